@@ -1,0 +1,47 @@
+// findmug/config.hpp — every tunable parameter, one YAML file plus overrides.
+//
+// Keys are `section.name` (e.g. `forest.num_trees`, `mrf.lambda`,
+// `overseg.seed_resolution_m`, `tables.safety_distance_m`). Unknown keys and
+// bad values are errors that name the key. Sections other than the core ones
+// (e.g. `daemon`) are kept as raw key/value pairs for their owners to read.
+#pragma once
+
+#include <map>
+#include <string>
+#include <vector>
+
+#include "findmug/cloud.hpp"
+#include "findmug/forest.hpp"
+#include "findmug/ground.hpp"
+#include "findmug/mrf.hpp"
+#include "findmug/oversegmentation.hpp"
+#include "findmug/tables.hpp"
+
+namespace findmug {
+
+struct SegmenterConfig {
+  float max_depth_m = 10.0f;
+  NormalConfig normals;
+  GroundConfig ground;
+  OversegmentationConfig overseg;
+  ForestParams forest;
+  MrfParams mrf;
+  bool use_mrf = true;
+  TableConfig tables;
+};
+
+struct Config {
+  SegmenterConfig segmenter;
+  // Everything under sections the core does not own, flattened: "daemon.source" -> "openni2".
+  std::map<std::string, std::string> extra;
+};
+
+// Parses YAML text; `origin` names it in errors (file path or "<flags>").
+Config parseConfig(const std::string& yaml_text, const std::string& origin);
+Config loadConfig(const std::string& path);
+// Applies "key=value" overrides (from command-line flags) on top.
+void applyOverride(Config& config, const std::string& key_equals_value);
+// The effective config as YAML, for the start-up log and reports.
+std::string dumpConfig(const Config& config);
+
+}  // namespace findmug

@@ -1,0 +1,102 @@
+// findmug/dataset.hpp — labelled RGB-D datasets in the NYU-style folder layout.
+//
+//   DIR/rgb/NAME.png     RGB8
+//   DIR/depth/NAME.png   uint16, millimetres, 0 = missing
+//   DIR/label8/NAME.png  uint8, findmug ids (0..7), 255 void       — or —
+//   DIR/label40/NAME.png uint8, NYU-40 ids (1..40), 0 void, mapped 40 -> 8 by a CSV
+//   DIR/intrinsics.yaml  optional: fx fy cx cy (default: NYU's Kinect calibration)
+//   DIR/extrinsics.csv   optional: name,height_m,pitch_rad,roll_rad per frame (synthetic data)
+//
+// Frames are read lazily, one at a time, so a large folder costs no memory.
+#pragma once
+
+#include <array>
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "findmug/frame.hpp"
+#include "findmug/labels.hpp"
+
+namespace findmug {
+
+// NYU Depth V2 RGB camera (toolbox camera_params.m).
+inline constexpr CameraIntrinsics kNyuIntrinsics{518.85790117450188, 519.46961112127485,
+                                                 325.58244941119034, 253.73616633400465};
+
+// Maps source label ids (0..255) to findmug ids; unmapped ids are an error.
+struct LabelMapping {
+  std::array<int, 256> to_findmug;  // -1 = not in the mapping
+  std::string source;               // file it came from, for messages
+  LabelMapping() { to_findmug.fill(-1); }
+};
+
+// CSV with header `source_id,findmug_label` (findmug_label a name from
+// kLabelNames or "void"). Throws on unknown names, duplicate or bad ids.
+LabelMapping loadLabelMapping(const std::string& csv_path);
+
+// The NYU-40 -> findmug-8 mapping that ships with the project
+// (models/nyu40_to_findmug8.csv, compiled in).
+const LabelMapping& defaultNyu40Mapping();
+
+struct LabeledFrame {
+  std::string name;
+  RgbdFrame frame;
+  std::vector<std::uint8_t> labels;  // findmug ids, kVoidLabel = no ground truth
+};
+
+struct DatasetOptions {
+  std::optional<std::string> mapping_csv;  // label40 -> 8; default: the shipped mapping
+  // NYU's invalid border (projection mask): pixels outside are void and get
+  // no depth. 1-based inclusive rows 45..471, cols 41..601 in the NYU toolbox.
+  bool mask_nyu_border = true;
+  int border_top = 44, border_bottom = 8, border_left = 40, border_right = 38;  // pixels cut
+  std::optional<CameraIntrinsics> intrinsics;  // overrides intrinsics.yaml / NYU default
+};
+
+class DatasetFolder {
+ public:
+  // Lists frames (names present in rgb/, depth/ and a label folder). Throws
+  // when the folder or a required sub-folder is missing or empty.
+  DatasetFolder(const std::string& dir, const DatasetOptions& options = {});
+
+  std::size_t size() const { return names_.size(); }
+  const std::vector<std::string>& names() const { return names_; }
+  const std::string& dir() const { return dir_; }
+  // Reads and validates frame i; throws findmug::Error naming the file on
+  // size mismatch, wrong bit depth, or label ids outside the mapping.
+  LabeledFrame load(std::size_t i) const;
+
+ private:
+  std::string dir_;
+  DatasetOptions options_;
+  std::vector<std::string> names_;
+  bool has_label8_ = false;
+  LabelMapping mapping_;
+  CameraIntrinsics intrinsics_;
+  std::vector<std::optional<CameraExtrinsics>> extrinsics_;
+};
+
+// Writes one frame in the folder layout above (label8), used by the
+// synthetic generator and the .mat converter.
+void writeLabeledFrame(const std::string& dir, const LabeledFrame& frame);
+
+// Reads the official nyu_depth_v2_labeled.mat (MATLAB v7.3 = HDF5):
+// `images` (3x640x480 uint8), `depths` (640x480 float metres), `labels`
+// (640x480 uint16 NYU-894 ids), mapped 894 -> 40 -> 8. Frame indices are
+// 1-based NYU indices; empty = all.
+class NyuMatFile {
+ public:
+  explicit NyuMatFile(const std::string& path);
+  ~NyuMatFile();
+  NyuMatFile(const NyuMatFile&) = delete;
+  NyuMatFile& operator=(const NyuMatFile&) = delete;
+  std::size_t size() const;
+  LabeledFrame load(std::size_t index0) const;  // 0-based
+ private:
+  struct Impl;
+  Impl* impl_;
+};
+
+}  // namespace findmug

@@ -1,0 +1,53 @@
+// findmug/features.hpp — the paper's 14-D feature vector per patch.
+//
+// Computed in the ground-aligned frame (see ground.hpp). Layout:
+//   0 pointness    λ0            eigenvalues λ0 <= λ1 <= λ2 of the patch's
+//   1 surfaceness  λ1 - λ0       scatter matrix, normalised by their sum so
+//   2 linearness   λ2 - λ1       the three are scale-free
+//   3 centroid height above ground (m)
+//   4 min point height (m)
+//   5 max point height (m)
+//   6 angle between the mean normal and the ground normal (rad, 0 = horizontal surface)
+//   7 circular standard deviation of the per-point normal angles (rad)
+//   8..10  CIELAB mean L*, a*, b*
+//   11..13 CIELAB standard deviation L*, a*, b*
+#pragma once
+
+#include <Eigen/Core>
+#include <array>
+#include <string_view>
+#include <vector>
+
+#include "findmug/cloud.hpp"
+#include "findmug/oversegmentation.hpp"
+
+namespace findmug {
+
+inline constexpr int kFeatureDim = 14;
+using FeatureVector = std::array<float, kFeatureDim>;
+
+inline constexpr std::array<std::string_view, kFeatureDim> kFeatureNames = {
+    "pointness", "surfaceness", "linearness", "centroid_height", "min_height", "max_height",
+    "normal_angle", "normal_angle_circular_std", "lab_l_mean", "lab_a_mean", "lab_b_mean",
+    "lab_l_std", "lab_a_std", "lab_b_std"};
+
+struct SegmentFeatures {
+  std::vector<FeatureVector> features;     // one per segment
+  std::vector<Eigen::Vector3f> centroids;  // ground frame, metres (used by the MRF)
+};
+
+// sRGB (0..255) to CIELAB (D65).
+Eigen::Vector3f rgbToLab(const Rgb8& rgb);
+
+// Features of one patch given its points/normals/colours in the ground frame.
+FeatureVector computePatchFeatures(const std::vector<Eigen::Vector3f>& points_ground,
+                                   const std::vector<Eigen::Vector3f>& normals_ground,
+                                   const std::vector<Rgb8>& colors);
+
+// Features of every segment. `cloud_ground` and `normals_ground` share the
+// oversegmentation's grid.
+SegmentFeatures computeFeatures(const OrganizedCloud& cloud_ground,
+                                const NormalImage& normals_ground,
+                                const Oversegmentation& segmentation);
+
+}  // namespace findmug

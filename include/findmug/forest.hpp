@@ -1,0 +1,75 @@
+// findmug/forest.hpp — randomized decision forest (Criminisi et al. style).
+//
+// Axis-aligned splits chosen among random (feature, threshold) candidates by
+// information gain; leaves hold label histograms; p(y|x) is the mean of the
+// reached leaves' distributions. Training is seeded and reproducible: tree t
+// uses seed + t whatever the number of threads.
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "findmug/features.hpp"
+#include "findmug/labels.hpp"
+
+namespace findmug {
+
+struct ForestParams {
+  int num_trees = 8;
+  int max_depth = 12;
+  int min_samples_leaf = 5;
+  int candidate_features = 4;     // random features tried per node
+  int candidate_thresholds = 10;  // random thresholds tried per feature
+  bool class_weighting = true;    // weight samples by inverse class frequency
+  double bagging_fraction = 1.0;  // share of samples (with replacement) per tree
+  std::uint64_t seed = 42;
+  int num_threads = 0;            // 0 = hardware concurrency
+};
+
+struct TrainingSet {
+  std::vector<FeatureVector> features;
+  std::vector<std::uint8_t> labels;  // 0..kNumLabels-1 (no void)
+  std::vector<float> weights;        // optional, empty = 1 each (e.g. patch pixel count)
+};
+
+class RandomForest {
+ public:
+  struct Node {
+    // Inner node: feature >= 0, go left when x[feature] < threshold.
+    // Leaf: feature = -1 and `distribution` is the label histogram (normalised).
+    std::int32_t feature = -1;
+    float threshold = 0.0f;
+    std::int32_t left = -1, right = -1;
+    ClassProbabilities distribution{};
+  };
+  using Tree = std::vector<Node>;  // node 0 is the root
+
+  // Progress callback: trees finished so far, total.
+  using Progress = std::function<void(int done, int total)>;
+
+  static RandomForest train(const TrainingSet& data, const ForestParams& params,
+                            const Progress& progress = {});
+
+  ClassProbabilities predict(const FeatureVector& x) const;
+
+  // Versioned binary model: magic, format version, label names, feature
+  // layout, parameters, trees, checksum. `load` refuses a truncated,
+  // corrupt or wrong-version file with a findmug::Error naming the file.
+  void save(const std::string& path) const;
+  static RandomForest load(const std::string& path);
+
+  const ForestParams& params() const { return params_; }
+  const std::vector<Tree>& trees() const { return trees_; }
+  // Short stable id of the model (derived from the checksum), for status messages.
+  std::string id() const { return id_; }
+  bool empty() const { return trees_.empty(); }
+
+ private:
+  ForestParams params_;
+  std::vector<Tree> trees_;
+  std::string id_;
+};
+
+}  // namespace findmug

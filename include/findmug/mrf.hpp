@@ -1,0 +1,42 @@
+// findmug/mrf.hpp — pairwise MRF over the supervoxel adjacency graph.
+//
+// Energy E(y) = Σ_i λ (1 - p_i(y_i)) + Σ_(i,j) [y_i != y_j] exp(-‖c_i - c_j‖ / σ)
+// (the paper's unary and Potts pairwise with centroid distance), minimised
+// by min-sum loopy belief propagation with damping.
+#pragma once
+
+#include <Eigen/Core>
+#include <cstdint>
+#include <utility>
+#include <vector>
+
+#include "findmug/labels.hpp"
+
+namespace findmug {
+
+struct MrfParams {
+  float lambda = 1.0f;        // unary weight
+  float sigma = 0.1f;         // metres; pairwise decay with centroid distance
+  int max_iterations = 30;
+  float damping = 0.5f;       // new message = (1-d)*computed + d*old
+  float convergence_tol = 1e-4f;
+};
+
+struct MrfResult {
+  std::vector<std::uint8_t> labels;  // one per node
+  std::vector<float> confidence;     // normalised belief of the chosen label
+  int iterations = 0;
+  bool converged = false;
+};
+
+MrfResult solveMrf(const std::vector<ClassProbabilities>& unaries,
+                   const std::vector<Eigen::Vector3f>& centroids,
+                   const std::vector<std::pair<int, int>>& edges, const MrfParams& params);
+
+// The energy above for a labelling, for tests and diagnostics.
+double mrfEnergy(const std::vector<ClassProbabilities>& unaries,
+                 const std::vector<Eigen::Vector3f>& centroids,
+                 const std::vector<std::pair<int, int>>& edges, const MrfParams& params,
+                 const std::vector<std::uint8_t>& labels);
+
+}  // namespace findmug

@@ -1,0 +1,97 @@
+// findmug/segmenter.hpp — the whole pipeline for one frame, stage by stage.
+//
+// frame -> cloud + normals -> ground plane -> oversegmentation -> features
+//       -> forest p(y|x) -> MRF -> label image -> tables
+//
+// Each stage is a method taking and returning plain data so that the daemon
+// can run stages on different threads and tests can check each alone.
+// `process` runs them all in sequence. No threads, no LCM.
+#pragma once
+
+#include <memory>
+#include <optional>
+#include <vector>
+
+#include "findmug/cloud.hpp"
+#include "findmug/config.hpp"
+#include "findmug/features.hpp"
+#include "findmug/forest.hpp"
+#include "findmug/frame.hpp"
+#include "findmug/ground.hpp"
+#include "findmug/label_image.hpp"
+#include "findmug/mrf.hpp"
+#include "findmug/oversegmentation.hpp"
+#include "findmug/tables.hpp"
+
+namespace findmug {
+
+// Wall time of each stage in milliseconds.
+struct StageTimings {
+  double cloud_ms = 0, normals_ms = 0, ground_ms = 0, overseg_ms = 0, features_ms = 0,
+         forest_ms = 0, mrf_ms = 0, labels_ms = 0, tables_ms = 0;
+  double total() const {
+    return cloud_ms + normals_ms + ground_ms + overseg_ms + features_ms + forest_ms + mrf_ms +
+           labels_ms + tables_ms;
+  }
+};
+
+// Stage 1 output: geometry in camera and ground frames.
+struct PreparedFrame {
+  RgbdFrame frame;
+  OrganizedCloud cloud_camera;
+  NormalImage normals_camera;
+  std::optional<GroundPlane> ground;  // nullopt: no ground plane -> frame cannot be labelled
+  OrganizedCloud cloud_ground;        // empty when no ground
+  NormalImage normals_ground;
+  StageTimings timings;
+};
+
+// Stage 2 output.
+struct SegmentedFrame {
+  PreparedFrame prepared;
+  Oversegmentation segmentation;
+  StageTimings timings;
+};
+
+// Stage 3 output: everything a client needs.
+struct LabelledFrame {
+  SegmentedFrame segmented;
+  SegmentFeatures features;
+  std::vector<ClassProbabilities> forest_probabilities;
+  std::vector<std::uint8_t> forest_labels;  // argmax of the forest alone
+  MrfResult mrf;
+  LabelImage labels;                        // final (MRF if enabled, else forest)
+  std::vector<TableCluster> tables;
+  StageTimings timings;
+};
+
+class Segmenter {
+ public:
+  // `forest` may be empty for feature extraction only (training).
+  Segmenter(SegmenterConfig config, std::shared_ptr<const RandomForest> forest);
+
+  // `gt_labels` is only used when config.ground.source == FloorLabels.
+  PreparedFrame prepare(RgbdFrame frame, const std::vector<std::uint8_t>* gt_labels = nullptr) const;
+  SegmentedFrame oversegment(PreparedFrame prepared) const;
+  // Features only (used by the trainer).
+  SegmentFeatures features(const SegmentedFrame& segmented) const;
+  LabelledFrame classify(SegmentedFrame segmented) const;
+  // All stages. Throws findmug::Error for invalid frames; a frame without a
+  // ground plane comes back with an all-void label image.
+  LabelledFrame process(RgbdFrame frame, const std::vector<std::uint8_t>* gt_labels = nullptr) const;
+
+  const SegmenterConfig& config() const { return config_; }
+  const RandomForest* forest() const { return forest_.get(); }
+
+ private:
+  SegmenterConfig config_;
+  std::shared_ptr<const RandomForest> forest_;
+  std::unique_ptr<Oversegmenter> oversegmenter_;
+};
+
+// Per-segment training labels: the majority ground-truth label of each
+// segment's pixels; segments whose pixels are mostly void get kVoidLabel.
+std::vector<std::uint8_t> segmentMajorityLabels(const Oversegmentation& segmentation,
+                                                const std::vector<std::uint8_t>& gt_labels);
+
+}  // namespace findmug

@@ -1,0 +1,42 @@
+#!/usr/bin/env bash
+# Installs the Debian 12 packages findmug needs to build, test and run.
+# Idempotent: packages already present are skipped, so a second run is quick.
+# Used by both README commands and by .ci/run.
+set -euo pipefail
+
+packages=(
+  build-essential cmake pkg-config git
+  # messaging: liblcm-dev forgets libglib2.0-dev, without which `pkg-config lcm` fails
+  liblcm-dev liblcm-bin liblcm-java libglib2.0-dev
+  # perception
+  libpcl-dev libeigen3-dev libopenni2-dev libopenni-dev
+  # logging, config, service integration
+  libspdlog-dev libfmt-dev libyaml-cpp-dev libsystemd-dev systemd
+  # image and data formats
+  libpng-dev libjpeg-dev zlib1g-dev libhdf5-dev libtiff-dev
+  # tests and benchmarks
+  libgtest-dev libgmock-dev libbenchmark-dev
+  # lcm-spy (Java) under a virtual display, for the screenshot script
+  default-jdk-headless libjchart2d-java xvfb x11-apps imagemagick
+  # network namespaces for the udpm tests
+  iproute2 util-linux
+)
+
+missing=()
+for p in "${packages[@]}"; do
+  if ! dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed"; then
+    missing+=("$p")
+  fi
+done
+
+if [ ${#missing[@]} -eq 0 ]; then
+  echo "install-deps: all ${#packages[@]} packages present"
+  exit 0
+fi
+
+echo "install-deps: installing ${missing[*]}"
+SUDO=""
+if [ "$(id -u)" -ne 0 ]; then SUDO="sudo"; fi
+export DEBIAN_FRONTEND=noninteractive
+$SUDO apt-get -o DPkg::Lock::Timeout=600 update -q
+$SUDO apt-get -o DPkg::Lock::Timeout=600 install -y -q --no-install-recommends "${missing[@]}"

@@ -1,0 +1,69 @@
+// Test support: locating the third-party data and scratch directories.
+//
+// Data comes from $FINDMUG_DATA, else ../shared/data beside the checkout.
+// When it is missing, a test is skipped on a developer machine but FAILS
+// under CI=true, so CI can never pass without having looked at real data.
+#pragma once
+
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <random>
+#include <string>
+
+namespace findmug::test {
+
+inline std::filesystem::path dataRoot() {
+  if (const char* env = std::getenv("FINDMUG_DATA"); env && *env) return env;
+  return FINDMUG_DEFAULT_DATA_DIR;
+}
+
+inline bool runningInCi() {
+  const char* ci = std::getenv("CI");
+  return ci && std::string(ci) == "true";
+}
+
+// Path of `relative` under the data root, or empty when it does not exist.
+inline std::filesystem::path dataPath(const std::string& relative) {
+  auto p = dataRoot() / relative;
+  return std::filesystem::exists(p) ? p : std::filesystem::path();
+}
+
+inline std::filesystem::path sourceDir() { return FINDMUG_SOURCE_DIR; }
+inline std::filesystem::path binaryDir() { return FINDMUG_BINARY_DIR; }
+
+// A fresh directory under the system temp dir, removed at scope exit.
+class TempDir {
+ public:
+  TempDir() {
+    std::random_device rd;
+    path_ = std::filesystem::temp_directory_path() /
+            ("findmug-test-" + std::to_string(rd()) + "-" + std::to_string(rd()));
+    std::filesystem::create_directories(path_);
+  }
+  ~TempDir() {
+    std::error_code ec;
+    std::filesystem::remove_all(path_, ec);
+  }
+  TempDir(const TempDir&) = delete;
+  TempDir& operator=(const TempDir&) = delete;
+  const std::filesystem::path& path() const { return path_; }
+  std::string str(const std::string& name = "") const { return (path_ / name).string(); }
+
+ private:
+  std::filesystem::path path_;
+};
+
+}  // namespace findmug::test
+
+// Use at the top of a test that needs the data: skips locally, fails in CI.
+#define FINDMUG_REQUIRE_DATA(var, relative)                                              \
+  const std::filesystem::path var = ::findmug::test::dataPath(relative);                 \
+  if (var.empty()) {                                                                     \
+    if (::findmug::test::runningInCi()) {                                                \
+      FAIL() << "test data missing under CI=true: " << (::findmug::test::dataRoot() / relative) \
+             << " (set FINDMUG_DATA)";                                                   \
+    }                                                                                    \
+    GTEST_SKIP() << "test data missing: " << (::findmug::test::dataRoot() / relative);   \
+  }
