@@ -35,6 +35,8 @@ struct LabelMapping {
 // CSV with header `source_id,findmug_label` (findmug_label a name from
 // kLabelNames or "void"). Throws on unknown names, duplicate or bad ids.
 LabelMapping loadLabelMapping(const std::string& csv_path);
+// Same, from CSV text already in memory; `source` names it in messages.
+LabelMapping parseLabelMapping(const std::string& csv_text, const std::string& source);
 
 // The NYU-40 -> findmug-8 mapping that ships with the project
 // (models/nyu40_to_findmug8.csv, compiled in).
@@ -49,9 +51,11 @@ struct LabeledFrame {
 struct DatasetOptions {
   std::optional<std::string> mapping_csv;  // label40 -> 8; default: the shipped mapping
   // NYU's invalid border (projection mask): pixels outside are void and get
-  // no depth. 1-based inclusive rows 45..471, cols 41..601 in the NYU toolbox.
+  // no depth. 1-based inclusive rows 45..471, cols 41..601 in the NYU toolbox,
+  // i.e. a 427x561 valid region of a 640x480 frame: 0-based rows 44..470,
+  // cols 40..600. Applied to frames of any size (set false for non-NYU data).
   bool mask_nyu_border = true;
-  int border_top = 44, border_bottom = 8, border_left = 40, border_right = 38;  // pixels cut
+  int border_top = 44, border_bottom = 9, border_left = 40, border_right = 39;  // pixels cut
   std::optional<CameraIntrinsics> intrinsics;  // overrides intrinsics.yaml / NYU default
 };
 
@@ -82,13 +86,22 @@ class DatasetFolder {
 // synthetic generator and the .mat converter.
 void writeLabeledFrame(const std::string& dir, const LabeledFrame& frame);
 
+// $FINDMUG_DATA/nyuv2_meta/nyu894_to_40.csv, with FINDMUG_DATA defaulting to
+// the data folder configured at build time (FINDMUG_DEFAULT_DATA_DIR).
+std::string defaultNyu894To40CsvPath();
+
 // Reads the official nyu_depth_v2_labeled.mat (MATLAB v7.3 = HDF5):
 // `images` (3x640x480 uint8), `depths` (640x480 float metres), `labels`
-// (640x480 uint16 NYU-894 ids), mapped 894 -> 40 -> 8. Frame indices are
-// 1-based NYU indices; empty = all.
+// (640x480 uint16 NYU-894 ids), mapped 894 -> 40 (CSV with columns
+// nyu894_id,name,nyu40_id,nyu40_name, read at run time) -> 8 (the shipped
+// mapping). MATLAB is column-major, so HDF5 sees N x 3 x W x H etc.; frames
+// come out row-major like every other frame. Depth becomes uint16 mm. The NYU
+// border is NOT masked here (DatasetFolder does that when reading). Frame
+// names are the 1-based NYU index, 4 digits ("0001").
 class NyuMatFile {
  public:
-  explicit NyuMatFile(const std::string& path);
+  explicit NyuMatFile(const std::string& path,
+                      const std::string& nyu894_to_40_csv = defaultNyu894To40CsvPath());
   ~NyuMatFile();
   NyuMatFile(const NyuMatFile&) = delete;
   NyuMatFile& operator=(const NyuMatFile&) = delete;

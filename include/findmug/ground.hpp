@@ -28,24 +28,34 @@ struct GroundPlane {
 };
 
 enum class GroundSource {
-  Extrinsics,    // from the camera mount (robot)
+  Auto,          // extrinsics when the frame carries them, else Estimated
+  Extrinsics,    // from the camera mount (robot); a frame without them is an error
   FloorLabels,   // RANSAC on ground-truth floor pixels (the paper's protocol)
   Estimated,     // dominant horizontal plane found in the frame alone
 };
 
 struct GroundConfig {
-  GroundSource source = GroundSource::Extrinsics;
+  GroundSource source = GroundSource::Auto;
   float ransac_inlier_m = 0.03f;
   int ransac_iterations = 200;
   int min_floor_points = 2000;     // fewer floor points: the frame is dropped
   float max_tilt_deg = 45.0f;      // estimated floor normal vs camera "up" (-y)
   std::uint64_t seed = 1;
+  // fitGroundToLabels: the plane must explain at least this share of the
+  // floor-labelled points (label noise at object feet and mislabels are the rest).
+  float min_inlier_fraction = 0.5f;
+  // estimateGround: a point supports a plane only if its normal is within
+  // this angle of the plane normal (keeps chair legs, box sides out).
+  float normal_agreement_deg = 20.0f;
 };
 
 // Builds the plane and transform from a known camera mount.
 GroundPlane groundFromExtrinsics(const CameraExtrinsics& extrinsics);
 
 // Builds the ground frame from a plane (normal, offset) in the camera frame.
+// The normal need not be unit; the sign is flipped if needed so that the
+// camera is on the positive side (above the floor). Throws on a zero or
+// non-finite normal or offset.
 GroundPlane groundFromPlane(const Eigen::Vector3f& normal_camera, float offset, int support);
 
 // RANSAC on the points whose label (same grid as the cloud) is Floor.
@@ -55,8 +65,11 @@ std::optional<GroundPlane> fitGroundToLabels(const OrganizedCloud& cloud_camera,
                                              const std::vector<std::uint8_t>& labels,
                                              const GroundConfig& config);
 
-// Finds the dominant roughly-horizontal plane low in the scene, using the
-// normals; for frames whose camera mount is unknown.
+// Finds the floor in the frame alone, for frames whose camera mount is
+// unknown: among the roughly-horizontal planes (normal within max_tilt_deg of
+// camera "up", -y) with at least `min_floor_points` supporting points, the
+// LOWEST one (furthest below the camera), so a large table top does not win
+// over a smaller visible floor. Returns nullopt when no such plane exists.
 std::optional<GroundPlane> estimateGround(const OrganizedCloud& cloud_camera,
                                           const NormalImage& normals_camera,
                                           const GroundConfig& config);

@@ -3,8 +3,16 @@
 // Segments are sets of pixels of the organized cloud. Two oversegmenters sit
 // behind one interface: PCL's SupervoxelClustering (the paper's, the
 // reference) and a fast one that works on the image grid.
+//
+// The organized oversegmenter (issue 7) is SLIC/VCCS on the image grid:
+// seeds on an adaptive grid whose pixel spacing follows depth so that seeds
+// are about `seed_resolution_m` apart on the 3-D surface, iterative local
+// assignment with PCL's distance (colour + 3-D position + normal, same
+// importances), then connectivity enforcement. Its segment count is tuned to
+// PCL's with `organized_seed_density`.
 #pragma once
 
+#include <cstdint>
 #include <memory>
 #include <string>
 #include <utility>
@@ -38,24 +46,65 @@ struct OversegmentationConfig {
   int min_segment_points = 20;  // smaller patches are dropped (unreliable features)
   int max_iterations = 5;       // organized oversegmenter: assignment/update rounds
   int search_window_factor = 2; // organized: search window = factor * grid step
+  // Organized: seeds per seed_resolution_m^2 of (camera-facing) surface. The
+  // default makes its segment count match PCL's on the NYU frames at the
+  // same seed resolution; scale it to trade detail for speed.
+  float organized_seed_density = 1.0f;
 };
+
+// Throws findmug::Error naming the field when a value is out of range
+// (non-positive resolutions, seed <= voxel resolution, negative or all-zero
+// importances, iterations outside 1..100, window factor outside 1..8, ...).
+void validateOversegmentationConfig(const OversegmentationConfig& config);
 
 class Oversegmenter {
  public:
   virtual ~Oversegmenter() = default;
   // `cloud_camera` and `normals_camera` in the camera optical frame.
+  // Throws findmug::Error when their sizes disagree.
   virtual Oversegmentation segment(const OrganizedCloud& cloud_camera,
                                    const NormalImage& normals_camera) const = 0;
   virtual std::string name() const = 0;
 };
 
+// Validates the config, then builds the oversegmenter of `config.kind`.
 std::unique_ptr<Oversegmenter> makeOversegmenter(const OversegmentationConfig& config);
+
+// Where finalizeOversegmentation takes the adjacency from.
+enum class EdgeSource {
+  ImageGrid,  // derive it: segments with 4-neighbouring pixels are adjacent
+  Keep,       // keep `seg.edges` as given (ids as in the input pixel_segment), remapped
+};
 
 // Re-derives `edges`, drops segments below `min_points` and renumbers
 // segments densely. Shared by both oversegmenters.
-void finalizeOversegmentation(Oversegmentation& seg, int min_points);
+//
+// Input: `pixel_segment` (width*height ids, -1 = none; ids need not be
+// dense but must be < width*height). `segments` is ignored and rebuilt.
+// Kept ids are renumbered in increasing order, so the result is
+// deterministic. With EdgeSource::Keep, edges touching a dropped segment are
+// removed, self-loops and duplicates too. Throws findmug::Error on sizes or
+// ids out of range.
+void finalizeOversegmentation(Oversegmentation& seg, int min_points,
+                              EdgeSource edge_source = EdgeSource::ImageGrid);
 
-// Quality against a ground-truth label image (same grid, 255 = void):
+// Quality against a ground-truth label image (same grid, 255 = void).
+//
+// Boundary recall: a GT boundary pixel is a non-void pixel with a 4-neighbour
+// of a different non-void label (boundaries to void are unknown, so they are
+// ignored). It is recalled when a segment boundary pixel (a pixel whose
+// segment id, -1 included, differs from a 4-neighbour's) lies within a
+// (2*tolerance_px+1)^2 square around it.
+//
+// Undersegmentation error (Achanta et al., "SLIC superpixels", TPAMI 2012):
+// over pixels P that are non-void and in a segment, N = |P|, GT regions g =
+// 4-connected components of equal label, |s| = pixels of segment s in P:
+//   UE = ( sum_g sum_{s : |s ∩ g| > 0.05 |s|} |s|  -  N ) / N
+// i.e. the share of pixels by which segments leak out of the GT regions they
+// overlap (0 when every segment lies inside one region). The 5 % overlap
+// threshold is the paper's, against GT boundary imprecision.
+//
+// Both are NaN when undefined (no GT boundary pixel / N = 0).
 struct OversegmentationQuality {
   double boundary_recall = 0.0;          // GT boundary pixels within `tolerance_px` of a segment boundary
   double undersegmentation_error = 0.0;  // leakage across GT regions, as in Achanta et al. (SLIC)

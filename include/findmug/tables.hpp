@@ -3,6 +3,28 @@
 // Everything here is in the ground-aligned frame of ground.hpp (z up, floor
 // at z = 0, x forward from below the camera): the robot base frame when the
 // camera mount is known.
+//
+// Pipeline of findTables / detectTables, per labelled frame:
+//   1. table points: label Table, finite coordinates, height within
+//      [min_table_height_m, max_table_height_m];
+//   2. Euclidean clustering with `cluster_tolerance_m` (exact: two points are
+//      in one cluster iff a chain of points links them with gaps no larger
+//      than the tolerance), clusters outside [min, max]_cluster_points dropped;
+//   3. per cluster: top height (densest height band), the top's points, PCA of
+//      the top projected on the floor (on a 2 cm occupancy grid, so that the
+//      denser near part of a table does not pull the axes), oriented box, hull;
+//   4. search positions (Wolf et al. 2014): on the second principal axis, on
+//      both sides, `safety_distance_m` from the table edge, facing the table;
+//      long tables get more positions along their long sides so that the top
+//      is within `arm_reach_m` of one of them (see computeSearchPositions);
+//   5. reachability of each position from the same labelled cloud: an
+//      obstacle (non-floor points between `obstacle_min_height_m` and
+//      `robot_height_m`) within `robot_radius_m`, or too little observed floor
+//      under the robot's footprint, makes it unreachable with a reason. Such
+//      positions are kept and flagged, never silently dropped.
+// Anything skipped (no ground-aligned cloud, non-finite points, degenerate or
+// out-of-size clusters) is reported in TableDetection::diagnostics for the
+// caller to log; the core library itself does not log.
 #pragma once
 
 #include <Eigen/Core>
@@ -20,15 +42,22 @@ struct SearchPosition {
   float yaw = 0.0f;                               // rad, facing the table
   bool reachable = true;
   std::string reason;  // why unreachable ("obstacle within robot radius", "no observed floor")
+  // Which long side of the table (+1: along +minor_axis, -1: along -minor_axis)
+  // and the offset along major_axis from the box centre, metres.
+  int side = 1;
+  float along_m = 0.0f;
 };
 
 struct TableCluster {
-  int id = 0;
-  Eigen::Vector3f centroid = Eigen::Vector3f::Zero();
+  int id = 0;  // findTables: 0..n-1 by decreasing point count; TableMap: the stable id
+  Eigen::Vector3f centroid = Eigen::Vector3f::Zero();  // mean of the top's points
   float top_height = 0.0f;
   Eigen::Vector2f major_axis = Eigen::Vector2f::UnitX();  // first principal axis (unit, floor plane)
-  Eigen::Vector2f minor_axis = Eigen::Vector2f::UnitY();  // second principal axis
+  Eigen::Vector2f minor_axis = Eigen::Vector2f::UnitY();  // second principal axis (major turned +90°)
   Eigen::Vector2f extents = Eigen::Vector2f::Zero();      // half-lengths along major/minor
+  // Centre of the oriented box (major/minor axes, extents) on the floor. It
+  // differs from the centroid's x,y when the points are unevenly spread.
+  Eigen::Vector2f center = Eigen::Vector2f::Zero();
   std::vector<Eigen::Vector2f> hull;                      // convex hull of the top, CCW
   int point_count = 0;
   float mean_confidence = 0.0f;
@@ -44,9 +73,68 @@ struct TableConfig {
   float robot_radius_m = 0.3f;
   float min_table_height_m = 0.3f;
   float max_table_height_m = 1.3f;
+  // Points within this height of the top height form the top (hull, axes, extents).
+  float top_band_m = 0.05f;
+  // Clusters whose top is narrower than this along the second axis (a line
+  // of points, a single point) are degenerate and dropped with a reason.
+  float min_table_width_m = 0.1f;
+  // Obstacle test: non-floor points with height in [obstacle_min_height_m,
+  // robot_height_m] within robot_radius_m of a position; at least
+  // obstacle_min_points of them (a few stray points are sensor noise).
+  float obstacle_min_height_m = 0.05f;
+  float robot_height_m = 1.4f;
+  int obstacle_min_points = 5;
+  // Floor test: floor-labelled points within floor_tolerance_m of z = 0 mark
+  // floor_cell_m cells as observed; a position needs at least
+  // min_floor_observed_fraction of the cells under its footprint observed.
+  float floor_tolerance_m = 0.1f;
+  float floor_cell_m = 0.1f;
+  float min_floor_observed_fraction = 0.5f;
 };
 
+// Why something produced no table or was flagged, for the caller to log.
+struct TableDetection {
+  std::vector<TableCluster> tables;
+  std::vector<std::string> diagnostics;  // one human-readable line per reason
+  int table_points = 0;           // table-labelled points used for clustering
+  int nonfinite_points = 0;       // table-labelled points with a NaN/inf coordinate
+  int implausible_points = 0;     // table-labelled points outside the height range or
+                                  // absurdly far (> 100 m) from the robot
+  int clusters_rejected = 0;      // clusters dropped (size, degenerate)
+};
+
+// Throws findmug::Error when `labels` and `cloud_ground` disagree in size or
+// a setting is out of range (message names the setting). An empty cloud
+// means "no ground plane for this frame": no tables, with that reason.
+TableDetection detectTables(const OrganizedCloud& cloud_ground, const LabelImage& labels,
+                            const TableConfig& config);
+
+// detectTables(...).tables, for callers that do not log the reasons.
 std::vector<TableCluster> findTables(const OrganizedCloud& cloud_ground, const LabelImage& labels,
                                      const TableConfig& config);
+
+// The search positions of a table from its box alone (centre, axes,
+// extents), all marked reachable: on both sides along the second axis, at
+// `safety_distance_m` from the edge, facing the table. Along each long side
+// there are n = max(1, ceil(extent_major / h)) positions spread evenly, with
+// h the half-length of edge a position covers: h = sqrt(r^2 - (d + w)^2)
+// when the arm reaches the midline of the top (r = arm_reach_m, d =
+// safety_distance_m, w = half-width), else sqrt(r^2 - d^2) (the edge strip
+// is covered). n = 1 is the paper's single position per side. When r <= d no
+// extra positions are added. Order: side +1 then -1, each by `along_m`.
+std::vector<SearchPosition> computeSearchPositions(const TableCluster& table,
+                                                   const TableConfig& config);
+
+// Exact Euclidean clustering: cluster index (0..k-1, in order of first
+// appearance) of each point, where two points share a cluster iff a chain of
+// points links them with steps of at most `tolerance`. Same partition as PCL's
+// EuclideanClusterExtraction before its size filter, in O(n) on a hashed voxel
+// grid. Points must be finite and within 100 m of the origin, the tolerance
+// at least 1 mm (else Error).
+std::vector<int> euclideanClusterLabels(const std::vector<Eigen::Vector3f>& points,
+                                        float tolerance);
+
+// Convex hull of 2-D points, counter-clockwise, without collinear points.
+std::vector<Eigen::Vector2f> convexHull2d(std::vector<Eigen::Vector2f> points);
 
 }  // namespace findmug

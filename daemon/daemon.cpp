@@ -1,0 +1,158 @@
+// findmugd's run loop: source thread, pipeline, systemd notifications, shutdown.
+#include "findmug/daemon/daemon.hpp"
+
+#include <spdlog/spdlog.h>
+
+#include <filesystem>
+
+#include "findmug/error.hpp"
+#include "findmug/io/frame_source.hpp"
+
+namespace findmug::daemon {
+
+namespace {
+using Clock = std::chrono::steady_clock;
+
+std::int64_t nowNs() {
+  return std::chrono::duration_cast<std::chrono::nanoseconds>(Clock::now().time_since_epoch())
+      .count();
+}
+}  // namespace
+
+std::shared_ptr<const RandomForest> loadModel(const std::string& path, std::string* model_id) {
+  try {
+    auto forest = std::make_shared<const RandomForest>(RandomForest::load(path));
+    if (forest->empty()) throw Error(path + ": model has no trees");
+    if (model_id) *model_id = std::filesystem::path(path).filename().string() + ":" + forest->id();
+    return forest;
+  } catch (const Error& e) {
+    throw Error(std::string("daemon.model_path: ") + e.what());
+  }
+}
+
+Daemon::Daemon(const Config& config, const DaemonConfig& daemon_config, PipelineHooks hooks)
+    : daemon_config_(daemon_config) {
+  std::string model_id;
+  auto forest = loadModel(daemon_config_.model_path, &model_id);
+  spdlog::info("model {} loaded from {} ({} trees)", model_id, daemon_config_.model_path,
+               forest->trees().size());
+  try {
+    io::SourceSpec spec = io::parseSourceSpec(daemon_config_.source);
+    // An lcm source without its own url listens where we publish.
+    if (spec.kind == "lcm" && spec.options.lcm_url.empty()) {
+      spec.options.lcm_url = effectiveLcmUrl(daemon_config_);
+    }
+    source_ = io::makeSource(spec);
+  } catch (const Error& e) {
+    throw Error(std::string("daemon.source: ") + e.what());
+  }
+  pipeline_ = std::make_unique<Pipeline>(config.segmenter, daemon_config_, std::move(forest),
+                                         model_id, ExecutionMode::Threaded, std::move(hooks));
+  pipeline_->attachSource(source_.get());
+  spdlog::info("source {}; {} segmentation worker(s), queue capacity {}", source_->describe(),
+               pipeline_->workers(), daemon_config_.queue_capacity);
+}
+
+Daemon::~Daemon() {
+  if (source_) source_->stop();
+  if (source_thread_.joinable()) source_thread_.join();
+  if (pipeline_) pipeline_->stop(StopMode::Discard);
+}
+
+void Daemon::sourceLoop() {
+  for (;;) {
+    source_in_next_.store(true);
+    std::optional<RgbdFrame> frame = source_->next();
+    source_in_next_.store(false);
+    source_last_return_ns_.store(nowNs());
+    if (!frame) break;
+    pipeline_->submit(std::move(*frame));
+  }
+  source_finished_.store(true);
+}
+
+ProgressSnapshot Daemon::progress() const {
+  ProgressSnapshot p = pipeline_->progress();
+  // A source blocked in next() in a live state (waiting for a frame,
+  // reconnecting with back-off) is legitimately idle: count it as alive.
+  // FrameSource::next() has no timeout, so a driver call hanging inside a
+  // "running" source cannot be told apart from a quiet one; see service.hpp.
+  const io::SourceState state = source_->state();
+  const bool live_wait = (source_in_next_.load() && state != io::SourceState::Failed &&
+                          state != io::SourceState::Stopped) ||
+                         (source_finished_.load() && state == io::SourceState::EndOfStream);
+  p.source_heartbeat = live_wait ? Clock::now()
+                                 : Clock::time_point(std::chrono::nanoseconds(
+                                       source_last_return_ns_.load()));
+  return p;
+}
+
+int Daemon::run() {
+  pipeline_->start();
+  source_last_return_ns_.store(nowNs());
+  source_thread_ = std::thread([this] { sourceLoop(); });
+  notifier_.ready("model " + pipeline_->modelId() + ", source " + source_->describe());
+  spdlog::info("findmugd ready");
+
+  std::optional<WatchdogGate> gate;
+  Clock::duration ping_period{};
+  if (const auto timeout = notifier_.watchdogTimeout()) {
+    gate.emplace(*timeout / 2);
+    ping_period = *timeout / 3;
+    spdlog::info("systemd watchdog: {} ms, pinged every {} ms while frames progress",
+                 std::chrono::duration_cast<std::chrono::milliseconds>(*timeout).count(),
+                 std::chrono::duration_cast<std::chrono::milliseconds>(ping_period).count());
+  }
+  auto next_ping = Clock::now();
+  auto next_status_text = Clock::now() + std::chrono::seconds(5);
+  bool warned_unhealthy = false;
+
+  // With exit_at_end_of_stream off, an exhausted source leaves the daemon up
+  // and idle (status still published) until it is asked to stop.
+  auto source_done = [&] {
+    return source_finished_.load() && (daemon_config_.exit_at_end_of_stream ||
+                                       source_->state() != io::SourceState::EndOfStream);
+  };
+  while (!stop_requested_.load() && !source_done()) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    const auto now = Clock::now();
+    if (gate && now >= next_ping) {
+      if (gate->healthy(progress(), now)) {
+        notifier_.watchdog();
+        warned_unhealthy = false;
+      } else if (!warned_unhealthy) {
+        spdlog::error("withholding watchdog ping: {}", gate->reason());
+        warned_unhealthy = true;
+      }
+      next_ping = now + ping_period;
+    }
+    if (now >= next_status_text) {
+      const auto c = pipeline_->counters();
+      notifier_.status(std::to_string(c.processed) + " frames processed, " +
+                       std::to_string(c.dropped) + " dropped, " + std::to_string(c.rejected) +
+                       " rejected; source " +
+                       std::string(io::sourceStateName(source_->state())));
+      next_status_text = now + std::chrono::seconds(5);
+    }
+  }
+
+  const io::SourceState final_state = source_->state();
+  const bool stop_request = stop_requested_.load();
+  notifier_.stopping(stop_request ? "stopping on request" : "source ended");
+  spdlog::info("shutting down ({})", stop_request ? "stop requested"
+                                                  : std::string("source ") +
+                                                        std::string(io::sourceStateName(final_state)));
+  source_->stop();
+  if (source_thread_.joinable()) source_thread_.join();
+  // On request: latency matters (systemd waits), drop what is queued. At the
+  // end of a finite stream every frame is still wanted.
+  pipeline_->stop(stop_request ? StopMode::Discard : StopMode::Drain);
+
+  if (!stop_request && final_state == io::SourceState::Failed) {
+    spdlog::error("source failed: {}", source_->stats().last_error);
+    return 1;
+  }
+  return 0;
+}
+
+}  // namespace findmug::daemon

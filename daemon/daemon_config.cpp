@@ -1,0 +1,249 @@
+// findmugd settings: the `daemon:` section of the YAML file and the command line.
+#include "findmug/daemon/daemon_config.hpp"
+
+#include <charconv>
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <functional>
+#include <map>
+#include <thread>
+
+#include "findmug/error.hpp"
+
+#ifndef FINDMUG_SYSCONF_DIR
+#define FINDMUG_SYSCONF_DIR "/etc"
+#endif
+#ifndef FINDMUG_DATA_INSTALL_DIR
+#define FINDMUG_DATA_INSTALL_DIR "/usr/local/share/findmug"
+#endif
+
+namespace findmug::daemon {
+
+std::string defaultConfigPath() { return FINDMUG_SYSCONF_DIR "/findmug/findmugd.yaml"; }
+std::string defaultModelPath() { return FINDMUG_DATA_INSTALL_DIR "/models/findmug.fmf"; }
+
+int DaemonConfig::effectiveWorkers() const {
+  if (workers > 0) return workers;
+  const unsigned cores = std::thread::hardware_concurrency();
+  return cores == 0 ? 1 : static_cast<int>(cores);
+}
+
+namespace {
+
+[[noreturn]] void bad(const std::string& key, const std::string& value,
+                      const std::string& expected) {
+  throw Error("invalid value '" + value + "' for " + key + " (expected " + expected + ")");
+}
+
+long long toInt(const std::string& key, const std::string& v, long long lo, long long hi) {
+  long long out = 0;
+  auto [ptr, ec] = std::from_chars(v.data(), v.data() + v.size(), out);
+  if (ec != std::errc() || ptr != v.data() + v.size() || out < lo || out > hi) {
+    bad(key, v, "an integer in [" + std::to_string(lo) + ", " + std::to_string(hi) + "]");
+  }
+  return out;
+}
+
+double toDouble(const std::string& key, const std::string& v, double lo, double hi) {
+  double out = 0;
+  auto [ptr, ec] = std::from_chars(v.data(), v.data() + v.size(), out);
+  if (ec != std::errc() || ptr != v.data() + v.size() || !std::isfinite(out) || out < lo ||
+      out > hi) {
+    bad(key, v, "a number in [" + std::to_string(lo) + ", " + std::to_string(hi) + "]");
+  }
+  return out;
+}
+
+bool toBool(const std::string& key, const std::string& v) {
+  if (v == "true" || v == "yes" || v == "on" || v == "1") return true;
+  if (v == "false" || v == "no" || v == "off" || v == "0") return false;
+  bad(key, v, "true or false");
+}
+
+std::string fmt(double v) {
+  std::string s = std::to_string(v);
+  while (s.size() > 1 && s.back() == '0') s.pop_back();
+  if (!s.empty() && s.back() == '.') s.pop_back();
+  return s;
+}
+
+// One daemon key: how to read it into DaemonConfig and how to print it back.
+struct Key {
+  std::function<void(DaemonConfig&, const std::string& key, const std::string& value)> set;
+  std::function<std::string(const DaemonConfig&)> get;
+};
+
+const std::map<std::string, Key>& keys() {
+  using D = DaemonConfig;
+  static const std::map<std::string, Key> all = {
+      {"daemon.source",
+       {[](D& d, const std::string& k, const std::string& v) {
+          if (v.empty()) bad(k, v, "a frame source spec, e.g. openni2 or dataset:/path");
+          d.source = v;
+        },
+        [](const D& d) { return d.source; }}},
+      {"daemon.lcm_url",
+       {[](D& d, const std::string& k, const std::string& v) {
+          if (!v.empty() && v.find("://") == std::string::npos) {
+            bad(k, v, "an LCM URL such as udpm://239.255.76.67:7667?ttl=0, or empty");
+          }
+          d.lcm_url = v;
+        },
+        [](const D& d) { return d.lcm_url; }}},
+      {"daemon.channel_suffix",
+       {[](D& d, const std::string& k, const std::string& v) {
+          for (char c : v) {
+            if (!std::isalnum(static_cast<unsigned char>(c)) && c != '_') {
+              bad(k, v, "letters, digits and '_' only");
+            }
+          }
+          d.channel_suffix = v;
+        },
+        [](const D& d) { return d.channel_suffix; }}},
+      {"daemon.model_path",
+       {[](D& d, const std::string& k, const std::string& v) {
+          if (v.empty()) bad(k, v, "the path of a .fmf model file");
+          d.model_path = v;
+        },
+        [](const D& d) { return d.model_path; }}},
+      {"daemon.queue_capacity",
+       {[](D& d, const std::string& k, const std::string& v) {
+          d.queue_capacity = static_cast<int>(toInt(k, v, 1, 64));
+        },
+        [](const D& d) { return std::to_string(d.queue_capacity); }}},
+      {"daemon.workers",
+       {[](D& d, const std::string& k, const std::string& v) {
+          d.workers = static_cast<int>(toInt(k, v, 0, 64));
+        },
+        [](const D& d) { return std::to_string(d.workers); }}},
+      {"daemon.status_period_s",
+       {[](D& d, const std::string& k, const std::string& v) {
+          d.status_period_s = toDouble(k, v, 0.05, 60);
+        },
+        [](const D& d) { return fmt(d.status_period_s); }}},
+      {"daemon.stats_window_s",
+       {[](D& d, const std::string& k, const std::string& v) {
+          d.stats_window_s = toDouble(k, v, 1, 3600);
+        },
+        [](const D& d) { return fmt(d.stats_window_s); }}},
+      {"daemon.publish_confidence",
+       {[](D& d, const std::string& k, const std::string& v) {
+          d.publish_confidence = toBool(k, v);
+        },
+        [](const D& d) { return std::string(d.publish_confidence ? "true" : "false"); }}},
+      {"daemon.compress_labels",
+       {[](D& d, const std::string& k, const std::string& v) { d.compress_labels = toBool(k, v); },
+        [](const D& d) { return std::string(d.compress_labels ? "true" : "false"); }}},
+      {"daemon.publish_tables",
+       {[](D& d, const std::string& k, const std::string& v) { d.publish_tables = toBool(k, v); },
+        [](const D& d) { return std::string(d.publish_tables ? "true" : "false"); }}},
+      {"daemon.exit_at_end_of_stream",
+       {[](D& d, const std::string& k, const std::string& v) {
+          d.exit_at_end_of_stream = toBool(k, v);
+        },
+        [](const D& d) { return std::string(d.exit_at_end_of_stream ? "true" : "false"); }}},
+      {"daemon.log_level",
+       {[](D& d, const std::string& k, const std::string& v) {
+          if (v != "trace" && v != "debug" && v != "info" && v != "warn" && v != "error") {
+            bad(k, v, "one of trace debug info warn error");
+          }
+          d.log_level = v;
+        },
+        [](const D& d) { return d.log_level; }}},
+  };
+  return all;
+}
+
+}  // namespace
+
+DaemonConfig resolveDaemonConfig(Config& config) {
+  DaemonConfig daemon;
+  for (const auto& [key, value] : config.extra) {
+    if (key.rfind("daemon.", 0) != 0) continue;  // other owners' sections
+    const auto it = keys().find(key);
+    if (it == keys().end()) {
+      std::string known;
+      for (const auto& [name, k] : keys()) known += (known.empty() ? "" : ", ") + name;
+      throw Error("unknown setting '" + key + "' (daemon keys: " + known + ")");
+    }
+    it->second.set(daemon, key, value);
+  }
+  for (const auto& [name, k] : keys()) config.extra[name] = k.get(daemon);
+  return daemon;
+}
+
+std::string effectiveLcmUrl(const DaemonConfig& config) {
+  if (!config.lcm_url.empty()) return config.lcm_url;
+  if (const char* env = std::getenv("LCM_DEFAULT_URL"); env && *env) return env;
+  return "";  // liblcm's built-in default
+}
+
+std::string usage() {
+  return "usage: findmugd [options]\n"
+         "  --config PATH          YAML config (default " +
+         defaultConfigPath() +
+         ")\n"
+         "  --set KEY=VALUE        override any setting, e.g. --set mrf.lambda=2 (repeatable)\n"
+         "  --source SPEC          same as --set daemon.source=SPEC\n"
+         "  --lcm-url URL          same as --set daemon.lcm_url=URL\n"
+         "  --channel-suffix S     same as --set daemon.channel_suffix=S\n"
+         "  --model PATH           same as --set daemon.model_path=PATH\n"
+         "  --workers N            same as --set daemon.workers=N\n"
+         "  --log-level LEVEL      same as --set daemon.log_level=LEVEL\n"
+         "  --check-config         validate and print the effective config, then exit\n"
+         "  --help                 this text\n"
+         "Environment: LCM_DEFAULT_URL (used when daemon.lcm_url is empty), NOTIFY_SOCKET,\n"
+         "WATCHDOG_USEC (systemd), JOURNAL_STREAM (log to the journal).\n";
+}
+
+CommandLine parseCommandLine(const std::vector<std::string>& args) {
+  static const std::map<std::string, std::string> shortcuts = {
+      {"--source", "daemon.source"},       {"--lcm-url", "daemon.lcm_url"},
+      {"--channel-suffix", "daemon.channel_suffix"}, {"--model", "daemon.model_path"},
+      {"--workers", "daemon.workers"},     {"--log-level", "daemon.log_level"}};
+  CommandLine cl;
+  for (std::size_t i = 0; i < args.size(); ++i) {
+    const std::string& arg = args[i];
+    auto value = [&]() -> std::string {
+      if (i + 1 >= args.size()) throw Error("option " + arg + " needs a value");
+      return args[++i];
+    };
+    if (arg == "--help" || arg == "-h") {
+      cl.help = true;
+    } else if (arg == "--check-config") {
+      cl.check_config = true;
+    } else if (arg == "--config") {
+      cl.config_path = value();
+    } else if (arg == "--set") {
+      cl.overrides.push_back(value());
+    } else if (auto it = shortcuts.find(arg); it != shortcuts.end()) {
+      cl.overrides.push_back(it->second + "=" + value());
+    } else {
+      throw Error("unknown option '" + arg + "' (see --help)");
+    }
+  }
+  return cl;
+}
+
+LoadedConfig loadDaemonConfig(const CommandLine& command_line) {
+  LoadedConfig loaded;
+  if (command_line.config_path) {
+    loaded.config = loadConfig(*command_line.config_path);
+    loaded.origin = *command_line.config_path;
+  } else if (std::filesystem::exists(defaultConfigPath())) {
+    loaded.config = loadConfig(defaultConfigPath());
+    loaded.origin = defaultConfigPath();
+  } else {
+    loaded.origin = "built-in defaults (no " + defaultConfigPath() + ")";
+  }
+  for (const auto& o : command_line.overrides) applyOverride(loaded.config, o);
+  try {
+    loaded.daemon = resolveDaemonConfig(loaded.config);
+  } catch (const Error& e) {
+    throw Error(loaded.origin + " + flags: " + e.what());
+  }
+  return loaded;
+}
+
+}  // namespace findmug::daemon

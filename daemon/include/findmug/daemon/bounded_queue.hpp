@@ -1,0 +1,160 @@
+// findmug/daemon/bounded_queue.hpp — a small thread-safe FIFO with an explicit
+// policy for what happens when it is full.
+//
+// The daemon's stages are joined by these queues. Frames are perishable: when
+// a consumer falls behind, the right answer for a robot is to forget the
+// oldest waiting frame and keep the newest, so latency stays bounded
+// (DropPolicy::DropOldest, every drop counted). Results that already cost a
+// full segmentation are not perishable; those queues apply back-pressure
+// instead (DropPolicy::Block).
+//
+// Every pop hands out a ticket: 0, 1, 2, ... in pop order. Because pops are
+// FIFO, ticket order is arrival order among the items that survived the drop
+// policy, which is exactly what a reorder buffer downstream of parallel
+// workers needs (see reorder_buffer.hpp). Drops therefore never leave holes
+// in the ticket sequence.
+//
+// close() ends the queue: pushes are refused, blocked callers wake, and pop
+// returns what is left before reporting the end (or nothing, after clear()).
+#pragma once
+
+#include <chrono>
+#include <condition_variable>
+#include <cstddef>
+#include <cstdint>
+#include <deque>
+#include <mutex>
+#include <optional>
+#include <stdexcept>
+#include <utility>
+
+namespace findmug::daemon {
+
+enum class DropPolicy {
+  DropOldest,  // full: evict the oldest waiting item, count it, accept the new one
+  Block,       // full: wait until there is room (or the queue is closed)
+};
+
+enum class PushResult {
+  Accepted,
+  AcceptedDroppedOldest,  // accepted; the oldest waiting item was evicted
+  Closed,                 // refused: the queue is closed (the item is discarded)
+};
+
+template <typename T>
+class BoundedQueue {
+ public:
+  struct Popped {
+    T value;
+    std::uint64_t ticket;  // 0, 1, 2, ... in pop order
+  };
+
+  BoundedQueue(std::size_t capacity, DropPolicy policy) : capacity_(capacity), policy_(policy) {
+    if (capacity_ == 0) throw std::invalid_argument("BoundedQueue capacity must be at least 1");
+  }
+  BoundedQueue(const BoundedQueue&) = delete;
+  BoundedQueue& operator=(const BoundedQueue&) = delete;
+
+  // Adds `value` under the queue's drop policy. With DropOldest this never
+  // blocks. `evicted`, when given, receives the dropped item (so a caller can
+  // log which frame was lost).
+  PushResult push(T value, std::optional<T>* evicted = nullptr) {
+    std::unique_lock lock(mutex_);
+    if (policy_ == DropPolicy::Block) {
+      not_full_.wait(lock, [&] { return closed_ || items_.size() < capacity_; });
+    }
+    if (closed_) return PushResult::Closed;
+    PushResult result = PushResult::Accepted;
+    if (items_.size() >= capacity_) {  // only reachable with DropOldest
+      if (evicted) *evicted = std::move(items_.front());
+      items_.pop_front();
+      ++dropped_;
+      result = PushResult::AcceptedDroppedOldest;
+    }
+    items_.push_back(std::move(value));
+    ++pushed_;
+    lock.unlock();
+    not_empty_.notify_one();
+    return result;
+  }
+
+  // Waits for an item. Returns nullopt once the queue is closed and empty.
+  std::optional<Popped> pop() {
+    std::unique_lock lock(mutex_);
+    not_empty_.wait(lock, [&] { return closed_ || !items_.empty(); });
+    return takeFrontLocked(lock);
+  }
+
+  // As pop(), but gives up after `timeout` (nullopt; check closed()).
+  template <typename Rep, typename Period>
+  std::optional<Popped> popFor(std::chrono::duration<Rep, Period> timeout) {
+    std::unique_lock lock(mutex_);
+    not_empty_.wait_for(lock, timeout, [&] { return closed_ || !items_.empty(); });
+    return takeFrontLocked(lock);
+  }
+
+  // Refuses further pushes and wakes every waiter. Items already queued can
+  // still be popped (drain) unless clear() discards them.
+  void close() {
+    {
+      std::lock_guard lock(mutex_);
+      closed_ = true;
+    }
+    not_empty_.notify_all();
+    not_full_.notify_all();
+  }
+
+  // Discards every waiting item, counting them as dropped; returns how many.
+  std::size_t clear() {
+    std::size_t n;
+    {
+      std::lock_guard lock(mutex_);
+      n = items_.size();
+      dropped_ += n;
+      items_.clear();
+    }
+    not_full_.notify_all();
+    return n;
+  }
+
+  std::size_t size() const {
+    std::lock_guard lock(mutex_);
+    return items_.size();
+  }
+  bool closed() const {
+    std::lock_guard lock(mutex_);
+    return closed_;
+  }
+  std::size_t capacity() const { return capacity_; }
+  DropPolicy policy() const { return policy_; }
+  std::uint64_t droppedCount() const {
+    std::lock_guard lock(mutex_);
+    return dropped_;
+  }
+  std::uint64_t pushedCount() const {
+    std::lock_guard lock(mutex_);
+    return pushed_;
+  }
+
+ private:
+  std::optional<Popped> takeFrontLocked(std::unique_lock<std::mutex>& lock) {
+    if (items_.empty()) return std::nullopt;
+    Popped popped{std::move(items_.front()), next_ticket_++};
+    items_.pop_front();
+    lock.unlock();
+    not_full_.notify_one();
+    return popped;
+  }
+
+  const std::size_t capacity_;
+  const DropPolicy policy_;
+  mutable std::mutex mutex_;
+  std::condition_variable not_empty_, not_full_;
+  std::deque<T> items_;
+  bool closed_ = false;
+  std::uint64_t next_ticket_ = 0;
+  std::uint64_t dropped_ = 0;
+  std::uint64_t pushed_ = 0;
+};
+
+}  // namespace findmug::daemon

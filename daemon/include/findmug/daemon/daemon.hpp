@@ -1,0 +1,70 @@
+// findmug/daemon/daemon.hpp — findmugd as an object: source thread, pipeline, watchdog, shutdown.
+//
+// Construction does everything that can fail for configuration reasons —
+// load the model, open the frame source, open LCM — and throws
+// findmug::Error naming the key, so start-up stops with a clear message.
+// run() then:
+//   1. starts the pipeline and the source thread (the only caller of
+//      FrameSource::next(), which owns any input LCM handle inside the source),
+//   2. tells systemd READY=1,
+//   3. loops every 50 ms: honours requestStop(), pings the watchdog when the
+//      WatchdogGate sees progress, and notices the source ending,
+//   4. shuts down: STOPPING=1, source->stop(), pipeline stop (queued frames
+//      are dropped on a stop request, drained at end of stream), final status.
+//
+// Exit codes: 0 after a stop request or an exhausted finite source, 1 when
+// the source failed for good (so Restart=on-failure brings the daemon back).
+#pragma once
+
+#include <atomic>
+#include <chrono>
+#include <memory>
+#include <string>
+#include <thread>
+
+#include "findmug/config.hpp"
+#include "findmug/daemon/daemon_config.hpp"
+#include "findmug/daemon/pipeline.hpp"
+#include "findmug/daemon/service.hpp"
+
+namespace findmug::io {
+class FrameSource;
+}
+
+namespace findmug::daemon {
+
+class Daemon {
+ public:
+  Daemon(const Config& config, const DaemonConfig& daemon_config, PipelineHooks hooks = {});
+  ~Daemon();
+  Daemon(const Daemon&) = delete;
+  Daemon& operator=(const Daemon&) = delete;
+
+  // Blocks until requestStop() or the end of the source; returns the exit code.
+  int run();
+  // Thread-safe and async-signal-safe (one atomic store).
+  void requestStop() { stop_requested_.store(true); }
+
+  const Pipeline& pipeline() const { return *pipeline_; }
+  const io::FrameSource& source() const { return *source_; }
+
+ private:
+  void sourceLoop();
+  ProgressSnapshot progress() const;
+
+  DaemonConfig daemon_config_;
+  SystemdNotifier notifier_;
+  std::unique_ptr<io::FrameSource> source_;
+  std::unique_ptr<Pipeline> pipeline_;
+  std::thread source_thread_;
+  std::atomic<bool> stop_requested_{false};
+  std::atomic<bool> source_finished_{false};
+  std::atomic<bool> source_in_next_{false};
+  std::atomic<std::int64_t> source_last_return_ns_{0};  // steady clock, ns
+};
+
+// The model file as a forest plus "FILE:ID" for status messages; throws
+// findmug::Error naming daemon.model_path when it cannot be loaded.
+std::shared_ptr<const RandomForest> loadModel(const std::string& path, std::string* model_id);
+
+}  // namespace findmug::daemon

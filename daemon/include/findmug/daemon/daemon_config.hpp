@@ -1,0 +1,78 @@
+// findmug/daemon/daemon_config.hpp — findmugd's own settings and command line.
+//
+// The YAML file holds the core sections (parsed by findmug::parseConfig) and a
+// `daemon:` section whose keys arrive in Config::extra as "daemon.NAME". This
+// file defines, validates and documents those keys (daemon/findmugd.yaml is
+// the annotated default file); an unknown daemon key or a bad value is a
+// findmug::Error naming the key, and start-up stops.
+//
+// Precedence, lowest first: built-in defaults < YAML file < command-line
+// flags. daemon.lcm_url left empty means $LCM_DEFAULT_URL, then liblcm's
+// own default.
+#pragma once
+
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "findmug/config.hpp"
+
+namespace findmug::daemon {
+
+// Compiled-in default locations (CMake passes the install prefix).
+std::string defaultConfigPath();  // /etc/findmug/findmugd.yaml
+std::string defaultModelPath();   // <prefix>/share/findmug/models/findmug.fmf
+
+struct DaemonConfig {
+  std::string source = "openni2";      // frame source spec, see findmug::io::makeFrameSource
+  std::string lcm_url;                 // output LCM provider; "" = $LCM_DEFAULT_URL / liblcm default
+  std::string channel_suffix;          // appended as "_SUFFIX" to every channel name
+  std::string model_path = defaultModelPath();
+  int queue_capacity = 2;              // per queue between stages (frames)
+  int workers = 0;                     // segmentation workers; 0 = one per CPU core
+  double status_period_s = 1.0;        // FINDMUG_STATUS period
+  double stats_window_s = 10.0;        // window of the status rates and latency percentiles
+  bool publish_confidence = true;      // include per-pixel confidence in label images
+  bool compress_labels = true;         // zlib-compress label images
+  bool publish_tables = true;          // publish FINDMUG_TABLES
+  bool exit_at_end_of_stream = true;   // finite source exhausted: drain, publish, exit 0
+  std::string log_level = "info";      // trace, debug, info, warn, error
+
+  // Channel names with the suffix applied.
+  std::string channel(const std::string& base) const {
+    return channel_suffix.empty() ? base : base + "_" + channel_suffix;
+  }
+  // Number of workers after resolving 0 to the core count.
+  int effectiveWorkers() const;
+};
+
+// Reads and validates every "daemon.*" entry of `config.extra`, then writes
+// the effective daemon values back into it (so dumpConfig shows all of them).
+// Throws findmug::Error naming the key for unknown keys and bad values.
+DaemonConfig resolveDaemonConfig(Config& config);
+
+// The resolved output LCM URL ($LCM_DEFAULT_URL when daemon.lcm_url is empty).
+std::string effectiveLcmUrl(const DaemonConfig& config);
+
+// Parsed command line of findmugd.
+struct CommandLine {
+  std::optional<std::string> config_path;  // --config; default file used when absent
+  std::vector<std::string> overrides;      // key=value, in order
+  bool check_config = false;               // --check-config: validate, print, exit
+  bool help = false;
+};
+
+// Throws findmug::Error for unknown flags or missing values.
+CommandLine parseCommandLine(const std::vector<std::string>& args);
+std::string usage();
+
+// Loads the file (the default one may be absent: then built-in defaults),
+// applies the overrides and resolves the daemon section.
+struct LoadedConfig {
+  Config config;
+  DaemonConfig daemon;
+  std::string origin;  // which file was read, or "built-in defaults"
+};
+LoadedConfig loadDaemonConfig(const CommandLine& command_line);
+
+}  // namespace findmug::daemon

@@ -1,0 +1,229 @@
+// findmug/daemon/stage.hpp — one pipeline stage: a function run on a queue's items.
+//
+// A stage owns its input queue (bounded, with a drop policy), runs `work` on
+// each item and hands the results to `emit` IN INPUT ORDER, one call at a
+// time. It runs in one of two modes, selected at construction:
+//
+//   Threaded    `workers` threads pop from the queue. With several workers
+//               items are processed in parallel; a reorder buffer keyed by
+//               the queue's pop tickets restores input order before emit.
+//               This is how the bottleneck stage (segmentation) uses every
+//               core while publishing in frame order.
+//   Sequential  push() runs work and emit inline on the caller's thread. The
+//               same pipeline then runs deterministically, frame by frame,
+//               which is what tests and offline tools want.
+//
+// A single-worker stage may also have a periodic `tick`, run by its worker
+// thread between items (or inline by tick() in sequential mode). The
+// publisher stage uses it for the status message so that one thread alone
+// owns the output LCM handle.
+//
+// `work` returns nullopt when an item yields nothing (e.g. a rejected frame);
+// an exception escaping `work` is reported through `on_error` and treated
+// the same way. Either way the item's place in the order is released, so
+// one bad frame never stalls the frames behind it.
+#pragma once
+
+#include <atomic>
+#include <chrono>
+#include <exception>
+#include <functional>
+#include <mutex>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <thread>
+#include <utility>
+#include <vector>
+
+#include "findmug/daemon/bounded_queue.hpp"
+#include "findmug/daemon/reorder_buffer.hpp"
+#include "findmug/daemon/stats.hpp"
+
+namespace findmug::daemon {
+
+enum class ExecutionMode { Threaded, Sequential };
+
+// What stop() does with items still waiting in the input queue.
+enum class StopMode {
+  Drain,    // process everything already queued, then stop
+  Discard,  // drop what is queued (counted as drops); only in-flight items finish
+};
+
+struct StageOptions {
+  std::string name;
+  ExecutionMode mode = ExecutionMode::Threaded;
+  int workers = 1;
+  std::size_t queue_capacity = 2;
+  DropPolicy policy = DropPolicy::DropOldest;
+  std::chrono::steady_clock::duration latency_window = std::chrono::seconds(10);
+  // Periodic tick (single worker only); zero = none.
+  std::chrono::steady_clock::duration tick_period{0};
+};
+
+struct StageStats {
+  std::string name;
+  std::size_t queue_depth = 0;
+  std::size_t queue_capacity = 0;
+  std::uint64_t accepted = 0;  // items that entered the queue
+  std::uint64_t dropped = 0;   // evicted by the drop policy or discarded at stop
+  std::uint64_t completed = 0; // work returned a value
+  std::uint64_t failed = 0;    // work returned nullopt or threw
+  std::size_t in_flight = 0;   // popped, not yet emitted (includes held in reorder)
+  LatencySummary latency;      // wall time of `work`
+};
+
+template <typename In, typename Out>
+class Stage {
+ public:
+  using Work = std::function<std::optional<Out>(In&)>;
+  using Emit = std::function<void(Out&&)>;
+  using OnDrop = std::function<void(const In& dropped)>;
+  using OnError = std::function<void(const std::string& what)>;
+  using Tick = std::function<void()>;
+
+  Stage(StageOptions options, Work work, Emit emit, OnDrop on_drop = {}, OnError on_error = {},
+        Tick tick = {})
+      : options_(std::move(options)),
+        work_(std::move(work)),
+        emit_(std::move(emit)),
+        on_drop_(std::move(on_drop)),
+        on_error_(std::move(on_error)),
+        tick_(std::move(tick)),
+        queue_(options_.queue_capacity, options_.policy),
+        latency_(options_.latency_window) {
+    if (options_.workers < 1) throw std::invalid_argument(options_.name + ": workers must be >= 1");
+    if (tick_ && options_.workers != 1) {
+      throw std::invalid_argument(options_.name + ": a ticking stage must have one worker");
+    }
+  }
+  Stage(const Stage&) = delete;
+  Stage& operator=(const Stage&) = delete;
+  ~Stage() { stop(StopMode::Discard); }
+
+  void start() {
+    if (options_.mode == ExecutionMode::Sequential || !threads_.empty()) return;
+    for (int i = 0; i < options_.workers; ++i) threads_.emplace_back([this] { workerLoop(); });
+  }
+
+  // Threaded: enqueue under the drop policy (blocks only with DropPolicy::Block).
+  // Sequential: run work + emit now. Returns false if the stage is stopped.
+  bool push(In item) {
+    if (options_.mode == ExecutionMode::Sequential) {
+      if (queue_.closed()) return false;
+      accepted_.fetch_add(1);
+      in_flight_.fetch_add(1);
+      auto result = run(item);
+      if (result) emit_(std::move(*result));
+      in_flight_.fetch_sub(1);
+      return true;
+    }
+    std::optional<In> evicted;
+    const PushResult r = queue_.push(std::move(item), &evicted);
+    if (r == PushResult::Closed) return false;
+    accepted_.fetch_add(1);
+    if (r == PushResult::AcceptedDroppedOldest && evicted && on_drop_) on_drop_(*evicted);
+    return true;
+  }
+
+  // Sequential mode: run the periodic tick now (threaded mode ticks itself).
+  void tick() {
+    if (tick_) tick_();
+  }
+
+  // Closes the input, handles queued items per `mode`, joins the workers.
+  // Idempotent. After stop(), push() returns false.
+  void stop(StopMode mode) {
+    if (mode == StopMode::Discard) queue_.clear();
+    queue_.close();
+    for (auto& t : threads_) {
+      if (t.joinable()) t.join();
+    }
+    threads_.clear();
+  }
+
+  StageStats stats() const {
+    StageStats s;
+    s.name = options_.name;
+    s.queue_depth = queue_.size();
+    s.queue_capacity = queue_.capacity();
+    s.accepted = accepted_.load();
+    s.dropped = queue_.droppedCount();
+    s.completed = completed_.load();
+    s.failed = failed_.load();
+    s.in_flight = in_flight_.load();
+    std::lock_guard lock(latency_mutex_);
+    s.latency = latency_.summary();
+    return s;
+  }
+
+  const StageOptions& options() const { return options_; }
+
+ private:
+  std::optional<Out> run(In& item) {
+    const auto t0 = std::chrono::steady_clock::now();
+    std::optional<Out> result;
+    try {
+      result = work_(item);
+    } catch (const std::exception& e) {
+      if (on_error_) on_error_(options_.name + ": " + e.what());
+    } catch (...) {
+      if (on_error_) on_error_(options_.name + ": unknown exception");
+    }
+    const auto t1 = std::chrono::steady_clock::now();
+    {
+      std::lock_guard lock(latency_mutex_);
+      latency_.add(std::chrono::duration<double, std::milli>(t1 - t0).count(), t1);
+    }
+    (result ? completed_ : failed_).fetch_add(1);
+    return result;
+  }
+
+  void workerLoop() {
+    using Clock = std::chrono::steady_clock;
+    const bool ticking = tick_ && options_.tick_period > Clock::duration::zero();
+    auto next_tick = Clock::now() + options_.tick_period;
+    for (;;) {
+      std::optional<typename BoundedQueue<In>::Popped> popped;
+      if (ticking) {
+        popped = queue_.popFor(std::max(next_tick - Clock::now(), Clock::duration::zero()));
+      } else {
+        popped = queue_.pop();
+      }
+      if (popped) {
+        in_flight_.fetch_add(1);
+        auto result = run(popped->value);
+        std::lock_guard lock(release_mutex_);
+        const std::uint64_t released_before = reorder_.nextTicket();
+        reorder_.insert(popped->ticket, std::move(result));
+        for (auto& r : reorder_.release()) emit_(std::move(r));
+        // Tickets now released (results and tombstones) have left the stage.
+        in_flight_.fetch_sub(static_cast<std::size_t>(reorder_.nextTicket() - released_before));
+      }
+      if (ticking && Clock::now() >= next_tick) {
+        tick_();
+        next_tick = Clock::now() + options_.tick_period;
+      }
+      if (!popped && queue_.closed() && queue_.size() == 0) break;
+    }
+  }
+
+  StageOptions options_;
+  Work work_;
+  Emit emit_;
+  OnDrop on_drop_;
+  OnError on_error_;
+  Tick tick_;
+  BoundedQueue<In> queue_;
+  std::vector<std::thread> threads_;
+
+  std::mutex release_mutex_;
+  ReorderBuffer<Out> reorder_;
+
+  mutable std::mutex latency_mutex_;
+  LatencyWindow latency_;
+  std::atomic<std::uint64_t> accepted_{0}, completed_{0}, failed_{0};
+  std::atomic<std::size_t> in_flight_{0};
+};
+
+}  // namespace findmug::daemon

@@ -1,0 +1,32 @@
+// findmug/io/channels.hpp — LCM channel names used by findmug.
+//
+// Every channel is a base name plus an optional suffix, so that several
+// robots / cameras can share one LCM network: suffix "KITCHEN" turns
+// FINDMUG_RGBD into FINDMUG_RGBD_KITCHEN. The suffix is configured once
+// (daemon.channel_suffix, --channel-suffix) and applied by channelName().
+//
+//   FINDMUG_RGBD        findmug::rgbd_frame_t   frames in (sensor, findmug-grab)
+//   FINDMUG_LABELS      findmug::label_image_t  per-pixel labels out
+//   FINDMUG_TABLES      findmug::tables_t       tables + search positions out
+//   FINDMUG_STATUS      findmug::status_t       daemon health, about 1 Hz
+//   FINDMUG_ROBOT_POSE  findmug::robot_pose_t   robot pose in the map (input, optional)
+#pragma once
+
+#include <string>
+#include <string_view>
+
+namespace findmug::io {
+
+inline constexpr std::string_view kRgbdChannel = "FINDMUG_RGBD";
+inline constexpr std::string_view kLabelsChannel = "FINDMUG_LABELS";
+inline constexpr std::string_view kTablesChannel = "FINDMUG_TABLES";
+inline constexpr std::string_view kStatusChannel = "FINDMUG_STATUS";
+inline constexpr std::string_view kRobotPoseChannel = "FINDMUG_ROBOT_POSE";
+
+// `base` + "_" + `suffix`, or `base` when the suffix is empty. The suffix may
+// hold only letters, digits and '_' (and may not start with '_'); anything
+// else throws findmug::Error naming the suffix, because a typo there would
+// silently make publisher and subscriber miss each other.
+std::string channelName(std::string_view base, std::string_view suffix);
+
+}  // namespace findmug::io

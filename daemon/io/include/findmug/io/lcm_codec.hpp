@@ -1,0 +1,131 @@
+// findmug/io/lcm_codec.hpp — findmug types <-> LCM messages (lcmtypes/*.lcm).
+//
+// Encoding compresses: depth with zlib, colour as JPEG or PNG (or raw), labels
+// and confidence with zlib. Decoding trusts nothing: every message comes from
+// the network or a log file, so the decoders check the wire layout before LCM
+// allocates anything (a corrupt size field could otherwise ask for gigabytes),
+// then dimensions, size fields against array lengths, compression ids, the
+// decompressed sizes and the payload values. Any problem throws findmug::Error
+// whose message names the channel and the field, e.g.
+//   "FINDMUG_RGBD: rgbd_frame_t.depth_data: zlib stream inflates to 614399 bytes, expected 614400".
+#pragma once
+
+#include <Eigen/Core>
+#include <cstddef>
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "findmug/frame.hpp"
+#include "findmug/label_image.hpp"
+#include "findmug/tables.hpp"
+#include "findmug/label_image_t.hpp"
+#include "findmug/rgbd_frame_t.hpp"
+#include "findmug/robot_pose_t.hpp"
+#include "findmug/status_t.hpp"
+#include "findmug/tables_t.hpp"
+
+namespace findmug::io {
+
+// ---- raw messages -------------------------------------------------------------
+
+// Decodes an LCM message of type Msg from `size` bytes after checking, field by
+// field, that every length fits in the buffer (and the type hash matches, and
+// nothing trails the message). `channel` names the source in errors.
+// Defined for rgbd_frame_t, label_image_t, tables_t, status_t, robot_pose_t.
+template <typename Msg>
+Msg decodeMessage(const void* data, std::size_t size, std::string_view channel);
+template <>
+rgbd_frame_t decodeMessage<rgbd_frame_t>(const void*, std::size_t, std::string_view);
+template <>
+label_image_t decodeMessage<label_image_t>(const void*, std::size_t, std::string_view);
+template <>
+tables_t decodeMessage<tables_t>(const void*, std::size_t, std::string_view);
+template <>
+status_t decodeMessage<status_t>(const void*, std::size_t, std::string_view);
+template <>
+robot_pose_t decodeMessage<robot_pose_t>(const void*, std::size_t, std::string_view);
+
+template <typename Msg>
+std::vector<std::uint8_t> encodeMessage(const Msg& message) {
+  std::vector<std::uint8_t> bytes(static_cast<std::size_t>(message.getEncodedSize()));
+  message.encode(bytes.data(), 0, static_cast<int>(bytes.size()));
+  return bytes;
+}
+
+// ---- RGB-D frames -------------------------------------------------------------
+
+enum class DepthCompression : std::int8_t { None = 0, Zlib = 1 };
+enum class ColorCompression : std::int8_t { None = 0, Jpeg = 1, Png = 2 };
+
+struct RgbdEncodeOptions {
+  DepthCompression depth = DepthCompression::Zlib;
+  ColorCompression color = ColorCompression::Jpeg;
+  int zlib_level = 1;     // 1 = fastest; depth compresses about 2-4x already there
+  int jpeg_quality = 90;  // 1..100
+};
+
+// Parses "none"/"zlib" and "none"/"jpeg"/"png" (flags, config); throws on others.
+DepthCompression parseDepthCompression(std::string_view name);
+ColorCompression parseColorCompression(std::string_view name);
+
+// Validates `frame` (validateFrame) and encodes it. Throws findmug::Error.
+rgbd_frame_t encodeRgbdFrame(const RgbdFrame& frame, const RgbdEncodeOptions& options = {});
+// Decodes and validates; the returned frame's `source` is "<channel>: <message source>".
+RgbdFrame decodeRgbdFrame(const rgbd_frame_t& message, std::string_view channel);
+RgbdFrame decodeRgbdFrame(const void* data, std::size_t size, std::string_view channel);
+
+// ---- label images -------------------------------------------------------------
+
+struct LabelImageMessage {
+  LabelImage image;        // confidence empty when the message had none
+  std::uint64_t utime = 0; // source frame's utime
+  std::int64_t seq = 0;    // source frame's seq
+  std::int64_t latency_us = 0;
+};
+
+// Labels must be < kNumLabels or kVoidLabel; confidence (if given and
+// `with_confidence`) in [0, 1], quantised to 0..255.
+label_image_t encodeLabelImage(const LabelImageMessage& labels, bool with_confidence = true);
+// Checks label names against kLabelNames and every label id.
+LabelImageMessage decodeLabelImage(const label_image_t& message, std::string_view channel);
+LabelImageMessage decodeLabelImage(const void* data, std::size_t size, std::string_view channel);
+
+// ---- tables ---------------------------------------------------------------------
+
+// The robot base's pose in the map (2-D).
+struct RobotPose {
+  std::uint64_t utime = 0;
+  double x = 0.0, y = 0.0, yaw = 0.0;
+};
+
+// A base-frame point in the map frame: R(yaw) * p + (x, y).
+Eigen::Vector2d toMapFrame(const RobotPose& pose, const Eigen::Vector2d& base_xy);
+
+// Map-frame copies of one table (tables_t with has_map_pose).
+struct MapFrameTable {
+  Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
+  std::vector<Eigen::Vector2d> hull;
+  std::vector<SearchPosition> search_positions;  // xy, yaw in the map frame
+};
+
+struct TablesMessage {
+  std::uint64_t utime = 0;  // source frame's utime
+  std::int64_t seq = 0;
+  std::vector<TableCluster> tables;        // robot base frame
+  std::optional<RobotPose> map_pose;       // when the pose was known
+  std::vector<MapFrameTable> map_tables;   // one per table when map_pose, else empty
+};
+
+// Fills the map_ fields from `message.map_pose` when set (map_tables is ignored).
+tables_t encodeTables(const TablesMessage& message);
+// Checks finiteness, counts, unit axes; fills map_tables when has_map_pose.
+TablesMessage decodeTables(const tables_t& message, std::string_view channel);
+TablesMessage decodeTables(const void* data, std::size_t size, std::string_view channel);
+
+robot_pose_t encodeRobotPose(const RobotPose& pose);
+RobotPose decodeRobotPose(const void* data, std::size_t size, std::string_view channel);
+
+}  // namespace findmug::io

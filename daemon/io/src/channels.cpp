@@ -1,0 +1,22 @@
+#include "findmug/io/channels.hpp"
+
+#include <cctype>
+
+#include "findmug/error.hpp"
+
+namespace findmug::io {
+
+std::string channelName(std::string_view base, std::string_view suffix) {
+  if (suffix.empty()) return std::string(base);
+  bool ok = suffix.front() != '_';
+  for (char c : suffix) {
+    if (!(std::isalnum(static_cast<unsigned char>(c)) || c == '_')) ok = false;
+  }
+  if (!ok) {
+    throw Error("channel suffix '" + std::string(suffix) +
+                "': only letters, digits and '_' allowed, not starting with '_'");
+  }
+  return std::string(base) + "_" + std::string(suffix);
+}
+
+}  // namespace findmug::io

@@ -1,0 +1,30 @@
+// compression.hpp (internal to findmug_io) — zlib and JPEG in memory.
+//
+// Decoders take the exact size the result must have (known from the message
+// header) and throw findmug::Error, prefixed with `what` (channel + field),
+// when the data is corrupt, truncated, or decodes to a different size.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "findmug/labels.hpp"
+
+namespace findmug::io::detail {
+
+std::vector<std::uint8_t> zlibCompress(const std::uint8_t* data, std::size_t size, int level);
+// Inflates into exactly `expected_size` bytes: a stream that ends early, runs
+// past that size, is corrupt, or has bytes after its end is an error.
+std::vector<std::uint8_t> zlibDecompress(const std::uint8_t* data, std::size_t size,
+                                         std::size_t expected_size, const std::string& what);
+
+std::vector<std::uint8_t> jpegCompressRgb(const std::vector<Rgb8>& pixels, int width, int height,
+                                          int quality);
+// Decodes a JPEG that must be width x height; any libjpeg error or warning
+// (corrupt or truncated data) is an error rather than a grey-filled image.
+std::vector<Rgb8> jpegDecompressRgb(const std::uint8_t* data, std::size_t size, int width,
+                                    int height, const std::string& what);
+
+}  // namespace findmug::io::detail

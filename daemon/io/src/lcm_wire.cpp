@@ -1,0 +1,253 @@
+// Wire-layout checks run before LCM's generated decode().
+//
+// The generated code trusts the size fields: a corrupt depth_size of 2e9 makes
+// it allocate and zero 2 GB before noticing the message is short, a corrupt
+// string length of 0 makes it throw std::length_error. Walking the layout
+// first, with every length checked against the bytes that are really left,
+// turns all of that into a findmug::Error naming the field. The walkers
+// mirror lcmtypes/*.lcm field by field; the codec round-trip tests fail if
+// they ever drift apart.
+#include <cstring>
+#include <limits>
+#include <string>
+#include <string_view>
+
+#include "findmug/error.hpp"
+#include "findmug/io/lcm_codec.hpp"
+
+namespace findmug::io {
+
+namespace {
+
+class WireWalker {
+ public:
+  WireWalker(const void* data, std::size_t size, std::string_view type, std::string_view channel)
+      : data_(static_cast<const std::uint8_t*>(data)), size_(size), type_(type), channel_(channel) {}
+
+  [[noreturn]] void fail(std::string_view field, const std::string& what) const {
+    throw Error(std::string(channel_) + ": " + std::string(type_) + "." + std::string(field) +
+                ": " + what + " (message of " + std::to_string(size_) + " bytes)");
+  }
+
+  void hash(std::int64_t expected) {
+    need(8, "<hash>");
+    const auto got = static_cast<std::int64_t>(bigEndian(8));
+    if (got != expected) {
+      throw Error(std::string(channel_) + ": not a findmug." + std::string(type_) +
+                  " message (type hash mismatch, " + std::to_string(size_) + " bytes)");
+    }
+  }
+
+  // Fixed-size fields: just make sure they are there.
+  void skip(std::size_t bytes, std::string_view field) {
+    need(bytes, field);
+    pos_ += bytes;
+  }
+
+  std::int32_t int32(std::string_view field) {
+    need(4, field);
+    return static_cast<std::int32_t>(bigEndian(4));
+  }
+
+  // An array length: non-negative and `count * element_bytes` must fit in
+  // what is left. Returns the count.
+  std::int32_t count(std::string_view field, std::size_t element_bytes) {
+    const std::int32_t n = int32(field);
+    if (n < 0) fail(field, "negative count " + std::to_string(n));
+    if (static_cast<std::size_t>(n) * element_bytes > left()) {
+      fail(field, "count " + std::to_string(n) + " needs at least " +
+                      std::to_string(static_cast<std::size_t>(n) * element_bytes) +
+                      " bytes, only " + std::to_string(left()) + " left");
+    }
+    return n;
+  }
+
+  void array(std::int32_t n, std::size_t element_bytes, std::string_view field) {
+    skip(static_cast<std::size_t>(n) * element_bytes, field);
+  }
+
+  // LCM string: int32 length including the terminating NUL, bytes, NUL.
+  void string(std::string_view field) {
+    const std::int32_t n = int32(field);
+    if (n < 1) fail(field, "string length " + std::to_string(n) + " (at least 1 for the NUL)");
+    need(static_cast<std::size_t>(n), field);
+    if (data_[pos_ + static_cast<std::size_t>(n) - 1] != 0) fail(field, "string not NUL-terminated");
+    pos_ += static_cast<std::size_t>(n);
+  }
+
+  void finish() const {
+    if (pos_ != size_) {
+      throw Error(std::string(channel_) + ": " + std::string(type_) + ": " +
+                  std::to_string(size_ - pos_) + " unexpected bytes after the message (" +
+                  std::to_string(size_) + " bytes)");
+    }
+  }
+
+ private:
+  std::size_t left() const { return size_ - pos_; }
+
+  void need(std::size_t bytes, std::string_view field) const {
+    if (bytes > left()) {
+      fail(field, "truncated: needs " + std::to_string(bytes) + " bytes at offset " +
+                      std::to_string(pos_) + ", only " + std::to_string(left()) + " left");
+    }
+  }
+
+  // Reads `bytes` big-endian bytes at pos_ and advances.
+  std::uint64_t bigEndian(int bytes) {
+    std::uint64_t v = 0;
+    for (int i = 0; i < bytes; ++i) v = (v << 8) | data_[pos_++];
+    return v;
+  }
+
+  const std::uint8_t* data_;
+  std::size_t size_;
+  std::size_t pos_ = 0;
+  std::string_view type_;
+  std::string_view channel_;
+};
+
+// Sizes on the wire.
+constexpr std::size_t kI8 = 1, kBool = 1, kI32 = 4, kI64 = 8, kF32 = 4, kF64 = 8;
+constexpr std::size_t kMinString = 5;                     // length + NUL
+constexpr std::size_t kMinSearchPosition = 3 * kF64 + kBool + kMinString;
+
+void walkRobotPose(WireWalker& w) {
+  w.skip(kI64, "utime");
+  w.skip(3 * kF64, "x/y/yaw");
+}
+
+void walkSearchPosition(WireWalker& w, std::string_view field) {
+  w.skip(3 * kF64, field);
+  w.skip(kBool, field);
+  w.string(field);
+}
+
+void walkTable(WireWalker& w) {
+  w.skip(kI32, "tables.id");
+  w.skip(3 * kF64 + kF64, "tables.centroid/top_height");
+  w.skip(6 * kF64, "tables.major_axis/minor_axis/extents");
+  const std::int32_t hull = w.count("tables.hull_size", 2 * kF64);
+  w.array(hull, 2 * kF64, "tables.hull");
+  w.skip(kI32 + kF32, "tables.point_count/mean_confidence");
+  const std::int32_t positions = w.count("tables.num_search_positions", kMinSearchPosition);
+  for (std::int32_t i = 0; i < positions; ++i) walkSearchPosition(w, "tables.search_positions");
+  w.skip(3 * kF64, "tables.map_centroid");
+  w.array(hull, 2 * kF64, "tables.map_hull");
+  for (std::int32_t i = 0; i < positions; ++i) walkSearchPosition(w, "tables.map_search_positions");
+}
+
+template <typename Msg>
+Msg decodeWalked(const void* data, std::size_t size, std::string_view channel) {
+  Msg msg;
+  int rc = -1;
+  try {
+    rc = msg.decode(data, 0, static_cast<int>(size));
+  } catch (const std::exception& e) {
+    throw Error(std::string(channel) + ": " + Msg::getTypeName() + ": LCM decode failed: " + e.what());
+  }
+  if (rc != static_cast<int>(size)) {
+    throw Error(std::string(channel) + ": " + Msg::getTypeName() + ": LCM decode failed (" +
+                std::to_string(rc) + " of " + std::to_string(size) + " bytes)");
+  }
+  return msg;
+}
+
+void checkSize(std::size_t size, std::string_view type, std::string_view channel) {
+  if (size > static_cast<std::size_t>(std::numeric_limits<int>::max())) {
+    throw Error(std::string(channel) + ": " + std::string(type) + ": message of " +
+                std::to_string(size) + " bytes is too large");
+  }
+}
+
+}  // namespace
+
+template <>
+rgbd_frame_t decodeMessage<rgbd_frame_t>(const void* data, std::size_t size,
+                                         std::string_view channel) {
+  checkSize(size, "rgbd_frame_t", channel);
+  WireWalker w(data, size, "rgbd_frame_t", channel);
+  w.hash(rgbd_frame_t::getHash());
+  w.skip(2 * kI64, "utime/seq");
+  w.string("source");
+  w.skip(2 * kI32, "width/height");
+  w.skip(4 * kF64, "fx/fy/cx/cy");
+  w.skip(kBool + 3 * kF64, "extrinsics");
+  w.skip(kI8, "depth_compression");
+  w.array(w.count("depth_size", 1), 1, "depth_data");
+  w.skip(kI8, "color_compression");
+  w.array(w.count("color_size", 1), 1, "color_data");
+  w.finish();
+  return decodeWalked<rgbd_frame_t>(data, size, channel);
+}
+
+template <>
+label_image_t decodeMessage<label_image_t>(const void* data, std::size_t size,
+                                           std::string_view channel) {
+  checkSize(size, "label_image_t", channel);
+  WireWalker w(data, size, "label_image_t", channel);
+  w.hash(label_image_t::getHash());
+  w.skip(2 * kI64 + 2 * kI32, "utime/seq/width/height");
+  const std::int32_t names = w.count("num_labels", kMinString);
+  for (std::int32_t i = 0; i < names; ++i) w.string("label_names");
+  w.skip(kI8, "compression");
+  w.array(w.count("labels_size", 1), 1, "labels_data");
+  w.skip(kBool, "has_confidence");
+  w.array(w.count("confidence_size", 1), 1, "confidence_data");
+  w.skip(kI64, "latency_us");
+  w.finish();
+  return decodeWalked<label_image_t>(data, size, channel);
+}
+
+template <>
+tables_t decodeMessage<tables_t>(const void* data, std::size_t size, std::string_view channel) {
+  checkSize(size, "tables_t", channel);
+  WireWalker w(data, size, "tables_t", channel);
+  w.hash(tables_t::getHash());
+  w.skip(2 * kI64 + kBool, "utime/seq/has_map_pose");
+  walkRobotPose(w);
+  // A table is at least its fixed fields plus the map centroid.
+  const std::int32_t tables = w.count("num_tables", kI32 + 10 * kF64 + 2 * kI32 + kF32 + kI32 + 3 * kF64);
+  for (std::int32_t i = 0; i < tables; ++i) walkTable(w);
+  w.finish();
+  return decodeWalked<tables_t>(data, size, channel);
+}
+
+template <>
+status_t decodeMessage<status_t>(const void* data, std::size_t size, std::string_view channel) {
+  checkSize(size, "status_t", channel);
+  WireWalker w(data, size, "status_t", channel);
+  w.hash(status_t::getHash());
+  w.skip(2 * kI64 + 4 * kI64, "utime/uptime_us/frame counters");
+  w.skip(kF64 + 2 * kF32, "window_s/input_fps/output_fps");
+  const std::int32_t stages = w.count("num_stages", kMinString + 3 * kI64);
+  for (std::int32_t i = 0; i < stages; ++i) w.string("stage_names");
+  w.array(stages, kI64, "latency_p50_us");
+  w.array(stages, kI64, "latency_p95_us");
+  w.array(stages, kI64, "latency_max_us");
+  const std::int32_t queues = w.count("num_queues", kMinString + 2 * kI32);
+  for (std::int32_t i = 0; i < queues; ++i) w.string("queue_names");
+  w.array(queues, kI32, "queue_depths");
+  w.array(queues, kI32, "queue_capacities");
+  w.string("model_id");
+  w.string("source");
+  w.string("source_state_name");
+  w.skip(kI8, "source_state");
+  w.string("last_error");
+  w.skip(kI64, "last_error_utime");
+  w.finish();
+  return decodeWalked<status_t>(data, size, channel);
+}
+
+template <>
+robot_pose_t decodeMessage<robot_pose_t>(const void* data, std::size_t size,
+                                         std::string_view channel) {
+  checkSize(size, "robot_pose_t", channel);
+  WireWalker w(data, size, "robot_pose_t", channel);
+  w.hash(robot_pose_t::getHash());
+  walkRobotPose(w);
+  w.finish();
+  return decodeWalked<robot_pose_t>(data, size, channel);
+}
+
+}  // namespace findmug::io

@@ -1,0 +1,72 @@
+// findmugd — real-time semantic segmentation daemon (see daemon/include/findmug/daemon/daemon.hpp).
+//
+// Thin: parse flags, load and log the config, set up logging, turn SIGTERM /
+// SIGINT into Daemon::requestStop(), run. Signals are blocked in every thread
+// and taken synchronously by one dedicated thread, so no library call on a
+// worker thread is interrupted by EINTR.
+#include <pthread.h>
+#include <signal.h>
+#include <spdlog/spdlog.h>
+
+#include <cstdio>
+#include <iostream>
+#include <thread>
+
+#include "findmug/daemon/daemon.hpp"
+#include "findmug/daemon/daemon_config.hpp"
+#include "findmug/daemon/service.hpp"
+#include "findmug/error.hpp"
+
+int main(int argc, char** argv) {
+  using namespace findmug;
+  using namespace findmug::daemon;
+
+  sigset_t signals;
+  sigemptyset(&signals);
+  sigaddset(&signals, SIGTERM);
+  sigaddset(&signals, SIGINT);
+  pthread_sigmask(SIG_BLOCK, &signals, nullptr);  // inherited by every thread created below
+
+  LoadedConfig loaded;
+  try {
+    const CommandLine command_line =
+        parseCommandLine(std::vector<std::string>(argv + 1, argv + argc));
+    if (command_line.help) {
+      std::cout << usage();
+      return 0;
+    }
+    loaded = loadDaemonConfig(command_line);
+    setupLogging(loaded.daemon.log_level);
+    if (command_line.check_config) {
+      std::cout << dumpConfig(loaded.config);
+      return 0;
+    }
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "findmugd: configuration error: %s\n", e.what());
+    return 2;
+  }
+
+  spdlog::info("findmugd starting; config from {}; effective config:\n{}", loaded.origin,
+               dumpConfig(loaded.config));
+  try {
+    Daemon daemon(loaded.config, loaded.daemon);
+    std::thread signal_thread([&daemon, &signals] {
+      int signal_number = 0;
+      while (sigwait(&signals, &signal_number) == 0) {
+        if (signal_number == SIGTERM || signal_number == SIGINT) {
+          daemon.requestStop();
+          return;
+        }
+      }
+    });
+    const int code = daemon.run();
+    // If run() ended on its own (source ended), wake the signal thread.
+    pthread_kill(signal_thread.native_handle(), SIGTERM);
+    signal_thread.join();
+    spdlog::info("findmugd exiting with code {}", code);
+    return code;
+  } catch (const std::exception& e) {
+    spdlog::critical("findmugd: {}", e.what());
+    return 2;
+  }
+}

@@ -1,0 +1,53 @@
+// findmug/training.hpp — turning a labelled dataset into forest training data.
+//
+// The expensive part of training and evaluation (cloud, ground plane,
+// oversegmentation, features) is done once per frame; cross-validation and
+// parameter sweeps then only retrain forests and rerun the MRF.
+#pragma once
+
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "findmug/dataset.hpp"
+#include "findmug/forest.hpp"
+#include "findmug/segmenter.hpp"
+
+namespace findmug {
+
+// One frame reduced to what training and evaluation need.
+struct FrameSample {
+  std::string name;
+  int width = 0, height = 0;
+  std::vector<int> pixel_segment;                // from the oversegmentation
+  std::vector<std::pair<int, int>> edges;        // adjacency
+  SegmentFeatures features;                      // one per segment
+  std::vector<std::uint8_t> segment_labels;      // plurality ground truth per segment (255 = void)
+  std::vector<std::uint32_t> segment_pixels;     // pixel count per segment
+  std::vector<std::uint8_t> ground_truth;        // per pixel, 255 = void
+};
+
+struct ExtractionReport {
+  int frames_total = 0;
+  int frames_used = 0;
+  std::vector<std::string> dropped;  // "name: reason" for frames without a ground plane etc.
+};
+
+// Runs the segmenter's geometric stages on every frame. Frames for which no
+// ground plane is found are dropped (the paper drops frames with too few floor
+// points) and listed in the report. `progress(done, total)` after each frame.
+std::vector<FrameSample> extractSamples(const DatasetFolder& dataset, const Segmenter& segmenter,
+                                        ExtractionReport& report,
+                                        const std::function<void(int, int)>& progress = {});
+
+// Segments with a non-void label from the given frames, as a training set
+// (weights empty: one vote per patch; class weighting is the forest's job).
+TrainingSet makeTrainingSet(const std::vector<FrameSample>& samples,
+                            const std::vector<std::size_t>& frame_indices);
+
+// Per-pixel labels of a frame from per-segment labels (255 where no segment).
+std::vector<std::uint8_t> pixelLabels(const FrameSample& sample,
+                                      const std::vector<std::uint8_t>& segment_labels);
+
+}  // namespace findmug

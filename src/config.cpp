@@ -1,0 +1,346 @@
+#include "findmug/config.hpp"
+
+#include <yaml-cpp/yaml.h>
+
+#include <charconv>
+#include <cmath>
+#include <fstream>
+#include <functional>
+#include <limits>
+#include <set>
+#include <sstream>
+
+#include "findmug/error.hpp"
+
+namespace findmug {
+
+namespace {
+
+// Sections the core does not interpret; their keys are passed through in
+// Config::extra for the daemon and clients to validate themselves.
+const std::set<std::string> kPassThroughSections = {"daemon", "clients", "table_map"};
+
+// One named setting: how to parse it into the config and how to print it.
+struct Setting {
+  std::string key;
+  std::function<void(SegmenterConfig&, const std::string& value, const std::string& origin)> set;
+  std::function<std::string(const SegmenterConfig&)> get;
+};
+
+[[noreturn]] void badValue(const std::string& origin, const std::string& key,
+                           const std::string& value, const std::string& expected) {
+  throw Error(origin + ": invalid value '" + value + "' for " + key + " (expected " + expected +
+              ")");
+}
+
+double parseDouble(const std::string& origin, const std::string& key, const std::string& value) {
+  double out = 0;
+  const char* begin = value.data();
+  const char* end = begin + value.size();
+  auto [ptr, ec] = std::from_chars(begin, end, out);
+  if (ec != std::errc() || ptr != end || !std::isfinite(out)) {
+    badValue(origin, key, value, "a finite number");
+  }
+  return out;
+}
+
+long long parseInt(const std::string& origin, const std::string& key, const std::string& value) {
+  long long out = 0;
+  const char* begin = value.data();
+  const char* end = begin + value.size();
+  auto [ptr, ec] = std::from_chars(begin, end, out);
+  if (ec != std::errc() || ptr != end) badValue(origin, key, value, "an integer");
+  return out;
+}
+
+bool parseBool(const std::string& origin, const std::string& key, const std::string& value) {
+  if (value == "true" || value == "yes" || value == "on" || value == "1") return true;
+  if (value == "false" || value == "no" || value == "off" || value == "0") return false;
+  badValue(origin, key, value, "true or false");
+}
+
+std::string formatDouble(double v) {
+  std::ostringstream s;
+  s.precision(9);
+  s << v;
+  return s.str();
+}
+
+// Builders for the kinds of settings, with inclusive ranges.
+Setting floatSetting(std::string key, std::function<float&(SegmenterConfig&)> field, double lo,
+                     double hi) {
+  Setting s;
+  s.key = key;
+  s.set = [key, field, lo, hi](SegmenterConfig& c, const std::string& v, const std::string& o) {
+    const double x = parseDouble(o, key, v);
+    if (x < lo || x > hi) {
+      badValue(o, key, v, "a number in [" + formatDouble(lo) + ", " + formatDouble(hi) + "]");
+    }
+    field(c) = static_cast<float>(x);
+  };
+  s.get = [field](const SegmenterConfig& c) {
+    return formatDouble(field(const_cast<SegmenterConfig&>(c)));
+  };
+  return s;
+}
+
+Setting intSetting(std::string key, std::function<int&(SegmenterConfig&)> field, long long lo,
+                   long long hi) {
+  Setting s;
+  s.key = key;
+  s.set = [key, field, lo, hi](SegmenterConfig& c, const std::string& v, const std::string& o) {
+    const long long x = parseInt(o, key, v);
+    if (x < lo || x > hi) {
+      badValue(o, key, v,
+               "an integer in [" + std::to_string(lo) + ", " + std::to_string(hi) + "]");
+    }
+    field(c) = static_cast<int>(x);
+  };
+  s.get = [field](const SegmenterConfig& c) {
+    return std::to_string(field(const_cast<SegmenterConfig&>(c)));
+  };
+  return s;
+}
+
+Setting boolSetting(std::string key, std::function<bool&(SegmenterConfig&)> field) {
+  Setting s;
+  s.key = key;
+  s.set = [key, field](SegmenterConfig& c, const std::string& v, const std::string& o) {
+    field(c) = parseBool(o, key, v);
+  };
+  s.get = [field](const SegmenterConfig& c) {
+    return std::string(field(const_cast<SegmenterConfig&>(c)) ? "true" : "false");
+  };
+  return s;
+}
+
+template <typename Enum>
+Setting enumSetting(std::string key, std::function<Enum&(SegmenterConfig&)> field,
+                    std::vector<std::pair<std::string, Enum>> names) {
+  Setting s;
+  s.key = key;
+  s.set = [key, field, names](SegmenterConfig& c, const std::string& v, const std::string& o) {
+    for (const auto& [name, value] : names) {
+      if (name == v) {
+        field(c) = value;
+        return;
+      }
+    }
+    std::string expected = "one of";
+    for (const auto& n : names) expected += " " + n.first;
+    badValue(o, key, v, expected);
+  };
+  s.get = [field, names](const SegmenterConfig& c) {
+    const Enum e = field(const_cast<SegmenterConfig&>(c));
+    for (const auto& [name, value] : names) {
+      if (value == e) return name;
+    }
+    return std::string("?");
+  };
+  return s;
+}
+
+const std::vector<Setting>& settings() {
+  using C = SegmenterConfig;
+  static const std::vector<Setting> all = {
+      floatSetting("cloud.max_depth_m", [](C& c) -> float& { return c.max_depth_m; }, 0.5, 20),
+      intSetting("normals.window_radius_px",
+                 [](C& c) -> int& { return c.normals.window_radius_px; }, 1, 32),
+      floatSetting("normals.max_depth_jump_m",
+                   [](C& c) -> float& { return c.normals.max_depth_jump_m; }, 0.001, 1),
+      enumSetting<GroundSource>("ground.source", [](C& c) -> GroundSource& { return c.ground.source; },
+                                {{"auto", GroundSource::Auto},
+                                 {"extrinsics", GroundSource::Extrinsics},
+                                 {"floor_labels", GroundSource::FloorLabels},
+                                 {"estimated", GroundSource::Estimated}}),
+      floatSetting("ground.ransac_inlier_m",
+                   [](C& c) -> float& { return c.ground.ransac_inlier_m; }, 0.001, 0.5),
+      intSetting("ground.ransac_iterations",
+                 [](C& c) -> int& { return c.ground.ransac_iterations; }, 1, 100000),
+      intSetting("ground.min_floor_points",
+                 [](C& c) -> int& { return c.ground.min_floor_points; }, 3, 10000000),
+      floatSetting("ground.max_tilt_deg", [](C& c) -> float& { return c.ground.max_tilt_deg; },
+                   1, 89),
+      enumSetting<OversegmenterKind>(
+          "overseg.method", [](C& c) -> OversegmenterKind& { return c.overseg.kind; },
+          {{"pcl", OversegmenterKind::PclSupervoxels},
+           {"organized", OversegmenterKind::Organized}}),
+      floatSetting("overseg.voxel_resolution_m",
+                   [](C& c) -> float& { return c.overseg.voxel_resolution_m; }, 0.001, 1),
+      floatSetting("overseg.seed_resolution_m",
+                   [](C& c) -> float& { return c.overseg.seed_resolution_m; }, 0.005, 5),
+      floatSetting("overseg.color_importance",
+                   [](C& c) -> float& { return c.overseg.color_importance; }, 0, 100),
+      floatSetting("overseg.spatial_importance",
+                   [](C& c) -> float& { return c.overseg.spatial_importance; }, 0, 100),
+      floatSetting("overseg.normal_importance",
+                   [](C& c) -> float& { return c.overseg.normal_importance; }, 0, 100),
+      intSetting("overseg.min_segment_points",
+                 [](C& c) -> int& { return c.overseg.min_segment_points; }, 1, 100000),
+      intSetting("overseg.max_iterations",
+                 [](C& c) -> int& { return c.overseg.max_iterations; }, 1, 100),
+      intSetting("overseg.search_window_factor",
+                 [](C& c) -> int& { return c.overseg.search_window_factor; }, 1, 10),
+      intSetting("forest.num_trees", [](C& c) -> int& { return c.forest.num_trees; }, 1, 1000),
+      intSetting("forest.max_depth", [](C& c) -> int& { return c.forest.max_depth; }, 1, 40),
+      intSetting("forest.min_samples_leaf",
+                 [](C& c) -> int& { return c.forest.min_samples_leaf; }, 1, 1000000),
+      intSetting("forest.candidate_features",
+                 [](C& c) -> int& { return c.forest.candidate_features; }, 1, 14),
+      intSetting("forest.candidate_thresholds",
+                 [](C& c) -> int& { return c.forest.candidate_thresholds; }, 1, 1000),
+      boolSetting("forest.class_weighting",
+                  [](C& c) -> bool& { return c.forest.class_weighting; }),
+      intSetting("forest.num_threads", [](C& c) -> int& { return c.forest.num_threads; }, 0, 256),
+      boolSetting("mrf.enabled", [](C& c) -> bool& { return c.use_mrf; }),
+      floatSetting("mrf.lambda", [](C& c) -> float& { return c.mrf.lambda; }, 0, 1000),
+      floatSetting("mrf.sigma", [](C& c) -> float& { return c.mrf.sigma; }, 1e-4, 100),
+      intSetting("mrf.max_iterations", [](C& c) -> int& { return c.mrf.max_iterations; }, 1,
+                 10000),
+      floatSetting("mrf.damping", [](C& c) -> float& { return c.mrf.damping; }, 0, 0.99),
+      floatSetting("mrf.convergence_tol", [](C& c) -> float& { return c.mrf.convergence_tol; },
+                   0, 1),
+      floatSetting("tables.cluster_tolerance_m",
+                   [](C& c) -> float& { return c.tables.cluster_tolerance_m; }, 0.005, 1),
+      intSetting("tables.min_cluster_points",
+                 [](C& c) -> int& { return c.tables.min_cluster_points; }, 1, 10000000),
+      intSetting("tables.max_cluster_points",
+                 [](C& c) -> int& { return c.tables.max_cluster_points; }, 1, 10000000),
+      floatSetting("tables.safety_distance_m",
+                   [](C& c) -> float& { return c.tables.safety_distance_m; }, 0, 5),
+      floatSetting("tables.arm_reach_m", [](C& c) -> float& { return c.tables.arm_reach_m; },
+                   0.05, 5),
+      floatSetting("tables.robot_radius_m",
+                   [](C& c) -> float& { return c.tables.robot_radius_m; }, 0, 3),
+      floatSetting("tables.min_table_height_m",
+                   [](C& c) -> float& { return c.tables.min_table_height_m; }, 0, 3),
+      floatSetting("tables.max_table_height_m",
+                   [](C& c) -> float& { return c.tables.max_table_height_m; }, 0, 3),
+  };
+  return all;
+}
+
+// The seeds are 64-bit and the bagging fraction a double: handled apart from
+// the table above so that no precision is lost.
+bool setSpecial(SegmenterConfig& c, const std::string& key, const std::string& value,
+                const std::string& origin) {
+  if (key == "forest.seed" || key == "ground.seed") {
+    const long long x = parseInt(origin, key, value);
+    if (x < 0) badValue(origin, key, value, "a non-negative integer");
+    (key == "forest.seed" ? c.forest.seed : c.ground.seed) = static_cast<std::uint64_t>(x);
+    return true;
+  }
+  if (key == "forest.bagging_fraction") {
+    const double x = parseDouble(origin, key, value);
+    if (x <= 0 || x > 1) badValue(origin, key, value, "a number in (0, 1]");
+    c.forest.bagging_fraction = x;
+    return true;
+  }
+  return false;
+}
+
+void setValue(Config& config, const std::string& key, const std::string& value,
+              const std::string& origin) {
+  const auto dot = key.find('.');
+  if (dot == std::string::npos || dot == 0 || dot + 1 == key.size()) {
+    throw Error(origin + ": setting '" + key + "' must be of the form section.name");
+  }
+  const std::string section = key.substr(0, dot);
+  if (kPassThroughSections.count(section)) {
+    config.extra[key] = value;
+    return;
+  }
+  if (setSpecial(config.segmenter, key, value, origin)) return;
+  for (const auto& s : settings()) {
+    if (s.key == key) {
+      s.set(config.segmenter, value, origin);
+      return;
+    }
+  }
+  throw Error(origin + ": unknown setting '" + key + "'");
+}
+
+void validateConsistency(const Config& config, const std::string& origin) {
+  const auto& c = config.segmenter;
+  if (c.overseg.seed_resolution_m <= c.overseg.voxel_resolution_m) {
+    throw Error(origin + ": overseg.seed_resolution_m (" +
+                formatDouble(c.overseg.seed_resolution_m) +
+                ") must be larger than overseg.voxel_resolution_m (" +
+                formatDouble(c.overseg.voxel_resolution_m) + ")");
+  }
+  if (c.tables.min_table_height_m >= c.tables.max_table_height_m) {
+    throw Error(origin + ": tables.min_table_height_m must be below tables.max_table_height_m");
+  }
+  if (c.tables.min_cluster_points > c.tables.max_cluster_points) {
+    throw Error(origin + ": tables.min_cluster_points must not exceed tables.max_cluster_points");
+  }
+}
+
+}  // namespace
+
+Config parseConfig(const std::string& yaml_text, const std::string& origin) {
+  YAML::Node root;
+  try {
+    root = YAML::Load(yaml_text);
+  } catch (const YAML::Exception& e) {
+    throw Error(origin + ": not valid YAML: " + e.what());
+  }
+  Config config;
+  if (root.IsNull()) return config;  // an empty file means all defaults
+  if (!root.IsMap()) throw Error(origin + ": top level must be a map of sections");
+  for (const auto& section : root) {
+    const std::string section_name = section.first.as<std::string>();
+    if (!section.second.IsMap()) {
+      throw Error(origin + ": section '" + section_name + "' must be a map of settings");
+    }
+    for (const auto& entry : section.second) {
+      const std::string key = section_name + "." + entry.first.as<std::string>();
+      if (!entry.second.IsScalar()) {
+        throw Error(origin + ": setting '" + key + "' must be a single value");
+      }
+      setValue(config, key, entry.second.Scalar(), origin);
+    }
+  }
+  validateConsistency(config, origin);
+  return config;
+}
+
+Config loadConfig(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw Error(path + ": cannot open config file");
+  std::stringstream buffer;
+  buffer << in.rdbuf();
+  return parseConfig(buffer.str(), path);
+}
+
+void applyOverride(Config& config, const std::string& key_equals_value) {
+  const auto eq = key_equals_value.find('=');
+  if (eq == std::string::npos) {
+    throw Error("<flags>: override '" + key_equals_value + "' must be key=value");
+  }
+  setValue(config, key_equals_value.substr(0, eq), key_equals_value.substr(eq + 1), "<flags>");
+  validateConsistency(config, "<flags>");
+}
+
+std::string dumpConfig(const Config& config) {
+  // Group "section.name" keys back into YAML sections, in a stable order.
+  std::map<std::string, std::vector<std::pair<std::string, std::string>>> sections;
+  auto add = [&](const std::string& key, const std::string& value) {
+    const auto dot = key.find('.');
+    sections[key.substr(0, dot)].emplace_back(key.substr(dot + 1), value);
+  };
+  for (const auto& s : settings()) add(s.key, s.get(config.segmenter));
+  add("forest.seed", std::to_string(config.segmenter.forest.seed));
+  add("forest.bagging_fraction", formatDouble(config.segmenter.forest.bagging_fraction));
+  add("ground.seed", std::to_string(config.segmenter.ground.seed));
+  for (const auto& [key, value] : config.extra) add(key, value);
+
+  std::ostringstream out;
+  for (const auto& [section, entries] : sections) {
+    out << section << ":\n";
+    for (const auto& [name, value] : entries) out << "  " << name << ": " << value << "\n";
+  }
+  return out.str();
+}
+
+}  // namespace findmug

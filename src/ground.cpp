@@ -1,0 +1,340 @@
+// ground.cpp — the ground plane from the camera mount, from floor labels, or
+// estimated from the frame alone, and the ground-aligned frame built on it.
+//
+// Conventions (see ground.hpp): a plane is n.dot(p) + d = 0 in the camera
+// optical frame with n unit and pointing up, so for any point p its height
+// above the floor is n.dot(p) + d and the camera (p = 0) is d above it.
+#include "findmug/ground.hpp"
+
+#include <Eigen/Eigenvalues>
+#include <algorithm>
+#include <cmath>
+#include <iterator>
+#include <random>
+#include <sstream>
+#include <string>
+
+#include "findmug/error.hpp"
+
+namespace findmug {
+
+namespace {
+
+constexpr std::uint8_t kFloorId = static_cast<std::uint8_t>(Label::Floor);
+// At most this many points score a RANSAC hypothesis; the final refit and the
+// reported support use all of them. Keeps RANSAC cost independent of image size.
+constexpr std::size_t kScoringSubset = 3000;
+// estimateGround works on at most this many candidate points (evenly strided).
+constexpr std::size_t kMaxCandidates = 20000;
+// estimateGround extracts up to this many horizontal planes (floor, table
+// tops, seats, shelves) before choosing the lowest.
+constexpr int kMaxPlanes = 5;
+// Planes whose heights below the camera differ by less than this are one
+// level (e.g. a floor split in two by sensor noise).
+constexpr float kSameLevelM = 0.10f;
+
+struct Plane {
+  Eigen::Vector3f normal = Eigen::Vector3f::Zero();
+  float offset = 0.0f;
+  float distance(const Eigen::Vector3f& p) const { return normal.dot(p) + offset; }
+};
+
+void validateConfig(const GroundConfig& config, const char* where) {
+  auto bad = [&](const std::string& field, double value) {
+    std::ostringstream msg;
+    msg << where << ": invalid ground." << field << " = " << value;
+    throw Error(msg.str());
+  };
+  if (!(config.ransac_inlier_m > 0.0f) || !std::isfinite(config.ransac_inlier_m))
+    bad("ransac_inlier_m", config.ransac_inlier_m);
+  if (config.ransac_iterations < 1 || config.ransac_iterations > 1000000)
+    bad("ransac_iterations", config.ransac_iterations);
+  if (config.min_floor_points < 3) bad("min_floor_points", config.min_floor_points);
+  if (!(config.max_tilt_deg > 0.0f && config.max_tilt_deg < 90.0f))
+    bad("max_tilt_deg", config.max_tilt_deg);
+  if (!(config.min_inlier_fraction > 0.0f && config.min_inlier_fraction <= 1.0f))
+    bad("min_inlier_fraction", config.min_inlier_fraction);
+  if (!(config.normal_agreement_deg > 0.0f && config.normal_agreement_deg < 90.0f))
+    bad("normal_agreement_deg", config.normal_agreement_deg);
+}
+
+float cosDeg(float deg) { return std::cos(deg * static_cast<float>(M_PI) / 180.0f); }
+
+// Plane through three points; false when they are (nearly) collinear.
+bool planeThrough(const Eigen::Vector3f& a, const Eigen::Vector3f& b, const Eigen::Vector3f& c,
+                  Plane& plane) {
+  Eigen::Vector3f n = (b - a).cross(c - a);
+  const float norm = n.norm();
+  if (!(norm > 1e-9f)) return false;
+  plane.normal = n / norm;
+  plane.offset = -plane.normal.dot(a);
+  return true;
+}
+
+// Least-squares plane (total least squares: centroid + smallest principal
+// axis) through the selected points. Keeps the orientation of `hint`.
+Plane refitPlane(const std::vector<Eigen::Vector3f>& points, const std::vector<std::size_t>& idx,
+                 const Plane& hint) {
+  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+  for (std::size_t i : idx) mean += points[i].cast<double>();
+  mean /= static_cast<double>(idx.size());
+  Eigen::Matrix3d scatter = Eigen::Matrix3d::Zero();
+  for (std::size_t i : idx) {
+    const Eigen::Vector3d q = points[i].cast<double>() - mean;
+    scatter.noalias() += q * q.transpose();
+  }
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig;
+  eig.computeDirect(scatter);
+  Eigen::Vector3f normal = eig.eigenvectors().col(0).cast<float>().normalized();
+  if (normal.dot(hint.normal) < 0.0f) normal = -normal;
+  Plane plane;
+  plane.normal = normal;
+  plane.offset = -normal.dot(mean.cast<float>());
+  return plane;
+}
+
+// Generic RANSAC + least-squares refinement over `points[idx]`. `accept`
+// vets a hypothesis (and may reorient it), `inlier(plane, i)` decides
+// support. Returns false when no hypothesis was accepted.
+template <typename Accept, typename Inlier>
+bool ransacPlane(const std::vector<Eigen::Vector3f>& points, const std::vector<std::size_t>& idx,
+                 int iterations, std::mt19937_64& rng, Accept accept, Inlier inlier,
+                 Plane& result, std::vector<std::size_t>& inliers) {
+  if (idx.size() < 3) return false;
+  // Score on a fixed random subset so cost does not grow with the image.
+  std::vector<std::size_t> scoring;
+  if (idx.size() <= kScoringSubset) {
+    scoring = idx;
+  } else {
+    scoring.reserve(kScoringSubset);
+    std::sample(idx.begin(), idx.end(), std::back_inserter(scoring), kScoringSubset, rng);
+  }
+  std::uniform_int_distribution<std::size_t> pick(0, idx.size() - 1);
+  Plane best;
+  std::size_t best_score = 0;
+  for (int it = 0; it < iterations; ++it) {
+    Plane hyp;
+    if (!planeThrough(points[idx[pick(rng)]], points[idx[pick(rng)]], points[idx[pick(rng)]],
+                      hyp) ||
+        !accept(hyp)) {
+      continue;
+    }
+    std::size_t score = 0;
+    for (std::size_t i : scoring) score += inlier(hyp, i) ? 1 : 0;
+    if (score > best_score) {
+      best_score = score;
+      best = hyp;
+    }
+  }
+  if (best_score < 3) return false;
+
+  // Two rounds of refit-on-inliers: the first removes the bias of the
+  // three-point sample, the second settles the inlier set.
+  Plane plane = best;
+  for (int round = 0; round < 2; ++round) {
+    inliers.clear();
+    for (std::size_t i : idx)
+      if (inlier(plane, i)) inliers.push_back(i);
+    if (inliers.size() < 3) return false;
+    plane = refitPlane(points, inliers, plane);
+  }
+  inliers.clear();
+  for (std::size_t i : idx)
+    if (inlier(plane, i)) inliers.push_back(i);
+  result = plane;
+  return inliers.size() >= 3;
+}
+
+}  // namespace
+
+GroundPlane groundFromPlane(const Eigen::Vector3f& normal_camera, float offset, int support) {
+  const float norm = normal_camera.norm();
+  if (!std::isfinite(norm) || !(norm > 1e-6f) || !std::isfinite(offset)) {
+    std::ostringstream msg;
+    msg << "groundFromPlane: degenerate plane normal (" << normal_camera.transpose()
+        << ") offset " << offset;
+    throw Error(msg.str());
+  }
+  Eigen::Vector3f up = normal_camera / norm;
+  float d = offset / norm;
+  if (d < 0.0f) {  // make the camera side the positive side
+    up = -up;
+    d = -d;
+  }
+  // x: the viewing direction (optical z) projected on the floor. When the
+  // camera looks straight down that projection vanishes; image "up" (-y) is
+  // then the natural forward direction.
+  Eigen::Vector3f forward = Eigen::Vector3f::UnitZ() - up * up.z();
+  if (forward.norm() < 1e-4f) forward = -Eigen::Vector3f::UnitY() - up * (-up.y());
+  forward.normalize();
+  const Eigen::Vector3f left = up.cross(forward);
+
+  GroundPlane ground;
+  ground.normal_camera = up;
+  ground.offset = d;
+  ground.support_points = support;
+  Eigen::Matrix3f rotation;  // rows: ground axes expressed in the camera frame
+  rotation.row(0) = forward;
+  rotation.row(1) = left;
+  rotation.row(2) = up;
+  ground.camera_to_ground.setIdentity();
+  ground.camera_to_ground.linear() = rotation;
+  // The camera centre lies on the ground z axis at height d.
+  ground.camera_to_ground.translation() = Eigen::Vector3f(0.0f, 0.0f, d);
+  return ground;
+}
+
+GroundPlane groundFromExtrinsics(const CameraExtrinsics& extrinsics) {
+  if (!std::isfinite(extrinsics.height_m) || extrinsics.height_m <= 0.0 ||
+      !std::isfinite(extrinsics.pitch_rad) || std::abs(extrinsics.pitch_rad) >= M_PI / 2 ||
+      !std::isfinite(extrinsics.roll_rad) || std::abs(extrinsics.roll_rad) >= M_PI / 2) {
+    std::ostringstream msg;
+    msg << "groundFromExtrinsics: invalid camera mount height_m=" << extrinsics.height_m
+        << " pitch_rad=" << extrinsics.pitch_rad << " roll_rad=" << extrinsics.roll_rad;
+    throw Error(msg.str());
+  }
+  // Camera orientation in a level frame (x forward, y left, z up):
+  //  - level camera: optical z = forward, x = -left (right), y = -up (down);
+  //  - pitch θ > 0 tips the optical axis down: rotation about the level
+  //    frame's y (left) axis by +θ, taking forward (1,0,0) to (cosθ,0,-sinθ);
+  //  - roll φ > 0 turns the camera's image axes clockwise as seen looking
+  //    along the optical axis: rotation about optical z by +φ, taking image
+  //    right (x) towards image down (y).
+  // So R_level_from_camera = Ry(θ) * R0 * Rz(φ).
+  const float pitch = static_cast<float>(extrinsics.pitch_rad);
+  const float roll = static_cast<float>(extrinsics.roll_rad);
+  Eigen::Matrix3f r0;
+  r0.col(0) = Eigen::Vector3f(0, -1, 0);
+  r0.col(1) = Eigen::Vector3f(0, 0, -1);
+  r0.col(2) = Eigen::Vector3f(1, 0, 0);
+  const Eigen::Matrix3f level_from_camera =
+      Eigen::AngleAxisf(pitch, Eigen::Vector3f::UnitY()).toRotationMatrix() * r0 *
+      Eigen::AngleAxisf(roll, Eigen::Vector3f::UnitZ()).toRotationMatrix();
+  // Up in camera coordinates is the level z axis pulled back.
+  const Eigen::Vector3f up_camera = level_from_camera.transpose() * Eigen::Vector3f::UnitZ();
+  return groundFromPlane(up_camera, static_cast<float>(extrinsics.height_m), 0);
+}
+
+std::optional<GroundPlane> fitGroundToLabels(const OrganizedCloud& cloud_camera,
+                                             const std::vector<std::uint8_t>& labels,
+                                             const GroundConfig& config) {
+  validateConfig(config, "fitGroundToLabels");
+  if (labels.size() != cloud_camera.points.size()) {
+    throw Error("fitGroundToLabels: label image has " + std::to_string(labels.size()) +
+                " pixels but the cloud has " + std::to_string(cloud_camera.points.size()));
+  }
+  std::vector<std::size_t> floor;
+  for (std::size_t i = 0; i < labels.size(); ++i)
+    if (labels[i] == kFloorId && cloud_camera.valid(i)) floor.push_back(i);
+  if (floor.size() < static_cast<std::size_t>(config.min_floor_points)) return std::nullopt;
+
+  std::mt19937_64 rng(config.seed);
+  const float tol = config.ransac_inlier_m;
+  const auto& pts = cloud_camera.points;
+  Plane plane;
+  std::vector<std::size_t> inliers;
+  const bool found = ransacPlane(
+      pts, floor, config.ransac_iterations, rng, [](Plane&) { return true; },
+      [&](const Plane& p, std::size_t i) { return std::abs(p.distance(pts[i])) < tol; }, plane,
+      inliers);
+  if (!found ||
+      static_cast<double>(inliers.size()) < config.min_inlier_fraction * floor.size()) {
+    return std::nullopt;
+  }
+  // groundFromPlane orients the normal so that the camera is above the floor.
+  return groundFromPlane(plane.normal, plane.offset, static_cast<int>(inliers.size()));
+}
+
+std::optional<GroundPlane> estimateGround(const OrganizedCloud& cloud_camera,
+                                          const NormalImage& normals_camera,
+                                          const GroundConfig& config) {
+  validateConfig(config, "estimateGround");
+  if (normals_camera.normals.size() != cloud_camera.points.size()) {
+    throw Error("estimateGround: normal image has " +
+                std::to_string(normals_camera.normals.size()) + " entries but the cloud has " +
+                std::to_string(cloud_camera.points.size()) + " points");
+  }
+  const Eigen::Vector3f camera_up(0.0f, -1.0f, 0.0f);
+  const float cos_tilt = cosDeg(config.max_tilt_deg);
+  const float cos_agree = cosDeg(config.normal_agreement_deg);
+  const float tol = config.ransac_inlier_m;
+  const auto& pts = cloud_camera.points;
+  const auto& nrm = normals_camera.normals;
+
+  // Candidates: points whose own normal is roughly "up". Normals face the
+  // camera, so a floor or table top seen from above has n.dot(-y) > 0, while
+  // a ceiling (seen from below) does not qualify.
+  std::vector<std::size_t> all;
+  for (std::size_t i = 0; i < pts.size(); ++i) {
+    if (!cloud_camera.valid(i) || !std::isfinite(nrm[i].x())) continue;
+    if (nrm[i].dot(camera_up) >= cos_tilt) all.push_back(i);
+  }
+  const std::size_t stride = all.size() / kMaxCandidates + 1;
+  std::vector<std::size_t> remaining;
+  remaining.reserve(all.size() / stride + 1);
+  for (std::size_t k = 0; k < all.size(); k += stride) remaining.push_back(all[k]);
+  const auto min_sampled = static_cast<std::size_t>(config.min_floor_points) / stride;
+
+  auto accept = [&](Plane& p) {
+    if (p.normal.dot(camera_up) < 0.0f) {
+      p.normal = -p.normal;
+      p.offset = -p.offset;
+    }
+    return p.normal.dot(camera_up) >= cos_tilt;
+  };
+  auto supports = [&](const Plane& p, std::size_t i) {
+    return std::abs(p.distance(pts[i])) < tol && nrm[i].dot(p.normal) >= cos_agree;
+  };
+
+  // Sequential RANSAC: peel off the horizontal planes one by one.
+  struct Found {
+    Plane plane;
+    std::size_t support;
+  };
+  std::vector<Found> planes;
+  std::mt19937_64 rng(config.seed);
+  std::vector<std::size_t> inliers;
+  for (int k = 0; k < kMaxPlanes && remaining.size() >= std::max<std::size_t>(min_sampled, 3);
+       ++k) {
+    Plane plane;
+    if (!ransacPlane(pts, remaining, config.ransac_iterations, rng, accept, supports, plane,
+                     inliers)) {
+      break;
+    }
+    if (inliers.size() >= min_sampled && plane.offset > 0.0f) {
+      planes.push_back({plane, inliers.size()});
+    }
+    // Remove this plane's points (inliers is sorted: it follows `remaining`).
+    std::vector<std::size_t> rest;
+    rest.reserve(remaining.size() - inliers.size());
+    std::set_difference(remaining.begin(), remaining.end(), inliers.begin(), inliers.end(),
+                        std::back_inserter(rest));
+    remaining.swap(rest);
+  }
+  if (planes.empty()) return std::nullopt;
+
+  // The lowest level (largest height below the camera); within that level
+  // the best-supported plane.
+  float lowest = 0.0f;
+  for (const auto& f : planes) lowest = std::max(lowest, f.plane.offset);
+  const Found* chosen = nullptr;
+  for (const auto& f : planes) {
+    if (lowest - f.plane.offset <= kSameLevelM && (!chosen || f.support > chosen->support))
+      chosen = &f;
+  }
+
+  // Final least-squares fit on every candidate (not just the strided subset)
+  // that supports the chosen plane, and the support at full resolution.
+  Plane plane = chosen->plane;
+  for (int round = 0; round < 2; ++round) {
+    inliers.clear();
+    for (std::size_t i : all)
+      if (supports(plane, i)) inliers.push_back(i);
+    if (inliers.size() < static_cast<std::size_t>(config.min_floor_points)) return std::nullopt;
+    plane = refitPlane(pts, inliers, plane);
+  }
+  if (plane.normal.dot(camera_up) < cos_tilt || plane.offset <= 0.0f) return std::nullopt;
+  return groundFromPlane(plane.normal, plane.offset, static_cast<int>(inliers.size()));
+}
+
+}  // namespace findmug

@@ -1,0 +1,220 @@
+// Pairwise MRF over the supervoxel adjacency graph, solved by min-sum loopy
+// belief propagation.
+//
+// Unary cost U_i(y) = λ (1 - p_i(y)); Potts pairwise cost w_ij [y_i != y_j]
+// with w_ij = exp(-‖c_i - c_j‖ / σ). Messages live on directed edges: edge k
+// of the input gives directed edges 2k (a -> b) and 2k+1 (b -> a), so the
+// reverse of directed edge e is e ^ 1.
+//
+// Potts makes a message cheap: with h(y) = belief of the sender minus the
+// message it got from the receiver,
+//   m(y) = min( h(y), min_y' h(y') + w ) - min_y' h(y')
+//        = min( h(y) - min h, w ),
+// which is O(L) instead of O(L^2). Messages are normalised (minimum 0), so
+// they stay within [0, w] ⊂ [0, 1] and an absolute convergence tolerance is
+// meaningful. Updates are synchronous (all messages from the previous
+// iteration's beliefs) with damping, which makes the result independent of
+// the edge order and helps convergence on loopy graphs.
+#include "findmug/mrf.hpp"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <limits>
+#include <string>
+
+#include "findmug/error.hpp"
+
+namespace findmug {
+
+namespace {
+
+using Costs = std::array<float, kNumLabels>;
+
+void validateParams(const MrfParams& p) {
+  auto fail = [](const std::string& field, float value, const std::string& rule) {
+    throw Error("MRF parameter " + field + " = " + std::to_string(value) + " is invalid (" +
+                rule + ")");
+  };
+  if (!(std::isfinite(p.lambda) && p.lambda >= 0.0f)) fail("lambda", p.lambda, "expected >= 0");
+  if (!(std::isfinite(p.sigma) && p.sigma > 0.0f)) fail("sigma", p.sigma, "expected > 0");
+  if (p.max_iterations < 0)
+    fail("max_iterations", static_cast<float>(p.max_iterations), "expected >= 0");
+  if (!(p.damping >= 0.0f && p.damping < 1.0f)) fail("damping", p.damping, "expected in [0, 1)");
+  if (!(std::isfinite(p.convergence_tol) && p.convergence_tol >= 0.0f))
+    fail("convergence_tol", p.convergence_tol, "expected >= 0");
+}
+
+void validateGraph(const std::vector<ClassProbabilities>& unaries,
+                   const std::vector<Eigen::Vector3f>& centroids,
+                   const std::vector<std::pair<int, int>>& edges) {
+  if (unaries.size() != centroids.size())
+    throw Error("MRF: " + std::to_string(unaries.size()) + " unaries but " +
+                std::to_string(centroids.size()) + " centroids");
+  // Probabilities from the forest; a little slack for rounding.
+  constexpr float kSlack = 1e-3f;
+  for (std::size_t i = 0; i < unaries.size(); ++i) {
+    for (int y = 0; y < kNumLabels; ++y) {
+      const float p = unaries[i][y];
+      if (!(std::isfinite(p) && p >= -kSlack && p <= 1.0f + kSlack))
+        throw Error("MRF: unary of node " + std::to_string(i) + " label " +
+                    std::string(kLabelNames[y]) + " is " + std::to_string(p) +
+                    " (expected a probability)");
+    }
+    if (!centroids[i].allFinite())
+      throw Error("MRF: centroid of node " + std::to_string(i) + " is not finite");
+  }
+  const auto n = static_cast<long long>(unaries.size());
+  for (std::size_t k = 0; k < edges.size(); ++k) {
+    const auto [a, b] = edges[k];
+    if (a < 0 || b < 0 || a >= n || b >= n)
+      throw Error("MRF: edge " + std::to_string(k) + " (" + std::to_string(a) + ", " +
+                  std::to_string(b) + ") refers to a node outside 0.." + std::to_string(n - 1));
+    if (a == b)
+      throw Error("MRF: edge " + std::to_string(k) + " is a self-edge on node " +
+                  std::to_string(a));
+  }
+}
+
+float pairwiseWeight(const Eigen::Vector3f& a, const Eigen::Vector3f& b, float sigma) {
+  return std::exp(-(a - b).norm() / sigma);
+}
+
+}  // namespace
+
+MrfResult solveMrf(const std::vector<ClassProbabilities>& unaries,
+                   const std::vector<Eigen::Vector3f>& centroids,
+                   const std::vector<std::pair<int, int>>& edges, const MrfParams& params) {
+  validateParams(params);
+  validateGraph(unaries, centroids, edges);
+
+  const std::size_t num_nodes = unaries.size();
+  const std::size_t num_directed = 2 * edges.size();
+
+  // Unary costs.
+  std::vector<Costs> unary(num_nodes);
+  for (std::size_t i = 0; i < num_nodes; ++i)
+    for (int y = 0; y < kNumLabels; ++y) unary[i][y] = params.lambda * (1.0f - unaries[i][y]);
+
+  // Directed edges: source, target, weight; plus per-node incoming lists (CSR).
+  std::vector<std::uint32_t> source(num_directed), target(num_directed);
+  std::vector<float> weight(edges.size());
+  std::vector<std::uint32_t> in_begin(num_nodes + 1, 0);
+  for (std::size_t k = 0; k < edges.size(); ++k) {
+    const auto a = static_cast<std::uint32_t>(edges[k].first);
+    const auto b = static_cast<std::uint32_t>(edges[k].second);
+    source[2 * k] = a;
+    target[2 * k] = b;
+    source[2 * k + 1] = b;
+    target[2 * k + 1] = a;
+    weight[k] = pairwiseWeight(centroids[a], centroids[b], params.sigma);
+    ++in_begin[a + 1];
+    ++in_begin[b + 1];
+  }
+  for (std::size_t i = 0; i < num_nodes; ++i) in_begin[i + 1] += in_begin[i];
+  std::vector<std::uint32_t> incoming(num_directed);
+  {
+    std::vector<std::uint32_t> fill(in_begin.begin(), in_begin.end() - 1);
+    for (std::size_t e = 0; e < num_directed; ++e) incoming[fill[target[e]]++] = static_cast<std::uint32_t>(e);
+  }
+
+  std::vector<Costs> messages(num_directed, Costs{});
+  std::vector<Costs> next(num_directed);
+  std::vector<Costs> belief(num_nodes);
+  auto computeBeliefs = [&] {
+    for (std::size_t i = 0; i < num_nodes; ++i) {
+      Costs b = unary[i];
+      for (std::uint32_t k = in_begin[i]; k < in_begin[i + 1]; ++k) {
+        const Costs& m = messages[incoming[k]];
+        for (int y = 0; y < kNumLabels; ++y) b[y] += m[y];
+      }
+      belief[i] = b;
+    }
+  };
+
+  MrfResult result;
+  result.converged = edges.empty();
+  const float keep = params.damping;
+  const float take = 1.0f - params.damping;
+  for (int iter = 0; iter < params.max_iterations && !edges.empty(); ++iter) {
+    computeBeliefs();
+    float max_change = 0.0f;
+    for (std::size_t e = 0; e < num_directed; ++e) {
+      const Costs& b = belief[source[e]];
+      const Costs& back = messages[e ^ 1];
+      Costs h;
+      float h_min = std::numeric_limits<float>::infinity();
+      for (int y = 0; y < kNumLabels; ++y) {
+        h[y] = b[y] - back[y];
+        h_min = std::min(h_min, h[y]);
+      }
+      const float w = weight[e / 2];
+      const Costs& old = messages[e];
+      Costs m;
+      float m_min = std::numeric_limits<float>::infinity();
+      for (int y = 0; y < kNumLabels; ++y) {
+        m[y] = take * std::min(h[y] - h_min, w) + keep * old[y];
+        m_min = std::min(m_min, m[y]);
+      }
+      for (int y = 0; y < kNumLabels; ++y) {
+        m[y] -= m_min;
+        max_change = std::max(max_change, std::abs(m[y] - old[y]));
+      }
+      next[e] = m;
+    }
+    messages.swap(next);
+    result.iterations = iter + 1;
+    if (max_change < params.convergence_tol) {
+      result.converged = true;
+      break;
+    }
+  }
+  computeBeliefs();
+
+  result.labels.resize(num_nodes);
+  result.confidence.resize(num_nodes);
+  for (std::size_t i = 0; i < num_nodes; ++i) {
+    const Costs& b = belief[i];
+    // Lowest belief wins; ties (e.g. λ = 0, or an isolated node with equal
+    // probabilities) go to the higher forest probability, then the lower id.
+    // For an isolated node this is exactly the argmax of p.
+    int best = 0;
+    for (int y = 1; y < kNumLabels; ++y) {
+      if (b[y] < b[best] || (b[y] == b[best] && unaries[i][y] > unaries[i][best])) best = y;
+    }
+    // Confidence: exp(-b) normalised over the labels, i.e. a softmax of the
+    // negated beliefs, evaluated relative to the minimum for stability.
+    double z = 0.0;
+    for (int y = 0; y < kNumLabels; ++y) z += std::exp(-static_cast<double>(b[y] - b[best]));
+    result.labels[i] = static_cast<std::uint8_t>(best);
+    result.confidence[i] = static_cast<float>(1.0 / z);
+  }
+  return result;
+}
+
+double mrfEnergy(const std::vector<ClassProbabilities>& unaries,
+                 const std::vector<Eigen::Vector3f>& centroids,
+                 const std::vector<std::pair<int, int>>& edges, const MrfParams& params,
+                 const std::vector<std::uint8_t>& labels) {
+  validateParams(params);
+  validateGraph(unaries, centroids, edges);
+  if (labels.size() != unaries.size())
+    throw Error("mrfEnergy: " + std::to_string(labels.size()) + " labels for " +
+                std::to_string(unaries.size()) + " nodes");
+  double energy = 0.0;
+  for (std::size_t i = 0; i < labels.size(); ++i) {
+    if (labels[i] >= kNumLabels)
+      throw Error("mrfEnergy: node " + std::to_string(i) + " has label " +
+                  std::to_string(labels[i]) + " (expected 0.." + std::to_string(kNumLabels - 1) +
+                  ")");
+    energy += static_cast<double>(params.lambda) * (1.0 - static_cast<double>(unaries[i][labels[i]]));
+  }
+  for (const auto& [a, b] : edges) {
+    if (labels[static_cast<std::size_t>(a)] != labels[static_cast<std::size_t>(b)])
+      energy += pairwiseWeight(centroids[static_cast<std::size_t>(a)],
+                               centroids[static_cast<std::size_t>(b)], params.sigma);
+  }
+  return energy;
+}
+
+}  // namespace findmug

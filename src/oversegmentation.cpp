@@ -1,0 +1,359 @@
+// Oversegmentation stage: the factory, the shared finalisation (drop small
+// patches, renumber, adjacency) and the quality measures against ground truth.
+// The two oversegmenters live in overseg_pcl.cpp and overseg_organized.cpp.
+#include "findmug/oversegmentation.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <string>
+
+#include "findmug/error.hpp"
+#include "findmug/labels.hpp"
+#include "oversegmentation_internal.hpp"
+
+namespace findmug {
+
+namespace {
+
+std::string fieldError(const std::string& field, const std::string& value,
+                       const std::string& expected) {
+  return "oversegmentation config: overseg." + field + " = " + value + " (expected " + expected +
+         ")";
+}
+
+void requireFinitePositive(float value, const char* field) {
+  if (!(std::isfinite(value) && value > 0.0f)) {
+    throw Error(fieldError(field, std::to_string(value), "a finite value > 0"));
+  }
+}
+
+void requireFiniteNonNegative(float value, const char* field) {
+  if (!(std::isfinite(value) && value >= 0.0f)) {
+    throw Error(fieldError(field, std::to_string(value), "a finite value >= 0"));
+  }
+}
+
+void requireIntRange(int value, int lo, int hi, const char* field) {
+  if (value < lo || value > hi) {
+    throw Error(fieldError(field, std::to_string(value),
+                           std::to_string(lo) + ".." + std::to_string(hi)));
+  }
+}
+
+// Edges (a, b) with a < b, sorted, each once.
+void sortUniqueEdges(std::vector<std::pair<int, int>>& edges) {
+  std::sort(edges.begin(), edges.end());
+  edges.erase(std::unique(edges.begin(), edges.end()), edges.end());
+}
+
+}  // namespace
+
+void validateOversegmentationConfig(const OversegmentationConfig& c) {
+  if (c.kind != OversegmenterKind::PclSupervoxels && c.kind != OversegmenterKind::Organized) {
+    throw Error(fieldError("kind", std::to_string(static_cast<int>(c.kind)), "pcl or organized"));
+  }
+  requireFinitePositive(c.voxel_resolution_m, "voxel_resolution_m");
+  requireFinitePositive(c.seed_resolution_m, "seed_resolution_m");
+  if (c.seed_resolution_m <= c.voxel_resolution_m) {
+    throw Error(fieldError("seed_resolution_m", std::to_string(c.seed_resolution_m),
+                           "more than overseg.voxel_resolution_m = " +
+                               std::to_string(c.voxel_resolution_m)));
+  }
+  if (c.seed_resolution_m > 100.0f) {
+    throw Error(fieldError("seed_resolution_m", std::to_string(c.seed_resolution_m), "<= 100 m"));
+  }
+  requireFiniteNonNegative(c.color_importance, "color_importance");
+  requireFiniteNonNegative(c.spatial_importance, "spatial_importance");
+  requireFiniteNonNegative(c.normal_importance, "normal_importance");
+  if (c.color_importance + c.spatial_importance + c.normal_importance <= 0.0f) {
+    throw Error(fieldError("color_importance/spatial_importance/normal_importance", "all 0",
+                           "at least one > 0"));
+  }
+  requireIntRange(c.min_segment_points, 0, 1000000, "min_segment_points");
+  requireIntRange(c.max_iterations, 1, 100, "max_iterations");
+  requireIntRange(c.search_window_factor, 1, 8, "search_window_factor");
+  requireFinitePositive(c.organized_seed_density, "organized_seed_density");
+  if (c.organized_seed_density > 1000.0f) {
+    throw Error(fieldError("organized_seed_density", std::to_string(c.organized_seed_density),
+                           "<= 1000"));
+  }
+}
+
+namespace detail {
+
+void checkOversegmentationInput(const OrganizedCloud& cloud, const NormalImage& normals,
+                                const char* who) {
+  const std::string prefix = std::string(who) + ": ";
+  if (cloud.width <= 0 || cloud.height <= 0 || cloud.width > 100000 || cloud.height > 100000) {
+    throw Error(prefix + "cloud size " + std::to_string(cloud.width) + "x" +
+                std::to_string(cloud.height) + " is not a valid organized grid");
+  }
+  const std::size_t n = static_cast<std::size_t>(cloud.width) * cloud.height;
+  if (cloud.points.size() != n || cloud.colors.size() != n) {
+    throw Error(prefix + "cloud " + std::to_string(cloud.width) + "x" +
+                std::to_string(cloud.height) + " has " + std::to_string(cloud.points.size()) +
+                " points and " + std::to_string(cloud.colors.size()) + " colours");
+  }
+  if (normals.width != cloud.width || normals.height != cloud.height ||
+      normals.normals.size() != n) {
+    throw Error(prefix + "normal image " + std::to_string(normals.width) + "x" +
+                std::to_string(normals.height) + " with " + std::to_string(normals.normals.size()) +
+                " normals does not match the cloud " + std::to_string(cloud.width) + "x" +
+                std::to_string(cloud.height));
+  }
+}
+
+}  // namespace detail
+
+std::unique_ptr<Oversegmenter> makeOversegmenter(const OversegmentationConfig& config) {
+  validateOversegmentationConfig(config);
+  switch (config.kind) {
+    case OversegmenterKind::PclSupervoxels:
+      return detail::makePclSupervoxelOversegmenter(config);
+    case OversegmenterKind::Organized:
+      return detail::makeOrganizedOversegmenter(config);
+  }
+  throw Error("makeOversegmenter: unknown oversegmenter kind " +
+              std::to_string(static_cast<int>(config.kind)));
+}
+
+void finalizeOversegmentation(Oversegmentation& seg, int min_points, EdgeSource edge_source) {
+  if (seg.width < 0 || seg.height < 0 || seg.width > 100000 || seg.height > 100000) {
+    throw Error("finalizeOversegmentation: grid size " + std::to_string(seg.width) + "x" +
+                std::to_string(seg.height) + " is invalid");
+  }
+  const std::size_t n = static_cast<std::size_t>(seg.width) * seg.height;
+  if (seg.pixel_segment.size() != n) {
+    throw Error("finalizeOversegmentation: pixel_segment has " +
+                std::to_string(seg.pixel_segment.size()) + " entries, grid " +
+                std::to_string(seg.width) + "x" + std::to_string(seg.height) + " needs " +
+                std::to_string(n));
+  }
+  if (min_points < 0) {
+    throw Error("finalizeOversegmentation: min_points = " + std::to_string(min_points) +
+                " (expected >= 0)");
+  }
+
+  // Pixel count per input id. Ids are bounded by the pixel count so that the
+  // dense table below stays small.
+  int max_id = -1;
+  for (std::size_t i = 0; i < n; ++i) {
+    const int id = seg.pixel_segment[i];
+    if (id < -1 || (id >= 0 && static_cast<std::size_t>(id) >= n)) {
+      throw Error("finalizeOversegmentation: pixel " + std::to_string(i) + " has segment id " +
+                  std::to_string(id) + ", outside -1.." + std::to_string(n - 1));
+    }
+    max_id = std::max(max_id, id);
+  }
+  std::vector<int> counts(static_cast<std::size_t>(max_id + 1), 0);
+  for (const int id : seg.pixel_segment) {
+    if (id >= 0) ++counts[id];
+  }
+
+  // Dense renumbering in increasing id order; segments below the threshold
+  // (and ids without pixels) map to -1.
+  const int keep_at_least = std::max(min_points, 1);
+  std::vector<int> remap(counts.size(), -1);
+  int next = 0;
+  for (std::size_t id = 0; id < counts.size(); ++id) {
+    if (counts[id] >= keep_at_least) remap[id] = next++;
+  }
+
+  seg.segments.assign(static_cast<std::size_t>(next), {});
+  for (std::size_t id = 0; id < counts.size(); ++id) {
+    if (remap[id] >= 0) seg.segments[remap[id]].reserve(counts[id]);
+  }
+  for (std::size_t i = 0; i < n; ++i) {
+    int& id = seg.pixel_segment[i];
+    if (id < 0) continue;
+    id = remap[id];
+    if (id >= 0) seg.segments[id].push_back(static_cast<int>(i));
+  }
+
+  std::vector<std::pair<int, int>> edges;
+  if (edge_source == EdgeSource::Keep) {
+    edges.reserve(seg.edges.size());
+    for (const auto& [a, b] : seg.edges) {
+      for (const int id : {a, b}) {
+        if (id < 0 || static_cast<std::size_t>(id) >= n) {
+          throw Error("finalizeOversegmentation: edge (" + std::to_string(a) + ", " +
+                      std::to_string(b) + ") names segment id " + std::to_string(id) +
+                      ", outside 0.." + std::to_string(n - 1));
+        }
+      }
+      // Ids beyond max_id have no pixels: such a segment is dropped.
+      const int ra = a <= max_id ? remap[a] : -1;
+      const int rb = b <= max_id ? remap[b] : -1;
+      if (ra < 0 || rb < 0 || ra == rb) continue;
+      edges.emplace_back(std::min(ra, rb), std::max(ra, rb));
+    }
+  } else {
+    const int w = seg.width;
+    const int h = seg.height;
+    const auto add = [&edges](int a, int b) {
+      if (a < 0 || b < 0 || a == b) return;
+      const std::pair<int, int> e(std::min(a, b), std::max(a, b));
+      // Boundaries run along rows and columns: skip the immediate repeat.
+      if (edges.empty() || edges.back() != e) edges.push_back(e);
+    };
+    for (int y = 0; y < h; ++y) {
+      const int* row = seg.pixel_segment.data() + static_cast<std::size_t>(y) * w;
+      const int* below = y + 1 < h ? row + w : nullptr;
+      for (int x = 0; x < w; ++x) {
+        if (x + 1 < w) add(row[x], row[x + 1]);
+        if (below) add(row[x], below[x]);
+      }
+    }
+  }
+  sortUniqueEdges(edges);
+  seg.edges = std::move(edges);
+}
+
+OversegmentationQuality evaluateOversegmentation(const Oversegmentation& seg,
+                                                 const std::vector<std::uint8_t>& gt_labels,
+                                                 int tolerance_px) {
+  const int w = seg.width;
+  const int h = seg.height;
+  const std::size_t n = static_cast<std::size_t>(std::max(w, 0)) * std::max(h, 0);
+  if (w <= 0 || h <= 0 || seg.pixel_segment.size() != n) {
+    throw Error("evaluateOversegmentation: segmentation " + std::to_string(w) + "x" +
+                std::to_string(h) + " with " + std::to_string(seg.pixel_segment.size()) +
+                " pixel ids is not a valid grid");
+  }
+  if (gt_labels.size() != n) {
+    throw Error("evaluateOversegmentation: ground truth has " + std::to_string(gt_labels.size()) +
+                " labels, the " + std::to_string(w) + "x" + std::to_string(h) +
+                " segmentation needs " + std::to_string(n));
+  }
+  if (tolerance_px < 0 || tolerance_px > 1000) {
+    throw Error("evaluateOversegmentation: tolerance_px = " + std::to_string(tolerance_px) +
+                " (expected 0..1000)");
+  }
+  const std::vector<int>& ps = seg.pixel_segment;
+  for (std::size_t i = 0; i < n; ++i) {
+    if (ps[i] < -1 || ps[i] >= static_cast<int>(seg.segments.size())) {
+      throw Error("evaluateOversegmentation: pixel " + std::to_string(i) + " has segment id " +
+                  std::to_string(ps[i]) + " but there are " +
+                  std::to_string(seg.segments.size()) + " segments");
+    }
+  }
+
+  OversegmentationQuality quality;
+  quality.segment_count = static_cast<int>(seg.segments.size());
+
+  // --- boundary recall ------------------------------------------------------
+  // Segment boundary map, then "is there one within the square window" as a
+  // separable box test on prefix sums (rows, then columns).
+  std::vector<std::uint8_t> seg_boundary(n, 0);
+  for (int y = 0; y < h; ++y) {
+    for (int x = 0; x < w; ++x) {
+      const std::size_t i = static_cast<std::size_t>(y) * w + x;
+      if (x + 1 < w && ps[i] != ps[i + 1]) seg_boundary[i] = seg_boundary[i + 1] = 1;
+      if (y + 1 < h && ps[i] != ps[i + w]) seg_boundary[i] = seg_boundary[i + w] = 1;
+    }
+  }
+  std::vector<std::uint8_t> near_rows(n, 0);
+  std::vector<int> prefix(static_cast<std::size_t>(std::max(w, h)) + 1);
+  for (int y = 0; y < h; ++y) {
+    const std::size_t row = static_cast<std::size_t>(y) * w;
+    prefix[0] = 0;
+    for (int x = 0; x < w; ++x) prefix[x + 1] = prefix[x] + seg_boundary[row + x];
+    for (int x = 0; x < w; ++x) {
+      const int lo = std::max(0, x - tolerance_px);
+      const int hi = std::min(w, x + tolerance_px + 1);
+      near_rows[row + x] = prefix[hi] > prefix[lo];
+    }
+  }
+  std::vector<std::uint8_t> near_boundary(n, 0);
+  for (int x = 0; x < w; ++x) {
+    prefix[0] = 0;
+    for (int y = 0; y < h; ++y) prefix[y + 1] = prefix[y] + near_rows[static_cast<std::size_t>(y) * w + x];
+    for (int y = 0; y < h; ++y) {
+      const int lo = std::max(0, y - tolerance_px);
+      const int hi = std::min(h, y + tolerance_px + 1);
+      near_boundary[static_cast<std::size_t>(y) * w + x] = prefix[hi] > prefix[lo];
+    }
+  }
+  std::size_t gt_boundary = 0;
+  std::size_t recalled = 0;
+  for (int y = 0; y < h; ++y) {
+    for (int x = 0; x < w; ++x) {
+      const std::size_t i = static_cast<std::size_t>(y) * w + x;
+      const std::uint8_t label = gt_labels[i];
+      if (label == kVoidLabel) continue;
+      const auto differs = [&](std::size_t j) {
+        return gt_labels[j] != kVoidLabel && gt_labels[j] != label;
+      };
+      const bool is_boundary = (x > 0 && differs(i - 1)) || (x + 1 < w && differs(i + 1)) ||
+                               (y > 0 && differs(i - w)) || (y + 1 < h && differs(i + w));
+      if (!is_boundary) continue;
+      ++gt_boundary;
+      recalled += near_boundary[i];
+    }
+  }
+  quality.boundary_recall = gt_boundary > 0
+                                ? static_cast<double>(recalled) / static_cast<double>(gt_boundary)
+                                : std::numeric_limits<double>::quiet_NaN();
+
+  // --- undersegmentation error ----------------------------------------------
+  // GT regions: 4-connected components of equal non-void label (flood fill).
+  std::vector<int> region(n, -1);
+  std::vector<std::size_t> stack;
+  int region_count = 0;
+  for (std::size_t start = 0; start < n; ++start) {
+    if (gt_labels[start] == kVoidLabel || region[start] >= 0) continue;
+    const std::uint8_t label = gt_labels[start];
+    region[start] = region_count;
+    stack.assign(1, start);
+    while (!stack.empty()) {
+      const std::size_t i = stack.back();
+      stack.pop_back();
+      const int x = static_cast<int>(i % w);
+      const int y = static_cast<int>(i / w);
+      const auto visit = [&](std::size_t j) {
+        if (region[j] < 0 && gt_labels[j] == label) {
+          region[j] = region_count;
+          stack.push_back(j);
+        }
+      };
+      if (x > 0) visit(i - 1);
+      if (x + 1 < w) visit(i + 1);
+      if (y > 0) visit(i - w);
+      if (y + 1 < h) visit(i + w);
+    }
+    ++region_count;
+  }
+  // Overlaps |s ∩ g| over P (non-void and in a segment), as sorted (s, g) keys.
+  std::vector<std::uint64_t> keys;
+  keys.reserve(n);
+  std::vector<std::size_t> seg_size(seg.segments.size(), 0);
+  for (std::size_t i = 0; i < n; ++i) {
+    if (ps[i] < 0 || region[i] < 0) continue;
+    ++seg_size[ps[i]];
+    keys.push_back((static_cast<std::uint64_t>(ps[i]) << 32) | static_cast<std::uint32_t>(region[i]));
+  }
+  const std::size_t total = keys.size();
+  if (total == 0) {
+    quality.undersegmentation_error = std::numeric_limits<double>::quiet_NaN();
+    return quality;
+  }
+  std::sort(keys.begin(), keys.end());
+  double leak_sum = 0.0;
+  for (std::size_t i = 0; i < keys.size();) {
+    std::size_t j = i;
+    while (j < keys.size() && keys[j] == keys[i]) ++j;
+    const std::size_t overlap = j - i;
+    const std::size_t s_size = seg_size[keys[i] >> 32];
+    if (static_cast<double>(overlap) > 0.05 * static_cast<double>(s_size)) {
+      leak_sum += static_cast<double>(s_size);
+    }
+    i = j;
+  }
+  quality.undersegmentation_error =
+      (leak_sum - static_cast<double>(total)) / static_cast<double>(total);
+  return quality;
+}
+
+}  // namespace findmug

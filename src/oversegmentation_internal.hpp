@@ -1,0 +1,19 @@
+// Internal to findmug_core: the two oversegmenter implementations behind
+// makeOversegmenter, and the input check they share. Not installed.
+#pragma once
+
+#include <memory>
+
+#include "findmug/oversegmentation.hpp"
+
+namespace findmug::detail {
+
+std::unique_ptr<Oversegmenter> makePclSupervoxelOversegmenter(const OversegmentationConfig& config);
+std::unique_ptr<Oversegmenter> makeOrganizedOversegmenter(const OversegmentationConfig& config);
+
+// Throws findmug::Error (prefixed with `who`) unless cloud and normals share
+// one non-empty grid and every array has width*height entries.
+void checkOversegmentationInput(const OrganizedCloud& cloud, const NormalImage& normals,
+                                const char* who);
+
+}  // namespace findmug::detail

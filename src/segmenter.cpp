@@ -1,0 +1,200 @@
+#include "findmug/segmenter.hpp"
+
+#include <algorithm>
+#include <array>
+#include <chrono>
+
+#include "findmug/error.hpp"
+
+namespace findmug {
+
+namespace {
+
+class Stopwatch {
+ public:
+  Stopwatch() : start_(std::chrono::steady_clock::now()) {}
+  // Milliseconds since construction or the previous lap.
+  double lap() {
+    const auto now = std::chrono::steady_clock::now();
+    const double ms = std::chrono::duration<double, std::milli>(now - start_).count();
+    start_ = now;
+    return ms;
+  }
+
+ private:
+  std::chrono::steady_clock::time_point start_;
+};
+
+std::uint8_t argmax(const ClassProbabilities& p) {
+  return static_cast<std::uint8_t>(std::max_element(p.begin(), p.end()) - p.begin());
+}
+
+// A label image in which every pixel is void: the answer for a frame that
+// cannot be labelled (no ground plane), so that the consumer still gets one
+// message per frame.
+LabelImage voidLabels(int width, int height) {
+  LabelImage image;
+  image.width = width;
+  image.height = height;
+  image.labels.assign(static_cast<std::size_t>(width) * height, kVoidLabel);
+  image.confidence.assign(image.labels.size(), 0.0f);
+  return image;
+}
+
+}  // namespace
+
+Segmenter::Segmenter(SegmenterConfig config, std::shared_ptr<const RandomForest> forest)
+    : config_(std::move(config)),
+      forest_(std::move(forest)),
+      oversegmenter_(makeOversegmenter(config_.overseg)) {}
+
+PreparedFrame Segmenter::prepare(RgbdFrame frame, const std::vector<std::uint8_t>* gt_labels) const {
+  PreparedFrame out;
+  Stopwatch watch;
+  out.cloud_camera = frameToCloud(frame, config_.max_depth_m);
+  out.timings.cloud_ms = watch.lap();
+  out.normals_camera = computeNormals(out.cloud_camera, config_.normals);
+  out.timings.normals_ms = watch.lap();
+
+  switch (config_.ground.source) {
+    case GroundSource::Auto:
+      out.ground = frame.extrinsics ? std::optional(groundFromExtrinsics(*frame.extrinsics))
+                                    : estimateGround(out.cloud_camera, out.normals_camera,
+                                                     config_.ground);
+      break;
+    case GroundSource::Extrinsics:
+      if (!frame.extrinsics) {
+        throw Error(frame.source + ": ground.source is 'extrinsics' but the frame carries none "
+                                   "(set ground.source to auto or estimated)");
+      }
+      out.ground = groundFromExtrinsics(*frame.extrinsics);
+      break;
+    case GroundSource::FloorLabels:
+      if (gt_labels == nullptr) {
+        throw Error(frame.source + ": ground.source is 'floor_labels' but no ground truth was given");
+      }
+      if (gt_labels->size() != out.cloud_camera.size()) {
+        throw Error(frame.source + ": ground-truth labels have " +
+                    std::to_string(gt_labels->size()) + " pixels, frame has " +
+                    std::to_string(out.cloud_camera.size()));
+      }
+      out.ground = fitGroundToLabels(out.cloud_camera, *gt_labels, config_.ground);
+      break;
+    case GroundSource::Estimated:
+      out.ground = estimateGround(out.cloud_camera, out.normals_camera, config_.ground);
+      break;
+  }
+  if (out.ground) {
+    out.cloud_ground = transformCloud(out.cloud_camera, out.ground->camera_to_ground);
+    out.normals_ground = rotateNormals(out.normals_camera, out.ground->camera_to_ground.linear());
+  }
+  out.timings.ground_ms = watch.lap();
+  out.frame = std::move(frame);
+  return out;
+}
+
+SegmentedFrame Segmenter::oversegment(PreparedFrame prepared) const {
+  SegmentedFrame out;
+  out.timings = prepared.timings;
+  Stopwatch watch;
+  if (prepared.ground) {
+    out.segmentation = oversegmenter_->segment(prepared.cloud_camera, prepared.normals_camera);
+  } else {
+    // Without a ground plane no feature can be computed: skip the work.
+    out.segmentation.width = prepared.cloud_camera.width;
+    out.segmentation.height = prepared.cloud_camera.height;
+    out.segmentation.pixel_segment.assign(prepared.cloud_camera.size(), -1);
+  }
+  out.timings.overseg_ms = watch.lap();
+  out.prepared = std::move(prepared);
+  return out;
+}
+
+SegmentFeatures Segmenter::features(const SegmentedFrame& segmented) const {
+  if (!segmented.prepared.ground) return {};
+  return computeFeatures(segmented.prepared.cloud_ground, segmented.prepared.normals_ground,
+                         segmented.segmentation);
+}
+
+LabelledFrame Segmenter::classify(SegmentedFrame segmented) const {
+  if (!forest_ || forest_->empty()) {
+    throw Error("Segmenter::classify: no trained forest loaded");
+  }
+  LabelledFrame out;
+  out.timings = segmented.timings;
+  const int width = segmented.prepared.cloud_camera.width;
+  const int height = segmented.prepared.cloud_camera.height;
+  if (!segmented.prepared.ground) {
+    out.labels = voidLabels(width, height);
+    out.segmented = std::move(segmented);
+    return out;
+  }
+
+  Stopwatch watch;
+  out.features = features(segmented);
+  out.timings.features_ms = watch.lap();
+
+  const std::size_t n = out.features.features.size();
+  out.forest_probabilities.resize(n);
+  out.forest_labels.resize(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    out.forest_probabilities[i] = forest_->predict(out.features.features[i]);
+    out.forest_labels[i] = argmax(out.forest_probabilities[i]);
+  }
+  out.timings.forest_ms = watch.lap();
+
+  std::vector<float> confidence(n);
+  const std::vector<std::uint8_t>* final_labels = &out.forest_labels;
+  if (config_.use_mrf) {
+    out.mrf = solveMrf(out.forest_probabilities, out.features.centroids,
+                       segmented.segmentation.edges, config_.mrf);
+    final_labels = &out.mrf.labels;
+    confidence = out.mrf.confidence;
+  } else {
+    for (std::size_t i = 0; i < n; ++i) {
+      confidence[i] = out.forest_probabilities[i][out.forest_labels[i]];
+    }
+  }
+  out.timings.mrf_ms = watch.lap();
+
+  out.labels = projectLabels(segmented.segmentation, *final_labels, confidence);
+  out.timings.labels_ms = watch.lap();
+
+  out.tables = findTables(segmented.prepared.cloud_ground, out.labels, config_.tables);
+  out.timings.tables_ms = watch.lap();
+  out.segmented = std::move(segmented);
+  return out;
+}
+
+LabelledFrame Segmenter::process(RgbdFrame frame, const std::vector<std::uint8_t>* gt_labels) const {
+  return classify(oversegment(prepare(std::move(frame), gt_labels)));
+}
+
+std::vector<std::uint8_t> segmentMajorityLabels(const Oversegmentation& segmentation,
+                                                const std::vector<std::uint8_t>& gt_labels) {
+  if (gt_labels.size() != segmentation.pixel_segment.size()) {
+    throw Error("segmentMajorityLabels: label image has " + std::to_string(gt_labels.size()) +
+                " pixels, segmentation has " + std::to_string(segmentation.pixel_segment.size()));
+  }
+  std::vector<std::uint8_t> out(segmentation.segments.size(), kVoidLabel);
+  for (std::size_t s = 0; s < segmentation.segments.size(); ++s) {
+    std::array<int, kNumLabels> counts{};
+    int void_count = 0;
+    for (int pixel : segmentation.segments[s]) {
+      const std::uint8_t y = gt_labels[pixel];
+      if (y < kNumLabels) {
+        ++counts[y];
+      } else {
+        ++void_count;
+      }
+    }
+    const auto best = std::max_element(counts.begin(), counts.end());
+    // The plurality label; a patch that is mostly void has no trustworthy label.
+    if (*best > 0 && void_count * 2 < static_cast<int>(segmentation.segments[s].size())) {
+      out[s] = static_cast<std::uint8_t>(best - counts.begin());
+    }
+  }
+  return out;
+}
+
+}  // namespace findmug

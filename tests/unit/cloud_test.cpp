@@ -1,0 +1,195 @@
+// Tests for cloud.hpp: pinhole back-projection, organized normals, transforms.
+#include "findmug/cloud.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <random>
+
+#include "findmug/error.hpp"
+
+namespace findmug {
+namespace {
+
+constexpr float kPi = static_cast<float>(M_PI);
+
+RgbdFrame blankFrame(int w, int h, CameraIntrinsics k) {
+  RgbdFrame f;
+  f.width = w;
+  f.height = h;
+  f.intrinsics = k;
+  f.depth_mm.assign(static_cast<std::size_t>(w) * h, 0);
+  f.rgb.assign(static_cast<std::size_t>(w) * h, Rgb8{10, 20, 30});
+  f.source = "synthetic";
+  return f;
+}
+
+// Depth (mm, rounded like a sensor) of the plane n.p + d = 0 seen through
+// pixel (u, v); 0 when the ray misses it (behind the camera).
+std::uint16_t planeDepthMm(const CameraIntrinsics& k, int u, int v, const Eigen::Vector3f& n,
+                           float d) {
+  const Eigen::Vector3f ray(static_cast<float>((u - k.cx) / k.fx),
+                            static_cast<float>((v - k.cy) / k.fy), 1.0f);
+  const float z = -d / n.dot(ray);
+  if (!(z > 0.0f)) return 0;
+  return static_cast<std::uint16_t>(std::lround(z * 1000.0f));
+}
+
+TEST(FrameToCloud, BackProjectsThroughPinholeModel) {
+  const CameraIntrinsics k{100.0, 110.0, 31.5, 23.5};
+  RgbdFrame f = blankFrame(64, 48, k);
+  for (int v = 0; v < 48; ++v)
+    for (int u = 0; u < 64; ++u) f.depth_mm[v * 64 + u] = static_cast<std::uint16_t>(1000 + 10 * u);
+  f.rgb[5 * 64 + 7] = Rgb8{200, 100, 50};
+
+  const OrganizedCloud c = frameToCloud(f);
+  ASSERT_EQ(c.width, 64);
+  ASSERT_EQ(c.height, 48);
+  ASSERT_EQ(c.points.size(), 64u * 48u);
+  ASSERT_EQ(c.colors.size(), 64u * 48u);
+  for (int v : {0, 5, 23, 47}) {
+    for (int u : {0, 7, 31, 63}) {
+      const float z = (1000 + 10 * u) / 1000.0f;
+      const Eigen::Vector3f& p = c.points[v * 64 + u];
+      EXPECT_NEAR(p.z(), z, 1e-6f);
+      EXPECT_NEAR(p.x(), (u - 31.5f) * z / 100.0f, 1e-5f) << u << "," << v;
+      EXPECT_NEAR(p.y(), (v - 23.5f) * z / 110.0f, 1e-5f) << u << "," << v;
+    }
+  }
+  EXPECT_EQ(c.colors[5 * 64 + 7], (Rgb8{200, 100, 50}));
+  // x right, y down: the top-left pixel is up and to the left of the axis.
+  EXPECT_LT(c.points[0].x(), 0.0f);
+  EXPECT_LT(c.points[0].y(), 0.0f);
+}
+
+TEST(FrameToCloud, ZeroAndTooFarDepthBecomeNaN) {
+  RgbdFrame f = blankFrame(8, 4, {});
+  std::fill(f.depth_mm.begin(), f.depth_mm.end(), 2000);
+  f.depth_mm[3] = 0;
+  f.depth_mm[4] = 10001;  // beyond the default 10 m
+  f.depth_mm[5] = 4001;
+  const OrganizedCloud c = frameToCloud(f);
+  EXPECT_FALSE(c.valid(3));
+  EXPECT_TRUE(std::isnan(c.points[3].x()) && std::isnan(c.points[3].y()));
+  EXPECT_FALSE(c.valid(4));
+  EXPECT_TRUE(c.valid(5));
+  EXPECT_TRUE(c.valid(0));
+  const OrganizedCloud near = frameToCloud(f, 4.0f);
+  EXPECT_FALSE(near.valid(5));
+  EXPECT_TRUE(near.valid(0));
+}
+
+TEST(FrameToCloud, RejectsBadFrameAndBadMaxDepth) {
+  RgbdFrame f = blankFrame(8, 4, {});
+  f.depth_mm.pop_back();
+  EXPECT_THROW(frameToCloud(f), Error);
+  RgbdFrame g = blankFrame(8, 4, {});
+  EXPECT_THROW(frameToCloud(g, 0.0f), Error);
+  EXPECT_THROW(frameToCloud(g, std::nanf("")), Error);
+  g.intrinsics.fx = -1;
+  EXPECT_THROW(frameToCloud(g), Error);
+}
+
+TEST(ComputeNormals, TiltedPlaneGivesItsNormalFacingTheCamera) {
+  const CameraIntrinsics k{525.0, 525.0, 159.5, 119.5};
+  RgbdFrame f = blankFrame(320, 240, k);
+  // A plane tilted 30 degrees about x and 20 about y, 2 m in front.
+  const Eigen::Vector3f n_true =
+      (Eigen::AngleAxisf(0.35f, Eigen::Vector3f::UnitY()) *
+       Eigen::AngleAxisf(kPi / 6, Eigen::Vector3f::UnitX()) * Eigen::Vector3f(0, 0, -1))
+          .normalized();
+  const float d = 2.0f;  // n.p + d = 0 and n faces the camera: n.(0,0,2) = -2 roughly
+  for (int v = 0; v < 240; ++v)
+    for (int u = 0; u < 320; ++u) f.depth_mm[v * 320 + u] = planeDepthMm(k, u, v, n_true, d);
+  const OrganizedCloud c = frameToCloud(f);
+  const NormalImage normals = computeNormals(c, NormalConfig{});
+  ASSERT_EQ(normals.normals.size(), c.points.size());
+  int checked = 0;
+  for (int v = 10; v < 230; v += 7) {
+    for (int u = 10; u < 310; u += 7) {
+      const Eigen::Vector3f& n = normals.normals[v * 320 + u];
+      ASSERT_TRUE(n.allFinite()) << u << "," << v;
+      EXPECT_NEAR(n.norm(), 1.0f, 1e-4f);
+      // Millimetre depth rounding at ~2 m: allow 3 degrees.
+      EXPECT_GT(n.dot(n_true), std::cos(3.0f * kPi / 180)) << u << "," << v << " n=" << n.transpose();
+      EXPECT_LT(n.dot(c.points[v * 320 + u]), 0.0f);  // faces the camera
+      ++checked;
+    }
+  }
+  EXPECT_GT(checked, 1000);
+}
+
+TEST(ComputeNormals, DepthStepDoesNotBendNormalsAndHolesStayNaN) {
+  const CameraIntrinsics k{525.0, 525.0, 79.5, 59.5};
+  RgbdFrame f = blankFrame(160, 120, k);
+  // Left half: fronto-parallel wall at 1 m. Right half: floor-like plane
+  // much further away. A normal that mixed them would be far off.
+  const Eigen::Vector3f floor_n = Eigen::Vector3f(0, -1, -0.5f).normalized();
+  for (int v = 0; v < 120; ++v)
+    for (int u = 0; u < 160; ++u)
+      f.depth_mm[v * 160 + u] =
+          u < 80 ? 1000 : planeDepthMm(k, u, v, floor_n, 0.9f);
+  // A single valid pixel in a hole has no neighbours: no normal.
+  for (int v = 90; v < 110; ++v)
+    for (int u = 10; u < 30; ++u) f.depth_mm[v * 160 + u] = 0;
+  f.depth_mm[100 * 160 + 20] = 1000;
+  const OrganizedCloud c = frameToCloud(f);
+  ASSERT_GT(c.points[60 * 160 + 100].z(), 1.5f);  // the far plane really is far
+  const NormalImage normals = computeNormals(c, NormalConfig{});
+  for (int v = 10; v < 80; v += 3) {
+    for (int u : {74, 76, 77}) {  // 3+ pixels left of the step
+      const Eigen::Vector3f& n = normals.normals[v * 160 + u];
+      ASSERT_TRUE(n.allFinite());
+      EXPECT_GT(n.dot(Eigen::Vector3f(0, 0, -1)), std::cos(1.0f * kPi / 180)) << u << "," << v;
+    }
+    for (int u : {83, 85}) {  // right of the step
+      const Eigen::Vector3f& n = normals.normals[v * 160 + u];
+      ASSERT_TRUE(n.allFinite());
+      EXPECT_GT(n.dot(floor_n), std::cos(3.0f * kPi / 180)) << u << "," << v;
+    }
+  }
+  EXPECT_FALSE(normals.normals[100 * 160 + 20].allFinite());
+  EXPECT_FALSE(normals.normals[95 * 160 + 15].allFinite());  // no point at all
+}
+
+TEST(ComputeNormals, RejectsBadConfigAndShape) {
+  OrganizedCloud c;
+  c.width = 4;
+  c.height = 4;
+  c.points.assign(16, Eigen::Vector3f(0, 0, 1));
+  NormalConfig bad;
+  bad.window_radius_px = 0;
+  EXPECT_THROW(computeNormals(c, bad), Error);
+  bad = NormalConfig{};
+  bad.max_depth_jump_m = -1.0f;
+  EXPECT_THROW(computeNormals(c, bad), Error);
+  c.points.pop_back();
+  EXPECT_THROW(computeNormals(c, NormalConfig{}), Error);
+}
+
+TEST(TransformCloud, MovesValidPointsAndKeepsNaN) {
+  OrganizedCloud c;
+  c.width = 2;
+  c.height = 1;
+  c.points = {Eigen::Vector3f(1, 2, 3), Eigen::Vector3f::Constant(std::nanf(""))};
+  c.colors = {Rgb8{1, 2, 3}, Rgb8{4, 5, 6}};
+  Eigen::Isometry3f t = Eigen::Isometry3f::Identity();
+  t.linear() = Eigen::AngleAxisf(kPi / 2, Eigen::Vector3f::UnitZ()).toRotationMatrix();
+  t.translation() = Eigen::Vector3f(10, 0, 0);
+  const OrganizedCloud out = transformCloud(c, t);
+  EXPECT_TRUE(out.points[0].isApprox(Eigen::Vector3f(8, 1, 3), 1e-5f)) << out.points[0].transpose();
+  EXPECT_FALSE(out.valid(1));
+  EXPECT_EQ(out.colors, c.colors);
+  EXPECT_EQ(out.width, 2);
+
+  NormalImage n;
+  n.width = 2;
+  n.height = 1;
+  n.normals = {Eigen::Vector3f(1, 0, 0), Eigen::Vector3f::Constant(std::nanf(""))};
+  const NormalImage r = rotateNormals(n, t.linear());
+  EXPECT_TRUE(r.normals[0].isApprox(Eigen::Vector3f(0, 1, 0), 1e-5f));
+  EXPECT_FALSE(r.normals[1].allFinite());
+}
+
+}  // namespace
+}  // namespace findmug

@@ -1,0 +1,613 @@
+// Tests of the randomized decision forest: learning, determinism, the model
+// file and its refusal of truncated/corrupt/foreign files.
+#include "findmug/forest.hpp"
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <fstream>
+#include <iterator>
+#include <random>
+#include <thread>
+
+#include "findmug/error.hpp"
+#include "test_data.hpp"
+
+namespace findmug {
+namespace {
+
+using test::TempDir;
+
+// 8 well separated Gaussian blobs in 14-D, one per label.
+TrainingSet makeBlobs(int per_class, std::uint32_t seed, float noise = 0.6f) {
+  std::mt19937 mean_rng(1234);  // same class means for every call
+  std::uniform_real_distribution<float> mean_dist(0.0f, 10.0f);
+  std::array<FeatureVector, kNumLabels> means;
+  for (auto& m : means)
+    for (float& v : m) v = mean_dist(mean_rng);
+  std::mt19937 rng(seed);
+  std::normal_distribution<float> noise_dist(0.0f, noise);
+  TrainingSet set;
+  for (int i = 0; i < per_class; ++i) {
+    for (int c = 0; c < kNumLabels; ++c) {
+      FeatureVector x;
+      for (int f = 0; f < kFeatureDim; ++f) x[f] = means[c][f] + noise_dist(rng);
+      set.features.push_back(x);
+      set.labels.push_back(static_cast<std::uint8_t>(c));
+    }
+  }
+  return set;
+}
+
+int argmax(const ClassProbabilities& p) {
+  return static_cast<int>(std::max_element(p.begin(), p.end()) - p.begin());
+}
+
+double accuracy(const RandomForest& forest, const TrainingSet& set) {
+  int correct = 0;
+  for (std::size_t i = 0; i < set.features.size(); ++i)
+    correct += argmax(forest.predict(set.features[i])) == set.labels[i];
+  return static_cast<double>(correct) / static_cast<double>(set.features.size());
+}
+
+std::vector<std::uint8_t> readBytes(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+
+void writeBytes(const std::string& path, const std::vector<std::uint8_t>& bytes) {
+  std::ofstream out(path, std::ios::binary | std::ios::trunc);
+  out.write(reinterpret_cast<const char*>(bytes.data()), static_cast<std::streamsize>(bytes.size()));
+}
+
+// ---------------------------------------------------------------------------
+// Learning
+
+TEST(Forest, LearnsSeparableProblem) {
+  const TrainingSet train = makeBlobs(200, 1);
+  const TrainingSet test = makeBlobs(100, 2);
+  ForestParams params;
+  params.num_trees = 8;
+  params.max_depth = 12;
+  const RandomForest forest = RandomForest::train(train, params);
+  EXPECT_EQ(forest.trees().size(), 8u);
+  EXPECT_GT(accuracy(forest, test), 0.95);
+  // Every prediction is a distribution.
+  for (std::size_t i = 0; i < 50; ++i) {
+    const auto p = forest.predict(test.features[i]);
+    float sum = 0.0f;
+    for (float v : p) {
+      EXPECT_GE(v, 0.0f);
+      sum += v;
+    }
+    EXPECT_NEAR(sum, 1.0f, 1e-5f);
+  }
+}
+
+TEST(Forest, DeeperTreesFitBetterThanStumps) {
+  // Noisier blobs: 8 classes cannot be told apart by one split per tree.
+  const TrainingSet train = makeBlobs(150, 3, 1.5f);
+  ForestParams shallow;
+  shallow.max_depth = 1;
+  ForestParams deep;
+  deep.max_depth = 12;
+  const double shallow_acc = accuracy(RandomForest::train(train, shallow), train);
+  const double deep_acc = accuracy(RandomForest::train(train, deep), train);
+  EXPECT_GT(deep_acc, 0.9);
+  EXPECT_GT(deep_acc, shallow_acc + 0.3) << "shallow " << shallow_acc << " deep " << deep_acc;
+}
+
+TEST(Forest, RespectsDepthAndMinSamplesPerLeaf) {
+  const TrainingSet train = makeBlobs(60, 4, 2.0f);
+  ForestParams params;
+  params.num_trees = 3;
+  params.max_depth = 5;
+  params.min_samples_leaf = 7;
+  params.class_weighting = false;
+  const RandomForest forest = RandomForest::train(train, params);
+  for (const auto& tree : forest.trees()) {
+    // Depth of every node, and how many training samples reach each leaf
+    // (no bagging, so every tree saw all samples).
+    std::vector<int> depth(tree.size(), 0);
+    for (std::size_t i = 0; i < tree.size(); ++i) {
+      if (tree[i].feature >= 0) {
+        depth[tree[i].left] = depth[i] + 1;
+        depth[tree[i].right] = depth[i] + 1;
+      }
+    }
+    EXPECT_LE(*std::max_element(depth.begin(), depth.end()), 5);
+    EXPECT_GT(tree.size(), 1u);
+    std::vector<int> reached(tree.size(), 0);
+    for (const auto& x : train.features) {
+      std::int32_t i = 0;
+      while (tree[i].feature >= 0) i = x[tree[i].feature] < tree[i].threshold ? tree[i].left
+                                                                               : tree[i].right;
+      ++reached[i];
+    }
+    for (std::size_t i = 0; i < tree.size(); ++i) {
+      if (tree[i].feature < 0) {
+        EXPECT_GE(reached[i], 7) << "leaf " << i;
+        float sum = 0.0f;
+        for (float p : tree[i].distribution) sum += p;
+        EXPECT_NEAR(sum, 1.0f, 1e-5f);
+      }
+    }
+  }
+}
+
+TEST(Forest, PureDataGivesSingleLeaf) {
+  TrainingSet train = makeBlobs(20, 5);
+  std::fill(train.labels.begin(), train.labels.end(), static_cast<std::uint8_t>(Label::Table));
+  const RandomForest forest = RandomForest::train(train, ForestParams{});
+  for (const auto& tree : forest.trees()) {
+    ASSERT_EQ(tree.size(), 1u);
+    EXPECT_EQ(tree[0].feature, -1);
+    EXPECT_FLOAT_EQ(tree[0].distribution[static_cast<int>(Label::Table)], 1.0f);
+  }
+}
+
+TEST(Forest, LeafHistogramUsesSampleAndClassWeights) {
+  // All features equal: no split possible, the root is the leaf.
+  TrainingSet train;
+  for (int i = 0; i < 20; ++i) {
+    train.features.push_back(FeatureVector{});
+    const bool wall = i < 10;
+    train.labels.push_back(wall ? 2 : 7);
+    train.weights.push_back(wall ? 3.0f : 1.0f);
+  }
+  ForestParams params;
+  params.num_trees = 1;
+  params.class_weighting = false;
+  auto p = RandomForest::train(train, params).predict(FeatureVector{});
+  EXPECT_NEAR(p[2], 0.75f, 1e-6f);
+  EXPECT_NEAR(p[7], 0.25f, 1e-6f);
+  params.class_weighting = true;  // each class then carries the same total weight
+  p = RandomForest::train(train, params).predict(FeatureVector{});
+  EXPECT_NEAR(p[2], 0.5f, 1e-6f);
+  EXPECT_NEAR(p[7], 0.5f, 1e-6f);
+}
+
+// A rare class overlapping a frequent one: chair (5 %) vs wall, shifted in one
+// feature. Without weighting the leaves in the overlap vote wall.
+TrainingSet makeRareClassSet(std::uint32_t seed) {
+  std::mt19937 rng(seed);
+  std::normal_distribution<float> unit(0.0f, 1.0f);
+  TrainingSet set;
+  auto add = [&](std::uint8_t label, float shift, int count) {
+    for (int i = 0; i < count; ++i) {
+      FeatureVector x;
+      for (float& v : x) v = unit(rng);
+      x[3] += shift;
+      set.features.push_back(x);
+      set.labels.push_back(label);
+    }
+  };
+  add(static_cast<std::uint8_t>(Label::Wall), 0.0f, 3000);
+  add(static_cast<std::uint8_t>(Label::Chair), 1.5f, 150);
+  return set;
+}
+
+double recall(const RandomForest& forest, const TrainingSet& set, int label) {
+  int hits = 0, total = 0;
+  for (std::size_t i = 0; i < set.features.size(); ++i) {
+    if (set.labels[i] != label) continue;
+    ++total;
+    hits += argmax(forest.predict(set.features[i])) == label;
+  }
+  return static_cast<double>(hits) / total;
+}
+
+TEST(Forest, ClassWeightingRaisesRecallOfRareClass) {
+  const TrainingSet train = makeRareClassSet(10);
+  const TrainingSet test = makeRareClassSet(11);
+  ForestParams params;
+  params.max_depth = 8;
+  params.min_samples_leaf = 30;
+  params.class_weighting = false;
+  const double plain = recall(RandomForest::train(train, params), test, 5);
+  params.class_weighting = true;
+  const double weighted = recall(RandomForest::train(train, params), test, 5);
+  EXPECT_GT(weighted, plain + 0.3) << "plain " << plain << " weighted " << weighted;
+}
+
+// ---------------------------------------------------------------------------
+// Determinism and progress
+
+TEST(Forest, SameSeedGivesIdenticalModelWhateverTheThreadCount) {
+  const TrainingSet train = makeBlobs(40, 6, 2.0f);
+  TempDir dir;
+  ForestParams params;
+  params.num_trees = 6;
+  params.bagging_fraction = 0.7;
+  std::vector<std::vector<std::uint8_t>> files;
+  std::vector<std::string> ids;
+  for (int threads : {1, 2, 3, 6, 0}) {
+    params.num_threads = threads;
+    const RandomForest forest = RandomForest::train(train, params);
+    const std::string path = dir.str("t" + std::to_string(threads) + ".fmf");
+    forest.save(path);
+    files.push_back(readBytes(path));
+    ids.push_back(forest.id());
+  }
+  ASSERT_FALSE(files[0].empty());
+  for (std::size_t i = 1; i < files.size(); ++i) {
+    EXPECT_EQ(ids[i], ids[0]);
+    EXPECT_TRUE(files[i] == files[0]) << "model " << i << " differs";
+  }
+  // A different seed gives a different model.
+  params.seed = 43;
+  EXPECT_NE(RandomForest::train(train, params).id(), ids[0]);
+}
+
+TEST(Forest, ProgressReportedOnCallingThreadForEveryTree) {
+  const TrainingSet train = makeBlobs(20, 7);
+  ForestParams params;
+  params.num_trees = 5;
+  params.num_threads = 2;
+  std::vector<std::pair<int, int>> calls;
+  const auto caller = std::this_thread::get_id();
+  bool other_thread = false;
+  RandomForest::train(train, params, [&](int done, int total) {
+    calls.emplace_back(done, total);
+    other_thread |= std::this_thread::get_id() != caller;
+  });
+  ASSERT_EQ(calls.size(), 5u);
+  for (int i = 0; i < 5; ++i) EXPECT_EQ(calls[i], std::make_pair(i + 1, 5));
+  EXPECT_FALSE(other_thread);
+}
+
+TEST(Forest, ProgressCallbackExceptionPropagates) {
+  const TrainingSet train = makeBlobs(20, 7);
+  ForestParams params;
+  params.num_trees = 4;
+  params.num_threads = 2;
+  EXPECT_THROW(RandomForest::train(train, params,
+                                   [](int, int) { throw std::runtime_error("cancelled"); }),
+               std::runtime_error);
+}
+
+// ---------------------------------------------------------------------------
+// Input validation
+
+TEST(Forest, RefusesBadTrainingInput) {
+  const TrainingSet good = makeBlobs(5, 8);
+  ForestParams params;
+  auto expectError = [&](const TrainingSet& set, const ForestParams& p, const std::string& word) {
+    try {
+      RandomForest::train(set, p);
+      ADD_FAILURE() << "no error, expected one mentioning " << word;
+    } catch (const Error& e) {
+      EXPECT_NE(std::string(e.what()).find(word), std::string::npos) << e.what();
+    }
+  };
+  expectError(TrainingSet{}, params, "empty");
+  TrainingSet bad = good;
+  bad.labels.pop_back();
+  expectError(bad, params, "labels");
+  bad = good;
+  bad.labels[3] = kVoidLabel;
+  expectError(bad, params, "label 255");
+  bad = good;
+  bad.features[2][4] = std::nanf("");
+  expectError(bad, params, "min_height");
+  bad = good;
+  bad.weights.assign(good.labels.size(), 1.0f);
+  bad.weights[1] = 0.0f;
+  expectError(bad, params, "weight");
+  bad.weights.resize(3);
+  expectError(bad, params, "weights");
+  ForestParams p = params;
+  p.num_trees = 0;
+  expectError(good, p, "num_trees");
+  p = params;
+  p.candidate_features = 15;
+  expectError(good, p, "candidate_features");
+  p = params;
+  p.bagging_fraction = 0.0;
+  expectError(good, p, "bagging_fraction");
+  p = params;
+  p.min_samples_leaf = 0;
+  expectError(good, p, "min_samples_leaf");
+  EXPECT_THROW(RandomForest().predict(FeatureVector{}), Error);
+}
+
+// ---------------------------------------------------------------------------
+// Model file
+
+TEST(ForestFile, SaveLoadRoundTripGivesIdenticalPredictions) {
+  const TrainingSet train = makeBlobs(50, 9, 1.5f);
+  const TrainingSet test = makeBlobs(30, 10, 1.5f);
+  ForestParams params;
+  params.num_trees = 4;
+  params.max_depth = 9;
+  params.bagging_fraction = 0.8;
+  params.seed = 777;
+  const RandomForest forest = RandomForest::train(train, params);
+  TempDir dir;
+  const std::string path = dir.str("model.fmf");
+  forest.save(path);
+  const RandomForest loaded = RandomForest::load(path);
+  EXPECT_EQ(loaded.id(), forest.id());
+  EXPECT_EQ(forest.id().size(), 8u);
+  EXPECT_EQ(loaded.params().seed, 777u);
+  EXPECT_EQ(loaded.params().max_depth, 9);
+  EXPECT_EQ(loaded.params().bagging_fraction, 0.8);
+  EXPECT_EQ(loaded.params().class_weighting, true);
+  ASSERT_EQ(loaded.trees().size(), forest.trees().size());
+  for (const auto& x : test.features) {
+    const auto a = forest.predict(x);
+    const auto b = loaded.predict(x);
+    EXPECT_EQ(std::memcmp(a.data(), b.data(), sizeof a), 0);
+  }
+  // Saving the loaded model reproduces the file byte for byte.
+  loaded.save(dir.str("again.fmf"));
+  EXPECT_EQ(readBytes(dir.str("again.fmf")), readBytes(path));
+}
+
+TEST(ForestFile, SaveToUnwritablePlaceFails) {
+  const RandomForest forest = RandomForest::train(makeBlobs(5, 1), ForestParams{});
+  EXPECT_THROW(forest.save("/nonexistent-dir-findmug/model.fmf"), Error);
+  EXPECT_THROW(RandomForest().save("/tmp/findmug-empty.fmf"), Error);
+}
+
+// Helpers that know the documented file layout (see src/forest.cpp), to
+// build files that are intact (valid checksum) but wrong in one field.
+std::uint64_t fnv1a64(const std::uint8_t* data, std::size_t size) {
+  std::uint64_t h = 0xcbf29ce484222325ULL;
+  for (std::size_t i = 0; i < size; ++i) {
+    h ^= data[i];
+    h *= 0x100000001b3ULL;
+  }
+  return h;
+}
+
+void fixChecksum(std::vector<std::uint8_t>& bytes) {
+  const std::size_t body = bytes.size() - 8;
+  const std::uint64_t h = fnv1a64(bytes.data(), body);
+  for (int i = 0; i < 8; ++i) bytes[body + i] = static_cast<std::uint8_t>(h >> (8 * i));
+}
+
+void putU32(std::vector<std::uint8_t>& bytes, std::size_t offset, std::uint32_t v) {
+  for (int i = 0; i < 4; ++i) bytes[offset + i] = static_cast<std::uint8_t>(v >> (8 * i));
+}
+
+std::uint32_t getU32(const std::vector<std::uint8_t>& bytes, std::size_t offset) {
+  std::uint32_t v = 0;
+  for (int i = 0; i < 4; ++i) v |= static_cast<std::uint32_t>(bytes[offset + i]) << (8 * i);
+  return v;
+}
+
+constexpr std::size_t kVersionOffset = 8;
+constexpr std::size_t kLabelCountOffset = 12;
+constexpr std::size_t kParamsSize = 5 * 4 + 1 + 8 + 8;
+
+std::size_t featureSectionOffset() {
+  std::size_t offset = kLabelCountOffset + 4;
+  for (auto name : kLabelNames) offset += 4 + name.size();
+  return offset;
+}
+std::size_t paramsOffset() {
+  std::size_t offset = featureSectionOffset() + 4;
+  for (auto name : kFeatureNames) offset += 4 + name.size();
+  return offset;
+}
+std::size_t treeCountOffset() { return paramsOffset() + kParamsSize; }
+
+// Offsets of the nodes of tree 0.
+std::vector<std::size_t> nodeOffsetsOfFirstTree(const std::vector<std::uint8_t>& bytes) {
+  std::size_t offset = treeCountOffset() + 4;
+  const std::uint32_t count = getU32(bytes, offset);
+  offset += 4;
+  std::vector<std::size_t> nodes;
+  for (std::uint32_t i = 0; i < count; ++i) {
+    nodes.push_back(offset);
+    const auto feature = static_cast<std::int32_t>(getU32(bytes, offset));
+    offset += feature >= 0 ? 16 : 4 + 4 * kNumLabels;
+  }
+  return nodes;
+}
+
+class ForestFileCorruption : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    ForestParams params;
+    params.num_trees = 2;
+    params.max_depth = 3;
+    params.seed = 5;
+    forest_ = RandomForest::train(makeBlobs(10, 12, 2.0f), params);
+    path_ = dir_.str("model.fmf");
+    forest_.save(path_);
+    good_ = readBytes(path_);
+    ASSERT_GT(good_.size(), 400u);
+    // Sanity of the layout helpers against the real file.
+    ASSERT_EQ(getU32(good_, kLabelCountOffset), static_cast<std::uint32_t>(kNumLabels));
+    ASSERT_EQ(getU32(good_, featureSectionOffset()), static_cast<std::uint32_t>(kFeatureDim));
+    ASSERT_EQ(getU32(good_, treeCountOffset()), 2u);
+  }
+
+  // Writes `bytes` to a file and expects load to fail with a message naming
+  // the file and containing `word`.
+  void expectRefused(const std::vector<std::uint8_t>& bytes, const std::string& word) {
+    const std::string bad = dir_.str("bad.fmf");
+    writeBytes(bad, bytes);
+    try {
+      RandomForest::load(bad);
+      ADD_FAILURE() << "load accepted a bad file; expected an error mentioning '" << word << "'";
+    } catch (const Error& e) {
+      const std::string msg = e.what();
+      EXPECT_NE(msg.find(bad), std::string::npos) << msg;
+      EXPECT_NE(msg.find(word), std::string::npos) << msg;
+    }
+  }
+
+  TempDir dir_;
+  RandomForest forest_;
+  std::string path_;
+  std::vector<std::uint8_t> good_;
+};
+
+TEST_F(ForestFileCorruption, IntactFileLoads) {
+  EXPECT_EQ(RandomForest::load(path_).id(), forest_.id());
+}
+
+TEST_F(ForestFileCorruption, MissingFile) {
+  try {
+    RandomForest::load(dir_.str("nope.fmf"));
+    ADD_FAILURE() << "loaded a missing file";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("nope.fmf"), std::string::npos) << e.what();
+  }
+}
+
+TEST_F(ForestFileCorruption, EveryTruncationIsRefused) {
+  for (std::size_t length = 0; length < good_.size(); ++length) {
+    SCOPED_TRACE("prefix length " + std::to_string(length));
+    expectRefused(std::vector<std::uint8_t>(good_.begin(), good_.begin() + length), "truncated");
+  }
+}
+
+TEST_F(ForestFileCorruption, EveryCorruptByteIsRefused) {
+  for (std::size_t i = 0; i < good_.size(); ++i) {
+    for (std::uint8_t flip : {std::uint8_t{0x01}, std::uint8_t{0x80}}) {
+      auto bytes = good_;
+      bytes[i] ^= flip;
+      SCOPED_TRACE("byte " + std::to_string(i) + " xor " + std::to_string(flip));
+      expectRefused(bytes, "");
+    }
+  }
+}
+
+TEST_F(ForestFileCorruption, CorruptLeafProbabilityIsAChecksumMismatch) {
+  const auto nodes = nodeOffsetsOfFirstTree(good_);
+  const auto leaf = std::find_if(nodes.begin(), nodes.end(), [&](std::size_t off) {
+    return static_cast<std::int32_t>(getU32(good_, off)) < 0;
+  });
+  ASSERT_NE(leaf, nodes.end());
+  auto bytes = good_;
+  bytes[*leaf + 4] ^= 0x01;  // lowest mantissa bit of the first probability
+  expectRefused(bytes, "checksum mismatch");
+}
+
+TEST_F(ForestFileCorruption, TrailingBytes) {
+  auto bytes = good_;
+  bytes.insert(bytes.end() - 8, std::uint8_t{0});
+  fixChecksum(bytes);
+  expectRefused(bytes, "unexpected bytes");
+}
+
+TEST_F(ForestFileCorruption, WrongMagic) {
+  auto bytes = good_;
+  bytes[0] = 'X';
+  expectRefused(bytes, "wrong magic");
+  expectRefused({'P', 'K', 3, 4, 0, 0, 0, 0, 0}, "wrong magic");
+}
+
+TEST_F(ForestFileCorruption, WrongVersion) {
+  auto bytes = good_;
+  putU32(bytes, kVersionOffset, 2);
+  expectRefused(bytes, "version 2");
+  fixChecksum(bytes);
+  expectRefused(bytes, "version 2");
+}
+
+TEST_F(ForestFileCorruption, DifferentLabelNames) {
+  auto bytes = good_;
+  const auto it = std::search(bytes.begin(), bytes.end(), kLabelNames[5].begin(),
+                              kLabelNames[5].end());
+  ASSERT_NE(it, bytes.end());
+  *(it + 1) = 'X';  // "chair" -> "cXair"
+  fixChecksum(bytes);
+  expectRefused(bytes, "label names differ");
+
+  bytes = good_;
+  putU32(bytes, kLabelCountOffset, 9);
+  fixChecksum(bytes);
+  expectRefused(bytes, "9 labels");
+}
+
+TEST_F(ForestFileCorruption, DifferentFeatureLayout) {
+  auto bytes = good_;
+  const std::string_view name = kFeatureNames[6];
+  const auto it = std::search(bytes.begin(), bytes.end(), name.begin(), name.end());
+  ASSERT_NE(it, bytes.end());
+  *it = 'X';
+  fixChecksum(bytes);
+  expectRefused(bytes, "feature layout differs");
+
+  bytes = good_;
+  putU32(bytes, featureSectionOffset(), 13);
+  fixChecksum(bytes);
+  expectRefused(bytes, "13 features");
+}
+
+TEST_F(ForestFileCorruption, AbsurdCounts) {
+  auto bytes = good_;
+  putU32(bytes, treeCountOffset(), 20000);
+  fixChecksum(bytes);
+  expectRefused(bytes, "num_trees");
+
+  bytes = good_;
+  putU32(bytes, paramsOffset(), 20000);  // params.num_trees
+  fixChecksum(bytes);
+  expectRefused(bytes, "num_trees");
+
+  bytes = good_;
+  putU32(bytes, treeCountOffset() + 4, 0xFFFFFFFFu);  // node count of tree 0
+  fixChecksum(bytes);
+  expectRefused(bytes, "node count");
+
+  bytes = good_;
+  putU32(bytes, paramsOffset() + 4, 1000);  // params.max_depth
+  fixChecksum(bytes);
+  expectRefused(bytes, "max_depth");
+}
+
+TEST_F(ForestFileCorruption, BadTreeStructure) {
+  const auto nodes = nodeOffsetsOfFirstTree(good_);
+  ASSERT_EQ(static_cast<std::int32_t>(getU32(good_, nodes[0])) >= 0, true) << "root should split";
+  const std::size_t root_left = nodes[0] + 8;
+  const std::size_t root_right = nodes[0] + 12;
+
+  auto bytes = good_;
+  putU32(bytes, root_left, static_cast<std::uint32_t>(nodes.size()));  // one past the end
+  fixChecksum(bytes);
+  expectRefused(bytes, "out of range");
+
+  bytes = good_;
+  putU32(bytes, root_left, 0);  // back to the root: a cycle
+  fixChecksum(bytes);
+  expectRefused(bytes, "out of range");
+
+  bytes = good_;
+  putU32(bytes, root_right, getU32(good_, root_left));  // both children the same node
+  fixChecksum(bytes);
+  expectRefused(bytes, "more than one parent");
+
+  // An inner node below the root pointing at itself.
+  const auto inner = std::find_if(nodes.begin() + 1, nodes.end(), [&](std::size_t off) {
+    return static_cast<std::int32_t>(getU32(good_, off)) >= 0;
+  });
+  ASSERT_NE(inner, nodes.end()) << "tree 0 should have a second inner node";
+  bytes = good_;
+  putU32(bytes, *inner + 8, static_cast<std::uint32_t>(inner - nodes.begin()));
+  fixChecksum(bytes);
+  expectRefused(bytes, "cycle");
+
+  bytes = good_;
+  putU32(bytes, nodes[0], 14);  // feature index out of range
+  fixChecksum(bytes);
+  expectRefused(bytes, "feature index 14");
+
+  const auto leaf = std::find_if(nodes.begin(), nodes.end(), [&](std::size_t off) {
+    return static_cast<std::int32_t>(getU32(good_, off)) < 0;
+  });
+  bytes = good_;
+  putU32(bytes, *leaf + 4, 0x7fc00000u);  // NaN probability
+  fixChecksum(bytes);
+  expectRefused(bytes, "leaf probability");
+}
+
+}  // namespace
+}  // namespace findmug

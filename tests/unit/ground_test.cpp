@@ -1,0 +1,325 @@
+// Tests for ground.hpp: the plane from the camera mount, from floor labels
+// (RANSAC), and estimated from the frame alone; synthetic scenes with known
+// answers and real NYU Depth V2 frames.
+#include "findmug/ground.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <filesystem>
+#include <random>
+#include <string>
+
+#include "findmug/dataset.hpp"
+#include "findmug/error.hpp"
+#include "findmug/image_io.hpp"
+#include "test_data.hpp"
+
+namespace findmug {
+namespace {
+
+constexpr float kDeg = static_cast<float>(M_PI / 180.0);
+
+// The camera's "up" and "forward on the floor" in camera coordinates for a
+// mount (pitch θ down, roll φ clockwise), derived by hand:
+//   up      = (-sinφ cosθ, -cosφ cosθ, -sinθ)
+//   forward = (-sinφ sinθ, -cosφ sinθ,  cosθ)
+Eigen::Vector3f upInCamera(const CameraExtrinsics& m) {
+  const double t = m.pitch_rad, f = m.roll_rad;
+  return Eigen::Vector3d(-std::sin(f) * std::cos(t), -std::cos(f) * std::cos(t), -std::sin(t))
+      .cast<float>();
+}
+Eigen::Vector3f forwardInCamera(const CameraExtrinsics& m) {
+  const double t = m.pitch_rad, f = m.roll_rad;
+  return Eigen::Vector3d(-std::sin(f) * std::sin(t), -std::cos(f) * std::sin(t), std::cos(t))
+      .cast<float>();
+}
+
+float angleBetween(const Eigen::Vector3f& a, const Eigen::Vector3f& b) {
+  return std::acos(std::clamp(a.normalized().dot(b.normalized()), -1.0f, 1.0f));
+}
+
+// A ray-cast room: floor, optionally a table top (horizontal rectangle) and a
+// wall across the view. Depth in mm with Gaussian noise, plus a label image.
+struct Scene {
+  CameraExtrinsics mount{1.3, 0.4, 0.05};
+  bool floor = true;
+  float table_height = 0.0f;  // 0 = no table
+  float table_near = 0.0f, table_far = 0.0f, table_half_width = 0.0f;
+  float wall_distance = 0.0f;  // 0 = no wall; forward distance from the camera
+  float noise_m = 0.0f;
+  int width = 320, height = 240;
+  CameraIntrinsics k{262.5, 262.5, 159.5, 119.5};
+};
+
+struct Rendered {
+  OrganizedCloud cloud;
+  std::vector<std::uint8_t> labels;
+  int floor_pixels = 0, table_pixels = 0;
+};
+
+Rendered render(const Scene& s, std::uint64_t seed = 7) {
+  const Eigen::Vector3f up = upInCamera(s.mount);
+  const Eigen::Vector3f fwd = forwardInCamera(s.mount);
+  const Eigen::Vector3f left = up.cross(fwd);
+  const float h = static_cast<float>(s.mount.height_m);
+  std::mt19937 rng(seed);
+  std::normal_distribution<float> noise(0.0f, s.noise_m);
+
+  RgbdFrame f;
+  f.width = s.width;
+  f.height = s.height;
+  f.intrinsics = s.k;
+  f.source = "synthetic scene";
+  f.depth_mm.assign(static_cast<std::size_t>(s.width) * s.height, 0);
+  f.rgb.assign(f.depth_mm.size(), Rgb8{128, 128, 128});
+  Rendered out;
+  out.labels.assign(f.depth_mm.size(), 0);
+  for (int v = 0; v < s.height; ++v) {
+    for (int u = 0; u < s.width; ++u) {
+      const Eigen::Vector3f ray(static_cast<float>((u - s.k.cx) / s.k.fx),
+                                static_cast<float>((v - s.k.cy) / s.k.fy), 1.0f);
+      float best = 1e9f;
+      std::uint8_t label = 0;
+      const float up_r = up.dot(ray);
+      if (s.floor && up_r < 0.0f) {
+        const float t = -h / up_r;
+        if (t < best) best = t, label = 1;
+      }
+      if (s.table_height > 0.0f && up_r != 0.0f) {
+        const float t = (s.table_height - h) / up_r;
+        const Eigen::Vector3f p = t * ray;
+        if (t > 0.0f && t < best && fwd.dot(p) > s.table_near && fwd.dot(p) < s.table_far &&
+            std::abs(left.dot(p)) < s.table_half_width) {
+          best = t, label = 4;
+        }
+      }
+      if (s.wall_distance > 0.0f && fwd.dot(ray) > 0.0f) {
+        const float t = s.wall_distance / fwd.dot(ray);
+        if (t < best) best = t, label = 2;
+      }
+      if (best > 9.5f) continue;
+      const std::size_t i = static_cast<std::size_t>(v) * s.width + u;
+      const float z = best + (s.noise_m > 0.0f ? noise(rng) : 0.0f);
+      f.depth_mm[i] = static_cast<std::uint16_t>(std::lround(z * 1000.0f));
+      out.labels[i] = label;
+      out.floor_pixels += label == 1;
+      out.table_pixels += label == 4;
+    }
+  }
+  out.cloud = frameToCloud(f);
+  return out;
+}
+
+TEST(GroundFromExtrinsics, FloorPointMapsToZeroAndOneMetreAboveToOne) {
+  const CameraExtrinsics m{1.2, 0.3, 0.1};
+  const GroundPlane g = groundFromExtrinsics(m);
+  const Eigen::Vector3f up = upInCamera(m);
+  EXPECT_LT(angleBetween(g.normal_camera, up), 1e-4f) << g.normal_camera.transpose();
+  EXPECT_NEAR(g.offset, 1.2f, 1e-5f);
+  EXPECT_EQ(g.support_points, 0);
+
+  // The optical axis meets the floor at depth h / sin(pitch), straight ahead.
+  const Eigen::Vector3f on_floor(0, 0, static_cast<float>(1.2 / std::sin(0.3)));
+  const Eigen::Vector3f q = g.camera_to_ground * on_floor;
+  EXPECT_NEAR(q.z(), 0.0f, 1e-5f);
+  EXPECT_NEAR(q.x(), static_cast<float>(1.2 / std::tan(0.3)), 1e-4f);  // forward
+  EXPECT_NEAR(q.y(), 0.0f, 1e-5f);
+  EXPECT_NEAR((g.camera_to_ground * Eigen::Vector3f(on_floor + up)).z(), 1.0f, 1e-5f);
+  // The camera itself sits right above the origin.
+  EXPECT_TRUE((g.camera_to_ground * Eigen::Vector3f::Zero()).isApprox(Eigen::Vector3f(0, 0, 1.2f)));
+  // Image right (camera +x) rolled clockwise dips: it points partly down and
+  // to the right (negative ground y).
+  const Eigen::Vector3f right = g.camera_to_ground.linear() * Eigen::Vector3f::UnitX();
+  EXPECT_LT(right.z(), -0.05f);
+  EXPECT_LT(right.y(), -0.9f);
+}
+
+TEST(GroundFromExtrinsics, LevelCameraAndBadMount) {
+  const GroundPlane g = groundFromExtrinsics({0.8, 0.0, 0.0});
+  EXPECT_TRUE(g.normal_camera.isApprox(Eigen::Vector3f(0, -1, 0), 1e-6f));
+  // 5 m ahead, 1 m to the right, 0.3 m above the camera.
+  const Eigen::Vector3f p = g.camera_to_ground * Eigen::Vector3f(1.0f, -0.3f, 5.0f);
+  EXPECT_TRUE(p.isApprox(Eigen::Vector3f(5.0f, -1.0f, 1.1f), 1e-5f)) << p.transpose();
+  EXPECT_THROW(groundFromExtrinsics({-1.0, 0.0, 0.0}), Error);
+  EXPECT_THROW(groundFromExtrinsics({1.0, std::nan(""), 0.0}), Error);
+  EXPECT_THROW(groundFromExtrinsics({1.0, 0.0, 2.0}), Error);
+}
+
+TEST(GroundFromPlane, NormalisesOrientsAndBuildsRightHandedFrame) {
+  // -2y - 3 = 0: the plane y = -1.5 (above the camera, as seen in camera
+  // coordinates). The camera must end up on the positive side.
+  const GroundPlane g = groundFromPlane(Eigen::Vector3f(0, -2, 0), -3.0f, 42);
+  EXPECT_TRUE(g.normal_camera.isApprox(Eigen::Vector3f(0, 1, 0)));
+  EXPECT_NEAR(g.offset, 1.5f, 1e-6f);
+  EXPECT_EQ(g.support_points, 42);
+  EXPECT_NEAR((g.camera_to_ground * Eigen::Vector3f(0.3f, -1.5f, 2.0f)).z(), 0.0f, 1e-6f);
+  EXPECT_NEAR(g.camera_to_ground.linear().determinant(), 1.0f, 1e-5f);
+
+  // Camera looking straight down: forward falls back to image "up" (-y).
+  const GroundPlane down = groundFromPlane(Eigen::Vector3f(0, 0, -1), 1.0f, 0);
+  EXPECT_NEAR(down.camera_to_ground.linear().determinant(), 1.0f, 1e-5f);
+  EXPECT_TRUE((down.camera_to_ground.linear() * Eigen::Vector3f(0, -1, 0))
+                  .isApprox(Eigen::Vector3f(1, 0, 0), 1e-5f));
+
+  EXPECT_THROW(groundFromPlane(Eigen::Vector3f::Zero(), 1.0f, 0), Error);
+  EXPECT_THROW(groundFromPlane(Eigen::Vector3f(0, -1, 0), std::nanf(""), 0), Error);
+}
+
+Scene roomWithTable() {
+  Scene s;
+  s.table_height = 0.75f;
+  s.table_near = 1.2f;
+  s.table_far = 2.2f;
+  s.table_half_width = 0.5f;
+  s.wall_distance = 4.0f;
+  s.noise_m = 0.005f;
+  return s;
+}
+
+TEST(FitGroundToLabels, RecoversFloorDespiteNoiseAndMislabels) {
+  const Scene s = roomWithTable();
+  Rendered r = render(s);
+  ASSERT_GT(r.floor_pixels, 10000);
+  // 20 % of the floor labels land on wrong depths (label bleeding, objects).
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<float> depth(0.5f, 5.0f);
+  int outliers = 0;
+  for (std::size_t i = 0; i < r.labels.size(); ++i) {
+    if (r.labels[i] == 1 && rng() % 5 == 0) {
+      r.cloud.points[i] *= depth(rng) / r.cloud.points[i].z();
+      ++outliers;
+    }
+  }
+  ASSERT_GT(outliers, 1000);
+  GroundConfig config;
+  const auto g = fitGroundToLabels(r.cloud, r.labels, config);
+  ASSERT_TRUE(g.has_value());
+  EXPECT_LT(angleBetween(g->normal_camera, upInCamera(s.mount)), 0.5f * kDeg);
+  EXPECT_NEAR(g->offset, 1.3f, 0.01f);
+  EXPECT_GT(g->support_points, (r.floor_pixels - outliers) * 9 / 10);
+  EXPECT_LT(g->support_points, r.floor_pixels - outliers / 2);
+  // Ground x runs along the viewing direction.
+  const Eigen::Vector3f x_cam = g->camera_to_ground.linear().transpose() * Eigen::Vector3f::UnitX();
+  EXPECT_LT(angleBetween(x_cam, forwardInCamera(s.mount)), 0.5f * kDeg);
+
+  // Seeded: the same input gives the same plane.
+  const auto again = fitGroundToLabels(r.cloud, r.labels, config);
+  ASSERT_TRUE(again.has_value());
+  EXPECT_EQ(again->offset, g->offset);
+  EXPECT_EQ(again->support_points, g->support_points);
+}
+
+TEST(FitGroundToLabels, TooFewFloorPointsOrBadInputs) {
+  Rendered r = render(roomWithTable());
+  int kept = 0;
+  for (auto& l : r.labels)
+    if (l == 1 && ++kept > 1500) l = 0;
+  GroundConfig config;  // min_floor_points = 2000
+  EXPECT_FALSE(fitGroundToLabels(r.cloud, r.labels, config).has_value());
+  config.min_floor_points = 1000;
+  EXPECT_TRUE(fitGroundToLabels(r.cloud, r.labels, config).has_value());
+
+  // Floor labels on points that are no plane at all: no plane explains half.
+  Rendered scattered = render(roomWithTable());
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<float> depth(0.5f, 6.0f);
+  for (std::size_t i = 0; i < scattered.labels.size(); ++i)
+    if (scattered.labels[i] == 1) scattered.cloud.points[i] *= depth(rng) / scattered.cloud.points[i].z();
+  EXPECT_FALSE(fitGroundToLabels(scattered.cloud, scattered.labels, GroundConfig{}).has_value());
+
+  std::vector<std::uint8_t> short_labels(r.labels.begin(), r.labels.end() - 1);
+  EXPECT_THROW(fitGroundToLabels(r.cloud, short_labels, config), Error);
+  GroundConfig bad;
+  bad.ransac_inlier_m = 0.0f;
+  EXPECT_THROW(fitGroundToLabels(r.cloud, r.labels, bad), Error);
+}
+
+TEST(EstimateGround, PicksTheFloorNotTheBiggerTable) {
+  Scene s = roomWithTable();
+  s.mount = {1.4, 0.55, -0.04};
+  s.table_near = 0.7f;
+  s.table_far = 2.0f;
+  s.table_half_width = 0.9f;
+  const Rendered r = render(s);
+  // The table must dominate, or "largest plane" would also pass.
+  ASSERT_GT(r.table_pixels, 2 * r.floor_pixels);
+  ASSERT_GT(r.floor_pixels, 5000);
+  const NormalImage normals = computeNormals(r.cloud, NormalConfig{});
+  const auto g = estimateGround(r.cloud, normals, GroundConfig{});
+  ASSERT_TRUE(g.has_value());
+  EXPECT_LT(angleBetween(g->normal_camera, upInCamera(s.mount)), 1.0f * kDeg);
+  EXPECT_NEAR(g->offset, 1.4f, 0.02f);
+  EXPECT_GT(g->support_points, r.floor_pixels / 2);
+  EXPECT_LE(g->support_points, r.floor_pixels);
+}
+
+TEST(EstimateGround, NoVisibleFloorGivesNothing) {
+  // Looking slightly up at a wall 2 m away: nothing horizontal in view.
+  Scene s;
+  s.mount = {1.5, -0.3, 0.0};
+  s.wall_distance = 2.0f;
+  s.noise_m = 0.003f;
+  Rendered r = render(s);
+  ASSERT_EQ(r.floor_pixels, 0);
+  NormalImage normals = computeNormals(r.cloud, NormalConfig{});
+  EXPECT_FALSE(estimateGround(r.cloud, normals, GroundConfig{}).has_value());
+
+  // Only a thin strip of floor at the wall's foot: too little support.
+  s.mount = {1.5, 0.23, 0.0};
+  r = render(s);
+  ASSERT_GT(r.floor_pixels, 0);
+  ASSERT_LT(r.floor_pixels, GroundConfig{}.min_floor_points);
+  normals = computeNormals(r.cloud, NormalConfig{});
+  EXPECT_FALSE(estimateGround(r.cloud, normals, GroundConfig{}).has_value());
+
+  NormalImage wrong = normals;
+  wrong.normals.pop_back();
+  EXPECT_THROW(estimateGround(r.cloud, wrong, GroundConfig{}), Error);
+}
+
+// NYU Depth V2 labeled frames: the ground from floor labels (the paper's
+// protocol) and the label-free estimate must agree where floor is plentiful.
+TEST(GroundOnNyu, EstimateAgreesWithFloorLabelFit) {
+  FINDMUG_REQUIRE_DATA(root, "nyuv2_labeled");
+  int compared = 0;
+  for (const auto& entry : std::filesystem::directory_iterator(root / "label8")) {
+    const std::string name = entry.path().stem().string();
+    const auto labels = readPng8(entry.path().string());
+    const auto depth = readPng16((root / "depth" / (name + ".png")).string());
+    const auto rgb = readPngRgb((root / "rgb" / (name + ".png")).string());
+    RgbdFrame f;
+    f.width = depth.width;
+    f.height = depth.height;
+    f.depth_mm = depth.pixels;
+    f.rgb = rgb.pixels;
+    f.intrinsics = kNyuIntrinsics;
+    f.source = name;
+    // NYU's projection mask: depth outside it is inpainting, not measurement.
+    for (int v = 0; v < f.height; ++v)
+      for (int u = 0; u < f.width; ++u)
+        if (v < 44 || v >= 471 || u < 40 || u >= 601) f.depth_mm[v * f.width + u] = 0;
+    const OrganizedCloud cloud = frameToCloud(f);
+    int floor = 0;
+    for (std::size_t i = 0; i < labels.pixels.size(); ++i)
+      floor += labels.pixels[i] == 1 && cloud.valid(i);
+    if (floor < 30000) continue;  // "plenty of floor": about a tenth of the image
+
+    GroundConfig config;
+    const auto fit = fitGroundToLabels(cloud, labels.pixels, config);
+    ASSERT_TRUE(fit.has_value()) << name;
+    const auto est = estimateGround(cloud, computeNormals(cloud, NormalConfig{}), config);
+    ASSERT_TRUE(est.has_value()) << name;
+    const float angle = angleBetween(fit->normal_camera, est->normal_camera);
+    EXPECT_LT(angle, 3.0f * kDeg) << name;
+    EXPECT_NEAR(fit->offset, est->offset, 0.05f) << name;
+    // A hand-held Kinect in a room: the camera is 0.5..2 m above the floor.
+    EXPECT_GT(fit->offset, 0.5f) << name;
+    EXPECT_LT(fit->offset, 2.0f) << name;
+    ++compared;
+  }
+  EXPECT_GE(compared, 5);
+}
+
+}  // namespace
+}  // namespace findmug

@@ -1,0 +1,195 @@
+// Segmenter: the stages chained for one frame, on a scene whose answer is known.
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "findmug/error.hpp"
+#include "findmug/metrics.hpp"
+#include "findmug/segmenter.hpp"
+#include "findmug/training.hpp"
+
+namespace findmug {
+namespace {
+
+using ::testing::HasSubstr;
+
+// A camera 1.2 m above a floor, pitched 30 degrees down, facing a wall 3 m
+// ahead. Floor is grey-brown, wall light blue. Returns the frame and, per
+// pixel, the true label (floor / wall, void where no depth).
+struct Scene {
+  RgbdFrame frame;
+  std::vector<std::uint8_t> truth;
+};
+
+Scene floorAndWall(bool with_extrinsics) {
+  Scene s;
+  RgbdFrame& f = s.frame;
+  f.width = 320;
+  f.height = 240;
+  f.intrinsics = {262.5, 262.5, 159.5, 119.5};
+  f.source = "synthetic floor+wall";
+  const double h = 1.2, pitch = 30.0 * M_PI / 180.0, wall_x = 3.0;
+  if (with_extrinsics) f.extrinsics = CameraExtrinsics{h, pitch, 0.0};
+  f.depth_mm.assign(f.width * f.height, 0);
+  f.rgb.assign(f.width * f.height, Rgb8{});
+  s.truth.assign(f.width * f.height, kVoidLabel);
+  for (int v = 0; v < f.height; ++v) {
+    for (int u = 0; u < f.width; ++u) {
+      // Ray in camera optical frame, then in a world frame with x forward, z up.
+      const double xc = (u - f.intrinsics.cx) / f.intrinsics.fx;
+      const double yc = (v - f.intrinsics.cy) / f.intrinsics.fy;
+      const double fwd = std::cos(pitch) * 1.0 - std::sin(pitch) * yc;   // along x (world)
+      const double up = -std::sin(pitch) * 1.0 - std::cos(pitch) * yc;   // along z (world)
+      double t_floor = up < 0 ? h / -up : INFINITY;
+      double t_wall = fwd > 0 ? wall_x / fwd : INFINITY;
+      const double t = std::min(t_floor, t_wall);
+      if (!std::isfinite(t) || t > 8.0) continue;
+      const std::size_t i = static_cast<std::size_t>(v) * f.width + u;
+      f.depth_mm[i] = static_cast<std::uint16_t>(std::lround(t * 1000.0));  // z = t (unit z ray)
+      const bool floor = t_floor < t_wall;
+      s.truth[i] = static_cast<std::uint8_t>(floor ? Label::Floor : Label::Wall);
+      f.rgb[i] = floor ? Rgb8{120, 100, 80} : Rgb8{170, 190, 230};
+      (void)xc;
+    }
+  }
+  return s;
+}
+
+std::shared_ptr<const RandomForest> trainOn(const Segmenter& segmenter, const Scene& scene) {
+  SegmentedFrame segmented = segmenter.oversegment(segmenter.prepare(scene.frame));
+  const SegmentFeatures features = segmenter.features(segmented);
+  const auto labels = segmentMajorityLabels(segmented.segmentation, scene.truth);
+  TrainingSet set;
+  for (std::size_t k = 0; k < labels.size(); ++k) {
+    if (labels[k] >= kNumLabels) continue;
+    set.features.push_back(features.features[k]);
+    set.labels.push_back(labels[k]);
+  }
+  ForestParams params;
+  params.num_trees = 4;
+  params.max_depth = 6;
+  return std::make_shared<const RandomForest>(RandomForest::train(set, params));
+}
+
+SegmenterConfig fastConfig() {
+  SegmenterConfig config;
+  config.overseg.kind = OversegmenterKind::Organized;
+  return config;
+}
+
+TEST(Segmenter, LabelsAKnownSceneCorrectly) {
+  const Scene scene = floorAndWall(true);
+  const Segmenter untrained(fastConfig(), nullptr);
+  const auto forest = trainOn(untrained, scene);
+  const Segmenter segmenter(fastConfig(), forest);
+
+  const LabelledFrame out = segmenter.process(scene.frame);
+  ASSERT_EQ(out.labels.width, scene.frame.width);
+  ASSERT_EQ(out.labels.height, scene.frame.height);
+  ASSERT_EQ(out.labels.labels.size(), scene.truth.size());
+  ConfusionMatrix cm;
+  cm.add(scene.truth, out.labels.labels);
+  EXPECT_GT(cm.globalAccuracy(), 0.9);
+  EXPECT_GT(cm.perClassAccuracy()[static_cast<int>(Label::Floor)], 0.9);
+  EXPECT_GT(cm.perClassAccuracy()[static_cast<int>(Label::Wall)], 0.9);
+  // Void exactly where there is no depth (no label invented there).
+  for (std::size_t i = 0; i < scene.truth.size(); ++i) {
+    if (scene.frame.depth_mm[i] == 0) ASSERT_EQ(out.labels.labels[i], kVoidLabel) << i;
+  }
+  // The stages report their own time.
+  EXPECT_GT(out.timings.total(), 0.0);
+  EXPECT_EQ(out.forest_labels.size(), out.features.features.size());
+  EXPECT_EQ(out.mrf.labels.size(), out.features.features.size());
+}
+
+TEST(Segmenter, GroundFromExtrinsicsPutsFloorAtZeroHeight) {
+  const Scene scene = floorAndWall(true);
+  const Segmenter segmenter(fastConfig(), nullptr);
+  const PreparedFrame prepared = segmenter.prepare(scene.frame);
+  ASSERT_TRUE(prepared.ground.has_value());
+  int checked = 0;
+  for (std::size_t i = 0; i < scene.truth.size(); i += 97) {
+    if (scene.truth[i] != static_cast<std::uint8_t>(Label::Floor)) continue;
+    EXPECT_NEAR(prepared.cloud_ground.points[i].z(), 0.0f, 0.01f);
+    ++checked;
+  }
+  EXPECT_GT(checked, 50);
+}
+
+TEST(Segmenter, EstimatedGroundMatchesExtrinsics) {
+  const Scene scene = floorAndWall(false);
+  SegmenterConfig config = fastConfig();
+  config.ground.source = GroundSource::Estimated;
+  const Segmenter segmenter(config, nullptr);
+  const PreparedFrame prepared = segmenter.prepare(scene.frame);
+  ASSERT_TRUE(prepared.ground.has_value());
+  const GroundPlane truth = groundFromExtrinsics(CameraExtrinsics{1.2, 30.0 * M_PI / 180.0, 0.0});
+  EXPECT_GT(prepared.ground->normal_camera.dot(truth.normal_camera), std::cos(2.0 * M_PI / 180.0));
+  EXPECT_NEAR(prepared.ground->offset, truth.offset, 0.03);
+}
+
+TEST(Segmenter, FloorLabelGroundNeedsGroundTruth) {
+  const Scene scene = floorAndWall(false);
+  SegmenterConfig config = fastConfig();
+  config.ground.source = GroundSource::FloorLabels;
+  const Segmenter segmenter(config, nullptr);
+  EXPECT_THROW(segmenter.prepare(scene.frame), Error);
+  const PreparedFrame prepared = segmenter.prepare(scene.frame, &scene.truth);
+  EXPECT_TRUE(prepared.ground.has_value());
+}
+
+TEST(Segmenter, ExtrinsicsSourceRefusesFrameWithout) {
+  const Scene scene = floorAndWall(false);
+  SegmenterConfig config = fastConfig();
+  config.ground.source = GroundSource::Extrinsics;
+  const Segmenter segmenter(config, nullptr);
+  try {
+    segmenter.prepare(scene.frame);
+    FAIL() << "expected an error";
+  } catch (const Error& e) {
+    EXPECT_THAT(e.what(), HasSubstr("synthetic floor+wall"));
+    EXPECT_THAT(e.what(), HasSubstr("extrinsics"));
+  }
+}
+
+TEST(Segmenter, ClassifyWithoutForestIsAnError) {
+  const Scene scene = floorAndWall(true);
+  const Segmenter segmenter(fastConfig(), nullptr);
+  EXPECT_THROW(segmenter.process(scene.frame), Error);
+}
+
+TEST(Segmenter, FrameWithoutGroundGetsAllVoidLabels) {
+  // A wall only (camera looking straight at it): no floor to estimate.
+  Scene scene = floorAndWall(false);
+  for (std::size_t i = 0; i < scene.truth.size(); ++i) {
+    scene.frame.depth_mm[i] = 2000;
+    scene.frame.rgb[i] = {170, 190, 230};
+  }
+  SegmenterConfig config = fastConfig();
+  config.ground.source = GroundSource::Estimated;
+  const Segmenter untrained(config, nullptr);
+  const auto forest = trainOn(Segmenter(fastConfig(), nullptr), floorAndWall(true));
+  const Segmenter segmenter(config, forest);
+  const LabelledFrame out = segmenter.process(scene.frame);
+  EXPECT_FALSE(out.segmented.prepared.ground.has_value());
+  ASSERT_EQ(out.labels.labels.size(), scene.truth.size());
+  for (auto y : out.labels.labels) ASSERT_EQ(y, kVoidLabel);
+}
+
+TEST(Segmenter, MajorityLabelsPerSegment) {
+  Oversegmentation seg;
+  seg.width = 4;
+  seg.height = 1;
+  seg.segments = {{0, 1, 2}, {3}};
+  seg.pixel_segment = {0, 0, 0, 1};
+  const std::vector<std::uint8_t> truth = {2, 2, 1, kVoidLabel};
+  const auto labels = segmentMajorityLabels(seg, truth);
+  ASSERT_EQ(labels.size(), 2u);
+  EXPECT_EQ(labels[0], 2);
+  EXPECT_EQ(labels[1], kVoidLabel);
+  EXPECT_THROW(segmentMajorityLabels(seg, {1, 2}), Error);
+}
+
+}  // namespace
+}  // namespace findmug

@@ -1,0 +1,222 @@
+// findmug-eval: accuracy of the forest and forest+MRF on a labelled dataset.
+//
+//   findmug-eval --data DIR [--folds 5] [--model MODEL] [--json FILE] [--out DIR] [--sweep]
+//                [--config FILE] [--set key=value ...]
+//
+// Without --model: k-fold cross-validation by frame (contiguous blocks of
+// frames, so neighbouring frames of one scene stay in one fold). With
+// --model: that model on every frame. Reports per-class, class-average and
+// global accuracy (void excluded) for the forest alone and with the MRF, a
+// confusion-matrix heatmap, optional sweeps over trees and depth (the
+// paper's Fig. 3), and colour overlays of prediction vs ground truth.
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <sstream>
+
+#include "eval_report.hpp"
+#include "findmug/error.hpp"
+#include "findmug/image_io.hpp"
+#include "findmug/label_image.hpp"
+#include "findmug/metrics.hpp"
+#include "findmug/training.hpp"
+#include "tool_common.hpp"
+
+namespace findmug::tools {
+namespace {
+
+constexpr const char* kUsage =
+    "usage: findmug-eval --data DIR [--folds K] [--model MODEL] [--json FILE] [--out DIR]\n"
+    "                    [--sweep] [--config FILE] [--set section.key=value ...] [--no-nyu-border]\n"
+    "Cross-validates (default 5 folds by frame) or evaluates --model on a labelled dataset.\n";
+
+struct Evaluation {
+  ConfusionMatrix forest, mrf;
+  std::vector<std::vector<std::uint8_t>> mrf_pixels;  // per frame, for overlays
+};
+
+std::uint8_t argmax(const ClassProbabilities& p) {
+  return static_cast<std::uint8_t>(std::max_element(p.begin(), p.end()) - p.begin());
+}
+
+// Labels the test frames with `forest` and accumulates both confusions.
+void labelFrames(const RandomForest& forest, const MrfParams& mrf_params,
+                 const std::vector<FrameSample>& samples, const std::vector<std::size_t>& frames,
+                 Evaluation& eval, bool keep_pixels) {
+  for (std::size_t f : frames) {
+    const FrameSample& s = samples[f];
+    const std::size_t n = s.features.features.size();
+    std::vector<ClassProbabilities> probs(n);
+    std::vector<std::uint8_t> forest_labels(n);
+    for (std::size_t k = 0; k < n; ++k) {
+      probs[k] = forest.predict(s.features.features[k]);
+      forest_labels[k] = argmax(probs[k]);
+    }
+    const MrfResult mrf = solveMrf(probs, s.features.centroids, s.edges, mrf_params);
+    eval.forest.add(s.ground_truth, pixelLabels(s, forest_labels));
+    auto mrf_pixels = pixelLabels(s, mrf.labels);
+    eval.mrf.add(s.ground_truth, mrf_pixels);
+    if (keep_pixels) eval.mrf_pixels[f] = std::move(mrf_pixels);
+  }
+}
+
+Evaluation crossValidate(const std::vector<FrameSample>& samples, int folds,
+                         const SegmenterConfig& config, bool keep_pixels) {
+  Evaluation eval;
+  eval.mrf_pixels.resize(samples.size());
+  const std::size_t n = samples.size();
+  for (int fold = 0; fold < folds; ++fold) {
+    std::vector<std::size_t> train, test;
+    for (std::size_t i = 0; i < n; ++i) {
+      (static_cast<int>(i * folds / n) == fold ? test : train).push_back(i);
+    }
+    if (test.empty() || train.empty()) continue;
+    const TrainingSet set = makeTrainingSet(samples, train);
+    if (set.labels.empty()) continue;
+    ForestParams params = config.forest;
+    params.seed += static_cast<std::uint64_t>(fold);
+    const RandomForest forest = RandomForest::train(set, params);
+    labelFrames(forest, config.mrf, samples, test, eval, keep_pixels);
+  }
+  return eval;
+}
+
+void writeOverlays(const DatasetFolder& dataset, const std::vector<FrameSample>& samples,
+                   const Evaluation& eval, const std::filesystem::path& dir) {
+  std::filesystem::create_directories(dir);
+  std::map<std::string, std::size_t> index_of;
+  for (std::size_t i = 0; i < dataset.size(); ++i) index_of[dataset.names()[i]] = i;
+  for (std::size_t f = 0; f < samples.size(); ++f) {
+    if (eval.mrf_pixels[f].empty()) continue;
+    const LabeledFrame frame = dataset.load(index_of.at(samples[f].name));
+    const int w = frame.frame.width, h = frame.frame.height;
+    LabelImage truth{w, h, samples[f].ground_truth, {}};
+    LabelImage predicted{w, h, eval.mrf_pixels[f], {}};
+    const auto truth_rgb = colorizeLabels(truth, frame.frame.rgb, 0.7f);
+    const auto predicted_rgb = colorizeLabels(predicted, frame.frame.rgb, 0.7f);
+    // Side by side: colour | ground truth | prediction.
+    Image<Rgb8> out{3 * w, h, std::vector<Rgb8>(static_cast<std::size_t>(3) * w * h)};
+    for (int y = 0; y < h; ++y) {
+      for (int x = 0; x < w; ++x) {
+        const std::size_t src = static_cast<std::size_t>(y) * w + x;
+        const std::size_t row = static_cast<std::size_t>(y) * 3 * w;
+        out.pixels[row + x] = frame.frame.rgb[src];
+        out.pixels[row + w + x] = truth_rgb[src];
+        out.pixels[row + 2 * w + x] = predicted_rgb[src];
+      }
+    }
+    writePngRgb((dir / (samples[f].name + ".png")).string(), out);
+  }
+}
+
+int run(int argc, char** argv) {
+  Flags flags(argc, argv, {"help", "sweep", "no-nyu-border"});
+  flags.allowOnly(
+      {"help", "data", "folds", "model", "json", "out", "sweep", "config", "set", "no-nyu-border"});
+  if (flags.has("help") || !flags.has("data")) {
+    std::cerr << kUsage;
+    return flags.has("help") ? 0 : 2;
+  }
+  const Config config = configFromFlags(flags);
+  const int folds = flags.getInt("folds", 5);
+  if (folds < 2) throw Error("flag --folds: need at least 2 folds, got " + std::to_string(folds));
+
+  DatasetOptions options;
+  options.mask_nyu_border = !flags.has("no-nyu-border");
+  const DatasetFolder dataset(flags.get("data"), options);
+  const Segmenter segmenter(config.segmenter, nullptr);
+
+  const auto start = std::chrono::steady_clock::now();
+  ProgressBar bar("features");
+  ExtractionReport extraction;
+  const auto samples = extractSamples(dataset, segmenter, extraction,
+                                      [&](int done, int total) { bar.update(done, total); });
+  bar.finish();
+  if (samples.empty()) throw Error(flags.get("data") + ": no frame could be used");
+  if (!flags.has("model") && static_cast<int>(samples.size()) < folds) {
+    throw Error("only " + std::to_string(samples.size()) + " usable frames for " +
+                std::to_string(folds) + " folds");
+  }
+
+  EvalReport report;
+  report.data = flags.get("data");
+  report.frames_total = extraction.frames_total;
+  report.frames_used = extraction.frames_used;
+  report.dropped = extraction.dropped;
+  report.config_yaml = dumpConfig(config);
+
+  Evaluation eval;
+  if (flags.has("model")) {
+    const RandomForest forest = RandomForest::load(flags.get("model"));
+    report.protocol = "model " + flags.get("model") + " (id " + forest.id() + ") on all frames";
+    eval.mrf_pixels.resize(samples.size());
+    std::vector<std::size_t> all(samples.size());
+    for (std::size_t i = 0; i < all.size(); ++i) all[i] = i;
+    labelFrames(forest, config.segmenter.mrf, samples, all, eval, true);
+  } else {
+    report.protocol = std::to_string(folds) + "-fold cross-validation by frame";
+    eval = crossValidate(samples, folds, config.segmenter, true);
+  }
+  report.forest = eval.forest;
+  report.mrf = eval.mrf;
+
+  if (flags.has("sweep")) {
+    if (flags.has("model")) throw Error("--sweep retrains forests; it cannot be used with --model");
+    for (int trees : {1, 2, 4, 6, 8, 10, 12, 14, 16}) {
+      SegmenterConfig c = config.segmenter;
+      c.forest.num_trees = trees;
+      const Evaluation e = crossValidate(samples, folds, c, false);
+      report.sweep_trees.push_back({trees, c.forest.max_depth, e.forest, e.mrf});
+      std::fprintf(stderr, "sweep trees=%d: forest %.1f/%.1f mrf %.1f/%.1f\n", trees,
+                   100 * e.forest.classAverageAccuracy(), 100 * e.forest.globalAccuracy(),
+                   100 * e.mrf.classAverageAccuracy(), 100 * e.mrf.globalAccuracy());
+    }
+    for (int depth : {2, 4, 6, 8, 10, 12, 14, 16}) {
+      SegmenterConfig c = config.segmenter;
+      c.forest.max_depth = depth;
+      const Evaluation e = crossValidate(samples, folds, c, false);
+      report.sweep_depth.push_back({c.forest.num_trees, depth, e.forest, e.mrf});
+      std::fprintf(stderr, "sweep depth=%d: forest %.1f/%.1f mrf %.1f/%.1f\n", depth,
+                   100 * e.forest.classAverageAccuracy(), 100 * e.forest.globalAccuracy(),
+                   100 * e.mrf.classAverageAccuracy(), 100 * e.mrf.globalAccuracy());
+    }
+  }
+  report.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+
+  std::cout << formatTable(report);
+  if (flags.has("json")) {
+    std::ofstream out(flags.get("json"));
+    if (!out) throw Error(flags.get("json") + ": cannot write JSON report");
+    out << formatJson(report);
+  }
+  if (flags.has("out")) {
+    const std::filesystem::path dir = flags.get("out");
+    std::filesystem::create_directories(dir);
+    writeConfusionSvg((dir / "confusion_forest.svg").string(), report.forest,
+                      "Forest only: row-normalised confusion (%)");
+    writeConfusionSvg((dir / "confusion_mrf.svg").string(), report.mrf,
+                      "Forest + MRF: row-normalised confusion (%)");
+    if (!report.sweep_trees.empty()) {
+      writeSweepSvg((dir / "sweep_trees.svg").string(), report.sweep_trees, true);
+      writeSweepSvg((dir / "sweep_depth.svg").string(), report.sweep_depth, false);
+    }
+    writeOverlays(dataset, samples, eval, dir / "overlays");
+    std::cout << "pictures in " << dir.string() << "\n";
+  }
+  return 0;
+}
+
+}  // namespace
+}  // namespace findmug::tools
+
+int main(int argc, char** argv) {
+  try {
+    return findmug::tools::run(argc, argv);
+  } catch (const std::exception& e) {
+    std::cerr << "findmug-eval: error: " << e.what() << "\n";
+    return 1;
+  }
+}

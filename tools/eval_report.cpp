@@ -1,0 +1,248 @@
+#include "eval_report.hpp"
+
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <sstream>
+
+#include "findmug/error.hpp"
+#include "findmug/labels.hpp"
+
+namespace findmug::tools {
+
+namespace {
+
+// Wolf et al. 2014, NYU Depth V2, 5-fold CV: per class (floor .. object),
+// class average, global. The paper gives no figure for "unknown".
+constexpr double kPaperPerClass[kNumLabels] = {NAN, 96.9, 75.0, 92.3, 59.7, 72.2, 58.4, 40.0};
+constexpr double kPaperClassAverage = 71.7;
+constexpr double kPaperGlobal = 77.2;
+
+std::string percent(double x) {
+  if (std::isnan(x)) return "   -  ";
+  char buf[16];
+  std::snprintf(buf, sizeof buf, "%6.1f", 100.0 * x);
+  return buf;
+}
+
+std::string jsonNumber(double x) {
+  if (std::isnan(x)) return "null";
+  char buf[32];
+  std::snprintf(buf, sizeof buf, "%.6f", x);
+  return buf;
+}
+
+std::string jsonString(const std::string& s) {
+  std::string out = "\"";
+  for (char c : s) {
+    switch (c) {
+      case '"': out += "\\\""; break;
+      case '\\': out += "\\\\"; break;
+      case '\n': out += "\\n"; break;
+      case '\t': out += "\\t"; break;
+      default:
+        if (static_cast<unsigned char>(c) < 0x20) {
+          char buf[8];
+          std::snprintf(buf, sizeof buf, "\\u%04x", c);
+          out += buf;
+        } else {
+          out += c;
+        }
+    }
+  }
+  return out + "\"";
+}
+
+std::string jsonMatrix(const ConfusionMatrix& m) {
+  std::ostringstream out;
+  const auto per_class = m.perClassAccuracy();
+  out << "{\"class_average\": " << jsonNumber(m.classAverageAccuracy())
+      << ", \"global\": " << jsonNumber(m.globalAccuracy()) << ", \"pixels\": " << m.total()
+      << ", \"per_class\": {";
+  for (int c = 0; c < kNumLabels; ++c) {
+    out << (c ? ", " : "") << "\"" << kLabelNames[c] << "\": " << jsonNumber(per_class[c]);
+  }
+  out << "}, \"confusion\": [";
+  for (int t = 0; t < kNumLabels; ++t) {
+    out << (t ? ", " : "") << "[";
+    for (int p = 0; p <= kNumLabels; ++p) out << (p ? ", " : "") << m.count(t, p);
+    out << "]";
+  }
+  out << "]}";
+  return out.str();
+}
+
+void writeFile(const std::string& path, const std::string& text) {
+  std::ofstream out(path);
+  if (!out) throw Error(path + ": cannot write");
+  out << text;
+}
+
+}  // namespace
+
+std::string formatTable(const EvalReport& r) {
+  std::ostringstream out;
+  out << "findmug-eval: " << r.data << "\n"
+      << "protocol: " << r.protocol << "; frames used " << r.frames_used << " of "
+      << r.frames_total << "\n";
+  for (const auto& d : r.dropped) out << "  dropped " << d << "\n";
+  out << "\n  class        forest   +MRF   paper\n";
+  const auto f = r.forest.perClassAccuracy();
+  const auto m = r.mrf.perClassAccuracy();
+  for (int c = 1; c <= kNumLabels; ++c) {
+    const int k = c % kNumLabels;  // unknown last, as a footnote class
+    char line[96];
+    std::snprintf(line, sizeof line, "  %-10s %s %s %s\n", std::string(kLabelNames[k]).c_str(),
+                  percent(f[k]).c_str(), percent(m[k]).c_str(),
+                  percent(kPaperPerClass[k] / 100.0).c_str());
+    out << line;
+  }
+  char line[128];
+  std::snprintf(line, sizeof line, "  %-10s %s %s %s\n  %-10s %s %s %s\n", "class avg",
+                percent(r.forest.classAverageAccuracy()).c_str(),
+                percent(r.mrf.classAverageAccuracy()).c_str(),
+                percent(kPaperClassAverage / 100).c_str(), "global",
+                percent(r.forest.globalAccuracy()).c_str(), percent(r.mrf.globalAccuracy()).c_str(),
+                percent(kPaperGlobal / 100).c_str());
+  out << line;
+  if (!r.sweep_trees.empty()) {
+    out << "\n  sweep   trees depth   forest(avg/glob)   mrf(avg/glob)\n";
+    for (const auto* points : {&r.sweep_trees, &r.sweep_depth}) {
+      for (const auto& p : *points) {
+        std::snprintf(line, sizeof line, "          %5d %5d   %s %s   %s %s\n", p.trees, p.depth,
+                      percent(p.forest.classAverageAccuracy()).c_str(),
+                      percent(p.forest.globalAccuracy()).c_str(),
+                      percent(p.mrf.classAverageAccuracy()).c_str(),
+                      percent(p.mrf.globalAccuracy()).c_str());
+        out << line;
+      }
+    }
+  }
+  std::snprintf(line, sizeof line, "\n  time %.1f s\n", r.seconds);
+  out << line;
+  return out.str();
+}
+
+std::string formatJson(const EvalReport& r) {
+  std::ostringstream out;
+  out << "{\n  \"data\": " << jsonString(r.data) << ",\n  \"protocol\": " << jsonString(r.protocol)
+      << ",\n  \"frames_total\": " << r.frames_total << ",\n  \"frames_used\": " << r.frames_used
+      << ",\n  \"dropped\": [";
+  for (std::size_t i = 0; i < r.dropped.size(); ++i) {
+    out << (i ? ", " : "") << jsonString(r.dropped[i]);
+  }
+  out << "],\n  \"labels\": [";
+  for (int c = 0; c < kNumLabels; ++c) out << (c ? ", " : "") << "\"" << kLabelNames[c] << "\"";
+  out << "],\n  \"forest\": " << jsonMatrix(r.forest) << ",\n  \"mrf\": " << jsonMatrix(r.mrf);
+  for (const auto& [name, points] :
+       {std::pair{"sweep_trees", &r.sweep_trees}, std::pair{"sweep_depth", &r.sweep_depth}}) {
+    out << ",\n  \"" << name << "\": [";
+    for (std::size_t i = 0; i < points->size(); ++i) {
+      const auto& p = (*points)[i];
+      out << (i ? ",\n    " : "\n    ") << "{\"trees\": " << p.trees << ", \"depth\": " << p.depth
+          << ", \"forest\": {\"class_average\": " << jsonNumber(p.forest.classAverageAccuracy())
+          << ", \"global\": " << jsonNumber(p.forest.globalAccuracy())
+          << "}, \"mrf\": {\"class_average\": " << jsonNumber(p.mrf.classAverageAccuracy())
+          << ", \"global\": " << jsonNumber(p.mrf.globalAccuracy()) << "}}";
+    }
+    out << "]";
+  }
+  out << ",\n  \"config\": " << jsonString(r.config_yaml) << ",\n  \"seconds\": "
+      << jsonNumber(r.seconds) << "\n}\n";
+  return out.str();
+}
+
+void writeConfusionSvg(const std::string& path, const ConfusionMatrix& m, const std::string& title) {
+  constexpr int kCell = 56, kLeft = 90, kTop = 70;
+  const int size = kLeft + kCell * kNumLabels + 20;
+  std::ostringstream svg;
+  svg << "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"" << size << "\" height=\""
+      << kTop + kCell * kNumLabels + 30 << "\" font-family=\"sans-serif\" font-size=\"12\">\n"
+      << "<rect width=\"100%\" height=\"100%\" fill=\"white\"/>\n"
+      << "<text x=\"" << kLeft << "\" y=\"20\" font-size=\"14\">" << title << "</text>\n"
+      << "<text x=\"" << kLeft << "\" y=\"40\">columns: predicted, rows: ground truth</text>\n";
+  for (int c = 0; c < kNumLabels; ++c) {
+    svg << "<text x=\"" << kLeft + c * kCell + kCell / 2 << "\" y=\"" << kTop - 6
+        << "\" text-anchor=\"middle\">" << kLabelNames[c] << "</text>\n"
+        << "<text x=\"" << kLeft - 6 << "\" y=\"" << kTop + c * kCell + kCell / 2 + 4
+        << "\" text-anchor=\"end\">" << kLabelNames[c] << "</text>\n";
+  }
+  for (int t = 0; t < kNumLabels; ++t) {
+    const double row = static_cast<double>(m.rowTotal(t));
+    for (int p = 0; p < kNumLabels; ++p) {
+      const double share = row > 0 ? m.count(t, p) / row : 0.0;
+      const int shade = static_cast<int>(255 - 215 * share);
+      svg << "<rect x=\"" << kLeft + p * kCell << "\" y=\"" << kTop + t * kCell << "\" width=\""
+          << kCell << "\" height=\"" << kCell << "\" fill=\"rgb(" << shade << "," << shade
+          << ",255)\" stroke=\"#999\"/>\n";
+      if (row > 0) {
+        char text[16];
+        std::snprintf(text, sizeof text, "%.0f", 100 * share);
+        svg << "<text x=\"" << kLeft + p * kCell + kCell / 2 << "\" y=\""
+            << kTop + t * kCell + kCell / 2 + 4 << "\" text-anchor=\"middle\" fill=\""
+            << (share > 0.5 ? "white" : "black") << "\">" << text << "</text>\n";
+      }
+    }
+  }
+  svg << "</svg>\n";
+  writeFile(path, svg.str());
+}
+
+void writeSweepSvg(const std::string& path, const std::vector<SweepPoint>& points, bool by_trees) {
+  constexpr int kW = 520, kH = 340, kLeft = 60, kRight = 150, kTop = 40, kBottom = 50;
+  const double x_max = by_trees ? 16 : 16, x_min = by_trees ? 1 : 2;
+  auto px = [&](double x) { return kLeft + (x - x_min) / (x_max - x_min) * (kW - kLeft - kRight); };
+  auto py = [&](double acc) { return kTop + (1.0 - acc) * (kH - kTop - kBottom); };
+  std::ostringstream svg;
+  svg << "<svg xmlns=\"http://www.w3.org/2000/svg\" width=\"" << kW << "\" height=\"" << kH
+      << "\" font-family=\"sans-serif\" font-size=\"12\">\n"
+      << "<rect width=\"100%\" height=\"100%\" fill=\"white\"/>\n"
+      << "<text x=\"" << kLeft << "\" y=\"22\" font-size=\"14\">Accuracy vs "
+      << (by_trees ? "number of trees" : "maximum tree depth") << "</text>\n";
+  for (int pct = 0; pct <= 100; pct += 20) {
+    svg << "<line x1=\"" << kLeft << "\" x2=\"" << kW - kRight << "\" y1=\"" << py(pct / 100.0)
+        << "\" y2=\"" << py(pct / 100.0) << "\" stroke=\"#ddd\"/>\n"
+        << "<text x=\"" << kLeft - 6 << "\" y=\"" << py(pct / 100.0) + 4
+        << "\" text-anchor=\"end\">" << pct << "%</text>\n";
+  }
+  for (const auto& p : points) {
+    const int x = by_trees ? p.trees : p.depth;
+    svg << "<text x=\"" << px(x) << "\" y=\"" << kH - kBottom + 16 << "\" text-anchor=\"middle\">"
+        << x << "</text>\n";
+  }
+  svg << "<text x=\"" << (kLeft + kW - kRight) / 2 << "\" y=\"" << kH - 12
+      << "\" text-anchor=\"middle\">" << (by_trees ? "trees" : "max depth") << "</text>\n";
+  struct Series {
+    const char* name;
+    const char* color;
+    const char* dash;
+    double (*value)(const SweepPoint&);
+  };
+  const Series series[] = {
+      {"forest class avg", "#1f77b4", "", [](const SweepPoint& p) { return p.forest.classAverageAccuracy(); }},
+      {"forest global", "#1f77b4", "6,4", [](const SweepPoint& p) { return p.forest.globalAccuracy(); }},
+      {"MRF class avg", "#d62728", "", [](const SweepPoint& p) { return p.mrf.classAverageAccuracy(); }},
+      {"MRF global", "#d62728", "6,4", [](const SweepPoint& p) { return p.mrf.globalAccuracy(); }},
+  };
+  int legend_y = kTop + 10;
+  for (const auto& s : series) {
+    svg << "<polyline fill=\"none\" stroke=\"" << s.color << "\" stroke-width=\"2\""
+        << (*s.dash ? std::string(" stroke-dasharray=\"") + s.dash + "\"" : std::string())
+        << " points=\"";
+    for (const auto& p : points) {
+      const double v = s.value(p);
+      if (!std::isnan(v)) svg << px(by_trees ? p.trees : p.depth) << "," << py(v) << " ";
+    }
+    svg << "\"/>\n<line x1=\"" << kW - kRight + 10 << "\" x2=\"" << kW - kRight + 34 << "\" y1=\""
+        << legend_y << "\" y2=\"" << legend_y << "\" stroke=\"" << s.color
+        << "\" stroke-width=\"2\""
+        << (*s.dash ? std::string(" stroke-dasharray=\"") + s.dash + "\"" : std::string())
+        << "/>\n<text x=\"" << kW - kRight + 38 << "\" y=\"" << legend_y + 4 << "\">" << s.name
+        << "</text>\n";
+    legend_y += 18;
+  }
+  svg << "</svg>\n";
+  writeFile(path, svg.str());
+}
+
+}  // namespace findmug::tools

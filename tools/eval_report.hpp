@@ -1,0 +1,38 @@
+// findmug-eval's report: terminal table, JSON, and SVG pictures.
+#pragma once
+
+#include <string>
+#include <vector>
+
+#include "findmug/metrics.hpp"
+
+namespace findmug::tools {
+
+struct SweepPoint {
+  int trees = 0;
+  int depth = 0;
+  ConfusionMatrix forest, mrf;
+};
+
+struct EvalReport {
+  std::string data;
+  std::string protocol;
+  int frames_total = 0;
+  int frames_used = 0;
+  std::vector<std::string> dropped;
+  std::string config_yaml;
+  ConfusionMatrix forest, mrf;
+  std::vector<SweepPoint> sweep_trees, sweep_depth;
+  double seconds = 0;
+};
+
+std::string formatTable(const EvalReport& report);
+// JSON with `forest` and `mrf` objects holding class_average, global,
+// per_class (by label name) and the confusion matrix; plus the sweeps.
+std::string formatJson(const EvalReport& report);
+void writeConfusionSvg(const std::string& path, const ConfusionMatrix& matrix,
+                       const std::string& title);
+// Accuracy against number of trees (`by_trees`) or against maximum depth.
+void writeSweepSvg(const std::string& path, const std::vector<SweepPoint>& points, bool by_trees);
+
+}  // namespace findmug::tools
