@@ -62,44 +62,40 @@ inline bool tangent(const Eigen::Vector3f& a, const Eigen::Vector3f& c, const Ei
   return true;
 }
 
-// In-place box filter (radius r) over rows of an image of Vector3f, summing
-// only finite entries. `row_sums` is scratch of width+1 entries.
-void boxFilterRows(std::vector<Eigen::Vector3f>& img, int width, int height, int r,
-                   std::vector<Eigen::Vector3f>& prefix) {
-  prefix.resize(static_cast<std::size_t>(width) + 1);
+// Box sums (radius r, clipped at the border) of the finite entries of `in`,
+// separably: rows into `tmp` with a prefix sum, then columns into `out` with
+// one running sum per column, so every pixel costs O(1) and no full-size
+// prefix table is needed. Non-finite entries count as zero.
+void boxSum(const std::vector<Eigen::Vector3f>& in, int width, int height, int r,
+            std::vector<Eigen::Vector3f>& tmp, std::vector<Eigen::Vector3f>& out) {
+  tmp.resize(in.size());
+  out.resize(in.size());
+  std::vector<Eigen::Vector3f> prefix(static_cast<std::size_t>(width) + 1);
   for (int v = 0; v < height; ++v) {
-    Eigen::Vector3f* row = img.data() + static_cast<std::size_t>(v) * width;
+    const Eigen::Vector3f* row = in.data() + static_cast<std::size_t>(v) * width;
+    Eigen::Vector3f* dst = tmp.data() + static_cast<std::size_t>(v) * width;
     prefix[0].setZero();
-    for (int u = 0; u < width; ++u) {
-      const Eigen::Vector3f& n = row[u];
-      prefix[u + 1] = prefix[u] + (std::isfinite(n.x()) ? n : Eigen::Vector3f::Zero());
-    }
-    for (int u = 0; u < width; ++u) {
-      const int lo = std::max(0, u - r);
-      const int hi = std::min(width, u + r + 1);
-      row[u] = prefix[hi] - prefix[lo];
-    }
+    for (int u = 0; u < width; ++u)
+      prefix[u + 1] = prefix[u] + (std::isfinite(row[u].x()) ? row[u] : Eigen::Vector3f::Zero());
+    for (int u = 0; u < width; ++u)
+      dst[u] = prefix[std::min(width, u + r + 1)] - prefix[std::max(0, u - r)];
   }
-}
-
-void boxFilterCols(std::vector<Eigen::Vector3f>& img, int width, int height, int r,
-                   std::vector<Eigen::Vector3f>& prefix) {
-  // Column prefix sums, processed row by row so memory access stays
-  // sequential: prefix holds (height+1) rows of width entries.
-  prefix.assign(static_cast<std::size_t>(height + 1) * width, Eigen::Vector3f::Zero());
-  for (int v = 0; v < height; ++v) {
-    const Eigen::Vector3f* src = img.data() + static_cast<std::size_t>(v) * width;
-    const Eigen::Vector3f* above = prefix.data() + static_cast<std::size_t>(v) * width;
-    Eigen::Vector3f* dst = prefix.data() + static_cast<std::size_t>(v + 1) * width;
-    for (int u = 0; u < width; ++u) dst[u] = above[u] + src[u];
+  std::vector<Eigen::Vector3f> column(static_cast<std::size_t>(width), Eigen::Vector3f::Zero());
+  // Prime with rows 0..r-1; each output row v then adds row v+r, drops v-r-1.
+  for (int v = 0; v < std::min(r, height); ++v) {
+    const Eigen::Vector3f* src = tmp.data() + static_cast<std::size_t>(v) * width;
+    for (int u = 0; u < width; ++u) column[u] += src[u];
   }
   for (int v = 0; v < height; ++v) {
-    const int lo = std::max(0, v - r);
-    const int hi = std::min(height, v + r + 1);
-    const Eigen::Vector3f* top = prefix.data() + static_cast<std::size_t>(lo) * width;
-    const Eigen::Vector3f* bottom = prefix.data() + static_cast<std::size_t>(hi) * width;
-    Eigen::Vector3f* dst = img.data() + static_cast<std::size_t>(v) * width;
-    for (int u = 0; u < width; ++u) dst[u] = bottom[u] - top[u];
+    if (v + r < height) {
+      const Eigen::Vector3f* add = tmp.data() + static_cast<std::size_t>(v + r) * width;
+      for (int u = 0; u < width; ++u) column[u] += add[u];
+    }
+    if (v - r - 1 >= 0) {
+      const Eigen::Vector3f* drop = tmp.data() + static_cast<std::size_t>(v - r - 1) * width;
+      for (int u = 0; u < width; ++u) column[u] -= drop[u];
+    }
+    std::copy(column.begin(), column.end(), out.begin() + static_cast<std::ptrdiff_t>(v) * width);
   }
 }
 
@@ -199,10 +195,8 @@ NormalImage computeNormals(const OrganizedCloud& cloud, const NormalConfig& conf
   //    had no raw normal stay NaN: they are isolated or on a depth edge.
   const int smooth_r = r / 2;
   if (smooth_r > 0) {
-    std::vector<Eigen::Vector3f> smoothed = n;
-    std::vector<Eigen::Vector3f> scratch;
-    boxFilterRows(smoothed, w, h, smooth_r, scratch);
-    boxFilterCols(smoothed, w, h, smooth_r, scratch);
+    std::vector<Eigen::Vector3f> tmp, smoothed;
+    boxSum(n, w, h, smooth_r, tmp, smoothed);
     for (std::size_t i = 0; i < n.size(); ++i) {
       if (!std::isfinite(n[i].x())) continue;
       const float norm = smoothed[i].norm();

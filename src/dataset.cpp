@@ -301,8 +301,7 @@ LabelMapping loadLabelMapping(const std::string& csv_path) {
 
 const LabelMapping& defaultNyu40Mapping() {
   static const LabelMapping mapping = parseLabelMapping(
-      generated::kNyu40MappingCsv,
-      std::string(generated::kNyu40MappingCsvPath) + " (compiled in)");
+      generated::kNyu40MappingCsv, std::string(generated::kNyu40MappingCsvPath) + " (compiled in)");
   return mapping;
 }
 
@@ -316,7 +315,8 @@ DatasetFolder::DatasetFolder(const std::string& dir, const DatasetOptions& optio
   if (!fs::is_directory(root, ec)) throw Error(dir + ": dataset folder does not exist");
   for (const char* sub : {"rgb", "depth"}) {
     if (!fs::is_directory(root / sub, ec)) {
-      throw Error(dir + ": missing sub-folder '" + sub + "/' (expected rgb/, depth/, label8/ or "
+      throw Error(dir + ": missing sub-folder '" + sub +
+                  "/' (expected rgb/, depth/, label8/ or "
                   "label40/)");
     }
   }
@@ -330,18 +330,17 @@ DatasetFolder::DatasetFolder(const std::string& dir, const DatasetOptions& optio
   if (!has_label8_) {
     mapping_ = options.mapping_csv ? loadLabelMapping(*options.mapping_csv) : defaultNyu40Mapping();
   }
-  if (options.mask_nyu_border &&
-      (options.border_top < 0 || options.border_bottom < 0 || options.border_left < 0 ||
-       options.border_right < 0)) {
+  if (options.mask_nyu_border && (options.border_top < 0 || options.border_bottom < 0 ||
+                                  options.border_left < 0 || options.border_right < 0)) {
     throw Error(dir + ": negative NYU border width in dataset options");
   }
 
   const auto rgb = pngStems(root / "rgb");
   const auto depth = pngStems(root / "depth");
   const auto labels = pngStems(root / label_dir);
-  if (rgb.empty()) throw Error(dir + "/rgb: no PNG files");
-  if (depth.empty()) throw Error(dir + "/depth: no PNG files");
-  if (labels.empty()) throw Error(dir + "/" + label_dir + ": no PNG files");
+  if (rgb.empty()) throw Error((root / "rgb").string() + ": no PNG files");
+  if (depth.empty()) throw Error((root / "depth").string() + ": no PNG files");
+  if (labels.empty()) throw Error((root / label_dir).string() + ": no PNG files");
   for (const auto& name : rgb) {
     if (depth.count(name) && labels.count(name)) names_.push_back(name);
   }
@@ -508,9 +507,9 @@ void writeLabeledFrame(const std::string& dir, const LabeledFrame& labeled) {
     const auto& k = frame.intrinsics;
     writeTextFileAtomically(intrinsics_path,
                             "# Pinhole intrinsics of the colour camera (pixels), depth registered\n"
-                            "fx: " + formatDouble(k.fx) + "\nfy: " + formatDouble(k.fy) +
-                                "\ncx: " + formatDouble(k.cx) + "\ncy: " + formatDouble(k.cy) +
-                                "\n");
+                            "fx: " +
+                                formatDouble(k.fx) + "\nfy: " + formatDouble(k.fy) + "\ncx: " +
+                                formatDouble(k.cx) + "\ncy: " + formatDouble(k.cy) + "\n");
   }
 
   const std::string png = labeled.name + ".png";
@@ -534,8 +533,7 @@ void writeLabeledFrame(const std::string& dir, const LabeledFrame& labeled) {
   std::string text = std::string(kExtrinsicsHeader) + "\n";
   for (const auto& r : rows) {
     text += r.name + "," + formatDouble(r.extrinsics.height_m) + "," +
-            formatDouble(r.extrinsics.pitch_rad) + "," + formatDouble(r.extrinsics.roll_rad) +
-            "\n";
+            formatDouble(r.extrinsics.pitch_rad) + "," + formatDouble(r.extrinsics.roll_rad) + "\n";
   }
   writeTextFileAtomically(extrinsics_path, text);
 }

@@ -52,8 +52,9 @@ namespace {
 constexpr char kMagic[8] = {'F', 'M', 'U', 'G', 'F', 'R', 'S', 'T'};
 constexpr std::uint32_t kFormatVersion = 1;
 constexpr int kMaxTrees = 10000;
-// A tree of depth 30 already has up to 2^31 - 1 nodes, the int32 index limit.
-constexpr int kMaxDepth = 30;
+// Tree size is bounded by the training samples (every leaf holds at least
+// one), not by the depth; this limit only refuses absurd values.
+constexpr int kMaxDepth = 64;
 constexpr std::uint32_t kMaxNameLength = 256;
 constexpr std::size_t kChecksumSize = 8;
 // Smallest encodings of a node, used to bound counts before allocating.
@@ -90,6 +91,8 @@ void validateParams(const ForestParams& p, const std::string& where) {
 void validateTrainingSet(const TrainingSet& data) {
   const std::size_t n = data.features.size();
   if (n == 0) throw Error("forest training: the training set is empty");
+  if (n > std::numeric_limits<std::uint32_t>::max())
+    throw Error("forest training: " + std::to_string(n) + " samples exceed the 2^32 - 1 limit");
   if (data.labels.size() != n)
     throw Error("forest training: " + std::to_string(n) + " feature vectors but " +
                 std::to_string(data.labels.size()) + " labels");
@@ -121,8 +124,8 @@ class TreeRng {
   explicit TreeRng(std::uint64_t seed) : engine_(seed) {}
   // Uniform integer in [0, n), n >= 1, without modulo bias (rejection).
   std::uint64_t below(std::uint64_t n) {
-    const std::uint64_t limit = std::numeric_limits<std::uint64_t>::max() -
-                                std::numeric_limits<std::uint64_t>::max() % n;
+    const std::uint64_t limit =
+        std::numeric_limits<std::uint64_t>::max() - std::numeric_limits<std::uint64_t>::max() % n;
     std::uint64_t x;
     do {
       x = engine_();
@@ -217,9 +220,8 @@ class TreeBuilder {
       // Partition in place: samples going left first.
       const auto mid_it = std::stable_partition(
           samples.begin() + static_cast<std::ptrdiff_t>(job.begin),
-          samples.begin() + static_cast<std::ptrdiff_t>(job.end), [&](std::uint32_t s) {
-            return data_.features[s][split.feature] < split.threshold;
-          });
+          samples.begin() + static_cast<std::ptrdiff_t>(job.end),
+          [&](std::uint32_t s) { return data_.features[s][split.feature] < split.threshold; });
       const auto mid = static_cast<std::size_t>(mid_it - samples.begin());
       const auto left = static_cast<std::int32_t>(tree.size());
       const auto right = left + 1;
@@ -541,8 +543,7 @@ RandomForest RandomForest::train(const TrainingSet& data, const ForestParams& pa
     Histogram factor{};
     for (int c = 0; c < kNumLabels; ++c)
       factor[c] = class_total[c] > 0.0 ? total / (present * class_total[c]) : 0.0;
-    for (std::size_t i = 0; i < view.weights.size(); ++i)
-      view.weights[i] *= factor[data.labels[i]];
+    for (std::size_t i = 0; i < view.weights.size(); ++i) view.weights[i] *= factor[data.labels[i]];
   }
 
   RandomForest forest;
@@ -616,13 +617,14 @@ RandomForest RandomForest::train(const TrainingSet& data, const ForestParams& pa
 }
 
 ClassProbabilities RandomForest::predict(const FeatureVector& x) const {
-  if (trees_.empty()) throw Error("RandomForest::predict: the forest is empty (not trained/loaded)");
+  if (trees_.empty())
+    throw Error("RandomForest::predict: the forest is empty (not trained/loaded)");
   std::array<float, kNumLabels> sum{};
   for (const Tree& tree : trees_) {
     const Node* nodes = tree.data();
     std::int32_t i = 0;
-    while (nodes[i].feature >= 0) i = x[nodes[i].feature] < nodes[i].threshold ? nodes[i].left
-                                                                                : nodes[i].right;
+    while (nodes[i].feature >= 0)
+      i = x[nodes[i].feature] < nodes[i].threshold ? nodes[i].left : nodes[i].right;
     const auto& d = nodes[i].distribution;
     for (int c = 0; c < kNumLabels; ++c) sum[c] += d[c];
   }
@@ -668,7 +670,8 @@ RandomForest RandomForest::load(const std::string& path) {
   if (std::memcmp(buf.data(), kMagic, sizeof kMagic) != 0)
     throw Error(path + ": not a findmug forest model (wrong magic)");
   std::uint32_t version = 0;
-  for (int i = 0; i < 4; ++i) version |= static_cast<std::uint32_t>(buf[sizeof kMagic + i]) << (8 * i);
+  for (int i = 0; i < 4; ++i)
+    version |= static_cast<std::uint32_t>(buf[sizeof kMagic + i]) << (8 * i);
   if (version != kFormatVersion)
     throw Error(path + ": forest model format version " + std::to_string(version) +
                 " is not supported (this build reads version " + std::to_string(kFormatVersion) +
@@ -742,8 +745,7 @@ RandomForest RandomForest::load(const std::string& path) {
       const std::uint32_t num_nodes = r.u32(tree_name + " node count");
       // Every node takes at least kInnerNodeBytes, so a count the rest of the
       // file cannot hold is refused before allocating for it.
-      if (num_nodes == 0)
-        throw Error(path + ": forest model " + tree_name + " has no nodes");
+      if (num_nodes == 0) throw Error(path + ": forest model " + tree_name + " has no nodes");
       if (num_nodes > r.remaining() / kInnerNodeBytes)
         throw Error(path + ": forest model " + tree_name + " has node count " +
                     std::to_string(num_nodes) + " but only " + std::to_string(r.remaining()) +

@@ -10,6 +10,7 @@
 #include <algorithm>
 #include <cmath>
 #include <iterator>
+#include <limits>
 #include <random>
 #include <sstream>
 #include <string>
@@ -32,6 +33,10 @@ constexpr int kMaxPlanes = 5;
 // Planes whose heights below the camera differ by less than this are one
 // level (e.g. a floor split in two by sensor noise).
 constexpr float kSameLevelM = 0.10f;
+// Horizontal planes of one scene agree on "up" within this angle (NYU depth
+// bends large planes and furniture tops by up to ~9 degrees; the sloped
+// surfaces seen on NYU frames, bed covers and cushions, are off by 15+).
+constexpr float kConsensusDeg = 12.0f;
 
 struct Plane {
   Eigen::Vector3f normal = Eigen::Vector3f::Zero();
@@ -56,6 +61,8 @@ void validateConfig(const GroundConfig& config, const char* where) {
     bad("min_inlier_fraction", config.min_inlier_fraction);
   if (!(config.normal_agreement_deg > 0.0f && config.normal_agreement_deg < 90.0f))
     bad("normal_agreement_deg", config.normal_agreement_deg);
+  if (!(config.min_camera_height_m >= 0.0f && config.min_camera_height_m < 10.0f))
+    bad("min_camera_height_m", config.min_camera_height_m);
 }
 
 float cosDeg(float deg) { return std::cos(deg * static_cast<float>(M_PI) / 180.0f); }
@@ -290,6 +297,7 @@ std::optional<GroundPlane> estimateGround(const OrganizedCloud& cloud_camera,
   struct Found {
     Plane plane;
     std::size_t support;
+    Eigen::Vector3f centroid;  // of the supporting points, camera frame
   };
   std::vector<Found> planes;
   std::mt19937_64 rng(config.seed);
@@ -302,7 +310,9 @@ std::optional<GroundPlane> estimateGround(const OrganizedCloud& cloud_camera,
       break;
     }
     if (inliers.size() >= min_sampled && plane.offset > 0.0f) {
-      planes.push_back({plane, inliers.size()});
+      Eigen::Vector3f centroid = Eigen::Vector3f::Zero();
+      for (std::size_t i : inliers) centroid += pts[i];
+      planes.push_back({plane, inliers.size(), centroid / static_cast<float>(inliers.size())});
     }
     // Remove this plane's points (inliers is sorted: it follows `remaining`).
     std::vector<std::size_t> rest;
@@ -313,14 +323,39 @@ std::optional<GroundPlane> estimateGround(const OrganizedCloud& cloud_camera,
   }
   if (planes.empty()) return std::nullopt;
 
-  // The lowest level (largest height below the camera); within that level
-  // the best-supported plane.
-  float lowest = 0.0f;
-  for (const auto& f : planes) lowest = std::max(lowest, f.plane.offset);
+  // Gravity consensus: every real horizontal surface (floor, table tops,
+  // seats) shares one normal, while sloped surfaces that slipped under the
+  // tilt limit (bed covers, cushions, ramps) each have their own. The
+  // reference "up" is the plane whose direction gathers the most support
+  // over all planes; the others must agree with it.
+  const float cos_consensus = cosDeg(kConsensusDeg);
+  std::size_t best_consensus = 0;
+  Eigen::Vector3f reference_up = planes.front().plane.normal;
+  for (const auto& f : planes) {
+    std::size_t consensus = 0;
+    for (const auto& g : planes)
+      if (f.plane.normal.dot(g.plane.normal) >= cos_consensus) consensus += g.support;
+    if (consensus > best_consensus) {
+      best_consensus = consensus;
+      reference_up = f.plane.normal;
+    }
+  }
+  // The lowest level of the consistent planes; within that level the
+  // best-supported plane. "Low" is measured at the supporting points (their
+  // centroid's depth below the camera along the reference up), not by the
+  // plane offset: a slightly tilted plane's extension can pass far below the
+  // floor at the camera while its points sit well above it.
+  auto depthBelowCamera = [&](const Found& f) { return -reference_up.dot(f.centroid); };
+  auto consistent = [&](const Found& f) { return f.plane.normal.dot(reference_up) >= cos_consensus; };
+  float lowest = -std::numeric_limits<float>::infinity();
+  for (const auto& f : planes)
+    if (consistent(f)) lowest = std::max(lowest, depthBelowCamera(f));
   const Found* chosen = nullptr;
   for (const auto& f : planes) {
-    if (lowest - f.plane.offset <= kSameLevelM && (!chosen || f.support > chosen->support))
+    if (consistent(f) && lowest - depthBelowCamera(f) <= kSameLevelM &&
+        (!chosen || f.support > chosen->support)) {
       chosen = &f;
+    }
   }
 
   // Final least-squares fit on every candidate (not just the strided subset)
@@ -333,7 +368,9 @@ std::optional<GroundPlane> estimateGround(const OrganizedCloud& cloud_camera,
     if (inliers.size() < static_cast<std::size_t>(config.min_floor_points)) return std::nullopt;
     plane = refitPlane(pts, inliers, plane);
   }
-  if (plane.normal.dot(camera_up) < cos_tilt || plane.offset <= 0.0f) return std::nullopt;
+  if (plane.normal.dot(camera_up) < cos_tilt || plane.offset < config.min_camera_height_m) {
+    return std::nullopt;
+  }
   return groundFromPlane(plane.normal, plane.offset, static_cast<int>(inliers.size()));
 }
 

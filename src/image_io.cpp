@@ -47,12 +47,18 @@ void onPngWarning(png_structp, png_const_charp) {
 
 std::string colourTypeName(int colour_type) {
   switch (colour_type) {
-    case PNG_COLOR_TYPE_GRAY: return "grey";
-    case PNG_COLOR_TYPE_GRAY_ALPHA: return "grey+alpha";
-    case PNG_COLOR_TYPE_RGB: return "RGB";
-    case PNG_COLOR_TYPE_RGB_ALPHA: return "RGBA";
-    case PNG_COLOR_TYPE_PALETTE: return "palette";
-    default: return "colour type " + std::to_string(colour_type);
+    case PNG_COLOR_TYPE_GRAY:
+      return "grey";
+    case PNG_COLOR_TYPE_GRAY_ALPHA:
+      return "grey+alpha";
+    case PNG_COLOR_TYPE_RGB:
+      return "RGB";
+    case PNG_COLOR_TYPE_RGB_ALPHA:
+      return "RGBA";
+    case PNG_COLOR_TYPE_PALETTE:
+      return "palette";
+    default:
+      return "colour type " + std::to_string(colour_type);
   }
 }
 
@@ -61,17 +67,22 @@ enum class Want { Grey8, Grey16, Rgb8 };
 
 std::string wantName(Want want) {
   switch (want) {
-    case Want::Grey8: return "8-bit single-channel PNG";
-    case Want::Grey16: return "16-bit single-channel PNG";
-    case Want::Rgb8: return "8-bit RGB or RGBA PNG";
+    case Want::Grey8:
+      return "8-bit single-channel PNG";
+    case Want::Grey16:
+      return "16-bit single-channel PNG";
+    case Want::Rgb8:
+      return "8-bit RGB or RGBA PNG";
   }
   return "?";
 }
 
 bool accepts(Want want, int bit_depth, int colour_type) {
   switch (want) {
-    case Want::Grey8: return bit_depth == 8 && colour_type == PNG_COLOR_TYPE_GRAY;
-    case Want::Grey16: return bit_depth == 16 && colour_type == PNG_COLOR_TYPE_GRAY;
+    case Want::Grey8:
+      return bit_depth == 8 && colour_type == PNG_COLOR_TYPE_GRAY;
+    case Want::Grey16:
+      return bit_depth == 16 && colour_type == PNG_COLOR_TYPE_GRAY;
     case Want::Rgb8:
       return bit_depth == 8 &&
              (colour_type == PNG_COLOR_TYPE_RGB || colour_type == PNG_COLOR_TYPE_RGB_ALPHA);
@@ -155,8 +166,7 @@ bool runRead(ReadJob* job) {
                nullptr, nullptr);
   if (!accepts(job->want, out.bit_depth, out.colour_type)) {
     job->format_error = job->what + ": expected " + wantName(job->want) + ", found " +
-                        std::to_string(out.bit_depth) + "-bit " +
-                        colourTypeName(out.colour_type);
+                        std::to_string(out.bit_depth) + "-bit " + colourTypeName(out.colour_type);
     return true;
   }
   // PNG stores 16-bit samples big-endian; ask libpng for host order.
@@ -214,8 +224,8 @@ Image<T> makeImage(const Decoded& d) {
   image.pixels.resize(static_cast<std::size_t>(d.width) * d.height);
   const std::size_t packed = sizeof(T) * d.width;
   if (packed != d.row_bytes && d.height > 0) {
-    throw Error("internal: PNG row size " + std::to_string(d.row_bytes) + " != " +
-                std::to_string(packed));
+    throw Error("internal: PNG row size " + std::to_string(d.row_bytes) +
+                " != " + std::to_string(packed));
   }
   if (!image.pixels.empty()) std::memcpy(image.pixels.data(), d.bytes.data(), d.bytes.size());
   return image;
@@ -238,9 +248,9 @@ void checkWritable(const Image<T>& image, const std::string& what) {
   }
   const auto expected = static_cast<std::size_t>(image.width) * image.height;
   if (image.pixels.size() != expected) {
-    throw Error(what + ": image has " + std::to_string(image.pixels.size()) +
-                " pixels, expected " + std::to_string(expected) + " (" +
-                std::to_string(image.width) + "x" + std::to_string(image.height) + ")");
+    throw Error(what + ": image has " + std::to_string(image.pixels.size()) + " pixels, expected " +
+                std::to_string(expected) + " (" + std::to_string(image.width) + "x" +
+                std::to_string(image.height) + ")");
   }
 }
 
@@ -285,8 +295,8 @@ bool runWrite(WriteJob* job) {
 
 // Encodes rows of `row_bytes` bytes each. `bit_depth`/`colour_type` describe
 // the pixel layout; for 16 bit the caller's samples are in host order.
-void encode(std::FILE* file, std::vector<std::uint8_t>* memory, const std::string& what,
-            int width, int height, int bit_depth, int colour_type, const std::uint8_t* data,
+void encode(std::FILE* file, std::vector<std::uint8_t>* memory, const std::string& what, int width,
+            int height, int bit_depth, int colour_type, const std::uint8_t* data,
             std::size_t row_bytes) {
   WriteJob job;
   job.file = file;
@@ -357,8 +367,7 @@ std::vector<std::uint8_t> encodePngRgb(const Image<Rgb8>& image) {
 
 Image<Rgb8> decodePngRgb(const std::vector<std::uint8_t>& bytes, const std::string& what) {
   if (bytes.size() < 8 || png_sig_cmp(bytes.data(), 0, 8) != 0) {
-    throw Error(what + ": not a PNG (" + std::to_string(bytes.size()) +
-                " bytes, bad signature)");
+    throw Error(what + ": not a PNG (" + std::to_string(bytes.size()) + " bytes, bad signature)");
   }
   MemoryReader reader{bytes.data(), bytes.size(), 0};
   return makeImage<Rgb8>(decode(nullptr, &reader, what, Want::Rgb8));

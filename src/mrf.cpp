@@ -29,12 +29,14 @@ namespace findmug {
 
 namespace {
 
-using Costs = std::array<float, kNumLabels>;
+// Fixed-size Eigen arrays so that the per-label loops (add, min, clamp)
+// compile to SIMD instructions without relying on -ffast-math.
+using Costs = Eigen::Array<float, kNumLabels, 1>;
 
 void validateParams(const MrfParams& p) {
   auto fail = [](const std::string& field, float value, const std::string& rule) {
-    throw Error("MRF parameter " + field + " = " + std::to_string(value) + " is invalid (" +
-                rule + ")");
+    throw Error("MRF parameter " + field + " = " + std::to_string(value) + " is invalid (" + rule +
+                ")");
   };
   if (!(std::isfinite(p.lambda) && p.lambda >= 0.0f)) fail("lambda", p.lambda, "expected >= 0");
   if (!(std::isfinite(p.sigma) && p.sigma > 0.0f)) fail("sigma", p.sigma, "expected > 0");
@@ -94,7 +96,7 @@ MrfResult solveMrf(const std::vector<ClassProbabilities>& unaries,
   // Unary costs.
   std::vector<Costs> unary(num_nodes);
   for (std::size_t i = 0; i < num_nodes; ++i)
-    for (int y = 0; y < kNumLabels; ++y) unary[i][y] = params.lambda * (1.0f - unaries[i][y]);
+    unary[i] = params.lambda * (1.0f - Eigen::Map<const Costs>(unaries[i].data()));
 
   // Directed edges: source, target, weight; plus per-node incoming lists (CSR).
   std::vector<std::uint32_t> source(num_directed), target(num_directed);
@@ -115,19 +117,17 @@ MrfResult solveMrf(const std::vector<ClassProbabilities>& unaries,
   std::vector<std::uint32_t> incoming(num_directed);
   {
     std::vector<std::uint32_t> fill(in_begin.begin(), in_begin.end() - 1);
-    for (std::size_t e = 0; e < num_directed; ++e) incoming[fill[target[e]]++] = static_cast<std::uint32_t>(e);
+    for (std::size_t e = 0; e < num_directed; ++e)
+      incoming[fill[target[e]]++] = static_cast<std::uint32_t>(e);
   }
 
-  std::vector<Costs> messages(num_directed, Costs{});
+  std::vector<Costs> messages(num_directed, Costs::Zero());
   std::vector<Costs> next(num_directed);
   std::vector<Costs> belief(num_nodes);
   auto computeBeliefs = [&] {
     for (std::size_t i = 0; i < num_nodes; ++i) {
       Costs b = unary[i];
-      for (std::uint32_t k = in_begin[i]; k < in_begin[i + 1]; ++k) {
-        const Costs& m = messages[incoming[k]];
-        for (int y = 0; y < kNumLabels; ++y) b[y] += m[y];
-      }
+      for (std::uint32_t k = in_begin[i]; k < in_begin[i + 1]; ++k) b += messages[incoming[k]];
       belief[i] = b;
     }
   };
@@ -140,26 +140,11 @@ MrfResult solveMrf(const std::vector<ClassProbabilities>& unaries,
     computeBeliefs();
     float max_change = 0.0f;
     for (std::size_t e = 0; e < num_directed; ++e) {
-      const Costs& b = belief[source[e]];
-      const Costs& back = messages[e ^ 1];
-      Costs h;
-      float h_min = std::numeric_limits<float>::infinity();
-      for (int y = 0; y < kNumLabels; ++y) {
-        h[y] = b[y] - back[y];
-        h_min = std::min(h_min, h[y]);
-      }
-      const float w = weight[e / 2];
+      const Costs h = belief[source[e]] - messages[e ^ 1];
       const Costs& old = messages[e];
-      Costs m;
-      float m_min = std::numeric_limits<float>::infinity();
-      for (int y = 0; y < kNumLabels; ++y) {
-        m[y] = take * std::min(h[y] - h_min, w) + keep * old[y];
-        m_min = std::min(m_min, m[y]);
-      }
-      for (int y = 0; y < kNumLabels; ++y) {
-        m[y] -= m_min;
-        max_change = std::max(max_change, std::abs(m[y] - old[y]));
-      }
+      Costs m = take * (h - h.minCoeff()).min(weight[e / 2]) + keep * old;
+      m -= m.minCoeff();
+      max_change = std::max(max_change, (m - old).abs().maxCoeff());
       next[e] = m;
     }
     messages.swap(next);
@@ -207,7 +192,8 @@ double mrfEnergy(const std::vector<ClassProbabilities>& unaries,
       throw Error("mrfEnergy: node " + std::to_string(i) + " has label " +
                   std::to_string(labels[i]) + " (expected 0.." + std::to_string(kNumLabels - 1) +
                   ")");
-    energy += static_cast<double>(params.lambda) * (1.0 - static_cast<double>(unaries[i][labels[i]]));
+    energy +=
+        static_cast<double>(params.lambda) * (1.0 - static_cast<double>(unaries[i][labels[i]]));
   }
   for (const auto& [a, b] : edges) {
     if (labels[static_cast<std::size_t>(a)] != labels[static_cast<std::size_t>(b)])

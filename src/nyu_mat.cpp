@@ -99,8 +99,10 @@ std::string typeText(const DatasetInfo& info) {
     case H5T_INTEGER:
       return std::string(info.sign == H5T_SGN_NONE ? "uint" : "int") +
              std::to_string(8 * info.type_size);
-    case H5T_FLOAT: return "float" + std::to_string(8 * info.type_size);
-    default: return "HDF5 type class " + std::to_string(static_cast<int>(info.type_class));
+    case H5T_FLOAT:
+      return "float" + std::to_string(8 * info.type_size);
+    default:
+      return "HDF5 type class " + std::to_string(static_cast<int>(info.type_class));
   }
 }
 
@@ -143,14 +145,12 @@ void readFrameSlab(const std::string& path, const char* name, const DatasetInfo&
   count[0] = 1;
   if (!file_space.valid() || H5Sselect_hyperslab(file_space.get(), H5S_SELECT_SET, start.data(),
                                                  nullptr, count.data(), nullptr) < 0) {
-    throw Error(path + ": cannot select frame " + std::to_string(index + 1) + " of '" + name +
-                "'");
+    throw Error(path + ": cannot select frame " + std::to_string(index + 1) + " of '" + name + "'");
   }
   Hid memory_space(H5Screate_simple(static_cast<int>(count.size()), count.data(), nullptr),
                    H5Sclose);
-  if (!memory_space.valid() ||
-      H5Dread(info.dataset.get(), memory_type, memory_space.get(), file_space.get(), H5P_DEFAULT,
-              out) < 0) {
+  if (!memory_space.valid() || H5Dread(info.dataset.get(), memory_type, memory_space.get(),
+                                       file_space.get(), H5P_DEFAULT, out) < 0) {
     throw Error(path + ": cannot read frame " + std::to_string(index + 1) + " of '" + name +
                 "' (truncated or corrupt file?)");
   }
@@ -255,8 +255,8 @@ NyuMatFile::NyuMatFile(const std::string& path, const std::string& nyu894_to_40_
     requireType(path, "labels", impl_->labels, H5T_INTEGER, 2, "uint16 (NYU-894 ids)");
 
     const auto& im = impl_->images.dims;
-    if (im.size() != 4 || im[1] != 3 || im[0] == 0 || im[2] == 0 || im[3] == 0 ||
-        im[2] > 4096 || im[3] > 4096) {
+    if (im.size() != 4 || im[1] != 3 || im[0] == 0 || im[2] == 0 || im[3] == 0 || im[2] > 4096 ||
+        im[3] > 4096) {
       throw Error(path + ": dataset 'images' has dims " + dimsText(im) +
                   ", expected [N][3][width][height] (MATLAB height x width x 3 x N)");
     }

@@ -64,7 +64,9 @@ std::string fmt(double value, int precision = 3) {
   throw Error("tables." + key + " = " + fmt(value, 6) + ": " + rule);
 }
 
-void validateConfig(const TableConfig& c) {
+}  // namespace
+
+void validateTableConfig(const TableConfig& c) {
   auto positive = [](const char* key, float v) {
     if (!std::isfinite(v) || v <= 0.0f) badSetting(key, v, "must be a positive number");
   };
@@ -109,6 +111,8 @@ void validateConfig(const TableConfig& c) {
                "must be in [0, 1]");
   }
 }
+
+namespace {
 
 // ---------------------------------------------------------------------------
 // Exact Euclidean clustering on a hashed voxel grid.
@@ -657,7 +661,7 @@ std::vector<SearchPosition> computeSearchPositions(const TableCluster& table,
 
 TableDetection detectTables(const OrganizedCloud& cloud_ground, const LabelImage& labels,
                             const TableConfig& config) {
-  validateConfig(config);
+  validateTableConfig(config);
   TableDetection result;
   if (cloud_ground.points.empty()) {
     result.diagnostics.push_back("no ground-aligned cloud (no ground plane for this frame): no tables");

@@ -15,6 +15,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <optional>
 #include <sstream>
 
 #include "eval_report.hpp"
@@ -128,6 +129,9 @@ int run(int argc, char** argv) {
   options.mask_nyu_border = !flags.has("no-nyu-border");
   const DatasetFolder dataset(flags.get("data"), options);
   const Segmenter segmenter(config.segmenter, nullptr);
+  // Load the model first: a bad file is refused before minutes of feature extraction.
+  std::optional<RandomForest> model;
+  if (flags.has("model")) model = RandomForest::load(flags.get("model"));
 
   const auto start = std::chrono::steady_clock::now();
   ProgressBar bar("features");
@@ -149,8 +153,8 @@ int run(int argc, char** argv) {
   report.config_yaml = dumpConfig(config);
 
   Evaluation eval;
-  if (flags.has("model")) {
-    const RandomForest forest = RandomForest::load(flags.get("model"));
+  if (model) {
+    const RandomForest& forest = *model;
     report.protocol = "model " + flags.get("model") + " (id " + forest.id() + ") on all frames";
     eval.mrf_pixels.resize(samples.size());
     std::vector<std::size_t> all(samples.size());

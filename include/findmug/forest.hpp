@@ -23,9 +23,11 @@ struct ForestParams {
   int candidate_features = 4;     // random features tried per node
   int candidate_thresholds = 10;  // random thresholds tried per feature
   bool class_weighting = true;    // weight samples by inverse class frequency
-  double bagging_fraction = 1.0;  // share of samples (with replacement) per tree
+  double bagging_fraction = 1.0;  // share of samples (with replacement) per tree;
+                                  // 1.0 = every tree sees all samples, no bootstrap
   std::uint64_t seed = 42;
-  int num_threads = 0;            // 0 = hardware concurrency
+  int num_threads = 0;            // 0 = hardware concurrency; not part of the model
+                                  // (not saved: the model does not depend on it)
 };
 
 struct TrainingSet {
@@ -52,6 +54,7 @@ class RandomForest {
   static RandomForest train(const TrainingSet& data, const ForestParams& params,
                             const Progress& progress = {});
 
+  // Throws findmug::Error on an empty forest. Non-finite features go right.
   ClassProbabilities predict(const FeatureVector& x) const;
 
   // Versioned binary model: magic, format version, label names, feature

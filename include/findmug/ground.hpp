@@ -47,6 +47,12 @@ struct GroundConfig {
   // estimateGround: a point supports a plane only if its normal is within
   // this angle of the plane normal (keeps chair legs, box sides out).
   float normal_agreement_deg = 20.0f;
+  // estimateGround: the lowest horizontal plane must lie at least this far
+  // below the camera, or the frame is taken to show no floor. When no floor
+  // is visible the lowest plane is a table or seat, typically 0.4..0.7 m
+  // below a hand-held camera; a real floor is >= 1 m below on NYU. A camera
+  // mounted lower than this must use GroundSource::Extrinsics (or lower it).
+  float min_camera_height_m = 0.8f;
 };
 
 // Builds the plane and transform from a known camera mount.
@@ -69,7 +75,8 @@ std::optional<GroundPlane> fitGroundToLabels(const OrganizedCloud& cloud_camera,
 // unknown: among the roughly-horizontal planes (normal within max_tilt_deg of
 // camera "up", -y) with at least `min_floor_points` supporting points, the
 // LOWEST one (furthest below the camera), so a large table top does not win
-// over a smaller visible floor. Returns nullopt when no such plane exists.
+// over a smaller visible floor. Returns nullopt when no such plane exists
+// or it is less than `min_camera_height_m` below the camera.
 std::optional<GroundPlane> estimateGround(const OrganizedCloud& cloud_camera,
                                           const NormalImage& normals_camera,
                                           const GroundConfig& config);

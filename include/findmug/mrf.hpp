@@ -24,11 +24,15 @@ struct MrfParams {
 
 struct MrfResult {
   std::vector<std::uint8_t> labels;  // one per node
-  std::vector<float> confidence;     // normalised belief of the chosen label
+  std::vector<float> confidence;     // normalised belief of the chosen label:
+                                     // exp(-b(y)) / Σ_y' exp(-b(y')), in [1/8, 1]
   int iterations = 0;
   bool converged = false;
 };
 
+// Throws findmug::Error on sizes that differ, edges out of range or
+// self-edges, non-finite/non-probability unaries and invalid parameters.
+// Nodes without edges get the argmax of their p.
 MrfResult solveMrf(const std::vector<ClassProbabilities>& unaries,
                    const std::vector<Eigen::Vector3f>& centroids,
                    const std::vector<std::pair<int, int>>& edges, const MrfParams& params);

@@ -124,7 +124,11 @@ class TableMap {
   TableMapConfig map_config_;
   TableConfig table_config_;
   std::vector<MappedTable> tables_;
-  std::vector<std::deque<TableCluster>> observations_;  // per table, map frame, newest last
+  struct Observation {
+    std::uint64_t utime = 0;
+    TableCluster table;  // map frame
+  };
+  std::vector<std::deque<Observation>> observations_;  // per table, oldest first
   int next_id_ = 1;
   std::uint64_t last_utime_ = 0;
 };

@@ -103,6 +103,11 @@ struct TableDetection {
   int clusters_rejected = 0;      // clusters dropped (size, degenerate)
 };
 
+// Throws findmug::Error naming the setting (`tables.KEY = value: rule`) when
+// a setting is out of range or inconsistent with another. detectTables calls
+// it; a daemon can call it once at start-up to fail early.
+void validateTableConfig(const TableConfig& config);
+
 // Throws findmug::Error when `labels` and `cloud_ground` disagree in size or
 // a setting is out of range (message names the setting). An empty cloud
 // means "no ground plane for this frame": no tables, with that reason.

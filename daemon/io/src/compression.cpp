@@ -40,7 +40,7 @@ std::vector<std::uint8_t> zlibDecompress(const std::uint8_t* data, std::size_t s
   zs.next_out = out.data();
   zs.avail_out = static_cast<uInt>(expected_size);
   int rc = inflate(&zs, Z_FINISH);
-  if (rc == Z_BUF_ERROR && zs.avail_out == 0 && zs.avail_in > 0) {
+  if ((rc == Z_BUF_ERROR || rc == Z_OK) && zs.avail_out == 0) {
     zs.next_out = &spare;
     zs.avail_out = 1;
     rc = inflate(&zs, Z_FINISH);

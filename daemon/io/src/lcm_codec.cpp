@@ -1,0 +1,525 @@
+#include "findmug/io/lcm_codec.hpp"
+
+#include <cmath>
+#include <cstring>
+#include <string>
+
+#include "compression.hpp"
+#include "findmug/error.hpp"
+#include "findmug/image_io.hpp"
+
+namespace findmug::io {
+
+namespace {
+
+// Same limit as validateFrame(): a Kinect is 640x480; anything beyond 4096 a
+// side can only come from a corrupt message, and must be refused before
+// width*height sizes an allocation.
+constexpr std::int32_t kMaxSide = 4096;
+
+std::string field(std::string_view channel, std::string_view type, std::string_view name) {
+  return std::string(channel) + ": " + std::string(type) + "." + std::string(name);
+}
+
+void checkDimensions(std::int32_t width, std::int32_t height, std::string_view channel,
+                     std::string_view type) {
+  if (width < 1 || height < 1 || width > kMaxSide || height > kMaxSide) {
+    throw Error(field(channel, type, "width/height") + ": absurd image size " +
+                std::to_string(width) + "x" + std::to_string(height) + " (expected 1.." +
+                std::to_string(kMaxSide) + " per side)");
+  }
+}
+
+void checkArraySize(std::int32_t declared, std::size_t actual, std::string_view channel,
+                    std::string_view type, std::string_view name) {
+  if (declared < 0 || static_cast<std::size_t>(declared) != actual) {
+    throw Error(field(channel, type, name) + ": size field says " + std::to_string(declared) +
+                " but the array holds " + std::to_string(actual));
+  }
+}
+
+bool finite(double v) { return std::isfinite(v); }
+
+double wrapAngle(double a) {
+  a = std::remainder(a, 2.0 * M_PI);  // (-pi, pi]
+  return a;
+}
+
+}  // namespace
+
+// ---- compression names ------------------------------------------------------------
+
+DepthCompression parseDepthCompression(std::string_view name) {
+  if (name == "none") return DepthCompression::None;
+  if (name == "zlib") return DepthCompression::Zlib;
+  throw Error("depth compression '" + std::string(name) + "': expected none or zlib");
+}
+
+ColorCompression parseColorCompression(std::string_view name) {
+  if (name == "none") return ColorCompression::None;
+  if (name == "jpeg" || name == "jpg") return ColorCompression::Jpeg;
+  if (name == "png") return ColorCompression::Png;
+  throw Error("colour compression '" + std::string(name) + "': expected none, jpeg or png");
+}
+
+// ---- RGB-D frames ---------------------------------------------------------------------
+
+rgbd_frame_t encodeRgbdFrame(const RgbdFrame& frame, const RgbdEncodeOptions& options) {
+  validateFrame(frame);
+  rgbd_frame_t msg;
+  msg.utime = static_cast<std::int64_t>(frame.utime);
+  msg.seq = frame.seq;
+  msg.source = frame.source;
+  msg.width = frame.width;
+  msg.height = frame.height;
+  msg.fx = frame.intrinsics.fx;
+  msg.fy = frame.intrinsics.fy;
+  msg.cx = frame.intrinsics.cx;
+  msg.cy = frame.intrinsics.cy;
+  msg.has_extrinsics = frame.extrinsics.has_value();
+  msg.height_m = frame.extrinsics ? frame.extrinsics->height_m : 0.0;
+  msg.pitch_rad = frame.extrinsics ? frame.extrinsics->pitch_rad : 0.0;
+  msg.roll_rad = frame.extrinsics ? frame.extrinsics->roll_rad : 0.0;
+
+  // Depth on the wire is little-endian whatever the host.
+  std::vector<std::uint8_t> depth(frame.depth_mm.size() * 2);
+  for (std::size_t i = 0; i < frame.depth_mm.size(); ++i) {
+    depth[2 * i] = static_cast<std::uint8_t>(frame.depth_mm[i] & 0xff);
+    depth[2 * i + 1] = static_cast<std::uint8_t>(frame.depth_mm[i] >> 8);
+  }
+  switch (options.depth) {
+    case DepthCompression::None:
+      msg.depth_data = std::move(depth);
+      break;
+    case DepthCompression::Zlib:
+      msg.depth_data = detail::zlibCompress(depth.data(), depth.size(), options.zlib_level);
+      break;
+  }
+  msg.depth_compression = static_cast<std::int8_t>(options.depth);
+  msg.depth_size = static_cast<std::int32_t>(msg.depth_data.size());
+
+  switch (options.color) {
+    case ColorCompression::None:
+      msg.color_data.resize(frame.rgb.size() * 3);
+      std::memcpy(msg.color_data.data(), frame.rgb.data(), msg.color_data.size());
+      break;
+    case ColorCompression::Jpeg:
+      msg.color_data =
+          detail::jpegCompressRgb(frame.rgb, frame.width, frame.height, options.jpeg_quality);
+      break;
+    case ColorCompression::Png:
+      msg.color_data = encodePngRgb(Image<Rgb8>{frame.width, frame.height, frame.rgb});
+      break;
+  }
+  msg.color_compression = static_cast<std::int8_t>(options.color);
+  msg.color_size = static_cast<std::int32_t>(msg.color_data.size());
+  return msg;
+}
+
+RgbdFrame decodeRgbdFrame(const rgbd_frame_t& msg, std::string_view channel) {
+  constexpr std::string_view type = "rgbd_frame_t";
+  checkDimensions(msg.width, msg.height, channel, type);
+  checkArraySize(msg.depth_size, msg.depth_data.size(), channel, type, "depth_size");
+  checkArraySize(msg.color_size, msg.color_data.size(), channel, type, "color_size");
+  if (msg.utime < 0) {
+    throw Error(field(channel, type, "utime") + ": negative time " + std::to_string(msg.utime));
+  }
+  const std::size_t pixels = static_cast<std::size_t>(msg.width) * msg.height;
+
+  RgbdFrame frame;
+  frame.width = msg.width;
+  frame.height = msg.height;
+  frame.utime = static_cast<std::uint64_t>(msg.utime);
+  frame.seq = msg.seq;
+  frame.source = std::string(channel) + (msg.source.empty() ? "" : ": " + msg.source);
+  frame.intrinsics = {msg.fx, msg.fy, msg.cx, msg.cy};
+  if (msg.has_extrinsics) frame.extrinsics = CameraExtrinsics{msg.height_m, msg.pitch_rad, msg.roll_rad};
+
+  const std::string depth_field = field(channel, type, "depth_data");
+  std::vector<std::uint8_t> inflated;
+  const std::vector<std::uint8_t>* depth_bytes = &msg.depth_data;
+  switch (msg.depth_compression) {
+    case rgbd_frame_t::DEPTH_NONE:
+      if (msg.depth_data.size() != pixels * 2) {
+        throw Error(depth_field + ": " + std::to_string(msg.depth_data.size()) +
+                    " bytes of raw depth, expected " + std::to_string(pixels * 2) + " for " +
+                    std::to_string(msg.width) + "x" + std::to_string(msg.height));
+      }
+      break;
+    case rgbd_frame_t::DEPTH_ZLIB:
+      inflated = detail::zlibDecompress(msg.depth_data.data(), msg.depth_data.size(), pixels * 2,
+                                        depth_field);
+      depth_bytes = &inflated;
+      break;
+    default:
+      throw Error(field(channel, type, "depth_compression") + ": unknown compression id " +
+                  std::to_string(msg.depth_compression) + " (expected 0 none or 1 zlib)");
+  }
+  frame.depth_mm.resize(pixels);
+  for (std::size_t i = 0; i < pixels; ++i) {
+    frame.depth_mm[i] = static_cast<std::uint16_t>((*depth_bytes)[2 * i] |
+                                                   ((*depth_bytes)[2 * i + 1] << 8));
+  }
+
+  const std::string color_field = field(channel, type, "color_data");
+  switch (msg.color_compression) {
+    case rgbd_frame_t::COLOR_NONE:
+      if (msg.color_data.size() != pixels * 3) {
+        throw Error(color_field + ": " + std::to_string(msg.color_data.size()) +
+                    " bytes of raw RGB, expected " + std::to_string(pixels * 3));
+      }
+      frame.rgb.resize(pixels);
+      std::memcpy(frame.rgb.data(), msg.color_data.data(), pixels * 3);
+      break;
+    case rgbd_frame_t::COLOR_JPEG:
+      frame.rgb = detail::jpegDecompressRgb(msg.color_data.data(), msg.color_data.size(),
+                                            msg.width, msg.height, color_field);
+      break;
+    case rgbd_frame_t::COLOR_PNG: {
+      if (msg.color_data.empty()) throw Error(color_field + ": empty PNG data");
+      Image<Rgb8> image = decodePngRgb(msg.color_data, color_field);
+      if (image.width != msg.width || image.height != msg.height) {
+        throw Error(color_field + ": PNG is " + std::to_string(image.width) + "x" +
+                    std::to_string(image.height) + ", message says " + std::to_string(msg.width) +
+                    "x" + std::to_string(msg.height));
+      }
+      frame.rgb = std::move(image.pixels);
+      break;
+    }
+    default:
+      throw Error(field(channel, type, "color_compression") + ": unknown compression id " +
+                  std::to_string(msg.color_compression) + " (expected 0 none, 1 jpeg or 2 png)");
+  }
+  validateFrame(frame);  // intrinsics, extrinsics; names the channel via frame.source
+  return frame;
+}
+
+RgbdFrame decodeRgbdFrame(const void* data, std::size_t size, std::string_view channel) {
+  return decodeRgbdFrame(decodeMessage<rgbd_frame_t>(data, size, channel), channel);
+}
+
+// ---- label images -------------------------------------------------------------------------
+
+label_image_t encodeLabelImage(const LabelImageMessage& in, bool with_confidence) {
+  const LabelImage& image = in.image;
+  checkDimensions(image.width, image.height, "encode", "label_image_t");
+  const std::size_t pixels = static_cast<std::size_t>(image.width) * image.height;
+  if (image.labels.size() != pixels) {
+    throw Error("label image encode: " + std::to_string(image.labels.size()) + " labels for " +
+                std::to_string(image.width) + "x" + std::to_string(image.height));
+  }
+  for (std::size_t i = 0; i < pixels; ++i) {
+    if (image.labels[i] >= kNumLabels && image.labels[i] != kVoidLabel) {
+      throw Error("label image encode: pixel " + std::to_string(i) + " has label id " +
+                  std::to_string(image.labels[i]));
+    }
+  }
+  label_image_t msg;
+  msg.utime = static_cast<std::int64_t>(in.utime);
+  msg.seq = in.seq;
+  msg.width = image.width;
+  msg.height = image.height;
+  msg.num_labels = kNumLabels;
+  for (auto name : kLabelNames) msg.label_names.emplace_back(name);
+  msg.compression = label_image_t::COMPRESSION_ZLIB;
+  msg.labels_data = detail::zlibCompress(image.labels.data(), pixels, 1);
+  msg.labels_size = static_cast<std::int32_t>(msg.labels_data.size());
+  msg.has_confidence = with_confidence && !image.confidence.empty();
+  if (msg.has_confidence) {
+    if (image.confidence.size() != pixels) {
+      throw Error("label image encode: " + std::to_string(image.confidence.size()) +
+                  " confidences for " + std::to_string(pixels) + " pixels");
+    }
+    std::vector<std::uint8_t> quantised(pixels);
+    for (std::size_t i = 0; i < pixels; ++i) {
+      const float c = image.confidence[i];
+      if (!(c >= 0.0f && c <= 1.0f)) {
+        throw Error("label image encode: pixel " + std::to_string(i) + " confidence " +
+                    std::to_string(c) + " outside [0, 1]");
+      }
+      quantised[i] = static_cast<std::uint8_t>(std::lround(c * 255.0f));
+    }
+    msg.confidence_data = detail::zlibCompress(quantised.data(), pixels, 1);
+  }
+  msg.confidence_size = static_cast<std::int32_t>(msg.confidence_data.size());
+  msg.latency_us = in.latency_us;
+  return msg;
+}
+
+LabelImageMessage decodeLabelImage(const label_image_t& msg, std::string_view channel) {
+  constexpr std::string_view type = "label_image_t";
+  checkDimensions(msg.width, msg.height, channel, type);
+  checkArraySize(msg.num_labels, msg.label_names.size(), channel, type, "num_labels");
+  checkArraySize(msg.labels_size, msg.labels_data.size(), channel, type, "labels_size");
+  checkArraySize(msg.confidence_size, msg.confidence_data.size(), channel, type,
+                 "confidence_size");
+  // The ids are part of the contract (labels.hpp); a publisher with other
+  // names would make every client mis-colour silently.
+  if (msg.num_labels != kNumLabels) {
+    throw Error(field(channel, type, "num_labels") + ": " + std::to_string(msg.num_labels) +
+                " labels, expected " + std::to_string(kNumLabels));
+  }
+  for (int i = 0; i < kNumLabels; ++i) {
+    if (msg.label_names[static_cast<std::size_t>(i)] != kLabelNames[static_cast<std::size_t>(i)]) {
+      throw Error(field(channel, type, "label_names") + ": id " + std::to_string(i) + " is '" +
+                  msg.label_names[static_cast<std::size_t>(i)] + "', expected '" +
+                  std::string(kLabelNames[static_cast<std::size_t>(i)]) + "'");
+    }
+  }
+  if (msg.utime < 0) {
+    throw Error(field(channel, type, "utime") + ": negative time " + std::to_string(msg.utime));
+  }
+  if (msg.latency_us < 0) {
+    throw Error(field(channel, type, "latency_us") + ": negative latency " +
+                std::to_string(msg.latency_us));
+  }
+  const std::size_t pixels = static_cast<std::size_t>(msg.width) * msg.height;
+  auto unpack = [&](const std::vector<std::uint8_t>& data, std::string_view name) {
+    const std::string where = field(channel, type, name);
+    switch (msg.compression) {
+      case label_image_t::COMPRESSION_NONE:
+        if (data.size() != pixels) {
+          throw Error(where + ": " + std::to_string(data.size()) + " bytes, expected " +
+                      std::to_string(pixels));
+        }
+        return data;
+      case label_image_t::COMPRESSION_ZLIB:
+        return detail::zlibDecompress(data.data(), data.size(), pixels, where);
+      default:
+        throw Error(field(channel, type, "compression") + ": unknown compression id " +
+                    std::to_string(msg.compression) + " (expected 0 none or 1 zlib)");
+    }
+  };
+
+  LabelImageMessage out;
+  out.utime = static_cast<std::uint64_t>(msg.utime);
+  out.seq = msg.seq;
+  out.latency_us = msg.latency_us;
+  out.image.width = msg.width;
+  out.image.height = msg.height;
+  out.image.labels = unpack(msg.labels_data, "labels_data");
+  for (std::size_t i = 0; i < pixels; ++i) {
+    const std::uint8_t id = out.image.labels[i];
+    if (id >= kNumLabels && id != kVoidLabel) {
+      throw Error(field(channel, type, "labels_data") + ": pixel " + std::to_string(i) +
+                  " has label id " + std::to_string(id) + " (expected 0.." +
+                  std::to_string(kNumLabels - 1) + " or 255)");
+    }
+  }
+  if (msg.has_confidence) {
+    const std::vector<std::uint8_t> q = unpack(msg.confidence_data, "confidence_data");
+    out.image.confidence.resize(pixels);
+    for (std::size_t i = 0; i < pixels; ++i) out.image.confidence[i] = q[i] / 255.0f;
+  } else if (msg.confidence_size != 0) {
+    throw Error(field(channel, type, "confidence_size") + ": " +
+                std::to_string(msg.confidence_size) + " bytes but has_confidence is false");
+  }
+  return out;
+}
+
+LabelImageMessage decodeLabelImage(const void* data, std::size_t size, std::string_view channel) {
+  return decodeLabelImage(decodeMessage<label_image_t>(data, size, channel), channel);
+}
+
+// ---- tables ------------------------------------------------------------------------------------
+
+Eigen::Vector2d toMapFrame(const RobotPose& pose, const Eigen::Vector2d& p) {
+  const double c = std::cos(pose.yaw), s = std::sin(pose.yaw);
+  return {c * p.x() - s * p.y() + pose.x, s * p.x() + c * p.y() + pose.y};
+}
+
+namespace {
+
+search_position_t toLcm(const SearchPosition& p) {
+  search_position_t out;
+  out.x = p.xy.x();
+  out.y = p.xy.y();
+  out.yaw = p.yaw;
+  out.reachable = p.reachable;
+  out.reason = p.reason;
+  return out;
+}
+
+search_position_t toLcmMap(const SearchPosition& p, const RobotPose& pose) {
+  search_position_t out = toLcm(p);
+  const Eigen::Vector2d m = toMapFrame(pose, p.xy.cast<double>());
+  out.x = m.x();
+  out.y = m.y();
+  out.yaw = wrapAngle(p.yaw + pose.yaw);
+  return out;
+}
+
+SearchPosition fromLcm(const search_position_t& p, const std::string& where) {
+  if (!finite(p.x) || !finite(p.y) || !finite(p.yaw)) {
+    throw Error(where + ": non-finite search position (" + std::to_string(p.x) + ", " +
+                std::to_string(p.y) + ", yaw " + std::to_string(p.yaw) + ")");
+  }
+  SearchPosition out;
+  out.xy = Eigen::Vector2f(static_cast<float>(p.x), static_cast<float>(p.y));
+  out.yaw = static_cast<float>(p.yaw);
+  out.reachable = p.reachable;
+  out.reason = p.reason;
+  return out;
+}
+
+void checkFinite(std::initializer_list<double> values, const std::string& where) {
+  for (double v : values) {
+    if (!finite(v)) throw Error(where + ": non-finite value");
+  }
+}
+
+}  // namespace
+
+tables_t encodeTables(const TablesMessage& in) {
+  tables_t msg;
+  msg.utime = static_cast<std::int64_t>(in.utime);
+  msg.seq = in.seq;
+  msg.has_map_pose = in.map_pose.has_value();
+  if (in.map_pose) msg.map_pose = encodeRobotPose(*in.map_pose);
+  else msg.map_pose = encodeRobotPose(RobotPose{});
+  msg.num_tables = static_cast<std::int32_t>(in.tables.size());
+  for (const TableCluster& t : in.tables) {
+    table_t out;
+    out.id = t.id;
+    for (int i = 0; i < 3; ++i) out.centroid[i] = t.centroid[i];
+    out.top_height = t.top_height;
+    for (int i = 0; i < 2; ++i) {
+      out.major_axis[i] = t.major_axis[i];
+      out.minor_axis[i] = t.minor_axis[i];
+      out.extents[i] = t.extents[i];
+    }
+    out.hull_size = static_cast<std::int32_t>(t.hull.size());
+    for (const auto& p : t.hull) out.hull.push_back({p.x(), p.y()});
+    out.point_count = t.point_count;
+    out.mean_confidence = t.mean_confidence;
+    out.num_search_positions = static_cast<std::int32_t>(t.search_positions.size());
+    for (const auto& p : t.search_positions) out.search_positions.push_back(toLcm(p));
+    if (in.map_pose) {
+      const Eigen::Vector2d c = toMapFrame(*in.map_pose, t.centroid.head<2>().cast<double>());
+      out.map_centroid[0] = c.x();
+      out.map_centroid[1] = c.y();
+      out.map_centroid[2] = t.centroid.z();
+      for (const auto& p : t.hull) {
+        const Eigen::Vector2d m = toMapFrame(*in.map_pose, p.cast<double>());
+        out.map_hull.push_back({m.x(), m.y()});
+      }
+      for (const auto& p : t.search_positions) {
+        out.map_search_positions.push_back(toLcmMap(p, *in.map_pose));
+      }
+    } else {
+      // The arrays share their length fields with the base-frame ones.
+      for (int i = 0; i < 3; ++i) out.map_centroid[i] = 0.0;
+      out.map_hull.assign(t.hull.size(), std::vector<double>(2, 0.0));
+      out.map_search_positions.assign(t.search_positions.size(), toLcm(SearchPosition{}));
+    }
+    msg.tables.push_back(std::move(out));
+  }
+  return msg;
+}
+
+TablesMessage decodeTables(const tables_t& msg, std::string_view channel) {
+  constexpr std::string_view type = "tables_t";
+  checkArraySize(msg.num_tables, msg.tables.size(), channel, type, "num_tables");
+  if (msg.utime < 0) {
+    throw Error(field(channel, type, "utime") + ": negative time " + std::to_string(msg.utime));
+  }
+  TablesMessage out;
+  out.utime = static_cast<std::uint64_t>(msg.utime);
+  out.seq = msg.seq;
+  if (msg.has_map_pose) {
+    const auto& p = msg.map_pose;
+    checkFinite({p.x, p.y, p.yaw}, field(channel, type, "map_pose"));
+    if (p.utime < 0) {
+      throw Error(field(channel, type, "map_pose.utime") + ": negative time " +
+                  std::to_string(p.utime));
+    }
+    out.map_pose = RobotPose{static_cast<std::uint64_t>(p.utime), p.x, p.y, p.yaw};
+  }
+  for (std::size_t k = 0; k < msg.tables.size(); ++k) {
+    const table_t& t = msg.tables[k];
+    const std::string where = field(channel, type, "tables[" + std::to_string(k) + "]");
+    checkArraySize(t.hull_size, t.hull.size(), channel, type,
+                   "tables[" + std::to_string(k) + "].hull_size");
+    checkArraySize(t.hull_size, t.map_hull.size(), channel, type,
+                   "tables[" + std::to_string(k) + "].map_hull");
+    checkArraySize(t.num_search_positions, t.search_positions.size(), channel, type,
+                   "tables[" + std::to_string(k) + "].num_search_positions");
+    checkArraySize(t.num_search_positions, t.map_search_positions.size(), channel, type,
+                   "tables[" + std::to_string(k) + "].map_search_positions");
+    checkFinite({t.centroid[0], t.centroid[1], t.centroid[2], t.top_height, t.major_axis[0],
+                 t.major_axis[1], t.minor_axis[0], t.minor_axis[1], t.extents[0], t.extents[1]},
+                where + ".centroid/top_height/axes/extents");
+    const double major_norm = std::hypot(t.major_axis[0], t.major_axis[1]);
+    const double minor_norm = std::hypot(t.minor_axis[0], t.minor_axis[1]);
+    if (std::abs(major_norm - 1.0) > 1e-3 || std::abs(minor_norm - 1.0) > 1e-3) {
+      throw Error(where + ": principal axes are not unit vectors (|major| " +
+                  std::to_string(major_norm) + ", |minor| " + std::to_string(minor_norm) + ")");
+    }
+    if (t.extents[0] < 0 || t.extents[1] < 0) throw Error(where + ".extents: negative extent");
+    if (t.point_count < 0) {
+      throw Error(where + ".point_count: negative (" + std::to_string(t.point_count) + ")");
+    }
+    if (!(t.mean_confidence >= 0.0f && t.mean_confidence <= 1.0f)) {
+      throw Error(where + ".mean_confidence: " + std::to_string(t.mean_confidence) +
+                  " outside [0, 1]");
+    }
+    TableCluster c;
+    c.id = t.id;
+    c.centroid = Eigen::Vector3f(static_cast<float>(t.centroid[0]), static_cast<float>(t.centroid[1]),
+                                 static_cast<float>(t.centroid[2]));
+    c.top_height = static_cast<float>(t.top_height);
+    c.major_axis = Eigen::Vector2f(static_cast<float>(t.major_axis[0]), static_cast<float>(t.major_axis[1]));
+    c.minor_axis = Eigen::Vector2f(static_cast<float>(t.minor_axis[0]), static_cast<float>(t.minor_axis[1]));
+    c.extents = Eigen::Vector2f(static_cast<float>(t.extents[0]), static_cast<float>(t.extents[1]));
+    for (const auto& p : t.hull) {
+      checkFinite({p[0], p[1]}, where + ".hull");
+      c.hull.emplace_back(static_cast<float>(p[0]), static_cast<float>(p[1]));
+    }
+    c.point_count = t.point_count;
+    c.mean_confidence = t.mean_confidence;
+    for (const auto& p : t.search_positions) {
+      c.search_positions.push_back(fromLcm(p, where + ".search_positions"));
+    }
+    if (msg.has_map_pose) {
+      MapFrameTable m;
+      checkFinite({t.map_centroid[0], t.map_centroid[1], t.map_centroid[2]},
+                  where + ".map_centroid");
+      m.centroid = Eigen::Vector3d(t.map_centroid[0], t.map_centroid[1], t.map_centroid[2]);
+      for (const auto& p : t.map_hull) {
+        checkFinite({p[0], p[1]}, where + ".map_hull");
+        m.hull.emplace_back(p[0], p[1]);
+      }
+      for (const auto& p : t.map_search_positions) {
+        m.search_positions.push_back(fromLcm(p, where + ".map_search_positions"));
+      }
+      out.map_tables.push_back(std::move(m));
+    }
+    out.tables.push_back(std::move(c));
+  }
+  return out;
+}
+
+TablesMessage decodeTables(const void* data, std::size_t size, std::string_view channel) {
+  return decodeTables(decodeMessage<tables_t>(data, size, channel), channel);
+}
+
+robot_pose_t encodeRobotPose(const RobotPose& pose) {
+  robot_pose_t msg;
+  msg.utime = static_cast<std::int64_t>(pose.utime);
+  msg.x = pose.x;
+  msg.y = pose.y;
+  msg.yaw = pose.yaw;
+  return msg;
+}
+
+RobotPose decodeRobotPose(const void* data, std::size_t size, std::string_view channel) {
+  const robot_pose_t msg = decodeMessage<robot_pose_t>(data, size, channel);
+  checkFinite({msg.x, msg.y, msg.yaw}, field(channel, "robot_pose_t", "x/y/yaw"));
+  if (msg.utime < 0) {
+    throw Error(field(channel, "robot_pose_t", "utime") + ": negative time " +
+                std::to_string(msg.utime));
+  }
+  return RobotPose{static_cast<std::uint64_t>(msg.utime), msg.x, msg.y, msg.yaw};
+}
+
+}  // namespace findmug::io

@@ -1,0 +1,415 @@
+// OpenNI2 device and .oni playback.
+//
+// One class serves both: a .oni file is an OpenNI2 "device" too, so opening,
+// stream set-up, frame pairing and conversion are shared; only end-of-stream
+// (playback) and loss/reconnection (live device) differ.
+//
+// Live device: depth registered to colour, colour/depth frame sync, 640x480
+// at 30 fps when offered (else the device's own mode, logged). A device that
+// is absent or stops delivering frames is closed and re-opened with
+// exponential back-off; state() is Reconnecting meanwhile. Frames carry the
+// host time at which the pair was complete (device clocks are not host time).
+#include <OpenNI.h>
+#include <spdlog/spdlog.h>
+
+#include <cmath>
+#include <cstring>
+#include <filesystem>
+#include <mutex>
+
+#include "findmug/error.hpp"
+#include "sources_internal.hpp"
+
+namespace findmug::io::detail {
+
+namespace {
+
+using openni::OpenNI;
+using openni::Status;
+
+void initializeOpenNi() {
+  static std::once_flag once;
+  static Status status = openni::STATUS_OK;
+  static std::string error;
+  std::call_once(once, [] {
+    status = OpenNI::initialize();
+    if (status != openni::STATUS_OK) error = OpenNI::getExtendedError();
+  });
+  if (status != openni::STATUS_OK) throw Error("OpenNI2 initialisation failed: " + error);
+}
+
+std::string oniError(const std::string& what, Status status) {
+  std::string detail = OpenNI::getExtendedError();
+  while (!detail.empty() && (detail.back() == '\n' || detail.back() == ' ')) detail.pop_back();
+  return what + " failed (status " + std::to_string(static_cast<int>(status)) + ")" +
+         (detail.empty() ? "" : ": " + detail);
+}
+
+// Depth and colour frames are paired when their device timestamps are this close.
+constexpr std::uint64_t kPairToleranceUs = 16000;
+// A live device that delivers nothing for this long is considered lost.
+constexpr int kLiveFrameTimeoutMs = 2000;
+// Poll interval, so that stop() is noticed promptly.
+constexpr int kPollMs = 100;
+
+struct CapturedImage {
+  bool valid = false;
+  std::uint64_t device_timestamp = 0;
+  int frame_index = 0;
+  int width = 0, height = 0;
+  std::vector<std::uint16_t> depth;  // depth stream
+  std::vector<Rgb8> rgb;             // colour stream
+};
+
+class Openni2Source : public FrameSourceBase {
+ public:
+  Openni2Source(std::string target, SourceOptions options)
+      : target_(std::move(target)), options_(std::move(options)) {
+    initializeOpenNi();
+    std::error_code ec;
+    playback_ = !target_.empty() && std::filesystem::is_regular_file(target_, ec);
+    if (playback_) {
+      description_ = "openni2:" + target_ + " (" + (options_.realtime ? "recorded speed" : "as fast as possible") +
+                     (options_.loop ? ", loop" : "") + ")";
+      // A file that cannot be opened is a configuration error: say so now.
+      if (const std::string error = open(); !error.empty()) throw Error(target_ + ": " + error);
+    } else {
+      description_ = "openni2:" + (target_.empty() ? std::string("<first device>") : target_);
+      if (const std::string error = open(); !error.empty()) {
+        recordError(error + "; retrying");
+        setState(SourceState::Reconnecting);
+      }
+    }
+  }
+
+  ~Openni2Source() override { close(); }
+
+  std::string describe() const override { return description_; }
+
+  std::optional<RgbdFrame> next() override {
+    auto backoff = options_.reconnect_initial;
+    while (!stopRequested()) {
+      if (!device_.isValid()) {
+        if (playback_) {  // cannot come back; close() only happens on errors
+          setState(SourceState::Failed);
+          return std::nullopt;
+        }
+        if (!sleepUntil(Clock::now() + backoff)) break;
+        backoff = std::min(backoff * 2, options_.reconnect_max);
+        if (const std::string error = open(); !error.empty()) {
+          recordError(error + "; retrying in " + std::to_string(backoff.count()) + " ms");
+          continue;
+        }
+        recordReconnect();
+        spdlog::info("{}: device open again", description_);
+      }
+      auto frame = readPair();
+      if (frame) {
+        if (playback_ && !pace(options_.rate_hz)) break;
+        frame->seq = seq_++;
+        recordDelivered();
+        return frame;
+      }
+      if (ended_) {
+        setState(SourceState::EndOfStream);
+        return std::nullopt;
+      }
+    }
+    setState(SourceState::Stopped);
+    return std::nullopt;
+  }
+
+ private:
+  // Opens device and streams; returns an error message, empty on success.
+  std::string open() {
+    close();
+    setState(SourceState::Starting);
+    const char* uri = target_.empty() ? openni::ANY_DEVICE : target_.c_str();
+    if (Status s = device_.open(uri); s != openni::STATUS_OK) {
+      device_.close();
+      return oniError("opening device " + (target_.empty() ? std::string("(any)") : target_), s);
+    }
+    for (auto [sensor, stream, name] : {std::tuple{openni::SENSOR_DEPTH, &depth_, "depth"},
+                                        std::tuple{openni::SENSOR_COLOR, &color_, "colour"}}) {
+      if (!device_.hasSensor(sensor)) {
+        close();
+        return std::string("device has no ") + name + " sensor";
+      }
+      if (Status s = stream->create(device_, sensor); s != openni::STATUS_OK) {
+        close();
+        return oniError(std::string("creating the ") + name + " stream", s);
+      }
+    }
+    if (!playback_) {
+      if (std::string error = configureLive(); !error.empty()) {
+        close();
+        return error;
+      }
+    } else if (auto* control = device_.getPlaybackControl()) {
+      // Speed -1: "manual", a frame becomes available when the previous one is read.
+      control->setSpeed(options_.realtime ? 1.0f : -1.0f);
+      control->setRepeatEnabled(options_.loop);
+      playback_frames_ = control->getNumberOfFrames(depth_);
+    }
+    for (auto [stream, name] : {std::pair{&depth_, "depth"}, std::pair{&color_, "colour"}}) {
+      if (Status s = stream->start(); s != openni::STATUS_OK) {
+        close();
+        return oniError(std::string("starting the ") + name + " stream", s);
+      }
+    }
+    const auto depth_mode = depth_.getVideoMode();
+    const auto color_mode = color_.getVideoMode();
+    if (depth_mode.getPixelFormat() != openni::PIXEL_FORMAT_DEPTH_1_MM &&
+        depth_mode.getPixelFormat() != openni::PIXEL_FORMAT_DEPTH_100_UM) {
+      close();
+      return "depth pixel format " + std::to_string(depth_mode.getPixelFormat()) +
+             " is not millimetres / 100 um";
+    }
+    if (color_mode.getPixelFormat() != openni::PIXEL_FORMAT_RGB888) {
+      close();
+      return "colour pixel format " + std::to_string(color_mode.getPixelFormat()) + " is not RGB888";
+    }
+    intrinsics_ = intrinsicsFromFov(color_mode.getResolutionX(), color_mode.getResolutionY());
+    spdlog::info("{}: depth {}x{} @ {} fps, colour {}x{} @ {} fps, fx={:.1f} fy={:.1f}",
+                 description_, depth_mode.getResolutionX(), depth_mode.getResolutionY(),
+                 depth_mode.getFps(), color_mode.getResolutionX(), color_mode.getResolutionY(),
+                 color_mode.getFps(), intrinsics_.fx, intrinsics_.fy);
+    last_depth_ = {};
+    last_color_ = {};
+    ended_ = false;
+    last_frame_time_ = Clock::now();
+    return {};
+  }
+
+  std::string configureLive() {
+    // Prefer 640x480 at 30 fps in the formats we use; otherwise keep the
+    // device's default mode (logged by open()).
+    for (auto [stream, format, name] :
+         {std::tuple{&depth_, openni::PIXEL_FORMAT_DEPTH_1_MM, "depth"},
+          std::tuple{&color_, openni::PIXEL_FORMAT_RGB888, "colour"}}) {
+      const auto& modes = stream->getSensorInfo().getSupportedVideoModes();
+      bool found = false;
+      for (int i = 0; i < modes.getSize() && !found; ++i) {
+        if (modes[i].getResolutionX() == 640 && modes[i].getResolutionY() == 480 &&
+            modes[i].getFps() == 30 && modes[i].getPixelFormat() == format) {
+          found = stream->setVideoMode(modes[i]) == openni::STATUS_OK;
+        }
+      }
+      if (!found) spdlog::warn("{}: no 640x480@30 {} mode; using the device default", description_, name);
+    }
+    if (device_.isImageRegistrationModeSupported(openni::IMAGE_REGISTRATION_DEPTH_TO_COLOR)) {
+      if (Status s = device_.setImageRegistrationMode(openni::IMAGE_REGISTRATION_DEPTH_TO_COLOR);
+          s != openni::STATUS_OK) {
+        return oniError("enabling depth-to-colour registration", s);
+      }
+    } else {
+      spdlog::warn("{}: device cannot register depth to colour; pixels will not align exactly",
+                   description_);
+    }
+    if (device_.setDepthColorSyncEnabled(true) != openni::STATUS_OK) {
+      spdlog::warn("{}: depth/colour frame sync not available", description_);
+    }
+    return {};
+  }
+
+  CameraIntrinsics intrinsicsFromFov(int width, int height) const {
+    const double hfov = color_.getHorizontalFieldOfView();
+    const double vfov = color_.getVerticalFieldOfView();
+    CameraIntrinsics k;
+    if (std::isfinite(hfov) && std::isfinite(vfov) && hfov > 0.1 && hfov < 3.0 && vfov > 0.1 &&
+        vfov < 3.0) {
+      k.fx = width / 2.0 / std::tan(hfov / 2.0);
+      k.fy = height / 2.0 / std::tan(vfov / 2.0);
+    } else {
+      // Kinect-class default, scaled to the resolution; logged because it is a guess.
+      k.fx = 525.0 * width / 640.0;
+      k.fy = 525.0 * height / 480.0;
+      spdlog::warn("{}: no valid field of view from the device; assuming fx={} fy={}", description_,
+                   k.fx, k.fy);
+    }
+    k.cx = (width - 1) / 2.0;
+    k.cy = (height - 1) / 2.0;
+    return k;
+  }
+
+  void close() {
+    depth_.stop();
+    color_.stop();
+    depth_.destroy();
+    color_.destroy();
+    device_.close();
+  }
+
+  void lose(const std::string& why) {
+    recordError(why + (playback_ ? "" : "; device lost, reconnecting"));
+    close();
+    if (!playback_) setState(SourceState::Reconnecting);
+  }
+
+  // Reads frames until one depth/colour pair is complete; nullopt on
+  // timeout-with-nothing, loss or end of playback (see ended_).
+  std::optional<RgbdFrame> readPair() {
+    while (!stopRequested()) {
+      openni::VideoStream* streams[] = {&depth_, &color_};
+      int ready = -1;
+      const Status s = OpenNI::waitForAnyStream(streams, 2, &ready, kPollMs);
+      if (s == openni::STATUS_TIME_OUT) {
+        if (playback_) {
+          if (atEndOfPlayback()) ended_ = true;
+          if (ended_) return std::nullopt;
+        }
+        if (Clock::now() - last_frame_time_ > std::chrono::milliseconds(kLiveFrameTimeoutMs)) {
+          lose("no frame for " + std::to_string(kLiveFrameTimeoutMs) + " ms");
+          return std::nullopt;
+        }
+        continue;
+      }
+      if (s != openni::STATUS_OK || ready < 0 || ready > 1) {
+        lose(oniError("waiting for frames", s));
+        return std::nullopt;
+      }
+      openni::VideoFrameRef ref;
+      if (Status rs = streams[ready]->readFrame(&ref); rs != openni::STATUS_OK || !ref.isValid()) {
+        lose(oniError("reading a frame", rs));
+        return std::nullopt;
+      }
+      last_frame_time_ = Clock::now();
+      try {
+        if (ready == 0) {
+          last_depth_ = copyDepth(ref);
+        } else {
+          last_color_ = copyColor(ref);
+        }
+      } catch (const Error& e) {
+        recordRejected(e.what());
+        continue;
+      }
+      if (!last_depth_.valid || !last_color_.valid) continue;
+      const std::uint64_t dt = last_depth_.device_timestamp > last_color_.device_timestamp
+                                   ? last_depth_.device_timestamp - last_color_.device_timestamp
+                                   : last_color_.device_timestamp - last_depth_.device_timestamp;
+      if (dt > kPairToleranceUs) {
+        // Keep the newer one; the older can no longer find its partner.
+        (last_depth_.device_timestamp < last_color_.device_timestamp ? last_depth_ : last_color_)
+            .valid = false;
+        recordDropped();
+        continue;
+      }
+      RgbdFrame frame;
+      try {
+        frame = assemble();
+        finishFrame(frame, options_);
+      } catch (const Error& e) {
+        recordRejected(e.what());
+        continue;
+      }
+      if (playback_ && playback_frames_ > 0 && !options_.loop &&
+          last_depth_.frame_index >= playback_frames_) {
+        ended_ = true;  // this was the last pair; the next call ends the stream
+      }
+      last_depth_.valid = last_color_.valid = false;
+      return frame;
+    }
+    return std::nullopt;
+  }
+
+  bool atEndOfPlayback() const {
+    return !options_.loop && playback_frames_ > 0 && last_depth_.frame_index >= playback_frames_;
+  }
+
+  CapturedImage copyDepth(const openni::VideoFrameRef& ref) const {
+    CapturedImage out;
+    out.width = ref.getWidth();
+    out.height = ref.getHeight();
+    checkSize(out.width, out.height, "depth");
+    const auto format = ref.getVideoMode().getPixelFormat();
+    const int stride = ref.getStrideInBytes();
+    if (stride < out.width * 2 || ref.getDataSize() < stride * out.height) {
+      throw Error(description_ + ": depth frame of " + std::to_string(ref.getDataSize()) +
+                  " bytes too small for " + std::to_string(out.width) + "x" +
+                  std::to_string(out.height) + " (stride " + std::to_string(stride) + ")");
+    }
+    out.depth.resize(static_cast<std::size_t>(out.width) * out.height);
+    const auto* base = static_cast<const std::uint8_t*>(ref.getData());
+    for (int y = 0; y < out.height; ++y) {
+      std::memcpy(&out.depth[static_cast<std::size_t>(y) * out.width], base + static_cast<std::size_t>(y) * stride,
+                  static_cast<std::size_t>(out.width) * 2);
+    }
+    if (format == openni::PIXEL_FORMAT_DEPTH_100_UM) {
+      for (auto& d : out.depth) d = static_cast<std::uint16_t>((d + 5) / 10);
+    }
+    out.device_timestamp = ref.getTimestamp();
+    out.frame_index = ref.getFrameIndex();
+    out.valid = true;
+    return out;
+  }
+
+  CapturedImage copyColor(const openni::VideoFrameRef& ref) const {
+    CapturedImage out;
+    out.width = ref.getWidth();
+    out.height = ref.getHeight();
+    checkSize(out.width, out.height, "colour");
+    const int stride = ref.getStrideInBytes();
+    if (stride < out.width * 3 || ref.getDataSize() < stride * out.height) {
+      throw Error(description_ + ": colour frame of " + std::to_string(ref.getDataSize()) +
+                  " bytes too small for " + std::to_string(out.width) + "x" +
+                  std::to_string(out.height));
+    }
+    out.rgb.resize(static_cast<std::size_t>(out.width) * out.height);
+    const auto* base = static_cast<const std::uint8_t*>(ref.getData());
+    for (int y = 0; y < out.height; ++y) {
+      std::memcpy(&out.rgb[static_cast<std::size_t>(y) * out.width], base + static_cast<std::size_t>(y) * stride,
+                  static_cast<std::size_t>(out.width) * 3);
+    }
+    out.device_timestamp = ref.getTimestamp();
+    out.frame_index = ref.getFrameIndex();
+    out.valid = true;
+    return out;
+  }
+
+  void checkSize(int width, int height, const char* what) const {
+    if (width < 1 || height < 1 || width > 4096 || height > 4096) {
+      throw Error(description_ + ": " + what + " frame has absurd size " + std::to_string(width) +
+                  "x" + std::to_string(height));
+    }
+  }
+
+  RgbdFrame assemble() {
+    if (last_depth_.width != last_color_.width || last_depth_.height != last_color_.height) {
+      throw Error(description_ + ": depth " + std::to_string(last_depth_.width) + "x" +
+                  std::to_string(last_depth_.height) + " and colour " +
+                  std::to_string(last_color_.width) + "x" + std::to_string(last_color_.height) +
+                  " differ; registration needs one grid");
+    }
+    RgbdFrame frame;
+    frame.width = last_depth_.width;
+    frame.height = last_depth_.height;
+    frame.depth_mm = std::move(last_depth_.depth);
+    frame.rgb = std::move(last_color_.rgb);
+    frame.intrinsics = intrinsics_;
+    frame.utime = hostUtimeNow();
+    frame.source = description_ + " frame " + std::to_string(last_depth_.frame_index);
+    return frame;
+  }
+
+  std::string target_;
+  SourceOptions options_;
+  bool playback_ = false;
+  std::string description_;
+  openni::Device device_;
+  openni::VideoStream depth_, color_;
+  CameraIntrinsics intrinsics_;
+  CapturedImage last_depth_, last_color_;
+  int playback_frames_ = 0;
+  bool ended_ = false;
+  std::int64_t seq_ = 0;
+  Clock::time_point last_frame_time_ = Clock::now();
+};
+
+}  // namespace
+
+std::unique_ptr<FrameSource> makeOpenni2Source(const SourceSpec& spec) {
+  return std::make_unique<Openni2Source>(spec.target, spec.options);
+}
+
+}  // namespace findmug::io::detail

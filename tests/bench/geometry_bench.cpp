@@ -1,0 +1,143 @@
+// geometry_bench: the geometric front of the pipeline on one real 640x480
+// NYU Depth V2 frame (raw Kinect depth with holes, frame 0433):
+// back-projection, normals, ground plane (from labels and estimated),
+// transform into the ground frame and the 14-D features of ~1000 patches.
+//
+//   geometry_bench [--benchmark_filter=REGEX]
+//
+// Data from $FINDMUG_DATA or ../shared/data (nyuv2_labeled/).
+#include <benchmark/benchmark.h>
+
+#include <cstdlib>
+#include <filesystem>
+#include <stdexcept>
+#include <string>
+
+#include "findmug/cloud.hpp"
+#include "findmug/dataset.hpp"
+#include "findmug/features.hpp"
+#include "findmug/ground.hpp"
+#include "findmug/image_io.hpp"
+
+namespace {
+
+using namespace findmug;
+
+std::filesystem::path dataRoot() {
+  if (const char* env = std::getenv("FINDMUG_DATA"); env && *env) return env;
+  return FINDMUG_DEFAULT_DATA_DIR;
+}
+
+struct Fixture {
+  RgbdFrame frame;
+  std::vector<std::uint8_t> labels;
+  OrganizedCloud cloud;
+  NormalImage normals;
+  GroundPlane ground;
+  OrganizedCloud cloud_ground;
+  NormalImage normals_ground;
+  Oversegmentation blocks;  // 20x16-pixel blocks: 960 patches, as many as supervoxels
+};
+
+// Loads once; throws when the data is missing (reported per benchmark).
+const Fixture& fixture() {
+  static const Fixture f = [] {
+    const auto dir = dataRoot() / "nyuv2_labeled";
+    const std::string name = "0433";
+    Fixture x;
+    const auto depth = readPng16((dir / "depth" / (name + ".png")).string());
+    const auto rgb = readPngRgb((dir / "rgb" / (name + ".png")).string());
+    x.labels = readPng8((dir / "label8" / (name + ".png")).string()).pixels;
+    x.frame.width = depth.width;
+    x.frame.height = depth.height;
+    x.frame.depth_mm = depth.pixels;
+    x.frame.rgb = rgb.pixels;
+    x.frame.intrinsics = kNyuIntrinsics;
+    x.frame.source = name;
+    x.cloud = frameToCloud(x.frame);
+    x.normals = computeNormals(x.cloud, NormalConfig{});
+    const auto g = fitGroundToLabels(x.cloud, x.labels, GroundConfig{});
+    if (!g) throw std::runtime_error("no floor plane in " + name);
+    x.ground = *g;
+    x.cloud_ground = transformCloud(x.cloud, x.ground.camera_to_ground);
+    x.normals_ground = rotateNormals(x.normals, x.ground.camera_to_ground.linear());
+
+    auto& seg = x.blocks;
+    seg.width = x.cloud.width;
+    seg.height = x.cloud.height;
+    seg.pixel_segment.assign(x.cloud.size(), -1);
+    const int bw = 20, bh = 16, cols = seg.width / bw;
+    std::vector<int> block_to_segment(static_cast<std::size_t>(cols) * (seg.height / bh), -1);
+    for (int v = 0; v < seg.height; ++v) {
+      for (int u = 0; u < seg.width; ++u) {
+        const std::size_t i = static_cast<std::size_t>(v) * seg.width + u;
+        if (!x.cloud.valid(i)) continue;
+        int& s = block_to_segment[static_cast<std::size_t>(v / bh) * cols + u / bw];
+        if (s < 0) {
+          s = static_cast<int>(seg.segments.size());
+          seg.segments.emplace_back();
+        }
+        seg.pixel_segment[i] = s;
+        seg.segments[s].push_back(static_cast<int>(i));
+      }
+    }
+    return x;
+  }();
+  return f;
+}
+
+template <typename Body>
+void run(benchmark::State& state, Body body) {
+  const Fixture* f = nullptr;
+  try {
+    f = &fixture();
+  } catch (const std::exception& e) {
+    state.SkipWithError(e.what());
+    return;
+  }
+  for (auto _ : state) body(*f);
+}
+
+void BM_FrameToCloud(benchmark::State& state) {
+  run(state, [](const Fixture& f) { benchmark::DoNotOptimize(frameToCloud(f.frame)); });
+}
+BENCHMARK(BM_FrameToCloud)->Unit(benchmark::kMillisecond);
+
+void BM_ComputeNormals(benchmark::State& state) {
+  run(state, [](const Fixture& f) {
+    benchmark::DoNotOptimize(computeNormals(f.cloud, NormalConfig{}));
+  });
+}
+BENCHMARK(BM_ComputeNormals)->Unit(benchmark::kMillisecond);
+
+void BM_FitGroundToLabels(benchmark::State& state) {
+  run(state, [](const Fixture& f) {
+    benchmark::DoNotOptimize(fitGroundToLabels(f.cloud, f.labels, GroundConfig{}));
+  });
+}
+BENCHMARK(BM_FitGroundToLabels)->Unit(benchmark::kMillisecond);
+
+void BM_EstimateGround(benchmark::State& state) {
+  run(state, [](const Fixture& f) {
+    benchmark::DoNotOptimize(estimateGround(f.cloud, f.normals, GroundConfig{}));
+  });
+}
+BENCHMARK(BM_EstimateGround)->Unit(benchmark::kMillisecond);
+
+void BM_TransformToGround(benchmark::State& state) {
+  run(state, [](const Fixture& f) {
+    benchmark::DoNotOptimize(transformCloud(f.cloud, f.ground.camera_to_ground));
+    benchmark::DoNotOptimize(rotateNormals(f.normals, f.ground.camera_to_ground.linear()));
+  });
+}
+BENCHMARK(BM_TransformToGround)->Unit(benchmark::kMillisecond);
+
+void BM_ComputeFeatures(benchmark::State& state) {
+  run(state, [&state](const Fixture& f) {
+    benchmark::DoNotOptimize(computeFeatures(f.cloud_ground, f.normals_ground, f.blocks));
+    state.counters["segments"] = static_cast<double>(f.blocks.segments.size());
+  });
+}
+BENCHMARK(BM_ComputeFeatures)->Unit(benchmark::kMillisecond);
+
+}  // namespace

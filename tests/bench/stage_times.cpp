@@ -1,0 +1,132 @@
+// stage_times: wall time of each pipeline stage per 640x480 frame, median over
+// a labelled dataset, for each oversegmenter side by side in one run.
+//
+//   stage_times [--data DIR] [--model MODEL] [--repeat N]
+//
+// Without --model a forest is trained in-process on the same frames (the
+// timing of prediction does not depend on what the trees learnt, only on
+// their size). Prints a Markdown table for BENCHMARKS.md. Single-threaded.
+#include <algorithm>
+#include <cstdio>
+#include <cstring>
+#include <map>
+#include <memory>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "findmug/dataset.hpp"
+#include "findmug/error.hpp"
+#include "findmug/segmenter.hpp"
+#include "findmug/training.hpp"
+#include "test_data.hpp"
+
+namespace {
+
+using namespace findmug;
+
+double median(std::vector<double> v) {
+  if (v.empty()) return 0;
+  std::sort(v.begin(), v.end());
+  const std::size_t n = v.size();
+  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
+struct Column {
+  std::string name;
+  std::map<std::string, std::vector<double>> stage_ms;
+  std::vector<double> segments;
+};
+
+void record(Column& c, const StageTimings& t, std::size_t segments) {
+  const std::pair<const char*, double> stages[] = {
+      {"cloud", t.cloud_ms},       {"normals", t.normals_ms},   {"ground", t.ground_ms},
+      {"oversegmentation", t.overseg_ms}, {"features", t.features_ms}, {"forest", t.forest_ms},
+      {"mrf", t.mrf_ms},           {"labels", t.labels_ms},     {"tables", t.tables_ms},
+      {"total", t.total()}};
+  for (const auto& [name, ms] : stages) c.stage_ms[name].push_back(ms);
+  c.segments.push_back(static_cast<double>(segments));
+}
+
+int run(int argc, char** argv) {
+  std::string data = (test::dataRoot() / "nyuv2_labeled").string();
+  std::string model_path;
+  int repeat = 1;
+  for (int i = 1; i + 1 < argc; i += 2) {
+    if (!std::strcmp(argv[i], "--data")) data = argv[i + 1];
+    else if (!std::strcmp(argv[i], "--model")) model_path = argv[i + 1];
+    else if (!std::strcmp(argv[i], "--repeat")) repeat = std::max(1, std::atoi(argv[i + 1]));
+    else throw Error(std::string("unknown flag ") + argv[i]);
+  }
+  const DatasetFolder dataset(data);
+  std::vector<LabeledFrame> frames;
+  for (std::size_t i = 0; i < dataset.size(); ++i) frames.push_back(dataset.load(i));
+
+  SegmenterConfig base;
+  base.ground.source = GroundSource::Estimated;  // what a robot without extrinsics does
+  base.forest.num_threads = 1;
+
+  std::shared_ptr<const RandomForest> forest;
+  if (!model_path.empty()) {
+    forest = std::make_shared<const RandomForest>(RandomForest::load(model_path));
+  } else {
+    SegmenterConfig train_config = base;
+    train_config.overseg.kind = OversegmenterKind::Organized;
+    train_config.ground.source = GroundSource::FloorLabels;
+    ExtractionReport report;
+    const auto samples = extractSamples(dataset, Segmenter(train_config, nullptr), report);
+    std::vector<std::size_t> all(samples.size());
+    for (std::size_t i = 0; i < all.size(); ++i) all[i] = i;
+    forest = std::make_shared<const RandomForest>(
+        RandomForest::train(makeTrainingSet(samples, all), train_config.forest));
+  }
+
+  std::vector<Column> columns;
+  for (auto kind : {OversegmenterKind::PclSupervoxels, OversegmenterKind::Organized}) {
+    SegmenterConfig config = base;
+    config.overseg.kind = kind;
+    const Segmenter segmenter(config, forest);
+    Column column;
+    column.name = kind == OversegmenterKind::PclSupervoxels ? "PCL supervoxels" : "organized";
+    for (int r = 0; r < repeat; ++r) {
+      for (const auto& f : frames) {
+        const LabelledFrame out = segmenter.process(f.frame);
+        if (!out.segmented.prepared.ground) continue;  // no plane: not a full pipeline run
+        record(column, out.timings, out.segmented.segmentation.segments.size());
+      }
+    }
+    columns.push_back(std::move(column));
+  }
+
+  std::printf("Median wall time per stage (ms) over %zu frames x %d, %s, one thread, "
+              "forest %zu trees\n\n",
+              frames.size(), repeat, data.c_str(), forest->trees().size());
+  std::printf("| stage |");
+  for (const auto& c : columns) std::printf(" %s |", c.name.c_str());
+  std::printf("\n|---|");
+  for (std::size_t i = 0; i < columns.size(); ++i) std::printf("---:|");
+  std::printf("\n");
+  for (const char* stage : {"cloud", "normals", "ground", "oversegmentation", "features", "forest",
+                            "mrf", "labels", "tables", "total"}) {
+    std::printf("| %s |", stage);
+    for (const auto& c : columns) std::printf(" %.1f |", median(c.stage_ms.at(stage)));
+    std::printf("\n");
+  }
+  std::printf("| segments (median) |");
+  for (const auto& c : columns) std::printf(" %.0f |", median(c.segments));
+  std::printf("\n| frames timed |");
+  for (const auto& c : columns) std::printf(" %zu |", c.segments.size());
+  std::printf("\n");
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  try {
+    return run(argc, argv);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "stage_times: error: %s\n", e.what());
+    return 1;
+  }
+}

@@ -1,0 +1,389 @@
+// Unit tests of the daemon's concurrency building blocks: the bounded queue
+// and its drop policy, the reorder buffer, stages in sequential and threaded
+// mode, the status statistics, the watchdog gate and the daemon config.
+// No timed assertions: threads are synchronised with latches/flags only.
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <chrono>
+#include <condition_variable>
+#include <mutex>
+#include <random>
+#include <thread>
+
+#include "findmug/daemon/bounded_queue.hpp"
+#include "findmug/daemon/daemon_config.hpp"
+#include "findmug/daemon/reorder_buffer.hpp"
+#include "findmug/daemon/service.hpp"
+#include "findmug/daemon/stage.hpp"
+#include "findmug/daemon/stats.hpp"
+#include "findmug/error.hpp"
+
+namespace findmug::daemon {
+namespace {
+
+using namespace std::chrono_literals;
+
+TEST(BoundedQueue, DropOldestKeepsTheNewestAndCountsDrops) {
+  BoundedQueue<int> q(3, DropPolicy::DropOldest);
+  for (int i = 0; i < 3; ++i) EXPECT_EQ(q.push(i), PushResult::Accepted);
+  std::optional<int> evicted;
+  EXPECT_EQ(q.push(3, &evicted), PushResult::AcceptedDroppedOldest);
+  ASSERT_TRUE(evicted);
+  EXPECT_EQ(*evicted, 0);
+  EXPECT_EQ(q.push(4), PushResult::AcceptedDroppedOldest);
+  EXPECT_EQ(q.droppedCount(), 2u);
+  EXPECT_EQ(q.size(), 3u);
+  // The survivors are the newest three, in order, with consecutive tickets.
+  for (int expected = 2, ticket = 0; expected <= 4; ++expected, ++ticket) {
+    auto p = q.pop();
+    ASSERT_TRUE(p);
+    EXPECT_EQ(p->value, expected);
+    EXPECT_EQ(p->ticket, static_cast<std::uint64_t>(ticket));
+  }
+}
+
+TEST(BoundedQueue, CloseDrainsThenEnds) {
+  BoundedQueue<int> q(2, DropPolicy::DropOldest);
+  q.push(1);
+  q.close();
+  EXPECT_EQ(q.push(2), PushResult::Closed);
+  auto p = q.pop();
+  ASSERT_TRUE(p);
+  EXPECT_EQ(p->value, 1);
+  EXPECT_FALSE(q.pop());  // closed and empty: returns instead of blocking
+}
+
+TEST(BoundedQueue, ClearCountsDiscardedItemsAsDropped) {
+  BoundedQueue<int> q(4, DropPolicy::DropOldest);
+  q.push(1);
+  q.push(2);
+  EXPECT_EQ(q.clear(), 2u);
+  EXPECT_EQ(q.droppedCount(), 2u);
+  EXPECT_EQ(q.size(), 0u);
+}
+
+TEST(BoundedQueue, BlockPolicyWaitsForRoomInsteadOfDropping) {
+  BoundedQueue<int> q(1, DropPolicy::Block);
+  q.push(1);
+  std::atomic<bool> pushed{false};
+  std::thread producer([&] {
+    q.push(2);  // must wait until the consumer pops
+    pushed = true;
+  });
+  // The producer cannot finish while the queue is full; pop releases it.
+  auto first = q.pop();
+  producer.join();
+  EXPECT_TRUE(pushed);
+  ASSERT_TRUE(first);
+  EXPECT_EQ(first->value, 1);
+  auto second = q.pop();
+  ASSERT_TRUE(second);
+  EXPECT_EQ(second->value, 2);
+  EXPECT_EQ(q.droppedCount(), 0u);
+}
+
+TEST(BoundedQueue, CloseWakesABlockedProducer) {
+  BoundedQueue<int> q(1, DropPolicy::Block);
+  q.push(1);
+  PushResult result = PushResult::Accepted;
+  std::thread producer([&] { result = q.push(2); });
+  q.close();
+  producer.join();
+  EXPECT_EQ(result, PushResult::Closed);
+}
+
+TEST(BoundedQueue, ZeroCapacityIsRejected) {
+  EXPECT_THROW(BoundedQueue<int>(0, DropPolicy::Block), std::invalid_argument);
+}
+
+TEST(ReorderBuffer, ReleasesInTicketOrderAndSkipsTombstones) {
+  ReorderBuffer<int> r;
+  r.insert(2, 20);
+  EXPECT_TRUE(r.release().empty());  // 0 and 1 still missing
+  r.insert(1, std::nullopt);         // ticket 1 failed
+  EXPECT_TRUE(r.release().empty());
+  r.insert(0, 0);
+  EXPECT_EQ(r.release(), (std::vector<int>{0, 20}));
+  EXPECT_EQ(r.nextTicket(), 3u);
+  EXPECT_THROW(r.insert(1, 5), std::logic_error);  // already delivered
+}
+
+TEST(Stage, SequentialRunsInlineAndInOrder) {
+  std::vector<int> out;
+  std::vector<std::string> errors;
+  Stage<int, int> stage(
+      {"double", ExecutionMode::Sequential, 1, 2},
+      [](int& x) -> std::optional<int> {
+        if (x == 3) throw Error("three is bad");
+        if (x == 4) return std::nullopt;
+        return 2 * x;
+      },
+      [&](int&& y) { out.push_back(y); }, {}, [&](const std::string& e) { errors.push_back(e); });
+  for (int i = 0; i < 6; ++i) EXPECT_TRUE(stage.push(i));
+  // No threads: results are there as soon as push returns.
+  EXPECT_EQ(out, (std::vector<int>{0, 2, 4, 10}));
+  ASSERT_EQ(errors.size(), 1u);
+  EXPECT_NE(errors[0].find("double: three is bad"), std::string::npos);
+  const StageStats s = stage.stats();
+  EXPECT_EQ(s.completed, 4u);
+  EXPECT_EQ(s.failed, 2u);
+  EXPECT_EQ(s.dropped, 0u);
+  EXPECT_EQ(s.latency.samples, 6u);
+  stage.stop(StopMode::Drain);
+  EXPECT_FALSE(stage.push(7));
+}
+
+TEST(Stage, ParallelWorkersPublishInInputOrder) {
+  // Random per-item work so that workers finish out of order; the block
+  // policy makes sure nothing is dropped and every item must come out.
+  constexpr int kItems = 200;
+  std::mutex m;
+  std::vector<int> out;
+  std::atomic<int> concurrent{0}, max_concurrent{0};
+  Stage<int, int> stage(
+      {"work", ExecutionMode::Threaded, 4, 8, DropPolicy::Block},
+      [&](int& x) -> std::optional<int> {
+        const int now = ++concurrent;
+        int seen = max_concurrent.load();
+        while (now > seen && !max_concurrent.compare_exchange_weak(seen, now)) {
+        }
+        std::mt19937 rng(static_cast<unsigned>(x));
+        std::this_thread::sleep_for(std::chrono::microseconds(rng() % 2000));
+        --concurrent;
+        if (x % 17 == 5) return std::nullopt;  // some items yield nothing
+        return x;
+      },
+      [&](int&& y) {
+        std::lock_guard lock(m);
+        out.push_back(y);
+      });
+  stage.start();
+  for (int i = 0; i < kItems; ++i) ASSERT_TRUE(stage.push(i));
+  stage.stop(StopMode::Drain);
+  std::vector<int> expected;
+  for (int i = 0; i < kItems; ++i) {
+    if (i % 17 != 5) expected.push_back(i);
+  }
+  EXPECT_EQ(out, expected);
+  EXPECT_GT(max_concurrent.load(), 1) << "the workers never overlapped";
+  EXPECT_EQ(stage.stats().in_flight, 0u);
+}
+
+TEST(Stage, SlowWorkerMakesTheQueueDropTheOldestItems) {
+  // The worker is held on item 0 until all items have been offered, so the
+  // queue (capacity 2) must keep only the two newest.
+  std::mutex m;
+  std::condition_variable cv;
+  bool entered = false, release = false;
+  std::vector<int> out;
+  std::vector<int> dropped;
+  Stage<int, int> stage(
+      {"slow", ExecutionMode::Threaded, 1, 2, DropPolicy::DropOldest},
+      [&](int& x) -> std::optional<int> {
+        std::unique_lock lock(m);
+        entered = true;
+        cv.notify_all();
+        cv.wait(lock, [&] { return release; });
+        return x;
+      },
+      [&](int&& y) { out.push_back(y); }, [&](const int& d) { dropped.push_back(d); });
+  stage.start();
+  stage.push(0);
+  {
+    std::unique_lock lock(m);
+    cv.wait(lock, [&] { return entered; });
+  }
+  for (int i = 1; i < 10; ++i) stage.push(i);
+  EXPECT_EQ(stage.stats().queue_depth, 2u);
+  EXPECT_EQ(stage.stats().in_flight, 1u);
+  {
+    std::lock_guard lock(m);
+    release = true;
+  }
+  cv.notify_all();
+  stage.stop(StopMode::Drain);
+  EXPECT_EQ(out, (std::vector<int>{0, 8, 9}));
+  EXPECT_EQ(dropped, (std::vector<int>{1, 2, 3, 4, 5, 6, 7}));
+  EXPECT_EQ(stage.stats().dropped, 7u);
+}
+
+TEST(Stage, DiscardOnStopDropsQueuedItemsButFinishesTheOneInFlight) {
+  std::mutex m;
+  std::condition_variable cv;
+  bool entered = false, release = false;
+  std::vector<int> out;
+  Stage<int, int> stage(
+      {"slow", ExecutionMode::Threaded, 1, 4, DropPolicy::DropOldest},
+      [&](int& x) -> std::optional<int> {
+        std::unique_lock lock(m);
+        entered = true;
+        cv.notify_all();
+        cv.wait(lock, [&] { return release; });
+        return x;
+      },
+      [&](int&& y) { out.push_back(y); });
+  stage.start();
+  stage.push(0);
+  {
+    std::unique_lock lock(m);
+    cv.wait(lock, [&] { return entered; });
+  }
+  stage.push(1);
+  stage.push(2);
+  std::thread stopper([&] { stage.stop(StopMode::Discard); });
+  // stop() clears the queue before joining; wait for that, then let item 0 finish.
+  while (stage.stats().queue_depth != 0) std::this_thread::yield();
+  {
+    std::lock_guard lock(m);
+    release = true;
+  }
+  cv.notify_all();
+  stopper.join();
+  EXPECT_EQ(out, (std::vector<int>{0}));
+  EXPECT_EQ(stage.stats().dropped, 2u);
+}
+
+TEST(Stage, TickRunsOnTheWorkerThread) {
+  std::atomic<int> ticks{0};
+  std::thread::id worker_id, tick_id;
+  std::mutex m;
+  Stage<int, int> stage(
+      {"tick", ExecutionMode::Threaded, 1, 2, DropPolicy::Block, 10s, 1ms},
+      [&](int& x) -> std::optional<int> {
+        std::lock_guard lock(m);
+        worker_id = std::this_thread::get_id();
+        return x;
+      },
+      [](int&&) {}, {}, {},
+      [&] {
+        std::lock_guard lock(m);
+        tick_id = std::this_thread::get_id();
+        ++ticks;
+      });
+  stage.start();
+  stage.push(1);
+  while (ticks.load() < 3) std::this_thread::sleep_for(1ms);
+  stage.stop(StopMode::Drain);
+  std::lock_guard lock(m);
+  EXPECT_EQ(worker_id, tick_id);
+  EXPECT_THROW((Stage<int, int>({"bad", ExecutionMode::Threaded, 2, 2}, [](int& x) { return std::optional<int>(x); },
+                                [](int&&) {}, {}, {}, [] {})),
+               std::invalid_argument);
+}
+
+TEST(LatencyWindow, NearestRankPercentilesOverTheWindow) {
+  using Clock = std::chrono::steady_clock;
+  const auto t0 = Clock::time_point{} + 100s;
+  LatencyWindow w(10s);
+  EXPECT_EQ(w.summary(t0).samples, 0u);
+  for (int i = 1; i <= 100; ++i) w.add(i, t0);
+  LatencySummary s = w.summary(t0);
+  EXPECT_EQ(s.samples, 100u);
+  EXPECT_DOUBLE_EQ(s.p50_ms, 50);
+  EXPECT_DOUBLE_EQ(s.p95_ms, 95);
+  EXPECT_DOUBLE_EQ(s.max_ms, 100);
+  // Ten seconds later a new sample is all that is left in the window.
+  w.add(7, t0 + 11s);
+  s = w.summary(t0 + 11s);
+  EXPECT_EQ(s.samples, 1u);
+  EXPECT_DOUBLE_EQ(s.max_ms, 7);
+}
+
+TEST(RateMeter, SteadyStreamAndDecayAfterItStops) {
+  using Clock = std::chrono::steady_clock;
+  const auto t0 = Clock::time_point{} + 100s;
+  RateMeter r(100, 10s);
+  for (int i = 0; i <= 20; ++i) r.tick(t0 + i * 250ms);  // 4 Hz for 5 s
+  EXPECT_NEAR(r.rate(t0 + 5s), 4.0, 1e-9);
+  EXPECT_LT(r.rate(t0 + 9s), 3.0);       // stopped: decays
+  EXPECT_EQ(r.rate(t0 + 30s), 0.0);      // beyond the horizon
+}
+
+TEST(WatchdogGate, PingsWhileFramesProgressOrThePipelineIsIdle) {
+  using Clock = std::chrono::steady_clock;
+  const auto t0 = Clock::time_point{} + 100s;
+  WatchdogGate gate(5s);
+  ProgressSnapshot p;
+  p.source_heartbeat = t0;
+  EXPECT_TRUE(gate.healthy(p, t0));
+  // Idle for a long time (nothing pending) with a live source: still healthy.
+  p.source_heartbeat = t0 + 20s;
+  EXPECT_TRUE(gate.healthy(p, t0 + 20s));
+  // Frames pending and completing: healthy.
+  p.frames_pending = 2;
+  p.frames_completed = 1;
+  EXPECT_TRUE(gate.healthy(p, t0 + 21s));
+  // Frames pending but nothing completes for longer than the stall limit:
+  // no ping, even though the source keeps delivering.
+  p.source_heartbeat = t0 + 25s;
+  EXPECT_TRUE(gate.healthy(p, t0 + 25s));
+  p.source_heartbeat = t0 + 27s;
+  EXPECT_FALSE(gate.healthy(p, t0 + 27s));
+  EXPECT_NE(gate.reason().find("pending"), std::string::npos);
+  // Progress resumes.
+  p.frames_completed = 2;
+  EXPECT_TRUE(gate.healthy(p, t0 + 28s));
+  // A source thread that stopped coming round is unhealthy.
+  p.frames_pending = 0;
+  EXPECT_FALSE(gate.healthy(p, t0 + 40s));
+  EXPECT_NE(gate.reason().find("source"), std::string::npos);
+}
+
+TEST(DaemonConfig, DefaultsAreWrittenBackAndValuesValidated) {
+  Config config = parseConfig("daemon:\n  workers: 3\n  queue_capacity: 4\n", "test.yaml");
+  const DaemonConfig d = resolveDaemonConfig(config);
+  EXPECT_EQ(d.workers, 3);
+  EXPECT_EQ(d.effectiveWorkers(), 3);
+  EXPECT_EQ(d.queue_capacity, 4);
+  EXPECT_EQ(config.extra.at("daemon.status_period_s"), "1");
+  EXPECT_EQ(config.extra.at("daemon.source"), "openni2");
+  // The effective config dump shows the daemon section with every key.
+  EXPECT_NE(dumpConfig(config).find("publish_confidence: true"), std::string::npos);
+}
+
+TEST(DaemonConfig, BadValuesAndUnknownKeysNameTheKey) {
+  auto error_of = [](const std::string& yaml) -> std::string {
+    try {
+      Config c = parseConfig(yaml, "test.yaml");
+      resolveDaemonConfig(c);
+    } catch (const Error& e) {
+      return e.what();
+    }
+    return "";
+  };
+  EXPECT_NE(error_of("daemon:\n  workers: -1\n").find("daemon.workers"), std::string::npos);
+  EXPECT_NE(error_of("daemon:\n  queue_capacity: 0\n").find("daemon.queue_capacity"),
+            std::string::npos);
+  EXPECT_NE(error_of("daemon:\n  status_period_s: fast\n").find("daemon.status_period_s"),
+            std::string::npos);
+  EXPECT_NE(error_of("daemon:\n  publish_tables: maybe\n").find("daemon.publish_tables"),
+            std::string::npos);
+  EXPECT_NE(error_of("daemon:\n  channel_suffix: a-b\n").find("daemon.channel_suffix"),
+            std::string::npos);
+  EXPECT_NE(error_of("daemon:\n  lcm_url: nowhere\n").find("daemon.lcm_url"), std::string::npos);
+  EXPECT_NE(error_of("daemon:\n  wokers: 2\n").find("daemon.wokers"), std::string::npos);
+  EXPECT_EQ(error_of("daemon:\n  workers: 2\nclients:\n  viewer_scale: 2\n"), "");
+}
+
+TEST(DaemonConfig, CommandLineShortcutsBecomeOverrides) {
+  const CommandLine cl = parseCommandLine(
+      {"--config", "/x.yaml", "--workers", "2", "--set", "mrf.lambda=2", "--check-config"});
+  EXPECT_EQ(cl.config_path, "/x.yaml");
+  EXPECT_EQ(cl.overrides, (std::vector<std::string>{"daemon.workers=2", "mrf.lambda=2"}));
+  EXPECT_TRUE(cl.check_config);
+  EXPECT_THROW(parseCommandLine({"--frobnicate"}), Error);
+  EXPECT_THROW(parseCommandLine({"--config"}), Error);
+}
+
+TEST(DaemonConfig, LcmDefaultUrlIsUsedWhenTheConfigLeavesItEmpty) {
+  DaemonConfig d;
+  setenv("LCM_DEFAULT_URL", "memq://", 1);
+  EXPECT_EQ(effectiveLcmUrl(d), "memq://");
+  d.lcm_url = "file:///tmp/x.lcmlog?mode=w";
+  EXPECT_EQ(effectiveLcmUrl(d), "file:///tmp/x.lcmlog?mode=w");
+  unsetenv("LCM_DEFAULT_URL");
+}
+
+}  // namespace
+}  // namespace findmug::daemon

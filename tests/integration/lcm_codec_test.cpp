@@ -1,0 +1,737 @@
+// LCM codecs: round trips for every compression, and every class of corrupt
+// message (truncated at many lengths, flipped bytes, wrong size fields, absurd
+// dimensions, unknown compression ids, corrupt zlib / JPEG / PNG, wrong type)
+// must end in findmug::Error — never a crash, a huge allocation, or another
+// exception type.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <cstring>
+#include <random>
+
+#include "findmug/dataset.hpp"
+#include "findmug/error.hpp"
+#include "findmug/image_io.hpp"
+#include "findmug/io/channels.hpp"
+#include "findmug/io/frame_source.hpp"
+#include "findmug/io/lcm_codec.hpp"
+#include "test_data.hpp"
+
+namespace findmug::io {
+namespace {
+
+using Bytes = std::vector<std::uint8_t>;
+
+// A frame with structure (a slanted plane, a box, holes) and a smooth colour
+// gradient, so that compression behaves as on real data.
+RgbdFrame makeFrame(int width = 64, int height = 48) {
+  RgbdFrame f;
+  f.width = width;
+  f.height = height;
+  f.intrinsics = {520.5, 519.25, 31.5, 23.75};
+  f.extrinsics = CameraExtrinsics{1.1, 0.35, -0.02};
+  f.utime = 1700000000123456ULL;
+  f.seq = 42;
+  f.source = "synthetic";
+  std::mt19937 rng(7);
+  for (int v = 0; v < height; ++v) {
+    for (int u = 0; u < width; ++u) {
+      std::uint16_t d = static_cast<std::uint16_t>(1500 + 20 * v + 3 * u);
+      if (u > width / 3 && u < width / 2 && v > height / 3) d = 900;
+      if ((u * 7 + v * 13) % 29 == 0) d = 0;  // holes
+      if (v == height - 1) d = 65535;           // extreme value survives
+      f.depth_mm.push_back(d);
+      f.rgb.push_back(Rgb8{static_cast<std::uint8_t>(u * 255 / width),
+                           static_cast<std::uint8_t>(v * 255 / height),
+                           static_cast<std::uint8_t>(128 + (rng() % 8))});
+    }
+  }
+  return f;
+}
+
+double meanAbsColourError(const std::vector<Rgb8>& a, const std::vector<Rgb8>& b) {
+  EXPECT_EQ(a.size(), b.size());
+  double sum = 0;
+  for (std::size_t i = 0; i < a.size() && i < b.size(); ++i) {
+    sum += std::abs(a[i].r - b[i].r) + std::abs(a[i].g - b[i].g) + std::abs(a[i].b - b[i].b);
+  }
+  return sum / (3.0 * a.size());
+}
+
+// Runs `decode` and reports how it ended: "ok", "error: <message>" for
+// findmug::Error, "OTHER: ..." for any other exception (a test failure).
+template <typename F>
+std::string outcome(F&& decode) {
+  try {
+    decode();
+    return "ok";
+  } catch (const Error& e) {
+    return std::string("error: ") + e.what();
+  } catch (const std::exception& e) {
+    return std::string("OTHER: ") + e.what();
+  }
+}
+
+template <typename F>
+void expectError(F&& decode, const std::string& must_contain) {
+  const std::string result = outcome(decode);
+  ASSERT_EQ(result.rfind("error: ", 0), 0u) << result;
+  EXPECT_NE(result.find(must_contain), std::string::npos)
+      << "message '" << result << "' lacks '" << must_contain << "'";
+}
+
+void putBe32(Bytes& b, std::size_t offset, std::int32_t value) {
+  const auto v = static_cast<std::uint32_t>(value);
+  b[offset] = static_cast<std::uint8_t>(v >> 24);
+  b[offset + 1] = static_cast<std::uint8_t>(v >> 16);
+  b[offset + 2] = static_cast<std::uint8_t>(v >> 8);
+  b[offset + 3] = static_cast<std::uint8_t>(v);
+}
+
+// Byte offsets in an encoded rgbd_frame_t (layout of rgbd_frame_t.lcm).
+struct RgbdOffsets {
+  std::size_t source_len, width, height, fx, depth_compression, depth_size, depth_data,
+      color_compression, color_size, color_data;
+};
+RgbdOffsets rgbdOffsets(const rgbd_frame_t& m) {
+  RgbdOffsets o{};
+  o.source_len = 8 + 8 + 8;
+  o.width = o.source_len + 4 + m.source.size() + 1;
+  o.height = o.width + 4;
+  o.fx = o.height + 4;
+  o.depth_compression = o.fx + 32 + 1 + 24;
+  o.depth_size = o.depth_compression + 1;
+  o.depth_data = o.depth_size + 4;
+  o.color_compression = o.depth_data + static_cast<std::size_t>(m.depth_size);
+  o.color_size = o.color_compression + 1;
+  o.color_data = o.color_size + 4;
+  return o;
+}
+
+// ---- channels ---------------------------------------------------------------------
+
+TEST(Channels, SuffixIsAppendedWithUnderscore) {
+  EXPECT_EQ(channelName(kRgbdChannel, ""), "FINDMUG_RGBD");
+  EXPECT_EQ(channelName(kLabelsChannel, "KITCHEN"), "FINDMUG_LABELS_KITCHEN");
+  EXPECT_EQ(channelName(kStatusChannel, "robot2"), "FINDMUG_STATUS_robot2");
+}
+
+TEST(Channels, BadSuffixIsRejected) {
+  expectError([] { channelName(kTablesChannel, "A B"); }, "A B");
+  expectError([] { channelName(kTablesChannel, "_X"); }, "_X");
+  expectError([] { channelName(kTablesChannel, "X/Y"); }, "X/Y");
+}
+
+// ---- RGB-D round trips -----------------------------------------------------------------
+
+struct Combo {
+  DepthCompression depth;
+  ColorCompression color;
+};
+
+class RgbdRoundTrip : public ::testing::TestWithParam<Combo> {};
+
+TEST_P(RgbdRoundTrip, BytesInFrameOut) {
+  const RgbdFrame in = makeFrame();
+  RgbdEncodeOptions opt;
+  opt.depth = GetParam().depth;
+  opt.color = GetParam().color;
+  const rgbd_frame_t msg = encodeRgbdFrame(in, opt);
+  EXPECT_EQ(msg.depth_compression, static_cast<std::int8_t>(opt.depth));
+  EXPECT_EQ(msg.color_compression, static_cast<std::int8_t>(opt.color));
+  const Bytes bytes = encodeMessage(msg);
+  const RgbdFrame out = decodeRgbdFrame(bytes.data(), bytes.size(), "FINDMUG_RGBD");
+
+  EXPECT_EQ(out.width, in.width);
+  EXPECT_EQ(out.height, in.height);
+  EXPECT_EQ(out.utime, in.utime);
+  EXPECT_EQ(out.seq, in.seq);
+  EXPECT_EQ(out.source, "FINDMUG_RGBD: synthetic");
+  EXPECT_EQ(out.intrinsics.fx, in.intrinsics.fx);
+  EXPECT_EQ(out.intrinsics.fy, in.intrinsics.fy);
+  EXPECT_EQ(out.intrinsics.cx, in.intrinsics.cx);
+  EXPECT_EQ(out.intrinsics.cy, in.intrinsics.cy);
+  ASSERT_TRUE(out.extrinsics.has_value());
+  EXPECT_EQ(out.extrinsics->height_m, 1.1);
+  EXPECT_EQ(out.extrinsics->pitch_rad, 0.35);
+  EXPECT_EQ(out.extrinsics->roll_rad, -0.02);
+  EXPECT_EQ(out.depth_mm, in.depth_mm);  // depth is always lossless
+  if (opt.color == ColorCompression::Jpeg) {
+    EXPECT_LT(meanAbsColourError(out.rgb, in.rgb), 3.0);
+    EXPECT_NE(out.rgb, in.rgb);  // it really went through JPEG
+  } else {
+    EXPECT_EQ(out.rgb, in.rgb);
+  }
+  if (opt.depth == DepthCompression::Zlib) {
+    EXPECT_LT(msg.depth_data.size(), in.depth_mm.size() * 2);
+  } else {
+    EXPECT_EQ(msg.depth_data.size(), in.depth_mm.size() * 2);
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(
+    AllCompressions, RgbdRoundTrip,
+    ::testing::Values(Combo{DepthCompression::None, ColorCompression::None},
+                      Combo{DepthCompression::None, ColorCompression::Jpeg},
+                      Combo{DepthCompression::None, ColorCompression::Png},
+                      Combo{DepthCompression::Zlib, ColorCompression::None},
+                      Combo{DepthCompression::Zlib, ColorCompression::Jpeg},
+                      Combo{DepthCompression::Zlib, ColorCompression::Png}));
+
+TEST(RgbdCodec, FrameWithoutExtrinsicsStaysWithout) {
+  RgbdFrame in = makeFrame();
+  in.extrinsics.reset();
+  const Bytes bytes = encodeMessage(encodeRgbdFrame(in));
+  EXPECT_FALSE(decodeRgbdFrame(bytes.data(), bytes.size(), "C").extrinsics.has_value());
+}
+
+TEST(RgbdCodec, DepthIsLittleEndianOnTheWire) {
+  RgbdFrame in = makeFrame(2, 1);
+  in.depth_mm = {0x1234, 0xabcd};
+  const rgbd_frame_t msg = encodeRgbdFrame(in, {DepthCompression::None, ColorCompression::None});
+  EXPECT_EQ(msg.depth_data, (Bytes{0x34, 0x12, 0xcd, 0xab}));
+}
+
+TEST(RgbdCodec, CompressionNamesParse) {
+  EXPECT_EQ(parseDepthCompression("zlib"), DepthCompression::Zlib);
+  EXPECT_EQ(parseDepthCompression("none"), DepthCompression::None);
+  EXPECT_EQ(parseColorCompression("jpeg"), ColorCompression::Jpeg);
+  EXPECT_EQ(parseColorCompression("png"), ColorCompression::Png);
+  expectError([] { parseColorCompression("webp"); }, "webp");
+  expectError([] { parseDepthCompression("lz4"); }, "lz4");
+}
+
+TEST(RgbdCodec, EncoderRefusesInvalidFrames) {
+  RgbdFrame f = makeFrame();
+  f.depth_mm.pop_back();
+  EXPECT_THROW(encodeRgbdFrame(f), Error);
+  f = makeFrame();
+  f.intrinsics.fx = std::nan("");
+  EXPECT_THROW(encodeRgbdFrame(f), Error);
+}
+
+TEST(RgbdCodec, RealNyuFrameThroughJpegAndPng) {
+  FINDMUG_REQUIRE_DATA(dir, "nyuv2_labeled");
+  const DatasetFolder folder(dir.string());
+  const RgbdFrame in = folder.load(0).frame;
+  const Bytes jpeg = encodeMessage(encodeRgbdFrame(in, {DepthCompression::Zlib, ColorCompression::Jpeg}));
+  const Bytes png = encodeMessage(encodeRgbdFrame(in, {DepthCompression::Zlib, ColorCompression::Png}));
+  const RgbdFrame from_jpeg = decodeRgbdFrame(jpeg.data(), jpeg.size(), "C");
+  const RgbdFrame from_png = decodeRgbdFrame(png.data(), png.size(), "C");
+  EXPECT_EQ(from_jpeg.depth_mm, in.depth_mm);
+  EXPECT_EQ(from_png.rgb, in.rgb);
+  EXPECT_LT(meanAbsColourError(from_jpeg.rgb, in.rgb), 4.0);
+  // A 640x480 frame must fit comfortably in a UDP-fragmented LCM message.
+  EXPECT_LT(jpeg.size(), 640u * 480u * 5u / 2u);
+}
+
+// ---- RGB-D corrupt messages ----------------------------------------------------------------
+
+Bytes encodedFrame(DepthCompression depth, ColorCompression color, int w = 16, int h = 12) {
+  RgbdEncodeOptions opt;
+  opt.depth = depth;
+  opt.color = color;
+  return encodeMessage(encodeRgbdFrame(makeFrame(w, h), opt));
+}
+
+TEST(RgbdCorrupt, TruncatedAtEveryLengthIsAnError) {
+  for (auto [depth, color] : {std::pair{DepthCompression::None, ColorCompression::None},
+                              std::pair{DepthCompression::Zlib, ColorCompression::Jpeg},
+                              std::pair{DepthCompression::Zlib, ColorCompression::Png}}) {
+    const Bytes full = encodedFrame(depth, color);
+    ASSERT_EQ(outcome([&] { decodeRgbdFrame(full.data(), full.size(), "C"); }), "ok");
+    for (std::size_t len = 0; len < full.size(); ++len) {
+      const std::string result = outcome([&] { decodeRgbdFrame(full.data(), len, "FINDMUG_RGBD"); });
+      ASSERT_EQ(result.rfind("error: FINDMUG_RGBD", 0), 0u) << "length " << len << ": " << result;
+    }
+  }
+}
+
+TEST(RgbdCorrupt, TrailingBytesAreAnError) {
+  Bytes b = encodedFrame(DepthCompression::Zlib, ColorCompression::Jpeg);
+  b.push_back(0);
+  expectError([&] { decodeRgbdFrame(b.data(), b.size(), "C"); }, "unexpected bytes");
+}
+
+TEST(RgbdCorrupt, FlippedBytesNeverCrash) {
+  // Flips anywhere: the result is a valid frame (a flip inside raw pixel data
+  // is undetectable) or a findmug::Error — nothing else.
+  std::mt19937 rng(1234);
+  int errors = 0;
+  for (auto [depth, color] : {std::pair{DepthCompression::None, ColorCompression::None},
+                              std::pair{DepthCompression::Zlib, ColorCompression::Jpeg},
+                              std::pair{DepthCompression::Zlib, ColorCompression::Png}}) {
+    const Bytes full = encodedFrame(depth, color);
+    for (int trial = 0; trial < 1500; ++trial) {
+      Bytes b = full;
+      const int flips = 1 + static_cast<int>(rng() % 3);
+      for (int k = 0; k < flips; ++k) b[rng() % b.size()] ^= static_cast<std::uint8_t>(1 + rng() % 255);
+      const std::string result = outcome([&] { decodeRgbdFrame(b.data(), b.size(), "C"); });
+      ASSERT_TRUE(result == "ok" || result.rfind("error: ", 0) == 0) << result;
+      errors += result != "ok";
+    }
+  }
+  EXPECT_GT(errors, 1500);  // most flips land in checked structure or compressed data
+}
+
+TEST(RgbdCorrupt, SizeFieldBeyondTheMessageIsRejectedBeforeAllocating) {
+  const Bytes full = encodedFrame(DepthCompression::Zlib, ColorCompression::Jpeg);
+  rgbd_frame_t msg = decodeMessage<rgbd_frame_t>(full.data(), full.size(), "C");
+  const RgbdOffsets o = rgbdOffsets(msg);
+  for (std::int32_t bad : {0x7fffffff, 2000000000, static_cast<std::int32_t>(full.size())}) {
+    Bytes b = full;
+    putBe32(b, o.depth_size, bad);
+    expectError([&] { decodeRgbdFrame(b.data(), b.size(), "FINDMUG_RGBD"); },
+                "FINDMUG_RGBD: rgbd_frame_t.depth_size");
+    b = full;
+    putBe32(b, o.color_size, bad);
+    expectError([&] { decodeRgbdFrame(b.data(), b.size(), "FINDMUG_RGBD"); }, "color_size");
+  }
+  Bytes b = full;
+  putBe32(b, o.depth_size, -5);
+  expectError([&] { decodeRgbdFrame(b.data(), b.size(), "C"); }, "negative count -5");
+  b = full;
+  putBe32(b, o.source_len, 0);
+  expectError([&] { decodeRgbdFrame(b.data(), b.size(), "C"); }, "rgbd_frame_t.source");
+  b = full;
+  putBe32(b, o.source_len, -1);
+  expectError([&] { decodeRgbdFrame(b.data(), b.size(), "C"); }, "rgbd_frame_t.source");
+  b = full;
+  putBe32(b, o.source_len, 1 << 30);
+  expectError([&] { decodeRgbdFrame(b.data(), b.size(), "C"); }, "rgbd_frame_t.source");
+}
+
+TEST(RgbdCorrupt, AbsurdOrMismatchedDimensions) {
+  const Bytes full = encodedFrame(DepthCompression::None, ColorCompression::None);
+  const RgbdOffsets o = rgbdOffsets(decodeMessage<rgbd_frame_t>(full.data(), full.size(), "C"));
+  for (std::int32_t w : {0, -16, 100000, 1 << 30}) {
+    Bytes b = full;
+    putBe32(b, o.width, w);
+    expectError([&] { decodeRgbdFrame(b.data(), b.size(), "FINDMUG_RGBD"); }, "absurd image size");
+  }
+  // Plausible but wrong: the raw depth no longer matches width*height.
+  Bytes b = full;
+  putBe32(b, o.width, 15);
+  expectError([&] { decodeRgbdFrame(b.data(), b.size(), "FINDMUG_RGBD"); },
+              "rgbd_frame_t.depth_data");
+  // Same with zlib and JPEG: inflated size and JPEG size disagree.
+  const Bytes zj = encodedFrame(DepthCompression::Zlib, ColorCompression::Jpeg);
+  const RgbdOffsets oz = rgbdOffsets(decodeMessage<rgbd_frame_t>(zj.data(), zj.size(), "C"));
+  b = zj;
+  putBe32(b, oz.height, 11);
+  expectError([&] { decodeRgbdFrame(b.data(), b.size(), "C"); }, "inflates to more than");
+  b = zj;
+  putBe32(b, oz.height, 13);
+  expectError([&] { decodeRgbdFrame(b.data(), b.size(), "C"); }, "zlib stream inflates to 384");
+}
+
+TEST(RgbdCorrupt, UnknownCompressionIds) {
+  const Bytes full = encodedFrame(DepthCompression::Zlib, ColorCompression::Jpeg);
+  const RgbdOffsets o = rgbdOffsets(decodeMessage<rgbd_frame_t>(full.data(), full.size(), "C"));
+  Bytes b = full;
+  b[o.depth_compression] = 7;
+  expectError([&] { decodeRgbdFrame(b.data(), b.size(), "C"); }, "depth_compression: unknown compression id 7");
+  b = full;
+  b[o.color_compression] = 0xff;
+  expectError([&] { decodeRgbdFrame(b.data(), b.size(), "C"); }, "color_compression: unknown compression id -1");
+}
+
+TEST(RgbdCorrupt, BadZlibStreams) {
+  RgbdFrame f = makeFrame(16, 12);
+  rgbd_frame_t msg = encodeRgbdFrame(f, {DepthCompression::Zlib, ColorCompression::None});
+  // Garbage instead of a zlib stream.
+  rgbd_frame_t bad = msg;
+  bad.depth_data.assign(40, 0x5a);
+  bad.depth_size = 40;
+  expectError([&] { decodeRgbdFrame(bad, "C"); }, "corrupt zlib stream");
+  // A damaged body (adler32 catches what inflate does not).
+  bad = msg;
+  bad.depth_data[bad.depth_data.size() / 2] ^= 0x10;
+  expectError([&] { decodeRgbdFrame(bad, "C"); }, "depth_data");
+  // A stream cut short.
+  bad = msg;
+  bad.depth_data.resize(bad.depth_data.size() - 6);
+  bad.depth_size = static_cast<std::int32_t>(bad.depth_data.size());
+  expectError([&] { decodeRgbdFrame(bad, "C"); }, "zlib");
+  // Bytes after the end of a complete stream.
+  bad = msg;
+  bad.depth_data.push_back(0);
+  bad.depth_size += 1;
+  expectError([&] { decodeRgbdFrame(bad, "C"); }, "after the end of the zlib stream");
+  // Size field and array disagree in an in-memory message.
+  bad = msg;
+  bad.depth_size += 3;
+  expectError([&] { decodeRgbdFrame(bad, "C"); }, "depth_size: size field says");
+}
+
+TEST(RgbdCorrupt, BadJpegAndPng) {
+  const RgbdFrame f = makeFrame(32, 24);
+  const rgbd_frame_t jpeg = encodeRgbdFrame(f, {DepthCompression::None, ColorCompression::Jpeg});
+  rgbd_frame_t bad = jpeg;
+  bad.color_data.resize(bad.color_data.size() / 2);  // truncated: libjpeg would grey-fill
+  bad.color_size = static_cast<std::int32_t>(bad.color_data.size());
+  expectError([&] { decodeRgbdFrame(bad, "FINDMUG_RGBD"); }, "rgbd_frame_t.color_data: bad JPEG");
+  bad = jpeg;
+  bad.color_data.assign(100, 0x11);
+  bad.color_size = 100;
+  expectError([&] { decodeRgbdFrame(bad, "C"); }, "bad JPEG");
+  bad = jpeg;
+  bad.color_data.clear();
+  bad.color_size = 0;
+  expectError([&] { decodeRgbdFrame(bad, "C"); }, "empty JPEG");
+  // A valid JPEG of another size.
+  bad = jpeg;
+  bad.color_data = encodeRgbdFrame(makeFrame(16, 24), {DepthCompression::None, ColorCompression::Jpeg}).color_data;
+  bad.color_size = static_cast<std::int32_t>(bad.color_data.size());
+  expectError([&] { decodeRgbdFrame(bad, "C"); }, "JPEG is 16x24, message says 32x24");
+
+  const rgbd_frame_t png = encodeRgbdFrame(f, {DepthCompression::None, ColorCompression::Png});
+  bad = png;
+  bad.color_data.resize(bad.color_data.size() - 20);
+  bad.color_size = static_cast<std::int32_t>(bad.color_data.size());
+  EXPECT_THROW(decodeRgbdFrame(bad, "C"), Error);
+  bad = png;
+  bad.color_data = encodeRgbdFrame(makeFrame(32, 12), {DepthCompression::None, ColorCompression::Png}).color_data;
+  bad.color_size = static_cast<std::int32_t>(bad.color_data.size());
+  expectError([&] { decodeRgbdFrame(bad, "C"); }, "PNG is 32x12");
+}
+
+TEST(RgbdCorrupt, BadValuesAreRejected) {
+  rgbd_frame_t msg = encodeRgbdFrame(makeFrame(16, 12));
+  rgbd_frame_t bad = msg;
+  bad.fx = std::nan("");
+  expectError([&] { decodeRgbdFrame(bad, "FINDMUG_RGBD"); }, "intrinsics");
+  bad = msg;
+  bad.fy = -3;
+  expectError([&] { decodeRgbdFrame(bad, "FINDMUG_RGBD"); }, "intrinsics");
+  bad = msg;
+  bad.height_m = 40.0;
+  expectError([&] { decodeRgbdFrame(bad, "FINDMUG_RGBD"); }, "extrinsics");
+  bad = msg;
+  bad.utime = -1;
+  expectError([&] { decodeRgbdFrame(bad, "FINDMUG_RGBD"); }, "utime");
+}
+
+TEST(RgbdCorrupt, OtherMessageTypeIsRejectedByHash) {
+  LabelImageMessage labels;
+  labels.image.width = 4;
+  labels.image.height = 2;
+  labels.image.labels.assign(8, 1);
+  const Bytes b = encodeMessage(encodeLabelImage(labels));
+  expectError([&] { decodeRgbdFrame(b.data(), b.size(), "FINDMUG_RGBD"); },
+              "FINDMUG_RGBD: not a findmug.rgbd_frame_t");
+}
+
+// ---- label images ------------------------------------------------------------------------------
+
+LabelImageMessage makeLabels(int w = 20, int h = 10, bool confidence = true) {
+  LabelImageMessage m;
+  m.utime = 123456789;
+  m.seq = 77;
+  m.latency_us = 81234;
+  m.image.width = w;
+  m.image.height = h;
+  for (int i = 0; i < w * h; ++i) {
+    m.image.labels.push_back(i % 11 == 0 ? kVoidLabel : static_cast<std::uint8_t>(i % kNumLabels));
+    if (confidence) m.image.confidence.push_back(i % 11 == 0 ? 0.0f : (i % 101) / 100.0f);
+  }
+  return m;
+}
+
+TEST(LabelCodec, RoundTripWithConfidence) {
+  const LabelImageMessage in = makeLabels();
+  const label_image_t msg = encodeLabelImage(in);
+  EXPECT_TRUE(msg.has_confidence);
+  EXPECT_EQ(msg.compression, label_image_t::COMPRESSION_ZLIB);
+  ASSERT_EQ(msg.label_names.size(), static_cast<std::size_t>(kNumLabels));
+  EXPECT_EQ(msg.label_names[4], "table");
+  const Bytes b = encodeMessage(msg);
+  const LabelImageMessage out = decodeLabelImage(b.data(), b.size(), "FINDMUG_LABELS");
+  EXPECT_EQ(out.utime, in.utime);
+  EXPECT_EQ(out.seq, in.seq);
+  EXPECT_EQ(out.latency_us, in.latency_us);
+  EXPECT_EQ(out.image.width, 20);
+  EXPECT_EQ(out.image.labels, in.image.labels);
+  ASSERT_EQ(out.image.confidence.size(), in.image.confidence.size());
+  for (std::size_t i = 0; i < in.image.confidence.size(); ++i) {
+    EXPECT_NEAR(out.image.confidence[i], in.image.confidence[i], 0.5 / 255 + 1e-6) << i;
+  }
+}
+
+TEST(LabelCodec, RoundTripWithoutConfidence) {
+  LabelImageMessage in = makeLabels();
+  const label_image_t msg = encodeLabelImage(in, /*with_confidence=*/false);
+  EXPECT_FALSE(msg.has_confidence);
+  EXPECT_EQ(msg.confidence_size, 0);
+  const LabelImageMessage out = decodeLabelImage(msg, "C");
+  EXPECT_TRUE(out.image.confidence.empty());
+  EXPECT_EQ(out.image.labels, in.image.labels);
+  // Uncompressed labels are accepted too.
+  label_image_t raw = msg;
+  raw.compression = label_image_t::COMPRESSION_NONE;
+  raw.labels_data = in.image.labels;
+  raw.labels_size = static_cast<std::int32_t>(raw.labels_data.size());
+  EXPECT_EQ(decodeLabelImage(raw, "C").image.labels, in.image.labels);
+}
+
+TEST(LabelCodec, EncoderRefusesBadInput) {
+  LabelImageMessage m = makeLabels();
+  m.image.labels[3] = 9;
+  expectError([&] { encodeLabelImage(m); }, "label id 9");
+  m = makeLabels();
+  m.image.confidence[5] = 1.5f;
+  expectError([&] { encodeLabelImage(m); }, "confidence");
+  m = makeLabels();
+  m.image.labels.pop_back();
+  EXPECT_THROW(encodeLabelImage(m), Error);
+}
+
+TEST(LabelCorrupt, EveryClass) {
+  const LabelImageMessage in = makeLabels();
+  const label_image_t good = encodeLabelImage(in);
+  const Bytes full = encodeMessage(good);
+  for (std::size_t len = 0; len < full.size(); ++len) {
+    const std::string r = outcome([&] { decodeLabelImage(full.data(), len, "FINDMUG_LABELS"); });
+    ASSERT_EQ(r.rfind("error: FINDMUG_LABELS", 0), 0u) << len << ": " << r;
+  }
+  std::mt19937 rng(99);
+  for (int trial = 0; trial < 2000; ++trial) {
+    Bytes b = full;
+    b[rng() % b.size()] ^= static_cast<std::uint8_t>(1 + rng() % 255);
+    const std::string r = outcome([&] { decodeLabelImage(b.data(), b.size(), "C"); });
+    ASSERT_TRUE(r == "ok" || r.rfind("error: ", 0) == 0) << r;
+  }
+  label_image_t bad = good;
+  bad.label_names[4] = "desk";
+  expectError([&] { decodeLabelImage(bad, "C"); }, "id 4 is 'desk', expected 'table'");
+  bad = good;
+  bad.num_labels = 7;
+  bad.label_names.pop_back();
+  expectError([&] { decodeLabelImage(bad, "C"); }, "num_labels");
+  bad = good;
+  bad.width = 5000;
+  expectError([&] { decodeLabelImage(bad, "C"); }, "absurd image size");
+  bad = good;
+  bad.width = 19;
+  expectError([&] { decodeLabelImage(bad, "C"); }, "labels_data");
+  bad = good;
+  bad.compression = 3;
+  expectError([&] { decodeLabelImage(bad, "C"); }, "unknown compression id 3");
+  bad = good;
+  bad.has_confidence = false;
+  expectError([&] { decodeLabelImage(bad, "C"); }, "has_confidence is false");
+  bad = good;
+  bad.confidence_data.assign(30, 0x78);
+  bad.confidence_size = 30;
+  expectError([&] { decodeLabelImage(bad, "C"); }, "confidence_data");
+  bad = good;
+  bad.latency_us = -4;
+  expectError([&] { decodeLabelImage(bad, "C"); }, "latency_us");
+  // An id outside the label set inside a valid zlib stream.
+  bad = good;
+  std::vector<std::uint8_t> labels = in.image.labels;
+  labels[17] = 42;
+  bad.compression = label_image_t::COMPRESSION_NONE;
+  bad.labels_data = labels;
+  bad.labels_size = static_cast<std::int32_t>(labels.size());
+  bad.has_confidence = false;
+  bad.confidence_data.clear();
+  bad.confidence_size = 0;
+  expectError([&] { decodeLabelImage(bad, "C"); }, "pixel 17 has label id 42");
+}
+
+// ---- tables --------------------------------------------------------------------------------------
+
+TablesMessage makeTables() {
+  TablesMessage m;
+  m.utime = 5550001;
+  m.seq = 9;
+  TableCluster t;
+  t.id = 0;
+  t.centroid = {1.5f, 0.25f, 0.74f};
+  t.top_height = 0.75f;
+  t.major_axis = Eigen::Vector2f(0.6f, 0.8f);
+  t.minor_axis = Eigen::Vector2f(-0.8f, 0.6f);
+  t.extents = {0.6f, 0.4f};
+  t.hull = {{1.0f, 0.0f}, {2.0f, 0.0f}, {2.0f, 0.5f}, {1.0f, 0.5f}};
+  t.point_count = 4321;
+  t.mean_confidence = 0.8125f;
+  SearchPosition a;
+  a.xy = {0.5f, 0.25f};
+  a.yaw = 0.0f;
+  SearchPosition b;
+  b.xy = {2.5f, 0.25f};
+  b.yaw = static_cast<float>(M_PI);
+  b.reachable = false;
+  b.reason = "obstacle within robot radius";
+  t.search_positions = {a, b};
+  m.tables.push_back(t);
+  TableCluster t2 = t;
+  t2.id = 1;
+  t2.hull.clear();
+  t2.search_positions.clear();
+  m.tables.push_back(t2);
+  return m;
+}
+
+TEST(TablesCodec, RoundTripInBaseFrame) {
+  const TablesMessage in = makeTables();
+  const Bytes b = encodeMessage(encodeTables(in));
+  const TablesMessage out = decodeTables(b.data(), b.size(), "FINDMUG_TABLES");
+  EXPECT_EQ(out.utime, in.utime);
+  EXPECT_EQ(out.seq, in.seq);
+  EXPECT_FALSE(out.map_pose.has_value());
+  EXPECT_TRUE(out.map_tables.empty());
+  ASSERT_EQ(out.tables.size(), 2u);
+  const TableCluster& t = out.tables[0];
+  EXPECT_EQ(t.centroid, in.tables[0].centroid);
+  EXPECT_EQ(t.top_height, 0.75f);
+  EXPECT_EQ(t.major_axis, in.tables[0].major_axis);
+  EXPECT_EQ(t.minor_axis, in.tables[0].minor_axis);
+  EXPECT_EQ(t.extents, in.tables[0].extents);
+  EXPECT_EQ(t.hull, in.tables[0].hull);
+  EXPECT_EQ(t.point_count, 4321);
+  EXPECT_EQ(t.mean_confidence, 0.8125f);
+  ASSERT_EQ(t.search_positions.size(), 2u);
+  EXPECT_EQ(t.search_positions[1].xy, in.tables[0].search_positions[1].xy);
+  EXPECT_FALSE(t.search_positions[1].reachable);
+  EXPECT_EQ(t.search_positions[1].reason, "obstacle within robot radius");
+  EXPECT_EQ(out.tables[1].id, 1);
+  EXPECT_TRUE(out.tables[1].hull.empty());
+}
+
+TEST(TablesCodec, MapFrameCopiesFollowThePose) {
+  TablesMessage in = makeTables();
+  in.map_pose = RobotPose{777, 10.0, -2.0, M_PI / 2};  // robot at (10,-2) facing map +y
+  const Bytes b = encodeMessage(encodeTables(in));
+  const TablesMessage out = decodeTables(b.data(), b.size(), "C");
+  ASSERT_TRUE(out.map_pose.has_value());
+  EXPECT_EQ(out.map_pose->utime, 777u);
+  ASSERT_EQ(out.map_tables.size(), 2u);
+  const MapFrameTable& m = out.map_tables[0];
+  // Base (x forward, y left) rotated by +90 deg: (x, y) -> (-y, x), then shifted.
+  EXPECT_NEAR(m.centroid.x(), 10.0 - 0.25, 1e-6);
+  EXPECT_NEAR(m.centroid.y(), -2.0 + 1.5, 1e-6);
+  EXPECT_NEAR(m.centroid.z(), 0.74, 1e-6);
+  ASSERT_EQ(m.hull.size(), 4u);
+  EXPECT_NEAR(m.hull[1].x(), 10.0, 1e-6);
+  EXPECT_NEAR(m.hull[1].y(), 0.0, 1e-6);
+  ASSERT_EQ(m.search_positions.size(), 2u);
+  EXPECT_NEAR(m.search_positions[0].yaw, M_PI / 2, 1e-6);
+  // pi + pi/2 wraps to -pi/2.
+  EXPECT_NEAR(m.search_positions[1].yaw, -M_PI / 2, 1e-6);
+  EXPECT_FALSE(m.search_positions[1].reachable);
+  // Base-frame fields are untouched by the pose.
+  EXPECT_EQ(out.tables[0].centroid, in.tables[0].centroid);
+}
+
+TEST(TablesCorrupt, EveryClass) {
+  TablesMessage in = makeTables();
+  in.map_pose = RobotPose{1, 1.0, 2.0, 0.3};
+  const tables_t good = encodeTables(in);
+  const Bytes full = encodeMessage(good);
+  for (std::size_t len = 0; len < full.size(); ++len) {
+    const std::string r = outcome([&] { decodeTables(full.data(), len, "FINDMUG_TABLES"); });
+    ASSERT_EQ(r.rfind("error: FINDMUG_TABLES", 0), 0u) << len << ": " << r;
+  }
+  std::mt19937 rng(5);
+  for (int trial = 0; trial < 3000; ++trial) {
+    Bytes b = full;
+    b[rng() % b.size()] ^= static_cast<std::uint8_t>(1 + rng() % 255);
+    const std::string r = outcome([&] { decodeTables(b.data(), b.size(), "C"); });
+    ASSERT_TRUE(r == "ok" || r.rfind("error: ", 0) == 0) << r;
+  }
+  // num_tables huge: refused by the wire check, not by a failed allocation.
+  Bytes b = full;
+  putBe32(b, 8 + 8 + 8 + 1 + 32, 0x7fffffff);
+  expectError([&] { decodeTables(b.data(), b.size(), "C"); }, "num_tables");
+  tables_t bad = good;
+  bad.tables[0].major_axis[0] = 2.0;
+  expectError([&] { decodeTables(bad, "C"); }, "not unit vectors");
+  bad = good;
+  bad.tables[0].centroid[1] = std::nan("");
+  expectError([&] { decodeTables(bad, "C"); }, "tables[0]");
+  bad = good;
+  bad.tables[0].mean_confidence = 1.5f;
+  expectError([&] { decodeTables(bad, "C"); }, "mean_confidence");
+  bad = good;
+  bad.tables[0].hull_size = 3;
+  expectError([&] { decodeTables(bad, "C"); }, "tables[0].hull_size");
+  bad = good;
+  bad.tables[0].search_positions[0].yaw = INFINITY;
+  expectError([&] { decodeTables(bad, "C"); }, "search_positions");
+  bad = good;
+  bad.map_pose.x = std::nan("");
+  expectError([&] { decodeTables(bad, "C"); }, "map_pose");
+  bad = good;
+  bad.num_tables = 3;
+  expectError([&] { decodeTables(bad, "C"); }, "num_tables");
+}
+
+// ---- status and robot pose -----------------------------------------------------------------
+
+TEST(StatusAndPose, SourceStateValuesMatchStatusConstants) {
+  EXPECT_EQ(static_cast<int>(SourceState::Starting), status_t::SOURCE_STARTING);
+  EXPECT_EQ(static_cast<int>(SourceState::Running), status_t::SOURCE_RUNNING);
+  EXPECT_EQ(static_cast<int>(SourceState::Reconnecting), status_t::SOURCE_RECONNECTING);
+  EXPECT_EQ(static_cast<int>(SourceState::EndOfStream), status_t::SOURCE_END_OF_STREAM);
+  EXPECT_EQ(static_cast<int>(SourceState::Stopped), status_t::SOURCE_STOPPED);
+  EXPECT_EQ(static_cast<int>(SourceState::Failed), status_t::SOURCE_FAILED);
+  EXPECT_EQ(sourceStateName(SourceState::Reconnecting), "reconnecting");
+}
+
+TEST(StatusAndPose, RoundTripAndTruncation) {
+  status_t s;
+  s.utime = 99;
+  s.uptime_us = 1000000;
+  s.frames_received = 10;
+  s.frames_processed = 8;
+  s.frames_dropped = 1;
+  s.frames_rejected = 1;
+  s.window_s = 5.0;
+  s.input_fps = 30.0f;
+  s.output_fps = 4.0f;
+  s.num_stages = 2;
+  s.stage_names = {"cloud", "total"};
+  s.latency_p50_us = {1000, 200000};
+  s.latency_p95_us = {1500, 250000};
+  s.latency_max_us = {2000, 300000};
+  s.num_queues = 1;
+  s.queue_names = {"frames"};
+  s.queue_depths = {1};
+  s.queue_capacities = {2};
+  s.model_id = "forest.fmf";
+  s.source = "openni2";
+  s.source_state_name = "running";
+  s.source_state = status_t::SOURCE_RUNNING;
+  s.last_error = "";
+  s.last_error_utime = 0;
+  const Bytes b = encodeMessage(s);
+  const status_t out = decodeMessage<status_t>(b.data(), b.size(), "FINDMUG_STATUS");
+  EXPECT_EQ(out.stage_names, s.stage_names);
+  EXPECT_EQ(out.latency_p95_us, s.latency_p95_us);
+  EXPECT_EQ(out.queue_capacities, s.queue_capacities);
+  EXPECT_EQ(out.model_id, "forest.fmf");
+  EXPECT_EQ(out.source_state, status_t::SOURCE_RUNNING);
+  for (std::size_t len = 0; len < b.size(); ++len) {
+    EXPECT_THROW(decodeMessage<status_t>(b.data(), len, "C"), Error) << len;
+  }
+  Bytes huge = b;
+  // num_stages sits after hash, 6 int64, a double and two floats.
+  putBe32(huge, 8 + 6 * 8 + 8 + 8, 0x40000000);
+  expectError([&] { decodeMessage<status_t>(huge.data(), huge.size(), "C"); }, "num_stages");
+
+  const Bytes p = encodeMessage(encodeRobotPose(RobotPose{5, 1.0, 2.0, -0.5}));
+  const RobotPose pose = decodeRobotPose(p.data(), p.size(), "FINDMUG_ROBOT_POSE");
+  EXPECT_EQ(pose.utime, 5u);
+  EXPECT_EQ(pose.yaw, -0.5);
+  for (std::size_t len = 0; len < p.size(); ++len) {
+    EXPECT_THROW(decodeRobotPose(p.data(), len, "C"), Error) << len;
+  }
+  robot_pose_t nan_pose = encodeRobotPose(RobotPose{5, std::nan(""), 0, 0});
+  const Bytes n = encodeMessage(nan_pose);
+  expectError([&] { decodeRobotPose(n.data(), n.size(), "C"); }, "x/y/yaw");
+}
+
+}  // namespace
+}  // namespace findmug::io

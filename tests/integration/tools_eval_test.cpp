@@ -1,0 +1,174 @@
+// findmug-eval and findmug-train on the 31 real NYU Depth V2 frames.
+//
+// The accuracy bar: forest+MRF must beat the majority-class baseline (label
+// every pixel "wall") by a wide margin. See BENCHMARKS.md for the measured
+// figures the margins were chosen from.
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <array>
+#include <cstdio>
+#include <fstream>
+#include <regex>
+#include <sstream>
+
+#include "test_data.hpp"
+
+namespace findmug {
+namespace {
+
+using ::testing::HasSubstr;
+
+struct RunResult {
+  int exit_code = -1;
+  std::string output;
+};
+
+RunResult run(const std::string& command) {
+  RunResult r;
+  FILE* pipe = popen((command + " 2>&1").c_str(), "r");
+  if (!pipe) return r;
+  std::array<char, 4096> buf;
+  while (std::fgets(buf.data(), buf.size(), pipe)) r.output += buf.data();
+  const int status = pclose(pipe);
+  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  return r;
+}
+
+std::string readFile(const std::filesystem::path& p) {
+  std::ifstream in(p);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+// The object `"name": {...}` of the report, as text (objects are not nested
+// beyond per_class/confusion, which come after the numbers we read).
+std::string section(const std::string& json, const std::string& name) {
+  const auto at = json.find("\"" + name + "\": {");
+  if (at == std::string::npos) return "";
+  return json.substr(at, json.find("\"confusion\"", at) - at);
+}
+
+double number(const std::string& text, const std::string& key) {
+  std::smatch m;
+  const std::regex re("\"" + key + "\": ([0-9.eE+-]+|null)");
+  if (!std::regex_search(text, m, re) || m[1] == "null") return -1.0;
+  return std::stod(m[1]);
+}
+
+// Pixel counts per ground-truth class from the confusion matrix rows.
+std::vector<double> classTotals(const std::string& json) {
+  const auto at = json.find("\"confusion\": [", json.find("\"mrf\": {"));
+  std::vector<double> totals;
+  std::string rest = json.substr(at + 14);
+  const std::regex row(R"(\[([0-9, ]+)\])");
+  for (std::sregex_iterator it(rest.begin(), rest.end(), row), end; it != end && totals.size() < 8;
+       ++it) {
+    double sum = 0;
+    std::stringstream cells((*it)[1].str());
+    std::string cell;
+    while (std::getline(cells, cell, ',')) sum += std::stod(cell);
+    totals.push_back(sum);
+  }
+  return totals;
+}
+
+TEST(ToolsEval, CrossValidationBeatsMajorityBaselineWidely) {
+  FINDMUG_REQUIRE_DATA(nyu, "nyuv2_labeled");
+  test::TempDir tmp;
+  const auto result =
+      run(std::string(FINDMUG_EVAL_EXE) + " --data " + nyu.string() +
+          " --folds 5 --set ground.source=floor_labels --json " + tmp.str("eval.json") +
+          " --out " + tmp.str("pictures"));
+  ASSERT_EQ(result.exit_code, 0) << result.output;
+  EXPECT_THAT(result.output, HasSubstr("class avg"));
+
+  const std::string json = readFile(tmp.path() / "eval.json");
+  const std::string forest = section(json, "forest");
+  const std::string mrf = section(json, "mrf");
+  ASSERT_FALSE(forest.empty()) << json;
+  ASSERT_FALSE(mrf.empty()) << json;
+  const double mrf_class_avg = number(mrf, "class_average");
+  const double mrf_global = number(mrf, "global");
+  const double forest_class_avg = number(forest, "class_average");
+
+  const auto totals = classTotals(json);
+  ASSERT_EQ(totals.size(), 8u);
+  double all = 0, largest = 0;
+  int present = 0;
+  for (double t : totals) {
+    all += t;
+    largest = std::max(largest, t);
+    present += t > 0;
+  }
+  const double baseline_global = largest / all;          // everything labelled "wall"
+  const double baseline_class_avg = 1.0 / present;       // one class right, the rest wrong
+  RecordProperty("mrf_class_average", std::to_string(mrf_class_avg));
+  RecordProperty("mrf_global", std::to_string(mrf_global));
+  std::printf("baseline: class avg %.3f global %.3f; forest class avg %.3f; mrf %.3f / %.3f\n",
+              baseline_class_avg, baseline_global, forest_class_avg, mrf_class_avg, mrf_global);
+  EXPECT_GT(mrf_class_avg, baseline_class_avg + 0.25);
+  EXPECT_GT(mrf_global, baseline_global + 0.20);
+  EXPECT_GT(forest_class_avg, baseline_class_avg + 0.20);
+
+  // The pictures a person looks at.
+  EXPECT_TRUE(std::filesystem::exists(tmp.path() / "pictures" / "confusion_mrf.svg"));
+  EXPECT_TRUE(std::filesystem::exists(tmp.path() / "pictures" / "confusion_forest.svg"));
+  int overlays = 0;
+  for (const auto& e : std::filesystem::directory_iterator(tmp.path() / "pictures" / "overlays")) {
+    overlays += e.path().extension() == ".png";
+  }
+  const int used = static_cast<int>(number(json, "frames_used"));
+  EXPECT_GE(used, 20);
+  EXPECT_EQ(overlays, used);
+}
+
+TEST(ToolsEval, TrainThenEvaluateModel) {
+  FINDMUG_REQUIRE_DATA(nyu, "nyuv2_labeled");
+  test::TempDir tmp;
+  const auto model = tmp.str("nyu.fmf");
+  const auto trained = run(std::string(FINDMUG_TRAIN_EXE) + " --data " + nyu.string() +
+                           " --set ground.source=floor_labels --out " + model);
+  ASSERT_EQ(trained.exit_code, 0) << trained.output;
+  EXPECT_THAT(trained.output, HasSubstr("training patches"));
+  ASSERT_TRUE(std::filesystem::exists(model));
+
+  const auto evaluated =
+      run(std::string(FINDMUG_EVAL_EXE) + " --data " + nyu.string() + " --model " + model +
+          " --set ground.source=floor_labels --json " + tmp.str("eval.json"));
+  ASSERT_EQ(evaluated.exit_code, 0) << evaluated.output;
+  const std::string json = readFile(tmp.path() / "eval.json");
+  // Evaluated on its own training frames it must fit them well.
+  EXPECT_GT(number(section(json, "mrf"), "global"), 0.75) << json;
+}
+
+TEST(ToolsEval, BadInputIsNamed) {
+  test::TempDir tmp;
+  auto r = run(std::string(FINDMUG_EVAL_EXE) + " --data /nonexistent/dataset");
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_THAT(r.output, HasSubstr("/nonexistent/dataset"));
+
+  r = run(std::string(FINDMUG_EVAL_EXE) + " --data /tmp --folds 1");
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_THAT(r.output, HasSubstr("--folds"));
+
+  r = run(std::string(FINDMUG_EVAL_EXE) + " --data /tmp --bogus 3");
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_THAT(r.output, HasSubstr("--bogus"));
+
+  FINDMUG_REQUIRE_DATA(nyu, "nyuv2_labeled");
+  std::ofstream(tmp.str("corrupt.fmf")) << "FMUGFRST garbage that is no model";
+  r = run(std::string(FINDMUG_EVAL_EXE) + " --data " + nyu.string() + " --model " +
+          tmp.str("corrupt.fmf"));
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_THAT(r.output, HasSubstr("corrupt.fmf"));
+
+  r = run(std::string(FINDMUG_TRAIN_EXE) + " --data " + nyu.string() + " --out " +
+          tmp.str("m.fmf") + " --set forest.num_trees=0");
+  EXPECT_NE(r.exit_code, 0);
+  EXPECT_THAT(r.output, HasSubstr("forest.num_trees"));
+}
+
+}  // namespace
+}  // namespace findmug
