@@ -4,15 +4,18 @@
 // vertical tangent, each the difference between the points `window_radius_px`
 // pixels to either side (central difference, or one-sided where a neighbour is
 // missing or lies across a depth discontinuity). Those raw normals are then
-// averaged over a small box (half the window radius) to beat down Kinect depth
-// quantisation, which at 3 m is a few centimetres per step and would otherwise
-// tilt single-difference normals by tens of degrees. Everything is O(1) per
-// pixel with separable running sums, so a 640x480 frame costs a few
-// milliseconds on one core.
+// box-averaged (`smoothing_radius_px`) to beat down Kinect depth quantisation,
+// which at 3 m is a few centimetres per step and tilts single-difference
+// normals by tens of degrees. On NYU floors at 2..4 m the median error against
+// the fitted floor plane drops from ~10 to ~6 degrees with the defaults
+// (r = 4, smoothing 4: about 17 px of support, like PCL supervoxels' 5 cm
+// normal radius at 2..3 m). Everything is O(1) per pixel with separable
+// running sums, so a 640x480 frame costs a few milliseconds on one core.
 #include "findmug/cloud.hpp"
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 #include <sstream>
 #include <string>
@@ -37,8 +40,8 @@ void checkCloudShape(const OrganizedCloud& cloud, const char* what) {
   }
   if (!cloud.colors.empty() && cloud.colors.size() != pixels) {
     std::ostringstream msg;
-    msg << what << ": organized cloud has " << cloud.colors.size() << " colours for "
-        << pixels << " points";
+    msg << what << ": organized cloud has " << cloud.colors.size() << " colours for " << pixels
+        << " points";
     throw Error(msg.str());
   }
 }
@@ -62,40 +65,85 @@ inline bool tangent(const Eigen::Vector3f& a, const Eigen::Vector3f& c, const Ei
   return true;
 }
 
-// Box sums (radius r, clipped at the border) of the finite entries of `in`,
-// separably: rows into `tmp` with a prefix sum, then columns into `out` with
-// one running sum per column, so every pixel costs O(1) and no full-size
-// prefix table is needed. Non-finite entries count as zero.
-void boxSum(const std::vector<Eigen::Vector3f>& in, int width, int height, int r,
-            std::vector<Eigen::Vector3f>& tmp, std::vector<Eigen::Vector3f>& out) {
-  tmp.resize(in.size());
-  out.resize(in.size());
-  std::vector<Eigen::Vector3f> prefix(static_cast<std::size_t>(width) + 1);
-  for (int v = 0; v < height; ++v) {
-    const Eigen::Vector3f* row = in.data() + static_cast<std::size_t>(v) * width;
-    Eigen::Vector3f* dst = tmp.data() + static_cast<std::size_t>(v) * width;
-    prefix[0].setZero();
-    for (int u = 0; u < width; ++u)
-      prefix[u + 1] = prefix[u] + (std::isfinite(row[u].x()) ? row[u] : Eigen::Vector3f::Zero());
-    for (int u = 0; u < width; ++u)
-      dst[u] = prefix[std::min(width, u + r + 1)] - prefix[std::max(0, u - r)];
-  }
-  std::vector<Eigen::Vector3f> column(static_cast<std::size_t>(width), Eigen::Vector3f::Zero());
-  // Prime with rows 0..r-1; each output row v then adds row v+r, drops v-r-1.
-  for (int v = 0; v < std::min(r, height); ++v) {
-    const Eigen::Vector3f* src = tmp.data() + static_cast<std::size_t>(v) * width;
-    for (int u = 0; u < width; ++u) column[u] += src[u];
-  }
-  for (int v = 0; v < height; ++v) {
-    if (v + r < height) {
-      const Eigen::Vector3f* add = tmp.data() + static_cast<std::size_t>(v + r) * width;
-      for (int u = 0; u < width; ++u) column[u] += add[u];
+// Reusable buffers for the smoothing pass (see computeNormals).
+struct SmoothingScratch {
+  std::vector<std::uint8_t> links;      // bit 0: linked to the right, bit 1: to below
+  std::vector<Eigen::Vector3f> prefix;  // column prefix sums of row sums, (h+1) x w
+  std::vector<std::int32_t> run_start;  // first row of each pixel's vertical run
+  std::vector<Eigen::Vector3f> row_prefix;
+  std::vector<int> row_start, col_end;
+};
+
+constexpr std::uint8_t kLinkRight = 1;
+constexpr std::uint8_t kLinkDown = 2;
+
+// Box sums (radius r) of the finite entries of `in`, clipped to the border
+// AND to the pixel's surface: along each axis the window stops where two
+// neighbouring pixels are not linked (one invalid, or a depth step larger
+// than max_jump_rel * depth). So normals are averaged only with normals of
+// the same surface, and a table edge does not bleed into the floor behind.
+// Separable (rows, then columns) with prefix sums: O(1) per pixel for any r.
+void surfaceBoxSum(const std::vector<Eigen::Vector3f>& in, const OrganizedCloud& cloud, int r,
+                   float max_jump_rel, SmoothingScratch& s, std::vector<Eigen::Vector3f>& out) {
+  const int w = cloud.width;
+  const int h = cloud.height;
+  const std::size_t n = in.size();
+  const Eigen::Vector3f* pts = cloud.points.data();
+
+  s.links.assign(n, 0);
+  for (int v = 0; v < h; ++v) {
+    const std::size_t base = static_cast<std::size_t>(v) * w;
+    for (int u = 0; u < w; ++u) {
+      const float z = pts[base + u].z();
+      if (!std::isfinite(z)) continue;  // NaN compares false below, but be explicit
+      const float tol = max_jump_rel * z;
+      std::uint8_t l = 0;
+      if (u + 1 < w && std::abs(pts[base + u + 1].z() - z) <= tol) l |= kLinkRight;
+      if (v + 1 < h && std::abs(pts[base + w + u].z() - z) <= tol) l |= kLinkDown;
+      s.links[base + u] = l;
     }
-    if (v - r - 1 >= 0) {
-      const Eigen::Vector3f* drop = tmp.data() + static_cast<std::size_t>(v - r - 1) * width;
-      for (int u = 0; u < width; ++u) column[u] -= drop[u];
+  }
+
+  // Horizontal pass, written straight into the column prefix table:
+  // prefix[v + 1] = prefix[v] + row_sum[v].
+  s.prefix.resize(static_cast<std::size_t>(h + 1) * w);
+  std::fill(s.prefix.begin(), s.prefix.begin() + w, Eigen::Vector3f::Zero());
+  s.row_prefix.resize(static_cast<std::size_t>(w) + 1);
+  s.row_start.resize(static_cast<std::size_t>(w));
+  s.run_start.resize(n);
+  for (int v = 0; v < h; ++v) {
+    const std::size_t base = static_cast<std::size_t>(v) * w;
+    const std::uint8_t* links = s.links.data() + base;
+    s.row_prefix[0].setZero();
+    for (int u = 0; u < w; ++u) {
+      const Eigen::Vector3f& x = in[base + u];
+      s.row_prefix[u + 1] = s.row_prefix[u] + (std::isfinite(x.x()) ? x : Eigen::Vector3f::Zero());
+      s.row_start[u] = (u > 0 && (links[u - 1] & kLinkRight)) ? s.row_start[u - 1] : u;
+      s.run_start[base + u] =
+          (v > 0 && (s.links[base - w + u] & kLinkDown)) ? s.run_start[base - w + u] : v;
     }
-    std::copy(column.begin(), column.end(), out.begin() + static_cast<std::ptrdiff_t>(v) * width);
+    // Right to left: the run end is known from the right neighbour.
+    int row_end = w - 1;
+    for (int u = w - 1; u >= 0; --u) {
+      if (!(links[u] & kLinkRight)) row_end = u;
+      const int lo = std::max(u - r, s.row_start[u]);
+      const int hi = std::min(u + r, row_end);
+      s.prefix[base + w + u] = s.prefix[base + u] + (s.row_prefix[hi + 1] - s.row_prefix[lo]);
+    }
+  }
+
+  // Vertical pass, bottom to top so each pixel's run end is known from below.
+  out.resize(n);
+  s.col_end.assign(static_cast<std::size_t>(w), h - 1);
+  for (int v = h - 1; v >= 0; --v) {
+    const std::size_t base = static_cast<std::size_t>(v) * w;
+    for (int u = 0; u < w; ++u) {
+      if (!(s.links[base + u] & kLinkDown)) s.col_end[u] = v;
+      const int lo = std::max(v - r, s.run_start[base + u]);
+      const int hi = std::min(v + r, s.col_end[u]);
+      out[base + u] = s.prefix[static_cast<std::size_t>(hi + 1) * w + u] -
+                      s.prefix[static_cast<std::size_t>(lo) * w + u];
+    }
   }
 }
 
@@ -146,6 +194,10 @@ NormalImage computeNormals(const OrganizedCloud& cloud, const NormalConfig& conf
     throw Error("computeNormals: normals.window_radius_px must be in 1..64, got " +
                 std::to_string(config.window_radius_px));
   }
+  if (config.smoothing_radius_px < 0 || config.smoothing_radius_px > 64) {
+    throw Error("computeNormals: normals.smoothing_radius_px must be in 0..64, got " +
+                std::to_string(config.smoothing_radius_px));
+  }
   if (!std::isfinite(config.max_depth_jump_m) || config.max_depth_jump_m <= 0.0f) {
     throw Error("computeNormals: normals.max_depth_jump_m must be positive, got " +
                 std::to_string(config.max_depth_jump_m));
@@ -191,12 +243,15 @@ NormalImage computeNormals(const OrganizedCloud& cloud, const NormalConfig& conf
     }
   }
 
-  // 2. Box-average the raw normals (radius r/2) and renormalise. Pixels that
-  //    had no raw normal stay NaN: they are isolated or on a depth edge.
-  const int smooth_r = r / 2;
+  // 2. Box-average the raw normals and renormalise. Pixels that had no raw
+  //    normal stay NaN: they are isolated or on a depth edge.
+  const int smooth_r = config.smoothing_radius_px;
   if (smooth_r > 0) {
-    std::vector<Eigen::Vector3f> tmp, smoothed;
-    boxSum(n, w, h, smooth_r, tmp, smoothed);
+    // Per-thread scratch: reusing it saves the page faults of several fresh
+    // multi-megabyte buffers per 640x480 frame (a quarter of the run time).
+    thread_local SmoothingScratch scratch;
+    thread_local std::vector<Eigen::Vector3f> smoothed;
+    surfaceBoxSum(n, cloud, smooth_r, config.max_depth_jump_m, scratch, smoothed);
     for (std::size_t i = 0; i < n.size(); ++i) {
       if (!std::isfinite(n[i].x())) continue;
       const float norm = smoothed[i].norm();

@@ -355,6 +355,7 @@ DatasetFolder::DatasetFolder(const std::string& dir, const DatasetOptions& optio
     intrinsics_ = readIntrinsicsYaml((root / "intrinsics.yaml").string());
   } else {
     intrinsics_ = kNyuIntrinsics;
+    nyu_calibration_ = true;
   }
 
   extrinsics_.assign(names_.size(), std::nullopt);
@@ -441,7 +442,7 @@ LabeledFrame DatasetFolder::load(std::size_t i) const {
     out.labels[p] = static_cast<std::uint8_t>(lookup[label_ids.pixels[p]]);
   }
 
-  if (options_.mask_nyu_border) {
+  if (options_.mask_nyu_border && nyu_calibration_) {
     const int x0 = options_.border_left, x1 = frame.width - options_.border_right;
     const int y0 = options_.border_top, y1 = frame.height - options_.border_bottom;
     if (x0 >= x1 || y0 >= y1) {

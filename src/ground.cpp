@@ -105,8 +105,8 @@ Plane refitPlane(const std::vector<Eigen::Vector3f>& points, const std::vector<s
 // support. Returns false when no hypothesis was accepted.
 template <typename Accept, typename Inlier>
 bool ransacPlane(const std::vector<Eigen::Vector3f>& points, const std::vector<std::size_t>& idx,
-                 int iterations, std::mt19937_64& rng, Accept accept, Inlier inlier,
-                 Plane& result, std::vector<std::size_t>& inliers) {
+                 int iterations, std::mt19937_64& rng, Accept accept, Inlier inlier, Plane& result,
+                 std::vector<std::size_t>& inliers) {
   if (idx.size() < 3) return false;
   // Score on a fixed random subset so cost does not grow with the image.
   std::vector<std::size_t> scoring;
@@ -158,8 +158,8 @@ GroundPlane groundFromPlane(const Eigen::Vector3f& normal_camera, float offset, 
   const float norm = normal_camera.norm();
   if (!std::isfinite(norm) || !(norm > 1e-6f) || !std::isfinite(offset)) {
     std::ostringstream msg;
-    msg << "groundFromPlane: degenerate plane normal (" << normal_camera.transpose()
-        << ") offset " << offset;
+    msg << "groundFromPlane: degenerate plane normal (" << normal_camera.transpose() << ") offset "
+        << offset;
     throw Error(msg.str());
   }
   Eigen::Vector3f up = normal_camera / norm;
@@ -244,8 +244,7 @@ std::optional<GroundPlane> fitGroundToLabels(const OrganizedCloud& cloud_camera,
       pts, floor, config.ransac_iterations, rng, [](Plane&) { return true; },
       [&](const Plane& p, std::size_t i) { return std::abs(p.distance(pts[i])) < tol; }, plane,
       inliers);
-  if (!found ||
-      static_cast<double>(inliers.size()) < config.min_inlier_fraction * floor.size()) {
+  if (!found || static_cast<double>(inliers.size()) < config.min_inlier_fraction * floor.size()) {
     return std::nullopt;
   }
   // groundFromPlane orients the normal so that the camera is above the floor.
@@ -346,7 +345,9 @@ std::optional<GroundPlane> estimateGround(const OrganizedCloud& cloud_camera,
   // plane offset: a slightly tilted plane's extension can pass far below the
   // floor at the camera while its points sit well above it.
   auto depthBelowCamera = [&](const Found& f) { return -reference_up.dot(f.centroid); };
-  auto consistent = [&](const Found& f) { return f.plane.normal.dot(reference_up) >= cos_consensus; };
+  auto consistent = [&](const Found& f) {
+    return f.plane.normal.dot(reference_up) >= cos_consensus;
+  };
   float lowest = -std::numeric_limits<float>::infinity();
   for (const auto& f : planes)
     if (consistent(f)) lowest = std::max(lowest, depthBelowCamera(f));

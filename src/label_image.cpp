@@ -34,8 +34,8 @@ LabelImage projectLabels(const Oversegmentation& segmentation,
     const std::uint8_t id = segment_labels[s];
     if (id >= kNumLabels && id != kVoidLabel) {
       throw Error("projectLabels: segment " + std::to_string(s) + " has label id " +
-                  std::to_string(id) + " (valid: 0.." + std::to_string(kNumLabels - 1) +
-                  " or " + std::to_string(kVoidLabel) + ")");
+                  std::to_string(id) + " (valid: 0.." + std::to_string(kNumLabels - 1) + " or " +
+                  std::to_string(kVoidLabel) + ")");
     }
     const float c = segment_confidence[s];
     if (!std::isfinite(c) || c < 0.0f || c > 1.0f) {

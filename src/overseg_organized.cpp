@@ -40,7 +40,6 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
-#include <cstdlib>
 #include <limits>
 #include <memory>
 #include <numeric>
@@ -59,9 +58,14 @@ namespace findmug {
 namespace {
 
 constexpr float kLabScale = 1.0f / 100.0f;
-static float kMinCosine = getenv("OS_COS") ? atof(getenv("OS_COS")) : 0.25f;  // TEMP calibration
-static float kMinSeedVoxels = getenv("OS_VOX") ? atof(getenv("OS_VOX")) : 0.0f;  // TEMP calibration
-static float kZCap = getenv("OS_ZCAP") ? atof(getenv("OS_ZCAP")) : 100.0f;  // TEMP calibration
+constexpr float kMinCosine = 0.25f;  // slant cap: one pixel counts as at most 4 facing ones
+// PCL keeps a seed only when more than 0.05 * pi * (seed/2)^2 / voxel^2
+// voxels lie within seed/2 of it. Its single-camera voxels are voxel * z
+// wide, so a surface stops getting seeds at z^2 = 1 / (0.05 * pi / 4), about
+// (5 m)^2, whatever the resolutions; from there on its supervoxels stop
+// shrinking in the image. We mirror that by capping a pixel's footprint
+// z^2 / cos (in units of (1/f)^2 m^2, see placeSeeds) at that value.
+constexpr double kMaxFootprint = 4.0 / (0.05 * 3.14159265358979);
 constexpr int kCoarseStride = 2;
 
 // sRGB (D65) -> CIELAB with tables: a 256-entry sRGB -> linear table and a
@@ -419,8 +423,8 @@ class OrganizedOversegmenter final : public Oversegmenter {
           const bool has_normal = coarse.ch[kNX][i] != 0.0f || coarse.ch[kNY][i] != 0.0f ||
                                   coarse.ch[kNZ][i] != 0.0f;
           const float cosine = has_normal ? std::max(std::fabs(dot) / range, kMinCosine) : 1.0f;
-          const double zc = std::min(pz, kZCap);
-          row_density += block_valid[i] * zc * zc * pixel_solid / cosine /
+          const double footprint = std::min(static_cast<double>(pz) * pz / cosine, kMaxFootprint);
+          row_density += block_valid[i] * footprint * pixel_solid /
                          per_seed_area;
           ++row_valid;
         }
@@ -435,8 +439,6 @@ class OrganizedOversegmenter final : public Oversegmenter {
 
     // Coarse pixels a seed needs: its segment would be dropped otherwise.
     const int min_valid = std::max(1, config_.min_segment_points / (kCoarseStride * kCoarseStride));
-    const double min_cell = std::max<double>(min_valid, kMinSeedVoxels * config_.voxel_resolution_m * fx *
-                                                 config_.voxel_resolution_m * fy / (kCoarseStride * kCoarseStride));
     const float half_factor = 0.5f * static_cast<float>(config_.search_window_factor);
     struct Rect {
       int x0, y0, x1, y1;
@@ -451,7 +453,7 @@ class OrganizedOversegmenter final : public Oversegmenter {
       if (nvalid < min_valid) continue;
       const double seeds = rectSum(density, r.x0, r.y0, r.x1, r.y1);
       // Halves must still be able to hold a segment that survives.
-      if (seeds > 1.0 && std::max(rw, rh) >= 2 && rw * rh >= 2 * min_cell) {
+      if (seeds > 1.0 && std::max(rw, rh) >= 2 && rw * rh >= 2 * min_valid) {
         if (rw >= rh) {
           const int mid = r.x0 + rw / 2;
           stack.push_back({r.x0, r.y0, mid, r.y1});

@@ -4,14 +4,28 @@
 
 namespace findmug {
 
+LabeledFrames framesOf(const DatasetFolder& dataset) {
+  return {dataset.dir(), dataset.size(), [&dataset](std::size_t i) { return dataset.load(i); }};
+}
+
+LabeledFrames framesOf(const NyuMatFile& mat, const std::string& path) {
+  return {path, mat.size(), [&mat](std::size_t i) { return mat.load(i); }};
+}
+
 std::vector<FrameSample> extractSamples(const DatasetFolder& dataset, const Segmenter& segmenter,
+                                        ExtractionReport& report,
+                                        const std::function<void(int, int)>& progress) {
+  return extractSamples(framesOf(dataset), segmenter, report, progress);
+}
+
+std::vector<FrameSample> extractSamples(const LabeledFrames& frames, const Segmenter& segmenter,
                                         ExtractionReport& report,
                                         const std::function<void(int, int)>& progress) {
   std::vector<FrameSample> samples;
   report = {};
-  report.frames_total = static_cast<int>(dataset.size());
-  for (std::size_t i = 0; i < dataset.size(); ++i) {
-    LabeledFrame labelled = dataset.load(i);
+  report.frames_total = static_cast<int>(frames.count);
+  for (std::size_t i = 0; i < frames.count; ++i) {
+    LabeledFrame labelled = frames.load(i);
     PreparedFrame prepared = segmenter.prepare(std::move(labelled.frame), &labelled.labels);
     if (!prepared.ground) {
       report.dropped.push_back(labelled.name + ": no ground plane found");
@@ -19,6 +33,7 @@ std::vector<FrameSample> extractSamples(const DatasetFolder& dataset, const Segm
       SegmentedFrame segmented = segmenter.oversegment(std::move(prepared));
       FrameSample sample;
       sample.name = labelled.name;
+      sample.source_index = i;
       sample.width = segmented.segmentation.width;
       sample.height = segmented.segmentation.height;
       sample.features = segmenter.features(segmented);

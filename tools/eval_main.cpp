@@ -1,7 +1,7 @@
 // findmug-eval: accuracy of the forest and forest+MRF on a labelled dataset.
 //
-//   findmug-eval --data DIR [--folds 5] [--model MODEL] [--json FILE] [--out DIR] [--sweep]
-//                [--config FILE] [--set key=value ...]
+//   findmug-eval (--data DIR | --mat FILE) [--folds 5] [--model MODEL] [--json FILE]
+//                [--out DIR] [--sweep] [--train-extra DIR ...] [--config FILE] [--set key=value ...]
 //
 // Without --model: k-fold cross-validation by frame (contiguous blocks of
 // frames, so neighbouring frames of one scene stay in one fold). With
@@ -9,6 +9,8 @@
 // global accuracy (void excluded) for the forest alone and with the MRF, a
 // confusion-matrix heatmap, optional sweeps over trees and depth (the
 // paper's Fig. 3), and colour overlays of prediction vs ground truth.
+// --train-extra adds a data set (e.g. synthetic scenes) to the training set
+// of every fold; it is never evaluated, so figures stay comparable.
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -30,8 +32,10 @@ namespace findmug::tools {
 namespace {
 
 constexpr const char* kUsage =
-    "usage: findmug-eval --data DIR [--folds K] [--model MODEL] [--json FILE] [--out DIR]\n"
-    "                    [--sweep] [--config FILE] [--set section.key=value ...] [--no-nyu-border]\n"
+    "usage: findmug-eval (--data DIR | --mat nyu_depth_v2_labeled.mat) [--folds K] [--model MODEL]\n"
+    "                    [--json FILE] [--out DIR] [--sweep] [--train-extra DIR ...]\n"
+    "                    [--config FILE] [--set section.key=value ...] [--nyu894-csv FILE]\n"
+    "                    [--no-nyu-border]\n"
     "Cross-validates (default 5 folds by frame) or evaluates --model on a labelled dataset.\n";
 
 struct Evaluation {
@@ -64,7 +68,8 @@ void labelFrames(const RandomForest& forest, const MrfParams& mrf_params,
   }
 }
 
-Evaluation crossValidate(const std::vector<FrameSample>& samples, int folds,
+Evaluation crossValidate(const std::vector<FrameSample>& samples,
+                         const std::vector<FrameSample>& extra_training, int folds,
                          const SegmenterConfig& config, bool keep_pixels) {
   Evaluation eval;
   eval.mrf_pixels.resize(samples.size());
@@ -75,7 +80,14 @@ Evaluation crossValidate(const std::vector<FrameSample>& samples, int folds,
       (static_cast<int>(i * folds / n) == fold ? test : train).push_back(i);
     }
     if (test.empty() || train.empty()) continue;
-    const TrainingSet set = makeTrainingSet(samples, train);
+    TrainingSet set = makeTrainingSet(samples, train);
+    if (!extra_training.empty()) {
+      std::vector<std::size_t> all(extra_training.size());
+      for (std::size_t i = 0; i < all.size(); ++i) all[i] = i;
+      const TrainingSet extra = makeTrainingSet(extra_training, all);
+      set.features.insert(set.features.end(), extra.features.begin(), extra.features.end());
+      set.labels.insert(set.labels.end(), extra.labels.begin(), extra.labels.end());
+    }
     if (set.labels.empty()) continue;
     ForestParams params = config.forest;
     params.seed += static_cast<std::uint64_t>(fold);
@@ -85,14 +97,12 @@ Evaluation crossValidate(const std::vector<FrameSample>& samples, int folds,
   return eval;
 }
 
-void writeOverlays(const DatasetFolder& dataset, const std::vector<FrameSample>& samples,
+void writeOverlays(const LabeledFrames& frames, const std::vector<FrameSample>& samples,
                    const Evaluation& eval, const std::filesystem::path& dir) {
   std::filesystem::create_directories(dir);
-  std::map<std::string, std::size_t> index_of;
-  for (std::size_t i = 0; i < dataset.size(); ++i) index_of[dataset.names()[i]] = i;
   for (std::size_t f = 0; f < samples.size(); ++f) {
     if (eval.mrf_pixels[f].empty()) continue;
-    const LabeledFrame frame = dataset.load(index_of.at(samples[f].name));
+    const LabeledFrame frame = frames.load(samples[f].source_index);
     const int w = frame.frame.width, h = frame.frame.height;
     LabelImage truth{w, h, samples[f].ground_truth, {}};
     LabelImage predicted{w, h, eval.mrf_pixels[f], {}};
@@ -115,9 +125,9 @@ void writeOverlays(const DatasetFolder& dataset, const std::vector<FrameSample>&
 
 int run(int argc, char** argv) {
   Flags flags(argc, argv, {"help", "sweep", "no-nyu-border"});
-  flags.allowOnly(
-      {"help", "data", "folds", "model", "json", "out", "sweep", "config", "set", "no-nyu-border"});
-  if (flags.has("help") || !flags.has("data")) {
+  flags.allowOnly({"help", "data", "mat", "nyu894-csv", "folds", "model", "json", "out", "sweep",
+                   "train-extra", "config", "set", "no-nyu-border"});
+  if (flags.has("help") || flags.has("data") == flags.has("mat")) {
     std::cerr << kUsage;
     return flags.has("help") ? 0 : 2;
   }
@@ -127,7 +137,8 @@ int run(int argc, char** argv) {
 
   DatasetOptions options;
   options.mask_nyu_border = !flags.has("no-nyu-border");
-  const DatasetFolder dataset(flags.get("data"), options);
+  const auto input = flags.has("data") ? LabeledInput::folder(flags.get("data"), options)
+                                       : LabeledInput::mat(flags.get("mat"), flags.get("nyu894-csv"));
   const Segmenter segmenter(config.segmenter, nullptr);
   // Load the model first: a bad file is refused before minutes of feature extraction.
   std::optional<RandomForest> model;
@@ -136,17 +147,29 @@ int run(int argc, char** argv) {
   const auto start = std::chrono::steady_clock::now();
   ProgressBar bar("features");
   ExtractionReport extraction;
-  const auto samples = extractSamples(dataset, segmenter, extraction,
+  const auto samples = extractSamples(input->frames(), segmenter, extraction,
                                       [&](int done, int total) { bar.update(done, total); });
   bar.finish();
-  if (samples.empty()) throw Error(flags.get("data") + ": no frame could be used");
+  if (samples.empty()) throw Error(input->frames().description + ": no frame could be used");
+  std::vector<FrameSample> extra_training;
+  for (const auto& dir : flags.getAll("train-extra")) {
+    if (flags.has("model")) throw Error("--train-extra trains forests; it cannot be used with --model");
+    const auto extra_input = LabeledInput::folder(dir, options);
+    ProgressBar extra_bar("features " + dir);
+    ExtractionReport extra_report;
+    auto part = extractSamples(extra_input->frames(), segmenter, extra_report,
+                               [&](int done, int total) { extra_bar.update(done, total); });
+    extra_bar.finish();
+    for (auto& s : part) extra_training.push_back(std::move(s));
+  }
   if (!flags.has("model") && static_cast<int>(samples.size()) < folds) {
     throw Error("only " + std::to_string(samples.size()) + " usable frames for " +
                 std::to_string(folds) + " folds");
   }
 
   EvalReport report;
-  report.data = flags.get("data");
+  report.data = input->frames().description;
+  for (const auto& dir : flags.getAll("train-extra")) report.train_extra.push_back(dir);
   report.frames_total = extraction.frames_total;
   report.frames_used = extraction.frames_used;
   report.dropped = extraction.dropped;
@@ -162,7 +185,7 @@ int run(int argc, char** argv) {
     labelFrames(forest, config.segmenter.mrf, samples, all, eval, true);
   } else {
     report.protocol = std::to_string(folds) + "-fold cross-validation by frame";
-    eval = crossValidate(samples, folds, config.segmenter, true);
+    eval = crossValidate(samples, extra_training, folds, config.segmenter, true);
   }
   report.forest = eval.forest;
   report.mrf = eval.mrf;
@@ -172,7 +195,7 @@ int run(int argc, char** argv) {
     for (int trees : {1, 2, 4, 6, 8, 10, 12, 14, 16}) {
       SegmenterConfig c = config.segmenter;
       c.forest.num_trees = trees;
-      const Evaluation e = crossValidate(samples, folds, c, false);
+      const Evaluation e = crossValidate(samples, extra_training, folds, c, false);
       report.sweep_trees.push_back({trees, c.forest.max_depth, e.forest, e.mrf});
       std::fprintf(stderr, "sweep trees=%d: forest %.1f/%.1f mrf %.1f/%.1f\n", trees,
                    100 * e.forest.classAverageAccuracy(), 100 * e.forest.globalAccuracy(),
@@ -181,7 +204,7 @@ int run(int argc, char** argv) {
     for (int depth : {2, 4, 6, 8, 10, 12, 14, 16}) {
       SegmenterConfig c = config.segmenter;
       c.forest.max_depth = depth;
-      const Evaluation e = crossValidate(samples, folds, c, false);
+      const Evaluation e = crossValidate(samples, extra_training, folds, c, false);
       report.sweep_depth.push_back({c.forest.num_trees, depth, e.forest, e.mrf});
       std::fprintf(stderr, "sweep depth=%d: forest %.1f/%.1f mrf %.1f/%.1f\n", depth,
                    100 * e.forest.classAverageAccuracy(), 100 * e.forest.globalAccuracy(),
@@ -207,7 +230,7 @@ int run(int argc, char** argv) {
       writeSweepSvg((dir / "sweep_trees.svg").string(), report.sweep_trees, true);
       writeSweepSvg((dir / "sweep_depth.svg").string(), report.sweep_depth, false);
     }
-    writeOverlays(dataset, samples, eval, dir / "overlays");
+    writeOverlays(input->frames(), samples, eval, dir / "overlays");
     std::cout << "pictures in " << dir.string() << "\n";
   }
   return 0;

@@ -131,6 +131,10 @@ std::string formatJson(const EvalReport& r) {
   for (std::size_t i = 0; i < r.dropped.size(); ++i) {
     out << (i ? ", " : "") << jsonString(r.dropped[i]);
   }
+  out << "],\n  \"train_extra\": [";
+  for (std::size_t i = 0; i < r.train_extra.size(); ++i) {
+    out << (i ? ", " : "") << jsonString(r.train_extra[i]);
+  }
   out << "],\n  \"labels\": [";
   for (int c = 0; c < kNumLabels; ++c) out << (c ? ", " : "") << "\"" << kLabelNames[c] << "\"";
   out << "],\n  \"forest\": " << jsonMatrix(r.forest) << ",\n  \"mrf\": " << jsonMatrix(r.mrf);

@@ -17,6 +17,7 @@ struct SweepPoint {
 struct EvalReport {
   std::string data;
   std::string protocol;
+  std::vector<std::string> train_extra;  // data sets added to every fold's training
   int frames_total = 0;
   int frames_used = 0;
   std::vector<std::string> dropped;

@@ -70,20 +70,23 @@ int main(int argc, char** argv) {
       std::cout << kUsage;
       return 0;
     }
-    flags.allowOnly({"seed", "frames", "out", "fps", "camera-height", "pitch-deg", "tables", "speed",
-                     "no-noise", "help"});
+    flags.allowOnly({"seed", "frames", "out", "fps", "camera-height", "pitch-deg", "tables",
+                     "speed", "no-noise", "help"});
     for (const char* required : {"seed", "frames", "out"})
       if (!flags.has(required)) throw Error(std::string("missing --") + required + "\n" + kUsage);
 
     synth::SequenceSpec spec;
     spec.seed = parseSeed(flags.get("seed"));
     spec.frames = flags.getInt("frames", 0);
-    if (spec.frames <= 0) throw Error("flag --frames: must be positive, got " + flags.get("frames"));
+    if (spec.frames <= 0)
+      throw Error("flag --frames: must be positive, got " + flags.get("frames"));
     if (flags.has("fps")) spec.fps = parseDouble("fps", flags.get("fps"));
     if (flags.has("camera-height"))
-      std::tie(spec.path.height_min, spec.path.height_max) = parseRange("camera-height", flags.get("camera-height"));
+      std::tie(spec.path.height_min, spec.path.height_max) =
+          parseRange("camera-height", flags.get("camera-height"));
     if (flags.has("pitch-deg"))
-      std::tie(spec.path.pitch_min_deg, spec.path.pitch_max_deg) = parseRange("pitch-deg", flags.get("pitch-deg"));
+      std::tie(spec.path.pitch_min_deg, spec.path.pitch_max_deg) =
+          parseRange("pitch-deg", flags.get("pitch-deg"));
     if (flags.has("tables")) {
       const auto [lo, hi] = parseRange("tables", flags.get("tables"));
       if (lo != static_cast<int>(lo) || hi != static_cast<int>(hi))
@@ -99,11 +102,12 @@ int main(int argc, char** argv) {
 
     const std::string out = flags.get("out");
     tools::ProgressBar bar("findmug-synth");
-    const auto truth = synth::writeSequence(out, spec, [&](int done, int total) { bar.update(done, total); });
+    const auto truth =
+        synth::writeSequence(out, spec, [&](int done, int total) { bar.update(done, total); });
     bar.finish();
-    std::printf("wrote %d frames (%d table%s) to %s, ground truth in %s/ground_truth.yaml\n", spec.frames,
-                static_cast<int>(truth.tables.size()), truth.tables.size() == 1 ? "" : "s", out.c_str(),
-                out.c_str());
+    std::printf("wrote %d frames (%d table%s) to %s, ground truth in %s/ground_truth.yaml\n",
+                spec.frames, static_cast<int>(truth.tables.size()),
+                truth.tables.size() == 1 ? "" : "s", out.c_str(), out.c_str());
     return 0;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "findmug-synth: %s\n", e.what());

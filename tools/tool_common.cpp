@@ -62,6 +62,23 @@ Config configFromFlags(const Flags& flags) {
   return config;
 }
 
+std::unique_ptr<LabeledInput> LabeledInput::folder(const std::string& dir,
+                                                   const DatasetOptions& options) {
+  auto input = std::unique_ptr<LabeledInput>(new LabeledInput);
+  input->folder_ = std::make_unique<DatasetFolder>(dir, options);
+  input->frames_ = framesOf(*input->folder_);
+  return input;
+}
+
+std::unique_ptr<LabeledInput> LabeledInput::mat(const std::string& path,
+                                                const std::string& nyu894_csv) {
+  auto input = std::unique_ptr<LabeledInput>(new LabeledInput);
+  input->mat_ = nyu894_csv.empty() ? std::make_unique<NyuMatFile>(path)
+                                   : std::make_unique<NyuMatFile>(path, nyu894_csv);
+  input->frames_ = framesOf(*input->mat_, path);
+  return input;
+}
+
 ProgressBar::ProgressBar(std::string label) : label_(std::move(label)), tty_(isatty(2) != 0) {}
 
 void ProgressBar::update(int done, int total) {

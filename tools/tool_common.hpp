@@ -2,10 +2,13 @@
 #pragma once
 
 #include <map>
+#include <memory>
 #include <string>
 #include <vector>
 
 #include "findmug/config.hpp"
+#include "findmug/dataset.hpp"
+#include "findmug/training.hpp"
 
 namespace findmug::tools {
 
@@ -27,6 +30,20 @@ class Flags {
 
 // --config FILE (optional) then every --set key=value on top.
 Config configFromFlags(const Flags& flags);
+
+// A labelled data set opened from a folder (--data DIR) or from the official
+// NYU file (--mat nyu_depth_v2_labeled.mat); owns what `frames` refers to.
+class LabeledInput {
+ public:
+  static std::unique_ptr<LabeledInput> folder(const std::string& dir, const DatasetOptions& options);
+  static std::unique_ptr<LabeledInput> mat(const std::string& path, const std::string& nyu894_csv);
+  const LabeledFrames& frames() const { return frames_; }
+
+ private:
+  std::unique_ptr<DatasetFolder> folder_;
+  std::unique_ptr<NyuMatFile> mat_;
+  LabeledFrames frames_;
+};
 
 // A one-line progress bar on stderr when it is a terminal; silent otherwise.
 class ProgressBar {

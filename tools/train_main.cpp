@@ -15,16 +15,18 @@
 namespace {
 
 constexpr const char* kUsage =
-    "usage: findmug-train --data DIR [--data DIR ...] --out MODEL [--config FILE]\n"
-    "                     [--set section.key=value ...] [--no-nyu-border]\n"
-    "Trains findmug's randomized forest on NYU-style dataset folders\n"
-    "(rgb/, depth/ in mm, label8/ or label40/) and writes a versioned model file.\n";
+    "usage: findmug-train (--data DIR | --mat nyu_depth_v2_labeled.mat) [more --data/--mat]\n"
+    "                     --out MODEL [--config FILE] [--set section.key=value ...]\n"
+    "                     [--nyu894-csv FILE] [--no-nyu-border]\n"
+    "Trains findmug's randomized forest on NYU-style dataset folders (rgb/, depth/ in mm,\n"
+    "label8/ or label40/) or on the official NYU Depth V2 labelled .mat file, and writes a\n"
+    "versioned model file. For the paper's protocol on NYU add --set ground.source=floor_labels.\n";
 
 int run(int argc, char** argv) {
   using namespace findmug;
   tools::Flags flags(argc, argv, {"help", "no-nyu-border"});
-  flags.allowOnly({"help", "data", "out", "config", "set", "no-nyu-border"});
-  if (flags.has("help") || !flags.has("data") || !flags.has("out")) {
+  flags.allowOnly({"help", "data", "mat", "nyu894-csv", "out", "config", "set", "no-nyu-border"});
+  if (flags.has("help") || !(flags.has("data") || flags.has("mat")) || !flags.has("out")) {
     std::cerr << kUsage;
     return flags.has("help") ? 0 : 2;
   }
@@ -37,18 +39,22 @@ int run(int argc, char** argv) {
   std::vector<FrameSample> samples;
   int frames_total = 0;
   std::vector<std::string> dropped;
-  for (const auto& dir : flags.getAll("data")) {
-    DatasetFolder dataset(dir, options);
-    tools::ProgressBar bar("features " + dir);
+  std::vector<std::unique_ptr<tools::LabeledInput>> inputs;
+  for (const auto& dir : flags.getAll("data")) inputs.push_back(tools::LabeledInput::folder(dir, options));
+  for (const auto& mat : flags.getAll("mat")) {
+    inputs.push_back(tools::LabeledInput::mat(mat, flags.get("nyu894-csv")));
+  }
+  for (const auto& input : inputs) {
+    tools::ProgressBar bar("features " + input->frames().description);
     ExtractionReport report;
-    auto part = extractSamples(dataset, segmenter, report,
+    auto part = extractSamples(input->frames(), segmenter, report,
                                [&](int done, int total) { bar.update(done, total); });
     bar.finish();
     frames_total += report.frames_total;
     dropped.insert(dropped.end(), report.dropped.begin(), report.dropped.end());
     for (auto& s : part) samples.push_back(std::move(s));
   }
-  if (samples.empty()) throw Error("no usable frame in the given --data folders");
+  if (samples.empty()) throw Error("no usable frame in the given --data/--mat inputs");
 
   std::vector<std::size_t> all(samples.size());
   for (std::size_t i = 0; i < all.size(); ++i) all[i] = i;

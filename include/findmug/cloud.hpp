@@ -37,11 +37,17 @@ struct NormalImage {
 OrganizedCloud frameToCloud(const RgbdFrame& frame, float max_depth_m = 10.0f);
 
 struct NormalConfig {
-  int window_radius_px = 4;       // half size of the neighbourhood used per pixel
-  float max_depth_jump_m = 0.05f; // neighbours further than this (scaled by depth) are ignored
+  int window_radius_px = 4;        // half size of the neighbourhood used per pixel
+  float max_depth_jump_m = 0.05f;  // neighbours further than this (scaled by depth) are ignored
+  int smoothing_radius_px = 4;     // box average of the per-pixel normals (0 = none)
 };
 
-// Normals from the organized grid, oriented towards the camera.
+// Normals from the organized grid, oriented towards the camera: cross product
+// of the horizontal and vertical differences between the points
+// `window_radius_px` away on either side (a neighbour whose depth differs from
+// the centre's by more than max_depth_jump_m * depth is skipped, falling back
+// to a one-sided difference), then box-averaged over `smoothing_radius_px`.
+// NaN where no valid neighbour pair exists.
 NormalImage computeNormals(const OrganizedCloud& cloud, const NormalConfig& config);
 
 // Applies a rigid transform to every valid point (NaNs stay NaN).

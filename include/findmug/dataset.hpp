@@ -53,7 +53,9 @@ struct DatasetOptions {
   // NYU's invalid border (projection mask): pixels outside are void and get
   // no depth. 1-based inclusive rows 45..471, cols 41..601 in the NYU toolbox,
   // i.e. a 427x561 valid region of a 640x480 frame: 0-based rows 44..470,
-  // cols 40..600. Applied to frames of any size (set false for non-NYU data).
+  // cols 40..600. Applied only to folders that use NYU's calibration (no
+  // intrinsics.yaml and no `intrinsics` override): other sensors and the
+  // synthetic generator have no such border.
   bool mask_nyu_border = true;
   int border_top = 44, border_bottom = 9, border_left = 40, border_right = 39;  // pixels cut
   std::optional<CameraIntrinsics> intrinsics;  // overrides intrinsics.yaml / NYU default
@@ -79,6 +81,7 @@ class DatasetFolder {
   bool has_label8_ = false;
   LabelMapping mapping_;
   CameraIntrinsics intrinsics_;
+  bool nyu_calibration_ = false;  // NYU default intrinsics: the NYU border applies
   std::vector<std::optional<CameraExtrinsics>> extrinsics_;
 };
 

@@ -113,9 +113,9 @@ struct TableTruth {
   TableShape shape = TableShape::Rectangular;
   std::string kind;  // "dining", "desk", "coffee", "bar"
   Eigen::Vector2d center_xy = Eigen::Vector2d::Zero();
-  double yaw = 0.0;                                  // rad about z (long side along local x)
-  Eigen::Vector2d size = Eigen::Vector2d::Zero();    // length, width (round: diameter twice)
-  double height = 0.0;                               // top surface above the floor, metres
+  double yaw = 0.0;                                // rad about z (long side along local x)
+  Eigen::Vector2d size = Eigen::Vector2d::Zero();  // length, width (round: diameter twice)
+  double height = 0.0;                             // top surface above the floor, metres
   // Outline of the top at z = height, counter-clockwise. Round tops are a
   // 64-gon inscribed in the circle (at most 0.12% of the radius inside it).
   std::vector<Eigen::Vector2d> top_polygon;
@@ -191,15 +191,20 @@ CameraExtrinsics extrinsicsOf(const CameraPose& pose);
 // polygon transformed (height and size unchanged).
 TableTruth tableInGroundFrame(const TableTruth& table, const CameraPose& pose);
 
+// Signed distance (metres) from a floor point to the outline of the table top
+// polygon, in whatever frame the table is given: negative inside, positive
+// outside. E.g. a search position should be at about safety_distance_m.
+double signedDistanceToTop(const TableTruth& table, const Eigen::Vector2d& xy);
+
 struct CameraPathParams {
-  double height_min = 1.0, height_max = 1.4;                  // camera height, per sequence
-  double pitch_min_deg = 20.0, pitch_max_deg = 45.0;          // tilt down, per sequence
-  double speed_mps = 0.4;                                     // driving speed
-  double max_yaw_rate = 0.8;                                  // rad/s, head/base turning
-  double dwell_s = 2.0;                                       // pause at each viewpoint
-  double pan_amplitude_rad = 0.15;                            // head pan while dwelling
-  double robot_radius_m = 0.3;                                // clearance to furniture
-  double max_view_distance_m = 2.6;                           // viewpoint to table centre
+  double height_min = 1.0, height_max = 1.4;          // camera height, per sequence
+  double pitch_min_deg = 20.0, pitch_max_deg = 45.0;  // tilt down, per sequence
+  double speed_mps = 0.4;                             // driving speed
+  double max_yaw_rate = 0.8;                          // rad/s, head/base turning
+  double dwell_s = 2.0;                               // pause at each viewpoint
+  double pan_amplitude_rad = 0.15;                    // head pan while dwelling
+  double robot_radius_m = 0.3;                        // clearance to furniture
+  double max_view_distance_m = 2.6;                   // viewpoint to table centre
 };
 
 void validate(const CameraPathParams& params);
@@ -217,14 +222,14 @@ struct DepthNoiseParams {
   bool enabled = true;  // false: exact depth (still rounded to mm), no dropouts
   double min_range_m = 0.5;
   double max_range_m = 4.5;
-  double disparity_k = 2.85e-3;      // 1/m per disparity unit (K&E 2012)
-  double disparity_sigma = 0.5;      // disparity units (K&E 2012)
-  bool quantise = true;              // integer disparities
-  double grazing_start_deg = 78.0;   // dropout begins
-  double grazing_full_deg = 88.0;    // everything dropped beyond
+  double disparity_k = 2.85e-3;     // 1/m per disparity unit (K&E 2012)
+  double disparity_sigma = 0.5;     // disparity units (K&E 2012)
+  bool quantise = true;             // integer disparities
+  double grazing_start_deg = 78.0;  // dropout begins
+  double grazing_full_deg = 88.0;   // everything dropped beyond
   bool projector_shadows = true;
   double projector_baseline_m = 0.075;
-  double rgb_noise_sigma = 2.0;      // grey levels
+  double rgb_noise_sigma = 2.0;  // grey levels
 };
 
 struct RenderOptions {
@@ -237,15 +242,15 @@ struct RenderOptions {
 void validate(const RenderOptions& options);
 
 struct RenderedFrame {
-  LabeledFrame labeled;                // noisy depth, colour, labels, intrinsics, extrinsics
-  std::vector<float> true_depth_m;     // exact z along the optical axis, per pixel
-  std::vector<std::int32_t> object;    // index into SynthScene::objects, per pixel
+  LabeledFrame labeled;              // noisy depth, colour, labels, intrinsics, extrinsics
+  std::vector<float> true_depth_m;   // exact z along the optical axis, per pixel
+  std::vector<std::int32_t> object;  // index into SynthScene::objects, per pixel
 };
 
 // Ray casts one frame. `noise_seed` selects the noise realisation (the same
 // seed gives the same bytes). Frame name/seq/utime are left for the caller.
-RenderedFrame render(const SynthScene& scene, const CameraPose& pose,
-                     const RenderOptions& options, std::uint64_t noise_seed);
+RenderedFrame render(const SynthScene& scene, const CameraPose& pose, const RenderOptions& options,
+                     std::uint64_t noise_seed);
 
 // One depth sample of the noise model above for an exact depth z (metres) on
 // a surface seen head-on, without dropouts: the millimetre value written to

@@ -12,7 +12,9 @@
 //      than the tolerance), clusters outside [min, max]_cluster_points dropped;
 //   3. per cluster: top height (densest height band), the top's points, PCA of
 //      the top projected on the floor (on a 2 cm occupancy grid, so that the
-//      denser near part of a table does not pull the axes), oriented box, hull;
+//      denser near part of a table does not pull the axes), oriented box
+//      (edges robust to depth noise: a high quantile of per-strip extremes),
+//      convex hull of the top's points;
 //   4. search positions (Wolf et al. 2014): on the second principal axis, on
 //      both sides, `safety_distance_m` from the table edge, facing the table;
 //      long tables get more positions along their long sides so that the top
@@ -67,7 +69,7 @@ struct TableCluster {
 struct TableConfig {
   float cluster_tolerance_m = 0.05f;
   int min_cluster_points = 500;
-  int max_cluster_points = 200000;
+  int max_cluster_points = 1000000;  // above a VGA frame: a close table may fill the view
   float safety_distance_m = 0.5f;  // d: from the table edge to the search position
   float arm_reach_m = 0.8f;
   float robot_radius_m = 0.3f;

@@ -19,6 +19,7 @@ namespace findmug {
 // One frame reduced to what training and evaluation need.
 struct FrameSample {
   std::string name;
+  std::size_t source_index = 0;                  // index in the LabeledFrames it came from
   int width = 0, height = 0;
   std::vector<int> pixel_segment;                // from the oversegmentation
   std::vector<std::pair<int, int>> edges;        // adjacency
@@ -27,6 +28,16 @@ struct FrameSample {
   std::vector<std::uint32_t> segment_pixels;     // pixel count per segment
   std::vector<std::uint8_t> ground_truth;        // per pixel, 255 = void
 };
+
+// Any indexed collection of labelled frames (a dataset folder, the official
+// NYU .mat file, ...), seen through one small interface.
+struct LabeledFrames {
+  std::string description;  // for messages
+  std::size_t count = 0;
+  std::function<LabeledFrame(std::size_t)> load;
+};
+LabeledFrames framesOf(const DatasetFolder& dataset);
+LabeledFrames framesOf(const NyuMatFile& mat, const std::string& path);
 
 struct ExtractionReport {
   int frames_total = 0;
@@ -37,6 +48,9 @@ struct ExtractionReport {
 // Runs the segmenter's geometric stages on every frame. Frames for which no
 // ground plane is found are dropped (the paper drops frames with too few floor
 // points) and listed in the report. `progress(done, total)` after each frame.
+std::vector<FrameSample> extractSamples(const LabeledFrames& frames, const Segmenter& segmenter,
+                                        ExtractionReport& report,
+                                        const std::function<void(int, int)>& progress = {});
 std::vector<FrameSample> extractSamples(const DatasetFolder& dataset, const Segmenter& segmenter,
                                         ExtractionReport& report,
                                         const std::function<void(int, int)>& progress = {});

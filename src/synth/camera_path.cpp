@@ -178,7 +178,8 @@ std::vector<Viewpoint> findViewpoints(const SynthScene& scene, const PlanningGri
     for (const auto& c : candidates) {
       if (static_cast<int>(chosen.size()) >= per_table) break;
       bool apart = true;  // a different side of the table
-      for (const auto& h : chosen) apart = apart && std::abs(wrapAngle(c.angle - h.angle)) > M_PI / 2;
+      for (const auto& h : chosen)
+        apart = apart && std::abs(wrapAngle(c.angle - h.angle)) > M_PI / 2;
       if (apart) chosen.push_back(c);
     }
     for (const auto& c : chosen) all.push_back({c.xy, t.id, grid.componentAt(c.xy)});
@@ -222,7 +223,8 @@ void validate(const CameraPathParams& p) {
   if (!(p.max_yaw_rate > 0.0 && p.max_yaw_rate <= 10.0)) bad("max_yaw_rate", p.max_yaw_rate);
   if (!(p.dwell_s >= 0.0 && p.dwell_s <= 60.0)) bad("dwell_s", p.dwell_s);
   if (!(std::abs(p.pan_amplitude_rad) <= 1.0)) bad("pan_amplitude_rad", p.pan_amplitude_rad);
-  if (!(p.robot_radius_m >= 0.05 && p.robot_radius_m <= 1.0)) bad("robot_radius_m", p.robot_radius_m);
+  if (!(p.robot_radius_m >= 0.05 && p.robot_radius_m <= 1.0))
+    bad("robot_radius_m", p.robot_radius_m);
   if (!(p.max_view_distance_m >= 0.5 && p.max_view_distance_m <= 10.0))
     bad("max_view_distance_m", p.max_view_distance_m);
 }
@@ -230,7 +232,8 @@ void validate(const CameraPathParams& p) {
 std::vector<CameraPose> cameraPath(const SynthScene& scene, int n_frames, double fps,
                                    const CameraPathParams& params) {
   validate(params);
-  if (n_frames < 0 || n_frames > 10000000) throw Error("synth: absurd frame count " + std::to_string(n_frames));
+  if (n_frames < 0 || n_frames > 10000000)
+    throw Error("synth: absurd frame count " + std::to_string(n_frames));
   if (!(std::isfinite(fps) && fps > 0.0 && fps <= 1000.0))
     throw Error("synth: absurd frame rate " + std::to_string(fps));
   detail::Rng rng(detail::hash3(scene.seed, 0xca3e7a, 1));
@@ -240,7 +243,8 @@ std::vector<CameraPose> cameraPath(const SynthScene& scene, int n_frames, double
   const auto viewpoints = detail::findViewpoints(scene, grid, height, pitch, params, 2, rng);
   if (viewpoints.empty())
     throw Error("synth: no table of scene seed " + std::to_string(scene.seed) +
-                " can be seen from free floor (robot radius " + std::to_string(params.robot_radius_m) + " m)");
+                " can be seen from free floor (robot radius " +
+                std::to_string(params.robot_radius_m) + " m)");
 
   auto bearing = [&](const Eigen::Vector2d& from, int table) {
     const Eigen::Vector2d d = scene.tables[table].center_xy - from;
@@ -261,9 +265,10 @@ std::vector<CameraPose> cameraPath(const SynthScene& scene, int n_frames, double
   for (int i = 0; i < n_frames; ++i) {
     CameraPose pose;
     pose.xy = pos;
-    const double pan = moving || params.dwell_s <= 0.0
-                           ? 0.0
-                           : params.pan_amplitude_rad * std::sin(2.0 * M_PI * phase_time / params.dwell_s);
+    const double pan =
+        moving || params.dwell_s <= 0.0
+            ? 0.0
+            : params.pan_amplitude_rad * std::sin(2.0 * M_PI * phase_time / params.dwell_s);
     pose.yaw = detail::wrapAngle(yaw + pan);
     pose.height_m = height;
     pose.pitch_rad = pitch;
@@ -340,6 +345,18 @@ TableTruth tableInGroundFrame(const TableTruth& table, const CameraPose& pose) {
   out.yaw = detail::wrapAngle(table.yaw - pose.yaw);
   for (auto& v : out.top_polygon) v = xy(v);
   return out;
+}
+
+double signedDistanceToTop(const TableTruth& table, const Eigen::Vector2d& xy) {
+  const auto& poly = table.top_polygon;
+  if (poly.size() < 3) throw Error("synth: table " + std::to_string(table.id) + " has no top polygon");
+  double best = std::numeric_limits<double>::infinity();
+  for (std::size_t i = 0; i < poly.size(); ++i) {
+    const Eigen::Vector2d a = poly[i], e = poly[(i + 1) % poly.size()] - a;
+    const double s = std::clamp((xy - a).dot(e) / e.squaredNorm(), 0.0, 1.0);
+    best = std::min(best, (a + s * e - xy).norm());
+  }
+  return detail::insideConvex(poly, xy) ? -best : best;
 }
 
 }  // namespace findmug::synth

@@ -52,15 +52,18 @@ struct Reader {
                               const std::string& where) const {
     const YAML::Node c = child(node, key, where);
     if (!c.IsSequence() || c.size() != n)
-      throw Error(path + ": '" + key + "' in " + where + " must be a list of " + std::to_string(n) + " numbers");
+      throw Error(path + ": '" + key + "' in " + where + " must be a list of " + std::to_string(n) +
+                  " numbers");
     std::vector<double> v;
     for (std::size_t i = 0; i < n; ++i) {
       try {
         v.push_back(c[i].as<double>());
       } catch (const YAML::Exception&) {
-        throw Error(path + ": '" + key + "' in " + where + " has a non-number at index " + std::to_string(i));
+        throw Error(path + ": '" + key + "' in " + where + " has a non-number at index " +
+                    std::to_string(i));
       }
-      if (!std::isfinite(v.back())) throw Error(path + ": '" + key + "' in " + where + " is not finite");
+      if (!std::isfinite(v.back()))
+        throw Error(path + ": '" + key + "' in " + where + " is not finite");
     }
     return v;
   }
@@ -82,7 +85,8 @@ std::string frameName(int index) {
 }
 
 void writeGroundTruth(const std::string& path, const SequenceGroundTruth& truth) {
-  if (truth.poses.size() != truth.frame_names.size() || truth.poses.size() != truth.frame_utimes.size())
+  if (truth.poses.size() != truth.frame_names.size() ||
+      truth.poses.size() != truth.frame_utimes.size())
     throw Error(path + ": ground truth has " + std::to_string(truth.poses.size()) + " poses, " +
                 std::to_string(truth.frame_names.size()) + " names and " +
                 std::to_string(truth.frame_utimes.size()) + " timestamps");
@@ -167,7 +171,8 @@ SequenceGroundTruth readGroundTruth(const std::string& path) {
   if (r.text(root, "format", "the top level") != kFormat)
     throw Error(path + ": 'format' is not " + kFormat);
   if (r.number(root, "version", "the top level") != kVersion)
-    throw Error(path + ": unsupported ground truth version (expected " + std::to_string(kVersion) + ")");
+    throw Error(path + ": unsupported ground truth version (expected " + std::to_string(kVersion) +
+                ")");
   SequenceGroundTruth t;
   const double seed = r.number(root, "seed", "the top level");
   if (seed < 0) throw Error(path + ": negative 'seed'");
@@ -191,9 +196,12 @@ SequenceGroundTruth readGroundTruth(const std::string& path) {
     tt.id = static_cast<int>(r.number(n, "id", where));
     tt.kind = r.text(n, "kind", where);
     const std::string shape = r.text(n, "shape", where);
-    if (shape == "round") tt.shape = TableShape::Round;
-    else if (shape == "rectangular") tt.shape = TableShape::Rectangular;
-    else throw Error(path + ": 'shape' in " + where + " is '" + shape + "' (rectangular or round)");
+    if (shape == "round")
+      tt.shape = TableShape::Round;
+    else if (shape == "rectangular")
+      tt.shape = TableShape::Rectangular;
+    else
+      throw Error(path + ": 'shape' in " + where + " is '" + shape + "' (rectangular or round)");
     const auto c = r.numbers(n, "center", 2, where);
     tt.center_xy = {c[0], c[1]};
     tt.yaw = r.number(n, "yaw", where);

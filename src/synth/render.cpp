@@ -47,9 +47,9 @@ const std::array<float, kTableSize + 1>& inverseCdfTable() {
   static const std::array<float, kTableSize + 1> table = [] {
     std::array<float, kTableSize + 1> t{};
     for (int k = 0; k <= kTableSize; ++k) {
-      const double p = k == 0             ? 0.25 / kTableSize
+      const double p = k == 0            ? 0.25 / kTableSize
                        : k == kTableSize ? 1.0 - 0.25 / kTableSize
-                                          : static_cast<double>(k) / kTableSize;
+                                         : static_cast<double>(k) / kTableSize;
       t[k] = static_cast<float>(inverseNormalCdf(p));
     }
     return t;
@@ -146,7 +146,8 @@ struct PrimitiveSetup {
 // Screen bounding box of a primitive: its bounding box corners clipped at the
 // near plane and projected. Returns false when it is entirely behind.
 bool screenBounds(const Primitive& p, const Eigen::Isometry3d& world_to_camera,
-                  const CameraIntrinsics& k, int width, int height, int& u0, int& u1, int& v0, int& v1) {
+                  const CameraIntrinsics& k, int width, int height, int& u0, int& u1, int& v0,
+                  int& v1) {
   const double c = std::cos(p.yaw), s = std::sin(p.yaw);
   const Eigen::Vector3d& h = p.half_extent;
   std::array<Eigen::Vector3d, 8> corners;
@@ -200,7 +201,8 @@ void validate(const RenderOptions& o) {
     msg << "synth: absurd image size " << o.width << "x" << o.height;
   } else if (!(std::isfinite(k.fx) && std::isfinite(k.fy) && std::isfinite(k.cx) &&
                std::isfinite(k.cy) && k.fx > 0 && k.fy > 0)) {
-    msg << "synth: invalid intrinsics fx=" << k.fx << " fy=" << k.fy << " cx=" << k.cx << " cy=" << k.cy;
+    msg << "synth: invalid intrinsics fx=" << k.fx << " fy=" << k.fy << " cx=" << k.cx
+        << " cy=" << k.cy;
   } else if (!(n.min_range_m >= 0.0 && n.min_range_m < n.max_range_m && n.max_range_m <= 65.0)) {
     msg << "synth: invalid depth range [" << n.min_range_m << ", " << n.max_range_m << "] m";
   } else if (!(n.disparity_k > 0.0 && n.disparity_k < 1.0)) {
@@ -243,14 +245,16 @@ RenderedFrame render(const SynthScene& scene, const CameraPose& pose, const Rend
   if (!(o_d.x() > 0 && o_d.y() > 0 && o_d.z() > 0 && o_d.x() < room.x() && o_d.y() < room.y() &&
         o_d.z() < room.z())) {
     std::ostringstream msg;
-    msg << "synth: camera at (" << o_d.transpose() << ") is outside the room (" << room.transpose() << ")";
+    msg << "synth: camera at (" << o_d.transpose() << ") is outside the room (" << room.transpose()
+        << ")";
     throw Error(msg.str());
   }
   const Eigen::Isometry3d world_to_cam = cam_to_world.inverse();
   const Eigen::Matrix3d& Rd = cam_to_world.linear();
   const V3 o{static_cast<float>(o_d.x()), static_cast<float>(o_d.y()), static_cast<float>(o_d.z())};
   auto col = [&](int c) {
-    return V3{static_cast<float>(Rd(0, c)), static_cast<float>(Rd(1, c)), static_cast<float>(Rd(2, c))};
+    return V3{static_cast<float>(Rd(0, c)), static_cast<float>(Rd(1, c)),
+              static_cast<float>(Rd(2, c))};
   };
   const V3 c0 = col(0), c1 = col(1), c2 = col(2);
   // Ray through pixel (u, v): d = a[u] * c0 + b[v] * c1 + c2 (optical z component 1).
@@ -319,8 +323,10 @@ RenderedFrame render(const SynthScene& scene, const CameraPose& pose, const Rend
           const float tx1 = (-half.x - ol.x) * ix, tx2 = (half.x - ol.x) * ix;
           const float ty1 = (-half.y - ol.y) * iy, ty2 = (half.y - ol.y) * iy;
           const float tz1 = (-half.z - ol.z) * iz, tz2 = (half.z - ol.z) * iz;
-          const float tmin = std::max(std::max(std::min(tx1, tx2), std::min(ty1, ty2)), std::min(tz1, tz2));
-          const float tmax = std::min(std::min(std::max(tx1, tx2), std::max(ty1, ty2)), std::max(tz1, tz2));
+          const float tmin =
+              std::max(std::max(std::min(tx1, tx2), std::min(ty1, ty2)), std::min(tz1, tz2));
+          const float tmax =
+              std::min(std::min(std::max(tx1, tx2), std::max(ty1, ty2)), std::max(tz1, tz2));
           if (tmin <= tmax && tmin > kNear && tmin < zrow[u]) {
             zrow[u] = tmin;
             hrow[u] = id;
@@ -415,20 +421,24 @@ RenderedFrame render(const SynthScene& scene, const CameraPose& pose, const Rend
         const int s = -1 - hit[i];
         n = kShellNormals[s];
         object = s;  // objects 0..5 are floor, ceiling and the walls in this order
-        m = s == 0 ? &scene.floor_material : (s == 1 ? &scene.ceiling_material : &scene.wall_material);
+        m = s == 0 ? &scene.floor_material
+                   : (s == 1 ? &scene.ceiling_material : &scene.wall_material);
         local = P;
         salt = scene.seed;
       } else {
         const Primitive& p = scene.primitives[hit[i]];
-        const float cy = static_cast<float>(std::cos(p.yaw)), sy = static_cast<float>(std::sin(p.yaw));
+        const float cy = static_cast<float>(std::cos(p.yaw)),
+                    sy = static_cast<float>(std::sin(p.yaw));
         const V3 center{static_cast<float>(p.center.x()), static_cast<float>(p.center.y()),
                         static_cast<float>(p.center.z())};
         local = rotZ(P - center, cy, -sy);
-        const float hx = static_cast<float>(p.half_extent.x()), hy = static_cast<float>(p.half_extent.y()),
+        const float hx = static_cast<float>(p.half_extent.x()),
+                    hy = static_cast<float>(p.half_extent.y()),
                     hz = static_cast<float>(p.half_extent.z());
         V3 nl;
         if (p.shape == Shape::Box) {
-          const float ex = std::abs(local.x) / hx, ey = std::abs(local.y) / hy, ez = std::abs(local.z) / hz;
+          const float ex = std::abs(local.x) / hx, ey = std::abs(local.y) / hy,
+                      ez = std::abs(local.z) / hz;
           if (ex >= ey && ex >= ez) {
             nl = {local.x > 0 ? 1.0f : -1.0f, 0, 0};
             axis = 0;
@@ -459,11 +469,13 @@ RenderedFrame render(const SynthScene& scene, const CameraPose& pose, const Rend
       const V3 to_light = light - P;
       const float dist2 = dot(to_light, to_light);
       const float diffuse = std::max(0.0f, dot(n, to_light)) / std::sqrt(dist2);
-      const float shade = (0.38f + 0.8f * diffuse / (1.0f + 0.06f * dist2) + 0.15f * std::max(0.0f, -n.z)) *
-                          textureFactor(*m, P, local, axis, salt);
+      const float shade =
+          (0.38f + 0.8f * diffuse / (1.0f + 0.06f * dist2) + 0.15f * std::max(0.0f, -n.z)) *
+          textureFactor(*m, P, local, axis, salt);
       const std::uint64_t h_rgb = detail::hash3(frame_key, i, 1);
       auto channel = [&](std::uint8_t c, int k) {
-        const float g = detail::gaussianFrom21(gauss_table, static_cast<std::uint32_t>(h_rgb >> (43 - 21 * k)) & 0x1fffffu);
+        const float g = detail::gaussianFrom21(
+            gauss_table, static_cast<std::uint32_t>(h_rgb >> (43 - 21 * k)) & 0x1fffffu);
         const float value = c * shade + rgb_sigma * g;
         return static_cast<std::uint8_t>(std::clamp(value + 0.5f, 0.0f, 255.0f));
       };
@@ -485,8 +497,8 @@ RenderedFrame render(const SynthScene& scene, const CameraPose& pose, const Rend
         const float p_drop = (cos_start - cos_inc) / (cos_start - cos_full);
         if (static_cast<float>(detail::toUnit(detail::mix64(h_depth))) < p_drop) continue;
       }
-      frame.depth_mm[i] =
-          noisyDepthMm(t, noise, detail::gaussianFrom21(gauss_table, static_cast<std::uint32_t>(h_depth >> 43)));
+      frame.depth_mm[i] = noisyDepthMm(
+          t, noise, detail::gaussianFrom21(gauss_table, static_cast<std::uint32_t>(h_depth >> 43)));
     }
   }
   return out;

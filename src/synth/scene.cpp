@@ -23,7 +23,9 @@ std::uint8_t clampByte(double v) {
 // Per-object colour variation: overall brightness and a little per channel.
 Rgb8 jitter(Rgb8 c, double amount, Rng& rng) {
   const double gain = 1.0 + amount * rng.uniform(-1.0, 1.0);
-  auto ch = [&](std::uint8_t v) { return clampByte(v * gain * (1.0 + 0.4 * amount * rng.uniform(-1.0, 1.0))); };
+  auto ch = [&](std::uint8_t v) {
+    return clampByte(v * gain * (1.0 + 0.4 * amount * rng.uniform(-1.0, 1.0)));
+  };
   return {ch(c.r), ch(c.g), ch(c.b)};
 }
 
@@ -67,7 +69,9 @@ struct Wall {
   Eigen::Vector2d origin, along, inward;
   double length;
   double yaw() const { return std::atan2(-inward.x(), inward.y()); }
-  Eigen::Vector2d point(double s, double offset) const { return origin + s * along + offset * inward; }
+  Eigen::Vector2d point(double s, double offset) const {
+    return origin + s * along + offset * inward;
+  }
 };
 
 std::array<Wall, 4> wallsOf(const Eigen::Vector3d& room) {
@@ -117,8 +121,8 @@ struct Surface {
   std::vector<Polygon2> taken;
 };
 
-const Rgb8 kObjectColors[] = {{200, 40, 40},  {40, 90, 200},  {240, 240, 235}, {30, 30, 35},
-                              {230, 190, 40}, {60, 150, 70},  {220, 110, 30},  {120, 60, 150},
+const Rgb8 kObjectColors[] = {{200, 40, 40},   {40, 90, 200}, {240, 240, 235}, {30, 30, 35},
+                              {230, 190, 40},  {60, 150, 70}, {220, 110, 30},  {120, 60, 150},
                               {170, 170, 175}, {90, 60, 40}};
 
 // Tries to put one small object (mug, box or book) on `surface`.
@@ -147,12 +151,11 @@ void placeSmallObject(SynthScene& scene, Surface& surface, Rng& rng, bool uprigh
       name = "mug";
     } else if (kind < 0.7 || upright_books) {
       const bool book = kind >= 0.7;
-      const Eigen::Vector3d half = book ? Eigen::Vector3d(rng.uniform(0.01, 0.025),
-                                                          rng.uniform(0.07, 0.11),
-                                                          rng.uniform(0.08, 0.13))
-                                        : Eigen::Vector3d(rng.uniform(0.04, 0.12),
-                                                          rng.uniform(0.04, 0.10),
-                                                          rng.uniform(0.03, 0.10));
+      const Eigen::Vector3d half =
+          book ? Eigen::Vector3d(rng.uniform(0.01, 0.025), rng.uniform(0.07, 0.11),
+                                 rng.uniform(0.08, 0.13))
+               : Eigen::Vector3d(rng.uniform(0.04, 0.12), rng.uniform(0.04, 0.10),
+                                 rng.uniform(0.03, 0.10));
       if (2 * half.z() > surface.max_height) continue;
       const double yaw = upright_books ? 0.0 : rng.uniform(0.0, M_PI);
       footprint = detail::rectangle(c, yaw, half.x(), half.y());
@@ -189,8 +192,10 @@ void placeSmallObject(SynthScene& scene, Surface& surface, Rng& rng, bool uprigh
 }
 
 Material woodMaterial(Rng& rng) {
-  const Rgb8 woods[] = {{150, 105, 65}, {120, 80, 50}, {185, 145, 100}, {95, 60, 40}, {200, 170, 125}};
-  return {jitter(pick(woods, rng), 0.12, rng), Texture::Wood, static_cast<float>(rng.uniform(0.02, 0.05))};
+  const Rgb8 woods[] = {
+      {150, 105, 65}, {120, 80, 50}, {185, 145, 100}, {95, 60, 40}, {200, 170, 125}};
+  return {jitter(pick(woods, rng), 0.12, rng), Texture::Wood,
+          static_cast<float>(rng.uniform(0.02, 0.05))};
 }
 
 Material laminateMaterial(Rng& rng) {
@@ -219,9 +224,11 @@ void addChair(SynthScene& scene, Layout& layout, const Eigen::Vector2d& center, 
   const double sh = stool ? rng.uniform(0.62, 0.72) : rng.uniform(0.43, 0.48);
   const Polygon2 footprint = detail::rectangle(center, yaw, sw, sd);
   if (!layout.insideRoom(footprint, 0.02) || !layout.free(footprint, table_object)) return;
-  const Rgb8 colors[] = {{110, 75, 45}, {40, 40, 45}, {200, 60, 50}, {225, 225, 220}, {70, 110, 160}};
+  const Rgb8 colors[] = {
+      {110, 75, 45}, {40, 40, 45}, {200, 60, 50}, {225, 225, 220}, {70, 110, 160}};
   const bool wooden = rng.chance(0.5);
-  const Material m = wooden ? woodMaterial(rng) : Material{jitter(pick(colors, rng), 0.1, rng), Texture::Plain, 0.2f};
+  const Material m = wooden ? woodMaterial(rng)
+                            : Material{jitter(pick(colors, rng), 0.1, rng), Texture::Plain, 0.2f};
   const Material legs = rng.chance(0.5) ? m : Material{{150, 150, 155}, Texture::Plain, 0.2f};
   std::vector<Primitive> parts;
   const double seat_th = 0.04;
@@ -229,8 +236,9 @@ void addChair(SynthScene& scene, Layout& layout, const Eigen::Vector2d& center, 
   const double leg = 0.017, leg_h = sh - seat_th;
   for (int sx : {-1, 1})
     for (int sy : {-1, 1})
-      parts.push_back(box(at(toWorld(center, yaw, sx * (sw - leg - 0.01), sy * (sd - leg - 0.01)), leg_h / 2),
-                          yaw, {leg, leg, leg_h / 2}, legs));
+      parts.push_back(
+          box(at(toWorld(center, yaw, sx * (sw - leg - 0.01), sy * (sd - leg - 0.01)), leg_h / 2),
+              yaw, {leg, leg, leg_h / 2}, legs));
   if (!stool) {  // backrest on the side away from the table (local -y)
     const double bh = rng.uniform(0.35, 0.5);
     parts.push_back(box(at(toWorld(center, yaw, 0.0, -(sd - 0.015)), sh + bh / 2), yaw,
@@ -331,10 +339,10 @@ bool addTable(SynthScene& scene, Layout& layout, const ApartmentParams& params,
       t.yaw = rng.chance(0.7) ? (rng.chance(0.5) ? 0.0 : M_PI / 2) + 0.03 * rng.normal()
                               : rng.uniform(0.0, M_PI);
       const double pad = kind->chairs_hi > 0 ? 0.75 : 0.55;
-      clearance = t.shape == TableShape::Round
-                      ? detail::circle(t.center_xy, t.size.x() / 2 + pad, 16)
-                      : detail::rectangle(t.center_xy, t.yaw, t.size.x() / 2 + pad,
-                                          t.size.y() / 2 + pad);
+      clearance =
+          t.shape == TableShape::Round
+              ? detail::circle(t.center_xy, t.size.x() / 2 + pad, 16)
+              : detail::rectangle(t.center_xy, t.yaw, t.size.x() / 2 + pad, t.size.y() / 2 + pad);
     }
     if (!layout.insideRoom(clearance, kind->against_wall ? -0.01 : 0.0)) continue;
     if (!layout.free(clearance)) continue;
@@ -346,7 +354,8 @@ bool addTable(SynthScene& scene, Layout& layout, const ApartmentParams& params,
                       ? detail::circle(t.center_xy, t.size.x() / 2, 64)
                       : detail::rectangle(t.center_xy, t.yaw, t.size.x() / 2, t.size.y() / 2);
   const Material top = rng.chance(0.7) ? woodMaterial(rng) : laminateMaterial(rng);
-  const Material legs = rng.chance(0.5) ? top : Material{jitter({140, 140, 145}, 0.2, rng), Texture::Plain, 0.2f};
+  const Material legs =
+      rng.chance(0.5) ? top : Material{jitter({140, 140, 145}, 0.2, rng), Texture::Plain, 0.2f};
   const double th = rng.uniform(0.025, 0.045);
   const double leg_h = t.height - th;
   std::vector<Primitive> parts;
@@ -354,22 +363,24 @@ bool addTable(SynthScene& scene, Layout& layout, const ApartmentParams& params,
     const double r = t.size.x() / 2;
     parts.push_back(cylinder(at(t.center_xy, t.height - th / 2), r, th / 2, top));
     const double base_h = 0.03;
-    parts.push_back(cylinder(at(t.center_xy, base_h / 2), std::min(0.3, 0.6 * r), base_h / 2, legs));
-    parts.push_back(cylinder(at(t.center_xy, base_h + (leg_h - base_h) / 2), rng.uniform(0.035, 0.06),
-                             (leg_h - base_h) / 2, legs));
+    parts.push_back(
+        cylinder(at(t.center_xy, base_h / 2), std::min(0.3, 0.6 * r), base_h / 2, legs));
+    parts.push_back(cylinder(at(t.center_xy, base_h + (leg_h - base_h) / 2),
+                             rng.uniform(0.035, 0.06), (leg_h - base_h) / 2, legs));
   } else {
     const double hl = t.size.x() / 2, hw = t.size.y() / 2;
     parts.push_back(box(at(t.center_xy, t.height - th / 2), t.yaw, {hl, hw, th / 2}, top));
     if (kind->against_wall && rng.chance(0.5)) {  // desk with two side panels
       for (int sx : {-1, 1})
-        parts.push_back(box(at(toWorld(t.center_xy, t.yaw, sx * (hl - 0.04), 0.0), leg_h / 2), t.yaw,
-                            {0.0125, hw - 0.03, leg_h / 2}, legs));
+        parts.push_back(box(at(toWorld(t.center_xy, t.yaw, sx * (hl - 0.04), 0.0), leg_h / 2),
+                            t.yaw, {0.0125, hw - 0.03, leg_h / 2}, legs));
     } else {
       const double leg = rng.uniform(0.02, 0.035), inset = leg + rng.uniform(0.02, 0.06);
       for (int sx : {-1, 1})
         for (int sy : {-1, 1})
-          parts.push_back(box(at(toWorld(t.center_xy, t.yaw, sx * (hl - inset), sy * (hw - inset)), leg_h / 2),
-                              t.yaw, {leg, leg, leg_h / 2}, legs));
+          parts.push_back(
+              box(at(toWorld(t.center_xy, t.yaw, sx * (hl - inset), sy * (hw - inset)), leg_h / 2),
+                  t.yaw, {leg, leg, leg_h / 2}, legs));
     }
   }
   t.id = static_cast<int>(scene.tables.size());
@@ -387,9 +398,10 @@ bool addTable(SynthScene& scene, Layout& layout, const ApartmentParams& params,
 
   Surface s;
   // Keep objects 3 cm inside the edge.
-  s.outline = t.shape == TableShape::Round
-                  ? detail::circle(t.center_xy, t.size.x() / 2 - 0.03, 32)
-                  : detail::rectangle(t.center_xy, t.yaw, t.size.x() / 2 - 0.03, t.size.y() / 2 - 0.03);
+  s.outline =
+      t.shape == TableShape::Round
+          ? detail::circle(t.center_xy, t.size.x() / 2 - 0.03, 32)
+          : detail::rectangle(t.center_xy, t.yaw, t.size.x() / 2 - 0.03, t.size.y() / 2 - 0.03);
   s.z = t.height;
   s.max_height = 0.4;
   surfaces.push_back(s);
@@ -410,7 +422,8 @@ bool placeAgainstWall(const Layout& layout, double width, double depth, Rng& rng
     footprint = detail::rectangle(center, yaw, width / 2, depth / 2);
     // Leave 0.45 m in front free as well so nothing blocks the doors.
     const Polygon2 front = detail::rectangle(w.point(s, depth + 0.225), yaw, width / 2, 0.225);
-    if (layout.insideRoom(footprint, -0.01) && layout.free(footprint) && layout.free(front)) return true;
+    if (layout.insideRoom(footprint, -0.01) && layout.free(footprint) && layout.free(front))
+      return true;
   }
   return false;
 }
@@ -430,8 +443,9 @@ void addCabinet(SynthScene& scene, Layout& layout, std::vector<Surface>& surface
   // Two handles either side of the door seam.
   const Material handle{{190, 190, 195}, Texture::Plain, 0.2f};
   for (int sx : {-1, 1})
-    parts.push_back(box(at(toWorld(c, yaw, sx * 0.04, depth / 2 + 0.01), tall ? 1.0 : height - 0.12),
-                        yaw, {0.006, 0.01, 0.05}, handle));
+    parts.push_back(
+        box(at(toWorld(c, yaw, sx * 0.04, depth / 2 + 0.01), tall ? 1.0 : height - 0.12), yaw,
+            {0.006, 0.01, 0.05}, handle));
   const int object = addObject(scene, "cabinet", Label::Cabinet, std::move(parts));
   layout.solids.push_back({footprint, object});
   scene.obstacles.push_back({footprint, height, object});
@@ -459,7 +473,7 @@ void addShelf(SynthScene& scene, Layout& layout, std::vector<Surface>& surfaces,
                         {th / 2, hd, height / 2}, m));
   parts.push_back(box(at(toWorld(c, yaw, 0.0, -hd + 0.005), height / 2), yaw,
                       {hw - th, 0.005, height / 2}, m));  // back
-  const int boards = rng.integer(3, 5);  // including bottom and top
+  const int boards = rng.integer(3, 5);                   // including bottom and top
   const double spacing = (height - th) / (boards - 1);
   for (int b = 0; b < boards; ++b) {
     const double z = b * spacing + th / 2;
@@ -500,11 +514,15 @@ void addWallOpenings(SynthScene& scene, Layout& layout, const ApartmentParams& p
     if (s0 < 0) continue;
     const Wall& wall = walls[w];
     const double s = s0 + width / 2;
-    Material m = rng.chance(0.5) ? woodMaterial(rng) : Material{jitter({238, 238, 232}, 0.05, rng), Texture::Panel, 0.2f};
-    std::vector<Primitive> parts{box(at(wall.point(s, 0.015), std::min(height, layout.room.z()) / 2),
-                                     wall.yaw(), {width / 2, 0.015, std::min(height, layout.room.z()) / 2}, m)};
+    Material m = rng.chance(0.5)
+                     ? woodMaterial(rng)
+                     : Material{jitter({238, 238, 232}, 0.05, rng), Texture::Panel, 0.2f};
+    std::vector<Primitive> parts{
+        box(at(wall.point(s, 0.015), std::min(height, layout.room.z()) / 2), wall.yaw(),
+            {width / 2, 0.015, std::min(height, layout.room.z()) / 2}, m)};
     addObject(scene, "door", Label::Wall, std::move(parts));
-    layout.keepouts.push_back(detail::rectangle(wall.point(s, 0.5), wall.yaw(), width / 2 + 0.05, 0.5));
+    layout.keepouts.push_back(
+        detail::rectangle(wall.point(s, 0.5), wall.yaw(), width / 2 + 0.05, 0.5));
   }
   const int windows = rng.integer(params.windows_min, params.windows_max);
   for (int i = 0; i < windows; ++i) {
@@ -541,7 +559,8 @@ SynthScene tryApartment(Rng& rng, const ApartmentParams& params) {
     const Rgb8 carpets[] = {{120, 115, 110}, {80, 90, 120}, {170, 150, 120}, {100, 60, 55}};
     scene.floor_material = {jitter(pick(carpets, rng), 0.1, rng), Texture::Carpet, 0.01f};
   }
-  const Rgb8 paints[] = {{235, 232, 222}, {220, 228, 235}, {238, 225, 205}, {215, 230, 215}, {240, 240, 240}};
+  const Rgb8 paints[] = {
+      {235, 232, 222}, {220, 228, 235}, {238, 225, 205}, {215, 230, 215}, {240, 240, 240}};
   scene.wall_material = {jitter(pick(paints, rng), 0.04, rng), Texture::Plain, 0.2f};
   scene.ceiling_material = {jitter({245, 245, 242}, 0.02, rng), Texture::Plain, 0.2f};
 
@@ -558,8 +577,9 @@ SynthScene tryApartment(Rng& rng, const ApartmentParams& params) {
   // Small objects: on every table top, a few on shelves and low cabinets.
   for (auto& s : surfaces) {
     const bool table_top = s.max_height >= 0.4;
-    const int n = table_top ? rng.integer(params.objects_per_table_min, params.objects_per_table_max)
-                            : rng.integer(0, 3);
+    const int n = table_top
+                      ? rng.integer(params.objects_per_table_min, params.objects_per_table_max)
+                      : rng.integer(0, 3);
     for (int k = 0; k < n; ++k) placeSmallObject(scene, s, rng, !table_top && rng.chance(0.5));
   }
   return scene;
@@ -581,7 +601,8 @@ void validate(const ApartmentParams& p) {
 }
 
 SynthScene makeEmptyRoom(const Eigen::Vector3d& room_size) {
-  if (!room_size.allFinite() || (room_size.array() <= 0.5).any() || (room_size.array() > 50.0).any()) {
+  if (!room_size.allFinite() || (room_size.array() <= 0.5).any() ||
+      (room_size.array() > 50.0).any()) {
     std::ostringstream msg;
     msg << "synth: absurd room size " << room_size.transpose() << " (each side 0.5..50 m)";
     throw Error(msg.str());
@@ -597,7 +618,8 @@ SynthScene makeEmptyRoom(const Eigen::Vector3d& room_size) {
   return scene;
 }
 
-int addObject(SynthScene& scene, const std::string& kind, Label label, std::vector<Primitive> parts) {
+int addObject(SynthScene& scene, const std::string& kind, Label label,
+              std::vector<Primitive> parts) {
   const int index = static_cast<int>(scene.objects.size());
   scene.objects.push_back({kind, label, -1});
   for (auto& p : parts) {

@@ -55,8 +55,7 @@ double gaussianFromBits(std::uint64_t bits);
 
 using Polygon2 = std::vector<Eigen::Vector2d>;
 
-inline Polygon2 rectangle(const Eigen::Vector2d& center, double yaw, double half_x,
-                          double half_y) {
+inline Polygon2 rectangle(const Eigen::Vector2d& center, double yaw, double half_x, double half_y) {
   const Eigen::Vector2d ax(std::cos(yaw), std::sin(yaw));
   const Eigen::Vector2d ay(-ax.y(), ax.x());
   return {center - half_x * ax - half_y * ay, center + half_x * ax - half_y * ay,
@@ -136,7 +135,9 @@ class PlanningGrid {
  private:
   int index(int ix, int iy) const { return iy * nx_ + ix; }
   bool cellOf(const Eigen::Vector2d& xy, int& ix, int& iy) const;
-  Eigen::Vector2d centerOf(int ix, int iy) const { return {(ix + 0.5) * cell_, (iy + 0.5) * cell_}; }
+  Eigen::Vector2d centerOf(int ix, int iy) const {
+    return {(ix + 0.5) * cell_, (iy + 0.5) * cell_};
+  }
   bool lineFree(const Eigen::Vector2d& a, const Eigen::Vector2d& b) const;
   double cell_;
   int nx_, ny_;

@@ -104,9 +104,8 @@ void BM_FrameToCloud(benchmark::State& state) {
 BENCHMARK(BM_FrameToCloud)->Unit(benchmark::kMillisecond);
 
 void BM_ComputeNormals(benchmark::State& state) {
-  run(state, [](const Fixture& f) {
-    benchmark::DoNotOptimize(computeNormals(f.cloud, NormalConfig{}));
-  });
+  run(state,
+      [](const Fixture& f) { benchmark::DoNotOptimize(computeNormals(f.cloud, NormalConfig{})); });
 }
 BENCHMARK(BM_ComputeNormals)->Unit(benchmark::kMillisecond);
 

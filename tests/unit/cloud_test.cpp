@@ -111,7 +111,8 @@ TEST(ComputeNormals, TiltedPlaneGivesItsNormalFacingTheCamera) {
       ASSERT_TRUE(n.allFinite()) << u << "," << v;
       EXPECT_NEAR(n.norm(), 1.0f, 1e-4f);
       // Millimetre depth rounding at ~2 m: allow 3 degrees.
-      EXPECT_GT(n.dot(n_true), std::cos(3.0f * kPi / 180)) << u << "," << v << " n=" << n.transpose();
+      EXPECT_GT(n.dot(n_true), std::cos(3.0f * kPi / 180))
+          << u << "," << v << " n=" << n.transpose();
       EXPECT_LT(n.dot(c.points[v * 320 + u]), 0.0f);  // faces the camera
       ++checked;
     }
@@ -127,8 +128,7 @@ TEST(ComputeNormals, DepthStepDoesNotBendNormalsAndHolesStayNaN) {
   const Eigen::Vector3f floor_n = Eigen::Vector3f(0, -1, -0.5f).normalized();
   for (int v = 0; v < 120; ++v)
     for (int u = 0; u < 160; ++u)
-      f.depth_mm[v * 160 + u] =
-          u < 80 ? 1000 : planeDepthMm(k, u, v, floor_n, 0.9f);
+      f.depth_mm[v * 160 + u] = u < 80 ? 1000 : planeDepthMm(k, u, v, floor_n, 0.9f);
   // A single valid pixel in a hole has no neighbours: no normal.
   for (int v = 90; v < 110; ++v)
     for (int u = 10; u < 30; ++u) f.depth_mm[v * 160 + u] = 0;

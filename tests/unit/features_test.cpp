@@ -52,8 +52,7 @@ TEST(RgbToLab, KnownColours) {
 TEST(PatchFeatures, FlatHorizontalPatchAtTableHeight) {
   Patch patch;
   for (int i = 0; i < 20; ++i)
-    for (int j = 0; j < 20; ++j)
-      patch.add({1.0f + 0.01f * i, -0.2f + 0.01f * j, 0.75f}, {0, 0, 1});
+    for (int j = 0; j < 20; ++j) patch.add({1.0f + 0.01f * i, -0.2f + 0.01f * j, 0.75f}, {0, 0, 1});
   const FeatureVector f = patch.features();
   EXPECT_NEAR(f[0], 0.0f, 1e-5f);  // pointness
   EXPECT_NEAR(f[1], 0.5f, 1e-4f);  // square: λ1 = λ2, so surfaceness = 1/2
@@ -218,9 +217,11 @@ Grid makeGrid() {
       // Quadrants: 0 floor-like, 1 wall-like, 2 tilted, 3 no segment.
       Eigen::Vector3f p(0.02f * u, 0.02f * v, 0.0f), n(0, 0, 1);
       if (quadrant == 1) p.z() = 0.5f + 0.02f * v, n = Eigen::Vector3f(1, 0, 0);
-      if (quadrant == 2) p.z() = 0.3f + 0.01f * u + jitter(rng), n = Eigen::Vector3f(-1, 0, 2).normalized();
+      if (quadrant == 2)
+        p.z() = 0.3f + 0.01f * u + jitter(rng), n = Eigen::Vector3f(-1, 0, 2).normalized();
       g.cloud.points.push_back(p);
-      g.cloud.colors.push_back(Rgb8{static_cast<std::uint8_t>(u * 6), static_cast<std::uint8_t>(v * 8), 77});
+      g.cloud.colors.push_back(
+          Rgb8{static_cast<std::uint8_t>(u * 6), static_cast<std::uint8_t>(v * 8), 77});
       g.normals.normals.push_back(n);
       const int s = quadrant == 3 ? -1 : quadrant;
       g.seg.pixel_segment.push_back(s);
@@ -247,7 +248,8 @@ TEST(ComputeFeatures, MatchesPerPatchFeaturesAndCentroids) {
     }
     const FeatureVector expected = p.features();
     for (int k = 0; k < kFeatureDim; ++k)
-      EXPECT_NEAR(sf.features[s][k], expected[k], 1e-5f) << "segment " << s << " " << kFeatureNames[k];
+      EXPECT_NEAR(sf.features[s][k], expected[k], 1e-5f)
+          << "segment " << s << " " << kFeatureNames[k];
     EXPECT_TRUE(sf.centroids[s].isApprox(centroid / n, 1e-5f));
   }
   EXPECT_NEAR(sf.features[0][6], 0.0f, 1e-5f);

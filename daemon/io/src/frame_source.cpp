@@ -70,11 +70,18 @@ void FrameSourceBase::recordError(const std::string& message) {
 }
 
 void FrameSourceBase::recordRejected(const std::string& message) {
-  spdlog::warn("{}: skipped bad input: {}", describe(), message);
-  std::lock_guard lock(mutex_);
-  ++stats_.frames_rejected;
-  stats_.last_error = message;
-  stats_.last_error_utime = hostUtimeNow();
+  std::uint64_t rejected = 0;
+  {
+    std::lock_guard lock(mutex_);
+    rejected = ++stats_.frames_rejected;
+    stats_.last_error = message;
+    stats_.last_error_utime = hostUtimeNow();
+  }
+  // A stream of garbage (a wrong publisher on our channel) must not flood the
+  // log: the first ten, then every hundredth; the count is in stats() anyway.
+  if (rejected <= 10 || rejected % 100 == 0) {
+    spdlog::warn("{}: skipped bad input ({} so far): {}", describe(), rejected, message);
+  }
 }
 
 void FrameSourceBase::recordDelivered() {

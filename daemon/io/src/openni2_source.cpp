@@ -16,6 +16,7 @@
 #include <cstring>
 #include <filesystem>
 #include <mutex>
+#include <thread>
 
 #include "findmug/error.hpp"
 #include "sources_internal.hpp"
@@ -233,8 +234,14 @@ class Openni2Source : public FrameSourceBase {
   }
 
   void close() {
+    const bool streaming = depth_.isValid() || color_.isValid();
     depth_.stop();
     color_.stop();
+    // A driver's frame thread may still touch a stream for about one frame
+    // period after stop() (OpenNI2's own Dummy driver crashes with a
+    // use-after-free otherwise). close() is rare — loss, shutdown — so wait
+    // three frame periods before freeing the streams.
+    if (streaming) std::this_thread::sleep_for(std::chrono::milliseconds(100));
     depth_.destroy();
     color_.destroy();
     device_.close();

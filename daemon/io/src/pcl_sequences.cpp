@@ -1,8 +1,5 @@
 // PCD / PCLZF / TIFF frame readers and the sequence sources built on them.
 #include <pcl/io/lzf.h>
-#include <pcl/io/pcd_io.h>
-#include <pcl/point_cloud.h>
-#include <pcl/point_types.h>
 #include <spdlog/spdlog.h>
 #include <tiffio.h>
 
@@ -82,66 +79,205 @@ struct AxisAccumulator {
 
 }  // namespace
 
+// Our own PCD reader: PCL's maps the file and, for binary_compressed data,
+// trusts the stored compressed size — a truncated file makes it read past the
+// end of the mapping. Here every size is checked against the bytes we have.
+namespace {
+
+struct PcdField {
+  std::string name;
+  int size = 0;
+  char type = 0;
+  int count = 1;
+};
+
+struct PcdHeader {
+  std::vector<PcdField> fields;
+  std::size_t width = 0, height = 0, points = 0;
+  std::string data;
+  std::size_t body_offset = 0;
+};
+
+std::size_t parseCount(const std::string& path, const std::string& key, const std::string& token) {
+  std::size_t used = 0;
+  long long v = -1;
+  try {
+    v = std::stoll(token, &used);
+  } catch (const std::exception&) {
+    used = 0;
+  }
+  if (used != token.size() || v < 0) throw Error(path + ": PCD " + key + " '" + token + "' is not a count");
+  return static_cast<std::size_t>(v);
+}
+
+PcdHeader parsePcdHeader(const std::string& path, const std::vector<std::uint8_t>& file) {
+  PcdHeader h;
+  std::vector<int> sizes, counts;
+  std::vector<char> types;
+  std::size_t pos = 0;
+  while (h.data.empty()) {
+    if (pos >= file.size() || pos > 4096) throw Error(path + ": PCD header has no DATA line");
+    std::size_t eol = pos;
+    while (eol < file.size() && file[eol] != '\n') ++eol;
+    if (eol == file.size()) throw Error(path + ": PCD header has no DATA line");
+    std::istringstream line(std::string(file.begin() + static_cast<std::ptrdiff_t>(pos),
+                                        file.begin() + static_cast<std::ptrdiff_t>(eol)));
+    pos = eol + 1;
+    std::string key;
+    if (!(line >> key) || key[0] == '#') continue;
+    std::vector<std::string> tokens;
+    for (std::string t; line >> t;) tokens.push_back(t);
+    if (key == "FIELDS") {
+      for (const auto& t : tokens) h.fields.push_back({t});
+    } else if (key == "SIZE") {
+      for (const auto& t : tokens) sizes.push_back(static_cast<int>(parseCount(path, key, t)));
+    } else if (key == "TYPE") {
+      for (const auto& t : tokens) types.push_back(t.size() == 1 ? t[0] : '?');
+    } else if (key == "COUNT") {
+      for (const auto& t : tokens) counts.push_back(static_cast<int>(parseCount(path, key, t)));
+    } else if (key == "WIDTH" && tokens.size() == 1) {
+      h.width = parseCount(path, key, tokens[0]);
+    } else if (key == "HEIGHT" && tokens.size() == 1) {
+      h.height = parseCount(path, key, tokens[0]);
+    } else if (key == "POINTS" && tokens.size() == 1) {
+      h.points = parseCount(path, key, tokens[0]);
+    } else if (key == "DATA" && tokens.size() == 1) {
+      h.data = tokens[0];
+    }
+  }
+  h.body_offset = pos;
+  if (counts.empty()) counts.assign(h.fields.size(), 1);
+  if (h.fields.empty() || sizes.size() != h.fields.size() || types.size() != h.fields.size() ||
+      counts.size() != h.fields.size()) {
+    throw Error(path + ": PCD header FIELDS/SIZE/TYPE/COUNT disagree in length");
+  }
+  for (std::size_t i = 0; i < h.fields.size(); ++i) {
+    h.fields[i].size = sizes[i];
+    h.fields[i].type = types[i];
+    h.fields[i].count = counts[i];
+    if (sizes[i] < 1 || sizes[i] > 8 || counts[i] < 1 || counts[i] > 1024) {
+      throw Error(path + ": PCD field " + h.fields[i].name + " has SIZE " +
+                  std::to_string(sizes[i]) + " COUNT " + std::to_string(counts[i]));
+    }
+  }
+  if (h.height <= 1 || h.width < 2 || h.width > static_cast<std::size_t>(kMaxSide) ||
+      h.height > static_cast<std::size_t>(kMaxSide)) {
+    throw Error(path + ": not an organized depth-camera cloud (" + std::to_string(h.width) + "x" +
+                std::to_string(h.height) + ")");
+  }
+  if (h.points != h.width * h.height) {
+    throw Error(path + ": PCD POINTS " + std::to_string(h.points) + " != WIDTH*HEIGHT");
+  }
+  return h;
+}
+
+}  // namespace
+
 RgbdFrame readPcdFrame(const std::string& path) {
-  pcl::PCDReader reader;
-  pcl::PCLPointCloud2 header;
-  Eigen::Vector4f origin;
-  Eigen::Quaternionf orientation;
-  int version = 0, data_type = 0;
-  unsigned int data_idx = 0;
-  if (reader.readHeader(path, header, origin, orientation, version, data_type, data_idx) < 0) {
-    throw Error(path + ": not a readable PCD header");
+  const std::vector<std::uint8_t> file = readWholeFile(path);
+  const PcdHeader h = parsePcdHeader(path, file);
+  // Where x, y, z and rgb(a) live in a point (AoS) and in the field-major
+  // layout of binary_compressed (SoA).
+  int ix = -1, iy = -1, iz = -1, irgb = -1;
+  std::vector<std::size_t> aos_offset(h.fields.size()), soa_offset(h.fields.size());
+  std::size_t point_bytes = 0;
+  for (std::size_t i = 0; i < h.fields.size(); ++i) {
+    const auto& f = h.fields[i];
+    aos_offset[i] = point_bytes;
+    soa_offset[i] = point_bytes * h.points;
+    point_bytes += static_cast<std::size_t>(f.size) * f.count;
+    const int idx = static_cast<int>(i);
+    if (f.name == "x") ix = idx;
+    if (f.name == "y") iy = idx;
+    if (f.name == "z") iz = idx;
+    if (f.name == "rgb" || f.name == "rgba") irgb = idx;
   }
-  bool has_x = false, has_y = false, has_z = false, has_rgb = false;
-  for (const auto& f : header.fields) {
-    has_x |= f.name == "x";
-    has_y |= f.name == "y";
-    has_z |= f.name == "z";
-    has_rgb |= f.name == "rgb" || f.name == "rgba";
-  }
-  if (!(has_x && has_y && has_z && has_rgb)) {
+  if (ix < 0 || iy < 0 || iz < 0 || irgb < 0) {
     throw Error(path + ": PCD needs fields x y z and rgb or rgba");
   }
-  if (header.height <= 1 || header.width < 2 || header.width > kMaxSide ||
-      header.height > kMaxSide) {
-    throw Error(path + ": not an organized depth-camera cloud (" + std::to_string(header.width) +
-                "x" + std::to_string(header.height) + ")");
+  for (int i : {ix, iy, iz}) {
+    const auto& f = h.fields[static_cast<std::size_t>(i)];
+    if (f.type != 'F' || f.size != 4 || f.count != 1) {
+      throw Error(path + ": PCD field " + f.name + " must be one 4-byte float");
+    }
   }
-  pcl::PointCloud<pcl::PointXYZRGBA> cloud;
-  int rc = -1;
-  try {
-    rc = reader.read(path, cloud);
-  } catch (const std::exception& e) {
-    throw Error(path + ": PCD read failed: " + e.what());
-  }
-  if (rc < 0) throw Error(path + ": PCD read failed (PCL code " + std::to_string(rc) + ")");
-  if (cloud.width != header.width || cloud.height != header.height ||
-      cloud.size() != static_cast<std::size_t>(cloud.width) * cloud.height) {
-    throw Error(path + ": PCD body holds " + std::to_string(cloud.size()) + " points, header says " +
-                std::to_string(header.width) + "x" + std::to_string(header.height));
+  if (h.fields[static_cast<std::size_t>(irgb)].size != 4 ||
+      h.fields[static_cast<std::size_t>(irgb)].count != 1) {
+    throw Error(path + ": PCD field rgb/rgba must be 4 bytes");
   }
 
+  const std::size_t body_size = point_bytes * h.points;
+  std::vector<std::uint8_t> decompressed;
+  const std::uint8_t* body = nullptr;
+  bool field_major = false;
+  const std::size_t available = file.size() - h.body_offset;
+  if (h.data == "binary") {
+    if (available < body_size) {
+      throw Error(path + ": PCD body has " + std::to_string(available) + " bytes, expected " +
+                  std::to_string(body_size));
+    }
+    body = &file[h.body_offset];
+  } else if (h.data == "binary_compressed") {
+    if (available < 8) throw Error(path + ": PCD compressed body truncated");
+    const std::uint32_t compressed = readLe32(&file[h.body_offset]);
+    const std::uint32_t uncompressed = readLe32(&file[h.body_offset + 4]);
+    if (uncompressed != body_size) {
+      throw Error(path + ": PCD uncompressed size " + std::to_string(uncompressed) +
+                  ", expected " + std::to_string(body_size));
+    }
+    if (compressed > available - 8) {
+      throw Error(path + ": PCD compressed body of " + std::to_string(compressed) +
+                  " bytes, only " + std::to_string(available - 8) + " in the file (truncated?)");
+    }
+    decompressed.resize(body_size);
+    const unsigned int got = pcl::lzfDecompress(&file[h.body_offset + 8], compressed,
+                                                decompressed.data(), static_cast<unsigned int>(body_size));
+    if (got != body_size) {
+      throw Error(path + ": corrupt LZF data in PCD (" + std::to_string(got) + " of " +
+                  std::to_string(body_size) + " bytes)");
+    }
+    body = decompressed.data();
+    field_major = true;
+  } else {
+    throw Error(path + ": PCD DATA '" + h.data + "' not supported (binary, binary_compressed)");
+  }
+  auto fieldAt = [&](int field, std::size_t point) {
+    const auto f = static_cast<std::size_t>(field);
+    const std::uint8_t* p = field_major ? body + soa_offset[f] + point * 4
+                                        : body + point * point_bytes + aos_offset[f];
+    std::uint32_t bits;
+    std::memcpy(&bits, p, 4);  // PCD binary data is little-endian, as is the host
+    return bits;
+  };
+  auto asFloat = [](std::uint32_t bits) {
+    float v;
+    std::memcpy(&v, &bits, 4);
+    return v;
+  };
+
   RgbdFrame frame;
-  frame.width = static_cast<int>(cloud.width);
-  frame.height = static_cast<int>(cloud.height);
+  frame.width = static_cast<int>(h.width);
+  frame.height = static_cast<int>(h.height);
   frame.source = path;
-  frame.depth_mm.assign(cloud.size(), 0);
-  frame.rgb.resize(cloud.size());
+  frame.depth_mm.assign(h.points, 0);
+  frame.rgb.resize(h.points);
   AxisAccumulator fit_u, fit_v;
   for (int v = 0; v < frame.height; ++v) {
     for (int u = 0; u < frame.width; ++u) {
       const auto i = static_cast<std::size_t>(v) * frame.width + u;
-      const auto& p = cloud[i];
-      frame.rgb[i] = Rgb8{p.r, p.g, p.b};
-      if (!(std::isfinite(p.x) && std::isfinite(p.y) && std::isfinite(p.z)) || p.z <= 0.0f) continue;
-      const double mm = std::round(static_cast<double>(p.z) * 1000.0);
+      const std::uint32_t rgb = fieldAt(irgb, i);
+      frame.rgb[i] = Rgb8{static_cast<std::uint8_t>(rgb >> 16), static_cast<std::uint8_t>(rgb >> 8),
+                          static_cast<std::uint8_t>(rgb)};
+      const float x = asFloat(fieldAt(ix, i)), y = asFloat(fieldAt(iy, i)), z = asFloat(fieldAt(iz, i));
+      if (!(std::isfinite(x) && std::isfinite(y) && std::isfinite(z)) || z <= 0.0f) continue;
+      const double mm = std::round(static_cast<double>(z) * 1000.0);
       if (mm > 65535.0) {
         throw Error(path + ": point (" + std::to_string(u) + ", " + std::to_string(v) +
-                    ") has z = " + std::to_string(p.z) + " m, beyond uint16 millimetres");
+                    ") has z = " + std::to_string(z) + " m, beyond uint16 millimetres");
       }
       frame.depth_mm[i] = static_cast<std::uint16_t>(mm);
-      fit_u.add(p.x / p.z, u);
-      fit_v.add(p.y / p.z, v);
+      fit_u.add(x / z, u);
+      fit_v.add(y / z, v);
     }
   }
   // PCD keeps no calibration, but an organized camera cloud is a pinhole

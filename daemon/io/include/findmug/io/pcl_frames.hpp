@@ -1,8 +1,10 @@
 // findmug/io/pcl_frames.hpp — single RGB-D frames from PCL's recording formats.
 //
 // These are the three layouts PCL's grabbers write (and its test data uses):
-//   PCD    an organized cloud with x y z and rgb or rgba; depth = z in mm,
-//          intrinsics fitted to the points (they are a pinhole projection);
+//   PCD    an organized cloud (binary or binary_compressed) with float x y z
+//          and rgb or rgba; depth = z in mm, intrinsics fitted to the points
+//          (they are a pinhole projection); read by our own bounds-checked
+//          reader, since PCL's reads past the end of truncated compressed files;
 //   PCLZF  NAME_depth.pclzf (LZF-compressed uint16 depth, "depth16"),
 //          NAME_rgb.pclzf ("rgb24") and NAME.xml (intrinsics, depth scale);
 //   TIFF   NAME_depth.tiff (uint16 mm) + NAME_rgb.tiff (RGB8); no calibration

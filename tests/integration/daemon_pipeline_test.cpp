@@ -1,0 +1,378 @@
+// The daemon's pipeline in-process: real frames in (NYU, PCL grabber
+// sequence, LCM log with corrupt messages), LCM file:// logs out, compared
+// frame by frame with Segmenter::process. Also the drop policy under an
+// artificially held segmentation stage, and start-up errors naming the key.
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <condition_variable>
+#include <fstream>
+#include <map>
+#include <mutex>
+#include <thread>
+
+#include "daemon_test_support.hpp"
+#include "findmug/daemon/daemon.hpp"
+#include "findmug/daemon/pipeline.hpp"
+#include "findmug/error.hpp"
+#include "findmug/io/channels.hpp"
+#include "findmug/io/frame_source.hpp"
+#include "findmug/io/lcm_codec.hpp"
+#include "findmug/segmenter.hpp"
+#include "test_data.hpp"
+
+namespace findmug::daemon {
+namespace {
+
+using namespace std::chrono_literals;
+using findmug::test::TempDir;
+
+// One model for the whole test program, trained on two NYU frames.
+struct SharedModel {
+  std::shared_ptr<const RandomForest> forest;
+  std::string path;
+  TempDir dir;
+};
+
+const SharedModel* sharedModel() {
+  static SharedModel* model = [] () -> SharedModel* {
+    const auto nyu = findmug::test::dataPath("nyuv2_labeled");
+    if (nyu.empty()) return nullptr;
+    auto* m = new SharedModel;
+    DatasetFolder ds(nyu.string());
+    std::vector<LabeledFrame> frames = {ds.load(0), ds.load(1)};
+    m->path = m->dir.str("tiny.fmf");
+    m->forest = test::trainTinyModel(test::fastSegmenterConfig(), frames, m->path);
+    return m;
+  }();
+  return model;
+}
+
+Config baseConfig(const std::string& source, const std::string& out_log) {
+  Config config;
+  config.segmenter = test::fastSegmenterConfig();
+  config.extra["daemon.source"] = source;
+  config.extra["daemon.lcm_url"] = "file://" + out_log + "?mode=w";
+  config.extra["daemon.model_path"] = sharedModel()->path;
+  config.extra["daemon.workers"] = "2";
+  config.extra["daemon.status_period_s"] = "0.2";
+  return config;
+}
+
+struct Published {
+  std::vector<io::LabelImageMessage> labels;
+  std::vector<io::TablesMessage> tables;
+  std::vector<status_t> statuses;
+};
+
+Published readPublished(const std::string& log) {
+  Published p;
+  for (const auto& m : test::readLcmLog(log)) {
+    if (m.channel == io::kLabelsChannel) {
+      p.labels.push_back(io::decodeLabelImage(m.data.data(), m.data.size(), m.channel));
+    } else if (m.channel == io::kTablesChannel) {
+      p.tables.push_back(io::decodeTables(m.data.data(), m.data.size(), m.channel));
+    } else if (m.channel == io::kStatusChannel) {
+      p.statuses.push_back(io::decodeMessage<status_t>(m.data.data(), m.data.size(), m.channel));
+    } else {
+      ADD_FAILURE() << "unexpected channel " << m.channel;
+    }
+  }
+  return p;
+}
+
+// Every frame the spec yields, run through the library alone.
+std::map<std::int64_t, LabelledFrame> libraryResults(const std::string& spec) {
+  const Segmenter segmenter(test::fastSegmenterConfig(), sharedModel()->forest);
+  auto source = io::makeSource(spec);
+  std::map<std::int64_t, LabelledFrame> out;
+  while (auto frame = source->next()) {
+    const std::int64_t seq = frame->seq;
+    out.emplace(seq, segmenter.process(std::move(*frame)));
+  }
+  return out;
+}
+
+void expectSameLabels(const LabelImage& expected, const io::LabelImageMessage& got) {
+  ASSERT_EQ(got.image.width, expected.width);
+  ASSERT_EQ(got.image.height, expected.height);
+  ASSERT_EQ(got.image.labels.size(), expected.labels.size());
+  std::size_t differing = 0;
+  for (std::size_t i = 0; i < expected.labels.size(); ++i) {
+    differing += got.image.labels[i] != expected.labels[i];
+  }
+  EXPECT_EQ(differing, 0u) << "seq " << got.seq;
+  ASSERT_EQ(got.image.confidence.size(), expected.confidence.size());
+  for (std::size_t i = 0; i < expected.confidence.size(); i += 97) {
+    EXPECT_NEAR(got.image.confidence[i], expected.confidence[i], 0.5 / 255 + 1e-6);
+  }
+}
+
+// Runs the daemon over a finite source to its end and checks that every
+// frame was published exactly once, in order, equal to the library's output.
+void runAndCompare(const std::string& spec, std::size_t expected_frames) {
+  TempDir tmp;
+  const std::string out = tmp.str("out.lcmlog");
+  Config config = baseConfig(spec, out);
+  config.extra["daemon.queue_capacity"] = "16";  // a finite replay: keep every frame
+  const DaemonConfig dc = resolveDaemonConfig(config);
+  {
+    Daemon daemon(config, dc);
+    EXPECT_EQ(daemon.run(), 0);
+  }
+  const auto expected = libraryResults(spec);
+  ASSERT_EQ(expected.size(), expected_frames);
+  const Published published = readPublished(out);
+  ASSERT_EQ(published.labels.size(), expected_frames);
+  ASSERT_EQ(published.tables.size(), expected_frames);
+  std::int64_t previous = -1;
+  for (std::size_t i = 0; i < published.labels.size(); ++i) {
+    const auto& got = published.labels[i];
+    EXPECT_GT(got.seq, previous) << "label images out of frame order";
+    previous = got.seq;
+    ASSERT_TRUE(expected.count(got.seq)) << "unknown seq " << got.seq;
+    const LabelledFrame& want = expected.at(got.seq);
+    expectSameLabels(want.labels, got);
+    EXPECT_EQ(got.utime, published.tables[i].utime);
+    EXPECT_EQ(published.tables[i].seq, got.seq);
+    EXPECT_EQ(published.tables[i].tables.size(), want.tables.size());
+    EXPECT_GT(got.latency_us, 0);
+  }
+  ASSERT_FALSE(published.statuses.empty());
+  const status_t& last = published.statuses.back();  // the final status, after the drain
+  EXPECT_EQ(last.frames_received, static_cast<std::int64_t>(expected_frames));
+  EXPECT_EQ(last.frames_processed, static_cast<std::int64_t>(expected_frames));
+  EXPECT_EQ(last.frames_dropped, 0);
+  EXPECT_EQ(last.frames_rejected, 0);
+  EXPECT_EQ(last.model_id, "tiny.fmf:" + sharedModel()->forest->id());
+  EXPECT_EQ(last.source_state, status_t::SOURCE_END_OF_STREAM);
+  EXPECT_EQ(last.num_queues, 3);
+  const auto& names = last.stage_names;
+  for (const char* stage : {"prepare", "segment", "publish", "supervoxels", "forest", "total"}) {
+    EXPECT_NE(std::find(names.begin(), names.end(), stage), names.end()) << stage;
+  }
+  const auto total = std::find(names.begin(), names.end(), "total") - names.begin();
+  EXPECT_GT(last.latency_p50_us[total], 0);
+  EXPECT_GE(last.latency_max_us[total], last.latency_p95_us[total]);
+  EXPECT_GE(last.latency_p95_us[total], last.latency_p50_us[total]);
+}
+
+TEST(DaemonPipeline, NyuFramesArePublishedEqualToTheLibraryOutput) {
+  FINDMUG_REQUIRE_DATA(nyu, "nyuv2_labeled");
+  ASSERT_TRUE(sharedModel());
+  TempDir tmp;
+  DatasetFolder all(nyu.string());
+  // Three frames, including the one with raw (holey) depth when present.
+  std::vector<std::string> names = {all.names()[2], all.names()[5]};
+  names.push_back(std::find(all.names().begin(), all.names().end(), "0433") != all.names().end()
+                      ? "0433"
+                      : all.names()[8]);
+  test::linkDatasetSubset(nyu, names, tmp.path() / "nyu");
+  runAndCompare("dataset:" + (tmp.path() / "nyu").string(), 3);
+}
+
+TEST(DaemonPipeline, PclGrabberSequenceIsPublishedEqualToTheLibraryOutput) {
+  FINDMUG_REQUIRE_DATA(pcd, "pcl_test_clouds/grabber_sequences/pcd");
+  ASSERT_TRUE(sharedModel());
+  runAndCompare("pcd:" + pcd.string(), 3);
+}
+
+TEST(DaemonPipeline, SequentialModeRunsTheSamePipelineSynchronously) {
+  FINDMUG_REQUIRE_DATA(nyu, "nyuv2_labeled");
+  ASSERT_TRUE(sharedModel());
+  TempDir tmp;
+  Config config = baseConfig("openni2", tmp.str("out.lcmlog"));
+  const DaemonConfig dc = resolveDaemonConfig(config);
+  DatasetFolder ds(nyu.string());
+  const Segmenter segmenter(config.segmenter, sharedModel()->forest);
+  std::vector<LabelImage> expected;
+  {
+    Pipeline pipeline(config.segmenter, dc, sharedModel()->forest, "tiny",
+                      ExecutionMode::Sequential);
+    pipeline.start();
+    for (std::size_t i : {3u, 4u}) {
+      RgbdFrame frame = ds.load(i).frame;
+      frame.seq = static_cast<std::int64_t>(i);
+      expected.push_back(segmenter.process(frame).labels);
+      const auto before = pipeline.counters().processed;
+      ASSERT_TRUE(pipeline.submit(std::move(frame)));
+      // Synchronous: published before submit returned.
+      EXPECT_EQ(pipeline.counters().processed, before + 1);
+      EXPECT_EQ(pipeline.counters().pending, 0u);
+    }
+    pipeline.stop(StopMode::Drain);
+  }
+  const Published published = readPublished(tmp.str("out.lcmlog"));
+  ASSERT_EQ(published.labels.size(), 2u);
+  EXPECT_EQ(published.labels[0].seq, 3);
+  EXPECT_EQ(published.labels[1].seq, 4);
+  expectSameLabels(expected[0], published.labels[0]);
+  expectSameLabels(expected[1], published.labels[1]);
+}
+
+TEST(DaemonPipeline, HeldSegmentStageDropsTheOldestFramesAndTheNewestWin) {
+  FINDMUG_REQUIRE_DATA(nyu, "nyuv2_labeled");
+  ASSERT_TRUE(sharedModel());
+  TempDir tmp;
+  Config config = baseConfig("openni2", tmp.str("out.lcmlog"));
+  config.extra["daemon.workers"] = "1";
+  config.extra["daemon.queue_capacity"] = "2";
+  const DaemonConfig dc = resolveDaemonConfig(config);
+
+  // The artificially slow stage: segmentation of the first frame is held
+  // until every frame has been offered and the prepare stage has gone idle.
+  std::mutex m;
+  std::condition_variable cv;
+  bool first_entered = false, release = false;
+  PipelineHooks hooks;
+  hooks.before_segment = [&](const RgbdFrame& frame) {
+    if (frame.seq != 0) return;
+    std::unique_lock lock(m);
+    first_entered = true;
+    cv.notify_all();
+    cv.wait(lock, [&] { return release; });
+  };
+  DatasetFolder ds(nyu.string());
+  const RgbdFrame frame = ds.load(6).frame;
+  constexpr int kFrames = 10;
+  Pipeline pipeline(config.segmenter, dc, sharedModel()->forest, "tiny", ExecutionMode::Threaded,
+                    hooks);
+  pipeline.start();
+  auto submit = [&](int seq) {
+    RgbdFrame f = frame;
+    f.seq = seq;
+    f.utime = 1000 + static_cast<std::uint64_t>(seq);
+    ASSERT_TRUE(pipeline.submit(std::move(f)));
+  };
+  submit(0);
+  {
+    std::unique_lock lock(m);
+    ASSERT_TRUE(cv.wait_for(lock, 120s, [&] { return first_entered; }));
+  }
+  for (int seq = 1; seq < kFrames; ++seq) submit(seq);
+  // Wait (deadline only guards a hang) until the prepare stage has handed
+  // everything on: 1 frame held + a full segment queue.
+  const auto deadline = std::chrono::steady_clock::now() + 120s;
+  while (pipeline.counters().pending != 3 && std::chrono::steady_clock::now() < deadline) {
+    std::this_thread::sleep_for(10ms);
+  }
+  ASSERT_EQ(pipeline.counters().pending, 3u);
+  EXPECT_EQ(pipeline.makeStatus().frames_dropped, kFrames - 3);
+  {
+    std::lock_guard lock(m);
+    release = true;
+  }
+  cv.notify_all();
+  pipeline.stop(StopMode::Drain);
+
+  const PipelineCounters c = pipeline.counters();
+  EXPECT_EQ(c.received, static_cast<std::uint64_t>(kFrames));
+  EXPECT_EQ(c.processed, 3u);
+  EXPECT_EQ(c.dropped, static_cast<std::uint64_t>(kFrames - 3));
+  EXPECT_EQ(c.rejected, 0u);
+  const Published published = readPublished(tmp.str("out.lcmlog"));
+  std::vector<std::int64_t> seqs;
+  for (const auto& l : published.labels) seqs.push_back(l.seq);
+  // The held frame, then the newest two: everything in between was dropped.
+  EXPECT_EQ(seqs, (std::vector<std::int64_t>{0, kFrames - 2, kFrames - 1}));
+  ASSERT_FALSE(published.statuses.empty());
+  EXPECT_EQ(published.statuses.back().frames_dropped, kFrames - 3);
+  EXPECT_EQ(published.statuses.back().frames_processed, 3);
+}
+
+TEST(DaemonPipeline, CorruptLcmMessagesAreCountedAndSkipped) {
+  FINDMUG_REQUIRE_DATA(nyu, "nyuv2_labeled");
+  ASSERT_TRUE(sharedModel());
+  TempDir tmp;
+  DatasetFolder ds(nyu.string());
+  RgbdFrame good = ds.load(7).frame;
+  good.seq = 10;
+  const rgbd_frame_t good_msg = io::encodeRgbdFrame(good);
+  const std::vector<std::uint8_t> good_bytes = io::encodeMessage(good_msg);
+
+  std::vector<test::LogMessage> in;
+  const std::string ch(io::kRgbdChannel);
+  in.push_back({ch, good_bytes});
+  // Truncated in the middle of the depth payload.
+  in.push_back({ch, std::vector<std::uint8_t>(good_bytes.begin(),
+                                              good_bytes.begin() + good_bytes.size() / 2)});
+  // Garbage (wrong type hash).
+  in.push_back({ch, std::vector<std::uint8_t>(4096, 0xA5)});
+  // Absurd dimensions.
+  rgbd_frame_t huge = good_msg;
+  huge.width = 100000;
+  huge.height = 100000;
+  in.push_back({ch, io::encodeMessage(huge)});
+  // Size field consistent with the array but not with width x height.
+  rgbd_frame_t short_depth = good_msg;
+  short_depth.depth_compression = rgbd_frame_t::DEPTH_NONE;
+  short_depth.depth_size = 100;
+  short_depth.depth_data.assign(100, 0);
+  in.push_back({ch, io::encodeMessage(short_depth)});
+  // Empty message.
+  in.push_back({ch, {}});
+  rgbd_frame_t second = good_msg;
+  second.seq = 11;
+  in.push_back({ch, io::encodeMessage(second)});
+  const std::string in_log = tmp.str("in.lcmlog");
+  test::writeLcmLog(in_log, in);
+
+  const std::string out = tmp.str("out.lcmlog");
+  Config config = baseConfig("lcm:" + ch + "?url=file://" + in_log + "?speed=0", out);
+  config.extra["daemon.queue_capacity"] = "8";
+  const DaemonConfig dc = resolveDaemonConfig(config);
+  {
+    Daemon daemon(config, dc);
+    EXPECT_EQ(daemon.run(), 0);  // the log's end is the stream's end
+  }
+  const Published published = readPublished(out);
+  ASSERT_EQ(published.labels.size(), 2u);
+  EXPECT_EQ(published.labels[0].seq, 10);
+  EXPECT_EQ(published.labels[1].seq, 11);
+  const Segmenter segmenter(test::fastSegmenterConfig(), sharedModel()->forest);
+  const LabelledFrame expected = segmenter.process(io::decodeRgbdFrame(good_msg, ch));
+  expectSameLabels(expected.labels, published.labels[0]);
+  ASSERT_FALSE(published.statuses.empty());
+  const status_t& last = published.statuses.back();
+  EXPECT_EQ(last.frames_received, 2);
+  EXPECT_EQ(last.frames_processed, 2);
+  EXPECT_EQ(last.frames_rejected, 5);
+  EXPECT_FALSE(last.last_error.empty());
+  EXPECT_GT(last.last_error_utime, 0);
+}
+
+TEST(DaemonPipeline, StartupErrorsNameTheKey) {
+  FINDMUG_REQUIRE_DATA(nyu, "nyuv2_labeled");
+  ASSERT_TRUE(sharedModel());
+  TempDir tmp;
+  auto error_of = [&](Config config) -> std::string {
+    try {
+      const DaemonConfig dc = resolveDaemonConfig(config);
+      Daemon daemon(config, dc);
+    } catch (const Error& e) {
+      return e.what();
+    }
+    return "";
+  };
+  Config missing_model = baseConfig("dataset:" + nyu.string(), tmp.str("o.lcmlog"));
+  missing_model.extra["daemon.model_path"] = tmp.str("nope.fmf");
+  EXPECT_NE(error_of(missing_model).find("daemon.model_path"), std::string::npos);
+
+  Config corrupt_model = baseConfig("dataset:" + nyu.string(), tmp.str("o.lcmlog"));
+  {
+    std::ofstream f(tmp.str("bad.fmf"), std::ios::binary);
+    f << "not a model";
+  }
+  corrupt_model.extra["daemon.model_path"] = tmp.str("bad.fmf");
+  EXPECT_NE(error_of(corrupt_model).find("daemon.model_path"), std::string::npos);
+
+  Config bad_source = baseConfig("dataset:" + tmp.str("no-such-dir"), tmp.str("o.lcmlog"));
+  EXPECT_NE(error_of(bad_source).find("daemon.source"), std::string::npos);
+
+  Config bad_url = baseConfig("dataset:" + nyu.string(), tmp.str("o.lcmlog"));
+  bad_url.extra["daemon.lcm_url"] = "bogus://x";
+  EXPECT_NE(error_of(bad_url).find("daemon.lcm_url"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace findmug::daemon

@@ -1,0 +1,58 @@
+// Helpers shared by the daemon integration tests: a tiny model trained in
+// process, LCM log files in and out, a dataset subset made of symlinks, and
+// a NOTIFY_SOCKET the test owns.
+#pragma once
+
+#include <chrono>
+#include <cstdint>
+#include <filesystem>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "findmug/config.hpp"
+#include "findmug/dataset.hpp"
+#include "findmug/forest.hpp"
+
+namespace findmug::daemon::test {
+
+// Settings that keep the tests quick on a 2-core machine while exercising
+// every stage (the organized oversegmenter; the MRF stays on).
+SegmenterConfig fastSegmenterConfig();
+
+// Trains a small forest on the frames' supervoxel features and ground-truth
+// labels, saves it to `path` and returns it.
+std::shared_ptr<const RandomForest> trainTinyModel(const SegmenterConfig& config,
+                                                   const std::vector<LabeledFrame>& frames,
+                                                   const std::string& path);
+
+// A folder `dst` in the NYU layout holding symlinks to `names` of `src`
+// (rgb/, depth/, label8/): a short sequence without copying the data.
+void linkDatasetSubset(const std::filesystem::path& src, const std::vector<std::string>& names,
+                       const std::filesystem::path& dst);
+
+struct LogMessage {
+  std::string channel;
+  std::vector<std::uint8_t> data;
+};
+std::vector<LogMessage> readLcmLog(const std::string& path);
+void writeLcmLog(const std::string& path, const std::vector<LogMessage>& messages);
+
+// An AF_UNIX datagram socket bound at `path`, as systemd's NOTIFY_SOCKET.
+class NotifySocket {
+ public:
+  explicit NotifySocket(std::string path);
+  ~NotifySocket();
+  NotifySocket(const NotifySocket&) = delete;
+  NotifySocket& operator=(const NotifySocket&) = delete;
+  const std::string& path() const { return path_; }
+  // One datagram, or nullopt after `timeout`.
+  std::optional<std::string> receive(std::chrono::milliseconds timeout);
+
+ private:
+  std::string path_;
+  int fd_ = -1;
+};
+
+}  // namespace findmug::daemon::test
