@@ -3,6 +3,7 @@
 
 #include <spdlog/spdlog.h>
 
+#include <algorithm>
 #include <filesystem>
 
 #include "findmug/error.hpp"
@@ -127,12 +128,19 @@ int Daemon::run() {
       next_ping = now + ping_period;
     }
     if (now >= next_status_text) {
-      const auto c = pipeline_->counters();
-      notifier_.status(std::to_string(c.processed) + " frames processed, " +
-                       std::to_string(c.dropped) + " dropped, " + std::to_string(c.rejected) +
-                       " rejected; source " +
-                       std::string(io::sourceStateName(source_->state())));
-      next_status_text = now + std::chrono::seconds(5);
+      // The same figures as status_t, for `systemctl status` and the journal.
+      const status_t s = pipeline_->makeStatus();
+      const auto total = std::find(s.stage_names.begin(), s.stage_names.end(), "total") -
+                         s.stage_names.begin();
+      const std::string line = fmt::format(
+          "{} received, {} processed, {} dropped, {} rejected; in {:.2f} fps, out {:.2f} fps; "
+          "latency p50 {:.0f} ms, p95 {:.0f} ms; source {}",
+          s.frames_received, s.frames_processed, s.frames_dropped, s.frames_rejected, s.input_fps,
+          s.output_fps, s.latency_p50_us[total] / 1000.0, s.latency_p95_us[total] / 1000.0,
+          s.source_state_name);
+      notifier_.status(line);
+      spdlog::info("{}", line);
+      next_status_text = now + std::chrono::seconds(10);
     }
   }
 
@@ -142,14 +150,20 @@ int Daemon::run() {
   spdlog::info("shutting down ({})", stop_request ? "stop requested"
                                                   : std::string("source ") +
                                                         std::string(io::sourceStateName(final_state)));
-  source_->stop();
+  // An exhausted source keeps its EndOfStream state for the final status.
+  if (!(source_finished_.load() && final_state == io::SourceState::EndOfStream)) source_->stop();
   if (source_thread_.joinable()) source_thread_.join();
   // On request: latency matters (systemd waits), drop what is queued. At the
   // end of a finite stream every frame is still wanted.
   pipeline_->stop(stop_request ? StopMode::Discard : StopMode::Drain);
+  const std::string last_source_error = source_->stats().last_error;  // before closing it
+  // Close the device / files / input LCM handle now, not whenever the
+  // Daemon is destroyed.
+  pipeline_->attachSource(nullptr);
+  source_.reset();
 
   if (!stop_request && final_state == io::SourceState::Failed) {
-    spdlog::error("source failed: {}", source_->stats().last_error);
+    spdlog::error("source failed: {}", last_source_error);
     return 1;
   }
   return 0;

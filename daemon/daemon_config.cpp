@@ -143,6 +143,11 @@ const std::map<std::string, Key>& keys() {
           d.exit_at_end_of_stream = toBool(k, v);
         },
         [](const D& d) { return std::string(d.exit_at_end_of_stream ? "true" : "false"); }}},
+      {"daemon.shutdown_grace_s",
+       {[](D& d, const std::string& k, const std::string& v) {
+          d.shutdown_grace_s = toDouble(k, v, 0, 10);
+        },
+        [](const D& d) { return fmt(d.shutdown_grace_s); }}},
       {"daemon.log_level",
        {[](D& d, const std::string& k, const std::string& v) {
           if (v != "trace" && v != "debug" && v != "info" && v != "warn" && v != "error") {

@@ -9,6 +9,7 @@
 #include <spdlog/spdlog.h>
 
 #include <cstdio>
+#include <cstdlib>
 #include <iostream>
 #include <thread>
 
@@ -64,7 +65,14 @@ int main(int argc, char** argv) {
     pthread_kill(signal_thread.native_handle(), SIGTERM);
     signal_thread.join();
     spdlog::info("findmugd exiting with code {}", code);
-    return code;
+    // Everything observable is done: final status published, LCM handles and
+    // the source closed. A segmentation still running past the shutdown
+    // grace period cannot be interrupted and its result is not wanted, so
+    // leave without joining it (~Daemon would), to stay within systemd's
+    // and the robot's patience.
+    spdlog::shutdown();
+    std::fflush(nullptr);
+    std::_Exit(code);
   } catch (const std::exception& e) {
     spdlog::critical("findmugd: {}", e.what());
     return 2;

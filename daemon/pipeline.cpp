@@ -4,6 +4,7 @@
 #include <spdlog/spdlog.h>
 
 #include <lcm/lcm-cpp.hpp>
+#include <thread>
 
 #include "findmug/error.hpp"
 #include "findmug/io/channels.hpp"
@@ -109,7 +110,9 @@ Pipeline::Pipeline(const SegmenterConfig& segmenter_config, const DaemonConfig& 
           throw Error(name + ": " + e.what());
         }
       },
-      [this](ResultJob&& r) { publish_->push(std::move(r)); },
+      [this](ResultJob&& r) {
+        if (!publish_->push(std::move(r))) abandoned_.fetch_add(1);  // only after stop()
+      },
       [](const PreparedJob& dropped) {
         spdlog::debug("segment queue full: dropped {}", frameName(dropped.prepared.frame));
       },
@@ -127,7 +130,9 @@ Pipeline::Pipeline(const SegmenterConfig& segmenter_config, const DaemonConfig& 
           throw Error(name + ": " + e.what());
         }
       },
-      [this](PreparedJob&& p) { segment_->push(std::move(p)); },
+      [this](PreparedJob&& p) {
+        if (!segment_->push(std::move(p))) abandoned_.fetch_add(1);  // only after stop()
+      },
       [](const FrameJob& dropped) {
         spdlog::debug("prepare queue full: dropped {}", frameName(dropped.frame));
       },
@@ -177,10 +182,27 @@ void Pipeline::stop(StopMode mode) {
   }
   // Upstream first, so every stage can still hand its last results on.
   prepare_->stop(mode);
-  segment_->stop(mode);
+  segment_->close(mode);
+  if (mode == StopMode::Drain) {
+    segment_->join();
+  } else {
+    // A segmentation cannot be interrupted. Wait for the frames in flight
+    // only as long as the shutdown budget allows; later ones are abandoned
+    // (counted as dropped) and their workers joined by the destructor.
+    const auto deadline =
+        Clock::now() + std::chrono::duration_cast<Clock::duration>(
+                           std::chrono::duration<double>(daemon_config_.shutdown_grace_s));
+    while (segment_->stats().in_flight > 0 && Clock::now() < deadline) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    }
+    if (segment_->stats().in_flight == 0) segment_->join();
+  }
   publish_->stop(StopMode::Drain);  // finished results are always published
+  finalized_.store(true);
   // The publish thread is gone: this thread may use the LCM handle now.
   publishStatus();
+  // Close the handle: flushes a file:// log, leaves a udpm multicast group.
+  lcm_.reset();
   const auto c = counters();
   spdlog::info("pipeline stopped: {} received, {} processed, {} dropped, {} rejected", c.received,
                c.processed, c.dropped, c.rejected);
@@ -234,6 +256,12 @@ PipelineCounters Pipeline::counters() const {
     c.dropped += s.dropped;
     c.rejected += s.failed;
     c.pending += s.queue_depth + s.in_flight;
+  }
+  c.dropped += abandoned_.load();
+  if (finalized_.load()) {
+    // Stopped: whatever is still in a stage will never be published.
+    c.dropped += c.pending;
+    c.pending = 0;
   }
   if (const io::FrameSource* source = source_.load()) {
     const io::SourceStats s = source->stats();
@@ -314,6 +342,7 @@ status_t Pipeline::makeStatus() const {
 }
 
 void Pipeline::publishStatus() {
+  if (!lcm_) return;  // stopped: the final status has gone out already
   const status_t status = makeStatus();
   if (lcm_->publish(status_channel_, &status) != 0) {
     spdlog::warn("LCM publish on {} failed", status_channel_);

@@ -3,37 +3,38 @@
 //
 // Why it is fast: the organized cloud already knows each point's neighbours,
 // so there is no voxelisation, no octree and no k-d tree. Clustering is SLIC
-// (Achanta et al. 2012) with PCL's VCCS distance:
+// (Achanta et al. 2012) with PCL's VCCS distance and importances:
 //
-//   D = color_importance   * |Lab_p - Lab_c| / 100
+//   D = color_importance   * |Lab_p - Lab_c| / 80
 //     + spatial_importance * |xyz_p - xyz_c| / seed_resolution
 //     + normal_importance  * (1 - |n_p . n_c|)
 //
-// (PCL uses |RGB| / 255; CIELAB over 100 has the same range, black to white
-// is 1, and is perceptually even.)
+// (PCL uses |RGB| / 255; kLabScale below puts CIELAB on the same scale.)
 //
 // Steps:
-//  1. Per-pixel features: CIELAB through lookup tables, xyz, normal (SoA).
-//  2. A half-resolution copy (one valid pixel of each 2x2 block) on which
-//     seeds are placed and the iterations run; only the last assignment is at
-//     full resolution. This quarters the cost of the iterations.
-//  3. Seeds: the image is split k-d-tree style (halving the longer side)
-//     until each cell covers about one seed's worth of 3-D surface,
-//     seed_resolution^2 / organized_seed_density. A pixel covers
-//     (z/fx)(z/fy)/cos(theta) m^2 (theta: normal vs viewing ray, capped), so
-//     seeds are about seed_resolution apart on the surface at every depth and
-//     slant, as PCL's 3-D seeding gives; the count scales with
-//     1/seed_resolution^2. The focal lengths are recovered from the cloud
-//     itself (u = fx x/z + cx is linear). Each cell's seed goes to the valid
-//     pixel nearest its centre, then to the lowest-gradient pixel of its 3x3
-//     neighbourhood (SLIC), off colour and depth edges.
-//  4. max_iterations rounds of: every cluster scans a window of
-//     search_window_factor times its cell size around its centre and claims
+//  1. A half-resolution feature grid (one usable pixel of each 2x2 block:
+//     CIELAB through lookup tables, xyz, normal; structure of arrays). Seeds
+//     and iterations run on it, which quarters their cost.
+//  2. Seeds: each pixel covers (z/fx)(z/fy)/cos(theta) m^2 of surface (theta:
+//     normal vs viewing ray, capped; footprint capped beyond 4 m as PCL's
+//     seeding fades out there). The image is cut k-d-tree style, longer side
+//     first, into cells holding about one seed's worth of surface,
+//     seed_resolution^2 / organized_seed_density, so seeds are about
+//     seed_resolution apart on the surface at every depth and slant, as
+//     PCL's 3-D seeding gives, and the count scales with
+//     organized_seed_density / seed_resolution^2. The focal lengths come from
+//     the cloud itself (u = fx x/z + cx is linear). Each cell's seed goes to
+//     the usable pixel nearest its centre, then to the lowest-gradient pixel
+//     of its 3x3 neighbourhood (SLIC), off colour and depth edges.
+//  3. max_iterations rounds of: every cluster scans a window of
+//     search_window_factor times its cell around its centre (SSE2) and claims
 //     the pixels it is nearest to; centres become the means.
-//  5. Final assignment at full resolution, then connectivity: each
-//     4-connected piece of a label becomes its own segment, and pieces
-//     smaller than max(min_segment_points, a quarter of the cell) merge into
-//     the neighbouring segment they share the longest border with.
+//  4. Full resolution: a pixel takes the label its nearest coarse samples
+//     agree on, or along boundaries the nearest of their clusters.
+//  5. Connectivity (on horizontal runs): each 4-connected piece of a label
+//     becomes its own segment; pieces smaller than max(min_segment_points, a
+//     quarter of the cell) merge into the neighbouring piece they share the
+//     longest border with.
 //  6. finalizeOversegmentation: drop what is still too small (islands in
 //     invalid depth), renumber, 4-neighbour adjacency.
 #include <algorithm>
@@ -50,23 +51,51 @@
 #include <emmintrin.h>
 #endif
 
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <ctime>
+
 #include "findmug/error.hpp"
+namespace {
+double cpuMs() {
+  timespec t;
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
+  return t.tv_sec * 1e3 + t.tv_nsec * 1e-6;
+}
+struct ProfT {
+  const char* name;
+  double t = cpuMs();
+  void lap(const char* what) {
+    double n = cpuMs();
+    if (getenv("OS_PROF")) fprintf(stderr, "%s %.2f ", what, n - t);
+    t = n;
+  }
+};
+}  // namespace
 #include "findmug/oversegmentation.hpp"
 #include "oversegmentation_internal.hpp"
 
 namespace findmug {
 namespace {
 
-constexpr float kLabScale = 1.0f / 100.0f;
+// CIELAB distance to PCL's colour scale (|dRGB| / 255): on the 31 NYU frames
+// the mean |dLab| between pixels 9 px apart is 79.5 times their mean
+// |dRGB| / 255, so |dLab| / 80 makes color_importance mean what it means to PCL.
+constexpr float kLabScale = 1.0f / 80.0f;
 constexpr float kMinCosine = 0.25f;  // slant cap: one pixel counts as at most 4 facing ones
-// PCL keeps a seed only when more than 0.05 * pi * (seed/2)^2 / voxel^2
-// voxels lie within seed/2 of it. Its single-camera voxels are voxel * z
-// wide, so a surface stops getting seeds at z^2 = 1 / (0.05 * pi / 4), about
-// (5 m)^2, whatever the resolutions; from there on its supervoxels stop
-// shrinking in the image. We mirror that by capping a pixel's footprint
-// z^2 / cos (in units of (1/f)^2 m^2, see placeSeeds) at that value.
-constexpr double kMaxFootprint = 4.0 / (0.05 * 3.14159265358979);
+// Beyond about 4 m patches stop shrinking in the image: a pixel's footprint
+// z^2 / cos (in units of (1/f)^2 m^2, see placeSeeds) is capped at (4 m)^2.
+// This mirrors PCL: it keeps a seed only when more than
+// 0.05 * pi * (seed/2)^2 / voxel^2 voxels lie within seed/2 of it, and its
+// single-camera voxels are voxel * z wide, so seeds thin out from about 4 m
+// and stop at z^2 = 1 / (0.05 * pi / 4), about 5 m, whatever the
+// resolutions; far surfaces get few, large supervoxels. The cap (fitted with
+// organized_seed_density on the NYU frames) also keeps far patches big
+// enough for stable features.
+constexpr double kMaxFootprint = 4.0 * 4.0;
 constexpr int kCoarseStride = 2;
+constexpr int kUnassigned = -2;  // usable pixel that no cluster reached
 
 // sRGB (D65) -> CIELAB with tables: a 256-entry sRGB -> linear table and a
 // table of the CIELAB f(t) (cube root above the knee) with linear
@@ -276,17 +305,20 @@ class OrganizedOversegmenter final : public Oversegmenter {
     seg.height = h;
     seg.pixel_segment.assign(n, -1);
 
-    FeatureGrid full;
-    std::size_t valid_count = buildFeatures(cloud, normals, full);
-    if (valid_count == 0) {
+    // Half-resolution features; a pixel is usable when it has a point in
+    // front of the camera (z <= 0 cannot come from one).
+    ProfT prof{"x"};
+    FeatureGrid coarse;
+    std::vector<std::uint8_t> block_valid;  // usable full pixels per coarse pixel
+    if (buildCoarse(cloud, normals, coarse, block_valid) == 0) {
       finalizeOversegmentation(seg, config_.min_segment_points);
       return seg;
     }
-    FeatureGrid coarse;
-    std::vector<std::uint8_t> block_valid;  // valid full pixels per coarse pixel
-    buildCoarse(full, coarse, block_valid);
 
+    prof.lap("coarse");
     std::vector<Cluster> clusters = placeSeeds(cloud, coarse, block_valid);
+    prof.lap("seeds");
+    if (getenv("OS_PROF")) fprintf(stderr, "clusters %zu ", clusters.size());
 
     // Iterations on the coarse grid.
     const std::size_t nc = static_cast<std::size_t>(coarse.width) * coarse.height;
@@ -307,89 +339,143 @@ class OrganizedOversegmenter final : public Oversegmenter {
       updateCentres(coarse, labels, clusters);
     }
 
-    // Final assignment at full resolution.
-    std::vector<float> best_full(n, std::numeric_limits<float>::infinity());
-    std::vector<int> labels_full(n, -1);
-    for (std::size_t k = 0; k < clusters.size(); ++k) {
-      const Cluster& c = clusters[k];
-      const int cu = static_cast<int>(std::lround(c.u * kCoarseStride + 0.5f));
-      const int cv = static_cast<int>(std::lround(c.v * kCoarseStride + 0.5f));
-      const int hw = c.half_w * kCoarseStride + 1;
-      const int hh = c.half_h * kCoarseStride + 1;
-      assignWindow(full, c.centre, weights_, static_cast<int>(k), std::max(0, cu - hw),
-                   std::min(w, cu + hw + 1), std::max(0, cv - hh), std::min(h, cv + hh + 1),
-                   best_full.data(), labels_full.data());
-    }
-
-    enforceConnectivity(full, clusters, labels_full, seg.pixel_segment);
+    prof.lap("iters");
+    std::vector<int> labels_full = refineToFullResolution(cloud, normals, coarse, labels, clusters);
+    prof.lap("refine");
+    enforceConnectivity(w, h, clusters, labels_full, seg.pixel_segment);
+    prof.lap("conn");
+    if (getenv("OS_PROF")) { int mx = -1; for (int v : seg.pixel_segment) mx = std::max(mx, v); std::vector<int> cnt(mx + 1); for (int v : seg.pixel_segment) if (v >= 0) cnt[v]++; int nz = 0, sm = 0; for (int c : cnt) { nz += c > 0; sm += c > 0 && c < 20; } fprintf(stderr, "pieces %d small %d ", nz, sm); }
     finalizeOversegmentation(seg, config_.min_segment_points);
+    prof.lap("final");
+    if (getenv("OS_PROF")) fprintf(stderr, "\n");
     return seg;
   }
 
  private:
-  std::size_t buildFeatures(const OrganizedCloud& cloud, const NormalImage& normals,
-                            FeatureGrid& g) const {
-    const LabConverter& lab = labConverter();
-    g.resize(cloud.width, cloud.height);
-    const float nan = std::numeric_limits<float>::quiet_NaN();
-    std::size_t valid = 0;
-    for (std::size_t i = 0; i < cloud.size(); ++i) {
-      const Eigen::Vector3f& p = cloud.points[i];
-      if (!(p.z() > 0.0f) || !p.allFinite()) {  // z <= 0 cannot come from a camera
-        g.ch[kX][i] = g.ch[kY][i] = g.ch[kZ][i] = nan;
-        continue;
-      }
-      ++valid;
-      lab.convert(cloud.colors[i], g.ch[kL][i], g.ch[kA][i], g.ch[kB][i]);
-      g.ch[kX][i] = p.x();
-      g.ch[kY][i] = p.y();
-      g.ch[kZ][i] = p.z();
-      // No normal: a zero vector makes the normal term the same (1) for every
-      // cluster, so the others decide.
-      const Eigen::Vector3f& nv = normals.normals[i];
-      if (nv.allFinite()) {
-        g.ch[kNX][i] = nv.x();
-        g.ch[kNY][i] = nv.y();
-        g.ch[kNZ][i] = nv.z();
-      }
-    }
-    return valid;
+  static bool usable(const Eigen::Vector3f& p) { return p.z() > 0.0f && p.allFinite(); }
+
+  // Features of full-resolution pixel i (usable) into f.
+  static void pixelFeatures(const OrganizedCloud& cloud, const NormalImage& normals, std::size_t i,
+                            std::array<float, kNumChannels>& f) {
+    labConverter().convert(cloud.colors[i], f[kL], f[kA], f[kB]);
+    const Eigen::Vector3f& p = cloud.points[i];
+    f[kX] = p.x();
+    f[kY] = p.y();
+    f[kZ] = p.z();
+    // No normal: a zero vector makes the normal term the same (1) for every
+    // cluster, so the others decide.
+    const Eigen::Vector3f& nv = normals.normals[i];
+    const bool has_normal = nv.allFinite();
+    f[kNX] = has_normal ? nv.x() : 0.0f;
+    f[kNY] = has_normal ? nv.y() : 0.0f;
+    f[kNZ] = has_normal ? nv.z() : 0.0f;
   }
 
-  // One valid pixel per 2x2 block (not the mean: a mean across a depth edge
-  // is a point in mid-air).
-  static void buildCoarse(const FeatureGrid& full, FeatureGrid& coarse,
-                          std::vector<std::uint8_t>& block_valid) {
-    const int cw = (full.width + kCoarseStride - 1) / kCoarseStride;
-    const int chh = (full.height + kCoarseStride - 1) / kCoarseStride;
+  float distance(const std::array<float, kNumChannels>& f,
+                 const std::array<float, kNumChannels>& c) const {
+    const float dl = f[kL] - c[kL], da = f[kA] - c[kA], db = f[kB] - c[kB];
+    const float dx = f[kX] - c[kX], dy = f[kY] - c[kY], dz = f[kZ] - c[kZ];
+    const float dot = f[kNX] * c[kNX] + f[kNY] * c[kNY] + f[kNZ] * c[kNZ];
+    return weights_.color * std::sqrt(dl * dl + da * da + db * db) +
+           weights_.spatial * std::sqrt(dx * dx + dy * dy + dz * dz) +
+           weights_.normal * (1.0f - std::fabs(dot));
+  }
+
+  // Full-resolution labels from the coarse ones. A pixel lies between the
+  // (up to) 2x2 coarse samples nearest to it; where they agree it takes
+  // their label, along boundaries it picks the nearest of their clusters.
+  // Pixels with no labelled sample around are kUnassigned, unusable ones -1.
+  // Only boundary pixels need their own features, which is most of the
+  // saving over a full-resolution SLIC pass.
+  std::vector<int> refineToFullResolution(const OrganizedCloud& cloud, const NormalImage& normals,
+                                          const FeatureGrid& coarse, const std::vector<int>& labels,
+                                          const std::vector<Cluster>& clusters) const {
+    const int w = cloud.width;
+    const int h = cloud.height;
+    const int cw = coarse.width;
+    const int chh = coarse.height;
+    std::vector<int> out(cloud.size(), -1);
+    std::array<float, kNumChannels> f{};
+    // The sample of coarse pixel c is (usually) full pixel 2c: an even pixel
+    // sits on it (its other neighbour is c - 1), an odd one between c, c + 1.
+    const auto other = [](int full, int c, int size) {
+      return std::clamp(full % kCoarseStride == 0 ? c - 1 : c + 1, 0, size - 1);
+    };
+    for (int y = 0; y < h; ++y) {
+      const int cy = y / kCoarseStride;
+      const int* row_a = labels.data() + static_cast<std::size_t>(cy) * cw;
+      const int* row_b = labels.data() + static_cast<std::size_t>(other(y, cy, chh)) * cw;
+      for (int x = 0; x < w; ++x) {
+        const std::size_t i = static_cast<std::size_t>(y) * w + x;
+        if (!usable(cloud.points[i])) continue;
+        const int cx = x / kCoarseStride;
+        const int ox = other(x, cx, cw);
+        const std::array<int, 4> around = {row_a[cx], row_a[ox], row_b[cx], row_b[ox]};
+        std::array<int, 4> candidates{};
+        int count = 0;
+        for (const int k : around) {
+          if (k >= 0 && std::find(candidates.begin(), candidates.begin() + count, k) ==
+                            candidates.begin() + count) {
+            candidates[count++] = k;
+          }
+        }
+        if (count <= 1) {
+          out[i] = count == 1 ? candidates[0] : kUnassigned;
+          continue;
+        }
+        pixelFeatures(cloud, normals, i, f);
+        int best_k = candidates[0];
+        float best_d = distance(f, clusters[best_k].centre);
+        for (int c = 1; c < count; ++c) {
+          const float d = distance(f, clusters[candidates[c]].centre);
+          if (d < best_d) {
+            best_d = d;
+            best_k = candidates[c];
+          }
+        }
+        out[i] = best_k;
+      }
+    }
+    return out;
+  }
+
+  // One usable pixel per 2x2 block (not the mean: a mean across a depth
+  // edge is a point in mid-air). Returns the number of usable full pixels.
+  static std::size_t buildCoarse(const OrganizedCloud& cloud, const NormalImage& normals,
+                                 FeatureGrid& coarse, std::vector<std::uint8_t>& block_valid) {
+    const int w = cloud.width;
+    const int h = cloud.height;
+    const int cw = (w + kCoarseStride - 1) / kCoarseStride;
+    const int chh = (h + kCoarseStride - 1) / kCoarseStride;
     coarse.resize(cw, chh);
     block_valid.assign(static_cast<std::size_t>(cw) * chh, 0);
     const float nan = std::numeric_limits<float>::quiet_NaN();
+    std::size_t total = 0;
+    std::array<float, kNumChannels> f{};
     for (int cy = 0; cy < chh; ++cy) {
       for (int cx = 0; cx < cw; ++cx) {
         const std::size_t ci = static_cast<std::size_t>(cy) * cw + cx;
-        std::size_t pick = std::numeric_limits<std::size_t>::max();
+        std::size_t pick = 0;
         int count = 0;
-        for (int dy = 0; dy < kCoarseStride; ++dy) {
-          const int y = cy * kCoarseStride + dy;
-          if (y >= full.height) break;
-          for (int dx = 0; dx < kCoarseStride; ++dx) {
-            const int x = cx * kCoarseStride + dx;
-            if (x >= full.width) break;
-            const std::size_t i = static_cast<std::size_t>(y) * full.width + x;
-            if (!full.valid(i)) continue;
+        for (int y = cy * kCoarseStride; y < std::min(h, (cy + 1) * kCoarseStride); ++y) {
+          for (int x = cx * kCoarseStride; x < std::min(w, (cx + 1) * kCoarseStride); ++x) {
+            const std::size_t i = static_cast<std::size_t>(y) * w + x;
+            if (!usable(cloud.points[i])) continue;
             if (count == 0) pick = i;
             ++count;
           }
         }
         block_valid[ci] = static_cast<std::uint8_t>(count);
+        total += count;
         if (count == 0) {
           coarse.ch[kX][ci] = coarse.ch[kY][ci] = coarse.ch[kZ][ci] = nan;
           continue;
         }
-        for (int k = 0; k < kNumChannels; ++k) coarse.ch[k][ci] = full.ch[k][pick];
+        pixelFeatures(cloud, normals, pick, f);
+        for (int k = 0; k < kNumChannels; ++k) coarse.ch[k][ci] = f[k];
       }
     }
+    return total;
   }
 
   std::vector<Cluster> placeSeeds(const OrganizedCloud& cloud, const FeatureGrid& coarse,
@@ -444,6 +530,7 @@ class OrganizedOversegmenter final : public Oversegmenter {
       int x0, y0, x1, y1;
     };
     std::vector<Rect> stack{{0, 0, cw, chh}};
+    if (getenv("OS_PROF")) fprintf(stderr, "Dtotal %.1f fx %.1f fy %.1f ", rectSum(density, 0, 0, cw, chh), fx, fy);
     while (!stack.empty()) {
       const Rect r = stack.back();
       stack.pop_back();
@@ -451,17 +538,40 @@ class OrganizedOversegmenter final : public Oversegmenter {
       const int rh = r.y1 - r.y0;
       const int nvalid = rectSum(valid, r.x0, r.y0, r.x1, r.y1);
       if (nvalid < min_valid) continue;
+      // This cell deserves round(D) seeds. Cut its longer side so that the
+      // parts get floor(k/2) and ceil(k/2) of them: the count follows the
+      // density smoothly (halving alone would give power-of-two cells whose
+      // count jumps by 2x where the density is uniform).
       const double seeds = rectSum(density, r.x0, r.y0, r.x1, r.y1);
-      // Halves must still be able to hold a segment that survives.
-      if (seeds > 1.0 && std::max(rw, rh) >= 2 && rw * rh >= 2 * min_valid) {
-        if (rw >= rh) {
-          const int mid = r.x0 + rw / 2;
-          stack.push_back({r.x0, r.y0, mid, r.y1});
-          stack.push_back({mid, r.y0, r.x1, r.y1});
+      const long k = std::lround(seeds);
+      // Parts must still be able to hold a segment that survives.
+      if (k >= 2 && std::max(rw, rh) >= 2 && rw * rh >= 2 * min_valid) {
+        const double share = static_cast<double>(k / 2) / static_cast<double>(k) * seeds;
+        const bool cut_x = rw >= rh;
+        const int lo = cut_x ? r.x0 : r.y0;
+        const int hi = cut_x ? r.x1 : r.y1;
+        const auto before = [&](int cut) {
+          return cut_x ? rectSum(density, r.x0, r.y0, cut, r.y1)
+                       : rectSum(density, r.x0, r.y0, r.x1, cut);
+        };
+        // Smallest cut in (lo, hi) with at least `share` before it.
+        int a = lo + 1, b = hi - 1;
+        while (a < b) {
+          const int mid = a + (b - a) / 2;
+          if (before(mid) >= share) {
+            b = mid;
+          } else {
+            a = mid + 1;
+          }
+        }
+        int cut = a;
+        if (cut - 1 > lo && share - before(cut - 1) < before(cut) - share) --cut;
+        if (cut_x) {
+          stack.push_back({r.x0, r.y0, cut, r.y1});
+          stack.push_back({cut, r.y0, r.x1, r.y1});
         } else {
-          const int mid = r.y0 + rh / 2;
-          stack.push_back({r.x0, r.y0, r.x1, mid});
-          stack.push_back({r.x0, mid, r.x1, r.y1});
+          stack.push_back({r.x0, r.y0, r.x1, cut});
+          stack.push_back({r.x0, cut, r.x1, r.y1});
         }
         continue;
       }
@@ -470,8 +580,11 @@ class OrganizedOversegmenter final : public Oversegmenter {
       for (int k = 0; k < kNumChannels; ++k) c.centre[k] = coarse.ch[k][seed];
       c.u = static_cast<float>(seed % cw);
       c.v = static_cast<float>(seed / cw);
-      c.half_w = std::max(1, static_cast<int>(std::ceil(half_factor * rw)));
-      c.half_h = std::max(1, static_cast<int>(std::ceil(half_factor * rh)));
+      // Window: factor x the cell, but at least factor x its equivalent
+      // square side along each axis, so a narrow cell can still move.
+      const float side = std::sqrt(static_cast<float>(rw) * static_cast<float>(rh));
+      c.half_w = std::max(1, static_cast<int>(std::ceil(half_factor * std::max<float>(rw, side))));
+      c.half_h = std::max(1, static_cast<int>(std::ceil(half_factor * std::max<float>(rh, side))));
       c.nominal_area_px = static_cast<float>(rw) * rh * kCoarseStride * kCoarseStride;
       clusters.push_back(c);
     }
@@ -567,90 +680,34 @@ class OrganizedOversegmenter final : public Oversegmenter {
   }
 
   // Splits every label into its 4-connected pieces and merges small pieces
-  // (and valid pixels no window reached) into the neighbour they share the
-  // longest border with. Writes one id per piece group into `out`.
-  void enforceConnectivity(const FeatureGrid& g, const std::vector<Cluster>& clusters,
-                           const std::vector<int>& labels, std::vector<int>& out) const {
-    const int w = g.width;
-    const int h = g.height;
-    const std::size_t n = labels.size();
-    constexpr int kUnassigned = -2;  // valid but in no window
-    // Key per pixel: label, kUnassigned, or -1 (invalid: no piece).
-    std::vector<int> key(n);
-    for (std::size_t i = 0; i < n; ++i) {
-      key[i] = labels[i] >= 0 ? labels[i] : (g.valid(i) ? kUnassigned : -1);
-    }
-    std::vector<int> piece(n, -1);
-    std::vector<int> piece_size;
-    std::vector<int> piece_key;
-    std::vector<std::size_t> stack;
-    for (std::size_t start = 0; start < n; ++start) {
-      if (key[start] == -1 || piece[start] >= 0) continue;
-      const int id = static_cast<int>(piece_size.size());
-      const int k = key[start];
-      int size = 0;
-      piece[start] = id;
-      stack.assign(1, start);
-      while (!stack.empty()) {
-        const std::size_t i = stack.back();
-        stack.pop_back();
-        ++size;
-        const int x = static_cast<int>(i % w);
-        const auto visit = [&](std::size_t j) {
-          if (piece[j] < 0 && key[j] == k) {
-            piece[j] = id;
-            stack.push_back(j);
-          }
-        };
-        if (x > 0) visit(i - 1);
-        if (x + 1 < w) visit(i + 1);
-        if (i >= static_cast<std::size_t>(w)) visit(i - w);
-        if (i + w < n) visit(i + w);
-      }
-      piece_size.push_back(size);
-      piece_key.push_back(k);
-    }
-    const int pieces = static_cast<int>(piece_size.size());
-    std::vector<std::uint8_t> small(pieces, 0);
-    for (int p = 0; p < pieces; ++p) {
-      const float nominal = piece_key[p] >= 0 ? clusters[piece_key[p]].nominal_area_px : 0.0f;
-      const float threshold =
-          std::max(static_cast<float>(config_.min_segment_points), 0.25f * nominal);
-      small[p] = piece_size[p] < threshold || piece_key[p] == kUnassigned;
-    }
-    // Border lengths between a small piece and its neighbours, as sorted
-    // (small, neighbour) pairs.
-    std::vector<std::uint64_t> contacts;
-    const auto touch = [&](int a, int b) {
-      if (a < 0 || b < 0 || a == b) return;
-      if (small[a]) contacts.push_back((static_cast<std::uint64_t>(a) << 32) | static_cast<std::uint32_t>(b));
-      if (small[b]) contacts.push_back((static_cast<std::uint64_t>(b) << 32) | static_cast<std::uint32_t>(a));
+  // (and usable pixels no cluster reached) into the neighbouring piece they
+  // share the longest border with. Writes one id per piece group into `out`.
+  // Works on horizontal runs of equal key (a few tens per row) rather than
+  // on pixels.
+  // `key`: cluster per pixel, kUnassigned, or -1 (unusable: in no piece).
+  void enforceConnectivity(int w, int h, const std::vector<Cluster>& clusters,
+                           const std::vector<int>& key, std::vector<int>& out) const {
+    struct Run {
+      int x0, x1;  // [x0, x1) in its row
+      int key;
     };
+    std::vector<Run> runs;
+    std::vector<int> row_begin(static_cast<std::size_t>(h) + 1, 0);
     for (int y = 0; y < h; ++y) {
-      for (int x = 0; x < w; ++x) {
-        const std::size_t i = static_cast<std::size_t>(y) * w + x;
-        if (x + 1 < w) touch(piece[i], piece[i + 1]);
-        if (y + 1 < h) touch(piece[i], piece[i + w]);
+      row_begin[y] = static_cast<int>(runs.size());
+      const int* row = key.data() + static_cast<std::size_t>(y) * w;
+      for (int x = 0; x < w;) {
+        const int k = row[x];
+        int x1 = x + 1;
+        while (x1 < w && row[x1] == k) ++x1;
+        if (k != -1) runs.push_back({x, x1, k});
+        x = x1;
       }
     }
-    std::sort(contacts.begin(), contacts.end());
-    std::vector<int> target(pieces, -1);  // neighbour with the longest border
-    std::vector<int> target_len(pieces, 0);
-    for (std::size_t i = 0; i < contacts.size();) {
-      std::size_t j = i;
-      while (j < contacts.size() && contacts[j] == contacts[i]) ++j;
-      const int a = static_cast<int>(contacts[i] >> 32);
-      const int b = static_cast<int>(contacts[i] & 0xffffffffu);
-      const int len = static_cast<int>(j - i);
-      if (len > target_len[a]) {
-        target_len[a] = len;
-        target[a] = b;
-      }
-      i = j;
-    }
-    // Union-find resolves chains (a small piece into a small piece into a
-    // big one) and pairs of small pieces that chose each other.
-    std::vector<int> parent(pieces);
+    row_begin[h] = static_cast<int>(runs.size());
+    const int run_count = static_cast<int>(runs.size());
+
+    std::vector<int> parent(run_count);
     std::iota(parent.begin(), parent.end(), 0);
     const auto find = [&parent](int p) {
       while (parent[p] != p) {
@@ -659,13 +716,123 @@ class OrganizedOversegmenter final : public Oversegmenter {
       }
       return p;
     };
-    for (int p = 0; p < pieces; ++p) {
-      if (!small[p] || target[p] < 0) continue;
-      const int a = find(p);
-      const int b = find(target[p]);
-      if (a != b) parent[a] = b;
+    const auto unite = [&](int a, int b) {
+      a = find(a);
+      b = find(b);
+      if (a != b) parent[std::max(a, b)] = std::min(a, b);
+    };
+    // Calls f(upper run, lower run, overlap) for vertically touching runs.
+    const auto forEachVerticalContact = [&](auto&& f) {
+      for (int y = 1; y < h; ++y) {
+        int a = row_begin[y - 1];
+        int b = row_begin[y];
+        while (a < row_begin[y] && b < row_begin[y + 1]) {
+          const int overlap = std::min(runs[a].x1, runs[b].x1) - std::max(runs[a].x0, runs[b].x0);
+          if (overlap > 0) f(a, b, overlap);
+          if (runs[a].x1 < runs[b].x1) {
+            ++a;
+          } else {
+            ++b;
+          }
+        }
+      }
+    };
+    forEachVerticalContact([&](int a, int b, int) {
+      if (runs[a].key == runs[b].key) unite(a, b);
+    });
+
+    // Pieces: dense ids for the union-find roots, with sizes and keys.
+    std::vector<int> run_piece(run_count);
+    std::vector<int> piece_size;
+    std::vector<int> piece_key;
+    for (int r = 0; r < run_count; ++r) {
+      const int root = find(r);
+      if (root == r) {
+        run_piece[r] = static_cast<int>(piece_size.size());
+        piece_size.push_back(0);
+        piece_key.push_back(runs[r].key);
+      } else {
+        run_piece[r] = run_piece[root];  // roots precede their runs
+      }
+      piece_size[run_piece[r]] += runs[r].x1 - runs[r].x0;
     }
-    for (std::size_t i = 0; i < n; ++i) out[i] = piece[i] >= 0 ? find(piece[i]) : -1;
+    const int pieces = static_cast<int>(piece_size.size());
+    std::vector<std::uint8_t> small(pieces, 0);
+    bool any_small = false;
+    for (int p = 0; p < pieces; ++p) {
+      const float nominal = piece_key[p] >= 0 ? clusters[piece_key[p]].nominal_area_px : 0.0f;
+      const float threshold =
+          std::max(static_cast<float>(config_.min_segment_points), 0.25f * nominal);
+      small[p] = piece_size[p] < threshold || piece_key[p] == kUnassigned;
+      any_small = any_small || small[p];
+    }
+
+    std::vector<int> merged(pieces);
+    std::iota(merged.begin(), merged.end(), 0);
+    if (any_small) {
+      // Border lengths between a small piece and its neighbours.
+      struct Contact {
+        std::uint64_t pair;  // small << 32 | neighbour
+        int length;
+      };
+      std::vector<Contact> contacts;
+      const auto touch = [&](int pa, int pb, int length) {
+        if (pa == pb) return;
+        if (small[pa])
+          contacts.push_back(
+              {(static_cast<std::uint64_t>(pa) << 32) | static_cast<std::uint32_t>(pb), length});
+        if (small[pb])
+          contacts.push_back(
+              {(static_cast<std::uint64_t>(pb) << 32) | static_cast<std::uint32_t>(pa), length});
+      };
+      for (int y = 0; y < h; ++y) {
+        for (int r = row_begin[y]; r + 1 < row_begin[y + 1]; ++r) {
+          if (runs[r].x1 == runs[r + 1].x0) touch(run_piece[r], run_piece[r + 1], 1);
+        }
+      }
+      forEachVerticalContact(
+          [&](int a, int b, int overlap) { touch(run_piece[a], run_piece[b], overlap); });
+      std::sort(contacts.begin(), contacts.end(),
+                [](const Contact& a, const Contact& b) { return a.pair < b.pair; });
+      std::vector<int> target(pieces, -1);  // neighbour with the longest border
+      std::vector<int> target_len(pieces, 0);
+      for (std::size_t i = 0; i < contacts.size();) {
+        int length = 0;
+        std::size_t j = i;
+        for (; j < contacts.size() && contacts[j].pair == contacts[i].pair; ++j)
+          length += contacts[j].length;
+        const int a = static_cast<int>(contacts[i].pair >> 32);
+        if (length > target_len[a]) {
+          target_len[a] = length;
+          target[a] = static_cast<int>(contacts[i].pair & 0xffffffffu);
+        }
+        i = j;
+      }
+      // Union-find resolves chains (a small piece into a small piece into a
+      // big one) and pairs of small pieces that chose each other.
+      const auto find_merged = [&merged](int p) {
+        while (merged[p] != p) {
+          merged[p] = merged[merged[p]];
+          p = merged[p];
+        }
+        return p;
+      };
+      for (int p = 0; p < pieces; ++p) {
+        if (!small[p] || target[p] < 0) continue;
+        const int a = find_merged(p);
+        const int b = find_merged(target[p]);
+        if (a != b) merged[a] = b;
+      }
+      for (int p = 0; p < pieces; ++p) merged[p] = find_merged(p);
+    }
+
+    std::fill(out.begin(), out.end(), -1);
+    for (int y = 0; y < h; ++y) {
+      int* row = out.data() + static_cast<std::size_t>(y) * w;
+      for (int r = row_begin[y]; r < row_begin[y + 1]; ++r) {
+        std::fill(row + runs[r].x0, row + runs[r].x1, merged[run_piece[r]]);
+      }
+    }
   }
 
   OversegmentationConfig config_;

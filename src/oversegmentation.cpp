@@ -190,24 +190,35 @@ void finalizeOversegmentation(Oversegmentation& seg, int min_points, EdgeSource 
       edges.emplace_back(std::min(ra, rb), std::max(ra, rb));
     }
   } else {
+    // Neighbour lists (a segment has a handful) instead of sorting every
+    // boundary pixel pair.
+    std::vector<std::vector<int>> neighbours(static_cast<std::size_t>(next));
     const int w = seg.width;
     const int h = seg.height;
-    const auto add = [&edges](int a, int b) {
+    int last_a = -1, last_b = -1;
+    const auto add = [&](int a, int b) {
       if (a < 0 || b < 0 || a == b) return;
-      const std::pair<int, int> e(std::min(a, b), std::max(a, b));
-      // Boundaries run along rows and columns: skip the immediate repeat.
-      if (edges.empty() || edges.back() != e) edges.push_back(e);
+      if (a > b) std::swap(a, b);
+      if (a == last_a && b == last_b) return;  // boundaries run along rows
+      last_a = a;
+      last_b = b;
+      std::vector<int>& list = neighbours[a];
+      if (std::find(list.begin(), list.end(), b) == list.end()) list.push_back(b);
     };
     for (int y = 0; y < h; ++y) {
       const int* row = seg.pixel_segment.data() + static_cast<std::size_t>(y) * w;
       const int* below = y + 1 < h ? row + w : nullptr;
       for (int x = 0; x < w; ++x) {
-        if (x + 1 < w) add(row[x], row[x + 1]);
-        if (below) add(row[x], below[x]);
+        if (x + 1 < w && row[x] != row[x + 1]) add(row[x], row[x + 1]);
+        if (below && row[x] != below[x]) add(row[x], below[x]);
       }
     }
+    for (int a = 0; a < next; ++a) {
+      std::sort(neighbours[a].begin(), neighbours[a].end());
+      for (const int b : neighbours[a]) edges.emplace_back(a, b);
+    }
   }
-  sortUniqueEdges(edges);
+  if (edge_source == EdgeSource::Keep) sortUniqueEdges(edges);  // grid edges come out sorted
   seg.edges = std::move(edges);
 }
 

@@ -224,15 +224,23 @@ std::vector<int> clusterPoints(const std::vector<Eigen::Vector3f>& points, float
   VoxelIndex index(points.size());
   std::vector<int> point_voxel(points.size());
   std::vector<Eigen::Vector3i> voxel_coords;
+  const float inv_voxel = 1.0f / voxel;
+  std::uint64_t last_key = ~std::uint64_t{0};
+  int last_voxel = -1;
   for (int i = 0; i < n; ++i) {
     const Eigen::Vector3f& p = points[i];
-    const Eigen::Vector3i c(static_cast<int>(std::floor(p.x() / voxel)),
-                            static_cast<int>(std::floor(p.y() / voxel)),
-                            static_cast<int>(std::floor(p.z() / voxel)));
-    bool inserted = false;
-    point_voxel[i] = index.findOrInsert(packVoxel(c.x(), c.y(), c.z()),
-                                        static_cast<int>(voxel_coords.size()), inserted);
-    if (inserted) voxel_coords.push_back(c);
+    const Eigen::Vector3i c(static_cast<int>(std::floor(p.x() * inv_voxel)),
+                            static_cast<int>(std::floor(p.y() * inv_voxel)),
+                            static_cast<int>(std::floor(p.z() * inv_voxel)));
+    const std::uint64_t key = packVoxel(c.x(), c.y(), c.z());
+    // Points come in image order, so neighbours often share a voxel.
+    if (key != last_key) {
+      bool inserted = false;
+      last_voxel = index.findOrInsert(key, static_cast<int>(voxel_coords.size()), inserted);
+      last_key = key;
+      if (inserted) voxel_coords.push_back(c);
+    }
+    point_voxel[i] = last_voxel;
   }
   const int voxels = static_cast<int>(voxel_coords.size());
 
@@ -250,32 +258,52 @@ std::vector<int> clusterPoints(const std::vector<Eigen::Vector3f>& points, float
     for (int k = start[v]; k < start[v + 1]; ++k) boxes[v].extend(points[order[k]]);
   }
 
-  // Forward half of the neighbourhood: each unordered voxel pair once.
+  // Points copied in voxel order: the pair tests below then read memory
+  // sequentially.
+  std::vector<Eigen::Vector3f> sorted(points.size());
+  for (int k = 0; k < n; ++k) sorted[k] = points[order[k]];
+
+  // Forward half of the neighbourhood (each unordered voxel pair once), the
+  // touching voxels first: on a dense surface they join nearly everything,
+  // so the farther pairs are then mostly skipped as already joined.
   std::vector<Eigen::Vector3i> offsets;
-  for (int dz = -reach; dz <= reach; ++dz) {
-    for (int dy = -reach; dy <= reach; ++dy) {
-      for (int dx = -reach; dx <= reach; ++dx) {
-        if (dz > 0 || (dz == 0 && (dy > 0 || (dy == 0 && dx > 0)))) {
-          offsets.emplace_back(dx, dy, dz);
+  for (int ring = 1; ring <= reach; ++ring) {
+    for (int dz = -ring; dz <= ring; ++dz) {
+      for (int dy = -ring; dy <= ring; ++dy) {
+        for (int dx = -ring; dx <= ring; ++dx) {
+          const bool forward = dz > 0 || (dz == 0 && (dy > 0 || (dy == 0 && dx > 0)));
+          const int chebyshev = std::max({std::abs(dx), std::abs(dy), std::abs(dz)});
+          if (forward && chebyshev == ring) offsets.emplace_back(dx, dy, dz);
         }
       }
     }
   }
 
   DisjointSets sets(voxels);
-  for (int a = 0; a < voxels; ++a) {
-    const Eigen::Vector3i& ca = voxel_coords[a];
-    for (const Eigen::Vector3i& d : offsets) {
+  std::vector<int> near_a, near_b;
+  for (const Eigen::Vector3i& d : offsets) {
+    for (int a = 0; a < voxels; ++a) {
+      const Eigen::Vector3i& ca = voxel_coords[a];
       const int b = index.find(packVoxel(static_cast<std::int64_t>(ca.x()) + d.x(),
                                          static_cast<std::int64_t>(ca.y()) + d.y(),
                                          static_cast<std::int64_t>(ca.z()) + d.z()));
       if (b < 0 || sets.find(a) == sets.find(b)) continue;
       if (squaredGap(boxes[a], boxes[b]) > tol2) continue;
+      // Only points within the tolerance of the other voxel's box can link.
+      near_a.clear();
+      near_b.clear();
+      for (int k = start[a]; k < start[a + 1]; ++k) {
+        if (boxes[b].squaredExteriorDistance(sorted[k]) <= tol2) near_a.push_back(k);
+      }
+      if (near_a.empty()) continue;
+      for (int k = start[b]; k < start[b + 1]; ++k) {
+        if (boxes[a].squaredExteriorDistance(sorted[k]) <= tol2) near_b.push_back(k);
+      }
       bool linked = false;
-      for (int i = start[a]; i < start[a + 1] && !linked; ++i) {
-        const Eigen::Vector3f& p = points[order[i]];
-        for (int j = start[b]; j < start[b + 1]; ++j) {
-          if ((points[order[j]] - p).squaredNorm() <= tol2) {
+      for (std::size_t i = 0; i < near_a.size() && !linked; ++i) {
+        const Eigen::Vector3f& p = sorted[near_a[i]];
+        for (int k : near_b) {
+          if ((sorted[k] - p).squaredNorm() <= tol2) {
             linked = true;
             break;
           }
@@ -656,6 +684,100 @@ std::vector<int> euclideanClusterLabels(const std::vector<Eigen::Vector3f>& poin
     }
   }
   return clusterPoints(points, tolerance);
+}
+
+namespace {
+
+// Shortest open path from `start` through all points (Held-Karp dynamic
+// programme, O(n^2 2^n)): exact, for the few positions of a frame.
+std::vector<int> exactVisitingOrder(const Eigen::Vector2f& start,
+                                    const std::vector<Eigen::Vector2f>& points) {
+  const int n = static_cast<int>(points.size());
+  const std::size_t subsets = std::size_t{1} << n;
+  std::vector<float> cost(subsets * n, std::numeric_limits<float>::max());
+  std::vector<std::int8_t> previous(subsets * n, -1);
+  for (int i = 0; i < n; ++i) cost[(std::size_t{1} << i) * n + i] = (points[i] - start).norm();
+  for (std::size_t mask = 1; mask < subsets; ++mask) {
+    for (int last = 0; last < n; ++last) {
+      const float c = cost[mask * n + last];
+      if (!(mask & (std::size_t{1} << last)) || c == std::numeric_limits<float>::max()) continue;
+      for (int next = 0; next < n; ++next) {
+        if (mask & (std::size_t{1} << next)) continue;
+        const std::size_t grown = mask | (std::size_t{1} << next);
+        const float candidate = c + (points[next] - points[last]).norm();
+        if (candidate < cost[grown * n + next]) {
+          cost[grown * n + next] = candidate;
+          previous[grown * n + next] = static_cast<std::int8_t>(last);
+        }
+      }
+    }
+  }
+  std::size_t mask = subsets - 1;
+  int last = 0;
+  for (int i = 1; i < n; ++i) {
+    if (cost[mask * n + i] < cost[mask * n + last]) last = i;
+  }
+  std::vector<int> order;
+  while (last >= 0) {
+    order.push_back(last);
+    const int before = previous[mask * n + last];
+    mask &= ~(std::size_t{1} << last);
+    last = before;
+  }
+  std::reverse(order.begin(), order.end());
+  return order;
+}
+
+constexpr int kExactVisitingOrderMax = 12;
+
+}  // namespace
+
+std::vector<int> visitingOrder(const Eigen::Vector2f& start,
+                               const std::vector<Eigen::Vector2f>& points) {
+  const int n = static_cast<int>(points.size());
+  if (n == 0) return {};
+  if (n <= kExactVisitingOrderMax) return exactVisitingOrder(start, points);
+  std::vector<int> order;
+  order.reserve(points.size());
+  std::vector<bool> used(points.size(), false);
+  Eigen::Vector2f at = start;
+  for (int step = 0; step < n; ++step) {
+    int best = -1;
+    float best_d = std::numeric_limits<float>::max();
+    for (int i = 0; i < n; ++i) {
+      const float d = (points[i] - at).squaredNorm();
+      if (!used[i] && d < best_d) {
+        best = i;
+        best_d = d;
+      }
+    }
+    used[best] = true;
+    order.push_back(best);
+    at = points[best];
+  }
+  // 2-opt on the open path start -> order[0] -> ... -> order[n-1]: reversing
+  // order[i..j] replaces edges (prev_i, i) and (j, next_j) by (prev_i, j) and
+  // (i, next_j); the path has no edge after its last point.
+  const auto pointAt = [&](int k) -> const Eigen::Vector2f& {
+    return k < 0 ? start : points[order[k]];
+  };
+  bool improved = true;
+  for (int pass = 0; improved && pass < 100; ++pass) {
+    improved = false;
+    for (int i = 0; i < n - 1; ++i) {
+      for (int j = i + 1; j < n; ++j) {
+        const float before = (pointAt(i - 1) - pointAt(i)).norm() +
+                             (j + 1 < n ? (pointAt(j) - pointAt(j + 1)).norm() : 0.0f);
+        const float after = (pointAt(i - 1) - pointAt(j)).norm() +
+                            (j + 1 < n ? (pointAt(i) - pointAt(j + 1)).norm() : 0.0f);
+        if (after < before - 1e-6f) {
+          std::reverse(order.begin() + i, order.begin() + j + 1);
+          improved = true;
+        }
+      }
+    }
+  }
+  return order;
 }
 
 std::vector<Eigen::Vector2f> convexHull2d(std::vector<Eigen::Vector2f> points) {

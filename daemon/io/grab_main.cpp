@@ -7,7 +7,6 @@
 // Frames go out as findmug::rgbd_frame_t on FINDMUG_RGBD[_suffix] (depth zlib,
 // colour JPEG by default). The LCM URL defaults to LCM's own default
 // (LCM_DEFAULT_URL, else udpm with ttl 0: this machine only).
-#include <lcm/lcm-cpp.hpp>
 #include <spdlog/spdlog.h>
 
 #include <atomic>
@@ -15,6 +14,7 @@
 #include <csignal>
 #include <cstdlib>
 #include <iostream>
+#include <lcm/lcm-cpp.hpp>
 #include <string>
 #include <thread>
 
@@ -175,8 +175,8 @@ int main(int argc, char** argv) {
     done = true;
     watcher.join();
     const SourceStats stats = source->stats();
-    spdlog::info("findmug-grab: published {} frames ({:.1f} MB); source {} ({} rejected)", published,
-                 bytes / 1e6, sourceStateName(source->state()), stats.frames_rejected);
+    spdlog::info("findmug-grab: published {} frames ({:.1f} MB); source {} ({} rejected)",
+                 published, bytes / 1e6, sourceStateName(source->state()), stats.frames_rejected);
     if (exit_code == 0 && source->state() == SourceState::Failed) exit_code = 1;
     return exit_code;
   } catch (const Error& e) {

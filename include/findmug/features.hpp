@@ -7,8 +7,11 @@
 //   3 centroid height above ground (m)
 //   4 min point height (m)
 //   5 max point height (m)
-//   6 angle between the mean normal and the ground normal (rad, 0 = horizontal surface)
-//   7 circular standard deviation of the per-point normal angles (rad)
+//   6 angle between the mean normal and the ground normal +z (rad, 0..π):
+//     0 = up-facing horizontal surface (floor, table top), π/2 = vertical
+//     (wall), π = down-facing (ceiling); normals face the camera
+//   7 circular standard deviation sqrt(-2 ln R) of the per-point normal
+//     angles (rad), R = length of the mean unit phasor e^{iθ}
 //   8..10  CIELAB mean L*, a*, b*
 //   11..13 CIELAB standard deviation L*, a*, b*
 #pragma once

@@ -46,10 +46,11 @@ struct OversegmentationConfig {
   int min_segment_points = 20;  // smaller patches are dropped (unreliable features)
   int max_iterations = 5;       // organized oversegmenter: assignment/update rounds
   int search_window_factor = 2; // organized: search window = factor * grid step
-  // Organized: seeds per seed_resolution_m^2 of (camera-facing) surface. The
-  // default makes its segment count match PCL's on the NYU frames at the
-  // same seed resolution; scale it to trade detail for speed.
-  float organized_seed_density = 1.0f;
+  // Organized: seeds per seed_resolution_m^2 of surface. PCL's octree
+  // seeding gives about 1.5 (a surface crosses more seed cubes than its area
+  // says): at 1.5 the segment count matches PCL's on the 31 NYU frames at the
+  // same seed resolution (mean ratio 0.99, typically within +-15 % per frame).
+  float organized_seed_density = 1.5f;
 };
 
 // Throws findmug::Error naming the field when a value is out of range

@@ -349,7 +349,8 @@ TableTruth tableInGroundFrame(const TableTruth& table, const CameraPose& pose) {
 
 double signedDistanceToTop(const TableTruth& table, const Eigen::Vector2d& xy) {
   const auto& poly = table.top_polygon;
-  if (poly.size() < 3) throw Error("synth: table " + std::to_string(table.id) + " has no top polygon");
+  if (poly.size() < 3)
+    throw Error("synth: table " + std::to_string(table.id) + " has no top polygon");
   double best = std::numeric_limits<double>::infinity();
   for (std::size_t i = 0; i < poly.size(); ++i) {
     const Eigen::Vector2d a = poly[i], e = poly[(i + 1) % poly.size()] - a;

@@ -19,6 +19,17 @@ SegmenterConfig fastSegmenterConfig() {
   return config;
 }
 
+std::vector<LabeledFrame> framesWithGround(const std::string& dataset_dir, std::size_t count) {
+  DatasetFolder ds(dataset_dir);
+  const Segmenter probe(fastSegmenterConfig(), nullptr);
+  std::vector<LabeledFrame> frames;
+  for (std::size_t i = 0; i < ds.size() && frames.size() < count; ++i) {
+    LabeledFrame f = ds.load(i);
+    if (probe.prepare(f.frame).ground) frames.push_back(std::move(f));
+  }
+  return frames;
+}
+
 std::shared_ptr<const RandomForest> trainTinyModel(const SegmenterConfig& config,
                                                    const std::vector<LabeledFrame>& frames,
                                                    const std::string& path) {

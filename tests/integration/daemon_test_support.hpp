@@ -21,6 +21,10 @@ namespace findmug::daemon::test {
 // every stage (the organized oversegmenter; the MRF stays on).
 SegmenterConfig fastSegmenterConfig();
 
+// The first `count` frames of a labelled dataset whose ground plane the
+// segmenter finds (only those have features to train on).
+std::vector<LabeledFrame> framesWithGround(const std::string& dataset_dir, std::size_t count);
+
 // Trains a small forest on the frames' supervoxel features and ground-truth
 // labels, saves it to `path` and returns it.
 std::shared_ptr<const RandomForest> trainTinyModel(const SegmenterConfig& config,

@@ -3,6 +3,8 @@
 // dimensions, unknown compression ids, corrupt zlib / JPEG / PNG, wrong type)
 // must end in findmug::Error — never a crash, a huge allocation, or another
 // exception type.
+#include "findmug/io/lcm_codec.hpp"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -14,7 +16,6 @@
 #include "findmug/image_io.hpp"
 #include "findmug/io/channels.hpp"
 #include "findmug/io/frame_source.hpp"
-#include "findmug/io/lcm_codec.hpp"
 #include "test_data.hpp"
 
 namespace findmug::io {
@@ -39,7 +40,7 @@ RgbdFrame makeFrame(int width = 64, int height = 48) {
       std::uint16_t d = static_cast<std::uint16_t>(1500 + 20 * v + 3 * u);
       if (u > width / 3 && u < width / 2 && v > height / 3) d = 900;
       if ((u * 7 + v * 13) % 29 == 0) d = 0;  // holes
-      if (v == height - 1) d = 65535;           // extreme value survives
+      if (v == height - 1) d = 65535;         // extreme value survives
       f.depth_mm.push_back(d);
       f.rgb.push_back(Rgb8{static_cast<std::uint8_t>(u * 255 / width),
                            static_cast<std::uint8_t>(v * 255 / height),
@@ -176,15 +177,14 @@ TEST_P(RgbdRoundTrip, BytesInFrameOut) {
   }
 }
 
-INSTANTIATE_TEST_SUITE_P(
-    AllCompressions, RgbdRoundTrip,
-    ::testing::Values(Combo{DepthCompression::None, ColorCompression::None},
-                      Combo{DepthCompression::None, ColorCompression::Jpeg},
-                      Combo{DepthCompression::None, ColorCompression::Png},
-                      Combo{DepthCompression::Zlib, ColorCompression::None},
-                      Combo{DepthCompression::Zlib, ColorCompression::Jpeg},
-                      Combo{DepthCompression::Zlib, ColorCompression::Png}),
-    comboName);
+INSTANTIATE_TEST_SUITE_P(AllCompressions, RgbdRoundTrip,
+                         ::testing::Values(Combo{DepthCompression::None, ColorCompression::None},
+                                           Combo{DepthCompression::None, ColorCompression::Jpeg},
+                                           Combo{DepthCompression::None, ColorCompression::Png},
+                                           Combo{DepthCompression::Zlib, ColorCompression::None},
+                                           Combo{DepthCompression::Zlib, ColorCompression::Jpeg},
+                                           Combo{DepthCompression::Zlib, ColorCompression::Png}),
+                         comboName);
 
 // ---- RGB-D corrupt messages ----------------------------------------------------------------
 
@@ -202,7 +202,8 @@ TEST(RgbdCorrupt, TruncatedAtEveryLengthIsAnError) {
     const Bytes full = encodedFrame(depth, color);
     ASSERT_EQ(outcome([&] { decodeRgbdFrame(full.data(), full.size(), "C"); }), "ok");
     for (std::size_t len = 0; len < full.size(); ++len) {
-      const std::string result = outcome([&] { decodeRgbdFrame(full.data(), len, "FINDMUG_RGBD"); });
+      const std::string result =
+          outcome([&] { decodeRgbdFrame(full.data(), len, "FINDMUG_RGBD"); });
       ASSERT_EQ(result.rfind("error: FINDMUG_RGBD", 0), 0u) << "length " << len << ": " << result;
     }
   }
@@ -226,7 +227,8 @@ TEST(RgbdCorrupt, FlippedBytesNeverCrash) {
     for (int trial = 0; trial < 1500; ++trial) {
       Bytes b = full;
       const int flips = 1 + static_cast<int>(rng() % 3);
-      for (int k = 0; k < flips; ++k) b[rng() % b.size()] ^= static_cast<std::uint8_t>(1 + rng() % 255);
+      for (int k = 0; k < flips; ++k)
+        b[rng() % b.size()] ^= static_cast<std::uint8_t>(1 + rng() % 255);
       const std::string result = outcome([&] { decodeRgbdFrame(b.data(), b.size(), "C"); });
       ASSERT_TRUE(result == "ok" || result.rfind("error: ", 0) == 0) << result;
       errors += result != "ok";
@@ -291,10 +293,12 @@ TEST(RgbdCorrupt, UnknownCompressionIds) {
   const RgbdOffsets o = rgbdOffsets(decodeMessage<rgbd_frame_t>(full.data(), full.size(), "C"));
   Bytes b = full;
   b[o.depth_compression] = 7;
-  expectError([&] { decodeRgbdFrame(b.data(), b.size(), "C"); }, "depth_compression: unknown compression id 7");
+  expectError([&] { decodeRgbdFrame(b.data(), b.size(), "C"); },
+              "depth_compression: unknown compression id 7");
   b = full;
   b[o.color_compression] = 0xff;
-  expectError([&] { decodeRgbdFrame(b.data(), b.size(), "C"); }, "color_compression: unknown compression id -1");
+  expectError([&] { decodeRgbdFrame(b.data(), b.size(), "C"); },
+              "color_compression: unknown compression id -1");
 }
 
 TEST(RgbdCorrupt, BadZlibStreams) {
@@ -342,7 +346,9 @@ TEST(RgbdCorrupt, BadJpegAndPng) {
   expectError([&] { decodeRgbdFrame(bad, "C"); }, "empty JPEG");
   // A valid JPEG of another size.
   bad = jpeg;
-  bad.color_data = encodeRgbdFrame(makeFrame(16, 24), {DepthCompression::None, ColorCompression::Jpeg}).color_data;
+  bad.color_data =
+      encodeRgbdFrame(makeFrame(16, 24), {DepthCompression::None, ColorCompression::Jpeg})
+          .color_data;
   bad.color_size = static_cast<std::int32_t>(bad.color_data.size());
   expectError([&] { decodeRgbdFrame(bad, "C"); }, "JPEG is 16x24, message says 32x24");
 
@@ -352,7 +358,9 @@ TEST(RgbdCorrupt, BadJpegAndPng) {
   bad.color_size = static_cast<std::int32_t>(bad.color_data.size());
   EXPECT_THROW(decodeRgbdFrame(bad, "C"), Error);
   bad = png;
-  bad.color_data = encodeRgbdFrame(makeFrame(32, 12), {DepthCompression::None, ColorCompression::Png}).color_data;
+  bad.color_data =
+      encodeRgbdFrame(makeFrame(32, 12), {DepthCompression::None, ColorCompression::Png})
+          .color_data;
   bad.color_size = static_cast<std::int32_t>(bad.color_data.size());
   expectError([&] { decodeRgbdFrame(bad, "C"); }, "PNG is 32x12");
 }
@@ -501,7 +509,8 @@ TEST(LabelCorrupt, EveryClass) {
   expectError([&] { decodeLabelImage(bad, "C"); }, "pixel 17 has label id 42");
 }
 
-// ---- tables --------------------------------------------------------------------------------------
+// ---- tables
+// --------------------------------------------------------------------------------------
 
 TablesMessage makeTables() {
   TablesMessage m;

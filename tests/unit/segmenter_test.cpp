@@ -95,7 +95,9 @@ TEST(Segmenter, LabelsAKnownSceneCorrectly) {
   EXPECT_GT(cm.perClassAccuracy()[static_cast<int>(Label::Wall)], 0.9);
   // Void exactly where there is no depth (no label invented there).
   for (std::size_t i = 0; i < scene.truth.size(); ++i) {
-    if (scene.frame.depth_mm[i] == 0) ASSERT_EQ(out.labels.labels[i], kVoidLabel) << i;
+    if (scene.frame.depth_mm[i] == 0) {
+      ASSERT_EQ(out.labels.labels[i], kVoidLabel) << i;
+    }
   }
   // The stages report their own time.
   EXPECT_GT(out.timings.total(), 0.0);

@@ -2,7 +2,6 @@
 // rendered frames against the scene truth, the Kinect noise model, the camera
 // path, determinism and the dataset/ground-truth files.
 #include "findmug/synth.hpp"
-#include "findmug/tables.hpp"
 
 #include <gtest/gtest.h>
 
@@ -17,6 +16,7 @@
 #include "findmug/dataset.hpp"
 #include "findmug/error.hpp"
 #include "findmug/ground.hpp"
+#include "findmug/tables.hpp"
 #include "test_data.hpp"
 
 namespace findmug::synth {
@@ -442,14 +442,15 @@ TEST(SynthGeometry, GroundFrameAgreesWithGroundFromExtrinsics) {
   EXPECT_DOUBLE_EQ(g.height, t.height);
   // Signed distance to the top outline, same in both frames.
   const Eigen::Vector2d probe_world = t.center_xy + Eigen::Vector2d(3.0, 0.0);
-  const Eigen::Vector2d probe_ground = (w2g * Eigen::Vector3d(probe_world.x(), probe_world.y(), 0)).head<2>();
+  const Eigen::Vector2d probe_ground =
+      (w2g * Eigen::Vector3d(probe_world.x(), probe_world.y(), 0)).head<2>();
   EXPECT_NEAR(signedDistanceToTop(t, probe_world), signedDistanceToTop(g, probe_ground), 1e-9);
   EXPECT_LT(signedDistanceToTop(t, t.center_xy), -0.2);
-  const Eigen::Vector2d edge_mid = 0.5 * (t.top_polygon[0] + t.top_polygon[1]);
-  const Eigen::Vector2d outward = (edge_mid - t.center_xy).normalized();
-  if (t.shape == TableShape::Rectangular) {
-    EXPECT_NEAR(signedDistanceToTop(t, edge_mid + 0.5 * outward), 0.5, 1e-9);
-  }
+  TableTruth square;  // 1 m x 1 m centred at (2, 2)
+  square.top_polygon = {{1.5, 1.5}, {2.5, 1.5}, {2.5, 2.5}, {1.5, 2.5}};
+  EXPECT_NEAR(signedDistanceToTop(square, {3.0, 2.2}), 0.5, 1e-12);             // beside an edge
+  EXPECT_NEAR(signedDistanceToTop(square, {3.0, 3.0}), std::sqrt(0.5), 1e-12);  // off a corner
+  EXPECT_NEAR(signedDistanceToTop(square, {2.0, 2.4}), -0.1, 1e-12);            // inside
   const Eigen::Vector3d origin = w2g * Eigen::Vector3d(pose.xy.x(), pose.xy.y(), 0.0);
   EXPECT_LT(origin.norm(), 1e-12);
 }

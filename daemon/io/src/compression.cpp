@@ -56,13 +56,14 @@ std::vector<std::uint8_t> zlibDecompress(const std::uint8_t* data, std::size_t s
                   " bytes, expected " + std::to_string(expected_size));
     }
     if (left_in != 0) {
-      throw Error(what + ": " + std::to_string(left_in) + " bytes after the end of the zlib stream");
+      throw Error(what + ": " + std::to_string(left_in) +
+                  " bytes after the end of the zlib stream");
     }
     return out;
   }
   if (rc == Z_DATA_ERROR || rc == Z_NEED_DICT || rc == Z_STREAM_ERROR || rc == Z_MEM_ERROR) {
-    throw Error(what + ": corrupt zlib stream (" + (zmsg.empty() ? "code " + std::to_string(rc) : zmsg) +
-                ")");
+    throw Error(what + ": corrupt zlib stream (" +
+                (zmsg.empty() ? "code " + std::to_string(rc) : zmsg) + ")");
   }
   if (produced > expected_size) {
     throw Error(what + ": zlib stream inflates to more than the expected " +
@@ -175,8 +176,8 @@ int encodeJpeg(const unsigned char* rgb, int width, int height, int quality, uns
   jpeg_start_compress(&cinfo, TRUE);
   while (cinfo.next_scanline < cinfo.image_height) {
     // libjpeg's API is not const-correct; it only reads the row.
-    JSAMPROW row = const_cast<unsigned char*>(rgb) +
-                   static_cast<std::size_t>(cinfo.next_scanline) * width * 3;
+    JSAMPROW row =
+        const_cast<unsigned char*>(rgb) + static_cast<std::size_t>(cinfo.next_scanline) * width * 3;
     jpeg_write_scanlines(&cinfo, &row, 1);
   }
   jpeg_finish_compress(&cinfo);

@@ -54,9 +54,10 @@ std::optional<RgbdFrame> FileSequenceSource::next() {
 
 std::unique_ptr<FrameSource> makeDatasetSource(const SourceSpec& spec) {
   auto folder = std::make_shared<DatasetFolder>(spec.target);
-  std::string description = "dataset:" + spec.target + " (" + std::to_string(folder->size()) +
-                            " frames";
-  if (spec.options.rate_hz > 0) description += ", " + fmt::format("{:g}", spec.options.rate_hz) + " Hz";
+  std::string description =
+      "dataset:" + spec.target + " (" + std::to_string(folder->size()) + " frames";
+  if (spec.options.rate_hz > 0)
+    description += ", " + fmt::format("{:g}", spec.options.rate_hz) + " Hz";
   if (spec.options.loop) description += ", loop";
   description += ")";
   auto loader = [folder](std::size_t i) {

@@ -12,12 +12,18 @@ namespace findmug::io {
 
 std::string_view sourceStateName(SourceState state) {
   switch (state) {
-    case SourceState::Starting: return "starting";
-    case SourceState::Running: return "running";
-    case SourceState::Reconnecting: return "reconnecting";
-    case SourceState::EndOfStream: return "end_of_stream";
-    case SourceState::Stopped: return "stopped";
-    case SourceState::Failed: return "failed";
+    case SourceState::Starting:
+      return "starting";
+    case SourceState::Running:
+      return "running";
+    case SourceState::Reconnecting:
+      return "reconnecting";
+    case SourceState::EndOfStream:
+      return "end_of_stream";
+    case SourceState::Stopped:
+      return "stopped";
+    case SourceState::Failed:
+      return "failed";
   }
   return "unknown";
 }
@@ -108,8 +114,8 @@ bool FrameSourceBase::sleepUntil(Clock::time_point deadline) {
 
 bool FrameSourceBase::pace(double rate_hz) {
   if (!(rate_hz > 0.0)) return !stopRequested();
-  const auto period = std::chrono::duration_cast<Clock::duration>(
-      std::chrono::duration<double>(1.0 / rate_hz));
+  const auto period =
+      std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(1.0 / rate_hz));
   const auto now = Clock::now();
   Clock::time_point slot = now;
   {
@@ -169,8 +175,8 @@ SourceSpec parseSourceSpec(const std::string& text) {
   bool known = false;
   for (const char* k : kKinds) known = known || spec.kind == k;
   if (!known) specError(text, "unknown kind '" + spec.kind + "'");
-  const bool needs_target = spec.kind == "dataset" || spec.kind == "pcd" ||
-                            spec.kind == "pclzf" || spec.kind == "tiff";
+  const bool needs_target =
+      spec.kind == "dataset" || spec.kind == "pcd" || spec.kind == "pclzf" || spec.kind == "tiff";
   if (needs_target && spec.target.empty()) specError(text, spec.kind + " needs a directory");
 
   if (question == std::string::npos) return spec;
@@ -199,7 +205,8 @@ SourceSpec parseSourceSpec(const std::string& text) {
       spec.options.realtime = parseBool(text, key, value);
     } else if (key == "queue") {
       const double q = parseNumber(text, key, value);
-      if (q < 1 || q > 1000 || q != std::floor(q)) specError(text, "queue=" + value + " not in 1..1000");
+      if (q < 1 || q > 1000 || q != std::floor(q))
+        specError(text, "queue=" + value + " not in 1..1000");
       spec.options.lcm_queue_size = static_cast<int>(q);
     } else if (key == "url") {
       if (spec.kind != "lcm") specError(text, "url= only applies to lcm sources");

@@ -133,7 +133,8 @@ RgbdFrame decodeRgbdFrame(const rgbd_frame_t& msg, std::string_view channel) {
   frame.seq = msg.seq;
   frame.source = std::string(channel) + (msg.source.empty() ? "" : ": " + msg.source);
   frame.intrinsics = {msg.fx, msg.fy, msg.cx, msg.cy};
-  if (msg.has_extrinsics) frame.extrinsics = CameraExtrinsics{msg.height_m, msg.pitch_rad, msg.roll_rad};
+  if (msg.has_extrinsics)
+    frame.extrinsics = CameraExtrinsics{msg.height_m, msg.pitch_rad, msg.roll_rad};
 
   const std::string depth_field = field(channel, type, "depth_data");
   std::vector<std::uint8_t> inflated;
@@ -157,8 +158,8 @@ RgbdFrame decodeRgbdFrame(const rgbd_frame_t& msg, std::string_view channel) {
   }
   frame.depth_mm.resize(pixels);
   for (std::size_t i = 0; i < pixels; ++i) {
-    frame.depth_mm[i] = static_cast<std::uint16_t>((*depth_bytes)[2 * i] |
-                                                   ((*depth_bytes)[2 * i + 1] << 8));
+    frame.depth_mm[i] =
+        static_cast<std::uint16_t>((*depth_bytes)[2 * i] | ((*depth_bytes)[2 * i + 1] << 8));
   }
 
   const std::string color_field = field(channel, type, "color_data");
@@ -172,8 +173,8 @@ RgbdFrame decodeRgbdFrame(const rgbd_frame_t& msg, std::string_view channel) {
       std::memcpy(frame.rgb.data(), msg.color_data.data(), pixels * 3);
       break;
     case rgbd_frame_t::COLOR_JPEG:
-      frame.rgb = detail::jpegDecompressRgb(msg.color_data.data(), msg.color_data.size(),
-                                            msg.width, msg.height, color_field);
+      frame.rgb = detail::jpegDecompressRgb(msg.color_data.data(), msg.color_data.size(), msg.width,
+                                            msg.height, color_field);
       break;
     case rgbd_frame_t::COLOR_PNG: {
       if (msg.color_data.empty()) throw Error(color_field + ": empty PNG data");
@@ -251,8 +252,7 @@ LabelImageMessage decodeLabelImage(const label_image_t& msg, std::string_view ch
   checkDimensions(msg.width, msg.height, channel, type);
   checkArraySize(msg.num_labels, msg.label_names.size(), channel, type, "num_labels");
   checkArraySize(msg.labels_size, msg.labels_data.size(), channel, type, "labels_size");
-  checkArraySize(msg.confidence_size, msg.confidence_data.size(), channel, type,
-                 "confidence_size");
+  checkArraySize(msg.confidence_size, msg.confidence_data.size(), channel, type, "confidence_size");
   // The ids are part of the contract (labels.hpp); a publisher with other
   // names would make every client mis-colour silently.
   if (msg.num_labels != kNumLabels) {
@@ -375,8 +375,10 @@ tables_t encodeTables(const TablesMessage& in) {
   msg.utime = static_cast<std::int64_t>(in.utime);
   msg.seq = in.seq;
   msg.has_map_pose = in.map_pose.has_value();
-  if (in.map_pose) msg.map_pose = encodeRobotPose(*in.map_pose);
-  else msg.map_pose = encodeRobotPose(RobotPose{});
+  if (in.map_pose)
+    msg.map_pose = encodeRobotPose(*in.map_pose);
+  else
+    msg.map_pose = encodeRobotPose(RobotPose{});
   msg.num_tables = static_cast<std::int32_t>(in.tables.size());
   for (const TableCluster& t : in.tables) {
     table_t out;
@@ -465,11 +467,14 @@ TablesMessage decodeTables(const tables_t& msg, std::string_view channel) {
     }
     TableCluster c;
     c.id = t.id;
-    c.centroid = Eigen::Vector3f(static_cast<float>(t.centroid[0]), static_cast<float>(t.centroid[1]),
-                                 static_cast<float>(t.centroid[2]));
+    c.centroid =
+        Eigen::Vector3f(static_cast<float>(t.centroid[0]), static_cast<float>(t.centroid[1]),
+                        static_cast<float>(t.centroid[2]));
     c.top_height = static_cast<float>(t.top_height);
-    c.major_axis = Eigen::Vector2f(static_cast<float>(t.major_axis[0]), static_cast<float>(t.major_axis[1]));
-    c.minor_axis = Eigen::Vector2f(static_cast<float>(t.minor_axis[0]), static_cast<float>(t.minor_axis[1]));
+    c.major_axis =
+        Eigen::Vector2f(static_cast<float>(t.major_axis[0]), static_cast<float>(t.major_axis[1]));
+    c.minor_axis =
+        Eigen::Vector2f(static_cast<float>(t.minor_axis[0]), static_cast<float>(t.minor_axis[1]));
     c.extents = Eigen::Vector2f(static_cast<float>(t.extents[0]), static_cast<float>(t.extents[1]));
     for (const auto& p : t.hull) {
       checkFinite({p[0], p[1]}, where + ".hull");

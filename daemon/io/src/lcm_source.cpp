@@ -1,7 +1,8 @@
 #include "findmug/io/lcm_source.hpp"
 
-#include <lcm/lcm-cpp.hpp>
 #include <spdlog/spdlog.h>
+
+#include <lcm/lcm-cpp.hpp>
 
 #include "findmug/error.hpp"
 #include "findmug/io/channels.hpp"
@@ -17,7 +18,8 @@ LcmFrameSource::LcmFrameSource(std::string channel, std::string url, SourceOptio
     throw Error("lcm source: queue size " + std::to_string(options_.lcm_queue_size) + " < 1");
   }
   replaying_log_ = url_.rfind("file://", 0) == 0;
-  description_ = "lcm:" + channel_ + " (" + (url_.empty() ? std::string("default URL") : url_) + ")";
+  description_ =
+      "lcm:" + channel_ + " (" + (url_.empty() ? std::string("default URL") : url_) + ")";
   lcm_ = std::make_unique<lcm::LCM>(url_);
   if (!lcm_->good()) {
     throw Error("lcm source: cannot open LCM URL '" + url_ + "'" +
@@ -46,6 +48,14 @@ void LcmFrameSource::run() {
     }
     // Short timeout: the loop must notice stop() promptly.
     const int rc = lcm_->handleTimeout(100);
+    // A live publisher that falls silent looks like a lost camera: say so in
+    // state() (back to Running with the next frame).
+    if (!replaying_log_ && state() == SourceState::Running &&
+        Clock::now() - last_frame_.load() > kSilenceTimeout) {
+      spdlog::warn("{}: no frame for {} ms; waiting for the publisher", description_,
+                   std::chrono::duration_cast<std::chrono::milliseconds>(kSilenceTimeout).count());
+      setState(SourceState::Reconnecting);
+    }
     if (rc < 0) {
       if (replaying_log_) {
         spdlog::info("{}: end of log", description_);
@@ -70,6 +80,7 @@ void LcmFrameSource::onMessage(const lcm::ReceiveBuffer* buffer, const std::stri
     recordRejected(e.what());
     return;
   }
+  last_frame_ = Clock::now();
   std::unique_lock lock(queue_mutex_);
   if (replaying_log_) {
     queue_changed_.wait(lock, [&] {

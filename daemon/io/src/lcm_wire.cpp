@@ -22,7 +22,10 @@ namespace {
 class WireWalker {
  public:
   WireWalker(const void* data, std::size_t size, std::string_view type, std::string_view channel)
-      : data_(static_cast<const std::uint8_t*>(data)), size_(size), type_(type), channel_(channel) {}
+      : data_(static_cast<const std::uint8_t*>(data)),
+        size_(size),
+        type_(type),
+        channel_(channel) {}
 
   [[noreturn]] void fail(std::string_view field, const std::string& what) const {
     throw Error(std::string(channel_) + ": " + std::string(type_) + "." + std::string(field) +
@@ -71,7 +74,8 @@ class WireWalker {
     const std::int32_t n = int32(field);
     if (n < 1) fail(field, "string length " + std::to_string(n) + " (at least 1 for the NUL)");
     need(static_cast<std::size_t>(n), field);
-    if (data_[pos_ + static_cast<std::size_t>(n) - 1] != 0) fail(field, "string not NUL-terminated");
+    if (data_[pos_ + static_cast<std::size_t>(n) - 1] != 0)
+      fail(field, "string not NUL-terminated");
     pos_ += static_cast<std::size_t>(n);
   }
 
@@ -109,7 +113,7 @@ class WireWalker {
 
 // Sizes on the wire.
 constexpr std::size_t kI8 = 1, kBool = 1, kI32 = 4, kI64 = 8, kF32 = 4, kF64 = 8;
-constexpr std::size_t kMinString = 5;                     // length + NUL
+constexpr std::size_t kMinString = 5;  // length + NUL
 constexpr std::size_t kMinSearchPosition = 3 * kF64 + kBool + kMinString;
 
 void walkRobotPose(WireWalker& w) {
@@ -144,7 +148,8 @@ Msg decodeWalked(const void* data, std::size_t size, std::string_view channel) {
   try {
     rc = msg.decode(data, 0, static_cast<int>(size));
   } catch (const std::exception& e) {
-    throw Error(std::string(channel) + ": " + Msg::getTypeName() + ": LCM decode failed: " + e.what());
+    throw Error(std::string(channel) + ": " + Msg::getTypeName() +
+                ": LCM decode failed: " + e.what());
   }
   if (rc != static_cast<int>(size)) {
     throw Error(std::string(channel) + ": " + Msg::getTypeName() + ": LCM decode failed (" +
@@ -207,7 +212,8 @@ tables_t decodeMessage<tables_t>(const void* data, std::size_t size, std::string
   w.skip(2 * kI64 + kBool, "utime/seq/has_map_pose");
   walkRobotPose(w);
   // A table is at least its fixed fields plus the map centroid.
-  const std::int32_t tables = w.count("num_tables", kI32 + 10 * kF64 + 2 * kI32 + kF32 + kI32 + 3 * kF64);
+  const std::int32_t tables =
+      w.count("num_tables", kI32 + 10 * kF64 + 2 * kI32 + kF32 + kI32 + 3 * kF64);
   for (std::int32_t i = 0; i < tables; ++i) walkTable(w);
   w.finish();
   return decodeWalked<tables_t>(data, size, channel);

@@ -70,7 +70,8 @@ class Openni2Source : public FrameSourceBase {
     std::error_code ec;
     playback_ = !target_.empty() && std::filesystem::is_regular_file(target_, ec);
     if (playback_) {
-      description_ = "openni2:" + target_ + " (" + (options_.realtime ? "recorded speed" : "as fast as possible") +
+      description_ = "openni2:" + target_ + " (" +
+                     (options_.realtime ? "recorded speed" : "as fast as possible") +
                      (options_.loop ? ", loop" : "") + ")";
       // A file that cannot be opened is a configuration error: say so now.
       if (const std::string error = open(); !error.empty()) throw Error(target_ + ": " + error);
@@ -99,6 +100,7 @@ class Openni2Source : public FrameSourceBase {
         backoff = std::min(backoff * 2, options_.reconnect_max);
         if (const std::string error = open(); !error.empty()) {
           recordError(error + "; retrying in " + std::to_string(backoff.count()) + " ms");
+          setState(SourceState::Reconnecting);
           continue;
         }
         recordReconnect();
@@ -168,7 +170,8 @@ class Openni2Source : public FrameSourceBase {
     }
     if (color_mode.getPixelFormat() != openni::PIXEL_FORMAT_RGB888) {
       close();
-      return "colour pixel format " + std::to_string(color_mode.getPixelFormat()) + " is not RGB888";
+      return "colour pixel format " + std::to_string(color_mode.getPixelFormat()) +
+             " is not RGB888";
     }
     intrinsics_ = intrinsicsFromFov(color_mode.getResolutionX(), color_mode.getResolutionY());
     spdlog::info("{}: depth {}x{} @ {} fps, colour {}x{} @ {} fps, fx={:.1f} fy={:.1f}",
@@ -196,7 +199,8 @@ class Openni2Source : public FrameSourceBase {
           found = stream->setVideoMode(modes[i]) == openni::STATUS_OK;
         }
       }
-      if (!found) spdlog::warn("{}: no 640x480@30 {} mode; using the device default", description_, name);
+      if (!found)
+        spdlog::warn("{}: no 640x480@30 {} mode; using the device default", description_, name);
     }
     if (device_.isImageRegistrationModeSupported(openni::IMAGE_REGISTRATION_DEPTH_TO_COLOR)) {
       if (Status s = device_.setImageRegistrationMode(openni::IMAGE_REGISTRATION_DEPTH_TO_COLOR);
@@ -339,7 +343,8 @@ class Openni2Source : public FrameSourceBase {
     out.depth.resize(static_cast<std::size_t>(out.width) * out.height);
     const auto* base = static_cast<const std::uint8_t*>(ref.getData());
     for (int y = 0; y < out.height; ++y) {
-      std::memcpy(&out.depth[static_cast<std::size_t>(y) * out.width], base + static_cast<std::size_t>(y) * stride,
+      std::memcpy(&out.depth[static_cast<std::size_t>(y) * out.width],
+                  base + static_cast<std::size_t>(y) * stride,
                   static_cast<std::size_t>(out.width) * 2);
     }
     if (format == openni::PIXEL_FORMAT_DEPTH_100_UM) {
@@ -365,7 +370,8 @@ class Openni2Source : public FrameSourceBase {
     out.rgb.resize(static_cast<std::size_t>(out.width) * out.height);
     const auto* base = static_cast<const std::uint8_t*>(ref.getData());
     for (int y = 0; y < out.height; ++y) {
-      std::memcpy(&out.rgb[static_cast<std::size_t>(y) * out.width], base + static_cast<std::size_t>(y) * stride,
+      std::memcpy(&out.rgb[static_cast<std::size_t>(y) * out.width],
+                  base + static_cast<std::size_t>(y) * stride,
                   static_cast<std::size_t>(out.width) * 3);
     }
     out.device_timestamp = ref.getTimestamp();

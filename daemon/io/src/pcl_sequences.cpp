@@ -32,7 +32,8 @@ std::vector<std::uint8_t> readWholeFile(const std::string& path) {
   const auto size = static_cast<std::size_t>(in.tellg());
   in.seekg(0);
   std::vector<std::uint8_t> bytes(size);
-  if (size > 0 && !in.read(reinterpret_cast<char*>(bytes.data()), static_cast<std::streamsize>(size))) {
+  if (size > 0 &&
+      !in.read(reinterpret_cast<char*>(bytes.data()), static_cast<std::streamsize>(size))) {
     throw Error(path + ": read failed");
   }
   return bytes;
@@ -106,7 +107,8 @@ std::size_t parseCount(const std::string& path, const std::string& key, const st
   } catch (const std::exception&) {
     used = 0;
   }
-  if (used != token.size() || v < 0) throw Error(path + ": PCD " + key + " '" + token + "' is not a count");
+  if (used != token.size() || v < 0)
+    throw Error(path + ": PCD " + key + " '" + token + "' is not a count");
   return static_cast<std::size_t>(v);
 }
 
@@ -222,16 +224,17 @@ RgbdFrame readPcdFrame(const std::string& path) {
     const std::uint32_t compressed = readLe32(&file[h.body_offset]);
     const std::uint32_t uncompressed = readLe32(&file[h.body_offset + 4]);
     if (uncompressed != body_size) {
-      throw Error(path + ": PCD uncompressed size " + std::to_string(uncompressed) +
-                  ", expected " + std::to_string(body_size));
+      throw Error(path + ": PCD uncompressed size " + std::to_string(uncompressed) + ", expected " +
+                  std::to_string(body_size));
     }
     if (compressed > available - 8) {
       throw Error(path + ": PCD compressed body of " + std::to_string(compressed) +
                   " bytes, only " + std::to_string(available - 8) + " in the file (truncated?)");
     }
     decompressed.resize(body_size);
-    const unsigned int got = pcl::lzfDecompress(&file[h.body_offset + 8], compressed,
-                                                decompressed.data(), static_cast<unsigned int>(body_size));
+    const unsigned int got =
+        pcl::lzfDecompress(&file[h.body_offset + 8], compressed, decompressed.data(),
+                           static_cast<unsigned int>(body_size));
     if (got != body_size) {
       throw Error(path + ": corrupt LZF data in PCD (" + std::to_string(got) + " of " +
                   std::to_string(body_size) + " bytes)");
@@ -243,8 +246,8 @@ RgbdFrame readPcdFrame(const std::string& path) {
   }
   auto fieldAt = [&](int field, std::size_t point) {
     const auto f = static_cast<std::size_t>(field);
-    const std::uint8_t* p = field_major ? body + soa_offset[f] + point * 4
-                                        : body + point * point_bytes + aos_offset[f];
+    const std::uint8_t* p =
+        field_major ? body + soa_offset[f] + point * 4 : body + point * point_bytes + aos_offset[f];
     std::uint32_t bits;
     std::memcpy(&bits, p, 4);  // PCD binary data is little-endian, as is the host
     return bits;
@@ -268,7 +271,8 @@ RgbdFrame readPcdFrame(const std::string& path) {
       const std::uint32_t rgb = fieldAt(irgb, i);
       frame.rgb[i] = Rgb8{static_cast<std::uint8_t>(rgb >> 16), static_cast<std::uint8_t>(rgb >> 8),
                           static_cast<std::uint8_t>(rgb)};
-      const float x = asFloat(fieldAt(ix, i)), y = asFloat(fieldAt(iy, i)), z = asFloat(fieldAt(iz, i));
+      const float x = asFloat(fieldAt(ix, i)), y = asFloat(fieldAt(iy, i)),
+                  z = asFloat(fieldAt(iz, i));
       if (!(std::isfinite(x) && std::isfinite(y) && std::isfinite(z)) || z <= 0.0f) continue;
       const double mm = std::round(static_cast<double>(z) * 1000.0);
       if (mm > 65535.0) {
@@ -463,8 +467,8 @@ std::vector<T> readTiff(const std::string& path, int samples, int bits, int& wid
   }
   const bool rgba_ok = samples == 3 && spp == 4;  // RGBA: alpha dropped
   if (bps != bits || (spp != samples && !rgba_ok) || format != SAMPLEFORMAT_UINT) {
-    throw Error(path + ": TIFF has " + std::to_string(spp) + " sample(s) of " + std::to_string(bps) +
-                " bit(s) (format " + std::to_string(format) + "), expected " +
+    throw Error(path + ": TIFF has " + std::to_string(spp) + " sample(s) of " +
+                std::to_string(bps) + " bit(s) (format " + std::to_string(format) + "), expected " +
                 std::to_string(samples) + " unsigned of " + std::to_string(bits));
   }
   if (TIFFIsTiled(tif.get()) || (spp > 1 && planar != PLANARCONFIG_CONTIG)) {
@@ -485,7 +489,8 @@ std::vector<T> readTiff(const std::string& path, int samples, int bits, int& wid
       for (int s = 0; s < samples; ++s) {
         T value;
         std::memcpy(&value, &row[(static_cast<std::size_t>(x) * spp + s) * sizeof(T)], sizeof(T));
-        out[(static_cast<std::size_t>(y) * w + x) * samples + s] = value;  // libtiff swabs to host order
+        out[(static_cast<std::size_t>(y) * w + x) * samples + s] =
+            value;  // libtiff swabs to host order
       }
     }
   }
@@ -522,7 +527,8 @@ RgbdFrame readTiffFrame(const std::string& depth_path, const std::string& rgb_pa
 namespace {
 
 bool endsWith(const std::string& s, const std::string& suffix) {
-  return s.size() >= suffix.size() && s.compare(s.size() - suffix.size(), suffix.size(), suffix) == 0;
+  return s.size() >= suffix.size() &&
+         s.compare(s.size() - suffix.size(), suffix.size(), suffix) == 0;
 }
 
 }  // namespace
@@ -548,7 +554,8 @@ std::vector<PclSequenceItem> listPclSequence(const std::string& dir, PclFormat f
       case PclFormat::Pclzf:
         if (endsWith(name, "_depth.pclzf")) {
           const std::string stem = name.substr(0, name.size() - 12);
-          items.push_back({stem, {path, need(stem, stem + "_rgb.pclzf"), need(stem, stem + ".xml")}});
+          items.push_back(
+              {stem, {path, need(stem, stem + "_rgb.pclzf"), need(stem, stem + ".xml")}});
         }
         break;
       case PclFormat::Tiff:
@@ -573,9 +580,10 @@ std::unique_ptr<FrameSource> makePclSequenceSource(const SourceSpec& spec) {
                            : spec.kind == "pclzf" ? PclFormat::Pclzf
                                                   : PclFormat::Tiff;
   auto items = std::make_shared<std::vector<PclSequenceItem>>(listPclSequence(spec.target, format));
-  std::string description = spec.kind + ":" + spec.target + " (" + std::to_string(items->size()) +
-                            " frames";
-  if (spec.options.rate_hz > 0) description += ", " + fmt::format("{:g}", spec.options.rate_hz) + " Hz";
+  std::string description =
+      spec.kind + ":" + spec.target + " (" + std::to_string(items->size()) + " frames";
+  if (spec.options.rate_hz > 0)
+    description += ", " + fmt::format("{:g}", spec.options.rate_hz) + " Hz";
   if (spec.options.loop) description += ", loop";
   description += ")";
   // TIFF files carry no calibration: the Kinect-class default unless configured.
@@ -587,9 +595,12 @@ std::unique_ptr<FrameSource> makePclSequenceSource(const SourceSpec& spec) {
   auto loader = [items, format, tiff_k](std::size_t i) {
     const PclSequenceItem& item = (*items)[i];
     switch (format) {
-      case PclFormat::Pcd: return readPcdFrame(item.files[0]);
-      case PclFormat::Pclzf: return readPclzfFrame(item.files[0], item.files[1], item.files[2]);
-      case PclFormat::Tiff: return readTiffFrame(item.files[0], item.files[1], tiff_k);
+      case PclFormat::Pcd:
+        return readPcdFrame(item.files[0]);
+      case PclFormat::Pclzf:
+        return readPclzfFrame(item.files[0], item.files[1], item.files[2]);
+      case PclFormat::Tiff:
+        return readTiffFrame(item.files[0], item.files[1], tiff_k);
     }
     throw Error("unreachable");
   };

@@ -46,6 +46,7 @@ class Daemon {
   void requestStop() { stop_requested_.store(true); }
 
   const Pipeline& pipeline() const { return *pipeline_; }
+  // Valid until run() returns (run closes the source on its way out).
   const io::FrameSource& source() const { return *source_; }
 
  private:

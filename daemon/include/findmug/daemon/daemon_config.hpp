@@ -36,6 +36,7 @@ struct DaemonConfig {
   bool compress_labels = true;         // zlib-compress label images
   bool publish_tables = true;          // publish FINDMUG_TABLES
   bool exit_at_end_of_stream = true;   // finite source exhausted: drain, publish, exit 0
+  double shutdown_grace_s = 1.0;       // on SIGTERM, wait this long for frames in flight
   std::string log_level = "info";      // trace, debug, info, warn, error
 
   // Channel names with the suffix applied.

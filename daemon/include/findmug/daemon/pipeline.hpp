@@ -89,8 +89,10 @@ class Pipeline {
   bool submit(RgbdFrame frame);
   // Sequential mode: publish a status now (threaded mode does it periodically).
   void publishStatusNow();
-  // Drain: finish every queued frame; Discard: drop queued frames, finish
-  // those in flight. Then publishes a final status. Idempotent.
+  // Drain: finish every queued frame; Discard: drop queued frames and wait
+  // for those in flight at most daemon.shutdown_grace_s (the rest are
+  // abandoned, counted as dropped). Then publishes a final status and closes
+  // the LCM handle. Idempotent.
   void stop(StopMode mode);
 
   PipelineCounters counters() const;
@@ -121,7 +123,8 @@ class Pipeline {
   Clock::time_point last_sequential_status_;
   std::atomic<const io::FrameSource*> source_{nullptr};
 
-  std::atomic<std::uint64_t> received_{0}, processed_{0}, next_index_{0};
+  std::atomic<std::uint64_t> received_{0}, processed_{0}, abandoned_{0};
+  std::atomic<bool> finalized_{false};
   mutable std::mutex stats_mutex_;  // guards the members below
   RateMeter input_rate_, output_rate_;
   std::map<std::string, LatencyWindow> latency_;  // per named stage/sub-stage

@@ -134,8 +134,17 @@ class Stage {
   // Closes the input, handles queued items per `mode`, joins the workers.
   // Idempotent. After stop(), push() returns false.
   void stop(StopMode mode) {
+    close(mode);
+    join();
+  }
+
+  // The two halves of stop(), for a caller that must not wait for an item
+  // in flight longer than it can afford (see Pipeline::stop).
+  void close(StopMode mode) {
     if (mode == StopMode::Discard) queue_.clear();
     queue_.close();
+  }
+  void join() {
     for (auto& t : threads_) {
       if (t.joinable()) t.join();
     }

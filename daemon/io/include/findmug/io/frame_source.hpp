@@ -60,9 +60,9 @@ std::string_view sourceStateName(SourceState state);
 struct SourceStats {
   std::uint64_t frames_delivered = 0;  // returned by next()
   std::uint64_t frames_rejected = 0;   // bad input skipped (corrupt file / message / frame)
-  std::uint64_t frames_dropped = 0;    // good frames discarded because next() was not called in time
-  std::uint64_t reconnects = 0;        // times the device was (re)opened after a loss
-  std::string last_error;              // most recent problem, empty if none
+  std::uint64_t frames_dropped = 0;  // good frames discarded because next() was not called in time
+  std::uint64_t reconnects = 0;      // times the device was (re)opened after a loss
+  std::string last_error;            // most recent problem, empty if none
   std::uint64_t last_error_utime = 0;  // when (microseconds, host clock), 0 if none
 };
 
@@ -117,7 +117,7 @@ struct SourceSpec {
   std::string kind;    // openni2, lcm, dataset, pcd, pclzf, tiff
   std::string target;  // device URI / .oni path / channel / directory; may be empty
   SourceOptions options;
-  std::string text;    // the spec as given, for messages
+  std::string text;  // the spec as given, for messages
 };
 
 // Parses the spec syntax above; throws findmug::Error naming the spec and the

@@ -20,11 +20,11 @@
 
 #include "findmug/frame.hpp"
 #include "findmug/label_image.hpp"
-#include "findmug/tables.hpp"
 #include "findmug/label_image_t.hpp"
 #include "findmug/rgbd_frame_t.hpp"
 #include "findmug/robot_pose_t.hpp"
 #include "findmug/status_t.hpp"
+#include "findmug/tables.hpp"
 #include "findmug/tables_t.hpp"
 
 namespace findmug::io {
@@ -80,9 +80,9 @@ RgbdFrame decodeRgbdFrame(const void* data, std::size_t size, std::string_view c
 // ---- label images -------------------------------------------------------------
 
 struct LabelImageMessage {
-  LabelImage image;        // confidence empty when the message had none
-  std::uint64_t utime = 0; // source frame's utime
-  std::int64_t seq = 0;    // source frame's seq
+  LabelImage image;         // confidence empty when the message had none
+  std::uint64_t utime = 0;  // source frame's utime
+  std::int64_t seq = 0;     // source frame's seq
   std::int64_t latency_us = 0;
 };
 
@@ -114,9 +114,9 @@ struct MapFrameTable {
 struct TablesMessage {
   std::uint64_t utime = 0;  // source frame's utime
   std::int64_t seq = 0;
-  std::vector<TableCluster> tables;        // robot base frame
-  std::optional<RobotPose> map_pose;       // when the pose was known
-  std::vector<MapFrameTable> map_tables;   // one per table when map_pose, else empty
+  std::vector<TableCluster> tables;       // robot base frame
+  std::optional<RobotPose> map_pose;      // when the pose was known
+  std::vector<MapFrameTable> map_tables;  // one per table when map_pose, else empty
 };
 
 // Fills the map_ fields from `message.map_pose` when set (map_tables is ignored).

@@ -7,9 +7,14 @@
 //   * file:// URLs (replaying a log): the thread waits for room instead, so no
 //     frame is lost, and the end of the log ends the stream (EndOfStream).
 // Bad messages (truncated, corrupt, wrong type) are logged, counted in
-// stats().frames_rejected and skipped.
+// stats().frames_rejected and skipped. State: Starting until the first frame,
+// Running while frames come, Reconnecting when a live channel has been silent
+// for kSilenceTimeout (the publisher or its camera is gone), EndOfStream at
+// the end of a log.
 #pragma once
 
+#include <atomic>
+#include <chrono>
 #include <condition_variable>
 #include <deque>
 #include <memory>
@@ -28,6 +33,8 @@ namespace findmug::io {
 
 class LcmFrameSource : public FrameSourceBase {
  public:
+  static constexpr std::chrono::milliseconds kSilenceTimeout{2000};
+
   // Throws findmug::Error when the URL cannot be opened.
   LcmFrameSource(std::string channel, std::string url, SourceOptions options);
   ~LcmFrameSource() override;
@@ -59,6 +66,7 @@ class LcmFrameSource : public FrameSourceBase {
   std::mutex queue_mutex_;
   std::condition_variable queue_changed_;
   std::deque<RgbdFrame> queue_;
+  std::atomic<Clock::time_point> last_frame_{Clock::now()};  // last good frame received
   bool finished_ = false;  // thread ended (end of log / fatal LCM error)
   bool stopping_ = false;
   std::thread thread_;

@@ -31,7 +31,7 @@ RgbdFrame readTiffFrame(const std::string& depth_path, const std::string& rgb_pa
 // frame, or a frame lacks one of its files (e.g. a depth without its rgb).
 enum class PclFormat { Pcd, Pclzf, Tiff };
 struct PclSequenceItem {
-  std::string name;        // common stem, e.g. frame_20121214T142255.814212
+  std::string name;                // common stem, e.g. frame_20121214T142255.814212
   std::vector<std::string> files;  // pcd: {cloud}; pclzf: {depth, rgb, xml}; tiff: {depth, rgb}
 };
 std::vector<PclSequenceItem> listPclSequence(const std::string& dir, PclFormat format);

@@ -1,0 +1,233 @@
+// findmug-nav-client — what a navigation stack would take from findmugd.
+//
+// Subscribes to FINDMUG_TABLES[_suffix] (tables_t) and, for every message,
+// prints the reachable search positions in visiting order from the robot's
+// position (shortest open path, see findmug::visitingOrder), then the
+// unreachable ones with their reason. Positions are given in the map frame
+// when the message carries the robot's map pose (and --frame is auto or
+// map), else in the robot base frame, where the robot stands at the origin.
+// With --json, one JSON object per message on its own line (JSON lines).
+//
+// Exits cleanly on SIGINT/SIGTERM, after --count messages, or at the end of
+// a replayed log (--lcm-url file://LOG?speed=0). Bad messages are reported on
+// stderr and skipped.
+#include <lcm/lcm-cpp.hpp>
+
+#include <cmath>
+#include <cstdio>
+#include <iostream>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "client_common.hpp"
+#include "findmug/error.hpp"
+#include "findmug/io/channels.hpp"
+#include "findmug/io/lcm_codec.hpp"
+#include "findmug/tables.hpp"
+
+namespace {
+
+using namespace findmug;
+
+constexpr const char* kProgram = "findmug-nav-client";
+
+const char* kUsage =
+    "usage: findmug-nav-client [options]\n"
+    "  --lcm-url URL          LCM provider (default: LCM_DEFAULT_URL or udpm default);\n"
+    "                         file://LOG?speed=0 replays a log and exits at its end\n"
+    "  --channel-suffix S     listen on FINDMUG_TABLES_S\n"
+    "  --frame auto|base|map  frame of the printed positions (default auto: map when\n"
+    "                         the message has the robot's map pose)\n"
+    "  --json                 one JSON object per message (JSON lines)\n"
+    "  --count N              exit after N messages\n"
+    "  --help\n";
+
+enum class FrameChoice { Auto, Base, Map };
+
+struct Position {
+  int table = 0;
+  SearchPosition position;  // in the chosen frame
+};
+
+std::string jsonEscape(const std::string& s) {
+  std::string out;
+  for (char c : s) {
+    switch (c) {
+      case '"': out += "\\\""; break;
+      case '\\': out += "\\\\"; break;
+      case '\n': out += "\\n"; break;
+      case '\t': out += "\\t"; break;
+      default:
+        if (static_cast<unsigned char>(c) < 0x20) {
+          char buf[8];
+          std::snprintf(buf, sizeof(buf), "\\u%04x", c);
+          out += buf;
+        } else {
+          out += c;
+        }
+    }
+  }
+  return out;
+}
+
+std::string number(double v, int decimals = 3) {
+  char buf[64];
+  std::snprintf(buf, sizeof(buf), "%.*f", decimals, v);
+  return buf;
+}
+
+class NavClient {
+ public:
+  NavClient(FrameChoice frame, bool json) : frame_(frame), json_(json) {}
+
+  void onMessage(const lcm::ReceiveBuffer* buffer, const std::string& channel) {
+    ++received_;
+    io::TablesMessage message;
+    try {
+      message = io::decodeTables(buffer->data, buffer->data_size, channel);
+    } catch (const std::exception& e) {
+      std::fprintf(stderr, "%s: skipping bad message: %s\n", kProgram, e.what());
+      return;
+    }
+    const bool use_map =
+        message.map_pose.has_value() && frame_ != FrameChoice::Base;
+    if (frame_ == FrameChoice::Map && !message.map_pose) {
+      std::fprintf(stderr, "%s: message seq %lld has no map pose; positions in the base frame\n",
+                   kProgram, static_cast<long long>(message.seq));
+    }
+    // The robot: at the base-frame origin, or at its map pose.
+    Eigen::Vector2f robot = Eigen::Vector2f::Zero();
+    double robot_yaw = 0.0;
+    if (use_map) {
+      robot = Eigen::Vector2f(static_cast<float>(message.map_pose->x),
+                              static_cast<float>(message.map_pose->y));
+      robot_yaw = message.map_pose->yaw;
+    }
+    std::vector<Position> reachable, unreachable;
+    for (std::size_t t = 0; t < message.tables.size(); ++t) {
+      const auto& positions =
+          use_map ? message.map_tables[t].search_positions : message.tables[t].search_positions;
+      for (const auto& p : positions) {
+        (p.reachable ? reachable : unreachable).push_back({message.tables[t].id, p});
+      }
+    }
+    std::vector<Eigen::Vector2f> points;
+    for (const auto& r : reachable) points.push_back(r.position.xy);
+    const std::vector<int> order = visitingOrder(robot, points);
+    if (json_) {
+      printJson(message, use_map, robot, robot_yaw, reachable, order, unreachable);
+    } else {
+      printText(message, use_map, robot, robot_yaw, reachable, order, unreachable);
+    }
+    std::fflush(stdout);
+  }
+
+  long received() const { return received_; }
+
+ private:
+  void printText(const io::TablesMessage& m, bool use_map, const Eigen::Vector2f& robot,
+                 double robot_yaw, const std::vector<Position>& reachable,
+                 const std::vector<int>& order, const std::vector<Position>& unreachable) const {
+    std::printf("tables seq %lld utime %llu: %zu tables, %zu positions (%zu reachable), %s frame, "
+                "robot at (%.2f, %.2f) yaw %.1f deg\n",
+                static_cast<long long>(m.seq), static_cast<unsigned long long>(m.utime),
+                m.tables.size(), reachable.size() + unreachable.size(), reachable.size(),
+                use_map ? "map" : "base", robot.x(), robot.y(), robot_yaw * 180.0 / M_PI);
+    Eigen::Vector2f at = robot;
+    double total = 0.0;
+    for (std::size_t k = 0; k < order.size(); ++k) {
+      const Position& p = reachable[order[k]];
+      const double leg = (p.position.xy - at).norm();
+      total += leg;
+      at = p.position.xy;
+      std::printf("  %2zu. table %d  x %7.2f  y %7.2f  yaw %7.1f deg  leg %5.2f m  total %6.2f m\n",
+                  k + 1, p.table, p.position.xy.x(), p.position.xy.y(),
+                  p.position.yaw * 180.0 / M_PI, leg, total);
+    }
+    for (const Position& p : unreachable) {
+      std::printf("   -  table %d  x %7.2f  y %7.2f  yaw %7.1f deg  unreachable: %s\n", p.table,
+                  p.position.xy.x(), p.position.xy.y(), p.position.yaw * 180.0 / M_PI,
+                  p.position.reason.c_str());
+    }
+  }
+
+  void printJson(const io::TablesMessage& m, bool use_map, const Eigen::Vector2f& robot,
+                 double robot_yaw, const std::vector<Position>& reachable,
+                 const std::vector<int>& order, const std::vector<Position>& unreachable) const {
+    std::ostringstream out;
+    out << "{\"utime\":" << m.utime << ",\"seq\":" << m.seq << ",\"frame\":\""
+        << (use_map ? "map" : "base") << "\",\"robot\":{\"x\":" << number(robot.x())
+        << ",\"y\":" << number(robot.y()) << ",\"yaw\":" << number(robot_yaw, 4)
+        << "},\"tables\":" << m.tables.size() << ",\"tour\":[";
+    Eigen::Vector2f at = robot;
+    double total = 0.0;
+    for (std::size_t k = 0; k < order.size(); ++k) {
+      const Position& p = reachable[order[k]];
+      total += (p.position.xy - at).norm();
+      at = p.position.xy;
+      out << (k ? "," : "") << "{\"order\":" << k + 1 << ",\"table\":" << p.table
+          << ",\"x\":" << number(p.position.xy.x()) << ",\"y\":" << number(p.position.xy.y())
+          << ",\"yaw\":" << number(p.position.yaw, 4) << ",\"path_m\":" << number(total) << "}";
+    }
+    out << "],\"unreachable\":[";
+    for (std::size_t k = 0; k < unreachable.size(); ++k) {
+      const Position& p = unreachable[k];
+      out << (k ? "," : "") << "{\"table\":" << p.table << ",\"x\":" << number(p.position.xy.x())
+          << ",\"y\":" << number(p.position.xy.y()) << ",\"yaw\":" << number(p.position.yaw, 4)
+          << ",\"reason\":\"" << jsonEscape(p.position.reason) << "\"}";
+    }
+    out << "]}";
+    std::puts(out.str().c_str());
+  }
+
+  FrameChoice frame_;
+  bool json_;
+  long received_ = 0;
+};
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  using namespace findmug;
+  std::string url, channel;
+  FrameChoice frame = FrameChoice::Auto;
+  bool json = false;
+  long count = 0;
+  try {
+    const clients::Flags flags(argc, argv, {"--lcm-url", "--channel-suffix", "--frame", "--count"},
+                               {"--json", "--help"});
+    if (flags.has("--help")) {
+      std::fputs(kUsage, stdout);
+      return 0;
+    }
+    url = flags.get("--lcm-url", "");
+    channel = io::channelName(io::kTablesChannel, flags.get("--channel-suffix", ""));
+    const std::string frame_name = flags.get("--frame", "auto");
+    if (frame_name == "base") {
+      frame = FrameChoice::Base;
+    } else if (frame_name == "map") {
+      frame = FrameChoice::Map;
+    } else if (frame_name != "auto") {
+      throw std::invalid_argument("--frame " + frame_name + ": expected auto, base or map");
+    }
+    json = flags.has("--json");
+    count = flags.getInt("--count", 0, 1);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "%s: %s\n%s", kProgram, e.what(), kUsage);
+    return 2;
+  }
+
+  lcm::LCM lcm(url);
+  if (!lcm.good()) {
+    std::fprintf(stderr, "%s: cannot open LCM provider '%s'\n", kProgram,
+                 url.empty() ? "default" : url.c_str());
+    return 1;
+  }
+  clients::installStopHandlers();
+  NavClient client(frame, json);
+  lcm.subscribe(channel, &NavClient::onMessage, &client);
+  if (!json) std::fprintf(stderr, "%s: listening on %s\n", kProgram, channel.c_str());
+  return clients::receiveLoop(lcm, url, kProgram,
+                              [&] { return count > 0 && client.received() >= count; });
+}

@@ -1,0 +1,323 @@
+#!/usr/bin/env bash
+# daemon_bench.sh — findmugd under replayed real frames: sustained fps, latency,
+# drops, time per stage, CPU and peak memory, threaded vs sequential.
+#
+#   tests/bench/daemon_bench.sh [--build-dir build] [--rates "1 5 15 30"] [--duration 30]
+#       [--datasets "nyu pcl synth"] [--modes "threaded sequential"] [--no-search]
+#       [--model FILE] [--out BENCHMARKS-replay.md] [--results DIR]
+#   (scripts/bench.sh runs this with the defaults.)
+#
+# For each data set, input rate and mode, inside a private network namespace:
+#   findmug-replay publishes the data set's frames in a loop at RATE fps for
+#   DURATION s on udpm (as a camera driver would: fresh seq, utime = send time);
+#   the daemon under test reads them with its lcm: source and publishes labels;
+#   findmug-replay-probe measures latency (label received - frame received),
+#   output fps and drops, and keeps the daemon's final status (per-stage times
+#   over the whole run, counters). CPU time and peak RSS of the daemon process
+#   come from /proc (sampled every 0.2 s; VmHWM is the kernel's own peak).
+# Modes: "threaded" = findmugd; "sequential" = findmug-sequential, the same
+# library, config and LCM I/O with every stage on one thread (the gain from
+# pipelining is the ratio of the two).
+# Data sets: nyu = the 31 NYU Depth V2 frames (640x480) looped; pcl = PCL's
+# 3-frame Kinect grabber sequence (PCLZF) looped; synth = a 60-frame synthetic
+# apartment walk (findmug-synth --seed 7), looped.
+# Then, unless --no-search, the highest NYU input rate the threaded daemon
+# holds without drops is searched by bisection between the grid's rates.
+#
+# Writes a Markdown fragment (machine, commit, command, tables) to --out and
+# the raw reports (JSON, histograms, logs) under --results. Figures depend on
+# what else runs on the machine: the load average is recorded with them.
+set -euo pipefail
+
+ROOT="$(cd "$(dirname "$0")/../.." && pwd)"
+BUILD="${BUILD_DIR:-$ROOT/build}"
+RATES="1 5 15 30"
+DURATION=30
+DATASETS="nyu pcl synth"
+MODES="threaded sequential"
+SEARCH=1
+MODEL="${FINDMUG_MODEL:-}"
+OUT="$ROOT/BENCHMARKS-replay.md"
+RESULTS=""
+COMMAND_LINE="tests/bench/daemon_bench.sh $*"
+ARGS=("$@")
+while [[ $# -gt 0 ]]; do
+  case "$1" in
+    --build-dir) BUILD=$2; shift 2 ;;
+    --rates) RATES=$2; shift 2 ;;
+    --duration) DURATION=$2; shift 2 ;;
+    --datasets) DATASETS=$2; shift 2 ;;
+    --modes) MODES=$2; shift 2 ;;
+    --no-search) SEARCH=0; shift ;;
+    --model) MODEL=$2; shift 2 ;;
+    --out) OUT=$2; shift 2 ;;
+    --results) RESULTS=$2; shift 2 ;;
+    -h|--help) sed -n '2,32p' "$0"; exit 0 ;;
+    *) echo "daemon_bench: unknown argument '$1'" >&2; exit 2 ;;
+  esac
+done
+BUILD="$(cd "$BUILD" && pwd)"
+FINDMUGD="$BUILD/daemon/findmugd"
+SEQUENTIAL="$BUILD/tests/replay/findmug-sequential"
+REPLAY="$BUILD/tests/replay/findmug-replay"
+PROBE="$BUILD/tests/replay/findmug-replay-probe"
+SYNTH="$BUILD/tools/findmug-synth"
+TRAIN="$BUILD/tools/findmug-train"
+for exe in "$FINDMUGD" "$SEQUENTIAL" "$REPLAY" "$PROBE"; do
+  [[ -x "$exe" ]] || { echo "daemon_bench: $exe missing: build first (cmake --build $BUILD)" >&2; exit 1; }
+done
+
+# --- private network namespace (no packet leaves it) -------------------------------
+if [[ "${FINDMUG_BENCH_NETNS:-}" != 1 ]]; then
+  ns=(unshare --net)
+  [[ $EUID -eq 0 ]] || ns=(unshare --net --map-root-user)
+  exec "${ns[@]}" env FINDMUG_BENCH_NETNS=1 FINDMUG_BENCH_COMMAND="$COMMAND_LINE" \
+    BUILD_DIR="$BUILD" bash "$0" "${ARGS[@]}"
+fi
+COMMAND_LINE="${FINDMUG_BENCH_COMMAND:-$COMMAND_LINE}"
+ip link set lo up
+ip route add 224.0.0.0/4 dev lo
+URL="udpm://239.255.76.67:7667?ttl=0&recv_buf_size=4194304"
+
+DATA_ROOT="${FINDMUG_DATA:-$ROOT/../shared/data}"
+WORK="$(mktemp -d /tmp/findmug-bench.XXXXXX)"
+RESULTS="${RESULTS:-$BUILD/bench-results/daemon-$(date -u +%Y%m%dT%H%M%SZ)}"
+mkdir -p "$RESULTS"
+PIDS=()
+cleanup() {
+  for pid in "${PIDS[@]+"${PIDS[@]}"}"; do kill -TERM "$pid" 2>/dev/null || true; done
+  wait 2>/dev/null || true
+  rm -rf "$WORK"
+}
+trap cleanup EXIT
+forget() {
+  local keep=() p
+  for p in "${PIDS[@]+"${PIDS[@]}"}"; do [[ "$p" == "$1" ]] || keep+=("$p"); done
+  PIDS=("${keep[@]+"${keep[@]}"}")
+}
+log() { echo "daemon_bench: $*" >&2; }
+
+wait_for() {  # FILE SECONDS PID
+  local file=$1 seconds=$2 pid=$3 waited=0
+  while [[ ! -e "$file" ]]; do
+    kill -0 "$pid" 2>/dev/null || return 2
+    (( waited >= seconds * 5 )) && return 1
+    sleep 0.2
+    waited=$((waited + 1))
+  done
+}
+
+# monitor PID FILE: "epoch_ms cpu_ticks vmhwm_kb" every 0.2 s while PID lives.
+monitor() {
+  local pid=$1 file=$2 stat ticks hwm
+  : > "$file"
+  while [[ -r /proc/$pid/stat ]]; do
+    stat=$(cat "/proc/$pid/stat" 2>/dev/null) || break
+    # Fields after the command name (which may hold spaces): utime is 14th, stime 15th.
+    ticks=$(echo "${stat##*) }" | awk '{print $12 + $13}')
+    hwm=$(awk '/^VmHWM:/ {print $2}' "/proc/$pid/status" 2>/dev/null || echo 0)
+    [[ -n "$hwm" ]] && echo "$(date +%s%3N) $ticks $hwm" >> "$file"
+    sleep 0.2
+  done
+}
+
+# --- data sets ---------------------------------------------------------------------------
+declare -A SPEC
+for ds in $DATASETS; do
+  case "$ds" in
+    nyu) SPEC[nyu]="dataset:$DATA_ROOT/nyuv2_labeled" ;;
+    pcl) SPEC[pcl]="pclzf:$DATA_ROOT/pcl_test_clouds/grabber_sequences/pclzf" ;;
+    synth)
+      [[ -x "$SYNTH" ]] || { log "findmug-synth missing"; exit 1; }
+      log "rendering the synthetic apartment (60 frames)"
+      "$SYNTH" --seed 7 --frames 60 --out "$WORK/synth" > "$WORK/synth.log" 2>&1 \
+        || { cat "$WORK/synth.log"; exit 1; }
+      SPEC[synth]="dataset:$WORK/synth" ;;
+    *) log "unknown data set '$ds' (nyu, pcl, synth)"; exit 2 ;;
+  esac
+done
+
+if [[ -z "$MODEL" ]]; then
+  for candidate in "$ROOT/models/findmug.fmf" "$ROOT"/models/*.fmf; do
+    [[ -f "$candidate" ]] && { MODEL=$candidate; break; }
+  done
+fi
+if [[ -z "$MODEL" ]]; then
+  MODEL="$RESULTS/nyu31.fmf"
+  log "no committed model: training $MODEL on the 31 NYU frames (default forest)"
+  "$TRAIN" --data "$DATA_ROOT/nyuv2_labeled" --set ground.source=floor_labels --out "$MODEL" \
+    > "$RESULTS/train.log" 2>&1 || { cat "$RESULTS/train.log"; exit 1; }
+fi
+
+# --- one run -------------------------------------------------------------------------------
+# run_one DS RATE MODE: results in $RESULTS/DS-RATEfps-MODE/
+run_one() {
+  local ds=$1 rate=$2 mode=$3
+  local tag="$ds-${rate}fps-$mode" dir="$RESULTS/$ds-${rate}fps-$mode"
+  rm -rf "$dir"; mkdir -p "$dir"
+  log "$tag: ${DURATION} s"
+  "$PROBE" --url "$URL" --live --expect-file "$dir/count" --name "$tag" --report-only \
+    --ready-file "$dir/ready" --drained-file "$dir/drained" --out-json "$dir/probe.json" \
+    --histogram-csv "$dir/histogram.csv" --histogram-txt "$dir/histogram.txt" --bins 60 \
+    --timeout $((DURATION + 900)) > "$dir/probe.log" 2>&1 &
+  local probe=$!; PIDS+=("$probe")
+  local exe=$FINDMUGD
+  [[ $mode == sequential ]] && exe=$SEQUENTIAL
+  "$exe" --source "lcm:FINDMUG_RGBD?url=$URL" --lcm-url "$URL" --model "$MODEL" \
+    --set daemon.stats_window_s=3600 --log-level warn > "$dir/daemon.log" 2>&1 &
+  local daemon=$!; PIDS+=("$daemon")
+  monitor "$daemon" "$dir/usage" &
+  local mon=$!; PIDS+=("$mon")
+  if ! wait_for "$dir/ready" 120 "$daemon"; then
+    cat "$dir/daemon.log" >&2; log "$tag: the daemon did not come up"; exit 1
+  fi
+  date +%s%3N > "$dir/start_ms"
+  "$REPLAY" --source "${SPEC[$ds]}" --rate "$rate" --duration "$DURATION" --url "$URL" \
+    --count-file "$dir/count" > "$dir/replay.log" 2>&1 || { cat "$dir/replay.log" >&2; exit 1; }
+  # Let queued frames finish (a slow mode may need a while), then stop.
+  wait_for "$dir/drained" 120 "$daemon" || log "$tag: not drained after 120 s, stopping"
+  date +%s%3N > "$dir/end_ms"
+  kill -TERM "$daemon"; wait "$daemon" || log "$tag: daemon exit code $?"; forget "$daemon"
+  wait "$mon" || true; forget "$mon"
+  kill -TERM "$probe"; wait "$probe" || true; forget "$probe"
+  grep -E "^== |latency ms|daemon status" "$dir/probe.log" >&2 || true
+}
+
+# Figures of one run as "key=value" lines.
+figures() {
+  local dir=$1 j=$1/probe.json
+  [[ -s "$j" ]] || return 0
+  local get lat
+  get() { grep -o "\"$1\": [^,}]*" "$j" | head -1 | sed 's/.*: //'; }
+  lat() { grep -o "\"latency_ms\": {[^}]*}" "$j" | grep -o "\"$1\": [^,}]*" | sed 's/.*: //'; }
+  local frames_in published dropped
+  frames_in=$(get frames_in); published=$(get labels_received)
+  dropped=$((frames_in - published))
+  local tck; tck=$(getconf CLK_TCK)
+  local usage
+  usage=$(awk -v s="$(cat "$dir/start_ms")" -v e="$(cat "$dir/end_ms")" -v tck="$tck" '
+    { if ($1 <= s) { t0 = $1; c0 = $2 } if ($1 <= e) { t1 = $1; c1 = $2 } hwm = $3 }
+    END { if (t1 > t0) printf "%.0f %.0f", 100 * (c1 - c0) / tck / ((t1 - t0) / 1000), hwm / 1024;
+          else printf "? %.0f", hwm / 1024 }' "$dir/usage")
+  echo "input_fps=$(get input_fps) output_fps=$(get output_fps) frames_in=$frames_in published=$published dropped=$dropped p50=$(lat p50) p99=$(lat p99) max=$(lat max) cpu=${usage% *} rss=${usage#* }"
+}
+val() { sed -n "s/.*\b$2=\([^ ]*\).*/\1/p" <<< "$1"; }
+fmt1() { awk -v v="$1" 'BEGIN { if (v == "") print "-"; else printf "%.1f", v }'; }
+fmt0() { awk -v v="$1" 'BEGIN { if (v == "") print "-"; else printf "%.0f", v }'; }
+
+# --- the grid ------------------------------------------------------------------------------------
+LOAD_BEFORE=$(cut -d' ' -f1-3 /proc/loadavg)
+for ds in $DATASETS; do
+  for rate in $RATES; do
+    for mode in $MODES; do run_one "$ds" "$rate" "$mode"; done
+  done
+done
+
+# --- highest NYU rate held without drops (threaded) ----------------------------------------------
+held() {  # DIR -> 0 if no frame was dropped
+  local f; f=$(figures "$1")
+  [[ -n "$f" && "$(val "$f" dropped)" == 0 ]]
+}
+SEARCHED=""
+if [[ $SEARCH == 1 && " $DATASETS " == *" nyu "* && " $MODES " == *" threaded "* ]]; then
+  lo="" hi=""
+  for rate in $(tr ' ' '\n' <<< "$RATES" | sort -g); do
+    if held "$RESULTS/nyu-${rate}fps-threaded"; then lo=$rate; elif [[ -z "$hi" ]]; then hi=$rate; fi
+  done
+  if [[ -n "$lo" && -n "$hi" ]] && awk -v a="$lo" -v b="$hi" 'BEGIN { exit !(a < b) }'; then
+    for _ in 1 2 3; do
+      mid=$(awk -v a="$lo" -v b="$hi" 'BEGIN { m = int((a + b) + 0.5) / 2; printf "%g", m }')
+      awk -v m="$mid" -v a="$lo" -v b="$hi" 'BEGIN { exit !(m > a && m < b) }' || break
+      run_one nyu "$mid" threaded
+      SEARCHED="$SEARCHED $mid"
+      if held "$RESULTS/nyu-${mid}fps-threaded"; then lo=$mid; else hi=$mid; fi
+    done
+  fi
+  HIGHEST_HELD=${lo:-none}
+  FIRST_DROPPING=${hi:-none}
+fi
+LOAD_AFTER=$(cut -d' ' -f1-3 /proc/loadavg)
+
+# --- the Markdown fragment ----------------------------------------------------------------------
+commit=$(git -C "$ROOT" rev-parse --short HEAD 2>/dev/null || echo unknown)
+git -C "$ROOT" diff --quiet HEAD 2>/dev/null || commit="$commit (with uncommitted changes)"
+cpu_model=$(awk -F': ' '/model name/ {print $2; exit}' /proc/cpuinfo)
+mem_gb=$(awk '/MemTotal/ {printf "%.0f", $2 / 1048576}' /proc/meminfo)
+{
+  echo "## Daemon under replayed input (\`tests/bench/daemon_bench.sh\`)"
+  echo
+  echo "- Machine: $cpu_model, $(nproc) cores, $mem_gb GiB RAM, Linux $(uname -r)"
+  echo "- Commit: $commit; date $(date -u +%Y-%m-%dT%H:%MZ)"
+  echo "- Command: \`$COMMAND_LINE\` (build \`$BUILD\`), model \`$(basename "$MODEL")\`"
+  echo "- Each run: ${DURATION} s of input from \`findmug-replay\` (frames looped, fresh seq/utime),"
+  echo "  LCM udpm in a private network namespace; latency = label image received - frame received"
+  echo "  (same host clock); dropped = frames in - label images out; CPU = daemon process CPU time /"
+  echo "  wall time of the run (200 % = both cores); peak RSS = VmHWM."
+  echo "- Load average (1/5/15 min) before: $LOAD_BEFORE, after: $LOAD_AFTER. Other jobs on the machine"
+  echo "  inflate latency and lower fps; compare rows of one run, not across runs."
+  echo
+  echo "### Sustained rate, latency, drops, CPU and memory"
+  echo
+  echo "| data | input fps | mode | measured in fps | out fps | frames in | published | dropped | p50 ms | p99 ms | max ms | CPU % | peak RSS MB |"
+  echo "|---|---|---|---|---|---|---|---|---|---|---|---|---|"
+  for ds in $DATASETS; do
+    for rate in $RATES $([[ $ds == nyu ]] && echo "$SEARCHED"); do
+      for mode in $MODES; do
+        dir="$RESULTS/$ds-${rate}fps-$mode"
+        [[ -d "$dir" ]] || continue
+        f=$(figures "$dir")
+        [[ -n "$f" ]] || continue
+        echo "| $ds | $rate | $mode | $(fmt1 "$(val "$f" input_fps)") | $(fmt1 "$(val "$f" output_fps)") | $(val "$f" frames_in) | $(val "$f" published) | $(val "$f" dropped) | $(fmt0 "$(val "$f" p50)") | $(fmt0 "$(val "$f" p99)") | $(fmt0 "$(val "$f" max)") | $(val "$f" cpu) | $(val "$f" rss) |"
+      done
+    done
+  done
+  if [[ " $MODES " == *" threaded "* && " $MODES " == *" sequential "* ]]; then
+    echo
+    echo "### Gain from pipelining (same library, same input)"
+    echo
+    echo "| data | input fps | threaded out fps | sequential out fps | out fps ratio | threaded p50 ms | sequential p50 ms |"
+    echo "|---|---|---|---|---|---|---|"
+    for ds in $DATASETS; do
+      for rate in $RATES; do
+        t=$(figures "$RESULTS/$ds-${rate}fps-threaded"); s=$(figures "$RESULTS/$ds-${rate}fps-sequential")
+        [[ -n "$t" && -n "$s" ]] || continue
+        ratio=$(awk -v a="$(val "$t" output_fps)" -v b="$(val "$s" output_fps)" 'BEGIN { if (b > 0) printf "%.2f", a / b; else print "-" }')
+        echo "| $ds | $rate | $(fmt1 "$(val "$t" output_fps)") | $(fmt1 "$(val "$s" output_fps)") | $ratio | $(fmt0 "$(val "$t" p50)") | $(fmt0 "$(val "$s" p50)") |"
+      done
+    done
+  fi
+  echo
+  echo "### Time per stage (threaded, lowest input rate: no queueing), ms p50 / p95 / max"
+  echo
+  low=$(tr ' ' '\n' <<< "$RATES" | sort -g | head -1)
+  stages="prepare segment publish cloud normals ground supervoxels features forest mrf labels tables total"
+  header="| stage |"; rule="|---|"
+  for ds in $DATASETS; do header="$header $ds |"; rule="$rule---|"; done
+  echo "$header"; echo "$rule"
+  for st in $stages; do
+    row="| $st |"
+    for ds in $DATASETS; do
+      j="$RESULTS/$ds-${low}fps-threaded/probe.json"
+      cell=$(grep -o "{\"name\": \"$st\", \"p50_ms\": [0-9.]*, \"p95_ms\": [0-9.]*, \"max_ms\": [0-9.]*}" "$j" 2>/dev/null \
+        | head -1 | awk -F'[:,}]' '{printf "%.0f / %.0f / %.0f", $4, $6, $8}')
+      row="$row ${cell:--} |"
+    done
+    echo "$row"
+  done
+  if [[ -n "${HIGHEST_HELD:-}" ]]; then
+    echo
+    echo "### Target: NYU frames at 5 fps, p99 latency <= 1 s, no drops (threaded)"
+    echo
+    f=$(figures "$RESULTS/nyu-5fps-threaded" || true)
+    if [[ -n "$f" ]]; then
+      verdict="NOT held"
+      if [[ "$(val "$f" dropped)" == 0 ]] && awk -v p="$(val "$f" p99)" 'BEGIN { exit !(p <= 1000) }'; then verdict="held"; fi
+      echo "- 5 fps: **$verdict** (dropped $(val "$f" dropped) of $(val "$f" frames_in), p99 $(fmt0 "$(val "$f" p99)") ms, output $(fmt1 "$(val "$f" output_fps)") fps)"
+    fi
+    echo "- Highest NYU input rate held without drops: **$HIGHEST_HELD fps** (first rate with drops: $FIRST_DROPPING fps; bisection runs:${SEARCHED:- none})"
+  fi
+  echo
+  echo "Raw reports (JSON, latency histograms, logs): \`$RESULTS\`."
+} > "$OUT"
+log "wrote $OUT"
+cat "$OUT"

@@ -1,0 +1,129 @@
+// Benchmark of the table stage (detectTables: clustering, geometry, search
+// positions, reachability) on labelled frames, one benchmark per frame:
+//   tables/nyu/NNNN      NYU Depth V2 frames with ground-truth labels and the
+//                        ground plane fitted to the floor labels (real clutter)
+//   tables/synth/SEED_F  rendered apartment frames (Kinect noise model)
+//   tables/close_table   the worst case: a table filling most of the view
+// The target is <= 20 ms per frame, median over the frames. Inputs are
+// prepared once outside the timed loop. Run e.g.
+//   tables_bench --benchmark_repetitions=5 --benchmark_report_aggregates_only=true
+#include <benchmark/benchmark.h>
+
+#include <cmath>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "findmug/cloud.hpp"
+#include "findmug/dataset.hpp"
+#include "findmug/ground.hpp"
+#include "findmug/synth.hpp"
+#include "findmug/tables.hpp"
+#include "test_data.hpp"
+
+namespace {
+
+using namespace findmug;
+
+struct Input {
+  std::string name;
+  OrganizedCloud cloud_ground;
+  LabelImage labels;
+};
+
+std::vector<Input> nyuInputs() {
+  std::vector<Input> out;
+  const auto dir = test::dataPath("nyuv2_labeled");
+  if (dir.empty()) return out;
+  const DatasetFolder dataset(dir.string());
+  for (std::size_t i = 0; i < dataset.size(); ++i) {
+    const LabeledFrame frame = dataset.load(i);
+    const OrganizedCloud cloud = frameToCloud(frame.frame);
+    const auto ground = fitGroundToLabels(cloud, frame.labels, GroundConfig{});
+    if (!ground) continue;  // the paper drops frames without enough floor too
+    Input in;
+    in.name = "tables/nyu/" + frame.name;
+    in.cloud_ground = transformCloud(cloud, ground->camera_to_ground);
+    in.labels.width = cloud.width;
+    in.labels.height = cloud.height;
+    in.labels.labels = frame.labels;
+    in.labels.confidence.assign(frame.labels.size(), 0.8f);
+    out.push_back(std::move(in));
+  }
+  return out;
+}
+
+Input renderInput(const synth::SynthScene& scene, const synth::CameraPose& pose,
+                  std::uint64_t seed, const std::string& name) {
+  const auto rendered = synth::render(scene, pose, synth::RenderOptions{}, seed);
+  const RgbdFrame& frame = rendered.labeled.frame;
+  const GroundPlane ground = groundFromExtrinsics(frame.extrinsics.value());
+  Input in;
+  in.name = name;
+  in.cloud_ground = transformCloud(frameToCloud(frame), ground.camera_to_ground);
+  in.labels.width = frame.width;
+  in.labels.height = frame.height;
+  in.labels.labels = rendered.labeled.labels;
+  in.labels.confidence.assign(in.labels.labels.size(), 0.8f);
+  return in;
+}
+
+std::vector<Input> synthInputs() {
+  std::vector<Input> out;
+  for (std::uint64_t seed : {1u, 3u}) {
+    const synth::SynthScene scene = synth::makeApartment(seed);
+    const auto path = synth::cameraPath(scene, 200, 10.0);
+    for (std::size_t f = 0; f < path.size(); f += 40) {
+      out.push_back(renderInput(scene, path[f], seed * 100 + f,
+                                "tables/synth/" + std::to_string(seed) + "_" + std::to_string(f)));
+    }
+  }
+  // A 1.6 x 0.9 m table right in front of the camera, covering most pixels.
+  synth::SynthScene scene = synth::makeEmptyRoom({6.0, 5.0, 2.6});
+  synth::Primitive top;
+  top.center = Eigen::Vector3d(3.0, 2.5, 0.735);
+  top.half_extent = Eigen::Vector3d(0.8, 0.45, 0.015);
+  synth::addObject(scene, "table", Label::Table, {top});
+  synth::CameraPose pose;
+  pose.xy = {1.9, 2.5};
+  pose.yaw = 0.0;
+  pose.pitch_rad = 0.9;
+  out.push_back(renderInput(scene, pose, 1, "tables/close_table"));
+  return out;
+}
+
+void runTables(benchmark::State& state, const Input* input) {
+  const TableConfig config;
+  std::size_t tables = 0, positions = 0;
+  for (auto _ : state) {
+    TableDetection d = detectTables(input->cloud_ground, input->labels, config);
+    tables = d.tables.size();
+    positions = 0;
+    for (const auto& t : d.tables) positions += t.search_positions.size();
+    benchmark::DoNotOptimize(d);
+  }
+  int table_points = 0;
+  for (std::uint8_t l : input->labels.labels) table_points += l == static_cast<std::uint8_t>(Label::Table);
+  state.counters["tables"] = static_cast<double>(tables);
+  state.counters["positions"] = static_cast<double>(positions);
+  state.counters["table_px"] = table_points;
+}
+
+// Inputs live for the whole run; benchmarks keep pointers to them.
+std::vector<Input>& inputs() {
+  static std::vector<Input> all = [] {
+    std::vector<Input> v = nyuInputs();
+    for (auto& s : synthInputs()) v.push_back(std::move(s));
+    return v;
+  }();
+  return all;
+}
+
+const bool registered = [] {
+  for (const Input& in : inputs()) {
+    benchmark::RegisterBenchmark(in.name.c_str(), runTables, &in)->Unit(benchmark::kMillisecond);
+  }
+  return true;
+}();
+
+}  // namespace

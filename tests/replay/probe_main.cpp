@@ -1,0 +1,342 @@
+// findmug-replay-probe — watches a running daemon over LCM during a replay and
+// checks / measures what comes out (see replay_check.hpp for the verdicts).
+//
+//   findmug-replay-probe --url URL --log rec.lcm --name nyu-2x
+//       --ready-file r --drained-file d --out-json nyu-2x.json --histogram-txt nyu-2x.txt
+//
+// It subscribes to FINDMUG_RGBD, FINDMUG_LABELS and FINDMUG_STATUS (with the
+// channel suffix), and runs until SIGTERM/SIGINT; then it reads what is still
+// queued (until the bus has been quiet for half a second), evaluates, writes
+// its reports and exits 0 when every invariant holds, 1 otherwise (always 0
+// with --report-only), 2 on usage or set-up errors.
+//
+// The replayed frames are either the FINDMUG_RGBD messages of a recorded log
+// (--log: the ground truth of what was replayed), or, with --live, whatever
+// appears on FINDMUG_RGBD; then --expect-file names a file in which the
+// replayer writes how many frames it published, once it is done.
+//
+// Hand-shakes with the driver script (files, so that shell can wait on them):
+//   --ready-file    created once a status message arrived: the daemon is up
+//                   and (having opened its input first) subscribed;
+//   --drained-file  created once the daemon's counters account for every
+//                   replayed frame (published + dropped + rejected): the
+//                   driver may stop the daemon without discarding anything.
+//
+//   findmug-replay-probe --inspect-log rec.lcm [--channel-suffix S]
+// prints how many frames a log holds and at what rate, and exits.
+#include <lcm/lcm-cpp.hpp>
+
+#include <atomic>
+#include <chrono>
+#include <cerrno>
+#include <csignal>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <optional>
+#include <sstream>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "findmug/error.hpp"
+#include "findmug/io/channels.hpp"
+#include "findmug/io/lcm_codec.hpp"
+#include "replay_check.hpp"
+
+namespace {
+
+using findmug::Error;
+using namespace findmug::replay;
+
+std::atomic<bool> g_stop{false};
+void onSignal(int) { g_stop = true; }
+
+struct Options {
+  std::string url;
+  std::string suffix;
+  std::string name = "replay";
+  std::string log;
+  bool live = false;
+  std::string expect_file;
+  std::string ready_file;
+  std::string drained_file;
+  std::string out_json;
+  std::string histogram_csv;
+  std::string histogram_txt;
+  double bin_ms = 50.0;
+  int bins = 40;
+  bool report_only = false;
+  double timeout_s = 600.0;
+  std::string inspect_log;
+};
+
+const char* kUsage =
+    "usage: findmug-replay-probe --url URL (--log FILE | --live [--expect-file F]) [options]\n"
+    "       findmug-replay-probe --inspect-log FILE [--channel-suffix S]\n"
+    "  --channel-suffix S     channels FINDMUG_*_S\n"
+    "  --name NAME            run name in reports\n"
+    "  --ready-file F         created when the daemon's first status arrives\n"
+    "  --drained-file F       created when the daemon has accounted for every replayed frame\n"
+    "  --out-json F           figures and violations as JSON\n"
+    "  --histogram-csv F      latency histogram as CSV (from_ms,to_ms,count)\n"
+    "  --histogram-txt F      latency histogram as a text chart\n"
+    "  --bin-ms MS, --bins N  histogram bins (default 50 ms x 40)\n"
+    "  --report-only          exit 0 even when invariants are violated (benchmarks)\n"
+    "  --timeout S            stop by itself after S seconds (default 600)\n";
+
+double number(const std::string& flag, const std::string& text) {
+  std::size_t used = 0;
+  double v = 0;
+  try {
+    v = std::stod(text, &used);
+  } catch (const std::exception&) {
+    used = 0;
+  }
+  if (used != text.size()) throw Error(flag + ": '" + text + "' is not a number");
+  return v;
+}
+
+Options parse(int argc, char** argv) {
+  Options o;
+  for (int i = 1; i < argc; ++i) {
+    const std::string arg = argv[i];
+    auto value = [&]() -> std::string {
+      if (i + 1 >= argc) throw Error(arg + " needs a value");
+      return argv[++i];
+    };
+    if (arg == "--url") o.url = value();
+    else if (arg == "--channel-suffix") o.suffix = value();
+    else if (arg == "--name") o.name = value();
+    else if (arg == "--log") o.log = value();
+    else if (arg == "--live") o.live = true;
+    else if (arg == "--expect-file") o.expect_file = value();
+    else if (arg == "--ready-file") o.ready_file = value();
+    else if (arg == "--drained-file") o.drained_file = value();
+    else if (arg == "--out-json") o.out_json = value();
+    else if (arg == "--histogram-csv") o.histogram_csv = value();
+    else if (arg == "--histogram-txt") o.histogram_txt = value();
+    else if (arg == "--bin-ms") o.bin_ms = number(arg, value());
+    else if (arg == "--bins") o.bins = static_cast<int>(number(arg, value()));
+    else if (arg == "--report-only") o.report_only = true;
+    else if (arg == "--timeout") o.timeout_s = number(arg, value());
+    else if (arg == "--inspect-log") o.inspect_log = value();
+    else throw Error("unknown argument '" + arg + "'");
+  }
+  if (!o.inspect_log.empty()) return o;
+  if (o.log.empty() == !o.live) throw Error("give exactly one of --log FILE and --live");
+  if (!o.expect_file.empty() && !o.live) throw Error("--expect-file goes with --live");
+  if (!(o.bin_ms > 0) || o.bins < 2 || o.bins > 10000) throw Error("bad histogram bins");
+  if (!(o.timeout_s > 0)) throw Error("--timeout must be positive");
+  return o;
+}
+
+FrameInfo frameInfo(const findmug::rgbd_frame_t& m) {
+  return FrameInfo{m.seq, static_cast<std::uint64_t>(m.utime), m.width, m.height};
+}
+
+// The FINDMUG_RGBD frames of a log, in log order.
+std::vector<FrameInfo> readLog(const std::string& path, const std::string& channel,
+                               std::vector<std::int64_t>* event_times = nullptr) {
+  if (!std::filesystem::is_regular_file(path)) throw Error(path + ": no such log file");
+  lcm::LogFile log(path, "r");
+  if (!log.good()) throw Error(path + ": cannot open as an LCM log");
+  std::vector<FrameInfo> frames;
+  while (const lcm::LogEvent* event = log.readNextEvent()) {
+    if (event->channel != channel) continue;
+    const auto msg = findmug::io::decodeMessage<findmug::rgbd_frame_t>(
+        event->data, static_cast<std::size_t>(event->datalen),
+        path + " event " + std::to_string(event->eventnum) + " on " + channel);
+    frames.push_back(frameInfo(msg));
+    if (event_times) event_times->push_back(event->timestamp);
+  }
+  return frames;
+}
+
+int inspectLog(const Options& o) {
+  const std::string channel = findmug::io::channelName(findmug::io::kRgbdChannel, o.suffix);
+  std::vector<std::int64_t> times;
+  const auto frames = readLog(o.inspect_log, channel, &times);
+  double rate = 0;
+  if (times.size() >= 2 && times.back() > times.front()) {
+    rate = static_cast<double>(times.size() - 1) /
+           (static_cast<double>(times.back() - times.front()) / 1e6);
+  }
+  std::cout << "frames " << frames.size() << "\n"
+            << "channel " << channel << "\n"
+            << "rate_hz " << rate << "\n";
+  if (!frames.empty()) {
+    std::cout << "first_seq " << frames.front().seq << "\nlast_seq " << frames.back().seq << "\n"
+              << "size " << frames.front().width << "x" << frames.front().height << "\n";
+  }
+  return 0;
+}
+
+void touch(const std::string& path) {
+  if (path.empty()) return;
+  std::ofstream f(path);
+  if (!f) throw Error("cannot create " + path);
+}
+
+class Probe {
+ public:
+  Probe(const Options& o)
+      : options_(o),
+        rgbd_channel_(findmug::io::channelName(findmug::io::kRgbdChannel, o.suffix)),
+        labels_channel_(findmug::io::channelName(findmug::io::kLabelsChannel, o.suffix)),
+        status_channel_(findmug::io::channelName(findmug::io::kStatusChannel, o.suffix)),
+        lcm_(o.url) {
+    if (!lcm_.good()) throw Error("cannot open LCM URL '" + o.url + "'");
+    if (!o.log.empty()) {
+      for (const FrameInfo& f : readLog(o.log, rgbd_channel_)) check_.addReplayedFrame(f);
+      if (check_.framesReplayed() == 0) throw Error(o.log + ": no frames on " + rgbd_channel_);
+      expected_ = check_.framesReplayed();
+    }
+    lcm_.subscribe(rgbd_channel_, &Probe::onFrame, this);
+    lcm_.subscribe(labels_channel_, &Probe::onLabels, this);
+    lcm_.subscribe(status_channel_, &Probe::onStatus, this);
+  }
+
+  int run() {
+    const auto deadline =
+        std::chrono::steady_clock::now() + std::chrono::duration<double>(options_.timeout_s);
+    bool timed_out = false;
+    while (!g_stop) {
+      // A signal interrupts the wait (EINTR): the loop condition sees g_stop.
+      if (lcm_.handleTimeout(100) < 0 && errno != EINTR) throw Error("LCM receive failed");
+      if (std::chrono::steady_clock::now() > deadline) {
+        timed_out = true;
+        break;
+      }
+      pollExpectFile();
+      if (!ready_ && check_.lastStatus()) {
+        touch(options_.ready_file);
+        ready_ = true;
+      }
+      if (!drained_ && expected_ && check_.drained(*expected_)) {
+        touch(options_.drained_file);
+        drained_ = true;
+      }
+    }
+    // The daemon has exited (or we were told to stop): take what is queued.
+    for (int quiet_ms = 0; quiet_ms < 500;) {
+      const int rc = lcm_.handleTimeout(100);
+      if (rc < 0 && errno == EINTR) continue;
+      if (rc < 0) break;
+      quiet_ms = rc == 0 ? quiet_ms + 100 : 0;
+    }
+    pollExpectFile();
+    if (timed_out) {
+      check_.addViolation("timed out after " + std::to_string(options_.timeout_s) +
+                          " s without being stopped");
+    }
+    if (options_.live && !expected_) {
+      check_.addViolation("the replayer never reported how many frames it published (" +
+                          options_.expect_file + "); using the frames seen on the bus");
+    }
+    const std::int64_t frames_in = expected_.value_or(check_.framesReplayed());
+    const Report report = check_.evaluate(frames_in, CheckOptions{});
+    writeReports(report);
+    return report.ok() || options_.report_only ? 0 : 1;
+  }
+
+ private:
+  void pollExpectFile() {
+    if (options_.expect_file.empty() || expected_) return;
+    std::ifstream f(options_.expect_file);
+    long long n = -1;
+    if (f >> n && n >= 0) expected_ = n;
+  }
+
+  void onFrame(const lcm::ReceiveBuffer* buffer, const std::string& channel) {
+    try {
+      const auto msg = findmug::io::decodeMessage<findmug::rgbd_frame_t>(
+          buffer->data, static_cast<std::size_t>(buffer->data_size), channel);
+      check_.frameSeen(frameInfo(msg), buffer->recv_utime, options_.live);
+    } catch (const Error& e) {
+      check_.addViolation(std::string("undecodable frame on the bus: ") + e.what());
+    }
+  }
+
+  void onLabels(const lcm::ReceiveBuffer* buffer, const std::string& channel) {
+    try {
+      // Full decode: checks sizes, compression and every label id.
+      const auto labels = findmug::io::decodeLabelImage(
+          buffer->data, static_cast<std::size_t>(buffer->data_size), channel);
+      check_.labelReceived(LabelInfo{labels.seq, labels.utime, labels.image.width,
+                                     labels.image.height, buffer->recv_utime, labels.latency_us});
+    } catch (const Error& e) {
+      check_.addViolation(std::string("label image does not decode: ") + e.what());
+    }
+  }
+
+  void onStatus(const lcm::ReceiveBuffer* buffer, const std::string& channel) {
+    try {
+      const auto s = findmug::io::decodeMessage<findmug::status_t>(
+          buffer->data, static_cast<std::size_t>(buffer->data_size), channel);
+      StatusInfo info;
+      info.utime = s.utime;
+      info.frames_received = s.frames_received;
+      info.frames_processed = s.frames_processed;
+      info.frames_dropped = s.frames_dropped;
+      info.frames_rejected = s.frames_rejected;
+      info.source_state = s.source_state;
+      for (int i = 0; i < s.num_stages; ++i) {
+        info.stages.push_back({s.stage_names[i], s.latency_p50_us[i] / 1000.0,
+                               s.latency_p95_us[i] / 1000.0, s.latency_max_us[i] / 1000.0});
+      }
+      check_.statusReceived(info);
+    } catch (const Error& e) {
+      check_.addViolation(std::string("status does not decode: ") + e.what());
+    }
+  }
+
+  void writeReports(const Report& report) const {
+    printReport(std::cout, options_.name, report);
+    if (!options_.out_json.empty()) {
+      std::ofstream f(options_.out_json);
+      writeJson(f, options_.name, report);
+    }
+    if (!options_.histogram_csv.empty() || !options_.histogram_txt.empty()) {
+      std::ofstream csv, txt;
+      std::ostringstream discard;
+      if (!options_.histogram_csv.empty()) csv.open(options_.histogram_csv);
+      if (!options_.histogram_txt.empty()) txt.open(options_.histogram_txt);
+      writeHistogram(options_.histogram_csv.empty() ? static_cast<std::ostream&>(discard) : csv,
+                     options_.histogram_txt.empty() ? static_cast<std::ostream&>(discard) : txt,
+                     options_.name, report, options_.bin_ms,
+                     static_cast<std::size_t>(options_.bins));
+    }
+  }
+
+  Options options_;
+  std::string rgbd_channel_, labels_channel_, status_channel_;
+  lcm::LCM lcm_;
+  ReplayCheck check_;
+  std::optional<std::int64_t> expected_;
+  bool ready_ = false;
+  bool drained_ = false;
+};
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  Options options;
+  try {
+    options = parse(argc, argv);
+  } catch (const Error& e) {
+    std::cerr << "findmug-replay-probe: " << e.what() << "\n" << kUsage;
+    return 2;
+  }
+  try {
+    if (!options.inspect_log.empty()) return inspectLog(options);
+    std::signal(SIGTERM, onSignal);
+    std::signal(SIGINT, onSignal);
+    Probe probe(options);
+    return probe.run();
+  } catch (const Error& e) {
+    std::cerr << "findmug-replay-probe: " << e.what() << "\n";
+    return 2;
+  }
+}

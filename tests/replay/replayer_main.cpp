@@ -1,0 +1,191 @@
+// findmug-replay — replays recorded frames on LCM at a fixed rate, as a camera would.
+//
+//   findmug-replay --source 'dataset:/data/nyuv2_labeled' --rate 15 --duration 30
+//                  --url 'udpm://239.255.76.67:7667?ttl=0' --count-file sent.txt
+//
+// The frames of any finite source (dataset folder, PCD/PCLZF/TIFF sequence,
+// .oni file, or an LCM log through lcm:CHANNEL?url=file://...) are read and
+// encoded once, up front, so that replaying costs almost no CPU; then they are
+// published on FINDMUG_RGBD[_suffix] in a loop, one every 1/rate seconds on
+// an absolute schedule (no drift), each with a fresh seq (0, 1, 2, ...) and
+// utime = the host time at publication — exactly what a live camera driver
+// would send, so that "label published minus frame utime" is the latency a
+// client sees.
+//
+// lcm-logplayer replays a log at its recorded timing (and -s multiples of
+// it); this tool is for fixed input rates and long looped runs (benchmarks).
+// At the end it writes the number of frames published to --count-file (for
+// findmug-replay-probe --expect-file) and reports frames sent late.
+#include <lcm/lcm-cpp.hpp>
+#include <spdlog/spdlog.h>
+
+#include <atomic>
+#include <chrono>
+#include <csignal>
+#include <filesystem>
+#include <fstream>
+#include <iostream>
+#include <string>
+#include <thread>
+#include <vector>
+
+#include "findmug/error.hpp"
+#include "findmug/io/channels.hpp"
+#include "findmug/io/frame_source.hpp"
+#include "findmug/io/lcm_codec.hpp"
+
+namespace {
+
+using findmug::Error;
+
+std::atomic<bool> g_stop{false};
+void onSignal(int) { g_stop = true; }
+
+const char* kUsage =
+    "usage: findmug-replay --source SPEC --rate HZ (--duration S | --count N) [options]\n"
+    "  --url URL               LCM URL to publish on (default: LCM_DEFAULT_URL)\n"
+    "  --channel-suffix S      publish on FINDMUG_RGBD_S\n"
+    "  --max-frames N          read at most N frames of the source (default 1000)\n"
+    "  --depth-compression C   zlib (default) or none\n"
+    "  --color-compression C   jpeg (default), png or none\n"
+    "  --count-file F          write the number of frames published to F when done\n"
+    "  --warmup S              wait S seconds before the first frame (default 0)\n";
+
+double number(const std::string& flag, const std::string& text) {
+  std::size_t used = 0;
+  double v = 0;
+  try {
+    v = std::stod(text, &used);
+  } catch (const std::exception&) {
+    used = 0;
+  }
+  if (used != text.size()) throw Error(flag + ": '" + text + "' is not a number");
+  return v;
+}
+
+void writeCount(const std::string& path, long long count) {
+  // Write then rename, so that a reader polling the file never sees it half written.
+  const std::string tmp = path + ".tmp";
+  {
+    std::ofstream f(tmp);
+    f << count << "\n";
+    if (!f) throw Error("cannot write " + tmp);
+  }
+  std::filesystem::rename(tmp, path);
+}
+
+int run(int argc, char** argv) {
+  using namespace findmug;
+  std::string source_spec, suffix, count_file;
+  std::string url;
+  if (const char* env = std::getenv("LCM_DEFAULT_URL"); env && *env) url = env;
+  double rate = 0, duration = 0, warmup = 0;
+  long long count = 0, max_frames = 1000;
+  io::RgbdEncodeOptions encode;
+  for (int i = 1; i < argc; ++i) {
+    const std::string arg = argv[i];
+    auto value = [&]() -> std::string {
+      if (i + 1 >= argc) throw Error(arg + " needs a value");
+      return argv[++i];
+    };
+    if (arg == "--help" || arg == "-h") {
+      std::cout << kUsage;
+      return 0;
+    } else if (arg == "--source") {
+      source_spec = value();
+    } else if (arg == "--url") {
+      url = value();
+    } else if (arg == "--channel-suffix") {
+      suffix = value();
+    } else if (arg == "--rate") {
+      rate = number(arg, value());
+    } else if (arg == "--duration") {
+      duration = number(arg, value());
+    } else if (arg == "--count") {
+      count = static_cast<long long>(number(arg, value()));
+    } else if (arg == "--max-frames") {
+      max_frames = static_cast<long long>(number(arg, value()));
+    } else if (arg == "--depth-compression") {
+      encode.depth = io::parseDepthCompression(value());
+    } else if (arg == "--color-compression") {
+      encode.color = io::parseColorCompression(value());
+    } else if (arg == "--count-file") {
+      count_file = value();
+    } else if (arg == "--warmup") {
+      warmup = number(arg, value());
+    } else {
+      throw Error("unknown argument '" + arg + "'");
+    }
+  }
+  if (source_spec.empty()) throw Error("--source is required");
+  if (!(rate > 0 && rate <= 1000)) throw Error("--rate must be in (0, 1000] Hz");
+  if ((duration > 0) == (count > 0)) throw Error("give exactly one of --duration and --count");
+  if (max_frames < 1) throw Error("--max-frames must be at least 1");
+  if (warmup < 0 || warmup > 3600) throw Error("--warmup must be 0..3600 s");
+
+  // Read and encode the sequence once. The source runs as fast as it can
+  // (no pacing, no loop): timing comes from the schedule below.
+  io::SourceSpec spec = io::parseSourceSpec(source_spec);
+  spec.options.rate_hz = 0;
+  spec.options.loop = false;
+  spec.options.realtime = false;
+  auto source = io::makeSource(spec);
+  std::vector<rgbd_frame_t> frames;
+  while (static_cast<long long>(frames.size()) < max_frames) {
+    std::optional<RgbdFrame> frame = source->next();
+    if (!frame) break;
+    frames.push_back(io::encodeRgbdFrame(*frame, encode));
+  }
+  const std::string described = source->describe();
+  source.reset();
+  if (frames.empty()) throw Error(source_spec + ": the source delivered no frames");
+
+  lcm::LCM lcm(url);
+  if (!lcm.good()) throw Error("cannot open LCM URL '" + url + "'");
+  const std::string channel = io::channelName(io::kRgbdChannel, suffix);
+  spdlog::info("findmug-replay: {} frames from {}, {} Hz on {} ({})", frames.size(), described,
+               rate, channel, url.empty() ? std::string("default URL") : url);
+
+  std::signal(SIGTERM, onSignal);
+  std::signal(SIGINT, onSignal);
+  using Clock = std::chrono::steady_clock;
+  if (warmup > 0) std::this_thread::sleep_for(std::chrono::duration<double>(warmup));
+  const auto period = std::chrono::duration<double>(1.0 / rate);
+  const auto start = Clock::now();
+  const auto end = start + std::chrono::duration<double>(duration);
+  long long published = 0, late = 0;
+  std::vector<std::uint8_t> bytes;
+  while (!g_stop) {
+    if (count > 0 && published >= count) break;
+    const auto due = start + std::chrono::duration_cast<Clock::duration>(period * published);
+    if (duration > 0 && due >= end) break;
+    std::this_thread::sleep_until(due);
+    // More than half a period behind schedule counts as late (reported, the
+    // schedule is kept: a late frame does not shift the ones after it).
+    if (Clock::now() - due > period / 2) ++late;
+    rgbd_frame_t& msg = frames[static_cast<std::size_t>(published) % frames.size()];
+    msg.seq = published;
+    msg.utime = static_cast<std::int64_t>(io::hostUtimeNow());
+    bytes = io::encodeMessage(msg);
+    if (lcm.publish(channel, bytes.data(), static_cast<unsigned int>(bytes.size())) != 0) {
+      throw Error("publishing on " + channel + " failed");
+    }
+    ++published;
+  }
+  const double elapsed = std::chrono::duration<double>(Clock::now() - start).count();
+  spdlog::info("findmug-replay: published {} frames in {:.1f} s ({:.2f} Hz), {} late", published,
+               elapsed, elapsed > 0 ? published / elapsed : 0.0, late);
+  if (!count_file.empty()) writeCount(count_file, published);
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  try {
+    return run(argc, argv);
+  } catch (const findmug::Error& e) {
+    std::cerr << "findmug-replay: " << e.what() << "\n" << kUsage;
+    return 2;
+  }
+}
