@@ -37,10 +37,10 @@ class Flags {
     for (int i = 1; i < argc; ++i) {
       const std::string arg = argv[i];
       if (contains(switches, arg)) {
-        values_[arg] = "1";
+        values_.insert_or_assign(arg, std::string());  // present, no value
       } else if (contains(with_value, arg)) {
         if (i + 1 >= argc) throw std::invalid_argument(arg + " needs a value");
-        values_[arg] = argv[++i];
+        values_.insert_or_assign(arg, std::string(argv[++i]));
       } else {
         throw std::invalid_argument("unknown argument '" + arg + "' (see --help)");
       }

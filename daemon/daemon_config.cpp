@@ -132,9 +132,6 @@ const std::map<std::string, Key>& keys() {
           d.publish_confidence = toBool(k, v);
         },
         [](const D& d) { return std::string(d.publish_confidence ? "true" : "false"); }}},
-      {"daemon.compress_labels",
-       {[](D& d, const std::string& k, const std::string& v) { d.compress_labels = toBool(k, v); },
-        [](const D& d) { return std::string(d.compress_labels ? "true" : "false"); }}},
       {"daemon.publish_tables",
        {[](D& d, const std::string& k, const std::string& v) { d.publish_tables = toBool(k, v); },
         [](const D& d) { return std::string(d.publish_tables ? "true" : "false"); }}},

@@ -187,6 +187,8 @@ const std::vector<Setting>& settings() {
                  [](C& c) -> int& { return c.overseg.min_segment_points; }, 1, 100000),
       intSetting("overseg.max_iterations",
                  [](C& c) -> int& { return c.overseg.max_iterations; }, 1, 100),
+      floatSetting("overseg.organized_seed_density",
+                   [](C& c) -> float& { return c.overseg.organized_seed_density; }, 0.01, 1000),
       intSetting("overseg.search_window_factor",
                  [](C& c) -> int& { return c.overseg.search_window_factor; }, 1, 10),
       intSetting("forest.num_trees", [](C& c) -> int& { return c.forest.num_trees; }, 1, 1000),

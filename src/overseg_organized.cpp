@@ -51,28 +51,7 @@
 #include <emmintrin.h>
 #endif
 
-#include <chrono>
-#include <cstdio>
-#include <cstdlib>
-#include <ctime>
-
 #include "findmug/error.hpp"
-namespace {
-double cpuMs() {
-  timespec t;
-  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
-  return t.tv_sec * 1e3 + t.tv_nsec * 1e-6;
-}
-struct ProfT {
-  const char* name;
-  double t = cpuMs();
-  void lap(const char* what) {
-    double n = cpuMs();
-    if (getenv("OS_PROF")) fprintf(stderr, "%s %.2f ", what, n - t);
-    t = n;
-  }
-};
-}  // namespace
 #include "findmug/oversegmentation.hpp"
 #include "oversegmentation_internal.hpp"
 
@@ -106,13 +85,14 @@ class LabConverter {
   LabConverter() {
     for (int v = 0; v < 256; ++v) {
       const double c = v / 255.0;
-      linear_[v] = static_cast<float>(c <= 0.04045 ? c / 12.92 : std::pow((c + 0.055) / 1.055, 2.4));
+      linear_[v] =
+          static_cast<float>(c <= 0.04045 ? c / 12.92 : std::pow((c + 0.055) / 1.055, 2.4));
     }
     for (int i = 0; i <= kFSize; ++i) {
       const double t = static_cast<double>(i) * kFMax / kFSize;
       constexpr double kDelta = 6.0 / 29.0;
-      f_[i] = static_cast<float>(t > kDelta * kDelta * kDelta ? std::cbrt(t)
-                                                               : t / (3 * kDelta * kDelta) + 4.0 / 29.0);
+      f_[i] = static_cast<float>(
+          t > kDelta * kDelta * kDelta ? std::cbrt(t) : t / (3 * kDelta * kDelta) + 4.0 / 29.0);
     }
     f_[kFSize + 1] = f_[kFSize];
   }
@@ -173,9 +153,9 @@ struct FeatureGrid {
 
 struct Cluster {
   std::array<float, kNumChannels> centre{};
-  float u = 0, v = 0;           // centre in coarse pixels
-  int half_w = 1, half_h = 1;   // search window half size, coarse pixels
-  float nominal_area_px = 0;    // full-resolution pixels of its seed cell
+  float u = 0, v = 0;          // centre in coarse pixels
+  int half_w = 1, half_h = 1;  // search window half size, coarse pixels
+  float nominal_area_px = 0;   // full-resolution pixels of its seed cell
 };
 
 struct Weights {
@@ -186,9 +166,8 @@ struct Weights {
 
 // For each pixel of rows [y0, y1) x columns [x0, x1): if it is nearer to the
 // cluster centre than `best`, take it.
-void assignWindow(const FeatureGrid& g, const std::array<float, kNumChannels>& c,
-                  const Weights& wt, int label, int x0, int x1, int y0, int y1, float* best,
-                  int* labels) {
+void assignWindow(const FeatureGrid& g, const std::array<float, kNumChannels>& c, const Weights& wt,
+                  int label, int x0, int x1, int y0, int y1, float* best, int* labels) {
   const float* ch[kNumChannels];
   for (int k = 0; k < kNumChannels; ++k) ch[k] = g.ch[k].data();
   for (int y = y0; y < y1; ++y) {
@@ -215,10 +194,9 @@ void assignWindow(const FeatureGrid& g, const std::array<float, kNumChannels>& c
           _mm_add_ps(_mm_add_ps(_mm_mul_ps(dl, dl), _mm_mul_ps(da, da)), _mm_mul_ps(db, db));
       const __m128 space2 =
           _mm_add_ps(_mm_add_ps(_mm_mul_ps(dx, dx), _mm_mul_ps(dy, dy)), _mm_mul_ps(dz, dz));
-      const __m128 dot = _mm_add_ps(
-          _mm_add_ps(_mm_mul_ps(_mm_loadu_ps(ch[kNX] + i), cnx),
-                     _mm_mul_ps(_mm_loadu_ps(ch[kNY] + i), cny)),
-          _mm_mul_ps(_mm_loadu_ps(ch[kNZ] + i), cnz));
+      const __m128 dot = _mm_add_ps(_mm_add_ps(_mm_mul_ps(_mm_loadu_ps(ch[kNX] + i), cnx),
+                                               _mm_mul_ps(_mm_loadu_ps(ch[kNY] + i), cny)),
+                                    _mm_mul_ps(_mm_loadu_ps(ch[kNZ] + i), cnz));
       const __m128 d = _mm_add_ps(
           _mm_add_ps(_mm_mul_ps(wc, _mm_sqrt_ps(color2)), _mm_mul_ps(ws, _mm_sqrt_ps(space2))),
           _mm_mul_ps(wn, _mm_sub_ps(one, _mm_and_ps(dot, abs_mask))));
@@ -253,8 +231,7 @@ float featureDistance(const FeatureGrid& g, std::size_t i, std::size_t j, const 
   const float dx = c[kX][i] - c[kX][j], dy = c[kY][i] - c[kY][j], dz = c[kZ][i] - c[kZ][j];
   const float dot = c[kNX][i] * c[kNX][j] + c[kNY][i] * c[kNY][j] + c[kNZ][i] * c[kNZ][j];
   return wt.color * std::sqrt(dl * dl + da * da + db * db) +
-         wt.spatial * std::sqrt(dx * dx + dy * dy + dz * dz) +
-         wt.normal * (1.0f - std::fabs(dot));
+         wt.spatial * std::sqrt(dx * dx + dy * dy + dz * dz) + wt.normal * (1.0f - std::fabs(dot));
 }
 
 // Focal length along one image axis from the points themselves: for a
@@ -293,8 +270,7 @@ class OrganizedOversegmenter final : public Oversegmenter {
 
   std::string name() const override { return "organized"; }
 
-  Oversegmentation segment(const OrganizedCloud& cloud,
-                           const NormalImage& normals) const override {
+  Oversegmentation segment(const OrganizedCloud& cloud, const NormalImage& normals) const override {
     detail::checkOversegmentationInput(cloud, normals, "organized oversegmenter");
     const int w = cloud.width;
     const int h = cloud.height;
@@ -307,7 +283,6 @@ class OrganizedOversegmenter final : public Oversegmenter {
 
     // Half-resolution features; a pixel is usable when it has a point in
     // front of the camera (z <= 0 cannot come from one).
-    ProfT prof{"x"};
     FeatureGrid coarse;
     std::vector<std::uint8_t> block_valid;  // usable full pixels per coarse pixel
     if (buildCoarse(cloud, normals, coarse, block_valid) == 0) {
@@ -315,10 +290,7 @@ class OrganizedOversegmenter final : public Oversegmenter {
       return seg;
     }
 
-    prof.lap("coarse");
     std::vector<Cluster> clusters = placeSeeds(cloud, coarse, block_valid);
-    prof.lap("seeds");
-    if (getenv("OS_PROF")) fprintf(stderr, "clusters %zu ", clusters.size());
 
     // Iterations on the coarse grid.
     const std::size_t nc = static_cast<std::size_t>(coarse.width) * coarse.height;
@@ -331,23 +303,16 @@ class OrganizedOversegmenter final : public Oversegmenter {
         const Cluster& c = clusters[k];
         const int cu = static_cast<int>(std::lround(c.u));
         const int cv = static_cast<int>(std::lround(c.v));
-        assignWindow(coarse, c.centre, weights_, static_cast<int>(k),
-                     std::max(0, cu - c.half_w), std::min(coarse.width, cu + c.half_w + 1),
-                     std::max(0, cv - c.half_h), std::min(coarse.height, cv + c.half_h + 1),
-                     best.data(), labels.data());
+        assignWindow(coarse, c.centre, weights_, static_cast<int>(k), std::max(0, cu - c.half_w),
+                     std::min(coarse.width, cu + c.half_w + 1), std::max(0, cv - c.half_h),
+                     std::min(coarse.height, cv + c.half_h + 1), best.data(), labels.data());
       }
       updateCentres(coarse, labels, clusters);
     }
 
-    prof.lap("iters");
     std::vector<int> labels_full = refineToFullResolution(cloud, normals, coarse, labels, clusters);
-    prof.lap("refine");
     enforceConnectivity(w, h, clusters, labels_full, seg.pixel_segment);
-    prof.lap("conn");
-    if (getenv("OS_PROF")) { int mx = -1; for (int v : seg.pixel_segment) mx = std::max(mx, v); std::vector<int> cnt(mx + 1); for (int v : seg.pixel_segment) if (v >= 0) cnt[v]++; int nz = 0, sm = 0; for (int c : cnt) { nz += c > 0; sm += c > 0 && c < 20; } fprintf(stderr, "pieces %d small %d ", nz, sm); }
     finalizeOversegmentation(seg, config_.min_segment_points);
-    prof.lap("final");
-    if (getenv("OS_PROF")) fprintf(stderr, "\n");
     return seg;
   }
 
@@ -505,13 +470,13 @@ class OrganizedOversegmenter final : public Oversegmenter {
         if (block_valid[i] > 0) {
           const float px = coarse.ch[kX][i], py = coarse.ch[kY][i], pz = coarse.ch[kZ][i];
           const float range = std::sqrt(px * px + py * py + pz * pz);
-          const float dot = px * coarse.ch[kNX][i] + py * coarse.ch[kNY][i] + pz * coarse.ch[kNZ][i];
-          const bool has_normal = coarse.ch[kNX][i] != 0.0f || coarse.ch[kNY][i] != 0.0f ||
-                                  coarse.ch[kNZ][i] != 0.0f;
+          const float dot =
+              px * coarse.ch[kNX][i] + py * coarse.ch[kNY][i] + pz * coarse.ch[kNZ][i];
+          const bool has_normal =
+              coarse.ch[kNX][i] != 0.0f || coarse.ch[kNY][i] != 0.0f || coarse.ch[kNZ][i] != 0.0f;
           const float cosine = has_normal ? std::max(std::fabs(dot) / range, kMinCosine) : 1.0f;
           const double footprint = std::min(static_cast<double>(pz) * pz / cosine, kMaxFootprint);
-          row_density += block_valid[i] * footprint * pixel_solid /
-                         per_seed_area;
+          row_density += block_valid[i] * footprint * pixel_solid / per_seed_area;
           ++row_valid;
         }
         density[at(x + 1, y + 1)] = density[at(x + 1, y)] + row_density;
@@ -530,7 +495,6 @@ class OrganizedOversegmenter final : public Oversegmenter {
       int x0, y0, x1, y1;
     };
     std::vector<Rect> stack{{0, 0, cw, chh}};
-    if (getenv("OS_PROF")) fprintf(stderr, "Dtotal %.1f fx %.1f fy %.1f ", rectSum(density, 0, 0, cw, chh), fx, fy);
     while (!stack.empty()) {
       const Rect r = stack.back();
       stack.pop_back();

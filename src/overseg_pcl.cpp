@@ -35,8 +35,7 @@ class PclSupervoxelOversegmenter final : public Oversegmenter {
 
   std::string name() const override { return "pcl_supervoxels"; }
 
-  Oversegmentation segment(const OrganizedCloud& cloud,
-                           const NormalImage& normals) const override {
+  Oversegmentation segment(const OrganizedCloud& cloud, const NormalImage& normals) const override {
     detail::checkOversegmentationInput(cloud, normals, "PCL supervoxels");
     const int w = cloud.width;
     const int h = cloud.height;
@@ -138,7 +137,8 @@ class PclSupervoxelOversegmenter final : public Oversegmenter {
 }  // namespace
 
 namespace detail {
-std::unique_ptr<Oversegmenter> makePclSupervoxelOversegmenter(const OversegmentationConfig& config) {
+std::unique_ptr<Oversegmenter> makePclSupervoxelOversegmenter(
+    const OversegmentationConfig& config) {
   return std::make_unique<PclSupervoxelOversegmenter>(config);
 }
 }  // namespace detail

@@ -37,8 +37,8 @@ void requireFiniteNonNegative(float value, const char* field) {
 
 void requireIntRange(int value, int lo, int hi, const char* field) {
   if (value < lo || value > hi) {
-    throw Error(fieldError(field, std::to_string(value),
-                           std::to_string(lo) + ".." + std::to_string(hi)));
+    throw Error(
+        fieldError(field, std::to_string(value), std::to_string(lo) + ".." + std::to_string(hi)));
   }
 }
 
@@ -57,9 +57,9 @@ void validateOversegmentationConfig(const OversegmentationConfig& c) {
   requireFinitePositive(c.voxel_resolution_m, "voxel_resolution_m");
   requireFinitePositive(c.seed_resolution_m, "seed_resolution_m");
   if (c.seed_resolution_m <= c.voxel_resolution_m) {
-    throw Error(fieldError("seed_resolution_m", std::to_string(c.seed_resolution_m),
-                           "more than overseg.voxel_resolution_m = " +
-                               std::to_string(c.voxel_resolution_m)));
+    throw Error(fieldError(
+        "seed_resolution_m", std::to_string(c.seed_resolution_m),
+        "more than overseg.voxel_resolution_m = " + std::to_string(c.voxel_resolution_m)));
   }
   if (c.seed_resolution_m > 100.0f) {
     throw Error(fieldError("seed_resolution_m", std::to_string(c.seed_resolution_m), "<= 100 m"));
@@ -73,11 +73,11 @@ void validateOversegmentationConfig(const OversegmentationConfig& c) {
   }
   requireIntRange(c.min_segment_points, 0, 1000000, "min_segment_points");
   requireIntRange(c.max_iterations, 1, 100, "max_iterations");
-  requireIntRange(c.search_window_factor, 1, 8, "search_window_factor");
+  requireIntRange(c.search_window_factor, 1, 10, "search_window_factor");
   requireFinitePositive(c.organized_seed_density, "organized_seed_density");
   if (c.organized_seed_density > 1000.0f) {
-    throw Error(fieldError("organized_seed_density", std::to_string(c.organized_seed_density),
-                           "<= 1000"));
+    throw Error(
+        fieldError("organized_seed_density", std::to_string(c.organized_seed_density), "<= 1000"));
   }
 }
 
@@ -246,8 +246,8 @@ OversegmentationQuality evaluateOversegmentation(const Oversegmentation& seg,
   for (std::size_t i = 0; i < n; ++i) {
     if (ps[i] < -1 || ps[i] >= static_cast<int>(seg.segments.size())) {
       throw Error("evaluateOversegmentation: pixel " + std::to_string(i) + " has segment id " +
-                  std::to_string(ps[i]) + " but there are " +
-                  std::to_string(seg.segments.size()) + " segments");
+                  std::to_string(ps[i]) + " but there are " + std::to_string(seg.segments.size()) +
+                  " segments");
     }
   }
 
@@ -280,7 +280,8 @@ OversegmentationQuality evaluateOversegmentation(const Oversegmentation& seg,
   std::vector<std::uint8_t> near_boundary(n, 0);
   for (int x = 0; x < w; ++x) {
     prefix[0] = 0;
-    for (int y = 0; y < h; ++y) prefix[y + 1] = prefix[y] + near_rows[static_cast<std::size_t>(y) * w + x];
+    for (int y = 0; y < h; ++y)
+      prefix[y + 1] = prefix[y] + near_rows[static_cast<std::size_t>(y) * w + x];
     for (int y = 0; y < h; ++y) {
       const int lo = std::max(0, y - tolerance_px);
       const int hi = std::min(h, y + tolerance_px + 1);
@@ -343,7 +344,8 @@ OversegmentationQuality evaluateOversegmentation(const Oversegmentation& seg,
   for (std::size_t i = 0; i < n; ++i) {
     if (ps[i] < 0 || region[i] < 0) continue;
     ++seg_size[ps[i]];
-    keys.push_back((static_cast<std::uint64_t>(ps[i]) << 32) | static_cast<std::uint32_t>(region[i]));
+    keys.push_back((static_cast<std::uint64_t>(ps[i]) << 32) |
+                   static_cast<std::uint32_t>(region[i]));
   }
   const std::size_t total = keys.size();
   if (total == 0) {

@@ -177,9 +177,9 @@ run_one() {
   # Let queued frames finish (a slow mode may need a while), then stop.
   wait_for "$dir/drained" 120 "$daemon" || log "$tag: not drained after 120 s, stopping"
   date +%s%3N > "$dir/end_ms"
-  kill -TERM "$daemon"; wait "$daemon" || log "$tag: daemon exit code $?"; forget "$daemon"
+  kill -TERM "$daemon" 2>/dev/null || true; wait "$daemon" || log "$tag: daemon exit code $?"; forget "$daemon"
   wait "$mon" || true; forget "$mon"
-  kill -TERM "$probe"; wait "$probe" || true; forget "$probe"
+  kill -TERM "$probe" 2>/dev/null || true; wait "$probe" || true; forget "$probe"
   grep -E "^== |latency ms|daemon status" "$dir/probe.log" >&2 || true
 }
 

@@ -7,6 +7,8 @@
 #include <atomic>
 #include <chrono>
 #include <condition_variable>
+#include <fstream>
+#include <sstream>
 #include <mutex>
 #include <random>
 #include <thread>
@@ -18,6 +20,7 @@
 #include "findmug/daemon/stage.hpp"
 #include "findmug/daemon/stats.hpp"
 #include "findmug/error.hpp"
+#include "test_data.hpp"
 
 namespace findmug::daemon {
 namespace {
@@ -383,6 +386,42 @@ TEST(DaemonConfig, LcmDefaultUrlIsUsedWhenTheConfigLeavesItEmpty) {
   d.lcm_url = "file:///tmp/x.lcmlog?mode=w";
   EXPECT_EQ(effectiveLcmUrl(d), "file:///tmp/x.lcmlog?mode=w");
   unsetenv("LCM_DEFAULT_URL");
+}
+
+}  // namespace
+}  // namespace findmug::daemon
+
+namespace findmug::daemon {
+namespace {
+
+// The shipped default config must load, and must document every key the
+// daemon knows (core and daemon): a key added to config.hpp or
+// daemon_config.hpp without a line in daemon/findmugd.yaml fails here.
+TEST(DaemonConfig, ShippedDefaultFileIsValidAndDocumentsEveryKey) {
+  const std::string path = (findmug::test::sourceDir() / "daemon" / "findmugd.yaml").string();
+  Config config = loadConfig(path);
+  const DaemonConfig d = resolveDaemonConfig(config);
+  EXPECT_EQ(d.source, "openni2");
+  std::ifstream in(path);
+  const std::string text((std::istreambuf_iterator<char>(in)), {});
+  std::istringstream dump(dumpConfig(config));
+  std::string line, section;
+  int keys = 0;
+  while (std::getline(dump, line)) {
+    if (line.empty()) continue;
+    if (line[0] != ' ') {
+      section = line.substr(0, line.find(':'));
+      EXPECT_NE(text.find("\n" + section + ":\n"), std::string::npos) << "section " << section;
+      continue;
+    }
+    const std::string key = line.substr(2, line.find(':') - 2);
+    ++keys;
+    // Set, or shown commented out with its default.
+    const bool documented = text.find("\n  " + key + ":") != std::string::npos ||
+                            text.find("\n  # " + key + ":") != std::string::npos;
+    EXPECT_TRUE(documented) << section << "." << key << " is not in " << path;
+  }
+  EXPECT_GT(keys, 40);
 }
 
 }  // namespace

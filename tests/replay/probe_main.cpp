@@ -65,7 +65,7 @@ struct Options {
   std::string out_json;
   std::string histogram_csv;
   std::string histogram_txt;
-  double bin_ms = 50.0;
+  double bin_ms = 100.0;
   int bins = 40;
   bool report_only = false;
   double timeout_s = 600.0;
@@ -82,7 +82,7 @@ const char* kUsage =
     "  --out-json F           figures and violations as JSON\n"
     "  --histogram-csv F      latency histogram as CSV (from_ms,to_ms,count)\n"
     "  --histogram-txt F      latency histogram as a text chart\n"
-    "  --bin-ms MS, --bins N  histogram bins (default 50 ms x 40)\n"
+    "  --bin-ms MS, --bins N  histogram bins (default 100 ms x 40)\n"
     "  --report-only          exit 0 even when invariants are violated (benchmarks)\n"
     "  --timeout S            stop by itself after S seconds (default 600)\n";
 

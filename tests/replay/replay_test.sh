@@ -140,7 +140,7 @@ echo "replay_test: model $MODEL"
 echo "replay_test: recording $FRAMES NYU frames at $RATE Hz (findmug-grab + lcm-logger)"
 lcm-logger -q --lcm-url="$URL" --channel=FINDMUG_RGBD -f "$WORK/rec.lcm" &
 LOGGER=$!; PIDS+=("$LOGGER")
-sleep 1  # lcm-logger has no ready signal; let it subscribe
+sleep 2  # lcm-logger has no ready signal; let it subscribe
 "$GRAB" --source "dataset:$NYU?rate_hz=$RATE" --count "$FRAMES" --url "$URL" \
   > "$WORK/grab.log" 2>&1 || { cat "$WORK/grab.log"; fail "findmug-grab"; }
 sleep 1  # the last frame is on its way to the logger's socket
@@ -178,9 +178,9 @@ for speed in $SPEEDS; do
   # assertion: after the wait the counters are checked whatever they say.
   wait_for "$run/drained" $((60 + FRAMES * 10)) "$daemon" || \
     echo "replay_test: $name: daemon has not accounted for every frame yet; stopping it anyway"
-  kill -TERM "$daemon"
+  kill -TERM "$daemon" 2>/dev/null || true
   daemon_rc=0; wait "$daemon" || daemon_rc=$?; forget "$daemon"
-  kill -TERM "$probe"
+  kill -TERM "$probe" 2>/dev/null || true
   probe_rc=0; wait "$probe" || probe_rc=$?; forget "$probe"
   cat "$run/probe.log"
   if [[ $daemon_rc -ne 0 ]]; then
@@ -192,7 +192,9 @@ for speed in $SPEEDS; do
   get() { grep -o "\"$1\": [^,}]*" "$j" | head -1 | sed 's/.*: //'; }
   lat() { grep -o "\"latency_ms\": {[^}]*}" "$j" | grep -o "\"$1\": [^,}]*" | sed 's/.*: //'; }
   if [[ -s "$j" ]]; then
-    echo "| ${speed}x | $(get input_fps) | $(get frames_in) | $(get frames_processed) | $(get frames_dropped) | $(get output_fps) | $(lat p50) | $(lat p99) | $(lat max) | $([[ $probe_rc -eq 0 ]] && echo held || echo VIOLATED) |" >> "$summary"
+    r1() { awk -v v="$1" 'BEGIN { printf "%.1f", v }'; }
+    r0() { awk -v v="$1" 'BEGIN { printf "%.0f", v }'; }
+    echo "| ${speed}x | $(r1 "$(get input_fps)") | $(get frames_in) | $(get frames_processed) | $(get frames_dropped) | $(r1 "$(get output_fps)") | $(r0 "$(lat p50)") | $(r0 "$(lat p99)") | $(r0 "$(lat max)") | $([[ $probe_rc -eq 0 ]] && echo held || echo VIOLATED) |" >> "$summary"
   fi
 done
 echo

@@ -78,8 +78,8 @@ class Openni2Source : public FrameSourceBase {
     } else {
       description_ = "openni2:" + (target_.empty() ? std::string("<first device>") : target_);
       if (const std::string error = open(); !error.empty()) {
-        recordError(error + "; retrying");
         setState(SourceState::Reconnecting);
+        recordError(error + "; retrying");
       }
     }
   }
@@ -99,8 +99,8 @@ class Openni2Source : public FrameSourceBase {
         if (!sleepUntil(Clock::now() + backoff)) break;
         backoff = std::min(backoff * 2, options_.reconnect_max);
         if (const std::string error = open(); !error.empty()) {
-          recordError(error + "; retrying in " + std::to_string(backoff.count()) + " ms");
           setState(SourceState::Reconnecting);
+          recordError(error + "; retrying in " + std::to_string(backoff.count()) + " ms");
           continue;
         }
         recordReconnect();
@@ -126,7 +126,8 @@ class Openni2Source : public FrameSourceBase {
   // Opens device and streams; returns an error message, empty on success.
   std::string open() {
     close();
-    setState(SourceState::Starting);
+    // State is left alone: Starting at first, Reconnecting while recovering,
+    // Running again with the first delivered frame.
     const char* uri = target_.empty() ? openni::ANY_DEVICE : target_.c_str();
     if (Status s = device_.open(uri); s != openni::STATUS_OK) {
       device_.close();

@@ -33,7 +33,6 @@ struct DaemonConfig {
   double status_period_s = 1.0;        // FINDMUG_STATUS period
   double stats_window_s = 10.0;        // window of the status rates and latency percentiles
   bool publish_confidence = true;      // include per-pixel confidence in label images
-  bool compress_labels = true;         // zlib-compress label images
   bool publish_tables = true;          // publish FINDMUG_TABLES
   bool exit_at_end_of_stream = true;   // finite source exhausted: drain, publish, exit 0
   double shutdown_grace_s = 1.0;       // on SIGTERM, wait this long for frames in flight
