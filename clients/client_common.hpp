@@ -6,11 +6,10 @@
 // between waits, so no state is touched from a signal handler.
 #pragma once
 
-#include <lcm/lcm-cpp.hpp>
-
 #include <csignal>
 #include <cstdio>
 #include <functional>
+#include <lcm/lcm-cpp.hpp>
 #include <map>
 #include <stdexcept>
 #include <string>
@@ -62,8 +61,8 @@ class Flags {
       used = 0;
     }
     if (used != text.size() || value < min_value) {
-      throw std::invalid_argument(name + " " + text + ": expected an integer >= " +
-                                  std::to_string(min_value));
+      throw std::invalid_argument(name + " " + text +
+                                  ": expected an integer >= " + std::to_string(min_value));
     }
     return value;
   }

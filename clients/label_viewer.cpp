@@ -11,12 +11,11 @@
 // Exits cleanly on SIGINT/SIGTERM, after --count label images, or at the end
 // of a replayed log (--lcm-url file://LOG?speed=0). Bad messages are
 // reported on stderr and skipped.
-#include <lcm/lcm-cpp.hpp>
-
 #include <array>
 #include <cstdio>
 #include <deque>
 #include <filesystem>
+#include <lcm/lcm-cpp.hpp>
 #include <string>
 #include <utility>
 #include <vector>
@@ -93,8 +92,8 @@ class LabelViewer {
     }
 
     std::string summary = "labels seq " + std::to_string(message.seq) + " utime " +
-                          std::to_string(message.utime) + " " + std::to_string(image.width) +
-                          "x" + std::to_string(image.height);
+                          std::to_string(message.utime) + " " + std::to_string(image.width) + "x" +
+                          std::to_string(image.height);
     char buf[96];
     std::snprintf(buf, sizeof(buf), " latency %.1f ms:", message.latency_us / 1000.0);
     summary += buf;
@@ -167,10 +166,9 @@ int main(int argc, char** argv) {
   long every = 1, count = 0;
   bool write_png = true;
   try {
-    const clients::Flags flags(argc, argv,
-                               {"--lcm-url", "--channel-suffix", "--out", "--alpha", "--every",
-                                "--count"},
-                               {"--no-png", "--help"});
+    const clients::Flags flags(
+        argc, argv, {"--lcm-url", "--channel-suffix", "--out", "--alpha", "--every", "--count"},
+        {"--no-png", "--help"});
     if (flags.has("--help")) {
       std::fputs(kUsage, stdout);
       return 0;

@@ -11,11 +11,10 @@
 // Exits cleanly on SIGINT/SIGTERM, after --count messages, or at the end of
 // a replayed log (--lcm-url file://LOG?speed=0). Bad messages are reported on
 // stderr and skipped.
-#include <lcm/lcm-cpp.hpp>
-
 #include <cmath>
 #include <cstdio>
 #include <iostream>
+#include <lcm/lcm-cpp.hpp>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -54,10 +53,18 @@ std::string jsonEscape(const std::string& s) {
   std::string out;
   for (char c : s) {
     switch (c) {
-      case '"': out += "\\\""; break;
-      case '\\': out += "\\\\"; break;
-      case '\n': out += "\\n"; break;
-      case '\t': out += "\\t"; break;
+      case '"':
+        out += "\\\"";
+        break;
+      case '\\':
+        out += "\\\\";
+        break;
+      case '\n':
+        out += "\\n";
+        break;
+      case '\t':
+        out += "\\t";
+        break;
       default:
         if (static_cast<unsigned char>(c) < 0x20) {
           char buf[8];
@@ -90,8 +97,7 @@ class NavClient {
       std::fprintf(stderr, "%s: skipping bad message: %s\n", kProgram, e.what());
       return;
     }
-    const bool use_map =
-        message.map_pose.has_value() && frame_ != FrameChoice::Base;
+    const bool use_map = message.map_pose.has_value() && frame_ != FrameChoice::Base;
     if (frame_ == FrameChoice::Map && !message.map_pose) {
       std::fprintf(stderr, "%s: message seq %lld has no map pose; positions in the base frame\n",
                    kProgram, static_cast<long long>(message.seq));
@@ -129,11 +135,12 @@ class NavClient {
   void printText(const io::TablesMessage& m, bool use_map, const Eigen::Vector2f& robot,
                  double robot_yaw, const std::vector<Position>& reachable,
                  const std::vector<int>& order, const std::vector<Position>& unreachable) const {
-    std::printf("tables seq %lld utime %llu: %zu tables, %zu positions (%zu reachable), %s frame, "
-                "robot at (%.2f, %.2f) yaw %.1f deg\n",
-                static_cast<long long>(m.seq), static_cast<unsigned long long>(m.utime),
-                m.tables.size(), reachable.size() + unreachable.size(), reachable.size(),
-                use_map ? "map" : "base", robot.x(), robot.y(), robot_yaw * 180.0 / M_PI);
+    std::printf(
+        "tables seq %lld utime %llu: %zu tables, %zu positions (%zu reachable), %s frame, "
+        "robot at (%.2f, %.2f) yaw %.1f deg\n",
+        static_cast<long long>(m.seq), static_cast<unsigned long long>(m.utime), m.tables.size(),
+        reachable.size() + unreachable.size(), reachable.size(), use_map ? "map" : "base",
+        robot.x(), robot.y(), robot_yaw * 180.0 / M_PI);
     Eigen::Vector2f at = robot;
     double total = 0.0;
     for (std::size_t k = 0; k < order.size(); ++k) {

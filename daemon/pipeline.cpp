@@ -274,8 +274,10 @@ PipelineCounters Pipeline::counters() const {
 ProgressSnapshot Pipeline::progress() const {
   ProgressSnapshot p;
   const StageStats seg = segment_->stats(), pub = publish_->stats(), pre = prepare_->stats();
-  p.frames_completed = pre.completed + pre.failed + seg.completed + seg.failed + pub.completed +
-                       pub.failed;
+  // Frames that LEFT the pipeline: published, or failed in some stage. A
+  // frame merely passing an early stage does not count: with the bottleneck
+  // stuck, prepare would otherwise keep "progressing" forever.
+  p.frames_completed = pre.failed + seg.failed + pub.completed + pub.failed;
   p.frames_pending = pre.queue_depth + pre.in_flight + seg.queue_depth + seg.in_flight +
                      pub.queue_depth + pub.in_flight;
   return p;

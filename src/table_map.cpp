@@ -77,7 +77,8 @@ void describeFootprint(const std::vector<Eigen::Vector2f>& hull, TableCluster& t
     const double cov_yy = syy / (12.0 * area) - my * my;
     const double cov_xy = sxy / (24.0 * area) - mx * my;
     const double angle = 0.5 * std::atan2(2.0 * cov_xy, cov_xx - cov_yy);
-    major = Eigen::Vector2f(static_cast<float>(std::cos(angle)), static_cast<float>(std::sin(angle)));
+    major =
+        Eigen::Vector2f(static_cast<float>(std::cos(angle)), static_cast<float>(std::sin(angle)));
     centroid = origin + Eigen::Vector2f(static_cast<float>(mx), static_cast<float>(my));
   }
   if (major.x() < 0.0f || (major.x() == 0.0f && major.y() < 0.0f)) major = -major;
@@ -201,7 +202,8 @@ float convexGap(const std::vector<Eigen::Vector2f>& a, const std::vector<Eigen::
 // The map.
 
 void validateTableMapConfig(const TableMapConfig& c) {
-  if (c.confirm_sightings < 1) badMapSetting("confirm_sightings", c.confirm_sightings, "must be >= 1");
+  if (c.confirm_sightings < 1)
+    badMapSetting("confirm_sightings", c.confirm_sightings, "must be >= 1");
   if (c.forget_misses < 1) badMapSetting("forget_misses", c.forget_misses, "must be >= 1");
   if (!std::isfinite(c.tentative_timeout_s) || c.tentative_timeout_s <= 0.0) {
     badMapSetting("tentative_timeout_s", c.tentative_timeout_s, "must be a positive number");
@@ -381,9 +383,8 @@ TableMapUpdate TableMap::update(const std::vector<TableCluster>& tables_base,
       result.diagnostics.push_back("table " + std::to_string(t.table.id) +
                                    " forgotten: not seen where expected in " +
                                    std::to_string(t.misses) + " consecutive frames");
-    } else if (!t.confirmed &&
-               static_cast<double>(utime - t.first_seen_utime) * 1e-6 >
-                   map_config_.tentative_timeout_s) {
+    } else if (!t.confirmed && static_cast<double>(utime - t.first_seen_utime) * 1e-6 >
+                                   map_config_.tentative_timeout_s) {
       remove[j] = true;
       result.diagnostics.push_back("tentative table " + std::to_string(t.table.id) +
                                    " dropped: not confirmed within " +
@@ -405,8 +406,9 @@ TableMapUpdate TableMap::update(const std::vector<TableCluster>& tables_base,
       if (!(overlap > 0.5f * smaller)) continue;
       MappedTable& keep = tables_[j];
       const MappedTable& gone = tables_[k];
-      result.diagnostics.push_back("table " + std::to_string(gone.table.id) + " merged into table " +
-                                   std::to_string(keep.table.id) + " (footprints overlap)");
+      result.diagnostics.push_back("table " + std::to_string(gone.table.id) +
+                                   " merged into table " + std::to_string(keep.table.id) +
+                                   " (footprints overlap)");
       for (int& id : result.assigned_ids) {
         if (id == gone.table.id) id = keep.table.id;
       }
@@ -421,8 +423,9 @@ TableMapUpdate TableMap::update(const std::vector<TableCluster>& tables_base,
       // Oldest first, whichever table they came from; keep the newest.
       auto& kept = observations_[j];
       kept.insert(kept.end(), observations_[k].begin(), observations_[k].end());
-      std::stable_sort(kept.begin(), kept.end(),
-                       [](const Observation& x, const Observation& y) { return x.utime < y.utime; });
+      std::stable_sort(kept.begin(), kept.end(), [](const Observation& x, const Observation& y) {
+        return x.utime < y.utime;
+      });
       while (static_cast<int>(kept.size()) > map_config_.max_observations) kept.pop_front();
       rebuild(j);
       remove[k] = true;

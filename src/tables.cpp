@@ -79,7 +79,8 @@ void validateTableConfig(const TableConfig& c) {
   if (!std::isfinite(c.cluster_tolerance_m) || c.cluster_tolerance_m < kMinToleranceM) {
     badSetting("cluster_tolerance_m", c.cluster_tolerance_m, "must be at least 0.001 m");
   }
-  if (c.min_cluster_points < 1) badSetting("min_cluster_points", c.min_cluster_points, "must be >= 1");
+  if (c.min_cluster_points < 1)
+    badSetting("min_cluster_points", c.min_cluster_points, "must be >= 1");
   if (c.max_cluster_points < c.min_cluster_points) {
     badSetting("max_cluster_points", c.max_cluster_points,
                "must not be below tables.min_cluster_points (" +
@@ -100,8 +101,7 @@ void validateTableConfig(const TableConfig& c) {
   positive("robot_height_m", c.robot_height_m);
   if (c.robot_height_m <= c.obstacle_min_height_m) {
     badSetting("robot_height_m", c.robot_height_m,
-               "must be above tables.obstacle_min_height_m (" + fmt(c.obstacle_min_height_m) +
-                   ")");
+               "must be above tables.obstacle_min_height_m (" + fmt(c.obstacle_min_height_m) + ")");
   }
   if (c.obstacle_min_points < 1) {
     badSetting("obstacle_min_points", c.obstacle_min_points, "must be >= 1");
@@ -110,8 +110,7 @@ void validateTableConfig(const TableConfig& c) {
   positive("floor_cell_m", c.floor_cell_m);
   if (!std::isfinite(c.min_floor_observed_fraction) || c.min_floor_observed_fraction < 0.0f ||
       c.min_floor_observed_fraction > 1.0f) {
-    badSetting("min_floor_observed_fraction", c.min_floor_observed_fraction,
-               "must be in [0, 1]");
+    badSetting("min_floor_observed_fraction", c.min_floor_observed_fraction, "must be in [0, 1]");
   }
 }
 
@@ -375,8 +374,7 @@ void principalAxes(const std::vector<Eigen::Vector2f>& pts, Eigen::Vector2f& maj
   const float cell = std::max(kAxisCellM, std::sqrt(size.x() * size.y() / 4.0e6f));
   const int cols = static_cast<int>(size.x() / cell) + 1;
   const int rows = static_cast<int>(size.y() / cell) + 1;
-  std::vector<Eigen::Vector2f> sums(static_cast<std::size_t>(cols) * rows,
-                                    Eigen::Vector2f::Zero());
+  std::vector<Eigen::Vector2f> sums(static_cast<std::size_t>(cols) * rows, Eigen::Vector2f::Zero());
   std::vector<int> counts(sums.size(), 0);
   for (const auto& p : pts) {
     const int c = std::min(cols - 1, static_cast<int>((p.x() - box.min().x()) / cell));
@@ -480,7 +478,8 @@ ClusterOutcome describeCluster(const std::vector<Eigen::Vector3f>& points,
   constexpr float kBin = 0.01f;
   const int bins = static_cast<int>((z_max - z_min) / kBin) + 1;
   std::vector<int> histogram(static_cast<std::size_t>(bins), 0);
-  for (const auto& p : points) ++histogram[std::min(bins - 1, static_cast<int>((p.z() - z_min) / kBin))];
+  for (const auto& p : points)
+    ++histogram[std::min(bins - 1, static_cast<int>((p.z() - z_min) / kBin))];
   const int half_window = std::max(0, static_cast<int>(config.top_band_m / (2.0f * kBin)));
   int best_bin = 0;
   long best_count = -1;
@@ -542,8 +541,9 @@ ClusterOutcome describeCluster(const std::vector<Eigen::Vector3f>& points,
                  table.minor_axis * 0.5f * (minor_range[1] + minor_range[0]);
   const float width = 2.0f * table.extents.y();
   if (!(width >= config.min_table_width_m)) {
-    outcome.reason = "degenerate or narrow cluster of " + std::to_string(n) + " points: " +
-                     fmt(width) + " m wide along its second axis, below tables.min_table_width_m (" +
+    outcome.reason = "degenerate or narrow cluster of " + std::to_string(n) +
+                     " points: " + fmt(width) +
+                     " m wide along its second axis, below tables.min_table_width_m (" +
                      fmt(config.min_table_width_m) + ")";
     return outcome;
   }
@@ -813,8 +813,8 @@ std::vector<SearchPosition> computeSearchPositions(const TableCluster& table,
     // Half-length of the edge one position covers: up to the midline of the
     // top when the arm gets that far, else the edge strip.
     const float to_midline = d + half_width;
-    const float h = r > to_midline ? std::sqrt(r * r - to_midline * to_midline)
-                                   : std::sqrt(r * r - d * d);
+    const float h =
+        r > to_midline ? std::sqrt(r * r - to_midline * to_midline) : std::sqrt(r * r - d * d);
     // Guard against absurd counts from a tiny reach margin.
     per_side = std::clamp(static_cast<int>(std::ceil(half_length / h - 1e-4f)), 1, 64);
   }
@@ -839,7 +839,8 @@ TableDetection detectTables(const OrganizedCloud& cloud_ground, const LabelImage
   validateTableConfig(config);
   TableDetection result;
   if (cloud_ground.points.empty()) {
-    result.diagnostics.push_back("no ground-aligned cloud (no ground plane for this frame): no tables");
+    result.diagnostics.push_back(
+        "no ground-aligned cloud (no ground plane for this frame): no tables");
     return result;
   }
   checkInputs(cloud_ground, labels);
@@ -921,11 +922,10 @@ TableDetection detectTables(const OrganizedCloud& cloud_ground, const LabelImage
   }
   if (small_clusters > 0) {
     result.clusters_rejected += small_clusters;
-    result.diagnostics.push_back(std::to_string(small_clusters) +
-                                 " clusters below tables.min_cluster_points (" +
-                                 std::to_string(config.min_cluster_points) +
-                                 ") dropped, the largest of " + std::to_string(largest_small) +
-                                 " points");
+    result.diagnostics.push_back(
+        std::to_string(small_clusters) + " clusters below tables.min_cluster_points (" +
+        std::to_string(config.min_cluster_points) + ") dropped, the largest of " +
+        std::to_string(largest_small) + " points");
   }
   std::stable_sort(tables.begin(), tables.end(), [](const TableCluster& a, const TableCluster& b) {
     return a.point_count > b.point_count;

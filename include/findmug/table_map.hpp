@@ -62,11 +62,11 @@ double wrapAngle(double angle);
 TableCluster transformTable(const TableCluster& table, const Pose2D& pose);
 
 struct TableMapConfig {
-  int confirm_sightings = 3;         // sightings (updates with a match) to confirm a table
-  int forget_misses = 3;             // consecutive expected-but-unseen updates to forget it
-  double tentative_timeout_s = 10.0; // unconfirmed tables older than this are dropped
-  float match_gap_m = 0.15f;         // footprints this close (or overlapping) may be one table
-  float match_height_m = 0.15f;      // ... when their top heights differ by at most this
+  int confirm_sightings = 3;          // sightings (updates with a match) to confirm a table
+  int forget_misses = 3;              // consecutive expected-but-unseen updates to forget it
+  double tentative_timeout_s = 10.0;  // unconfirmed tables older than this are dropped
+  float match_gap_m = 0.15f;          // footprints this close (or overlapping) may be one table
+  float match_height_m = 0.15f;       // ... when their top heights differ by at most this
   // The camera's view on the floor, from the base frame origin along +x:
   // a mapped table is expected in a frame when its box centre is within
   // this range and bearing. Defaults: Kinect-like 57° field of view less a
@@ -74,8 +74,8 @@ struct TableMapConfig {
   float view_half_angle_rad = 0.4f;
   float view_min_range_m = 0.8f;
   float view_max_range_m = 4.0f;
-  int max_observations = 10;         // newest observations kept per table
-  float position_match_m = 0.3f;     // observed position near a recomputed one lends its verdict
+  int max_observations = 10;      // newest observations kept per table
+  float position_match_m = 0.3f;  // observed position near a recomputed one lends its verdict
 };
 
 // Throws findmug::Error naming the setting (as `table_map.KEY`) when out of range.
@@ -84,7 +84,7 @@ void validateTableMapConfig(const TableMapConfig& config);
 struct MappedTable {
   TableCluster table;  // map frame; table.id is the stable id (1, 2, ...; never reused)
   int sightings = 0;
-  int misses = 0;      // consecutive updates in which it was expected but not seen
+  int misses = 0;  // consecutive updates in which it was expected but not seen
   bool confirmed = false;
   std::uint64_t first_seen_utime = 0;
   std::uint64_t last_seen_utime = 0;

@@ -41,7 +41,7 @@ namespace findmug {
 
 struct SearchPosition {
   Eigen::Vector2f xy = Eigen::Vector2f::Zero();  // on the floor, metres
-  float yaw = 0.0f;                               // rad, facing the table
+  float yaw = 0.0f;                              // rad, facing the table
   bool reachable = true;
   std::string reason;  // why unreachable ("obstacle within robot radius", "no observed floor")
   // Which long side of the table (+1: along +minor_axis, -1: along -minor_axis)
@@ -54,13 +54,15 @@ struct TableCluster {
   int id = 0;  // findTables: 0..n-1 by decreasing point count; TableMap: the stable id
   Eigen::Vector3f centroid = Eigen::Vector3f::Zero();  // mean of the top's points
   float top_height = 0.0f;
-  Eigen::Vector2f major_axis = Eigen::Vector2f::UnitX();  // first principal axis (unit, floor plane)
-  Eigen::Vector2f minor_axis = Eigen::Vector2f::UnitY();  // second principal axis (major turned +90°)
-  Eigen::Vector2f extents = Eigen::Vector2f::Zero();      // half-lengths along major/minor
+  // First principal axis (unit, floor plane) and the second one (major
+  // turned +90°); half-lengths of the top along them.
+  Eigen::Vector2f major_axis = Eigen::Vector2f::UnitX();
+  Eigen::Vector2f minor_axis = Eigen::Vector2f::UnitY();
+  Eigen::Vector2f extents = Eigen::Vector2f::Zero();
   // Centre of the oriented box (major/minor axes, extents) on the floor. It
   // differs from the centroid's x,y when the points are unevenly spread.
   Eigen::Vector2f center = Eigen::Vector2f::Zero();
-  std::vector<Eigen::Vector2f> hull;                      // convex hull of the top, CCW
+  std::vector<Eigen::Vector2f> hull;  // convex hull of the top, CCW
   int point_count = 0;
   float mean_confidence = 0.0f;
   std::vector<SearchPosition> search_positions;
@@ -70,7 +72,7 @@ struct TableConfig {
   float cluster_tolerance_m = 0.05f;
   int min_cluster_points = 500;
   int max_cluster_points = 1000000;  // above a VGA frame: a close table may fill the view
-  float safety_distance_m = 0.5f;  // d: from the table edge to the search position
+  float safety_distance_m = 0.5f;    // d: from the table edge to the search position
   float arm_reach_m = 0.8f;
   float robot_radius_m = 0.3f;
   float min_table_height_m = 0.3f;
@@ -98,11 +100,11 @@ struct TableConfig {
 struct TableDetection {
   std::vector<TableCluster> tables;
   std::vector<std::string> diagnostics;  // one human-readable line per reason
-  int table_points = 0;           // table-labelled points used for clustering
-  int nonfinite_points = 0;       // table-labelled points with a NaN/inf coordinate
-  int implausible_points = 0;     // table-labelled points outside the height range or
-                                  // absurdly far (> 100 m) from the robot
-  int clusters_rejected = 0;      // clusters dropped (size, degenerate)
+  int table_points = 0;                  // table-labelled points used for clustering
+  int nonfinite_points = 0;              // table-labelled points with a NaN/inf coordinate
+  int implausible_points = 0;            // table-labelled points outside the height range or
+                                         // absurdly far (> 100 m) from the robot
+  int clusters_rejected = 0;             // clusters dropped (size, degenerate)
 };
 
 // Throws findmug::Error naming the setting (`tables.KEY = value: rule`) when

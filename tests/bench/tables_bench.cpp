@@ -53,8 +53,8 @@ std::vector<Input> nyuInputs() {
   return out;
 }
 
-Input renderInput(const synth::SynthScene& scene, const synth::CameraPose& pose,
-                  std::uint64_t seed, const std::string& name) {
+Input renderInput(const synth::SynthScene& scene, const synth::CameraPose& pose, std::uint64_t seed,
+                  const std::string& name) {
   const auto rendered = synth::render(scene, pose, synth::RenderOptions{}, seed);
   const RgbdFrame& frame = rendered.labeled.frame;
   const GroundPlane ground = groundFromExtrinsics(frame.extrinsics.value());
@@ -103,7 +103,8 @@ void runTables(benchmark::State& state, const Input* input) {
     benchmark::DoNotOptimize(d);
   }
   int table_points = 0;
-  for (std::uint8_t l : input->labels.labels) table_points += l == static_cast<std::uint8_t>(Label::Table);
+  for (std::uint8_t l : input->labels.labels)
+    table_points += l == static_cast<std::uint8_t>(Label::Table);
   state.counters["tables"] = static_cast<double>(tables);
   state.counters["positions"] = static_cast<double>(positions);
   state.counters["table_px"] = table_points;

@@ -391,3 +391,70 @@ TEST(DaemonPipeline, StartupErrorsNameTheKey) {
 
 }  // namespace
 }  // namespace findmug::daemon
+
+namespace findmug::daemon {
+namespace {
+
+// The watchdog is fed while frames progress, withheld while the bottleneck
+// is stuck with frames waiting, and fed again once it recovers. The notify
+// socket belongs to the test (NOTIFY_SOCKET / WATCHDOG_USEC as systemd sets them).
+TEST(DaemonPipeline, WatchdogIsWithheldWhileTheSegmentStageIsStuck) {
+  FINDMUG_REQUIRE_DATA(nyu, "nyuv2_labeled");
+  ASSERT_TRUE(sharedModel());
+  TempDir tmp;
+  test::NotifySocket notify(tmp.str("notify.sock"));
+  setenv("NOTIFY_SOCKET", notify.path().c_str(), 1);
+  setenv("WATCHDOG_USEC", "600000", 1);  // stall limit 0.3 s, a ping every 0.2 s
+  Config config = baseConfig("dataset:" + nyu.string() + "?loop=1&rate_hz=20", tmp.str("o.lcmlog"));
+  config.extra["daemon.workers"] = "1";
+  const DaemonConfig dc = resolveDaemonConfig(config);
+
+  std::mutex m;
+  std::condition_variable cv;
+  bool stuck = false, release = false;
+  PipelineHooks hooks;
+  hooks.before_segment = [&](const RgbdFrame& frame) {
+    if (frame.seq != 3) return;
+    std::unique_lock lock(m);
+    stuck = true;
+    cv.notify_all();
+    cv.wait(lock, [&] { return release; });
+  };
+  auto daemon = std::make_unique<Daemon>(config, dc, hooks);
+  unsetenv("NOTIFY_SOCKET");
+  unsetenv("WATCHDOG_USEC");
+  int code = -1;
+  std::thread runner([&] { code = daemon->run(); });
+  auto count_pings = [&](std::chrono::milliseconds window) {
+    int pings = 0;
+    const auto end = std::chrono::steady_clock::now() + window;
+    while (std::chrono::steady_clock::now() < end) {
+      if (auto msg = notify.receive(20ms); msg && msg->find("WATCHDOG=1") != std::string::npos) {
+        ++pings;
+      }
+    }
+    return pings;
+  };
+  {
+    std::unique_lock lock(m);
+    ASSERT_TRUE(cv.wait_for(lock, 120s, [&] { return stuck; }));
+  }
+  // Frames keep arriving (and being dropped) but none completes: after the
+  // stall limit the pings must stop.
+  count_pings(800ms);  // drain what was sent before the stall was noticed
+  const int pings_while_stuck = count_pings(1500ms);
+  {
+    std::lock_guard lock(m);
+    release = true;
+  }
+  cv.notify_all();
+  const int pings_after_recovery = count_pings(3000ms);
+  daemon->requestStop();
+  runner.join();
+  EXPECT_EQ(code, 0);
+  EXPECT_EQ(pings_while_stuck, 0);
+  EXPECT_GT(pings_after_recovery, 0);
+}
+
+}  // namespace
+}  // namespace findmug::daemon

@@ -43,7 +43,8 @@ TableCluster observe(const std::vector<Eigen::Vector2f>& outline_map, float heig
   t.major_axis = (a_long ? a : b).normalized();
   if (t.major_axis.x() < 0) t.major_axis = -t.major_axis;
   t.minor_axis = Eigen::Vector2f(-t.major_axis.y(), t.major_axis.x());
-  t.extents = Eigen::Vector2f(0.5f * std::max(a.norm(), b.norm()), 0.5f * std::min(a.norm(), b.norm()));
+  t.extents =
+      Eigen::Vector2f(0.5f * std::max(a.norm(), b.norm()), 0.5f * std::min(a.norm(), b.norm()));
   Eigen::Vector2f c = Eigen::Vector2f::Zero();
   for (const auto& p : t.hull) c += p;
   t.center = c / static_cast<float>(t.hull.size());
@@ -107,7 +108,8 @@ TEST(TransformTable, MovesAllGeometryAndRoundTrips) {
   }
   const TableCluster back = transformTable(m, inversePose(base_in_map));
   EXPECT_LT((back.center - t.center).norm(), 1e-4f);
-  for (std::size_t i = 0; i < t.hull.size(); ++i) EXPECT_LT((back.hull[i] - t.hull[i]).norm(), 1e-4f);
+  for (std::size_t i = 0; i < t.hull.size(); ++i)
+    EXPECT_LT((back.hull[i] - t.hull[i]).norm(), 1e-4f);
 }
 
 TEST(Polygons, AreaIntersectionAndGap) {
@@ -155,8 +157,9 @@ TEST(TableMap, ConfirmsAfterSightingsWithOneStableId) {
   EXPECT_LT((t.center - Eigen::Vector2f(5.0f, 2.0f)).norm(), 1e-3f);
   EXPECT_NEAR(t.extents.x(), 0.7f, 1e-3f);
   EXPECT_NEAR(t.extents.y(), 0.4f, 1e-3f);
-  EXPECT_LT(std::abs(std::abs(t.major_axis.dot(Eigen::Vector2f(std::cos(0.2f), std::sin(0.2f)))) - 1),
-            1e-4f);
+  EXPECT_LT(
+      std::abs(std::abs(t.major_axis.dot(Eigen::Vector2f(std::cos(0.2f), std::sin(0.2f)))) - 1),
+      1e-4f);
   // Positions recomputed in the map: at d from the edge, reachable (observed so).
   ASSERT_EQ(t.search_positions.size(), 4u);
   for (const auto& p : t.search_positions) {

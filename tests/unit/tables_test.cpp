@@ -106,7 +106,8 @@ std::string joined(const std::vector<std::string>& lines) {
 TEST(ConvexHull, SquareWithInteriorAndCollinearPoints) {
   std::vector<Eigen::Vector2f> pts;
   for (int i = 0; i <= 10; ++i) {
-    for (int j = 0; j <= 10; ++j) pts.emplace_back(0.1f * i, 0.1f * j);  // edges hold collinear points
+    for (int j = 0; j <= 10; ++j)
+      pts.emplace_back(0.1f * i, 0.1f * j);  // edges hold collinear points
   }
   const auto hull = convexHull2d(pts);
   ASSERT_EQ(hull.size(), 4u);
@@ -187,8 +188,9 @@ TEST(EuclideanClusters, SamePartitionAsBruteForce) {
 TEST(EuclideanClusters, ChainsLinkAndGapsSplit) {
   std::vector<Eigen::Vector3f> chain, gaps;
   for (int i = 0; i < 50; ++i) {
-    chain.emplace_back(0.045f * i, 0.0f, 0.7f);  // steps below the tolerance: one cluster 2.2 m long
-    gaps.emplace_back(0.055f * i, 0.0f, 0.7f);   // steps above it: all apart
+    chain.emplace_back(0.045f * i, 0.0f,
+                       0.7f);                   // steps below the tolerance: one cluster 2.2 m long
+    gaps.emplace_back(0.055f * i, 0.0f, 0.7f);  // steps above it: all apart
   }
   const auto one = euclideanClusterLabels(chain, 0.05f);
   EXPECT_EQ(*std::max_element(one.begin(), one.end()), 0);
@@ -445,7 +447,8 @@ TEST(FindTables, ImplausibleHeightsAreNotTables) {
   s.addTop({2.0f, 0.0f}, 0.0f, 1.0f, 0.6f, 2.0f);  // and above the head
   const TableDetection d = detectTables(s.cloud, s.labels, TableConfig{});
   EXPECT_TRUE(d.tables.empty());
-  EXPECT_EQ(d.implausible_points, std::count(s.labels.labels.begin(), s.labels.labels.end(), kTable));
+  EXPECT_EQ(d.implausible_points,
+            std::count(s.labels.labels.begin(), s.labels.labels.end(), kTable));
   EXPECT_TRUE(hasDiagnostic(d, "outside [0.3, 1.3] m height")) << joined(d.diagnostics);
 }
 
@@ -1030,14 +1033,14 @@ TEST(RealDataTables, PclTableSceneMugGivesOneTable) {
 // checked against the images: e.g. 0009 has the desk in front and the
 // reception counter at the back (2); 0031 the desk, its left part cut off
 // behind the chair, and a small table-labelled surface 13 cm below the top
-// (3); in 0016 a 9 cm wide sliver of a second desk is dropped as too narrow. A changed count means clustering or the
-// ground fit behaves differently: look at the frame before updating it.
+// (3); in 0016 a 9 cm wide sliver of a second desk is dropped as too narrow. A changed count means
+// clustering or the ground fit behaves differently: look at the frame before updating it.
 TEST(RealDataTables, NyuFramesWithTablesGiveTableClusters) {
   FINDMUG_REQUIRE_DATA(dir, "nyuv2_labeled");
   const DatasetFolder dataset(dir.string());
   const std::map<std::string, int> expected = {
       {"0001", 1}, {"0009", 2}, {"0016", 1}, {"0017", 1}, {"0018", 1},
-      {"0021", 1}, {"0030", 1}, {"0031", 3}, {"0118", 1},  // with tables
+      {"0021", 1}, {"0030", 1}, {"0031", 3}, {"0118", 1},               // with tables
       {"0015", 0}, {"0037", 0}, {"0060", 0}, {"0090", 0}, {"0433", 0},  // without
   };
   int seen = 0;
