@@ -82,9 +82,9 @@ ProgressSnapshot Daemon::progress() const {
   const bool live_wait = (source_in_next_.load() && state != io::SourceState::Failed &&
                           state != io::SourceState::Stopped) ||
                          (source_finished_.load() && state == io::SourceState::EndOfStream);
-  p.source_heartbeat = live_wait ? Clock::now()
-                                 : Clock::time_point(std::chrono::nanoseconds(
-                                       source_last_return_ns_.load()));
+  p.source_heartbeat =
+      live_wait ? Clock::now()
+                : Clock::time_point(std::chrono::nanoseconds(source_last_return_ns_.load()));
   return p;
 }
 
@@ -130,8 +130,8 @@ int Daemon::run() {
     if (now >= next_status_text) {
       // The same figures as status_t, for `systemctl status` and the journal.
       const status_t s = pipeline_->makeStatus();
-      const auto total = std::find(s.stage_names.begin(), s.stage_names.end(), "total") -
-                         s.stage_names.begin();
+      const auto total =
+          std::find(s.stage_names.begin(), s.stage_names.end(), "total") - s.stage_names.begin();
       const std::string line = fmt::format(
           "{} received, {} processed, {} dropped, {} rejected; in {:.2f} fps, out {:.2f} fps; "
           "latency p50 {:.0f} ms, p95 {:.0f} ms; source {}",
@@ -147,9 +147,10 @@ int Daemon::run() {
   const io::SourceState final_state = source_->state();
   const bool stop_request = stop_requested_.load();
   notifier_.stopping(stop_request ? "stopping on request" : "source ended");
-  spdlog::info("shutting down ({})", stop_request ? "stop requested"
-                                                  : std::string("source ") +
-                                                        std::string(io::sourceStateName(final_state)));
+  spdlog::info("shutting down ({})",
+               stop_request
+                   ? "stop requested"
+                   : std::string("source ") + std::string(io::sourceStateName(final_state)));
   // An exhausted source keeps its EndOfStream state for the final status.
   if (!(source_finished_.load() && final_state == io::SourceState::EndOfStream)) source_->stop();
   if (source_thread_.joinable()) source_thread_.join();

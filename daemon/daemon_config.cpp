@@ -201,9 +201,12 @@ std::string usage() {
 
 CommandLine parseCommandLine(const std::vector<std::string>& args) {
   static const std::map<std::string, std::string> shortcuts = {
-      {"--source", "daemon.source"},       {"--lcm-url", "daemon.lcm_url"},
-      {"--channel-suffix", "daemon.channel_suffix"}, {"--model", "daemon.model_path"},
-      {"--workers", "daemon.workers"},     {"--log-level", "daemon.log_level"}};
+      {"--source", "daemon.source"},
+      {"--lcm-url", "daemon.lcm_url"},
+      {"--channel-suffix", "daemon.channel_suffix"},
+      {"--model", "daemon.model_path"},
+      {"--workers", "daemon.workers"},
+      {"--log-level", "daemon.log_level"}};
   CommandLine cl;
   for (std::size_t i = 0; i < args.size(); ++i) {
     const std::string& arg = args[i];

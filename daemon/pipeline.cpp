@@ -33,10 +33,10 @@ namespace {
 // pipeline stages' wall times, "total" is arrival to published.
 const std::vector<std::pair<std::string, double StageTimings::*>>& subStages() {
   static const std::vector<std::pair<std::string, double StageTimings::*>> all = {
-      {"cloud", &StageTimings::cloud_ms},         {"normals", &StageTimings::normals_ms},
-      {"ground", &StageTimings::ground_ms},       {"supervoxels", &StageTimings::overseg_ms},
-      {"features", &StageTimings::features_ms},   {"forest", &StageTimings::forest_ms},
-      {"mrf", &StageTimings::mrf_ms},             {"labels", &StageTimings::labels_ms},
+      {"cloud", &StageTimings::cloud_ms},       {"normals", &StageTimings::normals_ms},
+      {"ground", &StageTimings::ground_ms},     {"supervoxels", &StageTimings::overseg_ms},
+      {"features", &StageTimings::features_ms}, {"forest", &StageTimings::forest_ms},
+      {"mrf", &StageTimings::mrf_ms},           {"labels", &StageTimings::labels_ms},
       {"tables", &StageTimings::tables_ms}};
   return all;
 }
@@ -84,7 +84,12 @@ Pipeline::Pipeline(const SegmenterConfig& segmenter_config, const DaemonConfig& 
   const auto capacity = static_cast<std::size_t>(daemon_config_.queue_capacity);
   auto on_error = [this](const std::string& what) { recordError(what); };
 
-  StageOptions publish_options{"publish", mode_, 1, capacity, DropPolicy::Block, window,
+  StageOptions publish_options{"publish",
+                               mode_,
+                               1,
+                               capacity,
+                               DropPolicy::Block,
+                               window,
                                std::chrono::duration_cast<Clock::duration>(
                                    std::chrono::duration<double>(daemon_config_.status_period_s))};
   publish_ = std::make_unique<Stage<ResultJob, Published>>(

@@ -30,9 +30,7 @@ void SystemdNotifier::send(const std::string& message) const {
   if (r < 0) spdlog::warn("sd_notify failed: {}", std::strerror(-r));
 }
 
-void SystemdNotifier::ready(const std::string& status) const {
-  send("READY=1\nSTATUS=" + status);
-}
+void SystemdNotifier::ready(const std::string& status) const { send("READY=1\nSTATUS=" + status); }
 void SystemdNotifier::watchdog() const { send("WATCHDOG=1"); }
 void SystemdNotifier::stopping(const std::string& status) const {
   send("STOPPING=1\nSTATUS=" + status);
@@ -53,11 +51,11 @@ bool WatchdogGate::healthy(const ProgressSnapshot& progress, Clock::time_point n
     return false;
   }
   if (progress.frames_pending > 0 && now - last_progress_ > stall_limit_) {
-    reason_ = std::to_string(progress.frames_pending) + " frame(s) pending but none completed for " +
-              std::to_string(
-                  std::chrono::duration_cast<std::chrono::milliseconds>(now - last_progress_)
-                      .count()) +
-              " ms";
+    reason_ =
+        std::to_string(progress.frames_pending) + " frame(s) pending but none completed for " +
+        std::to_string(
+            std::chrono::duration_cast<std::chrono::milliseconds>(now - last_progress_).count()) +
+        " ms";
     return false;
   }
   reason_.clear();

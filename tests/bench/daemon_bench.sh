@@ -192,14 +192,15 @@ figures() {
   lat() { grep -o "\"latency_ms\": {[^}]*}" "$j" | grep -o "\"$1\": [^,}]*" | sed 's/.*: //'; }
   local frames_in published dropped
   frames_in=$(get frames_in); published=$(get labels_received)
+  local void; void=$(get labels_all_void)
   dropped=$((frames_in - published))
   local tck; tck=$(getconf CLK_TCK)
   local usage
   usage=$(awk -v s="$(cat "$dir/start_ms")" -v e="$(cat "$dir/end_ms")" -v tck="$tck" '
-    { if ($1 <= s) { t0 = $1; c0 = $2 } if ($1 <= e) { t1 = $1; c1 = $2 } hwm = $3 }
+    { if ($1 <= s) { t0 = $1; c0 = $2 } if ($1 <= e) { t1 = $1; c1 = $2 } if ($3 > hwm) hwm = $3 }
     END { if (t1 > t0) printf "%.0f %.0f", 100 * (c1 - c0) / tck / ((t1 - t0) / 1000), hwm / 1024;
           else printf "? %.0f", hwm / 1024 }' "$dir/usage")
-  echo "input_fps=$(get input_fps) output_fps=$(get output_fps) frames_in=$frames_in published=$published dropped=$dropped p50=$(lat p50) p99=$(lat p99) max=$(lat max) cpu=${usage% *} rss=${usage#* }"
+  echo "input_fps=$(get input_fps) output_fps=$(get output_fps) frames_in=$frames_in published=$published dropped=$dropped labelled=$((published - void)) p50=$(lat p50) p99=$(lat p99) max=$(lat max) cpu=${usage% *} rss=${usage#* }"
 }
 val() { sed -n "s/.*\b$2=\([^ ]*\).*/\1/p" <<< "$1"; }
 fmt1() { awk -v v="$1" 'BEGIN { if (v == "") print "-"; else printf "%.1f", v }'; }
@@ -252,14 +253,16 @@ mem_gb=$(awk '/MemTotal/ {printf "%.0f", $2 / 1048576}' /proc/meminfo)
   echo "- Each run: ${DURATION} s of input from \`findmug-replay\` (frames looped, fresh seq/utime),"
   echo "  LCM udpm in a private network namespace; latency = label image received - frame received"
   echo "  (same host clock); dropped = frames in - label images out; CPU = daemon process CPU time /"
-  echo "  wall time of the run (200 % = both cores); peak RSS = VmHWM."
+  echo "  wall time of the run (200 % = both cores); peak RSS = VmHWM. \"labelled\" = label images"
+  echo "  with at least one labelled pixel: a frame without a ground plane (no camera mount given and"
+  echo "  none found) is published all void after the geometry stages only, and costs far less."
   echo "- Load average (1/5/15 min) before: $LOAD_BEFORE, after: $LOAD_AFTER. Other jobs on the machine"
   echo "  inflate latency and lower fps; compare rows of one run, not across runs."
   echo
   echo "### Sustained rate, latency, drops, CPU and memory"
   echo
-  echo "| data | input fps | mode | measured in fps | out fps | frames in | published | dropped | p50 ms | p99 ms | max ms | CPU % | peak RSS MB |"
-  echo "|---|---|---|---|---|---|---|---|---|---|---|---|---|"
+  echo "| data | input fps | mode | measured in fps | out fps | frames in | published | labelled | dropped | p50 ms | p99 ms | max ms | CPU % | peak RSS MB |"
+  echo "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"
   for ds in $DATASETS; do
     for rate in $RATES $([[ $ds == nyu ]] && echo "$SEARCHED"); do
       for mode in $MODES; do
@@ -267,7 +270,7 @@ mem_gb=$(awk '/MemTotal/ {printf "%.0f", $2 / 1048576}' /proc/meminfo)
         [[ -d "$dir" ]] || continue
         f=$(figures "$dir")
         [[ -n "$f" ]] || continue
-        echo "| $ds | $rate | $mode | $(fmt1 "$(val "$f" input_fps)") | $(fmt1 "$(val "$f" output_fps)") | $(val "$f" frames_in) | $(val "$f" published) | $(val "$f" dropped) | $(fmt0 "$(val "$f" p50)") | $(fmt0 "$(val "$f" p99)") | $(fmt0 "$(val "$f" max)") | $(val "$f" cpu) | $(val "$f" rss) |"
+        echo "| $ds | $rate | $mode | $(fmt1 "$(val "$f" input_fps)") | $(fmt1 "$(val "$f" output_fps)") | $(val "$f" frames_in) | $(val "$f" published) | $(val "$f" labelled) | $(val "$f" dropped) | $(fmt0 "$(val "$f" p50)") | $(fmt0 "$(val "$f" p99)") | $(fmt0 "$(val "$f" max)") | $(val "$f" cpu) | $(val "$f" rss) |"
       done
     done
   done

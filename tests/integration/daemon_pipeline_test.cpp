@@ -35,7 +35,7 @@ struct SharedModel {
 };
 
 const SharedModel* sharedModel() {
-  static SharedModel* model = [] () -> SharedModel* {
+  static SharedModel* model = []() -> SharedModel* {
     const auto nyu = findmug::test::dataPath("nyuv2_labeled");
     if (nyu.empty()) return nullptr;
     auto* m = new SharedModel;
@@ -404,7 +404,8 @@ TEST(DaemonPipeline, WatchdogIsWithheldWhileTheSegmentStageIsStuck) {
   TempDir tmp;
   test::NotifySocket notify(tmp.str("notify.sock"));
   setenv("NOTIFY_SOCKET", notify.path().c_str(), 1);
-  setenv("WATCHDOG_USEC", "600000", 1);  // stall limit 0.3 s, a ping every 0.2 s
+  // WatchdogSec 3 s: stall limit 1.5 s (longer than any frame takes here), a ping every second.
+  setenv("WATCHDOG_USEC", "3000000", 1);
   Config config = baseConfig("dataset:" + nyu.string() + "?loop=1&rate_hz=20", tmp.str("o.lcmlog"));
   config.extra["daemon.workers"] = "1";
   const DaemonConfig dc = resolveDaemonConfig(config);
@@ -420,9 +421,8 @@ TEST(DaemonPipeline, WatchdogIsWithheldWhileTheSegmentStageIsStuck) {
     cv.notify_all();
     cv.wait(lock, [&] { return release; });
   };
+  // sd_notify reads NOTIFY_SOCKET at each call: keep it set while the daemon runs.
   auto daemon = std::make_unique<Daemon>(config, dc, hooks);
-  unsetenv("NOTIFY_SOCKET");
-  unsetenv("WATCHDOG_USEC");
   int code = -1;
   std::thread runner([&] { code = daemon->run(); });
   auto count_pings = [&](std::chrono::milliseconds window) {
@@ -441,19 +441,23 @@ TEST(DaemonPipeline, WatchdogIsWithheldWhileTheSegmentStageIsStuck) {
   }
   // Frames keep arriving (and being dropped) but none completes: after the
   // stall limit the pings must stop.
-  count_pings(800ms);  // drain what was sent before the stall was noticed
-  const int pings_while_stuck = count_pings(1500ms);
+  count_pings(2000ms);  // drain what was sent before the stall was noticed
+  const int pings_while_stuck = count_pings(2000ms);
   {
     std::lock_guard lock(m);
     release = true;
   }
   cv.notify_all();
-  const int pings_after_recovery = count_pings(3000ms);
+  const int pings_after_recovery = count_pings(5000ms);
+  const PipelineCounters c = daemon->pipeline().counters();
   daemon->requestStop();
   runner.join();
+  unsetenv("NOTIFY_SOCKET");
+  unsetenv("WATCHDOG_USEC");
   EXPECT_EQ(code, 0);
   EXPECT_EQ(pings_while_stuck, 0);
-  EXPECT_GT(pings_after_recovery, 0);
+  EXPECT_GT(pings_after_recovery, 0)
+      << c.received << " received, " << c.processed << " processed, " << c.pending << " pending";
 }
 
 }  // namespace

@@ -2,9 +2,9 @@
 // NOTIFY_SOCKET this test owns (READY=1, WATCHDOG=1, STOPPING=1), SIGTERM
 // handling (final status, exit 0 within 2 s), LCM_DEFAULT_URL, and start-up
 // failures that name the bad key. LCM goes to a file:// log only.
+#include <fcntl.h>
 #include <gtest/gtest.h>
 #include <signal.h>
-#include <fcntl.h>
 #include <spawn.h>
 #include <sys/wait.h>
 #include <unistd.h>
@@ -129,8 +129,7 @@ TEST(Findmugd, NotifyProtocolWatchdogAndCleanShutdownOnSigterm) {
   }
   // Frames flow, so the progress-gated watchdog must be fed (WatchdogSec 1.5 s
   // here: a ping every 0.5 s while healthy).
-  EXPECT_TRUE(awaitMessage(notify, "WATCHDOG=1", 30s, seen))
-      << readFile(tmp.str("stderr.txt"));
+  EXPECT_TRUE(awaitMessage(notify, "WATCHDOG=1", 30s, seen)) << readFile(tmp.str("stderr.txt"));
   std::this_thread::sleep_for(2s);  // let a few frames through
   ASSERT_EQ(kill(pid, SIGTERM), 0);
   const auto term_sent = Clock::now();
@@ -158,9 +157,9 @@ TEST(Findmugd, NotifyProtocolWatchdogAndCleanShutdownOnSigterm) {
   for (const auto& m : messages) label_images += m.channel == io::kLabelsChannel;
   EXPECT_GT(final_status.frames_processed, 0);
   EXPECT_EQ(static_cast<std::size_t>(final_status.frames_processed), label_images);
-  EXPECT_EQ(final_status.frames_received, final_status.frames_processed +
-                                              final_status.frames_dropped +
-                                              final_status.frames_rejected);
+  EXPECT_EQ(
+      final_status.frames_received,
+      final_status.frames_processed + final_status.frames_dropped + final_status.frames_rejected);
   EXPECT_EQ(final_status.source_state, status_t::SOURCE_STOPPED);
   const std::string log = readFile(tmp.str("stderr.txt"));
   EXPECT_NE(log.find("effective config"), std::string::npos);

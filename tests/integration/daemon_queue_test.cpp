@@ -3,14 +3,16 @@
 // mode, the status statistics, the watchdog gate and the daemon config.
 // No timed assertions: threads are synchronised with latches/flags only.
 #include <gtest/gtest.h>
+#include <sys/stat.h>
+#include <unistd.h>
 
 #include <atomic>
 #include <chrono>
 #include <condition_variable>
 #include <fstream>
-#include <sstream>
 #include <mutex>
 #include <random>
+#include <sstream>
 #include <thread>
 
 #include "findmug/daemon/bounded_queue.hpp"
@@ -270,8 +272,9 @@ TEST(Stage, TickRunsOnTheWorkerThread) {
   stage.stop(StopMode::Drain);
   std::lock_guard lock(m);
   EXPECT_EQ(worker_id, tick_id);
-  EXPECT_THROW((Stage<int, int>({"bad", ExecutionMode::Threaded, 2, 2}, [](int& x) { return std::optional<int>(x); },
-                                [](int&&) {}, {}, {}, [] {})),
+  EXPECT_THROW((Stage<int, int>(
+                   {"bad", ExecutionMode::Threaded, 2, 2},
+                   [](int& x) { return std::optional<int>(x); }, [](int&&) {}, {}, {}, [] {})),
                std::invalid_argument);
 }
 
@@ -299,8 +302,8 @@ TEST(RateMeter, SteadyStreamAndDecayAfterItStops) {
   RateMeter r(100, 10s);
   for (int i = 0; i <= 20; ++i) r.tick(t0 + i * 250ms);  // 4 Hz for 5 s
   EXPECT_NEAR(r.rate(t0 + 5s), 4.0, 1e-9);
-  EXPECT_LT(r.rate(t0 + 9s), 3.0);       // stopped: decays
-  EXPECT_EQ(r.rate(t0 + 30s), 0.0);      // beyond the horizon
+  EXPECT_LT(r.rate(t0 + 9s), 3.0);   // stopped: decays
+  EXPECT_EQ(r.rate(t0 + 30s), 0.0);  // beyond the horizon
 }
 
 TEST(WatchdogGate, PingsWhileFramesProgressOrThePipelineIsIdle) {
@@ -422,6 +425,29 @@ TEST(DaemonConfig, ShippedDefaultFileIsValidAndDocumentsEveryKey) {
     EXPECT_TRUE(documented) << section << "." << key << " is not in " << path;
   }
   EXPECT_GT(keys, 40);
+}
+
+}  // namespace
+}  // namespace findmug::daemon
+
+namespace findmug::daemon {
+namespace {
+
+// Journal logging is chosen only when JOURNAL_STREAM names stderr itself
+// (systemd's documented check), not merely because the variable is set.
+TEST(Logging, JournalIsDetectedOnlyWhenJournalStreamMatchesStderr) {
+  struct stat st {};
+  ASSERT_EQ(fstat(STDERR_FILENO, &st), 0);
+  const std::string own = std::to_string(st.st_dev) + ":" + std::to_string(st.st_ino);
+  setenv("JOURNAL_STREAM", own.c_str(), 1);
+  EXPECT_TRUE(stderrIsJournal());
+  setenv("JOURNAL_STREAM",
+         (std::to_string(st.st_dev) + ":" + std::to_string(st.st_ino + 1)).c_str(), 1);
+  EXPECT_FALSE(stderrIsJournal());
+  setenv("JOURNAL_STREAM", "garbage", 1);
+  EXPECT_FALSE(stderrIsJournal());
+  unsetenv("JOURNAL_STREAM");
+  EXPECT_FALSE(stderrIsJournal());
 }
 
 }  // namespace

@@ -26,6 +26,7 @@
 // prints how many frames a log holds and at what rate, and exits.
 #include <lcm/lcm-cpp.hpp>
 
+#include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <cerrno>
@@ -43,6 +44,7 @@
 #include "findmug/error.hpp"
 #include "findmug/io/channels.hpp"
 #include "findmug/io/lcm_codec.hpp"
+#include "findmug/labels.hpp"
 #include "replay_check.hpp"
 
 namespace {
@@ -264,8 +266,12 @@ class Probe {
       // Full decode: checks sizes, compression and every label id.
       const auto labels = findmug::io::decodeLabelImage(
           buffer->data, static_cast<std::size_t>(buffer->data_size), channel);
+      const auto& ids = labels.image.labels;
+      const bool all_void = std::all_of(ids.begin(), ids.end(),
+                                        [](std::uint8_t id) { return id == findmug::kVoidLabel; });
       check_.labelReceived(LabelInfo{labels.seq, labels.utime, labels.image.width,
-                                     labels.image.height, buffer->recv_utime, labels.latency_us});
+                                     labels.image.height, buffer->recv_utime, labels.latency_us,
+                                     all_void});
     } catch (const Error& e) {
       check_.addViolation(std::string("label image does not decode: ") + e.what());
     }

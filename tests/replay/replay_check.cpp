@@ -170,6 +170,7 @@ Report ReplayCheck::evaluate(std::int64_t frames_in, const CheckOptions& options
       last_seq = label.seq;
     }
     labelled[pos] = true;
+    if (label.all_void) ++r.labels_all_void;
     if (it->second.seen_utime) {
       r.latencies_ms.push_back(static_cast<double>(label.recv_utime - *it->second.seen_utime) /
                                1000.0);
@@ -250,7 +251,7 @@ void printReport(std::ostream& out, const std::string& name, const Report& r) {
   out << "== " << name << ": " << (r.ok() ? "OK" : "FAILED") << "\n";
   out << "   frames replayed " << r.frames_in << " (seen on the bus " << r.frames_seen
       << "), label images " << r.labels_received << ", frames without a label "
-      << r.dropped_by_seq_gap << "\n";
+      << r.dropped_by_seq_gap << ", all-void label images " << r.labels_all_void << "\n";
   if (r.final_status) {
     const StatusInfo& s = *r.final_status;
     out << "   daemon status: received " << s.frames_received << ", published "
@@ -273,6 +274,7 @@ void writeJson(std::ostream& out, const std::string& name, const Report& r) {
       << ",\n  \"frames_in\": " << r.frames_in << ",\n  \"frames_seen\": " << r.frames_seen
       << ",\n  \"labels_received\": " << r.labels_received
       << ",\n  \"frames_without_label\": " << r.dropped_by_seq_gap
+      << ",\n  \"labels_all_void\": " << r.labels_all_void
       << ",\n  \"input_fps\": " << fixed(r.input_fps, 3)
       << ",\n  \"output_fps\": " << fixed(r.output_fps, 3) << ",\n  \"span_s\": "
       << fixed(r.span_s, 3) << ",\n  \"latency_ms\": ";

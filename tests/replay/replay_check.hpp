@@ -50,6 +50,7 @@ struct LabelInfo {
   int height = 0;
   std::int64_t recv_utime = 0;         // when this process received it (host clock)
   std::int64_t daemon_latency_us = 0;  // label_image_t.latency_us (arrival -> publish, in-daemon)
+  bool all_void = false;  // no pixel labelled (e.g. no ground plane found): a cheap frame
 };
 
 // The parts of a status_t the checks need.
@@ -106,6 +107,7 @@ struct Report {
   std::int64_t labels_received = 0;
   std::optional<StatusInfo> final_status;  // last status received
   std::int64_t dropped_by_seq_gap = 0;   // replayed frames without a label image
+  std::int64_t labels_all_void = 0;      // label images with no labelled pixel
 
   Percentiles latency_ms;          // label received - frame received
   Percentiles daemon_latency_ms;   // label_image_t.latency_us

@@ -26,8 +26,10 @@ class ReplayCheckTest : public ::testing::Test {
   }
   static std::uint64_t utime(std::int64_t seq) { return 1'000'000 + 200'000 * static_cast<std::uint64_t>(seq); }
   static std::int64_t seenAt(std::int64_t seq) { return 5'000'000 + 200'000 * seq; }
-  void label(std::int64_t seq, std::int64_t latency_us = 300'000, int w = kW, int h = kH) {
-    check.labelReceived(LabelInfo{seq, utime(seq), w, h, seenAt(seq) + latency_us, 250'000});
+  void label(std::int64_t seq, std::int64_t latency_us = 300'000, int w = kW, int h = kH,
+             bool all_void = false) {
+    check.labelReceived(
+        LabelInfo{seq, utime(seq), w, h, seenAt(seq) + latency_us, 250'000, all_void});
   }
   void finalStatus(std::int64_t processed, std::int64_t dropped, std::int64_t rejected = 0,
                    int state = kSourceStopped) {
@@ -49,12 +51,14 @@ class ReplayCheckTest : public ::testing::Test {
 };
 
 TEST_F(ReplayCheckTest, CleanRunHoldsAndIsMeasured) {
-  for (int seq : {10, 11, 13, 14}) label(seq, 100'000 * (seq - 9));
+  for (int seq : {10, 11, 13}) label(seq, 100'000 * (seq - 9));
+  label(14, 500'000, kW, kH, /*all_void=*/true);
   finalStatus(4, 1);
   const Report r = check.evaluate(5, {});
   EXPECT_TRUE(r.ok()) << r.violations.front();
   EXPECT_EQ(r.labels_received, 4);
   EXPECT_EQ(r.dropped_by_seq_gap, 1);
+  EXPECT_EQ(r.labels_all_void, 1);
   EXPECT_EQ(r.frames_seen, 5);
   ASSERT_EQ(r.latency_ms.count, 4u);
   EXPECT_DOUBLE_EQ(r.latency_ms.p50, 200.0);  // latencies 100, 200, 400, 500 ms

@@ -5,10 +5,10 @@
 // The benchmark's baseline for "what does pipelining buy": the same library,
 // the same Pipeline class, the same frame source, config and LCM output as
 // findmugd, but in ExecutionMode::Sequential — every stage of a frame runs on
-// the main thread, and the next frame is taken from the source only when the
-// previous one is published. Frames that arrive meanwhile wait in the
-// source's small queue (daemon.source ...?queue=N, default 2), oldest dropped
-// and counted, as in the daemon.
+// the main thread, and the next frame is processed only when the previous one
+// is published. Frames that arrive meanwhile wait in the source's small queue
+// (daemon.source ...?queue=N, default 2, oldest dropped and counted, as in the
+// daemon) plus one held by the thread that reads the source.
 //
 // Stops on SIGTERM/SIGINT or at the end of a finite source, then publishes a
 // final status (source_state STOPPED / END_OF_STREAM) like findmugd.
@@ -16,8 +16,12 @@
 #include <signal.h>
 #include <spdlog/spdlog.h>
 
+#include <chrono>
+#include <condition_variable>
 #include <cstdio>
 #include <iostream>
+#include <mutex>
+#include <optional>
 #include <thread>
 
 #include "findmug/daemon/daemon.hpp"
@@ -80,9 +84,51 @@ int main(int argc, char** argv) {
         }
       }
     });
-    while (std::optional<RgbdFrame> frame = source->next()) {
-      pipeline.submit(std::move(*frame));
+
+    // A reader thread takes frames from the source and hands them over one at
+    // a time (it holds at most one while the main thread is busy; the source's
+    // own queue buffers the rest, oldest dropped). The main thread alone
+    // touches the pipeline: it processes a handed-over frame, or, when none
+    // comes for a status period, publishes a status, so that watchers see the
+    // counters settle after the input stops (findmugd's publish thread does
+    // that on its own).
+    std::mutex mutex;
+    std::condition_variable changed;
+    std::optional<RgbdFrame> handed;
+    bool source_done = false;
+    std::thread reader([&] {
+      while (std::optional<RgbdFrame> frame = source->next()) {
+        std::unique_lock lock(mutex);
+        changed.wait(lock, [&] { return !handed; });
+        handed = std::move(frame);
+        changed.notify_all();
+      }
+      std::lock_guard lock(mutex);
+      source_done = true;
+      changed.notify_all();
+    });
+    const auto status_period = std::chrono::duration<double>(loaded.daemon.status_period_s);
+    auto last_status = std::chrono::steady_clock::now();
+    for (;;) {
+      std::unique_lock lock(mutex);
+      changed.wait_for(lock, status_period, [&] { return handed || source_done; });
+      if (handed) {
+        RgbdFrame frame = std::move(*handed);
+        handed.reset();
+        changed.notify_all();
+        lock.unlock();
+        pipeline.submit(std::move(frame));
+      } else if (source_done) {
+        break;
+      } else {
+        lock.unlock();
+      }
+      if (std::chrono::steady_clock::now() - last_status >= status_period) {
+        pipeline.publishStatusNow();
+        last_status = std::chrono::steady_clock::now();
+      }
     }
+    reader.join();
     const io::SourceState state = source->state();
     source->stop();
     pipeline.stop(StopMode::Discard);

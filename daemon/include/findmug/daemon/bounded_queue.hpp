@@ -131,6 +131,11 @@ class BoundedQueue {
     std::lock_guard lock(mutex_);
     return dropped_;
   }
+  // Items handed out by pop so far (= the next ticket).
+  std::uint64_t poppedCount() const {
+    std::lock_guard lock(mutex_);
+    return next_ticket_;
+  }
   std::uint64_t pushedCount() const {
     std::lock_guard lock(mutex_);
     return pushed_;

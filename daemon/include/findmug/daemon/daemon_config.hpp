@@ -24,19 +24,19 @@ std::string defaultConfigPath();  // /etc/findmug/findmugd.yaml
 std::string defaultModelPath();   // <prefix>/share/findmug/models/findmug.fmf
 
 struct DaemonConfig {
-  std::string source = "openni2";      // frame source spec, see findmug::io::makeFrameSource
-  std::string lcm_url;                 // output LCM provider; "" = $LCM_DEFAULT_URL / liblcm default
-  std::string channel_suffix;          // appended as "_SUFFIX" to every channel name
+  std::string source = "openni2";  // frame source spec, see findmug::io::makeFrameSource
+  std::string lcm_url;             // output LCM provider; "" = $LCM_DEFAULT_URL / liblcm default
+  std::string channel_suffix;      // appended as "_SUFFIX" to every channel name
   std::string model_path = defaultModelPath();
-  int queue_capacity = 2;              // per queue between stages (frames)
-  int workers = 0;                     // segmentation workers; 0 = one per CPU core
-  double status_period_s = 1.0;        // FINDMUG_STATUS period
-  double stats_window_s = 10.0;        // window of the status rates and latency percentiles
-  bool publish_confidence = true;      // include per-pixel confidence in label images
-  bool publish_tables = true;          // publish FINDMUG_TABLES
-  bool exit_at_end_of_stream = true;   // finite source exhausted: drain, publish, exit 0
-  double shutdown_grace_s = 1.0;       // on SIGTERM, wait this long for frames in flight
-  std::string log_level = "info";      // trace, debug, info, warn, error
+  int queue_capacity = 2;             // per queue between stages (frames)
+  int workers = 0;                    // segmentation workers; 0 = one per CPU core
+  double status_period_s = 1.0;       // FINDMUG_STATUS period
+  double stats_window_s = 10.0;       // window of the status rates and latency percentiles
+  bool publish_confidence = true;     // include per-pixel confidence in label images
+  bool publish_tables = true;         // publish FINDMUG_TABLES
+  bool exit_at_end_of_stream = true;  // finite source exhausted: drain, publish, exit 0
+  double shutdown_grace_s = 1.0;      // on SIGTERM, wait this long for frames in flight
+  std::string log_level = "info";     // trace, debug, info, warn, error
 
   // Channel names with the suffix applied.
   std::string channel(const std::string& base) const {

@@ -61,9 +61,9 @@ struct PipelineHooks {
 struct PipelineCounters {
   std::uint64_t received = 0;   // submitted frames
   std::uint64_t processed = 0;  // published label images
-  std::uint64_t dropped = 0;    // evicted from a full queue / discarded at shutdown (+ source drops)
-  std::uint64_t rejected = 0;   // failed in a stage (+ bad input the source skipped)
-  std::uint64_t pending = 0;    // inside the pipeline now
+  std::uint64_t dropped = 0;   // evicted from a full queue / discarded at shutdown (+ source drops)
+  std::uint64_t rejected = 0;  // failed in a stage (+ bad input the source skipped)
+  std::uint64_t pending = 0;   // inside the pipeline now
 };
 
 class Pipeline {

@@ -65,12 +65,12 @@ struct StageStats {
   std::string name;
   std::size_t queue_depth = 0;
   std::size_t queue_capacity = 0;
-  std::uint64_t accepted = 0;  // items that entered the queue
-  std::uint64_t dropped = 0;   // evicted by the drop policy or discarded at stop
-  std::uint64_t completed = 0; // work returned a value
-  std::uint64_t failed = 0;    // work returned nullopt or threw
-  std::size_t in_flight = 0;   // popped, not yet emitted (includes held in reorder)
-  LatencySummary latency;      // wall time of `work`
+  std::uint64_t accepted = 0;   // items that entered the queue
+  std::uint64_t dropped = 0;    // evicted by the drop policy or discarded at stop
+  std::uint64_t completed = 0;  // work returned a value
+  std::uint64_t failed = 0;     // work returned nullopt or threw
+  std::size_t in_flight = 0;    // taken from the queue, not yet emitted (incl. held for reorder)
+  LatencySummary latency;       // wall time of `work`
 };
 
 template <typename In, typename Out>
@@ -154,13 +154,20 @@ class Stage {
   StageStats stats() const {
     StageStats s;
     s.name = options_.name;
+    // Read in this order so that an item moving between the queue, a worker
+    // and the next stage is counted twice rather than not at all (a caller
+    // waiting for the pipeline to go idle must never see it idle too early).
+    const std::uint64_t released = released_.load();
     s.queue_depth = queue_.size();
+    const std::uint64_t popped = queue_.poppedCount();
     s.queue_capacity = queue_.capacity();
     s.accepted = accepted_.load();
     s.dropped = queue_.droppedCount();
     s.completed = completed_.load();
     s.failed = failed_.load();
-    s.in_flight = in_flight_.load();
+    s.in_flight = options_.mode == ExecutionMode::Sequential
+                      ? in_flight_.load()
+                      : static_cast<std::size_t>(popped - released);
     std::lock_guard lock(latency_mutex_);
     s.latency = latency_.summary();
     return s;
@@ -200,14 +207,13 @@ class Stage {
         popped = queue_.pop();
       }
       if (popped) {
-        in_flight_.fetch_add(1);
         auto result = run(popped->value);
         std::lock_guard lock(release_mutex_);
-        const std::uint64_t released_before = reorder_.nextTicket();
         reorder_.insert(popped->ticket, std::move(result));
         for (auto& r : reorder_.release()) emit_(std::move(r));
-        // Tickets now released (results and tombstones) have left the stage.
-        in_flight_.fetch_sub(static_cast<std::size_t>(reorder_.nextTicket() - released_before));
+        // Tickets released so far (results and tombstones) have left the
+        // stage; set after emit, so a result is never in neither stage.
+        released_.store(reorder_.nextTicket());
       }
       if (ticking && Clock::now() >= next_tick) {
         tick_();
@@ -232,7 +238,8 @@ class Stage {
   mutable std::mutex latency_mutex_;
   LatencyWindow latency_;
   std::atomic<std::uint64_t> accepted_{0}, completed_{0}, failed_{0};
-  std::atomic<std::size_t> in_flight_{0};
+  std::atomic<std::size_t> in_flight_{0};   // sequential mode
+  std::atomic<std::uint64_t> released_{0};  // threaded mode: tickets that left the stage
 };
 
 }  // namespace findmug::daemon
