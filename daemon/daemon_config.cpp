@@ -153,8 +153,100 @@ const std::map<std::string, Key>& keys() {
           d.log_level = v;
         },
         [](const D& d) { return d.log_level; }}},
+      {"daemon.pose_input",
+       {[](D& d, const std::string& k, const std::string& v) { d.pose_input = toBool(k, v); },
+        [](const D& d) { return std::string(d.pose_input ? "true" : "false"); }}},
+      {"daemon.pose_url",
+       {[](D& d, const std::string& k, const std::string& v) {
+          if (!v.empty() && v.find("://") == std::string::npos) {
+            bad(k, v, "an LCM URL such as udpm://239.255.76.67:7667?ttl=0, or empty");
+          }
+          d.pose_url = v;
+        },
+        [](const D& d) { return d.pose_url; }}},
+      {"daemon.pose_max_age_s",
+       {[](D& d, const std::string& k, const std::string& v) {
+          d.pose_max_age_s = toDouble(k, v, 0, 10);
+        },
+        [](const D& d) { return fmt(d.pose_max_age_s); }}},
+      {"daemon.pose_history_s",
+       {[](D& d, const std::string& k, const std::string& v) {
+          d.pose_history_s = toDouble(k, v, 0.1, 3600);
+        },
+        [](const D& d) { return fmt(d.pose_history_s); }}},
+      {"daemon.publish_table_map",
+       {[](D& d, const std::string& k, const std::string& v) {
+          d.publish_table_map = toBool(k, v);
+        },
+        [](const D& d) { return std::string(d.publish_table_map ? "true" : "false"); }}},
   };
   return all;
+}
+
+// The table_map section: findmug::TableMapConfig, one key per field. Ranges
+// here only keep the numbers sane; validateTableMapConfig (core) has the
+// final word on consistency.
+const std::map<std::string, Key>& tableMapKeys() {
+  using D = DaemonConfig;
+  static const std::map<std::string, Key> all = {
+      {"table_map.confirm_sightings",
+       {[](D& d, const std::string& k, const std::string& v) {
+          d.table_map.confirm_sightings = static_cast<int>(toInt(k, v, 1, 1000));
+        },
+        [](const D& d) { return std::to_string(d.table_map.confirm_sightings); }}},
+      {"table_map.forget_misses",
+       {[](D& d, const std::string& k, const std::string& v) {
+          d.table_map.forget_misses = static_cast<int>(toInt(k, v, 1, 1000));
+        },
+        [](const D& d) { return std::to_string(d.table_map.forget_misses); }}},
+      {"table_map.tentative_timeout_s",
+       {[](D& d, const std::string& k, const std::string& v) {
+          d.table_map.tentative_timeout_s = toDouble(k, v, 0, 86400);
+        },
+        [](const D& d) { return fmt(d.table_map.tentative_timeout_s); }}},
+      {"table_map.match_gap_m",
+       {[](D& d, const std::string& k, const std::string& v) {
+          d.table_map.match_gap_m = static_cast<float>(toDouble(k, v, 0, 5));
+        },
+        [](const D& d) { return fmt(d.table_map.match_gap_m); }}},
+      {"table_map.match_height_m",
+       {[](D& d, const std::string& k, const std::string& v) {
+          d.table_map.match_height_m = static_cast<float>(toDouble(k, v, 0, 2));
+        },
+        [](const D& d) { return fmt(d.table_map.match_height_m); }}},
+      {"table_map.view_half_angle_rad",
+       {[](D& d, const std::string& k, const std::string& v) {
+          d.table_map.view_half_angle_rad = static_cast<float>(toDouble(k, v, 0, 3.14159));
+        },
+        [](const D& d) { return fmt(d.table_map.view_half_angle_rad); }}},
+      {"table_map.view_min_range_m",
+       {[](D& d, const std::string& k, const std::string& v) {
+          d.table_map.view_min_range_m = static_cast<float>(toDouble(k, v, 0, 100));
+        },
+        [](const D& d) { return fmt(d.table_map.view_min_range_m); }}},
+      {"table_map.view_max_range_m",
+       {[](D& d, const std::string& k, const std::string& v) {
+          d.table_map.view_max_range_m = static_cast<float>(toDouble(k, v, 0, 100));
+        },
+        [](const D& d) { return fmt(d.table_map.view_max_range_m); }}},
+      {"table_map.max_observations",
+       {[](D& d, const std::string& k, const std::string& v) {
+          d.table_map.max_observations = static_cast<int>(toInt(k, v, 1, 1000));
+        },
+        [](const D& d) { return std::to_string(d.table_map.max_observations); }}},
+      {"table_map.position_match_m",
+       {[](D& d, const std::string& k, const std::string& v) {
+          d.table_map.position_match_m = static_cast<float>(toDouble(k, v, 0, 5));
+        },
+        [](const D& d) { return fmt(d.table_map.position_match_m); }}},
+  };
+  return all;
+}
+
+std::string keyList(const std::map<std::string, Key>& keys) {
+  std::string known;
+  for (const auto& [name, k] : keys) known += (known.empty() ? "" : ", ") + name;
+  return known;
 }
 
 }  // namespace
@@ -162,16 +254,29 @@ const std::map<std::string, Key>& keys() {
 DaemonConfig resolveDaemonConfig(Config& config) {
   DaemonConfig daemon;
   for (const auto& [key, value] : config.extra) {
-    if (key.rfind("daemon.", 0) != 0) continue;  // other owners' sections
-    const auto it = keys().find(key);
-    if (it == keys().end()) {
-      std::string known;
-      for (const auto& [name, k] : keys()) known += (known.empty() ? "" : ", ") + name;
-      throw Error("unknown setting '" + key + "' (daemon keys: " + known + ")");
+    const std::map<std::string, Key>* section = nullptr;
+    std::string section_name;
+    if (key.rfind("daemon.", 0) == 0) {
+      section = &keys();
+      section_name = "daemon";
+    } else if (key.rfind("table_map.", 0) == 0) {
+      section = &tableMapKeys();
+      section_name = "table_map";
+    } else {
+      continue;  // other owners' sections
+    }
+    const auto it = section->find(key);
+    if (it == section->end()) {
+      throw Error("unknown setting '" + key + "' (" + section_name +
+                  " keys: " + keyList(*section) + ")");
     }
     it->second.set(daemon, key, value);
   }
+  // Consistency across keys (e.g. view_min_range_m below view_max_range_m);
+  // the message names the key as table_map.KEY.
+  validateTableMapConfig(daemon.table_map);
   for (const auto& [name, k] : keys()) config.extra[name] = k.get(daemon);
+  for (const auto& [name, k] : tableMapKeys()) config.extra[name] = k.get(daemon);
   return daemon;
 }
 
@@ -179,6 +284,14 @@ std::string effectiveLcmUrl(const DaemonConfig& config) {
   if (!config.lcm_url.empty()) return config.lcm_url;
   if (const char* env = std::getenv("LCM_DEFAULT_URL"); env && *env) return env;
   return "";  // liblcm's built-in default
+}
+
+std::optional<std::string> effectivePoseUrl(const DaemonConfig& config) {
+  if (!config.pose_input) return std::nullopt;
+  if (!config.pose_url.empty()) return config.pose_url;
+  const std::string output = effectiveLcmUrl(config);
+  if (output.rfind("file://", 0) == 0) return std::nullopt;
+  return output;
 }
 
 std::string usage() {

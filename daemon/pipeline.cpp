@@ -3,6 +3,8 @@
 
 #include <spdlog/spdlog.h>
 
+#include <algorithm>
+#include <cmath>
 #include <lcm/lcm-cpp.hpp>
 #include <thread>
 
@@ -60,11 +62,14 @@ Pipeline::Pipeline(const SegmenterConfig& segmenter_config, const DaemonConfig& 
       labels_channel_(io::channelName(io::kLabelsChannel, daemon_config.channel_suffix)),
       tables_channel_(io::channelName(io::kTablesChannel, daemon_config.channel_suffix)),
       status_channel_(io::channelName(io::kStatusChannel, daemon_config.channel_suffix)),
+      table_map_channel_(io::channelName(io::kTableMapChannel, daemon_config.channel_suffix)),
       segmenter_(segmenter_config, forest),
       model_id_(std::move(model_id)),
       mode_(mode),
       hooks_(std::move(hooks)),
       workers_(daemon_config.effectiveWorkers()),
+      pose_max_age_us_(static_cast<std::uint64_t>(std::llround(daemon_config.pose_max_age_s * 1e6))),
+      table_map_(daemon_config.table_map, segmenter_config.tables),
       started_(Clock::now()),
       last_sequential_status_(started_) {
   if (!forest || forest->empty()) throw Error("findmugd: the model has no trees");
@@ -142,6 +147,24 @@ Pipeline::Pipeline(const SegmenterConfig& segmenter_config, const DaemonConfig& 
         spdlog::debug("prepare queue full: dropped {}", frameName(dropped.frame));
       },
       on_error);
+
+  // Last: its thread reports through recordError, so everything it may touch
+  // must exist already.
+  if (const auto pose_url = effectivePoseUrl(daemon_config_)) {
+    const std::string channel =
+        io::channelName(io::kRobotPoseChannel, daemon_config_.channel_suffix);
+    pose_input_ = std::make_unique<PoseInput>(*pose_url, channel, daemon_config_.pose_history_s,
+                                              [this](const std::string& what) {
+                                                recordError(what);
+                                              });
+    spdlog::info("robot poses from {} on {}: tables also in the map frame, table map on {}",
+                 pose_url->empty() ? "the default LCM provider" : *pose_url, channel,
+                 table_map_channel_);
+  } else {
+    spdlog::info("no robot pose input ({}): tables in the base frame only, no table map",
+                 daemon_config_.pose_input ? "the output is a log file and daemon.pose_url is empty"
+                                           : "daemon.pose_input is off");
+  }
 }
 
 Pipeline::~Pipeline() { stop(StopMode::Discard); }
@@ -203,6 +226,8 @@ void Pipeline::stop(StopMode mode) {
     if (segment_->stats().in_flight == 0) segment_->join();
   }
   publish_->stop(StopMode::Drain);  // finished results are always published
+  // Nobody looks poses up any more: stop the pose thread, close its handle.
+  if (pose_input_) pose_input_->stop();
   finalized_.store(true);
   // The publish thread is gone: this thread may use the LCM handle now.
   publishStatus();
@@ -236,21 +261,120 @@ void Pipeline::publishResult(ResultJob& job) {
   if (lcm_->publish(labels_channel_, &label_msg) != 0) {
     throw Error("LCM publish on " + labels_channel_ + " failed for " + frameName(frame));
   }
+  if (spdlog::should_log(spdlog::level::debug)) {
+    for (const std::string& line : labelled.table_diagnostics) {
+      spdlog::debug("{}: tables: {}", frameName(frame), line);
+    }
+  }
+
+  // The robot's pose for this frame, if one close enough in time has arrived.
+  std::optional<io::RobotPose> pose;
+  if (pose_input_) pose = pose_input_->history().closest(frame.utime, pose_max_age_us_);
+  std::vector<io::TableMapInfo> map_info;
+  bool map_updated = false;
+  // Only a labelled frame is evidence about tables: without a ground plane
+  // nothing was classified, and with no labelled pixel at all (no valid
+  // depth: a covered or blinded sensor, while the mount still gives a
+  // ground plane) nothing was seen. "No table seen" would then wrongly count
+  // as a miss for every mapped table in view.
+  const bool evidence =
+      labelled.segmented.prepared.ground.has_value() &&
+      std::any_of(labelled.labels.labels.begin(), labelled.labels.labels.end(),
+                  [](std::uint8_t id) { return id != kVoidLabel; });
+  if (pose && evidence) {
+    map_updated = updateTableMap(labelled, *pose, &map_info);
+  }
+
   if (daemon_config_.publish_tables) {
     io::TablesMessage tables;
     tables.utime = frame.utime;
     tables.seq = frame.seq;
     tables.tables = labelled.tables;
+    tables.map_pose = pose;
+    tables.map_info = std::move(map_info);
     const tables_t tables_msg = io::encodeTables(tables);
     if (lcm_->publish(tables_channel_, &tables_msg) != 0) {
       throw Error("LCM publish on " + tables_channel_ + " failed for " + frameName(frame));
     }
   }
+  if (map_updated && daemon_config_.publish_table_map) publishTableMap(frame, *pose);
   processed_.fetch_add(1);
   std::lock_guard lock(stats_mutex_);
   output_rate_.tick(now);
   for (const auto& [name, field] : subStages()) latency_.at(name).add(labelled.timings.*field, now);
   latency_.at("total").add(static_cast<double>(latency_us) / 1000.0, now);
+}
+
+bool Pipeline::updateTableMap(const LabelledFrame& labelled, const io::RobotPose& pose,
+                              std::vector<io::TableMapInfo>* map_info) {
+  const RgbdFrame& frame = labelled.segmented.prepared.frame;
+  const Pose2D base_in_map{pose.x, pose.y, pose.yaw};
+  std::lock_guard lock(map_mutex_);
+  TableMapUpdate update;
+  try {
+    update = table_map_.update(labelled.tables, base_in_map, frame.utime);
+  } catch (const std::exception& e) {
+    // E.g. a source that restarted its clock: the frame is still published,
+    // in the base frame and with its map pose, but the map skips it.
+    recordError(frameName(frame) + ": table map not updated: " + e.what());
+    return false;
+  }
+  if (spdlog::should_log(spdlog::level::debug)) {
+    auto ids = [](const std::vector<int>& v) {
+      std::string out;
+      for (int id : v) {
+        if (!out.empty()) out += ',';
+        out += std::to_string(id);
+      }
+      return out.empty() ? std::string("-") : out;
+    };
+    spdlog::debug(
+        "{}: table map at ({:.2f}, {:.2f}, yaw {:.3f}): {} seen -> ids [{}]; created [{}], "
+        "confirmed [{}], forgotten [{}]; {} mapped",
+        frameName(frame), pose.x, pose.y, pose.yaw, labelled.tables.size(),
+        ids(update.assigned_ids), ids(update.created), ids(update.confirmed),
+        ids(update.forgotten), table_map_.tables().size());
+    for (const std::string& line : update.diagnostics) {
+      spdlog::debug("{}: table map: {}", frameName(frame), line);
+    }
+  }
+  map_info->clear();
+  for (int id : update.assigned_ids) {
+    io::TableMapInfo info;
+    for (const MappedTable& t : table_map_.tables()) {
+      if (t.table.id == id) info = {id, t.confirmed, t.sightings};
+    }
+    map_info->push_back(info);
+  }
+  return true;
+}
+
+void Pipeline::publishTableMap(const RgbdFrame& frame, const io::RobotPose& pose) {
+  io::TablesMessage message;
+  message.utime = frame.utime;
+  message.seq = frame.seq;
+  message.content = io::TablesContent::Map;
+  message.map_pose = pose;
+  // The encoder derives the map_ fields from base-frame tables and the pose:
+  // hand it the mapped tables relative to the robot at this pose.
+  const Pose2D map_to_base = inversePose(Pose2D{pose.x, pose.y, pose.yaw});
+  {
+    std::lock_guard lock(map_mutex_);
+    for (const MappedTable& t : table_map_.tables()) {
+      if (!t.confirmed) continue;
+      message.tables.push_back(transformTable(t.table, map_to_base));
+      message.map_info.push_back({t.table.id, true, t.sightings});
+    }
+  }
+  const tables_t msg = io::encodeTables(message);
+  if (lcm_->publish(table_map_channel_, &msg) != 0) {
+    throw Error("LCM publish on " + table_map_channel_ + " failed for " + frameName(frame));
+  }
+}
+
+std::vector<MappedTable> Pipeline::mappedTables() const {
+  std::lock_guard lock(map_mutex_);
+  return table_map_.tables();
 }
 
 PipelineCounters Pipeline::counters() const {
@@ -263,6 +387,7 @@ PipelineCounters Pipeline::counters() const {
     c.pending += s.queue_depth + s.in_flight;
   }
   c.dropped += abandoned_.load();
+  if (pose_input_) c.rejected += pose_input_->rejected();
   if (finalized_.load()) {
     // Stopped: whatever is still in a stage will never be published.
     c.dropped += c.pending;

@@ -226,6 +226,22 @@ const std::vector<Setting>& settings() {
                    [](C& c) -> float& { return c.tables.min_table_height_m; }, 0, 3),
       floatSetting("tables.max_table_height_m",
                    [](C& c) -> float& { return c.tables.max_table_height_m; }, 0, 3),
+      floatSetting("tables.top_band_m", [](C& c) -> float& { return c.tables.top_band_m; },
+                   0.005, 0.5),
+      floatSetting("tables.min_table_width_m",
+                   [](C& c) -> float& { return c.tables.min_table_width_m; }, 0, 5),
+      floatSetting("tables.obstacle_min_height_m",
+                   [](C& c) -> float& { return c.tables.obstacle_min_height_m; }, 0, 2),
+      floatSetting("tables.robot_height_m",
+                   [](C& c) -> float& { return c.tables.robot_height_m; }, 0.1, 3),
+      intSetting("tables.obstacle_min_points",
+                 [](C& c) -> int& { return c.tables.obstacle_min_points; }, 1, 100000),
+      floatSetting("tables.floor_tolerance_m",
+                   [](C& c) -> float& { return c.tables.floor_tolerance_m; }, 0.005, 1),
+      floatSetting("tables.floor_cell_m", [](C& c) -> float& { return c.tables.floor_cell_m; },
+                   0.01, 1),
+      floatSetting("tables.min_floor_observed_fraction",
+                   [](C& c) -> float& { return c.tables.min_floor_observed_fraction; }, 0, 1),
   };
   return all;
 }
@@ -280,6 +296,12 @@ void validateConsistency(const Config& config, const std::string& origin) {
   }
   if (c.tables.min_table_height_m >= c.tables.max_table_height_m) {
     throw Error(origin + ": tables.min_table_height_m must be below tables.max_table_height_m");
+  }
+  if (c.tables.arm_reach_m <= c.tables.safety_distance_m) {
+    throw Error(origin + ": tables.arm_reach_m (" + formatDouble(c.tables.arm_reach_m) +
+                ") must exceed tables.safety_distance_m (" +
+                formatDouble(c.tables.safety_distance_m) +
+                "): from a search position the arm must reach past the table edge");
   }
   if (c.tables.min_cluster_points > c.tables.max_cluster_points) {
     throw Error(origin + ": tables.min_cluster_points must not exceed tables.max_cluster_points");

@@ -160,7 +160,10 @@ LabelledFrame Segmenter::classify(SegmentedFrame segmented) const {
   out.labels = projectLabels(segmented.segmentation, *final_labels, confidence);
   out.timings.labels_ms = watch.lap();
 
-  out.tables = findTables(segmented.prepared.cloud_ground, out.labels, config_.tables);
+  TableDetection detection =
+      detectTables(segmented.prepared.cloud_ground, out.labels, config_.tables);
+  out.tables = std::move(detection.tables);
+  out.table_diagnostics = std::move(detection.diagnostics);
   out.timings.tables_ms = watch.lap();
   out.segmented = std::move(segmented);
   return out;

@@ -10,6 +10,7 @@
 
 #include <memory>
 #include <optional>
+#include <string>
 #include <vector>
 
 #include "findmug/cloud.hpp"
@@ -62,6 +63,8 @@ struct LabelledFrame {
   MrfResult mrf;
   LabelImage labels;                        // final (MRF if enabled, else forest)
   std::vector<TableCluster> tables;
+  // Why tables were not found or were rejected (for the caller to log).
+  std::vector<std::string> table_diagnostics;
   StageTimings timings;
 };
 

@@ -595,9 +595,93 @@ TEST(TablesCodec, MapFrameCopiesFollowThePose) {
   EXPECT_EQ(out.tables[0].centroid, in.tables[0].centroid);
 }
 
+// The table map's additions: box centres, map entries (stable id,
+// confirmation, sightings) and the content id survive the round trip; the
+// map-frame centre follows the pose like the centroid.
+TEST(TablesCodec, MapEntriesCentresAndContentRoundTrip) {
+  TablesMessage in = makeTables();
+  in.tables[0].center = Eigen::Vector2f(1.55f, 0.2f);
+  in.map_info = {{7, true, 4}, {0, false, 0}};
+  Bytes b = encodeMessage(encodeTables(in));
+  TablesMessage out = decodeTables(b.data(), b.size(), "C");
+  EXPECT_EQ(out.content, TablesContent::Frame);
+  EXPECT_EQ(out.tables[0].center, in.tables[0].center);
+  ASSERT_EQ(out.map_info.size(), 2u);
+  EXPECT_EQ(out.map_info[0].map_id, 7);
+  EXPECT_TRUE(out.map_info[0].confirmed);
+  EXPECT_EQ(out.map_info[0].sightings, 4);
+  EXPECT_EQ(out.map_info[1].map_id, 0);
+  EXPECT_FALSE(out.map_info[1].confirmed);
+
+  // No map entries given: every table decodes as "not in the map".
+  in.map_info.clear();
+  b = encodeMessage(encodeTables(in));
+  out = decodeTables(b.data(), b.size(), "C");
+  ASSERT_EQ(out.map_info.size(), 2u);
+  EXPECT_EQ(out.map_info[0].map_id, 0);
+  EXPECT_EQ(out.map_info[0].sightings, 0);
+
+  // A table map message: ids are the stable ids, the pose is mandatory.
+  TablesMessage map = makeTables();
+  map.content = TablesContent::Map;
+  map.map_pose = RobotPose{9, 10.0, -2.0, M_PI / 2};
+  map.tables[0].id = 3;
+  map.tables[0].center = Eigen::Vector2f(1.5f, 0.25f);
+  map.tables[1].id = 5;
+  map.map_info = {{3, true, 3}, {5, true, 12}};
+  b = encodeMessage(encodeTables(map));
+  out = decodeTables(b.data(), b.size(), "FINDMUG_TABLE_MAP");
+  EXPECT_EQ(out.content, TablesContent::Map);
+  ASSERT_EQ(out.map_tables.size(), 2u);
+  EXPECT_NEAR(out.map_tables[0].center.x(), 10.0 - 0.25, 1e-6);
+  EXPECT_NEAR(out.map_tables[0].center.y(), -2.0 + 1.5, 1e-6);
+  EXPECT_EQ(out.tables[1].id, 5);
+  EXPECT_EQ(out.map_info[1].sightings, 12);
+
+  TablesMessage wrong = map;
+  wrong.map_pose.reset();
+  EXPECT_THROW(encodeTables(wrong), Error);
+  wrong = map;
+  wrong.map_info[1].map_id = 6;  // id 5 != map_id 6
+  EXPECT_THROW(encodeTables(wrong), Error);
+  wrong = makeTables();
+  wrong.map_info = {{1, false, 1}};  // one entry for two tables
+  EXPECT_THROW(encodeTables(wrong), Error);
+}
+
+TEST(TablesCorrupt, BadMapEntriesAndContentAreNamed) {
+  TablesMessage in = makeTables();
+  in.map_pose = RobotPose{1, 1.0, 2.0, 0.3};
+  in.map_info = {{2, true, 3}, {0, false, 0}};
+  const tables_t good = encodeTables(in);
+  tables_t bad = good;
+  bad.content = 7;
+  expectError([&] { decodeTables(bad, "C"); }, "tables_t.content: unknown content id 7");
+  bad = good;
+  bad.content = tables_t::CONTENT_MAP;  // table 1 has map_id 0, table 0 id 0 != map_id 2
+  expectError([&] { decodeTables(bad, "C"); }, "tables[0].map_id");
+  bad = good;
+  bad.content = tables_t::CONTENT_MAP;
+  bad.has_map_pose = false;
+  expectError([&] { decodeTables(bad, "C"); }, "has_map_pose");
+  bad = good;
+  bad.tables[1].confirmed = true;  // confirmed, but not in the map
+  expectError([&] { decodeTables(bad, "C"); }, "tables[1].confirmed");
+  bad = good;
+  bad.tables[0].sightings = -1;
+  expectError([&] { decodeTables(bad, "C"); }, "tables[0].map_id/sightings");
+  bad = good;
+  bad.tables[0].center[0] = INFINITY;
+  expectError([&] { decodeTables(bad, "C"); }, "tables[0].center");
+  bad = good;
+  bad.tables[1].map_center[1] = std::nan("");
+  expectError([&] { decodeTables(bad, "C"); }, "tables[1].map_center");
+}
+
 TEST(TablesCorrupt, EveryClass) {
   TablesMessage in = makeTables();
   in.map_pose = RobotPose{1, 1.0, 2.0, 0.3};
+  in.map_info = {{2, true, 3}, {0, false, 0}};
   const tables_t good = encodeTables(in);
   const Bytes full = encodeMessage(good);
   for (std::size_t len = 0; len < full.size(); ++len) {

@@ -371,18 +371,40 @@ void checkFinite(std::initializer_list<double> values, const std::string& where)
 }  // namespace
 
 tables_t encodeTables(const TablesMessage& in) {
+  if (!in.map_info.empty() && in.map_info.size() != in.tables.size()) {
+    throw Error("encodeTables: " + std::to_string(in.map_info.size()) + " map entries for " +
+                std::to_string(in.tables.size()) + " tables");
+  }
+  if (in.content == TablesContent::Map) {
+    if (!in.map_pose) throw Error("encodeTables: a table map message needs the robot's map pose");
+    for (std::size_t k = 0; k < in.tables.size(); ++k) {
+      if (in.map_info.empty() || in.map_info[k].map_id <= 0 ||
+          in.map_info[k].map_id != in.tables[k].id) {
+        throw Error("encodeTables: table map entry " + std::to_string(k) +
+                    " needs id == map_id > 0");
+      }
+    }
+  }
   tables_t msg;
   msg.utime = static_cast<std::int64_t>(in.utime);
   msg.seq = in.seq;
+  msg.content = static_cast<std::int8_t>(in.content);
   msg.has_map_pose = in.map_pose.has_value();
   if (in.map_pose)
     msg.map_pose = encodeRobotPose(*in.map_pose);
   else
     msg.map_pose = encodeRobotPose(RobotPose{});
   msg.num_tables = static_cast<std::int32_t>(in.tables.size());
-  for (const TableCluster& t : in.tables) {
+  for (std::size_t k = 0; k < in.tables.size(); ++k) {
+    const TableCluster& t = in.tables[k];
     table_t out;
     out.id = t.id;
+    const TableMapInfo info = in.map_info.empty() ? TableMapInfo{} : in.map_info[k];
+    out.map_id = info.map_id;
+    out.confirmed = info.confirmed;
+    out.sightings = info.sightings;
+    out.center[0] = t.center.x();
+    out.center[1] = t.center.y();
     for (int i = 0; i < 3; ++i) out.centroid[i] = t.centroid[i];
     out.top_height = t.top_height;
     for (int i = 0; i < 2; ++i) {
@@ -401,6 +423,9 @@ tables_t encodeTables(const TablesMessage& in) {
       out.map_centroid[0] = c.x();
       out.map_centroid[1] = c.y();
       out.map_centroid[2] = t.centroid.z();
+      const Eigen::Vector2d center = toMapFrame(*in.map_pose, t.center.cast<double>());
+      out.map_center[0] = center.x();
+      out.map_center[1] = center.y();
       for (const auto& p : t.hull) {
         const Eigen::Vector2d m = toMapFrame(*in.map_pose, p.cast<double>());
         out.map_hull.push_back({m.x(), m.y()});
@@ -411,6 +436,7 @@ tables_t encodeTables(const TablesMessage& in) {
     } else {
       // The arrays share their length fields with the base-frame ones.
       for (int i = 0; i < 3; ++i) out.map_centroid[i] = 0.0;
+      out.map_center[0] = out.map_center[1] = 0.0;
       out.map_hull.assign(t.hull.size(), std::vector<double>(2, 0.0));
       out.map_search_positions.assign(t.search_positions.size(), toLcm(SearchPosition{}));
     }
@@ -425,9 +451,21 @@ TablesMessage decodeTables(const tables_t& msg, std::string_view channel) {
   if (msg.utime < 0) {
     throw Error(field(channel, type, "utime") + ": negative time " + std::to_string(msg.utime));
   }
+  if (msg.content != tables_t::CONTENT_FRAME && msg.content != tables_t::CONTENT_MAP) {
+    throw Error(field(channel, type, "content") + ": unknown content id " +
+                std::to_string(static_cast<int>(msg.content)) + " (expected " +
+                std::to_string(static_cast<int>(tables_t::CONTENT_FRAME)) + " or " +
+                std::to_string(static_cast<int>(tables_t::CONTENT_MAP)) + ")");
+  }
+  const bool map_content = msg.content == tables_t::CONTENT_MAP;
+  if (map_content && !msg.has_map_pose) {
+    throw Error(field(channel, type, "has_map_pose") +
+                ": a table map message (CONTENT_MAP) must carry the robot's map pose");
+  }
   TablesMessage out;
   out.utime = static_cast<std::uint64_t>(msg.utime);
   out.seq = msg.seq;
+  out.content = map_content ? TablesContent::Map : TablesContent::Frame;
   if (msg.has_map_pose) {
     const auto& p = msg.map_pose;
     checkFinite({p.x, p.y, p.yaw}, field(channel, type, "map_pose"));
@@ -465,8 +503,22 @@ TablesMessage decodeTables(const tables_t& msg, std::string_view channel) {
       throw Error(where + ".mean_confidence: " + std::to_string(t.mean_confidence) +
                   " outside [0, 1]");
     }
+    checkFinite({t.center[0], t.center[1]}, where + ".center");
+    if (t.map_id < 0 || t.sightings < 0) {
+      throw Error(where + ".map_id/sightings: negative (" + std::to_string(t.map_id) + ", " +
+                  std::to_string(t.sightings) + ")");
+    }
+    if (t.confirmed && t.map_id == 0) {
+      throw Error(where + ".confirmed: set for a table that is not in the map (map_id 0)");
+    }
+    if (map_content && (t.map_id == 0 || t.id != t.map_id)) {
+      throw Error(where + ".map_id: a table map entry needs id == map_id > 0 (id " +
+                  std::to_string(t.id) + ", map_id " + std::to_string(t.map_id) + ")");
+    }
+    out.map_info.push_back({t.map_id, t.confirmed != 0, t.sightings});
     TableCluster c;
     c.id = t.id;
+    c.center = Eigen::Vector2f(static_cast<float>(t.center[0]), static_cast<float>(t.center[1]));
     c.centroid =
         Eigen::Vector3f(static_cast<float>(t.centroid[0]), static_cast<float>(t.centroid[1]),
                         static_cast<float>(t.centroid[2]));
@@ -490,6 +542,8 @@ TablesMessage decodeTables(const tables_t& msg, std::string_view channel) {
       checkFinite({t.map_centroid[0], t.map_centroid[1], t.map_centroid[2]},
                   where + ".map_centroid");
       m.centroid = Eigen::Vector3d(t.map_centroid[0], t.map_centroid[1], t.map_centroid[2]);
+      checkFinite({t.map_center[0], t.map_center[1]}, where + ".map_center");
+      m.center = Eigen::Vector2d(t.map_center[0], t.map_center[1]);
       for (const auto& p : t.map_hull) {
         checkFinite({p[0], p[1]}, where + ".map_hull");
         m.hull.emplace_back(p[0], p[1]);

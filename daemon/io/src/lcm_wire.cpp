@@ -139,6 +139,8 @@ void walkTable(WireWalker& w) {
   w.skip(3 * kF64, "tables.map_centroid");
   w.array(hull, 2 * kF64, "tables.map_hull");
   for (std::int32_t i = 0; i < positions; ++i) walkSearchPosition(w, "tables.map_search_positions");
+  w.skip(4 * kF64, "tables.center/map_center");
+  w.skip(kI32 + kBool + kI32, "tables.map_id/confirmed/sightings");
 }
 
 template <typename Msg>
@@ -211,10 +213,13 @@ tables_t decodeMessage<tables_t>(const void* data, std::size_t size, std::string
   w.hash(tables_t::getHash());
   w.skip(2 * kI64 + kBool, "utime/seq/has_map_pose");
   walkRobotPose(w);
-  // A table is at least its fixed fields plus the map centroid.
-  const std::int32_t tables =
-      w.count("num_tables", kI32 + 10 * kF64 + 2 * kI32 + kF32 + kI32 + 3 * kF64);
+  // A table is at least its fixed fields: id, centroid, top height, axes,
+  // extents, hull_size, point_count, mean_confidence, num_search_positions,
+  // map centroid, centres, map_id, confirmed, sightings.
+  const std::int32_t tables = w.count("num_tables", kI32 + 10 * kF64 + 2 * kI32 + kF32 + kI32 +
+                                                        3 * kF64 + 4 * kF64 + 2 * kI32 + kBool);
   for (std::int32_t i = 0; i < tables; ++i) walkTable(w);
+  w.skip(kI8, "content");
   w.finish();
   return decodeWalked<tables_t>(data, size, channel);
 }

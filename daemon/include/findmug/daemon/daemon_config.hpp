@@ -6,6 +6,9 @@
 // the annotated default file); an unknown daemon key or a bad value is a
 // findmug::Error naming the key, and start-up stops.
 //
+// The `table_map:` section (Config::extra "table_map.NAME") configures the
+// persistent table map (findmug::TableMapConfig) and is validated here too.
+//
 // Precedence, lowest first: built-in defaults < YAML file < command-line
 // flags. daemon.lcm_url left empty means $LCM_DEFAULT_URL, then liblcm's
 // own default.
@@ -16,6 +19,7 @@
 #include <vector>
 
 #include "findmug/config.hpp"
+#include "findmug/table_map.hpp"
 
 namespace findmug::daemon {
 
@@ -38,6 +42,14 @@ struct DaemonConfig {
   double shutdown_grace_s = 1.0;      // on SIGTERM, wait this long for frames in flight
   std::string log_level = "info";     // trace, debug, info, warn, error
 
+  // Robot pose input (FINDMUG_ROBOT_POSE) and the table map (FINDMUG_TABLE_MAP).
+  bool pose_input = true;          // listen for robot_pose_t
+  std::string pose_url;            // "" = the output provider (see effectivePoseUrl)
+  double pose_max_age_s = 0.2;     // a frame takes the closest pose only this close in time
+  double pose_history_s = 5.0;     // poses kept for the lookup (must cover the latency)
+  bool publish_table_map = true;   // publish FINDMUG_TABLE_MAP after each map update
+  TableMapConfig table_map;        // the `table_map:` section
+
   // Channel names with the suffix applied.
   std::string channel(const std::string& base) const {
     return channel_suffix.empty() ? base : base + "_" + channel_suffix;
@@ -53,6 +65,13 @@ DaemonConfig resolveDaemonConfig(Config& config);
 
 // The resolved output LCM URL ($LCM_DEFAULT_URL when daemon.lcm_url is empty).
 std::string effectiveLcmUrl(const DaemonConfig& config);
+
+// Where robot poses are read from, or nullopt when there is no pose input:
+// daemon.pose_input off, or daemon.pose_url empty while the output goes to a
+// file:// log (a log being written has no poses to read). Empty pose_url
+// otherwise means the output provider (effectiveLcmUrl), where the robot's
+// localisation publishes on the same LCM network.
+std::optional<std::string> effectivePoseUrl(const DaemonConfig& config);
 
 // Parsed command line of findmugd.
 struct CommandLine {

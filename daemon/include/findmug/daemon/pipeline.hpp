@@ -13,6 +13,18 @@
 //   publish   label_image_t on FINDMUG_LABELS, tables_t on FINDMUG_TABLES, and
 //             status_t on FINDMUG_STATUS every daemon.status_period_s
 //
+// Map frame (pose_input.hpp): when robot poses arrive on FINDMUG_ROBOT_POSE,
+// the publish stage looks up the pose closest in time to each frame (within
+// daemon.pose_max_age_s). With one, the frame's tables_t carries it and the
+// map-frame copies of every table, and — when the frame was labelled: it had
+// a ground plane and at least one pixel got a label — the frame's tables
+// update the persistent TableMap;
+// after each such update the map's confirmed tables go out on
+// FINDMUG_TABLE_MAP (tables_t, content CONTENT_MAP, ids stable). The map is
+// touched by the publish thread only, in frame order, as TableMap::update
+// requires. Table diagnostics (why a cluster was dropped) and map changes
+// (created / confirmed / forgotten) are logged at debug level.
+//
 // Frames are perishable, results are not: the two input queues drop their
 // oldest frame when full (counted), the publish queue applies back-pressure.
 // Each published label image is exactly Segmenter::process of its frame.
@@ -35,12 +47,14 @@
 
 #include "findmug/config.hpp"
 #include "findmug/daemon/daemon_config.hpp"
+#include "findmug/daemon/pose_input.hpp"
 #include "findmug/daemon/service.hpp"
 #include "findmug/daemon/stage.hpp"
 #include "findmug/forest.hpp"
 #include "findmug/frame.hpp"
 #include "findmug/segmenter.hpp"
 #include "findmug/status_t.hpp"
+#include "findmug/table_map.hpp"
 
 namespace lcm {
 class LCM;
@@ -62,7 +76,8 @@ struct PipelineCounters {
   std::uint64_t received = 0;   // submitted frames
   std::uint64_t processed = 0;  // published label images
   std::uint64_t dropped = 0;   // evicted from a full queue / discarded at shutdown (+ source drops)
-  std::uint64_t rejected = 0;  // failed in a stage (+ bad input the source skipped)
+  std::uint64_t rejected = 0;  // failed in a stage (+ bad input the source skipped,
+                               // + bad robot pose messages)
   std::uint64_t pending = 0;   // inside the pipeline now
 };
 
@@ -70,8 +85,10 @@ class Pipeline {
  public:
   using Clock = std::chrono::steady_clock;
 
-  // Opens the output LCM handle (effectiveLcmUrl); throws findmug::Error when
-  // it cannot. `forest` must be trained; `model_id` goes into status_t.
+  // Opens the output LCM handle (effectiveLcmUrl) and, when effectivePoseUrl
+  // gives one, the pose input (its own handle and thread); throws
+  // findmug::Error naming the key when either cannot be opened. `forest`
+  // must be trained; `model_id` goes into status_t.
   Pipeline(const SegmenterConfig& segmenter_config, const DaemonConfig& daemon_config,
            std::shared_ptr<const RandomForest> forest, std::string model_id,
            ExecutionMode mode = ExecutionMode::Threaded, PipelineHooks hooks = {});
@@ -100,6 +117,10 @@ class Pipeline {
   status_t makeStatus() const;
   const std::string& modelId() const { return model_id_; }
   int workers() const { return workers_; }
+  // The pose input, or nullptr when there is none (see effectivePoseUrl).
+  const PoseInput* poseInput() const { return pose_input_.get(); }
+  // Tables in the map now, tentative ones included (thread-safe copy).
+  std::vector<MappedTable> mappedTables() const;
 
  private:
   struct FrameJob;
@@ -108,17 +129,26 @@ class Pipeline {
   struct Published {};
 
   void publishResult(ResultJob& job);
+  // Merges a labelled frame's tables into the map; fills one entry per table.
+  // False (error recorded) when the map refused the update.
+  bool updateTableMap(const LabelledFrame& labelled, const io::RobotPose& pose,
+                      std::vector<io::TableMapInfo>* map_info);
+  void publishTableMap(const RgbdFrame& frame, const io::RobotPose& pose);
   void publishStatus();
   void recordError(const std::string& message);
 
   DaemonConfig daemon_config_;
-  std::string labels_channel_, tables_channel_, status_channel_;
+  std::string labels_channel_, tables_channel_, status_channel_, table_map_channel_;
   Segmenter segmenter_;
   std::string model_id_;
   ExecutionMode mode_;
   PipelineHooks hooks_;
   int workers_;
   std::unique_ptr<lcm::LCM> lcm_;
+  std::unique_ptr<PoseInput> pose_input_;  // nullptr: no pose input
+  std::uint64_t pose_max_age_us_ = 0;
+  mutable std::mutex map_mutex_;  // guards table_map_ (written by the publish thread only)
+  TableMap table_map_;
   Clock::time_point started_;
   Clock::time_point last_sequential_status_;
   std::atomic<const io::FrameSource*> source_{nullptr};

@@ -7,7 +7,9 @@
 //
 //   FINDMUG_RGBD        findmug::rgbd_frame_t   frames in (sensor, findmug-grab)
 //   FINDMUG_LABELS      findmug::label_image_t  per-pixel labels out
-//   FINDMUG_TABLES      findmug::tables_t       tables + search positions out
+//   FINDMUG_TABLES      findmug::tables_t       tables + search positions out (one frame)
+//   FINDMUG_TABLE_MAP   findmug::tables_t       confirmed tables of the persistent map, out
+//                                               after each map update (needs robot poses)
 //   FINDMUG_STATUS      findmug::status_t       daemon health, about 1 Hz
 //   FINDMUG_ROBOT_POSE  findmug::robot_pose_t   robot pose in the map (input, optional)
 #pragma once
@@ -20,6 +22,7 @@ namespace findmug::io {
 inline constexpr std::string_view kRgbdChannel = "FINDMUG_RGBD";
 inline constexpr std::string_view kLabelsChannel = "FINDMUG_LABELS";
 inline constexpr std::string_view kTablesChannel = "FINDMUG_TABLES";
+inline constexpr std::string_view kTableMapChannel = "FINDMUG_TABLE_MAP";
 inline constexpr std::string_view kStatusChannel = "FINDMUG_STATUS";
 inline constexpr std::string_view kRobotPoseChannel = "FINDMUG_ROBOT_POSE";
 

@@ -107,21 +107,42 @@ Eigen::Vector2d toMapFrame(const RobotPose& pose, const Eigen::Vector2d& base_xy
 // Map-frame copies of one table (tables_t with has_map_pose).
 struct MapFrameTable {
   Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
+  Eigen::Vector2d center = Eigen::Vector2d::Zero();  // oriented box centre
   std::vector<Eigen::Vector2d> hull;
   std::vector<SearchPosition> search_positions;  // xy, yaw in the map frame
+};
+
+// What a tables_t holds (tables_t.content): one frame's detections
+// (FINDMUG_TABLES) or the confirmed tables of the persistent table map
+// (FINDMUG_TABLE_MAP).
+enum class TablesContent : std::int8_t { Frame = 0, Map = 1 };
+
+// A table's entry in the daemon's table map (table_t.map_id/confirmed/sightings).
+struct TableMapInfo {
+  int map_id = 0;  // stable id, 1, 2, ...; 0 = not in the map
+  bool confirmed = false;
+  int sightings = 0;
 };
 
 struct TablesMessage {
   std::uint64_t utime = 0;  // source frame's utime
   std::int64_t seq = 0;
+  TablesContent content = TablesContent::Frame;
   std::vector<TableCluster> tables;       // robot base frame
   std::optional<RobotPose> map_pose;      // when the pose was known
   std::vector<MapFrameTable> map_tables;  // one per table when map_pose, else empty
+  // One per table, or empty (= no table is in the map). Always filled by the decoder.
+  std::vector<TableMapInfo> map_info;
 };
 
-// Fills the map_ fields from `message.map_pose` when set (map_tables is ignored).
+// Fills the map_ fields from `message.map_pose` when set (map_tables is
+// ignored). Throws findmug::Error when map_info is neither empty nor one per
+// table, or when a Map message breaks the rules decodeTables checks.
 tables_t encodeTables(const TablesMessage& message);
-// Checks finiteness, counts, unit axes; fills map_tables when has_map_pose.
+// Checks finiteness, counts, unit axes, the content id and the map entries
+// (map_id >= 0, sightings >= 0, confirmed only with a map_id; a Map message
+// needs has_map_pose and id == map_id > 0 for every table); fills map_tables
+// when has_map_pose, and map_info always.
 TablesMessage decodeTables(const tables_t& message, std::string_view channel);
 TablesMessage decodeTables(const void* data, std::size_t size, std::string_view channel);
 

@@ -1,0 +1,684 @@
+// findmug-nav-client and findmug-label-viewer run as processes on an LCM log
+// file the test writes (file://LOG?mode=r&speed=0: no network traffic), with
+// tables, label images, a colour frame and corrupt messages in it.
+//
+//   nav-client    positions in visiting order (checked against
+//                 findmug::visitingOrder AND against brute force over every
+//                 order, i.e. the geometry), base or map frame, unreachable
+//                 positions with their reason, JSON lines that parse, exit 0
+//                 at the end of the log, exit 2 on bad flags;
+//   label-viewer  overlay PNGs in the paper's palette (pixel colours against
+//                 kLabelColors, blended with the colour frame of the same
+//                 utime), the console summary, the corrupt message skipped
+//                 with its reason, exit 2 on bad flags.
+#include <fcntl.h>
+#include <spawn.h>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <map>
+#include <memory>
+#include <numeric>
+#include <sstream>
+#include <thread>
+#include <variant>
+
+#include "daemon_test_support.hpp"
+#include "findmug/error.hpp"
+#include "findmug/image_io.hpp"
+#include "findmug/io/channels.hpp"
+#include "findmug/io/lcm_codec.hpp"
+#include "findmug/labels.hpp"
+#include "findmug/tables.hpp"
+#include "test_data.hpp"
+
+extern char** environ;
+
+namespace findmug {
+namespace {
+
+using findmug::test::TempDir;
+using Log = std::vector<daemon::test::LogMessage>;
+
+// ---- running a client -----------------------------------------------------------------
+
+struct ProcessResult {
+  int exit_code = -1;
+  std::string out, err;
+};
+
+std::string readFile(const std::string& path) {
+  std::ifstream in(path, std::ios::binary);
+  return std::string((std::istreambuf_iterator<char>(in)), {});
+}
+
+// Runs `exe` with `args`, stdout and stderr to files; kills it after 60 s
+// (a hang is a failure, not a timing measurement).
+ProcessResult run(const std::string& exe, const std::vector<std::string>& args,
+                  const TempDir& tmp) {
+  const std::string out_path = tmp.str("stdout.txt"), err_path = tmp.str("stderr.txt");
+  posix_spawn_file_actions_t actions;
+  posix_spawn_file_actions_init(&actions);
+  posix_spawn_file_actions_addopen(&actions, STDOUT_FILENO, out_path.c_str(),
+                                   O_WRONLY | O_CREAT | O_TRUNC, 0644);
+  posix_spawn_file_actions_addopen(&actions, STDERR_FILENO, err_path.c_str(),
+                                   O_WRONLY | O_CREAT | O_TRUNC, 0644);
+  std::vector<std::string> argv_strings = {exe};
+  argv_strings.insert(argv_strings.end(), args.begin(), args.end());
+  std::vector<char*> argv;
+  for (auto& a : argv_strings) argv.push_back(a.data());
+  argv.push_back(nullptr);
+  pid_t pid = 0;
+  const int rc = posix_spawn(&pid, exe.c_str(), &actions, nullptr, argv.data(), environ);
+  posix_spawn_file_actions_destroy(&actions);
+  ProcessResult result;
+  if (rc != 0) {
+    ADD_FAILURE() << "cannot start " << exe << ": " << std::strerror(rc);
+    return result;
+  }
+  int status = 0;
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
+  while (waitpid(pid, &status, WNOHANG) == 0) {
+    if (std::chrono::steady_clock::now() > deadline) {
+      kill(pid, SIGKILL);
+      waitpid(pid, &status, 0);
+      ADD_FAILURE() << exe << " did not exit within 60 s";
+      break;
+    }
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  result.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status);
+  result.out = readFile(out_path);
+  result.err = readFile(err_path);
+  return result;
+}
+
+std::vector<std::string> lines(const std::string& text) {
+  std::vector<std::string> out;
+  std::istringstream in(text);
+  std::string line;
+  while (std::getline(in, line)) out.push_back(line);
+  return out;
+}
+
+std::string replayUrl(const std::string& log) { return "file://" + log + "?mode=r&speed=0"; }
+
+// ---- a small strict JSON reader (enough for the nav client's lines) ---------------
+
+struct Json {
+  std::variant<std::nullptr_t, bool, double, std::string, std::vector<Json>,
+               std::map<std::string, Json>>
+      value;
+  const Json& operator[](const std::string& key) const {
+    const auto& object = std::get<std::map<std::string, Json>>(value);
+    const auto it = object.find(key);
+    if (it == object.end()) throw std::runtime_error("JSON: no key " + key);
+    return it->second;
+  }
+  const std::vector<Json>& array() const { return std::get<std::vector<Json>>(value); }
+  double number() const { return std::get<double>(value); }
+  const std::string& string() const { return std::get<std::string>(value); }
+};
+
+class JsonParser {
+ public:
+  explicit JsonParser(const std::string& text) : text_(text) {}
+  Json parseDocument() {
+    Json v = parseValue();
+    skipSpace();
+    if (pos_ != text_.size()) fail("trailing characters");
+    return v;
+  }
+
+ private:
+  [[noreturn]] void fail(const std::string& what) const {
+    throw std::runtime_error("JSON: " + what + " at offset " + std::to_string(pos_) + " in " +
+                             text_);
+  }
+  void skipSpace() {
+    while (pos_ < text_.size() && std::isspace(static_cast<unsigned char>(text_[pos_]))) ++pos_;
+  }
+  void expect(char c) {
+    skipSpace();
+    if (pos_ >= text_.size() || text_[pos_] != c) fail(std::string("expected '") + c + "'");
+    ++pos_;
+  }
+  bool consume(const std::string& word) {
+    if (text_.compare(pos_, word.size(), word) != 0) return false;
+    pos_ += word.size();
+    return true;
+  }
+  std::string parseString() {
+    expect('"');
+    std::string out;
+    while (pos_ < text_.size() && text_[pos_] != '"') {
+      char c = text_[pos_++];
+      if (static_cast<unsigned char>(c) < 0x20) fail("control character in a string");
+      if (c == '\\') {
+        if (pos_ >= text_.size()) fail("unterminated escape");
+        const char e = text_[pos_++];
+        switch (e) {
+          case '"': c = '"'; break;
+          case '\\': c = '\\'; break;
+          case '/': c = '/'; break;
+          case 'n': c = '\n'; break;
+          case 't': c = '\t'; break;
+          case 'r': c = '\r'; break;
+          case 'b': c = '\b'; break;
+          case 'f': c = '\f'; break;
+          case 'u': {
+            if (pos_ + 4 > text_.size()) fail("short \\u escape");
+            c = static_cast<char>(std::stoi(text_.substr(pos_, 4), nullptr, 16));
+            pos_ += 4;
+            break;
+          }
+          default: fail("bad escape");
+        }
+      }
+      out += c;
+    }
+    if (pos_ >= text_.size()) fail("unterminated string");
+    ++pos_;
+    return out;
+  }
+  Json parseValue() {
+    skipSpace();
+    if (pos_ >= text_.size()) fail("unexpected end");
+    const char c = text_[pos_];
+    if (c == '{') {
+      ++pos_;
+      std::map<std::string, Json> object;
+      skipSpace();
+      if (pos_ < text_.size() && text_[pos_] == '}') {
+        ++pos_;
+        return Json{object};
+      }
+      for (;;) {
+        skipSpace();
+        std::string key = parseString();
+        expect(':');
+        if (!object.emplace(key, parseValue()).second) fail("duplicate key " + key);
+        skipSpace();
+        if (pos_ < text_.size() && text_[pos_] == ',') {
+          ++pos_;
+          continue;
+        }
+        expect('}');
+        return Json{object};
+      }
+    }
+    if (c == '[') {
+      ++pos_;
+      std::vector<Json> array;
+      skipSpace();
+      if (pos_ < text_.size() && text_[pos_] == ']') {
+        ++pos_;
+        return Json{array};
+      }
+      for (;;) {
+        array.push_back(parseValue());
+        skipSpace();
+        if (pos_ < text_.size() && text_[pos_] == ',') {
+          ++pos_;
+          continue;
+        }
+        expect(']');
+        return Json{array};
+      }
+    }
+    if (c == '"') return Json{parseString()};
+    if (consume("true")) return Json{true};
+    if (consume("false")) return Json{false};
+    if (consume("null")) return Json{nullptr};
+    const std::size_t start = pos_;
+    if (text_[pos_] == '-') ++pos_;
+    while (pos_ < text_.size() &&
+           (std::isdigit(static_cast<unsigned char>(text_[pos_])) || text_[pos_] == '.' ||
+            text_[pos_] == 'e' || text_[pos_] == 'E' || text_[pos_] == '+' || text_[pos_] == '-')) {
+      ++pos_;
+    }
+    if (pos_ == start) fail("unexpected character");
+    std::size_t used = 0;
+    const std::string number = text_.substr(start, pos_ - start);
+    const double v = std::stod(number, &used);
+    if (used != number.size()) fail("bad number " + number);
+    return Json{v};
+  }
+
+  const std::string& text_;
+  std::size_t pos_ = 0;
+};
+
+Json parseJson(const std::string& text) { return JsonParser(text).parseDocument(); }
+
+// ---- the nav client -----------------------------------------------------------------------
+
+SearchPosition position(float x, float y, float yaw, bool reachable = true,
+                        const std::string& reason = "") {
+  SearchPosition p;
+  p.xy = Eigen::Vector2f(x, y);
+  p.yaw = yaw;
+  p.reachable = reachable;
+  p.reason = reason;
+  return p;
+}
+
+TableCluster table(int id, Eigen::Vector2f center, std::vector<SearchPosition> positions) {
+  TableCluster t;
+  t.id = id;
+  t.centroid = Eigen::Vector3f(center.x(), center.y(), 0.74f);
+  t.center = center;
+  t.top_height = 0.75f;
+  t.extents = Eigen::Vector2f(0.6f, 0.4f);
+  t.hull = {center + Eigen::Vector2f(-0.6f, -0.4f), center + Eigen::Vector2f(0.6f, -0.4f),
+            center + Eigen::Vector2f(0.6f, 0.4f), center + Eigen::Vector2f(-0.6f, 0.4f)};
+  t.point_count = 2000;
+  t.mean_confidence = 0.9f;
+  t.search_positions = std::move(positions);
+  return t;
+}
+
+// Two frames' tables: one without a map pose, one with. Positions are placed
+// so that the shortest tour is not the listed order.
+io::TablesMessage baseFrameTables() {
+  io::TablesMessage m;
+  m.utime = 1'000'000;
+  m.seq = 1;
+  m.tables.push_back(table(0, {3.0f, 0.0f},
+                           {position(3.0f, -0.9f, 1.57f), position(3.0f, 0.9f, -1.57f),
+                            position(2.2f, 0.0f, 0.0f, false, "obstacle within robot radius")}));
+  m.tables.push_back(table(1, {1.5f, -1.5f},
+                           {position(1.5f, -2.4f, 1.57f), position(0.6f, -1.5f, 0.0f),
+                            position(1.5f, -0.6f, -1.57f)}));
+  return m;
+}
+
+io::TablesMessage mapFrameTables() {
+  io::TablesMessage m = baseFrameTables();
+  m.utime = 3'000'000;
+  m.seq = 3;
+  m.tables[1].search_positions[2].reachable = false;
+  m.tables[1].search_positions[2].reason = "no observed floor";
+  m.map_pose = io::RobotPose{2'999'000, 10.0, -2.0, M_PI / 2};
+  return m;
+}
+
+// What the client should list for a message: (table, x, y) of the
+// reachable positions in visiting order, in the requested frame.
+struct Stop {
+  int table = 0;
+  Eigen::Vector2f xy;
+};
+
+std::vector<Stop> expectedTour(const io::TablesMessage& message, bool map_frame,
+                               Eigen::Vector2f* robot) {
+  // Decode what was encoded: exactly the numbers the client sees.
+  const auto bytes = io::encodeMessage(io::encodeTables(message));
+  const io::TablesMessage m = io::decodeTables(bytes.data(), bytes.size(), "T");
+  *robot = map_frame ? Eigen::Vector2f(static_cast<float>(m.map_pose->x),
+                                       static_cast<float>(m.map_pose->y))
+                     : Eigen::Vector2f::Zero();
+  std::vector<Stop> reachable;
+  for (std::size_t t = 0; t < m.tables.size(); ++t) {
+    const auto& positions =
+        map_frame ? m.map_tables[t].search_positions : m.tables[t].search_positions;
+    for (const auto& p : positions) {
+      if (p.reachable) reachable.push_back({m.tables[t].id, p.xy});
+    }
+  }
+  std::vector<Eigen::Vector2f> points;
+  for (const auto& s : reachable) points.push_back(s.xy);
+  std::vector<Stop> tour;
+  for (int i : visitingOrder(*robot, points)) tour.push_back(reachable[static_cast<std::size_t>(i)]);
+  return tour;
+}
+
+double pathLength(const Eigen::Vector2f& start, const std::vector<Eigen::Vector2f>& stops) {
+  double total = 0.0;
+  Eigen::Vector2f at = start;
+  for (const auto& s : stops) {
+    total += (s - at).norm();
+    at = s;
+  }
+  return total;
+}
+
+// The shortest open path over `stops` from `start`, by trying every order.
+double shortestByBruteForce(const Eigen::Vector2f& start, std::vector<Eigen::Vector2f> stops) {
+  std::vector<int> order(stops.size());
+  std::iota(order.begin(), order.end(), 0);
+  double best = std::numeric_limits<double>::infinity();
+  do {
+    std::vector<Eigen::Vector2f> path;
+    for (int i : order) path.push_back(stops[static_cast<std::size_t>(i)]);
+    best = std::min(best, pathLength(start, path));
+  } while (std::next_permutation(order.begin(), order.end()));
+  return best;
+}
+
+std::vector<std::uint8_t> truncated(std::vector<std::uint8_t> bytes) {
+  bytes.resize(bytes.size() / 2);
+  return bytes;
+}
+
+// The log both clients read: tables (base frame, corrupt, map frame), a
+// colour frame, label images (good, corrupt, good with the colour frame).
+struct ClientLog {
+  TempDir dir;
+  std::string path;
+  io::LabelImageMessage labels1, labels3;
+  RgbdFrame color3;
+};
+
+LabelImage labelBlocks(int width, int height) {
+  LabelImage image;
+  image.width = width;
+  image.height = height;
+  for (int v = 0; v < height; ++v) {
+    for (int u = 0; u < width; ++u) {
+      // Floor at the bottom half, wall/table/chair columns above, one void pixel per row.
+      std::uint8_t id = v >= height / 2 ? static_cast<std::uint8_t>(Label::Floor)
+                        : u < width / 3  ? static_cast<std::uint8_t>(Label::Wall)
+                        : u < 2 * width / 3 ? static_cast<std::uint8_t>(Label::Table)
+                                            : static_cast<std::uint8_t>(Label::Chair);
+      if (u == width - 1) id = kVoidLabel;
+      image.labels.push_back(id);
+      image.confidence.push_back(id == kVoidLabel ? 0.0f : 0.5f);
+    }
+  }
+  return image;
+}
+
+const ClientLog& clientLog() {
+  static const ClientLog* log = [] {
+    auto* l = new ClientLog;
+    Log messages;
+    const std::string tables_channel(io::kTablesChannel), labels_channel(io::kLabelsChannel);
+    messages.push_back(
+        {tables_channel, io::encodeMessage(io::encodeTables(baseFrameTables()))});
+    messages.push_back(
+        {tables_channel, truncated(io::encodeMessage(io::encodeTables(baseFrameTables())))});
+    messages.push_back({tables_channel, io::encodeMessage(io::encodeTables(mapFrameTables()))});
+
+    l->labels1.image = labelBlocks(12, 8);
+    l->labels1.utime = 1'000'000;
+    l->labels1.seq = 1;
+    l->labels1.latency_us = 250'000;
+    messages.push_back({labels_channel, io::encodeMessage(io::encodeLabelImage(l->labels1))});
+    // A label id no class has: a well-formed message with bad content.
+    label_image_t bad = io::encodeLabelImage(l->labels1, false);
+    bad.seq = 2;
+    bad.compression = label_image_t::COMPRESSION_NONE;
+    bad.labels_data.assign(l->labels1.image.labels.begin(), l->labels1.image.labels.end());
+    bad.labels_data[17] = 42;
+    bad.labels_size = static_cast<std::int32_t>(bad.labels_data.size());
+    messages.push_back({labels_channel, io::encodeMessage(bad)});
+
+    l->color3.width = 12;
+    l->color3.height = 8;
+    l->color3.intrinsics = {10.0, 10.0, 5.5, 3.5};
+    l->color3.utime = 3'000'000;
+    l->color3.seq = 3;
+    l->color3.source = "test";
+    for (int i = 0; i < 12 * 8; ++i) {
+      l->color3.depth_mm.push_back(1500);
+      l->color3.rgb.push_back(Rgb8{static_cast<std::uint8_t>(i * 2),
+                                   static_cast<std::uint8_t>(200 - i),
+                                   static_cast<std::uint8_t>(100 + i)});
+    }
+    io::RgbdEncodeOptions lossless;
+    lossless.color = io::ColorCompression::None;
+    messages.push_back(
+        {std::string(io::kRgbdChannel), io::encodeMessage(io::encodeRgbdFrame(l->color3, lossless))});
+    l->labels3 = l->labels1;
+    l->labels3.utime = 3'000'000;
+    l->labels3.seq = 3;
+    messages.push_back({labels_channel, io::encodeMessage(io::encodeLabelImage(l->labels3))});
+
+    l->path = l->dir.str("clients.lcmlog");
+    daemon::test::writeLcmLog(l->path, messages);
+    return l;
+  }();
+  return *log;
+}
+
+// "  %2zu. table %d  x %7.2f  y %7.2f  yaw ..." lines of the text output.
+std::vector<Stop> parseTourLines(const std::vector<std::string>& block) {
+  std::vector<Stop> out;
+  for (const std::string& line : block) {
+    int order = 0, table = 0;
+    float x = 0, y = 0;
+    if (std::sscanf(line.c_str(), " %d. table %d x %f y %f", &order, &table, &x, &y) == 4) {
+      EXPECT_EQ(order, static_cast<int>(out.size()) + 1) << line;
+      out.push_back({table, Eigen::Vector2f(x, y)});
+    }
+  }
+  return out;
+}
+
+// Splits the text output into one block of lines per "tables seq" header.
+std::map<int, std::vector<std::string>> blocksBySeq(const std::string& out) {
+  std::map<int, std::vector<std::string>> blocks;
+  int seq = -1;
+  for (const std::string& line : lines(out)) {
+    int s = 0;
+    if (std::sscanf(line.c_str(), "tables seq %d", &s) == 1) seq = s;
+    blocks[seq].push_back(line);
+  }
+  return blocks;
+}
+
+void expectTour(const std::vector<Stop>& got, const io::TablesMessage& message, bool map_frame,
+                double tolerance) {
+  Eigen::Vector2f robot;
+  const std::vector<Stop> want = expectedTour(message, map_frame, &robot);
+  ASSERT_EQ(got.size(), want.size());
+  std::vector<Eigen::Vector2f> printed;
+  for (std::size_t k = 0; k < want.size(); ++k) {
+    EXPECT_EQ(got[k].table, want[k].table) << "stop " << k + 1;
+    EXPECT_NEAR(got[k].xy.x(), want[k].xy.x(), tolerance) << "stop " << k + 1;
+    EXPECT_NEAR(got[k].xy.y(), want[k].xy.y(), tolerance) << "stop " << k + 1;
+    printed.push_back(want[k].xy);
+  }
+  // The geometry: the printed order is a shortest tour from the robot.
+  std::vector<Eigen::Vector2f> stops = printed;
+  EXPECT_NEAR(pathLength(robot, printed), shortestByBruteForce(robot, stops), 1e-4);
+}
+
+TEST(NavClient, PrintsReachablePositionsInVisitingOrderAndSkipsTheCorruptMessage) {
+  const ClientLog& log = clientLog();
+  TempDir tmp;
+  const ProcessResult r = run(FINDMUG_NAV_CLIENT_EXE, {"--lcm-url", replayUrl(log.path)}, tmp);
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  const auto blocks = blocksBySeq(r.out);
+  ASSERT_TRUE(blocks.count(1) && blocks.count(3)) << r.out;
+  EXPECT_EQ(blocks.size(), 2u) << "the corrupt message must not be printed:\n" << r.out;
+
+  // Without a map pose: base frame, robot at the origin.
+  EXPECT_NE(blocks.at(1)[0].find("2 tables, 6 positions (5 reachable), base frame"),
+            std::string::npos)
+      << blocks.at(1)[0];
+  expectTour(parseTourLines(blocks.at(1)), baseFrameTables(), false, 0.006);
+  // With one (auto): map frame, robot at its map pose.
+  EXPECT_NE(blocks.at(3)[0].find("(4 reachable), map frame, robot at (10.00, -2.00)"),
+            std::string::npos)
+      << blocks.at(3)[0];
+  expectTour(parseTourLines(blocks.at(3)), mapFrameTables(), true, 0.006);
+  // Unreachable positions are listed with their reason.
+  int unreachable = 0;
+  for (const auto& line : blocks.at(3)) {
+    if (line.find("unreachable: ") == std::string::npos) continue;
+    ++unreachable;
+    EXPECT_TRUE(line.find("obstacle within robot radius") != std::string::npos ||
+                line.find("no observed floor") != std::string::npos)
+        << line;
+  }
+  EXPECT_EQ(unreachable, 2);
+  // The corrupt message: reported with the decoder's reason, then skipped.
+  EXPECT_NE(r.err.find("skipping bad message: FINDMUG_TABLES: tables_t"), std::string::npos)
+      << r.err;
+}
+
+TEST(NavClient, BaseFrameIsUsedWhenAskedEvenWithAMapPose) {
+  const ClientLog& log = clientLog();
+  TempDir tmp;
+  const ProcessResult r =
+      run(FINDMUG_NAV_CLIENT_EXE, {"--lcm-url", replayUrl(log.path), "--frame", "base"}, tmp);
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  const auto blocks = blocksBySeq(r.out);
+  ASSERT_TRUE(blocks.count(3)) << r.out;
+  EXPECT_NE(blocks.at(3)[0].find("base frame, robot at (0.00, 0.00)"), std::string::npos)
+      << blocks.at(3)[0];
+  expectTour(parseTourLines(blocks.at(3)), mapFrameTables(), false, 0.006);
+}
+
+TEST(NavClient, JsonLinesParseAndCarryTheTour) {
+  const ClientLog& log = clientLog();
+  TempDir tmp;
+  const ProcessResult r =
+      run(FINDMUG_NAV_CLIENT_EXE, {"--lcm-url", replayUrl(log.path), "--json"}, tmp);
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  const auto out = lines(r.out);
+  ASSERT_EQ(out.size(), 2u) << r.out;  // one object per good message, nothing else on stdout
+  const io::TablesMessage expected[] = {baseFrameTables(), mapFrameTables()};
+  for (std::size_t i = 0; i < out.size(); ++i) {
+    Json j;
+    ASSERT_NO_THROW(j = parseJson(out[i])) << out[i];
+    const bool map_frame = i == 1;
+    EXPECT_EQ(j["seq"].number(), static_cast<double>(expected[i].seq));
+    EXPECT_EQ(j["frame"].string(), map_frame ? "map" : "base");
+    EXPECT_EQ(j["tables"].number(), 2.0);
+    std::vector<Stop> tour;
+    double previous_path = 0.0;
+    for (const Json& stop : j["tour"].array()) {
+      EXPECT_EQ(stop["order"].number(), static_cast<double>(tour.size() + 1));
+      tour.push_back({static_cast<int>(stop["table"].number()),
+                      Eigen::Vector2f(static_cast<float>(stop["x"].number()),
+                                      static_cast<float>(stop["y"].number()))});
+      EXPECT_GE(stop["path_m"].number(), previous_path);  // cumulative
+      previous_path = stop["path_m"].number();
+    }
+    expectTour(tour, expected[i], map_frame, 0.0006);
+    for (const Json& u : j["unreachable"].array()) EXPECT_FALSE(u["reason"].string().empty());
+  }
+  EXPECT_EQ(parseJson(out[1])["unreachable"].array().size(), 2u);
+}
+
+TEST(NavClient, CountStopsEarly) {
+  const ClientLog& log = clientLog();
+  TempDir tmp;
+  const ProcessResult r = run(FINDMUG_NAV_CLIENT_EXE,
+                              {"--lcm-url", replayUrl(log.path), "--json", "--count", "1"}, tmp);
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(lines(r.out).size(), 1u) << r.out;
+}
+
+TEST(NavClient, BadFlagsExitWithCode2AndUsage) {
+  TempDir tmp;
+  for (const std::vector<std::string>& args :
+       std::vector<std::vector<std::string>>{{"--frame", "sideways"},
+                                             {"--count", "0"},
+                                             {"--count", "many"},
+                                             {"--no-such-flag"},
+                                             {"--lcm-url"},
+                                             {"--channel-suffix", "bad suffix"}}) {
+    const ProcessResult r = run(FINDMUG_NAV_CLIENT_EXE, args, tmp);
+    EXPECT_EQ(r.exit_code, 2) << args[0] << ": " << r.err;
+    EXPECT_NE(r.err.find("usage: findmug-nav-client"), std::string::npos) << r.err;
+    EXPECT_TRUE(r.out.empty()) << r.out;
+  }
+}
+
+// ---- the label viewer -----------------------------------------------------------------------
+
+TEST(LabelViewer, WritesPaletteOverlaysAndSummariesAndSkipsTheCorruptImage) {
+  const ClientLog& log = clientLog();
+  TempDir tmp;
+  std::filesystem::create_directories(tmp.path() / "png");
+  const ProcessResult r = run(FINDMUG_LABEL_VIEWER_EXE,
+                              {"--lcm-url", replayUrl(log.path), "--out", tmp.str("png"),
+                               "--alpha", "0.5"},
+                              tmp);
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+
+  // Console: one summary per good image, shares of each class.
+  const auto out = lines(r.out);
+  ASSERT_EQ(out.size(), 2u) << r.out;
+  // 12x8: bottom half floor (48 px), top rows: wall 4, table 4, chair 3 columns
+  // (x4 rows) minus the void last column (8 px).
+  for (const char* share :
+       {"labels seq 1 utime 1000000 12x8 latency 250.0 ms:", "floor 45.8%", "wall 16.7%",
+        "table 16.7%", "chair 12.5%", "void 8.3%", "mean confidence 0.50",
+        "palette (no colour frame)"}) {
+    EXPECT_NE(out[0].find(share), std::string::npos) << share << " not in: " << out[0];
+  }
+  EXPECT_NE(out[1].find("labels seq 3"), std::string::npos) << out[1];
+  EXPECT_NE(out[1].find("overlay "), std::string::npos) << out[1];
+  // The corrupt image: skipped with the decoder's reason, no PNG.
+  EXPECT_NE(r.err.find("skipping bad label image"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("label id 42"), std::string::npos) << r.err;
+  EXPECT_FALSE(std::filesystem::exists(tmp.path() / "png" / "labels_00000002.png"));
+
+  // seq 1, no colour frame: the plain palette (void black).
+  const Image<Rgb8> palette = readPngRgb(tmp.str("png/labels_00000001.png"));
+  ASSERT_EQ(palette.width, 12);
+  ASSERT_EQ(palette.height, 8);
+  for (std::size_t i = 0; i < palette.pixels.size(); ++i) {
+    const std::uint8_t id = log.labels1.image.labels[i];
+    const Rgb8 want = id == kVoidLabel ? Rgb8{0, 0, 0} : kLabelColors[id];
+    const Rgb8 got = palette.pixels[i];
+    ASSERT_TRUE(got.r == want.r && got.g == want.g && got.b == want.b)
+        << "pixel " << i << " label " << int(id) << ": got " << int(got.r) << "," << int(got.g)
+        << "," << int(got.b);
+  }
+  // The paper's colours for the classes in the image (floor red, wall blue, table green).
+  EXPECT_EQ(palette.pixels[12 * 7].r, 220);
+  EXPECT_EQ(palette.pixels[0].b, 220);
+  EXPECT_EQ(palette.pixels[5].g, 180);
+
+  // seq 3, with the colour frame of the same utime: half label colour, half image.
+  const Image<Rgb8> overlay = readPngRgb(tmp.str("png/labels_00000003.png"));
+  ASSERT_EQ(overlay.pixels.size(), log.color3.rgb.size());
+  for (std::size_t i = 0; i < overlay.pixels.size(); ++i) {
+    const std::uint8_t id = log.labels3.image.labels[i];
+    const Rgb8 c = id == kVoidLabel ? Rgb8{0, 0, 0} : kLabelColors[id];
+    const Rgb8 image = log.color3.rgb[i];
+    auto blend = [](int a, int b) { return 0.5 * a + 0.5 * b; };
+    EXPECT_NEAR(overlay.pixels[i].r, blend(c.r, image.r), 0.51) << i;
+    EXPECT_NEAR(overlay.pixels[i].g, blend(c.g, image.g), 0.51) << i;
+    EXPECT_NEAR(overlay.pixels[i].b, blend(c.b, image.b), 0.51) << i;
+  }
+}
+
+TEST(LabelViewer, NoPngWritesNothingAndBadFlagsExitWithCode2) {
+  const ClientLog& log = clientLog();
+  TempDir tmp;
+  std::filesystem::create_directories(tmp.path() / "png");
+  const ProcessResult r = run(FINDMUG_LABEL_VIEWER_EXE,
+                              {"--lcm-url", replayUrl(log.path), "--out", tmp.str("png"),
+                               "--no-png"},
+                              tmp);
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(lines(r.out).size(), 2u) << r.out;
+  EXPECT_TRUE(std::filesystem::is_empty(tmp.path() / "png"));
+
+  for (const std::vector<std::string>& args :
+       std::vector<std::vector<std::string>>{{"--alpha", "2"},
+                                             {"--every", "0"},
+                                             {"--out", tmp.str("no-such-dir")},
+                                             {"--bogus"}}) {
+    const ProcessResult bad = run(FINDMUG_LABEL_VIEWER_EXE, args, tmp);
+    EXPECT_EQ(bad.exit_code, 2) << args[0] << ": " << bad.err;
+    EXPECT_NE(bad.err.find("usage: findmug-label-viewer"), std::string::npos) << bad.err;
+  }
+}
+
+}  // namespace
+}  // namespace findmug

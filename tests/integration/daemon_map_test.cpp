@@ -1,0 +1,562 @@
+// The daemon's map frame: robot poses in over LCM (file:// logs), tables out
+// in the map frame and merged into the persistent table map published on
+// FINDMUG_TABLE_MAP.
+//
+// The scene is a synthetic apartment (findmug_synth), so the truth is exact:
+// the map frame is the synth world frame, the robot pose of a frame is its
+// camera pose projected to the floor (x, y, yaw), and every table's true
+// centre and height are known. The forest is trained on the very frames it
+// then labels (deep trees, no held-out data on purpose): the test is about
+// poses and mapping, not the classifier, so labels must be close to the truth.
+//
+// Also: the pose history (closest in time, max age, late poses), the
+// daemon.pose_* and table_map.* settings, and bad pose messages.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <set>
+
+#include "daemon_test_support.hpp"
+#include "findmug/daemon/daemon_config.hpp"
+#include "findmug/daemon/pipeline.hpp"
+#include "findmug/daemon/pose_input.hpp"
+#include "findmug/error.hpp"
+#include "findmug/io/channels.hpp"
+#include "findmug/io/lcm_codec.hpp"
+#include "findmug/segmenter.hpp"
+#include "findmug/synth.hpp"
+#include "findmug/table_map.hpp"
+#include "findmug/training.hpp"
+#include "test_data.hpp"
+
+namespace findmug::daemon {
+namespace {
+
+using findmug::test::TempDir;
+
+// ---- the pose history ---------------------------------------------------------------
+
+io::RobotPose poseAt(std::uint64_t utime, double x) { return io::RobotPose{utime, x, 0.0, 0.0}; }
+
+TEST(PoseHistory, ClosestInTimeWithinTheMaximumAge) {
+  PoseHistory history(10'000'000);
+  EXPECT_FALSE(history.closest(1000, 1'000'000).has_value());  // empty
+  for (std::uint64_t t : {1'000'000u, 1'100'000u, 1'200'000u}) history.insert(poseAt(t, t * 1e-6));
+  // Nearest of the neighbours on either side.
+  EXPECT_EQ(history.closest(1'140'000, 200'000)->utime, 1'100'000u);
+  EXPECT_EQ(history.closest(1'160'000, 200'000)->utime, 1'200'000u);
+  EXPECT_EQ(history.closest(1'150'000, 200'000)->utime, 1'200'000u);  // tie: the later one
+  EXPECT_EQ(history.closest(1'000'000, 0)->utime, 1'000'000u);        // exact match, zero age
+  // Before the first and after the last pose: only within the maximum age.
+  EXPECT_EQ(history.closest(900'000, 100'000)->utime, 1'000'000u);
+  EXPECT_FALSE(history.closest(899'999, 100'000).has_value());
+  EXPECT_EQ(history.closest(1'400'000, 200'000)->utime, 1'200'000u);
+  EXPECT_FALSE(history.closest(1'400'001, 200'000).has_value());
+  // Between two poses further apart than the age: none.
+  history.insert(poseAt(3'000'000, 3.0));
+  EXPECT_FALSE(history.closest(2'000'000, 200'000).has_value());
+}
+
+TEST(PoseHistory, LatePosesAreOrderedDuplicatesReplaceOldOnesExpire) {
+  PoseHistory history(1'000'000);  // one second
+  history.insert(poseAt(2'000'000, 2.0));
+  history.insert(poseAt(1'500'000, 1.5));  // late, goes before
+  history.insert(poseAt(1'700'000, 1.7));
+  EXPECT_EQ(history.size(), 3u);
+  EXPECT_EQ(history.closest(1'550'000, 100'000)->x, 1.5);
+  EXPECT_EQ(history.closest(1'650'000, 100'000)->x, 1.7);
+  EXPECT_EQ(history.closest(1'900'000, 100'000)->x, 2.0);
+  history.insert(poseAt(1'700'000, 9.0));  // same time: replaces
+  EXPECT_EQ(history.size(), 3u);
+  EXPECT_EQ(history.closest(1'700'000, 0)->x, 9.0);
+  // A pose 2.6 s: everything older than 1.6 s goes.
+  history.insert(poseAt(2'600'000, 2.6));
+  EXPECT_EQ(history.size(), 3u);  // 1.7, 2.0, 2.6
+  EXPECT_FALSE(history.closest(1'500'000, 100'000).has_value());
+  EXPECT_EQ(history.closest(1'650'000, 100'000)->x, 9.0);
+}
+
+// ---- settings -------------------------------------------------------------------------
+
+std::string errorOf(Config config) {
+  try {
+    resolveDaemonConfig(config);
+  } catch (const Error& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(DaemonMapConfig, PoseAndTableMapKeysAreParsedValidatedAndWrittenBack) {
+  Config config;
+  config.extra["daemon.pose_max_age_s"] = "0.05";
+  config.extra["daemon.pose_url"] = "file:///tmp/poses.lcmlog?speed=0";
+  config.extra["table_map.confirm_sightings"] = "5";
+  config.extra["table_map.match_gap_m"] = "0.25";
+  const DaemonConfig d = resolveDaemonConfig(config);
+  EXPECT_DOUBLE_EQ(d.pose_max_age_s, 0.05);
+  EXPECT_EQ(d.table_map.confirm_sightings, 5);
+  EXPECT_FLOAT_EQ(d.table_map.match_gap_m, 0.25f);
+  EXPECT_EQ(d.table_map.forget_misses, TableMapConfig{}.forget_misses);  // default kept
+  // Every key is written back (dumpConfig shows the effective values).
+  EXPECT_EQ(config.extra.at("table_map.confirm_sightings"), "5");
+  EXPECT_EQ(config.extra.at("table_map.view_max_range_m"), "4");
+  EXPECT_EQ(config.extra.at("daemon.pose_history_s"), "5");
+  EXPECT_EQ(config.extra.at("daemon.pose_input"), "true");
+  EXPECT_EQ(effectivePoseUrl(d), "file:///tmp/poses.lcmlog?speed=0");
+
+  auto with = [](const std::string& key, const std::string& value) {
+    Config c;
+    c.extra[key] = value;
+    return errorOf(c);
+  };
+  EXPECT_NE(with("table_map.confirm_sightings", "0").find("table_map.confirm_sightings"),
+            std::string::npos);
+  EXPECT_NE(with("table_map.match_gap_m", "wide").find("table_map.match_gap_m"),
+            std::string::npos);
+  // Consistency between keys, checked by the core's validateTableMapConfig.
+  EXPECT_NE(with("table_map.view_max_range_m", "0.5").find("table_map.view_max_range_m"),
+            std::string::npos);
+  EXPECT_NE(with("table_map.tentative_timeout_s", "0").find("table_map.tentative_timeout_s"),
+            std::string::npos);
+  EXPECT_NE(with("table_map.no_such_key", "1").find("table_map.no_such_key"), std::string::npos);
+  EXPECT_NE(with("daemon.pose_max_age_s", "-1").find("daemon.pose_max_age_s"),
+            std::string::npos);
+  EXPECT_NE(with("daemon.pose_url", "localhost").find("daemon.pose_url"), std::string::npos);
+  EXPECT_NE(with("daemon.pose_input", "maybe").find("daemon.pose_input"), std::string::npos);
+}
+
+TEST(DaemonMapConfig, PoseUrlDefaultsToTheOutputProviderButNeverToAnOutputLog) {
+  DaemonConfig d;
+  d.lcm_url = "udpm://239.255.76.67:7667?ttl=0";
+  EXPECT_EQ(effectivePoseUrl(d), d.lcm_url);
+  d.lcm_url = "file:///tmp/out.lcmlog?mode=w";  // a log being written has no poses
+  EXPECT_FALSE(effectivePoseUrl(d).has_value());
+  d.pose_url = "file:///tmp/poses.lcmlog?speed=0";
+  EXPECT_EQ(effectivePoseUrl(d), d.pose_url);
+  d.pose_input = false;
+  EXPECT_FALSE(effectivePoseUrl(d).has_value());
+}
+
+// ---- the pose input -----------------------------------------------------------------
+
+std::vector<std::uint8_t> poseBytes(const io::RobotPose& pose) {
+  return io::encodeMessage(io::encodeRobotPose(pose));
+}
+
+void waitUntilFinished(const PoseInput& input) {
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(60);
+  while (!input.finished() && std::chrono::steady_clock::now() < deadline) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  }
+  ASSERT_TRUE(input.finished()) << "the pose log was not read to its end";
+}
+
+TEST(PoseInput, ReadsItsChannelRejectsBadMessagesAndReportsThem) {
+  TempDir tmp;
+  const std::string channel = io::channelName(io::kRobotPoseChannel, "R2");
+  std::vector<test::LogMessage> log;
+  log.push_back({channel, poseBytes({1'000'000, 1.0, 2.0, 0.5})});
+  const auto good = poseBytes({1'100'000, 1.1, 2.0, 0.5});
+  log.push_back({channel, std::vector<std::uint8_t>(good.begin(), good.end() - 3)});  // truncated
+  log.push_back({channel, std::vector<std::uint8_t>(64, 0x5A)});                      // garbage
+  log.push_back({channel, poseBytes({1'200'000, std::nan(""), 2.0, 0.5})});           // NaN
+  log.push_back({"FINDMUG_ROBOT_POSE", poseBytes({1'300'000, 9.0, 9.0, 0.0})});        // other robot
+  log.push_back({channel, good});
+  test::writeLcmLog(tmp.str("poses.lcmlog"), log);
+
+  std::vector<std::string> errors;
+  std::mutex errors_mutex;
+  PoseInput input("file://" + tmp.str("poses.lcmlog") + "?speed=0", channel, 5.0,
+                  [&](const std::string& what) {
+                    std::lock_guard lock(errors_mutex);
+                    errors.push_back(what);
+                  });
+  waitUntilFinished(input);
+  EXPECT_EQ(input.received(), 2u);
+  EXPECT_EQ(input.rejected(), 3u);
+  EXPECT_EQ(input.history().size(), 2u);
+  EXPECT_DOUBLE_EQ(input.history().closest(1'110'000, 50'000)->x, 1.1);
+  std::lock_guard lock(errors_mutex);
+  ASSERT_EQ(errors.size(), 3u);
+  for (const std::string& e : errors) EXPECT_NE(e.find(channel), std::string::npos) << e;
+  EXPECT_NE(errors[0].find("truncated"), std::string::npos) << errors[0];
+  EXPECT_NE(errors[1].find("type hash"), std::string::npos) << errors[1];
+  EXPECT_NE(errors[2].find("x/y/yaw"), std::string::npos) << errors[2];
+}
+
+TEST(PoseInput, AnUnopenableProviderNamesTheKey) {
+  try {
+    PoseInput input("bogus://nowhere", "FINDMUG_ROBOT_POSE", 5.0);
+    FAIL() << "opened bogus://";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("daemon.pose_url"), std::string::npos) << e.what();
+  }
+}
+
+// ---- the map on a synthetic apartment ----------------------------------------------------
+
+constexpr std::uint64_t kSceneSeed = 11;
+constexpr double kPoseHz = 10.0;  // the localisation's rate
+constexpr int kFrameStride = 10;  // a frame every 10th pose: 1 Hz
+constexpr int kFrames = 40;
+constexpr std::uint64_t kStartUtime = 1'700'000'000'000'000ULL;
+
+std::uint64_t utimeOf(const synth::CameraPose& pose) {
+  return kStartUtime + static_cast<std::uint64_t>(std::llround(pose.time_s * 1e6));
+}
+
+// The base frame's pose in the map (= world) for a camera pose.
+io::RobotPose robotPose(const synth::CameraPose& pose) {
+  return io::RobotPose{utimeOf(pose), pose.xy.x(), pose.xy.y(), pose.yaw};
+}
+
+// Frames with no depth at all right after this frame, looking at table 1:
+// two without the camera mount (so no ground plane), one with it (a ground
+// plane, but not a single labelled pixel). They have poses but were not
+// labelled, so they must not touch the map: three "misses" would make it
+// forget table 1.
+constexpr int kBlankAfter = 20;
+constexpr int kBlankFrames = 3;
+
+// What goes into the pipeline, in time order.
+struct Submitted {
+  RgbdFrame frame;
+  synth::CameraPose pose;  // where the camera was
+  int index = -1;          // into Sequence::frames; -1 for a blank frame
+};
+
+struct Sequence {
+  synth::SynthScene scene;
+  std::vector<synth::CameraPose> poses;  // kPoseHz
+  std::vector<LabeledFrame> frames;      // every kFrameStride-th pose
+  std::vector<synth::CameraPose> frame_poses;
+  std::vector<Submitted> submitted;      // frames + blank frames
+  std::shared_ptr<const RandomForest> forest;
+  TempDir dir;
+};
+
+SegmenterConfig mapSegmenterConfig() { return test::fastSegmenterConfig(); }
+
+const Sequence& sequence() {
+  static const Sequence* s = [] {
+    auto* seq = new Sequence;
+    synth::ApartmentParams params;
+    params.tables_min = 2;
+    params.tables_max = 3;
+    seq->scene = synth::makeApartment(kSceneSeed, params);
+    seq->poses = synth::cameraPath(seq->scene, kFrames * kFrameStride, kPoseHz);
+    synth::RenderOptions render;
+    for (int i = 0; i < kFrames; ++i) {
+      const synth::CameraPose& pose = seq->poses[static_cast<std::size_t>(i * kFrameStride)];
+      synth::RenderedFrame r = synth::render(seq->scene, pose, render, 1000 + i);
+      r.labeled.frame.utime = utimeOf(pose);
+      r.labeled.frame.seq = i;
+      r.labeled.frame.source = "synth";
+      r.labeled.name = synth::frameName(i);
+      seq->frames.push_back(std::move(r.labeled));
+      seq->frame_poses.push_back(pose);
+    }
+    for (int i = 0; i < kFrames; ++i) {
+      const Submitted rendered{seq->frames[static_cast<std::size_t>(i)].frame,
+                               seq->frame_poses[static_cast<std::size_t>(i)], i};
+      seq->submitted.push_back(rendered);
+      for (int b = 1; i == kBlankAfter && b <= kBlankFrames; ++b) {
+        // 0.1 s apart, each on a pose of the path, looking at table 1.
+        Submitted blank = rendered;
+        blank.pose = seq->poses[static_cast<std::size_t>(i * kFrameStride + b)];
+        blank.frame.utime = utimeOf(blank.pose);
+        blank.frame.seq = 100 + b;
+        std::fill(blank.frame.depth_mm.begin(), blank.frame.depth_mm.end(), 0);
+        if (b < kBlankFrames) blank.frame.extrinsics.reset();
+        blank.index = -1;
+        seq->submitted.push_back(std::move(blank));
+      }
+    }
+    // Trained on the frames it will label: near-perfect labels on purpose.
+    const SegmenterConfig config = mapSegmenterConfig();
+    const Segmenter extractor(config, nullptr);
+    TrainingSet data;
+    for (const LabeledFrame& f : seq->frames) {
+      const SegmentedFrame segmented = extractor.oversegment(extractor.prepare(f.frame));
+      const SegmentFeatures features = extractor.features(segmented);
+      const auto labels = segmentMajorityLabels(segmented.segmentation, f.labels);
+      for (std::size_t k = 0; k < features.features.size(); ++k) {
+        if (labels[k] == kVoidLabel) continue;
+        data.features.push_back(features.features[k]);
+        data.labels.push_back(labels[k]);
+      }
+    }
+    ForestParams forest;
+    forest.num_trees = 6;
+    forest.max_depth = 16;
+    forest.min_samples_leaf = 1;
+    forest.num_threads = 2;
+    RandomForest trained = RandomForest::train(data, forest);
+    trained.save(seq->dir.str("synth.fmf"));
+    seq->forest = std::make_shared<const RandomForest>(RandomForest::load(seq->dir.str("synth.fmf")));
+    return seq;
+  }();
+  return *s;
+}
+
+struct MapRun {
+  std::vector<io::TablesMessage> tables;     // FINDMUG_TABLES, frame order
+  std::vector<io::TablesMessage> table_map;  // FINDMUG_TABLE_MAP
+  std::vector<status_t> statuses;
+  PipelineCounters counters;
+  std::vector<MappedTable> mapped;  // the map at the end, tentative tables included
+};
+
+// Runs the frames through the pipeline (sequential: deterministic, nothing
+// dropped) with the given pose log, after the pose input has read all of it.
+MapRun runPipeline(const Sequence& seq, const std::string& pose_log,
+                   const std::vector<std::string>& overrides = {}) {
+  TempDir tmp;
+  Config config;
+  config.segmenter = mapSegmenterConfig();
+  config.extra["daemon.lcm_url"] = "file://" + tmp.str("out.lcmlog") + "?mode=w";
+  config.extra["daemon.pose_url"] = "file://" + pose_log + "?speed=0";
+  config.extra["daemon.status_period_s"] = "60";
+  // The whole pose log is read before the first frame (a replay at full
+  // speed), so the history must hold all of it, not the default 5 s that
+  // covers a live pipeline's latency.
+  config.extra["daemon.pose_history_s"] = "1000";
+  for (const auto& o : overrides) applyOverride(config, o);
+  const DaemonConfig dc = resolveDaemonConfig(config);
+  MapRun run;
+  {
+    Pipeline pipeline(config.segmenter, dc, seq.forest, "synth", ExecutionMode::Sequential);
+    pipeline.start();
+    EXPECT_NE(pipeline.poseInput(), nullptr);
+    if (pipeline.poseInput()) waitUntilFinished(*pipeline.poseInput());
+    for (const Submitted& f : seq.submitted) EXPECT_TRUE(pipeline.submit(f.frame));
+    pipeline.stop(StopMode::Drain);
+    run.counters = pipeline.counters();
+    run.mapped = pipeline.mappedTables();
+  }
+  for (const auto& m : test::readLcmLog(tmp.str("out.lcmlog"))) {
+    if (m.channel == io::kTablesChannel) {
+      run.tables.push_back(io::decodeTables(m.data.data(), m.data.size(), m.channel));
+    } else if (m.channel == io::kTableMapChannel) {
+      run.table_map.push_back(io::decodeTables(m.data.data(), m.data.size(), m.channel));
+    } else if (m.channel == io::kStatusChannel) {
+      run.statuses.push_back(io::decodeMessage<status_t>(m.data.data(), m.data.size(), m.channel));
+    }
+  }
+  return run;
+}
+
+// Frame indices whose poses are left out of the pose log: for these frames
+// the closest pose is 0.3 s or more away, beyond daemon.pose_max_age_s (0.2 s).
+bool inPoseGap(int frame) { return frame == 12 || frame == 13; }
+
+// The pose log: every pose of the path at kPoseHz (frames fall exactly on
+// poses), minus the gap, plus three bad messages.
+std::string writePoseLog(const Sequence& seq, const TempDir& dir, double shift_s = 0.0) {
+  std::vector<test::LogMessage> log;
+  const std::string channel(io::kRobotPoseChannel);
+  for (std::size_t i = 0; i < seq.poses.size(); ++i) {
+    const double frame_index = static_cast<double>(i) / kFrameStride;
+    if (inPoseGap(static_cast<int>(std::lround(frame_index))) &&
+        std::abs(frame_index - std::round(frame_index)) < 0.25) {
+      continue;
+    }
+    io::RobotPose pose = robotPose(seq.poses[i]);
+    pose.utime += static_cast<std::uint64_t>(std::llround(shift_s * 1e6));
+    log.push_back({channel, poseBytes(pose)});
+    if (i == 5) {
+      auto bytes = poseBytes(pose);
+      log.push_back({channel, std::vector<std::uint8_t>(bytes.begin(), bytes.begin() + 20)});
+      log.push_back({channel, std::vector<std::uint8_t>(40, 0x33)});
+      pose.yaw = std::nan("");
+      log.push_back({channel, poseBytes(pose)});
+    }
+  }
+  const std::string path = dir.str("poses.lcmlog");
+  test::writeLcmLog(path, log);
+  return path;
+}
+
+// The map table nearest to `xy` (map frame box centre), or nullptr.
+const io::MapFrameTable* nearest(const io::TablesMessage& m, const Eigen::Vector2d& xy,
+                                 std::size_t* index) {
+  const io::MapFrameTable* best = nullptr;
+  for (std::size_t k = 0; k < m.map_tables.size(); ++k) {
+    if (!best || (m.map_tables[k].center - xy).norm() < (best->center - xy).norm()) {
+      best = &m.map_tables[k];
+      *index = k;
+    }
+  }
+  return best;
+}
+
+TEST(DaemonMap, PosesPutTablesInTheMapFrameAndTheMapHoldsEachTrueTableOnce) {
+  const Sequence& seq = sequence();
+  TempDir tmp;
+  const MapRun run = runPipeline(seq, writePoseLog(seq, tmp));
+
+  // Bad pose messages: counted as rejected input, skipped, reported.
+  EXPECT_EQ(run.counters.rejected, 3u);
+  ASSERT_FALSE(run.statuses.empty());
+  EXPECT_EQ(run.statuses.back().frames_rejected, 3);
+  EXPECT_NE(run.statuses.back().last_error.find("robot pose"), std::string::npos)
+      << run.statuses.back().last_error;
+  EXPECT_EQ(run.counters.processed, seq.submitted.size());
+
+  // Per frame: the closest pose (here the exact one) or none in the gap.
+  ASSERT_EQ(run.tables.size(), seq.submitted.size());
+  std::set<std::int64_t> frames_with_pose;  // labelled ones
+  int detections = 0;
+  for (std::size_t j = 0; j < seq.submitted.size(); ++j) {
+    const Submitted& submitted = seq.submitted[j];
+    const int i = static_cast<int>(submitted.frame.seq);
+    const io::TablesMessage& m = run.tables[j];
+    ASSERT_EQ(m.seq, i);
+    EXPECT_EQ(m.content, io::TablesContent::Frame);
+    if (submitted.index >= 0 && inPoseGap(submitted.index)) {
+      EXPECT_FALSE(m.map_pose.has_value()) << "frame " << i << " took a pose 0.3 s away";
+      EXPECT_TRUE(m.map_tables.empty());
+      for (const auto& info : m.map_info) EXPECT_EQ(info.map_id, 0);
+      continue;
+    }
+    ASSERT_TRUE(m.map_pose.has_value()) << "frame " << i;
+    if (submitted.index < 0) {
+      EXPECT_TRUE(m.tables.empty()) << "blank frame " << i;
+    } else {
+      frames_with_pose.insert(i);
+    }
+    const io::RobotPose want = robotPose(submitted.pose);
+    EXPECT_EQ(m.map_pose->utime, want.utime);
+    EXPECT_EQ(m.map_pose->x, want.x);
+    EXPECT_EQ(m.map_pose->yaw, want.yaw);
+    ASSERT_EQ(m.map_tables.size(), m.tables.size());
+    for (std::size_t k = 0; k < m.tables.size(); ++k) {
+      EXPECT_GT(m.map_info[k].map_id, 0) << "frame " << i << " table " << k << " not mapped";
+      ++detections;
+    }
+  }
+  EXPECT_GT(detections, kFrames / 2);
+
+  // One map message per labelled frame with a pose (every rendered frame has
+  // a ground plane: its camera mount is known; the blank ones have none),
+  // in frame order.
+  ASSERT_EQ(run.table_map.size(), frames_with_pose.size());
+  for (std::size_t j = 0; j < run.table_map.size(); ++j) {
+    const io::TablesMessage& m = run.table_map[j];
+    EXPECT_TRUE(frames_with_pose.count(m.seq)) << m.seq;
+    EXPECT_EQ(m.content, io::TablesContent::Map);
+    ASSERT_TRUE(m.map_pose.has_value());
+    for (const auto& info : m.map_info) EXPECT_TRUE(info.confirmed);
+    if (j > 0) {
+      EXPECT_GT(m.seq, run.table_map[j - 1].seq);
+    }
+  }
+
+  // The final map: each true table exactly once, where it really is.
+  const io::TablesMessage& final_map = run.table_map.back();
+  std::set<std::size_t> matched;
+  std::map<int, int> id_of_truth;  // truth table -> stable id
+  for (const synth::TableTruth& truth : seq.scene.tables) {
+    std::size_t k = 0;
+    const io::MapFrameTable* found = nearest(final_map, truth.center_xy, &k);
+    ASSERT_NE(found, nullptr) << "table " << truth.id << " (" << truth.kind << ") not in the map";
+    const double error = (found->center - truth.center_xy).norm();
+    const double height_error = std::abs(final_map.tables[k].top_height - truth.height);
+    double outside = -1e9;  // largest signed distance of a hull vertex to the true top
+    for (const auto& p : found->hull) {
+      outside = std::max(outside, synth::signedDistanceToTop(truth, p));
+    }
+    std::printf("truth table %d (%s, %.2f x %.2f m, h %.2f) at (%.3f, %.3f): map id %d at "
+                "(%.3f, %.3f), %.2f x %.2f m, error %.3f m, height error %.3f m, hull %.3f m "
+                "outside, %d sightings\n",
+                truth.id, truth.kind.c_str(), truth.size.x(), truth.size.y(), truth.height,
+                truth.center_xy.x(), truth.center_xy.y(), final_map.tables[k].id,
+                found->center.x(), found->center.y(), 2 * final_map.tables[k].extents.x(),
+                2 * final_map.tables[k].extents.y(), error, height_error, outside,
+                final_map.map_info[k].sightings);
+    // Tolerances from measurement (seed 11, printed above): the centre is
+    // off by 0.7, 1.6 and 7.8 cm, the height by at most 3 mm. With the
+    // ground-truth labels every single-frame hull lies within 2.3 cm of the
+    // true outline (depth noise, the 5 cm top band); the forest's labels
+    // are per supervoxel, and a supervoxel straddling the table edge drags
+    // up to 16 cm of neighbouring surface into one frame's cluster (frame
+    // 30 of table 1), which the hull of the recent hulls keeps: that is the
+    // 7.8 cm. A frame placed with the pose one period (0.1 s) off would
+    // shift a table 2.5 m away by up to 20 cm (0.08 rad of turning).
+    EXPECT_LT(error, 0.10) << "table " << truth.id;
+    EXPECT_LT(height_error, 0.02) << "table " << truth.id;
+    EXPECT_TRUE(matched.insert(k).second) << "two true tables share map table " << k;
+    id_of_truth[truth.id] = final_map.tables[k].id;
+  }
+  EXPECT_EQ(final_map.tables.size(), seq.scene.tables.size()) << "extra tables in the map";
+
+  // The daemon's map is exactly the library's TableMap fed with the published
+  // base-frame tables and the TRUE poses of the frames that had one: the
+  // right pose was taken for every frame, in order, and nothing else went in.
+  TableMap library(TableMapConfig{}, mapSegmenterConfig().tables);
+  for (std::size_t j = 0; j < seq.submitted.size(); ++j) {
+    const Submitted& submitted = seq.submitted[j];
+    if (submitted.index < 0 || inPoseGap(submitted.index)) continue;
+    const synth::CameraPose& p = submitted.pose;
+    const io::TablesMessage& m = run.tables[j];
+    const TableMapUpdate update =
+        library.update(m.tables, {p.xy.x(), p.xy.y(), p.yaw}, submitted.frame.utime);
+    ASSERT_EQ(update.assigned_ids.size(), m.map_info.size());
+    for (std::size_t k = 0; k < m.map_info.size(); ++k) {
+      EXPECT_EQ(m.map_info[k].map_id, update.assigned_ids[k]) << "frame " << m.seq;
+    }
+  }
+  const std::vector<TableCluster> confirmed = library.confirmedTables();
+  ASSERT_EQ(confirmed.size(), final_map.tables.size());
+  for (std::size_t k = 0; k < confirmed.size(); ++k) {
+    EXPECT_EQ(final_map.tables[k].id, confirmed[k].id);
+    EXPECT_NEAR(final_map.map_tables[k].center.x(), confirmed[k].center.x(), 1e-4);
+    EXPECT_NEAR(final_map.map_tables[k].center.y(), confirmed[k].center.y(), 1e-4);
+    EXPECT_EQ(final_map.map_tables[k].hull.size(), confirmed[k].hull.size());
+    EXPECT_EQ(final_map.map_tables[k].search_positions.size(),
+              confirmed[k].search_positions.size());
+  }
+
+  // Stable ids: whenever a true table is in a map message, it has the same id.
+  for (const io::TablesMessage& m : run.table_map) {
+    for (const synth::TableTruth& truth : seq.scene.tables) {
+      std::size_t k = 0;
+      const io::MapFrameTable* found = nearest(m, truth.center_xy, &k);
+      if (found && (found->center - truth.center_xy).norm() < 0.3) {
+        EXPECT_EQ(m.tables[k].id, id_of_truth[truth.id])
+            << "frame " << m.seq << ": table " << truth.id << " changed its id";
+      }
+    }
+  }
+}
+
+TEST(DaemonMap, WithoutPosesInTimeNoMapIsPublishedAndMapFieldsStayEmpty) {
+  const Sequence& seq = sequence();
+  TempDir tmp;
+  // Every pose 100 s after its frame (longer than the whole sequence): the
+  // history is full of poses, but none is close enough in time to any frame.
+  const MapRun run = runPipeline(seq, writePoseLog(seq, tmp, 100.0));
+  EXPECT_TRUE(run.table_map.empty());
+  EXPECT_TRUE(run.mapped.empty());
+  ASSERT_EQ(run.tables.size(), seq.submitted.size());
+  int detections = 0;
+  for (const io::TablesMessage& m : run.tables) {
+    EXPECT_FALSE(m.map_pose.has_value());
+    EXPECT_TRUE(m.map_tables.empty());
+    ASSERT_EQ(m.map_info.size(), m.tables.size());
+    for (const auto& info : m.map_info) {
+      EXPECT_EQ(info.map_id, 0);
+      EXPECT_FALSE(info.confirmed);
+      EXPECT_EQ(info.sightings, 0);
+    }
+    detections += static_cast<int>(m.tables.size());
+  }
+  EXPECT_GT(detections, 0) << "no tables at all: the test would prove nothing";
+}
+
+}  // namespace
+}  // namespace findmug::daemon
+
