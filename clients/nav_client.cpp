@@ -36,6 +36,8 @@ const char* kUsage =
     "  --lcm-url URL          LCM provider (default: LCM_DEFAULT_URL or udpm default);\n"
     "                         file://LOG?speed=0 replays a log and exits at its end\n"
     "  --channel-suffix S     listen on FINDMUG_TABLES_S\n"
+    "  --map                  listen on the persistent table map (FINDMUG_TABLE_MAP):\n"
+    "                         confirmed tables with stable ids, in the map frame\n"
     "  --frame auto|base|map  frame of the printed positions (default auto: map when\n"
     "                         the message has the robot's map pose)\n"
     "  --json                 one JSON object per message (JSON lines)\n"
@@ -203,13 +205,14 @@ int main(int argc, char** argv) {
   long count = 0;
   try {
     const clients::Flags flags(argc, argv, {"--lcm-url", "--channel-suffix", "--frame", "--count"},
-                               {"--json", "--help"});
+                               {"--json", "--map", "--help"});
     if (flags.has("--help")) {
       std::fputs(kUsage, stdout);
       return 0;
     }
     url = flags.get("--lcm-url", "");
-    channel = io::channelName(io::kTablesChannel, flags.get("--channel-suffix", ""));
+    channel = io::channelName(flags.has("--map") ? io::kTableMapChannel : io::kTablesChannel,
+                              flags.get("--channel-suffix", ""));
     const std::string frame_name = flags.get("--frame", "auto");
     if (frame_name == "base") {
       frame = FrameChoice::Base;

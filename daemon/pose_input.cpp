@@ -17,9 +17,9 @@ PoseHistory::PoseHistory(std::uint64_t span_us) : span_us_(span_us) {}
 
 void PoseHistory::insert(const io::RobotPose& pose) {
   std::lock_guard lock(mutex_);
-  const auto at = std::lower_bound(
-      poses_.begin(), poses_.end(), pose.utime,
-      [](const io::RobotPose& p, std::uint64_t utime) { return p.utime < utime; });
+  const auto at =
+      std::lower_bound(poses_.begin(), poses_.end(), pose.utime,
+                       [](const io::RobotPose& p, std::uint64_t utime) { return p.utime < utime; });
   if (at != poses_.end() && at->utime == pose.utime) {
     *at = pose;
   } else {
@@ -36,9 +36,9 @@ std::optional<io::RobotPose> PoseHistory::closest(std::uint64_t utime,
                                                   std::uint64_t max_age_us) const {
   std::lock_guard lock(mutex_);
   if (poses_.empty()) return std::nullopt;
-  const auto after = std::lower_bound(
-      poses_.begin(), poses_.end(), utime,
-      [](const io::RobotPose& p, std::uint64_t t) { return p.utime < t; });
+  const auto after =
+      std::lower_bound(poses_.begin(), poses_.end(), utime,
+                       [](const io::RobotPose& p, std::uint64_t t) { return p.utime < t; });
   auto distance = [utime](const io::RobotPose& p) {
     return p.utime > utime ? p.utime - utime : utime - p.utime;
   };

@@ -12,11 +12,10 @@
 //                 utime), the console summary, the corrupt message skipped
 //                 with its reason, exit 2 on bad flags.
 #include <fcntl.h>
+#include <gtest/gtest.h>
 #include <spawn.h>
 #include <sys/wait.h>
 #include <unistd.h>
-
-#include <gtest/gtest.h>
 
 #include <algorithm>
 #include <chrono>
@@ -165,21 +164,38 @@ class JsonParser {
         if (pos_ >= text_.size()) fail("unterminated escape");
         const char e = text_[pos_++];
         switch (e) {
-          case '"': c = '"'; break;
-          case '\\': c = '\\'; break;
-          case '/': c = '/'; break;
-          case 'n': c = '\n'; break;
-          case 't': c = '\t'; break;
-          case 'r': c = '\r'; break;
-          case 'b': c = '\b'; break;
-          case 'f': c = '\f'; break;
+          case '"':
+            c = '"';
+            break;
+          case '\\':
+            c = '\\';
+            break;
+          case '/':
+            c = '/';
+            break;
+          case 'n':
+            c = '\n';
+            break;
+          case 't':
+            c = '\t';
+            break;
+          case 'r':
+            c = '\r';
+            break;
+          case 'b':
+            c = '\b';
+            break;
+          case 'f':
+            c = '\f';
+            break;
           case 'u': {
             if (pos_ + 4 > text_.size()) fail("short \\u escape");
             c = static_cast<char>(std::stoi(text_.substr(pos_, 4), nullptr, 16));
             pos_ += 4;
             break;
           }
-          default: fail("bad escape");
+          default:
+            fail("bad escape");
         }
       }
       out += c;
@@ -294,9 +310,9 @@ io::TablesMessage baseFrameTables() {
   m.tables.push_back(table(0, {3.0f, 0.0f},
                            {position(3.0f, -0.9f, 1.57f), position(3.0f, 0.9f, -1.57f),
                             position(2.2f, 0.0f, 0.0f, false, "obstacle within robot radius")}));
-  m.tables.push_back(table(1, {1.5f, -1.5f},
-                           {position(1.5f, -2.4f, 1.57f), position(0.6f, -1.5f, 0.0f),
-                            position(1.5f, -0.6f, -1.57f)}));
+  m.tables.push_back(table(
+      1, {1.5f, -1.5f},
+      {position(1.5f, -2.4f, 1.57f), position(0.6f, -1.5f, 0.0f), position(1.5f, -0.6f, -1.57f)}));
   return m;
 }
 
@@ -336,7 +352,8 @@ std::vector<Stop> expectedTour(const io::TablesMessage& message, bool map_frame,
   std::vector<Eigen::Vector2f> points;
   for (const auto& s : reachable) points.push_back(s.xy);
   std::vector<Stop> tour;
-  for (int i : visitingOrder(*robot, points)) tour.push_back(reachable[static_cast<std::size_t>(i)]);
+  for (int i : visitingOrder(*robot, points))
+    tour.push_back(reachable[static_cast<std::size_t>(i)]);
   return tour;
 }
 
@@ -384,8 +401,8 @@ LabelImage labelBlocks(int width, int height) {
   for (int v = 0; v < height; ++v) {
     for (int u = 0; u < width; ++u) {
       // Floor at the bottom half, wall/table/chair columns above, one void pixel per row.
-      std::uint8_t id = v >= height / 2 ? static_cast<std::uint8_t>(Label::Floor)
-                        : u < width / 3  ? static_cast<std::uint8_t>(Label::Wall)
+      std::uint8_t id = v >= height / 2     ? static_cast<std::uint8_t>(Label::Floor)
+                        : u < width / 3     ? static_cast<std::uint8_t>(Label::Wall)
                         : u < 2 * width / 3 ? static_cast<std::uint8_t>(Label::Table)
                                             : static_cast<std::uint8_t>(Label::Chair);
       if (u == width - 1) id = kVoidLabel;
@@ -401,8 +418,7 @@ const ClientLog& clientLog() {
     auto* l = new ClientLog;
     Log messages;
     const std::string tables_channel(io::kTablesChannel), labels_channel(io::kLabelsChannel);
-    messages.push_back(
-        {tables_channel, io::encodeMessage(io::encodeTables(baseFrameTables()))});
+    messages.push_back({tables_channel, io::encodeMessage(io::encodeTables(baseFrameTables()))});
     messages.push_back(
         {tables_channel, truncated(io::encodeMessage(io::encodeTables(baseFrameTables())))});
     messages.push_back({tables_channel, io::encodeMessage(io::encodeTables(mapFrameTables()))});
@@ -435,8 +451,8 @@ const ClientLog& clientLog() {
     }
     io::RgbdEncodeOptions lossless;
     lossless.color = io::ColorCompression::None;
-    messages.push_back(
-        {std::string(io::kRgbdChannel), io::encodeMessage(io::encodeRgbdFrame(l->color3, lossless))});
+    messages.push_back({std::string(io::kRgbdChannel),
+                        io::encodeMessage(io::encodeRgbdFrame(l->color3, lossless))});
     l->labels3 = l->labels1;
     l->labels3.utime = 3'000'000;
     l->labels3.seq = 3;
@@ -602,10 +618,9 @@ TEST(LabelViewer, WritesPaletteOverlaysAndSummariesAndSkipsTheCorruptImage) {
   const ClientLog& log = clientLog();
   TempDir tmp;
   std::filesystem::create_directories(tmp.path() / "png");
-  const ProcessResult r = run(FINDMUG_LABEL_VIEWER_EXE,
-                              {"--lcm-url", replayUrl(log.path), "--out", tmp.str("png"),
-                               "--alpha", "0.5"},
-                              tmp);
+  const ProcessResult r =
+      run(FINDMUG_LABEL_VIEWER_EXE,
+          {"--lcm-url", replayUrl(log.path), "--out", tmp.str("png"), "--alpha", "0.5"}, tmp);
   EXPECT_EQ(r.exit_code, 0) << r.err;
 
   // Console: one summary per good image, shares of each class.
@@ -613,10 +628,9 @@ TEST(LabelViewer, WritesPaletteOverlaysAndSummariesAndSkipsTheCorruptImage) {
   ASSERT_EQ(out.size(), 2u) << r.out;
   // 12x8: bottom half floor (48 px), top rows: wall 4, table 4, chair 3 columns
   // (x4 rows) minus the void last column (8 px).
-  for (const char* share :
-       {"labels seq 1 utime 1000000 12x8 latency 250.0 ms:", "floor 45.8%", "wall 16.7%",
-        "table 16.7%", "chair 12.5%", "void 8.3%", "mean confidence 0.50",
-        "palette (no colour frame)"}) {
+  for (const char* share : {"labels seq 1 utime 1000000 12x8 latency 250.0 ms:", "floor 45.8%",
+                            "wall 16.7%", "table 16.7%", "chair 12.5%", "void 8.3%",
+                            "mean confidence 0.50", "palette (no colour frame)"}) {
     EXPECT_NE(out[0].find(share), std::string::npos) << share << " not in: " << out[0];
   }
   EXPECT_NE(out[1].find("labels seq 3"), std::string::npos) << out[1];
@@ -661,19 +675,15 @@ TEST(LabelViewer, NoPngWritesNothingAndBadFlagsExitWithCode2) {
   const ClientLog& log = clientLog();
   TempDir tmp;
   std::filesystem::create_directories(tmp.path() / "png");
-  const ProcessResult r = run(FINDMUG_LABEL_VIEWER_EXE,
-                              {"--lcm-url", replayUrl(log.path), "--out", tmp.str("png"),
-                               "--no-png"},
-                              tmp);
+  const ProcessResult r =
+      run(FINDMUG_LABEL_VIEWER_EXE,
+          {"--lcm-url", replayUrl(log.path), "--out", tmp.str("png"), "--no-png"}, tmp);
   EXPECT_EQ(r.exit_code, 0) << r.err;
   EXPECT_EQ(lines(r.out).size(), 2u) << r.out;
   EXPECT_TRUE(std::filesystem::is_empty(tmp.path() / "png"));
 
-  for (const std::vector<std::string>& args :
-       std::vector<std::vector<std::string>>{{"--alpha", "2"},
-                                             {"--every", "0"},
-                                             {"--out", tmp.str("no-such-dir")},
-                                             {"--bogus"}}) {
+  for (const std::vector<std::string>& args : std::vector<std::vector<std::string>>{
+           {"--alpha", "2"}, {"--every", "0"}, {"--out", tmp.str("no-such-dir")}, {"--bogus"}}) {
     const ProcessResult bad = run(FINDMUG_LABEL_VIEWER_EXE, args, tmp);
     EXPECT_EQ(bad.exit_code, 2) << args[0] << ": " << bad.err;
     EXPECT_NE(bad.err.find("usage: findmug-label-viewer"), std::string::npos) << bad.err;

@@ -114,16 +114,14 @@ TEST(DaemonMapConfig, PoseAndTableMapKeysAreParsedValidatedAndWrittenBack) {
   };
   EXPECT_NE(with("table_map.confirm_sightings", "0").find("table_map.confirm_sightings"),
             std::string::npos);
-  EXPECT_NE(with("table_map.match_gap_m", "wide").find("table_map.match_gap_m"),
-            std::string::npos);
+  EXPECT_NE(with("table_map.match_gap_m", "wide").find("table_map.match_gap_m"), std::string::npos);
   // Consistency between keys, checked by the core's validateTableMapConfig.
   EXPECT_NE(with("table_map.view_max_range_m", "0.5").find("table_map.view_max_range_m"),
             std::string::npos);
   EXPECT_NE(with("table_map.tentative_timeout_s", "0").find("table_map.tentative_timeout_s"),
             std::string::npos);
   EXPECT_NE(with("table_map.no_such_key", "1").find("table_map.no_such_key"), std::string::npos);
-  EXPECT_NE(with("daemon.pose_max_age_s", "-1").find("daemon.pose_max_age_s"),
-            std::string::npos);
+  EXPECT_NE(with("daemon.pose_max_age_s", "-1").find("daemon.pose_max_age_s"), std::string::npos);
   EXPECT_NE(with("daemon.pose_url", "localhost").find("daemon.pose_url"), std::string::npos);
   EXPECT_NE(with("daemon.pose_input", "maybe").find("daemon.pose_input"), std::string::npos);
 }
@@ -163,7 +161,7 @@ TEST(PoseInput, ReadsItsChannelRejectsBadMessagesAndReportsThem) {
   log.push_back({channel, std::vector<std::uint8_t>(good.begin(), good.end() - 3)});  // truncated
   log.push_back({channel, std::vector<std::uint8_t>(64, 0x5A)});                      // garbage
   log.push_back({channel, poseBytes({1'200'000, std::nan(""), 2.0, 0.5})});           // NaN
-  log.push_back({"FINDMUG_ROBOT_POSE", poseBytes({1'300'000, 9.0, 9.0, 0.0})});        // other robot
+  log.push_back({"FINDMUG_ROBOT_POSE", poseBytes({1'300'000, 9.0, 9.0, 0.0})});       // other robot
   log.push_back({channel, good});
   test::writeLcmLog(tmp.str("poses.lcmlog"), log);
 
@@ -233,7 +231,7 @@ struct Sequence {
   std::vector<synth::CameraPose> poses;  // kPoseHz
   std::vector<LabeledFrame> frames;      // every kFrameStride-th pose
   std::vector<synth::CameraPose> frame_poses;
-  std::vector<Submitted> submitted;      // frames + blank frames
+  std::vector<Submitted> submitted;  // frames + blank frames
   std::shared_ptr<const RandomForest> forest;
   TempDir dir;
 };
@@ -296,7 +294,8 @@ const Sequence& sequence() {
     forest.num_threads = 2;
     RandomForest trained = RandomForest::train(data, forest);
     trained.save(seq->dir.str("synth.fmf"));
-    seq->forest = std::make_shared<const RandomForest>(RandomForest::load(seq->dir.str("synth.fmf")));
+    seq->forest =
+        std::make_shared<const RandomForest>(RandomForest::load(seq->dir.str("synth.fmf")));
     return seq;
   }();
   return *s;
@@ -469,14 +468,14 @@ TEST(DaemonMap, PosesPutTablesInTheMapFrameAndTheMapHoldsEachTrueTableOnce) {
     for (const auto& p : found->hull) {
       outside = std::max(outside, synth::signedDistanceToTop(truth, p));
     }
-    std::printf("truth table %d (%s, %.2f x %.2f m, h %.2f) at (%.3f, %.3f): map id %d at "
-                "(%.3f, %.3f), %.2f x %.2f m, error %.3f m, height error %.3f m, hull %.3f m "
-                "outside, %d sightings\n",
-                truth.id, truth.kind.c_str(), truth.size.x(), truth.size.y(), truth.height,
-                truth.center_xy.x(), truth.center_xy.y(), final_map.tables[k].id,
-                found->center.x(), found->center.y(), 2 * final_map.tables[k].extents.x(),
-                2 * final_map.tables[k].extents.y(), error, height_error, outside,
-                final_map.map_info[k].sightings);
+    std::printf(
+        "truth table %d (%s, %.2f x %.2f m, h %.2f) at (%.3f, %.3f): map id %d at "
+        "(%.3f, %.3f), %.2f x %.2f m, error %.3f m, height error %.3f m, hull %.3f m "
+        "outside, %d sightings\n",
+        truth.id, truth.kind.c_str(), truth.size.x(), truth.size.y(), truth.height,
+        truth.center_xy.x(), truth.center_xy.y(), final_map.tables[k].id, found->center.x(),
+        found->center.y(), 2 * final_map.tables[k].extents.x(), 2 * final_map.tables[k].extents.y(),
+        error, height_error, outside, final_map.map_info[k].sightings);
     // Tolerances from measurement (seed 11, printed above): the centre is
     // off by 0.7, 1.6 and 7.8 cm, the height by at most 3 mm. With the
     // ground-truth labels every single-frame hull lies within 2.3 cm of the
@@ -559,4 +558,3 @@ TEST(DaemonMap, WithoutPosesInTimeNoMapIsPublishedAndMapFieldsStayEmpty) {
 
 }  // namespace
 }  // namespace findmug::daemon
-
