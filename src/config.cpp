@@ -375,4 +375,15 @@ std::string dumpConfig(const Config& config) {
   return out.str();
 }
 
+RandomForest::Settings extractionSettings(const SegmenterConfig& config) {
+  RandomForest::Settings out;
+  for (const auto& s : settings()) {
+    if (s.key.rfind("cloud.", 0) == 0 || s.key.rfind("normals.", 0) == 0 ||
+        s.key.rfind("overseg.", 0) == 0) {
+      out.emplace_back(s.key, s.get(config));
+    }
+  }
+  return out;
+}
+
 }  // namespace findmug

@@ -21,6 +21,8 @@
 //            candidate_thresholds; uint8 class_weighting; float64 bagging_fraction;
 //            uint64 seed   (num_threads is not stored: it is not a property of
 //            the model, and a seed must give the same file whatever it is)
+//   uint32   extraction setting count (version 2), then per setting: key, value
+//            as uint32 length + bytes (cloud.*, normals.*, overseg.* of training)
 //   uint32   tree count; per tree: uint32 node count, then per node:
 //            int32 feature; inner (feature >= 0): float32 threshold, int32 left, int32 right;
 //            leaf (feature == -1): float32[kNumLabels] distribution
@@ -50,7 +52,8 @@ namespace findmug {
 namespace {
 
 constexpr char kMagic[8] = {'F', 'M', 'U', 'G', 'F', 'R', 'S', 'T'};
-constexpr std::uint32_t kFormatVersion = 1;
+constexpr std::uint32_t kFormatVersion = 2;
+constexpr std::uint32_t kMaxSettings = 256;
 constexpr int kMaxTrees = 10000;
 // Tree size is bounded by the training samples (every leaf holds at least
 // one), not by the depth; this limit only refuses absurd values.
@@ -436,6 +439,7 @@ class Reader {
 };
 
 std::vector<std::uint8_t> serialize(const ForestParams& params,
+                                    const RandomForest::Settings& settings,
                                     const std::vector<RandomForest::Tree>& trees) {
   Writer w;
   w.bytes(kMagic, sizeof kMagic);
@@ -452,6 +456,11 @@ std::vector<std::uint8_t> serialize(const ForestParams& params,
   w.u8(params.class_weighting ? 1 : 0);
   w.f64(params.bagging_fraction);
   w.u64(params.seed);
+  w.u32(static_cast<std::uint32_t>(settings.size()));
+  for (const auto& [key, value] : settings) {
+    w.str(key);
+    w.str(value);
+  }
   w.u32(static_cast<std::uint32_t>(trees.size()));
   for (const auto& tree : trees) {
     w.u32(static_cast<std::uint32_t>(tree.size()));
@@ -608,12 +617,25 @@ RandomForest RandomForest::train(const TrainingSet& data, const ForestParams& pa
   for (auto& th : pool) th.join();
   if (failure) std::rethrow_exception(failure);
 
-  const auto bytes = serialize(forest.params_, forest.trees_);
+  forest.setExtractionSettings({});
+  return forest;
+}
+
+void RandomForest::setExtractionSettings(Settings settings) {
+  if (settings.size() > kMaxSettings)
+    throw Error("RandomForest: " + std::to_string(settings.size()) +
+                " extraction settings (at most " + std::to_string(kMaxSettings) + ")");
+  for (const auto& [key, value] : settings) {
+    if (key.empty() || key.size() > kMaxNameLength || value.size() > kMaxNameLength)
+      throw Error("RandomForest: extraction setting '" + key + "' has an empty or too long name/value");
+  }
+  extraction_settings_ = std::move(settings);
+  // The id names the model's content: settings included.
+  const auto bytes = serialize(params_, extraction_settings_, trees_);
   std::uint64_t checksum = 0;
   for (std::size_t i = 0; i < kChecksumSize; ++i)
     checksum |= static_cast<std::uint64_t>(bytes[bytes.size() - kChecksumSize + i]) << (8 * i);
-  forest.id_ = idFromChecksum(checksum);
-  return forest;
+  id_ = idFromChecksum(checksum);
 }
 
 ClassProbabilities RandomForest::predict(const FeatureVector& x) const {
@@ -635,7 +657,7 @@ ClassProbabilities RandomForest::predict(const FeatureVector& x) const {
 
 void RandomForest::save(const std::string& path) const {
   if (trees_.empty()) throw Error(path + ": refusing to save an empty forest");
-  const auto bytes = serialize(params_, trees_);
+  const auto bytes = serialize(params_, extraction_settings_, trees_);
   // Write to a temporary file and rename, so a crash never leaves a half model.
   const std::string tmp = path + ".tmp";
   {
@@ -732,6 +754,17 @@ RandomForest RandomForest::load(const std::string& path) {
     p.seed = r.u64("params.seed");
     validateParams(p, path);
 
+    const std::uint32_t num_settings = r.u32("extraction setting count");
+    if (num_settings > kMaxSettings)
+      throw Error(path + ": forest model has an absurd extraction setting count " +
+                  std::to_string(num_settings) + " (at most " + std::to_string(kMaxSettings) + ")");
+    for (std::uint32_t i = 0; i < num_settings; ++i) {
+      std::string key = r.str("extraction setting name");
+      std::string value = r.str("extraction setting value");
+      if (key.empty()) throw Error(path + ": forest model has an extraction setting without a name");
+      forest.extraction_settings_.emplace_back(std::move(key), std::move(value));
+    }
+
     const std::uint32_t num_trees = r.u32("tree count");
     if (num_trees == 0 || num_trees > kMaxTrees)
       throw Error(path + ": forest model has an absurd num_trees " + std::to_string(num_trees) +
@@ -778,6 +811,7 @@ RandomForest RandomForest::load(const std::string& path) {
     throw Error(path + ": forest model checksum mismatch (file corrupt; stored " +
                 idFromChecksum(stored_checksum) + "...)");
   forest.id_ = idFromChecksum(stored_checksum);
+  forest.source_ = path;
   return forest;
 }
 

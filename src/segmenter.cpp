@@ -46,7 +46,32 @@ LabelImage voidLabels(int width, int height) {
 Segmenter::Segmenter(SegmenterConfig config, std::shared_ptr<const RandomForest> forest)
     : config_(std::move(config)),
       forest_(std::move(forest)),
-      oversegmenter_(makeOversegmenter(config_.overseg)) {}
+      oversegmenter_(makeOversegmenter(config_.overseg)) {
+  if (forest_) checkModelMatchesConfig(*forest_, config_);
+}
+
+void checkModelMatchesConfig(const RandomForest& forest, const SegmenterConfig& config) {
+  const auto& trained = forest.extractionSettings();
+  if (trained.empty()) return;
+  const auto current = extractionSettings(config);
+  std::string differences;
+  for (const auto& [key, value] : trained) {
+    const auto it = std::find_if(current.begin(), current.end(),
+                                 [&](const auto& kv) { return kv.first == key; });
+    if (it == current.end()) {
+      differences += "\n  " + key + ": trained with " + value + ", unknown to this build";
+    } else if (it->second != value) {
+      differences += "\n  " + key + ": trained with " + value + ", config has " + it->second;
+    }
+  }
+  if (!differences.empty()) {
+    const std::string name = forest.source().empty() ? "forest " + forest.id()
+                                                      : forest.source() + " (" + forest.id() + ")";
+    throw Error("model " + name +
+                " was trained with other feature-extraction settings than the config; "
+                "set them back or retrain:" + differences);
+  }
+}
 
 PreparedFrame Segmenter::prepare(RgbdFrame frame, const std::vector<std::uint8_t>* gt_labels) const {
   PreparedFrame out;

@@ -142,7 +142,10 @@ int run(int argc, char** argv) {
   const Segmenter segmenter(config.segmenter, nullptr);
   // Load the model first: a bad file is refused before minutes of feature extraction.
   std::optional<RandomForest> model;
-  if (flags.has("model")) model = RandomForest::load(flags.get("model"));
+  if (flags.has("model")) {
+    model = RandomForest::load(flags.get("model"));
+    checkModelMatchesConfig(*model, config.segmenter);
+  }
 
   const auto start = std::chrono::steady_clock::now();
   ProgressBar bar("features");

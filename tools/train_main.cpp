@@ -62,9 +62,11 @@ int run(int argc, char** argv) {
   if (training.labels.empty()) throw Error("no labelled supervoxel to train on");
 
   tools::ProgressBar bar("trees");
-  const RandomForest forest = RandomForest::train(
+  RandomForest forest = RandomForest::train(
       training, config.segmenter.forest, [&](int done, int total) { bar.update(done, total); });
   bar.finish();
+  // Recorded so that the model is only ever run on features computed alike.
+  forest.setExtractionSettings(extractionSettings(config.segmenter));
   forest.save(flags.get("out"));
   const double seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

@@ -44,4 +44,9 @@ void applyOverride(Config& config, const std::string& key_equals_value);
 // The effective config as YAML, for the start-up log and reports.
 std::string dumpConfig(const Config& config);
 
+// The settings that shape the features (cloud.*, normals.*, overseg.*), as
+// "key" -> "value" in a stable order. The trainer stores them in the model;
+// a model is only run with the same values (see checkModelMatchesConfig).
+RandomForest::Settings extractionSettings(const SegmenterConfig& config);
+
 }  // namespace findmug

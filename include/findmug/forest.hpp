@@ -9,6 +9,7 @@
 #include <cstdint>
 #include <functional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "findmug/features.hpp"
@@ -63,6 +64,16 @@ class RandomForest {
   void save(const std::string& path) const;
   static RandomForest load(const std::string& path);
 
+  // Settings of the feature extraction the forest was trained with (cloud.*,
+  // normals.*, overseg.* as "key" -> "value"), stored in the model file so
+  // that a model is never run on features computed differently. Empty for
+  // forests trained in-process without them. Setting them changes id().
+  using Settings = std::vector<std::pair<std::string, std::string>>;
+  void setExtractionSettings(Settings settings);
+  const Settings& extractionSettings() const { return extraction_settings_; }
+  // The file the forest was loaded from ("" when trained in-process).
+  const std::string& source() const { return source_; }
+
   const ForestParams& params() const { return params_; }
   const std::vector<Tree>& trees() const { return trees_; }
   // Short stable id of the model (derived from the checksum), for status messages.
@@ -72,7 +83,9 @@ class RandomForest {
  private:
   ForestParams params_;
   std::vector<Tree> trees_;
+  Settings extraction_settings_;
   std::string id_;
+  std::string source_;
 };
 
 }  // namespace findmug

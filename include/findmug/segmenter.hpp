@@ -70,7 +70,8 @@ struct LabelledFrame {
 
 class Segmenter {
  public:
-  // `forest` may be empty for feature extraction only (training).
+  // `forest` may be null for feature extraction only (training). A forest
+  // trained with other extraction settings is refused (checkModelMatchesConfig).
   Segmenter(SegmenterConfig config, std::shared_ptr<const RandomForest> forest);
 
   // `gt_labels` is only used when config.ground.source == FloorLabels.
@@ -91,6 +92,12 @@ class Segmenter {
   std::shared_ptr<const RandomForest> forest_;
   std::unique_ptr<Oversegmenter> oversegmenter_;
 };
+
+// Throws findmug::Error naming the model and every setting whose value
+// differs when `forest` was trained with other feature-extraction settings
+// than `config` has (features would not mean what the trees learnt). A model
+// without recorded settings (trained in-process) is accepted.
+void checkModelMatchesConfig(const RandomForest& forest, const SegmenterConfig& config);
 
 // Per-segment training labels: the majority ground-truth label of each
 // segment's pixels; segments whose pixels are mostly void get kVoidLabel.

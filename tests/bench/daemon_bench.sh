@@ -4,7 +4,7 @@
 #
 #   tests/bench/daemon_bench.sh [--build-dir build] [--rates "1 5 15 30"] [--duration 30]
 #       [--datasets "nyu pcl synth"] [--modes "threaded sequential"] [--no-search]
-#       [--model FILE] [--out BENCHMARKS-replay.md] [--results DIR]
+#       [--model FILE] [--out BENCHMARKS-replay.md] [--results DIR] [--tables-only]
 #   (scripts/bench.sh runs this with the defaults.)
 #
 # For each data set, input rate and mode, inside a private network namespace:
@@ -25,7 +25,8 @@
 # holds without drops is searched by bisection between the grid's rates.
 #
 # Writes a Markdown fragment (machine, commit, command, tables) to --out and
-# the raw reports (JSON, histograms, logs) under --results. Figures depend on
+# the raw reports (JSON, histograms, logs) under --results; --tables-only
+# rewrites the fragment from an existing --results directory without running. Figures depend on
 # what else runs on the machine: the load average is recorded with them.
 set -euo pipefail
 
@@ -36,6 +37,7 @@ DURATION=30
 DATASETS="nyu pcl synth"
 MODES="threaded sequential"
 SEARCH=1
+TABLES_ONLY=0
 MODEL="${FINDMUG_MODEL:-}"
 OUT="$ROOT/BENCHMARKS-replay.md"
 RESULTS=""
@@ -49,6 +51,7 @@ while [[ $# -gt 0 ]]; do
     --datasets) DATASETS=$2; shift 2 ;;
     --modes) MODES=$2; shift 2 ;;
     --no-search) SEARCH=0; shift ;;
+    --tables-only) TABLES_ONLY=1; shift ;;
     --model) MODEL=$2; shift 2 ;;
     --out) OUT=$2; shift 2 ;;
     --results) RESULTS=$2; shift 2 ;;
@@ -128,6 +131,7 @@ for ds in $DATASETS; do
     nyu) SPEC[nyu]="dataset:$DATA_ROOT/nyuv2_labeled" ;;
     pcl) SPEC[pcl]="pclzf:$DATA_ROOT/pcl_test_clouds/grabber_sequences/pclzf" ;;
     synth)
+      if [[ $TABLES_ONLY == 1 ]]; then SPEC[synth]="(not run)"; continue; fi
       [[ -x "$SYNTH" ]] || { log "findmug-synth missing"; exit 1; }
       log "rendering the synthetic apartment (60 frames)"
       "$SYNTH" --seed 7 --frames 60 --out "$WORK/synth" > "$WORK/synth.log" 2>&1 \
@@ -142,11 +146,21 @@ if [[ -z "$MODEL" ]]; then
     [[ -f "$candidate" ]] && { MODEL=$candidate; break; }
   done
 fi
-if [[ -z "$MODEL" ]]; then
+if [[ -z "$MODEL" && $TABLES_ONLY == 0 ]]; then
   MODEL="$RESULTS/nyu31.fmf"
   log "no committed model: training $MODEL on the 31 NYU frames (default forest)"
   "$TRAIN" --data "$DATA_ROOT/nyuv2_labeled" --set ground.source=floor_labels --out "$MODEL" \
     > "$RESULTS/train.log" 2>&1 || { cat "$RESULTS/train.log"; exit 1; }
+fi
+
+# The checkout may change while the benchmark runs: every run uses this copy.
+if [[ $TABLES_ONLY == 0 ]]; then
+  cp "$MODEL" "$RESULTS/model.fmf"
+  MODEL_NAME="$(basename "$MODEL")"
+  echo "$MODEL_NAME" > "$RESULTS/model-name"
+  MODEL="$RESULTS/model.fmf"
+else
+  MODEL_NAME="$(cat "$RESULTS/model-name" 2>/dev/null || basename "$MODEL")"
 fi
 
 # --- one run -------------------------------------------------------------------------------
@@ -169,7 +183,13 @@ run_one() {
   monitor "$daemon" "$dir/usage" &
   local mon=$!; PIDS+=("$mon")
   if ! wait_for "$dir/ready" 120 "$daemon"; then
-    cat "$dir/daemon.log" >&2; log "$tag: the daemon did not come up"; exit 1
+    # Recorded and skipped: one failed configuration must not lose the others.
+    tail -5 "$dir/daemon.log" >&2; log "$tag: the daemon did not come up; run skipped"
+    kill -TERM "$daemon" "$probe" 2>/dev/null || true
+    wait "$daemon" "$probe" "$mon" 2>/dev/null || true
+    forget "$daemon"; forget "$probe"; forget "$mon"
+    rm -f "$dir/probe.json"
+    return 1
   fi
   date +%s%3N > "$dir/start_ms"
   "$REPLAY" --source "${SPEC[$ds]}" --rate "$rate" --duration "$DURATION" --url "$URL" \
@@ -208,9 +228,18 @@ fmt0() { awk -v v="$1" 'BEGIN { if (v == "") print "-"; else printf "%.0f", v }'
 
 # --- the grid ------------------------------------------------------------------------------------
 LOAD_BEFORE=$(cut -d' ' -f1-3 /proc/loadavg)
+if [[ $TABLES_ONLY == 1 ]]; then
+  LOAD_BEFORE="$(cat "$RESULTS/load-before" 2>/dev/null || echo "?")"
+  COMMAND_LINE="$(cat "$RESULTS/command" 2>/dev/null || echo "$COMMAND_LINE")"
+else
+  echo "$LOAD_BEFORE" > "$RESULTS/load-before"
+  echo "$COMMAND_LINE" > "$RESULTS/command"
+fi
 for ds in $DATASETS; do
   for rate in $RATES; do
-    for mode in $MODES; do run_one "$ds" "$rate" "$mode"; done
+    for mode in $MODES; do
+      [[ $TABLES_ONLY == 1 ]] || run_one "$ds" "$rate" "$mode" || true
+    done
   done
 done
 
@@ -219,37 +248,67 @@ held() {  # DIR -> 0 if no frame was dropped
   local f; f=$(figures "$1")
   [[ -n "$f" && "$(val "$f" dropped)" == 0 ]]
 }
-SEARCHED=""
-if [[ $SEARCH == 1 && " $DATASETS " == *" nyu "* && " $MODES " == *" threaded "* ]]; then
+# NYU threaded rates measured so far, ascending.
+nyu_rates() {
+  local d
+  for d in "$RESULTS"/nyu-*fps-threaded; do
+    [[ -s "$d/probe.json" ]] || continue
+    d=${d##*/nyu-}; echo "${d%fps-threaded}"
+  done | sort -g
+}
+# Highest rate held below the lowest rate with drops, and that lowest rate.
+bracket() {
   lo="" hi=""
-  for rate in $(tr ' ' '\n' <<< "$RATES" | sort -g); do
-    if held "$RESULTS/nyu-${rate}fps-threaded"; then lo=$rate; elif [[ -z "$hi" ]]; then hi=$rate; fi
+  local r
+  for r in $(nyu_rates); do
+    if held "$RESULTS/nyu-${r}fps-threaded"; then
+      [[ -z "$hi" ]] && lo=$r
+    elif [[ -z "$hi" ]]; then
+      hi=$r
+    fi
   done
-  if [[ -n "$lo" && -n "$hi" ]] && awk -v a="$lo" -v b="$hi" 'BEGIN { exit !(a < b) }'; then
+}
+SEARCHED=""
+if [[ " $DATASETS " == *" nyu "* && " $MODES " == *" threaded "* ]]; then
+  bracket
+  if [[ $SEARCH == 1 && $TABLES_ONLY == 0 && -n "$lo" && -n "$hi" ]]; then
     for _ in 1 2 3; do
       mid=$(awk -v a="$lo" -v b="$hi" 'BEGIN { m = int((a + b) + 0.5) / 2; printf "%g", m }')
       awk -v m="$mid" -v a="$lo" -v b="$hi" 'BEGIN { exit !(m > a && m < b) }' || break
-      run_one nyu "$mid" threaded
-      SEARCHED="$SEARCHED $mid"
-      if held "$RESULTS/nyu-${mid}fps-threaded"; then lo=$mid; else hi=$mid; fi
+      run_one nyu "$mid" threaded || true
+      bracket
     done
   fi
+  for r in $(nyu_rates); do
+    [[ " $RATES " == *" $r "* ]] || SEARCHED="$SEARCHED $r"
+  done
   HIGHEST_HELD=${lo:-none}
   FIRST_DROPPING=${hi:-none}
 fi
 LOAD_AFTER=$(cut -d' ' -f1-3 /proc/loadavg)
+if [[ $TABLES_ONLY == 1 ]]; then
+  LOAD_AFTER="$(cat "$RESULTS/load-after" 2>/dev/null || echo "?")"
+else
+  echo "$LOAD_AFTER" > "$RESULTS/load-after"
+fi
 
 # --- the Markdown fragment ----------------------------------------------------------------------
 commit=$(git -C "$ROOT" rev-parse --short HEAD 2>/dev/null || echo unknown)
 git -C "$ROOT" diff --quiet HEAD 2>/dev/null || commit="$commit (with uncommitted changes)"
+commit="$commit; date $(date -u +%Y-%m-%dT%H:%MZ)"
+if [[ $TABLES_ONLY == 1 ]]; then
+  commit="$(cat "$RESULTS/commit" 2>/dev/null || echo "$commit")"
+else
+  echo "$commit" > "$RESULTS/commit"
+fi
 cpu_model=$(awk -F': ' '/model name/ {print $2; exit}' /proc/cpuinfo)
 mem_gb=$(awk '/MemTotal/ {printf "%.0f", $2 / 1048576}' /proc/meminfo)
 {
   echo "## Daemon under replayed input (\`tests/bench/daemon_bench.sh\`)"
   echo
   echo "- Machine: $cpu_model, $(nproc) cores, $mem_gb GiB RAM, Linux $(uname -r)"
-  echo "- Commit: $commit; date $(date -u +%Y-%m-%dT%H:%MZ)"
-  echo "- Command: \`$COMMAND_LINE\` (build \`$BUILD\`), model \`$(basename "$MODEL")\`"
+  echo "- Commit: $commit"
+  echo "- Command: \`$COMMAND_LINE\` (build \`$BUILD\`), model \`$MODEL_NAME\`"
   echo "- Each run: ${DURATION} s of input from \`findmug-replay\` (frames looped, fresh seq/utime),"
   echo "  LCM udpm in a private network namespace; latency = label image received - frame received"
   echo "  (same host clock); dropped = frames in - label images out; CPU = daemon process CPU time /"

@@ -350,6 +350,22 @@ TEST(ForestFile, SaveLoadRoundTripGivesIdenticalPredictions) {
   EXPECT_EQ(readBytes(dir.str("again.fmf")), readBytes(path));
 }
 
+TEST(ForestFile, ExtractionSettingsRoundTripAndChangeTheId) {
+  RandomForest forest = RandomForest::train(makeBlobs(20, 3), ForestParams{});
+  const std::string bare_id = forest.id();
+  forest.setExtractionSettings({{"overseg.method", "organized"}, {"normals.window_radius_px", "4"}});
+  EXPECT_NE(forest.id(), bare_id);  // the id names the content, settings included
+  TempDir dir;
+  forest.save(dir.str("m.fmf"));
+  const RandomForest loaded = RandomForest::load(dir.str("m.fmf"));
+  EXPECT_EQ(loaded.id(), forest.id());
+  EXPECT_EQ(loaded.source(), dir.str("m.fmf"));
+  ASSERT_EQ(loaded.extractionSettings().size(), 2u);
+  EXPECT_EQ(loaded.extractionSettings()[0].first, "overseg.method");
+  EXPECT_EQ(loaded.extractionSettings()[0].second, "organized");
+  EXPECT_THROW(forest.setExtractionSettings({{"", "x"}}), Error);
+}
+
 TEST(ForestFile, SaveToUnwritablePlaceFails) {
   const RandomForest forest = RandomForest::train(makeBlobs(5, 1), ForestParams{});
   EXPECT_THROW(forest.save("/nonexistent-dir-findmug/model.fmf"), Error);
@@ -397,7 +413,10 @@ std::size_t paramsOffset() {
   for (auto name : kFeatureNames) offset += 4 + name.size();
   return offset;
 }
-std::size_t treeCountOffset() { return paramsOffset() + kParamsSize; }
+// The extraction-settings section follows the params; the fixture's forest
+// has none, so it is just its uint32 count (0).
+std::size_t settingsCountOffset() { return paramsOffset() + kParamsSize; }
+std::size_t treeCountOffset() { return settingsCountOffset() + 4; }
 
 // Offsets of the nodes of tree 0.
 std::vector<std::size_t> nodeOffsetsOfFirstTree(const std::vector<std::uint8_t>& bytes) {
@@ -502,6 +521,14 @@ TEST_F(ForestFileCorruption, TrailingBytes) {
   expectRefused(bytes, "unexpected bytes");
 }
 
+TEST_F(ForestFileCorruption, AbsurdExtractionSettingCount) {
+  auto bytes = good_;
+  ASSERT_EQ(getU32(bytes, settingsCountOffset()), 0u);
+  putU32(bytes, settingsCountOffset(), 100000);
+  fixChecksum(bytes);
+  expectRefused(bytes, "extraction setting count");
+}
+
 TEST_F(ForestFileCorruption, WrongMagic) {
   auto bytes = good_;
   bytes[0] = 'X';
@@ -511,10 +538,12 @@ TEST_F(ForestFileCorruption, WrongMagic) {
 
 TEST_F(ForestFileCorruption, WrongVersion) {
   auto bytes = good_;
-  putU32(bytes, kVersionOffset, 2);
-  expectRefused(bytes, "version 2");
+  putU32(bytes, kVersionOffset, 1);  // the format before extraction settings were stored
+  expectRefused(bytes, "version 1");
+  putU32(bytes, kVersionOffset, 3);
+  expectRefused(bytes, "version 3");
   fixChecksum(bytes);
-  expectRefused(bytes, "version 2");
+  expectRefused(bytes, "version 3");
 }
 
 TEST_F(ForestFileCorruption, DifferentLabelNames) {

@@ -179,6 +179,33 @@ TEST(Segmenter, FrameWithoutGroundGetsAllVoidLabels) {
   for (auto y : out.labels.labels) ASSERT_EQ(y, kVoidLabel);
 }
 
+TEST(Segmenter, RefusesModelTrainedWithOtherExtractionSettings) {
+  const Scene scene = floorAndWall(true);
+  SegmenterConfig trained_config = fastConfig();
+  auto trained = trainOn(Segmenter(trained_config, nullptr), scene);
+  RandomForest forest = *trained;
+  forest.setExtractionSettings(extractionSettings(trained_config));
+  auto model = std::make_shared<const RandomForest>(forest);
+
+  EXPECT_NO_THROW(Segmenter(trained_config, model));
+  SegmenterConfig other = trained_config;
+  other.overseg.kind = OversegmenterKind::PclSupervoxels;
+  other.overseg.seed_resolution_m = 0.15f;
+  try {
+    Segmenter segmenter(other, model);
+    FAIL() << "expected the model to be refused";
+  } catch (const Error& e) {
+    EXPECT_THAT(e.what(), HasSubstr("overseg.method: trained with organized, config has pcl"));
+    EXPECT_THAT(e.what(), HasSubstr("overseg.seed_resolution_m"));
+    EXPECT_THAT(e.what(), HasSubstr(forest.id()));
+  }
+  // Settings that do not shape the features (MRF, tables) may differ freely.
+  SegmenterConfig mrf_only = trained_config;
+  mrf_only.mrf.lambda = 3.0f;
+  mrf_only.tables.safety_distance_m = 0.4f;
+  EXPECT_NO_THROW(Segmenter(mrf_only, model));
+}
+
 TEST(Segmenter, MajorityLabelsPerSegment) {
   Oversegmentation seg;
   seg.width = 4;
