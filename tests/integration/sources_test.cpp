@@ -356,6 +356,23 @@ TEST(LcmSource, SlowConsumerGetsTheNewestFrame) {
   EXPECT_EQ(f->seq, 5);
 }
 
+TEST(LcmSource, FramesQueuedAtStopAreCountedAsDropped) {
+  SourceOptions options;
+  options.lcm_queue_size = 1;
+  LcmFrameSource source("FINDMUG_RGBD", "memq://", options);
+  for (int i = 0; i < 3; ++i) {
+    const auto b = frameBytes(i);
+    source.lcm().publish("FINDMUG_RGBD", b.data(), static_cast<unsigned>(b.size()));
+  }
+  // All three handled: two pushed out by newer ones, the newest still queued.
+  ASSERT_TRUE(eventually([&] { return source.stats().frames_dropped == 2; }));
+  source.stop();
+  // Never processed, never lost silently: frames in = delivered + dropped.
+  EXPECT_EQ(source.stats().frames_dropped, 3u);
+  EXPECT_EQ(source.stats().frames_delivered, 0u);
+  EXPECT_FALSE(source.next().has_value());
+}
+
 TEST(LcmSource, SilentPublisherShowsAsReconnectingUntilFramesReturn) {
   LcmFrameSource source("FINDMUG_RGBD", "memq://", SourceOptions{});
   EXPECT_EQ(source.state(), SourceState::Starting);

@@ -37,6 +37,12 @@ LcmFrameSource::~LcmFrameSource() {
 void LcmFrameSource::onStop() {
   std::lock_guard lock(queue_mutex_);
   stopping_ = true;
+  // Frames still waiting here will never be processed: count them as
+  // dropped so that frames in = published + dropped holds after a stop too.
+  if (!queue_.empty()) {
+    recordDropped(queue_.size());
+    queue_.clear();
+  }
   queue_changed_.notify_all();
 }
 
