@@ -12,7 +12,12 @@
 
 #include "findmug/error.hpp"
 #include "findmug/synth.hpp"
+#include "findmug/dataset.hpp"
+#include "findmug/io/channels.hpp"
+#include "findmug/io/lcm_codec.hpp"
 #include "tool_common.hpp"
+
+#include <lcm/lcm-cpp.hpp>
 
 namespace {
 
@@ -26,7 +31,10 @@ constexpr const char* kUsage =
     "  --pitch-deg A:B       camera tilt-down range in degrees (default 20:45)\n"
     "  --tables A:B          number of tables (default 1:3)\n"
     "  --speed V             robot speed in m/s (default 0.4)\n"
-    "  --no-noise            exact depth (mm), no dropouts, no colour noise\n";
+    "  --no-noise            exact depth (mm), no dropouts, no colour noise\n"
+    "  --lcm-log FILE        also write the frames as an LCM log of rgbd_frame_t on\n"
+    "                        FINDMUG_RGBD (what lcm-logplayer replays to findmugd), stamped\n"
+    "                        with the sequence's own frame times\n";
 
 double parseDouble(const std::string& flag, const std::string& text) {
   try {
@@ -60,6 +68,34 @@ std::uint64_t parseSeed(const std::string& text) {
   throw findmug::Error("flag --seed: '" + text + "' is not a non-negative integer");
 }
 
+// The written folder as an LCM log, read back through the dataset reader so
+// the log holds exactly what the folder holds. Each event carries the
+// frame's own time, so lcm-logplayer replays at the sequence's frame rate.
+void writeLcmLog(const std::string& dataset_dir, const findmug::synth::SequenceGroundTruth& truth,
+                 const std::string& log_path) {
+  using namespace findmug;
+  const DatasetFolder folder(dataset_dir);
+  lcm::LogFile log(log_path, "w");
+  if (!log.good()) throw Error(log_path + ": cannot open the LCM log for writing");
+  const std::string channel(io::kRgbdChannel);
+  for (std::size_t i = 0; i < folder.size(); ++i) {
+    LabeledFrame frame = folder.load(i);
+    frame.frame.seq = static_cast<std::int64_t>(i);
+    if (i < truth.frame_utimes.size()) frame.frame.utime = truth.frame_utimes[i];
+    const rgbd_frame_t message = io::encodeRgbdFrame(frame.frame);
+    std::vector<std::uint8_t> bytes(static_cast<std::size_t>(message.getEncodedSize()));
+    if (message.encode(bytes.data(), 0, static_cast<int>(bytes.size())) < 0)
+      throw Error(log_path + ": cannot encode frame " + frame.name);
+    lcm::LogEvent event;
+    event.eventnum = static_cast<int64_t>(i);
+    event.timestamp = static_cast<int64_t>(frame.frame.utime);
+    event.channel = channel;
+    event.datalen = static_cast<int32_t>(bytes.size());
+    event.data = bytes.data();
+    if (log.writeEvent(&event) != 0) throw Error(log_path + ": write failed at frame " + frame.name);
+  }
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -71,7 +107,7 @@ int main(int argc, char** argv) {
       return 0;
     }
     flags.allowOnly({"seed", "frames", "out", "fps", "camera-height", "pitch-deg", "tables",
-                     "speed", "no-noise", "help"});
+                     "speed", "no-noise", "lcm-log", "help"});
     for (const char* required : {"seed", "frames", "out"})
       if (!flags.has(required)) throw Error(std::string("missing --") + required + "\n" + kUsage);
 
@@ -108,6 +144,11 @@ int main(int argc, char** argv) {
     std::printf("wrote %d frames (%d table%s) to %s, ground truth in %s/ground_truth.yaml\n",
                 spec.frames, static_cast<int>(truth.tables.size()),
                 truth.tables.size() == 1 ? "" : "s", out.c_str(), out.c_str());
+    if (flags.has("lcm-log")) {
+      writeLcmLog(out, truth, flags.get("lcm-log"));
+      std::printf("wrote %d rgbd_frame_t messages on %s to %s\n", spec.frames,
+                  std::string(io::kRgbdChannel).c_str(), flags.get("lcm-log").c_str());
+    }
     return 0;
   } catch (const std::exception& e) {
     std::fprintf(stderr, "findmug-synth: %s\n", e.what());
