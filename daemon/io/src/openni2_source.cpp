@@ -14,6 +14,7 @@
 
 #include <cmath>
 #include <cstring>
+#include <deque>
 #include <filesystem>
 #include <mutex>
 #include <thread>
@@ -48,6 +49,8 @@ std::string oniError(const std::string& what, Status status) {
 
 // Depth and colour frames are paired when their device timestamps are this close.
 constexpr std::uint64_t kPairToleranceUs = 16000;
+// Unpaired images kept per stream while waiting for a partner (about 130 ms at 30 fps).
+constexpr std::size_t kPairHistory = 4;
 // A live device that delivers nothing for this long is considered lost.
 constexpr int kLiveFrameTimeoutMs = 2000;
 // Poll interval, so that stop() is noticed promptly.
@@ -181,6 +184,8 @@ class Openni2Source : public FrameSourceBase {
                  color_mode.getFps(), intrinsics_.fx, intrinsics_.fy);
     last_depth_ = {};
     last_color_ = {};
+    recent_[0].clear();
+    recent_[1].clear();
     ended_ = false;
     last_frame_time_ = Clock::now();
     return {};
@@ -287,26 +292,12 @@ class Openni2Source : public FrameSourceBase {
       }
       last_frame_time_ = Clock::now();
       try {
-        if (ready == 0) {
-          last_depth_ = copyDepth(ref);
-        } else {
-          last_color_ = copyColor(ref);
-        }
+        recent_[ready].push_back(ready == 0 ? copyDepth(ref) : copyColor(ref));
       } catch (const Error& e) {
         recordRejected(e.what());
         continue;
       }
-      if (!last_depth_.valid || !last_color_.valid) continue;
-      const std::uint64_t dt = last_depth_.device_timestamp > last_color_.device_timestamp
-                                   ? last_depth_.device_timestamp - last_color_.device_timestamp
-                                   : last_color_.device_timestamp - last_depth_.device_timestamp;
-      if (dt > kPairToleranceUs) {
-        // Keep the newer one; the older can no longer find its partner.
-        (last_depth_.device_timestamp < last_color_.device_timestamp ? last_depth_ : last_color_)
-            .valid = false;
-        recordDropped();
-        continue;
-      }
+      if (!pairNewest(ready)) continue;
       RgbdFrame frame;
       try {
         frame = assemble();
@@ -323,6 +314,48 @@ class Openni2Source : public FrameSourceBase {
       return frame;
     }
     return std::nullopt;
+  }
+
+  // Pairs the newest image of stream `stream` with the image of the other
+  // stream closest in device time, into last_depth_ / last_color_. Keeping a
+  // few recent images per stream matters: when one stream lags the other by a
+  // frame (a loaded machine, a driver without hardware sync), matching only
+  // the latest of each would never pair again and the source would deliver
+  // nothing while frames keep arriving. Images older than a pair, or pushed
+  // out of the history, can no longer pair and are counted as dropped.
+  bool pairNewest(int stream) {
+    auto& mine = recent_[stream];
+    auto& other = recent_[1 - stream];
+    const CapturedImage& newest = mine.back();
+    auto best = other.end();
+    std::uint64_t best_dt = 0;
+    for (auto it = other.begin(); it != other.end(); ++it) {
+      const std::uint64_t dt = newest.device_timestamp > it->device_timestamp
+                                   ? newest.device_timestamp - it->device_timestamp
+                                   : it->device_timestamp - newest.device_timestamp;
+      if (best == other.end() || dt < best_dt) {
+        best = it;
+        best_dt = dt;
+      }
+    }
+    if (best == other.end() || best_dt > kPairToleranceUs) {
+      if (mine.size() > kPairHistory) {
+        mine.pop_front();
+        recordDropped();
+      }
+      return false;
+    }
+    CapturedImage& depth = stream == 0 ? mine.back() : *best;
+    CapturedImage& color = stream == 0 ? *best : mine.back();
+    last_depth_ = std::move(depth);
+    last_color_ = std::move(color);
+    const auto older_in_other = static_cast<std::uint64_t>(best - other.begin());
+    if (const std::uint64_t dropped = older_in_other + (mine.size() - 1); dropped > 0) {
+      recordDropped(dropped);
+    }
+    other.erase(other.begin(), best + 1);
+    mine.clear();
+    return true;
   }
 
   bool atEndOfPlayback() const {
@@ -413,7 +446,8 @@ class Openni2Source : public FrameSourceBase {
   openni::Device device_;
   openni::VideoStream depth_, color_;
   CameraIntrinsics intrinsics_;
-  CapturedImage last_depth_, last_color_;
+  CapturedImage last_depth_, last_color_;  // the pair being delivered
+  std::deque<CapturedImage> recent_[2];     // unpaired images: 0 depth, 1 colour
   int playback_frames_ = 0;
   bool ended_ = false;
   std::int64_t seq_ = 0;
