@@ -36,24 +36,16 @@ constexpr const char* kUsage =
     "                        FINDMUG_RGBD (what lcm-logplayer replays to findmugd), stamped\n"
     "                        with the sequence's own frame times\n";
 
-double parseDouble(const std::string& flag, const std::string& text) {
-  try {
-    std::size_t used = 0;
-    const double v = std::stod(text, &used);
-    if (used == text.size()) return v;
-  } catch (const std::exception&) {
-  }
-  throw findmug::Error("flag --" + flag + ": '" + text + "' is not a number");
-}
 
 // "A:B" or "A" (then B = A).
 std::pair<double, double> parseRange(const std::string& flag, const std::string& text) {
   const auto colon = text.find(':');
   if (colon == std::string::npos) {
-    const double v = parseDouble(flag, text);
+    const double v = findmug::tools::parseNumber("--" + flag, text);
     return {v, v};
   }
-  return {parseDouble(flag, text.substr(0, colon)), parseDouble(flag, text.substr(colon + 1))};
+  return {findmug::tools::parseNumber("--" + flag, text.substr(0, colon)),
+          findmug::tools::parseNumber("--" + flag, text.substr(colon + 1))};
 }
 
 std::uint64_t parseSeed(const std::string& text) {
@@ -116,7 +108,7 @@ int main(int argc, char** argv) {
     spec.frames = flags.getInt("frames", 0);
     if (spec.frames <= 0)
       throw Error("flag --frames: must be positive, got " + flags.get("frames"));
-    if (flags.has("fps")) spec.fps = parseDouble("fps", flags.get("fps"));
+    if (flags.has("fps")) spec.fps = findmug::tools::parseNumber("--fps", flags.get("fps"));
     if (flags.has("camera-height"))
       std::tie(spec.path.height_min, spec.path.height_max) =
           parseRange("camera-height", flags.get("camera-height"));
@@ -130,7 +122,7 @@ int main(int argc, char** argv) {
       spec.apartment.tables_min = static_cast<int>(lo);
       spec.apartment.tables_max = static_cast<int>(hi);
     }
-    if (flags.has("speed")) spec.path.speed_mps = parseDouble("speed", flags.get("speed"));
+    if (flags.has("speed")) spec.path.speed_mps = findmug::tools::parseNumber("--speed", flags.get("speed"));
     if (flags.has("no-noise")) {
       spec.render.noise.enabled = false;
       spec.render.noise.rgb_noise_sigma = 0.0;

@@ -56,6 +56,18 @@ void Flags::allowOnly(const std::vector<std::string>& known) const {
   }
 }
 
+double parseNumber(const std::string& flag, const std::string& text) {
+  std::size_t used = 0;
+  double value = 0;
+  try {
+    value = std::stod(text, &used);
+  } catch (const std::exception&) {
+    used = 0;
+  }
+  if (used == 0 || used != text.size()) throw Error(flag + ": '" + text + "' is not a number");
+  return value;
+}
+
 Config configFromFlags(const Flags& flags) {
   Config config = flags.has("config") ? loadConfig(flags.get("config")) : Config{};
   for (const auto& kv : flags.getAll("set")) applyOverride(config, kv);

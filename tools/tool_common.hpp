@@ -28,6 +28,10 @@ class Flags {
   std::map<std::string, std::vector<std::string>> values_;
 };
 
+// A flag's value as a number; throws findmug::Error "FLAG: 'TEXT' is not a
+// number" unless the whole text is one. Shared by every findmug program.
+double parseNumber(const std::string& flag, const std::string& text);
+
 // --config FILE (optional) then every --set key=value on top.
 Config configFromFlags(const Flags& flags);
 

@@ -18,6 +18,7 @@
 #include <string>
 #include <thread>
 
+#include "tool_common.hpp"
 #include "findmug/error.hpp"
 #include "findmug/io/channels.hpp"
 #include "findmug/io/frame_source.hpp"
@@ -46,17 +47,6 @@ void usage(std::ostream& out) {
          "  --verbose               log every frame\n";
 }
 
-double parseDouble(const std::string& flag, const std::string& value) {
-  std::size_t used = 0;
-  double v = 0;
-  try {
-    v = std::stod(value, &used);
-  } catch (const std::exception&) {
-    used = 0;
-  }
-  if (used != value.size()) throw findmug::Error(flag + ": '" + value + "' is not a number");
-  return v;
-}
 
 }  // namespace
 
@@ -97,16 +87,16 @@ int main(int argc, char** argv) {
       } else if (arg == "--color-compression") {
         encode.color = parseColorCompression(value());
       } else if (arg == "--jpeg-quality") {
-        const double q = parseDouble(arg, value());
+        const double q = findmug::tools::parseNumber(arg, value());
         if (q < 1 || q > 100) throw Error("--jpeg-quality must be 1..100");
         encode.jpeg_quality = static_cast<int>(q);
       } else if (arg == "--rate") {
-        rate = parseDouble(arg, value());
+        rate = findmug::tools::parseNumber(arg, value());
         if (*rate < 0 || *rate > 1000) throw Error("--rate must be 0..1000 Hz");
       } else if (arg == "--loop") {
         loop = true;
       } else if (arg == "--count") {
-        const double c = parseDouble(arg, value());
+        const double c = findmug::tools::parseNumber(arg, value());
         if (c < 0 || c != static_cast<double>(static_cast<long long>(c))) {
           throw Error("--count must be a non-negative integer");
         }

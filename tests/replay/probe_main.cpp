@@ -41,6 +41,7 @@
 #include <thread>
 #include <vector>
 
+#include "tool_common.hpp"
 #include "findmug/error.hpp"
 #include "findmug/io/channels.hpp"
 #include "findmug/io/lcm_codec.hpp"
@@ -88,17 +89,6 @@ const char* kUsage =
     "  --report-only          exit 0 even when invariants are violated (benchmarks)\n"
     "  --timeout S            stop by itself after S seconds (default 600)\n";
 
-double number(const std::string& flag, const std::string& text) {
-  std::size_t used = 0;
-  double v = 0;
-  try {
-    v = std::stod(text, &used);
-  } catch (const std::exception&) {
-    used = 0;
-  }
-  if (used != text.size()) throw Error(flag + ": '" + text + "' is not a number");
-  return v;
-}
 
 Options parse(int argc, char** argv) {
   Options o;
@@ -119,10 +109,10 @@ Options parse(int argc, char** argv) {
     else if (arg == "--out-json") o.out_json = value();
     else if (arg == "--histogram-csv") o.histogram_csv = value();
     else if (arg == "--histogram-txt") o.histogram_txt = value();
-    else if (arg == "--bin-ms") o.bin_ms = number(arg, value());
-    else if (arg == "--bins") o.bins = static_cast<int>(number(arg, value()));
+    else if (arg == "--bin-ms") o.bin_ms = findmug::tools::parseNumber(arg, value());
+    else if (arg == "--bins") o.bins = static_cast<int>(findmug::tools::parseNumber(arg, value()));
     else if (arg == "--report-only") o.report_only = true;
-    else if (arg == "--timeout") o.timeout_s = number(arg, value());
+    else if (arg == "--timeout") o.timeout_s = findmug::tools::parseNumber(arg, value());
     else if (arg == "--inspect-log") o.inspect_log = value();
     else throw Error("unknown argument '" + arg + "'");
   }

@@ -29,6 +29,7 @@
 #include <thread>
 #include <vector>
 
+#include "tool_common.hpp"
 #include "findmug/error.hpp"
 #include "findmug/io/channels.hpp"
 #include "findmug/io/frame_source.hpp"
@@ -51,17 +52,6 @@ const char* kUsage =
     "  --count-file F          write the number of frames published to F when done\n"
     "  --warmup S              wait S seconds before the first frame (default 0)\n";
 
-double number(const std::string& flag, const std::string& text) {
-  std::size_t used = 0;
-  double v = 0;
-  try {
-    v = std::stod(text, &used);
-  } catch (const std::exception&) {
-    used = 0;
-  }
-  if (used != text.size()) throw Error(flag + ": '" + text + "' is not a number");
-  return v;
-}
 
 void writeCount(const std::string& path, long long count) {
   // Write then rename, so that a reader polling the file never sees it half written.
@@ -98,13 +88,13 @@ int run(int argc, char** argv) {
     } else if (arg == "--channel-suffix") {
       suffix = value();
     } else if (arg == "--rate") {
-      rate = number(arg, value());
+      rate = findmug::tools::parseNumber(arg, value());
     } else if (arg == "--duration") {
-      duration = number(arg, value());
+      duration = findmug::tools::parseNumber(arg, value());
     } else if (arg == "--count") {
-      count = static_cast<long long>(number(arg, value()));
+      count = static_cast<long long>(findmug::tools::parseNumber(arg, value()));
     } else if (arg == "--max-frames") {
-      max_frames = static_cast<long long>(number(arg, value()));
+      max_frames = static_cast<long long>(findmug::tools::parseNumber(arg, value()));
     } else if (arg == "--depth-compression") {
       encode.depth = io::parseDepthCompression(value());
     } else if (arg == "--color-compression") {
@@ -112,7 +102,7 @@ int run(int argc, char** argv) {
     } else if (arg == "--count-file") {
       count_file = value();
     } else if (arg == "--warmup") {
-      warmup = number(arg, value());
+      warmup = findmug::tools::parseNumber(arg, value());
     } else {
       throw Error("unknown argument '" + arg + "'");
     }

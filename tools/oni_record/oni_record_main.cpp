@@ -21,6 +21,7 @@
 #include <optional>
 #include <string>
 
+#include "tool_common.hpp"
 #include "findmug/error.hpp"
 #include "findmug/io/frame_source.hpp"
 #include "oni_writer.hpp"
@@ -38,17 +39,6 @@ const char* kUsage =
     "  --depth-codec 16z|raw     lossless either way (default 16z)\n"
     "  --color-codec jpeg|raw    (default jpeg)\n";
 
-double number(const std::string& flag, const std::string& text) {
-  std::size_t used = 0;
-  double v = 0;
-  try {
-    v = std::stod(text, &used);
-  } catch (const std::exception&) {
-    used = 0;
-  }
-  if (used != text.size()) throw findmug::Error(flag + ": '" + text + "' is not a number");
-  return v;
-}
 
 int run(int argc, char** argv) {
   using namespace findmug;
@@ -71,13 +61,13 @@ int run(int argc, char** argv) {
     } else if (arg == "--out") {
       out = value();
     } else if (arg == "--count") {
-      const double c = number(arg, value());
+      const double c = findmug::tools::parseNumber(arg, value());
       if (c < 0 || c != static_cast<double>(static_cast<long long>(c))) {
         throw Error("--count must be a non-negative integer");
       }
       count = static_cast<long long>(c);
     } else if (arg == "--rate") {
-      rate = number(arg, value());
+      rate = findmug::tools::parseNumber(arg, value());
       if (!(rate > 0 && rate <= 1000)) throw Error("--rate must be in (0, 1000] Hz");
     } else if (arg == "--timestamps") {
       const std::string v = value();
