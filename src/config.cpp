@@ -191,12 +191,26 @@ const std::vector<Setting>& settings() {
                    [](C& c) -> float& { return c.overseg.organized_seed_density; }, 0.01, 1000),
       intSetting("overseg.search_window_factor",
                  [](C& c) -> int& { return c.overseg.search_window_factor; }, 1, 10),
+      boolSetting("features.regions", [](C& c) -> bool& { return c.regions.enabled; }),
+      floatSetting("features.region_normal_angle_deg",
+                   [](C& c) -> float& { return c.regions.normal_angle_deg; }, 0, 180),
+      floatSetting("features.region_plane_distance_m",
+                   [](C& c) -> float& { return c.regions.plane_distance_m; }, 0, 1),
+      boolSetting("features.context", [](C& c) -> bool& { return c.context.enabled; }),
+      floatSetting("features.context_near_m", [](C& c) -> float& { return c.context.near_m; },
+                   0.01, 10),
+      floatSetting("features.context_far_m", [](C& c) -> float& { return c.context.far_m; },
+                   0.01, 10),
+      floatSetting("features.context_column_radius_m",
+                   [](C& c) -> float& { return c.context.column_radius_m; }, 0.01, 10),
+      intSetting("features.context_cross_fit_folds",
+                 [](C& c) -> int& { return c.context.cross_fit_folds; }, 0, 100),
       intSetting("forest.num_trees", [](C& c) -> int& { return c.forest.num_trees; }, 1, 1000),
       intSetting("forest.max_depth", [](C& c) -> int& { return c.forest.max_depth; }, 1, 40),
       intSetting("forest.min_samples_leaf",
                  [](C& c) -> int& { return c.forest.min_samples_leaf; }, 1, 1000000),
       intSetting("forest.candidate_features",
-                 [](C& c) -> int& { return c.forest.candidate_features; }, 1, 14),
+                 [](C& c) -> int& { return c.forest.candidate_features; }, 1, 1024),
       intSetting("forest.candidate_thresholds",
                  [](C& c) -> int& { return c.forest.candidate_thresholds; }, 1, 1000),
       boolSetting("forest.class_weighting",
@@ -378,8 +392,9 @@ std::string dumpConfig(const Config& config) {
 RandomForest::Settings extractionSettings(const SegmenterConfig& config) {
   RandomForest::Settings out;
   for (const auto& s : settings()) {
+    if (s.key == "features.context_cross_fit_folds") continue;  // training only
     if (s.key.rfind("cloud.", 0) == 0 || s.key.rfind("normals.", 0) == 0 ||
-        s.key.rfind("overseg.", 0) == 0) {
+        s.key.rfind("overseg.", 0) == 0 || s.key.rfind("features.", 0) == 0) {
       out.emplace_back(s.key, s.get(config));
     }
   }

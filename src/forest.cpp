@@ -16,7 +16,8 @@
 //   char[8]  "FMUGFRST"
 //   uint32   format version (kFormatVersion)
 //   uint32   label count, then per label: uint32 length + bytes   (kLabelNames)
-//   uint32   feature count, then per feature: uint32 length + bytes (kFeatureNames)
+//   uint32   feature count, then per feature: uint32 length + bytes (kFeatureNames,
+//            then in version 3 any extra columns: region/context features)
 //   params   int32 num_trees, max_depth, min_samples_leaf, candidate_features,
 //            candidate_thresholds; uint8 class_weighting; float64 bagging_fraction;
 //            uint64 seed   (num_threads is not stored: it is not a property of
@@ -26,6 +27,8 @@
 //   uint32   tree count; per tree: uint32 node count, then per node:
 //            int32 feature; inner (feature >= 0): float32 threshold, int32 left, int32 right;
 //            leaf (feature == -1): float32[kNumLabels] distribution
+//   uint8    (version 3) 1 when an auto-context stage follows, else 0; the stage is
+//            feature count + names, params, tree count + trees as above
 //   uint64   FNV-1a 64 checksum of every byte before it
 #include "findmug/forest.hpp"
 
@@ -52,7 +55,11 @@ namespace findmug {
 namespace {
 
 constexpr char kMagic[8] = {'F', 'M', 'U', 'G', 'F', 'R', 'S', 'T'};
-constexpr std::uint32_t kFormatVersion = 2;
+constexpr std::uint32_t kFormatVersion = 3;
+// Format 2: the 14 base features only, no context stage. Still read; such a
+// model means features.regions = false and features.context = false.
+constexpr std::uint32_t kOldestFormatVersion = 2;
+constexpr std::uint32_t kMaxFeatures = 1024;
 constexpr std::uint32_t kMaxSettings = 256;
 constexpr int kMaxTrees = 10000;
 // Tree size is bounded by the training samples (every leaf holds at least
@@ -81,9 +88,9 @@ void validateParams(const ForestParams& p, const std::string& where) {
     fail("max_depth", std::to_string(p.max_depth), "expected 0.." + std::to_string(kMaxDepth));
   if (p.min_samples_leaf < 1)
     fail("min_samples_leaf", std::to_string(p.min_samples_leaf), "expected >= 1");
-  if (p.candidate_features < 1 || p.candidate_features > kFeatureDim)
+  if (p.candidate_features < 1 || p.candidate_features > static_cast<int>(kMaxFeatures))
     fail("candidate_features", std::to_string(p.candidate_features),
-         "expected 1.." + std::to_string(kFeatureDim));
+         "expected 1.." + std::to_string(kMaxFeatures));
   if (p.candidate_thresholds < 1 || p.candidate_thresholds > 100000)
     fail("candidate_thresholds", std::to_string(p.candidate_thresholds), "expected 1..100000");
   if (!(p.bagging_fraction > 0.0 && p.bagging_fraction <= 1.0))
@@ -102,6 +109,18 @@ void validateTrainingSet(const TrainingSet& data) {
   if (!data.weights.empty() && data.weights.size() != n)
     throw Error("forest training: " + std::to_string(n) + " feature vectors but " +
                 std::to_string(data.weights.size()) + " weights");
+  const std::size_t extra_dim = data.extra_names.size();
+  if (kFeatureDim + extra_dim > kMaxFeatures)
+    throw Error("forest training: " + std::to_string(kFeatureDim + extra_dim) +
+                " features exceed the limit of " + std::to_string(kMaxFeatures));
+  for (const auto& name : data.extra_names)
+    if (name.empty() || name.size() > kMaxNameLength)
+      throw Error("forest training: extra feature name '" + name + "' is empty or too long");
+  if (data.extra.size() != n * extra_dim)
+    throw Error("forest training: " + std::to_string(n) + " samples with " +
+                std::to_string(extra_dim) + " extra features need " +
+                std::to_string(n * extra_dim) + " extra values, got " +
+                std::to_string(data.extra.size()));
   for (std::size_t i = 0; i < n; ++i) {
     if (data.labels[i] >= kNumLabels)
       throw Error("forest training: sample " + std::to_string(i) + " has label " +
@@ -111,6 +130,11 @@ void validateTrainingSet(const TrainingSet& data) {
       if (!std::isfinite(data.features[i][f]))
         throw Error("forest training: sample " + std::to_string(i) + " feature " +
                     std::string(kFeatureNames[f]) + " is not finite");
+    }
+    for (std::size_t f = 0; f < extra_dim; ++f) {
+      if (!std::isfinite(data.extra[i * extra_dim + f]))
+        throw Error("forest training: sample " + std::to_string(i) + " feature " +
+                    data.extra_names[f] + " is not finite");
     }
     if (!data.weights.empty() && !(std::isfinite(data.weights[i]) && data.weights[i] > 0.0f))
       throw Error("forest training: sample " + std::to_string(i) + " has weight " +
@@ -161,8 +185,15 @@ double entropy(const Histogram& h, double total) {
 
 struct TrainingView {
   const std::vector<FeatureVector>& features;
+  const std::vector<float>& extra;
+  int extra_dim;
   const std::vector<std::uint8_t>& labels;
   std::vector<double> weights;  // per sample, including class weighting
+  int dim() const { return kFeatureDim + extra_dim; }
+  float value(std::uint32_t sample, int f) const {
+    return f < kFeatureDim ? features[sample][f]
+                           : extra[static_cast<std::size_t>(sample) * extra_dim + (f - kFeatureDim)];
+  }
 };
 
 class TreeBuilder {
@@ -224,7 +255,7 @@ class TreeBuilder {
       const auto mid_it = std::stable_partition(
           samples.begin() + static_cast<std::ptrdiff_t>(job.begin),
           samples.begin() + static_cast<std::ptrdiff_t>(job.end),
-          [&](std::uint32_t s) { return data_.features[s][split.feature] < split.threshold; });
+          [&](std::uint32_t s) { return data_.value(s, split.feature) < split.threshold; });
       const auto mid = static_cast<std::size_t>(mid_it - samples.begin());
       const auto left = static_cast<std::int32_t>(tree.size());
       const auto right = left + 1;
@@ -257,10 +288,12 @@ class TreeBuilder {
     const auto min_leaf = static_cast<std::size_t>(params_.min_samples_leaf);
 
     // Distinct random features: a partial Fisher-Yates shuffle.
-    std::array<int, kFeatureDim> order;
-    for (int f = 0; f < kFeatureDim; ++f) order[f] = f;
+    const int dim = data_.dim();
+    std::vector<int>& order = order_;
+    order.resize(static_cast<std::size_t>(dim));
+    for (int f = 0; f < dim; ++f) order[f] = f;
     for (int k = 0; k < params_.candidate_features; ++k) {
-      const auto j = k + static_cast<int>(rng_.below(static_cast<std::uint64_t>(kFeatureDim - k)));
+      const auto j = k + static_cast<int>(rng_.below(static_cast<std::uint64_t>(dim - k)));
       std::swap(order[k], order[j]);
     }
 
@@ -273,7 +306,7 @@ class TreeBuilder {
       float lo = std::numeric_limits<float>::infinity();
       float hi = -lo;
       for (std::size_t s = begin; s < end; ++s) {
-        const float v = data_.features[samples[s]][feature];
+        const float v = data_.value(samples[s], feature);
         lo = std::min(lo, v);
         hi = std::max(hi, v);
       }
@@ -294,7 +327,7 @@ class TreeBuilder {
       std::fill(bin_counts_.begin(), bin_counts_.end(), 0);
       for (std::size_t s = begin; s < end; ++s) {
         const std::uint32_t sample = samples[s];
-        const float v = data_.features[sample][feature];
+        const float v = data_.value(sample, feature);
         const auto bin = static_cast<std::size_t>(
             std::upper_bound(thresholds_.begin(), thresholds_.end(), v) - thresholds_.begin());
         bins_[bin][data_.labels[sample]] += data_.weights[sample];
@@ -337,6 +370,7 @@ class TreeBuilder {
   const TrainingView& data_;
   const ForestParams& params_;
   TreeRng rng_;
+  std::vector<int> order_;
   std::vector<float> thresholds_;
   std::vector<Histogram> bins_;
   std::vector<std::size_t> bin_counts_;
@@ -438,16 +472,7 @@ class Reader {
   const std::string& path_;
 };
 
-std::vector<std::uint8_t> serialize(const ForestParams& params,
-                                    const RandomForest::Settings& settings,
-                                    const std::vector<RandomForest::Tree>& trees) {
-  Writer w;
-  w.bytes(kMagic, sizeof kMagic);
-  w.u32(kFormatVersion);
-  w.u32(kNumLabels);
-  for (auto name : kLabelNames) w.str(name);
-  w.u32(kFeatureDim);
-  for (auto name : kFeatureNames) w.str(name);
+void writeParams(Writer& w, const ForestParams& params) {
   w.i32(params.num_trees);
   w.i32(params.max_depth);
   w.i32(params.min_samples_leaf);
@@ -456,11 +481,14 @@ std::vector<std::uint8_t> serialize(const ForestParams& params,
   w.u8(params.class_weighting ? 1 : 0);
   w.f64(params.bagging_fraction);
   w.u64(params.seed);
-  w.u32(static_cast<std::uint32_t>(settings.size()));
-  for (const auto& [key, value] : settings) {
-    w.str(key);
-    w.str(value);
-  }
+}
+
+void writeFeatureNames(Writer& w, const std::vector<std::string>& names) {
+  w.u32(static_cast<std::uint32_t>(names.size()));
+  for (const auto& name : names) w.str(name);
+}
+
+void writeTrees(Writer& w, const std::vector<RandomForest::Tree>& trees) {
   w.u32(static_cast<std::uint32_t>(trees.size()));
   for (const auto& tree : trees) {
     w.u32(static_cast<std::uint32_t>(tree.size()));
@@ -475,6 +503,30 @@ std::vector<std::uint8_t> serialize(const ForestParams& params,
       }
     }
   }
+}
+
+std::vector<std::uint8_t> serialize(const RandomForest& forest) {
+  Writer w;
+  w.bytes(kMagic, sizeof kMagic);
+  w.u32(kFormatVersion);
+  w.u32(kNumLabels);
+  for (auto name : kLabelNames) w.str(name);
+  writeFeatureNames(w, forest.featureNames());
+  writeParams(w, forest.params());
+  const auto& settings = forest.extractionSettings();
+  w.u32(static_cast<std::uint32_t>(settings.size()));
+  for (const auto& [key, value] : settings) {
+    w.str(key);
+    w.str(value);
+  }
+  writeTrees(w, forest.trees());
+  const RandomForest* stage = forest.contextStage();
+  w.u8(stage ? 1 : 0);
+  if (stage) {
+    writeFeatureNames(w, stage->featureNames());
+    writeParams(w, stage->params());
+    writeTrees(w, stage->trees());
+  }
   auto& buf = w.buffer();
   w.u64(fnv1a64(buf.data(), buf.size()));
   return std::move(buf);
@@ -483,7 +535,8 @@ std::vector<std::uint8_t> serialize(const ForestParams& params,
 // Structural checks of one loaded tree: indices in range, every node except
 // the root referenced exactly once and only from a node with a smaller index
 // (so there are no cycles and every node is reachable), sane leaves.
-void validateTree(const RandomForest::Tree& tree, std::size_t t, const std::string& path) {
+void validateTree(const RandomForest::Tree& tree, std::size_t t, int dim,
+                  const std::string& path) {
   const auto n = static_cast<std::int64_t>(tree.size());
   std::vector<std::uint8_t> referenced(tree.size(), 0);
   auto fail = [&](std::size_t node, const std::string& problem) {
@@ -493,9 +546,9 @@ void validateTree(const RandomForest::Tree& tree, std::size_t t, const std::stri
   for (std::size_t i = 0; i < tree.size(); ++i) {
     const auto& node = tree[i];
     if (node.feature >= 0) {
-      if (node.feature >= kFeatureDim)
+      if (node.feature >= dim)
         fail(i, "feature index " + std::to_string(node.feature) + " out of range 0.." +
-                    std::to_string(kFeatureDim - 1));
+                    std::to_string(dim - 1));
       if (!std::isfinite(node.threshold)) fail(i, "threshold is not finite");
       for (std::int32_t child : {node.left, node.right}) {
         if (child <= 0 || child >= n)
@@ -533,7 +586,12 @@ RandomForest RandomForest::train(const TrainingSet& data, const ForestParams& pa
   validateParams(params, "forest training");
   validateTrainingSet(data);
 
-  TrainingView view{data.features, data.labels, {}};
+  TrainingView view{data.features, data.extra, static_cast<int>(data.extra_names.size()),
+                    data.labels, {}};
+  if (params.candidate_features > view.dim())
+    throw Error("forest training: forest parameter candidate_features = " +
+                std::to_string(params.candidate_features) + " is invalid (expected 1.." +
+                std::to_string(view.dim()) + ", the number of features)");
   view.weights.resize(data.features.size());
   for (std::size_t i = 0; i < view.weights.size(); ++i)
     view.weights[i] = data.weights.empty() ? 1.0 : static_cast<double>(data.weights[i]);
@@ -557,6 +615,8 @@ RandomForest RandomForest::train(const TrainingSet& data, const ForestParams& pa
 
   RandomForest forest;
   forest.params_ = params;
+  for (auto name : kFeatureNames) forest.feature_names_.emplace_back(name);
+  for (const auto& name : data.extra_names) forest.feature_names_.push_back(name);
   forest.trees_.resize(static_cast<std::size_t>(params.num_trees));
 
   int threads = params.num_threads > 0 ? params.num_threads
@@ -630,17 +690,37 @@ void RandomForest::setExtractionSettings(Settings settings) {
       throw Error("RandomForest: extraction setting '" + key + "' has an empty or too long name/value");
   }
   extraction_settings_ = std::move(settings);
-  // The id names the model's content: settings included.
-  const auto bytes = serialize(params_, extraction_settings_, trees_);
+  updateId();
+}
+
+void RandomForest::setContextStage(RandomForest stage) {
+  if (stage.empty()) throw Error("RandomForest: the context stage is empty (not trained)");
+  if (stage.contextStage())
+    throw Error("RandomForest: a context stage cannot have a context stage of its own");
+  const auto& names = stage.featureNames();
+  if (names.size() <= feature_names_.size() ||
+      !std::equal(feature_names_.begin(), feature_names_.end(), names.begin()))
+    throw Error("RandomForest: the context stage's rows must start with the first stage's " +
+                std::to_string(feature_names_.size()) + " columns and add context columns");
+  context_stage_ = std::make_shared<const RandomForest>(std::move(stage));
+  updateId();
+}
+
+void RandomForest::updateId() {
+  // The id names the model's content: settings and context stage included.
+  const auto bytes = serialize(*this);
   std::uint64_t checksum = 0;
   for (std::size_t i = 0; i < kChecksumSize; ++i)
     checksum |= static_cast<std::uint64_t>(bytes[bytes.size() - kChecksumSize + i]) << (8 * i);
   id_ = idFromChecksum(checksum);
 }
 
-ClassProbabilities RandomForest::predict(const FeatureVector& x) const {
+ClassProbabilities RandomForest::predict(std::span<const float> x) const {
   if (trees_.empty())
     throw Error("RandomForest::predict: the forest is empty (not trained/loaded)");
+  if (x.size() != feature_names_.size())
+    throw Error("RandomForest::predict: a row of " + std::to_string(x.size()) +
+                " features for a forest of " + std::to_string(feature_names_.size()));
   std::array<float, kNumLabels> sum{};
   for (const Tree& tree : trees_) {
     const Node* nodes = tree.data();
@@ -657,7 +737,7 @@ ClassProbabilities RandomForest::predict(const FeatureVector& x) const {
 
 void RandomForest::save(const std::string& path) const {
   if (trees_.empty()) throw Error(path + ": refusing to save an empty forest");
-  const auto bytes = serialize(params_, extraction_settings_, trees_);
+  const auto bytes = serialize(*this);
   // Write to a temporary file and rename, so a crash never leaves a half model.
   const std::string tmp = path + ".tmp";
   {
@@ -694,10 +774,10 @@ RandomForest RandomForest::load(const std::string& path) {
   std::uint32_t version = 0;
   for (int i = 0; i < 4; ++i)
     version |= static_cast<std::uint32_t>(buf[sizeof kMagic + i]) << (8 * i);
-  if (version != kFormatVersion)
+  if (version < kOldestFormatVersion || version > kFormatVersion)
     throw Error(path + ": forest model format version " + std::to_string(version) +
-                " is not supported (this build reads version " + std::to_string(kFormatVersion) +
-                ")");
+                " is not supported (this build reads versions " +
+                std::to_string(kOldestFormatVersion) + ".." + std::to_string(kFormatVersion) + ")");
 
   // Whether the trailing checksum matches tells apart "truncated or corrupt"
   // from "intact but not loadable by this build" in the messages below.
@@ -727,32 +807,82 @@ RandomForest RandomForest::load(const std::string& path) {
                     "', this build expects '" + std::string(kLabelNames[c]) +
                     "' (label names differ)");
     }
-    const std::uint32_t num_features = r.u32("feature count");
-    if (num_features != kFeatureDim)
-      throw Error(path + ": forest model has " + std::to_string(num_features) +
-                  " features, this build computes " + std::to_string(kFeatureDim));
-    for (int f = 0; f < kFeatureDim; ++f) {
-      const std::string name = r.str("feature name");
-      if (name != kFeatureNames[f])
-        throw Error(path + ": forest model feature " + std::to_string(f) + " is '" + name +
-                    "', this build computes '" + std::string(kFeatureNames[f]) +
-                    "' (feature layout differs)");
-    }
+    // Column names: the 14 base features first; format 3 may add extras.
+    auto readFeatureNames = [&](const std::string& stage) {
+      const std::uint32_t num_features = r.u32(stage + "feature count");
+      if (version == 2 ? num_features != kFeatureDim
+                       : (num_features < kFeatureDim || num_features > kMaxFeatures))
+        throw Error(path + ": forest model " + stage + "has " + std::to_string(num_features) +
+                    " features, this build computes " + std::to_string(kFeatureDim) +
+                    (version == 2 ? "" : " base features plus at most " +
+                                             std::to_string(kMaxFeatures - kFeatureDim) +
+                                             " extra ones"));
+      std::vector<std::string> names;
+      for (std::uint32_t f = 0; f < num_features; ++f) {
+        std::string name = r.str(stage + "feature name");
+        if (f < kFeatureDim && name != kFeatureNames[f])
+          throw Error(path + ": forest model " + stage + "feature " + std::to_string(f) + " is '" +
+                      name + "', this build computes '" + std::string(kFeatureNames[f]) +
+                      "' (feature layout differs)");
+        if (name.empty()) throw Error(path + ": forest model " + stage + "feature name is empty");
+        names.push_back(std::move(name));
+      }
+      return names;
+    };
+    auto readParams = [&](ForestParams& p, const std::string& stage) {
+      p.num_trees = r.i32(stage + "params.num_trees");
+      p.max_depth = r.i32(stage + "params.max_depth");
+      p.min_samples_leaf = r.i32(stage + "params.min_samples_leaf");
+      p.candidate_features = r.i32(stage + "params.candidate_features");
+      p.candidate_thresholds = r.i32(stage + "params.candidate_thresholds");
+      const std::uint8_t weighting = r.u8(stage + "params.class_weighting");
+      if (weighting > 1)
+        throw Error(path + ": forest model " + stage + "params.class_weighting = " +
+                    std::to_string(weighting) + " (expected 0 or 1)");
+      p.class_weighting = weighting == 1;
+      p.bagging_fraction = r.f64(stage + "params.bagging_fraction");
+      p.seed = r.u64(stage + "params.seed");
+      validateParams(p, path);
+    };
+    auto readTrees = [&](RandomForest& f, const std::string& stage) {
+      const std::uint32_t num_trees = r.u32(stage + "tree count");
+      if (num_trees == 0 || num_trees > kMaxTrees)
+        throw Error(path + ": forest model " + stage + "has an absurd num_trees " +
+                    std::to_string(num_trees) + " (expected 1.." + std::to_string(kMaxTrees) + ")");
+      if (num_trees != static_cast<std::uint32_t>(f.params_.num_trees))
+        throw Error(path + ": forest model " + stage + "holds " + std::to_string(num_trees) +
+                    " trees but params.num_trees = " + std::to_string(f.params_.num_trees));
+      f.trees_.resize(num_trees);
+      for (std::uint32_t t = 0; t < num_trees; ++t) {
+        const std::string tree_name = stage + "tree " + std::to_string(t);
+        const std::uint32_t num_nodes = r.u32(tree_name + " node count");
+        // Every node takes at least kInnerNodeBytes, so a count the rest of the
+        // file cannot hold is refused before allocating for it.
+        if (num_nodes == 0) throw Error(path + ": forest model " + tree_name + " has no nodes");
+        if (num_nodes > r.remaining() / kInnerNodeBytes)
+          throw Error(path + ": forest model " + tree_name + " has node count " +
+                      std::to_string(num_nodes) + " but only " + std::to_string(r.remaining()) +
+                      " bytes remain (absurd count, or the file is truncated)");
+        Tree& tree = f.trees_[t];
+        tree.resize(num_nodes);
+        for (std::uint32_t i = 0; i < num_nodes; ++i) {
+          Node& node = tree[i];
+          node.feature = r.i32(tree_name + " node feature");
+          if (node.feature >= 0) {
+            node.threshold = r.f32(tree_name + " node threshold");
+            node.left = r.i32(tree_name + " node left");
+            node.right = r.i32(tree_name + " node right");
+          } else {
+            r.need(kLeafNodeBytes - 4, tree_name + " leaf distribution");
+            for (float& prob : node.distribution) prob = r.f32(tree_name + " leaf distribution");
+          }
+        }
+        validateTree(tree, t, f.dim(), path);
+      }
+    };
 
-    ForestParams& p = forest.params_;
-    p.num_trees = r.i32("params.num_trees");
-    p.max_depth = r.i32("params.max_depth");
-    p.min_samples_leaf = r.i32("params.min_samples_leaf");
-    p.candidate_features = r.i32("params.candidate_features");
-    p.candidate_thresholds = r.i32("params.candidate_thresholds");
-    const std::uint8_t weighting = r.u8("params.class_weighting");
-    if (weighting > 1)
-      throw Error(path + ": forest model params.class_weighting = " + std::to_string(weighting) +
-                  " (expected 0 or 1)");
-    p.class_weighting = weighting == 1;
-    p.bagging_fraction = r.f64("params.bagging_fraction");
-    p.seed = r.u64("params.seed");
-    validateParams(p, path);
+    forest.feature_names_ = readFeatureNames("");
+    readParams(forest.params_, "");
 
     const std::uint32_t num_settings = r.u32("extraction setting count");
     if (num_settings > kMaxSettings)
@@ -765,39 +895,26 @@ RandomForest RandomForest::load(const std::string& path) {
       forest.extraction_settings_.emplace_back(std::move(key), std::move(value));
     }
 
-    const std::uint32_t num_trees = r.u32("tree count");
-    if (num_trees == 0 || num_trees > kMaxTrees)
-      throw Error(path + ": forest model has an absurd num_trees " + std::to_string(num_trees) +
-                  " (expected 1.." + std::to_string(kMaxTrees) + ")");
-    if (num_trees != static_cast<std::uint32_t>(p.num_trees))
-      throw Error(path + ": forest model holds " + std::to_string(num_trees) +
-                  " trees but params.num_trees = " + std::to_string(p.num_trees));
-    forest.trees_.resize(num_trees);
-    for (std::uint32_t t = 0; t < num_trees; ++t) {
-      const std::string tree_name = "tree " + std::to_string(t);
-      const std::uint32_t num_nodes = r.u32(tree_name + " node count");
-      // Every node takes at least kInnerNodeBytes, so a count the rest of the
-      // file cannot hold is refused before allocating for it.
-      if (num_nodes == 0) throw Error(path + ": forest model " + tree_name + " has no nodes");
-      if (num_nodes > r.remaining() / kInnerNodeBytes)
-        throw Error(path + ": forest model " + tree_name + " has node count " +
-                    std::to_string(num_nodes) + " but only " + std::to_string(r.remaining()) +
-                    " bytes remain (absurd count, or the file is truncated)");
-      Tree& tree = forest.trees_[t];
-      tree.resize(num_nodes);
-      for (std::uint32_t i = 0; i < num_nodes; ++i) {
-        Node& node = tree[i];
-        node.feature = r.i32(tree_name + " node feature");
-        if (node.feature >= 0) {
-          node.threshold = r.f32(tree_name + " node threshold");
-          node.left = r.i32(tree_name + " node left");
-          node.right = r.i32(tree_name + " node right");
-        } else {
-          r.need(kLeafNodeBytes - 4, tree_name + " leaf distribution");
-          for (float& prob : node.distribution) prob = r.f32(tree_name + " leaf distribution");
-        }
+    readTrees(forest, "");
+    if (version >= 3) {
+      const std::uint8_t has_stage = r.u8("context stage flag");
+      if (has_stage > 1)
+        throw Error(path + ": forest model context stage flag = " + std::to_string(has_stage) +
+                    " (expected 0 or 1)");
+      if (has_stage == 1) {
+        RandomForest stage;
+        stage.feature_names_ = readFeatureNames("context stage ");
+        if (stage.feature_names_.size() <= forest.feature_names_.size() ||
+            !std::equal(forest.feature_names_.begin(), forest.feature_names_.end(),
+                        stage.feature_names_.begin()))
+          throw Error(path + ": forest model context stage columns do not start with the " +
+                      std::to_string(forest.feature_names_.size()) +
+                      " first-stage columns followed by context columns");
+        readParams(stage.params_, "context stage ");
+        readTrees(stage, "context stage ");
+        stage.format_version_ = version;
+        forest.context_stage_ = std::make_shared<const RandomForest>(std::move(stage));
       }
-      validateTree(tree, t, path);
     }
     if (r.remaining() < kChecksumSize) r.need(kChecksumSize, "checksum");
     if (r.remaining() > kChecksumSize)
@@ -812,6 +929,7 @@ RandomForest RandomForest::load(const std::string& path) {
                 idFromChecksum(stored_checksum) + "...)");
   forest.id_ = idFromChecksum(stored_checksum);
   forest.source_ = path;
+  forest.format_version_ = version;
   return forest;
 }
 

@@ -50,7 +50,103 @@ Segmenter::Segmenter(SegmenterConfig config, std::shared_ptr<const RandomForest>
   if (forest_) checkModelMatchesConfig(*forest_, config_);
 }
 
+std::vector<std::string> firstStageFeatureNames(const SegmenterConfig& config) {
+  std::vector<std::string> names(kFeatureNames.begin(), kFeatureNames.end());
+  if (config.regions.enabled) names.insert(names.end(), kRegionFeatureNames.begin(), kRegionFeatureNames.end());
+  return names;
+}
+
+std::vector<std::string> contextStageFeatureNames(const SegmenterConfig& config) {
+  std::vector<std::string> names = firstStageFeatureNames(config);
+  const auto context = contextFeatureNames();
+  names.insert(names.end(), context.begin(), context.end());
+  return names;
+}
+
+std::vector<float> firstStageRows(const SegmentFeatures& features) {
+  const std::size_t n = features.features.size();
+  const bool regions = !features.regions.empty();
+  if (regions && features.regions.size() != n * kRegionFeatureDim) {
+    throw Error("firstStageRows: " + std::to_string(n) + " segments but " +
+                std::to_string(features.regions.size()) + " region feature values");
+  }
+  const std::size_t dim = kFeatureDim + (regions ? kRegionFeatureDim : 0);
+  std::vector<float> rows(n * dim);
+  for (std::size_t i = 0; i < n; ++i) {
+    float* row = rows.data() + i * dim;
+    std::copy(features.features[i].begin(), features.features[i].end(), row);
+    if (regions) {
+      std::copy_n(features.regions.begin() + static_cast<std::ptrdiff_t>(i * kRegionFeatureDim),
+                  kRegionFeatureDim, row + kFeatureDim);
+    }
+  }
+  return rows;
+}
+
+std::vector<ClassProbabilities> predictSegments(const RandomForest& model,
+                                                const SegmentFeatures& features,
+                                                const std::vector<float>& weights,
+                                                const ContextConfig& context,
+                                                std::vector<ClassProbabilities>* first_stage,
+                                                double* context_ms) {
+  const std::size_t n = features.features.size();
+  const std::vector<float> rows = firstStageRows(features);
+  const auto dim = static_cast<std::size_t>(model.dim());
+  if (rows.size() != n * dim) {
+    throw Error("predictSegments: the model reads " + std::to_string(dim) +
+                " columns per segment, the features give " +
+                std::to_string(n == 0 ? 0 : rows.size() / n) +
+                " (features.regions differs from the model's)");
+  }
+  std::vector<ClassProbabilities> probs(n);
+  for (std::size_t i = 0; i < n; ++i) probs[i] = model.predict({rows.data() + i * dim, dim});
+  const RandomForest* stage = model.contextStage();
+  if (!stage) return probs;
+
+  Stopwatch watch;
+  const std::vector<float> ctx = computeContextFeatures(probs, features.centroids, weights, context);
+  const std::size_t dim2 = dim + kContextFeatureDim;
+  if (static_cast<std::size_t>(stage->dim()) != dim2) {
+    throw Error("predictSegments: the context stage reads " + std::to_string(stage->dim()) +
+                " columns, expected " + std::to_string(dim2));
+  }
+  std::vector<float> row(dim2);
+  std::vector<ClassProbabilities> out(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    std::copy_n(rows.begin() + static_cast<std::ptrdiff_t>(i * dim), dim, row.begin());
+    std::copy_n(ctx.begin() + static_cast<std::ptrdiff_t>(i * kContextFeatureDim),
+                kContextFeatureDim, row.begin() + static_cast<std::ptrdiff_t>(dim));
+    out[i] = stage->predict(row);
+  }
+  if (context_ms) *context_ms = watch.lap();
+  if (first_stage) *first_stage = std::move(probs);
+  return out;
+}
+
 void checkModelMatchesConfig(const RandomForest& forest, const SegmenterConfig& config) {
+  const std::string name = forest.source().empty() ? "forest " + forest.id()
+                                                    : forest.source() + " (" + forest.id() + ")";
+  // Columns and stages first: they say in one line what is wrong.
+  const auto expected = firstStageFeatureNames(config);
+  if (forest.featureNames() != expected) {
+    const bool model_regions = forest.dim() == kFeatureDim + kRegionFeatureDim;
+    throw Error("model " + name + " reads " + std::to_string(forest.dim()) +
+                " feature columns" + (model_regions ? " (with region features)" : "") +
+                " but the config computes " + std::to_string(expected.size()) +
+                " (features.regions = " + (config.regions.enabled ? "true" : "false") +
+                "); set features.regions to match the model or retrain" +
+                (forest.formatVersion() == 2 ? " (a format-2 model has no region features)" : ""));
+  }
+  if (config.context.enabled != (forest.contextStage() != nullptr)) {
+    throw Error("model " + name + (forest.contextStage() ? " has" : " has no") +
+                " auto-context stage but the config has features.context = " +
+                (config.context.enabled ? "true" : "false") +
+                "; set it to match the model or retrain" +
+                (forest.formatVersion() == 2 ? " (a format-2 model has no context stage)" : ""));
+  }
+  if (forest.contextStage() && forest.contextStage()->featureNames() != contextStageFeatureNames(config)) {
+    throw Error("model " + name + ": the context stage's columns are not those this build computes");
+  }
   const auto& trained = forest.extractionSettings();
   if (trained.empty()) return;
   const auto current = extractionSettings(config);
@@ -65,8 +161,6 @@ void checkModelMatchesConfig(const RandomForest& forest, const SegmenterConfig& 
     }
   }
   if (!differences.empty()) {
-    const std::string name = forest.source().empty() ? "forest " + forest.id()
-                                                      : forest.source() + " (" + forest.id() + ")";
     throw Error("model " + name +
                 " was trained with other feature-extraction settings than the config; "
                 "set them back or retrain:" + differences);
@@ -137,8 +231,15 @@ SegmentedFrame Segmenter::oversegment(PreparedFrame prepared) const {
 
 SegmentFeatures Segmenter::features(const SegmentedFrame& segmented) const {
   if (!segmented.prepared.ground) return {};
-  return computeFeatures(segmented.prepared.cloud_ground, segmented.prepared.normals_ground,
-                         segmented.segmentation);
+  SegmentFeatures out = computeFeatures(segmented.prepared.cloud_ground,
+                                        segmented.prepared.normals_ground, segmented.segmentation);
+  if (config_.regions.enabled) {
+    out.regions = computeRegionFeatures(segmented.prepared.cloud_ground,
+                                        segmented.prepared.normals_ground, segmented.segmentation,
+                                        config_.regions)
+                      .values;
+  }
+  return out;
 }
 
 LabelledFrame Segmenter::classify(SegmentedFrame segmented) const {
@@ -156,17 +257,30 @@ LabelledFrame Segmenter::classify(SegmentedFrame segmented) const {
   }
 
   Stopwatch watch;
-  out.features = features(segmented);
+  out.features = computeFeatures(segmented.prepared.cloud_ground,
+                                 segmented.prepared.normals_ground, segmented.segmentation);
   out.timings.features_ms = watch.lap();
+  if (config_.regions.enabled) {
+    out.features.regions = computeRegionFeatures(segmented.prepared.cloud_ground,
+                                                 segmented.prepared.normals_ground,
+                                                 segmented.segmentation, config_.regions)
+                               .values;
+  }
+  out.timings.regions_ms = watch.lap();
 
   const std::size_t n = out.features.features.size();
-  out.forest_probabilities.resize(n);
+  std::vector<float> weights(n);
+  for (std::size_t i = 0; i < n; ++i)
+    weights[i] = static_cast<float>(segmented.segmentation.segments[i].size());
+  double context_ms = 0;
+  out.forest_probabilities =
+      predictSegments(*forest_, out.features, weights, config_.context,
+                      &out.first_stage_probabilities, &context_ms);
   out.forest_labels.resize(n);
-  for (std::size_t i = 0; i < n; ++i) {
-    out.forest_probabilities[i] = forest_->predict(out.features.features[i]);
-    out.forest_labels[i] = argmax(out.forest_probabilities[i]);
-  }
-  out.timings.forest_ms = watch.lap();
+  for (std::size_t i = 0; i < n; ++i) out.forest_labels[i] = argmax(out.forest_probabilities[i]);
+  // The context stage's time is measured inside and reported on its own.
+  out.timings.context_ms = context_ms;
+  out.timings.forest_ms = watch.lap() - context_ms;
 
   std::vector<float> confidence(n);
   const std::vector<std::uint8_t>* final_labels = &out.forest_labels;

@@ -48,19 +48,16 @@ std::uint8_t argmax(const ClassProbabilities& p) {
 }
 
 // Labels the test frames with `forest` and accumulates both confusions.
-void labelFrames(const RandomForest& forest, const MrfParams& mrf_params,
+void labelFrames(const RandomForest& forest, const SegmenterConfig& config,
                  const std::vector<FrameSample>& samples, const std::vector<std::size_t>& frames,
                  Evaluation& eval, bool keep_pixels) {
   for (std::size_t f : frames) {
     const FrameSample& s = samples[f];
     const std::size_t n = s.features.features.size();
-    std::vector<ClassProbabilities> probs(n);
+    const std::vector<ClassProbabilities> probs = predictSample(forest, s, config);
     std::vector<std::uint8_t> forest_labels(n);
-    for (std::size_t k = 0; k < n; ++k) {
-      probs[k] = forest.predict(s.features.features[k]);
-      forest_labels[k] = argmax(probs[k]);
-    }
-    const MrfResult mrf = solveMrf(probs, s.features.centroids, s.edges, mrf_params);
+    for (std::size_t k = 0; k < n; ++k) forest_labels[k] = argmax(probs[k]);
+    const MrfResult mrf = solveMrf(probs, s.features.centroids, s.edges, config.mrf);
     eval.forest.add(s.ground_truth, pixelLabels(s, forest_labels));
     auto mrf_pixels = pixelLabels(s, mrf.labels);
     eval.mrf.add(s.ground_truth, mrf_pixels);
@@ -80,19 +77,14 @@ Evaluation crossValidate(const std::vector<FrameSample>& samples,
       (static_cast<int>(i * folds / n) == fold ? test : train).push_back(i);
     }
     if (test.empty() || train.empty()) continue;
-    TrainingSet set = makeTrainingSet(samples, train);
-    if (!extra_training.empty()) {
-      std::vector<std::size_t> all(extra_training.size());
-      for (std::size_t i = 0; i < all.size(); ++i) all[i] = i;
-      const TrainingSet extra = makeTrainingSet(extra_training, all);
-      set.features.insert(set.features.end(), extra.features.begin(), extra.features.end());
-      set.labels.insert(set.labels.end(), extra.labels.begin(), extra.labels.end());
-    }
-    if (set.labels.empty()) continue;
-    ForestParams params = config.forest;
-    params.seed += static_cast<std::uint64_t>(fold);
-    const RandomForest forest = RandomForest::train(set, params);
-    labelFrames(forest, config.mrf, samples, test, eval, keep_pixels);
+    std::vector<const FrameSample*> frames;
+    for (std::size_t i : train) frames.push_back(&samples[i]);
+    for (const auto& s : extra_training) frames.push_back(&s);
+    if (makeTrainingSet(frames).labels.empty()) continue;
+    SegmenterConfig fold_config = config;
+    fold_config.forest.seed += static_cast<std::uint64_t>(fold);
+    const RandomForest forest = trainModel(frames, fold_config);
+    labelFrames(forest, config, samples, test, eval, keep_pixels);
   }
   return eval;
 }
@@ -185,7 +177,7 @@ int run(int argc, char** argv) {
     eval.mrf_pixels.resize(samples.size());
     std::vector<std::size_t> all(samples.size());
     for (std::size_t i = 0; i < all.size(); ++i) all[i] = i;
-    labelFrames(forest, config.segmenter.mrf, samples, all, eval, true);
+    labelFrames(forest, config.segmenter, samples, all, eval, true);
   } else {
     report.protocol = std::to_string(folds) + "-fold cross-validation by frame";
     eval = crossValidate(samples, extra_training, folds, config.segmenter, true);

@@ -61,9 +61,11 @@ int run(int argc, char** argv) {
   const TrainingSet training = makeTrainingSet(samples, all);
   if (training.labels.empty()) throw Error("no labelled supervoxel to train on");
 
-  tools::ProgressBar bar("trees");
-  RandomForest forest = RandomForest::train(
-      training, config.segmenter.forest, [&](int done, int total) { bar.update(done, total); });
+  tools::ProgressBar bar("forests");
+  std::vector<const FrameSample*> frames;
+  for (const auto& s : samples) frames.push_back(&s);
+  RandomForest forest = trainModel(frames, config.segmenter,
+                                   [&](int done, int total) { bar.update(done, total); });
   bar.finish();
   // Recorded so that the model is only ever run on features computed alike.
   forest.setExtractionSettings(extractionSettings(config.segmenter));
@@ -83,6 +85,9 @@ int run(int argc, char** argv) {
   const auto& p = config.segmenter.forest;
   std::printf("  forest           %d trees, max depth %d, seed %llu\n", p.num_trees, p.max_depth,
               static_cast<unsigned long long>(p.seed));
+  std::printf("  features         %d columns%s%s\n", forest.dim(),
+              config.segmenter.regions.enabled ? " (with region features)" : "",
+              forest.contextStage() ? ", auto-context stage" : "");
   std::printf("  model            %s (id %s)\n", flags.get("out").c_str(), forest.id().c_str());
   std::printf("  time             %.1f s\n", seconds);
   return 0;

@@ -11,10 +11,12 @@
 #include <vector>
 
 #include "findmug/cloud.hpp"
+#include "findmug/context_features.hpp"
 #include "findmug/forest.hpp"
 #include "findmug/ground.hpp"
 #include "findmug/mrf.hpp"
 #include "findmug/oversegmentation.hpp"
+#include "findmug/region_features.hpp"
 #include "findmug/tables.hpp"
 
 namespace findmug {
@@ -24,6 +26,8 @@ struct SegmenterConfig {
   NormalConfig normals;
   GroundConfig ground;
   OversegmentationConfig overseg;
+  RegionConfig regions;    // features.regions, features.region_*
+  ContextConfig context;   // features.context, features.context_*
   ForestParams forest;
   MrfParams mrf;
   bool use_mrf = true;
@@ -44,7 +48,8 @@ void applyOverride(Config& config, const std::string& key_equals_value);
 // The effective config as YAML, for the start-up log and reports.
 std::string dumpConfig(const Config& config);
 
-// The settings that shape the features (cloud.*, normals.*, overseg.*), as
+// The settings that shape the features (cloud.*, normals.*, overseg.*,
+// features.* except the training-only features.context_cross_fit_folds), as
 // "key" -> "value" in a stable order. The trainer stores them in the model;
 // a model is only run with the same values (see checkModelMatchesConfig).
 RandomForest::Settings extractionSettings(const SegmenterConfig& config);

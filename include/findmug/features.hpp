@@ -37,6 +37,9 @@ inline constexpr std::array<std::string_view, kFeatureDim> kFeatureNames = {
 struct SegmentFeatures {
   std::vector<FeatureVector> features;     // one per segment
   std::vector<Eigen::Vector3f> centroids;  // ground frame, metres (used by the MRF)
+  // Region features (region_features.hpp), row-major, kRegionFeatureDim per
+  // segment; empty unless features.regions is on.
+  std::vector<float> regions;
 };
 
 // sRGB (0..255) to CIELAB (D65).

@@ -4,10 +4,20 @@
 // information gain; leaves hold label histograms; p(y|x) is the mean of the
 // reached leaves' distributions. Training is seeded and reproducible: tree t
 // uses seed + t whatever the number of threads.
+//
+// Feature rows: every forest reads the 14 base features of features.hpp
+// first, optionally followed by extra columns (region features, context
+// features; see context_features.hpp). The column names are part of the
+// model, so a model is never fed columns it was not trained on. A model may
+// carry a second, auto-context stage: a forest whose rows are the first
+// stage's rows followed by the first stage's class distributions aggregated
+// over 3-D neighbourhoods.
 #pragma once
 
 #include <cstdint>
 #include <functional>
+#include <memory>
+#include <span>
 #include <string>
 #include <utility>
 #include <vector>
@@ -21,7 +31,7 @@ struct ForestParams {
   int num_trees = 8;
   int max_depth = 12;
   int min_samples_leaf = 5;
-  int candidate_features = 4;     // random features tried per node
+  int candidate_features = 4;     // random features tried per node (<= feature count)
   int candidate_thresholds = 10;  // random thresholds tried per feature
   bool class_weighting = true;    // weight samples by inverse class frequency
   double bagging_fraction = 1.0;  // share of samples (with replacement) per tree;
@@ -32,7 +42,11 @@ struct ForestParams {
 };
 
 struct TrainingSet {
-  std::vector<FeatureVector> features;
+  std::vector<FeatureVector> features;  // the 14 base features per sample
+  // Optional extra columns after the base features: their names, and the
+  // values row-major (extra_names.size() per sample, same order as features).
+  std::vector<std::string> extra_names;
+  std::vector<float> extra;
   std::vector<std::uint8_t> labels;  // 0..kNumLabels-1 (no void)
   std::vector<float> weights;        // optional, empty = 1 each (e.g. patch pixel count)
 };
@@ -55,11 +69,28 @@ class RandomForest {
   static RandomForest train(const TrainingSet& data, const ForestParams& params,
                             const Progress& progress = {});
 
-  // Throws findmug::Error on an empty forest. Non-finite features go right.
-  ClassProbabilities predict(const FeatureVector& x) const;
+  // Throws findmug::Error on an empty forest or a row whose length is not
+  // dim(). Non-finite features go right. The FeatureVector overload is for
+  // forests of the 14 base features only.
+  ClassProbabilities predict(std::span<const float> row) const;
+  ClassProbabilities predict(const FeatureVector& x) const {
+    return predict(std::span<const float>(x.data(), x.size()));
+  }
+
+  // Column names of the rows this forest reads (kFeatureNames, then extras).
+  const std::vector<std::string>& featureNames() const { return feature_names_; }
+  int dim() const { return static_cast<int>(feature_names_.size()); }
+
+  // The auto-context stage (null when the model has none). Its rows are this
+  // forest's rows followed by context columns. Setting it changes id().
+  void setContextStage(RandomForest stage);
+  const RandomForest* contextStage() const { return context_stage_.get(); }
+  // Model file format the forest was loaded from (0 when trained in-process).
+  std::uint32_t formatVersion() const { return format_version_; }
 
   // Versioned binary model: magic, format version, label names, feature
-  // layout, parameters, trees, checksum. `load` refuses a truncated,
+  // layout, parameters, trees, optional context stage, checksum. Format 3 is
+  // written; format 2 (14 base features, no context stage) is still read. `load` refuses a truncated,
   // corrupt or wrong-version file with a findmug::Error naming the file.
   void save(const std::string& path) const;
   static RandomForest load(const std::string& path);
@@ -81,8 +112,13 @@ class RandomForest {
   bool empty() const { return trees_.empty(); }
 
  private:
+  void updateId();
+
   ForestParams params_;
   std::vector<Tree> trees_;
+  std::vector<std::string> feature_names_;
+  std::shared_ptr<const RandomForest> context_stage_;
+  std::uint32_t format_version_ = 0;
   Settings extraction_settings_;
   std::string id_;
   std::string source_;

@@ -1,7 +1,11 @@
 // findmug/segmenter.hpp — the whole pipeline for one frame, stage by stage.
 //
 // frame -> cloud + normals -> ground plane -> oversegmentation -> features
-//       -> forest p(y|x) -> MRF -> label image -> tables
+//       [-> region features] -> forest p(y|x) [-> context features -> context
+//       forest p(y|x)] -> MRF -> label image -> tables
+// The bracketed stages run when the model has them (features.regions,
+// features.context); the model file is the source of truth and a config
+// that disagrees with it is refused.
 //
 // Each stage is a method taking and returning plain data so that the daemon
 // can run stages on different threads and tests can check each alone.
@@ -29,10 +33,11 @@ namespace findmug {
 // Wall time of each stage in milliseconds.
 struct StageTimings {
   double cloud_ms = 0, normals_ms = 0, ground_ms = 0, overseg_ms = 0, features_ms = 0,
-         forest_ms = 0, mrf_ms = 0, labels_ms = 0, tables_ms = 0;
+         regions_ms = 0, forest_ms = 0, context_ms = 0, mrf_ms = 0, labels_ms = 0,
+         tables_ms = 0;
   double total() const {
-    return cloud_ms + normals_ms + ground_ms + overseg_ms + features_ms + forest_ms + mrf_ms +
-           labels_ms + tables_ms;
+    return cloud_ms + normals_ms + ground_ms + overseg_ms + features_ms + regions_ms + forest_ms +
+           context_ms + mrf_ms + labels_ms + tables_ms;
   }
 };
 
@@ -58,8 +63,11 @@ struct SegmentedFrame {
 struct LabelledFrame {
   SegmentedFrame segmented;
   SegmentFeatures features;
+  // The model's p(y|x) per segment: the context stage's when the model has
+  // one (the first stage's are then in first_stage_probabilities).
   std::vector<ClassProbabilities> forest_probabilities;
-  std::vector<std::uint8_t> forest_labels;  // argmax of the forest alone
+  std::vector<ClassProbabilities> first_stage_probabilities;  // empty without a context stage
+  std::vector<std::uint8_t> forest_labels;  // argmax of forest_probabilities
   MrfResult mrf;
   LabelImage labels;                        // final (MRF if enabled, else forest)
   std::vector<TableCluster> tables;
@@ -95,9 +103,30 @@ class Segmenter {
 
 // Throws findmug::Error naming the model and every setting whose value
 // differs when `forest` was trained with other feature-extraction settings
-// than `config` has (features would not mean what the trees learnt). A model
-// without recorded settings (trained in-process) is accepted.
+// than `config` has (features would not mean what the trees learnt), or when
+// its columns or stages are not those the config computes (features.regions,
+// features.context; a format-2 model has neither). A model without recorded
+// settings (trained in-process) is only checked for its columns and stages.
 void checkModelMatchesConfig(const RandomForest& forest, const SegmenterConfig& config);
+
+// Column names of the first stage's rows for `config` (kFeatureNames, then
+// kRegionFeatureNames with features.regions), and of the context stage's.
+std::vector<std::string> firstStageFeatureNames(const SegmenterConfig& config);
+std::vector<std::string> contextStageFeatureNames(const SegmenterConfig& config);
+
+// Row-major first-stage rows of every segment: base features, then region
+// features when `features.regions` is non-empty.
+std::vector<float> firstStageRows(const SegmentFeatures& features);
+
+// The model's per-segment class distributions: the first stage, then, when
+// the model has a context stage, the context stage on the first stage's rows
+// plus context features of the first stage's answers. `weights` are the
+// segments' sizes (pixel counts). `first_stage` (optional) receives the first
+// stage's distributions.
+std::vector<ClassProbabilities> predictSegments(
+    const RandomForest& model, const SegmentFeatures& features, const std::vector<float>& weights,
+    const ContextConfig& context, std::vector<ClassProbabilities>* first_stage = nullptr,
+    double* context_ms = nullptr);
 
 // Per-segment training labels: the majority ground-truth label of each
 // segment's pixels; segments whose pixels are mostly void get kVoidLabel.

@@ -57,8 +57,26 @@ std::vector<FrameSample> extractSamples(const DatasetFolder& dataset, const Segm
 
 // Segments with a non-void label from the given frames, as a training set
 // (weights empty: one vote per patch; class weighting is the forest's job).
+// Region features, when the samples have them, become the extra columns.
 TrainingSet makeTrainingSet(const std::vector<FrameSample>& samples,
                             const std::vector<std::size_t>& frame_indices);
+TrainingSet makeTrainingSet(const std::vector<const FrameSample*>& frames);
+
+// Trains the model `config` asks for on the given frames: the first-stage
+// forest (config.forest), and with features.context an auto-context stage
+// trained on first-stage distributions that are cross-fitted over
+// features.context_cross_fit_folds contiguous groups of the frames (each
+// group's distributions come from a forest trained on the other groups), so
+// the context stage learns from first-stage answers as good as those it will
+// get on new frames. Extraction settings are not set (the caller does).
+// `progress(done, total)` counts forests.
+RandomForest trainModel(const std::vector<const FrameSample*>& frames,
+                        const SegmenterConfig& config,
+                        const std::function<void(int, int)>& progress = {});
+
+// The model's per-segment class distributions for one extracted frame.
+std::vector<ClassProbabilities> predictSample(const RandomForest& model, const FrameSample& sample,
+                                              const SegmenterConfig& config);
 
 // Per-pixel labels of a frame from per-segment labels (255 where no segment).
 std::vector<std::uint8_t> pixelLabels(const FrameSample& sample,

@@ -366,6 +366,104 @@ TEST(ForestFile, ExtractionSettingsRoundTripAndChangeTheId) {
   EXPECT_THROW(forest.setExtractionSettings({{"", "x"}}), Error);
 }
 
+// Blobs with `extra` more columns: the class mean on the first extra column,
+// noise on the others.
+TrainingSet withExtraColumns(TrainingSet set, int extra, const std::string& prefix) {
+  std::mt19937 rng(99);
+  std::normal_distribution<float> noise(0.0f, 0.3f);
+  for (int e = 0; e < extra; ++e) set.extra_names.push_back(prefix + std::to_string(e));
+  for (std::size_t i = 0; i < set.labels.size(); ++i) {
+    for (int e = 0; e < extra; ++e)
+      set.extra.push_back((e == 0 ? 3.0f * set.labels[i] : 0.0f) + noise(rng));
+  }
+  return set;
+}
+
+TEST(ForestFile, ExtraColumnsAndContextStageRoundTrip) {
+  const TrainingSet first_set = withExtraColumns(makeBlobs(30, 21, 8.0f), 3, "region_");
+  ForestParams params;
+  params.num_trees = 3;
+  params.seed = 11;
+  RandomForest forest = RandomForest::train(first_set, params);
+  ASSERT_EQ(forest.dim(), kFeatureDim + 3);
+  EXPECT_EQ(forest.featureNames()[kFeatureDim], "region_0");
+  // The extra column carries the class: a forest of 17 columns uses it.
+  bool uses_extra = false;
+  for (const auto& tree : forest.trees())
+    for (const auto& node : tree) uses_extra |= node.feature >= kFeatureDim;
+  EXPECT_TRUE(uses_extra);
+
+  TrainingSet second_set = first_set;
+  for (int e = 0; e < 2; ++e) second_set.extra_names.push_back("ctx_" + std::to_string(e));
+  second_set.extra.clear();
+  for (std::size_t i = 0; i < first_set.labels.size(); ++i) {
+    for (int e = 0; e < 3; ++e) second_set.extra.push_back(first_set.extra[i * 3 + e]);
+    second_set.extra.push_back(static_cast<float>(first_set.labels[i]));
+    second_set.extra.push_back(0.5f);
+  }
+  const std::string first_id = forest.id();
+  forest.setContextStage(RandomForest::train(second_set, params));
+  EXPECT_NE(forest.id(), first_id);  // the id names the context stage too
+  ASSERT_NE(forest.contextStage(), nullptr);
+  EXPECT_EQ(forest.contextStage()->dim(), kFeatureDim + 5);
+
+  TempDir dir;
+  forest.save(dir.str("two-stage.fmf"));
+  const RandomForest loaded = RandomForest::load(dir.str("two-stage.fmf"));
+  EXPECT_EQ(loaded.id(), forest.id());
+  EXPECT_EQ(loaded.formatVersion(), 3u);
+  EXPECT_EQ(loaded.featureNames(), forest.featureNames());
+  ASSERT_NE(loaded.contextStage(), nullptr);
+  EXPECT_EQ(loaded.contextStage()->featureNames(), forest.contextStage()->featureNames());
+  for (std::size_t i = 0; i < 40; ++i) {
+    std::vector<float> row(first_set.features[i].begin(), first_set.features[i].end());
+    row.insert(row.end(), first_set.extra.begin() + 3 * i, first_set.extra.begin() + 3 * i + 3);
+    auto a = forest.predict(row), b = loaded.predict(row);
+    EXPECT_EQ(std::memcmp(a.data(), b.data(), sizeof a), 0);
+    row.push_back(static_cast<float>(first_set.labels[i]));
+    row.push_back(0.5f);
+    a = forest.contextStage()->predict(row);
+    b = loaded.contextStage()->predict(row);
+    EXPECT_EQ(std::memcmp(a.data(), b.data(), sizeof a), 0);
+  }
+  loaded.save(dir.str("again.fmf"));
+  EXPECT_EQ(readBytes(dir.str("again.fmf")), readBytes(dir.str("two-stage.fmf")));
+
+  // Rows of the wrong length are refused, not read out of bounds.
+  EXPECT_THROW(forest.predict(FeatureVector{}), Error);
+  EXPECT_THROW(forest.predict(std::vector<float>(kFeatureDim + 4, 0.0f)), Error);
+}
+
+TEST(ForestFile, ContextStageMustExtendTheFirstStage) {
+  ForestParams params;
+  params.num_trees = 1;
+  const TrainingSet base = makeBlobs(10, 3);
+  RandomForest plain = RandomForest::train(base, params);
+  // Same columns only: nothing added.
+  EXPECT_THROW(plain.setContextStage(RandomForest::train(base, params)), Error);
+  // Different leading columns.
+  RandomForest regions = RandomForest::train(withExtraColumns(base, 2, "region_"), params);
+  EXPECT_THROW(regions.setContextStage(
+                   RandomForest::train(withExtraColumns(base, 3, "other_"), params)),
+               Error);
+  EXPECT_NO_THROW(plain.setContextStage(RandomForest::train(withExtraColumns(base, 2, "c_"), params)));
+}
+
+TEST(Forest, RefusesBadExtraColumns) {
+  TrainingSet set = withExtraColumns(makeBlobs(5, 1), 2, "x");
+  set.extra.pop_back();
+  EXPECT_THROW(RandomForest::train(set, ForestParams{}), Error);
+  set = withExtraColumns(makeBlobs(5, 1), 2, "x");
+  set.extra[3] = std::nanf("");
+  EXPECT_THROW(RandomForest::train(set, ForestParams{}), Error);
+  set = withExtraColumns(makeBlobs(5, 1), 2, "x");
+  ForestParams params;
+  params.candidate_features = kFeatureDim + 3;  // more than the 16 columns
+  EXPECT_THROW(RandomForest::train(set, params), Error);
+  params.candidate_features = kFeatureDim + 2;
+  EXPECT_NO_THROW(RandomForest::train(set, params));
+}
+
 TEST(ForestFile, SaveToUnwritablePlaceFails) {
   const RandomForest forest = RandomForest::train(makeBlobs(5, 1), ForestParams{});
   EXPECT_THROW(forest.save("/nonexistent-dir-findmug/model.fmf"), Error);
@@ -540,10 +638,46 @@ TEST_F(ForestFileCorruption, WrongVersion) {
   auto bytes = good_;
   putU32(bytes, kVersionOffset, 1);  // the format before extraction settings were stored
   expectRefused(bytes, "version 1");
-  putU32(bytes, kVersionOffset, 3);
-  expectRefused(bytes, "version 3");
+  putU32(bytes, kVersionOffset, 4);
+  expectRefused(bytes, "version 4");
   fixChecksum(bytes);
-  expectRefused(bytes, "version 3");
+  expectRefused(bytes, "version 4");
+}
+
+// Format 2 (before extra columns and context stages): the same layout
+// without the context-stage flag. Such files still load, as 14-column
+// forests without a context stage.
+TEST_F(ForestFileCorruption, Format2FileLoadsAsFourteenColumnsWithoutContextStage) {
+  auto bytes = good_;
+  ASSERT_EQ(getU32(bytes, kVersionOffset), 3u);
+  ASSERT_EQ(bytes[bytes.size() - 9], 0u);  // the context-stage flag: none
+  bytes.erase(bytes.end() - 9);
+  putU32(bytes, kVersionOffset, 2);
+  fixChecksum(bytes);
+  const std::string old = dir_.str("format2.fmf");
+  writeBytes(old, bytes);
+  const RandomForest loaded = RandomForest::load(old);
+  EXPECT_EQ(loaded.formatVersion(), 2u);
+  EXPECT_EQ(loaded.dim(), kFeatureDim);
+  EXPECT_EQ(loaded.contextStage(), nullptr);
+  const TrainingSet probe = makeBlobs(5, 77, 2.0f);
+  for (const auto& x : probe.features) {
+    const auto a = forest_.predict(x);
+    const auto b = loaded.predict(x);
+    EXPECT_EQ(std::memcmp(a.data(), b.data(), sizeof a), 0);
+  }
+  // A format-2 file cannot carry extra columns.
+  auto more = bytes;
+  putU32(more, featureSectionOffset(), kFeatureDim + 1);
+  fixChecksum(more);
+  expectRefused(more, "15 features");
+}
+
+TEST_F(ForestFileCorruption, BadContextStageFlag) {
+  auto bytes = good_;
+  bytes[bytes.size() - 9] = 2;
+  fixChecksum(bytes);
+  expectRefused(bytes, "context stage flag = 2");
 }
 
 TEST_F(ForestFileCorruption, DifferentLabelNames) {

@@ -1,0 +1,155 @@
+// Region features: union-find over the patch adjacency graph, then one
+// scatter matrix per region from per-patch moments (no second pass over the
+// pixels).
+#include "findmug/region_features.hpp"
+
+#include <Eigen/Eigenvalues>
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+#include <string>
+
+#include "findmug/error.hpp"
+
+namespace findmug {
+
+namespace {
+
+// Sums of one patch (or region) in double precision, relative to a common
+// reference point so that the second moments stay well conditioned.
+struct Moments {
+  double count = 0;
+  Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+  Eigen::Matrix3d outer = Eigen::Matrix3d::Zero();
+  Eigen::Vector3d normal_sum = Eigen::Vector3d::Zero();
+  float max_z = -std::numeric_limits<float>::infinity();
+
+  void merge(const Moments& o) {
+    count += o.count;
+    sum += o.sum;
+    outer += o.outer;
+    normal_sum += o.normal_sum;
+    max_z = std::max(max_z, o.max_z);
+  }
+  Eigen::Vector3d mean() const { return sum / count; }
+  Eigen::Matrix3d covariance() const {
+    const Eigen::Vector3d m = mean();
+    return outer / count - m * m.transpose();
+  }
+};
+
+int findRoot(std::vector<int>& parent, int i) {
+  while (parent[i] != i) {
+    parent[i] = parent[parent[i]];
+    i = parent[i];
+  }
+  return i;
+}
+
+}  // namespace
+
+RegionFeatures computeRegionFeatures(const OrganizedCloud& cloud_ground,
+                                     const NormalImage& normals_ground,
+                                     const Oversegmentation& segmentation,
+                                     const RegionConfig& config) {
+  const std::size_t pixels = segmentation.pixel_segment.size();
+  if (cloud_ground.points.size() != pixels || normals_ground.normals.size() != pixels) {
+    throw Error("computeRegionFeatures: grids disagree: segmentation has " +
+                std::to_string(pixels) + " pixels, cloud " +
+                std::to_string(cloud_ground.points.size()) + ", normals " +
+                std::to_string(normals_ground.normals.size()));
+  }
+  const std::size_t n = segmentation.segments.size();
+  // Reference point: the first valid point, so that sums of squares stay small.
+  Eigen::Vector3d ref = Eigen::Vector3d::Zero();
+  for (std::size_t i = 0; i < pixels; ++i) {
+    if (segmentation.pixel_segment[i] >= 0 && cloud_ground.valid(i)) {
+      ref = cloud_ground.points[i].cast<double>();
+      break;
+    }
+  }
+  std::vector<Moments> patch(n);
+  for (std::size_t i = 0; i < pixels; ++i) {
+    const int s = segmentation.pixel_segment[i];
+    if (s < 0 || !cloud_ground.valid(i)) continue;
+    if (static_cast<std::size_t>(s) >= n) {
+      throw Error("computeRegionFeatures: pixel " + std::to_string(i) + " belongs to segment " +
+                  std::to_string(s) + " but there are only " + std::to_string(n));
+    }
+    Moments& m = patch[static_cast<std::size_t>(s)];
+    const Eigen::Vector3d p = cloud_ground.points[i].cast<double>() - ref;
+    m.count += 1;
+    m.sum += p;
+    m.outer += p * p.transpose();
+    m.max_z = std::max(m.max_z, cloud_ground.points[i].z());
+    const Eigen::Vector3f& nrm = normals_ground.normals[i];
+    if (nrm.allFinite()) m.normal_sum += nrm.cast<double>();
+  }
+  for (std::size_t s = 0; s < n; ++s) {
+    if (patch[s].count == 0) {
+      throw Error("computeRegionFeatures: segment " + std::to_string(s) + " (" +
+                  std::to_string(segmentation.segments[s].size()) + " pixels) has no valid point");
+    }
+  }
+
+  // Merge neighbours that continue each other's surface.
+  const double cos_limit = std::cos(static_cast<double>(config.normal_angle_deg) * M_PI / 180.0);
+  const double max_offset = config.plane_distance_m;
+  std::vector<int> parent(n);
+  std::iota(parent.begin(), parent.end(), 0);
+  for (const auto& [a, b] : segmentation.edges) {
+    if (a < 0 || b < 0 || static_cast<std::size_t>(a) >= n || static_cast<std::size_t>(b) >= n) {
+      throw Error("computeRegionFeatures: edge (" + std::to_string(a) + ", " + std::to_string(b) +
+                  ") names a segment outside 0.." + std::to_string(n - 1));
+    }
+    const Moments& pa = patch[static_cast<std::size_t>(a)];
+    const Moments& pb = patch[static_cast<std::size_t>(b)];
+    if (pa.normal_sum.squaredNorm() == 0 || pb.normal_sum.squaredNorm() == 0) continue;
+    const Eigen::Vector3d na = pa.normal_sum.normalized();
+    const Eigen::Vector3d nb = pb.normal_sum.normalized();
+    if (na.dot(nb) < cos_limit) continue;
+    const Eigen::Vector3d d = pb.mean() - pa.mean();
+    if (std::abs(na.dot(d)) > max_offset || std::abs(nb.dot(d)) > max_offset) continue;
+    const int ra = findRoot(parent, a), rb = findRoot(parent, b);
+    if (ra != rb) parent[std::max(ra, rb)] = std::min(ra, rb);
+  }
+
+  RegionFeatures out;
+  out.segment_region.assign(n, -1);
+  std::vector<int> root_region(n, -1);
+  std::vector<Moments> region;
+  for (std::size_t s = 0; s < n; ++s) {
+    const int root = findRoot(parent, static_cast<int>(s));
+    if (root_region[root] < 0) {
+      root_region[root] = static_cast<int>(region.size());
+      region.emplace_back();
+    }
+    out.segment_region[s] = root_region[root];
+    region[static_cast<std::size_t>(root_region[root])].merge(patch[s]);
+  }
+  out.region_count = static_cast<int>(region.size());
+
+  std::vector<std::array<float, kRegionFeatureDim>> per_region(region.size());
+  for (std::size_t r = 0; r < region.size(); ++r) {
+    const Moments& m = region[r];
+    Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(m.covariance(), Eigen::EigenvaluesOnly);
+    const Eigen::Vector3d ev = eig.eigenvalues().cwiseMax(0.0);  // ascending
+    const double major = std::sqrt(12.0 * ev[2]);
+    const double minor = std::sqrt(12.0 * ev[1]);
+    const double centroid_z = m.mean().z() + ref.z();
+    double angle = M_PI / 2;  // no normals at all: call it vertical, the commonest case
+    if (m.normal_sum.squaredNorm() > 0)
+      angle = std::acos(std::clamp(m.normal_sum.normalized().z(), -1.0, 1.0));
+    per_region[r] = {static_cast<float>(major * minor), static_cast<float>(major),
+                     static_cast<float>(minor), static_cast<float>(centroid_z), m.max_z,
+                     static_cast<float>(angle)};
+  }
+  out.values.resize(n * kRegionFeatureDim);
+  for (std::size_t s = 0; s < n; ++s) {
+    const auto& v = per_region[static_cast<std::size_t>(out.segment_region[s])];
+    std::copy(v.begin(), v.end(), out.values.begin() + static_cast<std::ptrdiff_t>(s * kRegionFeatureDim));
+  }
+  return out;
+}
+
+}  // namespace findmug
