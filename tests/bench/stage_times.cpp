@@ -1,11 +1,14 @@
 // stage_times: wall time of each pipeline stage per 640x480 frame, median over
-// a labelled dataset, for each oversegmenter side by side in one run.
+// a labelled dataset, for each oversegmenter side by side in one run, and for
+// the organized oversegmenter with the region and auto-context stages.
 //
 //   stage_times [--data DIR] [--model MODEL] [--repeat N]
 //
-// Without --model a forest is trained in-process on the same frames (the
+// Without --model the forests are trained in-process on the same frames (the
 // timing of prediction does not depend on what the trees learnt, only on
-// their size). Prints a Markdown table for BENCHMARKS.md. Single-threaded.
+// their size); --model replaces the forest of the columns whose settings it
+// matches (features.regions/context, overseg.method). Prints a Markdown table
+// for BENCHMARKS.md. Single-threaded.
 #include <algorithm>
 #include <cstdio>
 #include <cstring>
@@ -41,7 +44,8 @@ struct Column {
 void record(Column& c, const StageTimings& t, std::size_t segments) {
   const std::pair<const char*, double> stages[] = {
       {"cloud", t.cloud_ms},       {"normals", t.normals_ms},   {"ground", t.ground_ms},
-      {"oversegmentation", t.overseg_ms}, {"features", t.features_ms}, {"forest", t.forest_ms},
+      {"oversegmentation", t.overseg_ms}, {"features", t.features_ms},
+      {"regions", t.regions_ms},   {"forest", t.forest_ms},     {"context", t.context_ms},
       {"mrf", t.mrf_ms},           {"labels", t.labels_ms},     {"tables", t.tables_ms},
       {"total", t.total()}};
   for (const auto& [name, ms] : stages) c.stage_ms[name].push_back(ms);
@@ -66,28 +70,51 @@ int run(int argc, char** argv) {
   base.ground.source = GroundSource::Estimated;  // what a robot without extrinsics does
   base.forest.num_threads = 1;
 
-  std::shared_ptr<const RandomForest> forest;
-  if (!model_path.empty()) {
-    forest = std::make_shared<const RandomForest>(RandomForest::load(model_path));
-  } else {
-    SegmenterConfig train_config = base;
+  SegmenterConfig contextual = base;
+  contextual.overseg.kind = OversegmenterKind::Organized;
+  contextual.regions.enabled = true;
+  contextual.context.enabled = true;
+  struct Variant {
+    std::string name;
+    SegmenterConfig config;
+    std::shared_ptr<const RandomForest> forest;
+  };
+  std::vector<Variant> variants;
+  for (auto kind : {OversegmenterKind::PclSupervoxels, OversegmenterKind::Organized}) {
+    SegmenterConfig config = base;
+    config.overseg.kind = kind;
+    variants.push_back(
+        {kind == OversegmenterKind::PclSupervoxels ? "PCL supervoxels" : "organized", config, {}});
+  }
+  variants.push_back({"organized + regions + context", contextual, {}});
+
+  std::shared_ptr<const RandomForest> loaded;
+  if (!model_path.empty()) loaded = std::make_shared<const RandomForest>(RandomForest::load(model_path));
+  for (auto& v : variants) {
+    if (loaded) {
+      try {
+        checkModelMatchesConfig(*loaded, v.config);
+        v.forest = loaded;
+        continue;
+      } catch (const Error&) {
+        // Not this column's model: train one below.
+      }
+    }
+    SegmenterConfig train_config = v.config;
     train_config.overseg.kind = OversegmenterKind::Organized;
     train_config.ground.source = GroundSource::FloorLabels;
     ExtractionReport report;
     const auto samples = extractSamples(dataset, Segmenter(train_config, nullptr), report);
-    std::vector<std::size_t> all(samples.size());
-    for (std::size_t i = 0; i < all.size(); ++i) all[i] = i;
-    forest = std::make_shared<const RandomForest>(
-        RandomForest::train(makeTrainingSet(samples, all), train_config.forest));
+    std::vector<const FrameSample*> all;
+    for (const auto& s : samples) all.push_back(&s);
+    v.forest = std::make_shared<const RandomForest>(trainModel(all, train_config));
   }
 
   std::vector<Column> columns;
-  for (auto kind : {OversegmenterKind::PclSupervoxels, OversegmenterKind::Organized}) {
-    SegmenterConfig config = base;
-    config.overseg.kind = kind;
-    const Segmenter segmenter(config, forest);
+  for (const auto& v : variants) {
+    const Segmenter segmenter(v.config, v.forest);
     Column column;
-    column.name = kind == OversegmenterKind::PclSupervoxels ? "PCL supervoxels" : "organized";
+    column.name = v.name + (v.forest == loaded ? " (--model)" : "");
     for (int r = 0; r < repeat; ++r) {
       for (const auto& f : frames) {
         const LabelledFrame out = segmenter.process(f.frame);
@@ -100,14 +127,14 @@ int run(int argc, char** argv) {
 
   std::printf("Median wall time per stage (ms) over %zu frames x %d, %s, one thread, "
               "forest %zu trees\n\n",
-              frames.size(), repeat, data.c_str(), forest->trees().size());
+              frames.size(), repeat, data.c_str(), variants.front().forest->trees().size());
   std::printf("| stage |");
   for (const auto& c : columns) std::printf(" %s |", c.name.c_str());
   std::printf("\n|---|");
   for (std::size_t i = 0; i < columns.size(); ++i) std::printf("---:|");
   std::printf("\n");
-  for (const char* stage : {"cloud", "normals", "ground", "oversegmentation", "features", "forest",
-                            "mrf", "labels", "tables", "total"}) {
+  for (const char* stage : {"cloud", "normals", "ground", "oversegmentation", "features",
+                            "regions", "forest", "context", "mrf", "labels", "tables", "total"}) {
     std::printf("| %s |", stage);
     for (const auto& c : columns) std::printf(" %.1f |", median(c.stage_ms.at(stage)));
     std::printf("\n");

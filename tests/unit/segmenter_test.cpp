@@ -206,6 +206,83 @@ TEST(Segmenter, RefusesModelTrainedWithOtherExtractionSettings) {
   EXPECT_NO_THROW(Segmenter(mrf_only, model));
 }
 
+// The frame's features as the trainer and findmug-eval see them.
+std::vector<FrameSample> extractScene(const Segmenter& segmenter, const Scene& scene) {
+  LabeledFrames frames{"scene", 1, [&](std::size_t) {
+                         return LabeledFrame{"scene", scene.frame, scene.truth};
+                       }};
+  ExtractionReport report;
+  auto samples = extractSamples(frames, segmenter, report);
+  EXPECT_EQ(report.frames_used, 1);
+  return samples;
+}
+
+TEST(Segmenter, RunsTheRegionAndContextStagesOfTheModel) {
+  const Scene scene = floorAndWall(true);
+  SegmenterConfig config = fastConfig();
+  config.regions.enabled = true;
+  config.context.enabled = true;
+  config.context.cross_fit_folds = 0;  // one frame: nothing to cross-fit over
+  config.forest.num_trees = 4;
+  config.forest.max_depth = 6;
+  const auto samples = extractScene(Segmenter(config, nullptr), scene);
+  ASSERT_EQ(samples.size(), 1u);
+  const std::size_t n = samples[0].features.features.size();
+  ASSERT_EQ(samples[0].features.regions.size(), n * kRegionFeatureDim);
+  RandomForest trained = trainModel({&samples[0]}, config);
+  ASSERT_NE(trained.contextStage(), nullptr);
+  EXPECT_EQ(trained.dim(), kFeatureDim + kRegionFeatureDim);
+  EXPECT_EQ(trained.contextStage()->featureNames(), contextStageFeatureNames(config));
+  trained.setExtractionSettings(extractionSettings(config));
+  const auto model = std::make_shared<const RandomForest>(trained);
+
+  const Segmenter segmenter(config, model);
+  const LabelledFrame out = segmenter.process(scene.frame);
+  ASSERT_EQ(out.features.features.size(), n);
+  EXPECT_EQ(out.features.regions.size(), n * kRegionFeatureDim);
+  ASSERT_EQ(out.first_stage_probabilities.size(), n);
+  // The daemon's path gives exactly what evaluation computes for the frame.
+  const auto expected = predictSample(*model, samples[0], config);
+  ASSERT_EQ(out.forest_probabilities.size(), n);
+  for (std::size_t i = 0; i < n; ++i) ASSERT_EQ(out.forest_probabilities[i], expected[i]) << i;
+  ConfusionMatrix cm;
+  cm.add(scene.truth, out.labels.labels);
+  EXPECT_GT(cm.globalAccuracy(), 0.9);
+}
+
+TEST(Segmenter, RefusesModelWhoseStagesDifferFromTheConfig) {
+  const Scene scene = floorAndWall(true);
+  SegmenterConfig config = fastConfig();
+  config.regions.enabled = true;
+  config.forest.num_trees = 2;
+  const auto samples = extractScene(Segmenter(config, nullptr), scene);
+  const auto with_regions = std::make_shared<const RandomForest>(trainModel({&samples[0]}, config));
+  EXPECT_NO_THROW(Segmenter(config, with_regions));
+
+  SegmenterConfig no_regions = config;
+  no_regions.regions.enabled = false;
+  try {
+    Segmenter segmenter(no_regions, with_regions);
+    FAIL() << "expected the model to be refused";
+  } catch (const Error& e) {
+    EXPECT_THAT(e.what(), HasSubstr("features.regions = false"));
+    EXPECT_THAT(e.what(), HasSubstr("with region features"));
+  }
+  SegmenterConfig context = config;
+  context.context.enabled = true;
+  try {
+    Segmenter segmenter(context, with_regions);
+    FAIL() << "expected the model to be refused";
+  } catch (const Error& e) {
+    EXPECT_THAT(e.what(), HasSubstr("has no auto-context stage"));
+    EXPECT_THAT(e.what(), HasSubstr("features.context = true"));
+  }
+  // A 14-column model (as every format-2 model is) with features.regions on.
+  const auto plain = trainOn(Segmenter(fastConfig(), nullptr), scene);
+  EXPECT_THROW(Segmenter(config, plain), Error);
+  EXPECT_NO_THROW(Segmenter(fastConfig(), plain));
+}
+
 TEST(Segmenter, MajorityLabelsPerSegment) {
   Oversegmentation seg;
   seg.width = 4;
