@@ -10,6 +10,7 @@
 
 #include <algorithm>
 #include <charconv>
+#include <cstdlib>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -26,6 +27,7 @@ namespace findmug {
 namespace generated {
 extern const char* const kNyu40MappingCsv;
 extern const char* const kNyu40MappingCsvPath;
+extern const char* const kDefaultDataDir;
 }  // namespace generated
 
 namespace fs = std::filesystem;
@@ -246,7 +248,158 @@ void writeTextFileAtomically(const fs::path& path, const std::string& text) {
   if (ec) throw Error(path.string() + ": cannot replace (" + ec.message() + ")");
 }
 
+// Whitespace-separated fields of a line.
+std::vector<std::string> splitWhitespace(const std::string& line) {
+  std::vector<std::string> fields;
+  std::istringstream in(line);
+  std::string field;
+  while (in >> field) fields.push_back(field);
+  return fields;
+}
+
+constexpr const char* kGravityHeader = "name,up_x,up_y,up_z";
+
+// A gravity direction must be a usable direction; it is normalised here.
+std::array<double, 3> normalizedUp(const std::array<double, 3>& up, const std::string& where) {
+  const double norm = std::sqrt(up[0] * up[0] + up[1] * up[1] + up[2] * up[2]);
+  if (!(norm > 1e-6)) {
+    throw Error(where + ": up direction (" + formatDouble(up[0]) + ", " + formatDouble(up[1]) +
+                ", " + formatDouble(up[2]) + ") has zero length");
+  }
+  return {up[0] / norm, up[1] / norm, up[2] / norm};
+}
+
 }  // namespace
+
+// ---------------------------------------------------------------------------
+// Per-frame gravity
+
+std::array<double, 3> nyuUpFromRotation(const std::array<double, 9>& r) {
+  // Row 1 of R (0-based) is the gravity-aligned frame's y axis ("down")
+  // expressed in camera coordinates; "up" is its negative. See dataset.hpp.
+  return {-r[3], -r[4], -r[5]};
+}
+
+NyuRotations parseNyuRotations(const std::string& text, const std::string& source) {
+  NyuRotations out;
+  out.source = source;
+  std::istringstream in(text);
+  std::string line;
+  int line_number = 0;
+  std::array<double, 9> current{};
+  int rows = 0;
+  int first_row_line = 0;
+  auto finishMatrix = [&]() {
+    if (rows == 0) return;
+    if (rows != 3) {
+      throw Error(source + ":" + std::to_string(first_row_line) + ": matrix " +
+                  std::to_string(out.rotations.size() + 1) + " has " + std::to_string(rows) +
+                  " rows, expected 3");
+    }
+    // R R^T = I within the file's 6 printed digits.
+    for (int a = 0; a < 3; ++a) {
+      for (int b = 0; b < 3; ++b) {
+        double dot = 0;
+        for (int k = 0; k < 3; ++k) dot += current[3 * a + k] * current[3 * b + k];
+        if (std::abs(dot - (a == b ? 1.0 : 0.0)) > 1e-3) {
+          throw Error(source + ":" + std::to_string(first_row_line) + ": matrix " +
+                      std::to_string(out.rotations.size() + 1) + " is not a rotation (row " +
+                      std::to_string(a) + " . row " + std::to_string(b) + " = " +
+                      formatDouble(dot) + ")");
+        }
+      }
+    }
+    out.rotations.push_back(current);
+    rows = 0;
+  };
+  while (std::getline(in, line)) {
+    ++line_number;
+    const auto fields = splitWhitespace(line);
+    if (fields.empty()) {
+      finishMatrix();
+      continue;
+    }
+    const std::string where = source + ":" + std::to_string(line_number);
+    if (fields.size() != 3) {
+      throw Error(where + ": expected 3 numbers in a matrix row, found " +
+                  std::to_string(fields.size()));
+    }
+    if (rows == 3) {
+      throw Error(where + ": matrix " + std::to_string(out.rotations.size() + 1) +
+                  " has more than 3 rows (matrices are separated by blank lines)");
+    }
+    if (rows == 0) first_row_line = line_number;
+    for (int c = 0; c < 3; ++c) {
+      double value = 0;
+      if (!parseDouble(fields[static_cast<std::size_t>(c)], value)) {
+        throw Error(where + ": '" + fields[static_cast<std::size_t>(c)] +
+                    "' is not a finite number");
+      }
+      current[static_cast<std::size_t>(3 * rows + c)] = value;
+    }
+    ++rows;
+  }
+  finishMatrix();
+  if (out.rotations.empty()) throw Error(source + ": no rotation matrix");
+  return out;
+}
+
+NyuRotations loadNyuRotations(const std::string& path) {
+  return parseNyuRotations(readTextFile(path), path);
+}
+
+std::array<double, 3> NyuRotations::upForIndex(long nyu_index) const {
+  if (nyu_index < 1 || static_cast<std::size_t>(nyu_index) > rotations.size()) {
+    throw Error(source + ": NYU index " + std::to_string(nyu_index) + " out of range (file has " +
+                std::to_string(rotations.size()) + " matrices, indices 1.." +
+                std::to_string(rotations.size()) + ")");
+  }
+  return nyuUpFromRotation(rotations[static_cast<std::size_t>(nyu_index - 1)]);
+}
+
+std::string defaultNyuRotationsPath() {
+  const char* env = std::getenv("FINDMUG_DATA");
+  const std::string root = env && *env ? env : generated::kDefaultDataDir;
+  return root + "/nyuv2_meta/camera_rotations_NYU.txt";
+}
+
+std::vector<std::pair<std::string, std::array<double, 3>>> loadGravityCsv(const std::string& path) {
+  std::istringstream in(readTextFile(path));
+  std::vector<std::pair<std::string, std::array<double, 3>>> rows;
+  std::set<std::string> seen;
+  std::string line;
+  int line_number = 0;
+  bool header_seen = false;
+  while (std::getline(in, line)) {
+    ++line_number;
+    const std::string text = trim(line);
+    if (text.empty() || text[0] == '#') continue;
+    const std::string where = path + ":" + std::to_string(line_number);
+    if (!header_seen) {
+      if (text != kGravityHeader) {
+        throw Error(where + ": expected header '" + kGravityHeader + "', found '" + text + "'");
+      }
+      header_seen = true;
+      continue;
+    }
+    const auto fields = splitCommas(text);
+    if (fields.size() != 4) {
+      throw Error(where + ": expected 4 fields, found " + std::to_string(fields.size()));
+    }
+    if (fields[0].empty()) throw Error(where + ": empty frame name");
+    std::array<double, 3> up{};
+    const char* columns[3] = {"up_x", "up_y", "up_z"};
+    for (std::size_t c = 0; c < 3; ++c) {
+      if (!parseDouble(fields[c + 1], up[c])) {
+        throw Error(where + ": " + columns[c] + " '" + fields[c + 1] + "' is not a finite number");
+      }
+    }
+    if (!seen.insert(fields[0]).second) throw Error(where + ": duplicate frame '" + fields[0] + "'");
+    rows.emplace_back(fields[0], normalizedUp(up, where));
+  }
+  if (!header_seen) throw Error(path + ": empty (expected header '" + kGravityHeader + "')");
+  return rows;
+}
 
 // ---------------------------------------------------------------------------
 // Label mappings
@@ -370,6 +523,26 @@ DatasetFolder::DatasetFolder(const std::string& dir, const DatasetOptions& optio
       }
     }
   }
+
+  gravity_.assign(names_.size(), std::nullopt);
+  if (options.nyu_rotations_file) {
+    const NyuRotations rotations = loadNyuRotations(*options.nyu_rotations_file);
+    for (std::size_t i = 0; i < names_.size(); ++i) {
+      long index = 0;
+      if (!parseInt(names_[i], index)) {
+        throw Error(dir + ": frame '" + names_[i] + "' is not named by an NYU index, so " +
+                    rotations.source + " cannot give its gravity (use gravity.csv)");
+      }
+      gravity_[i] = rotations.upForIndex(index);
+    }
+  }
+  if (fs::exists(root / "gravity.csv", ec)) {
+    std::map<std::string, std::size_t> index;
+    for (std::size_t i = 0; i < names_.size(); ++i) index[names_[i]] = i;
+    for (const auto& [name, up] : loadGravityCsv((root / "gravity.csv").string())) {
+      if (auto it = index.find(name); it != index.end()) gravity_[it->second] = up;
+    }
+  }
 }
 
 LabeledFrame DatasetFolder::load(std::size_t i) const {
@@ -435,6 +608,7 @@ LabeledFrame DatasetFolder::load(std::size_t i) const {
   frame.depth_mm = std::move(depth.pixels);
   frame.intrinsics = intrinsics_;
   frame.extrinsics = extrinsics_[i];
+  frame.gravity_up = gravity_[i];
   frame.seq = static_cast<std::int64_t>(i);
   frame.source = rgb_path;
   out.labels.resize(label_ids.pixels.size());

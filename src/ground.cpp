@@ -63,6 +63,14 @@ void validateConfig(const GroundConfig& config, const char* where) {
     bad("normal_agreement_deg", config.normal_agreement_deg);
   if (!(config.min_camera_height_m >= 0.0f && config.min_camera_height_m < 10.0f))
     bad("min_camera_height_m", config.min_camera_height_m);
+  if (!(config.floor_percentile >= 0.0f && config.floor_percentile <= 50.0f))
+    bad("floor_percentile", config.floor_percentile);
+  if (!(config.percentile_margin_m >= 0.0f && config.percentile_margin_m < 10.0f))
+    bad("percentile_margin_m", config.percentile_margin_m);
+  if (!(config.prior_camera_height_m > 0.0f && config.prior_camera_height_m < 10.0f))
+    bad("prior_camera_height_m", config.prior_camera_height_m);
+  if (!(config.gravity_refine_deg >= 0.0f && config.gravity_refine_deg < 90.0f))
+    bad("gravity_refine_deg", config.gravity_refine_deg);
 }
 
 float cosDeg(float deg) { return std::cos(deg * static_cast<float>(M_PI) / 180.0f); }
@@ -152,7 +160,28 @@ bool ransacPlane(const std::vector<Eigen::Vector3f>& points, const std::vector<s
   return inliers.size() >= 3;
 }
 
+// Value at fraction q (0..1) of `values` (reorders them).
+float quantile(std::vector<float>& values, double q) {
+  const auto k = static_cast<std::size_t>(std::clamp(q, 0.0, 1.0) * (values.size() - 1) + 0.5);
+  std::nth_element(values.begin(), values.begin() + static_cast<long>(k), values.end());
+  return values[k];
+}
+
 }  // namespace
+
+const char* groundMethodName(GroundMethod method) {
+  switch (method) {
+    case GroundMethod::Given: return "plane";
+    case GroundMethod::Extrinsics: return "extrinsics";
+    case GroundMethod::FloorLabels: return "floor_labels";
+    case GroundMethod::Estimated: return "estimated";
+    case GroundMethod::GravityFloorLabels: return "gravity+floor_labels";
+    case GroundMethod::GravityLowestPlane: return "gravity+lowest_plane";
+    case GroundMethod::GravityLowPercentile: return "gravity+low_percentile";
+    case GroundMethod::GravityHeightPrior: return "gravity+height_prior";
+  }
+  return "?";
+}
 
 GroundPlane groundFromPlane(const Eigen::Vector3f& normal_camera, float offset, int support) {
   const float norm = normal_camera.norm();
@@ -219,7 +248,9 @@ GroundPlane groundFromExtrinsics(const CameraExtrinsics& extrinsics) {
       Eigen::AngleAxisf(roll, Eigen::Vector3f::UnitZ()).toRotationMatrix();
   // Up in camera coordinates is the level z axis pulled back.
   const Eigen::Vector3f up_camera = level_from_camera.transpose() * Eigen::Vector3f::UnitZ();
-  return groundFromPlane(up_camera, static_cast<float>(extrinsics.height_m), 0);
+  GroundPlane ground = groundFromPlane(up_camera, static_cast<float>(extrinsics.height_m), 0);
+  ground.method = GroundMethod::Extrinsics;
+  return ground;
 }
 
 std::optional<GroundPlane> fitGroundToLabels(const OrganizedCloud& cloud_camera,
@@ -248,7 +279,9 @@ std::optional<GroundPlane> fitGroundToLabels(const OrganizedCloud& cloud_camera,
     return std::nullopt;
   }
   // groundFromPlane orients the normal so that the camera is above the floor.
-  return groundFromPlane(plane.normal, plane.offset, static_cast<int>(inliers.size()));
+  GroundPlane ground = groundFromPlane(plane.normal, plane.offset, static_cast<int>(inliers.size()));
+  ground.method = GroundMethod::FloorLabels;
+  return ground;
 }
 
 std::optional<GroundPlane> estimateGround(const OrganizedCloud& cloud_camera,
@@ -372,7 +405,178 @@ std::optional<GroundPlane> estimateGround(const OrganizedCloud& cloud_camera,
   if (plane.normal.dot(camera_up) < cos_tilt || plane.offset < config.min_camera_height_m) {
     return std::nullopt;
   }
-  return groundFromPlane(plane.normal, plane.offset, static_cast<int>(inliers.size()));
+  GroundPlane ground = groundFromPlane(plane.normal, plane.offset, static_cast<int>(inliers.size()));
+  ground.method = GroundMethod::Estimated;
+  return ground;
+}
+
+std::optional<GroundPlane> groundFromGravity(const OrganizedCloud& cloud_camera,
+                                             const NormalImage& normals_camera,
+                                             const Eigen::Vector3f& up_camera,
+                                             const std::vector<std::uint8_t>* labels,
+                                             const GroundConfig& config) {
+  validateConfig(config, "groundFromGravity");
+  const float up_norm = up_camera.norm();
+  if (!std::isfinite(up_norm) || !(up_norm > 1e-6f)) {
+    std::ostringstream msg;
+    msg << "groundFromGravity: unusable up direction (" << up_camera.transpose() << ")";
+    throw Error(msg.str());
+  }
+  if (normals_camera.normals.size() != cloud_camera.points.size()) {
+    throw Error("groundFromGravity: normal image has " +
+                std::to_string(normals_camera.normals.size()) + " entries but the cloud has " +
+                std::to_string(cloud_camera.points.size()) + " points");
+  }
+  if (labels && labels->size() != cloud_camera.points.size()) {
+    throw Error("groundFromGravity: label image has " + std::to_string(labels->size()) +
+                " pixels but the cloud has " + std::to_string(cloud_camera.points.size()));
+  }
+  const Eigen::Vector3f up = up_camera / up_norm;
+  const auto& pts = cloud_camera.points;
+  const auto& nrm = normals_camera.normals;
+  const auto min_points = static_cast<std::size_t>(config.min_floor_points);
+  const float cos_agree = cosDeg(config.normal_agreement_deg);
+
+  // Height (along up, camera at 0) of the floor, how, and on how many points.
+  float floor_height = 0.0f;
+  GroundMethod method = GroundMethod::GravityLowPercentile;
+  std::size_t support = 0;
+  bool found = false;
+
+  // The labelled floor's own plane, when it agrees with gravity: measured
+  // gravity (NYU's rotations) is off by up to ~6 degrees on some frames,
+  // which would tilt heights by ~0.4 m at 4 m, while the floor plane is what
+  // height features are measured from (the paper's protocol).
+  const float cos_refine = cosDeg(config.gravity_refine_deg);
+  if (labels && config.gravity_refine_deg > 0.0f) {
+    if (auto fit = fitGroundToLabels(cloud_camera, *labels, config);
+        fit && fit->normal_camera.dot(up) >= cos_refine) {
+      fit->method = GroundMethod::GravityFloorLabels;
+      return fit;
+    }
+  }
+
+  if (labels) {
+    std::vector<float> floor;
+    for (std::size_t i = 0; i < pts.size(); ++i)
+      if ((*labels)[i] == kFloorId && cloud_camera.valid(i)) floor.push_back(up.dot(pts[i]));
+    if (floor.size() >= min_points) {
+      // The median is robust to mislabelled pixels at object feet; a gravity
+      // direction off by a degree or two only widens the spread around it.
+      floor_height = quantile(floor, 0.5);
+      method = GroundMethod::GravityFloorLabels;
+      support = floor.size();
+      found = true;
+    }
+  }
+
+  if (!found) {
+    std::vector<float> all;
+    std::vector<float> horizontal;
+    all.reserve(pts.size());
+    for (std::size_t i = 0; i < pts.size(); ++i) {
+      if (!cloud_camera.valid(i)) continue;
+      const float h = up.dot(pts[i]);
+      all.push_back(h);
+      if (std::isfinite(nrm[i].x()) && nrm[i].dot(up) >= cos_agree) horizontal.push_back(h);
+    }
+    if (all.empty()) return std::nullopt;
+    const float low = quantile(all, config.floor_percentile / 100.0);
+
+    // Lowest level of horizontal points: bins of ransac_inlier_m, a level
+    // counts the points of its bin and both neighbours (a slightly wrong
+    // gravity or a slightly sloped floor spreads one surface over ~3 bins).
+    std::optional<float> plane_height;
+    std::size_t plane_support = 0;
+    float plane_lo = 0.0f, plane_hi = 0.0f;  // height band of the lowest level
+    if (horizontal.size() >= min_points) {
+      const float bin = config.ransac_inlier_m;
+      const auto [lo_it, hi_it] = std::minmax_element(horizontal.begin(), horizontal.end());
+      const float lo = *lo_it;
+      const auto bins = static_cast<std::size_t>((*hi_it - lo) / bin) + 1;
+      std::vector<std::size_t> count(bins, 0);
+      for (float h : horizontal)
+        ++count[std::min(bins - 1, static_cast<std::size_t>((h - lo) / bin))];
+      auto level = [&](std::size_t b) {
+        return count[b] + (b > 0 ? count[b - 1] : 0) + (b + 1 < bins ? count[b + 1] : 0);
+      };
+      for (std::size_t b = 0; b < bins; ++b) {
+        if (level(b) < min_points) continue;
+        // The surface is the densest level within kSameLevelM above.
+        std::size_t best = b;
+        const auto reach = static_cast<std::size_t>(kSameLevelM / bin);
+        for (std::size_t c = b + 1; c < bins && c <= b + reach; ++c)
+          if (level(c) > level(best)) best = c;
+        // Its height: the mean of the points in the level's three bins.
+        double sum = 0;
+        std::size_t n = 0;
+        for (float h : horizontal) {
+          const float rel = (h - lo) / bin;
+          if (rel >= static_cast<float>(best) - 1.0f && rel < static_cast<float>(best) + 2.0f) {
+            sum += h;
+            ++n;
+          }
+        }
+        plane_height = static_cast<float>(sum / static_cast<double>(n));
+        plane_support = n;
+        plane_lo = lo + bin * (static_cast<float>(best) - 1.0f);
+        plane_hi = lo + bin * (static_cast<float>(best) + 2.0f);
+        break;
+      }
+    }
+    // A surface less than min_camera_height_m below the camera is a table
+    // or seat seen without the floor (see GroundConfig), not the floor.
+    if (plane_height && -*plane_height >= config.min_camera_height_m &&
+        low >= *plane_height - config.percentile_margin_m) {
+      floor_height = *plane_height;
+      method = GroundMethod::GravityLowestPlane;
+      support = plane_support;
+      if (config.gravity_refine_deg > 0.0f) {
+        // That surface's own plane (least squares over its horizontal
+        // points), when it agrees with gravity, as for the labelled floor.
+        std::vector<Eigen::Vector3f> level;
+        for (std::size_t i = 0; i < pts.size(); ++i) {
+          if (!cloud_camera.valid(i) || !std::isfinite(nrm[i].x()) ||
+              nrm[i].dot(up) < cos_agree)
+            continue;
+          const float h = up.dot(pts[i]);
+          if (h >= plane_lo && h < plane_hi) level.push_back(pts[i]);
+        }
+        std::vector<std::size_t> idx(level.size());
+        for (std::size_t k = 0; k < idx.size(); ++k) idx[k] = k;
+        Plane hint;
+        hint.normal = up;
+        Plane fitted = hint;  // offset 0: rejected below unless the fit runs
+        if (idx.size() >= 3) fitted = refitPlane(level, idx, hint);
+        // The refined plane must also put the floor where the level is at
+        // the camera (a tilted fit of a far, small surface may not).
+        if (fitted.normal.dot(up) >= cos_refine &&
+            std::abs(fitted.offset + *plane_height) <= kSameLevelM) {
+          GroundPlane ground =
+              groundFromPlane(fitted.normal, fitted.offset, static_cast<int>(support));
+          ground.method = method;
+          return ground;
+        }
+      }
+    } else if (-low >= config.prior_camera_height_m) {
+      floor_height = low;
+      method = GroundMethod::GravityLowPercentile;
+      support = all.size();
+    } else {
+      // Nothing in view reaches as low as a typical floor: the floor is out
+      // of view, and at least the usual camera height below.
+      floor_height = -config.prior_camera_height_m;
+      method = GroundMethod::GravityHeightPrior;
+      support = 0;
+    }
+  }
+
+  // The floor must be below the camera (plane up.p + d = 0 with d > 0).
+  const float offset = -floor_height;
+  if (!(offset > 1e-3f)) return std::nullopt;
+  GroundPlane ground = groundFromPlane(up, offset, static_cast<int>(support));
+  ground.method = method;
+  return ground;
 }
 
 }  // namespace findmug

@@ -202,6 +202,31 @@ PreparedFrame Segmenter::prepare(RgbdFrame frame, const std::vector<std::uint8_t
     case GroundSource::Estimated:
       out.ground = estimateGround(out.cloud_camera, out.normals_camera, config_.ground);
       break;
+    case GroundSource::Gravity:
+      // A robot knows its mount; a dataset frame brings its gravity; a frame
+      // with neither falls back to the labelled floor, then to the frame alone.
+      if (frame.extrinsics) {
+        out.ground = groundFromExtrinsics(*frame.extrinsics);
+      } else if (frame.gravity_up) {
+        const auto& g = *frame.gravity_up;
+        const Eigen::Vector3f up(static_cast<float>(g[0]), static_cast<float>(g[1]),
+                                 static_cast<float>(g[2]));
+        if (gt_labels && gt_labels->size() != out.cloud_camera.size()) {
+          throw Error(frame.source + ": ground-truth labels have " +
+                      std::to_string(gt_labels->size()) + " pixels, frame has " +
+                      std::to_string(out.cloud_camera.size()));
+        }
+        out.ground = groundFromGravity(out.cloud_camera, out.normals_camera, up, gt_labels,
+                                       config_.ground);
+      } else {
+        if (gt_labels && gt_labels->size() == out.cloud_camera.size()) {
+          out.ground = fitGroundToLabels(out.cloud_camera, *gt_labels, config_.ground);
+        }
+        if (!out.ground) {
+          out.ground = estimateGround(out.cloud_camera, out.normals_camera, config_.ground);
+        }
+      }
+      break;
   }
   if (out.ground) {
     out.cloud_ground = transformCloud(out.cloud_camera, out.ground->camera_to_ground);

@@ -30,6 +30,7 @@ std::vector<FrameSample> extractSamples(const LabeledFrames& frames, const Segme
     if (!prepared.ground) {
       report.dropped.push_back(labelled.name + ": no ground plane found");
     } else {
+      const GroundMethod method = prepared.ground->method;
       SegmentedFrame segmented = segmenter.oversegment(std::move(prepared));
       FrameSample sample;
       sample.name = labelled.name;
@@ -45,6 +46,8 @@ std::vector<FrameSample> extractSamples(const LabeledFrames& frames, const Segme
       sample.edges = std::move(segmented.segmentation.edges);
       sample.pixel_segment = std::move(segmented.segmentation.pixel_segment);
       sample.ground_truth = std::move(labelled.labels);
+      sample.ground_method = method;
+      report.ground_methods.emplace_back(sample.name, groundMethodName(method));
       samples.push_back(std::move(sample));
       ++report.frames_used;
     }

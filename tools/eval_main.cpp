@@ -35,8 +35,9 @@ constexpr const char* kUsage =
     "usage: findmug-eval (--data DIR | --mat nyu_depth_v2_labeled.mat) [--folds K] [--model MODEL]\n"
     "                    [--json FILE] [--out DIR] [--sweep] [--train-extra DIR ...]\n"
     "                    [--config FILE] [--set section.key=value ...] [--nyu894-csv FILE]\n"
-    "                    [--no-nyu-border]\n"
-    "Cross-validates (default 5 folds by frame) or evaluates --model on a labelled dataset.\n";
+    "                    [--no-nyu-border] [--nyu-rotations camera_rotations_NYU.txt]\n"
+    "Cross-validates (default 5 folds by frame) or evaluates --model on a labelled dataset.\n"
+    "--nyu-rotations gives NYU frames their gravity (for --set ground.source=gravity).\n";
 
 struct Evaluation {
   ConfusionMatrix forest, mrf;
@@ -118,7 +119,7 @@ void writeOverlays(const LabeledFrames& frames, const std::vector<FrameSample>& 
 int run(int argc, char** argv) {
   Flags flags(argc, argv, {"help", "sweep", "no-nyu-border"});
   flags.allowOnly({"help", "data", "mat", "nyu894-csv", "folds", "model", "json", "out", "sweep",
-                   "train-extra", "config", "set", "no-nyu-border"});
+                   "train-extra", "config", "set", "no-nyu-border", "nyu-rotations"});
   if (flags.has("help") || flags.has("data") == flags.has("mat")) {
     std::cerr << kUsage;
     return flags.has("help") ? 0 : 2;
@@ -129,8 +130,11 @@ int run(int argc, char** argv) {
 
   DatasetOptions options;
   options.mask_nyu_border = !flags.has("no-nyu-border");
-  const auto input = flags.has("data") ? LabeledInput::folder(flags.get("data"), options)
-                                       : LabeledInput::mat(flags.get("mat"), flags.get("nyu894-csv"));
+  if (flags.has("nyu-rotations")) options.nyu_rotations_file = flags.get("nyu-rotations");
+  const auto input = flags.has("data")
+                         ? LabeledInput::folder(flags.get("data"), options)
+                         : LabeledInput::mat(flags.get("mat"), flags.get("nyu894-csv"),
+                                             options.nyu_rotations_file);
   const Segmenter segmenter(config.segmenter, nullptr);
   // Load the model first: a bad file is refused before minutes of feature extraction.
   std::optional<RandomForest> model;
@@ -149,7 +153,9 @@ int run(int argc, char** argv) {
   std::vector<FrameSample> extra_training;
   for (const auto& dir : flags.getAll("train-extra")) {
     if (flags.has("model")) throw Error("--train-extra trains forests; it cannot be used with --model");
-    const auto extra_input = LabeledInput::folder(dir, options);
+    DatasetOptions extra_options = options;
+    extra_options.nyu_rotations_file.reset();  // extra sets are not NYU-indexed
+    const auto extra_input = LabeledInput::folder(dir, extra_options);
     ProgressBar extra_bar("features " + dir);
     ExtractionReport extra_report;
     auto part = extractSamples(extra_input->frames(), segmenter, extra_report,
@@ -168,6 +174,7 @@ int run(int argc, char** argv) {
   report.frames_total = extraction.frames_total;
   report.frames_used = extraction.frames_used;
   report.dropped = extraction.dropped;
+  report.ground_methods = extraction.ground_methods;
   report.config_yaml = dumpConfig(config);
 
   Evaluation eval;

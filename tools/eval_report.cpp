@@ -1,5 +1,6 @@
 #include "eval_report.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -86,6 +87,22 @@ std::string formatTable(const EvalReport& r) {
       << "protocol: " << r.protocol << "; frames used " << r.frames_used << " of "
       << r.frames_total << "\n";
   for (const auto& d : r.dropped) out << "  dropped " << d << "\n";
+  if (!r.ground_methods.empty()) {
+    // One line per way the ground was obtained, with the frames that got it.
+    std::vector<std::pair<std::string, std::string>> groups;  // method, frames
+    for (const auto& [frame, method] : r.ground_methods) {
+      auto it = std::find_if(groups.begin(), groups.end(),
+                             [&](const auto& g) { return g.first == method; });
+      if (it == groups.end()) {
+        groups.emplace_back(method, frame);
+      } else {
+        it->second += " " + frame;
+      }
+    }
+    for (const auto& [method, frames] : groups) {
+      out << "  ground " << method << ": " << frames << "\n";
+    }
+  }
   out << "\n  class        forest   +MRF   paper\n";
   const auto f = r.forest.perClassAccuracy();
   const auto m = r.mrf.perClassAccuracy();
@@ -130,6 +147,11 @@ std::string formatJson(const EvalReport& r) {
       << ",\n  \"dropped\": [";
   for (std::size_t i = 0; i < r.dropped.size(); ++i) {
     out << (i ? ", " : "") << jsonString(r.dropped[i]);
+  }
+  out << "],\n  \"ground\": [";
+  for (std::size_t i = 0; i < r.ground_methods.size(); ++i) {
+    out << (i ? ",\n    " : "\n    ") << "{\"frame\": " << jsonString(r.ground_methods[i].first)
+        << ", \"method\": " << jsonString(r.ground_methods[i].second) << "}";
   }
   out << "],\n  \"train_extra\": [";
   for (std::size_t i = 0; i < r.train_extra.size(); ++i) {

@@ -2,6 +2,7 @@
 #pragma once
 
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "findmug/metrics.hpp"
@@ -21,6 +22,8 @@ struct EvalReport {
   int frames_total = 0;
   int frames_used = 0;
   std::vector<std::string> dropped;
+  // (frame, how its ground frame was obtained) for every used frame.
+  std::vector<std::pair<std::string, std::string>> ground_methods;
   std::string config_yaml;
   ConfusionMatrix forest, mrf;
   std::vector<SweepPoint> sweep_trees, sweep_depth;

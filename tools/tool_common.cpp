@@ -83,11 +83,22 @@ std::unique_ptr<LabeledInput> LabeledInput::folder(const std::string& dir,
 }
 
 std::unique_ptr<LabeledInput> LabeledInput::mat(const std::string& path,
-                                                const std::string& nyu894_csv) {
+                                                const std::string& nyu894_csv,
+                                                const std::optional<std::string>& nyu_rotations) {
   auto input = std::unique_ptr<LabeledInput>(new LabeledInput);
   input->mat_ = nyu894_csv.empty() ? std::make_unique<NyuMatFile>(path)
                                    : std::make_unique<NyuMatFile>(path, nyu894_csv);
   input->frames_ = framesOf(*input->mat_, path);
+  if (nyu_rotations) {
+    // The .mat holds frames in NYU index order: frame i is NYU index i + 1.
+    input->rotations_ = std::make_shared<const NyuRotations>(loadNyuRotations(*nyu_rotations));
+    auto load = input->frames_.load;
+    input->frames_.load = [load, rotations = input->rotations_](std::size_t i) {
+      LabeledFrame frame = load(i);
+      frame.frame.gravity_up = rotations->upForIndex(static_cast<long>(i) + 1);
+      return frame;
+    };
+  }
   return input;
 }
 

@@ -3,6 +3,7 @@
 
 #include <map>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -40,12 +41,15 @@ Config configFromFlags(const Flags& flags);
 class LabeledInput {
  public:
   static std::unique_ptr<LabeledInput> folder(const std::string& dir, const DatasetOptions& options);
-  static std::unique_ptr<LabeledInput> mat(const std::string& path, const std::string& nyu894_csv);
+  // `nyu_rotations`: NYU's camera_rotations_NYU.txt, giving every frame its gravity.
+  static std::unique_ptr<LabeledInput> mat(const std::string& path, const std::string& nyu894_csv,
+                                           const std::optional<std::string>& nyu_rotations = {});
   const LabeledFrames& frames() const { return frames_; }
 
  private:
   std::unique_ptr<DatasetFolder> folder_;
   std::unique_ptr<NyuMatFile> mat_;
+  std::shared_ptr<const NyuRotations> rotations_;
   LabeledFrames frames_;
 };
 

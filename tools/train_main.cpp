@@ -18,14 +18,17 @@ constexpr const char* kUsage =
     "usage: findmug-train (--data DIR | --mat nyu_depth_v2_labeled.mat) [more --data/--mat]\n"
     "                     --out MODEL [--config FILE] [--set section.key=value ...]\n"
     "                     [--nyu894-csv FILE] [--no-nyu-border]\n"
+    "                     [--nyu-rotations camera_rotations_NYU.txt]\n"
     "Trains findmug's randomized forest on NYU-style dataset folders (rgb/, depth/ in mm,\n"
     "label8/ or label40/) or on the official NYU Depth V2 labelled .mat file, and writes a\n"
-    "versioned model file. For the paper's protocol on NYU add --set ground.source=floor_labels.\n";
+    "versioned model file. For the paper's protocol on NYU add --set ground.source=floor_labels;\n"
+    "to use every NYU frame, --set ground.source=gravity --nyu-rotations FILE.\n";
 
 int run(int argc, char** argv) {
   using namespace findmug;
   tools::Flags flags(argc, argv, {"help", "no-nyu-border"});
-  flags.allowOnly({"help", "data", "mat", "nyu894-csv", "out", "config", "set", "no-nyu-border"});
+  flags.allowOnly({"help", "data", "mat", "nyu894-csv", "out", "config", "set", "no-nyu-border",
+                   "nyu-rotations"});
   if (flags.has("help") || !(flags.has("data") || flags.has("mat")) || !flags.has("out")) {
     std::cerr << kUsage;
     return flags.has("help") ? 0 : 2;
@@ -34,15 +37,18 @@ int run(int argc, char** argv) {
   const Segmenter segmenter(config.segmenter, nullptr);
   DatasetOptions options;
   options.mask_nyu_border = !flags.has("no-nyu-border");
+  if (flags.has("nyu-rotations")) options.nyu_rotations_file = flags.get("nyu-rotations");
 
   const auto start = std::chrono::steady_clock::now();
   std::vector<FrameSample> samples;
   int frames_total = 0;
   std::vector<std::string> dropped;
+  std::vector<std::pair<std::string, std::string>> ground_methods;
   std::vector<std::unique_ptr<tools::LabeledInput>> inputs;
   for (const auto& dir : flags.getAll("data")) inputs.push_back(tools::LabeledInput::folder(dir, options));
   for (const auto& mat : flags.getAll("mat")) {
-    inputs.push_back(tools::LabeledInput::mat(mat, flags.get("nyu894-csv")));
+    inputs.push_back(
+        tools::LabeledInput::mat(mat, flags.get("nyu894-csv"), options.nyu_rotations_file));
   }
   for (const auto& input : inputs) {
     tools::ProgressBar bar("features " + input->frames().description);
@@ -52,6 +58,8 @@ int run(int argc, char** argv) {
     bar.finish();
     frames_total += report.frames_total;
     dropped.insert(dropped.end(), report.dropped.begin(), report.dropped.end());
+    ground_methods.insert(ground_methods.end(), report.ground_methods.begin(),
+                          report.ground_methods.end());
     for (auto& s : part) samples.push_back(std::move(s));
   }
   if (samples.empty()) throw Error("no usable frame in the given --data/--mat inputs");
@@ -78,6 +86,9 @@ int run(int argc, char** argv) {
   std::printf("findmug-train summary\n");
   std::printf("  frames used      %zu of %d\n", samples.size(), frames_total);
   for (const auto& d : dropped) std::printf("  dropped          %s\n", d.c_str());
+  for (const auto& [name, method] : ground_methods) {
+    std::printf("  ground           %-12s %s\n", name.c_str(), method.c_str());
+  }
   std::printf("  training patches %zu\n", training.labels.size());
   for (int c = 0; c < kNumLabels; ++c) {
     std::printf("    %-8s %7d\n", std::string(kLabelNames[c]).c_str(), per_class[c]);

@@ -6,6 +6,12 @@
 //   DIR/label40/NAME.png uint8, NYU-40 ids (1..40), 0 void, mapped 40 -> 8 by a CSV
 //   DIR/intrinsics.yaml  optional: fx fy cx cy (default: NYU's Kinect calibration)
 //   DIR/extrinsics.csv   optional: name,height_m,pitch_rad,roll_rad per frame (synthetic data)
+//   DIR/gravity.csv      optional: name,up_x,up_y,up_z per frame: the "up" direction (against
+//                        gravity) in camera coordinates (x right, y down, z forward), any length
+//
+// For NYU Depth V2 folders (frames named by NYU index, "0001".."1449") the
+// per-frame gravity can instead come from NYU's camera_rotations_NYU.txt
+// (DatasetOptions::nyu_rotations_file); gravity.csv rows take precedence.
 //
 // Frames are read lazily, one at a time, so a large folder costs no memory.
 #pragma once
@@ -14,6 +20,7 @@
 #include <cstdint>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "findmug/frame.hpp"
@@ -42,6 +49,37 @@ LabelMapping parseLabelMapping(const std::string& csv_text, const std::string& s
 // (models/nyu40_to_findmug8.csv, compiled in).
 const LabelMapping& defaultNyu40Mapping();
 
+// NYU Depth V2's per-frame gravity-aligning rotations
+// (nyuv2_meta/camera_rotations_NYU.txt): 1449 3x3 matrices of three
+// whitespace-separated numbers per row, matrices separated by blank lines,
+// in NYU index order (1-based).
+//
+// Convention, measured on the 31 labelled frames with floor labels (see
+// BENCHMARKS.md "Ground from gravity"): with R the matrix as written (rows as
+// in the file), "up" in camera coordinates is  up = -R^T * (0,1,0) = -(row 1
+// of R, 0-based)... i.e. R maps camera coordinates to a gravity-aligned frame
+// whose y axis points DOWN like the camera's y. See nyuUpFromRotation.
+struct NyuRotations {
+  std::string source;                          // file, for messages
+  std::vector<std::array<double, 9>> rotations;  // row-major, index 0 = NYU index 1
+  // Unit "up" in camera coordinates for a 1-based NYU index; throws
+  // findmug::Error naming the file when the index is out of range.
+  std::array<double, 3> upForIndex(long nyu_index) const;
+};
+NyuRotations loadNyuRotations(const std::string& path);
+// Same, from text already in memory. Errors name `source` and the line:
+// a field that is not a finite number, a row without exactly 3 numbers, a
+// matrix without exactly 3 rows, a matrix far from a rotation.
+NyuRotations parseNyuRotations(const std::string& text, const std::string& source);
+// "Up" in camera coordinates from one matrix (row-major) of that file.
+std::array<double, 3> nyuUpFromRotation(const std::array<double, 9>& rotation);
+
+// $FINDMUG_DATA/nyuv2_meta/camera_rotations_NYU.txt (see defaultNyu894To40CsvPath).
+std::string defaultNyuRotationsPath();
+
+// Reads DIR/gravity.csv (header `name,up_x,up_y,up_z`); errors name the file and line.
+std::vector<std::pair<std::string, std::array<double, 3>>> loadGravityCsv(const std::string& path);
+
 struct LabeledFrame {
   std::string name;
   RgbdFrame frame;
@@ -59,6 +97,10 @@ struct DatasetOptions {
   bool mask_nyu_border = true;
   int border_top = 44, border_bottom = 9, border_left = 40, border_right = 39;  // pixels cut
   std::optional<CameraIntrinsics> intrinsics;  // overrides intrinsics.yaml / NYU default
+  // NYU's camera_rotations_NYU.txt: frames whose name is an NYU index
+  // ("0001".."1449") get their gravity from it. A frame name that is not a
+  // number, or an index beyond the file, is an error naming both.
+  std::optional<std::string> nyu_rotations_file;
 };
 
 class DatasetFolder {
@@ -83,6 +125,7 @@ class DatasetFolder {
   CameraIntrinsics intrinsics_;
   bool nyu_calibration_ = false;  // NYU default intrinsics: the NYU border applies
   std::vector<std::optional<CameraExtrinsics>> extrinsics_;
+  std::vector<std::optional<std::array<double, 3>>> gravity_;
 };
 
 // Writes one frame in the folder layout above (label8), used by the

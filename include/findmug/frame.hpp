@@ -5,6 +5,7 @@
 // NYU frame does not (then the ground plane is estimated instead).
 #pragma once
 
+#include <array>
 #include <cstdint>
 #include <optional>
 #include <string>
@@ -34,6 +35,11 @@ struct RgbdFrame {
   std::vector<Rgb8> rgb;                // width*height, row-major
   CameraIntrinsics intrinsics;
   std::optional<CameraExtrinsics> extrinsics;
+  // Optional gravity direction: unit "up" (against gravity) in camera
+  // coordinates (x right, y down, z forward), e.g. from NYU's per-frame
+  // rotations or an IMU. Used by ground.source=gravity; the floor height
+  // is then found along it (see ground.hpp).
+  std::optional<std::array<double, 3>> gravity_up;
   std::uint64_t utime = 0;  // capture time, microseconds, host clock
   std::int64_t seq = 0;     // sequence number from the source
   std::string source;       // where it came from (file name, device), for error messages

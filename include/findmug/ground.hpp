@@ -17,6 +17,22 @@
 
 namespace findmug {
 
+// How a frame's ground plane was obtained (reported per frame by
+// findmug-train and findmug-eval; groundMethodName gives the spelling).
+enum class GroundMethod {
+  Given,                 // "plane": built by groundFromPlane from a caller's plane
+  Extrinsics,            // "extrinsics": the camera mount
+  FloorLabels,           // "floor_labels": RANSAC plane on ground-truth floor pixels
+  Estimated,             // "estimated": lowest horizontal plane, frame alone
+  GravityFloorLabels,    // "gravity+floor_labels": gravity, height of the labelled floor
+  GravityLowestPlane,    // "gravity+lowest_plane": gravity, lowest supported horizontal surface
+  GravityLowPercentile,  // "gravity+low_percentile": gravity, low percentile of all heights
+                         // (no horizontal surface low enough to be the floor)
+  GravityHeightPrior,    // "gravity+height_prior": gravity, floor out of view: nothing reaches
+                         // prior_camera_height_m below the camera, so the floor is put there
+};
+const char* groundMethodName(GroundMethod method);
+
 struct GroundPlane {
   // Plane in the camera frame: normal.dot(p) + offset = 0, normal unit and
   // pointing up (away from the floor, towards the camera side).
@@ -25,6 +41,7 @@ struct GroundPlane {
   // Maps camera-frame points into the ground-aligned frame.
   Eigen::Isometry3f camera_to_ground = Eigen::Isometry3f::Identity();
   int support_points = 0;  // inliers that produced it (0 when from extrinsics)
+  GroundMethod method = GroundMethod::Given;
 };
 
 enum class GroundSource {
@@ -32,6 +49,12 @@ enum class GroundSource {
   Extrinsics,    // from the camera mount (robot); a frame without them is an error
   FloorLabels,   // RANSAC on ground-truth floor pixels (the paper's protocol)
   Estimated,     // dominant horizontal plane found in the frame alone
+  // Per-frame gravity (RgbdFrame::gravity_up, e.g. NYU's rotations) gives
+  // "up"; the floor height along it comes from the labelled floor when it
+  // has min_floor_points points, else from the frame (groundFromGravity).
+  // A frame with extrinsics uses them (a robot knows both); a frame without
+  // gravity falls back to FloorLabels (if labels were given), then Estimated.
+  Gravity,
 };
 
 struct GroundConfig {
@@ -53,6 +76,23 @@ struct GroundConfig {
   // below a hand-held camera; a real floor is >= 1 m below on NYU. A camera
   // mounted lower than this must use GroundSource::Extrinsics (or lower it).
   float min_camera_height_m = 0.8f;
+  // groundFromGravity without floor labels: the floor is taken no higher
+  // than this percentile (in %) of all point heights along gravity, ...
+  float floor_percentile = 1.0f;
+  // ... i.e. when that percentile lies more than this below the lowest
+  // supported horizontal surface, that surface is a table or seat and the
+  // floor is at the percentile (cabinet fronts, chair legs and walls reach
+  // down to a floor hidden behind furniture).
+  float percentile_margin_m = 0.15f;
+  // groundFromGravity: a floor plane fitted to the labelled floor (or to the
+  // lowest horizontal surface) whose normal is within this angle of the given
+  // gravity replaces it; 0 = always keep the given direction. NYU's
+  // rotations differ from the labelled floor's normal by 0.8..6.4 degrees.
+  float gravity_refine_deg = 8.0f;
+  // groundFromGravity, floor out of view: the camera is taken this high above
+  // it. The median over the NYU labelled frames whose floor is labelled
+  // (17 frames, 0.82..1.41 m, median 1.28 m; BENCHMARKS.md "Ground from gravity").
+  float prior_camera_height_m = 1.28f;
 };
 
 // Builds the plane and transform from a known camera mount.
@@ -80,5 +120,29 @@ std::optional<GroundPlane> fitGroundToLabels(const OrganizedCloud& cloud_camera,
 std::optional<GroundPlane> estimateGround(const OrganizedCloud& cloud_camera,
                                           const NormalImage& normals_camera,
                                           const GroundConfig& config);
+
+// The ground frame from a known "up" direction (unit, camera coordinates,
+// against gravity) and the floor height along it:
+//  1. `labels` given (same grid as the cloud) with at least
+//     `min_floor_points` valid Floor pixels: their RANSAC plane
+//     (fitGroundToLabels) when its normal is within `gravity_refine_deg` of
+//     up, else the median height of those points along up (GravityFloorLabels);
+//  2. else the lowest horizontal surface: heights of the points whose
+//     normal is within `normal_agreement_deg` of up, binned by
+//     `ransac_inlier_m`; the lowest level holding `min_floor_points` points
+//     within +-ransac_inlier_m, if it is at least `min_camera_height_m`
+//     below the camera (GravityLowestPlane; its least-squares plane replaces
+//     up when within `gravity_refine_deg`) — unless the `floor_percentile` %
+//     height of all points lies more than `percentile_margin_m` below it;
+//  3. else that percentile when it is at least `prior_camera_height_m` below
+//     the camera (GravityLowPercentile: furniture reaching down to a floor
+//     hidden behind it), else `prior_camera_height_m` (GravityHeightPrior).
+// Returns nullopt only when the cloud has no valid point or every point is
+// above the camera (no floor below it). Heights are up.dot(p) in metres.
+std::optional<GroundPlane> groundFromGravity(const OrganizedCloud& cloud_camera,
+                                             const NormalImage& normals_camera,
+                                             const Eigen::Vector3f& up_camera,
+                                             const std::vector<std::uint8_t>* labels,
+                                             const GroundConfig& config);
 
 }  // namespace findmug

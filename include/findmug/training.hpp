@@ -27,6 +27,7 @@ struct FrameSample {
   std::vector<std::uint8_t> segment_labels;      // plurality ground truth per segment (255 = void)
   std::vector<std::uint32_t> segment_pixels;     // pixel count per segment
   std::vector<std::uint8_t> ground_truth;        // per pixel, 255 = void
+  GroundMethod ground_method = GroundMethod::Given;  // how its ground frame was obtained
 };
 
 // Any indexed collection of labelled frames (a dataset folder, the official
@@ -43,6 +44,8 @@ struct ExtractionReport {
   int frames_total = 0;
   int frames_used = 0;
   std::vector<std::string> dropped;  // "name: reason" for frames without a ground plane etc.
+  // Every used frame with groundMethodName of how its ground was obtained, in order.
+  std::vector<std::pair<std::string, std::string>> ground_methods;
 };
 
 // Runs the segmenter's geometric stages on every frame. Frames for which no

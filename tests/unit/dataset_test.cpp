@@ -481,6 +481,98 @@ TEST(DatasetFolder, ExtrinsicsCsvIsOptionalPerFrameAndValidated) {
   EXPECT_CONTAINS(msg, "invalid extrinsics height_m=40");
 }
 
+// --------------------------------------------------------------------------
+// Per-frame gravity
+
+constexpr const char* kTwoRotations =
+    "1 0 0\n0 1 0\n0 0 1\n\n"
+    "1 0 0\n0 0.6 0.8\n0 -0.8 0.6\n\n";
+
+TEST(NyuRotations, ReadsMatricesAndGivesUpAsMinusRowOne) {
+  const NyuRotations r = parseNyuRotations(kTwoRotations, "rot.txt");
+  ASSERT_EQ(r.rotations.size(), 2u);
+  // Identity: the camera is level, up is camera -y.
+  EXPECT_EQ(r.upForIndex(1), (std::array<double, 3>{-0.0, -1.0, -0.0}));
+  // Row 1 of the second matrix is (0, 0.6, 0.8): up = (0, -0.6, -0.8).
+  const auto up = r.upForIndex(2);
+  EXPECT_DOUBLE_EQ(up[1], -0.6);
+  EXPECT_DOUBLE_EQ(up[2], -0.8);
+  // Without a trailing blank line, with CRLF and extra blank lines too.
+  EXPECT_EQ(parseNyuRotations("\r\n1 0 0\r\n0 1 0\r\n0 0 1", "x").rotations.size(), 1u);
+}
+
+TEST(NyuRotations, ErrorsNameFileAndLine) {
+  auto msg = errorOf([] { parseNyuRotations("1 0 0\n0 1 zero\n0 0 1\n", "rot.txt"); });
+  EXPECT_CONTAINS(msg, "rot.txt:2: 'zero' is not a finite number");
+  msg = errorOf([] { parseNyuRotations("1 0 0\n0 1\n0 0 1\n", "rot.txt"); });
+  EXPECT_CONTAINS(msg, "rot.txt:2: expected 3 numbers in a matrix row, found 2");
+  msg = errorOf([] { parseNyuRotations("1 0 0\n0 1 0\n0 0 1\n\n1 0 0\n0 1 0\n", "rot.txt"); });
+  EXPECT_CONTAINS(msg, "rot.txt:5: matrix 2 has 2 rows, expected 3");
+  msg = errorOf([] { parseNyuRotations("1 0 0\n0 1 0\n0 0 1\n1 0 0\n", "rot.txt"); });
+  EXPECT_CONTAINS(msg, "rot.txt:4: matrix 1 has more than 3 rows");
+  msg = errorOf([] { parseNyuRotations("1 0 0\n0 2 0\n0 0 1\n", "rot.txt"); });
+  EXPECT_CONTAINS(msg, "rot.txt:1: matrix 1 is not a rotation");
+  msg = errorOf([] { parseNyuRotations("\n\n", "rot.txt"); });
+  EXPECT_CONTAINS(msg, "rot.txt: no rotation matrix");
+  const NyuRotations r = parseNyuRotations(kTwoRotations, "rot.txt");
+  msg = errorOf([&] { r.upForIndex(3); });
+  EXPECT_CONTAINS(msg, "rot.txt: NYU index 3 out of range (file has 2 matrices");
+  msg = errorOf([&] { r.upForIndex(0); });
+  EXPECT_CONTAINS(msg, "NYU index 0 out of range");
+  msg = errorOf([] { loadNyuRotations("/nonexistent/rot.txt"); });
+  EXPECT_CONTAINS(msg, "/nonexistent/rot.txt");
+}
+
+TEST(NyuRotations, TheShippedFileHasOneRotationPerNyuFrame) {
+  FINDMUG_REQUIRE_DATA(path, "nyuv2_meta/camera_rotations_NYU.txt");
+  const NyuRotations r = loadNyuRotations(path.string());
+  EXPECT_EQ(r.rotations.size(), 1449u);
+  // Hand-held Kinect: up is within 45 degrees of camera -y on every frame.
+  for (long i = 1; i <= 1449; ++i) EXPECT_LT(r.upForIndex(i)[1], -0.7) << i;
+}
+
+TEST(DatasetFolder, GravityFromNyuRotationsAndGravityCsv) {
+  TempDir dir;
+  RawFolder raw(dir.path());
+  raw.good("0001");
+  raw.good("0002");
+  writeText(dir.path() / "rot.txt", kTwoRotations);
+  DatasetOptions options = noBorder();
+  EXPECT_FALSE(DatasetFolder(dir.str(), options).load(0).frame.gravity_up.has_value());
+  options.nyu_rotations_file = (dir.path() / "rot.txt").string();
+  {
+    DatasetFolder folder(dir.str(), options);
+    ASSERT_TRUE(folder.load(1).frame.gravity_up.has_value());
+    EXPECT_DOUBLE_EQ((*folder.load(1).frame.gravity_up)[2], -0.8);
+  }
+  // gravity.csv overrides per frame; its vector is normalised.
+  writeText(dir.path() / "gravity.csv", "name,up_x,up_y,up_z\n0002,0,-2,0\nghost,0,-1,0\n");
+  {
+    DatasetFolder folder(dir.str(), options);
+    EXPECT_EQ(*folder.load(1).frame.gravity_up, (std::array<double, 3>{0.0, -1.0, 0.0}));
+    EXPECT_DOUBLE_EQ((*folder.load(0).frame.gravity_up)[1], -1.0);
+  }
+  writeText(dir.path() / "gravity.csv", "name,up_x,up_y,up_z\n0002,0,nan,0\n");
+  auto msg = errorOf([&] { DatasetFolder(dir.str(), options); });
+  EXPECT_CONTAINS(msg, "gravity.csv:2: up_y 'nan' is not a finite number");
+  writeText(dir.path() / "gravity.csv", "name,up_x,up_y,up_z\n0002,0,0,0\n");
+  msg = errorOf([&] { DatasetFolder(dir.str(), options); });
+  EXPECT_CONTAINS(msg, "gravity.csv:2: up direction");
+  writeText(dir.path() / "gravity.csv", "name,up\n");
+  msg = errorOf([&] { DatasetFolder(dir.str(), options); });
+  EXPECT_CONTAINS(msg, "expected header 'name,up_x,up_y,up_z'");
+  fs::remove(dir.path() / "gravity.csv");
+
+  // A frame beyond the file, or not named by an NYU index.
+  raw.good("0003");
+  msg = errorOf([&] { DatasetFolder(dir.str(), options); });
+  EXPECT_CONTAINS(msg, "NYU index 3 out of range");
+  fs::remove(dir.path() / "rgb" / "0003.png");
+  raw.good("kitchen");
+  msg = errorOf([&] { DatasetFolder(dir.str(), options); });
+  EXPECT_CONTAINS(msg, "frame 'kitchen' is not named by an NYU index");
+}
+
 TEST(DatasetFolder, BorderMaskOnSmallFrames) {
   TempDir dir;
   RawFolder raw(dir.path());

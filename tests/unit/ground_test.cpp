@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <random>
 #include <string>
@@ -13,6 +14,7 @@
 #include "findmug/dataset.hpp"
 #include "findmug/error.hpp"
 #include "findmug/image_io.hpp"
+#include "findmug/segmenter.hpp"
 #include "test_data.hpp"
 
 namespace findmug {
@@ -329,6 +331,269 @@ TEST(EstimateGround, TableWithoutFloorIsNotTakenForTheFloor) {
   const auto g = estimateGround(r.cloud, normals, config);
   ASSERT_TRUE(g.has_value());
   EXPECT_NEAR(g->offset, 1.3f - 0.75f, 0.02f);
+}
+
+// ---------------------------------------------------------------------------
+// groundFromGravity
+
+TEST(GroundFromGravity, LabelledFloorGivesTheHeight) {
+  const Scene s = roomWithTable();
+  const Rendered r = render(s);
+  const NormalImage normals = computeNormals(r.cloud, NormalConfig{});
+  const Eigen::Vector3f up = upInCamera(s.mount);
+  const auto g = groundFromGravity(r.cloud, normals, up, &r.labels, GroundConfig{});
+  ASSERT_TRUE(g.has_value());
+  EXPECT_EQ(g->method, GroundMethod::GravityFloorLabels);
+  EXPECT_STREQ(groundMethodName(g->method), "gravity+floor_labels");
+  EXPECT_LT(angleBetween(g->normal_camera, up), 1e-4f);
+  EXPECT_NEAR(g->offset, 1.3f, 0.01f);
+  EXPECT_EQ(g->support_points, r.floor_pixels);
+  // The floor maps to z = 0, the table top to its height.
+  for (std::size_t i = 0; i < r.labels.size(); i += 97) {
+    if (!r.cloud.valid(i)) continue;
+    const float z = (g->camera_to_ground * r.cloud.points[i]).z();
+    if (r.labels[i] == 1) {
+      EXPECT_NEAR(z, 0.0f, 0.03f);
+    } else if (r.labels[i] == 4) {
+      EXPECT_NEAR(z, 0.75f, 0.03f);
+    }
+  }
+}
+
+TEST(GroundFromGravity, SlightlyWrongGravityIsRefinedByTheFloorPlane) {
+  const Scene s = roomWithTable();
+  const Rendered r = render(s);
+  const NormalImage normals = computeNormals(r.cloud, NormalConfig{});
+  const Eigen::Vector3f truth = upInCamera(s.mount);
+  // Gravity 5 degrees off (about the optical axis, as NYU's rotations are).
+  const Eigen::Vector3f off5 = Eigen::AngleAxisf(5.0f * kDeg, Eigen::Vector3f::UnitZ()) * truth;
+  const Eigen::Vector3f off15 = Eigen::AngleAxisf(15.0f * kDeg, Eigen::Vector3f::UnitZ()) * truth;
+  for (const auto* labels : {&r.labels, static_cast<const std::vector<std::uint8_t>*>(nullptr)}) {
+    const auto g = groundFromGravity(r.cloud, normals, off5, labels, GroundConfig{});
+    ASSERT_TRUE(g.has_value());
+    EXPECT_EQ(g->method, labels ? GroundMethod::GravityFloorLabels : GroundMethod::GravityLowestPlane);
+    EXPECT_LT(angleBetween(g->normal_camera, truth), 0.5f * kDeg);
+    EXPECT_NEAR(g->offset, 1.3f, 0.02f);
+    // Beyond gravity_refine_deg the given direction is kept.
+    const auto h = groundFromGravity(r.cloud, normals, off15, labels, GroundConfig{});
+    ASSERT_TRUE(h.has_value());
+    EXPECT_LT(angleBetween(h->normal_camera, off15), 1e-3f);
+    // With refinement off, the given direction is kept too.
+    GroundConfig keep;
+    keep.gravity_refine_deg = 0.0f;
+    const auto k = groundFromGravity(r.cloud, normals, off5, labels, keep);
+    ASSERT_TRUE(k.has_value());
+    EXPECT_LT(angleBetween(k->normal_camera, off5), 1e-3f);
+  }
+}
+
+TEST(GroundFromGravity, WithoutLabelsTheLowestSurfaceNotTheBiggerTable) {
+  Scene s = roomWithTable();
+  s.mount = {1.4, 0.55, -0.04};
+  s.table_near = 0.6f;
+  s.table_far = 2.4f;
+  s.table_half_width = 1.2f;
+  s.wall_distance = 3.5f;
+  const Rendered r = render(s);
+  ASSERT_GT(r.table_pixels, 2 * r.floor_pixels);
+  const NormalImage normals = computeNormals(r.cloud, NormalConfig{});
+  const auto g = groundFromGravity(r.cloud, normals, upInCamera(s.mount), nullptr, GroundConfig{});
+  ASSERT_TRUE(g.has_value());
+  EXPECT_EQ(g->method, GroundMethod::GravityLowestPlane);
+  EXPECT_NEAR(g->offset, 1.4f, 0.02f);
+
+  // Too few labelled floor pixels: the labels are not trusted, the frame is.
+  std::vector<std::uint8_t> few(r.labels.size(), 0);
+  for (std::size_t i = 0, n = 0; i < r.labels.size() && n < 100; ++i)
+    if (r.labels[i] == 1) few[i] = 1, ++n;
+  const auto h = groundFromGravity(r.cloud, normals, upInCamera(s.mount), &few, GroundConfig{});
+  ASSERT_TRUE(h.has_value());
+  EXPECT_EQ(h->method, GroundMethod::GravityLowestPlane);
+  EXPECT_NEAR(h->offset, 1.4f, 0.02f);
+}
+
+// Hand-made cloud from a level camera (up = -y): a table top 0.55 m below
+// the camera and, optionally, a vertical front (a cabinet) 3 m ahead
+// reaching from the camera's height down to `front_bottom` below it.
+struct HandMade {
+  OrganizedCloud cloud;
+  NormalImage normals;
+};
+HandMade tableAndFront(float front_bottom, int front_rows) {
+  HandMade out;
+  const int w = 100, table_rows = 100;
+  out.cloud.width = out.normals.width = w;
+  out.cloud.height = out.normals.height = table_rows + front_rows;
+  for (int v = 0; v < table_rows; ++v) {
+    for (int u = 0; u < w; ++u) {
+      out.cloud.points.emplace_back(-0.5f + 0.01f * u, 0.55f, 0.8f + 0.01f * v);
+      out.normals.normals.emplace_back(0.0f, -1.0f, 0.0f);
+    }
+  }
+  for (int v = 0; v < front_rows; ++v) {
+    for (int u = 0; u < w; ++u) {
+      const float below = front_bottom * (v + 0.5f) / front_rows;
+      out.cloud.points.emplace_back(-0.5f + 0.01f * u, below, 3.0f);
+      out.normals.normals.emplace_back(0.0f, 0.0f, -1.0f);
+    }
+  }
+  out.cloud.colors.assign(out.cloud.points.size(), Rgb8{0, 0, 0});
+  return out;
+}
+
+TEST(GroundFromGravity, OnlyATableInViewGivesTheHeightPrior) {
+  // The table 0.55 m below the camera is less than min_camera_height_m
+  // (0.8 m) below it: not the floor, which is out of view.
+  const HandMade m = tableAndFront(0.0f, 0);
+  GroundConfig config;
+  const auto g = groundFromGravity(m.cloud, m.normals, Eigen::Vector3f(0, -1, 0), nullptr, config);
+  ASSERT_TRUE(g.has_value());
+  EXPECT_EQ(g->method, GroundMethod::GravityHeightPrior);
+  EXPECT_STREQ(groundMethodName(g->method), "gravity+height_prior");
+  EXPECT_NEAR(g->offset, config.prior_camera_height_m, 1e-5f);
+  // The same surface with min_camera_height_m lowered is taken as the floor.
+  config.min_camera_height_m = 0.5f;
+  const auto h = groundFromGravity(m.cloud, m.normals, Eigen::Vector3f(0, -1, 0), nullptr, config);
+  ASSERT_TRUE(h.has_value());
+  EXPECT_EQ(h->method, GroundMethod::GravityLowestPlane);
+  EXPECT_NEAR(h->offset, 0.55f, 1e-3f);
+  EXPECT_EQ(h->support_points, 10000);
+}
+
+TEST(GroundFromGravity, FurnitureReachingBelowTheTableGivesTheFloor) {
+  // 5000 front points spread evenly over 0..1.5 m below the camera: the
+  // 1 % height of all 15000 points is the 150th lowest, i.e. front row 150/100
+  // from the bottom: 1.5 * (1 - 1.5/50) ~ 1.455 m below. That is far below
+  // the table (0.55 m), so the table is not the floor, and below the prior
+  // camera height (1.29 m), so it is not the prior either.
+  const HandMade m = tableAndFront(1.5f, 50);
+  GroundConfig config;
+  const auto g = groundFromGravity(m.cloud, m.normals, Eigen::Vector3f(0, -1, 0), nullptr, config);
+  ASSERT_TRUE(g.has_value());
+  EXPECT_EQ(g->method, GroundMethod::GravityLowPercentile);
+  EXPECT_NEAR(g->offset, 1.5f * (1.0f - 1.5f / 50.0f), 0.015f);
+  EXPECT_STREQ(groundMethodName(g->method), "gravity+low_percentile");
+
+  // A front that ends just below the table top (within the margin) is the
+  // table's own edge: the table stays the lowest plane (allowed as the floor
+  // here by lowering min_camera_height_m).
+  const HandMade edge = tableAndFront(0.6f, 50);
+  GroundConfig low_camera = config;
+  low_camera.min_camera_height_m = 0.5f;
+  const auto e = groundFromGravity(edge.cloud, edge.normals, Eigen::Vector3f(0, -1, 0), nullptr,
+                                   low_camera);
+  ASSERT_TRUE(e.has_value());
+  EXPECT_EQ(e->method, GroundMethod::GravityLowestPlane);
+  EXPECT_NEAR(e->offset, 0.55f, 1e-3f);
+
+  // No horizontal surface at all (only the front): the percentile.
+  HandMade front = tableAndFront(1.5f, 50);
+  for (auto& n : front.normals.normals) n = Eigen::Vector3f(0, 0, -1);
+  const auto f = groundFromGravity(front.cloud, front.normals, Eigen::Vector3f(0, -1, 0), nullptr,
+                                   config);
+  ASSERT_TRUE(f.has_value());
+  EXPECT_EQ(f->method, GroundMethod::GravityLowPercentile);
+}
+
+TEST(GroundFromGravity, BadInputsAndNothingBelowTheCamera) {
+  const HandMade m = tableAndFront(0.0f, 0);
+  GroundConfig config;
+  EXPECT_THROW(groundFromGravity(m.cloud, m.normals, Eigen::Vector3f::Zero(), nullptr, config),
+               Error);
+  std::vector<std::uint8_t> short_labels(10, 1);
+  EXPECT_THROW(
+      groundFromGravity(m.cloud, m.normals, Eigen::Vector3f(0, -1, 0), &short_labels, config),
+      Error);
+  NormalImage wrong = m.normals;
+  wrong.normals.pop_back();
+  EXPECT_THROW(groundFromGravity(m.cloud, wrong, Eigen::Vector3f(0, -1, 0), nullptr, config),
+               Error);
+  config.floor_percentile = 80.0f;
+  EXPECT_THROW(groundFromGravity(m.cloud, m.normals, Eigen::Vector3f(0, -1, 0), nullptr, config),
+               Error);
+  // No valid point at all: no ground.
+  HandMade empty = m;
+  for (auto& p : empty.cloud.points) p = Eigen::Vector3f::Constant(std::nanf(""));
+  EXPECT_FALSE(groundFromGravity(empty.cloud, empty.normals, Eigen::Vector3f(0, -1, 0), nullptr,
+                                 GroundConfig{})
+                   .has_value());
+}
+
+// NYU's per-frame rotations (camera_rotations_NYU.txt): on every labelled
+// frame whose floor labels give a plane (the paper's protocol), the gravity
+// "up" read with nyuUpFromRotation must agree with that plane's normal.
+// Measured (BENCHMARKS.md "Ground from gravity"): see the printed angles.
+TEST(GroundOnNyu, GravityFromRotationsAgreesWithFloorLabelFit) {
+  FINDMUG_REQUIRE_DATA(root, "nyuv2_labeled");
+  FINDMUG_REQUIRE_DATA(rotations_file, "nyuv2_meta/camera_rotations_NYU.txt");
+  DatasetOptions options;
+  options.nyu_rotations_file = rotations_file.string();
+  const DatasetFolder folder(root.string(), options);
+  ASSERT_EQ(folder.size(), 31u);
+  const NyuRotations rotations = loadNyuRotations(rotations_file.string());
+  int compared = 0;
+  float worst = 0.0f, worst_transposed = 0.0f, sum = 0.0f;
+  for (std::size_t i = 0; i < folder.size(); ++i) {
+    const LabeledFrame f = folder.load(i);
+    ASSERT_TRUE(f.frame.gravity_up.has_value()) << f.name;
+    const auto& g = *f.frame.gravity_up;
+    const Eigen::Vector3f up(static_cast<float>(g[0]), static_cast<float>(g[1]),
+                             static_cast<float>(g[2]));
+    const OrganizedCloud cloud = frameToCloud(f.frame);
+    const auto fit = fitGroundToLabels(cloud, f.labels, GroundConfig{});
+    if (!fit) continue;
+    const float angle = angleBetween(fit->normal_camera, up) / kDeg;
+    std::printf("%s: gravity vs floor-label fit %.2f deg\n", f.name.c_str(), angle);
+    EXPECT_LT(angle, 7.5f) << f.name;
+    worst = std::max(worst, angle);
+    sum += angle;
+    // The transposed reading (a column of R instead of a row) is a different
+    // direction; on some frames far off, so the test tells them apart.
+    const auto& r = rotations.rotations[static_cast<std::size_t>(std::stol(f.name) - 1)];
+    const Eigen::Vector3f column(static_cast<float>(-r[1]), static_cast<float>(-r[4]),
+                                 static_cast<float>(-r[7]));
+    worst_transposed = std::max(worst_transposed, angleBetween(fit->normal_camera, column) / kDeg);
+    ++compared;
+  }
+  RecordProperty("worst_angle_deg", std::to_string(worst));
+  EXPECT_GE(compared, 12);
+  EXPECT_LT(sum / compared, 4.0f);
+  EXPECT_GT(worst_transposed, 10.0f);
+}
+
+// With ground.source=gravity every one of the 31 frames gets a ground frame
+// (the paper's floor_labels protocol keeps 14), and the way it was obtained
+// is the labelled floor wherever there is enough of it.
+TEST(GroundOnNyu, GravitySourceGivesEveryFrameAGround) {
+  FINDMUG_REQUIRE_DATA(root, "nyuv2_labeled");
+  FINDMUG_REQUIRE_DATA(rotations_file, "nyuv2_meta/camera_rotations_NYU.txt");
+  DatasetOptions options;
+  options.nyu_rotations_file = rotations_file.string();
+  const DatasetFolder folder(root.string(), options);
+  ASSERT_EQ(folder.size(), 31u);
+  SegmenterConfig config;
+  config.ground.source = GroundSource::Gravity;
+  const Segmenter segmenter(config, nullptr);
+  int with_labels = 0;
+  for (std::size_t i = 0; i < folder.size(); ++i) {
+    LabeledFrame f = folder.load(i);
+    int floor = 0;
+    for (auto l : f.labels) floor += l == 1;
+    const PreparedFrame p = segmenter.prepare(std::move(f.frame), &f.labels);
+    ASSERT_TRUE(p.ground.has_value()) << f.name;
+    std::printf("%s: %s, camera %.2f m above the floor\n", f.name.c_str(),
+                groundMethodName(p.ground->method), p.ground->offset);
+    // A hand-held Kinect: 0.8..2.2 m above whatever was taken as the floor.
+    EXPECT_GT(p.ground->offset, 0.8f) << f.name;
+    EXPECT_LT(p.ground->offset, 2.2f) << f.name;
+    if (floor >= GroundConfig{}.min_floor_points) {
+      EXPECT_EQ(p.ground->method, GroundMethod::GravityFloorLabels) << f.name;
+      ++with_labels;
+    } else {
+      EXPECT_NE(p.ground->method, GroundMethod::GravityFloorLabels) << f.name;
+    }
+  }
+  EXPECT_GE(with_labels, 12);
 }
 
 // NYU Depth V2 labeled frames: wherever the floor-label fit (the paper's
