@@ -131,6 +131,39 @@ TEST(ToolsEval, CrossValidationBeatsMajorityBaselineWidely) {
   EXPECT_EQ(overlays, used);
 }
 
+// Issue 10: on all 31 frames (ground.source=gravity), the region features of
+// the default model must beat today's 14-D pipeline on the same folds.
+// Measured (BENCHMARKS.md 1d, commit of this test): 14-D forest+MRF class
+// average 0.461, global 0.575; with features.regions 0.477 and 0.590, i.e.
+// +0.016 and +0.015. The bars ask for +0.005 each: a third of the measured
+// gain, so a broken region stage (no gain, or a loss) fails, while the
+// randomized forest (deterministic per seed, but sensitive to any change of
+// the features' floating point) keeps about a point of headroom.
+TEST(ToolsEval, RegionFeaturesBeatTheFourteenDimensionalPipelineOnAllFrames) {
+  FINDMUG_REQUIRE_DATA(nyu, "nyuv2_labeled");
+  FINDMUG_REQUIRE_DATA(meta, "nyuv2_meta");
+  test::TempDir tmp;
+  const std::string common = std::string(FINDMUG_EVAL_EXE) + " --data " + nyu.string() +
+                             " --folds 5 --set ground.source=gravity --nyu-rotations " +
+                             (meta / "camera_rotations_NYU.txt").string();
+  const auto base = run(common + " --set features.regions=false --json " + tmp.str("base.json"));
+  ASSERT_EQ(base.exit_code, 0) << base.output;
+  const auto regions = run(common + " --set features.regions=true --json " + tmp.str("regions.json"));
+  ASSERT_EQ(regions.exit_code, 0) << regions.output;
+  EXPECT_THAT(regions.output, HasSubstr("frames used 31 of 31"));
+  const std::string base_mrf = section(readFile(tmp.path() / "base.json"), "mrf");
+  const std::string regions_mrf = section(readFile(tmp.path() / "regions.json"), "mrf");
+  const double base_class_avg = number(base_mrf, "class_average");
+  const double base_global = number(base_mrf, "global");
+  const double class_avg = number(regions_mrf, "class_average");
+  const double global = number(regions_mrf, "global");
+  std::printf("14-D: class avg %.3f global %.3f; +regions: class avg %.3f global %.3f\n",
+              base_class_avg, base_global, class_avg, global);
+  ASSERT_GT(base_class_avg, 0.0) << base_mrf;
+  EXPECT_GT(class_avg, base_class_avg + 0.005);
+  EXPECT_GT(global, base_global + 0.005);
+}
+
 TEST(ToolsEval, TrainThenEvaluateModel) {
   FINDMUG_REQUIRE_DATA(nyu, "nyuv2_labeled");
   test::TempDir tmp;
