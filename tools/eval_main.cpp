@@ -8,7 +8,10 @@
 // --model: that model on every frame. Reports per-class, class-average and
 // global accuracy (void excluded) for the forest alone and with the MRF, a
 // confusion-matrix heatmap, optional sweeps over trees and depth (the
-// paper's Fig. 3), and colour overlays of prediction vs ground truth.
+// paper's Fig. 3), and colour overlays of prediction vs ground truth. Tables
+// are measured as objects too (table_metrics.hpp): instance precision and
+// recall of the tables found on the forest+MRF labels, and the height,
+// centroid and axis errors of the matched ones.
 // --train-extra adds a data set (e.g. synthetic scenes) to the training set
 // of every fold; it is never evaluated, so figures stay comparable.
 #include <chrono>
@@ -25,6 +28,7 @@
 #include "findmug/image_io.hpp"
 #include "findmug/label_image.hpp"
 #include "findmug/metrics.hpp"
+#include "findmug/table_metrics.hpp"
 #include "findmug/training.hpp"
 #include "tool_common.hpp"
 
@@ -96,6 +100,31 @@ Evaluation crossValidate(const std::vector<FrameSample>& samples,
     labelFrames(forest, config.mrf, samples, test, eval, keep_pixels);
   }
   return eval;
+}
+
+// Tables found on each evaluated frame's forest+MRF labels (the pipeline's
+// detectTables) against the ground-truth instances. The frame's geometry is
+// recomputed (cloud, ground): cheap, and it keeps FrameSample small.
+void measureTables(const LabeledFrames& frames, const std::vector<FrameSample>& samples,
+                   const Evaluation& eval, const Segmenter& segmenter, EvalReport& report) {
+  const SegmenterConfig& config = segmenter.config();
+  for (std::size_t f = 0; f < samples.size(); ++f) {
+    if (eval.mrf_pixels[f].empty()) continue;
+    LabeledFrame frame = frames.load(samples[f].source_index);
+    const PreparedFrame prepared = segmenter.prepare(std::move(frame.frame), &frame.labels);
+    if (!prepared.ground) {
+      throw Error(samples[f].name + ": no ground plane on the second pass (was found before)");
+    }
+    const auto truth = groundTruthTables(prepared.cloud_ground, samples[f].ground_truth,
+                                         config.tables, config.table_metrics);
+    const LabelImage predicted{samples[f].width, samples[f].height, eval.mrf_pixels[f], {}};
+    const auto detected = detectTables(prepared.cloud_ground, predicted, config.tables).tables;
+    const auto matches = matchTables(truth, detected, config.table_metrics.min_iou);
+    report.tables.add(static_cast<int>(truth.size()), static_cast<int>(detected.size()), matches);
+    report.frame_tables.push_back({samples[f].name, static_cast<int>(truth.size()),
+                                   static_cast<int>(detected.size()),
+                                   static_cast<int>(matches.size())});
+  }
 }
 
 void writeOverlays(const LabeledFrames& frames, const std::vector<FrameSample>& samples,
@@ -199,6 +228,7 @@ int run(int argc, char** argv) {
   }
   report.forest = eval.forest;
   report.mrf = eval.mrf;
+  measureTables(input->frames(), samples, eval, segmenter, report);
 
   if (flags.has("sweep")) {
     if (flags.has("model")) throw Error("--sweep retrains forests; it cannot be used with --model");

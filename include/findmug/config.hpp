@@ -15,6 +15,7 @@
 #include "findmug/ground.hpp"
 #include "findmug/mrf.hpp"
 #include "findmug/oversegmentation.hpp"
+#include "findmug/table_metrics.hpp"
 #include "findmug/tables.hpp"
 
 namespace findmug {
@@ -28,6 +29,7 @@ struct SegmenterConfig {
   MrfParams mrf;
   bool use_mrf = true;
   TableConfig tables;
+  TableMetricsConfig table_metrics;  // findmug-eval only: table instances and their matching
 };
 
 struct Config {

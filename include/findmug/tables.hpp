@@ -64,6 +64,9 @@ struct TableCluster {
   Eigen::Vector2f center = Eigen::Vector2f::Zero();
   std::vector<Eigen::Vector2f> hull;  // convex hull of the top, CCW
   int point_count = 0;
+  // Image pixels (y * width + x) of all the cluster's points, ascending: its
+  // image mask, for matching against ground truth (table_metrics.hpp).
+  std::vector<int> pixels;
   float mean_confidence = 0.0f;
   std::vector<SearchPosition> search_positions;
 };
@@ -121,6 +124,12 @@ TableDetection detectTables(const OrganizedCloud& cloud_ground, const LabelImage
 // detectTables(...).tables, for callers that do not log the reasons.
 std::vector<TableCluster> findTables(const OrganizedCloud& cloud_ground, const LabelImage& labels,
                                      const TableConfig& config);
+
+// Step 5 of detectTables alone: marks each position reachable or not (with
+// the reason) from a labelled ground-aligned cloud, e.g. to judge positions
+// against ground-truth labels. Throws like detectTables on bad inputs.
+void assessReachability(const OrganizedCloud& cloud_ground, const LabelImage& labels,
+                        std::vector<SearchPosition>& positions, const TableConfig& config);
 
 // The search positions of a table from its box alone (centre, axes,
 // extents), all marked reachable: on both sides along the second axis, at
