@@ -129,4 +129,53 @@ double TableMetrics::medianHeightError() const { return median(height_errors_); 
 double TableMetrics::medianCentroidError() const { return median(centroid_errors_); }
 double TableMetrics::medianAxisErrorDeg() const { return median(axis_errors_); }
 
+std::vector<SearchPosition> searchPositionsOfBox(const Eigen::Vector2f& center, float yaw,
+                                                 const Eigen::Vector2f& size, float height,
+                                                 const TableConfig& config) {
+  TableCluster box;
+  box.center = center;
+  box.major_axis = Eigen::Vector2f(std::cos(yaw), std::sin(yaw));
+  box.minor_axis = Eigen::Vector2f(-std::sin(yaw), std::cos(yaw));
+  box.extents = 0.5f * size;
+  box.top_height = height;
+  box.centroid = Eigen::Vector3f(center.x(), center.y(), height);
+  return computeSearchPositions(box, config);
+}
+
+std::vector<PositionError> nearestPositionErrors(const std::vector<SearchPosition>& predicted,
+                                                 const std::vector<SearchPosition>& truth) {
+  std::vector<PositionError> out(predicted.size());
+  for (std::size_t k = 0; k < predicted.size(); ++k) {
+    float best = std::numeric_limits<float>::infinity();
+    for (std::size_t t = 0; t < truth.size(); ++t) {
+      const float d = (predicted[k].xy - truth[t].xy).norm();
+      if (d < best) {
+        best = d;
+        out[k].nearest = static_cast<int>(t);
+      }
+    }
+    if (out[k].nearest < 0) continue;
+    out[k].distance_m = best;
+    const float diff = std::remainder(
+        predicted[k].yaw - truth[static_cast<std::size_t>(out[k].nearest)].yaw,
+        2.0f * static_cast<float>(M_PI));
+    out[k].yaw_error_deg = std::abs(diff) * 180.0f / static_cast<float>(M_PI);
+  }
+  return out;
+}
+
+void SearchPositionMetrics::add(const std::vector<PositionError>& errors, int reachable_in_truth) {
+  predicted_ += static_cast<int>(errors.size());
+  reachable_ += reachable_in_truth;
+  for (const auto& e : errors) {
+    if (e.nearest < 0) continue;
+    distances_.push_back(e.distance_m);
+    yaw_errors_.push_back(e.yaw_error_deg);
+  }
+}
+
+double SearchPositionMetrics::reachableShare() const { return ratio(reachable_, predicted_); }
+double SearchPositionMetrics::medianPositionError() const { return median(distances_); }
+double SearchPositionMetrics::medianYawErrorDeg() const { return median(yaw_errors_); }
+
 }  // namespace findmug

@@ -11,7 +11,10 @@
 // paper's Fig. 3), and colour overlays of prediction vs ground truth. Tables
 // are measured as objects too (table_metrics.hpp): instance precision and
 // recall of the tables found on the forest+MRF labels, and the height,
-// centroid and axis errors of the matched ones.
+// centroid and axis errors of the matched ones. On synthetic folders
+// (findmug-synth's ground_truth.yaml) also the search positions against the
+// true tables': position and yaw error to the nearest true position, and the
+// share of predicted positions reachable on the ground-truth labels.
 // --train-extra adds a data set (e.g. synthetic scenes) to the training set
 // of every fold; it is never evaluated, so figures stay comparable.
 #include <chrono>
@@ -20,6 +23,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <map>
 #include <optional>
 #include <sstream>
 
@@ -28,6 +32,7 @@
 #include "findmug/image_io.hpp"
 #include "findmug/label_image.hpp"
 #include "findmug/metrics.hpp"
+#include "findmug/synth.hpp"
 #include "findmug/table_metrics.hpp"
 #include "findmug/training.hpp"
 #include "tool_common.hpp"
@@ -105,9 +110,16 @@ Evaluation crossValidate(const std::vector<FrameSample>& samples,
 // Tables found on each evaluated frame's forest+MRF labels (the pipeline's
 // detectTables) against the ground-truth instances. The frame's geometry is
 // recomputed (cloud, ground): cheap, and it keeps FrameSample small.
+// On synthetic folders (`synth` = their ground_truth.yaml) also the search
+// positions of the detected tables against those of the true tables.
 void measureTables(const LabeledFrames& frames, const std::vector<FrameSample>& samples,
-                   const Evaluation& eval, const Segmenter& segmenter, EvalReport& report) {
+                   const Evaluation& eval, const Segmenter& segmenter,
+                   const synth::SequenceGroundTruth* synth, EvalReport& report) {
   const SegmenterConfig& config = segmenter.config();
+  std::map<std::string, std::size_t> pose_of;
+  if (synth) {
+    for (std::size_t i = 0; i < synth->frame_names.size(); ++i) pose_of[synth->frame_names[i]] = i;
+  }
   for (std::size_t f = 0; f < samples.size(); ++f) {
     if (eval.mrf_pixels[f].empty()) continue;
     LabeledFrame frame = frames.load(samples[f].source_index);
@@ -124,6 +136,32 @@ void measureTables(const LabeledFrames& frames, const std::vector<FrameSample>& 
     report.frame_tables.push_back({samples[f].name, static_cast<int>(truth.size()),
                                    static_cast<int>(detected.size()),
                                    static_cast<int>(matches.size())});
+    if (!synth) continue;
+    const auto pose = pose_of.find(samples[f].name);
+    if (pose == pose_of.end()) {
+      throw Error(frames.description + ": frame " + samples[f].name +
+                  " is not in ground_truth.yaml");
+    }
+    std::vector<SearchPosition> true_positions;
+    for (const auto& table : synth->tables) {
+      const synth::TableTruth t = synth::tableInGroundFrame(table, synth->poses[pose->second]);
+      const auto p = searchPositionsOfBox(t.center_xy.cast<float>(), static_cast<float>(t.yaw),
+                                          t.size.cast<float>(), static_cast<float>(t.height),
+                                          config.tables);
+      true_positions.insert(true_positions.end(), p.begin(), p.end());
+    }
+    std::vector<SearchPosition> predicted_positions;
+    for (const auto& table : detected) {
+      predicted_positions.insert(predicted_positions.end(), table.search_positions.begin(),
+                                 table.search_positions.end());
+    }
+    // Reachable in the ground truth: the pipeline's own test, on the true labels.
+    const LabelImage truth_labels{samples[f].width, samples[f].height, samples[f].ground_truth, {}};
+    assessReachability(prepared.cloud_ground, truth_labels, predicted_positions, config.tables);
+    int reachable = 0;
+    for (const auto& p : predicted_positions) reachable += p.reachable ? 1 : 0;
+    report.search.add(nearestPositionErrors(predicted_positions, true_positions), reachable);
+    report.has_search_truth = true;
   }
 }
 
@@ -228,7 +266,13 @@ int run(int argc, char** argv) {
   }
   report.forest = eval.forest;
   report.mrf = eval.mrf;
-  measureTables(input->frames(), samples, eval, segmenter, report);
+  std::optional<synth::SequenceGroundTruth> synth_truth;
+  if (flags.has("data")) {
+    const auto truth_path = std::filesystem::path(flags.get("data")) / "ground_truth.yaml";
+    if (std::filesystem::exists(truth_path)) synth_truth = synth::readGroundTruth(truth_path.string());
+  }
+  measureTables(input->frames(), samples, eval, segmenter, synth_truth ? &*synth_truth : nullptr,
+                report);
 
   if (flags.has("sweep")) {
     if (flags.has("model")) throw Error("--sweep retrains forests; it cannot be used with --model");

@@ -141,6 +141,15 @@ std::string formatTable(const EvalReport& r) {
       out << line;
     }
   }
+  if (r.has_search_truth) {
+    const SearchPositionMetrics& p = r.search;
+    std::snprintf(line, sizeof line,
+                  "  search positions vs true tables: %d predicted, median error %.1f cm, "
+                  "%.1f deg; reachable in ground truth %s %%\n",
+                  p.predicted(), 100 * p.medianPositionError(), p.medianYawErrorDeg(),
+                  percent(p.reachableShare()).c_str());
+    out << line;
+  }
   if (!r.sweep_trees.empty()) {
     out << "\n  sweep   trees depth   forest(avg/glob)   mrf(avg/glob)\n";
     for (const auto* points : {&r.sweep_trees, &r.sweep_depth}) {
@@ -196,6 +205,14 @@ std::string formatJson(const EvalReport& r) {
           << ", \"matched\": " << f.matched << "}";
     }
     out << "]}";
+  }
+  if (r.has_search_truth) {
+    const SearchPositionMetrics& p = r.search;
+    out << ",\n  \"search_positions\": {\"predicted\": " << p.predicted()
+        << ", \"reachable_in_truth\": " << p.reachableInTruth()
+        << ", \"reachable_share\": " << jsonNumber(p.reachableShare())
+        << ", \"median_position_error_m\": " << jsonNumber(p.medianPositionError())
+        << ", \"median_yaw_error_deg\": " << jsonNumber(p.medianYawErrorDeg()) << "}";
   }
   for (const auto& [name, points] :
        {std::pair{"sweep_trees", &r.sweep_trees}, std::pair{"sweep_depth", &r.sweep_depth}}) {

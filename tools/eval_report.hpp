@@ -36,6 +36,9 @@ struct EvalReport {
   // Tables detected on the forest+MRF labels against ground-truth instances.
   TableMetrics tables;
   std::vector<FrameTables> frame_tables;
+  // Synthetic folders only: their search positions against the true tables'.
+  bool has_search_truth = false;
+  SearchPositionMetrics search;
   std::vector<SweepPoint> sweep_trees, sweep_depth;
   double seconds = 0;
 };

@@ -80,4 +80,40 @@ class TableMetrics {
   std::vector<float> height_errors_, centroid_errors_, axis_errors_;
 };
 
+// ---------------------------------------------------------------------------
+// Search positions against exactly known tables (synthetic scenes).
+
+// The search positions of a table whose top is known exactly: a box with
+// centre, yaw (of its long side, `size` = length, width) in the ground frame,
+// through computeSearchPositions, as for a detected table.
+std::vector<SearchPosition> searchPositionsOfBox(const Eigen::Vector2f& center, float yaw,
+                                                 const Eigen::Vector2f& size, float height,
+                                                 const TableConfig& config);
+
+struct PositionError {
+  int nearest = -1;            // index into the true positions, -1 when there are none
+  float distance_m = 0.0f;     // to the nearest true position, on the floor
+  float yaw_error_deg = 0.0f;  // |yaw difference| to it, wrapped to 0..180
+};
+
+// For each predicted position, the nearest true position (by floor distance).
+std::vector<PositionError> nearestPositionErrors(const std::vector<SearchPosition>& predicted,
+                                                 const std::vector<SearchPosition>& truth);
+
+// Sums over frames: predicted positions, their errors, and how many of them
+// are reachable when judged on the ground-truth labels (assessReachability).
+class SearchPositionMetrics {
+ public:
+  void add(const std::vector<PositionError>& errors, int reachable_in_truth);
+  int predicted() const { return predicted_; }
+  int reachableInTruth() const { return reachable_; }
+  double reachableShare() const;          // NaN without predictions
+  double medianPositionError() const;     // NaN without predictions that have a true one
+  double medianYawErrorDeg() const;
+
+ private:
+  int predicted_ = 0, reachable_ = 0;
+  std::vector<float> distances_, yaw_errors_;
+};
+
 }  // namespace findmug

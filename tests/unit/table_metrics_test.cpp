@@ -6,9 +6,12 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 
 #include "findmug/error.hpp"
+#include "findmug/ground.hpp"
 #include "findmug/labels.hpp"
+#include "findmug/synth.hpp"
 
 namespace findmug {
 namespace {
@@ -203,6 +206,112 @@ TEST(TableMetrics, IouMatchingIsOneToOneGreedyByIou) {
   EXPECT_TRUE(std::isnan(empty.precision()));
   EXPECT_TRUE(std::isnan(empty.recall()));
   EXPECT_TRUE(std::isnan(empty.medianHeightError()));
+}
+
+}  // namespace
+}  // namespace findmug
+
+namespace findmug {
+namespace {
+
+TEST(SearchPositionErrors, NearestTruePositionAndWrappedYaw) {
+  SearchPosition a, b, c;
+  a.xy = Eigen::Vector2f(0, 0);
+  a.yaw = 3.1f;
+  b.xy = Eigen::Vector2f(2, 0);
+  b.yaw = 0.0f;
+  c.xy = Eigen::Vector2f(0.1f, 0.0f);
+  c.yaw = -3.1f;  // 0.083 rad from a's yaw across the +-pi seam
+  const auto errors = nearestPositionErrors({c, b}, {a, b});
+  ASSERT_EQ(errors.size(), 2u);
+  EXPECT_EQ(errors[0].nearest, 0);
+  EXPECT_NEAR(errors[0].distance_m, 0.1f, 1e-6f);
+  EXPECT_NEAR(errors[0].yaw_error_deg, (2 * M_PI - 6.2) * 180 / M_PI, 1e-3);
+  EXPECT_EQ(errors[1].nearest, 1);
+  EXPECT_NEAR(errors[1].distance_m, 0.0f, 1e-6f);
+  EXPECT_EQ(nearestPositionErrors({a}, {})[0].nearest, -1);
+
+  SearchPositionMetrics m;
+  m.add(errors, 1);
+  m.add(nearestPositionErrors({a}, {}), 0);  // no true position: counted, no error
+  EXPECT_EQ(m.predicted(), 3);
+  EXPECT_NEAR(m.reachableShare(), 1.0 / 3.0, 1e-12);
+  EXPECT_NEAR(m.medianPositionError(), 0.05, 1e-6);
+
+  // A 1.2 x 0.6 m box at the origin along x: with the defaults (0.5 m from
+  // the edge) its positions face it from both long sides, 0.8 m from the centre.
+  const auto positions =
+      searchPositionsOfBox(Eigen::Vector2f::Zero(), 0.0f, Eigen::Vector2f(1.2f, 0.6f), 0.7f,
+                           TableConfig{});
+  ASSERT_FALSE(positions.empty());
+  for (const auto& p : positions) EXPECT_NEAR(std::abs(p.xy.y()), 0.3f + 0.5f, 1e-5f);
+}
+
+// On synthetic frames with exact depth, the ground-truth instances are the
+// generator's tables: same top height, centroid on the true top, and the
+// search positions of the ground-truth labelling lie near the true tables'.
+TEST(TableMetricsOnSynth, GroundTruthInstancesAreTheGeneratorsTables) {
+  const synth::SynthScene scene = synth::makeApartment(5);
+  const auto poses = synth::cameraPath(scene, 12, 1.0);
+  synth::RenderOptions options;
+  options.noise.enabled = false;
+  const TableConfig tables;
+  const TableMetricsConfig config;
+  int instances = 0, frames_with_tables = 0;
+  SearchPositionMetrics search;
+  for (const auto& pose : poses) {
+    const synth::RenderedFrame r = synth::render(scene, pose, options, 0);
+    const RgbdFrame& frame = r.labeled.frame;
+    ASSERT_TRUE(frame.extrinsics.has_value());
+    const GroundPlane ground = groundFromExtrinsics(*frame.extrinsics);
+    const OrganizedCloud cloud = transformCloud(frameToCloud(frame), ground.camera_to_ground);
+    const auto truth = groundTruthTables(cloud, r.labeled.labels, tables, config);
+    // The ground-truth labelling as the prediction: a perfect detector.
+    const LabelImage labels{frame.width, frame.height, r.labeled.labels, {}};
+    const auto detected = detectTables(cloud, labels, tables).tables;
+    const auto matches = matchTables(truth, detected, config.min_iou);
+    TableMetrics metrics;
+    metrics.add(static_cast<int>(truth.size()), static_cast<int>(detected.size()), matches);
+    if (!truth.empty()) {
+      ++frames_with_tables;
+      EXPECT_DOUBLE_EQ(metrics.recall(), 1.0);
+    }
+    // Every detection of the true labels at instance size is an instance.
+    for (const auto& m : matches) EXPECT_DOUBLE_EQ(m.iou, 1.0);
+
+    std::vector<SearchPosition> true_positions;
+    for (const auto& t : scene.tables) {
+      const synth::TableTruth g = synth::tableInGroundFrame(t, pose);
+      // Each instance lies on one true table, at its height.
+      const auto p = searchPositionsOfBox(g.center_xy.cast<float>(), static_cast<float>(g.yaw),
+                                          g.size.cast<float>(), static_cast<float>(g.height),
+                                          tables);
+      true_positions.insert(true_positions.end(), p.begin(), p.end());
+    }
+    for (const auto& instance : truth) {
+      bool on_a_table = false;
+      for (const auto& t : scene.tables) {
+        const synth::TableTruth g = synth::tableInGroundFrame(t, pose);
+        if (synth::signedDistanceToTop(g, instance.centroid.head<2>().cast<double>()) < 0.0) {
+          on_a_table = true;
+          EXPECT_NEAR(instance.top_height, g.height, 0.02);
+        }
+      }
+      EXPECT_TRUE(on_a_table) << instance.centroid.transpose();
+      ++instances;
+      // A table seen whole gives the true table's search positions.
+      std::vector<SearchPosition> predicted = instance.search_positions;
+      search.add(nearestPositionErrors(predicted, true_positions), 0);
+    }
+  }
+  EXPECT_GE(frames_with_tables, 6);
+  EXPECT_GE(instances, 6);
+  std::printf("%d instances, %d search positions: median error %.3f m, %.1f deg\n", instances,
+              search.predicted(), search.medianPositionError(), search.medianYawErrorDeg());
+  // Measured: 0.061 m and 4.0 degrees (tables partly out of view shift their
+  // boxes); a wrong frame or axis convention gives errors of metres.
+  EXPECT_LT(search.medianPositionError(), 0.15);
+  EXPECT_LT(search.medianYawErrorDeg(), 10.0);
 }
 
 }  // namespace
