@@ -164,9 +164,20 @@ std::vector<PositionError> nearestPositionErrors(const std::vector<SearchPositio
   return out;
 }
 
-void SearchPositionMetrics::add(const std::vector<PositionError>& errors, int reachable_in_truth) {
+void SearchPositionMetrics::add(const std::vector<PositionError>& errors,
+                                const std::vector<bool>& flagged_reachable,
+                                const std::vector<bool>& reachable_in_truth) {
+  if (flagged_reachable.size() != errors.size() || reachable_in_truth.size() != errors.size()) {
+    throw Error("SearchPositionMetrics::add: " + std::to_string(errors.size()) + " errors, " +
+                std::to_string(flagged_reachable.size()) + " reachability flags and " +
+                std::to_string(reachable_in_truth.size()) + " true reachabilities");
+  }
   predicted_ += static_cast<int>(errors.size());
-  reachable_ += reachable_in_truth;
+  for (std::size_t k = 0; k < errors.size(); ++k) {
+    reachable_ += reachable_in_truth[k] ? 1 : 0;
+    flagged_ += flagged_reachable[k] ? 1 : 0;
+    flagged_truly_ += flagged_reachable[k] && reachable_in_truth[k] ? 1 : 0;
+  }
   for (const auto& e : errors) {
     if (e.nearest < 0) continue;
     distances_.push_back(e.distance_m);
@@ -175,6 +186,9 @@ void SearchPositionMetrics::add(const std::vector<PositionError>& errors, int re
 }
 
 double SearchPositionMetrics::reachableShare() const { return ratio(reachable_, predicted_); }
+double SearchPositionMetrics::flaggedReachableShare() const {
+  return ratio(flagged_truly_, flagged_);
+}
 double SearchPositionMetrics::medianPositionError() const { return median(distances_); }
 double SearchPositionMetrics::medianYawErrorDeg() const { return median(yaw_errors_); }
 

@@ -959,22 +959,4 @@ std::vector<TableCluster> findTables(const OrganizedCloud& cloud_ground, const L
   return detectTables(cloud_ground, labels, config).tables;
 }
 
-void assessReachability(const OrganizedCloud& cloud_ground, const LabelImage& labels,
-                        std::vector<SearchPosition>& positions, const TableConfig& config) {
-  validateTableConfig(config);
-  if (positions.empty()) return;
-  checkInputs(cloud_ground, labels);
-  Eigen::AlignedBox2f region;
-  for (const auto& p : positions) region.extend(p.xy);
-  const float margin = config.robot_radius_m + config.floor_cell_m;
-  region.extend(region.min() - Eigen::Vector2f::Constant(margin));
-  region.extend(region.max() + Eigen::Vector2f::Constant(margin));
-  const ReachabilityGrid grid(cloud_ground, labels, region, config);
-  for (auto& position : positions) {
-    position.reachable = true;
-    position.reason.clear();
-    grid.assess(position);
-  }
-}
-
 }  // namespace findmug

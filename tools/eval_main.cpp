@@ -14,7 +14,7 @@
 // centroid and axis errors of the matched ones. On synthetic folders
 // (findmug-synth's ground_truth.yaml) also the search positions against the
 // true tables': position and yaw error to the nearest true position, and the
-// share of predicted positions reachable on the ground-truth labels.
+// share of predicted positions where the robot fits in the true scene.
 // --train-extra adds a data set (e.g. synthetic scenes) to the training set
 // of every fold; it is never evaluated, so figures stay comparable.
 #include <chrono>
@@ -155,12 +155,23 @@ void measureTables(const LabeledFrames& frames, const std::vector<FrameSample>& 
       predicted_positions.insert(predicted_positions.end(), table.search_positions.begin(),
                                  table.search_positions.end());
     }
-    // Reachable in the ground truth: the pipeline's own test, on the true labels.
-    const LabelImage truth_labels{samples[f].width, samples[f].height, samples[f].ground_truth, {}};
-    assessReachability(prepared.cloud_ground, truth_labels, predicted_positions, config.tables);
-    int reachable = 0;
-    for (const auto& p : predicted_positions) reachable += p.reachable ? 1 : 0;
-    report.search.add(nearestPositionErrors(predicted_positions, true_positions), reachable);
+    // Reachable in the ground truth: the robot, at the position in the world,
+    // clear of the walls and of every furniture footprint. Files without
+    // obstacles (older findmug-synth) still have the table tops.
+    const synth::CameraPose& camera = synth->poses[pose->second];
+    const Eigen::Isometry3d ground_to_world = synth::worldToGround(camera).inverse();
+    std::vector<synth::Obstacle> obstacles = synth->obstacles;
+    if (obstacles.empty()) {
+      for (const auto& table : synth->tables) obstacles.push_back({table.top_polygon, table.height, 0});
+    }
+    std::vector<bool> flagged, truly;
+    for (const auto& p : predicted_positions) {
+      const Eigen::Vector3d world = ground_to_world * Eigen::Vector3d(p.xy.x(), p.xy.y(), 0.0);
+      flagged.push_back(p.reachable);
+      truly.push_back(synth::robotFits(synth->room_size, obstacles, world.head<2>(),
+                                       config.tables.robot_radius_m));
+    }
+    report.search.add(nearestPositionErrors(predicted_positions, true_positions), flagged, truly);
     report.has_search_truth = true;
   }
 }

@@ -145,9 +145,14 @@ std::string formatTable(const EvalReport& r) {
     const SearchPositionMetrics& p = r.search;
     std::snprintf(line, sizeof line,
                   "  search positions vs true tables: %d predicted, median error %.1f cm, "
-                  "%.1f deg; reachable in ground truth %s %%\n",
-                  p.predicted(), 100 * p.medianPositionError(), p.medianYawErrorDeg(),
-                  percent(p.reachableShare()).c_str());
+                  "%.1f deg\n",
+                  p.predicted(), 100 * p.medianPositionError(), p.medianYawErrorDeg());
+    out << line;
+    std::snprintf(line, sizeof line,
+                  "  reachable in the true scene: %s %% of all, %s %% of the %d flagged "
+                  "reachable\n",
+                  percent(p.reachableShare()).c_str(), percent(p.flaggedReachableShare()).c_str(),
+                  p.flaggedReachable());
     out << line;
   }
   if (!r.sweep_trees.empty()) {
@@ -211,6 +216,8 @@ std::string formatJson(const EvalReport& r) {
     out << ",\n  \"search_positions\": {\"predicted\": " << p.predicted()
         << ", \"reachable_in_truth\": " << p.reachableInTruth()
         << ", \"reachable_share\": " << jsonNumber(p.reachableShare())
+        << ", \"flagged_reachable\": " << p.flaggedReachable()
+        << ", \"flagged_reachable_share\": " << jsonNumber(p.flaggedReachableShare())
         << ", \"median_position_error_m\": " << jsonNumber(p.medianPositionError())
         << ", \"median_yaw_error_deg\": " << jsonNumber(p.medianYawErrorDeg()) << "}";
   }

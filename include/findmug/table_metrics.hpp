@@ -101,18 +101,25 @@ std::vector<PositionError> nearestPositionErrors(const std::vector<SearchPositio
                                                  const std::vector<SearchPosition>& truth);
 
 // Sums over frames: predicted positions, their errors, and how many of them
-// are reachable when judged on the ground-truth labels (assessReachability).
+// are reachable in the true scene (e.g. synth::robotFits), of all and of
+// those the pipeline flagged reachable (SearchPosition::reachable).
 class SearchPositionMetrics {
  public:
-  void add(const std::vector<PositionError>& errors, int reachable_in_truth);
+  // One entry per predicted position in each vector; throws findmug::Error
+  // when the sizes differ.
+  void add(const std::vector<PositionError>& errors, const std::vector<bool>& flagged_reachable,
+           const std::vector<bool>& reachable_in_truth);
   int predicted() const { return predicted_; }
   int reachableInTruth() const { return reachable_; }
-  double reachableShare() const;          // NaN without predictions
-  double medianPositionError() const;     // NaN without predictions that have a true one
+  int flaggedReachable() const { return flagged_; }
+  int flaggedReachableInTruth() const { return flagged_truly_; }
+  double reachableShare() const;         // of all predictions; NaN without any
+  double flaggedReachableShare() const;  // of those flagged reachable; NaN without any
+  double medianPositionError() const;    // NaN without predictions that have a true one
   double medianYawErrorDeg() const;
 
  private:
-  int predicted_ = 0, reachable_ = 0;
+  int predicted_ = 0, reachable_ = 0, flagged_ = 0, flagged_truly_ = 0;
   std::vector<float> distances_, yaw_errors_;
 };
 

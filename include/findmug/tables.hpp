@@ -125,12 +125,6 @@ TableDetection detectTables(const OrganizedCloud& cloud_ground, const LabelImage
 std::vector<TableCluster> findTables(const OrganizedCloud& cloud_ground, const LabelImage& labels,
                                      const TableConfig& config);
 
-// Step 5 of detectTables alone: marks each position reachable or not (with
-// the reason) from a labelled ground-aligned cloud, e.g. to judge positions
-// against ground-truth labels. Throws like detectTables on bad inputs.
-void assessReachability(const OrganizedCloud& cloud_ground, const LabelImage& labels,
-                        std::vector<SearchPosition>& positions, const TableConfig& config);
-
 // The search positions of a table from its box alone (centre, axes,
 // extents), all marked reachable: on both sides along the second axis, at
 // `safety_distance_m` from the edge, facing the table. Along each long side

@@ -232,11 +232,16 @@ TEST(SearchPositionErrors, NearestTruePositionAndWrappedYaw) {
   EXPECT_EQ(nearestPositionErrors({a}, {})[0].nearest, -1);
 
   SearchPositionMetrics m;
-  m.add(errors, 1);
-  m.add(nearestPositionErrors({a}, {}), 0);  // no true position: counted, no error
+  // c: flagged reachable and truly so; b: flagged reachable but blocked.
+  m.add(errors, {true, true}, {true, false});
+  // No true position: counted, no error; not flagged, yet truly free.
+  m.add(nearestPositionErrors({a}, {}), {false}, {true});
   EXPECT_EQ(m.predicted(), 3);
-  EXPECT_NEAR(m.reachableShare(), 1.0 / 3.0, 1e-12);
+  EXPECT_NEAR(m.reachableShare(), 2.0 / 3.0, 1e-12);
+  EXPECT_EQ(m.flaggedReachable(), 2);
+  EXPECT_NEAR(m.flaggedReachableShare(), 0.5, 1e-12);
   EXPECT_NEAR(m.medianPositionError(), 0.05, 1e-6);
+  EXPECT_THROW(m.add(errors, {true}, {true, true}), Error);
 
   // A 1.2 x 0.6 m box at the origin along x: with the defaults (0.5 m from
   // the edge) its positions face it from both long sides, 0.8 m from the centre.
@@ -300,8 +305,9 @@ TEST(TableMetricsOnSynth, GroundTruthInstancesAreTheGeneratorsTables) {
       EXPECT_TRUE(on_a_table) << instance.centroid.transpose();
       ++instances;
       // A table seen whole gives the true table's search positions.
-      std::vector<SearchPosition> predicted = instance.search_positions;
-      search.add(nearestPositionErrors(predicted, true_positions), 0);
+      const std::vector<SearchPosition>& predicted = instance.search_positions;
+      const std::vector<bool> none(predicted.size(), false);
+      search.add(nearestPositionErrors(predicted, true_positions), none, none);
     }
   }
   EXPECT_GE(frames_with_tables, 6);
