@@ -470,6 +470,27 @@ std::optional<GroundPlane> groundFromGravity(const OrganizedCloud& cloud_camera,
     }
   }
 
+  // The frame's own lowest horizontal plane (estimateGround: sequential
+  // RANSAC, consistent "up" across surfaces) when it agrees with gravity:
+  // a histogram of heights along a gravity that is a few degrees off smears
+  // a large floor over many bins, while the plane fit is not affected.
+  // As below, it is not the floor when a low percentile of all points lies
+  // well beneath it (a bed or table top seen above a hidden floor).
+  if (!found && config.gravity_refine_deg > 0.0f) {
+    if (auto estimated = estimateGround(cloud_camera, normals_camera, config);
+        estimated && estimated->normal_camera.dot(up) >= cos_refine) {
+      std::vector<float> heights;
+      heights.reserve(pts.size());
+      for (std::size_t i = 0; i < pts.size(); ++i)
+        if (cloud_camera.valid(i)) heights.push_back(estimated->normal_camera.dot(pts[i]));
+      const float low = quantile(heights, config.floor_percentile / 100.0);
+      if (low >= -estimated->offset - config.percentile_margin_m) {
+        estimated->method = GroundMethod::GravityLowestPlane;
+        return estimated;
+      }
+    }
+  }
+
   if (!found) {
     std::vector<float> all;
     std::vector<float> horizontal;

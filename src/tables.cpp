@@ -918,6 +918,9 @@ TableDetection detectTables(const OrganizedCloud& cloud_ground, const LabelImage
       result.diagnostics.push_back(outcome.reason + ": dropped");
       continue;
     }
+    table.pixels.reserve(member.size());
+    for (int i : member) table.pixels.push_back(pixels[i]);
+    std::sort(table.pixels.begin(), table.pixels.end());
     tables.push_back(std::move(table));
   }
   if (small_clusters > 0) {

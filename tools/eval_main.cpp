@@ -8,7 +8,13 @@
 // --model: that model on every frame. Reports per-class, class-average and
 // global accuracy (void excluded) for the forest alone and with the MRF, a
 // confusion-matrix heatmap, optional sweeps over trees and depth (the
-// paper's Fig. 3), and colour overlays of prediction vs ground truth.
+// paper's Fig. 3), and colour overlays of prediction vs ground truth. Tables
+// are measured as objects too (table_metrics.hpp): instance precision and
+// recall of the tables found on the forest+MRF labels, and the height,
+// centroid and axis errors of the matched ones. On synthetic folders
+// (findmug-synth's ground_truth.yaml) also the search positions against the
+// true tables': position and yaw error to the nearest true position, and the
+// share of predicted positions where the robot fits in the true scene.
 // --train-extra adds a data set (e.g. synthetic scenes) to the training set
 // of every fold; it is never evaluated, so figures stay comparable.
 #include <chrono>
@@ -17,6 +23,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <map>
 #include <optional>
 #include <sstream>
 
@@ -25,6 +32,8 @@
 #include "findmug/image_io.hpp"
 #include "findmug/label_image.hpp"
 #include "findmug/metrics.hpp"
+#include "findmug/synth.hpp"
+#include "findmug/table_metrics.hpp"
 #include "findmug/training.hpp"
 #include "tool_common.hpp"
 
@@ -88,6 +97,75 @@ Evaluation crossValidate(const std::vector<FrameSample>& samples,
     labelFrames(forest, config, samples, test, eval, keep_pixels);
   }
   return eval;
+}
+
+// Tables found on each evaluated frame's forest+MRF labels (the pipeline's
+// detectTables) against the ground-truth instances. The frame's geometry is
+// recomputed (cloud, ground): cheap, and it keeps FrameSample small.
+// On synthetic folders (`synth` = their ground_truth.yaml) also the search
+// positions of the detected tables against those of the true tables.
+void measureTables(const LabeledFrames& frames, const std::vector<FrameSample>& samples,
+                   const Evaluation& eval, const Segmenter& segmenter,
+                   const synth::SequenceGroundTruth* synth, EvalReport& report) {
+  const SegmenterConfig& config = segmenter.config();
+  std::map<std::string, std::size_t> pose_of;
+  if (synth) {
+    for (std::size_t i = 0; i < synth->frame_names.size(); ++i) pose_of[synth->frame_names[i]] = i;
+  }
+  for (std::size_t f = 0; f < samples.size(); ++f) {
+    if (eval.mrf_pixels[f].empty()) continue;
+    LabeledFrame frame = frames.load(samples[f].source_index);
+    const PreparedFrame prepared = segmenter.prepare(std::move(frame.frame), &frame.labels);
+    if (!prepared.ground) {
+      throw Error(samples[f].name + ": no ground plane on the second pass (was found before)");
+    }
+    const auto truth = groundTruthTables(prepared.cloud_ground, samples[f].ground_truth,
+                                         config.tables, config.table_metrics);
+    const LabelImage predicted{samples[f].width, samples[f].height, eval.mrf_pixels[f], {}};
+    const auto detected = detectTables(prepared.cloud_ground, predicted, config.tables).tables;
+    const auto matches = matchTables(truth, detected, config.table_metrics.min_iou);
+    report.tables.add(static_cast<int>(truth.size()), static_cast<int>(detected.size()), matches);
+    report.frame_tables.push_back({samples[f].name, static_cast<int>(truth.size()),
+                                   static_cast<int>(detected.size()),
+                                   static_cast<int>(matches.size())});
+    if (!synth) continue;
+    const auto pose = pose_of.find(samples[f].name);
+    if (pose == pose_of.end()) {
+      throw Error(frames.description + ": frame " + samples[f].name +
+                  " is not in ground_truth.yaml");
+    }
+    std::vector<SearchPosition> true_positions;
+    for (const auto& table : synth->tables) {
+      const synth::TableTruth t = synth::tableInGroundFrame(table, synth->poses[pose->second]);
+      const auto p = searchPositionsOfBox(t.center_xy.cast<float>(), static_cast<float>(t.yaw),
+                                          t.size.cast<float>(), static_cast<float>(t.height),
+                                          config.tables);
+      true_positions.insert(true_positions.end(), p.begin(), p.end());
+    }
+    std::vector<SearchPosition> predicted_positions;
+    for (const auto& table : detected) {
+      predicted_positions.insert(predicted_positions.end(), table.search_positions.begin(),
+                                 table.search_positions.end());
+    }
+    // Reachable in the ground truth: the robot, at the position in the world,
+    // clear of the walls and of every furniture footprint. Files without
+    // obstacles (older findmug-synth) still have the table tops.
+    const synth::CameraPose& camera = synth->poses[pose->second];
+    const Eigen::Isometry3d ground_to_world = synth::worldToGround(camera).inverse();
+    std::vector<synth::Obstacle> obstacles = synth->obstacles;
+    if (obstacles.empty()) {
+      for (const auto& table : synth->tables) obstacles.push_back({table.top_polygon, table.height, 0});
+    }
+    std::vector<bool> flagged, truly;
+    for (const auto& p : predicted_positions) {
+      const Eigen::Vector3d world = ground_to_world * Eigen::Vector3d(p.xy.x(), p.xy.y(), 0.0);
+      flagged.push_back(p.reachable);
+      truly.push_back(synth::robotFits(synth->room_size, obstacles, world.head<2>(),
+                                       config.tables.robot_radius_m));
+    }
+    report.search.add(nearestPositionErrors(predicted_positions, true_positions), flagged, truly);
+    report.has_search_truth = true;
+  }
 }
 
 void writeOverlays(const LabeledFrames& frames, const std::vector<FrameSample>& samples,
@@ -191,6 +269,13 @@ int run(int argc, char** argv) {
   }
   report.forest = eval.forest;
   report.mrf = eval.mrf;
+  std::optional<synth::SequenceGroundTruth> synth_truth;
+  if (flags.has("data")) {
+    const auto truth_path = std::filesystem::path(flags.get("data")) / "ground_truth.yaml";
+    if (std::filesystem::exists(truth_path)) synth_truth = synth::readGroundTruth(truth_path.string());
+  }
+  measureTables(input->frames(), samples, eval, segmenter, synth_truth ? &*synth_truth : nullptr,
+                report);
 
   if (flags.has("sweep")) {
     if (flags.has("model")) throw Error("--sweep retrains forests; it cannot be used with --model");

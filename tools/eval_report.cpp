@@ -122,6 +122,39 @@ std::string formatTable(const EvalReport& r) {
                 percent(r.forest.globalAccuracy()).c_str(), percent(r.mrf.globalAccuracy()).c_str(),
                 percent(kPaperGlobal / 100).c_str());
   out << line;
+  {
+    const TableMetrics& t = r.tables;
+    std::snprintf(line, sizeof line,
+                  "\n  table instances (forest+MRF, IoU >= 0.5): %d in ground truth, %d detected, "
+                  "%d matched\n",
+                  t.truth(), t.detected(), t.matched());
+    out << line;
+    std::snprintf(line, sizeof line, "  %-10s %s\n  %-10s %s\n", "precision",
+                  percent(t.precision()).c_str(), "recall", percent(t.recall()).c_str());
+    out << line;
+    if (t.matched() > 0) {
+      std::snprintf(line, sizeof line,
+                    "  matched tables, median error: height %.1f cm, centroid %.1f cm, "
+                    "axis %.1f deg\n",
+                    100 * t.medianHeightError(), 100 * t.medianCentroidError(),
+                    t.medianAxisErrorDeg());
+      out << line;
+    }
+  }
+  if (r.has_search_truth) {
+    const SearchPositionMetrics& p = r.search;
+    std::snprintf(line, sizeof line,
+                  "  search positions vs true tables: %d predicted, median error %.1f cm, "
+                  "%.1f deg\n",
+                  p.predicted(), 100 * p.medianPositionError(), p.medianYawErrorDeg());
+    out << line;
+    std::snprintf(line, sizeof line,
+                  "  reachable in the true scene: %s %% of all, %s %% of the %d flagged "
+                  "reachable\n",
+                  percent(p.reachableShare()).c_str(), percent(p.flaggedReachableShare()).c_str(),
+                  p.flaggedReachable());
+    out << line;
+  }
   if (!r.sweep_trees.empty()) {
     out << "\n  sweep   trees depth   forest(avg/glob)   mrf(avg/glob)\n";
     for (const auto* points : {&r.sweep_trees, &r.sweep_depth}) {
@@ -160,6 +193,34 @@ std::string formatJson(const EvalReport& r) {
   out << "],\n  \"labels\": [";
   for (int c = 0; c < kNumLabels; ++c) out << (c ? ", " : "") << "\"" << kLabelNames[c] << "\"";
   out << "],\n  \"forest\": " << jsonMatrix(r.forest) << ",\n  \"mrf\": " << jsonMatrix(r.mrf);
+  {
+    const TableMetrics& t = r.tables;
+    out << ",\n  \"table_instances\": {\"labels\": \"forest+mrf\", \"truth\": " << t.truth()
+        << ", \"detected\": " << t.detected() << ", \"matched\": " << t.matched()
+        << ", \"precision\": " << jsonNumber(t.precision())
+        << ", \"recall\": " << jsonNumber(t.recall())
+        << ", \"median_height_error_m\": " << jsonNumber(t.medianHeightError())
+        << ", \"median_centroid_error_m\": " << jsonNumber(t.medianCentroidError())
+        << ", \"median_axis_error_deg\": " << jsonNumber(t.medianAxisErrorDeg())
+        << ", \"per_frame\": [";
+    for (std::size_t i = 0; i < r.frame_tables.size(); ++i) {
+      const auto& f = r.frame_tables[i];
+      out << (i ? ",\n    " : "\n    ") << "{\"frame\": " << jsonString(f.frame)
+          << ", \"truth\": " << f.truth << ", \"detected\": " << f.detected
+          << ", \"matched\": " << f.matched << "}";
+    }
+    out << "]}";
+  }
+  if (r.has_search_truth) {
+    const SearchPositionMetrics& p = r.search;
+    out << ",\n  \"search_positions\": {\"predicted\": " << p.predicted()
+        << ", \"reachable_in_truth\": " << p.reachableInTruth()
+        << ", \"reachable_share\": " << jsonNumber(p.reachableShare())
+        << ", \"flagged_reachable\": " << p.flaggedReachable()
+        << ", \"flagged_reachable_share\": " << jsonNumber(p.flaggedReachableShare())
+        << ", \"median_position_error_m\": " << jsonNumber(p.medianPositionError())
+        << ", \"median_yaw_error_deg\": " << jsonNumber(p.medianYawErrorDeg()) << "}";
+  }
   for (const auto& [name, points] :
        {std::pair{"sweep_trees", &r.sweep_trees}, std::pair{"sweep_depth", &r.sweep_depth}}) {
     out << ",\n  \"" << name << "\": [";

@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "findmug/metrics.hpp"
+#include "findmug/table_metrics.hpp"
 
 namespace findmug::tools {
 
@@ -13,6 +14,12 @@ struct SweepPoint {
   int trees = 0;
   int depth = 0;
   ConfusionMatrix forest, mrf;
+};
+
+// Table instances of one evaluated frame (table_metrics.hpp).
+struct FrameTables {
+  std::string frame;
+  int truth = 0, detected = 0, matched = 0;
 };
 
 struct EvalReport {
@@ -26,6 +33,12 @@ struct EvalReport {
   std::vector<std::pair<std::string, std::string>> ground_methods;
   std::string config_yaml;
   ConfusionMatrix forest, mrf;
+  // Tables detected on the forest+MRF labels against ground-truth instances.
+  TableMetrics tables;
+  std::vector<FrameTables> frame_tables;
+  // Synthetic folders only: their search positions against the true tables'.
+  bool has_search_truth = false;
+  SearchPositionMetrics search;
   std::vector<SweepPoint> sweep_trees, sweep_depth;
   double seconds = 0;
 };

@@ -17,6 +17,7 @@
 #include "findmug/mrf.hpp"
 #include "findmug/oversegmentation.hpp"
 #include "findmug/region_features.hpp"
+#include "findmug/table_metrics.hpp"
 #include "findmug/tables.hpp"
 
 namespace findmug {
@@ -32,6 +33,7 @@ struct SegmenterConfig {
   MrfParams mrf;
   bool use_mrf = true;
   TableConfig tables;
+  TableMetricsConfig table_metrics;  // findmug-eval only: table instances and their matching
 };
 
 struct Config {

@@ -127,7 +127,11 @@ std::optional<GroundPlane> estimateGround(const OrganizedCloud& cloud_camera,
 //     `min_floor_points` valid Floor pixels: their RANSAC plane
 //     (fitGroundToLabels) when its normal is within `gravity_refine_deg` of
 //     up, else the median height of those points along up (GravityFloorLabels);
-//  2. else the lowest horizontal surface: heights of the points whose
+//  2. else estimateGround's plane when its normal is within
+//     `gravity_refine_deg` of up and the `floor_percentile` % height of all
+//     points is not more than `percentile_margin_m` below it
+//     (GravityLowestPlane); else the lowest
+//     horizontal surface along up: heights of the points whose
 //     normal is within `normal_agreement_deg` of up, binned by
 //     `ransac_inlier_m`; the lowest level holding `min_floor_points` points
 //     within +-ransac_inlier_m, if it is at least `min_camera_height_m`

@@ -270,7 +270,16 @@ struct SequenceGroundTruth {
   std::vector<std::uint64_t> frame_utimes;
   std::vector<CameraPose> poses;
   std::vector<TableTruth> tables;
+  // Furniture footprints the robot cannot drive through (tables included),
+  // world frame. Absent from files written before they were recorded.
+  std::vector<Obstacle> obstacles;
 };
+
+// Whether a round robot of `robot_radius` standing at world `xy` is clear of
+// the walls and of every obstacle footprint (the same test the camera path
+// planner uses): a search position is "reachable in the ground truth".
+bool robotFits(const Eigen::Vector3d& room_size, const std::vector<Obstacle>& obstacles,
+               const Eigen::Vector2d& xy, double robot_radius);
 
 // YAML (DIR/ground_truth.yaml). Reading throws findmug::Error naming the file
 // and the missing or malformed field.

@@ -64,6 +64,9 @@ struct TableCluster {
   Eigen::Vector2f center = Eigen::Vector2f::Zero();
   std::vector<Eigen::Vector2f> hull;  // convex hull of the top, CCW
   int point_count = 0;
+  // Image pixels (y * width + x) of all the cluster's points, ascending: its
+  // image mask, for matching against ground truth (table_metrics.hpp).
+  std::vector<int> pixels;
   float mean_confidence = 0.0f;
   std::vector<SearchPosition> search_positions;
 };

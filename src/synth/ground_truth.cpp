@@ -130,6 +130,18 @@ void writeGroundTruth(const std::string& path, const SequenceGroundTruth& truth)
   }
   out << YAML::EndSeq;
 
+  out << YAML::Key << "obstacles" << YAML::Value << YAML::BeginSeq;
+  for (const auto& o : truth.obstacles) {
+    out << YAML::BeginMap;
+    out << YAML::Key << "object" << YAML::Value << o.object;
+    out << YAML::Key << "top_z" << YAML::Value << o.top_z;
+    out << YAML::Key << "polygon" << YAML::Value << YAML::BeginSeq;
+    for (const auto& v : o.polygon) emitVec(out, {v.x(), v.y()});
+    out << YAML::EndSeq;
+    out << YAML::EndMap;
+  }
+  out << YAML::EndSeq;
+
   out << YAML::Key << "frames" << YAML::Value << YAML::BeginSeq;
   for (std::size_t i = 0; i < truth.poses.size(); ++i) {
     const CameraPose& p = truth.poses[i];
@@ -220,6 +232,28 @@ SequenceGroundTruth readGroundTruth(const std::string& path) {
     t.tables.push_back(tt);
   }
 
+  // Optional: files written before obstacles were recorded have none.
+  if (const YAML::Node obstacles = root["obstacles"]) {
+    if (!obstacles.IsSequence()) throw Error(path + ": 'obstacles' is not a list");
+    for (std::size_t i = 0; i < obstacles.size(); ++i) {
+      const std::string where = "obstacles[" + std::to_string(i) + "]";
+      const YAML::Node n = obstacles[i];
+      Obstacle o;
+      o.object = static_cast<int>(r.number(n, "object", where));
+      o.top_z = r.number(n, "top_z", where);
+      const YAML::Node poly = r.child(n, "polygon", where);
+      if (!poly.IsSequence() || poly.size() < 3)
+        throw Error(path + ": 'polygon' in " + where + " needs at least 3 points");
+      for (std::size_t k = 0; k < poly.size(); ++k) {
+        YAML::Node wrapper;
+        wrapper["p"] = poly[k];
+        const auto v = r.numbers(wrapper, "p", 2, where + ".polygon[" + std::to_string(k) + "]");
+        o.polygon.push_back({v[0], v[1]});
+      }
+      t.obstacles.push_back(o);
+    }
+  }
+
   const YAML::Node frames = r.child(root, "frames", "the top level");
   if (!frames.IsSequence()) throw Error(path + ": 'frames' is not a list");
   for (std::size_t i = 0; i < frames.size(); ++i) {
@@ -242,6 +276,18 @@ SequenceGroundTruth readGroundTruth(const std::string& path) {
   return t;
 }
 
+bool robotFits(const Eigen::Vector3d& room_size, const std::vector<Obstacle>& obstacles,
+               const Eigen::Vector2d& xy, double robot_radius) {
+  if (xy.x() < robot_radius || xy.y() < robot_radius || xy.x() > room_size.x() - robot_radius ||
+      xy.y() > room_size.y() - robot_radius) {
+    return false;
+  }
+  for (const auto& o : obstacles) {
+    if (detail::insideConvex(o.polygon, xy, robot_radius)) return false;
+  }
+  return true;
+}
+
 SequenceGroundTruth writeSequence(const std::string& dir, const SequenceSpec& spec,
                                   const std::function<void(int, int)>& progress) {
   validate(spec.render);
@@ -261,6 +307,7 @@ SequenceGroundTruth writeSequence(const std::string& dir, const SequenceSpec& sp
   truth.intrinsics = spec.render.intrinsics;
   truth.room_size = scene.room_size;
   truth.tables = scene.tables;
+  truth.obstacles = scene.obstacles;
   truth.poses = poses;
   for (int i = 0; i < spec.frames; ++i) {
     RenderedFrame r = render(scene, poses[i], spec.render, detail::hash3(spec.seed, i, 0xf4a3e));

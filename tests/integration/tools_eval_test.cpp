@@ -183,6 +183,76 @@ TEST(ToolsEval, TrainThenEvaluateModel) {
   EXPECT_GT(number(section(json, "mrf"), "global"), 0.75) << json;
 }
 
+// ground.source=gravity with NYU's rotations: all 31 frames are used, each
+// with the way its ground was obtained, and tables are measured as objects.
+TEST(ToolsEval, GravityGroundUsesEveryFrameAndTablesAreMeasured) {
+  FINDMUG_REQUIRE_DATA(nyu, "nyuv2_labeled");
+  FINDMUG_REQUIRE_DATA(rotations, "nyuv2_meta/camera_rotations_NYU.txt");
+  test::TempDir tmp;
+  const auto result = run(std::string(FINDMUG_EVAL_EXE) + " --data " + nyu.string() +
+                          " --folds 5 --set ground.source=gravity --nyu-rotations " +
+                          rotations.string() + " --json " + tmp.str("eval.json"));
+  ASSERT_EQ(result.exit_code, 0) << result.output;
+  EXPECT_THAT(result.output, HasSubstr("frames used 31 of 31"));
+  EXPECT_THAT(result.output, HasSubstr("ground gravity+floor_labels: 0001"));
+  EXPECT_THAT(result.output, HasSubstr("table instances"));
+  const std::string json = readFile(tmp.path() / "eval.json");
+  EXPECT_EQ(number(json, "frames_used"), 31);
+  // One "ground" entry per frame; the labelled floor wherever it is large.
+  const std::regex entry(R"re(\{"frame": "(\d+)", "method": "([a-z_+]+)"\})re");
+  int entries = 0, from_floor = 0;
+  for (std::sregex_iterator it(json.begin(), json.end(), entry), end; it != end; ++it) {
+    ++entries;
+    from_floor += (*it)[2] == "gravity+floor_labels";
+    EXPECT_THAT((*it)[2].str(), ::testing::StartsWith("gravity+")) << (*it)[1];
+  }
+  EXPECT_EQ(entries, 31);
+  EXPECT_GE(from_floor, 12);
+  // Table instances: the 31 frames hold ground-truth tables; the report
+  // counts them and gives precision and recall as numbers.
+  const auto at = json.find("\"table_instances\": {");
+  ASSERT_NE(at, std::string::npos) << json;
+  const std::string tables = json.substr(at, json.find('[', at) - at);
+  EXPECT_GE(number(tables, "truth"), 10) << tables;
+  EXPECT_GE(number(tables, "detected"), 1) << tables;
+  EXPECT_GE(number(tables, "precision"), 0.0) << tables;
+  EXPECT_GE(number(tables, "recall"), 0.0) << tables;
+  EXPECT_LE(number(tables, "recall"), 1.0) << tables;
+}
+
+// A synthetic sequence with exact table truth: a model trained on it finds
+// its tables, and the search positions are compared with the true tables'.
+TEST(ToolsEval, SyntheticSearchPositionsAgainstTruth) {
+  test::TempDir tmp;
+  const auto synth = run(std::string(FINDMUG_SYNTH_EXE) + " --seed 11 --frames 8 --fps 1 --out " +
+                         tmp.str("synth"));
+  ASSERT_EQ(synth.exit_code, 0) << synth.output;
+  const auto model = tmp.str("synth.fmf");
+  const auto trained =
+      run(std::string(FINDMUG_TRAIN_EXE) + " --data " + tmp.str("synth") + " --out " + model);
+  ASSERT_EQ(trained.exit_code, 0) << trained.output;
+  EXPECT_THAT(trained.output, HasSubstr("extrinsics"));  // how each frame's ground was obtained
+  const auto evaluated = run(std::string(FINDMUG_EVAL_EXE) + " --data " + tmp.str("synth") +
+                             " --model " + model + " --json " + tmp.str("eval.json"));
+  ASSERT_EQ(evaluated.exit_code, 0) << evaluated.output;
+  EXPECT_THAT(evaluated.output, HasSubstr("search positions vs true tables"));
+  const std::string json = readFile(tmp.path() / "eval.json");
+  const auto at = json.find("\"search_positions\": {");
+  ASSERT_NE(at, std::string::npos) << json;
+  const std::string search = json.substr(at, json.find('}', at) - at);
+  EXPECT_GE(number(search, "predicted"), 4) << search;
+  const double share = number(search, "reachable_share");
+  EXPECT_GE(share, 0.0) << search;
+  EXPECT_LE(share, 1.0) << search;
+  // Evaluated on its own training frames the model labels tables well, so
+  // its positions lie near the true ones.
+  EXPECT_LT(number(search, "median_position_error_m"), 0.5) << search;
+  const auto t = json.find("\"table_instances\": {");
+  ASSERT_NE(t, std::string::npos);
+  const std::string tables = json.substr(t, json.find('[', t) - t);
+  EXPECT_GE(number(tables, "recall"), 0.5) << tables;
+}
+
 TEST(ToolsEval, BadInputIsNamed) {
   test::TempDir tmp;
   auto r = run(std::string(FINDMUG_EVAL_EXE) + " --data /nonexistent/dataset");

@@ -596,6 +596,47 @@ TEST(GroundOnNyu, GravitySourceGivesEveryFrameAGround) {
   EXPECT_GE(with_labels, 12);
 }
 
+// The label-free part of groundFromGravity, checked where the answer is known:
+// on the frames with a labelled floor, withholding the labels, the floor
+// height found from the frame alone must agree with the labelled floor's.
+TEST(GroundOnNyu, GravityWithoutLabelsFindsTheLabelledFloorHeight) {
+  FINDMUG_REQUIRE_DATA(root, "nyuv2_labeled");
+  FINDMUG_REQUIRE_DATA(rotations_file, "nyuv2_meta/camera_rotations_NYU.txt");
+  DatasetOptions options;
+  options.nyu_rotations_file = rotations_file.string();
+  const DatasetFolder folder(root.string(), options);
+  const GroundConfig config;
+  int compared = 0, from_plane = 0;
+  for (std::size_t i = 0; i < folder.size(); ++i) {
+    const LabeledFrame f = folder.load(i);
+    const auto& g = *f.frame.gravity_up;
+    const Eigen::Vector3f up(static_cast<float>(g[0]), static_cast<float>(g[1]),
+                             static_cast<float>(g[2]));
+    const OrganizedCloud cloud = frameToCloud(f.frame);
+    const NormalImage normals = computeNormals(cloud, NormalConfig{});
+    // Where the labelled floor gives a plane (the paper's protocol), so the
+    // reference is a fitted plane, not a median height of few floor points.
+    if (!fitGroundToLabels(cloud, f.labels, config)) continue;
+    const auto with = groundFromGravity(cloud, normals, up, &f.labels, config);
+    ASSERT_TRUE(with.has_value()) << f.name;
+    ASSERT_EQ(with->method, GroundMethod::GravityFloorLabels) << f.name;
+    const auto without = groundFromGravity(cloud, normals, up, nullptr, config);
+    ASSERT_TRUE(without.has_value()) << f.name;
+    std::printf("%s: labelled floor %.3f m below the camera, without labels %.3f m (%s)\n",
+                f.name.c_str(), with->offset, without->offset, groundMethodName(without->method));
+    if (without->method == GroundMethod::GravityLowestPlane) {
+      EXPECT_NEAR(without->offset, with->offset, 0.06f) << f.name;
+      EXPECT_LT(angleBetween(without->normal_camera, with->normal_camera), 2.0f * kDeg) << f.name;
+      ++from_plane;
+    } else {
+      EXPECT_NEAR(without->offset, with->offset, 0.3f) << f.name;
+    }
+    ++compared;
+  }
+  EXPECT_GE(compared, 12);
+  EXPECT_GE(from_plane * 4, compared * 3);  // the visible floor is found as a plane
+}
+
 // NYU Depth V2 labeled frames: wherever the floor-label fit (the paper's
 // protocol) accepts a frame, the label-free estimate must find the same floor
 // or (only when the floor is small) nothing.

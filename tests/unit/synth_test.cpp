@@ -543,6 +543,7 @@ TEST(SynthFiles, GroundTruthRoundTripsAndBadFilesNameTheField) {
   t.fps = 15;
   t.room_size = scene.room_size;
   t.tables = scene.tables;
+  t.obstacles = scene.obstacles;
   t.poses = cameraPath(scene, 3, 15.0);
   t.frame_names = {"000000", "000001", "000002"};
   t.frame_utimes = {0, 66667, 133333};
@@ -558,6 +559,14 @@ TEST(SynthFiles, GroundTruthRoundTripsAndBadFilesNameTheField) {
     EXPECT_NEAR(back.tables[i].height, t.tables[i].height, 1e-8);
     ASSERT_EQ(back.tables[i].top_polygon.size(), t.tables[i].top_polygon.size());
     EXPECT_NEAR((back.tables[i].top_polygon[2] - t.tables[i].top_polygon[2]).norm(), 0, 1e-8);
+  }
+  ASSERT_EQ(back.obstacles.size(), t.obstacles.size());
+  ASSERT_FALSE(t.obstacles.empty());
+  for (std::size_t i = 0; i < t.obstacles.size(); ++i) {
+    EXPECT_EQ(back.obstacles[i].object, t.obstacles[i].object);
+    EXPECT_NEAR(back.obstacles[i].top_z, t.obstacles[i].top_z, 1e-8);
+    ASSERT_EQ(back.obstacles[i].polygon.size(), t.obstacles[i].polygon.size());
+    EXPECT_NEAR((back.obstacles[i].polygon[1] - t.obstacles[i].polygon[1]).norm(), 0, 1e-8);
   }
   ASSERT_EQ(back.poses.size(), 3u);
   EXPECT_NEAR(back.poses[2].yaw, t.poses[2].yaw, 1e-8);
@@ -579,6 +588,29 @@ TEST(SynthFiles, GroundTruthRoundTripsAndBadFilesNameTheField) {
   }
   std::ofstream(dir.str("truncated.yaml")) << text.substr(0, text.size() / 3);
   EXPECT_THROW(readGroundTruth(dir.str("truncated.yaml")), Error);
+
+  // Files from before obstacles were recorded still load, without them.
+  SequenceGroundTruth old = t;
+  old.obstacles.clear();
+  writeGroundTruth(dir.str("old.yaml"), old);
+  std::string old_text = readBytes(dir.str("old.yaml"));
+  const auto key = old_text.find("obstacles:");
+  ASSERT_NE(key, std::string::npos);
+  old_text.erase(key, old_text.find("frames:", key) - key);  // the key and its empty list
+  std::ofstream(dir.str("old.yaml"), std::ios::trunc) << old_text;
+  EXPECT_TRUE(readGroundTruth(dir.str("old.yaml")).obstacles.empty());
+}
+
+TEST(SynthTruth, RobotFitsOnlyClearOfWallsAndFurniture) {
+  const Eigen::Vector3d room(5, 4, 2.5);
+  // A 1 x 1 m table footprint at (2..3, 1..2).
+  const Obstacle table{{{2, 1}, {3, 1}, {3, 2}, {2, 2}}, 0.75, 6};
+  EXPECT_TRUE(robotFits(room, {table}, {2.5, 3.0}, 0.3));   // 1 m above it
+  EXPECT_FALSE(robotFits(room, {table}, {2.5, 2.2}, 0.3));  // 0.2 m from its edge
+  EXPECT_FALSE(robotFits(room, {table}, {2.5, 1.5}, 0.3));  // on it
+  EXPECT_FALSE(robotFits(room, {table}, {0.2, 3.0}, 0.3));  // against the wall x = 0
+  EXPECT_FALSE(robotFits(room, {table}, {4.9, 3.0}, 0.3));  // and x = X
+  EXPECT_TRUE(robotFits(room, {}, {2.5, 1.5}, 0.3));
 }
 
 // The tool's job end to end: the folder the trainer reads, identical bytes for

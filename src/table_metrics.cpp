@@ -1,0 +1,195 @@
+// Table detection measured as objects (see table_metrics.hpp).
+#include "findmug/table_metrics.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <string>
+
+#include "findmug/error.hpp"
+
+namespace findmug {
+
+namespace {
+
+double median(std::vector<float> values) {
+  if (values.empty()) return std::numeric_limits<double>::quiet_NaN();
+  const auto mid = values.begin() + static_cast<long>(values.size() / 2);
+  std::nth_element(values.begin(), mid, values.end());
+  if (values.size() % 2 == 1) return *mid;
+  const float below = *std::max_element(values.begin(), mid);
+  return 0.5 * (static_cast<double>(below) + *mid);
+}
+
+double ratio(int a, int b) {
+  return b > 0 ? static_cast<double>(a) / b : std::numeric_limits<double>::quiet_NaN();
+}
+
+}  // namespace
+
+void validateTableMetricsConfig(const TableMetricsConfig& config) {
+  if (config.min_instance_points < 1) {
+    throw Error("table_metrics.min_instance_points = " +
+                std::to_string(config.min_instance_points) + ": must be >= 1");
+  }
+  if (!(config.min_iou > 0.0f && config.min_iou <= 1.0f)) {
+    throw Error("table_metrics.min_iou = " + std::to_string(config.min_iou) +
+                ": must be in (0, 1]");
+  }
+}
+
+std::vector<TableCluster> groundTruthTables(const OrganizedCloud& cloud_ground,
+                                            const std::vector<std::uint8_t>& gt_labels,
+                                            const TableConfig& tables,
+                                            const TableMetricsConfig& config) {
+  validateTableMetricsConfig(config);
+  if (cloud_ground.points.empty()) return {};
+  TableConfig truth_config = tables;
+  truth_config.min_cluster_points = config.min_instance_points;
+  truth_config.max_cluster_points = std::max(truth_config.max_cluster_points,
+                                             static_cast<int>(cloud_ground.points.size()));
+  LabelImage labels;
+  labels.width = cloud_ground.width;
+  labels.height = cloud_ground.height;
+  labels.labels = gt_labels;
+  return detectTables(cloud_ground, labels, truth_config).tables;
+}
+
+double maskIoU(const std::vector<int>& a, const std::vector<int>& b) {
+  if (a.empty() && b.empty()) return 0.0;
+  std::size_t i = 0, j = 0, common = 0;
+  while (i < a.size() && j < b.size()) {
+    if (a[i] < b[j]) {
+      ++i;
+    } else if (b[j] < a[i]) {
+      ++j;
+    } else {
+      ++common, ++i, ++j;
+    }
+  }
+  return static_cast<double>(common) / static_cast<double>(a.size() + b.size() - common);
+}
+
+std::vector<TableMatch> matchTables(const std::vector<TableCluster>& truth,
+                                    const std::vector<TableCluster>& detected, float min_iou) {
+  std::vector<TableMatch> candidates;
+  for (std::size_t t = 0; t < truth.size(); ++t) {
+    for (std::size_t d = 0; d < detected.size(); ++d) {
+      const double iou = maskIoU(truth[t].pixels, detected[d].pixels);
+      if (iou >= min_iou && iou > 0.0) {
+        TableMatch m;
+        m.truth = static_cast<int>(t);
+        m.detected = static_cast<int>(d);
+        m.iou = iou;
+        candidates.push_back(m);
+      }
+    }
+  }
+  // Greedy by IoU; ties by index so that the result does not depend on sort order.
+  std::sort(candidates.begin(), candidates.end(), [](const TableMatch& a, const TableMatch& b) {
+    if (a.iou != b.iou) return a.iou > b.iou;
+    if (a.truth != b.truth) return a.truth < b.truth;
+    return a.detected < b.detected;
+  });
+  std::vector<bool> truth_used(truth.size(), false), detected_used(detected.size(), false);
+  std::vector<TableMatch> matches;
+  for (TableMatch m : candidates) {
+    if (truth_used[static_cast<std::size_t>(m.truth)] ||
+        detected_used[static_cast<std::size_t>(m.detected)]) {
+      continue;
+    }
+    truth_used[static_cast<std::size_t>(m.truth)] = true;
+    detected_used[static_cast<std::size_t>(m.detected)] = true;
+    const TableCluster& a = truth[static_cast<std::size_t>(m.truth)];
+    const TableCluster& b = detected[static_cast<std::size_t>(m.detected)];
+    m.height_error_m = std::abs(a.top_height - b.top_height);
+    m.centroid_error_m = (a.centroid.head<2>() - b.centroid.head<2>()).norm();
+    const float cosine = std::min(1.0f, std::abs(a.major_axis.normalized().dot(
+                                            b.major_axis.normalized())));
+    m.axis_error_deg = std::acos(cosine) * 180.0f / static_cast<float>(M_PI);
+    matches.push_back(m);
+  }
+  return matches;
+}
+
+void TableMetrics::add(int truth_tables, int detected_tables,
+                       const std::vector<TableMatch>& matches) {
+  truth_ += truth_tables;
+  detected_ += detected_tables;
+  for (const auto& m : matches) {
+    height_errors_.push_back(m.height_error_m);
+    centroid_errors_.push_back(m.centroid_error_m);
+    axis_errors_.push_back(m.axis_error_deg);
+  }
+}
+
+double TableMetrics::precision() const { return ratio(matched(), detected_); }
+double TableMetrics::recall() const { return ratio(matched(), truth_); }
+double TableMetrics::medianHeightError() const { return median(height_errors_); }
+double TableMetrics::medianCentroidError() const { return median(centroid_errors_); }
+double TableMetrics::medianAxisErrorDeg() const { return median(axis_errors_); }
+
+std::vector<SearchPosition> searchPositionsOfBox(const Eigen::Vector2f& center, float yaw,
+                                                 const Eigen::Vector2f& size, float height,
+                                                 const TableConfig& config) {
+  TableCluster box;
+  box.center = center;
+  box.major_axis = Eigen::Vector2f(std::cos(yaw), std::sin(yaw));
+  box.minor_axis = Eigen::Vector2f(-std::sin(yaw), std::cos(yaw));
+  box.extents = 0.5f * size;
+  box.top_height = height;
+  box.centroid = Eigen::Vector3f(center.x(), center.y(), height);
+  return computeSearchPositions(box, config);
+}
+
+std::vector<PositionError> nearestPositionErrors(const std::vector<SearchPosition>& predicted,
+                                                 const std::vector<SearchPosition>& truth) {
+  std::vector<PositionError> out(predicted.size());
+  for (std::size_t k = 0; k < predicted.size(); ++k) {
+    float best = std::numeric_limits<float>::infinity();
+    for (std::size_t t = 0; t < truth.size(); ++t) {
+      const float d = (predicted[k].xy - truth[t].xy).norm();
+      if (d < best) {
+        best = d;
+        out[k].nearest = static_cast<int>(t);
+      }
+    }
+    if (out[k].nearest < 0) continue;
+    out[k].distance_m = best;
+    const float diff = std::remainder(
+        predicted[k].yaw - truth[static_cast<std::size_t>(out[k].nearest)].yaw,
+        2.0f * static_cast<float>(M_PI));
+    out[k].yaw_error_deg = std::abs(diff) * 180.0f / static_cast<float>(M_PI);
+  }
+  return out;
+}
+
+void SearchPositionMetrics::add(const std::vector<PositionError>& errors,
+                                const std::vector<bool>& flagged_reachable,
+                                const std::vector<bool>& reachable_in_truth) {
+  if (flagged_reachable.size() != errors.size() || reachable_in_truth.size() != errors.size()) {
+    throw Error("SearchPositionMetrics::add: " + std::to_string(errors.size()) + " errors, " +
+                std::to_string(flagged_reachable.size()) + " reachability flags and " +
+                std::to_string(reachable_in_truth.size()) + " true reachabilities");
+  }
+  predicted_ += static_cast<int>(errors.size());
+  for (std::size_t k = 0; k < errors.size(); ++k) {
+    reachable_ += reachable_in_truth[k] ? 1 : 0;
+    flagged_ += flagged_reachable[k] ? 1 : 0;
+    flagged_truly_ += flagged_reachable[k] && reachable_in_truth[k] ? 1 : 0;
+  }
+  for (const auto& e : errors) {
+    if (e.nearest < 0) continue;
+    distances_.push_back(e.distance_m);
+    yaw_errors_.push_back(e.yaw_error_deg);
+  }
+}
+
+double SearchPositionMetrics::reachableShare() const { return ratio(reachable_, predicted_); }
+double SearchPositionMetrics::flaggedReachableShare() const {
+  return ratio(flagged_truly_, flagged_);
+}
+double SearchPositionMetrics::medianPositionError() const { return median(distances_); }
+double SearchPositionMetrics::medianYawErrorDeg() const { return median(yaw_errors_); }
+
+}  // namespace findmug
