@@ -141,10 +141,14 @@ for ds in $DATASETS; do
   esac
 done
 
+MODEL_SETS=()
 if [[ -z "$MODEL" ]]; then
   for candidate in "$ROOT/models/findmug.fmf" "$ROOT"/models/*.fmf; do
     [[ -f "$candidate" ]] && { MODEL=$candidate; break; }
   done
+  # The committed models are trained with region features (models/README.md);
+  # findmugd refuses a model whose stages differ from its config.
+  [[ -n "$MODEL" ]] && MODEL_SETS=(--set features.regions=true)
 fi
 if [[ -z "$MODEL" && $TABLES_ONLY == 0 ]]; then
   MODEL="$RESULTS/nyu31.fmf"
@@ -178,7 +182,7 @@ run_one() {
   local exe=$FINDMUGD
   [[ $mode == sequential ]] && exe=$SEQUENTIAL
   "$exe" --source "lcm:FINDMUG_RGBD?url=$URL" --lcm-url "$URL" --model "$MODEL" \
-    --set daemon.stats_window_s=3600 --log-level warn > "$dir/daemon.log" 2>&1 &
+    "${MODEL_SETS[@]}" --set daemon.stats_window_s=3600 --log-level warn > "$dir/daemon.log" 2>&1 &
   local daemon=$!; PIDS+=("$daemon")
   monitor "$daemon" "$dir/usage" &
   local mon=$!; PIDS+=("$mon")

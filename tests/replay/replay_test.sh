@@ -115,10 +115,14 @@ wait_for() {
   done
 }
 
+MODEL_SETS=()
 if [[ -z "$MODEL" ]]; then
   for candidate in "$SOURCE_DIR/models/findmug.fmf" "$SOURCE_DIR"/models/*.fmf; do
     if [[ -f "$candidate" ]]; then MODEL=$candidate; break; fi
   done
+  # The committed models are trained with region features (models/README.md);
+  # findmugd refuses a model whose stages differ from its config.
+  [[ -n "$MODEL" ]] && MODEL_SETS=(--set features.regions=true)
 fi
 if [[ -z "$MODEL" ]]; then
   # No committed model: train a small one (the replay test checks plumbing
@@ -162,7 +166,7 @@ for speed in $SPEEDS; do
     --timeout 840 > "$run/probe.log" 2>&1 &
   probe=$!; PIDS+=("$probe")
   "$FINDMUGD" --source "lcm:FINDMUG_RGBD?url=$URL" --lcm-url "$URL" --model "$MODEL" \
-    --set daemon.stats_window_s=3600 --log-level warn > "$run/daemon.log" 2>&1 &
+    "${MODEL_SETS[@]}" --set daemon.stats_window_s=3600 --log-level warn > "$run/daemon.log" 2>&1 &
   daemon=$!; PIDS+=("$daemon")
   if ! wait_for "$run/ready" 120 "$daemon"; then
     cat "$run/daemon.log"; fail "$name: findmugd published no status"
