@@ -27,7 +27,8 @@ mkdir -p "$OUT"
 BENCH="$ROOT/tests/bench/daemon_bench.sh"
 MODEL="$ROOT/models/findmug.fmf"
 [[ $TABLES_ONLY == 1 ]] || echo "load before: $(cut -d' ' -f1-3 /proc/loadavg)" > "$OUT/load"
-for ds in nyu synth; do
+DATASETS=${DATASETS:-nyu synth}
+for ds in $DATASETS; do
   [[ $TABLES_ONLY == 1 ]] && break
   "$BENCH" --build-dir "$BASE" --datasets "$ds" --rates "$RATE" --modes threaded --no-search \
     --duration "$DURATION" --model "$MODEL" --results "$OUT/base-$ds" --out "$OUT/base-$ds.md"
