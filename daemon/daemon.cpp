@@ -47,11 +47,21 @@ Daemon::Daemon(const Config& config, const DaemonConfig& daemon_config, Pipeline
   } catch (const Error& e) {
     throw Error(std::string("daemon.source: ") + e.what());
   }
+  // A budget below two cores: every stage on the source thread, one frame
+  // after another (the source's queue is then the door where frames wait).
+  const ExecutionMode mode =
+      daemon_config_.singleThreaded() ? ExecutionMode::Sequential : ExecutionMode::Threaded;
   pipeline_ = std::make_unique<Pipeline>(config.segmenter, daemon_config_, std::move(forest),
-                                         model_id, ExecutionMode::Threaded, std::move(hooks));
+                                         model_id, mode, std::move(hooks));
   pipeline_->attachSource(source_.get());
-  spdlog::info("source {}; {} segmentation worker(s), queue capacity {}", source_->describe(),
-               pipeline_->workers(), daemon_config_.queue_capacity);
+  if (mode == ExecutionMode::Sequential) {
+    spdlog::info("source {}; daemon.max_cpu_cores {}: every stage on one thread",
+                 source_->describe(), daemon_config_.max_cpu_cores);
+  } else {
+    spdlog::info("source {}; {} segmentation worker(s), queue capacity {}, max_cpu_cores {}",
+                 source_->describe(), pipeline_->workers(), daemon_config_.queue_capacity,
+                 daemon_config_.max_cpu_cores);
+  }
 }
 
 Daemon::~Daemon() {
@@ -62,6 +72,18 @@ Daemon::~Daemon() {
 
 void Daemon::sourceLoop() {
   for (;;) {
+    // Drop at the door: take the next frame only once the pipeline can
+    // accept it; meanwhile frames wait in the source, which keeps the newest
+    // and drops older ones before decoding them.
+    while (!pipeline_->waitForRoom(std::chrono::milliseconds(100))) {
+      // Alive, waiting on the pipeline (whose own progress the watchdog checks).
+      source_last_return_ns_.store(nowNs());
+      const io::SourceState state = source_->state();
+      if (stop_requested_.load() || state == io::SourceState::Stopped ||
+          state == io::SourceState::Failed) {
+        break;
+      }
+    }
     source_in_next_.store(true);
     std::optional<RgbdFrame> frame = source_->next();
     source_in_next_.store(false);
@@ -116,6 +138,8 @@ int Daemon::run() {
   };
   while (!stop_requested_.load() && !source_done()) {
     std::this_thread::sleep_for(std::chrono::milliseconds(50));
+    // Sequential mode: status also while no frame comes (no-op when threaded).
+    pipeline_->publishStatusIfDue();
     const auto now = Clock::now();
     if (gate && now >= next_ping) {
       if (gate->healthy(progress(), now)) {
@@ -134,9 +158,11 @@ int Daemon::run() {
           std::find(s.stage_names.begin(), s.stage_names.end(), "total") - s.stage_names.begin();
       const std::string line = fmt::format(
           "{} received, {} processed, {} dropped, {} rejected; in {:.2f} fps, out {:.2f} fps; "
-          "latency p50 {:.0f} ms, p95 {:.0f} ms; source {}",
+          "latency p50 {:.0f} ms, p95 {:.0f} ms; CPU {:.2f} cores (budget {}); source {}",
           s.frames_received, s.frames_processed, s.frames_dropped, s.frames_rejected, s.input_fps,
           s.output_fps, s.latency_p50_us[total] / 1000.0, s.latency_p95_us[total] / 1000.0,
+          s.cpu_used_cores, s.cpu_budget_cores > 0 ? fmt::format("{:g}", s.cpu_budget_cores)
+                                                   : std::string("none"),
           s.source_state_name);
       notifier_.status(line);
       spdlog::info("{}", line);

@@ -1,6 +1,7 @@
 // findmugd settings: the `daemon:` section of the YAML file and the command line.
 #include "findmug/daemon/daemon_config.hpp"
 
+#include <algorithm>
 #include <charconv>
 #include <cmath>
 #include <cstdlib>
@@ -24,9 +25,16 @@ std::string defaultConfigPath() { return FINDMUG_SYSCONF_DIR "/findmug/findmugd.
 std::string defaultModelPath() { return FINDMUG_DATA_INSTALL_DIR "/models/findmug.fmf"; }
 
 int DaemonConfig::effectiveWorkers() const {
-  if (workers > 0) return workers;
-  const unsigned cores = std::thread::hardware_concurrency();
-  return cores == 0 ? 1 : static_cast<int>(cores);
+  int n = workers;
+  if (n <= 0) {
+    const unsigned cores = std::thread::hardware_concurrency();
+    n = cores == 0 ? 1 : static_cast<int>(cores);
+  }
+  // A budget of k cores leaves k - 1 for segmentation: the prepare stage
+  // keeps one busy too (publishing is light).
+  if (max_cpu_cores >= 2.0) n = std::min(n, static_cast<int>(std::floor(max_cpu_cores)) - 1);
+  if (singleThreaded()) n = 1;
+  return std::max(n, 1);
 }
 
 namespace {
@@ -117,6 +125,11 @@ const std::map<std::string, Key>& keys() {
           d.workers = static_cast<int>(toInt(k, v, 0, 64));
         },
         [](const D& d) { return std::to_string(d.workers); }}},
+      {"daemon.max_cpu_cores",
+       {[](D& d, const std::string& k, const std::string& v) {
+          d.max_cpu_cores = toDouble(k, v, 0, 1024);
+        },
+        [](const D& d) { return fmt(d.max_cpu_cores); }}},
       {"daemon.status_period_s",
        {[](D& d, const std::string& k, const std::string& v) {
           d.status_period_s = toDouble(k, v, 0.05, 60);

@@ -5,6 +5,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <ctime>
 #include <lcm/lcm-cpp.hpp>
 #include <thread>
 
@@ -50,6 +51,12 @@ std::uint64_t utimeNow() {
                                         .count());
 }
 
+double processCpuSeconds() {
+  timespec ts{};
+  if (clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts) != 0) return 0.0;
+  return static_cast<double>(ts.tv_sec) + static_cast<double>(ts.tv_nsec) * 1e-9;
+}
+
 std::string frameName(const RgbdFrame& f) {
   return (f.source.empty() ? std::string("frame") : f.source) + " seq " + std::to_string(f.seq);
 }
@@ -72,7 +79,9 @@ Pipeline::Pipeline(const SegmenterConfig& segmenter_config, const DaemonConfig& 
       pose_max_age_us_(static_cast<std::uint64_t>(std::llround(daemon_config.pose_max_age_s * 1e6))),
       table_map_(daemon_config.table_map, segmenter_config.tables),
       started_(Clock::now()),
-      last_sequential_status_(started_) {
+      last_sequential_status_(started_),
+      cpu_sample_time_(started_),
+      cpu_sample_s_(processCpuSeconds()) {
   if (!forest || forest->empty()) throw Error("findmugd: the model has no trees");
   const std::string url = effectiveLcmUrl(daemon_config_);
   lcm_ = std::make_unique<lcm::LCM>(url);
@@ -145,9 +154,20 @@ Pipeline::Pipeline(const SegmenterConfig& segmenter_config, const DaemonConfig& 
         if (!segment_->push(std::move(p))) abandoned_.fetch_add(1);  // only after stop()
       },
       [](const FrameJob& dropped) {
-        spdlog::debug("prepare queue full: dropped {}", frameName(dropped.frame));
+        spdlog::debug("pipeline entry full: dropped {} at the door", frameName(dropped.frame));
       },
-      on_error);
+      on_error, Stage<FrameJob, PreparedJob>::Tick{},
+      // The door: take the next frame only when the segment queue can accept
+      // it, so that under overload frames wait — and the oldest is dropped —
+      // here, before any work is spent on them.
+      [this] {
+        while (!segment_->waitForRoom(std::chrono::milliseconds(50))) {
+          if (segment_->closed()) break;
+          // Stopping: discarded (nothing left to take) or draining into a
+          // live segment stage (waits for room like any frame).
+          if (prepare_->closed() && prepare_->queueSize() == 0) break;
+        }
+      });
 
   // Last: its thread reports through recordError, so everything it may touch
   // must exist already.
@@ -189,19 +209,34 @@ bool Pipeline::submit(RgbdFrame frame) {
     input_rate_.tick();
   }
   const bool accepted = prepare_->push(FrameJob{std::move(frame), Clock::now()});
-  if (mode_ == ExecutionMode::Sequential) {
-    // No publish thread ticks in sequential mode: keep the status period here.
-    const auto now = Clock::now();
-    if (now - last_sequential_status_ >=
-        std::chrono::duration<double>(daemon_config_.status_period_s)) {
-      publishStatus();
-      last_sequential_status_ = now;
-    }
-  }
+  // No publish thread ticks in sequential mode: keep the status period here.
+  publishStatusIfDue();
   return accepted;
 }
 
+bool Pipeline::waitForRoom(Clock::duration timeout) {
+  if (mode_ == ExecutionMode::Sequential) return true;  // submit() runs the frame itself
+  return prepare_->waitForRoom(timeout);
+}
+
+void Pipeline::publishStatusIfDue() {
+  if (mode_ != ExecutionMode::Sequential) return;  // the publish thread does it
+  std::lock_guard lock(sequential_status_mutex_);
+  const auto now = Clock::now();
+  if (now - last_sequential_status_ >=
+      std::chrono::duration<double>(daemon_config_.status_period_s)) {
+    publishStatus();
+    last_sequential_status_ = now;
+  }
+}
+
 void Pipeline::publishStatusNow() { publishStatus(); }
+
+int Pipeline::processingThreads() const {
+  // Sequential: the caller's thread runs every stage. Threaded: prepare,
+  // the segmentation workers and publish.
+  return mode_ == ExecutionMode::Sequential ? 1 : workers_ + 2;
+}
 
 void Pipeline::stop(StopMode mode) {
   {
@@ -233,6 +268,7 @@ void Pipeline::stop(StopMode mode) {
   // The publish thread is gone: this thread may use the LCM handle now.
   publishStatus();
   // Close the handle: flushes a file:// log, leaves a udpm multicast group.
+  std::lock_guard lcm_lock(lcm_mutex_);
   lcm_.reset();
   const auto c = counters();
   spdlog::info("pipeline stopped: {} received, {} processed, {} dropped, {} rejected", c.received,
@@ -259,9 +295,11 @@ void Pipeline::publishResult(ResultJob& job) {
   labels.seq = frame.seq;
   labels.latency_us = latency_us;
   const label_image_t label_msg = io::encodeLabelImage(labels, daemon_config_.publish_confidence);
+  std::unique_lock lcm_lock(lcm_mutex_);
   if (lcm_->publish(labels_channel_, &label_msg) != 0) {
     throw Error("LCM publish on " + labels_channel_ + " failed for " + frameName(frame));
   }
+  lcm_lock.unlock();
   if (spdlog::should_log(spdlog::level::debug)) {
     for (const std::string& line : labelled.table_diagnostics) {
       spdlog::debug("{}: tables: {}", frameName(frame), line);
@@ -294,6 +332,7 @@ void Pipeline::publishResult(ResultJob& job) {
     tables.map_pose = pose;
     tables.map_info = std::move(map_info);
     const tables_t tables_msg = io::encodeTables(tables);
+    std::lock_guard lcm_lock2(lcm_mutex_);
     if (lcm_->publish(tables_channel_, &tables_msg) != 0) {
       throw Error("LCM publish on " + tables_channel_ + " failed for " + frameName(frame));
     }
@@ -368,6 +407,7 @@ void Pipeline::publishTableMap(const RgbdFrame& frame, const io::RobotPose& pose
     }
   }
   const tables_t msg = io::encodeTables(message);
+  std::lock_guard lcm_lock(lcm_mutex_);
   if (lcm_->publish(table_map_channel_, &msg) != 0) {
     throw Error("LCM publish on " + table_map_channel_ + " failed for " + frameName(frame));
   }
@@ -382,21 +422,30 @@ PipelineCounters Pipeline::counters() const {
   PipelineCounters c;
   c.received = received_.load();
   c.processed = processed_.load();
-  for (const StageStats& s : {prepare_->stats(), segment_->stats(), publish_->stats()}) {
-    c.dropped += s.dropped;
-    c.rejected += s.failed;
-    c.pending += s.queue_depth + s.in_flight;
+  const StageStats pre = prepare_->stats(), seg = segment_->stats(), pub = publish_->stats();
+  for (const StageStats* s : {&pre, &seg, &pub}) {
+    c.dropped += s->dropped;
+    c.rejected += s->failed;
+    c.pending += s->queue_depth + s->in_flight;
+    c.dropped_at_shutdown += s->dropped - s->evicted;  // discarded by stop()
   }
+  c.dropped_at_door = pre.evicted;  // the prepare queue is the pipeline's entry
+  c.dropped_in_pipeline = seg.evicted + pub.evicted;
   c.dropped += abandoned_.load();
+  c.dropped_at_shutdown += abandoned_.load();
   if (pose_input_) c.rejected += pose_input_->rejected();
   if (finalized_.load()) {
     // Stopped: whatever is still in a stage will never be published.
     c.dropped += c.pending;
+    c.dropped_at_shutdown += c.pending;
     c.pending = 0;
   }
   if (const io::FrameSource* source = source_.load()) {
     const io::SourceStats s = source->stats();
+    // The source drops before decoding: at the door (its frames still
+    // queued at a stop are counted there too).
     c.dropped += s.frames_dropped;
+    c.dropped_at_door += s.frames_dropped;
     c.rejected += s.frames_rejected;
   }
   return c;
@@ -424,6 +473,11 @@ status_t Pipeline::makeStatus() const {
   s.frames_processed = static_cast<std::int64_t>(c.processed);
   s.frames_dropped = static_cast<std::int64_t>(c.dropped);
   s.frames_rejected = static_cast<std::int64_t>(c.rejected);
+  s.frames_dropped_at_door = static_cast<std::int64_t>(c.dropped_at_door);
+  s.frames_dropped_in_pipeline = static_cast<std::int64_t>(c.dropped_in_pipeline);
+  s.frames_dropped_at_shutdown = static_cast<std::int64_t>(c.dropped_at_shutdown);
+  s.cpu_budget_cores = static_cast<float>(daemon_config_.max_cpu_cores);
+  s.processing_threads = static_cast<std::int32_t>(processingThreads());
   s.window_s = daemon_config_.stats_window_s;
 
   const StageStats stages[] = {prepare_->stats(), segment_->stats(), publish_->stats()};
@@ -444,6 +498,7 @@ status_t Pipeline::makeStatus() const {
     add_latency("total", latency_.at("total").summary(now));
     last_error = last_error_;
     last_error_utime = last_error_utime_;
+    s.cpu_used_cores = static_cast<float>(cpu_used_cores_);
   }
   s.num_stages = static_cast<std::int32_t>(s.stage_names.size());
   for (const auto& st : stages) {
@@ -475,8 +530,19 @@ status_t Pipeline::makeStatus() const {
 }
 
 void Pipeline::publishStatus() {
-  if (!lcm_) return;  // stopped: the final status has gone out already
+  {
+    // The CPU the process used since the previous status, against the budget.
+    const double cpu_s = processCpuSeconds();
+    const auto now = Clock::now();
+    std::lock_guard lock(stats_mutex_);
+    const double wall_s = std::chrono::duration<double>(now - cpu_sample_time_).count();
+    if (wall_s > 0.0) cpu_used_cores_ = (cpu_s - cpu_sample_s_) / wall_s;
+    cpu_sample_s_ = cpu_s;
+    cpu_sample_time_ = now;
+  }
   const status_t status = makeStatus();
+  std::lock_guard lcm_lock(lcm_mutex_);
+  if (!lcm_) return;  // stopped: the final status has gone out already
   if (lcm_->publish(status_channel_, &status) != 0) {
     spdlog::warn("LCM publish on {} failed", status_channel_);
   }

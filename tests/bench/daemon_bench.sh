@@ -5,6 +5,7 @@
 #   tests/bench/daemon_bench.sh [--build-dir build] [--rates "1 5 15 30"] [--duration 30]
 #       [--datasets "nyu pcl synth"] [--modes "threaded sequential"] [--no-search]
 #       [--model FILE] [--out BENCHMARKS-replay.md] [--results DIR] [--tables-only]
+#       [--set KEY=VALUE]...   (extra daemon settings, e.g. --set daemon.max_cpu_cores=1)
 #   (scripts/bench.sh runs this with the defaults.)
 #
 # For each data set, input rate and mode, inside a private network namespace:
@@ -41,6 +42,7 @@ TABLES_ONLY=0
 MODEL="${FINDMUG_MODEL:-}"
 OUT="$ROOT/BENCHMARKS-replay.md"
 RESULTS=""
+EXTRA_SETS=()
 COMMAND_LINE="tests/bench/daemon_bench.sh $*"
 ARGS=("$@")
 while [[ $# -gt 0 ]]; do
@@ -55,6 +57,7 @@ while [[ $# -gt 0 ]]; do
     --model) MODEL=$2; shift 2 ;;
     --out) OUT=$2; shift 2 ;;
     --results) RESULTS=$2; shift 2 ;;
+    --set) EXTRA_SETS+=(--set "$2"); shift 2 ;;
     -h|--help) sed -n '2,32p' "$0"; exit 0 ;;
     *) echo "daemon_bench: unknown argument '$1'" >&2; exit 2 ;;
   esac
@@ -182,7 +185,8 @@ run_one() {
   local exe=$FINDMUGD
   [[ $mode == sequential ]] && exe=$SEQUENTIAL
   "$exe" --source "lcm:FINDMUG_RGBD?url=$URL" --lcm-url "$URL" --model "$MODEL" \
-    "${MODEL_SETS[@]}" --set daemon.stats_window_s=3600 --log-level warn > "$dir/daemon.log" 2>&1 &
+    "${MODEL_SETS[@]}" --set daemon.stats_window_s=3600 "${EXTRA_SETS[@]+"${EXTRA_SETS[@]}"}" \
+    --log-level warn > "$dir/daemon.log" 2>&1 &
   local daemon=$!; PIDS+=("$daemon")
   monitor "$daemon" "$dir/usage" &
   local mon=$!; PIDS+=("$mon")

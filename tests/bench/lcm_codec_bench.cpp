@@ -3,6 +3,9 @@
 // must stay far below 33 ms. Also the wire check alone (decodeMessage), which
 // runs before LCM's generated decode.
 #include <benchmark/benchmark.h>
+#include <zlib.h>
+
+#include <cmath>
 
 #include "findmug/dataset.hpp"
 #include "findmug/io/lcm_codec.hpp"
@@ -63,9 +66,57 @@ void BM_WireCheckAndLcmDecode(benchmark::State& state) {
   }
 }
 
+// Label image of NYU frame 0 (its ground-truth labels, void as the daemon
+// sends it) and a confidence image constant per label, quantised to bytes as
+// encodeLabelImage does: the daemon's label images are piecewise constant
+// the same way (one label and confidence per segment).
+const std::vector<std::uint8_t>* labelBytes(bool confidence) {
+  static const std::vector<std::uint8_t>* images = []() -> const std::vector<std::uint8_t>* {
+    const auto dir = test::dataPath("nyuv2_labeled");
+    if (dir.empty()) return nullptr;
+    auto* out = new std::vector<std::uint8_t>[2];
+    out[0] = DatasetFolder(dir.string()).load(0).labels;
+    out[1].resize(out[0].size());
+    for (std::size_t i = 0; i < out[0].size(); ++i) {
+      out[1][i] = static_cast<std::uint8_t>(std::lround((0.4f + 0.07f * (out[0][i] % 8)) * 255.0f));
+    }
+    return out;
+  }();
+  return images ? &images[confidence ? 1 : 0] : nullptr;
+}
+
+// Deflate level 1 of the label and confidence bytes of one label image:
+// argument 0 = zlib's default strategy (the encoder up to 4f88746), 1 = Z_RLE
+// (the encoder now). Both inflate with the same decoder.
+void BM_DeflateLabelImage(benchmark::State& state) {
+  const auto* labels = labelBytes(false);
+  const auto* confidence = labelBytes(true);
+  if (!labels) return state.SkipWithError("nyuv2_labeled missing (FINDMUG_DATA)");
+  const int strategy = state.range(0) == 0 ? Z_DEFAULT_STRATEGY : Z_RLE;
+  std::vector<std::uint8_t> out(compressBound(static_cast<uLong>(labels->size())));
+  std::size_t bytes = 0;
+  for (auto _ : state) {
+    bytes = 0;
+    for (const auto* image : {labels, confidence}) {
+      z_stream zs{};
+      deflateInit2(&zs, 1, Z_DEFLATED, 15, 8, strategy);
+      zs.next_in = const_cast<Bytef*>(image->data());
+      zs.avail_in = static_cast<uInt>(image->size());
+      zs.next_out = out.data();
+      zs.avail_out = static_cast<uInt>(out.size());
+      if (deflate(&zs, Z_FINISH) != Z_STREAM_END) state.SkipWithError("deflate failed");
+      bytes += zs.total_out;
+      deflateEnd(&zs);
+      benchmark::DoNotOptimize(out.data());
+    }
+  }
+  state.counters["compressed_kB"] = static_cast<double>(bytes) / 1000.0;
+}
+
 // Argument: colour compression 0 none, 1 JPEG, 2 PNG (depth always zlib).
 BENCHMARK(BM_EncodeRgbd)->Arg(0)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_DecodeRgbd)->Arg(0)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_DeflateLabelImage)->Arg(0)->Arg(1)->Unit(benchmark::kMillisecond);
 BENCHMARK(BM_WireCheckAndLcmDecode)->Unit(benchmark::kMicrosecond);
 
 }  // namespace

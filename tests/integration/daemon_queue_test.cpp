@@ -348,6 +348,32 @@ TEST(DaemonConfig, DefaultsAreWrittenBackAndValuesValidated) {
   EXPECT_NE(dumpConfig(config).find("publish_confidence: true"), std::string::npos);
 }
 
+TEST(DaemonConfig, CpuBudgetBoundsTheSegmentationWorkers) {
+  auto resolve = [](const std::string& yaml) {
+    Config config = parseConfig(yaml, "test.yaml");
+    return resolveDaemonConfig(config);
+  };
+  const DaemonConfig none = resolve("daemon:\n  workers: 6\n");
+  EXPECT_FALSE(none.singleThreaded());
+  EXPECT_EQ(none.effectiveWorkers(), 6);
+  const DaemonConfig one = resolve("daemon:\n  workers: 6\n  max_cpu_cores: 1\n");
+  EXPECT_TRUE(one.singleThreaded());
+  EXPECT_EQ(one.effectiveWorkers(), 1);
+  const DaemonConfig one_half = resolve("daemon:\n  max_cpu_cores: 1.5\n");
+  EXPECT_TRUE(one_half.singleThreaded());
+  const DaemonConfig four = resolve("daemon:\n  workers: 6\n  max_cpu_cores: 4\n");
+  EXPECT_FALSE(four.singleThreaded());
+  EXPECT_EQ(four.effectiveWorkers(), 3);  // prepare keeps the fourth core busy
+  const DaemonConfig roomy = resolve("daemon:\n  workers: 2\n  max_cpu_cores: 8\n");
+  EXPECT_EQ(roomy.effectiveWorkers(), 2);  // the budget only ever lowers the count
+  try {
+    resolve("daemon:\n  max_cpu_cores: -1\n");
+    ADD_FAILURE() << "a negative budget was accepted";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("daemon.max_cpu_cores"), std::string::npos) << e.what();
+  }
+}
+
 TEST(DaemonConfig, BadValuesAndUnknownKeysNameTheKey) {
   auto error_of = [](const std::string& yaml) -> std::string {
     try {

@@ -15,13 +15,24 @@ namespace findmug::io::detail {
 
 // ---- zlib -----------------------------------------------------------------------
 
-std::vector<std::uint8_t> zlibCompress(const std::uint8_t* data, std::size_t size, int level) {
-  if (size > std::numeric_limits<uLong>::max()) throw Error("zlib: input too large");
-  uLongf bound = compressBound(static_cast<uLong>(size));
-  std::vector<std::uint8_t> out(bound);
-  const int rc = compress2(out.data(), &bound, data, static_cast<uLong>(size), level);
-  if (rc != Z_OK) throw Error("zlib: compress2 failed with code " + std::to_string(rc));
-  out.resize(bound);
+std::vector<std::uint8_t> zlibCompress(const std::uint8_t* data, std::size_t size, int level,
+                                       bool run_length) {
+  if (size > std::numeric_limits<uInt>::max()) throw Error("zlib: input too large");
+  z_stream zs{};
+  if (deflateInit2(&zs, level, Z_DEFLATED, 15, 8, run_length ? Z_RLE : Z_DEFAULT_STRATEGY) !=
+      Z_OK) {
+    throw Error("zlib: deflateInit2 failed (level " + std::to_string(level) + ")");
+  }
+  std::vector<std::uint8_t> out(deflateBound(&zs, static_cast<uLong>(size)));
+  zs.next_in = const_cast<Bytef*>(data);
+  zs.avail_in = static_cast<uInt>(size);
+  zs.next_out = out.data();
+  zs.avail_out = static_cast<uInt>(out.size());
+  const int rc = deflate(&zs, Z_FINISH);
+  const std::size_t written = zs.total_out;
+  deflateEnd(&zs);
+  if (rc != Z_STREAM_END) throw Error("zlib: deflate failed with code " + std::to_string(rc));
+  out.resize(written);
   return out;
 }
 

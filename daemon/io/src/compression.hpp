@@ -14,7 +14,11 @@
 
 namespace findmug::io::detail {
 
-std::vector<std::uint8_t> zlibCompress(const std::uint8_t* data, std::size_t size, int level);
+// `run_length`: zlib's Z_RLE strategy (matches only runs of one byte). For
+// piecewise-constant images — labels, quantised confidences — it is several
+// times faster than the default matcher at a similar size; any inflate reads it.
+std::vector<std::uint8_t> zlibCompress(const std::uint8_t* data, std::size_t size, int level,
+                                       bool run_length = false);
 // Inflates into exactly `expected_size` bytes: a stream that ends early, runs
 // past that size, is corrupt, or has bytes after its end is an error.
 std::vector<std::uint8_t> zlibDecompress(const std::uint8_t* data, std::size_t size,

@@ -223,7 +223,7 @@ label_image_t encodeLabelImage(const LabelImageMessage& in, bool with_confidence
   msg.num_labels = kNumLabels;
   for (auto name : kLabelNames) msg.label_names.emplace_back(name);
   msg.compression = label_image_t::COMPRESSION_ZLIB;
-  msg.labels_data = detail::zlibCompress(image.labels.data(), pixels, 1);
+  msg.labels_data = detail::zlibCompress(image.labels.data(), pixels, 1, /*run_length=*/true);
   msg.labels_size = static_cast<std::int32_t>(msg.labels_data.size());
   msg.has_confidence = with_confidence && !image.confidence.empty();
   if (msg.has_confidence) {
@@ -240,7 +240,7 @@ label_image_t encodeLabelImage(const LabelImageMessage& in, bool with_confidence
       }
       quantised[i] = static_cast<std::uint8_t>(std::lround(c * 255.0f));
     }
-    msg.confidence_data = detail::zlibCompress(quantised.data(), pixels, 1);
+    msg.confidence_data = detail::zlibCompress(quantised.data(), pixels, 1, /*run_length=*/true);
   }
   msg.confidence_size = static_cast<std::int32_t>(msg.confidence_data.size());
   msg.latency_us = in.latency_us;

@@ -78,15 +78,13 @@ void LcmFrameSource::run() {
 }
 
 void LcmFrameSource::onMessage(const lcm::ReceiveBuffer* buffer, const std::string& channel) {
-  RgbdFrame frame;
-  try {
-    frame = decodeRgbdFrame(buffer->data, static_cast<std::size_t>(buffer->data_size), channel);
-    finishFrame(frame, options_);
-  } catch (const Error& e) {
-    recordRejected(e.what());
-    return;
-  }
+  // Only the bytes are kept here: decoding (JPEG, zlib) waits until next()
+  // takes the message, so a frame dropped because the consumer is busy costs
+  // a copy, not a decode. Buffers are recycled: no allocation per message in
+  // the steady state.
   last_frame_ = Clock::now();
+  const auto* bytes = static_cast<const std::uint8_t*>(buffer->data);
+  const std::size_t size = buffer->data_size;
   std::unique_lock lock(queue_mutex_);
   if (replaying_log_) {
     queue_changed_.wait(lock, [&] {
@@ -96,30 +94,55 @@ void LcmFrameSource::onMessage(const lcm::ReceiveBuffer* buffer, const std::stri
   } else {
     std::uint64_t dropped = 0;
     while (queue_.size() >= static_cast<std::size_t>(options_.lcm_queue_size)) {
+      spare_.push_back(std::move(queue_.front()));
       queue_.pop_front();
       ++dropped;
     }
     if (dropped > 0) recordDropped(dropped);
   }
-  queue_.push_back(std::move(frame));
+  RawMessage message;
+  if (!spare_.empty()) {
+    message = std::move(spare_.back());
+    spare_.pop_back();
+  }
+  message.bytes.assign(bytes, bytes + size);
+  message.channel = channel;
+  queue_.push_back(std::move(message));
   queue_changed_.notify_all();
 }
 
 std::optional<RgbdFrame> LcmFrameSource::next() {
-  std::unique_lock lock(queue_mutex_);
-  queue_changed_.wait(lock, [&] { return stopping_ || !queue_.empty() || finished_; });
-  if (stopping_) return std::nullopt;
-  if (queue_.empty()) {  // finished_
+  for (;;) {
+    std::unique_lock lock(queue_mutex_);
+    queue_changed_.wait(lock, [&] { return stopping_ || !queue_.empty() || finished_; });
+    if (stopping_) return std::nullopt;
+    if (queue_.empty()) {  // finished_
+      lock.unlock();
+      if (state() != SourceState::Failed) setState(SourceState::EndOfStream);
+      return std::nullopt;
+    }
+    RawMessage message = std::move(queue_.front());
+    queue_.pop_front();
+    queue_changed_.notify_all();  // room for a waiting log reader
     lock.unlock();
-    if (state() != SourceState::Failed) setState(SourceState::EndOfStream);
-    return std::nullopt;
+    RgbdFrame frame;
+    bool good = true;
+    try {
+      frame = decodeRgbdFrame(message.bytes.data(), message.bytes.size(), message.channel);
+      finishFrame(frame, options_);
+    } catch (const Error& e) {
+      recordRejected(e.what());
+      good = false;
+    }
+    lock.lock();
+    if (spare_.size() < static_cast<std::size_t>(options_.lcm_queue_size) + 1) {
+      spare_.push_back(std::move(message));
+    }
+    lock.unlock();
+    if (!good) continue;  // bad input: skipped, the next message is tried
+    recordDelivered();
+    return frame;
   }
-  RgbdFrame frame = std::move(queue_.front());
-  queue_.pop_front();
-  queue_changed_.notify_all();  // room for a waiting log reader
-  lock.unlock();
-  recordDelivered();
-  return frame;
 }
 
 namespace detail {

@@ -246,6 +246,8 @@ status_t decodeMessage<status_t>(const void* data, std::size_t size, std::string
   w.skip(kI8, "source_state");
   w.string("last_error");
   w.skip(kI64, "last_error_utime");
+  w.skip(3 * kI64, "frames_dropped_at_door/in_pipeline/at_shutdown");
+  w.skip(2 * kF32 + kI32, "cpu_budget_cores/cpu_used_cores/processing_threads");
   w.finish();
   return decodeWalked<status_t>(data, size, channel);
 }

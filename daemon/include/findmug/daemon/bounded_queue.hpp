@@ -69,6 +69,7 @@ class BoundedQueue {
       if (evicted) *evicted = std::move(items_.front());
       items_.pop_front();
       ++dropped_;
+      ++evicted_;
       result = PushResult::AcceptedDroppedOldest;
     }
     items_.push_back(std::move(value));
@@ -91,6 +92,17 @@ class BoundedQueue {
     std::unique_lock lock(mutex_);
     not_empty_.wait_for(lock, timeout, [&] { return closed_ || !items_.empty(); });
     return takeFrontLocked(lock);
+  }
+
+  // Waits at most `timeout` until the queue has room (or is closed). True
+  // when a push now would neither block nor evict (nothing else pushing).
+  // Lets a producer take its next item only when it can be accepted, so
+  // that items are dropped before any work is spent on them.
+  template <typename Rep, typename Period>
+  bool waitForRoom(std::chrono::duration<Rep, Period> timeout) {
+    std::unique_lock lock(mutex_);
+    return not_full_.wait_for(lock, timeout, [&] { return closed_ || items_.size() < capacity_; }) &&
+           !closed_;
   }
 
   // Refuses further pushes and wakes every waiter. Items already queued can
@@ -131,6 +143,11 @@ class BoundedQueue {
     std::lock_guard lock(mutex_);
     return dropped_;
   }
+  // Of those, the ones evicted by DropOldest (the rest were discarded by clear()).
+  std::uint64_t evictedCount() const {
+    std::lock_guard lock(mutex_);
+    return evicted_;
+  }
   // Items handed out by pop so far (= the next ticket).
   std::uint64_t poppedCount() const {
     std::lock_guard lock(mutex_);
@@ -147,7 +164,7 @@ class BoundedQueue {
     Popped popped{std::move(items_.front()), next_ticket_++};
     items_.pop_front();
     lock.unlock();
-    not_full_.notify_one();
+    not_full_.notify_all();  // blocked pushers and waitForRoom callers alike
     return popped;
   }
 
@@ -159,6 +176,7 @@ class BoundedQueue {
   bool closed_ = false;
   std::uint64_t next_ticket_ = 0;
   std::uint64_t dropped_ = 0;
+  std::uint64_t evicted_ = 0;
   std::uint64_t pushed_ = 0;
 };
 

@@ -5,9 +5,14 @@
 // findmug::Error naming the key, so start-up stops with a clear message.
 // run() then:
 //   1. starts the pipeline and the source thread (the only caller of
-//      FrameSource::next(), which owns any input LCM handle inside the source),
+//      FrameSource::next(), which owns any input LCM handle inside the source);
+//      the source thread takes a frame only when the pipeline has room for it
+//      (Pipeline::waitForRoom), so overload drops frames in the source before
+//      any work; with daemon.max_cpu_cores below 2 the pipeline is sequential
+//      and the source thread runs every stage itself,
 //   2. tells systemd READY=1,
-//   3. loops every 50 ms: honours requestStop(), pings the watchdog when the
+//   3. loops every 50 ms: honours requestStop(), publishes the status of a
+//      sequential pipeline when it is due, pings the watchdog when the
 //      WatchdogGate sees progress, and notices the source ending,
 //   4. shuts down: STOPPING=1, source->stop(), pipeline stop (queued frames
 //      are dropped on a stop request, drained at end of stream), final status.

@@ -34,6 +34,10 @@ struct DaemonConfig {
   std::string model_path = defaultModelPath();
   int queue_capacity = 2;             // per queue between stages (frames)
   int workers = 0;                    // segmentation workers; 0 = one per CPU core
+  // CPU budget in cores; 0 = none. Below 2: every stage (decoding included)
+  // runs one after another on the source's thread; from 2: the threaded
+  // pipeline with at most floor(max_cpu_cores) - 1 segmentation workers.
+  double max_cpu_cores = 0.0;
   double status_period_s = 1.0;       // FINDMUG_STATUS period
   double stats_window_s = 10.0;       // window of the status rates and latency percentiles
   bool publish_confidence = true;     // include per-pixel confidence in label images
@@ -54,8 +58,11 @@ struct DaemonConfig {
   std::string channel(const std::string& base) const {
     return channel_suffix.empty() ? base : base + "_" + channel_suffix;
   }
-  // Number of workers after resolving 0 to the core count.
+  // Number of segmentation workers after resolving 0 to the core count and
+  // applying max_cpu_cores.
   int effectiveWorkers() const;
+  // max_cpu_cores asks for one processing thread (see above).
+  bool singleThreaded() const { return max_cpu_cores > 0.0 && max_cpu_cores < 2.0; }
 };
 
 // Reads and validates every "daemon.*" entry of `config.extra`, then writes

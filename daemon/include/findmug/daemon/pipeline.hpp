@@ -1,7 +1,8 @@
 // findmug/daemon/pipeline.hpp — frames in, label images / tables / status out over LCM.
 //
 //   submit(frame) ─▶ [prepare queue] ─▶ prepare ─▶ [segment queue] ─▶ segment ×N
-//                     drop oldest        1 thread    drop oldest       reorder ▼
+//                     the door:          1 thread,   (never full)      reorder ▼
+//                     drop oldest        waits for room downstream
 //                                                   [publish queue] ◀──────────┘
 //                                                     blocking  ─▶ publish (1 thread: owns the LCM
 //                                                                  handle, also sends status)
@@ -25,8 +26,18 @@
 // requires. Table diagnostics (why a cluster was dropped) and map changes
 // (created / confirmed / forgotten) are logged at debug level.
 //
-// Frames are perishable, results are not: the two input queues drop their
-// oldest frame when full (counted), the publish queue applies back-pressure.
+// Frames are perishable, results are not. Frames are dropped at the door:
+// the prepare stage takes a frame only when the segment queue has room, so
+// under overload frames wait in the prepare queue (the pipeline's entry),
+// which drops its oldest when full, before any work is spent on them. A
+// daemon source loop calls waitForRoom() before taking a frame from its
+// source, so that they wait there, before decoding. The publish queue
+// applies back-pressure. Drops are counted by reason (PipelineCounters).
+//
+// CPU budget (daemon.max_cpu_cores): the daemon runs the pipeline
+// sequentially on its source thread below 2 cores, threaded with at most
+// floor(budget) - 1 segmentation workers from 2; status_t reports the
+// process's CPU use against the budget.
 // Each published label image is exactly Segmenter::process of its frame.
 //
 // In ExecutionMode::Sequential every submit() runs all stages on the
@@ -76,6 +87,9 @@ struct PipelineCounters {
   std::uint64_t received = 0;   // submitted frames
   std::uint64_t processed = 0;  // published label images
   std::uint64_t dropped = 0;   // evicted from a full queue / discarded at shutdown (+ source drops)
+  std::uint64_t dropped_at_door = 0;      // of those: before any work (pipeline entry, source)
+  std::uint64_t dropped_in_pipeline = 0;  // after some work (an internal queue was full)
+  std::uint64_t dropped_at_shutdown = 0;  // queued or in flight at stop()
   std::uint64_t rejected = 0;  // failed in a stage (+ bad input the source skipped,
                                // + bad robot pose messages)
   std::uint64_t pending = 0;   // inside the pipeline now
@@ -104,8 +118,21 @@ class Pipeline {
   // Threaded: never blocks (drop-oldest). Sequential: returns after publishing.
   // Returns false after stop().
   bool submit(RgbdFrame frame);
+  // Threaded: waits at most `timeout` until a submitted frame would be
+  // accepted without dropping one (false on timeout or after stop()). A
+  // source loop that calls this before taking its next frame leaves frames
+  // waiting in the source, where overload drops them before they are even
+  // decoded. Sequential: true at once.
+  bool waitForRoom(Clock::duration timeout);
   // Sequential mode: publish a status now (threaded mode does it periodically).
   void publishStatusNow();
+  // Sequential mode: publish a status if daemon.status_period_s has passed
+  // since the last one (submit() does this; an idle caller may too, from any
+  // thread). Threaded mode: no-op.
+  void publishStatusIfDue();
+  // Threads that process frames: 1 in sequential mode (the caller's),
+  // prepare + segmentation workers + publish in threaded mode.
+  int processingThreads() const;
   // Drain: finish every queued frame; Discard: drop queued frames and wait
   // for those in flight at most daemon.shutdown_grace_s (the rest are
   // abandoned, counted as dropped). Then publishes a final status and closes
@@ -151,6 +178,8 @@ class Pipeline {
   TableMap table_map_;
   Clock::time_point started_;
   Clock::time_point last_sequential_status_;
+  std::mutex sequential_status_mutex_;  // guards last_sequential_status_
+  std::mutex lcm_mutex_;                // guards lcm_ (publishes may come from two threads)
   std::atomic<const io::FrameSource*> source_{nullptr};
 
   std::atomic<std::uint64_t> received_{0}, processed_{0}, abandoned_{0};
@@ -160,6 +189,9 @@ class Pipeline {
   std::map<std::string, LatencyWindow> latency_;  // per named stage/sub-stage
   std::string last_error_;
   std::uint64_t last_error_utime_ = 0;
+  Clock::time_point cpu_sample_time_;  // process CPU time at the previous status
+  double cpu_sample_s_ = 0.0;
+  double cpu_used_cores_ = 0.0;
 
   std::unique_ptr<Stage<ResultJob, Published>> publish_;
   std::unique_ptr<Stage<PreparedJob, ResultJob>> segment_;

@@ -18,6 +18,11 @@
 // publisher stage uses it for the status message so that one thread alone
 // owns the output LCM handle.
 //
+// A threaded stage may have a `gate`, run by a worker before it takes the
+// next item: the prepare stage waits there until the segment queue has
+// room, so that under overload frames wait (and are dropped, keeping the
+// newest) in its input queue, before any work is spent on them.
+//
 // `work` returns nullopt when an item yields nothing (e.g. a rejected frame);
 // an exception escaping `work` is reported through `on_error` and treated
 // the same way. Either way the item's place in the order is released, so
@@ -67,6 +72,7 @@ struct StageStats {
   std::size_t queue_capacity = 0;
   std::uint64_t accepted = 0;   // items that entered the queue
   std::uint64_t dropped = 0;    // evicted by the drop policy or discarded at stop
+  std::uint64_t evicted = 0;    // of those, evicted by the drop policy (queue full)
   std::uint64_t completed = 0;  // work returned a value
   std::uint64_t failed = 0;     // work returned nullopt or threw
   std::size_t in_flight = 0;    // taken from the queue, not yet emitted (incl. held for reorder)
@@ -81,15 +87,17 @@ class Stage {
   using OnDrop = std::function<void(const In& dropped)>;
   using OnError = std::function<void(const std::string& what)>;
   using Tick = std::function<void()>;
+  using Gate = std::function<void()>;
 
   Stage(StageOptions options, Work work, Emit emit, OnDrop on_drop = {}, OnError on_error = {},
-        Tick tick = {})
+        Tick tick = {}, Gate gate = {})
       : options_(std::move(options)),
         work_(std::move(work)),
         emit_(std::move(emit)),
         on_drop_(std::move(on_drop)),
         on_error_(std::move(on_error)),
         tick_(std::move(tick)),
+        gate_(std::move(gate)),
         queue_(options_.queue_capacity, options_.policy),
         latency_(options_.latency_window) {
     if (options_.workers < 1) throw std::invalid_argument(options_.name + ": workers must be >= 1");
@@ -125,6 +133,15 @@ class Stage {
     if (r == PushResult::AcceptedDroppedOldest && evicted && on_drop_) on_drop_(*evicted);
     return true;
   }
+
+  // Waits at most `timeout` for room in the input queue; false on timeout or
+  // once the stage is closed.
+  template <typename Rep, typename Period>
+  bool waitForRoom(std::chrono::duration<Rep, Period> timeout) {
+    return queue_.waitForRoom(timeout);
+  }
+  bool closed() const { return queue_.closed(); }
+  std::size_t queueSize() const { return queue_.size(); }
 
   // Sequential mode: run the periodic tick now (threaded mode ticks itself).
   void tick() {
@@ -163,6 +180,7 @@ class Stage {
     s.queue_capacity = queue_.capacity();
     s.accepted = accepted_.load();
     s.dropped = queue_.droppedCount();
+    s.evicted = queue_.evictedCount();
     s.completed = completed_.load();
     s.failed = failed_.load();
     s.in_flight = options_.mode == ExecutionMode::Sequential
@@ -201,6 +219,7 @@ class Stage {
     auto next_tick = Clock::now() + options_.tick_period;
     for (;;) {
       std::optional<typename BoundedQueue<In>::Popped> popped;
+      if (gate_) gate_();
       if (ticking) {
         popped = queue_.popFor(std::max(next_tick - Clock::now(), Clock::duration::zero()));
       } else {
@@ -229,6 +248,7 @@ class Stage {
   OnDrop on_drop_;
   OnError on_error_;
   Tick tick_;
+  Gate gate_;
   BoundedQueue<In> queue_;
   std::vector<std::thread> threads_;
 

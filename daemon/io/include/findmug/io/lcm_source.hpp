@@ -6,8 +6,10 @@
 //     dropped (stats().frames_dropped): the consumer always sees fresh data;
 //   * file:// URLs (replaying a log): the thread waits for room instead, so no
 //     frame is lost, and the end of the log ends the stream (EndOfStream).
+// The queue holds the messages' bytes: next() decodes the message it takes,
+// so a frame dropped from the queue costs no decoding (dropped at the door).
 // Bad messages (truncated, corrupt, wrong type) are logged, counted in
-// stats().frames_rejected and skipped. State: Starting until the first frame,
+// stats().frames_rejected and skipped when next() reaches them. State: Starting until the first frame,
 // Running while frames come, Reconnecting when a live channel has been silent
 // for kSilenceTimeout (the publisher or its camera is gone), EndOfStream at
 // the end of a log.
@@ -21,6 +23,7 @@
 #include <mutex>
 #include <string>
 #include <thread>
+#include <vector>
 
 #include "findmug/io/frame_source.hpp"
 
@@ -65,7 +68,12 @@ class LcmFrameSource : public FrameSourceBase {
 
   std::mutex queue_mutex_;
   std::condition_variable queue_changed_;
-  std::deque<RgbdFrame> queue_;
+  struct RawMessage {
+    std::vector<std::uint8_t> bytes;
+    std::string channel;
+  };
+  std::deque<RawMessage> queue_;
+  std::vector<RawMessage> spare_;  // recycled buffers
   std::atomic<Clock::time_point> last_frame_{Clock::now()};  // last good frame received
   bool finished_ = false;  // thread ended (end of log / fatal LCM error)
   bool stopping_ = false;

@@ -1,0 +1,58 @@
+#!/usr/bin/env bash
+# budget_compare.sh — issue 13's before/after: 30 fps NYU and synthetic input,
+# one build against another, in one run, interleaved per data set:
+#   base        the older build (threaded, its defaults)
+#   new         this build, threaded, its defaults (daemon.max_cpu_cores 0)
+#   new-1core   this build with daemon.max_cpu_cores=1 (every stage on one thread)
+#
+#   tests/bench/budget_compare.sh BASE_BUILD_DIR [--duration 15] [--rate 30] [--out DIR]
+#
+# Each configuration is one tests/bench/daemon_bench.sh run (threaded mode,
+# no rate search); the table of the three goes to DIR/compare.md.
+# --tables-only rewrites compare.md from an existing --out directory.
+set -euo pipefail
+ROOT="$(cd "$(dirname "$0")/../.." && pwd)"
+BASE=$1; shift
+TABLES_ONLY=0 DURATION=15 RATE=30 OUT="$ROOT/build/bench-results/budget-$(date -u +%Y%m%dT%H%M%SZ)"
+while [[ $# -gt 0 ]]; do
+  case "$1" in
+    --duration) DURATION=$2; shift 2 ;;
+    --rate) RATE=$2; shift 2 ;;
+    --out) OUT=$2; shift 2 ;;
+    --tables-only) TABLES_ONLY=1; shift ;;
+    *) echo "budget_compare: unknown argument '$1'" >&2; exit 2 ;;
+  esac
+done
+mkdir -p "$OUT"
+BENCH="$ROOT/tests/bench/daemon_bench.sh"
+MODEL="$ROOT/models/findmug.fmf"
+[[ $TABLES_ONLY == 1 ]] || echo "load before: $(cut -d' ' -f1-3 /proc/loadavg)" > "$OUT/load"
+DATASETS=${DATASETS:-nyu synth}
+for ds in $DATASETS; do
+  [[ $TABLES_ONLY == 1 ]] && break
+  "$BENCH" --build-dir "$BASE" --datasets "$ds" --rates "$RATE" --modes threaded --no-search \
+    --duration "$DURATION" --model "$MODEL" --results "$OUT/base-$ds" --out "$OUT/base-$ds.md"
+  "$BENCH" --build-dir "$ROOT/build" --datasets "$ds" --rates "$RATE" --modes threaded --no-search \
+    --duration "$DURATION" --model "$MODEL" --results "$OUT/new-$ds" --out "$OUT/new-$ds.md"
+  "$BENCH" --build-dir "$ROOT/build" --datasets "$ds" --rates "$RATE" --modes threaded --no-search \
+    --duration "$DURATION" --model "$MODEL" --results "$OUT/new-1core-$ds" \
+    --out "$OUT/new-1core-$ds.md" --set daemon.max_cpu_cores=1
+done
+[[ $TABLES_ONLY == 1 ]] || echo "load after: $(cut -d' ' -f1-3 /proc/loadavg)" >> "$OUT/load"
+{
+  echo "| data | build | input fps | out fps | frames in | published | dropped | p50 ms | p99 ms | max ms | CPU % | CPU ms per published frame | peak RSS MB |"
+  echo "|---|---|---|---|---|---|---|---|---|---|---|---|---|"
+  for ds in nyu synth; do
+    for b in base new new-1core; do
+      [[ -f "$OUT/$b-$ds.md" ]] || continue
+      row=$(grep "^| $ds | $RATE | threaded" "$OUT/$b-$ds.md" || true)
+      # daemon_bench's columns: data rate mode in out frames published labelled dropped p50 p99 max cpu rss
+      awk -F'|' -v b="$b" -v ds="$ds" 'NF > 10 {
+        per = ($6 + 0 > 0) ? sprintf("%.1f", 10 * $14 / $6) : "-";
+        printf "| %s | %s |%s|%s|%s|%s|%s|%s|%s|%s|%s| %s |%s|\n", ds, b, $5, $6, $7, $8, $10, $11, $12, $13, $14, per, $15 }' <<< "$row"
+    done
+  done
+  echo
+  cat "$OUT/load"
+} > "$OUT/compare.md"
+cat "$OUT/compare.md"
