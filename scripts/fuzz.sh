@@ -10,6 +10,7 @@
 #   scripts/fuzz.sh [SECONDS] [TARGET...]
 #   BUILD_DIR=build-fuzz JOBS=2 FUZZ_RUNS=1000000 scripts/fuzz.sh 0 model
 #     FUZZ_RUNS: stop each target after this many executions (with SECONDS=0: no time limit)
+#     FUZZ_NO_BUILD=1: run what is built (e.g. while another build runs in BUILD_DIR)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 ROOT=$PWD
@@ -32,7 +33,8 @@ if [[ ! -f "$BUILD_DIR/CMakeCache.txt" ]]; then
 fi
 build_targets=()
 for t in "${TARGETS[@]}"; do build_targets+=(--target "fuzz_$t"); done
-cmake --build "$BUILD_DIR" -j"${BUILD_JOBS:-$(nproc)}" "${build_targets[@]}"
+[[ "${FUZZ_NO_BUILD:-}" == 1 ]] ||
+  cmake --build "$BUILD_DIR" -j"${BUILD_JOBS:-$(nproc)}" "${build_targets[@]}"
 
 # ASan's default 256 MB quarantine alone would trip the 256 MB RSS limit.
 export ASAN_OPTIONS=${ASAN_OPTIONS:-quarantine_size_mb=16:detect_leaks=1:abort_on_error=1}
