@@ -6,7 +6,11 @@
 #
 #   scripts/soak.sh 3600 [--build-dir build] [--out DIR] [--rate 30] [--period 5]
 #       [--warmup 60] [--max-rss-growth-mb 5] [--max-fd-growth 0] [--max-thread-growth 0]
-#       [--max-drops N] [--source SPEC]
+#       [--max-drops N] [--source SPEC] [--flood N]
+#
+# --flood N: meanwhile findmug-lcm-flood sends N hostile datagrams (random bytes,
+# broken LCM messages and fragments) to the same udpm group; the daemon must
+# stay up with flat fds/threads and bounded RSS, counting what it rejects.
 #
 # Input: the 31 NYU Depth V2 frames looped ($FINDMUG_DATA or ../shared/data),
 # published by findmug-replay as a camera driver would. Everything runs inside a
@@ -24,6 +28,7 @@ RATE=30
 PERIOD=5
 WARMUP=60
 SOURCE=""
+FLOOD=0
 BOUNDS=()
 ARGS=("$DURATION" "$@")
 while [[ $# -gt 0 ]]; do
@@ -34,6 +39,7 @@ while [[ $# -gt 0 ]]; do
     --period) PERIOD=$2; shift 2 ;;
     --warmup) WARMUP=$2; shift 2 ;;
     --source) SOURCE=$2; shift 2 ;;
+    --flood) FLOOD=$2; shift 2 ;;
     --max-rss-growth-mb|--max-fd-growth|--max-thread-growth|--max-drops) BOUNDS+=("$1" "$2"); shift 2 ;;
     *) echo "soak.sh: unknown argument '$1'" >&2; exit 2 ;;
   esac
@@ -92,6 +98,13 @@ DAEMON=$!; PIDS+=("$DAEMON")
 SAMPLER_PID=$!; PIDS+=("$SAMPLER_PID")
 sleep 3   # the daemon opens its input before the first frame is sent
 kill -0 "$DAEMON" 2>/dev/null || { cat "$OUT/daemon.log" >&2; echo "soak.sh: findmugd did not start" >&2; exit 2; }
+if [[ "$FLOOD" -gt 0 ]]; then
+  FLOODER="$BUILD/tests/soak/findmug-lcm-flood"
+  [[ -x "$FLOODER" ]] || { echo "soak.sh: $FLOODER missing" >&2; exit 2; }
+  # Spread over the first 80% of the run.
+  "$FLOODER" --count "$FLOOD" --rate $((FLOOD * 10 / (DURATION * 8) + 1)) > "$OUT/flood.log" 2>&1 &
+  PIDS+=("$!")
+fi
 "$REPLAY" --source "$SOURCE" --rate "$RATE" --duration "$DURATION" --url "$URL" \
   --count-file "$OUT/sent" > "$OUT/replay.log" 2>&1 || { cat "$OUT/replay.log" >&2; exit 2; }
 set +e
@@ -107,6 +120,7 @@ stop_ms=$(( ($(date +%s%N) - stopped_at) / 1000000 ))
 PIDS=()
 {
   echo "frames sent: $(cat "$OUT/sent" 2>/dev/null || echo '?')"
+  [[ "$FLOOD" -gt 0 ]] && echo "flood: $(tr '\n' ' ' < "$OUT/flood.log")"
   echo "daemon exit code $daemon_rc, ${stop_ms} ms after SIGTERM"
   echo "end: $(date -u +%FT%TZ), load: $(cut -d' ' -f1-3 /proc/loadavg)"
 } | tee -a "$OUT/run.txt"

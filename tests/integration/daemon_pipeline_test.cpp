@@ -460,5 +460,60 @@ TEST(DaemonPipeline, WatchdogIsWithheldWhileTheSegmentStageIsStuck) {
       << c.received << " received, " << c.processed << " processed, " << c.pending << " pending";
 }
 
+// Fault injection (issue 11): the frame stream repeats seq/utime, reorders,
+// jumps back an hour (a log replay restarted) and carries a corrupt message
+// after every third frame. Every good frame must come out, in input order,
+// with its own seq and utime; every corrupt one is counted as rejected.
+TEST(DaemonFaults, StreamThatRepeatsReordersJumpsBackAndHasACorruptFrameEveryThird) {
+  FINDMUG_REQUIRE_DATA(nyu, "nyuv2_labeled");
+  ASSERT_TRUE(sharedModel());
+  TempDir tmp;
+  DatasetFolder ds(nyu.string());
+  const rgbd_frame_t base = io::encodeRgbdFrame(ds.load(3).frame);
+  const std::int64_t u0 = 1'700'000'000'000'000;
+  const std::vector<std::pair<std::int64_t, std::int64_t>> seq_utime = {
+      {0, u0}, {1, u0 + 33'000}, {2, u0 + 66'000}, {3, u0 + 99'000},
+      {3, u0 + 99'000},                                    // repeated
+      {2, u0 + 66'000},                                    // reordered: older than the last
+      {0, u0 - 3'600'000'000}, {1, u0 - 3'600'000'000 + 33'000},  // replay restarted
+      {7, u0 + 500'000}};                                  // jumps ahead again
+  std::vector<test::LogMessage> in;
+  const std::string ch(io::kRgbdChannel);
+  int corrupt = 0;
+  for (std::size_t i = 0; i < seq_utime.size(); ++i) {
+    rgbd_frame_t m = base;
+    m.seq = seq_utime[i].first;
+    m.utime = seq_utime[i].second;
+    const auto bytes = io::encodeMessage(m);
+    in.push_back({ch, bytes});
+    if (i % 3 == 2) {  // a corrupt frame every third: cut inside the colour payload
+      in.push_back({ch, std::vector<std::uint8_t>(bytes.begin(), bytes.end() - 7)});
+      ++corrupt;
+    }
+  }
+  const std::string in_log = tmp.str("in.lcmlog");
+  test::writeLcmLog(in_log, in);
+  const std::string out = tmp.str("out.lcmlog");
+  Config config = baseConfig("lcm:" + ch + "?url=file://" + in_log + "?speed=0", out);
+  config.extra["daemon.queue_capacity"] = "16";
+  const DaemonConfig dc = resolveDaemonConfig(config);
+  {
+    Daemon daemon(config, dc);
+    EXPECT_EQ(daemon.run(), 0);
+  }
+  const Published published = readPublished(out);
+  ASSERT_EQ(published.labels.size(), seq_utime.size());
+  for (std::size_t i = 0; i < seq_utime.size(); ++i) {
+    EXPECT_EQ(published.labels[i].seq, seq_utime[i].first) << i;
+    EXPECT_EQ(static_cast<std::int64_t>(published.labels[i].utime), seq_utime[i].second) << i;
+  }
+  ASSERT_FALSE(published.statuses.empty());
+  const status_t& last = published.statuses.back();
+  EXPECT_EQ(last.frames_received, static_cast<std::int64_t>(seq_utime.size()));
+  EXPECT_EQ(last.frames_processed, static_cast<std::int64_t>(seq_utime.size()));
+  EXPECT_EQ(last.frames_dropped, 0);
+  EXPECT_EQ(last.frames_rejected, corrupt);
+}
+
 }  // namespace
 }  // namespace findmug::daemon
