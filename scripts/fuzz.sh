@@ -11,6 +11,8 @@
 #   BUILD_DIR=build-fuzz JOBS=2 FUZZ_RUNS=1000000 scripts/fuzz.sh 0 model
 #     FUZZ_RUNS: stop each target after this many executions (with SECONDS=0: no time limit)
 #     FUZZ_NO_BUILD=1: run what is built (e.g. while another build runs in BUILD_DIR)
+#     FUZZ_TIMEOUT: seconds per input (default 1; wall clock, so raise it on a loaded machine
+#       and re-run any timeout-* input alone to tell a slow input from a starved process)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 ROOT=$PWD
@@ -52,7 +54,7 @@ run_one() {
   mkdir -p "$corpus" "$findings" "$FINDMUG_FUZZ_TMP"
   local extra=()
   [[ -d tests/fuzz/regressions/$t ]] && extra+=("tests/fuzz/regressions/$t")
-  local limits=(-rss_limit_mb=256 -malloc_limit_mb=256 -timeout=1 -print_final_stats=1
+  local limits=(-rss_limit_mb=256 -malloc_limit_mb=256 -timeout="${FUZZ_TIMEOUT:-1}" -print_final_stats=1
                 -artifact_prefix="$findings/")
   [[ "$SECONDS_EACH" != 0 ]] && limits+=(-max_total_time="$SECONDS_EACH")
   [[ -n "${FUZZ_RUNS:-}" ]] && limits+=(-runs="$FUZZ_RUNS")
