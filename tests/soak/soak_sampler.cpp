@@ -195,7 +195,7 @@ void writeSvg(const std::string& path, const std::vector<Sample>& samples) {
   };
   t = col([](const Sample& s) { return s.t_s; });
   std::ofstream out(path);
-  out << "<svg xmlns='http://www.w3.org/2000/svg' width='920' height='900' font-family='sans-serif'>\n"
+  out << "<svg xmlns='http://www.w3.org/2000/svg' width='920' height='940' font-family='sans-serif'>\n"
       << "<rect width='100%' height='100%' fill='white'/>\n";
   panel(out, 30, "RSS (MB)", t, {{"rss", "#c00", col([](const Sample& s) { return s.rss_kb / 1024.0; })}});
   panel(out, 210, "open fds, threads", t,
