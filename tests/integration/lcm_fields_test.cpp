@@ -232,19 +232,23 @@ TEST(LcmFields, EveryLengthFieldAt0MinusOneInt32MaxAnd0xFFFFFFFFIsRejected) {
       }
     }
   }
+  RecordProperty("mutated_messages", static_cast<int>(mutated));
   EXPECT_GT(mutated, 100u);  // the walks found the fields
 }
 
 TEST(LcmFields, EveryMessageTruncatedAtEveryByteIsRejected) {
+  std::size_t truncations = 0;
   for (const auto& c : cases()) {
     for (std::size_t n = 0; n < c.bytes.size(); ++n) {
       const Bytes cut(c.bytes.begin(), c.bytes.begin() + static_cast<std::ptrdiff_t>(n));
       expectRejected(c, cut, "truncated at " + std::to_string(n));
     }
+    truncations += c.bytes.size();
     Bytes longer = c.bytes;
     longer.push_back(0);
     expectRejected(c, longer, "one trailing byte");
   }
+  RecordProperty("truncated_messages", static_cast<int>(truncations));
 }
 
 }  // namespace
