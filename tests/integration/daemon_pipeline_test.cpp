@@ -415,7 +415,7 @@ TEST(DaemonPipeline, WatchdogIsWithheldWhileTheSegmentStageIsStuck) {
   bool stuck = false, release = false;
   PipelineHooks hooks;
   hooks.before_segment = [&](const RgbdFrame& frame) {
-    if (frame.seq != 3) return;
+    if (frame.seq < 3) return;  // not == 3: under load frame 3 itself may be dropped
     std::unique_lock lock(m);
     stuck = true;
     cv.notify_all();
