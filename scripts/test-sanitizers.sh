@@ -60,7 +60,7 @@ for step in "${STEPS[@]}"; do
       timed "tsan build" cmake --build "$TSAN_DIR" -j"$JOBS" --target daemon_queue_test \
         --target daemon_pipeline_test --target findmugd
       timed "tsan tests" ctest --test-dir "$TSAN_DIR" --output-on-failure -j"$JOBS" --timeout 1800 \
-        -R '^(BoundedQueue|ReorderBuffer|Stage|LatencyWindow|RateMeter|WatchdogGate|DaemonPipeline)\.' ;;
+        -R '^(BoundedQueue|ReorderBuffer|Stage|LatencyWindow|RateMeter|WatchdogGate|DaemonPipeline|DaemonFaults)\.' ;;
     *) echo "test-sanitizers: unknown step '$step' (asan, fuzz, tsan)" >&2; exit 2 ;;
   esac
 done
