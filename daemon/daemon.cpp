@@ -32,25 +32,38 @@ std::shared_ptr<const RandomForest> loadModel(const std::string& path, std::stri
 }
 
 Daemon::Daemon(const Config& config, const DaemonConfig& daemon_config, PipelineHooks hooks)
-    : daemon_config_(daemon_config) {
+    : Daemon(config, daemon_config, std::unique_ptr<io::FrameSource>(), std::move(hooks)) {}
+
+Daemon::Daemon(const Config& config, const DaemonConfig& daemon_config,
+               std::unique_ptr<io::FrameSource> source, PipelineHooks hooks)
+    : daemon_config_(daemon_config), source_(std::move(source)) {
   std::string model_id;
   auto forest = loadModel(daemon_config_.model_path, &model_id);
   spdlog::info("model {} loaded from {} ({} trees)", model_id, daemon_config_.model_path,
                forest->trees().size());
-  try {
-    io::SourceSpec spec = io::parseSourceSpec(daemon_config_.source);
-    // An lcm source without its own url listens where we publish.
-    if (spec.kind == "lcm" && spec.options.lcm_url.empty()) {
-      spec.options.lcm_url = effectiveLcmUrl(daemon_config_);
+  double rate_hz = 0.0;
+  if (!source_) {
+    try {
+      io::SourceSpec spec = io::parseSourceSpec(daemon_config_.source);
+      // An lcm source without its own url listens where we publish.
+      if (spec.kind == "lcm" && spec.options.lcm_url.empty()) {
+        spec.options.lcm_url = effectiveLcmUrl(daemon_config_);
+      }
+      rate_hz = spec.options.rate_hz;
+      source_ = io::makeSource(spec);
+    } catch (const Error& e) {
+      throw Error(std::string("daemon.source: ") + e.what());
     }
-    source_ = io::makeSource(spec);
-  } catch (const Error& e) {
-    throw Error(std::string("daemon.source: ") + e.what());
   }
   // A budget below two cores: every stage on the source thread, one frame
   // after another (the source's queue is then the door where frames wait).
   const ExecutionMode mode =
       daemon_config_.singleThreaded() ? ExecutionMode::Sequential : ExecutionMode::Threaded;
+  // A paced file source legitimately waits one period inside next().
+  const double timeout_s =
+      std::max(daemon_config_.source_timeout_s, rate_hz > 0.0 ? 3.0 / rate_hz : 0.0);
+  source_timeout_ = std::chrono::duration_cast<std::chrono::nanoseconds>(
+      std::chrono::duration<double>(timeout_s));
   pipeline_ = std::make_unique<Pipeline>(config.segmenter, daemon_config_, std::move(forest),
                                          model_id, mode, std::move(hooks));
   pipeline_->attachSource(source_.get());
@@ -84,6 +97,7 @@ void Daemon::sourceLoop() {
         break;
       }
     }
+    source_call_ns_.store(nowNs());
     source_in_next_.store(true);
     std::optional<RgbdFrame> frame = source_->next();
     source_in_next_.store(false);
@@ -101,13 +115,21 @@ ProgressSnapshot Daemon::progress() const {
   // FrameSource::next() has no timeout, so a driver call hanging inside a
   // "running" source cannot be told apart from a quiet one; see service.hpp.
   const io::SourceState state = source_->state();
+  // ... unless it has reported "running" for longer than the source timeout
+  // without returning: a driver call that hangs (sourceHung).
   const bool live_wait = (source_in_next_.load() && state != io::SourceState::Failed &&
-                          state != io::SourceState::Stopped) ||
+                          state != io::SourceState::Stopped && !sourceHung(Clock::now())) ||
                          (source_finished_.load() && state == io::SourceState::EndOfStream);
   p.source_heartbeat =
       live_wait ? Clock::now()
                 : Clock::time_point(std::chrono::nanoseconds(source_last_return_ns_.load()));
   return p;
+}
+
+bool Daemon::sourceHung(Clock::time_point now) const {
+  if (!source_in_next_.load() || source_->state() != io::SourceState::Running) return false;
+  const auto entered = Clock::time_point(std::chrono::nanoseconds(source_call_ns_.load()));
+  return now - entered > source_timeout_;
 }
 
 int Daemon::run() {
@@ -129,6 +151,7 @@ int Daemon::run() {
   auto next_ping = Clock::now();
   auto next_status_text = Clock::now() + std::chrono::seconds(5);
   bool warned_unhealthy = false;
+  bool reported_hung = false;
 
   // With exit_at_end_of_stream off, an exhausted source leaves the daemon up
   // and idle (status still published) until it is asked to stop.
@@ -141,6 +164,19 @@ int Daemon::run() {
     // Sequential mode: status also while no frame comes (no-op when threaded).
     pipeline_->publishStatusIfDue();
     const auto now = Clock::now();
+    const bool hung = sourceHung(now);
+    if (hung && !reported_hung) {
+      spdlog::error(
+          "source {} is hung: no frame, no error and no state change for {:.1f} s while "
+          "'running' (daemon.source_timeout_s); the watchdog is no longer fed",
+          source_->describe(), std::chrono::duration<double>(source_timeout_).count());
+      notifier_.status("source hung: no frame for " +
+                       fmt::format("{:.1f}", std::chrono::duration<double>(source_timeout_).count()) +
+                       " s while running");
+    } else if (!hung && reported_hung) {
+      spdlog::info("source {} delivers again", source_->describe());
+    }
+    reported_hung = hung;
     if (gate && now >= next_ping) {
       if (gate->healthy(progress(), now)) {
         notifier_.watchdog();
@@ -151,7 +187,7 @@ int Daemon::run() {
       }
       next_ping = now + ping_period;
     }
-    if (now >= next_status_text) {
+    if (now >= next_status_text && !hung) {
       // The same figures as status_t, for `systemctl status` and the journal.
       const status_t s = pipeline_->makeStatus();
       const auto total =

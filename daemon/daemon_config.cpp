@@ -158,6 +158,11 @@ const std::map<std::string, Key>& keys() {
           d.shutdown_grace_s = toDouble(k, v, 0, 10);
         },
         [](const D& d) { return fmt(d.shutdown_grace_s); }}},
+      {"daemon.source_timeout_s",
+       {[](D& d, const std::string& k, const std::string& v) {
+          d.source_timeout_s = toDouble(k, v, 0.1, 3600);
+        },
+        [](const D& d) { return fmt(d.source_timeout_s); }}},
       {"daemon.log_level",
        {[](D& d, const std::string& k, const std::string& v) {
           if (v != "trace" && v != "debug" && v != "info" && v != "warn" && v != "error") {

@@ -20,6 +20,8 @@ packages=(
   default-jdk-headless libjchart2d-java xvfb x11-apps imagemagick
   # network namespaces for the udpm tests
   iproute2 util-linux
+  # sanitizer builds and fuzzing (scripts/test-sanitizers.sh, scripts/fuzz.sh)
+  clang-14 libfuzzer-14-dev ccache
 )
 
 missing=()

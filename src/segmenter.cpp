@@ -153,7 +153,7 @@ void checkModelMatchesConfig(const RandomForest& forest, const SegmenterConfig& 
   std::string differences;
   for (const auto& [key, value] : trained) {
     const auto it = std::find_if(current.begin(), current.end(),
-                                 [&](const auto& kv) { return kv.first == key; });
+                                 [&name = key](const auto& kv) { return kv.first == name; });
     if (it == current.end()) {
       differences += "\n  " + key + ": trained with " + value + ", unknown to this build";
     } else if (it->second != value) {

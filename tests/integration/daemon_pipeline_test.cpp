@@ -510,7 +510,7 @@ TEST(DaemonPipeline, WatchdogIsWithheldWhileTheSegmentStageIsStuck) {
   bool stuck = false, release = false;
   PipelineHooks hooks;
   hooks.before_segment = [&](const RgbdFrame& frame) {
-    if (frame.seq != 3) return;
+    if (frame.seq < 3) return;  // not == 3: under load frame 3 itself may be dropped
     std::unique_lock lock(m);
     stuck = true;
     cv.notify_all();
@@ -553,6 +553,160 @@ TEST(DaemonPipeline, WatchdogIsWithheldWhileTheSegmentStageIsStuck) {
   EXPECT_EQ(pings_while_stuck, 0);
   EXPECT_GT(pings_after_recovery, 0)
       << c.received << " received, " << c.processed << " processed, " << c.pending << " pending";
+}
+
+// Fault injection (issue 11): the frame stream repeats seq/utime, reorders,
+// jumps back an hour (a log replay restarted) and carries a corrupt message
+// after every third frame. Every good frame must come out, in input order,
+// with its own seq and utime; every corrupt one is counted as rejected.
+TEST(DaemonFaults, StreamThatRepeatsReordersJumpsBackAndHasACorruptFrameEveryThird) {
+  FINDMUG_REQUIRE_DATA(nyu, "nyuv2_labeled");
+  ASSERT_TRUE(sharedModel());
+  TempDir tmp;
+  DatasetFolder ds(nyu.string());
+  const rgbd_frame_t base = io::encodeRgbdFrame(ds.load(3).frame);
+  const std::int64_t u0 = 1'700'000'000'000'000;
+  const std::vector<std::pair<std::int64_t, std::int64_t>> seq_utime = {
+      {0, u0}, {1, u0 + 33'000}, {2, u0 + 66'000}, {3, u0 + 99'000},
+      {3, u0 + 99'000},                                    // repeated
+      {2, u0 + 66'000},                                    // reordered: older than the last
+      {0, u0 - 3'600'000'000}, {1, u0 - 3'600'000'000 + 33'000},  // replay restarted
+      {7, u0 + 500'000}};                                  // jumps ahead again
+  std::vector<test::LogMessage> in;
+  const std::string ch(io::kRgbdChannel);
+  int corrupt = 0;
+  for (std::size_t i = 0; i < seq_utime.size(); ++i) {
+    rgbd_frame_t m = base;
+    m.seq = seq_utime[i].first;
+    m.utime = seq_utime[i].second;
+    const auto bytes = io::encodeMessage(m);
+    in.push_back({ch, bytes});
+    if (i % 3 == 2) {  // a corrupt frame every third: cut inside the colour payload
+      in.push_back({ch, std::vector<std::uint8_t>(bytes.begin(), bytes.end() - 7)});
+      ++corrupt;
+    }
+  }
+  const std::string in_log = tmp.str("in.lcmlog");
+  test::writeLcmLog(in_log, in);
+  const std::string out = tmp.str("out.lcmlog");
+  Config config = baseConfig("lcm:" + ch + "?url=file://" + in_log + "?speed=0", out);
+  config.extra["daemon.queue_capacity"] = "16";
+  const DaemonConfig dc = resolveDaemonConfig(config);
+  {
+    Daemon daemon(config, dc);
+    EXPECT_EQ(daemon.run(), 0);
+  }
+  const Published published = readPublished(out);
+  ASSERT_EQ(published.labels.size(), seq_utime.size());
+  for (std::size_t i = 0; i < seq_utime.size(); ++i) {
+    EXPECT_EQ(published.labels[i].seq, seq_utime[i].first) << i;
+    EXPECT_EQ(static_cast<std::int64_t>(published.labels[i].utime), seq_utime[i].second) << i;
+  }
+  ASSERT_FALSE(published.statuses.empty());
+  const status_t& last = published.statuses.back();
+  EXPECT_EQ(last.frames_received, static_cast<std::int64_t>(seq_utime.size()));
+  EXPECT_EQ(last.frames_processed, static_cast<std::int64_t>(seq_utime.size()));
+  EXPECT_EQ(last.frames_dropped, 0);
+  EXPECT_EQ(last.frames_rejected, corrupt);
+}
+
+// A source that hangs on command: it delivers copies of one frame at 20 fps,
+// and while hang(true) it blocks inside next() still reporting Running — a
+// camera driver call that never returns — until hang(false) or stop().
+class CommandedSource : public io::FrameSourceBase {
+ public:
+  explicit CommandedSource(RgbdFrame frame) : frame_(std::move(frame)) {
+    setState(io::SourceState::Running);
+  }
+  std::optional<RgbdFrame> next() override {
+    {
+      std::unique_lock lock(m_);
+      cv_.wait(lock, [&] { return stopped_ || !hang_; });
+      if (stopped_) return std::nullopt;
+    }
+    if (!pace(20.0)) return std::nullopt;
+    RgbdFrame f = frame_;
+    f.seq = seq_++;
+    f.utime = io::hostUtimeNow();
+    recordDelivered();
+    return f;
+  }
+  void hang(bool on) {
+    std::lock_guard lock(m_);
+    hang_ = on;
+    cv_.notify_all();
+  }
+  std::string describe() const override { return "commanded test source"; }
+
+ protected:
+  void onStop() override {
+    std::lock_guard lock(m_);
+    stopped_ = true;
+    cv_.notify_all();
+  }
+
+ private:
+  RgbdFrame frame_;
+  std::int64_t seq_ = 0;
+  std::mutex m_;
+  std::condition_variable cv_;
+  bool hang_ = false, stopped_ = false;
+};
+
+// Fault injection (issue 11): every blocking read has a timeout. A source
+// that hangs in next() while "running" is detected after daemon.source_timeout_s,
+// reported (log, systemd STATUS=), and the watchdog is no longer fed, so
+// systemd restarts the service; when frames return the pings resume.
+TEST(DaemonFaults, HungSourceIsReportedAndStarvesTheWatchdog) {
+  FINDMUG_REQUIRE_DATA(nyu, "nyuv2_labeled");
+  ASSERT_TRUE(sharedModel());
+  TempDir tmp;
+  test::NotifySocket notify(tmp.str("notify.sock"));
+  setenv("NOTIFY_SOCKET", notify.path().c_str(), 1);
+  // WatchdogSec 3 s: stall limit 1.5 s, a ping every second while healthy.
+  setenv("WATCHDOG_USEC", "3000000", 1);
+  Config config = baseConfig("lcm:unused", tmp.str("o.lcmlog"));
+  config.extra["daemon.source_timeout_s"] = "1";
+  const DaemonConfig dc = resolveDaemonConfig(config);
+  DatasetFolder ds(nyu.string());
+  auto owned = std::make_unique<CommandedSource>(ds.load(3).frame);
+  CommandedSource* source = owned.get();
+  auto daemon = std::make_unique<Daemon>(config, dc, std::move(owned));
+  int code = -1;
+  std::thread runner([&] { code = daemon->run(); });
+  std::vector<std::string> other;
+  auto count_pings = [&](std::chrono::milliseconds window) {
+    int pings = 0;
+    const auto end = std::chrono::steady_clock::now() + window;
+    while (std::chrono::steady_clock::now() < end) {
+      if (auto msg = notify.receive(20ms)) {
+        if (msg->find("WATCHDOG=1") != std::string::npos) {
+          ++pings;
+        } else {
+          other.push_back(*msg);
+        }
+      }
+    }
+    return pings;
+  };
+  const int pings_running = count_pings(4000ms);
+  source->hang(true);
+  count_pings(3000ms);  // timeout (1 s) + stall limit (1.5 s) + what was already sent
+  const int pings_while_hung = count_pings(3000ms);
+  source->hang(false);
+  const int pings_after = count_pings(5000ms);
+  const auto delivered = source->stats().frames_delivered;
+  daemon->requestStop();
+  runner.join();
+  unsetenv("NOTIFY_SOCKET");
+  unsetenv("WATCHDOG_USEC");
+  EXPECT_EQ(code, 0);
+  EXPECT_GT(pings_running, 0);
+  EXPECT_EQ(pings_while_hung, 0);
+  EXPECT_GT(pings_after, 0) << delivered << " frames delivered";
+  bool reported = false;
+  for (const auto& m : other) reported |= m.find("STATUS=source hung") != std::string::npos;
+  EXPECT_TRUE(reported) << "no STATUS=source hung among " << other.size() << " messages";
 }
 
 }  // namespace

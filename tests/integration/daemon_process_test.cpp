@@ -193,5 +193,77 @@ TEST(Findmugd, InvalidConfigValueStopsStartupNamingTheKey) {
   EXPECT_NE(readFile(tmp.str("stderr2.txt")).find("mrf.lambda"), std::string::npos);
 }
 
+// Fault injection (issue 11): the whole process stalls (SIGSTOP), as a hung
+// kernel call or a debugger would stall it. systemd restarts a service whose
+// keep-alives stop: none may arrive while it is stopped, they resume after
+// SIGCONT, and a SIGTERM while frames are in flight still exits 0.
+TEST(Findmugd, SigstopStopsTheKeepAlivesAndSigtermMidFrameExitsCleanly) {
+  FINDMUG_REQUIRE_DATA(nyu, "nyuv2_labeled");
+  TempDir tmp;
+  const std::string model = writeModel(nyu, tmp);
+  {
+    std::ofstream yaml(tmp.str("findmugd.yaml"));
+    yaml << "overseg:\n  method: organized\n"
+         << "daemon:\n"
+         << "  source: dataset:" << nyu.string() << "?rate_hz=10&loop=1\n"
+         << "  model_path: " << model << "\n"
+         << "  workers: 2\n";
+  }
+  test::NotifySocket notify(tmp.str("notify.sock"));
+  const std::string out = tmp.str("out.lcmlog");
+  const pid_t pid = spawnDaemon({"--config", tmp.str("findmugd.yaml")},
+                                {"NOTIFY_SOCKET=" + notify.path(), "WATCHDOG_USEC=900000",
+                                 "LCM_DEFAULT_URL=file://" + out + "?mode=w"},
+                                tmp.str("stderr.txt"));
+  ASSERT_GT(pid, 0);
+  std::vector<std::string> seen;
+  if (!awaitMessage(notify, "READY=1", 120s, seen) ||
+      !awaitMessage(notify, "WATCHDOG=1", 30s, seen)) {
+    kill(pid, SIGKILL);
+    waitFor(pid, 10s);
+    FAIL() << "no READY/WATCHDOG; daemon output:\n" << readFile(tmp.str("stderr.txt"));
+  }
+  ASSERT_EQ(kill(pid, SIGSTOP), 0);
+  // Whatever was already in the socket before the stop took effect.
+  while (notify.receive(200ms)) {
+  }
+  int while_stopped = 0;
+  for (const auto end = Clock::now() + 3s; Clock::now() < end;) {
+    if (auto m = notify.receive(100ms); m && m->find("WATCHDOG=1") != std::string::npos) {
+      ++while_stopped;
+    }
+  }
+  ASSERT_EQ(kill(pid, SIGCONT), 0);
+  seen.clear();
+  const bool resumed = awaitMessage(notify, "WATCHDOG=1", 30s, seen);
+  // Wait until frames have been processed (the STATUS= line, every 10 s), so
+  // that the SIGTERM lands in a running stream: at 10 fps on two workers
+  // frames are always in flight.
+  bool processing = false;
+  for (const auto end = Clock::now() + 90s; !processing && Clock::now() < end;) {
+    const auto m = notify.receive(100ms);
+    processing = m && m->find(" processed") != std::string::npos &&
+                 m->find(", 0 processed") == std::string::npos;
+  }
+  EXPECT_TRUE(processing) << readFile(tmp.str("stderr.txt"));
+  ASSERT_EQ(kill(pid, SIGTERM), 0);
+  const auto status = waitFor(pid, 30s);
+  if (!status) kill(pid, SIGKILL), waitFor(pid, 10s);
+  EXPECT_EQ(while_stopped, 0) << "keep-alives from a stopped process";
+  EXPECT_TRUE(resumed) << "no keep-alive after SIGCONT\n" << readFile(tmp.str("stderr.txt"));
+  ASSERT_TRUE(status) << "findmugd did not exit after SIGTERM";
+  ASSERT_TRUE(WIFEXITED(*status)) << readFile(tmp.str("stderr.txt"));
+  EXPECT_EQ(WEXITSTATUS(*status), 0) << readFile(tmp.str("stderr.txt"));
+  const auto messages = test::readLcmLog(out);
+  ASSERT_FALSE(messages.empty());
+  ASSERT_EQ(messages.back().channel, io::kStatusChannel);
+  const auto final_status = io::decodeMessage<status_t>(
+      messages.back().data.data(), messages.back().data.size(), messages.back().channel);
+  EXPECT_GT(final_status.frames_processed, 0);
+  EXPECT_EQ(
+      final_status.frames_received,
+      final_status.frames_processed + final_status.frames_dropped + final_status.frames_rejected);
+}
+
 }  // namespace
 }  // namespace findmug::daemon

@@ -41,6 +41,10 @@ namespace findmug::daemon {
 class Daemon {
  public:
   Daemon(const Config& config, const DaemonConfig& daemon_config, PipelineHooks hooks = {});
+  // With a ready-made source instead of daemon.source (tests: a source that
+  // fails or hangs on command).
+  Daemon(const Config& config, const DaemonConfig& daemon_config,
+         std::unique_ptr<io::FrameSource> source, PipelineHooks hooks = {});
   ~Daemon();
   Daemon(const Daemon&) = delete;
   Daemon& operator=(const Daemon&) = delete;
@@ -57,6 +61,9 @@ class Daemon {
  private:
   void sourceLoop();
   ProgressSnapshot progress() const;
+  // True when the source has been inside next() longer than the source
+  // timeout while reporting Running (see DaemonConfig::source_timeout_s).
+  bool sourceHung(std::chrono::steady_clock::time_point now) const;
 
   DaemonConfig daemon_config_;
   SystemdNotifier notifier_;
@@ -67,6 +74,8 @@ class Daemon {
   std::atomic<bool> source_finished_{false};
   std::atomic<bool> source_in_next_{false};
   std::atomic<std::int64_t> source_last_return_ns_{0};  // steady clock, ns
+  std::atomic<std::int64_t> source_call_ns_{0};         // when next() was entered
+  std::chrono::nanoseconds source_timeout_{};
 };
 
 // The model file as a forest plus "FILE:ID" for status messages; throws

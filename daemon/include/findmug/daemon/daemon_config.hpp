@@ -44,6 +44,10 @@ struct DaemonConfig {
   bool publish_tables = true;         // publish FINDMUG_TABLES
   bool exit_at_end_of_stream = true;  // finite source exhausted: drain, publish, exit 0
   double shutdown_grace_s = 1.0;      // on SIGTERM, wait this long for frames in flight
+  // A source that stays inside next() this long while it reports "running"
+  // (no frame, no error, no state change) counts as hung: logged, and the
+  // watchdog is no longer fed. Paced file sources get at least 3 periods.
+  double source_timeout_s = 10.0;
   std::string log_level = "info";     // trace, debug, info, warn, error
 
   // Robot pose input (FINDMUG_ROBOT_POSE) and the table map (FINDMUG_TABLE_MAP).

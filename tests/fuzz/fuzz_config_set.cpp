@@ -1,0 +1,25 @@
+// Fuzz target config_set: --set key=value lines (findmugd/tools flags) -> applyOverride + resolveDaemonConfig.
+#include <cstddef>
+#include <cstdint>
+#include <sstream>
+#include <string>
+
+#include "findmug/config.hpp"
+#include "findmug/daemon/daemon_config.hpp"
+#include "findmug/error.hpp"
+#include "fuzz_support.hpp"
+
+extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
+  try {
+    // One --set key=value per line, applied in order to the defaults.
+    findmug::Config config;
+    std::istringstream lines(std::string(reinterpret_cast<const char*>(data), size));
+    std::string line;
+    while (std::getline(lines, line)) findmug::applyOverride(config, line);
+    (void)findmug::daemon::resolveDaemonConfig(config);
+    (void)findmug::dumpConfig(config);
+  } catch (const findmug::Error&) {
+    // The expected answer to a bad input.
+  }
+  return 0;
+}

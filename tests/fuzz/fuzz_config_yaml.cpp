@@ -1,0 +1,21 @@
+// Fuzz target config_yaml: YAML config text -> parseConfig + resolveDaemonConfig (findmugd.yaml).
+#include <cstddef>
+#include <cstdint>
+#include <string>
+
+#include "findmug/config.hpp"
+#include "findmug/daemon/daemon_config.hpp"
+#include "findmug/error.hpp"
+#include "fuzz_support.hpp"
+
+extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
+  try {
+    findmug::Config config =
+        findmug::parseConfig(std::string(reinterpret_cast<const char*>(data), size), "fuzz.yaml");
+    (void)findmug::daemon::resolveDaemonConfig(config);
+    (void)findmug::dumpConfig(config);
+  } catch (const findmug::Error&) {
+    // The expected answer to a bad input.
+  }
+  return 0;
+}

@@ -1,0 +1,16 @@
+// Fuzz target label_image: label_image_t bytes (FINDMUG_LABELS) -> decodeLabelImage,
+// as the label viewer and navigation client decode them.
+#include <cstddef>
+#include <cstdint>
+#include "findmug/io/lcm_codec.hpp"
+#include "findmug/error.hpp"
+#include "fuzz_support.hpp"
+
+extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
+  try {
+    (void)findmug::io::decodeLabelImage(data, size, "FUZZ_LABELS");
+  } catch (const findmug::Error&) {
+    // The expected answer to a bad input.
+  }
+  return 0;
+}

@@ -1,0 +1,23 @@
+// Fuzz target nyu_mat: container (fuzz_support.hpp) of the NYU-894 -> 40 CSV and
+// nyu_depth_v2_labeled.mat (HDF5) -> NyuMatFile, loading the first frames.
+#include <cstddef>
+#include <cstdint>
+#include <string_view>
+
+#include "findmug/dataset.hpp"
+#include "findmug/error.hpp"
+#include "fuzz_support.hpp"
+
+extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
+  try {
+    // The container: the NYU-894 -> 40 CSV, then the .mat (HDF5) file.
+    const auto parts = findmug::fuzz::splitParts(data, size, 2);
+    const auto csv = findmug::fuzz::scratchFile("nyu894_to_40.csv", parts[0]);
+    const auto mat = findmug::fuzz::scratchFile("labeled.mat", parts[1]);
+    findmug::NyuMatFile file(mat, csv);
+    for (std::size_t i = 0; i < file.size() && i < 4; ++i) (void)file.load(i);
+  } catch (const findmug::Error&) {
+    // The expected answer to a bad input.
+  }
+  return 0;
+}

@@ -1,0 +1,415 @@
+// findmug-fuzz-seeds OUTDIR — writes the seed corpora of the fuzz targets
+// (OUTDIR/<target>/<seed>) with the project's own encoders and writers, and
+// checks that each seed decodes. Run by scripts/fuzz-seeds.sh, which commits
+// nothing itself: the corpora under tests/fuzz/corpus/ are its output.
+//
+// Frames are small (32x24) and synthetic (a tilted plane in front of the
+// camera, colour gradient), so that the fuzzer mutates a few kB, not a VGA frame.
+#include <hdf5.h>
+#include <pcl/io/lzf_image_io.h>
+#include <pcl/io/pcd_io.h>
+#include <pcl/point_cloud.h>
+#include <pcl/point_types.h>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <functional>
+#include <iostream>
+#include <random>
+#include <sstream>
+#include <string>
+#include <vector>
+
+#include "findmug/config.hpp"
+#include "findmug/dataset.hpp"
+#include "findmug/error.hpp"
+#include "findmug/forest.hpp"
+#include "findmug/image_io.hpp"
+#include "findmug/io/lcm_codec.hpp"
+#include "findmug/io/pcl_frames.hpp"
+#include "fuzz_support.hpp"
+
+// After the LCM types: tiff.h defines COMPRESSION_* macros that clash with their constants.
+#include <tiffio.h>
+
+namespace fs = std::filesystem;
+using namespace findmug;
+
+namespace {
+
+constexpr int kW = 32, kH = 24;
+
+RgbdFrame syntheticFrame() {
+  RgbdFrame f;
+  f.width = kW;
+  f.height = kH;
+  f.intrinsics = CameraIntrinsics{26.0, 26.0, 15.5, 11.5};
+  f.utime = 1700000000000000ULL;
+  f.seq = 7;
+  f.source = "findmug-fuzz-seeds";
+  for (int v = 0; v < kH; ++v) {
+    for (int u = 0; u < kW; ++u) {
+      const bool hole = (u == 3 && v == 4);
+      f.depth_mm.push_back(hole ? 0 : static_cast<std::uint16_t>(1200 + 20 * v + 3 * u));
+      f.rgb.push_back(Rgb8{static_cast<std::uint8_t>(8 * u), static_cast<std::uint8_t>(10 * v),
+                           static_cast<std::uint8_t>(128)});
+    }
+  }
+  return f;
+}
+
+std::string readFile(const fs::path& path) {
+  std::ifstream in(path, std::ios::binary);
+  std::ostringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+struct SeedWriter {
+  fs::path root;
+  int count = 0;
+  // Writes one seed and runs `check` on its bytes (must not throw).
+  void write(const std::string& target, const std::string& name, const std::string& bytes,
+             const std::function<void(const std::string&)>& check) {
+    fs::create_directories(root / target);
+    std::ofstream(root / target / name, std::ios::binary) << bytes;
+    try {
+      check(bytes);
+    } catch (const std::exception& e) {
+      throw Error("seed " + target + "/" + name + " does not decode: " + e.what());
+    }
+    ++count;
+  }
+};
+
+std::string asString(const std::vector<std::uint8_t>& v) { return std::string(v.begin(), v.end()); }
+const std::uint8_t* bytesOf(const std::string& s) {
+  return reinterpret_cast<const std::uint8_t*>(s.data());
+}
+
+void lcmSeeds(SeedWriter& w) {
+  const RgbdFrame frame = syntheticFrame();
+  const struct {
+    const char* name;
+    io::DepthCompression depth;
+    io::ColorCompression color;
+  } variants[] = {{"raw", io::DepthCompression::None, io::ColorCompression::None},
+                  {"zlib-jpeg", io::DepthCompression::Zlib, io::ColorCompression::Jpeg},
+                  {"zlib-png", io::DepthCompression::Zlib, io::ColorCompression::Png}};
+  for (const auto& v : variants) {
+    io::RgbdEncodeOptions options;
+    options.depth = v.depth;
+    options.color = v.color;
+    const auto bytes = asString(io::encodeMessage(io::encodeRgbdFrame(frame, options)));
+    w.write("rgbd_frame", v.name, bytes, [](const std::string& b) {
+      (void)io::decodeRgbdFrame(b.data(), b.size(), "seed");
+    });
+  }
+
+  io::LabelImageMessage labels;
+  labels.image.width = kW;
+  labels.image.height = kH;
+  for (int i = 0; i < kW * kH; ++i) {
+    labels.image.labels.push_back(i % 7 == 0 ? kVoidLabel : static_cast<std::uint8_t>(i % kNumLabels));
+    labels.image.confidence.push_back(labels.image.labels.back() == kVoidLabel ? 0.0f : 0.75f);
+  }
+  labels.utime = frame.utime;
+  labels.seq = frame.seq;
+  labels.latency_us = 180000;
+  for (bool confidence : {true, false}) {
+    const auto bytes = asString(io::encodeMessage(io::encodeLabelImage(labels, confidence)));
+    w.write("label_image", confidence ? "with-confidence" : "labels-only", bytes,
+            [](const std::string& b) { (void)io::decodeLabelImage(b.data(), b.size(), "seed"); });
+  }
+
+  io::TablesMessage tables;
+  tables.utime = frame.utime;
+  tables.seq = frame.seq;
+  TableCluster t;
+  t.id = 1;
+  t.centroid = Eigen::Vector3f(1.5f, 0.2f, 0.72f);
+  t.top_height = 0.72f;
+  t.extents = Eigen::Vector2f(0.6f, 0.4f);
+  t.center = Eigen::Vector2f(1.5f, 0.2f);
+  t.hull = {{0.9f, -0.2f}, {2.1f, -0.2f}, {2.1f, 0.6f}, {0.9f, 0.6f}};
+  t.point_count = 900;
+  t.mean_confidence = 0.8f;
+  SearchPosition p;
+  p.xy = Eigen::Vector2f(1.5f, -0.9f);
+  p.yaw = 1.57f;
+  SearchPosition q = p;
+  q.xy = Eigen::Vector2f(1.5f, 1.3f);
+  q.reachable = false;
+  q.reason = "no observed floor";
+  t.search_positions = {p, q};
+  tables.tables = {t};
+  const auto frame_tables = asString(io::encodeMessage(io::encodeTables(tables)));
+  auto decodeTables = [](const std::string& b) { (void)io::decodeTables(b.data(), b.size(), "seed"); };
+  w.write("tables", "frame", frame_tables, decodeTables);
+  tables.content = io::TablesContent::Map;
+  tables.map_pose = io::RobotPose{frame.utime, 2.0, -1.0, 0.3};
+  tables.map_info = {io::TableMapInfo{1, true, 5}};
+  w.write("tables", "map", asString(io::encodeMessage(io::encodeTables(tables))), decodeTables);
+
+  const auto pose = asString(io::encodeMessage(io::encodeRobotPose(io::RobotPose{frame.utime, 2.0, -1.0, 0.3})));
+  w.write("robot_pose", "pose", pose,
+          [](const std::string& b) { (void)io::decodeRobotPose(b.data(), b.size(), "seed"); });
+
+  status_t s;
+  s.utime = frame.utime;
+  s.uptime_us = 1000000;
+  s.frames_received = 10;
+  s.frames_processed = 8;
+  s.frames_dropped = 1;
+  s.frames_rejected = 1;
+  s.window_s = 10.0;
+  s.input_fps = 30.0f;
+  s.output_fps = 4.0f;
+  s.num_stages = 2;
+  s.stage_names = {"cloud", "total"};
+  s.latency_p50_us = {1000, 200000};
+  s.latency_p95_us = {1500, 250000};
+  s.latency_max_us = {2000, 300000};
+  s.num_queues = 1;
+  s.queue_names = {"frames"};
+  s.queue_depths = {1};
+  s.queue_capacities = {2};
+  s.model_id = "findmug.fmf:0123abcd";
+  s.source = "openni2";
+  s.source_state_name = "running";
+  s.source_state = status_t::SOURCE_RUNNING;
+  w.write("status", "status", asString(io::encodeMessage(s)), [](const std::string& b) {
+    (void)io::decodeMessage<status_t>(b.data(), b.size(), "seed");
+  });
+}
+
+void modelSeeds(SeedWriter& w, const fs::path& scratch) {
+  TrainingSet data;
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<float> u(0.0f, 1.0f);
+  for (int i = 0; i < 60; ++i) {
+    FeatureVector x{};
+    for (auto& v : x) v = u(rng);
+    data.features.push_back(x);
+    data.labels.push_back(static_cast<std::uint8_t>((x[0] > 0.5f ? 1 : 0) + (x[3] > 0.5f ? 2 : 0)));
+  }
+  ForestParams params;
+  params.num_trees = 2;
+  params.max_depth = 3;
+  params.num_threads = 1;
+  auto forest = RandomForest::train(data, params);
+  const auto plain = scratch / "plain.fmf";
+  forest.save(plain.string());
+  auto check = [&scratch](const std::string& b) {
+    const auto path = scratch / "check.fmf";
+    std::ofstream(path, std::ios::binary) << b;
+    (void)RandomForest::load(path.string());
+  };
+  w.write("model", "plain", readFile(plain), check);
+  forest.setExtractionSettings(extractionSettings(SegmenterConfig{}));
+  const auto with_settings = scratch / "settings.fmf";
+  forest.save(with_settings.string());
+  w.write("model", "with-settings", readFile(with_settings), check);
+}
+
+void configSeeds(SeedWriter& w, const fs::path& source_dir) {
+  auto checkYaml = [](const std::string& b) { (void)parseConfig(b, "seed"); };
+  w.write("config_yaml", "defaults", dumpConfig(Config{}), checkYaml);
+  w.write("config_yaml", "findmugd", readFile(source_dir / "daemon/findmugd.yaml"), checkYaml);
+  const std::string sets =
+      "cloud.max_depth_m=8\nmrf.max_iterations=5\nnormals.window_radius_px=3\noverseg.method=organized\n"
+      "daemon.source=lcm:?url=memq://\ndaemon.queue_capacity=4\ndaemon.log_level=debug\n";
+  w.write("config_set", "overrides", sets, [](const std::string& b) {
+    Config c;
+    std::istringstream lines(b);
+    std::string line;
+    while (std::getline(lines, line)) applyOverride(c, line);
+  });
+  w.write("label_csv", "nyu40_to_findmug8", readFile(source_dir / "models/nyu40_to_findmug8.csv"),
+          [](const std::string& b) { (void)parseLabelMapping(b, "seed"); });
+}
+
+void pngSeeds(SeedWriter& w, const fs::path& scratch) {
+  const RgbdFrame f = syntheticFrame();
+  Image<Rgb8> rgb{kW, kH, f.rgb};
+  w.write("png", "rgb", asString(encodePngRgb(rgb)),
+          [](const std::string& b) { (void)decodePngRgb({b.begin(), b.end()}, "seed"); });
+  auto fileCheck = [&scratch](auto reader) {
+    return [&scratch, reader](const std::string& b) {
+      const auto path = scratch / "check.png";
+      std::ofstream(path, std::ios::binary) << b;
+      (void)reader(path.string());
+    };
+  };
+  const auto depth_png = scratch / "depth.png";
+  writePng16(depth_png.string(), Image<std::uint16_t>{kW, kH, f.depth_mm});
+  w.write("png", "depth16", readFile(depth_png), fileCheck(readPng16));
+  Image<std::uint8_t> labels{kW, kH, std::vector<std::uint8_t>(kW * kH, 3)};
+  const auto label_png = scratch / "label.png";
+  writePng8(label_png.string(), labels);
+  w.write("png", "label8", readFile(label_png), fileCheck(readPng8));
+}
+
+void pclSeeds(SeedWriter& w, const fs::path& scratch) {
+  const RgbdFrame f = syntheticFrame();
+  const auto& k = f.intrinsics;
+  pcl::PointCloud<pcl::PointXYZRGBA> cloud(kW, kH);
+  for (int v = 0; v < kH; ++v) {
+    for (int u = 0; u < kW; ++u) {
+      const std::size_t i = static_cast<std::size_t>(v) * kW + u;
+      auto& p = cloud(u, v);
+      const float z = f.depth_mm[i] * 0.001f;
+      if (f.depth_mm[i] == 0) {
+        p.x = p.y = p.z = std::numeric_limits<float>::quiet_NaN();
+      } else {
+        p.x = static_cast<float>((u - k.cx) * z / k.fx);
+        p.y = static_cast<float>((v - k.cy) * z / k.fy);
+        p.z = z;
+      }
+      p.r = f.rgb[i].r;
+      p.g = f.rgb[i].g;
+      p.b = f.rgb[i].b;
+      p.a = 255;
+    }
+  }
+  cloud.is_dense = false;
+  auto checkPcd = [&scratch](const std::string& b) {
+    const auto path = scratch / "check.pcd";
+    std::ofstream(path, std::ios::binary) << b;
+    (void)io::readPcdFrame(path.string());
+  };
+  const auto binary = scratch / "binary.pcd", compressed = scratch / "compressed.pcd";
+  pcl::io::savePCDFileBinary(binary.string(), cloud);
+  pcl::io::savePCDFileBinaryCompressed(compressed.string(), cloud);
+  w.write("pcd", "binary", readFile(binary), checkPcd);
+  w.write("pcd", "binary_compressed", readFile(compressed), checkPcd);
+
+  // PCLZF: PCL's own LZF writers, as its grabbers record.
+  std::vector<char> depth(reinterpret_cast<const char*>(f.depth_mm.data()),
+                          reinterpret_cast<const char*>(f.depth_mm.data() + f.depth_mm.size()));
+  std::vector<char> rgb;
+  for (const auto& c : f.rgb) {
+    rgb.push_back(static_cast<char>(c.r));
+    rgb.push_back(static_cast<char>(c.g));
+    rgb.push_back(static_cast<char>(c.b));
+  }
+  const auto depth_lzf = scratch / "f_depth.pclzf", rgb_lzf = scratch / "f_rgb.pclzf",
+             xml = scratch / "f.xml";
+  pcl::io::LZFDepth16ImageWriter depth_writer;
+  pcl::io::LZFRGB24ImageWriter rgb_writer;
+  pcl::io::CameraParameters params{k.fx, k.fy, k.cx, k.cy};
+  depth_writer.write(depth.data(), kW, kH, depth_lzf.string());
+  depth_writer.writeParameters(params, xml.string());
+  rgb_writer.write(rgb.data(), kW, kH, rgb_lzf.string());
+  w.write("pclzf", "frame",
+          fuzz::joinParts({readFile(depth_lzf), readFile(rgb_lzf), readFile(xml)}),
+          [&scratch](const std::string& b) {
+            const auto parts = fuzz::splitParts(bytesOf(b), b.size(), 3);
+            const auto d = scratch / "c_depth.pclzf", r = scratch / "c_rgb.pclzf",
+                       x = scratch / "c.xml";
+            std::ofstream(d, std::ios::binary) << parts[0];
+            std::ofstream(r, std::ios::binary) << parts[1];
+            std::ofstream(x, std::ios::binary) << parts[2];
+            (void)io::readPclzfFrame(d.string(), r.string(), x.string());
+          });
+
+  // TIFF: libtiff, uint16 depth and RGB8 strips, as PCL's TIFF recordings.
+  auto writeTiff = [](const fs::path& path, const void* pixels, int samples, int bits) {
+    TIFF* tif = TIFFOpen(path.string().c_str(), "w");
+    if (!tif) throw Error(path.string() + ": cannot create");
+    TIFFSetField(tif, TIFFTAG_IMAGEWIDTH, kW);
+    TIFFSetField(tif, TIFFTAG_IMAGELENGTH, kH);
+    TIFFSetField(tif, TIFFTAG_SAMPLESPERPIXEL, samples);
+    TIFFSetField(tif, TIFFTAG_BITSPERSAMPLE, bits);
+    TIFFSetField(tif, TIFFTAG_PLANARCONFIG, PLANARCONFIG_CONTIG);
+    TIFFSetField(tif, TIFFTAG_PHOTOMETRIC, samples == 3 ? PHOTOMETRIC_RGB : PHOTOMETRIC_MINISBLACK);
+    TIFFSetField(tif, TIFFTAG_ROWSPERSTRIP, 8);
+    const std::size_t row = static_cast<std::size_t>(kW) * samples * bits / 8;
+    for (int y = 0; y < kH; ++y) {
+      TIFFWriteScanline(tif, const_cast<char*>(static_cast<const char*>(pixels) + y * row), y, 0);
+    }
+    TIFFClose(tif);
+  };
+  const auto depth_tif = scratch / "f_depth.tiff", rgb_tif = scratch / "f_rgb.tiff";
+  writeTiff(depth_tif, f.depth_mm.data(), 1, 16);
+  writeTiff(rgb_tif, rgb.data(), 3, 8);
+  w.write("tiff", "frame", fuzz::joinParts({readFile(depth_tif), readFile(rgb_tif)}),
+          [&scratch](const std::string& b) {
+            const auto parts = fuzz::splitParts(bytesOf(b), b.size(), 2);
+            const auto d = scratch / "c_depth.tiff", r = scratch / "c_rgb.tiff";
+            std::ofstream(d, std::ios::binary) << parts[0];
+            std::ofstream(r, std::ios::binary) << parts[1];
+            (void)io::readTiffFrame(d.string(), r.string(), CameraIntrinsics{});
+          });
+}
+
+// A two-frame nyu_depth_v2_labeled.mat in the MATLAB v7.3 layout (HDF5 sees
+// N x 3 x W x H images, N x W x H depths and labels), and a CSV mapping the
+// 894 ids onto the 40 NYU-40 classes.
+void nyuSeeds(SeedWriter& w, const fs::path& scratch) {
+  constexpr hsize_t n = 2, W = 16, H = 12;
+  const auto mat = scratch / "labeled.mat";
+  const hid_t file = H5Fcreate(mat.string().c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT);
+  auto put = [file](const char* name, hid_t file_type, hid_t mem_type, std::vector<hsize_t> dims,
+                    const void* data) {
+    const hid_t space = H5Screate_simple(static_cast<int>(dims.size()), dims.data(), nullptr);
+    const hid_t set = H5Dcreate2(file, name, file_type, space, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
+    H5Dwrite(set, mem_type, H5S_ALL, H5S_ALL, H5P_DEFAULT, data);
+    H5Dclose(set);
+    H5Sclose(space);
+  };
+  std::vector<std::uint8_t> images(n * 3 * W * H);
+  for (std::size_t i = 0; i < images.size(); ++i) images[i] = static_cast<std::uint8_t>(i * 7);
+  std::vector<float> depths(n * W * H);
+  for (std::size_t i = 0; i < depths.size(); ++i) depths[i] = 1.0f + 0.01f * (i % 50);
+  std::vector<std::uint16_t> labels(n * W * H);
+  for (std::size_t i = 0; i < labels.size(); ++i) labels[i] = static_cast<std::uint16_t>(i % 5);
+  put("images", H5T_STD_U8LE, H5T_NATIVE_UINT8, {n, 3, W, H}, images.data());
+  put("depths", H5T_IEEE_F32LE, H5T_NATIVE_FLOAT, {n, W, H}, depths.data());
+  put("labels", H5T_STD_U16LE, H5T_NATIVE_UINT16, {n, W, H}, labels.data());
+  H5Fclose(file);
+  std::string csv = "nyu894_id,name,nyu40_id,nyu40_name\n";
+  for (int id = 1; id <= 894; ++id) {
+    const int id40 = 1 + (id - 1) % 40;
+    csv += std::to_string(id) + ",class" + std::to_string(id) + "," + std::to_string(id40) +
+           ",nyu40class" + std::to_string(id40) + "\n";
+  }
+  w.write("nyu_mat", "two-frames", fuzz::joinParts({csv, readFile(mat)}),
+          [&scratch](const std::string& b) {
+            const auto parts = fuzz::splitParts(bytesOf(b), b.size(), 2);
+            const auto c = scratch / "c.csv", m = scratch / "c.mat";
+            std::ofstream(c, std::ios::binary) << parts[0];
+            std::ofstream(m, std::ios::binary) << parts[1];
+            NyuMatFile f(m.string(), c.string());
+            for (std::size_t i = 0; i < f.size(); ++i) (void)f.load(i);
+          });
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  if (argc != 3) {
+    std::cerr << "usage: findmug-fuzz-seeds SOURCE_DIR OUTDIR\n"
+                 "  writes the fuzz seed corpora (OUTDIR/<target>/<seed>); SOURCE_DIR is the\n"
+                 "  findmug checkout (daemon/findmugd.yaml and models/*.csv are seeds too)\n";
+    return 2;
+  }
+  try {
+    SeedWriter w{fs::path(argv[2])};
+    const fs::path scratch = fs::temp_directory_path() / ("findmug-seeds-" + std::to_string(::getpid()));
+    fs::create_directories(scratch);
+    lcmSeeds(w);
+    modelSeeds(w, scratch);
+    configSeeds(w, argv[1]);
+    pngSeeds(w, scratch);
+    pclSeeds(w, scratch);
+    nyuSeeds(w, scratch);
+    fs::remove_all(scratch);
+    std::cout << w.count << " seeds written to " << argv[2] << "\n";
+    return 0;
+  } catch (const std::exception& e) {
+    std::cerr << "findmug-fuzz-seeds: " << e.what() << "\n";
+    return 1;
+  }
+}
