@@ -17,6 +17,7 @@
 #include "findmug/daemon/daemon_config.hpp"
 #include "findmug/daemon/service.hpp"
 #include "findmug/error.hpp"
+#include "findmug/version.hpp"
 
 int main(int argc, char** argv) {
   using namespace findmug;
@@ -34,6 +35,10 @@ int main(int argc, char** argv) {
         parseCommandLine(std::vector<std::string>(argv + 1, argv + argc));
     if (command_line.help) {
       std::cout << usage();
+      return 0;
+    }
+    if (command_line.version) {
+      std::cout << "findmugd " << kVersion << "\n";
       return 0;
     }
     loaded = loadDaemonConfig(command_line);

@@ -16,6 +16,8 @@ packages=(
   libpng-dev libjpeg-dev zlib1g-dev libhdf5-dev libtiff-dev
   # tests and benchmarks
   libgtest-dev libgmock-dev libbenchmark-dev
+  # command-line flags of the programs
+  libcli11-dev
   # lcm-spy (Java) under a virtual display, for the screenshot script
   default-jdk-headless libjchart2d-java xvfb x11-apps imagemagick
   # network namespaces for the udpm tests

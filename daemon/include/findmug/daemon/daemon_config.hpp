@@ -79,11 +79,14 @@ struct CommandLine {
   std::vector<std::string> overrides;      // key=value, in order
   bool check_config = false;               // --check-config: validate, print, exit
   bool help = false;
+  bool version = false;  // --version: print "findmugd VERSION", exit
 };
 
 // Throws findmug::Error for unknown flags or missing values.
 CommandLine parseCommandLine(const std::vector<std::string>& args);
 std::string usage();
+// The flags that stand for one daemon setting ("--model" -> "daemon.model_path").
+const std::vector<std::pair<std::string, std::string>>& daemonFlagShortcuts();
 
 // Loads the file (the default one may be absent: then built-in defaults),
 // applies the overrides and resolves the daemon section.
