@@ -22,6 +22,8 @@ packages=(
   default-jdk-headless libjchart2d-java xvfb x11-apps imagemagick
   # network namespaces for the udpm tests
   iproute2 util-linux
+  # Debian packages (scripts/package.sh) and their checks (label package)
+  dpkg-dev lintian adduser
 )
 
 missing=()
