@@ -290,7 +290,7 @@ int main(int argc, char** argv) {
   const std::filesystem::path out_dir = out_text;
   const bool write_png = !no_png;
   if (write_png && !std::filesystem::is_directory(out_dir)) {
-    std::fprintf(stderr, "%s: --out %s: not a directory\n", kProgram, out_dir.string().c_str());
+    std::fprintf(stderr, "%s: --out %s: not a directory (see --help)\n", kProgram, out_dir.string().c_str());
     return 2;
   }
   const std::string labels_channel = io::channelName(io::kLabelsChannel, suffix);
