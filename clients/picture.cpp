@@ -397,7 +397,7 @@ Image<Rgb8> tableMapPng(const io::TablesMessage& tables, int size_px) {
   for (const auto& p : v.positions) {
     const auto c = v.px(p.position.xy.cast<double>());
     // Which way the robot would face there.
-    canvas.line(c.x(), c.y(), c.x() + 16 * std::cos(p.position.yaw), c.y() - 16 * std::sin(p.position.yaw), kBlack, 2);
+    canvas.line(c.x(), c.y(), c.x() + 22 * std::cos(p.position.yaw), c.y() - 22 * std::sin(p.position.yaw), kBlack, 2);
     drawPositionMarker(canvas, c.x(), c.y(), p.order, 9);
   }
   // Robot: a disc with a heading line.
@@ -431,8 +431,8 @@ std::string tableMapSvg(const io::TablesMessage& tables, int size_px) {
   }
   for (const auto& p : v.positions) {
     const auto c = v.px(p.position.xy.cast<double>());
-    s << "<line x1=\"" << c.x() << "\" y1=\"" << c.y() << "\" x2=\"" << c.x() + 16 * std::cos(p.position.yaw)
-      << "\" y2=\"" << c.y() - 16 * std::sin(p.position.yaw) << "\" stroke=\"black\" stroke-width=\"2\"/>\n";
+    s << "<line x1=\"" << c.x() << "\" y1=\"" << c.y() << "\" x2=\"" << c.x() + 22 * std::cos(p.position.yaw)
+      << "\" y2=\"" << c.y() - 22 * std::sin(p.position.yaw) << "\" stroke=\"black\" stroke-width=\"2\"/>\n";
     s << "<circle cx=\"" << c.x() << "\" cy=\"" << c.y() << "\" r=\"9\" stroke=\"black\" fill=\""
       << (p.order > 0 ? "rgb(40,200,60)" : "rgb(220,40,40)") << "\"><title>table " << p.table
       << (p.order > 0 ? ", visit " + std::to_string(p.order) : ", unreachable: " + xmlEscape(p.position.reason))
