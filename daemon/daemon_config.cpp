@@ -245,6 +245,29 @@ const std::map<std::string, Key>& tableMapKeys() {
   return all;
 }
 
+// The check section: findmugd --check (check.hpp).
+const std::map<std::string, Key>& checkKeys() {
+  using D = DaemonConfig;
+  static const std::map<std::string, Key> all = {
+      {"check.frames",
+       {[](D& d, const std::string& k, const std::string& v) {
+          d.check.frames = static_cast<int>(toInt(k, v, 1, 10000));
+        },
+        [](const D& d) { return std::to_string(d.check.frames); }}},
+      {"check.timeout_s",
+       {[](D& d, const std::string& k, const std::string& v) {
+          d.check.timeout_s = toDouble(k, v, 0.1, 3600);
+        },
+        [](const D& d) { return fmt(d.check.timeout_s); }}},
+      {"check.min_valid_depth",
+       {[](D& d, const std::string& k, const std::string& v) {
+          d.check.min_valid_depth = toDouble(k, v, 0, 1);
+        },
+        [](const D& d) { return fmt(d.check.min_valid_depth); }}},
+  };
+  return all;
+}
+
 std::string keyList(const std::map<std::string, Key>& keys) {
   std::string known;
   for (const auto& [name, k] : keys) known += (known.empty() ? "" : ", ") + name;
@@ -264,6 +287,9 @@ DaemonConfig resolveDaemonConfig(Config& config) {
     } else if (key.rfind("table_map.", 0) == 0) {
       section = &tableMapKeys();
       section_name = "table_map";
+    } else if (key.rfind("check.", 0) == 0) {
+      section = &checkKeys();
+      section_name = "check";
     } else {
       continue;  // other owners' sections
     }
@@ -279,6 +305,7 @@ DaemonConfig resolveDaemonConfig(Config& config) {
   validateTableMapConfig(daemon.table_map);
   for (const auto& [name, k] : keys()) config.extra[name] = k.get(daemon);
   for (const auto& [name, k] : tableMapKeys()) config.extra[name] = k.get(daemon);
+  for (const auto& [name, k] : checkKeys()) config.extra[name] = k.get(daemon);
   return daemon;
 }
 
@@ -317,6 +344,9 @@ std::unique_ptr<CLI::App> daemonApp(CommandLine& cl) {
   }
   app->add_flag("--check-config", cl.check_config,
                 "validate and print the effective config, then exit");
+  app->add_flag("--check", cl.check,
+                "first-run self-test: config, model, source, frames, ground plane, one "
+                "labelled frame; one verdict line each; exit 0 when nothing failed");
   app->footer(
       "Environment: LCM_DEFAULT_URL (used when daemon.lcm_url is empty), NOTIFY_SOCKET,\n"
       "WATCHDOG_USEC (systemd), JOURNAL_STREAM (log to the journal).");
@@ -361,7 +391,7 @@ CommandLine parseCommandLine(const std::vector<std::string>& args) {
   for (const CLI::Option* option : app->parse_order()) {
     const std::string name = "--" + option->get_single_name();
     const std::size_t k = seen[option]++;
-    if (name == "--check-config") continue;
+    if (name == "--check-config" || name == "--check") continue;
     const std::string& value = option->results().at(k);
     if (name == "--config") {
       cl.config_path = value;
