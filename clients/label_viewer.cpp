@@ -293,10 +293,16 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "%s: --out %s: not a directory (see --help)\n", kProgram, out_dir.string().c_str());
     return 2;
   }
-  const std::string labels_channel = io::channelName(io::kLabelsChannel, suffix);
-  const std::string frames_channel = io::channelName(io::kRgbdChannel, suffix);
-  const std::string tables_channel = io::channelName(io::kTablesChannel, suffix);
-  const std::string map_channel = io::channelName(io::kTableMapChannel, suffix);
+  std::string labels_channel, frames_channel, tables_channel, map_channel;
+  try {
+    labels_channel = io::channelName(io::kLabelsChannel, suffix);
+    frames_channel = io::channelName(io::kRgbdChannel, suffix);
+    tables_channel = io::channelName(io::kTablesChannel, suffix);
+    map_channel = io::channelName(io::kTableMapChannel, suffix);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "%s: --channel-suffix: %s (see --help)\n", kProgram, e.what());
+    return 2;
+  }
   std::unique_ptr<io::FrameSource> source;
   if (!source_spec.empty()) {
     try {
