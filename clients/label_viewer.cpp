@@ -279,10 +279,10 @@ int main(int argc, char** argv) {
       ->check(CLI::Range(0.0, 1.0))
       ->capture_default_str();
   app->add_option("--every", every, "write every K-th overlay")
-      ->check(CLI::PositiveNumber)
+      ->check(cli::positive())
       ->capture_default_str();
   app->add_flag("--no-png", no_png, "console summary only");
-  app->add_option("--count", count, "exit after N label images")->check(CLI::PositiveNumber);
+  app->add_option("--count", count, "exit after N label images")->check(cli::positive());
   cli::addSourceFlag(*app, source_spec,
                      "colour frames (and camera mount) from this frame source, matched by "
                      "sequence number, e.g. the dataset:DIR the daemon replayed");

@@ -206,7 +206,7 @@ int main(int argc, char** argv) {
       ->check(CLI::IsMember({"auto", "base", "map"}))
       ->capture_default_str();
   app->add_flag("--json", json, "one JSON object per message (JSON lines)");
-  app->add_option("--count", count, "exit after N messages")->check(CLI::PositiveNumber);
+  app->add_option("--count", count, "exit after N messages")->check(cli::positive());
   if (auto code = cli::parse(*app, argc, argv)) return *code;
   if (frame_name == "base") frame = FrameChoice::Base;
   if (frame_name == "map") frame = FrameChoice::Map;

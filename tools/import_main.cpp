@@ -150,17 +150,17 @@ int main(int argc, char** argv) {
       ->type_name("DIR");
   app->add_option("--depth-scale", depth_scale,
                   "depth PNG units per metre (TUM: 5000; millimetre PNGs: 1000)")
-      ->check(CLI::PositiveNumber)
+      ->check(findmug::cli::positive())
       ->capture_default_str();
   app->add_option("--max-dt", max_dt, "largest colour/depth time difference paired, seconds (TUM)")
-      ->check(CLI::NonNegativeNumber)
+      ->check(findmug::cli::nonNegative())
       ->capture_default_str();
   app->add_option("--intrinsics", intrinsics_text,
                   "colour camera fx,fy,cx,cy in pixels (default: TUM's for registered depth)")
       ->type_name("FX,FY,CX,CY")
       ->capture_default_str();
   app->add_option("--count", count, "convert at most N frames (0: all)")
-      ->check(CLI::NonNegativeNumber);
+      ->check(findmug::cli::nonNegative());
   if (auto code = findmug::cli::parse(*app, argc, argv)) return *code;
 
   try {

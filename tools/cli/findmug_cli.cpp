@@ -49,6 +49,29 @@ CLI::Option* addModelFlag(CLI::App& app, std::string& path, const std::string& h
   return app.add_option("--model", path, help)->type_name("FILE");
 }
 
+namespace {
+CLI::Validator numberAtLeast(double min, bool inclusive) {
+  const std::string rule = std::string(inclusive ? ">= " : "> ") + (min == 0 ? "0" : "1");
+  return CLI::Validator(
+      [min, inclusive, rule](std::string& text) -> std::string {
+        double value = 0;
+        try {
+          std::size_t used = 0;
+          value = std::stod(text, &used);
+          if (used != text.size()) return "must be a number " + rule + ", got '" + text + "'";
+        } catch (const std::exception&) {
+          return "must be a number " + rule + ", got '" + text + "'";
+        }
+        if (inclusive ? value >= min : value > min) return {};
+        return "must be " + rule + ", got '" + text + "'";
+      },
+      "NUMBER " + rule);
+}
+}  // namespace
+
+CLI::Validator positive() { return numberAtLeast(0, false); }
+CLI::Validator nonNegative() { return numberAtLeast(0, true); }
+
 std::optional<int> parse(CLI::App& app, int argc, const char* const* argv) {
   try {
     app.parse(argc, argv);

@@ -36,6 +36,11 @@ CLI::Option* addLcmUrlFlag(CLI::App& app, std::string& url, const std::string& h
 CLI::Option* addChannelSuffixFlag(CLI::App& app, std::string& suffix);
 CLI::Option* addModelFlag(CLI::App& app, std::string& path, const std::string& help);
 
+// Number checks with short messages ("must be > 0, got '-1'"); CLI11's own
+// PositiveNumber/NonNegativeNumber print the whole range of a double.
+CLI::Validator positive();
+CLI::Validator nonNegative();
+
 // Parses argv. Returns an exit code when the program should stop now (help,
 // version: 0; parse error: 2, message on stderr), nullopt to go on.
 std::optional<int> parse(CLI::App& app, int argc, const char* const* argv);
