@@ -8,6 +8,11 @@ echo "== dpkg -i"
 dpkg -i ./findmug_*.deb ./findmug-dev_*.deb
 
 getent passwd findmug >/dev/null || fail "postinst did not create the system user findmug"
+for group in video plugdev; do
+  if getent group "$group" >/dev/null; then
+    id -nG findmug | grep -qw "$group" || fail "findmug is not in group $group"
+  fi
+done
 [[ -f /lib/systemd/system/findmugd.service ]] || fail "unit not installed"
 if find /etc/systemd/system -name 'findmugd.service' | grep -q .; then
   fail "the unit was enabled by the package; the administrator should decide"
