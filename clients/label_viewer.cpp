@@ -23,25 +23,25 @@
 #include <array>
 #include <cstdio>
 #include <deque>
+#include <filesystem>
 #include <fstream>
+#include <lcm/lcm-cpp.hpp>
 #include <memory>
 #include <optional>
-#include <filesystem>
-#include <lcm/lcm-cpp.hpp>
 #include <string>
 #include <utility>
 #include <vector>
 
 #include "client_common.hpp"
 #include "findmug/error.hpp"
-#include "findmug/io/frame_source.hpp"
-#include "findmug_cli.hpp"
-#include "picture.hpp"
 #include "findmug/image_io.hpp"
 #include "findmug/io/channels.hpp"
+#include "findmug/io/frame_source.hpp"
 #include "findmug/io/lcm_codec.hpp"
 #include "findmug/label_image.hpp"
 #include "findmug/labels.hpp"
+#include "findmug_cli.hpp"
+#include "picture.hpp"
 
 namespace {
 
@@ -217,12 +217,11 @@ class LabelViewer {
         break;
       }
       clients::Canvas canvas(std::move(overlay));
-      const int drawn =
-          clients::drawTablesInImage(canvas, tables, match->intrinsics, *match->extrinsics,
-                                     &match->depth_mm);
+      const int drawn = clients::drawTablesInImage(canvas, tables, match->intrinsics,
+                                                   *match->extrinsics, &match->depth_mm);
       overlay = canvas.image();
-      tables_note = " with " + std::to_string(drawn) + " of " + std::to_string(tables.tables.size()) +
-                    " tables in view";
+      tables_note = " with " + std::to_string(drawn) + " of " +
+                    std::to_string(tables.tables.size()) + " tables in view";
       break;
     }
     char name[64];
@@ -290,7 +289,8 @@ int main(int argc, char** argv) {
   const std::filesystem::path out_dir = out_text;
   const bool write_png = !no_png;
   if (write_png && !std::filesystem::is_directory(out_dir)) {
-    std::fprintf(stderr, "%s: --out %s: not a directory (see --help)\n", kProgram, out_dir.string().c_str());
+    std::fprintf(stderr, "%s: --out %s: not a directory (see --help)\n", kProgram,
+                 out_dir.string().c_str());
     return 2;
   }
   std::string labels_channel, frames_channel, tables_channel, map_channel;

@@ -20,11 +20,11 @@
 #include <vector>
 
 #include "client_common.hpp"
-#include "findmug_cli.hpp"
 #include "findmug/error.hpp"
 #include "findmug/io/channels.hpp"
 #include "findmug/io/lcm_codec.hpp"
 #include "findmug/tables.hpp"
+#include "findmug_cli.hpp"
 
 namespace {
 

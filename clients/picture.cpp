@@ -19,30 +19,54 @@ struct Glyph {
   std::array<std::uint8_t, 7> rows;
 };
 constexpr Glyph kFont[] = {
-    {'0', {0x0E, 0x11, 0x13, 0x15, 0x19, 0x11, 0x0E}}, {'1', {0x04, 0x0C, 0x04, 0x04, 0x04, 0x04, 0x0E}},
-    {'2', {0x0E, 0x11, 0x01, 0x02, 0x04, 0x08, 0x1F}}, {'3', {0x1F, 0x02, 0x04, 0x02, 0x01, 0x11, 0x0E}},
-    {'4', {0x02, 0x06, 0x0A, 0x12, 0x1F, 0x02, 0x02}}, {'5', {0x1F, 0x10, 0x1E, 0x01, 0x01, 0x11, 0x0E}},
-    {'6', {0x06, 0x08, 0x10, 0x1E, 0x11, 0x11, 0x0E}}, {'7', {0x1F, 0x01, 0x02, 0x04, 0x08, 0x08, 0x08}},
-    {'8', {0x0E, 0x11, 0x11, 0x0E, 0x11, 0x11, 0x0E}}, {'9', {0x0E, 0x11, 0x11, 0x0F, 0x01, 0x02, 0x0C}},
-    {'A', {0x0E, 0x11, 0x11, 0x1F, 0x11, 0x11, 0x11}}, {'B', {0x1E, 0x11, 0x11, 0x1E, 0x11, 0x11, 0x1E}},
-    {'C', {0x0E, 0x11, 0x10, 0x10, 0x10, 0x11, 0x0E}}, {'D', {0x1C, 0x12, 0x11, 0x11, 0x11, 0x12, 0x1C}},
-    {'E', {0x1F, 0x10, 0x10, 0x1E, 0x10, 0x10, 0x1F}}, {'F', {0x1F, 0x10, 0x10, 0x1E, 0x10, 0x10, 0x10}},
-    {'G', {0x0E, 0x11, 0x10, 0x17, 0x11, 0x11, 0x0F}}, {'H', {0x11, 0x11, 0x11, 0x1F, 0x11, 0x11, 0x11}},
-    {'I', {0x0E, 0x04, 0x04, 0x04, 0x04, 0x04, 0x0E}}, {'J', {0x07, 0x02, 0x02, 0x02, 0x02, 0x12, 0x0C}},
-    {'K', {0x11, 0x12, 0x14, 0x18, 0x14, 0x12, 0x11}}, {'L', {0x10, 0x10, 0x10, 0x10, 0x10, 0x10, 0x1F}},
-    {'M', {0x11, 0x1B, 0x15, 0x15, 0x11, 0x11, 0x11}}, {'N', {0x11, 0x11, 0x19, 0x15, 0x13, 0x11, 0x11}},
-    {'O', {0x0E, 0x11, 0x11, 0x11, 0x11, 0x11, 0x0E}}, {'P', {0x1E, 0x11, 0x11, 0x1E, 0x10, 0x10, 0x10}},
-    {'Q', {0x0E, 0x11, 0x11, 0x11, 0x15, 0x12, 0x0D}}, {'R', {0x1E, 0x11, 0x11, 0x1E, 0x14, 0x12, 0x11}},
-    {'S', {0x0F, 0x10, 0x10, 0x0E, 0x01, 0x01, 0x1E}}, {'T', {0x1F, 0x04, 0x04, 0x04, 0x04, 0x04, 0x04}},
-    {'U', {0x11, 0x11, 0x11, 0x11, 0x11, 0x11, 0x0E}}, {'V', {0x11, 0x11, 0x11, 0x11, 0x11, 0x0A, 0x04}},
-    {'W', {0x11, 0x11, 0x11, 0x15, 0x15, 0x15, 0x0A}}, {'X', {0x11, 0x11, 0x0A, 0x04, 0x0A, 0x11, 0x11}},
-    {'Y', {0x11, 0x11, 0x11, 0x0A, 0x04, 0x04, 0x04}}, {'Z', {0x1F, 0x01, 0x02, 0x04, 0x08, 0x10, 0x1F}},
-    {'.', {0x00, 0x00, 0x00, 0x00, 0x00, 0x0C, 0x0C}}, {',', {0x00, 0x00, 0x00, 0x00, 0x0C, 0x04, 0x08}},
-    {':', {0x00, 0x0C, 0x0C, 0x00, 0x0C, 0x0C, 0x00}}, {'-', {0x00, 0x00, 0x00, 0x1F, 0x00, 0x00, 0x00}},
-    {'(', {0x02, 0x04, 0x08, 0x08, 0x08, 0x04, 0x02}}, {')', {0x08, 0x04, 0x02, 0x02, 0x02, 0x04, 0x08}},
-    {'/', {0x00, 0x01, 0x02, 0x04, 0x08, 0x10, 0x00}}, {'%', {0x18, 0x19, 0x02, 0x04, 0x08, 0x13, 0x03}},
-    {'+', {0x00, 0x04, 0x04, 0x1F, 0x04, 0x04, 0x00}}, {'=', {0x00, 0x00, 0x1F, 0x00, 0x1F, 0x00, 0x00}},
-    {'#', {0x0A, 0x0A, 0x1F, 0x0A, 0x1F, 0x0A, 0x0A}}, {'_', {0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x1F}},
+    {'0', {0x0E, 0x11, 0x13, 0x15, 0x19, 0x11, 0x0E}},
+    {'1', {0x04, 0x0C, 0x04, 0x04, 0x04, 0x04, 0x0E}},
+    {'2', {0x0E, 0x11, 0x01, 0x02, 0x04, 0x08, 0x1F}},
+    {'3', {0x1F, 0x02, 0x04, 0x02, 0x01, 0x11, 0x0E}},
+    {'4', {0x02, 0x06, 0x0A, 0x12, 0x1F, 0x02, 0x02}},
+    {'5', {0x1F, 0x10, 0x1E, 0x01, 0x01, 0x11, 0x0E}},
+    {'6', {0x06, 0x08, 0x10, 0x1E, 0x11, 0x11, 0x0E}},
+    {'7', {0x1F, 0x01, 0x02, 0x04, 0x08, 0x08, 0x08}},
+    {'8', {0x0E, 0x11, 0x11, 0x0E, 0x11, 0x11, 0x0E}},
+    {'9', {0x0E, 0x11, 0x11, 0x0F, 0x01, 0x02, 0x0C}},
+    {'A', {0x0E, 0x11, 0x11, 0x1F, 0x11, 0x11, 0x11}},
+    {'B', {0x1E, 0x11, 0x11, 0x1E, 0x11, 0x11, 0x1E}},
+    {'C', {0x0E, 0x11, 0x10, 0x10, 0x10, 0x11, 0x0E}},
+    {'D', {0x1C, 0x12, 0x11, 0x11, 0x11, 0x12, 0x1C}},
+    {'E', {0x1F, 0x10, 0x10, 0x1E, 0x10, 0x10, 0x1F}},
+    {'F', {0x1F, 0x10, 0x10, 0x1E, 0x10, 0x10, 0x10}},
+    {'G', {0x0E, 0x11, 0x10, 0x17, 0x11, 0x11, 0x0F}},
+    {'H', {0x11, 0x11, 0x11, 0x1F, 0x11, 0x11, 0x11}},
+    {'I', {0x0E, 0x04, 0x04, 0x04, 0x04, 0x04, 0x0E}},
+    {'J', {0x07, 0x02, 0x02, 0x02, 0x02, 0x12, 0x0C}},
+    {'K', {0x11, 0x12, 0x14, 0x18, 0x14, 0x12, 0x11}},
+    {'L', {0x10, 0x10, 0x10, 0x10, 0x10, 0x10, 0x1F}},
+    {'M', {0x11, 0x1B, 0x15, 0x15, 0x11, 0x11, 0x11}},
+    {'N', {0x11, 0x11, 0x19, 0x15, 0x13, 0x11, 0x11}},
+    {'O', {0x0E, 0x11, 0x11, 0x11, 0x11, 0x11, 0x0E}},
+    {'P', {0x1E, 0x11, 0x11, 0x1E, 0x10, 0x10, 0x10}},
+    {'Q', {0x0E, 0x11, 0x11, 0x11, 0x15, 0x12, 0x0D}},
+    {'R', {0x1E, 0x11, 0x11, 0x1E, 0x14, 0x12, 0x11}},
+    {'S', {0x0F, 0x10, 0x10, 0x0E, 0x01, 0x01, 0x1E}},
+    {'T', {0x1F, 0x04, 0x04, 0x04, 0x04, 0x04, 0x04}},
+    {'U', {0x11, 0x11, 0x11, 0x11, 0x11, 0x11, 0x0E}},
+    {'V', {0x11, 0x11, 0x11, 0x11, 0x11, 0x0A, 0x04}},
+    {'W', {0x11, 0x11, 0x11, 0x15, 0x15, 0x15, 0x0A}},
+    {'X', {0x11, 0x11, 0x0A, 0x04, 0x0A, 0x11, 0x11}},
+    {'Y', {0x11, 0x11, 0x11, 0x0A, 0x04, 0x04, 0x04}},
+    {'Z', {0x1F, 0x01, 0x02, 0x04, 0x08, 0x10, 0x1F}},
+    {'.', {0x00, 0x00, 0x00, 0x00, 0x00, 0x0C, 0x0C}},
+    {',', {0x00, 0x00, 0x00, 0x00, 0x0C, 0x04, 0x08}},
+    {':', {0x00, 0x0C, 0x0C, 0x00, 0x0C, 0x0C, 0x00}},
+    {'-', {0x00, 0x00, 0x00, 0x1F, 0x00, 0x00, 0x00}},
+    {'(', {0x02, 0x04, 0x08, 0x08, 0x08, 0x04, 0x02}},
+    {')', {0x08, 0x04, 0x02, 0x02, 0x02, 0x04, 0x08}},
+    {'/', {0x00, 0x01, 0x02, 0x04, 0x08, 0x10, 0x00}},
+    {'%', {0x18, 0x19, 0x02, 0x04, 0x08, 0x13, 0x03}},
+    {'+', {0x00, 0x04, 0x04, 0x1F, 0x04, 0x04, 0x00}},
+    {'=', {0x00, 0x00, 0x1F, 0x00, 0x1F, 0x00, 0x00}},
+    {'#', {0x0A, 0x0A, 0x1F, 0x0A, 0x1F, 0x0A, 0x0A}},
+    {'_', {0x00, 0x00, 0x00, 0x00, 0x00, 0x00, 0x1F}},
 };
 
 const Glyph* glyphOf(char c) {
@@ -127,8 +151,10 @@ void Canvas::line(double x0, double y0, double x1, double y1, Rgb8 colour, int t
 }
 
 void Canvas::disc(double cx, double cy, double radius, Rgb8 colour) {
-  const int x0 = static_cast<int>(std::floor(cx - radius)), x1 = static_cast<int>(std::ceil(cx + radius));
-  const int y0 = static_cast<int>(std::floor(cy - radius)), y1 = static_cast<int>(std::ceil(cy + radius));
+  const int x0 = static_cast<int>(std::floor(cx - radius)),
+            x1 = static_cast<int>(std::ceil(cx + radius));
+  const int y0 = static_cast<int>(std::floor(cy - radius)),
+            y1 = static_cast<int>(std::ceil(cy + radius));
   for (int y = y0; y <= y1; ++y) {
     for (int x = x0; x <= x1; ++x) {
       if ((x - cx) * (x - cx) + (y - cy) * (y - cy) <= radius * radius) pixel(x, y, colour);
@@ -152,7 +178,8 @@ void Canvas::text(int x, int y, const std::string& text, Rgb8 colour, int scale)
     const int gx = x + static_cast<int>(k) * 6 * scale;
     for (int row = 0; row < 7; ++row) {
       for (int col = 0; col < 5; ++col) {
-        if (g->rows[row] & (0x10 >> col)) fillRect(gx + col * scale, y + row * scale, scale, scale, colour);
+        if (g->rows[row] & (0x10 >> col))
+          fillRect(gx + col * scale, y + row * scale, scale, scale, colour);
       }
     }
   }
@@ -218,15 +245,17 @@ std::vector<NumberedPosition> numberedPositions(const io::TablesMessage& message
   std::vector<Eigen::Vector2f> points;
   for (const auto& r : reachable) points.push_back(r.position.xy);
   const std::vector<int> order = visitingOrder(robot, points);
-  for (std::size_t k = 0; k < order.size(); ++k) reachable[order[k]].order = static_cast<int>(k) + 1;
+  for (std::size_t k = 0; k < order.size(); ++k)
+    reachable[order[k]].order = static_cast<int>(k) + 1;
   reachable.insert(reachable.end(), unreachable.begin(), unreachable.end());
   return reachable;
 }
 
-int drawTablesInImage(Canvas& canvas, const io::TablesMessage& tables,
-                      const CameraIntrinsics& k, const CameraExtrinsics& extrinsics,
+int drawTablesInImage(Canvas& canvas, const io::TablesMessage& tables, const CameraIntrinsics& k,
+                      const CameraExtrinsics& extrinsics,
                       const std::vector<std::uint16_t>* depth_mm) {
-  const Eigen::Isometry3f ground_to_camera = groundFromExtrinsics(extrinsics).camera_to_ground.inverse();
+  const Eigen::Isometry3f ground_to_camera =
+      groundFromExtrinsics(extrinsics).camera_to_ground.inverse();
   auto project = [&](float x, float y, float z, Eigen::Vector2d& pixel) {
     const Eigen::Vector3f c = ground_to_camera * Eigen::Vector3f(x, y, z);
     if (c.z() < 0.1f) return false;  // behind or at the camera
@@ -241,7 +270,8 @@ int drawTablesInImage(Canvas& canvas, const io::TablesMessage& tables,
       const auto& a = table.hull[i];
       const auto& b = table.hull[(i + 1) % n];
       Eigen::Vector2d pa, pb;
-      if (!project(a.x(), a.y(), table.top_height, pa) || !project(b.x(), b.y(), table.top_height, pb)) {
+      if (!project(a.x(), a.y(), table.top_height, pa) ||
+          !project(b.x(), b.y(), table.top_height, pb)) {
         continue;
       }
       canvas.line(pa.x(), pa.y(), pb.x(), pb.y(), kBlack, 5);
@@ -257,16 +287,19 @@ int drawTablesInImage(Canvas& canvas, const io::TablesMessage& tables,
     }
     drawn += any ? 1 : 0;
   }
-  const bool have_depth = depth_mm != nullptr &&
-                          depth_mm->size() == static_cast<std::size_t>(canvas.width()) * canvas.height();
+  const bool have_depth =
+      depth_mm != nullptr &&
+      depth_mm->size() == static_cast<std::size_t>(canvas.width()) * canvas.height();
   for (const auto& p : numberedPositions(tables, false)) {
     Eigen::Vector2d pixel;
     if (!project(p.position.xy.x(), p.position.xy.y(), 0.0f, pixel)) continue;
-    const int u = static_cast<int>(std::lround(pixel.x())), v = static_cast<int>(std::lround(pixel.y()));
+    const int u = static_cast<int>(std::lround(pixel.x())),
+              v = static_cast<int>(std::lround(pixel.y()));
     bool hidden = false;
     if (have_depth && u >= 0 && v >= 0 && u < canvas.width() && v < canvas.height()) {
       const std::uint16_t seen = (*depth_mm)[static_cast<std::size_t>(v) * canvas.width() + u];
-      const Eigen::Vector3f c = ground_to_camera * Eigen::Vector3f(p.position.xy.x(), p.position.xy.y(), 0.0f);
+      const Eigen::Vector3f c =
+          ground_to_camera * Eigen::Vector3f(p.position.xy.x(), p.position.xy.y(), 0.0f);
       hidden = seen > 0 && c.z() > seen / 1000.0f + 0.15f;  // 15 cm: depth noise at a few metres
     }
     if (hidden) {
@@ -322,7 +355,8 @@ TopDown topDown(const io::TablesMessage& m, int size) {
     v.robot_yaw = m.map_pose->yaw;
   }
   // Bounds of everything, 0.5 m around, square, at most 150 px per metre.
-  double x0 = v.robot.x() - 0.5, x1 = v.robot.x() + 0.5, y0 = v.robot.y() - 0.5, y1 = v.robot.y() + 0.5;
+  double x0 = v.robot.x() - 0.5, x1 = v.robot.x() + 0.5, y0 = v.robot.y() - 0.5,
+         y1 = v.robot.y() + 0.5;
   auto grow = [&](double x, double y) {
     x0 = std::min(x0, x - 0.5), x1 = std::max(x1, x + 0.5);
     y0 = std::min(y0, y - 0.5), y1 = std::max(y1, y + 0.5);
@@ -341,10 +375,14 @@ TopDown topDown(const io::TablesMessage& m, int size) {
 std::string xmlEscape(const std::string& text) {
   std::string out;
   for (char c : text) {
-    if (c == '&') out += "&amp;";
-    else if (c == '<') out += "&lt;";
-    else if (c == '>') out += "&gt;";
-    else out += c;
+    if (c == '&')
+      out += "&amp;";
+    else if (c == '<')
+      out += "&lt;";
+    else if (c == '>')
+      out += "&gt;";
+    else
+      out += c;
   }
   return out;
 }
@@ -364,20 +402,25 @@ Image<Rgb8> tableMapPng(const io::TablesMessage& tables, int size_px) {
   Canvas canvas(size_px, size_px, kWhite);
   // 1 m grid.
   const double metres = (size_px - 2 * v.margin) / v.scale;
-  for (int i = static_cast<int>(std::floor(v.min_x)); i <= static_cast<int>(std::ceil(v.min_x + metres)); ++i) {
+  for (int i = static_cast<int>(std::floor(v.min_x));
+       i <= static_cast<int>(std::ceil(v.min_x + metres)); ++i) {
     const double x = v.px({i, 0}).x();
-    if (x >= v.margin && x <= size_px - v.margin) canvas.line(x, v.margin, x, size_px - v.margin, kGrid);
+    if (x >= v.margin && x <= size_px - v.margin)
+      canvas.line(x, v.margin, x, size_px - v.margin, kGrid);
   }
-  for (int i = static_cast<int>(std::floor(v.max_y - metres)); i <= static_cast<int>(std::ceil(v.max_y)); ++i) {
+  for (int i = static_cast<int>(std::floor(v.max_y - metres));
+       i <= static_cast<int>(std::ceil(v.max_y)); ++i) {
     const double y = v.px({0, i}).y();
-    if (y >= v.margin && y <= size_px - v.margin) canvas.line(v.margin, y, size_px - v.margin, y, kGrid);
+    if (y >= v.margin && y <= size_px - v.margin)
+      canvas.line(v.margin, y, size_px - v.margin, y, kGrid);
   }
   for (const auto& t : v.tables) {
     // Fill: scanline test against the convex hull (point-in-polygon by winding).
     if (t.hull.size() >= 3) {
       for (int y = v.margin; y < size_px - v.margin; ++y) {
         for (int x = v.margin; x < size_px - v.margin; ++x) {
-          const Eigen::Vector2d p(v.min_x + (x - v.margin) / v.scale, v.max_y - (y - v.margin) / v.scale);
+          const Eigen::Vector2d p(v.min_x + (x - v.margin) / v.scale,
+                                  v.max_y - (y - v.margin) / v.scale);
           bool inside = true;
           for (std::size_t i = 0; i < t.hull.size() && inside; ++i) {
             const Eigen::Vector2d a = t.hull[i], b = t.hull[(i + 1) % t.hull.size()];
@@ -392,18 +435,21 @@ Image<Rgb8> tableMapPng(const io::TablesMessage& tables, int size_px) {
       canvas.line(a.x(), a.y(), b.x(), b.y(), kBlack, 2);
     }
     const auto c = v.px(t.center);
-    canvas.text(static_cast<int>(c.x()) - 6, static_cast<int>(c.y()) - 7, tableName(t.id), kBlack, 2);
+    canvas.text(static_cast<int>(c.x()) - 6, static_cast<int>(c.y()) - 7, tableName(t.id), kBlack,
+                2);
   }
   for (const auto& p : v.positions) {
     const auto c = v.px(p.position.xy.cast<double>());
     // Which way the robot would face there.
-    canvas.line(c.x(), c.y(), c.x() + 22 * std::cos(p.position.yaw), c.y() - 22 * std::sin(p.position.yaw), kBlack, 2);
+    canvas.line(c.x(), c.y(), c.x() + 22 * std::cos(p.position.yaw),
+                c.y() - 22 * std::sin(p.position.yaw), kBlack, 2);
     drawPositionMarker(canvas, c.x(), c.y(), p.order, 9);
   }
   // Robot: a disc with a heading line.
   const auto r = v.px(v.robot);
   canvas.disc(r.x(), r.y(), 12, kRobot);
-  canvas.line(r.x(), r.y(), r.x() + 24 * std::cos(v.robot_yaw), r.y() - 24 * std::sin(v.robot_yaw), kRobot, 3);
+  canvas.line(r.x(), r.y(), r.x() + 24 * std::cos(v.robot_yaw), r.y() - 24 * std::sin(v.robot_yaw),
+              kRobot, 3);
   canvas.text(static_cast<int>(r.x()) - 14, static_cast<int>(r.y()) + 16, "ROBOT", kRobot, 1);
   canvas.text(8, 8, title(v, tables), kBlack, 1);
   canvas.text(8, size_px - 14, "grid 1 m; x right, y up", kBlack, 1);
@@ -426,16 +472,18 @@ std::string tableMapSvg(const io::TablesMessage& tables, int size_px) {
       s << q.x() << "," << q.y() << " ";
     }
     const auto c = v.px(t.center);
-    s << "\"/>\n<text x=\"" << c.x() << "\" y=\"" << c.y() << "\" font-size=\"16\" text-anchor=\"middle\">T"
-      << t.id << "</text>\n";
+    s << "\"/>\n<text x=\"" << c.x() << "\" y=\"" << c.y()
+      << "\" font-size=\"16\" text-anchor=\"middle\">T" << t.id << "</text>\n";
   }
   for (const auto& p : v.positions) {
     const auto c = v.px(p.position.xy.cast<double>());
-    s << "<line x1=\"" << c.x() << "\" y1=\"" << c.y() << "\" x2=\"" << c.x() + 22 * std::cos(p.position.yaw)
-      << "\" y2=\"" << c.y() - 22 * std::sin(p.position.yaw) << "\" stroke=\"black\" stroke-width=\"2\"/>\n";
+    s << "<line x1=\"" << c.x() << "\" y1=\"" << c.y() << "\" x2=\""
+      << c.x() + 22 * std::cos(p.position.yaw) << "\" y2=\""
+      << c.y() - 22 * std::sin(p.position.yaw) << "\" stroke=\"black\" stroke-width=\"2\"/>\n";
     s << "<circle cx=\"" << c.x() << "\" cy=\"" << c.y() << "\" r=\"9\" stroke=\"black\" fill=\""
       << (p.order > 0 ? "rgb(40,200,60)" : "rgb(220,40,40)") << "\"><title>table " << p.table
-      << (p.order > 0 ? ", visit " + std::to_string(p.order) : ", unreachable: " + xmlEscape(p.position.reason))
+      << (p.order > 0 ? ", visit " + std::to_string(p.order)
+                      : ", unreachable: " + xmlEscape(p.position.reason))
       << "</title></circle>\n";
     s << "<text x=\"" << c.x() << "\" y=\"" << c.y() + 4 << "\" text-anchor=\"middle\" fill=\""
       << (p.order > 0 ? "black" : "white") << "\">" << (p.order > 0 ? std::to_string(p.order) : "x")
@@ -443,9 +491,11 @@ std::string tableMapSvg(const io::TablesMessage& tables, int size_px) {
   }
   const auto r = v.px(v.robot);
   s << "<circle cx=\"" << r.x() << "\" cy=\"" << r.y() << "\" r=\"12\" fill=\"rgb(30,110,255)\"/>\n"
-    << "<line x1=\"" << r.x() << "\" y1=\"" << r.y() << "\" x2=\"" << r.x() + 24 * std::cos(v.robot_yaw)
-    << "\" y2=\"" << r.y() - 24 * std::sin(v.robot_yaw) << "\" stroke=\"rgb(30,110,255)\" stroke-width=\"3\"/>\n"
-    << "<text x=\"" << r.x() << "\" y=\"" << r.y() + 28 << "\" text-anchor=\"middle\" fill=\"rgb(30,110,255)\">robot</text>\n"
+    << "<line x1=\"" << r.x() << "\" y1=\"" << r.y() << "\" x2=\""
+    << r.x() + 24 * std::cos(v.robot_yaw) << "\" y2=\"" << r.y() - 24 * std::sin(v.robot_yaw)
+    << "\" stroke=\"rgb(30,110,255)\" stroke-width=\"3\"/>\n"
+    << "<text x=\"" << r.x() << "\" y=\"" << r.y() + 28
+    << "\" text-anchor=\"middle\" fill=\"rgb(30,110,255)\">robot</text>\n"
     << "</svg>\n";
   return s.str();
 }

@@ -52,9 +52,9 @@ int runSelfCheck(const LoadedConfig& loaded, std::ostream& out) {
     out << verdictLine(v, item, what, todo) << std::flush;
   };
 
-  say(Verdict::Ok, "config", loaded.origin + ": valid (source " + d.source + ", output " +
-                                 (effectiveLcmUrl(d).empty() ? "LCM default" : effectiveLcmUrl(d)) +
-                                 ")");
+  say(Verdict::Ok, "config",
+      loaded.origin + ": valid (source " + d.source + ", output " +
+          (effectiveLcmUrl(d).empty() ? "LCM default" : effectiveLcmUrl(d)) + ")");
 
   // Model: loads, and was trained with this config's feature extraction settings.
   std::unique_ptr<Segmenter> segmenter;
@@ -75,7 +75,8 @@ int runSelfCheck(const LoadedConfig& loaded, std::ostream& out) {
   std::unique_ptr<io::FrameSource> source;
   try {
     io::SourceSpec spec = io::parseSourceSpec(d.source);
-    if (spec.kind == "lcm" && spec.options.lcm_url.empty()) spec.options.lcm_url = effectiveLcmUrl(d);
+    if (spec.kind == "lcm" && spec.options.lcm_url.empty())
+      spec.options.lcm_url = effectiveLcmUrl(d);
     source = io::makeSource(spec);
     say(Verdict::Ok, "source", source->describe());
   } catch (const std::exception& e) {
@@ -133,8 +134,8 @@ int runSelfCheck(const LoadedConfig& loaded, std::ostream& out) {
   }
   double valid_sum = 0.0;
   for (const auto& f : frames) {
-    const auto valid = std::count_if(f.depth_mm.begin(), f.depth_mm.end(),
-                                     [](std::uint16_t v) { return v != 0; });
+    const auto valid =
+        std::count_if(f.depth_mm.begin(), f.depth_mm.end(), [](std::uint16_t v) { return v != 0; });
     valid_sum += static_cast<double>(valid) / static_cast<double>(f.depth_mm.size());
   }
   const double valid_share = valid_sum / static_cast<double>(frames.size());
@@ -188,7 +189,8 @@ int runSelfCheck(const LoadedConfig& loaded, std::ostream& out) {
   const double tilt_deg = std::acos(std::clamp(-up.y(), -1.0f, 1.0f)) * 180.0 / M_PI;
   say(with_ground == static_cast<int>(frames.size()) ? Verdict::Ok : Verdict::Warn, "ground",
       "floor found in " + std::to_string(with_ground) + " of " + std::to_string(frames.size()) +
-          " frames" + format(" (camera %.2f m above it, tilted %.0f deg)", example->offset, tilt_deg),
+          " frames" +
+          format(" (camera %.2f m above it, tilted %.0f deg)", example->offset, tilt_deg),
       "frames without a floor are not labelled: keep more floor in view");
 
   // One frame through the whole segmentation.

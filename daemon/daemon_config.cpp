@@ -1,8 +1,6 @@
 // findmugd settings: the `daemon:` section of the YAML file and the command line.
 #include "findmug/daemon/daemon_config.hpp"
 
-#include "findmug_cli.hpp"
-
 #include <charconv>
 #include <cmath>
 #include <cstdlib>
@@ -12,6 +10,7 @@
 #include <thread>
 
 #include "findmug/error.hpp"
+#include "findmug_cli.hpp"
 
 #ifndef FINDMUG_SYSCONF_DIR
 #define FINDMUG_SYSCONF_DIR "/etc"

@@ -399,8 +399,7 @@ LabeledFrame DatasetFolder::load(std::size_t i) const {
   const auto label_ids =
       has_labels_ ? readPng8(label_path)
                   : Image<std::uint8_t>{rgb.width, rgb.height,
-                                        std::vector<std::uint8_t>(rgb.pixels.size(),
-                                                                  kVoidLabel)};
+                                        std::vector<std::uint8_t>(rgb.pixels.size(), kVoidLabel)};
 
   if (depth.width != rgb.width || depth.height != rgb.height) {
     throw Error(depth_path + " is " + sizeText(depth.width, depth.height) + " but " + rgb_path +

@@ -106,7 +106,8 @@ std::vector<Pair> pairByName(const fs::path& in) {
       pairs.push_back({entry.path().stem().string(), entry.path().string(), depth.string()});
     }
   }
-  std::sort(pairs.begin(), pairs.end(), [](const Pair& a, const Pair& b) { return a.name < b.name; });
+  std::sort(pairs.begin(), pairs.end(),
+            [](const Pair& a, const Pair& b) { return a.name < b.name; });
   return pairs;
 }
 
@@ -201,9 +202,11 @@ int main(int argc, char** argv) {
     yaml << "# colour camera intrinsics in pixels, written by findmug-import\n"
          << "fx: " << k[0] << "\nfy: " << k[1] << "\ncx: " << k[2] << "\ncy: " << k[3] << "\n";
     if (!yaml) throw Error((out / "intrinsics.yaml").string() + ": cannot write");
-    std::cout << "findmug-import: " << pairs.size() << " frames (" << (tum ? "TUM association" : "paired by name")
-              << ", depth / " << depth_scale << " per metre -> mm) in " << out_dir << "\n";
-    if (clipped > 0) std::cout << "findmug-import: " << clipped << " depth pixels beyond 65.535 m set to 0\n";
+    std::cout << "findmug-import: " << pairs.size() << " frames ("
+              << (tum ? "TUM association" : "paired by name") << ", depth / " << depth_scale
+              << " per metre -> mm) in " << out_dir << "\n";
+    if (clipped > 0)
+      std::cout << "findmug-import: " << clipped << " depth pixels beyond 65.535 m set to 0\n";
     return 0;
   } catch (const std::exception& e) {
     std::cerr << "findmug-import: " << e.what() << "\n";

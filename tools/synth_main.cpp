@@ -7,18 +7,17 @@
 //                 [--speed 0.4] [--no-noise]
 #include <cstdio>
 #include <iostream>
+#include <lcm/lcm-cpp.hpp>
 #include <string>
 #include <tuple>
 
-#include "findmug/error.hpp"
-#include "findmug/synth.hpp"
 #include "findmug/dataset.hpp"
+#include "findmug/error.hpp"
 #include "findmug/io/channels.hpp"
 #include "findmug/io/lcm_codec.hpp"
+#include "findmug/synth.hpp"
 #include "findmug_cli.hpp"
 #include "tool_common.hpp"
-
-#include <lcm/lcm-cpp.hpp>
 
 namespace {
 
@@ -87,7 +86,9 @@ int main(int argc, char** argv) {
   app->add_option("--seed", seed_text, "scene/path/noise seed (same seed, same bytes)")
       ->required()
       ->type_name("N");
-  app->add_option("--frames", frames, "number of frames to render")->required()->check(cli::positive());
+  app->add_option("--frames", frames, "number of frames to render")
+      ->required()
+      ->check(cli::positive());
   app->add_option("--out", out, "output dataset folder (must be empty or absent)")
       ->required()
       ->type_name("DIR");
@@ -111,9 +112,11 @@ int main(int argc, char** argv) {
     spec.frames = frames;
     if (!fps_text.empty()) spec.fps = findmug::tools::parseNumber("--fps", fps_text);
     if (!height_text.empty())
-      std::tie(spec.path.height_min, spec.path.height_max) = parseRange("camera-height", height_text);
+      std::tie(spec.path.height_min, spec.path.height_max) =
+          parseRange("camera-height", height_text);
     if (!pitch_text.empty())
-      std::tie(spec.path.pitch_min_deg, spec.path.pitch_max_deg) = parseRange("pitch-deg", pitch_text);
+      std::tie(spec.path.pitch_min_deg, spec.path.pitch_max_deg) =
+          parseRange("pitch-deg", pitch_text);
     if (!tables_text.empty()) {
       const auto [lo, hi] = parseRange("tables", tables_text);
       if (lo != static_cast<int>(lo) || hi != static_cast<int>(hi))
@@ -121,7 +124,8 @@ int main(int argc, char** argv) {
       spec.apartment.tables_min = static_cast<int>(lo);
       spec.apartment.tables_max = static_cast<int>(hi);
     }
-    if (!speed_text.empty()) spec.path.speed_mps = findmug::tools::parseNumber("--speed", speed_text);
+    if (!speed_text.empty())
+      spec.path.speed_mps = findmug::tools::parseNumber("--speed", speed_text);
     if (no_noise) {
       spec.render.noise.enabled = false;
       spec.render.noise.rgb_noise_sigma = 0.0;

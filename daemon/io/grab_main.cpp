@@ -18,11 +18,11 @@
 #include <string>
 #include <thread>
 
-#include "findmug_cli.hpp"
 #include "findmug/error.hpp"
 #include "findmug/io/channels.hpp"
 #include "findmug/io/frame_source.hpp"
 #include "findmug/io/lcm_codec.hpp"
+#include "findmug_cli.hpp"
 
 namespace {
 
@@ -56,8 +56,7 @@ int main(int argc, char** argv) {
                      "file:///path/log.lcm?mode=w writes a log file");
   app->add_option("--channel", channel_base, "base channel")->capture_default_str();
   cli::addChannelSuffixFlag(*app, suffix);
-  app->add_option("--depth-compression", depth_compression, "zlib or none")
-      ->capture_default_str();
+  app->add_option("--depth-compression", depth_compression, "zlib or none")->capture_default_str();
   app->add_option("--color-compression", color_compression, "jpeg, png or none")
       ->capture_default_str();
   app->add_option("--jpeg-quality", encode.jpeg_quality, "JPEG quality")

@@ -1,8 +1,6 @@
 // The shared command-line layer (tools/cli/findmug_cli.hpp) and findmugd's flags on it:
 // --help/--version/bad flags give the same exit codes everywhere, number checks name the
 // flag and value, and findmugd keeps --set and its shortcuts in command-line order.
-#include "findmug_cli.hpp"
-
 #include <gtest/gtest.h>
 
 #include <sstream>
@@ -11,6 +9,7 @@
 #include "findmug/daemon/daemon_config.hpp"
 #include "findmug/error.hpp"
 #include "findmug/version.hpp"
+#include "findmug_cli.hpp"
 
 namespace findmug {
 namespace {
@@ -53,9 +52,9 @@ TEST(Cli, FindmugdKeepsOverridesInCommandLineOrder) {
   const daemon::CommandLine cl = daemon::parseCommandLine(
       {"--set", "mrf.lambda=1", "--workers", "2", "--set", "daemon.workers=3", "--model", "m.fmf",
        "--set", "mrf.lambda=4", "--check"});
-  EXPECT_EQ(cl.overrides, (std::vector<std::string>{"mrf.lambda=1", "daemon.workers=2",
-                                                    "daemon.workers=3", "daemon.model_path=m.fmf",
-                                                    "mrf.lambda=4"}));
+  EXPECT_EQ(cl.overrides,
+            (std::vector<std::string>{"mrf.lambda=1", "daemon.workers=2", "daemon.workers=3",
+                                      "daemon.model_path=m.fmf", "mrf.lambda=4"}));
   EXPECT_TRUE(cl.check);
   EXPECT_FALSE(cl.check_config);
   EXPECT_TRUE(daemon::parseCommandLine({"--version"}).version);

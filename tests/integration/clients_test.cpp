@@ -658,8 +658,9 @@ TEST(LabelViewer, WritesPaletteOverlaysAndSummariesAndSkipsTheCorruptImage) {
   const Image<Rgb8> palette = cropped(with_legend, 12, 8);
   // The legend's swatches: one per class in the palette, top to bottom, 22 px apart.
   for (int id = 0; id < kNumLabels; ++id) {
-    const Rgb8 swatch = with_legend.pixels[static_cast<std::size_t>(34 + 22 * id + 7) *
-                                               with_legend.width + 12 + 10 + 8];
+    const Rgb8 swatch =
+        with_legend
+            .pixels[static_cast<std::size_t>(34 + 22 * id + 7) * with_legend.width + 12 + 10 + 8];
     EXPECT_TRUE(swatch == kLabelColors[id]) << "legend swatch " << id;
   }
   for (std::size_t i = 0; i < palette.pixels.size(); ++i) {
@@ -700,9 +701,12 @@ TEST(LabelViewer, NoPngWritesNothingAndBadFlagsExitWithCode2) {
   EXPECT_EQ(lines(r.out).size(), 2u) << r.out;
   EXPECT_TRUE(std::filesystem::is_empty(tmp.path() / "png"));
 
-  for (const std::vector<std::string>& args : std::vector<std::vector<std::string>>{
-           {"--alpha", "2"}, {"--every", "0"}, {"--out", tmp.str("no-such-dir")}, {"--bogus"},
-           {"--channel-suffix", "bad suffix"}}) {
+  for (const std::vector<std::string>& args :
+       std::vector<std::vector<std::string>>{{"--alpha", "2"},
+                                             {"--every", "0"},
+                                             {"--out", tmp.str("no-such-dir")},
+                                             {"--bogus"},
+                                             {"--channel-suffix", "bad suffix"}}) {
     const ProcessResult bad = run(FINDMUG_LABEL_VIEWER_EXE, args, tmp);
     EXPECT_EQ(bad.exit_code, 2) << args[0] << ": " << bad.err;
     EXPECT_TRUE(bad.out.empty()) << bad.out;

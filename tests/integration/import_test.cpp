@@ -75,7 +75,7 @@ TEST(FindmugImport, TumFolderBecomesAnUnlabelledDatasetThatReplays) {
   test::TempDir tmp;
   const auto originals = writeTumFolder(nyu, tmp.path() / "tum");
   const ToolRun r = run("--in " + tmp.str("tum") + " --out " + tmp.str("out") +
-                    " --depth-scale 5000 --intrinsics 518.5,519,325.5,253.5");
+                        " --depth-scale 5000 --intrinsics 518.5,519,325.5,253.5");
   ASSERT_EQ(r.code, 0) << r.output;
   EXPECT_NE(r.output.find("3 frames (TUM association"), std::string::npos) << r.output;
 
@@ -105,15 +105,15 @@ TEST(FindmugImport, TumFolderBecomesAnUnlabelledDatasetThatReplays) {
 
   // And findmug-grab publishes it (into an LCM log file).
   const std::string log_path = tmp.str("grab.lcm");
-  const std::string grab = std::string(FINDMUG_GRAB_EXE) + " --source 'dataset:" +
-                           tmp.str("out") + "' --url 'file://" + log_path + "?mode=w' 2>&1";
+  const std::string grab = std::string(FINDMUG_GRAB_EXE) + " --source 'dataset:" + tmp.str("out") +
+                           "' --url 'file://" + log_path + "?mode=w' 2>&1";
   ASSERT_EQ(std::system(grab.c_str()), 0);
   lcm::LogFile log(log_path, "r");
   ASSERT_TRUE(log.good());
   int events = 0;
   while (const lcm::LogEvent* event = log.readNextEvent()) {
-    const RgbdFrame f = io::decodeRgbdFrame(event->data, static_cast<std::size_t>(event->datalen),
-                                            event->channel);
+    const RgbdFrame f =
+        io::decodeRgbdFrame(event->data, static_cast<std::size_t>(event->datalen), event->channel);
     EXPECT_EQ(f.depth_mm, originals[static_cast<std::size_t>(events)].frame.depth_mm);
     ++events;
   }
@@ -163,8 +163,7 @@ TEST(FindmugImport, BadInputIsNamed) {
   std::ofstream(tmp.path() / "tum" / "depth.txt") << "1.0\n";
   r = run("--in " + tmp.str("tum") + " --out " + tmp.str("o2"));
   EXPECT_EQ(r.code, 1);
-  EXPECT_NE(r.output.find("depth.txt:1: expected 'timestamp path'"), std::string::npos)
-      << r.output;
+  EXPECT_NE(r.output.find("depth.txt:1: expected 'timestamp path'"), std::string::npos) << r.output;
 
   r = run("--in " + tmp.str("tum") + " --out " + tmp.str("o3") + " --intrinsics 1,2,3");
   EXPECT_EQ(r.code, 1);

@@ -2,14 +2,13 @@
 // camera sees them (checked against rays cast from chosen pixels through the daemon's own
 // camera-to-ground transform), occluded positions become rings, and the top-down map and
 // legend show what they claim.
-#include "picture.hpp"
-
 #include <gtest/gtest.h>
 
 #include <cmath>
 
 #include "findmug/ground.hpp"
 #include "findmug/tables.hpp"
+#include "picture.hpp"
 
 namespace findmug::clients {
 namespace {
@@ -85,8 +84,8 @@ TEST(Pictures, PositionsBehindASurfaceAreRings) {
   depth[200 * 320 + 60] = 1000;
   Canvas canvas(320, 240, kGrey);
   drawTablesInImage(canvas, tables, kK, kMount, &depth);
-  EXPECT_EQ(at(canvas, 60 + 6, 200), kGrey);  // inside the ring: not filled
-  EXPECT_NE(at(canvas, 60 + 10, 200), kGrey);  // the ring
+  EXPECT_EQ(at(canvas, 60 + 6, 200), kGrey);                 // inside the ring: not filled
+  EXPECT_NE(at(canvas, 60 + 10, 200), kGrey);                // the ring
   EXPECT_EQ(at(canvas, 260 + 8, 200), (Rgb8{220, 40, 40}));  // no depth there: drawn as usual
 }
 

@@ -21,9 +21,9 @@
 #include <optional>
 #include <string>
 
-#include "findmug_cli.hpp"
 #include "findmug/error.hpp"
 #include "findmug/io/frame_source.hpp"
+#include "findmug_cli.hpp"
 #include "oni_writer.hpp"
 
 namespace {

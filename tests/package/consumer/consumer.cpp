@@ -5,7 +5,6 @@
 #include <findmug/labels.hpp>
 #include <findmug/tables_t.hpp>
 #include <findmug/version.hpp>
-
 #include <iostream>
 #include <vector>
 
