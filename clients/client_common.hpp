@@ -1,5 +1,5 @@
 // client_common.hpp — small helpers shared by the findmug command-line clients:
-// flag parsing, clean shutdown on SIGINT/SIGTERM, and an LCM receive loop.
+// clean shutdown on SIGINT/SIGTERM and an LCM receive loop (flags: tools/cli/findmug_cli.hpp).
 //
 // The clients are single-threaded: LCM handlers run inside handleTimeout()
 // on the main thread, and a signal only sets a flag that the loop checks
@@ -26,72 +26,6 @@ inline void installStopHandlers() {
   sigaction(SIGINT, &action, nullptr);
   sigaction(SIGTERM, &action, nullptr);
 }
-
-// "--name value" and "--flag" arguments. Unknown flags and missing values
-// throw std::invalid_argument naming the flag.
-class Flags {
- public:
-  Flags(int argc, char** argv, const std::vector<std::string>& with_value,
-        const std::vector<std::string>& switches) {
-    for (int i = 1; i < argc; ++i) {
-      const std::string arg = argv[i];
-      if (contains(switches, arg)) {
-        values_.insert_or_assign(arg, std::string());  // present, no value
-      } else if (contains(with_value, arg)) {
-        if (i + 1 >= argc) throw std::invalid_argument(arg + " needs a value");
-        values_.insert_or_assign(arg, std::string(argv[++i]));
-      } else {
-        throw std::invalid_argument("unknown argument '" + arg + "' (see --help)");
-      }
-    }
-  }
-  bool has(const std::string& name) const { return values_.count(name) > 0; }
-  std::string get(const std::string& name, const std::string& fallback) const {
-    const auto it = values_.find(name);
-    return it == values_.end() ? fallback : it->second;
-  }
-  long getInt(const std::string& name, long fallback, long min_value) const {
-    if (!has(name)) return fallback;
-    const std::string text = get(name, "");
-    std::size_t used = 0;
-    long value = 0;
-    try {
-      value = std::stol(text, &used);
-    } catch (const std::exception&) {
-      used = 0;
-    }
-    if (used != text.size() || value < min_value) {
-      throw std::invalid_argument(name + " " + text +
-                                  ": expected an integer >= " + std::to_string(min_value));
-    }
-    return value;
-  }
-  double getDouble(const std::string& name, double fallback, double lo, double hi) const {
-    if (!has(name)) return fallback;
-    const std::string text = get(name, "");
-    std::size_t used = 0;
-    double value = 0;
-    try {
-      value = std::stod(text, &used);
-    } catch (const std::exception&) {
-      used = 0;
-    }
-    if (used != text.size() || !(value >= lo && value <= hi)) {
-      throw std::invalid_argument(name + " " + text + ": expected a number in [" +
-                                  std::to_string(lo) + ", " + std::to_string(hi) + "]");
-    }
-    return value;
-  }
-
- private:
-  static bool contains(const std::vector<std::string>& list, const std::string& s) {
-    for (const auto& x : list) {
-      if (x == s) return true;
-    }
-    return false;
-  }
-  std::map<std::string, std::string> values_;
-};
 
 // Waits for messages until a stop signal, `done()` turns true, or the LCM
 // source ends (a replayed log file reaches its end). Returns the exit code:

@@ -8,6 +8,15 @@
 // brown, void black) blended with the colour frame of the same utime when
 // one was received, or the plain palette image otherwise.
 //
+// Pictures for people: every overlay has a legend panel; when FINDMUG_TABLES[_suffix]
+// brings the tables of the same frame and the colour frame carries its camera mount
+// (extrinsics), the table hulls and the search positions (numbered in visiting order,
+// unreachable ones crossed) are drawn over the image. table_map.png and table_map.svg
+// show the tables top-down: the table map with the robot's pose from
+// FINDMUG_TABLE_MAP[_suffix], or, until a map arrives, the latest frame's tables around
+// the robot. --source SPEC takes the colour frames from a frame source (e.g. the dataset
+// folder the daemon replayed), matched by sequence number, for logs without frames.
+//
 // Exits cleanly on SIGINT/SIGTERM, after --count label images, or at the end
 // of a replayed log (--lcm-url file://LOG?speed=0). Bad messages are
 // reported on stderr and skipped.
@@ -15,7 +24,10 @@
 #include <cstdio>
 #include <deque>
 #include <filesystem>
+#include <fstream>
 #include <lcm/lcm-cpp.hpp>
+#include <memory>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -24,9 +36,12 @@
 #include "findmug/error.hpp"
 #include "findmug/image_io.hpp"
 #include "findmug/io/channels.hpp"
+#include "findmug/io/frame_source.hpp"
 #include "findmug/io/lcm_codec.hpp"
 #include "findmug/label_image.hpp"
 #include "findmug/labels.hpp"
+#include "findmug_cli.hpp"
+#include "picture.hpp"
 
 namespace {
 
@@ -36,36 +51,64 @@ constexpr const char* kProgram = "findmug-label-viewer";
 // Colour frames kept for matching: labels arrive some frames after their input.
 constexpr std::size_t kKeptColorFrames = 60;
 
-const char* kUsage =
-    "usage: findmug-label-viewer [options]\n"
-    "  --lcm-url URL        LCM provider (default: LCM_DEFAULT_URL or udpm default);\n"
-    "                       file://LOG?speed=0 replays a log and exits at its end\n"
-    "  --channel-suffix S   listen on FINDMUG_LABELS_S (and FINDMUG_RGBD_S)\n"
-    "  --out DIR            where overlays go (default: current directory)\n"
-    "  --alpha A            label colour weight over the image, 0..1 (default 0.6)\n"
-    "  --every K            write every K-th overlay (default 1)\n"
-    "  --no-png             console summary only\n"
-    "  --count N            exit after N label images\n"
-    "  --help\n";
-
 struct ColorFrame {
   std::uint64_t utime = 0;
+  std::int64_t seq = 0;
   int width = 0, height = 0;
   std::vector<Rgb8> rgb;
+  std::vector<std::uint16_t> depth_mm;  // to tell search positions hidden behind surfaces
+  CameraIntrinsics intrinsics;
+  std::optional<CameraExtrinsics> extrinsics;
 };
+// Label images kept for tables that arrive after them.
+constexpr std::size_t kKeptLabelImages = 8;
 
 class LabelViewer {
  public:
-  LabelViewer(std::filesystem::path out_dir, float alpha, long every, bool write_png)
-      : out_dir_(std::move(out_dir)), alpha_(alpha), every_(every), write_png_(write_png) {}
+  LabelViewer(std::filesystem::path out_dir, float alpha, long every, bool write_png,
+              std::unique_ptr<io::FrameSource> source)
+      : out_dir_(std::move(out_dir)),
+        alpha_(alpha),
+        every_(every),
+        write_png_(write_png),
+        source_(std::move(source)) {}
 
   void onFrame(const lcm::ReceiveBuffer* buffer, const std::string& channel) {
     try {
-      RgbdFrame frame = io::decodeRgbdFrame(buffer->data, buffer->data_size, channel);
-      colors_.push_back({frame.utime, frame.width, frame.height, std::move(frame.rgb)});
-      while (colors_.size() > kKeptColorFrames) colors_.pop_front();
+      keep(io::decodeRgbdFrame(buffer->data, buffer->data_size, channel));
     } catch (const std::exception& e) {
       std::fprintf(stderr, "%s: skipping bad frame: %s\n", kProgram, e.what());
+    }
+  }
+
+  void onTables(const lcm::ReceiveBuffer* buffer, const std::string& channel) {
+    io::TablesMessage message;
+    try {
+      message = io::decodeTables(buffer->data, buffer->data_size, channel);
+    } catch (const std::exception& e) {
+      std::fprintf(stderr, "%s: skipping bad tables message: %s\n", kProgram, e.what());
+      return;
+    }
+    const bool is_map = message.content == io::TablesContent::Map;
+    if (write_png_ && (is_map || !have_map_)) {
+      have_map_ = have_map_ || is_map;
+      writeTableMap(message);
+    }
+    if (is_map) return;
+    tables_.push_back(message);
+    while (tables_.size() > kKeptLabelImages) tables_.pop_front();
+    // Labels of this frame already written: draw them again, now with the tables.
+    for (const auto& labels : labels_) {
+      if (labels.utime == message.utime && write_png_) {
+        try {
+          const std::string written = writeOverlay(labels);
+          std::printf("tables seq %lld: %zu tables; redrawn %s\n",
+                      static_cast<long long>(message.seq), message.tables.size(), written.c_str());
+          std::fflush(stdout);
+        } catch (const std::exception& e) {
+          std::fprintf(stderr, "%s: overlay not redrawn: %s\n", kProgram, e.what());
+        }
+      }
     }
   }
 
@@ -115,6 +158,8 @@ class LabelViewer {
       } catch (const std::exception& e) {
         summary += std::string("; overlay not written: ") + e.what();
       }
+      labels_.push_back(message);
+      while (labels_.size() > kKeptLabelImages) labels_.pop_front();
     }
     std::puts(summary.c_str());
     std::fflush(stdout);
@@ -123,14 +168,36 @@ class LabelViewer {
   long received() const { return received_; }
 
  private:
-  std::string writeOverlay(const io::LabelImageMessage& message) const {
+  void keep(RgbdFrame frame) {
+    colors_.push_back({frame.utime, frame.seq, frame.width, frame.height, std::move(frame.rgb),
+                       std::move(frame.depth_mm), frame.intrinsics, frame.extrinsics});
+    while (colors_.size() > kKeptColorFrames) colors_.pop_front();
+  }
+
+  // The colour frame of a label image: same utime from FINDMUG_RGBD, or the same
+  // sequence number from --source (read ahead as far as needed).
+  const ColorFrame* colourFor(const io::LabelImageMessage& message) {
     const LabelImage& image = message.image;
-    const ColorFrame* match = nullptr;
-    for (const auto& c : colors_) {
-      if (c.utime == message.utime && c.width == image.width && c.height == image.height) {
-        match = &c;
+    auto find = [&]() -> const ColorFrame* {
+      for (const auto& c : colors_) {
+        const bool same = source_ ? c.seq == message.seq : c.utime == message.utime;
+        if (same && c.width == image.width && c.height == image.height) return &c;
+      }
+      return nullptr;
+    };
+    if (source_) {
+      while (!find() && (colors_.empty() || colors_.back().seq < message.seq)) {
+        auto frame = source_->next();
+        if (!frame) break;
+        keep(std::move(*frame));
       }
     }
+    return find();
+  }
+
+  std::string writeOverlay(const io::LabelImageMessage& message) {
+    const LabelImage& image = message.image;
+    const ColorFrame* match = colourFor(message);
     Image<Rgb8> overlay;
     overlay.width = image.width;
     overlay.height = image.height;
@@ -141,53 +208,109 @@ class LabelViewer {
       const std::vector<Rgb8> black(image.labels.size());
       overlay.pixels = colorizeLabels(image, black, 1.0f);
     }
+    std::string tables_note;
+    for (const auto& tables : tables_) {
+      if (tables.utime != message.utime) continue;
+      if (match == nullptr || !match->extrinsics) {
+        tables_note = " (" + std::to_string(tables.tables.size()) +
+                      " tables not drawn: no camera extrinsics with the colour frame)";
+        break;
+      }
+      clients::Canvas canvas(std::move(overlay));
+      const int drawn = clients::drawTablesInImage(canvas, tables, match->intrinsics,
+                                                   *match->extrinsics, &match->depth_mm);
+      overlay = canvas.image();
+      tables_note = " with " + std::to_string(drawn) + " of " +
+                    std::to_string(tables.tables.size()) + " tables in view";
+      break;
+    }
     char name[64];
     std::snprintf(name, sizeof(name), "labels_%08lld.png", static_cast<long long>(message.seq));
     const std::filesystem::path path = out_dir_ / name;
-    writePngRgb(path.string(), overlay);
-    return std::string(match ? "overlay " : "palette (no colour frame) ") + path.string();
+    writePngRgb(path.string(), clients::withLegend(overlay));
+    return std::string(match ? "overlay " : "palette (no colour frame) ") + path.string() +
+           tables_note;
+  }
+
+  void writeTableMap(const io::TablesMessage& message) const {
+    try {
+      writePngRgb((out_dir_ / "table_map.png").string(), clients::tableMapPng(message));
+      std::ofstream svg(out_dir_ / "table_map.svg");
+      svg << clients::tableMapSvg(message);
+      if (!svg) throw Error((out_dir_ / "table_map.svg").string() + ": cannot write");
+    } catch (const std::exception& e) {
+      std::fprintf(stderr, "%s: table map not written: %s\n", kProgram, e.what());
+    }
   }
 
   std::filesystem::path out_dir_;
   float alpha_;
   long every_;
   bool write_png_;
+  std::unique_ptr<io::FrameSource> source_;  // colour frames by seq (--source), or null
   long received_ = 0;
+  bool have_map_ = false;  // a FINDMUG_TABLE_MAP message arrived: table_map.* shows the map
   std::deque<ColorFrame> colors_;
+  std::deque<io::LabelImageMessage> labels_;
+  std::deque<io::TablesMessage> tables_;
 };
 
 }  // namespace
 
 int main(int argc, char** argv) {
   using namespace findmug;
-  std::string url, labels_channel, frames_channel;
-  std::filesystem::path out_dir = ".";
-  float alpha = 0.6f;
+  std::string url, suffix, out_text = ".", source_spec;
+  double alpha = 0.6;
   long every = 1, count = 0;
-  bool write_png = true;
+  bool no_png = false;
+  auto app = cli::makeApp(kProgram,
+                          "Prints a summary of each label image findmugd publishes and writes "
+                          "overlays with a legend, tables and search positions, and a top-down "
+                          "table map (table_map.png, table_map.svg)");
+  cli::addLcmUrlFlag(*app, url,
+                     "LCM provider (default: LCM_DEFAULT_URL or udpm default); "
+                     "file://LOG?speed=0 replays a log and exits at its end");
+  cli::addChannelSuffixFlag(*app, suffix);
+  app->add_option("--out", out_text, "where overlays and the table map go")
+      ->type_name("DIR")
+      ->capture_default_str();
+  app->add_option("--alpha", alpha, "label colour weight over the image")
+      ->check(CLI::Range(0.0, 1.0))
+      ->capture_default_str();
+  app->add_option("--every", every, "write every K-th overlay")
+      ->check(cli::positive())
+      ->capture_default_str();
+  app->add_flag("--no-png", no_png, "console summary only");
+  app->add_option("--count", count, "exit after N label images")->check(cli::positive());
+  cli::addSourceFlag(*app, source_spec,
+                     "colour frames (and camera mount) from this frame source, matched by "
+                     "sequence number, e.g. the dataset:DIR the daemon replayed");
+  if (auto code = cli::parse(*app, argc, argv)) return *code;
+  const std::filesystem::path out_dir = out_text;
+  const bool write_png = !no_png;
+  if (write_png && !std::filesystem::is_directory(out_dir)) {
+    std::fprintf(stderr, "%s: --out %s: not a directory (see --help)\n", kProgram,
+                 out_dir.string().c_str());
+    return 2;
+  }
+  std::string labels_channel, frames_channel, tables_channel, map_channel;
   try {
-    const clients::Flags flags(
-        argc, argv, {"--lcm-url", "--channel-suffix", "--out", "--alpha", "--every", "--count"},
-        {"--no-png", "--help"});
-    if (flags.has("--help")) {
-      std::fputs(kUsage, stdout);
-      return 0;
-    }
-    url = flags.get("--lcm-url", "");
-    const std::string suffix = flags.get("--channel-suffix", "");
     labels_channel = io::channelName(io::kLabelsChannel, suffix);
     frames_channel = io::channelName(io::kRgbdChannel, suffix);
-    out_dir = flags.get("--out", ".");
-    alpha = static_cast<float>(flags.getDouble("--alpha", 0.6, 0.0, 1.0));
-    every = flags.getInt("--every", 1, 1);
-    count = flags.getInt("--count", 0, 1);
-    write_png = !flags.has("--no-png");
-    if (write_png && !std::filesystem::is_directory(out_dir)) {
-      throw std::invalid_argument("--out " + out_dir.string() + ": not a directory");
-    }
+    tables_channel = io::channelName(io::kTablesChannel, suffix);
+    map_channel = io::channelName(io::kTableMapChannel, suffix);
   } catch (const std::exception& e) {
-    std::fprintf(stderr, "%s: %s\n%s", kProgram, e.what(), kUsage);
+    std::fprintf(stderr, "%s: --channel-suffix: %s (see --help)\n", kProgram, e.what());
     return 2;
+  }
+  std::unique_ptr<io::FrameSource> source;
+  if (!source_spec.empty()) {
+    try {
+      source = io::makeSource(source_spec);
+    } catch (const std::exception& e) {
+      std::fprintf(stderr, "%s: --source: %s\n", kProgram, e.what());
+      return 2;
+    }
   }
 
   lcm::LCM lcm(url);
@@ -197,11 +320,13 @@ int main(int argc, char** argv) {
     return 1;
   }
   clients::installStopHandlers();
-  LabelViewer viewer(out_dir, alpha, every, write_png);
+  LabelViewer viewer(out_dir, static_cast<float>(alpha), every, write_png, std::move(source));
   lcm.subscribe(labels_channel, &LabelViewer::onLabels, &viewer);
   lcm.subscribe(frames_channel, &LabelViewer::onFrame, &viewer);
-  std::fprintf(stderr, "%s: listening on %s and %s\n", kProgram, labels_channel.c_str(),
-               frames_channel.c_str());
+  lcm.subscribe(tables_channel, &LabelViewer::onTables, &viewer);
+  lcm.subscribe(map_channel, &LabelViewer::onTables, &viewer);
+  std::fprintf(stderr, "%s: listening on %s, %s, %s and %s\n", kProgram, labels_channel.c_str(),
+               frames_channel.c_str(), tables_channel.c_str(), map_channel.c_str());
   return clients::receiveLoop(lcm, url, kProgram,
                               [&] { return count > 0 && viewer.received() >= count; });
 }

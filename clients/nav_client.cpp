@@ -24,25 +24,13 @@
 #include "findmug/io/channels.hpp"
 #include "findmug/io/lcm_codec.hpp"
 #include "findmug/tables.hpp"
+#include "findmug_cli.hpp"
 
 namespace {
 
 using namespace findmug;
 
 constexpr const char* kProgram = "findmug-nav-client";
-
-const char* kUsage =
-    "usage: findmug-nav-client [options]\n"
-    "  --lcm-url URL          LCM provider (default: LCM_DEFAULT_URL or udpm default);\n"
-    "                         file://LOG?speed=0 replays a log and exits at its end\n"
-    "  --channel-suffix S     listen on FINDMUG_TABLES_S\n"
-    "  --map                  listen on the persistent table map (FINDMUG_TABLE_MAP):\n"
-    "                         confirmed tables with stable ids, in the map frame\n"
-    "  --frame auto|base|map  frame of the printed positions (default auto: map when\n"
-    "                         the message has the robot's map pose)\n"
-    "  --json                 one JSON object per message (JSON lines)\n"
-    "  --count N              exit after N messages\n"
-    "  --help\n";
 
 enum class FrameChoice { Auto, Base, Map };
 
@@ -199,32 +187,34 @@ class NavClient {
 
 int main(int argc, char** argv) {
   using namespace findmug;
-  std::string url, channel;
+  std::string url, suffix, frame_name = "auto";
   FrameChoice frame = FrameChoice::Auto;
-  bool json = false;
+  bool json = false, map = false;
   long count = 0;
+  auto app = cli::makeApp(kProgram,
+                          "Prints the tables' search positions in visiting order from the robot");
+  cli::addLcmUrlFlag(*app, url,
+                     "LCM provider (default: LCM_DEFAULT_URL or udpm default); "
+                     "file://LOG?speed=0 replays a log and exits at its end");
+  cli::addChannelSuffixFlag(*app, suffix);
+  app->add_flag("--map", map,
+                "listen on the persistent table map (FINDMUG_TABLE_MAP): confirmed tables "
+                "with stable ids, in the map frame");
+  app->add_option("--frame", frame_name,
+                  "frame of the printed positions (auto: map when the message has the "
+                  "robot's map pose)")
+      ->check(CLI::IsMember({"auto", "base", "map"}))
+      ->capture_default_str();
+  app->add_flag("--json", json, "one JSON object per message (JSON lines)");
+  app->add_option("--count", count, "exit after N messages")->check(cli::positive());
+  if (auto code = cli::parse(*app, argc, argv)) return *code;
+  if (frame_name == "base") frame = FrameChoice::Base;
+  if (frame_name == "map") frame = FrameChoice::Map;
+  std::string channel;
   try {
-    const clients::Flags flags(argc, argv, {"--lcm-url", "--channel-suffix", "--frame", "--count"},
-                               {"--json", "--map", "--help"});
-    if (flags.has("--help")) {
-      std::fputs(kUsage, stdout);
-      return 0;
-    }
-    url = flags.get("--lcm-url", "");
-    channel = io::channelName(flags.has("--map") ? io::kTableMapChannel : io::kTablesChannel,
-                              flags.get("--channel-suffix", ""));
-    const std::string frame_name = flags.get("--frame", "auto");
-    if (frame_name == "base") {
-      frame = FrameChoice::Base;
-    } else if (frame_name == "map") {
-      frame = FrameChoice::Map;
-    } else if (frame_name != "auto") {
-      throw std::invalid_argument("--frame " + frame_name + ": expected auto, base or map");
-    }
-    json = flags.has("--json");
-    count = flags.getInt("--count", 0, 1);
+    channel = io::channelName(map ? io::kTableMapChannel : io::kTablesChannel, suffix);
   } catch (const std::exception& e) {
-    std::fprintf(stderr, "%s: %s\n%s", kProgram, e.what(), kUsage);
+    std::fprintf(stderr, "%s: --channel-suffix: %s (see --help)\n", kProgram, e.what());
     return 2;
   }
 

@@ -11,6 +11,7 @@
 #include <thread>
 
 #include "findmug/error.hpp"
+#include "findmug_cli.hpp"
 
 #ifndef FINDMUG_SYSCONF_DIR
 #define FINDMUG_SYSCONF_DIR "/etc"
@@ -261,6 +262,29 @@ const std::map<std::string, Key>& tableMapKeys() {
   return all;
 }
 
+// The check section: findmugd --check (check.hpp).
+const std::map<std::string, Key>& checkKeys() {
+  using D = DaemonConfig;
+  static const std::map<std::string, Key> all = {
+      {"check.frames",
+       {[](D& d, const std::string& k, const std::string& v) {
+          d.check.frames = static_cast<int>(toInt(k, v, 1, 10000));
+        },
+        [](const D& d) { return std::to_string(d.check.frames); }}},
+      {"check.timeout_s",
+       {[](D& d, const std::string& k, const std::string& v) {
+          d.check.timeout_s = toDouble(k, v, 0.1, 3600);
+        },
+        [](const D& d) { return fmt(d.check.timeout_s); }}},
+      {"check.min_valid_depth",
+       {[](D& d, const std::string& k, const std::string& v) {
+          d.check.min_valid_depth = toDouble(k, v, 0, 1);
+        },
+        [](const D& d) { return fmt(d.check.min_valid_depth); }}},
+  };
+  return all;
+}
+
 std::string keyList(const std::map<std::string, Key>& keys) {
   std::string known;
   for (const auto& [name, k] : keys) known += (known.empty() ? "" : ", ") + name;
@@ -280,6 +304,9 @@ DaemonConfig resolveDaemonConfig(Config& config) {
     } else if (key.rfind("table_map.", 0) == 0) {
       section = &tableMapKeys();
       section_name = "table_map";
+    } else if (key.rfind("check.", 0) == 0) {
+      section = &checkKeys();
+      section_name = "check";
     } else {
       continue;  // other owners' sections
     }
@@ -295,6 +322,7 @@ DaemonConfig resolveDaemonConfig(Config& config) {
   validateTableMapConfig(daemon.table_map);
   for (const auto& [name, k] : keys()) config.extra[name] = k.get(daemon);
   for (const auto& [name, k] : tableMapKeys()) config.extra[name] = k.get(daemon);
+  for (const auto& [name, k] : checkKeys()) config.extra[name] = k.get(daemon);
   return daemon;
 }
 
@@ -312,51 +340,84 @@ std::optional<std::string> effectivePoseUrl(const DaemonConfig& config) {
   return output;
 }
 
-std::string usage() {
-  return "usage: findmugd [options]\n"
-         "  --config PATH          YAML config (default " +
-         defaultConfigPath() +
-         ")\n"
-         "  --set KEY=VALUE        override any setting, e.g. --set mrf.lambda=2 (repeatable)\n"
-         "  --source SPEC          same as --set daemon.source=SPEC\n"
-         "  --lcm-url URL          same as --set daemon.lcm_url=URL\n"
-         "  --channel-suffix S     same as --set daemon.channel_suffix=S\n"
-         "  --model PATH           same as --set daemon.model_path=PATH\n"
-         "  --workers N            same as --set daemon.workers=N\n"
-         "  --log-level LEVEL      same as --set daemon.log_level=LEVEL\n"
-         "  --check-config         validate and print the effective config, then exit\n"
-         "  --help                 this text\n"
-         "Environment: LCM_DEFAULT_URL (used when daemon.lcm_url is empty), NOTIFY_SOCKET,\n"
-         "WATCHDOG_USEC (systemd), JOURNAL_STREAM (log to the journal).\n";
+namespace {
+
+// findmugd's flags on the shared CLI layer. Values land in `cl` only through
+// parse_order() (below), which keeps --set and its shortcuts in command-line order.
+std::unique_ptr<CLI::App> daemonApp(CommandLine& cl) {
+  auto app = cli::makeApp("findmugd", "findmug real-time semantic segmentation daemon");
+  app->add_option("--config")
+      ->description("YAML config (default " + defaultConfigPath() + ")")
+      ->type_name("PATH");
+  app->add_option("--set")
+      ->description("override any setting, e.g. --set mrf.lambda=2 (repeatable)")
+      ->type_name("KEY=VALUE")
+      ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
+  for (const auto& [flag, key] : daemonFlagShortcuts()) {
+    app->add_option(flag)
+        ->description("same as --set " + key + "=VALUE")
+        ->type_name("VALUE")
+        ->multi_option_policy(CLI::MultiOptionPolicy::TakeAll);
+  }
+  app->add_flag("--check-config", cl.check_config,
+                "validate and print the effective config, then exit");
+  app->add_flag("--check", cl.check,
+                "first-run self-test: config, model, source, frames, ground plane, one "
+                "labelled frame; one verdict line each; exit 0 when nothing failed");
+  app->footer(
+      "Environment: LCM_DEFAULT_URL (used when daemon.lcm_url is empty), NOTIFY_SOCKET,\n"
+      "WATCHDOG_USEC (systemd), JOURNAL_STREAM (log to the journal).");
+  return app;
 }
 
-CommandLine parseCommandLine(const std::vector<std::string>& args) {
-  static const std::map<std::string, std::string> shortcuts = {
+}  // namespace
+
+const std::vector<std::pair<std::string, std::string>>& daemonFlagShortcuts() {
+  static const std::vector<std::pair<std::string, std::string>> shortcuts = {
       {"--source", "daemon.source"},
       {"--lcm-url", "daemon.lcm_url"},
       {"--channel-suffix", "daemon.channel_suffix"},
       {"--model", "daemon.model_path"},
       {"--workers", "daemon.workers"},
       {"--log-level", "daemon.log_level"}};
+  return shortcuts;
+}
+
+std::string usage() {
+  CommandLine unused;
+  return daemonApp(unused)->help();
+}
+
+CommandLine parseCommandLine(const std::vector<std::string>& args) {
   CommandLine cl;
-  for (std::size_t i = 0; i < args.size(); ++i) {
-    const std::string& arg = args[i];
-    auto value = [&]() -> std::string {
-      if (i + 1 >= args.size()) throw Error("option " + arg + " needs a value");
-      return args[++i];
-    };
-    if (arg == "--help" || arg == "-h") {
-      cl.help = true;
-    } else if (arg == "--check-config") {
-      cl.check_config = true;
-    } else if (arg == "--config") {
-      cl.config_path = value();
-    } else if (arg == "--set") {
-      cl.overrides.push_back(value());
-    } else if (auto it = shortcuts.find(arg); it != shortcuts.end()) {
-      cl.overrides.push_back(it->second + "=" + value());
+  auto app = daemonApp(cl);
+  std::vector<std::string> reversed(args.rbegin(), args.rend());  // CLI11 pops from the back
+  try {
+    app->parse(reversed);
+  } catch (const CLI::CallForHelp&) {
+    cl.help = true;
+    return cl;
+  } catch (const CLI::CallForVersion&) {
+    cl.version = true;
+    return cl;
+  } catch (const CLI::ParseError& e) {
+    throw Error(std::string(e.what()) + " (see --help)");
+  }
+  // Every occurrence of a value flag, in command-line order.
+  std::map<const CLI::Option*, std::size_t> seen;
+  for (const CLI::Option* option : app->parse_order()) {
+    const std::string name = "--" + option->get_single_name();
+    const std::size_t k = seen[option]++;
+    if (name == "--check-config" || name == "--check") continue;
+    const std::string& value = option->results().at(k);
+    if (name == "--config") {
+      cl.config_path = value;
+    } else if (name == "--set") {
+      cl.overrides.push_back(value);
     } else {
-      throw Error("unknown option '" + arg + "' (see --help)");
+      for (const auto& [flag, key] : daemonFlagShortcuts()) {
+        if (flag == name) cl.overrides.push_back(key + "=" + value);
+      }
     }
   }
   return cl;

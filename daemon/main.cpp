@@ -13,10 +13,12 @@
 #include <iostream>
 #include <thread>
 
+#include "findmug/daemon/check.hpp"
 #include "findmug/daemon/daemon.hpp"
 #include "findmug/daemon/daemon_config.hpp"
 #include "findmug/daemon/service.hpp"
 #include "findmug/error.hpp"
+#include "findmug/version.hpp"
 
 int main(int argc, char** argv) {
   using namespace findmug;
@@ -29,11 +31,15 @@ int main(int argc, char** argv) {
   pthread_sigmask(SIG_BLOCK, &signals, nullptr);  // inherited by every thread created below
 
   LoadedConfig loaded;
+  CommandLine command_line;
   try {
-    const CommandLine command_line =
-        parseCommandLine(std::vector<std::string>(argv + 1, argv + argc));
+    command_line = parseCommandLine(std::vector<std::string>(argv + 1, argv + argc));
     if (command_line.help) {
       std::cout << usage();
+      return 0;
+    }
+    if (command_line.version) {
+      std::cout << "findmugd " << kVersion << "\n";
       return 0;
     }
     loaded = loadDaemonConfig(command_line);
@@ -43,8 +49,25 @@ int main(int argc, char** argv) {
       return 0;
     }
   } catch (const std::exception& e) {
+    if (command_line.check) {
+      std::cout << verdictLine(Verdict::Fail, "config", e.what(),
+                               "correct the named setting (findmugd --check-config prints the "
+                               "effective config)")
+                << "findmugd --check: 1 item failed\n";
+      return 1;
+    }
     std::fprintf(stderr, "findmugd: configuration error: %s\n", e.what());
     return 2;
+  }
+  if (command_line.check) {
+    // Library logging (source reconnects etc.) would interleave with the verdicts.
+    spdlog::set_level(spdlog::level::off);
+    const int failures = runSelfCheck(loaded, std::cout);
+    std::cout << "findmugd --check: "
+              << (failures == 0 ? std::string("all items passed")
+                                : std::to_string(failures) + " item(s) failed")
+              << "\n";
+    return failures == 0 ? 0 : 1;
   }
 
   spdlog::info("findmugd starting; config from {}; effective config:\n{}", loaded.origin,

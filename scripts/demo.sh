@@ -49,10 +49,15 @@ echo "== 3. What a navigation client receives on FINDMUG_TABLES (search position
 "$BUILD_DIR"/clients/findmug-nav-client --lcm-url "file://$LOG?mode=r&speed=0" | tail -n 25
 
 echo
-echo "== 4. Label images on FINDMUG_LABELS (overlays in $OUT/labels/)"
+echo "== 4. Label images on FINDMUG_LABELS, pictures in $OUT/labels/"
+echo "      (labels over the camera image with a legend, table hulls and numbered search"
+echo "      positions; table_map.png / table_map.svg: the tables top-down around the robot)"
 mkdir -p "$OUT_ABS/labels"
+# The daemon does not republish the frames: --source gives the viewer the colour images
+# and camera mount of the same replay, matched by sequence number.
 "$BUILD_DIR"/clients/findmug-label-viewer --lcm-url "file://$LOG?mode=r&speed=0" \
-  --out "$OUT_ABS/labels" | tail -n 8
+  --source "dataset:$OUT_ABS/apartment" --out "$OUT_ABS/labels" | tail -n 8
+ls "$OUT_ABS/labels" | sed -n '1p;$p' | sed 's/^/      /'
 
 echo
 echo "Done. Published LCM log: $LOG (inspect with findmug-spy, or replay with lcm-logplayer)."

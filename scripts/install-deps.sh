@@ -16,12 +16,16 @@ packages=(
   libpng-dev libjpeg-dev zlib1g-dev libhdf5-dev libtiff-dev
   # tests and benchmarks
   libgtest-dev libgmock-dev libbenchmark-dev
+  # command-line flags of the programs
+  libcli11-dev
   # lcm-spy (Java) under a virtual display, for the screenshot script
   default-jdk-headless libjchart2d-java xvfb x11-apps imagemagick
   # network namespaces for the udpm tests
   iproute2 util-linux
   # sanitizer builds and fuzzing (scripts/test-sanitizers.sh, scripts/fuzz.sh)
   clang-14 libfuzzer-14-dev ccache
+  # Debian packages (scripts/package.sh) and their checks (label package)
+  dpkg-dev lintian adduser
 )
 
 missing=()

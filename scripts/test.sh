@@ -11,7 +11,8 @@ BUILD_DIR=${BUILD_DIR:-build}
 JOBS=${JOBS:-$(nproc)}
 
 scripts/install-deps.sh
-cmake -S . -B "$BUILD_DIR" -DCMAKE_BUILD_TYPE=Release -DFINDMUG_WERROR=ON
+# Prefix /usr: the tree the package test (label package) turns into the Debian package.
+cmake -S . -B "$BUILD_DIR" -DCMAKE_BUILD_TYPE=Release -DFINDMUG_WERROR=ON -DCMAKE_INSTALL_PREFIX=/usr
 cmake --build "$BUILD_DIR" -j"$JOBS"
 # Tests that need the third-party data read it from $FINDMUG_DATA or
 # ../shared/data; under CI=true a missing data set is a failure, not a skip.

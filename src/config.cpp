@@ -18,7 +18,7 @@ namespace {
 
 // Sections the core does not interpret; their keys are passed through in
 // Config::extra for the daemon and clients to validate themselves.
-const std::set<std::string> kPassThroughSections = {"daemon", "clients", "table_map"};
+const std::set<std::string> kPassThroughSections = {"daemon", "clients", "table_map", "check"};
 
 // One named setting: how to parse it into the config and how to print it.
 struct Setting {

@@ -476,11 +476,14 @@ DatasetFolder::DatasetFolder(const std::string& dir, const DatasetOptions& optio
   if (fs::is_directory(root / "label8", ec)) {
     has_label8_ = true;
   } else if (!fs::is_directory(root / "label40", ec)) {
-    throw Error(dir + ": missing label folder (neither label8/ nor label40/)");
+    if (options.require_labels) {
+      throw Error(dir + ": missing label folder (neither label8/ nor label40/)");
+    }
+    has_labels_ = false;
   }
-  const char* label_dir = has_label8_ ? "label8" : "label40";
+  const char* label_dir = has_labels_ ? (has_label8_ ? "label8" : "label40") : "rgb";
 
-  if (!has_label8_) {
+  if (has_labels_ && !has_label8_) {
     mapping_ = options.mapping_csv ? loadLabelMapping(*options.mapping_csv) : defaultNyu40Mapping();
   }
   if (options.mask_nyu_border && (options.border_top < 0 || options.border_bottom < 0 ||
@@ -498,6 +501,7 @@ DatasetFolder::DatasetFolder(const std::string& dir, const DatasetOptions& optio
     if (depth.count(name) && labels.count(name)) names_.push_back(name);
   }
   if (names_.empty()) {
+    if (!has_labels_) throw Error(dir + ": no frame has both rgb/NAME.png and depth/NAME.png");
     throw Error(dir + ": no frame has all of rgb/NAME.png, depth/NAME.png and " + label_dir +
                 "/NAME.png");
   }
@@ -564,7 +568,11 @@ LabeledFrame DatasetFolder::load(std::size_t i) const {
   } catch (const Error& e) {
     throw Error(std::string("depth not uint16 millimetres: ") + e.what());
   }
-  const auto label_ids = readPng8(label_path);
+  // Unlabelled replay: every pixel void, checked like a label image below.
+  const auto label_ids =
+      has_labels_ ? readPng8(label_path)
+                  : Image<std::uint8_t>{rgb.width, rgb.height,
+                                        std::vector<std::uint8_t>(rgb.pixels.size(), kVoidLabel)};
 
   if (depth.width != rgb.width || depth.height != rgb.height) {
     throw Error(depth_path + " is " + sizeText(depth.width, depth.height) + " but " + rgb_path +
@@ -593,7 +601,7 @@ LabeledFrame DatasetFolder::load(std::size_t i) const {
     }
   }
 
-  const auto& lookup = has_label8_ ? label8Identity() : mapping_.to_findmug;
+  const auto& lookup = (has_label8_ || !has_labels_) ? label8Identity() : mapping_.to_findmug;
   if (auto bad = unmappedIds(label_ids.pixels, lookup); !bad.empty()) {
     throw Error(label_path + ": label " + bad + " not in " +
                 (has_label8_ ? std::string("the findmug ids 0..7, 255") : mapping_.source));

@@ -7,35 +7,19 @@
 //                 [--speed 0.4] [--no-noise]
 #include <cstdio>
 #include <iostream>
+#include <lcm/lcm-cpp.hpp>
 #include <string>
 #include <tuple>
 
-#include "findmug/error.hpp"
-#include "findmug/synth.hpp"
 #include "findmug/dataset.hpp"
+#include "findmug/error.hpp"
 #include "findmug/io/channels.hpp"
 #include "findmug/io/lcm_codec.hpp"
+#include "findmug/synth.hpp"
+#include "findmug_cli.hpp"
 #include "tool_common.hpp"
 
-#include <lcm/lcm-cpp.hpp>
-
 namespace {
-
-constexpr const char* kUsage =
-    "usage: findmug-synth --seed N --frames N --out DIR [options]\n"
-    "  --seed N              scene/path/noise seed (same seed, same bytes)\n"
-    "  --frames N            number of frames to render\n"
-    "  --out DIR             output dataset folder (must be empty or absent)\n"
-    "  --fps F               frame rate of the camera path (default 30)\n"
-    "  --camera-height A:B   camera height range in metres (default 1.0:1.4; A alone = fixed)\n"
-    "  --pitch-deg A:B       camera tilt-down range in degrees (default 20:45)\n"
-    "  --tables A:B          number of tables (default 1:3)\n"
-    "  --speed V             robot speed in m/s (default 0.4)\n"
-    "  --no-noise            exact depth (mm), no dropouts, no colour noise\n"
-    "  --lcm-log FILE        also write the frames as an LCM log of rgbd_frame_t on\n"
-    "                        FINDMUG_RGBD (what lcm-logplayer replays to findmugd), stamped\n"
-    "                        with the sequence's own frame times\n";
-
 
 // "A:B" or "A" (then B = A).
 std::pair<double, double> parseRange(const std::string& flag, const std::string& text) {
@@ -92,43 +76,61 @@ void writeLcmLog(const std::string& dataset_dir, const findmug::synth::SequenceG
 
 int main(int argc, char** argv) {
   using namespace findmug;
+  std::string seed_text, out, fps_text, height_text, pitch_text, tables_text, speed_text, lcm_log;
+  int frames = 0;
+  bool no_noise = false;
+  auto app = cli::makeApp("findmug-synth",
+                          "Renders a synthetic apartment sequence with ground truth into a "
+                          "dataset folder (rgb/, depth/, label8/, intrinsics.yaml, "
+                          "extrinsics.csv, ground_truth.yaml)");
+  app->add_option("--seed", seed_text, "scene/path/noise seed (same seed, same bytes)")
+      ->required()
+      ->type_name("N");
+  app->add_option("--frames", frames, "number of frames to render")
+      ->required()
+      ->check(cli::positive());
+  app->add_option("--out", out, "output dataset folder (must be empty or absent)")
+      ->required()
+      ->type_name("DIR");
+  app->add_option("--fps", fps_text, "frame rate of the camera path (default 30)")->type_name("F");
+  app->add_option("--camera-height", height_text,
+                  "camera height range in metres (default 1.0:1.4; A alone = fixed)")
+      ->type_name("A:B");
+  app->add_option("--pitch-deg", pitch_text, "camera tilt-down range in degrees (default 20:45)")
+      ->type_name("A:B");
+  app->add_option("--tables", tables_text, "number of tables (default 1:3)")->type_name("A:B");
+  app->add_option("--speed", speed_text, "robot speed in m/s (default 0.4)")->type_name("V");
+  app->add_flag("--no-noise", no_noise, "exact depth (mm), no dropouts, no colour noise");
+  app->add_option("--lcm-log", lcm_log,
+                  "also write the frames as an LCM log of rgbd_frame_t on FINDMUG_RGBD (what "
+                  "lcm-logplayer replays to findmugd), stamped with the sequence's frame times")
+      ->type_name("FILE");
+  if (auto code = cli::parse(*app, argc, argv)) return *code;
   try {
-    const tools::Flags flags(argc, argv, {"no-noise", "help"});
-    if (flags.has("help")) {
-      std::cout << kUsage;
-      return 0;
-    }
-    flags.allowOnly({"seed", "frames", "out", "fps", "camera-height", "pitch-deg", "tables",
-                     "speed", "no-noise", "lcm-log", "help"});
-    for (const char* required : {"seed", "frames", "out"})
-      if (!flags.has(required)) throw Error(std::string("missing --") + required + "\n" + kUsage);
-
     synth::SequenceSpec spec;
-    spec.seed = parseSeed(flags.get("seed"));
-    spec.frames = flags.getInt("frames", 0);
-    if (spec.frames <= 0)
-      throw Error("flag --frames: must be positive, got " + flags.get("frames"));
-    if (flags.has("fps")) spec.fps = findmug::tools::parseNumber("--fps", flags.get("fps"));
-    if (flags.has("camera-height"))
+    spec.seed = parseSeed(seed_text);
+    spec.frames = frames;
+    if (!fps_text.empty()) spec.fps = findmug::tools::parseNumber("--fps", fps_text);
+    if (!height_text.empty())
       std::tie(spec.path.height_min, spec.path.height_max) =
-          parseRange("camera-height", flags.get("camera-height"));
-    if (flags.has("pitch-deg"))
+          parseRange("camera-height", height_text);
+    if (!pitch_text.empty())
       std::tie(spec.path.pitch_min_deg, spec.path.pitch_max_deg) =
-          parseRange("pitch-deg", flags.get("pitch-deg"));
-    if (flags.has("tables")) {
-      const auto [lo, hi] = parseRange("tables", flags.get("tables"));
+          parseRange("pitch-deg", pitch_text);
+    if (!tables_text.empty()) {
+      const auto [lo, hi] = parseRange("tables", tables_text);
       if (lo != static_cast<int>(lo) || hi != static_cast<int>(hi))
-        throw Error("flag --tables: '" + flags.get("tables") + "' must be integers");
+        throw Error("flag --tables: '" + tables_text + "' must be integers");
       spec.apartment.tables_min = static_cast<int>(lo);
       spec.apartment.tables_max = static_cast<int>(hi);
     }
-    if (flags.has("speed")) spec.path.speed_mps = findmug::tools::parseNumber("--speed", flags.get("speed"));
-    if (flags.has("no-noise")) {
+    if (!speed_text.empty())
+      spec.path.speed_mps = findmug::tools::parseNumber("--speed", speed_text);
+    if (no_noise) {
       spec.render.noise.enabled = false;
       spec.render.noise.rgb_noise_sigma = 0.0;
     }
 
-    const std::string out = flags.get("out");
     tools::ProgressBar bar("findmug-synth");
     const auto truth =
         synth::writeSequence(out, spec, [&](int done, int total) { bar.update(done, total); });
@@ -136,10 +138,10 @@ int main(int argc, char** argv) {
     std::printf("wrote %d frames (%d table%s) to %s, ground truth in %s/ground_truth.yaml\n",
                 spec.frames, static_cast<int>(truth.tables.size()),
                 truth.tables.size() == 1 ? "" : "s", out.c_str(), out.c_str());
-    if (flags.has("lcm-log")) {
-      writeLcmLog(out, truth, flags.get("lcm-log"));
+    if (!lcm_log.empty()) {
+      writeLcmLog(out, truth, lcm_log);
       std::printf("wrote %d rgbd_frame_t messages on %s to %s\n", spec.frames,
-                  std::string(io::kRgbdChannel).c_str(), flags.get("lcm-log").c_str());
+                  std::string(io::kRgbdChannel).c_str(), lcm_log.c_str());
     }
     return 0;
   } catch (const std::exception& e) {

@@ -18,35 +18,16 @@
 #include <string>
 #include <thread>
 
-#include "tool_common.hpp"
 #include "findmug/error.hpp"
 #include "findmug/io/channels.hpp"
 #include "findmug/io/frame_source.hpp"
 #include "findmug/io/lcm_codec.hpp"
+#include "findmug_cli.hpp"
 
 namespace {
 
 std::atomic<bool> g_interrupted{false};
 void onSignal(int) { g_interrupted = true; }
-
-void usage(std::ostream& out) {
-  out << "usage: findmug-grab [options]\n"
-         "  --source SPEC           frame source (default openni2): openni2[:URI|:FILE.oni],\n"
-         "                          lcm:CHANNEL, dataset:DIR, pcd:DIR, pclzf:DIR, tiff:DIR,\n"
-         "                          with ?rate_hz=R&loop=1&realtime=0&url=URL options\n"
-         "  --url URL               LCM URL to publish on (default: LCM_DEFAULT_URL or LCM's\n"
-         "                          default); file:///path/log.lcm?mode=w writes a log file\n"
-         "  --channel NAME          base channel (default FINDMUG_RGBD)\n"
-         "  --channel-suffix S      appended as NAME_S\n"
-         "  --depth-compression C   zlib (default) or none\n"
-         "  --color-compression C   jpeg (default), png or none\n"
-         "  --jpeg-quality Q        1..100 (default 90)\n"
-         "  --rate HZ               frames per second for file sources (overrides the spec)\n"
-         "  --loop                  loop file sources\n"
-         "  --count N               stop after N frames (default 0 = until the source ends)\n"
-         "  --verbose               log every frame\n";
-}
-
 
 }  // namespace
 
@@ -59,64 +40,48 @@ int main(int argc, char** argv) {
   std::string channel_base(kRgbdChannel);
   std::string suffix;
   RgbdEncodeOptions encode;
-  std::optional<double> rate;
+  double rate = -1.0;  // < 0: as the spec says
   bool loop = false;
   long long count = 0;
   bool verbose = false;
+  std::string depth_compression = "zlib", color_compression = "jpeg";
 
+  auto app = cli::makeApp("findmug-grab", "Publishes RGB-D frames from any frame source on LCM");
+  cli::addSourceFlag(*app, source_spec,
+                     "frame source: openni2[:URI|:FILE.oni], lcm:CHANNEL, dataset:DIR, pcd:DIR, "
+                     "pclzf:DIR, tiff:DIR, with ?rate_hz=R&loop=1&realtime=0&url=URL options")
+      ->capture_default_str();
+  cli::addLcmUrlFlag(*app, url,
+                     "LCM URL to publish on (default: LCM_DEFAULT_URL or LCM's default); "
+                     "file:///path/log.lcm?mode=w writes a log file");
+  app->add_option("--channel", channel_base, "base channel")->capture_default_str();
+  cli::addChannelSuffixFlag(*app, suffix);
+  app->add_option("--depth-compression", depth_compression, "zlib or none")->capture_default_str();
+  app->add_option("--color-compression", color_compression, "jpeg, png or none")
+      ->capture_default_str();
+  app->add_option("--jpeg-quality", encode.jpeg_quality, "JPEG quality")
+      ->check(CLI::Range(1, 100))
+      ->capture_default_str();
+  app->add_option("--rate", rate, "frames per second for file sources (overrides the spec)")
+      ->check(CLI::Range(0.0, 1000.0));
+  app->add_flag("--loop", loop, "loop file sources");
+  app->add_option("--count", count, "stop after N frames (0: until the source ends)")
+      ->check(cli::nonNegative())
+      ->capture_default_str();
+  app->add_flag("--verbose", verbose, "log every frame");
+  if (auto code = cli::parse(*app, argc, argv)) return *code;
   try {
-    for (int i = 1; i < argc; ++i) {
-      const std::string arg = argv[i];
-      auto value = [&]() -> std::string {
-        if (i + 1 >= argc) throw Error(arg + " needs a value");
-        return argv[++i];
-      };
-      if (arg == "--help" || arg == "-h") {
-        usage(std::cout);
-        return 0;
-      } else if (arg == "--source") {
-        source_spec = value();
-      } else if (arg == "--url") {
-        url = value();
-      } else if (arg == "--channel") {
-        channel_base = value();
-      } else if (arg == "--channel-suffix") {
-        suffix = value();
-      } else if (arg == "--depth-compression") {
-        encode.depth = parseDepthCompression(value());
-      } else if (arg == "--color-compression") {
-        encode.color = parseColorCompression(value());
-      } else if (arg == "--jpeg-quality") {
-        const double q = findmug::tools::parseNumber(arg, value());
-        if (q < 1 || q > 100) throw Error("--jpeg-quality must be 1..100");
-        encode.jpeg_quality = static_cast<int>(q);
-      } else if (arg == "--rate") {
-        rate = findmug::tools::parseNumber(arg, value());
-        if (*rate < 0 || *rate > 1000) throw Error("--rate must be 0..1000 Hz");
-      } else if (arg == "--loop") {
-        loop = true;
-      } else if (arg == "--count") {
-        const double c = findmug::tools::parseNumber(arg, value());
-        if (c < 0 || c != static_cast<double>(static_cast<long long>(c))) {
-          throw Error("--count must be a non-negative integer");
-        }
-        count = static_cast<long long>(c);
-      } else if (arg == "--verbose") {
-        verbose = true;
-      } else {
-        throw Error("unknown argument '" + arg + "'");
-      }
-    }
+    encode.depth = parseDepthCompression(depth_compression);
+    encode.color = parseColorCompression(color_compression);
   } catch (const Error& e) {
-    std::cerr << "findmug-grab: " << e.what() << "\n";
-    usage(std::cerr);
+    std::cerr << "findmug-grab: " << e.what() << " (see --help)\n";
     return 2;
   }
 
   try {
     const std::string channel = channelName(channel_base, suffix);
     SourceSpec spec = parseSourceSpec(source_spec);
-    if (rate) spec.options.rate_hz = *rate;
+    if (rate >= 0) spec.options.rate_hz = rate;
     if (loop) spec.options.loop = true;
     std::unique_ptr<FrameSource> source = makeSource(spec);
 

@@ -4,6 +4,8 @@
 //   DIR/depth/NAME.png   uint16, millimetres, 0 = missing
 //   DIR/label8/NAME.png  uint8, findmug ids (0..7), 255 void       — or —
 //   DIR/label40/NAME.png uint8, NYU-40 ids (1..40), 0 void, mapped 40 -> 8 by a CSV
+//                        (label folders are optional when DatasetOptions::require_labels
+//                        is false: replay of one's own recordings needs none)
 //   DIR/intrinsics.yaml  optional: fx fy cx cy (default: NYU's Kinect calibration)
 //   DIR/extrinsics.csv   optional: name,height_m,pitch_rad,roll_rad per frame (synthetic data)
 //   DIR/gravity.csv      optional: name,up_x,up_y,up_z per frame: the "up" direction (against
@@ -102,17 +104,23 @@ struct DatasetOptions {
   // ("0001".."1449") get their gravity from it. A frame name that is not a
   // number, or an index beyond the file, is an error naming both.
   std::optional<std::string> nyu_rotations_file;
+  // Training and evaluation need ground truth; replay does not. When false, a
+  // folder without label8/ and label40/ lists the frames present in rgb/ and
+  // depth/, and load() returns labels that are all kVoidLabel.
+  bool require_labels = true;
 };
 
 class DatasetFolder {
  public:
-  // Lists frames (names present in rgb/, depth/ and a label folder). Throws
-  // when the folder or a required sub-folder is missing or empty.
+  // Lists frames (names present in rgb/, depth/ and a label folder, if any).
+  // Throws when the folder or a required sub-folder is missing or empty.
   DatasetFolder(const std::string& dir, const DatasetOptions& options = {});
 
   std::size_t size() const { return names_.size(); }
   const std::vector<std::string>& names() const { return names_; }
   const std::string& dir() const { return dir_; }
+  // False for an unlabelled folder opened with require_labels = false.
+  bool hasLabels() const { return has_labels_; }
   // Reads and validates frame i; throws findmug::Error naming the file on
   // size mismatch, wrong bit depth, or label ids outside the mapping.
   LabeledFrame load(std::size_t i) const;
@@ -122,6 +130,7 @@ class DatasetFolder {
   DatasetOptions options_;
   std::vector<std::string> names_;
   bool has_label8_ = false;
+  bool has_labels_ = true;
   LabelMapping mapping_;
   CameraIntrinsics intrinsics_;
   bool nyu_calibration_ = false;  // NYU default intrinsics: the NYU border applies

@@ -596,7 +596,7 @@ TEST(NavClient, CountStopsEarly) {
   EXPECT_EQ(lines(r.out).size(), 1u) << r.out;
 }
 
-TEST(NavClient, BadFlagsExitWithCode2AndUsage) {
+TEST(NavClient, BadFlagsExitWithCode2AndAMessage) {
   TempDir tmp;
   for (const std::vector<std::string>& args :
        std::vector<std::vector<std::string>>{{"--frame", "sideways"},
@@ -607,12 +607,22 @@ TEST(NavClient, BadFlagsExitWithCode2AndUsage) {
                                              {"--channel-suffix", "bad suffix"}}) {
     const ProcessResult r = run(FINDMUG_NAV_CLIENT_EXE, args, tmp);
     EXPECT_EQ(r.exit_code, 2) << args[0] << ": " << r.err;
-    EXPECT_NE(r.err.find("usage: findmug-nav-client"), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("findmug-nav-client: "), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find("--help"), std::string::npos) << r.err;
     EXPECT_TRUE(r.out.empty()) << r.out;
   }
 }
 
 // ---- the label viewer -----------------------------------------------------------------------
+
+// The top-left w x h of an image (the label viewer's overlays carry a legend panel).
+Image<Rgb8> cropped(const Image<Rgb8>& image, int w, int h) {
+  Image<Rgb8> out{w, h, {}};
+  for (int y = 0; y < h; ++y) {
+    for (int x = 0; x < w; ++x) out.pixels.push_back(image.pixels[y * image.width + x]);
+  }
+  return out;
+}
 
 TEST(LabelViewer, WritesPaletteOverlaysAndSummariesAndSkipsTheCorruptImage) {
   const ClientLog& log = clientLog();
@@ -640,10 +650,19 @@ TEST(LabelViewer, WritesPaletteOverlaysAndSummariesAndSkipsTheCorruptImage) {
   EXPECT_NE(r.err.find("label id 42"), std::string::npos) << r.err;
   EXPECT_FALSE(std::filesystem::exists(tmp.path() / "png" / "labels_00000002.png"));
 
-  // seq 1, no colour frame: the plain palette (void black).
-  const Image<Rgb8> palette = readPngRgb(tmp.str("png/labels_00000001.png"));
-  ASSERT_EQ(palette.width, 12);
-  ASSERT_EQ(palette.height, 8);
+  // seq 1, no colour frame: the plain palette (void black), with the legend panel
+  // (150 px) to its right; the label pixels are the top-left 12x8.
+  const Image<Rgb8> with_legend = readPngRgb(tmp.str("png/labels_00000001.png"));
+  ASSERT_EQ(with_legend.width, 12 + 150);
+  ASSERT_GE(with_legend.height, 8);
+  const Image<Rgb8> palette = cropped(with_legend, 12, 8);
+  // The legend's swatches: one per class in the palette, top to bottom, 22 px apart.
+  for (int id = 0; id < kNumLabels; ++id) {
+    const Rgb8 swatch =
+        with_legend
+            .pixels[static_cast<std::size_t>(34 + 22 * id + 7) * with_legend.width + 12 + 10 + 8];
+    EXPECT_TRUE(swatch == kLabelColors[id]) << "legend swatch " << id;
+  }
   for (std::size_t i = 0; i < palette.pixels.size(); ++i) {
     const std::uint8_t id = log.labels1.image.labels[i];
     const Rgb8 want = id == kVoidLabel ? Rgb8{0, 0, 0} : kLabelColors[id];
@@ -658,7 +677,7 @@ TEST(LabelViewer, WritesPaletteOverlaysAndSummariesAndSkipsTheCorruptImage) {
   EXPECT_EQ(palette.pixels[5].g, 180);
 
   // seq 3, with the colour frame of the same utime: half label colour, half image.
-  const Image<Rgb8> overlay = readPngRgb(tmp.str("png/labels_00000003.png"));
+  const Image<Rgb8> overlay = cropped(readPngRgb(tmp.str("png/labels_00000003.png")), 12, 8);
   ASSERT_EQ(overlay.pixels.size(), log.color3.rgb.size());
   for (std::size_t i = 0; i < overlay.pixels.size(); ++i) {
     const std::uint8_t id = log.labels3.image.labels[i];
@@ -682,11 +701,17 @@ TEST(LabelViewer, NoPngWritesNothingAndBadFlagsExitWithCode2) {
   EXPECT_EQ(lines(r.out).size(), 2u) << r.out;
   EXPECT_TRUE(std::filesystem::is_empty(tmp.path() / "png"));
 
-  for (const std::vector<std::string>& args : std::vector<std::vector<std::string>>{
-           {"--alpha", "2"}, {"--every", "0"}, {"--out", tmp.str("no-such-dir")}, {"--bogus"}}) {
+  for (const std::vector<std::string>& args :
+       std::vector<std::vector<std::string>>{{"--alpha", "2"},
+                                             {"--every", "0"},
+                                             {"--out", tmp.str("no-such-dir")},
+                                             {"--bogus"},
+                                             {"--channel-suffix", "bad suffix"}}) {
     const ProcessResult bad = run(FINDMUG_LABEL_VIEWER_EXE, args, tmp);
     EXPECT_EQ(bad.exit_code, 2) << args[0] << ": " << bad.err;
-    EXPECT_NE(bad.err.find("usage: findmug-label-viewer"), std::string::npos) << bad.err;
+    EXPECT_TRUE(bad.out.empty()) << bad.out;
+    EXPECT_NE(bad.err.find("findmug-label-viewer: "), std::string::npos) << bad.err;
+    EXPECT_NE(bad.err.find("--help"), std::string::npos) << bad.err;
   }
 }
 

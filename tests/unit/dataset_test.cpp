@@ -327,6 +327,50 @@ TEST(DatasetFolder, ListsOnlyNamesPresentEverywhereAndPrefersLabel8) {
   EXPECT_CONTAINS(errorOf([&] { folder8.load(1); }), "out of range");
 }
 
+TEST(DatasetFolder, UnlabelledFolderReplaysOnlyWhenLabelsAreNotRequired) {
+  TempDir dir;
+  RawFolder raw(dir.path(), "label40");
+  fs::remove_all(dir.path() / "label40");
+  raw.rgb("b", 8, 6);
+  raw.depth16("b", 8, 6, 1500);
+  raw.rgb("a", 8, 6);
+  raw.depth16("a", 8, 6, 1200);
+  raw.rgb("only_rgb", 8, 6);
+  // Training and evaluation (the default) still insist on ground truth.
+  EXPECT_CONTAINS(errorOf([&] { DatasetFolder(dir.str(), noBorder()); }),
+                  "neither label8/ nor label40/");
+
+  DatasetOptions replay = noBorder();
+  replay.require_labels = false;
+  DatasetFolder folder(dir.str(), replay);
+  EXPECT_FALSE(folder.hasLabels());
+  EXPECT_EQ(folder.names(), (std::vector<std::string>{"a", "b"}));
+  const LabeledFrame a = folder.load(0);
+  EXPECT_EQ(a.frame.depth_mm, std::vector<std::uint16_t>(48, 1200));
+  EXPECT_EQ(a.frame.rgb.front(), (Rgb8{1, 2, 3}));
+  EXPECT_EQ(a.labels, std::vector<std::uint8_t>(48, kVoidLabel));
+  // Depth units are still checked without labels.
+  raw.depth16("a", 8, 6, 20);
+  EXPECT_CONTAINS(errorOf([&] { folder.load(0); }), "does not look like millimetres");
+
+  // A labelled folder keeps its labels with require_labels = false.
+  fs::create_directories(dir.path() / "label8");
+  raw.labels("label8", "b", 8, 6, 4);
+  DatasetFolder labelled(dir.str(), replay);
+  EXPECT_TRUE(labelled.hasLabels());
+  EXPECT_EQ(labelled.names(), (std::vector<std::string>{"b"}));
+  EXPECT_EQ(labelled.load(0).labels.front(), 4);
+
+  // Nothing in both rgb/ and depth/.
+  TempDir empty;
+  RawFolder lone(empty.path(), "label40");
+  fs::remove_all(empty.path() / "label40");
+  lone.rgb("x", 4, 4);
+  lone.depth16("y", 4, 4, 1000);
+  EXPECT_CONTAINS(errorOf([&] { DatasetFolder(empty.str(), replay); }),
+                  "no frame has both rgb/NAME.png and depth/NAME.png");
+}
+
 TEST(DatasetFolder, SizeMismatchNamesBothFilesAndSizes) {
   TempDir dir;
   RawFolder raw(dir.path());

@@ -21,24 +21,15 @@
 #include <optional>
 #include <string>
 
-#include "tool_common.hpp"
 #include "findmug/error.hpp"
 #include "findmug/io/frame_source.hpp"
+#include "findmug_cli.hpp"
 #include "oni_writer.hpp"
 
 namespace {
 
 std::atomic<bool> g_interrupted{false};
 void onSignal(int) { g_interrupted = true; }
-
-const char* kUsage =
-    "usage: findmug-oni-record --source SPEC --out FILE.oni [options]\n"
-    "  --count N                 stop after N frames (default: until the source ends)\n"
-    "  --rate HZ                 stamp frame i at i/HZ seconds (default 30)\n"
-    "  --timestamps source       use the spacing of the frames' own utime instead\n"
-    "  --depth-codec 16z|raw     lossless either way (default 16z)\n"
-    "  --color-codec jpeg|raw    (default jpeg)\n";
-
 
 int run(int argc, char** argv) {
   using namespace findmug;
@@ -47,41 +38,27 @@ int run(int argc, char** argv) {
   double rate = 30.0;
   bool source_timestamps = false;
   oni::OniWriterOptions options;
-  for (int i = 1; i < argc; ++i) {
-    const std::string arg = argv[i];
-    auto value = [&]() -> std::string {
-      if (i + 1 >= argc) throw Error(arg + " needs a value");
-      return argv[++i];
-    };
-    if (arg == "--help" || arg == "-h") {
-      std::cout << kUsage;
-      return 0;
-    } else if (arg == "--source") {
-      source_spec = value();
-    } else if (arg == "--out") {
-      out = value();
-    } else if (arg == "--count") {
-      const double c = findmug::tools::parseNumber(arg, value());
-      if (c < 0 || c != static_cast<double>(static_cast<long long>(c))) {
-        throw Error("--count must be a non-negative integer");
-      }
-      count = static_cast<long long>(c);
-    } else if (arg == "--rate") {
-      rate = findmug::tools::parseNumber(arg, value());
-      if (!(rate > 0 && rate <= 1000)) throw Error("--rate must be in (0, 1000] Hz");
-    } else if (arg == "--timestamps") {
-      const std::string v = value();
-      if (v != "source" && v != "rate") throw Error("--timestamps must be source or rate");
-      source_timestamps = v == "source";
-    } else if (arg == "--depth-codec") {
-      options.depth = oni::parseDepthCodec(value());
-    } else if (arg == "--color-codec") {
-      options.color = oni::parseColorCodec(value());
-    } else {
-      throw Error("unknown argument '" + arg + "'");
-    }
-  }
-  if (source_spec.empty() || out.empty()) throw Error("--source and --out are required");
+  std::string timestamps = "rate", depth_codec = "16z", color_codec = "jpeg";
+  auto app = cli::makeApp("findmug-oni-record",
+                          "Records frames from any findmug frame source into an OpenNI .oni file");
+  cli::addSourceFlag(*app, source_spec, "frame source (see findmug-grab --help)")->required();
+  app->add_option("--out", out, "the .oni file to write")->required()->type_name("FILE.oni");
+  app->add_option("--count", count, "stop after N frames (0: until the source ends)")
+      ->check(cli::nonNegative());
+  app->add_option("--rate", rate, "stamp frame i at i/HZ seconds")
+      ->check(CLI::Range(0.001, 1000.0))
+      ->capture_default_str();
+  app->add_option("--timestamps", timestamps,
+                  "rate: i/HZ; source: the spacing of the frames' own utime")
+      ->check(CLI::IsMember({"rate", "source"}))
+      ->capture_default_str();
+  app->add_option("--depth-codec", depth_codec, "16z or raw (lossless either way)")
+      ->capture_default_str();
+  app->add_option("--color-codec", color_codec, "jpeg or raw")->capture_default_str();
+  if (auto code = cli::parse(*app, argc, argv)) return *code;
+  source_timestamps = timestamps == "source";
+  options.depth = oni::parseDepthCodec(depth_codec);
+  options.color = oni::parseColorCodec(color_codec);
   options.nominal_fps = std::max(1, std::min(120, static_cast<int>(std::lround(rate))));
 
   auto source = io::makeSource(source_spec);

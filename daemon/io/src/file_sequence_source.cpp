@@ -53,9 +53,13 @@ std::optional<RgbdFrame> FileSequenceSource::next() {
 }
 
 std::unique_ptr<FrameSource> makeDatasetSource(const SourceSpec& spec) {
-  auto folder = std::make_shared<DatasetFolder>(spec.target);
+  // Replay needs no ground truth: a folder of one's own recordings has none.
+  DatasetOptions dataset_options;
+  dataset_options.require_labels = false;
+  auto folder = std::make_shared<DatasetFolder>(spec.target, dataset_options);
   std::string description =
       "dataset:" + spec.target + " (" + std::to_string(folder->size()) + " frames";
+  if (!folder->hasLabels()) description += ", unlabelled";
   if (spec.options.rate_hz > 0)
     description += ", " + fmt::format("{:g}", spec.options.rate_hz) + " Hz";
   if (spec.options.loop) description += ", loop";

@@ -27,6 +27,13 @@ namespace findmug::daemon {
 std::string defaultConfigPath();  // /etc/findmug/findmugd.yaml
 std::string defaultModelPath();   // <prefix>/share/findmug/models/findmug.fmf
 
+// `findmugd --check` (the `check:` section): how long to look at the source.
+struct CheckConfig {
+  int frames = 10;               // frames to read from the source
+  double timeout_s = 10.0;       // give up waiting for them after this long
+  double min_valid_depth = 0.5;  // below this share of pixels with depth: a warning
+};
+
 struct DaemonConfig {
   std::string source = "openni2";  // frame source spec, see findmug::io::makeFrameSource
   std::string lcm_url;             // output LCM provider; "" = $LCM_DEFAULT_URL / liblcm default
@@ -57,6 +64,7 @@ struct DaemonConfig {
   double pose_history_s = 5.0;     // poses kept for the lookup (must cover the latency)
   bool publish_table_map = true;   // publish FINDMUG_TABLE_MAP after each map update
   TableMapConfig table_map;        // the `table_map:` section
+  CheckConfig check;               // the `check:` section (findmugd --check only)
 
   // Channel names with the suffix applied.
   std::string channel(const std::string& base) const {
@@ -89,12 +97,16 @@ struct CommandLine {
   std::optional<std::string> config_path;  // --config; default file used when absent
   std::vector<std::string> overrides;      // key=value, in order
   bool check_config = false;               // --check-config: validate, print, exit
+  bool check = false;                      // --check: first-run self-test (check.hpp), exit
   bool help = false;
+  bool version = false;  // --version: print "findmugd VERSION", exit
 };
 
 // Throws findmug::Error for unknown flags or missing values.
 CommandLine parseCommandLine(const std::vector<std::string>& args);
 std::string usage();
+// The flags that stand for one daemon setting ("--model" -> "daemon.model_path").
+const std::vector<std::pair<std::string, std::string>>& daemonFlagShortcuts();
 
 // Loads the file (the default one may be absent: then built-in defaults),
 // applies the overrides and resolves the daemon section.

@@ -22,7 +22,7 @@
 //   openni2:URI                a given device URI
 //   openni2:/path/file.oni     .oni playback (realtime=1: recorded speed)
 //   lcm:CHANNEL                rgbd_frame_t messages on CHANNEL (default FINDMUG_RGBD)
-//   dataset:/dir               DatasetFolder (rgb/, depth/, label*/)
+//   dataset:/dir               DatasetFolder (rgb/, depth/; label8/ or label40/ optional)
 //   pcd:/dir                   organized x y z rgb(a) PCD files, in name order
 //   pclzf:/dir                 PCL LZF triplets NAME_depth.pclzf, NAME_rgb.pclzf, NAME.xml
 //   tiff:/dir                  NAME_depth.tiff (uint16 mm) + NAME_rgb.tiff (RGB8) pairs

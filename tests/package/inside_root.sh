@@ -1,0 +1,57 @@
+#!/usr/bin/env bash
+# Runs inside the throwaway root of package_install_test.sh (chroot, as root).
+set -euo pipefail
+cd /tmp/in
+fail() { echo "package test (inside): FAIL: $*" >&2; exit 1; }
+
+echo "== dpkg -i"
+dpkg -i ./findmug_*.deb ./findmug-dev_*.deb
+
+getent passwd findmug >/dev/null || fail "postinst did not create the system user findmug"
+for group in video plugdev; do
+  if getent group "$group" >/dev/null; then
+    id -nG findmug | grep -qw "$group" || fail "findmug is not in group $group"
+  fi
+done
+[[ -f /lib/systemd/system/findmugd.service ]] || fail "unit not installed"
+if find /etc/systemd/system -name 'findmugd.service' | grep -q .; then
+  fail "the unit was enabled by the package; the administrator should decide"
+fi
+dpkg-query -W -f='${Conffiles}\n' findmug | grep -q '/etc/findmug/findmugd.yaml' ||
+  fail "/etc/findmug/findmugd.yaml is not a conffile"
+grep -q '^User=findmug' /lib/systemd/system/findmugd.service || fail "unit does not run as findmug"
+[[ -f /usr/share/java/findmug_lcmtypes.jar ]] || fail "LCM types jar missing"
+[[ -f /lib/sysctl.d/60-findmug-lcm.conf ]] || fail "sysctl snippet missing"
+
+echo "== findmugd --version"
+out=$(findmugd --version)
+echo "$out"
+[[ "$out" == "findmugd $VERSION" ]] || fail "findmugd --version printed '$out'"
+
+echo "== findmugd --check-config (installed /etc/findmug/findmugd.yaml)"
+findmugd --check-config >/tmp/check-config.txt
+grep -q 'source: openni2' /tmp/check-config.txt || fail "--check-config did not show the installed config"
+
+echo "== findmugd over a synthetic dataset, installed model"
+findmug-synth --seed 3 --frames 3 --fps 5 --out /tmp/synth >/tmp/synth.log 2>&1 ||
+  { cat /tmp/synth.log; fail "findmug-synth"; }
+findmugd --source "dataset:/tmp/synth" --lcm-url "file:///tmp/out.lcmlog?mode=w" \
+  >/tmp/daemon.log 2>&1 || { tail -n 30 /tmp/daemon.log; fail "findmugd over the dataset"; }
+findmug-nav-client --lcm-url "file:///tmp/out.lcmlog?mode=r&speed=0" --json >/tmp/tables.json ||
+  fail "findmug-nav-client"
+frames=$(grep -c '"utime"' /tmp/tables.json || true)
+echo "tables messages: $frames"
+[[ "$frames" -eq 3 ]] || { head -c 2000 /tmp/tables.json; fail "expected 3 tables messages"; }
+
+echo "== a CMake project against findmug-dev"
+cmake -S /tmp/in/consumer -B /tmp/consumer-build -DCMAKE_BUILD_TYPE=Release >/tmp/consumer.log 2>&1 &&
+  cmake --build /tmp/consumer-build >>/tmp/consumer.log 2>&1 || { cat /tmp/consumer.log; fail "consumer build"; }
+out=$(/tmp/consumer-build/consumer)
+echo "$out"
+[[ "$out" == "findmug $VERSION nyu40_7=table tables_t bytes="* ]] || fail "consumer printed '$out'"
+
+echo "== dpkg --purge"
+dpkg --purge findmug-dev findmug
+getent passwd findmug >/dev/null && fail "purge left the system user"
+[[ -e /etc/findmug ]] && fail "purge left /etc/findmug"
+echo "inside: all checks passed"

@@ -1,0 +1,95 @@
+// findmug-test-spy-log LOG — writes an LCM log with one message of every findmug type on its
+// channel (rgbd_frame_t, label_image_t, tables_t on FINDMUG_TABLES and FINDMUG_TABLE_MAP,
+// status_t, robot_pose_t; table_t and search_position_t inside the tables), encoded by
+// findmug_io's codecs, for spy_test.sh to replay into findmug-spy.
+#include <cstdio>
+#include <lcm/lcm-cpp.hpp>
+#include <string>
+#include <vector>
+
+#include "findmug/io/channels.hpp"
+#include "findmug/io/lcm_codec.hpp"
+#include "findmug/status_t.hpp"
+
+using namespace findmug;
+
+namespace {
+
+void write(lcm::LogFile& log, std::string_view channel, std::vector<std::uint8_t> data,
+           std::int64_t utime) {
+  lcm::LogEvent event{};
+  event.timestamp = utime;
+  event.channel = std::string(channel);
+  event.datalen = static_cast<std::int32_t>(data.size());
+  event.data = data.data();
+  if (log.writeEvent(&event) != 0) throw std::runtime_error("cannot write " + event.channel);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  if (argc != 2) {
+    std::fprintf(stderr, "usage: findmug-test-spy-log LOG\n");
+    return 2;
+  }
+  try {
+    lcm::LogFile log(argv[1], "w");
+    if (!log.good()) throw std::runtime_error(std::string(argv[1]) + ": cannot open");
+    const std::int64_t t = 1'000'000;
+    const int w = 64, h = 48;
+
+    RgbdFrame frame;
+    frame.width = w;
+    frame.height = h;
+    frame.depth_mm.assign(w * h, 1500);
+    frame.rgb.assign(w * h, Rgb8{120, 80, 40});
+    frame.intrinsics = CameraIntrinsics{50, 50, 32, 24};
+    frame.extrinsics = CameraExtrinsics{1.2, 0.5, 0.0};
+    frame.utime = t;
+    write(log, io::kRgbdChannel, io::encodeMessage(io::encodeRgbdFrame(frame)), t);
+
+    io::LabelImageMessage labels;
+    labels.image.width = w;
+    labels.image.height = h;
+    labels.image.labels.assign(w * h, 1);
+    labels.image.confidence.assign(w * h, 0.8f);
+    labels.utime = t;
+    write(log, io::kLabelsChannel, io::encodeMessage(io::encodeLabelImage(labels)), t + 1);
+
+    io::TablesMessage tables;
+    tables.utime = t;
+    TableCluster table;
+    table.top_height = 0.75f;
+    table.hull = {{1.0f, -0.5f}, {2.0f, -0.5f}, {2.0f, 0.5f}, {1.0f, 0.5f}};
+    table.center = {1.5f, 0.0f};
+    table.extents = {0.5f, 0.5f};
+    table.centroid = {1.5f, 0.0f, 0.75f};
+    table.point_count = 900;
+    SearchPosition position;
+    position.xy = {0.5f, 0.0f};
+    table.search_positions = {position};
+    tables.tables = {table};
+    write(log, io::kTablesChannel, io::encodeMessage(io::encodeTables(tables)), t + 2);
+
+    io::TablesMessage map = tables;
+    map.content = io::TablesContent::Map;
+    map.map_pose = io::RobotPose{static_cast<std::uint64_t>(t), 2.0, 1.0, 0.3};
+    map.map_info = {io::TableMapInfo{1, true, 3}};
+    map.tables[0].id = 1;
+    write(log, io::kTableMapChannel, io::encodeMessage(io::encodeTables(map)), t + 3);
+
+    write(log, io::kRobotPoseChannel, io::encodeMessage(io::encodeRobotPose(*map.map_pose)), t + 4);
+
+    status_t status{};
+    status.utime = t + 5;
+    status.model_id = "findmug.fmf:test";
+    status.source = "dataset:/test";
+    status.source_state_name = "running";
+    status.source_state = status_t::SOURCE_RUNNING;
+    write(log, io::kStatusChannel, io::encodeMessage(status), t + 5);
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "findmug-test-spy-log: %s\n", e.what());
+    return 1;
+  }
+  return 0;
+}
