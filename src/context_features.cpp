@@ -16,7 +16,8 @@ std::vector<std::string> contextFeatureNames() {
                                                                       "below"};
   std::vector<std::string> names;
   for (const char* h : kNeighbourhoods) {
-    for (auto label : kLabelNames) names.push_back("ctx_" + std::string(h) + "_" + std::string(label));
+    for (auto label : kLabelNames)
+      names.push_back("ctx_" + std::string(h) + "_" + std::string(label));
   }
   return names;
 }
@@ -63,8 +64,10 @@ std::vector<float> computeContextFeatures(const std::vector<ClassProbabilities>&
         if (d2 <= near2) add(0, j);
       }
       if (j != i && horizontal2 <= column2) {
-        if (dz > 0.0f) add(2, j);
-        else if (dz < 0.0f) add(3, j);
+        if (dz > 0.0f)
+          add(2, j);
+        else if (dz < 0.0f)
+          add(3, j);
       }
     }
     float* row = out.data() + i * kContextFeatureDim;

@@ -10,9 +10,9 @@
 
 #include <algorithm>
 #include <charconv>
-#include <cstdlib>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -394,7 +394,8 @@ std::vector<std::pair<std::string, std::array<double, 3>>> loadGravityCsv(const 
         throw Error(where + ": " + columns[c] + " '" + fields[c + 1] + "' is not a finite number");
       }
     }
-    if (!seen.insert(fields[0]).second) throw Error(where + ": duplicate frame '" + fields[0] + "'");
+    if (!seen.insert(fields[0]).second)
+      throw Error(where + ": duplicate frame '" + fields[0] + "'");
     rows.emplace_back(fields[0], normalizedUp(up, where));
   }
   if (!header_seen) throw Error(path + ": empty (expected header '" + kGravityHeader + "')");

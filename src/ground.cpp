@@ -171,14 +171,22 @@ float quantile(std::vector<float>& values, double q) {
 
 const char* groundMethodName(GroundMethod method) {
   switch (method) {
-    case GroundMethod::Given: return "plane";
-    case GroundMethod::Extrinsics: return "extrinsics";
-    case GroundMethod::FloorLabels: return "floor_labels";
-    case GroundMethod::Estimated: return "estimated";
-    case GroundMethod::GravityFloorLabels: return "gravity+floor_labels";
-    case GroundMethod::GravityLowestPlane: return "gravity+lowest_plane";
-    case GroundMethod::GravityLowPercentile: return "gravity+low_percentile";
-    case GroundMethod::GravityHeightPrior: return "gravity+height_prior";
+    case GroundMethod::Given:
+      return "plane";
+    case GroundMethod::Extrinsics:
+      return "extrinsics";
+    case GroundMethod::FloorLabels:
+      return "floor_labels";
+    case GroundMethod::Estimated:
+      return "estimated";
+    case GroundMethod::GravityFloorLabels:
+      return "gravity+floor_labels";
+    case GroundMethod::GravityLowestPlane:
+      return "gravity+lowest_plane";
+    case GroundMethod::GravityLowPercentile:
+      return "gravity+low_percentile";
+    case GroundMethod::GravityHeightPrior:
+      return "gravity+height_prior";
   }
   return "?";
 }
@@ -279,7 +287,8 @@ std::optional<GroundPlane> fitGroundToLabels(const OrganizedCloud& cloud_camera,
     return std::nullopt;
   }
   // groundFromPlane orients the normal so that the camera is above the floor.
-  GroundPlane ground = groundFromPlane(plane.normal, plane.offset, static_cast<int>(inliers.size()));
+  GroundPlane ground =
+      groundFromPlane(plane.normal, plane.offset, static_cast<int>(inliers.size()));
   ground.method = GroundMethod::FloorLabels;
   return ground;
 }
@@ -405,7 +414,8 @@ std::optional<GroundPlane> estimateGround(const OrganizedCloud& cloud_camera,
   if (plane.normal.dot(camera_up) < cos_tilt || plane.offset < config.min_camera_height_m) {
     return std::nullopt;
   }
-  GroundPlane ground = groundFromPlane(plane.normal, plane.offset, static_cast<int>(inliers.size()));
+  GroundPlane ground =
+      groundFromPlane(plane.normal, plane.offset, static_cast<int>(inliers.size()));
   ground.method = GroundMethod::Estimated;
   return ground;
 }
@@ -557,8 +567,7 @@ std::optional<GroundPlane> groundFromGravity(const OrganizedCloud& cloud_camera,
         // points), when it agrees with gravity, as for the labelled floor.
         std::vector<Eigen::Vector3f> level;
         for (std::size_t i = 0; i < pts.size(); ++i) {
-          if (!cloud_camera.valid(i) || !std::isfinite(nrm[i].x()) ||
-              nrm[i].dot(up) < cos_agree)
+          if (!cloud_camera.valid(i) || !std::isfinite(nrm[i].x()) || nrm[i].dot(up) < cos_agree)
             continue;
           const float h = up.dot(pts[i]);
           if (h >= plane_lo && h < plane_hi) level.push_back(pts[i]);

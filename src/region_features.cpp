@@ -141,14 +141,18 @@ RegionFeatures computeRegionFeatures(const OrganizedCloud& cloud_ground,
     double angle = M_PI / 2;  // no normals at all: call it vertical, the commonest case
     if (m.normal_sum.squaredNorm() > 0)
       angle = std::acos(std::clamp(m.normal_sum.normalized().z(), -1.0, 1.0));
-    per_region[r] = {static_cast<float>(major * minor), static_cast<float>(major),
-                     static_cast<float>(minor), static_cast<float>(centroid_z), m.max_z,
+    per_region[r] = {static_cast<float>(major * minor),
+                     static_cast<float>(major),
+                     static_cast<float>(minor),
+                     static_cast<float>(centroid_z),
+                     m.max_z,
                      static_cast<float>(angle)};
   }
   out.values.resize(n * kRegionFeatureDim);
   for (std::size_t s = 0; s < n; ++s) {
     const auto& v = per_region[static_cast<std::size_t>(out.segment_region[s])];
-    std::copy(v.begin(), v.end(), out.values.begin() + static_cast<std::ptrdiff_t>(s * kRegionFeatureDim));
+    std::copy(v.begin(), v.end(),
+              out.values.begin() + static_cast<std::ptrdiff_t>(s * kRegionFeatureDim));
   }
   return out;
 }

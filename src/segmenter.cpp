@@ -216,8 +216,8 @@ PreparedFrame Segmenter::prepare(RgbdFrame frame, const std::vector<std::uint8_t
                       std::to_string(gt_labels->size()) + " pixels, frame has " +
                       std::to_string(out.cloud_camera.size()));
         }
-        out.ground = groundFromGravity(out.cloud_camera, out.normals_camera, up, gt_labels,
-                                       config_.ground);
+        out.ground =
+            groundFromGravity(out.cloud_camera, out.normals_camera, up, gt_labels, config_.ground);
       } else {
         if (gt_labels && gt_labels->size() == out.cloud_camera.size()) {
           out.ground = fitGroundToLabels(out.cloud_camera, *gt_labels, config_.ground);

@@ -46,8 +46,8 @@ std::vector<TableCluster> groundTruthTables(const OrganizedCloud& cloud_ground,
   if (cloud_ground.points.empty()) return {};
   TableConfig truth_config = tables;
   truth_config.min_cluster_points = config.min_instance_points;
-  truth_config.max_cluster_points = std::max(truth_config.max_cluster_points,
-                                             static_cast<int>(cloud_ground.points.size()));
+  truth_config.max_cluster_points =
+      std::max(truth_config.max_cluster_points, static_cast<int>(cloud_ground.points.size()));
   LabelImage labels;
   labels.width = cloud_ground.width;
   labels.height = cloud_ground.height;
@@ -104,8 +104,8 @@ std::vector<TableMatch> matchTables(const std::vector<TableCluster>& truth,
     const TableCluster& b = detected[static_cast<std::size_t>(m.detected)];
     m.height_error_m = std::abs(a.top_height - b.top_height);
     m.centroid_error_m = (a.centroid.head<2>() - b.centroid.head<2>()).norm();
-    const float cosine = std::min(1.0f, std::abs(a.major_axis.normalized().dot(
-                                            b.major_axis.normalized())));
+    const float cosine =
+        std::min(1.0f, std::abs(a.major_axis.normalized().dot(b.major_axis.normalized())));
     m.axis_error_deg = std::acos(cosine) * 180.0f / static_cast<float>(M_PI);
     matches.push_back(m);
   }
@@ -156,9 +156,9 @@ std::vector<PositionError> nearestPositionErrors(const std::vector<SearchPositio
     }
     if (out[k].nearest < 0) continue;
     out[k].distance_m = best;
-    const float diff = std::remainder(
-        predicted[k].yaw - truth[static_cast<std::size_t>(out[k].nearest)].yaw,
-        2.0f * static_cast<float>(M_PI));
+    const float diff =
+        std::remainder(predicted[k].yaw - truth[static_cast<std::size_t>(out[k].nearest)].yaw,
+                       2.0f * static_cast<float>(M_PI));
     out[k].yaw_error_deg = std::abs(diff) * 180.0f / static_cast<float>(M_PI);
   }
   return out;

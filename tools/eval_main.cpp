@@ -154,7 +154,8 @@ void measureTables(const LabeledFrames& frames, const std::vector<FrameSample>& 
     const Eigen::Isometry3d ground_to_world = synth::worldToGround(camera).inverse();
     std::vector<synth::Obstacle> obstacles = synth->obstacles;
     if (obstacles.empty()) {
-      for (const auto& table : synth->tables) obstacles.push_back({table.top_polygon, table.height, 0});
+      for (const auto& table : synth->tables)
+        obstacles.push_back({table.top_polygon, table.height, 0});
     }
     std::vector<bool> flagged, truly;
     for (const auto& p : predicted_positions) {
@@ -272,7 +273,8 @@ int run(int argc, char** argv) {
   std::optional<synth::SequenceGroundTruth> synth_truth;
   if (flags.has("data")) {
     const auto truth_path = std::filesystem::path(flags.get("data")) / "ground_truth.yaml";
-    if (std::filesystem::exists(truth_path)) synth_truth = synth::readGroundTruth(truth_path.string());
+    if (std::filesystem::exists(truth_path))
+      synth_truth = synth::readGroundTruth(truth_path.string());
   }
   measureTables(input->frames(), samples, eval, segmenter, synth_truth ? &*synth_truth : nullptr,
                 report);

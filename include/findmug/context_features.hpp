@@ -26,16 +26,16 @@
 namespace findmug {
 
 struct ContextConfig {
-  bool enabled = false;                // features.context
-  float near_m = 0.3f;                 // features.context_near_m
-  float far_m = 1.0f;                  // features.context_far_m
-  float column_radius_m = 0.5f;        // features.context_column_radius_m
+  bool enabled = false;          // features.context
+  float near_m = 0.3f;           // features.context_near_m
+  float far_m = 1.0f;            // features.context_far_m
+  float column_radius_m = 0.5f;  // features.context_column_radius_m
   // Training only (not part of the model): the first-stage distributions the
   // second stage learns from are predicted for each training frame by a
   // first-stage forest that did not see it, trained on the other frames in
   // this many groups (cross-fitting). 0 = in-sample predictions of the final
   // first stage (overfit: the second stage then trusts them too much).
-  int cross_fit_folds = 5;             // features.context_cross_fit_folds
+  int cross_fit_folds = 5;  // features.context_cross_fit_folds
 };
 
 inline constexpr int kContextNeighbourhoods = 4;

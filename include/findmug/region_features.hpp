@@ -28,20 +28,20 @@
 namespace findmug {
 
 struct RegionConfig {
-  bool enabled = false;              // features.regions
-  float normal_angle_deg = 10.0f;    // features.region_normal_angle_deg
-  float plane_distance_m = 0.03f;    // features.region_plane_distance_m
+  bool enabled = false;            // features.regions
+  float normal_angle_deg = 10.0f;  // features.region_normal_angle_deg
+  float plane_distance_m = 0.03f;  // features.region_plane_distance_m
 };
 
 inline constexpr int kRegionFeatureDim = 6;
 inline constexpr std::array<std::string_view, kRegionFeatureDim> kRegionFeatureNames = {
-    "region_area", "region_extent_major", "region_extent_minor", "region_centroid_height",
+    "region_area",       "region_extent_major", "region_extent_minor", "region_centroid_height",
     "region_max_height", "region_normal_angle"};
 
 struct RegionFeatures {
   std::vector<int> segment_region;  // segment -> region index (0..region_count-1)
   int region_count = 0;
-  std::vector<float> values;        // row-major, kRegionFeatureDim per segment
+  std::vector<float> values;  // row-major, kRegionFeatureDim per segment
 };
 
 // `cloud_ground` and `normals_ground` share the oversegmentation's grid.

@@ -371,7 +371,8 @@ TEST(GroundFromGravity, SlightlyWrongGravityIsRefinedByTheFloorPlane) {
   for (const auto* labels : {&r.labels, static_cast<const std::vector<std::uint8_t>*>(nullptr)}) {
     const auto g = groundFromGravity(r.cloud, normals, off5, labels, GroundConfig{});
     ASSERT_TRUE(g.has_value());
-    EXPECT_EQ(g->method, labels ? GroundMethod::GravityFloorLabels : GroundMethod::GravityLowestPlane);
+    EXPECT_EQ(g->method,
+              labels ? GroundMethod::GravityFloorLabels : GroundMethod::GravityLowestPlane);
     EXPECT_LT(angleBetween(g->normal_camera, truth), 0.5f * kDeg);
     EXPECT_NEAR(g->offset, 1.3f, 0.02f);
     // Beyond gravity_refine_deg the given direction is kept.
@@ -480,8 +481,8 @@ TEST(GroundFromGravity, FurnitureReachingBelowTheTableGivesTheFloor) {
   const HandMade edge = tableAndFront(0.6f, 50);
   GroundConfig low_camera = config;
   low_camera.min_camera_height_m = 0.5f;
-  const auto e = groundFromGravity(edge.cloud, edge.normals, Eigen::Vector3f(0, -1, 0), nullptr,
-                                   low_camera);
+  const auto e =
+      groundFromGravity(edge.cloud, edge.normals, Eigen::Vector3f(0, -1, 0), nullptr, low_camera);
   ASSERT_TRUE(e.has_value());
   EXPECT_EQ(e->method, GroundMethod::GravityLowestPlane);
   EXPECT_NEAR(e->offset, 0.55f, 1e-3f);
@@ -489,8 +490,8 @@ TEST(GroundFromGravity, FurnitureReachingBelowTheTableGivesTheFloor) {
   // No horizontal surface at all (only the front): the percentile.
   HandMade front = tableAndFront(1.5f, 50);
   for (auto& n : front.normals.normals) n = Eigen::Vector3f(0, 0, -1);
-  const auto f = groundFromGravity(front.cloud, front.normals, Eigen::Vector3f(0, -1, 0), nullptr,
-                                   config);
+  const auto f =
+      groundFromGravity(front.cloud, front.normals, Eigen::Vector3f(0, -1, 0), nullptr, config);
   ASSERT_TRUE(f.has_value());
   EXPECT_EQ(f->method, GroundMethod::GravityLowPercentile);
 }

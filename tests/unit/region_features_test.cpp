@@ -115,8 +115,7 @@ TEST(RegionFeatures, RefusesInconsistentInput) {
   EXPECT_THROW(computeRegionFeatures(scene.cloud, scene.normals, bad, RegionConfig{}), Error);
   NormalImage short_normals = scene.normals;
   short_normals.normals.pop_back();
-  EXPECT_THROW(computeRegionFeatures(scene.cloud, short_normals, scene.seg, RegionConfig{}),
-               Error);
+  EXPECT_THROW(computeRegionFeatures(scene.cloud, short_normals, scene.seg, RegionConfig{}), Error);
   // A segment whose points are all invalid has no features.
   for (int i : scene.seg.segments[3]) scene.cloud.points[i].z() = std::nanf("");
   EXPECT_THROW(computeRegionFeatures(scene.cloud, scene.normals, scene.seg, RegionConfig{}), Error);

@@ -140,9 +140,9 @@ TEST(TableMetrics, MergedTablesMatchNeither) {
   // them: two instances. A prediction that calls the board table too merges
   // them into one cluster whose IoU with either is below 0.5.
   Scene s;
-  s.box(10, 130, 10, 45, 0.75f, kTable);   // 4200
+  s.box(10, 130, 10, 45, 0.75f, kTable);    // 4200
   s.box(130, 150, 10, 45, 0.75f, kObject);  // 700
-  s.box(150, 200, 10, 90, 0.75f, kTable);  // 4000
+  s.box(150, 200, 10, 90, 0.75f, kTable);   // 4000
   const TableConfig tables;
   const TableMetricsConfig config;
   const auto truth = groundTruthTables(s.cloud, s.truth, tables, config);
@@ -197,10 +197,12 @@ TEST(TableMetrics, IouMatchingIsOneToOneGreedyByIou) {
   EXPECT_EQ(without[0].detected, 0);
   EXPECT_NEAR(without[0].iou, 0.9, 1e-9);
   // Perpendicular axes are 90 degrees apart, opposite ones 0.
-  EXPECT_NEAR(matchTables({handMade(0, 10, 0.0f)}, {handMade(0, 10, 90.0f)}, 0.5f)[0].axis_error_deg,
-              90.0f, 1e-3f);
-  EXPECT_NEAR(matchTables({handMade(0, 10, 0.0f)}, {handMade(0, 10, 180.0f)}, 0.5f)[0].axis_error_deg,
-              0.0f, 1e-2f);
+  EXPECT_NEAR(
+      matchTables({handMade(0, 10, 0.0f)}, {handMade(0, 10, 90.0f)}, 0.5f)[0].axis_error_deg, 90.0f,
+      1e-3f);
+  EXPECT_NEAR(
+      matchTables({handMade(0, 10, 0.0f)}, {handMade(0, 10, 180.0f)}, 0.5f)[0].axis_error_deg, 0.0f,
+      1e-2f);
 
   TableMetrics empty;
   EXPECT_TRUE(std::isnan(empty.precision()));
@@ -245,9 +247,8 @@ TEST(SearchPositionErrors, NearestTruePositionAndWrappedYaw) {
 
   // A 1.2 x 0.6 m box at the origin along x: with the defaults (0.5 m from
   // the edge) its positions face it from both long sides, 0.8 m from the centre.
-  const auto positions =
-      searchPositionsOfBox(Eigen::Vector2f::Zero(), 0.0f, Eigen::Vector2f(1.2f, 0.6f), 0.7f,
-                           TableConfig{});
+  const auto positions = searchPositionsOfBox(Eigen::Vector2f::Zero(), 0.0f,
+                                              Eigen::Vector2f(1.2f, 0.6f), 0.7f, TableConfig{});
   ASSERT_FALSE(positions.empty());
   for (const auto& p : positions) EXPECT_NEAR(std::abs(p.xy.y()), 0.3f + 0.5f, 1e-5f);
 }
@@ -288,9 +289,9 @@ TEST(TableMetricsOnSynth, GroundTruthInstancesAreTheGeneratorsTables) {
     for (const auto& t : scene.tables) {
       const synth::TableTruth g = synth::tableInGroundFrame(t, pose);
       // Each instance lies on one true table, at its height.
-      const auto p = searchPositionsOfBox(g.center_xy.cast<float>(), static_cast<float>(g.yaw),
-                                          g.size.cast<float>(), static_cast<float>(g.height),
-                                          tables);
+      const auto p =
+          searchPositionsOfBox(g.center_xy.cast<float>(), static_cast<float>(g.yaw),
+                               g.size.cast<float>(), static_cast<float>(g.height), tables);
       true_positions.insert(true_positions.end(), p.begin(), p.end());
     }
     for (const auto& instance : truth) {
