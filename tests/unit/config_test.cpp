@@ -140,5 +140,20 @@ TEST(Config, ShippedDefaultConfigParses) {
   EXPECT_GT(c.segmenter.forest.num_trees, 0);
 }
 
+// Found by fuzzing (tests/fuzz/regressions/config_yaml): a map or list used as
+// a key escaped as a yaml-cpp exception and aborted the daemon at start-up.
+TEST(Config, NonScalarKeysAreErrorsNamingTheLine) {
+  for (const std::string yaml : {"? [cloud, x]\n: {max_depth_m: 3}\n",
+                                 "cloud:\n  ? {a: b}\n  : 3\n"}) {
+    try {
+      parseConfig(yaml, "bad.yaml");
+      ADD_FAILURE() << "accepted: " << yaml;
+    } catch (const Error& e) {
+      EXPECT_THAT(e.what(), HasSubstr("bad.yaml: line "));
+      EXPECT_THAT(e.what(), HasSubstr("key must be a plain name"));
+    }
+  }
+}
+
 }  // namespace
 }  // namespace findmug
