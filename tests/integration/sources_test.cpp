@@ -454,6 +454,8 @@ TEST(Openni2Source, DummyDeviceDeliversPairedFrames) {
   EXPECT_EQ(source->state(), SourceState::Running);
   EXPECT_EQ(source->stats().frames_delivered, 4u);
   EXPECT_NE(source->describe().find("Dummy"), std::string::npos);
+  // The opened device names itself (findmugd --check shows it).
+  EXPECT_NE(source->describe().find(", uri Dummy)"), std::string::npos) << source->describe();
   // A configured camera mount is attached to device frames.
   SourceSpec spec = parseSourceSpec("openni2:Dummy");
   spec.options.extrinsics = CameraExtrinsics{1.2, 0.4, 0.0};

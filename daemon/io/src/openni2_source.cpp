@@ -89,7 +89,12 @@ class Openni2Source : public FrameSourceBase {
 
   ~Openni2Source() override { close(); }
 
-  std::string describe() const override { return description_; }
+  // Includes the device's own name once it has been opened ("openni2:<first
+  // device> (PrimeSense Carmine 1.09, uri ...)"), for logs and findmugd --check.
+  std::string describe() const override {
+    std::lock_guard<std::mutex> lock(device_name_mutex_);
+    return device_name_.empty() ? description_ : description_ + " (" + device_name_ + ")";
+  }
 
   std::optional<RgbdFrame> next() override {
     auto backoff = options_.reconnect_initial;
@@ -182,6 +187,11 @@ class Openni2Source : public FrameSourceBase {
                  description_, depth_mode.getResolutionX(), depth_mode.getResolutionY(),
                  depth_mode.getFps(), color_mode.getResolutionX(), color_mode.getResolutionY(),
                  color_mode.getFps(), intrinsics_.fx, intrinsics_.fy);
+    {
+      const openni::DeviceInfo& info = device_.getDeviceInfo();
+      std::lock_guard<std::mutex> lock(device_name_mutex_);
+      device_name_ = std::string(info.getVendor()) + " " + info.getName() + ", uri " + info.getUri();
+    }
     last_depth_ = {};
     last_color_ = {};
     recent_[0].clear();
@@ -443,6 +453,10 @@ class Openni2Source : public FrameSourceBase {
   SourceOptions options_;
   bool playback_ = false;
   std::string description_;
+  // Vendor, name and URI of the opened device; written on open() (source
+  // thread), read by describe() from any thread.
+  mutable std::mutex device_name_mutex_;
+  std::string device_name_;
   openni::Device device_;
   openni::VideoStream depth_, color_;
   CameraIntrinsics intrinsics_;
