@@ -88,7 +88,9 @@ trap cleanup EXIT
   echo "source: $SOURCE at $RATE fps; model: $MODEL"
 } > "$OUT/run.txt"
 
-"$FINDMUGD" --source "lcm:FINDMUG_RGBD?url=$URL" --lcm-url "$URL" --model "$MODEL" \
+# The shipped config: the committed model was trained with its features.* settings.
+"$FINDMUGD" --config "$ROOT/daemon/findmugd.yaml" --source "lcm:FINDMUG_RGBD?url=$URL" \
+  --lcm-url "$URL" --model "$MODEL" \
   --log-level warn > "$OUT/daemon.log" 2>&1 &
 DAEMON=$!; PIDS+=("$DAEMON")
 # The sampler runs as long as the replay plus the drain; warm-up covers the start.
