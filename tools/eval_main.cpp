@@ -190,9 +190,9 @@ void measureTables(const LabeledFrames& frames, const std::vector<FrameSample>& 
     std::vector<SearchPosition> true_positions;
     for (const auto& table : synth->tables) {
       const synth::TableTruth t = synth::tableInGroundFrame(table, synth->poses[pose->second]);
-      const auto p =
-          searchPositionsOfBox(t.center_xy.cast<float>(), static_cast<float>(t.yaw),
-                               t.size.cast<float>(), static_cast<float>(t.height), config.tables);
+      const auto p = searchPositionsOfBox(t.center_xy.cast<float>(), static_cast<float>(t.yaw),
+                                          t.size.cast<float>(), static_cast<float>(t.height),
+                                          config.tables);
       true_positions.insert(true_positions.end(), p.begin(), p.end());
     }
     std::vector<SearchPosition> predicted_positions;
