@@ -160,5 +160,45 @@ TEST(Cli, TrainAndEvalReadBothFlagFormsAndLastValueWins) {
   EXPECT_FALSE(has(r.err, "/nonexistent/first")) << r.err;
 }
 
+#if defined(FINDMUG_REPLAY_EXE) && defined(FINDMUG_REPLAY_PROBE_EXE)
+TEST(Cli, ReplayHelpersGiveHelpVersionAndNameBadFlags) {
+  const std::string replay(FINDMUG_REPLAY_EXE), probe(FINDMUG_REPLAY_PROBE_EXE);
+  for (const auto& [exe, name] :
+       {std::pair{replay, "findmug-replay"}, std::pair{probe, "findmug-replay-probe"}}) {
+    ProgramRun r = runProgram(exe + " --version");
+    EXPECT_EQ(r.exit_code, 0) << name;
+    EXPECT_EQ(r.out, std::string(name) + " " + kVersion + "\n");
+    r = runProgram(exe + " --help");
+    EXPECT_EQ(r.exit_code, 0) << name;
+    for (const char* flag : {"--lcm-url", "--channel-suffix", "--version"}) {
+      EXPECT_TRUE(has(r.out, flag)) << name << " --help lacks " << flag << ":\n" << r.out;
+    }
+  }
+  struct Case {
+    std::string command, expected;
+  };
+  const std::vector<Case> cases = {
+      {replay + " --source dataset:/x --rate 0 --count 1", "--rate: must be > 0, got '0'"},
+      {replay + " --source dataset:/x --rate 5 --count 1 --bogus", "--bogus"},
+      {replay + " --rate 5 --count 1", "--source is required"},
+      {replay + " --source dataset:/x --rate 5", "give exactly one of --duration and --count"},
+      {replay + " --source dataset:/x --rate 5 --count 1 --color-compression gif", "'gif'"},
+      // --url (the old name of --lcm-url) is accepted: the run gets as far as the source.
+      {replay + " --source dataset:/nonexistent/replay --rate 5 --count 1 --url memq://",
+       "/nonexistent/replay"},
+      {probe + " --url memq:// --log x.lcm --bins 1", "--bins"},
+      {probe + " --url memq:// --log x.lcm --timeout -3", "--timeout: must be > 0, got '-3'"},
+      {probe + " --url memq://", "give exactly one of --log FILE and --live"},
+      {probe + " --log x.lcm --expect-file n.txt", "--expect-file goes with --live"},
+  };
+  for (const auto& c : cases) {
+    const ProgramRun r = runProgram(c.command);
+    EXPECT_EQ(r.exit_code, 2) << c.command << "\n" << r.err;
+    EXPECT_TRUE(has(r.err, c.expected))
+        << c.command << "\nexpected: " << c.expected << "\ngot: " << r.err;
+  }
+}
+#endif
+
 }  // namespace
 }  // namespace findmug
