@@ -160,7 +160,8 @@ TEST(Cli, TrainAndEvalReadBothFlagFormsAndLastValueWins) {
   EXPECT_FALSE(has(r.err, "/nonexistent/first")) << r.err;
 }
 
-#if defined(FINDMUG_REPLAY_EXE) && defined(FINDMUG_REPLAY_PROBE_EXE)
+#if defined(FINDMUG_REPLAY_EXE) && defined(FINDMUG_REPLAY_PROBE_EXE) && \
+    defined(FINDMUG_SEQUENTIAL_EXE)
 TEST(Cli, ReplayHelpersGiveHelpVersionAndNameBadFlags) {
   const std::string replay(FINDMUG_REPLAY_EXE), probe(FINDMUG_REPLAY_PROBE_EXE);
   for (const auto& [exe, name] :
@@ -174,6 +175,10 @@ TEST(Cli, ReplayHelpersGiveHelpVersionAndNameBadFlags) {
       EXPECT_TRUE(has(r.out, flag)) << name << " --help lacks " << flag << ":\n" << r.out;
     }
   }
+  // findmug-sequential takes findmugd's flags (daemon_config.cpp) and its own name.
+  const ProgramRun sequential = runProgram(std::string(FINDMUG_SEQUENTIAL_EXE) + " --version");
+  EXPECT_EQ(sequential.exit_code, 0);
+  EXPECT_EQ(sequential.out, std::string("findmug-sequential ") + kVersion + "\n");
   struct Case {
     std::string command, expected;
   };
@@ -190,6 +195,7 @@ TEST(Cli, ReplayHelpersGiveHelpVersionAndNameBadFlags) {
       {probe + " --url memq:// --log x.lcm --timeout -3", "--timeout: must be > 0, got '-3'"},
       {probe + " --url memq://", "give exactly one of --log FILE and --live"},
       {probe + " --log x.lcm --expect-file n.txt", "--expect-file goes with --live"},
+      {std::string(FINDMUG_SEQUENTIAL_EXE) + " --bogus", "--bogus"},
   };
   for (const auto& c : cases) {
     const ProgramRun r = runProgram(c.command);
