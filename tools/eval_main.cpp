@@ -1,7 +1,8 @@
 // findmug-eval: accuracy of the forest and forest+MRF on a labelled dataset.
 //
 //   findmug-eval (--data DIR | --mat FILE) [--folds 5] [--model MODEL] [--json FILE]
-//                [--out DIR] [--sweep] [--train-extra DIR ...] [--config FILE] [--set key=value ...]
+//                [--out DIR] [--sweep] [--train-extra DIR ...] [--config FILE] [--set key=value
+//                ...]
 //
 // Without --model: k-fold cross-validation by frame (contiguous blocks of
 // frames, so neighbouring frames of one scene stay in one fold). With
@@ -35,18 +36,70 @@
 #include "findmug/synth.hpp"
 #include "findmug/table_metrics.hpp"
 #include "findmug/training.hpp"
+#include "findmug_cli.hpp"
 #include "tool_common.hpp"
 
 namespace findmug::tools {
 namespace {
 
-constexpr const char* kUsage =
-    "usage: findmug-eval (--data DIR | --mat nyu_depth_v2_labeled.mat) [--folds K] [--model MODEL]\n"
-    "                    [--json FILE] [--out DIR] [--sweep] [--train-extra DIR ...]\n"
-    "                    [--config FILE] [--set section.key=value ...] [--nyu894-csv FILE]\n"
-    "                    [--no-nyu-border] [--nyu-rotations camera_rotations_NYU.txt]\n"
-    "Cross-validates (default 5 folds by frame) or evaluates --model on a labelled dataset.\n"
-    "--nyu-rotations gives NYU frames their gravity (for --set ground.source=gravity).\n";
+// Shown by --help above the flag list.
+constexpr const char* kDescription =
+    "Cross-validates (default 5 folds by frame) or evaluates --model on a labelled dataset\n"
+    "(--data DIR or --mat nyu_depth_v2_labeled.mat). --nyu-rotations gives NYU frames their\n"
+    "gravity (for --set ground.source=gravity).";
+
+struct EvalFlags {
+  std::string data, mat, nyu894_csv, nyu_rotations, model, json, out;
+  int folds = 5;
+  bool sweep = false, no_nyu_border = false;
+  std::vector<std::string> train_extra;
+  cli::ConfigFlags config;
+};
+
+// The flags of findmug-eval; a value given twice: the last wins.
+std::unique_ptr<CLI::App> makeEvalApp(EvalFlags& f) {
+  auto app = cli::makeApp("findmug-eval", kDescription);
+  auto last = [](CLI::Option* o) {
+    return o->multi_option_policy(CLI::MultiOptionPolicy::TakeLast);
+  };
+  auto* data = last(app->add_option("--data", f.data, "labelled dataset folder")->type_name("DIR"));
+  last(app->add_option("--mat", f.mat, "the NYU Depth V2 labelled .mat file")->type_name("FILE"))
+      ->excludes(data);
+  last(app->add_option("--folds", f.folds, "cross-validation folds (contiguous blocks of frames)")
+           ->type_name("K")
+           ->check(CLI::Validator(
+               [](std::string& text) -> std::string {
+                 try {
+                   std::size_t used = 0;
+                   if (std::stoi(text, &used) >= 2 && used == text.size()) return {};
+                 } catch (const std::exception&) {
+                 }
+                 return "must be an integer >= 2, got '" + text + "'";
+               },
+               "INTEGER >= 2")));
+  cli::addModelFlag(*app, f.model,
+                    "evaluate this model on every frame instead of cross-validating");
+  last(app->get_option("--model"));
+  last(app->add_option("--json", f.json, "also write the report as JSON")->type_name("FILE"));
+  last(app->add_option("--out", f.out,
+                       "folder for the pictures (confusion heatmaps, sweeps, overlays)")
+           ->type_name("DIR"));
+  app->add_flag("--sweep", f.sweep, "also cross-validate over tree count and depth (paper Fig. 3)");
+  app->add_option("--train-extra", f.train_extra,
+                  "dataset folder added to every fold's training set, never evaluated (repeatable)")
+      ->type_name("DIR")
+      ->allow_extra_args(false);
+  cli::addConfigFlags(*app, f.config, "YAML config (segmenter settings)");
+  last(app->add_option("--nyu894-csv", f.nyu894_csv,
+                       "NYU 894-to-40 class map (CSV) for --mat (default: the installed one)")
+           ->type_name("FILE"));
+  app->add_flag("--no-nyu-border", f.no_nyu_border,
+                "keep the white border of NYU frames (masked as void by default)");
+  last(app->add_option("--nyu-rotations", f.nyu_rotations,
+                       "NYU's camera_rotations_NYU.txt: every NYU frame's gravity")
+           ->type_name("FILE"));
+  return app;
+}
 
 struct Evaluation {
   ConfusionMatrix forest, mrf;
@@ -196,29 +249,27 @@ void writeOverlays(const LabeledFrames& frames, const std::vector<FrameSample>& 
 }
 
 int run(int argc, char** argv) {
-  Flags flags(argc, argv, {"help", "sweep", "no-nyu-border"});
-  flags.allowOnly({"help", "data", "mat", "nyu894-csv", "folds", "model", "json", "out", "sweep",
-                   "train-extra", "config", "set", "no-nyu-border", "nyu-rotations"});
-  if (flags.has("help") || flags.has("data") == flags.has("mat")) {
-    std::cerr << kUsage;
-    return flags.has("help") ? 0 : 2;
+  EvalFlags f;
+  const auto app = makeEvalApp(f);
+  if (auto code = cli::parse(*app, argc, argv)) return *code;
+  if (f.data.empty() == f.mat.empty()) {
+    std::cerr << "findmug-eval: give one of --data DIR or --mat FILE (see --help)\n";
+    return 2;
   }
-  const Config config = configFromFlags(flags);
-  const int folds = flags.getInt("folds", 5);
-  if (folds < 2) throw Error("flag --folds: need at least 2 folds, got " + std::to_string(folds));
+  const Config config = cli::configFrom(f.config);
+  const int folds = f.folds;
 
   DatasetOptions options;
-  options.mask_nyu_border = !flags.has("no-nyu-border");
-  if (flags.has("nyu-rotations")) options.nyu_rotations_file = flags.get("nyu-rotations");
-  const auto input = flags.has("data")
-                         ? LabeledInput::folder(flags.get("data"), options)
-                         : LabeledInput::mat(flags.get("mat"), flags.get("nyu894-csv"),
-                                             options.nyu_rotations_file);
+  options.mask_nyu_border = !f.no_nyu_border;
+  if (!f.nyu_rotations.empty()) options.nyu_rotations_file = f.nyu_rotations;
+  const auto input = !f.data.empty()
+                         ? LabeledInput::folder(f.data, options)
+                         : LabeledInput::mat(f.mat, f.nyu894_csv, options.nyu_rotations_file);
   const Segmenter segmenter(config.segmenter, nullptr);
   // Load the model first: a bad file is refused before minutes of feature extraction.
   std::optional<RandomForest> model;
-  if (flags.has("model")) {
-    model = RandomForest::load(flags.get("model"));
+  if (!f.model.empty()) {
+    model = RandomForest::load(f.model);
     checkModelMatchesConfig(*model, config.segmenter);
   }
 
@@ -230,8 +281,9 @@ int run(int argc, char** argv) {
   bar.finish();
   if (samples.empty()) throw Error(input->frames().description + ": no frame could be used");
   std::vector<FrameSample> extra_training;
-  for (const auto& dir : flags.getAll("train-extra")) {
-    if (flags.has("model")) throw Error("--train-extra trains forests; it cannot be used with --model");
+  for (const auto& dir : f.train_extra) {
+    if (!f.model.empty())
+      throw Error("--train-extra trains forests; it cannot be used with --model");
     DatasetOptions extra_options = options;
     extra_options.nyu_rotations_file.reset();  // extra sets are not NYU-indexed
     const auto extra_input = LabeledInput::folder(dir, extra_options);
@@ -242,14 +294,14 @@ int run(int argc, char** argv) {
     extra_bar.finish();
     for (auto& s : part) extra_training.push_back(std::move(s));
   }
-  if (!flags.has("model") && static_cast<int>(samples.size()) < folds) {
+  if (!!f.model.empty() && static_cast<int>(samples.size()) < folds) {
     throw Error("only " + std::to_string(samples.size()) + " usable frames for " +
                 std::to_string(folds) + " folds");
   }
 
   EvalReport report;
   report.data = input->frames().description;
-  for (const auto& dir : flags.getAll("train-extra")) report.train_extra.push_back(dir);
+  for (const auto& dir : f.train_extra) report.train_extra.push_back(dir);
   report.frames_total = extraction.frames_total;
   report.frames_used = extraction.frames_used;
   report.dropped = extraction.dropped;
@@ -259,7 +311,7 @@ int run(int argc, char** argv) {
   Evaluation eval;
   if (model) {
     const RandomForest& forest = *model;
-    report.protocol = "model " + flags.get("model") + " (id " + forest.id() + ") on all frames";
+    report.protocol = "model " + f.model + " (id " + forest.id() + ") on all frames";
     eval.mrf_pixels.resize(samples.size());
     std::vector<std::size_t> all(samples.size());
     for (std::size_t i = 0; i < all.size(); ++i) all[i] = i;
@@ -271,16 +323,16 @@ int run(int argc, char** argv) {
   report.forest = eval.forest;
   report.mrf = eval.mrf;
   std::optional<synth::SequenceGroundTruth> synth_truth;
-  if (flags.has("data")) {
-    const auto truth_path = std::filesystem::path(flags.get("data")) / "ground_truth.yaml";
+  if (!f.data.empty()) {
+    const auto truth_path = std::filesystem::path(f.data) / "ground_truth.yaml";
     if (std::filesystem::exists(truth_path))
       synth_truth = synth::readGroundTruth(truth_path.string());
   }
   measureTables(input->frames(), samples, eval, segmenter, synth_truth ? &*synth_truth : nullptr,
                 report);
 
-  if (flags.has("sweep")) {
-    if (flags.has("model")) throw Error("--sweep retrains forests; it cannot be used with --model");
+  if (f.sweep) {
+    if (!f.model.empty()) throw Error("--sweep retrains forests; it cannot be used with --model");
     for (int trees : {1, 2, 4, 6, 8, 10, 12, 14, 16}) {
       SegmenterConfig c = config.segmenter;
       c.forest.num_trees = trees;
@@ -303,13 +355,13 @@ int run(int argc, char** argv) {
   report.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 
   std::cout << formatTable(report);
-  if (flags.has("json")) {
-    std::ofstream out(flags.get("json"));
-    if (!out) throw Error(flags.get("json") + ": cannot write JSON report");
+  if (!f.json.empty()) {
+    std::ofstream out(f.json);
+    if (!out) throw Error(f.json + ": cannot write JSON report");
     out << formatJson(report);
   }
-  if (flags.has("out")) {
-    const std::filesystem::path dir = flags.get("out");
+  if (!f.out.empty()) {
+    const std::filesystem::path dir = f.out;
     std::filesystem::create_directories(dir);
     writeConfusionSvg((dir / "confusion_forest.svg").string(), report.forest,
                       "Forest only: row-normalised confusion (%)");

@@ -2,59 +2,11 @@
 
 #include <unistd.h>
 
-#include <algorithm>
 #include <cstdio>
 
 #include "findmug/error.hpp"
 
 namespace findmug::tools {
-
-Flags::Flags(int argc, char** argv, const std::vector<std::string>& boolean_flags) {
-  for (int i = 1; i < argc; ++i) {
-    std::string arg = argv[i];
-    if (arg.rfind("--", 0) != 0) throw Error("unexpected argument '" + arg + "' (flags start with --)");
-    arg = arg.substr(2);
-    const auto eq = arg.find('=');
-    if (eq != std::string::npos) {
-      values_[arg.substr(0, eq)].push_back(arg.substr(eq + 1));
-    } else if (std::find(boolean_flags.begin(), boolean_flags.end(), arg) != boolean_flags.end()) {
-      values_[arg].push_back("true");
-    } else {
-      if (i + 1 >= argc) throw Error("flag --" + arg + " needs a value");
-      values_[arg].push_back(argv[++i]);
-    }
-  }
-}
-
-std::string Flags::get(const std::string& name, const std::string& fallback) const {
-  const auto it = values_.find(name);
-  return it == values_.end() ? fallback : it->second.back();
-}
-
-std::vector<std::string> Flags::getAll(const std::string& name) const {
-  const auto it = values_.find(name);
-  return it == values_.end() ? std::vector<std::string>{} : it->second;
-}
-
-int Flags::getInt(const std::string& name, int fallback) const {
-  if (!has(name)) return fallback;
-  const std::string v = get(name);
-  try {
-    std::size_t used = 0;
-    const int x = std::stoi(v, &used);
-    if (used == v.size()) return x;
-  } catch (const std::exception&) {
-  }
-  throw Error("flag --" + name + ": '" + v + "' is not an integer");
-}
-
-void Flags::allowOnly(const std::vector<std::string>& known) const {
-  for (const auto& [name, unused] : values_) {
-    if (std::find(known.begin(), known.end(), name) == known.end()) {
-      throw Error("unknown flag --" + name);
-    }
-  }
-}
 
 double parseNumber(const std::string& flag, const std::string& text) {
   std::size_t used = 0;
@@ -66,12 +18,6 @@ double parseNumber(const std::string& flag, const std::string& text) {
   }
   if (used == 0 || used != text.size()) throw Error(flag + ": '" + text + "' is not a number");
   return value;
-}
-
-Config configFromFlags(const Flags& flags) {
-  Config config = flags.has("config") ? loadConfig(flags.get("config")) : Config{};
-  for (const auto& kv : flags.getAll("set")) applyOverride(config, kv);
-  return config;
 }
 
 std::unique_ptr<LabeledInput> LabeledInput::folder(const std::string& dir,

@@ -1,7 +1,7 @@
-// Shared command-line plumbing of the findmug tools: flags, config, progress.
+// Shared plumbing of the findmug tools: number flags, labelled inputs, progress.
+// (Flags themselves are parsed by the CLI11 layer in tools/cli/findmug_cli.hpp.)
 #pragma once
 
-#include <map>
 #include <memory>
 #include <optional>
 #include <string>
@@ -13,34 +13,16 @@
 
 namespace findmug::tools {
 
-// Minimal flag parser: --name value, --name=value, boolean --flag.
-// Repeated flags keep every value (e.g. --set k=v --set k2=v2).
-class Flags {
- public:
-  Flags(int argc, char** argv, const std::vector<std::string>& boolean_flags);
-  bool has(const std::string& name) const { return values_.count(name) > 0; }
-  std::string get(const std::string& name, const std::string& fallback = "") const;
-  std::vector<std::string> getAll(const std::string& name) const;
-  int getInt(const std::string& name, int fallback) const;
-  // Throws findmug::Error naming the first flag not in `known`.
-  void allowOnly(const std::vector<std::string>& known) const;
-
- private:
-  std::map<std::string, std::vector<std::string>> values_;
-};
-
 // A flag's value as a number; throws findmug::Error "FLAG: 'TEXT' is not a
 // number" unless the whole text is one. Shared by every findmug program.
 double parseNumber(const std::string& flag, const std::string& text);
-
-// --config FILE (optional) then every --set key=value on top.
-Config configFromFlags(const Flags& flags);
 
 // A labelled data set opened from a folder (--data DIR) or from the official
 // NYU file (--mat nyu_depth_v2_labeled.mat); owns what `frames` refers to.
 class LabeledInput {
  public:
-  static std::unique_ptr<LabeledInput> folder(const std::string& dir, const DatasetOptions& options);
+  static std::unique_ptr<LabeledInput> folder(const std::string& dir,
+                                              const DatasetOptions& options);
   // `nyu_rotations`: NYU's camera_rotations_NYU.txt, giving every frame its gravity.
   static std::unique_ptr<LabeledInput> mat(const std::string& path, const std::string& nyu894_csv,
                                            const std::optional<std::string>& nyu_rotations = {});

@@ -10,34 +10,60 @@
 
 #include "findmug/error.hpp"
 #include "findmug/training.hpp"
+#include "findmug_cli.hpp"
 #include "tool_common.hpp"
 
 namespace {
 
-constexpr const char* kUsage =
-    "usage: findmug-train (--data DIR | --mat nyu_depth_v2_labeled.mat) [more --data/--mat]\n"
-    "                     --out MODEL [--config FILE] [--set section.key=value ...]\n"
-    "                     [--nyu894-csv FILE] [--no-nyu-border]\n"
-    "                     [--nyu-rotations camera_rotations_NYU.txt]\n"
+// Shown by --help above the flag list.
+constexpr const char* kDescription =
     "Trains findmug's randomized forest on NYU-style dataset folders (rgb/, depth/ in mm,\n"
     "label8/ or label40/) or on the official NYU Depth V2 labelled .mat file, and writes a\n"
     "versioned model file. For the paper's protocol on NYU add --set ground.source=floor_labels;\n"
-    "to use every NYU frame, --set ground.source=gravity --nyu-rotations FILE.\n";
+    "to use every NYU frame, --set ground.source=gravity --nyu-rotations FILE.";
+
+struct TrainFlags {
+  std::vector<std::string> data, mats;
+  std::string out, nyu894_csv, nyu_rotations;
+  bool no_nyu_border = false;
+  findmug::cli::ConfigFlags config;
+};
 
 int run(int argc, char** argv) {
   using namespace findmug;
-  tools::Flags flags(argc, argv, {"help", "no-nyu-border"});
-  flags.allowOnly({"help", "data", "mat", "nyu894-csv", "out", "config", "set", "no-nyu-border",
-                   "nyu-rotations"});
-  if (flags.has("help") || !(flags.has("data") || flags.has("mat")) || !flags.has("out")) {
-    std::cerr << kUsage;
-    return flags.has("help") ? 0 : 2;
+  TrainFlags f;
+  auto app = cli::makeApp("findmug-train", kDescription);
+  app->add_option("--data", f.data, "labelled dataset folder (repeatable)")
+      ->type_name("DIR")
+      ->allow_extra_args(false);
+  app->add_option("--mat", f.mats, "the NYU Depth V2 labelled .mat file (repeatable)")
+      ->type_name("FILE")
+      ->allow_extra_args(false);
+  app->add_option("--out", f.out, "model file to write")
+      ->required()
+      ->type_name("MODEL")
+      ->multi_option_policy(CLI::MultiOptionPolicy::TakeLast);
+  cli::addConfigFlags(*app, f.config, "YAML config (segmenter settings)");
+  app->add_option("--nyu894-csv", f.nyu894_csv,
+                  "NYU 894-to-40 class map (CSV) for --mat (default: the installed one)")
+      ->type_name("FILE")
+      ->multi_option_policy(CLI::MultiOptionPolicy::TakeLast);
+  app->add_flag("--no-nyu-border", f.no_nyu_border,
+                "keep the white border of NYU frames (masked as void by default)");
+  app->add_option("--nyu-rotations", f.nyu_rotations,
+                  "NYU's camera_rotations_NYU.txt: every NYU frame's gravity")
+      ->type_name("FILE")
+      ->multi_option_policy(CLI::MultiOptionPolicy::TakeLast);
+  if (auto code = cli::parse(*app, argc, argv)) return *code;
+  if (f.data.empty() && f.mats.empty()) {
+    std::cerr << "findmug-train: give at least one --data DIR or --mat FILE (see --help)\n";
+    return 2;
   }
-  const Config config = tools::configFromFlags(flags);
+  const Config config = cli::configFrom(f.config);
   const Segmenter segmenter(config.segmenter, nullptr);
   DatasetOptions options;
-  options.mask_nyu_border = !flags.has("no-nyu-border");
-  if (flags.has("nyu-rotations")) options.nyu_rotations_file = flags.get("nyu-rotations");
+  options.mask_nyu_border = !f.no_nyu_border;
+  if (!f.nyu_rotations.empty()) options.nyu_rotations_file = f.nyu_rotations;
 
   const auto start = std::chrono::steady_clock::now();
   std::vector<FrameSample> samples;
@@ -45,10 +71,9 @@ int run(int argc, char** argv) {
   std::vector<std::string> dropped;
   std::vector<std::pair<std::string, std::string>> ground_methods;
   std::vector<std::unique_ptr<tools::LabeledInput>> inputs;
-  for (const auto& dir : flags.getAll("data")) inputs.push_back(tools::LabeledInput::folder(dir, options));
-  for (const auto& mat : flags.getAll("mat")) {
-    inputs.push_back(
-        tools::LabeledInput::mat(mat, flags.get("nyu894-csv"), options.nyu_rotations_file));
+  for (const auto& dir : f.data) inputs.push_back(tools::LabeledInput::folder(dir, options));
+  for (const auto& mat : f.mats) {
+    inputs.push_back(tools::LabeledInput::mat(mat, f.nyu894_csv, options.nyu_rotations_file));
   }
   for (const auto& input : inputs) {
     tools::ProgressBar bar("features " + input->frames().description);
@@ -72,12 +97,12 @@ int run(int argc, char** argv) {
   tools::ProgressBar bar("forests");
   std::vector<const FrameSample*> frames;
   for (const auto& s : samples) frames.push_back(&s);
-  RandomForest forest = trainModel(frames, config.segmenter,
-                                   [&](int done, int total) { bar.update(done, total); });
+  RandomForest forest =
+      trainModel(frames, config.segmenter, [&](int done, int total) { bar.update(done, total); });
   bar.finish();
   // Recorded so that the model is only ever run on features computed alike.
   forest.setExtractionSettings(extractionSettings(config.segmenter));
-  forest.save(flags.get("out"));
+  forest.save(f.out);
   const double seconds =
       std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 
@@ -99,7 +124,7 @@ int run(int argc, char** argv) {
   std::printf("  features         %d columns%s%s\n", forest.dim(),
               config.segmenter.regions.enabled ? " (with region features)" : "",
               forest.contextStage() ? ", auto-context stage" : "");
-  std::printf("  model            %s (id %s)\n", flags.get("out").c_str(), forest.id().c_str());
+  std::printf("  model            %s (id %s)\n", f.out.c_str(), forest.id().c_str());
   std::printf("  time             %.1f s\n", seconds);
   return 0;
 }

@@ -1,8 +1,14 @@
 // The shared command-line layer (tools/cli/findmug_cli.hpp) and findmugd's flags on it:
 // --help/--version/bad flags give the same exit codes everywhere, number checks name the
 // flag and value, and findmugd keeps --set and its shortcuts in command-line order.
+// findmug-train and findmug-eval are run as programs to check their flags on the layer.
 #include <gtest/gtest.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
+#include <array>
+#include <cstdio>
+#include <fstream>
 #include <sstream>
 #include <vector>
 
@@ -66,6 +72,139 @@ TEST(Cli, FindmugdKeepsOverridesInCommandLineOrder) {
     EXPECT_NE(std::string(e.what()).find("--workers"), std::string::npos) << e.what();
   }
 }
+
+struct ProgramRun {
+  int exit_code = -1;
+  std::string out, err;
+};
+
+// Runs `command` with stdout and stderr captured apart (stderr into a temp file).
+ProgramRun runProgram(const std::string& command) {
+  ProgramRun r;
+  char err_path[] = "/tmp/findmug_cli_test_XXXXXX";
+  const int fd = mkstemp(err_path);
+  if (fd < 0) return r;
+  close(fd);
+  FILE* pipe = popen((command + " 2>" + err_path).c_str(), "r");
+  if (!pipe) return r;
+  std::array<char, 4096> buf;
+  while (std::fgets(buf.data(), buf.size(), pipe)) r.out += buf.data();
+  const int status = pclose(pipe);
+  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  std::ifstream in(err_path);
+  std::stringstream s;
+  s << in.rdbuf();
+  r.err = s.str();
+  std::remove(err_path);
+  return r;
+}
+
+bool has(const std::string& text, const std::string& part) {
+  return text.find(part) != std::string::npos;
+}
+
+TEST(Cli, TrainAndEvalGiveHelpAndVersion) {
+  for (const auto& [exe, name] : {std::pair{std::string(FINDMUG_TRAIN_EXE), "findmug-train"},
+                                  std::pair{std::string(FINDMUG_EVAL_EXE), "findmug-eval"}}) {
+    ProgramRun r = runProgram(exe + " --version");
+    EXPECT_EQ(r.exit_code, 0) << name;
+    EXPECT_EQ(r.out, std::string(name) + " " + kVersion + "\n");
+
+    r = runProgram(exe + " --help");
+    EXPECT_EQ(r.exit_code, 0) << name;
+    for (const char* flag : {"--data", "--mat", "--out", "--config", "--set", "--nyu894-csv",
+                             "--no-nyu-border", "--nyu-rotations", "--version"}) {
+      EXPECT_TRUE(has(r.out, flag)) << name << " --help lacks " << flag << ":\n" << r.out;
+    }
+  }
+  const ProgramRun eval = runProgram(std::string(FINDMUG_EVAL_EXE) + " --help");
+  for (const char* flag : {"--folds", "--model", "--json", "--sweep", "--train-extra"}) {
+    EXPECT_TRUE(has(eval.out, flag)) << "findmug-eval --help lacks " << flag;
+  }
+}
+
+TEST(Cli, TrainAndEvalRejectBadFlagsWithCode2NamingThem) {
+  const std::string train(FINDMUG_TRAIN_EXE), eval(FINDMUG_EVAL_EXE);
+  struct Case {
+    std::string command, expected;
+  };
+  const std::vector<Case> cases = {
+      {train + " --data /tmp --out m.fmf --bogus 3", "findmug-train: The following argument"},
+      {train + " --data /tmp --out m.fmf --bogus 3", "--bogus"},
+      {train + " --data /tmp", "--out is required"},
+      {train + " --out m.fmf", "give at least one --data DIR or --mat FILE"},
+      {train + " --data /tmp --out m.fmf --set mrf.lambda", "expected KEY=VALUE, got 'mrf.lambda'"},
+      {eval + " --data /tmp --bogus 3", "--bogus"},
+      {eval + " --data /tmp --folds 1", "--folds: must be an integer >= 2, got '1'"},
+      {eval + " --data /tmp --folds five", "--folds: must be an integer >= 2, got 'five'"},
+      {eval + " --data /tmp --folds 2.5", "--folds: must be an integer >= 2, got '2.5'"},
+      {eval + " --data /tmp --mat x.mat", "--data excludes --mat"},
+      {eval + " --folds 3", "give one of --data DIR or --mat FILE"},
+  };
+  for (const auto& c : cases) {
+    const ProgramRun r = runProgram(c.command);
+    EXPECT_EQ(r.exit_code, 2) << c.command << "\n" << r.err;
+    EXPECT_TRUE(has(r.err, c.expected))
+        << c.command << "\nexpected: " << c.expected << "\ngot: " << r.err;
+  }
+}
+
+TEST(Cli, TrainAndEvalReadBothFlagFormsAndLastValueWins) {
+  // --name=value works like --name value, and a value given twice takes the last one (as the
+  // hand-written parser did); the run then fails on the dataset folder that is really used.
+  const ProgramRun r =
+      runProgram(std::string(FINDMUG_EVAL_EXE) +
+                 " --data /nonexistent/first --data=/nonexistent/second --folds=3");
+  EXPECT_EQ(r.exit_code, 1) << r.err;
+  EXPECT_TRUE(has(r.err, "/nonexistent/second")) << r.err;
+  EXPECT_FALSE(has(r.err, "/nonexistent/first")) << r.err;
+}
+
+#if defined(FINDMUG_REPLAY_EXE) && defined(FINDMUG_REPLAY_PROBE_EXE) && \
+    defined(FINDMUG_SEQUENTIAL_EXE)
+TEST(Cli, ReplayHelpersGiveHelpVersionAndNameBadFlags) {
+  const std::string replay(FINDMUG_REPLAY_EXE), probe(FINDMUG_REPLAY_PROBE_EXE);
+  for (const auto& [exe, name] :
+       {std::pair{replay, "findmug-replay"}, std::pair{probe, "findmug-replay-probe"}}) {
+    ProgramRun r = runProgram(exe + " --version");
+    EXPECT_EQ(r.exit_code, 0) << name;
+    EXPECT_EQ(r.out, std::string(name) + " " + kVersion + "\n");
+    r = runProgram(exe + " --help");
+    EXPECT_EQ(r.exit_code, 0) << name;
+    for (const char* flag : {"--lcm-url", "--channel-suffix", "--version"}) {
+      EXPECT_TRUE(has(r.out, flag)) << name << " --help lacks " << flag << ":\n" << r.out;
+    }
+  }
+  // findmug-sequential takes findmugd's flags (daemon_config.cpp) and its own name.
+  const ProgramRun sequential = runProgram(std::string(FINDMUG_SEQUENTIAL_EXE) + " --version");
+  EXPECT_EQ(sequential.exit_code, 0);
+  EXPECT_EQ(sequential.out, std::string("findmug-sequential ") + kVersion + "\n");
+  struct Case {
+    std::string command, expected;
+  };
+  const std::vector<Case> cases = {
+      {replay + " --source dataset:/x --rate 0 --count 1", "--rate: must be > 0, got '0'"},
+      {replay + " --source dataset:/x --rate 5 --count 1 --bogus", "--bogus"},
+      {replay + " --rate 5 --count 1", "--source is required"},
+      {replay + " --source dataset:/x --rate 5", "give exactly one of --duration and --count"},
+      {replay + " --source dataset:/x --rate 5 --count 1 --color-compression gif", "'gif'"},
+      // --url (the old name of --lcm-url) is accepted: the run gets as far as the source.
+      {replay + " --source dataset:/nonexistent/replay --rate 5 --count 1 --url memq://",
+       "/nonexistent/replay"},
+      {probe + " --url memq:// --log x.lcm --bins 1", "--bins"},
+      {probe + " --url memq:// --log x.lcm --timeout -3", "--timeout: must be > 0, got '-3'"},
+      {probe + " --url memq://", "give exactly one of --log FILE and --live"},
+      {probe + " --log x.lcm --expect-file n.txt", "--expect-file goes with --live"},
+      {std::string(FINDMUG_SEQUENTIAL_EXE) + " --bogus", "--bogus"},
+  };
+  for (const auto& c : cases) {
+    const ProgramRun r = runProgram(c.command);
+    EXPECT_EQ(r.exit_code, 2) << c.command << "\n" << r.err;
+    EXPECT_TRUE(has(r.err, c.expected))
+        << c.command << "\nexpected: " << c.expected << "\ngot: " << r.err;
+  }
+}
+#endif
 
 }  // namespace
 }  // namespace findmug

@@ -24,28 +24,27 @@
 //
 //   findmug-replay-probe --inspect-log rec.lcm [--channel-suffix S]
 // prints how many frames a log holds and at what rate, and exits.
-#include <lcm/lcm-cpp.hpp>
-
 #include <algorithm>
 #include <atomic>
-#include <chrono>
 #include <cerrno>
+#include <chrono>
 #include <csignal>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <lcm/lcm-cpp.hpp>
 #include <optional>
 #include <sstream>
 #include <string>
 #include <thread>
 #include <vector>
 
-#include "tool_common.hpp"
 #include "findmug/error.hpp"
 #include "findmug/io/channels.hpp"
 #include "findmug/io/lcm_codec.hpp"
 #include "findmug/labels.hpp"
+#include "findmug_cli.hpp"
 #include "replay_check.hpp"
 
 namespace {
@@ -75,53 +74,52 @@ struct Options {
   std::string inspect_log;
 };
 
-const char* kUsage =
-    "usage: findmug-replay-probe --url URL (--log FILE | --live [--expect-file F]) [options]\n"
-    "       findmug-replay-probe --inspect-log FILE [--channel-suffix S]\n"
-    "  --channel-suffix S     channels FINDMUG_*_S\n"
-    "  --name NAME            run name in reports\n"
-    "  --ready-file F         created when the daemon's first status arrives\n"
-    "  --drained-file F       created when the daemon has accounted for every replayed frame\n"
-    "  --out-json F           figures and violations as JSON\n"
-    "  --histogram-csv F      latency histogram as CSV (from_ms,to_ms,count)\n"
-    "  --histogram-txt F      latency histogram as a text chart\n"
-    "  --bin-ms MS, --bins N  histogram bins (default 100 ms x 40)\n"
-    "  --report-only          exit 0 even when invariants are violated (benchmarks)\n"
-    "  --timeout S            stop by itself after S seconds (default 600)\n";
+// The probe's flags; the --lcm-url/--url and --channel-suffix spellings come from the shared
+// layer. Checks that need several flags at once are in checkOptions().
+std::unique_ptr<CLI::App> makeProbeApp(Options& o) {
+  auto app = findmug::cli::makeApp(
+      "findmug-replay-probe",
+      "Watches a running findmugd over LCM during a replay, checks what comes out and measures\n"
+      "latency, fps and drops. Exit: 0 invariants held (or --report-only), 1 violated, 2 usage\n"
+      "or set-up error. --inspect-log FILE prints how many frames a log holds and exits.");
+  findmug::cli::addLcmUrlFlag(*app, o.url, "LCM URL to listen on");
+  findmug::cli::addChannelSuffixFlag(*app, o.suffix);
+  app->add_option("--name", o.name, "run name in reports");
+  app->add_option("--log", o.log, "the replayed log: ground truth of the frames")
+      ->type_name("FILE");
+  app->add_flag("--live", o.live, "take the frames that appear on FINDMUG_RGBD instead of --log");
+  app->add_option("--expect-file", o.expect_file,
+                  "with --live: the replayer writes the number of frames it published here")
+      ->type_name("F");
+  app->add_option("--ready-file", o.ready_file, "created when the daemon's first status arrives")
+      ->type_name("F");
+  app->add_option("--drained-file", o.drained_file,
+                  "created when the daemon has accounted for every replayed frame")
+      ->type_name("F");
+  app->add_option("--out-json", o.out_json, "figures and violations as JSON")->type_name("F");
+  app->add_option("--histogram-csv", o.histogram_csv,
+                  "latency histogram as CSV (from_ms,to_ms,count)")
+      ->type_name("F");
+  app->add_option("--histogram-txt", o.histogram_txt, "latency histogram as a text chart")
+      ->type_name("F");
+  app->add_option("--bin-ms", o.bin_ms, "histogram bin width")
+      ->type_name("MS")
+      ->check(findmug::cli::positive());
+  app->add_option("--bins", o.bins, "number of histogram bins")->check(CLI::Range(2, 10000));
+  app->add_flag("--report-only", o.report_only,
+                "exit 0 even when invariants are violated (benchmarks)");
+  app->add_option("--timeout", o.timeout_s, "stop by itself after S seconds")
+      ->type_name("S")
+      ->check(findmug::cli::positive());
+  app->add_option("--inspect-log", o.inspect_log, "print the frame count and rate of a log, exit")
+      ->type_name("FILE");
+  return app;
+}
 
-
-Options parse(int argc, char** argv) {
-  Options o;
-  for (int i = 1; i < argc; ++i) {
-    const std::string arg = argv[i];
-    auto value = [&]() -> std::string {
-      if (i + 1 >= argc) throw Error(arg + " needs a value");
-      return argv[++i];
-    };
-    if (arg == "--url") o.url = value();
-    else if (arg == "--channel-suffix") o.suffix = value();
-    else if (arg == "--name") o.name = value();
-    else if (arg == "--log") o.log = value();
-    else if (arg == "--live") o.live = true;
-    else if (arg == "--expect-file") o.expect_file = value();
-    else if (arg == "--ready-file") o.ready_file = value();
-    else if (arg == "--drained-file") o.drained_file = value();
-    else if (arg == "--out-json") o.out_json = value();
-    else if (arg == "--histogram-csv") o.histogram_csv = value();
-    else if (arg == "--histogram-txt") o.histogram_txt = value();
-    else if (arg == "--bin-ms") o.bin_ms = findmug::tools::parseNumber(arg, value());
-    else if (arg == "--bins") o.bins = static_cast<int>(findmug::tools::parseNumber(arg, value()));
-    else if (arg == "--report-only") o.report_only = true;
-    else if (arg == "--timeout") o.timeout_s = findmug::tools::parseNumber(arg, value());
-    else if (arg == "--inspect-log") o.inspect_log = value();
-    else throw Error("unknown argument '" + arg + "'");
-  }
-  if (!o.inspect_log.empty()) return o;
+void checkOptions(const Options& o) {
+  if (!o.inspect_log.empty()) return;
   if (o.log.empty() == !o.live) throw Error("give exactly one of --log FILE and --live");
   if (!o.expect_file.empty() && !o.live) throw Error("--expect-file goes with --live");
-  if (!(o.bin_ms > 0) || o.bins < 2 || o.bins > 10000) throw Error("bad histogram bins");
-  if (!(o.timeout_s > 0)) throw Error("--timeout must be positive");
-  return o;
 }
 
 FrameInfo frameInfo(const findmug::rgbd_frame_t& m) {
@@ -319,13 +317,10 @@ class Probe {
 
 int main(int argc, char** argv) {
   Options options;
+  const auto app = makeProbeApp(options);
+  if (auto code = findmug::cli::parse(*app, argc, argv)) return *code;
   try {
-    options = parse(argc, argv);
-  } catch (const Error& e) {
-    std::cerr << "findmug-replay-probe: " << e.what() << "\n" << kUsage;
-    return 2;
-  }
-  try {
+    checkOptions(options);
     if (!options.inspect_log.empty()) return inspectLog(options);
     std::signal(SIGTERM, onSignal);
     std::signal(SIGINT, onSignal);

@@ -16,7 +16,6 @@
 // it); this tool is for fixed input rates and long looped runs (benchmarks).
 // At the end it writes the number of frames published to --count-file (for
 // findmug-replay-probe --expect-file) and reports frames sent late.
-#include <lcm/lcm-cpp.hpp>
 #include <spdlog/spdlog.h>
 
 #include <atomic>
@@ -25,15 +24,16 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <lcm/lcm-cpp.hpp>
 #include <string>
 #include <thread>
 #include <vector>
 
-#include "tool_common.hpp"
 #include "findmug/error.hpp"
 #include "findmug/io/channels.hpp"
 #include "findmug/io/frame_source.hpp"
 #include "findmug/io/lcm_codec.hpp"
+#include "findmug_cli.hpp"
 
 namespace {
 
@@ -41,17 +41,6 @@ using findmug::Error;
 
 std::atomic<bool> g_stop{false};
 void onSignal(int) { g_stop = true; }
-
-const char* kUsage =
-    "usage: findmug-replay --source SPEC --rate HZ (--duration S | --count N) [options]\n"
-    "  --url URL               LCM URL to publish on (default: LCM_DEFAULT_URL)\n"
-    "  --channel-suffix S      publish on FINDMUG_RGBD_S\n"
-    "  --max-frames N          read at most N frames of the source (default 1000)\n"
-    "  --depth-compression C   zlib (default) or none\n"
-    "  --color-compression C   jpeg (default), png or none\n"
-    "  --count-file F          write the number of frames published to F when done\n"
-    "  --warmup S              wait S seconds before the first frame (default 0)\n";
-
 
 void writeCount(const std::string& path, long long count) {
   // Write then rename, so that a reader polling the file never sees it half written.
@@ -72,46 +61,37 @@ int run(int argc, char** argv) {
   double rate = 0, duration = 0, warmup = 0;
   long long count = 0, max_frames = 1000;
   io::RgbdEncodeOptions encode;
-  for (int i = 1; i < argc; ++i) {
-    const std::string arg = argv[i];
-    auto value = [&]() -> std::string {
-      if (i + 1 >= argc) throw Error(arg + " needs a value");
-      return argv[++i];
-    };
-    if (arg == "--help" || arg == "-h") {
-      std::cout << kUsage;
-      return 0;
-    } else if (arg == "--source") {
-      source_spec = value();
-    } else if (arg == "--url") {
-      url = value();
-    } else if (arg == "--channel-suffix") {
-      suffix = value();
-    } else if (arg == "--rate") {
-      rate = findmug::tools::parseNumber(arg, value());
-    } else if (arg == "--duration") {
-      duration = findmug::tools::parseNumber(arg, value());
-    } else if (arg == "--count") {
-      count = static_cast<long long>(findmug::tools::parseNumber(arg, value()));
-    } else if (arg == "--max-frames") {
-      max_frames = static_cast<long long>(findmug::tools::parseNumber(arg, value()));
-    } else if (arg == "--depth-compression") {
-      encode.depth = io::parseDepthCompression(value());
-    } else if (arg == "--color-compression") {
-      encode.color = io::parseColorCompression(value());
-    } else if (arg == "--count-file") {
-      count_file = value();
-    } else if (arg == "--warmup") {
-      warmup = findmug::tools::parseNumber(arg, value());
-    } else {
-      throw Error("unknown argument '" + arg + "'");
-    }
-  }
-  if (source_spec.empty()) throw Error("--source is required");
-  if (!(rate > 0 && rate <= 1000)) throw Error("--rate must be in (0, 1000] Hz");
+  std::string depth_compression = "zlib", color_compression = "jpeg";
+  auto app = cli::makeApp("findmug-replay",
+                          "Replays the frames of a finite source on LCM at a fixed rate, as a "
+                          "camera would (fresh seq and host utime per frame)");
+  cli::addSourceFlag(*app, source_spec, "frame source to replay (read and encoded up front)")
+      ->required();
+  cli::addLcmUrlFlag(*app, url, "LCM URL to publish on (default: LCM_DEFAULT_URL)");
+  cli::addChannelSuffixFlag(*app, suffix);
+  app->add_option("--rate", rate, "frames per second")
+      ->required()
+      ->type_name("HZ")
+      ->check(CLI::Range(0.0, 1000.0))
+      ->check(cli::positive());
+  app->add_option("--duration", duration, "replay for S seconds")
+      ->type_name("S")
+      ->check(cli::positive());
+  app->add_option("--count", count, "replay N frames")->type_name("N")->check(cli::positive());
+  app->add_option("--max-frames", max_frames, "read at most N frames of the source")
+      ->type_name("N")
+      ->check(cli::positive());
+  app->add_option("--depth-compression", depth_compression, "zlib or none")->type_name("C");
+  app->add_option("--color-compression", color_compression, "jpeg, png or none")->type_name("C");
+  app->add_option("--count-file", count_file, "write the number of frames published to F when done")
+      ->type_name("F");
+  app->add_option("--warmup", warmup, "wait S seconds before the first frame")
+      ->type_name("S")
+      ->check(CLI::Range(0.0, 3600.0));
+  if (auto code = cli::parse(*app, argc, argv)) return *code;
+  encode.depth = io::parseDepthCompression(depth_compression);
+  encode.color = io::parseColorCompression(color_compression);
   if ((duration > 0) == (count > 0)) throw Error("give exactly one of --duration and --count");
-  if (max_frames < 1) throw Error("--max-frames must be at least 1");
-  if (warmup < 0 || warmup > 3600) throw Error("--warmup must be 0..3600 s");
 
   // Read and encode the sequence once. The source runs as fast as it can
   // (no pacing, no loop): timing comes from the schedule below.
@@ -175,7 +155,7 @@ int main(int argc, char** argv) {
   try {
     return run(argc, argv);
   } catch (const findmug::Error& e) {
-    std::cerr << "findmug-replay: " << e.what() << "\n" << kUsage;
+    std::cerr << "findmug-replay: " << e.what() << " (see --help)\n";
     return 2;
   }
 }

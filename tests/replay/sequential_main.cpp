@@ -30,6 +30,7 @@
 #include "findmug/daemon/service.hpp"
 #include "findmug/error.hpp"
 #include "findmug/io/frame_source.hpp"
+#include "findmug/version.hpp"
 
 int main(int argc, char** argv) {
   using namespace findmug;
@@ -49,6 +50,10 @@ int main(int argc, char** argv) {
     if (command_line.help) {
       std::cout << "findmug-sequential: findmugd's pipeline on one thread (benchmark baseline)\n"
                 << usage();
+      return 0;
+    }
+    if (command_line.version) {
+      std::cout << "findmug-sequential " << kVersion << "\n";
       return 0;
     }
     loaded = loadDaemonConfig(command_line);

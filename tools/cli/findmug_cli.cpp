@@ -30,6 +30,12 @@ void addConfigFlags(CLI::App& app, ConfigFlags& flags, const std::string& config
       });
 }
 
+Config configFrom(const ConfigFlags& flags) {
+  Config config = flags.config_path ? loadConfig(*flags.config_path) : Config{};
+  for (const auto& kv : flags.overrides) applyOverride(config, kv);
+  return config;
+}
+
 CLI::Option* addSourceFlag(CLI::App& app, std::string& spec, const std::string& help) {
   return app.add_option("--source", spec, help)->type_name("SPEC");
 }

@@ -18,6 +18,8 @@
 #include <string>
 #include <vector>
 
+#include "findmug/config.hpp"
+
 namespace findmug::cli {
 
 // An app named `program` (used in messages and --version) with --version.
@@ -29,6 +31,9 @@ struct ConfigFlags {
   std::vector<std::string> overrides;  // KEY=VALUE as given
 };
 void addConfigFlags(CLI::App& app, ConfigFlags& flags, const std::string& config_help);
+// The config those flags give: the --config file (or the defaults) with every --set on top.
+// Throws findmug::Error naming the file or the setting that is wrong.
+Config configFrom(const ConfigFlags& flags);
 
 CLI::Option* addSourceFlag(CLI::App& app, std::string& spec, const std::string& help);
 // --lcm-url with --url as an alias (findmug-grab and the test tools have used --url).
