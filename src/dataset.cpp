@@ -138,9 +138,18 @@ struct ExtrinsicsRow {
 
 constexpr const char* kExtrinsicsHeader = "name,height_m,pitch_rad,roll_rad";
 
-std::vector<ExtrinsicsRow> readExtrinsicsCsv(const std::string& path) {
+// Rows "name,a,b,c" of a per-frame CSV file with the given header: three
+// finite numbers per frame, names unique. Errors name the file and line.
+struct NamedTriple {
+  std::string name;
+  std::array<double, 3> values{};
+  std::string where;  // "file:line", for the caller's own checks
+};
+
+std::vector<NamedTriple> readPerFrameCsv(const std::string& path, const std::string& header) {
+  const auto columns = splitCommas(header);
   std::istringstream in(readTextFile(path));
-  std::vector<ExtrinsicsRow> rows;
+  std::vector<NamedTriple> rows;
   std::set<std::string> seen;
   std::string line;
   int line_number = 0;
@@ -151,8 +160,8 @@ std::vector<ExtrinsicsRow> readExtrinsicsCsv(const std::string& path) {
     if (text.empty() || text[0] == '#') continue;
     const std::string where = path + ":" + std::to_string(line_number);
     if (!header_seen) {
-      if (text != kExtrinsicsHeader) {
-        throw Error(where + ": expected header '" + kExtrinsicsHeader + "', found '" + text + "'");
+      if (text != header) {
+        throw Error(where + ": expected header '" + header + "', found '" + text + "'");
       }
       header_seen = true;
       continue;
@@ -161,22 +170,28 @@ std::vector<ExtrinsicsRow> readExtrinsicsCsv(const std::string& path) {
     if (fields.size() != 4) {
       throw Error(where + ": expected 4 fields, found " + std::to_string(fields.size()));
     }
-    ExtrinsicsRow row;
+    NamedTriple row;
     row.name = fields[0];
+    row.where = where;
     if (row.name.empty()) throw Error(where + ": empty frame name");
-    double* targets[3] = {&row.extrinsics.height_m, &row.extrinsics.pitch_rad,
-                          &row.extrinsics.roll_rad};
-    const char* columns[3] = {"height_m", "pitch_rad", "roll_rad"};
-    for (int c = 0; c < 3; ++c) {
-      if (!parseDouble(fields[static_cast<std::size_t>(c) + 1], *targets[c])) {
-        throw Error(where + ": " + columns[c] + " '" + fields[static_cast<std::size_t>(c) + 1] +
+    for (std::size_t c = 0; c < 3; ++c) {
+      if (!parseDouble(fields[c + 1], row.values[c])) {
+        throw Error(where + ": " + columns[c + 1] + " '" + fields[c + 1] +
                     "' is not a finite number");
       }
     }
     if (!seen.insert(row.name).second) throw Error(where + ": duplicate frame '" + row.name + "'");
-    rows.push_back(row);
+    rows.push_back(std::move(row));
   }
-  if (!header_seen) throw Error(path + ": empty (expected header '" + kExtrinsicsHeader + "')");
+  if (!header_seen) throw Error(path + ": empty (expected header '" + header + "')");
+  return rows;
+}
+
+std::vector<ExtrinsicsRow> readExtrinsicsCsv(const std::string& path) {
+  std::vector<ExtrinsicsRow> rows;
+  for (const NamedTriple& t : readPerFrameCsv(path, kExtrinsicsHeader)) {
+    rows.push_back({t.name, CameraExtrinsics{t.values[0], t.values[1], t.values[2]}});
+  }
   return rows;
 }
 
@@ -364,41 +379,10 @@ std::string defaultNyuRotationsPath() {
 }
 
 std::vector<std::pair<std::string, std::array<double, 3>>> loadGravityCsv(const std::string& path) {
-  std::istringstream in(readTextFile(path));
   std::vector<std::pair<std::string, std::array<double, 3>>> rows;
-  std::set<std::string> seen;
-  std::string line;
-  int line_number = 0;
-  bool header_seen = false;
-  while (std::getline(in, line)) {
-    ++line_number;
-    const std::string text = trim(line);
-    if (text.empty() || text[0] == '#') continue;
-    const std::string where = path + ":" + std::to_string(line_number);
-    if (!header_seen) {
-      if (text != kGravityHeader) {
-        throw Error(where + ": expected header '" + kGravityHeader + "', found '" + text + "'");
-      }
-      header_seen = true;
-      continue;
-    }
-    const auto fields = splitCommas(text);
-    if (fields.size() != 4) {
-      throw Error(where + ": expected 4 fields, found " + std::to_string(fields.size()));
-    }
-    if (fields[0].empty()) throw Error(where + ": empty frame name");
-    std::array<double, 3> up{};
-    const char* columns[3] = {"up_x", "up_y", "up_z"};
-    for (std::size_t c = 0; c < 3; ++c) {
-      if (!parseDouble(fields[c + 1], up[c])) {
-        throw Error(where + ": " + columns[c] + " '" + fields[c + 1] + "' is not a finite number");
-      }
-    }
-    if (!seen.insert(fields[0]).second)
-      throw Error(where + ": duplicate frame '" + fields[0] + "'");
-    rows.emplace_back(fields[0], normalizedUp(up, where));
+  for (const NamedTriple& t : readPerFrameCsv(path, kGravityHeader)) {
+    rows.emplace_back(t.name, normalizedUp(t.values, t.where));
   }
-  if (!header_seen) throw Error(path + ": empty (expected header '" + kGravityHeader + "')");
   return rows;
 }
 
