@@ -53,10 +53,15 @@ run_one() {
   corpus="$OUT/corpus/$t"    # grows across runs; the committed seeds are read-only inputs
   findings="$BUILD_DIR/fuzz-findings/$t"
   log="$OUT/$t.log"
+  rm -rf "$findings"   # a finding counts for the run that made it
   mkdir -p "$corpus" "$findings" "$FINDMUG_FUZZ_TMP"
   local extra=()
   [[ -d tests/fuzz/regressions/$t ]] && extra+=("tests/fuzz/regressions/$t")
-  local limits=(-rss_limit_mb=256 -malloc_limit_mb=256 -timeout="${FUZZ_TIMEOUT:-1}" -print_final_stats=1
+  # -malloc_limit_mb caps what one input may allocate at once (256 MB, the target);
+  # -rss_limit_mb is the whole process: libFuzzer's in-memory corpus, ASan's shadow and
+  # quarantine grow over a run, and at 256 MB a 30 s run under load stopped with "oom"
+  # on inputs that alone take a few ms and a few MB. 512 MB keeps that noise out.
+  local limits=(-rss_limit_mb="${FUZZ_RSS_MB:-512}" -malloc_limit_mb=256 -timeout="${FUZZ_TIMEOUT:-1}" -print_final_stats=1
                 -artifact_prefix="$findings/")
   [[ "$SECONDS_EACH" != 0 ]] && limits+=(-max_total_time="$SECONDS_EACH")
   [[ -n "${FUZZ_RUNS:-}" ]] && limits+=(-runs="$FUZZ_RUNS")
