@@ -43,6 +43,7 @@ for t in "${TARGETS[@]}"; do build_targets+=(--target "fuzz_$t"); done
 # not for what the allocator keeps cached over a long run.
 export ASAN_OPTIONS=${ASAN_OPTIONS:-quarantine_size_mb=16:detect_leaks=1:abort_on_error=1:allocator_release_to_os_interval_ms=1000}
 export UBSAN_OPTIONS=${UBSAN_OPTIONS:-print_stacktrace=1:halt_on_error=1}
+export LSAN_OPTIONS=${LSAN_OPTIONS:-suppressions=$PWD/tests/lsan.supp}
 OUT="$BUILD_DIR/fuzz-out"
 mkdir -p "$OUT"
 export FINDMUG_FUZZ_TMP="$OUT/tmp"
