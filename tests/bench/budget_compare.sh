@@ -5,7 +5,11 @@
 #   new         this build, threaded, its defaults (daemon.max_cpu_cores 0)
 #   new-1core   this build with daemon.max_cpu_cores=1 (every stage on one thread)
 #
-#   tests/bench/budget_compare.sh BASE_BUILD_DIR [--duration 15] [--rate 30] [--out DIR]
+#   tests/bench/budget_compare.sh BASE_BUILD_DIR [--duration 15] [--rate 30] [--out DIR] [--model FMF]
+#
+# --model: the forest every row runs (default models/findmug.fmf). An older base
+# build may not read the current model format; give it a model it reads (e.g.
+# that commit's models/findmug.fmf), and every row runs that same model.
 #
 # Each configuration is one tests/bench/daemon_bench.sh run (threaded mode,
 # no rate search); the table of the three goes to DIR/compare.md.
@@ -13,19 +17,19 @@
 set -euo pipefail
 ROOT="$(cd "$(dirname "$0")/../.." && pwd)"
 BASE=$1; shift
-TABLES_ONLY=0 DURATION=15 RATE=30 OUT="$ROOT/build/bench-results/budget-$(date -u +%Y%m%dT%H%M%SZ)"
+TABLES_ONLY=0 DURATION=15 RATE=30 MODEL="$ROOT/models/findmug.fmf" OUT="$ROOT/build/bench-results/budget-$(date -u +%Y%m%dT%H%M%SZ)"
 while [[ $# -gt 0 ]]; do
   case "$1" in
     --duration) DURATION=$2; shift 2 ;;
     --rate) RATE=$2; shift 2 ;;
     --out) OUT=$2; shift 2 ;;
+    --model) MODEL=$2; shift 2 ;;
     --tables-only) TABLES_ONLY=1; shift ;;
     *) echo "budget_compare: unknown argument '$1'" >&2; exit 2 ;;
   esac
 done
 mkdir -p "$OUT"
 BENCH="$ROOT/tests/bench/daemon_bench.sh"
-MODEL="$ROOT/models/findmug.fmf"
 [[ $TABLES_ONLY == 1 ]] || echo "load before: $(cut -d' ' -f1-3 /proc/loadavg)" > "$OUT/load"
 DATASETS=${DATASETS:-nyu synth}
 for ds in $DATASETS; do
