@@ -11,14 +11,17 @@
 // voxels (up to two voxels apart) that are not already joined and whose
 // bounding boxes come within the tolerance. On a dense table top almost
 // every voxel pair is already joined, so the cost is close to one hash
-// insert per point. The organized grid is not used for neighbourhoods
+// insert per point. The organized grid does not define the neighbourhoods,
 // because parts of one table split by an occluder (a chair back, a mug) must
-// still join when they are close in 3-D.
+// still join when they are close in 3-D; but when the points come with their
+// pixels (detectTables), image neighbours within the tolerance are linked
+// first, for free, so that the voxel pass finds almost every neighbouring
+// voxel pair already joined and compares few points.
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
-#include <numeric>
 #include <string>
+#include <utility>
 
 #include "findmug/error.hpp"
 #include "findmug/tables.hpp"
@@ -30,15 +33,13 @@ using namespace tables_detail;
 
 namespace {
 
+// Open-addressing hash map from packed voxel keys to dense voxel ids. It
+// grows with the number of voxels (kept at most half full), not with the
+// number of points: a table top of 100k points has a few thousand voxels,
+// and a small table stays in cache for the neighbour lookups.
 class VoxelIndex {
  public:
-  explicit VoxelIndex(std::size_t expected) {
-    std::size_t capacity = 16;
-    while (capacity < 2 * expected) capacity <<= 1;
-    keys_.assign(capacity, kEmpty);
-    values_.assign(capacity, -1);
-    mask_ = capacity - 1;
-  }
+  VoxelIndex() { reset(1024); }
   // Id of `key`, inserting it with `next_id` when absent.
   int findOrInsert(std::uint64_t key, int next_id, bool& inserted) {
     std::size_t slot = hash(key);
@@ -48,9 +49,15 @@ class VoxelIndex {
         return values_[slot];
       }
       if (keys_[slot] == kEmpty) {
+        inserted = true;
+        if (2 * (size_ + 1) > keys_.size()) {
+          grow();
+          slot = hash(key);
+          while (keys_[slot] != kEmpty) slot = (slot + 1) & mask_;
+        }
         keys_[slot] = key;
         values_[slot] = next_id;
-        inserted = true;
+        ++size_;
         return next_id;
       }
       slot = (slot + 1) & mask_;
@@ -70,16 +77,33 @@ class VoxelIndex {
   std::size_t hash(std::uint64_t key) const {
     return static_cast<std::size_t>((key * 0x9E3779B97F4A7C15ull) >> 20) & mask_;
   }
+  void reset(std::size_t capacity) {
+    keys_.assign(capacity, kEmpty);
+    values_.assign(capacity, -1);
+    mask_ = capacity - 1;
+  }
+  void grow() {
+    std::vector<std::uint64_t> keys = std::move(keys_);
+    std::vector<int> values = std::move(values_);
+    reset(2 * keys.size());
+    for (std::size_t i = 0; i < keys.size(); ++i) {
+      if (keys[i] == kEmpty) continue;
+      std::size_t slot = hash(keys[i]);
+      while (keys_[slot] != kEmpty) slot = (slot + 1) & mask_;
+      keys_[slot] = keys[i];
+      values_[slot] = values[i];
+    }
+  }
   std::vector<std::uint64_t> keys_;
   std::vector<int> values_;
   std::size_t mask_ = 0;
+  std::size_t size_ = 0;
 };
 
 class DisjointSets {
  public:
-  explicit DisjointSets(int n) : parent_(static_cast<std::size_t>(n)) {
-    std::iota(parent_.begin(), parent_.end(), 0);
-  }
+  // A new singleton set; ids are 0, 1, ... in order of addition.
+  void add() { parent_.push_back(static_cast<int>(parent_.size())); }
   int find(int x) {
     while (parent_[x] != x) {
       parent_[x] = parent_[parent_[x]];  // path halving
@@ -118,10 +142,13 @@ float squaredGap(const Eigen::AlignedBox3f& a, const Eigen::AlignedBox3f& b) {
 
 }  // namespace
 
-std::vector<int> tables_detail::clusterPoints(const std::vector<Eigen::Vector3f>& points, float tolerance) {
+std::vector<int> tables_detail::clusterPoints(const std::vector<Eigen::Vector3f>& points,
+                                              float tolerance, const PointGrid& grid) {
   const int n = static_cast<int>(points.size());
   std::vector<int> labels(points.size(), -1);
   if (n == 0) return labels;
+  const std::vector<int>* pixels = grid.pixels;
+  if (pixels && (pixels->size() != points.size() || grid.width < 1)) pixels = nullptr;
 
   // Slightly under tolerance/sqrt(3) so the voxel diagonal never exceeds the
   // tolerance through rounding; then neighbours within the tolerance are at
@@ -132,47 +159,82 @@ std::vector<int> tables_detail::clusterPoints(const std::vector<Eigen::Vector3f>
   const int reach = static_cast<int>(std::ceil(tolerance / voxel));
   const float tol2 = tolerance * tolerance;
 
-  VoxelIndex index(points.size());
+  // One pass over the points: voxel of each point, each voxel's bounding box
+  // and point count, and the links between image neighbours.
+  VoxelIndex index;
   std::vector<int> point_voxel(points.size());
   std::vector<Eigen::Vector3i> voxel_coords;
+  std::vector<Eigen::AlignedBox3f> boxes;
+  std::vector<int> voxel_size;
+  DisjointSets sets;
   const float inv_voxel = 1.0f / voxel;
   std::uint64_t last_key = ~std::uint64_t{0};
   int last_voxel = -1;
+  int up = 0;        // first point whose pixel is not before the one above point i's
+  int row_end = 0;   // end of the image row of point i's pixel
   for (int i = 0; i < n; ++i) {
     const Eigen::Vector3f& p = points[i];
     const Eigen::Vector3i c(static_cast<int>(std::floor(p.x() * inv_voxel)),
                             static_cast<int>(std::floor(p.y() * inv_voxel)),
                             static_cast<int>(std::floor(p.z() * inv_voxel)));
     const std::uint64_t key = packVoxel(c.x(), c.y(), c.z());
-    // Points come in image order, so neighbours often share a voxel.
+    // Points come in image order, so neighbours often share a voxel: the
+    // previous point's (last_key), or the one above's.
+    if (key != last_key && pixels) {
+      const int above = (*pixels)[i] - grid.width;
+      while (up < i && (*pixels)[up] < above) ++up;
+      if (up < i && (*pixels)[up] == above && voxel_coords[point_voxel[up]] == c) {
+        last_voxel = point_voxel[up];
+        last_key = key;
+      }
+    }
     if (key != last_key) {
       bool inserted = false;
       last_voxel = index.findOrInsert(key, static_cast<int>(voxel_coords.size()), inserted);
       last_key = key;
-      if (inserted) voxel_coords.push_back(c);
+      if (inserted) {
+        voxel_coords.push_back(c);
+        boxes.emplace_back();
+        voxel_size.push_back(0);
+        sets.add();
+      }
     }
     point_voxel[i] = last_voxel;
+    boxes[last_voxel].extend(p);
+    ++voxel_size[last_voxel];
+    if (pixels) {
+      // Image neighbours (left, above) within the tolerance are links of the
+      // exact partition found without any search; on a table top they join
+      // almost every pair of neighbouring voxels, so the voxel pass below
+      // rarely has to compare points.
+      const int px = (*pixels)[i];
+      while (px >= row_end) row_end += grid.width;  // pixels ascend: no division
+      if (i > 0 && (*pixels)[i - 1] == px - 1 && px != row_end - grid.width &&
+          point_voxel[i - 1] != last_voxel && (points[i - 1] - p).squaredNorm() <= tol2) {
+        sets.unite(point_voxel[i - 1], last_voxel);
+      }
+      const int above = px - grid.width;
+      while (up < i && (*pixels)[up] < above) ++up;
+      if (up < i && (*pixels)[up] == above && point_voxel[up] != last_voxel &&
+          (points[up] - p).squaredNorm() <= tol2) {
+        sets.unite(point_voxel[up], last_voxel);
+      }
+    }
   }
   const int voxels = static_cast<int>(voxel_coords.size());
 
-  // Points grouped by voxel (counting sort) and each voxel's bounding box.
-  std::vector<int> start(static_cast<std::size_t>(voxels) + 1, 0);
-  for (int v : point_voxel) ++start[v + 1];
-  for (int v = 0; v < voxels; ++v) start[v + 1] += start[v];
-  std::vector<int> order(points.size());
-  {
+  // Points grouped by voxel (counting sort), built only when a pair of
+  // voxels has to be decided point by point: the pair tests then read
+  // memory sequentially.
+  std::vector<int> start;
+  std::vector<Eigen::Vector3f> sorted;
+  const auto groupPoints = [&] {
+    start.assign(static_cast<std::size_t>(voxels) + 1, 0);
+    for (int v = 0; v < voxels; ++v) start[v + 1] = start[v] + voxel_size[v];
     std::vector<int> fill(start.begin(), start.end() - 1);
-    for (int i = 0; i < n; ++i) order[fill[point_voxel[i]]++] = i;
-  }
-  std::vector<Eigen::AlignedBox3f> boxes(static_cast<std::size_t>(voxels));
-  for (int v = 0; v < voxels; ++v) {
-    for (int k = start[v]; k < start[v + 1]; ++k) boxes[v].extend(points[order[k]]);
-  }
-
-  // Points copied in voxel order: the pair tests below then read memory
-  // sequentially.
-  std::vector<Eigen::Vector3f> sorted(points.size());
-  for (int k = 0; k < n; ++k) sorted[k] = points[order[k]];
+    sorted.resize(points.size());
+    for (int i = 0; i < n; ++i) sorted[fill[point_voxel[i]]++] = points[i];
+  };
 
   // Forward half of the neighbourhood (each unordered voxel pair once), the
   // touching voxels first: on a dense surface they join nearly everything,
@@ -190,16 +252,38 @@ std::vector<int> tables_detail::clusterPoints(const std::vector<Eigen::Vector3f>
     }
   }
 
-  DisjointSets sets(voxels);
+  // A lower bound of the gap between voxel a's points and any point of the
+  // voxel at offset d: the distance from a's box to that voxel's cell. Most
+  // voxels' points stay clear of most of their cell's faces (a table top is
+  // a thin layer), so most offsets are ruled out before the hash lookup.
+  // The slack covers the rounding of floor(p / voxel) at cell borders.
+  const float slack = 1e-4f;
+  const auto cellOutOfReach = [&](const Eigen::AlignedBox3f& box, const Eigen::Vector3i& ca,
+                                  const Eigen::Vector3i& d) {
+    float gap2 = 0.0f;
+    for (int axis = 0; axis < 3; ++axis) {
+      float g = 0.0f;
+      if (d[axis] > 0) {
+        g = static_cast<float>(ca[axis] + d[axis]) * voxel - box.max()[axis] - slack;
+      } else if (d[axis] < 0) {
+        g = box.min()[axis] - static_cast<float>(ca[axis] + d[axis] + 1) * voxel - slack;
+      }
+      if (g > 0.0f) gap2 += g * g;
+    }
+    return gap2 > tol2;
+  };
+
   std::vector<int> near_a, near_b;
   for (const Eigen::Vector3i& d : offsets) {
     for (int a = 0; a < voxels; ++a) {
       const Eigen::Vector3i& ca = voxel_coords[a];
+      if (cellOutOfReach(boxes[a], ca, d)) continue;
       const int b = index.find(packVoxel(static_cast<std::int64_t>(ca.x()) + d.x(),
                                          static_cast<std::int64_t>(ca.y()) + d.y(),
                                          static_cast<std::int64_t>(ca.z()) + d.z()));
       if (b < 0 || sets.find(a) == sets.find(b)) continue;
       if (squaredGap(boxes[a], boxes[b]) > tol2) continue;
+      if (sorted.empty()) groupPoints();
       // Only points within the tolerance of the other voxel's box can link.
       near_a.clear();
       near_b.clear();
@@ -227,10 +311,16 @@ std::vector<int> tables_detail::clusterPoints(const std::vector<Eigen::Vector3f>
   // Dense cluster ids in order of first appearance.
   std::vector<int> root_label(static_cast<std::size_t>(voxels), -1);
   int next = 0;
+  last_voxel = -1;
+  int last_label = -1;
   for (int i = 0; i < n; ++i) {
-    const int root = sets.find(point_voxel[i]);
-    if (root_label[root] < 0) root_label[root] = next++;
-    labels[i] = root_label[root];
+    if (point_voxel[i] != last_voxel) {
+      last_voxel = point_voxel[i];
+      const int root = sets.find(last_voxel);
+      if (root_label[root] < 0) root_label[root] = next++;
+      last_label = root_label[root];
+    }
+    labels[i] = last_label;
   }
   return labels;
 }

@@ -31,30 +31,33 @@ float cross2(const Eigen::Vector2f& o, const Eigen::Vector2f& a, const Eigen::Ve
 // Hull candidates: per narrow column the lowest and highest point in y, per
 // narrow row the extremes in x. Every hull vertex is, up to the strip width,
 // one of them; this cuts 100k top points to a few hundred before sorting.
-std::vector<Eigen::Vector2f> hullCandidates(const std::vector<Eigen::Vector2f>& pts) {
-  Eigen::AlignedBox2f box;
-  for (const auto& p : pts) box.extend(p);
+// `box` is the points' bounding box. The current extremes are kept by value
+// next to the arrays (not looked up through an index per point).
+std::vector<Eigen::Vector2f> hullCandidates(const std::vector<Eigen::Vector2f>& pts,
+                                            const Eigen::AlignedBox2f& box) {
   const Eigen::Vector2f size = box.sizes();
   // Cap the strip count for absurdly large inputs; the strip only sets accuracy.
   const float strip = std::max({kHullStripM, size.x() / 20000.0f, size.y() / 20000.0f});
   const int cols = static_cast<int>(size.x() / strip) + 1;
   const int rows = static_cast<int>(size.y() / strip) + 1;
-  constexpr int kNone = -1;
-  std::vector<int> col_lo(cols, kNone), col_hi(cols, kNone), row_lo(rows, kNone),
-      row_hi(rows, kNone);
-  for (int i = 0; i < static_cast<int>(pts.size()); ++i) {
-    const Eigen::Vector2f& p = pts[i];
-    const int c = std::min(cols - 1, static_cast<int>((p.x() - box.min().x()) / strip));
-    const int r = std::min(rows - 1, static_cast<int>((p.y() - box.min().y()) / strip));
-    if (col_lo[c] == kNone || p.y() < pts[col_lo[c]].y()) col_lo[c] = i;
-    if (col_hi[c] == kNone || p.y() > pts[col_hi[c]].y()) col_hi[c] = i;
-    if (row_lo[r] == kNone || p.x() < pts[row_lo[r]].x()) row_lo[r] = i;
-    if (row_hi[r] == kNone || p.x() > pts[row_hi[r]].x()) row_hi[r] = i;
+  // Points are finite, so the first point of a strip always replaces these.
+  constexpr float kInf = std::numeric_limits<float>::infinity();
+  std::vector<Eigen::Vector2f> col_lo(cols, Eigen::Vector2f(0.0f, kInf)),
+      col_hi(cols, Eigen::Vector2f(0.0f, -kInf)), row_lo(rows, Eigen::Vector2f(kInf, 0.0f)),
+      row_hi(rows, Eigen::Vector2f(-kInf, 0.0f));
+  const float x0 = box.min().x(), y0 = box.min().y();
+  for (const Eigen::Vector2f& p : pts) {
+    const int c = std::min(cols - 1, static_cast<int>((p.x() - x0) / strip));
+    const int r = std::min(rows - 1, static_cast<int>((p.y() - y0) / strip));
+    if (p.y() < col_lo[c].y()) col_lo[c] = p;
+    if (p.y() > col_hi[c].y()) col_hi[c] = p;
+    if (p.x() < row_lo[r].x()) row_lo[r] = p;
+    if (p.x() > row_hi[r].x()) row_hi[r] = p;
   }
   std::vector<Eigen::Vector2f> out;
   for (const auto* list : {&col_lo, &col_hi, &row_lo, &row_hi}) {
-    for (int i : *list) {
-      if (i != kNone) out.push_back(pts[i]);
+    for (const Eigen::Vector2f& p : *list) {
+      if (std::isfinite(p.x()) && std::isfinite(p.y())) out.push_back(p);
     }
   }
   return out;
@@ -63,10 +66,9 @@ std::vector<Eigen::Vector2f> hullCandidates(const std::vector<Eigen::Vector2f>& 
 // Principal axes of the top on the floor, from the occupied cells of a
 // kAxisCellM grid (each cell's mean point counts once), so that point
 // density (higher near the camera) does not bias the axes.
-void principalAxes(const std::vector<Eigen::Vector2f>& pts, Eigen::Vector2f& major,
-                   Eigen::Vector2f& minor) {
-  Eigen::AlignedBox2f box;
-  for (const auto& p : pts) box.extend(p);
+// `box` is the points' bounding box.
+void principalAxes(const std::vector<Eigen::Vector2f>& pts, const Eigen::AlignedBox2f& box,
+                   Eigen::Vector2f& major, Eigen::Vector2f& minor) {
   const Eigen::Vector2f size = box.sizes();
   // Coarser cells for huge inputs keep the grid below ~4M cells.
   const float cell = std::max(kAxisCellM, std::sqrt(size.x() * size.y() / 4.0e6f));
@@ -110,13 +112,9 @@ void principalAxes(const std::vector<Eigen::Vector2f>& pts, Eigen::Vector2f& maj
 // the most outward of hundreds of points 2-3 cm past the true edge. A high
 // quantile rather than the median keeps round tops (whose strips are shorter
 // towards the ends) within 1-2 % of their radius. Returns (low, high).
-Eigen::Vector2f edgeRange(const std::vector<Eigen::Vector2f>& local, int along, int across) {
-  float lo_along = std::numeric_limits<float>::max();
-  float hi_along = std::numeric_limits<float>::lowest();
-  for (const auto& q : local) {
-    lo_along = std::min(lo_along, q[along]);
-    hi_along = std::max(hi_along, q[along]);
-  }
+// [lo_along, hi_along] is the points' range along `along`.
+Eigen::Vector2f edgeRange(const std::vector<Eigen::Vector2f>& local, int along, int across,
+                          float lo_along, float hi_along) {
   const int strips = std::min(4096, static_cast<int>((hi_along - lo_along) / kEdgeStripM) + 1);
   const float strip_width = std::max(kEdgeStripM, (hi_along - lo_along) / strips * 1.0001f);
   std::vector<float> strip_lo(static_cast<std::size_t>(strips), std::numeric_limits<float>::max());
@@ -178,8 +176,7 @@ std::vector<Eigen::Vector2f> convexHull2d(std::vector<Eigen::Vector2f> points) {
 }
 
 ClusterOutcome tables_detail::describeCluster(const std::vector<Eigen::Vector3f>& points,
-                               const std::vector<float>& confidence, const TableConfig& config,
-                               TableCluster& table) {
+                                             const TableConfig& config, TableCluster& table) {
   ClusterOutcome outcome;
   const int n = static_cast<int>(points.size());
 
@@ -224,16 +221,15 @@ ClusterOutcome tables_detail::describeCluster(const std::vector<Eigen::Vector3f>
   std::vector<Eigen::Vector2f> top;
   top.reserve(points.size());
   Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
+  Eigen::AlignedBox2f top_box;
   for (const auto& p : points) {
     if (std::abs(p.z() - table.top_height) <= config.top_band_m) {
       top.push_back(p.head<2>());
+      top_box.extend(top.back());
       centroid += p.cast<double>();
     }
   }
   table.point_count = n;
-  double confidence_sum = 0.0;
-  for (float c : confidence) confidence_sum += c;
-  table.mean_confidence = n > 0 ? static_cast<float>(confidence_sum / n) : 0.0f;
   if (top.size() < 3) {
     outcome.reason = "degenerate cluster of " + std::to_string(n) + " points: only " +
                      std::to_string(top.size()) + " top points";
@@ -241,16 +237,20 @@ ClusterOutcome tables_detail::describeCluster(const std::vector<Eigen::Vector3f>
   }
   table.centroid = (centroid / static_cast<double>(top.size())).cast<float>();
 
-  principalAxes(top, table.major_axis, table.minor_axis);
+  principalAxes(top, top_box, table.major_axis, table.minor_axis);
   const Eigen::Vector2f origin = table.centroid.head<2>();
   std::vector<Eigen::Vector2f> local;  // (along major, along minor) relative to the centroid
   local.reserve(top.size());
+  Eigen::AlignedBox2f local_box;
   for (const auto& p : top) {
     const Eigen::Vector2f q = p - origin;
     local.emplace_back(q.dot(table.major_axis), q.dot(table.minor_axis));
+    local_box.extend(local.back());
   }
-  const Eigen::Vector2f minor_range = edgeRange(local, 0, 1);
-  const Eigen::Vector2f major_range = edgeRange(local, 1, 0);
+  const Eigen::Vector2f minor_range =
+      edgeRange(local, 0, 1, local_box.min().x(), local_box.max().x());
+  const Eigen::Vector2f major_range =
+      edgeRange(local, 1, 0, local_box.min().y(), local_box.max().y());
   table.extents = Eigen::Vector2f(0.5f * (major_range[1] - major_range[0]),
                                   0.5f * (minor_range[1] - minor_range[0]));
   table.center = origin + table.major_axis * 0.5f * (major_range[1] + major_range[0]) +
@@ -263,7 +263,7 @@ ClusterOutcome tables_detail::describeCluster(const std::vector<Eigen::Vector3f>
                      fmt(config.min_table_width_m) + ")";
     return outcome;
   }
-  table.hull = convexHull2d(hullCandidates(top));
+  table.hull = convexHull2d(hullCandidates(top, top_box));
   if (table.hull.size() < 3) {
     outcome.reason = "degenerate cluster of " + std::to_string(n) + " points: its top has no area";
     return outcome;

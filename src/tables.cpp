@@ -112,6 +112,12 @@ TableDetection detectTables(const OrganizedCloud& cloud_ground, const LabelImage
   // 1. Table points.
   std::vector<Eigen::Vector3f> points;
   std::vector<int> pixels;
+  {
+    const auto table_pixels = static_cast<std::size_t>(
+        std::count(labels.labels.begin(), labels.labels.end(), kTableLabel));
+    points.reserve(table_pixels);
+    pixels.reserve(table_pixels);
+  }
   for (std::size_t i = 0; i < cloud_ground.points.size(); ++i) {
     if (labels.labels[i] != kTableLabel) continue;
     const Eigen::Vector3f& p = cloud_ground.points[i];
@@ -143,16 +149,27 @@ TableDetection detectTables(const OrganizedCloud& cloud_ground, const LabelImage
     return result;
   }
 
-  // 2. Clusters.
-  const std::vector<int> cluster_of = clusterPoints(points, config.cluster_tolerance_m);
+  // 2. Clusters, their members grouped by a counting sort. Members stay in
+  // ascending point order, hence ascending pixel order: table.pixels needs no
+  // sort, and sums over members run in the same order as before.
+  const std::vector<int> cluster_of =
+      clusterPoints(points, config.cluster_tolerance_m, PointGrid{&pixels, cloud_ground.width});
   const int clusters = *std::max_element(cluster_of.begin(), cluster_of.end()) + 1;
-  std::vector<std::vector<int>> members(static_cast<std::size_t>(clusters));
-  for (int i = 0; i < static_cast<int>(points.size()); ++i) members[cluster_of[i]].push_back(i);
+  std::vector<int> member_start(static_cast<std::size_t>(clusters) + 1, 0);
+  for (int c : cluster_of) ++member_start[c + 1];
+  for (int c = 0; c < clusters; ++c) member_start[c + 1] += member_start[c];
+  std::vector<int> members(points.size());
+  {
+    std::vector<int> fill(member_start.begin(), member_start.end() - 1);
+    for (int i = 0; i < static_cast<int>(points.size()); ++i) members[fill[cluster_of[i]]++] = i;
+  }
 
   int small_clusters = 0, largest_small = 0;
   std::vector<TableCluster> tables;
-  for (const auto& member : members) {
-    const int n = static_cast<int>(member.size());
+  std::vector<Eigen::Vector3f> cluster_points;
+  for (int c = 0; c < clusters; ++c) {
+    const int* member = members.data() + member_start[c];
+    const int n = member_start[c + 1] - member_start[c];
     if (n < config.min_cluster_points) {
       ++small_clusters;
       largest_small = std::max(largest_small, n);
@@ -166,25 +183,23 @@ TableDetection detectTables(const OrganizedCloud& cloud_ground, const LabelImage
       continue;
     }
     // 3. Geometry.
-    std::vector<Eigen::Vector3f> cluster_points;
-    std::vector<float> confidence;
-    cluster_points.reserve(member.size());
-    confidence.reserve(member.size());
-    for (int i : member) {
-      cluster_points.push_back(points[i]);
-      // A label image without confidence (ground truth) counts as certain.
-      confidence.push_back(labels.confidence.empty() ? 1.0f : labels.confidence[pixels[i]]);
+    cluster_points.resize(static_cast<std::size_t>(n));
+    // A label image without confidence (ground truth) counts as certain.
+    double confidence_sum = labels.confidence.empty() ? static_cast<double>(n) : 0.0;
+    for (int k = 0; k < n; ++k) {
+      cluster_points[k] = points[member[k]];
+      if (!labels.confidence.empty()) confidence_sum += labels.confidence[pixels[member[k]]];
     }
     TableCluster table;
-    const ClusterOutcome outcome = describeCluster(cluster_points, confidence, config, table);
+    table.mean_confidence = static_cast<float>(confidence_sum / n);
+    const ClusterOutcome outcome = describeCluster(cluster_points, config, table);
     if (!outcome.ok) {
       ++result.clusters_rejected;
       result.diagnostics.push_back(outcome.reason + ": dropped");
       continue;
     }
-    table.pixels.reserve(member.size());
-    for (int i : member) table.pixels.push_back(pixels[i]);
-    std::sort(table.pixels.begin(), table.pixels.end());
+    table.pixels.resize(static_cast<std::size_t>(n));
+    for (int k = 0; k < n; ++k) table.pixels[k] = pixels[member[k]];
     tables.push_back(std::move(table));
   }
   if (small_clusters > 0) {
@@ -200,16 +215,20 @@ TableDetection detectTables(const OrganizedCloud& cloud_ground, const LabelImage
 
   // 4. Search positions, 5. their reachability.
   Eigen::AlignedBox2f region;
+  std::vector<Eigen::Vector2f> position_xy;
   for (std::size_t k = 0; k < tables.size(); ++k) {
     tables[k].id = static_cast<int>(k);
     tables[k].search_positions = computeSearchPositions(tables[k], config);
-    for (const auto& p : tables[k].search_positions) region.extend(p.xy);
+    for (const auto& p : tables[k].search_positions) {
+      region.extend(p.xy);
+      position_xy.push_back(p.xy);
+    }
   }
   if (!tables.empty()) {
     const float margin = config.robot_radius_m + config.floor_cell_m;
     region.extend(region.min() - Eigen::Vector2f::Constant(margin));
     region.extend(region.max() + Eigen::Vector2f::Constant(margin));
-    const ReachabilityGrid grid(cloud_ground, labels, region, config);
+    const ReachabilityGrid grid(cloud_ground, labels, region, position_xy, config);
     for (auto& table : tables) {
       for (auto& position : table.search_positions) grid.assess(position);
     }

@@ -35,32 +35,48 @@ inline bool finitePoint(const Eigen::Vector3f& p) {
 // `value` with `precision` significant digits, for messages.
 std::string fmt(double value, int precision = 3);
 
+// Where the points of clusterPoints sit in an organized image, when they
+// come from one: point k at pixel (*pixels)[k] (ascending) of an image
+// `width` pixels wide. Only a shortcut: the partition is the same with or
+// without it.
+struct PointGrid {
+  const std::vector<int>* pixels = nullptr;
+  int width = 0;
+};
+
 // Exact Euclidean clustering (see euclideanClusterLabels in tables.hpp)
 // without the input checks: the caller guarantees finite points within
 // kMaxPlausibleRangeM and a tolerance of at least kMinToleranceM.
-std::vector<int> clusterPoints(const std::vector<Eigen::Vector3f>& points, float tolerance);
+std::vector<int> clusterPoints(const std::vector<Eigen::Vector3f>& points, float tolerance,
+                               const PointGrid& grid = {});
 
 struct ClusterOutcome {
   bool ok = false;
   std::string reason;  // why not
 };
 
-// Fills `table` (all but id, pixels and search positions) from the cluster's
-// points and their label confidences: top height, centroid, axes, box, hull.
+// Fills `table` (all but id, pixels, mean_confidence and search positions)
+// from the cluster's points: point count, top height, centroid, axes, box, hull.
 ClusterOutcome describeCluster(const std::vector<Eigen::Vector3f>& points,
-                               const std::vector<float>& confidence, const TableConfig& config,
-                               TableCluster& table);
+                               const TableConfig& config, TableCluster& table);
 
 // Observed floor cells and obstacle points around the search positions
 // (`region`), from one pass over the labelled cloud; assess() flags a
 // position unreachable with a reason (see tables.hpp, step 5).
 class ReachabilityGrid {
  public:
+  // `positions`: every position that assess() will be asked about.
   ReachabilityGrid(const OrganizedCloud& cloud, const LabelImage& labels,
-                   const Eigen::AlignedBox2f& region, const TableConfig& config);
+                   const Eigen::AlignedBox2f& region, const std::vector<Eigen::Vector2f>& positions,
+                   const TableConfig& config);
   void assess(SearchPosition& position) const;
 
  private:
+  // Cells (clamped to the grid) within robot_radius_m of `q` on each axis.
+  struct Window {
+    int c0 = 0, c1 = -1, r0 = 0, r1 = -1;
+  };
+  Window windowOf(const Eigen::Vector2f& q) const;
   int cellOf(const Eigen::Vector2f& xy) const {
     const int col = static_cast<int>(std::floor((xy.x() - origin_.x()) / cell_));
     const int row = static_cast<int>(std::floor((xy.y() - origin_.y()) / cell_));

@@ -28,6 +28,7 @@
 #include "findmug/ground.hpp"
 #include "findmug/labels.hpp"
 #include "findmug/synth.hpp"
+#include "tables_internal.hpp"  // internal: clusterPoints with the image shortcut
 #include "test_data.hpp"
 
 namespace findmug {
@@ -182,6 +183,52 @@ TEST(EuclideanClusters, SamePartitionAsBruteForce) {
       ASSERT_EQ(b.first->second, ours[i]) << "tolerance " << tol << ", point " << i;
     }
     EXPECT_GT(forward.size(), 1u) << "test needs more than one cluster";
+  }
+}
+
+// detectTables passes the points' pixels to the clustering, which then links
+// image neighbours without a search. Only a shortcut: on an organized cloud
+// with depth steps just below and above the tolerance, noise, holes and
+// pixels far apart (a coarse camera), the clusters are those without it and
+// those of brute force.
+TEST(EuclideanClusters, ImageNeighbourShortcutGivesTheSamePartition) {
+  std::mt19937 rng(23);
+  std::normal_distribution<float> noise(0.0f, 0.01f);
+  std::uniform_real_distribution<float> unit(0.0f, 1.0f);
+  const int width = 80, height = 60;
+  const float focal = 60.0f;  // about 2.5 cm between pixels at 1.5 m
+  for (float tol : {0.03f, 0.05f}) {
+    for (int trial = 0; trial < 3; ++trial) {
+      std::vector<Eigen::Vector3f> pts;
+      std::vector<int> pixels;
+      for (int y = 0; y < height; ++y) {
+        for (int x = 0; x < width; ++x) {
+          if (unit(rng) > 0.8f) continue;  // holes
+          float depth = 1.2f + 0.01f * x + 0.005f * y;
+          if (x > 20 && x < 40) depth += 0.04f;              // step below the tolerance
+          if (y > 30 && x > 45) depth += 0.07f;              // step above it
+          if (x > 60 && y < 15) depth += 0.3f * (trial + 1);  // a far patch
+          depth += noise(rng);
+          pts.emplace_back((x - width / 2) * depth / focal, depth,
+                           0.7f + (height / 2 - y) * depth / focal * 0.1f);
+          pixels.push_back(y * width + x);
+        }
+      }
+      const auto plain = tables_detail::clusterPoints(pts, tol);
+      const auto shortcut =
+          tables_detail::clusterPoints(pts, tol, tables_detail::PointGrid{&pixels, width});
+      // Ids are dense in order of first appearance: same partition = same ids.
+      ASSERT_EQ(shortcut, plain) << "tolerance " << tol << ", trial " << trial;
+      const auto reference = bruteForceClusters(pts, tol);
+      std::map<int, int> forward;
+      for (std::size_t i = 0; i < pts.size(); ++i) {
+        const auto f = forward.emplace(plain[i], reference[i]);
+        ASSERT_EQ(f.first->second, reference[i]) << "tolerance " << tol << ", point " << i;
+      }
+      EXPECT_EQ(forward.size(),
+                static_cast<std::size_t>(*std::max_element(reference.begin(), reference.end()) + 1));
+      EXPECT_GT(forward.size(), 1u) << "test needs more than one cluster";
+    }
   }
 }
 
