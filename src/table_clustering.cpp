@@ -75,12 +75,16 @@ class VoxelIndex {
  private:
   static constexpr std::uint64_t kEmpty = ~std::uint64_t{0};  // never a packed key (63 bits)
   std::size_t hash(std::uint64_t key) const {
-    return static_cast<std::size_t>((key * 0x9E3779B97F4A7C15ull) >> 20) & mask_;
+    // Fibonacci hashing: the top bits of the product depend on every bit of
+    // the key (x, y and z fields alike).
+    return static_cast<std::size_t>((key * 0x9E3779B97F4A7C15ull) >> shift_);
   }
-  void reset(std::size_t capacity) {
+  void reset(std::size_t capacity) {  // a power of two
     keys_.assign(capacity, kEmpty);
     values_.assign(capacity, -1);
     mask_ = capacity - 1;
+    shift_ = 64;
+    for (std::size_t c = capacity; c > 1; c >>= 1) --shift_;
   }
   void grow() {
     std::vector<std::uint64_t> keys = std::move(keys_);
@@ -97,6 +101,7 @@ class VoxelIndex {
   std::vector<std::uint64_t> keys_;
   std::vector<int> values_;
   std::size_t mask_ = 0;
+  int shift_ = 64;
   std::size_t size_ = 0;
 };
 
