@@ -5,8 +5,10 @@
 // string length of 0 makes it throw std::length_error. Walking the layout
 // first, with every length checked against the bytes that are really left,
 // turns all of that into a findmug::Error naming the field. The walkers
-// mirror lcmtypes/*.lcm field by field; the codec round-trip tests fail if
-// they ever drift apart.
+// mirror lcmtypes/*.lcm field by field; tests/integration/lcm_wire_test.cpp
+// checks them against lcm-gen's encode()/decode() on many random messages of
+// every type, and fails when a field is added to, removed from or moved
+// within a .lcm file without the walker here following.
 #include <cstring>
 #include <limits>
 #include <string>
