@@ -51,9 +51,12 @@ class Random {
   // A length in [0, max]: often 0 or max, else anything between.
   int length(int max) {
     switch (rng_() % 4) {
-      case 0: return 0;
-      case 1: return max;
-      default: return static_cast<int>(rng_() % (static_cast<std::uint64_t>(max) + 1));
+      case 0:
+        return 0;
+      case 1:
+        return max;
+      default:
+        return static_cast<int>(rng_() % (static_cast<std::uint64_t>(max) + 1));
     }
   }
   // Printable, no NUL (an LCM string ends at its first NUL).
