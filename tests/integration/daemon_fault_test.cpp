@@ -70,6 +70,15 @@ TEST(DaemonFaults, CameraThatDisappearsMidRunIsReconnectedWithBackoffAndFramesFl
   auto daemon = std::make_unique<Daemon>(config, dc, std::move(owned));
   int code = -1;
   std::thread runner([&] { code = daemon->run(); });
+  // A failed ASSERT returns early: stop the daemon and join, not terminate.
+  struct Cleanup {
+    std::unique_ptr<Daemon>& daemon;
+    std::thread& runner;
+    ~Cleanup() {
+      if (daemon) daemon->requestStop();
+      if (runner.joinable()) runner.join();
+    }
+  } cleanup{daemon, runner};
   auto status = [&] { return daemon->pipeline().makeStatus(); };
 
   // Running: frames are segmented and published.
@@ -118,7 +127,7 @@ TEST(DaemonFaults, CameraThatDisappearsMidRunIsReconnectedWithBackoffAndFramesFl
   daemon->requestStop();
   runner.join();
   EXPECT_EQ(code, 0);
-  daemon.reset();
+  daemon.reset();  // closes the output log
 
   // On the wire: status running -> reconnecting (naming the loss) -> running
   // with one reconnect; label images before and after the loss, in one

@@ -597,7 +597,18 @@ TEST(DeviceSource, CameraThatDisappearsMidRunComesBackWithBackoff) {
   // while the consumer is blocked in next().
   camera.unplug();
   std::optional<RgbdFrame> after;
-  std::thread consumer([&] { after = source.next(); });
+  std::thread consumer, consumer2;
+  // A failed ASSERT returns early: stop the source and join, not terminate.
+  struct Cleanup {
+    FrameSource& source;
+    std::thread &a, &b;
+    ~Cleanup() {
+      source.stop();
+      if (a.joinable()) a.join();
+      if (b.joinable()) b.join();
+    }
+  } cleanup{source, consumer, consumer2};
+  consumer = std::thread([&] { after = source.next(); });
   ASSERT_TRUE(waitFor([&] { return source.reconnectAttempts().size() >= 6; }));
   EXPECT_EQ(source.state(), SourceState::Reconnecting);
   const SourceStats lost = source.stats();
@@ -627,7 +638,7 @@ TEST(DeviceSource, CameraThatDisappearsMidRunComesBackWithBackoff) {
   // A second loss, this time a stalled driver (no frames, no error): the
   // frame timeout notices it, and the back-off starts from the initial delay.
   camera.silence(true);
-  std::thread consumer2([&] { after = source.next(); });
+  consumer2 = std::thread([&] { after = source.next(); });
   ASSERT_TRUE(waitFor([&] { return source.state() == SourceState::Reconnecting; }));
   EXPECT_NE(source.stats().last_error.find("no frame for 2000 ms; device lost"),  // the default
             std::string::npos)
