@@ -78,8 +78,7 @@ bool DeviceSource::reopen() {
       return true;
     }
     setState(SourceState::Reconnecting);
-    recordError(attempt.error + "; retrying in " + std::to_string(backoff_.peek().count()) +
-                " ms");
+    recordError(attempt.error + "; retrying in " + std::to_string(backoff_.peek().count()) + " ms");
   }
   return false;
 }

@@ -209,8 +209,7 @@ SourceSpec parseSourceSpec(const std::string& text) {
       if (q < 1 || q > 1000 || q != std::floor(q))
         specError(text, "queue=" + value + " not in 1..1000");
       spec.options.lcm_queue_size = static_cast<int>(q);
-    } else if (key == "reconnect_ms" || key == "reconnect_max_ms" ||
-               key == "frame_timeout_ms") {
+    } else if (key == "reconnect_ms" || key == "reconnect_max_ms" || key == "frame_timeout_ms") {
       if (spec.kind != "openni2") specError(text, key + "= only applies to openni2 sources");
       const double ms = parseNumber(text, key, value);
       if (ms < 1 || ms > 3'600'000 || ms != std::floor(ms)) {

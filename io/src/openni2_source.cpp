@@ -214,7 +214,6 @@ class Openni2Device : public Device {
   }
 
  private:
-
   std::string configureLive() {
     // Prefer 640x480 at 30 fps in the formats we use; otherwise keep the
     // device's default mode (logged by open()).
@@ -418,8 +417,7 @@ std::unique_ptr<FrameSource> makeOpenni2Source(const SourceSpec& spec) {
   settings.reconnect = !playback;                            // a file cannot come back
   settings.rate_hz = playback ? spec.options.rate_hz : 0.0;  // a camera has its own rate
   return std::make_unique<DeviceSource>(
-      std::make_unique<Openni2Device>(spec.target, spec.options, playback), settings,
-      spec.options);
+      std::make_unique<Openni2Device>(spec.target, spec.options, playback), settings, spec.options);
 }
 
 }  // namespace findmug::io::detail

@@ -681,8 +681,7 @@ TEST(DeviceSource, StopEndsTheBackoffAndAnUnopenablePlaybackFailsAtStartUp) {
     DeviceSource playback(std::move(file), settings);
     FAIL() << "no error";
   } catch (const Error& e) {
-    EXPECT_NE(std::string(e.what()).find("unpluggable test camera"), std::string::npos)
-        << e.what();
+    EXPECT_NE(std::string(e.what()).find("unpluggable test camera"), std::string::npos) << e.what();
   }
 }
 
