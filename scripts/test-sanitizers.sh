@@ -64,7 +64,7 @@ for step in "${STEPS[@]}"; do
     tsan)
       configure "$TSAN_DIR" -DFINDMUG_SANITIZE=thread
       timed "tsan build" cmake --build "$TSAN_DIR" -j"$JOBS" --target daemon_queue_test \
-        --target daemon_pipeline_test --target findmugd
+        --target daemon_pipeline_test --target daemon_fault_test --target findmugd
       timed "tsan tests" ctest --test-dir "$TSAN_DIR" --output-on-failure -j"$JOBS" --timeout 1800 \
         -R '^(BoundedQueue|ReorderBuffer|Stage|LatencyWindow|RateMeter|WatchdogGate|DaemonPipeline|DaemonFaults)\.' ;;
     *) echo "test-sanitizers: unknown step '$step' (asan, fuzz, tsan)" >&2; exit 2 ;;

@@ -254,6 +254,7 @@ findmug_lcm::status_t decodeMessage<findmug_lcm::status_t>(const void* data, std
   w.skip(kI64, "last_error_utime");
   w.skip(3 * kI64, "frames_dropped_at_door/in_pipeline/at_shutdown");
   w.skip(2 * kF32 + kI32, "cpu_budget_cores/cpu_used_cores/processing_threads");
+  w.skip(kI64, "source_reconnects");
   w.finish();
   return decodeWalked<findmug_lcm::status_t>(data, size, channel);
 }
