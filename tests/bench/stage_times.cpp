@@ -21,6 +21,7 @@
 #include "findmug/dataset.hpp"
 #include "findmug/error.hpp"
 #include "findmug/segmenter.hpp"
+#include "bench_flags.hpp"
 #include "findmug/training.hpp"
 #include "test_data.hpp"
 
@@ -59,7 +60,7 @@ int run(int argc, char** argv) {
   for (int i = 1; i + 1 < argc; i += 2) {
     if (!std::strcmp(argv[i], "--data")) data = argv[i + 1];
     else if (!std::strcmp(argv[i], "--model")) model_path = argv[i + 1];
-    else if (!std::strcmp(argv[i], "--repeat")) repeat = std::max(1, std::atoi(argv[i + 1]));
+    else if (!std::strcmp(argv[i], "--repeat")) repeat = bench::positiveCount("--repeat", argv[i + 1]);
     else throw Error(std::string("unknown flag ") + argv[i]);
   }
   const DatasetFolder dataset(data);
