@@ -30,7 +30,7 @@
 #include <string>
 #include <vector>
 
-#include "bench_flags.hpp"
+#include "bench_support.hpp"
 #include "findmug/cloud.hpp"
 #include "findmug/dataset.hpp"
 #include "findmug/oversegmentation.hpp"

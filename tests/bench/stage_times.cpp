@@ -18,10 +18,10 @@
 #include <thread>
 #include <vector>
 
+#include "bench_support.hpp"
 #include "findmug/dataset.hpp"
 #include "findmug/error.hpp"
 #include "findmug/segmenter.hpp"
-#include "bench_flags.hpp"
 #include "findmug/training.hpp"
 #include "test_data.hpp"
 
@@ -150,11 +150,4 @@ int run(int argc, char** argv) {
 
 }  // namespace
 
-int main(int argc, char** argv) {
-  try {
-    return run(argc, argv);
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "stage_times: error: %s\n", e.what());
-    return 1;
-  }
-}
+int main(int argc, char** argv) { return findmug::bench::benchMain("stage_times", run, argc, argv); }
