@@ -69,11 +69,12 @@ class StopSignals {
 
   sigset_t signals_{};
   sigset_t old_mask_{};
-  struct sigaction old_int_{}, old_term_{};
+  struct sigaction old_int_ {
+  }, old_term_{};
   std::atomic<bool> requested_{false};
   std::atomic<int> signal_number_{0};
-  std::mutex mutex_;         // requested_ transitions, closing_, actions_
-  std::mutex running_;       // held while actions run, so remove() waits for them
+  std::mutex mutex_;    // requested_ transitions, closing_, actions_
+  std::mutex running_;  // held while actions run, so remove() waits for them
   std::condition_variable changed_;
   bool closing_ = false;
   std::uint64_t next_id_ = 1;

@@ -30,9 +30,7 @@ std::optional<double> parseNumber(std::string_view text) {
   return value;
 }
 
-std::optional<long long> parseInteger(std::string_view text) {
-  return parseWhole<long long>(text);
-}
+std::optional<long long> parseInteger(std::string_view text) { return parseWhole<long long>(text); }
 
 std::optional<unsigned long long> parseUnsigned(std::string_view text) {
   return parseWhole<unsigned long long>(text);

@@ -72,7 +72,9 @@ TEST(StopSignals, AnUnregisteredActionDoesNotRun) {
   StopSignals signals;
   std::atomic<int> kept{0}, dropped{0};
   const auto keep = signals.onStop([&kept] { ++kept; });
-  { const auto drop = signals.onStop([&dropped] { ++dropped; }); }
+  {
+    const auto drop = signals.onStop([&dropped] { ++dropped; });
+  }
   signalProcess(SIGTERM);
   ASSERT_TRUE(signals.waitFor(60s));
   while (kept.load() == 0) std::this_thread::sleep_for(1ms);

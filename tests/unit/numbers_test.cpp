@@ -30,8 +30,8 @@ TEST(Numbers, MinusZeroIsZeroWithItsSign) {
 }
 
 TEST(Numbers, RefusesNonFinite) {
-  for (const char* text : {"nan", "NaN", "-nan", "nan(1)", "inf", "-inf", "INF", "infinity",
-                           "Infinity"}) {
+  for (const char* text :
+       {"nan", "NaN", "-nan", "nan(1)", "inf", "-inf", "INF", "infinity", "Infinity"}) {
     EXPECT_FALSE(parseNumber(text)) << text;
   }
 }
@@ -44,8 +44,7 @@ TEST(Numbers, RefusesOutOfRange) {
   EXPECT_FALSE(parseInteger("-9223372036854775809"));
   EXPECT_EQ(parseInteger("9223372036854775807"), std::numeric_limits<long long>::max());
   EXPECT_FALSE(parseUnsigned("18446744073709551616"));
-  EXPECT_EQ(parseUnsigned("18446744073709551615"),
-            std::numeric_limits<unsigned long long>::max());
+  EXPECT_EQ(parseUnsigned("18446744073709551615"), std::numeric_limits<unsigned long long>::max());
 }
 
 TEST(Numbers, RefusesEmptyAndJunk) {
