@@ -25,6 +25,7 @@
 #include "findmug/io/lcm_codec.hpp"
 #include "findmug/tables.hpp"
 #include "findmug_cli.hpp"
+#include "findmug_json.hpp"
 #include "visiting_order.hpp"
 
 namespace {
@@ -39,41 +40,6 @@ struct Position {
   int table = 0;
   SearchPosition position;  // in the chosen frame
 };
-
-std::string jsonEscape(const std::string& s) {
-  std::string out;
-  for (char c : s) {
-    switch (c) {
-      case '"':
-        out += "\\\"";
-        break;
-      case '\\':
-        out += "\\\\";
-        break;
-      case '\n':
-        out += "\\n";
-        break;
-      case '\t':
-        out += "\\t";
-        break;
-      default:
-        if (static_cast<unsigned char>(c) < 0x20) {
-          char buf[8];
-          std::snprintf(buf, sizeof(buf), "\\u%04x", c);
-          out += buf;
-        } else {
-          out += c;
-        }
-    }
-  }
-  return out;
-}
-
-std::string number(double v, int decimals = 3) {
-  char buf[64];
-  std::snprintf(buf, sizeof(buf), "%.*f", decimals, v);
-  return buf;
-}
 
 class NavClient {
  public:
@@ -155,9 +121,10 @@ class NavClient {
                  const std::vector<int>& order, const std::vector<Position>& unreachable) const {
     std::ostringstream out;
     out << "{\"utime\":" << m.utime << ",\"seq\":" << m.seq << ",\"frame\":\""
-        << (use_map ? "map" : "base") << "\",\"robot\":{\"x\":" << number(robot.x())
-        << ",\"y\":" << number(robot.y()) << ",\"yaw\":" << number(robot_yaw, 4)
-        << "},\"tables\":" << m.tables.size() << ",\"tour\":[";
+        << (use_map ? "map" : "base") << "\",\"robot\":{\"x\":" << cli::jsonNumber(robot.x(), 3)
+        << ",\"y\":" << cli::jsonNumber(robot.y(), 3)
+        << ",\"yaw\":" << cli::jsonNumber(robot_yaw, 4) << "},\"tables\":" << m.tables.size()
+        << ",\"tour\":[";
     Eigen::Vector2f at = robot;
     double total = 0.0;
     for (std::size_t k = 0; k < order.size(); ++k) {
@@ -165,15 +132,19 @@ class NavClient {
       total += (p.position.xy - at).norm();
       at = p.position.xy;
       out << (k ? "," : "") << "{\"order\":" << k + 1 << ",\"table\":" << p.table
-          << ",\"x\":" << number(p.position.xy.x()) << ",\"y\":" << number(p.position.xy.y())
-          << ",\"yaw\":" << number(p.position.yaw, 4) << ",\"path_m\":" << number(total) << "}";
+          << ",\"x\":" << cli::jsonNumber(p.position.xy.x(), 3)
+          << ",\"y\":" << cli::jsonNumber(p.position.xy.y(), 3)
+          << ",\"yaw\":" << cli::jsonNumber(p.position.yaw, 4)
+          << ",\"path_m\":" << cli::jsonNumber(total, 3) << "}";
     }
     out << "],\"unreachable\":[";
     for (std::size_t k = 0; k < unreachable.size(); ++k) {
       const Position& p = unreachable[k];
-      out << (k ? "," : "") << "{\"table\":" << p.table << ",\"x\":" << number(p.position.xy.x())
-          << ",\"y\":" << number(p.position.xy.y()) << ",\"yaw\":" << number(p.position.yaw, 4)
-          << ",\"reason\":\"" << jsonEscape(p.position.reason) << "\"}";
+      out << (k ? "," : "") << "{\"table\":" << p.table
+          << ",\"x\":" << cli::jsonNumber(p.position.xy.x(), 3)
+          << ",\"y\":" << cli::jsonNumber(p.position.xy.y(), 3)
+          << ",\"yaw\":" << cli::jsonNumber(p.position.yaw, 4)
+          << ",\"reason\":" << cli::jsonString(p.position.reason) << "}";
     }
     out << "]}";
     std::puts(out.str().c_str());

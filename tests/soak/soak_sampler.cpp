@@ -18,7 +18,7 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
-#include <csignal>
+#include <climits>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
@@ -33,11 +33,11 @@
 #include "findmug/error.hpp"
 #include "findmug/io/channels.hpp"
 #include "findmug/io/lcm_codec.hpp"
+#include "findmug/numbers.hpp"
+#include "findmug_signals.hpp"
 
 namespace {
 
-std::atomic<bool> g_stop{false};
-void onSignal(int) { g_stop = true; }
 
 struct Options {
   int pid = 0;
@@ -70,24 +70,30 @@ Options parse(int argc, char** argv) {
     const std::string flag = argv[i];
     if (i + 1 >= argc) usage(flag + " needs a value");
     const std::string v = argv[++i];
-    try {
-      if (flag == "--pid") o.pid = std::stoi(v);
-      else if (flag == "--url") o.url = v;
-      else if (flag == "--channel") o.channel = v;
-      else if (flag == "--duration") o.duration_s = std::stod(v);
-      else if (flag == "--period") o.period_s = std::stod(v);
-      else if (flag == "--warmup") o.warmup_s = std::stod(v);
-      else if (flag == "--csv") o.csv = v;
-      else if (flag == "--svg") o.svg = v;
-      else if (flag == "--summary") o.summary = v;
-      else if (flag == "--max-rss-growth-mb") o.max_rss_growth_mb = std::stod(v);
-      else if (flag == "--max-fd-growth") o.max_fd_growth = std::stol(v);
-      else if (flag == "--max-thread-growth") o.max_thread_growth = std::stol(v);
-      else if (flag == "--max-drops") o.max_drops = std::stol(v);
-      else usage("unknown flag " + flag);
-    } catch (const std::logic_error&) {
-      usage(flag + ": bad value '" + v + "'");
-    }
+    const auto number = [&flag, &v] {
+      const auto x = findmug::parseNumber(v);
+      if (!x) usage(flag + ": bad value '" + v + "'");
+      return *x;
+    };
+    const auto integer = [&flag, &v] {
+      const auto x = findmug::parseInteger(v);
+      if (!x || *x < INT_MIN || *x > INT_MAX) usage(flag + ": bad value '" + v + "'");
+      return static_cast<int>(*x);
+    };
+    if (flag == "--pid") o.pid = integer();
+    else if (flag == "--url") o.url = v;
+    else if (flag == "--channel") o.channel = v;
+    else if (flag == "--duration") o.duration_s = number();
+    else if (flag == "--period") o.period_s = number();
+    else if (flag == "--warmup") o.warmup_s = number();
+    else if (flag == "--csv") o.csv = v;
+    else if (flag == "--svg") o.svg = v;
+    else if (flag == "--summary") o.summary = v;
+    else if (flag == "--max-rss-growth-mb") o.max_rss_growth_mb = number();
+    else if (flag == "--max-fd-growth") o.max_fd_growth = integer();
+    else if (flag == "--max-thread-growth") o.max_thread_growth = integer();
+    else if (flag == "--max-drops") o.max_drops = integer();
+    else usage("unknown flag " + flag);
   }
   if (o.pid <= 0 || o.csv.empty()) usage("--pid and --csv are required");
   if (!(o.period_s > 0) || !(o.duration_s > 0)) usage("--period and --duration must be > 0");
@@ -232,8 +238,7 @@ double slope(const std::vector<double>& t, const std::vector<double>& y) {
 
 int main(int argc, char** argv) {
   const Options o = parse(argc, argv);
-  std::signal(SIGTERM, onSignal);
-  std::signal(SIGINT, onSignal);
+  const findmug::cli::StopSignals stop_signals;
   lcm::LCM lcm(o.url);
   if (!lcm.good()) usage("cannot open LCM at '" + o.url + "'");
   StatusListener listener;
@@ -246,7 +251,7 @@ int main(int argc, char** argv) {
   const auto start = std::chrono::steady_clock::now();
   auto next = start;
   bool alive = true;
-  while (!g_stop) {
+  while (!stop_signals.requested()) {
     const auto now = std::chrono::steady_clock::now();
     const double t = std::chrono::duration<double>(now - start).count();
     if (now >= next) {

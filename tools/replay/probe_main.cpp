@@ -28,7 +28,6 @@
 #include <atomic>
 #include <cerrno>
 #include <chrono>
-#include <csignal>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -45,6 +44,7 @@
 #include "findmug/io/lcm_codec.hpp"
 #include "findmug/labels.hpp"
 #include "findmug_cli.hpp"
+#include "findmug_signals.hpp"
 #include "replay_check.hpp"
 
 namespace {
@@ -52,8 +52,9 @@ namespace {
 using findmug::Error;
 using namespace findmug::replay;
 
-std::atomic<bool> g_stop{false};
-void onSignal(int) { g_stop = true; }
+// Set by main() to its StopSignals (made before anything starts a thread).
+const findmug::cli::StopSignals* g_stop_signals = nullptr;
+bool stopRequested() { return g_stop_signals != nullptr && g_stop_signals->requested(); }
 
 struct Options {
   std::string url;
@@ -192,8 +193,8 @@ class Probe {
     const auto deadline =
         std::chrono::steady_clock::now() + std::chrono::duration<double>(options_.timeout_s);
     bool timed_out = false;
-    while (!g_stop) {
-      // A signal interrupts the wait (EINTR): the loop condition sees g_stop.
+    while (!stopRequested()) {
+      // handleTimeout() returns every 100 ms at the latest: the loop condition sees a stop.
       if (lcm_.handleTimeout(100) < 0 && errno != EINTR) throw Error("LCM receive failed");
       if (std::chrono::steady_clock::now() > deadline) {
         timed_out = true;
@@ -322,8 +323,8 @@ int main(int argc, char** argv) {
   try {
     checkOptions(options);
     if (!options.inspect_log.empty()) return inspectLog(options);
-    std::signal(SIGTERM, onSignal);
-    std::signal(SIGINT, onSignal);
+    const findmug::cli::StopSignals stop_signals;
+    g_stop_signals = &stop_signals;
     Probe probe(options);
     return probe.run();
   } catch (const Error& e) {

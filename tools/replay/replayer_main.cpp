@@ -20,7 +20,6 @@
 
 #include <atomic>
 #include <chrono>
-#include <csignal>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
@@ -34,13 +33,15 @@
 #include "findmug/io/frame_source.hpp"
 #include "findmug/io/lcm_codec.hpp"
 #include "findmug_cli.hpp"
+#include "findmug_signals.hpp"
 
 namespace {
 
 using findmug::Error;
 
-std::atomic<bool> g_stop{false};
-void onSignal(int) { g_stop = true; }
+// Set by main() to its StopSignals (made before anything starts a thread).
+const findmug::cli::StopSignals* g_stop_signals = nullptr;
+bool stopRequested() { return g_stop_signals != nullptr && g_stop_signals->requested(); }
 
 void writeCount(const std::string& path, long long count) {
   // Write then rename, so that a reader polling the file never sees it half written.
@@ -116,8 +117,6 @@ int run(int argc, char** argv) {
   spdlog::info("findmug-replay: {} frames from {}, {} Hz on {} ({})", frames.size(), described,
                rate, channel, url.empty() ? std::string("default URL") : url);
 
-  std::signal(SIGTERM, onSignal);
-  std::signal(SIGINT, onSignal);
   using Clock = std::chrono::steady_clock;
   if (warmup > 0) std::this_thread::sleep_for(std::chrono::duration<double>(warmup));
   const auto period = std::chrono::duration<double>(1.0 / rate);
@@ -125,7 +124,7 @@ int run(int argc, char** argv) {
   const auto end = start + std::chrono::duration<double>(duration);
   long long published = 0, late = 0;
   std::vector<std::uint8_t> bytes;
-  while (!g_stop) {
+  while (!stopRequested()) {
     if (count > 0 && published >= count) break;
     const auto due = start + std::chrono::duration_cast<Clock::duration>(period * published);
     if (duration > 0 && due >= end) break;
@@ -152,6 +151,8 @@ int run(int argc, char** argv) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  const findmug::cli::StopSignals stop_signals;
+  g_stop_signals = &stop_signals;
   try {
     return run(argc, argv);
   } catch (const findmug::Error& e) {
