@@ -2,6 +2,7 @@
 #include "findmug/io/bus.hpp"
 
 #include <algorithm>
+#include <cerrno>
 #include <climits>
 #include <lcm/lcm-cpp.hpp>
 
@@ -15,7 +16,7 @@ struct LcmBus::Impl {
   explicit Impl(const std::string& url) : lcm(url) {}
   lcm::LCM lcm;
   // Handlers stay at fixed addresses: LCM keeps a pointer to each.
-  std::vector<std::unique_ptr<Handler>> handlers;
+  std::vector<std::unique_ptr<TimedHandler>> handlers;
 };
 
 LcmBus::LcmBus(std::string url, const std::string& what)
@@ -37,14 +38,14 @@ bool LcmBus::publish(const std::string& channel, const void* data, std::size_t s
   return impl_->lcm.publish(channel, data, static_cast<unsigned int>(size)) == 0;
 }
 
-void LcmBus::subscribe(const std::string& channel, Handler handler) {
-  impl_->handlers.push_back(std::make_unique<Handler>(std::move(handler)));
-  Handler* h = impl_->handlers.back().get();
+void LcmBus::subscribeTimed(const std::string& channel, TimedHandler handler) {
+  impl_->handlers.push_back(std::make_unique<TimedHandler>(std::move(handler)));
+  TimedHandler* h = impl_->handlers.back().get();
   impl_->lcm.subscribeFunction(
       channel,
-      +[](const lcm::ReceiveBuffer* buffer, const std::string& ch, Handler* target) {
+      +[](const lcm::ReceiveBuffer* buffer, const std::string& ch, TimedHandler* target) {
         (*target)(ch, static_cast<const std::uint8_t*>(buffer->data),
-                  static_cast<std::size_t>(buffer->data_size));
+                  static_cast<std::size_t>(buffer->data_size), buffer->recv_utime);
       },
       h);
 }
@@ -53,6 +54,8 @@ HandleResult LcmBus::handle(std::chrono::milliseconds timeout) {
   const int rc = impl_->lcm.handleTimeout(static_cast<int>(timeout.count()));
   if (rc > 0) return HandleResult::Handled;
   if (rc == 0) return HandleResult::Timeout;
+  // A signal interrupted the wait (the clients' and tools' stop signals): not a failure.
+  if (!replaying_log_ && errno == EINTR) return HandleResult::Timeout;
   // LCM reports the end of a replayed log as an error: say which it is.
   return replaying_log_ ? HandleResult::EndOfLog : HandleResult::Failed;
 }
@@ -72,14 +75,18 @@ bool MemoryBus::publish(const std::string& channel, const void* data, std::size_
       queue_.pop_front();
       discarded_.fetch_add(1);
     }
-    queue_.push_back(Message{channel, std::vector<std::uint8_t>(bytes, bytes + size)});
+    const auto utime = std::chrono::duration_cast<std::chrono::microseconds>(
+                           std::chrono::system_clock::now().time_since_epoch())
+                           .count();
+    queue_.push_back(Message{channel, std::vector<std::uint8_t>(bytes, bytes + size),
+                             static_cast<std::int64_t>(utime)});
   }
   published_.fetch_add(1);
   arrived_.notify_all();
   return true;
 }
 
-void MemoryBus::subscribe(const std::string& channel, Handler handler) {
+void MemoryBus::subscribeTimed(const std::string& channel, TimedHandler handler) {
   std::lock_guard lock(mutex_);
   handlers_.emplace(channel, std::move(handler));
 }
@@ -94,11 +101,13 @@ HandleResult MemoryBus::handle(std::chrono::milliseconds timeout) {
   // they may publish (on this or another channel).
   Message message = std::move(queue_.front());
   queue_.pop_front();
-  std::vector<Handler*> targets;
+  std::vector<TimedHandler*> targets;
   const auto [first, last] = handlers_.equal_range(message.channel);
   for (auto it = first; it != last; ++it) targets.push_back(&it->second);
   lock.unlock();
-  for (Handler* h : targets) (*h)(message.channel, message.bytes.data(), message.bytes.size());
+  for (TimedHandler* h : targets) {
+    (*h)(message.channel, message.bytes.data(), message.bytes.size(), message.utime);
+  }
   return HandleResult::Handled;
 }
 

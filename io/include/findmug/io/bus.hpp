@@ -51,6 +51,10 @@ class Bus {
  public:
   using Handler =
       std::function<void(const std::string& channel, const std::uint8_t* data, std::size_t size)>;
+  // The same, also given when the message was received (host clock, µs; for a
+  // replayed LCM log, when it was recorded).
+  using TimedHandler = std::function<void(const std::string& channel, const std::uint8_t* data,
+                                          std::size_t size, std::int64_t recv_utime)>;
 
   virtual ~Bus() = default;
 
@@ -59,7 +63,11 @@ class Bus {
   virtual bool publish(const std::string& channel, const void* data, std::size_t size) = 0;
   // Calls `handler` for each message on `channel`, on the owner thread (the
   // one calling handle()). Subscribe before the owner thread starts handling.
-  virtual void subscribe(const std::string& channel, Handler handler) = 0;
+  virtual void subscribeTimed(const std::string& channel, TimedHandler handler) = 0;
+  void subscribe(const std::string& channel, Handler handler) {
+    subscribeTimed(channel, [h = std::move(handler)](const std::string& c, const std::uint8_t* d,
+                                                     std::size_t n, std::int64_t) { h(c, d, n); });
+  }
   // Waits at most `timeout` for messages and dispatches them. Owner thread only.
   virtual HandleResult handle(std::chrono::milliseconds timeout) = 0;
   // What the bus is connected to, for messages ("memory", the LCM URL).
@@ -91,7 +99,7 @@ class LcmBus final : public Bus {
   LcmBus& operator=(const LcmBus&) = delete;
 
   bool publish(const std::string& channel, const void* data, std::size_t size) override;
-  void subscribe(const std::string& channel, Handler handler) override;
+  void subscribeTimed(const std::string& channel, TimedHandler handler) override;
   HandleResult handle(std::chrono::milliseconds timeout) override;
   std::string describe() const override;
   bool replaysLog() const override { return replaying_log_; }
@@ -112,7 +120,7 @@ class MemoryBus final : public Bus {
   explicit MemoryBus(std::size_t capacity = 4096);
 
   bool publish(const std::string& channel, const void* data, std::size_t size) override;
-  void subscribe(const std::string& channel, Handler handler) override;
+  void subscribeTimed(const std::string& channel, TimedHandler handler) override;
   HandleResult handle(std::chrono::milliseconds timeout) override;
   std::string describe() const override { return "memory"; }
   bool replaysLog() const override { return ended_.load(); }
@@ -127,12 +135,13 @@ class MemoryBus final : public Bus {
   struct Message {
     std::string channel;
     std::vector<std::uint8_t> bytes;
+    std::int64_t utime = 0;  // when published
   };
   std::size_t capacity_;
   mutable std::mutex mutex_;
   std::condition_variable arrived_;
   std::deque<Message> queue_;
-  std::multimap<std::string, Handler> handlers_;  // guarded by mutex_; called without it
+  std::multimap<std::string, TimedHandler> handlers_;  // guarded by mutex_; called without it
   std::atomic<bool> ended_{false};
   std::atomic<std::uint64_t> published_{0}, discarded_{0};
 };
@@ -149,8 +158,8 @@ class FaultyBus final : public Bus {
   std::uint64_t refused() const { return refused_.load(); }
 
   bool publish(const std::string& channel, const void* data, std::size_t size) override;
-  void subscribe(const std::string& channel, Handler handler) override {
-    inner_->subscribe(channel, std::move(handler));
+  void subscribeTimed(const std::string& channel, TimedHandler handler) override {
+    inner_->subscribeTimed(channel, std::move(handler));
   }
   HandleResult handle(std::chrono::milliseconds timeout) override {
     return inner_->handle(timeout);
