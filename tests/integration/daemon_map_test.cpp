@@ -13,8 +13,13 @@
 // daemon.pose_* and table_map.* settings, and bad pose messages.
 #include <gtest/gtest.h>
 
+#include <sched.h>
+#include <unistd.h>
+
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
+#include <thread>
 #include <map>
 #include <set>
 
@@ -27,6 +32,7 @@
 #include "findmug/io/bus.hpp"
 #include "findmug/io/channels.hpp"
 #include "findmug/io/lcm_codec.hpp"
+#include "findmug/io/subscriber.hpp"
 #include "findmug/segmenter.hpp"
 #include "findmug/synth.hpp"
 #include "findmug/table_map.hpp"
@@ -739,6 +745,59 @@ TEST(DaemonOutputFaults, AnUnreadBusAndRefusedPublishesLeaveThePipelineRunning) 
   EXPECT_EQ(last.frames_processed, 8);
   EXPECT_EQ(last.frames_rejected, 4);
   EXPECT_EQ(last.frames_dropped, 0);
+}
+
+// The same fault over real LCM: findmug's udpm output with one subscriber
+// that never calls handle() (what it does not take is dropped on its side:
+// by LCM's bounded receive buffer, or by the kernel) and one that reads. Runs in a private network namespace this test process
+// enters (root only; skipped otherwise, like the replay tests).
+TEST(DaemonOutputFaults, AUdpmSubscriberThatNeverReadsDoesNotHoldThePipeline) {
+  if (::geteuid() != 0) GTEST_SKIP() << "needs root for a private network namespace";
+  ASSERT_EQ(::unshare(CLONE_NEWNET), 0) << "unshare(CLONE_NEWNET) failed";
+  ASSERT_EQ(std::system("ip link set lo up && ip route add 224.0.0.0/4 dev lo"), 0);
+  const Sequence& seq = sequence();
+  const std::string url = "udpm://239.255.76.67:7667?ttl=0";
+  // Never read: the default (small) receive buffer overflows after a few frames.
+  io::LcmBus never_read(url, "never-reading subscriber");
+  int never_called = 0;
+  never_read.subscribe(std::string(io::kLabelsChannel),
+                       [&](const std::string&, const std::uint8_t*, std::size_t) { ++never_called; });
+  // Reads on its own thread, with room for whole label images.
+  io::LcmBus reader_bus(url + "&recv_buf_size=4194304", "reading subscriber");
+  io::Subscriber<io::LabelImageMessage> reader(
+      reader_bus, std::string(io::kLabelsChannel),
+      [](const std::uint8_t* d, std::size_t n, const std::string& c) {
+        return io::decodeLabelImage(d, n, c);
+      });
+  reader.startReceiving();
+
+  Config config = memoryConfig();
+  config.extra["daemon.lcm_url"] = url;
+  config.extra["daemon.pose_input"] = "false";
+  const DaemonConfig dc = resolveDaemonConfig(config);
+  constexpr std::size_t kSubmitted = 12;
+  {
+    Pipeline pipeline(config.segmenter, dc, seq.forest, "synth", ExecutionMode::Sequential);
+    pipeline.start();
+    for (std::size_t i = 0; i < kSubmitted; ++i) {
+      ASSERT_TRUE(pipeline.submit(seq.frames[i].frame));
+      const findmug_lcm::status_t s = makeStatus(pipeline);
+      for (int q = 0; q < s.num_queues; ++q) EXPECT_LE(s.queue_depths[q], s.queue_capacities[q]);
+    }
+    pipeline.stop(StopMode::Drain);
+    EXPECT_EQ(pipeline.counters().processed, kSubmitted);
+    EXPECT_EQ(pipeline.counters().rejected, 0u);
+    EXPECT_EQ(pipeline.publishFailures(), 0u);  // udpm never waits for subscribers
+  }
+  // The reader got every label image (a deadline only guards a hang).
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(30);
+  while (reader.accepted() < kSubmitted && std::chrono::steady_clock::now() < deadline) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  EXPECT_EQ(reader.accepted(), kSubmitted);
+  EXPECT_EQ(reader.rejected(), 0u);
+  reader.stop();
+  EXPECT_EQ(never_called, 0);
 }
 
 }  // namespace
