@@ -120,16 +120,7 @@ Pipeline::Pipeline(const SegmenterConfig& segmenter_config, const DaemonConfig& 
                                window};
   segment_ = std::make_unique<Stage<PreparedJob, ResultJob>>(
       segment_options,
-      [this](PreparedJob& job) -> std::optional<ResultJob> {
-        if (hooks_.before_segment) hooks_.before_segment(job.prepared.frame);
-        const std::string name = frameName(job.prepared.frame);
-        try {
-          return ResultJob{segmenter_.classify(segmenter_.oversegment(std::move(job.prepared))),
-                           job.arrival};
-        } catch (const std::exception& e) {
-          throw Error(name + ": " + e.what());
-        }
-      },
+      [this](PreparedJob& job) -> std::optional<ResultJob> { return segmentFrame(job); },
       [this](ResultJob&& r) {
         if (!publish_->push(std::move(r))) abandoned_.fetch_add(1);  // only after stop()
       },
@@ -141,15 +132,7 @@ Pipeline::Pipeline(const SegmenterConfig& segmenter_config, const DaemonConfig& 
   StageOptions prepare_options{"prepare", mode_, 1, capacity, DropPolicy::DropOldest, window};
   prepare_ = std::make_unique<Stage<FrameJob, PreparedJob>>(
       prepare_options,
-      [this](FrameJob& job) -> std::optional<PreparedJob> {
-        const std::string name = frameName(job.frame);
-        try {
-          validateFrame(job.frame);
-          return PreparedJob{segmenter_.prepare(std::move(job.frame)), job.arrival};
-        } catch (const std::exception& e) {
-          throw Error(name + ": " + e.what());
-        }
-      },
+      [this](FrameJob& job) -> std::optional<PreparedJob> { return prepareFrame(job); },
       [this](PreparedJob&& p) {
         if (!segment_->push(std::move(p))) abandoned_.fetch_add(1);  // only after stop()
       },
@@ -292,6 +275,30 @@ void Pipeline::recordError(const std::string& message) {
   last_error_utime_ = utimeNow();
 }
 
+// ---- the three stages' work on one frame ----------------------------------------------
+
+Pipeline::PreparedJob Pipeline::prepareFrame(FrameJob& job) {
+  const std::string name = frameName(job.frame);
+  try {
+    validateFrame(job.frame);
+    return PreparedJob{segmenter_.prepare(std::move(job.frame)), job.arrival};
+  } catch (const std::exception& e) {
+    throw Error(name + ": " + e.what());
+  }
+}
+
+Pipeline::ResultJob Pipeline::segmentFrame(PreparedJob& job) {
+  if (hooks_.before_segment) hooks_.before_segment(job.prepared.frame);
+  const std::string name = frameName(job.prepared.frame);
+  try {
+    return ResultJob{segmenter_.classify(segmenter_.oversegment(std::move(job.prepared))),
+                     job.arrival};
+  } catch (const std::exception& e) {
+    throw Error(name + ": " + e.what());
+  }
+}
+
+// The result goes to the sinks, in registration order (result_sinks.hpp).
 void Pipeline::publishResult(ResultJob& job) {
   const LabelledFrame& labelled = job.labelled;
   const RgbdFrame& frame = labelled.segmented.prepared.frame;

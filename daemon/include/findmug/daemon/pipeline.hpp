@@ -159,7 +159,10 @@ class Pipeline {
   struct ResultJob;
   struct Published {};
 
-  void publishResult(ResultJob& job);
+  // The stages' work, one frame each (the constructor wires them into Stages).
+  PreparedJob prepareFrame(FrameJob& job);   // validateFrame + Segmenter::prepare
+  ResultJob segmentFrame(PreparedJob& job);  // Segmenter::oversegment + classify
+  void publishResult(ResultJob& job);        // pose lookup, then every sink
   void publishStatus();
   void recordError(const std::string& message);
 
