@@ -1,9 +1,10 @@
 // client_common.hpp — small helpers shared by the findmug command-line clients:
 // clean shutdown on SIGINT/SIGTERM and a bus receive loop (flags: tools/cli/findmug_cli.hpp).
 //
-// The clients are single-threaded: the main thread owns the bus
-// (io::LcmBus), and the subscribers' callbacks run inside Bus::handle(), and a signal only sets a flag that the loop checks
-// between waits, so no state is touched from a signal handler.
+// The clients are single-threaded: the main thread owns the bus (io::LcmBus)
+// and the subscribers' callbacks run inside Bus::handle() on it. A signal only
+// sets a flag that the loop checks between waits, so no state is touched from
+// a signal handler.
 #pragma once
 
 #include <chrono>

@@ -20,8 +20,8 @@
 
 #include "client_common.hpp"
 #include "findmug/error.hpp"
-#include "findmug/io/channels.hpp"
 #include "findmug/io/bus.hpp"
+#include "findmug/io/channels.hpp"
 #include "findmug/io/lcm_codec.hpp"
 #include "findmug/io/subscriber.hpp"
 #include "findmug/tables.hpp"
@@ -231,6 +231,7 @@ int main(int argc, char** argv) {
       });
   if (!json) std::fprintf(stderr, "%s: listening on %s\n", kProgram, channel.c_str());
   // --count counts every message, bad ones included.
-  return clients::receiveLoop(*bus, kProgram,
-                              [&] { return count > 0 && tables.received() >= static_cast<std::uint64_t>(count); });
+  return clients::receiveLoop(*bus, kProgram, [&] {
+    return count > 0 && tables.received() >= static_cast<std::uint64_t>(count);
+  });
 }

@@ -67,7 +67,8 @@ Pipeline::Pipeline(const SegmenterConfig& segmenter_config, const DaemonConfig& 
       mode_(mode),
       hooks_(std::move(hooks)),
       workers_(daemon_config.effectiveWorkers()),
-      pose_max_age_us_(static_cast<std::uint64_t>(std::llround(daemon_config.pose_max_age_s * 1e6))),
+      pose_max_age_us_(
+          static_cast<std::uint64_t>(std::llround(daemon_config.pose_max_age_s * 1e6))),
       started_(Clock::now()),
       last_sequential_status_(started_),
       cpu_sample_time_(started_),
@@ -163,8 +164,8 @@ Pipeline::Pipeline(const SegmenterConfig& segmenter_config, const DaemonConfig& 
       pose_input_ = std::make_unique<PoseInput>(hooks_.pose_bus, channel,
                                                 daemon_config_.pose_history_s, on_pose_error);
     } else {
-      pose_input_ = std::make_unique<PoseInput>(*pose_url, channel,
-                                                daemon_config_.pose_history_s, on_pose_error);
+      pose_input_ = std::make_unique<PoseInput>(*pose_url, channel, daemon_config_.pose_history_s,
+                                                on_pose_error);
     }
     spdlog::info("robot poses from {} on {}: tables also in the map frame, table map on {}",
                  hooks_.pose_bus     ? hooks_.pose_bus->describe()

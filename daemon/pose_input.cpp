@@ -7,6 +7,7 @@
 #include <cmath>
 
 #include "findmug/error.hpp"
+#include "findmug/io/lcm_codec.hpp"
 
 namespace findmug::daemon {
 
@@ -65,8 +66,9 @@ std::uint64_t secondsToMicros(double seconds) {
 }  // namespace
 
 PoseInput::PoseInput(std::string url, std::string channel, double history_s, OnError on_error)
-    : PoseInput(std::make_shared<io::LcmBus>(url, "daemon.pose_url (robot poses on " + channel + ")"),
-                channel, history_s, std::move(on_error)) {
+    : PoseInput(
+          std::make_shared<io::LcmBus>(url, "daemon.pose_url (robot poses on " + channel + ")"),
+          channel, history_s, std::move(on_error)) {
   url_ = std::move(url);
 }
 

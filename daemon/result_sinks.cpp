@@ -7,6 +7,7 @@
 
 #include "findmug/daemon/status_builder.hpp"
 #include "findmug/error.hpp"
+#include "findmug/io/lcm_codec.hpp"
 
 namespace findmug::daemon {
 
@@ -62,8 +63,8 @@ bool TableMapSink::update(const LabelledFrame& labelled, const io::RobotPose& po
         "{}: table map at ({:.2f}, {:.2f}, yaw {:.3f}): {} seen -> ids [{}]; created [{}], "
         "confirmed [{}], forgotten [{}]; {} mapped",
         frameName(frame), pose.x, pose.y, pose.yaw, labelled.tables.size(),
-        ids(update.assigned_ids), ids(update.created), ids(update.confirmed),
-        ids(update.forgotten), map_.tables().size());
+        ids(update.assigned_ids), ids(update.created), ids(update.confirmed), ids(update.forgotten),
+        map_.tables().size());
     for (const std::string& line : update.diagnostics) {
       spdlog::debug("{}: table map: {}", frameName(frame), line);
     }

@@ -151,19 +151,19 @@ void ReceiveThread::start(Bus& bus, std::function<void(HandleResult)> on_end,
   stop();
   stop_requested_.store(false);
   finished_.store(false);
-  thread_ = std::thread([this, &bus, on_end = std::move(on_end),
-                         after_wait = std::move(after_wait)] {
-    while (!stop_requested_.load()) {
-      // Short timeout: the loop must notice stop() promptly.
-      const HandleResult result = bus.handle(kHandleTimeout);
-      if (after_wait) after_wait();
-      if (result == HandleResult::EndOfLog || result == HandleResult::Failed) {
-        if (on_end) on_end(result);
-        break;
-      }
-    }
-    finished_.store(true);
-  });
+  thread_ =
+      std::thread([this, &bus, on_end = std::move(on_end), after_wait = std::move(after_wait)] {
+        while (!stop_requested_.load()) {
+          // Short timeout: the loop must notice stop() promptly.
+          const HandleResult result = bus.handle(kHandleTimeout);
+          if (after_wait) after_wait();
+          if (result == HandleResult::EndOfLog || result == HandleResult::Failed) {
+            if (on_end) on_end(result);
+            break;
+          }
+        }
+        finished_.store(true);
+      });
 }
 
 void ReceiveThread::stop() {

@@ -10,12 +10,10 @@
 namespace findmug::io {
 
 LcmFrameSource::LcmFrameSource(std::string channel, std::string url, SourceOptions options)
-    : LcmFrameSource(std::move(channel),
-                     std::make_shared<LcmBus>(url, "lcm source (" + url + ")"),
+    : LcmFrameSource(std::move(channel), std::make_shared<LcmBus>(url, "lcm source (" + url + ")"),
                      std::move(options)) {}
 
-LcmFrameSource::LcmFrameSource(std::string channel, std::shared_ptr<Bus> bus,
-                               SourceOptions options)
+LcmFrameSource::LcmFrameSource(std::string channel, std::shared_ptr<Bus> bus, SourceOptions options)
     : channel_(std::move(channel)), options_(std::move(options)), bus_(std::move(bus)) {
   if (channel_.empty()) throw Error("lcm source: empty channel name");
   if (options_.lcm_queue_size < 1) {

@@ -1,6 +1,8 @@
 // The bus (io/bus.hpp) and the typed subscriber (io/subscriber.hpp): delivery
 // semantics of the in-memory bus, the LCM bus over memq:// and file://, the
 // fault-injecting decorator, and Subscriber<T>'s counting and end of log.
+#include "findmug/io/bus.hpp"
+
 #include <gtest/gtest.h>
 
 #include <chrono>
@@ -10,7 +12,6 @@
 #include <vector>
 
 #include "findmug/error.hpp"
-#include "findmug/io/bus.hpp"
 #include "findmug/io/lcm_codec.hpp"
 #include "findmug/io/lcm_source.hpp"
 #include "findmug/io/subscriber.hpp"
@@ -107,8 +108,9 @@ TEST(FaultyBus, RefusesPublishesOnCommandOnlyOnThatChannel) {
 TEST(LcmBus, MemqDeliversWithinTheHandleAndBadUrlNamesTheSetting) {
   LcmBus bus("memq://");
   std::vector<std::string> got;
-  bus.subscribe("FINDMUG_BUS_TEST", [&](const std::string&, const std::uint8_t* d,
-                                        std::size_t n) { got.emplace_back(d, d + n); });
+  bus.subscribe("FINDMUG_BUS_TEST", [&](const std::string&, const std::uint8_t* d, std::size_t n) {
+    got.emplace_back(d, d + n);
+  });
   const auto b = bytesOf("hello");
   ASSERT_TRUE(bus.publish("FINDMUG_BUS_TEST", b.data(), b.size()));
   EXPECT_EQ(bus.handle(1000ms), HandleResult::Handled);

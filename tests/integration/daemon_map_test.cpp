@@ -12,16 +12,15 @@
 // Also: the pose history (closest in time, max age, late poses), the
 // daemon.pose_* and table_map.* settings, and bad pose messages.
 #include <gtest/gtest.h>
-
 #include <sched.h>
 #include <unistd.h>
 
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
-#include <thread>
 #include <map>
 #include <set>
+#include <thread>
 
 #include "daemon_test_support.hpp"
 #include "findmug/daemon/daemon_config.hpp"
@@ -749,8 +748,8 @@ TEST(DaemonOutputFaults, AnUnreadBusAndRefusedPublishesLeaveThePipelineRunning) 
 
 // The same fault over real LCM: findmug's udpm output with one subscriber
 // that never calls handle() (what it does not take is dropped on its side:
-// by LCM's bounded receive buffer, or by the kernel) and one that reads. Runs in a private network namespace this test process
-// enters (root only; skipped otherwise, like the replay tests).
+// by LCM's bounded receive buffer, or by the kernel) and one that reads. Runs in a private network
+// namespace this test process enters (root only; skipped otherwise, like the replay tests).
 TEST(DaemonOutputFaults, AUdpmSubscriberThatNeverReadsDoesNotHoldThePipeline) {
   if (::geteuid() != 0) GTEST_SKIP() << "needs root for a private network namespace";
   ASSERT_EQ(::unshare(CLONE_NEWNET), 0) << "unshare(CLONE_NEWNET) failed";
@@ -760,8 +759,8 @@ TEST(DaemonOutputFaults, AUdpmSubscriberThatNeverReadsDoesNotHoldThePipeline) {
   // Never read: the default (small) receive buffer overflows after a few frames.
   io::LcmBus never_read(url, "never-reading subscriber");
   int never_called = 0;
-  never_read.subscribe(std::string(io::kLabelsChannel),
-                       [&](const std::string&, const std::uint8_t*, std::size_t) { ++never_called; });
+  never_read.subscribe(std::string(io::kLabelsChannel), [&](const std::string&, const std::uint8_t*,
+                                                            std::size_t) { ++never_called; });
   // Reads on its own thread, with room for whole label images.
   io::LcmBus reader_bus(url + "&recv_buf_size=4194304", "reading subscriber");
   io::Subscriber<io::LabelImageMessage> reader(

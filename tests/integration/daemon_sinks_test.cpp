@@ -161,8 +161,8 @@ TEST(LcmPublisherSink, PublishesLabelsTablesAndMapInThatOrder) {
   auto bus = std::make_shared<io::MemoryBus>();
   LcmPublisherSink sink(bus, kChannels, true, true);
   const LabelledFrame l = labelledFrame(7, true, true, {tableAhead(2.0f)});
-  FrameResult r{l, 1234, poseAt(l.segmented.prepared.frame.utime), {{5, false, 1}},
-                io::TablesMessage{}};
+  FrameResult r{
+      l, 1234, poseAt(l.segmented.prepared.frame.utime), {{5, false, 1}}, io::TablesMessage{}};
   r.table_map->content = io::TablesContent::Map;
   r.table_map->seq = 7;
   r.table_map->map_pose = r.pose;

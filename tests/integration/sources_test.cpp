@@ -315,12 +315,9 @@ TEST(LcmSource, MemqFramesArriveInOrderAndBadMessagesAreCounted) {
   for (int i = 0; i < 5; ++i) {
     const auto b = frameBytes(i);
     ASSERT_TRUE(source.bus().publish("FINDMUG_RGBD_T", b.data(), b.size()));
-    if (i == 1)
-      source.bus().publish("FINDMUG_RGBD_T", garbage.data(), garbage.size());
-    if (i == 2)
-      source.bus().publish("FINDMUG_RGBD_T", truncated.data(), truncated.size());
-    if (i == 3)
-      source.bus().publish("FINDMUG_RGBD_T", other_type.data(), other_type.size());
+    if (i == 1) source.bus().publish("FINDMUG_RGBD_T", garbage.data(), garbage.size());
+    if (i == 2) source.bus().publish("FINDMUG_RGBD_T", truncated.data(), truncated.size());
+    if (i == 3) source.bus().publish("FINDMUG_RGBD_T", other_type.data(), other_type.size());
     // Another channel is not ours.
     source.bus().publish("FINDMUG_RGBD_OTHER", b.data(), b.size());
   }

@@ -252,8 +252,7 @@ class Probe {
   void onFrame(const std::uint8_t* data, std::size_t size, const std::string& channel,
                std::int64_t recv_utime) {
     try {
-      const auto msg =
-          findmug::io::decodeMessage<findmug_lcm::rgbd_frame_t>(data, size, channel);
+      const auto msg = findmug::io::decodeMessage<findmug_lcm::rgbd_frame_t>(data, size, channel);
       check_.frameSeen(frameInfo(msg), recv_utime, options_.live);
     } catch (const Error& e) {
       check_.addViolation(std::string("undecodable frame on the bus: ") + e.what());
@@ -269,8 +268,7 @@ class Probe {
       const bool all_void = std::all_of(ids.begin(), ids.end(),
                                         [](std::uint8_t id) { return id == findmug::kVoidLabel; });
       check_.labelReceived(LabelInfo{labels.seq, labels.utime, labels.image.width,
-                                     labels.image.height, recv_utime, labels.latency_us,
-                                     all_void});
+                                     labels.image.height, recv_utime, labels.latency_us, all_void});
     } catch (const Error& e) {
       check_.addViolation(std::string("label image does not decode: ") + e.what());
     }

@@ -116,7 +116,6 @@ bool readProc(int pid, Sample& s) {
   return s.rss_kb > 0;
 }
 
-
 void fillFromStatus(const findmug_lcm::status_t& st, Sample& s) {
   s.received = st.frames_received;
   s.processed = st.frames_processed;

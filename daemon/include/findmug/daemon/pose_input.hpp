@@ -33,7 +33,7 @@
 #include <thread>
 
 #include "findmug/io/bus.hpp"
-#include "findmug/io/lcm_codec.hpp"
+#include "findmug/io/messages.hpp"
 #include "findmug/io/subscriber.hpp"
 
 namespace findmug::daemon {

@@ -34,7 +34,7 @@
 #include <vector>
 
 #include "findmug/io/bus.hpp"
-#include "findmug/io/lcm_codec.hpp"
+#include "findmug/io/messages.hpp"
 #include "findmug/segmenter.hpp"
 #include "findmug/table_map.hpp"
 
@@ -45,8 +45,8 @@ struct StatusSnapshot;
 // One frame's result on its way through the sinks.
 struct FrameResult {
   const LabelledFrame& labelled;
-  std::int64_t latency_us = 0;          // arrival to publish
-  std::optional<io::RobotPose> pose;    // the robot's pose for this frame, if one is close enough
+  std::int64_t latency_us = 0;        // arrival to publish
+  std::optional<io::RobotPose> pose;  // the robot's pose for this frame, if one is close enough
   // Set by TableMapSink: one entry per table of the frame when the map took it,
   std::vector<io::TableMapInfo> map_info;
   // and the map's confirmed tables when they are due on FINDMUG_TABLE_MAP.
@@ -66,8 +66,8 @@ class TableMapSink final : public ResultSink {
  public:
   using OnError = std::function<void(const std::string& what)>;
 
-  TableMapSink(const TableMapConfig& map_config, const TableConfig& tables_config,
-               bool publish_map, OnError on_error);
+  TableMapSink(const TableMapConfig& map_config, const TableConfig& tables_config, bool publish_map,
+               OnError on_error);
 
   // Whether `labelled` is evidence about tables (see the header comment).
   static bool isEvidence(const LabelledFrame& labelled);

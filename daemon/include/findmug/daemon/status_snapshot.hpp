@@ -17,13 +17,13 @@ namespace findmug::daemon {
 struct PipelineCounters {
   std::uint64_t received = 0;   // submitted frames
   std::uint64_t processed = 0;  // published label images
-  std::uint64_t dropped = 0;   // evicted from a full queue / discarded at shutdown (+ source drops)
+  std::uint64_t dropped = 0;  // evicted from a full queue / discarded at shutdown (+ source drops)
   std::uint64_t dropped_at_door = 0;      // of those: before any work (pipeline entry, source)
   std::uint64_t dropped_in_pipeline = 0;  // after some work (an internal queue was full)
   std::uint64_t dropped_at_shutdown = 0;  // queued or in flight at stop()
-  std::uint64_t rejected = 0;  // failed in a stage (+ bad input the source skipped,
-                               // + bad robot pose messages)
-  std::uint64_t pending = 0;   // inside the pipeline now
+  std::uint64_t rejected = 0;             // failed in a stage (+ bad input the source skipped,
+                                          // + bad robot pose messages)
+  std::uint64_t pending = 0;              // inside the pipeline now
 };
 
 struct StatusSnapshot {

@@ -35,8 +35,8 @@ namespace findmug::io {
 template <class T>
 class Subscriber {
  public:
-  using Decode = std::function<T(const std::uint8_t* data, std::size_t size,
-                                 const std::string& channel)>;
+  using Decode =
+      std::function<T(const std::uint8_t* data, std::size_t size, const std::string& channel)>;
   using OnMessage = std::function<void(const T& message, const std::string& channel)>;
   using OnError = std::function<void(const std::string& what)>;
 
