@@ -14,15 +14,16 @@
 #include <cmath>
 #include <cstdio>
 #include <iostream>
-#include <lcm/lcm-cpp.hpp>
 #include <sstream>
 #include <string>
 #include <vector>
 
 #include "client_common.hpp"
 #include "findmug/error.hpp"
+#include "findmug/io/bus.hpp"
 #include "findmug/io/channels.hpp"
 #include "findmug/io/lcm_codec.hpp"
+#include "findmug/io/subscriber.hpp"
 #include "findmug/tables.hpp"
 #include "findmug_cli.hpp"
 #include "findmug_json.hpp"
@@ -45,15 +46,8 @@ class NavClient {
  public:
   NavClient(FrameChoice frame, bool json) : frame_(frame), json_(json) {}
 
-  void onMessage(const lcm::ReceiveBuffer* buffer, const std::string& channel) {
-    ++received_;
-    io::TablesMessage message;
-    try {
-      message = io::decodeTables(buffer->data, buffer->data_size, channel);
-    } catch (const std::exception& e) {
-      std::fprintf(stderr, "%s: skipping bad message: %s\n", kProgram, e.what());
-      return;
-    }
+  // A decoded message (bad ones are reported by the subscriber and skipped).
+  void onMessage(const io::TablesMessage& message) {
     const bool use_map = message.map_pose.has_value() && frame_ != FrameChoice::Base;
     if (frame_ == FrameChoice::Map && !message.map_pose) {
       std::fprintf(stderr, "%s: message seq %lld has no map pose; positions in the base frame\n",
@@ -85,8 +79,6 @@ class NavClient {
     }
     std::fflush(stdout);
   }
-
-  long received() const { return received_; }
 
  private:
   void printText(const io::TablesMessage& m, bool use_map, const Eigen::Vector2f& robot,
@@ -152,7 +144,6 @@ class NavClient {
 
   FrameChoice frame_;
   bool json_;
-  long received_ = 0;
 };
 
 }  // namespace
@@ -190,16 +181,29 @@ int main(int argc, char** argv) {
     return 2;
   }
 
-  lcm::LCM lcm(url);
-  if (!lcm.good()) {
+  std::unique_ptr<io::LcmBus> bus;
+  try {
+    bus = std::make_unique<io::LcmBus>(url, "--lcm-url");
+  } catch (const std::exception&) {
     std::fprintf(stderr, "%s: cannot open LCM provider '%s'\n", kProgram,
                  url.empty() ? "default" : url.c_str());
     return 1;
   }
   clients::installStopHandlers();
   NavClient client(frame, json);
-  lcm.subscribe(channel, &NavClient::onMessage, &client);
+  // This thread owns the bus: the callbacks run inside receiveLoop.
+  io::Subscriber<io::TablesMessage> tables(
+      *bus, channel,
+      [](const std::uint8_t* d, std::size_t n, const std::string& c) {
+        return io::decodeTables(d, n, c);
+      },
+      [&](const io::TablesMessage& m, const std::string&) { client.onMessage(m); },
+      [](const std::string& error) {
+        std::fprintf(stderr, "%s: skipping bad message: %s\n", kProgram, error.c_str());
+      });
   if (!json) std::fprintf(stderr, "%s: listening on %s\n", kProgram, channel.c_str());
-  return clients::receiveLoop(lcm, url, kProgram,
-                              [&] { return count > 0 && client.received() >= count; });
+  // --count counts every message, bad ones included.
+  return clients::receiveLoop(*bus, kProgram, [&] {
+    return count > 0 && tables.received() >= static_cast<std::uint64_t>(count);
+  });
 }

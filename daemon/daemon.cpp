@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <filesystem>
 
+#include "findmug/daemon/status_builder.hpp"
 #include "findmug/error.hpp"
 #include "findmug/io/frame_source.hpp"
 
@@ -199,7 +200,7 @@ int Daemon::run() {
     }
     if (now >= next_status_text && !hung) {
       // The same figures as status_t, for `systemctl status` and the journal.
-      const findmug_lcm::status_t s = pipeline_->makeStatus();
+      const findmug_lcm::status_t s = makeStatus(*pipeline_);
       const auto total =
           std::find(s.stage_names.begin(), s.stage_names.end(), "total") - s.stage_names.begin();
       const std::string line = fmt::format(

@@ -13,11 +13,11 @@
 #include <chrono>
 #include <cstdlib>
 #include <iostream>
-#include <lcm/lcm-cpp.hpp>
 #include <string>
 #include <thread>
 
 #include "findmug/error.hpp"
+#include "findmug/io/bus.hpp"
 #include "findmug/io/channels.hpp"
 #include "findmug/io/frame_source.hpp"
 #include "findmug/io/lcm_codec.hpp"
@@ -79,8 +79,7 @@ int main(int argc, char** argv) {
     if (loop) spec.options.loop = true;
     std::unique_ptr<FrameSource> source = makeSource(spec);
 
-    lcm::LCM lcm(url);
-    if (!lcm.good()) throw Error("cannot open LCM URL '" + url + "'");
+    LcmBus bus(url, "--lcm-url");
     spdlog::info("findmug-grab: {} -> {} on {}", source->describe(), channel,
                  url.empty() ? std::string("LCM default URL") : url);
 
@@ -96,7 +95,7 @@ int main(int argc, char** argv) {
         if (!frame) break;
         const findmug_lcm::rgbd_frame_t msg = encodeRgbdFrame(*frame, encode);
         const std::vector<std::uint8_t> data = encodeMessage(msg);
-        if (lcm.publish(channel, data.data(), static_cast<unsigned int>(data.size())) != 0) {
+        if (!bus.publish(channel, data.data(), data.size())) {
           throw Error("publishing on " + channel + " failed");
         }
         ++published;

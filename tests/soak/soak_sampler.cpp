@@ -12,7 +12,6 @@
 // (least-squares slope over the span, so that one allocation burst is not a
 // trend), fd and thread ranges, and drops. Exits 0 when every given bound
 // holds, 1 when one does not, 2 on usage errors or when no status ever arrived.
-#include <lcm/lcm-cpp.hpp>
 
 #include <algorithm>
 #include <atomic>
@@ -24,6 +23,7 @@
 #include <fstream>
 #include <iostream>
 #include <map>
+#include <memory>
 #include <optional>
 #include <sstream>
 #include <string>
@@ -31,8 +31,10 @@
 #include <vector>
 
 #include "findmug/error.hpp"
+#include "findmug/io/bus.hpp"
 #include "findmug/io/channels.hpp"
 #include "findmug/io/lcm_codec.hpp"
+#include "findmug/io/subscriber.hpp"
 #include "findmug/numbers.hpp"
 #include "findmug_signals.hpp"
 
@@ -119,21 +121,6 @@ bool readProc(int pid, Sample& s) {
   std::ifstream("/proc/loadavg") >> s.load1;
   return s.rss_kb > 0;
 }
-
-class StatusListener {
- public:
-  std::optional<findmug_lcm::status_t> latest;
-  long errors = 0;
-  void onMessage(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
-    try {
-      latest =
-          findmug::io::decodeMessage<findmug_lcm::status_t>(rbuf->data, rbuf->data_size, channel);
-    } catch (const findmug::Error& e) {
-      ++errors;
-      std::cerr << "findmug-soak-sampler: " << e.what() << "\n";
-    }
-  }
-};
 
 void fillFromStatus(const findmug_lcm::status_t& st, Sample& s) {
   s.received = st.frames_received;
@@ -239,10 +226,19 @@ double slope(const std::vector<double>& t, const std::vector<double>& y) {
 int main(int argc, char** argv) {
   const Options o = parse(argc, argv);
   const findmug::cli::StopSignals stop_signals;
-  lcm::LCM lcm(o.url);
-  if (!lcm.good()) usage("cannot open LCM at '" + o.url + "'");
-  StatusListener listener;
-  lcm.subscribe(o.channel, &StatusListener::onMessage, &listener);
+  std::unique_ptr<findmug::io::LcmBus> bus;
+  try {
+    bus = std::make_unique<findmug::io::LcmBus>(o.url, "--url");
+  } catch (const std::exception&) {
+    usage("cannot open LCM at '" + o.url + "'");
+  }
+  // The latest status; this thread owns the bus (handle() below).
+  findmug::io::Subscriber<findmug_lcm::status_t> listener(
+      *bus, o.channel,
+      [](const std::uint8_t* d, std::size_t n, const std::string& c) {
+        return findmug::io::decodeMessage<findmug_lcm::status_t>(d, n, c);
+      },
+      {}, [](const std::string& e) { std::cerr << "findmug-soak-sampler: " << e << "\n"; });
 
   std::ofstream csv(o.csv);
   csv << "t_s,rss_kb,fds,threads,received,processed,dropped,rejected,input_fps,output_fps,"
@@ -259,7 +255,7 @@ int main(int argc, char** argv) {
       s.t_s = t;
       alive = readProc(o.pid, s);
       if (!alive) break;
-      if (listener.latest) fillFromStatus(*listener.latest, s);
+      if (const auto latest = listener.latest()) fillFromStatus(*latest, s);
       samples.push_back(s);
       csv << s.t_s << "," << s.rss_kb << "," << s.fds << "," << s.threads << "," << s.received << ","
           << s.processed << "," << s.dropped << "," << s.rejected << "," << s.input_fps << ","
@@ -268,7 +264,7 @@ int main(int argc, char** argv) {
       next += std::chrono::microseconds(static_cast<long long>(o.period_s * 1e6));
     }
     if (t >= o.duration_s) break;
-    lcm.handleTimeout(100);
+    bus->handle(std::chrono::milliseconds(100));
   }
   if (!o.svg.empty()) writeSvg(o.svg, samples);
 
@@ -286,7 +282,7 @@ int main(int argc, char** argv) {
   }
   std::ostringstream report;
   bool ok = true;
-  if (!listener.latest) {
+  if (!listener.latest()) {
     std::cerr << "findmug-soak-sampler: no status message on " << o.channel << " in " << o.duration_s
               << " s\n";
     return 2;
@@ -304,7 +300,7 @@ int main(int argc, char** argv) {
          << "latency p95 (10 s windows) max " << p95_max << " ms; last p50 " << last.lat_p50_ms
          << " ms, p95 " << last.lat_p95_ms << " ms\n"
          << "daemon " << (alive ? "alive" : "GONE") << " at the end; status decode errors "
-         << listener.errors << "\n";
+         << listener.rejected() << "\n";
   auto check = [&](bool good, const std::string& what) {
     if (!good) {
       ok = false;
@@ -312,7 +308,7 @@ int main(int argc, char** argv) {
     }
   };
   check(alive, "the daemon exited during the soak");
-  check(listener.errors == 0, "undecodable status messages");
+  check(listener.rejected() == 0, "undecodable status messages");
   if (o.max_rss_growth_mb) check(growth_mb <= *o.max_rss_growth_mb, "RSS trend above the bound");
   if (o.max_fd_growth) check(t.empty() || fd_hi - fd_lo <= *o.max_fd_growth, "fd count not flat");
   if (o.max_thread_growth) {

@@ -23,12 +23,12 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
-#include <lcm/lcm-cpp.hpp>
 #include <string>
 #include <thread>
 #include <vector>
 
 #include "findmug/error.hpp"
+#include "findmug/io/bus.hpp"
 #include "findmug/io/channels.hpp"
 #include "findmug/io/frame_source.hpp"
 #include "findmug/io/lcm_codec.hpp"
@@ -111,8 +111,7 @@ int run(int argc, char** argv) {
   source.reset();
   if (frames.empty()) throw Error(source_spec + ": the source delivered no frames");
 
-  lcm::LCM lcm(url);
-  if (!lcm.good()) throw Error("cannot open LCM URL '" + url + "'");
+  io::LcmBus bus(url, "--lcm-url");
   const std::string channel = io::channelName(io::kRgbdChannel, suffix);
   spdlog::info("findmug-replay: {} frames from {}, {} Hz on {} ({})", frames.size(), described,
                rate, channel, url.empty() ? std::string("default URL") : url);
@@ -136,7 +135,7 @@ int run(int argc, char** argv) {
     msg.seq = published;
     msg.utime = static_cast<std::int64_t>(io::hostUtimeNow());
     bytes = io::encodeMessage(msg);
-    if (lcm.publish(channel, bytes.data(), static_cast<unsigned int>(bytes.size())) != 0) {
+    if (!bus.publish(channel, bytes.data(), bytes.size())) {
       throw Error("publishing on " + channel + " failed");
     }
     ++published;
