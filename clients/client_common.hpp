@@ -11,6 +11,7 @@
 #include <cstdio>
 #include <functional>
 #include <map>
+#include <memory>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -26,6 +27,18 @@ inline cli::StopSignals& stopSignals() {
   return signals;
 }
 inline void installStopHandlers() { stopSignals(); }
+
+// The client's bus on `url` (--lcm-url; empty = LCM's default provider), or null after
+// saying on stderr that it cannot be opened.
+inline std::unique_ptr<io::LcmBus> openBus(const std::string& url, const char* program) {
+  try {
+    return std::make_unique<io::LcmBus>(url, "--lcm-url");
+  } catch (const std::exception&) {
+    std::fprintf(stderr, "%s: cannot open LCM provider '%s'\n", program,
+                 url.empty() ? "default" : url.c_str());
+    return nullptr;
+  }
+}
 
 // Waits for messages until a stop signal, `done()` turns true, or the LCM
 // source ends (a replayed log file reaches its end). Returns the exit code:

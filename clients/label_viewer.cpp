@@ -301,14 +301,8 @@ int main(int argc, char** argv) {
     }
   }
 
-  std::unique_ptr<io::LcmBus> bus;
-  try {
-    bus = std::make_unique<io::LcmBus>(url, "--lcm-url");
-  } catch (const std::exception&) {
-    std::fprintf(stderr, "%s: cannot open LCM provider '%s'\n", kProgram,
-                 url.empty() ? "default" : url.c_str());
-    return 1;
-  }
+  const std::unique_ptr<io::LcmBus> bus = clients::openBus(url, kProgram);
+  if (!bus) return 1;
   clients::installStopHandlers();
   LabelViewer viewer(out_dir, static_cast<float>(alpha), every, write_png, std::move(source));
   // This thread owns the bus: the subscribers' callbacks run inside receiveLoop.

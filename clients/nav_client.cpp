@@ -57,9 +57,9 @@ class NavClient {
     Eigen::Vector2f robot = Eigen::Vector2f::Zero();
     double robot_yaw = 0.0;
     if (use_map) {
-      robot = Eigen::Vector2f(static_cast<float>(message.map_pose->x),
-                              static_cast<float>(message.map_pose->y));
-      robot_yaw = message.map_pose->yaw;
+      robot = Eigen::Vector2f(static_cast<float>(message.map_pose->pose.x),
+                              static_cast<float>(message.map_pose->pose.y));
+      robot_yaw = message.map_pose->pose.yaw;
     }
     std::vector<Position> reachable, unreachable;
     for (std::size_t t = 0; t < message.tables.size(); ++t) {
@@ -181,14 +181,8 @@ int main(int argc, char** argv) {
     return 2;
   }
 
-  std::unique_ptr<io::LcmBus> bus;
-  try {
-    bus = std::make_unique<io::LcmBus>(url, "--lcm-url");
-  } catch (const std::exception&) {
-    std::fprintf(stderr, "%s: cannot open LCM provider '%s'\n", kProgram,
-                 url.empty() ? "default" : url.c_str());
-    return 1;
-  }
+  const std::unique_ptr<io::LcmBus> bus = clients::openBus(url, kProgram);
+  if (!bus) return 1;
   clients::installStopHandlers();
   NavClient client(frame, json);
   // This thread owns the bus: the callbacks run inside receiveLoop.

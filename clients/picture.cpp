@@ -239,8 +239,8 @@ std::vector<NumberedPosition> numberedPositions(const io::TablesMessage& message
   }
   Eigen::Vector2f robot = Eigen::Vector2f::Zero();
   if (use_map) {
-    robot = Eigen::Vector2f(static_cast<float>(message.map_pose->x),
-                            static_cast<float>(message.map_pose->y));
+    robot = Eigen::Vector2f(static_cast<float>(message.map_pose->pose.x),
+                            static_cast<float>(message.map_pose->pose.y));
   }
   std::vector<Eigen::Vector2f> points;
   for (const auto& r : reachable) points.push_back(r.position.xy);
@@ -351,8 +351,8 @@ TopDown topDown(const io::TablesMessage& m, int size) {
   }
   v.positions = numberedPositions(m, v.map);
   if (v.map) {
-    v.robot = {m.map_pose->x, m.map_pose->y};
-    v.robot_yaw = m.map_pose->yaw;
+    v.robot = {m.map_pose->pose.x, m.map_pose->pose.y};
+    v.robot_yaw = m.map_pose->pose.yaw;
   }
   // Bounds of everything, 0.5 m around, square, at most 150 px per metre.
   double x0 = v.robot.x() - 0.5, x1 = v.robot.x() + 0.5, y0 = v.robot.y() - 0.5,

@@ -39,7 +39,7 @@ void TableMapSink::consume(FrameResult& result) {
 bool TableMapSink::update(const LabelledFrame& labelled, const io::RobotPose& pose,
                           std::vector<io::TableMapInfo>* map_info) {
   const RgbdFrame& frame = labelled.segmented.prepared.frame;
-  const Pose2D base_in_map{pose.x, pose.y, pose.yaw};
+  const Pose2D& base_in_map = pose.pose;
   std::lock_guard lock(mutex_);
   TableMapUpdate update;
   try {
@@ -62,7 +62,7 @@ bool TableMapSink::update(const LabelledFrame& labelled, const io::RobotPose& po
     spdlog::debug(
         "{}: table map at ({:.2f}, {:.2f}, yaw {:.3f}): {} seen -> ids [{}]; created [{}], "
         "confirmed [{}], forgotten [{}]; {} mapped",
-        frameName(frame), pose.x, pose.y, pose.yaw, labelled.tables.size(),
+        frameName(frame), pose.pose.x, pose.pose.y, pose.pose.yaw, labelled.tables.size(),
         ids(update.assigned_ids), ids(update.created), ids(update.confirmed), ids(update.forgotten),
         map_.tables().size());
     for (const std::string& line : update.diagnostics) {
@@ -89,7 +89,7 @@ io::TablesMessage TableMapSink::mapMessage(const RgbdFrame& frame,
   message.map_pose = pose;
   // The encoder derives the map_ fields from base-frame tables and the pose:
   // hand it the mapped tables relative to the robot at this pose.
-  const Pose2D map_to_base = inversePose(Pose2D{pose.x, pose.y, pose.yaw});
+  const Pose2D map_to_base = inversePose(pose.pose);
   std::lock_guard lock(mutex_);
   for (const MappedTable& t : map_.tables()) {
     if (!t.confirmed) continue;

@@ -108,27 +108,6 @@ void describeFootprint(const std::vector<Eigen::Vector2f>& hull, TableCluster& t
 // ---------------------------------------------------------------------------
 // Poses and polygons.
 
-double wrapAngle(double angle) {
-  angle = std::remainder(angle, 2.0 * kPi);  // [-pi, pi]
-  return angle <= -kPi ? angle + 2.0 * kPi : angle;
-}
-
-Pose2D inversePose(const Pose2D& pose) {
-  const double c = std::cos(pose.yaw), s = std::sin(pose.yaw);
-  return {-(c * pose.x + s * pose.y), -(-s * pose.x + c * pose.y), wrapAngle(-pose.yaw)};
-}
-
-Pose2D composePoses(const Pose2D& a, const Pose2D& b) {
-  const double c = std::cos(a.yaw), s = std::sin(a.yaw);
-  return {a.x + c * b.x - s * b.y, a.y + s * b.x + c * b.y, wrapAngle(a.yaw + b.yaw)};
-}
-
-Eigen::Vector2f transformPoint(const Pose2D& pose, const Eigen::Vector2f& xy) {
-  const double c = std::cos(pose.yaw), s = std::sin(pose.yaw);
-  return Eigen::Vector2f(static_cast<float>(pose.x + c * xy.x() - s * xy.y()),
-                         static_cast<float>(pose.y + s * xy.x() + c * xy.y()));
-}
-
 TableCluster transformTable(const TableCluster& table, const Pose2D& pose) {
   const double c = std::cos(pose.yaw), s = std::sin(pose.yaw);
   const auto rotate = [&](const Eigen::Vector2f& v) {

@@ -60,6 +60,13 @@ void validateTableConfig(const TableConfig& c) {
   auto nonNegative = [](const char* key, float v) {
     if (!std::isfinite(v) || v < 0.0f) badSetting(key, v, "must be a number >= 0");
   };
+  // `key` must be above the setting `lower_key`, whose value is `lower`.
+  auto above = [](const char* key, float v, const char* lower_key, float lower) {
+    if (v <= lower) {
+      badSetting(key, v,
+                 "must be above tables." + std::string(lower_key) + " (" + fmt(lower) + ")");
+    }
+  };
   if (!std::isfinite(c.cluster_tolerance_m) || c.cluster_tolerance_m < kMinToleranceM) {
     badSetting("cluster_tolerance_m", c.cluster_tolerance_m, "must be at least 0.001 m");
   }
@@ -75,18 +82,12 @@ void validateTableConfig(const TableConfig& c) {
   nonNegative("robot_radius_m", c.robot_radius_m);
   nonNegative("min_table_height_m", c.min_table_height_m);
   positive("max_table_height_m", c.max_table_height_m);
-  if (c.max_table_height_m <= c.min_table_height_m) {
-    badSetting("max_table_height_m", c.max_table_height_m,
-               "must be above tables.min_table_height_m (" + fmt(c.min_table_height_m) + ")");
-  }
+  above("max_table_height_m", c.max_table_height_m, "min_table_height_m", c.min_table_height_m);
   positive("top_band_m", c.top_band_m);
   nonNegative("min_table_width_m", c.min_table_width_m);
   nonNegative("obstacle_min_height_m", c.obstacle_min_height_m);
   positive("robot_height_m", c.robot_height_m);
-  if (c.robot_height_m <= c.obstacle_min_height_m) {
-    badSetting("robot_height_m", c.robot_height_m,
-               "must be above tables.obstacle_min_height_m (" + fmt(c.obstacle_min_height_m) + ")");
-  }
+  above("robot_height_m", c.robot_height_m, "obstacle_min_height_m", c.obstacle_min_height_m);
   if (c.obstacle_min_points < 1) {
     badSetting("obstacle_min_points", c.obstacle_min_points, "must be >= 1");
   }

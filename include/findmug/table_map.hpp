@@ -36,24 +36,11 @@
 #include <string>
 #include <vector>
 
+#include "findmug/pose2d.hpp"
 #include "findmug/tables.hpp"
 
 namespace findmug {
 
-// The base frame's pose in the map: origin position (m) and heading of its
-// x axis (rad, counter-clockwise from the map's x axis).
-struct Pose2D {
-  double x = 0.0;
-  double y = 0.0;
-  double yaw = 0.0;
-};
-
-Pose2D inversePose(const Pose2D& pose);
-// a ∘ b: the pose b (given in frame a) expressed in a's parent frame.
-Pose2D composePoses(const Pose2D& a, const Pose2D& b);
-Eigen::Vector2f transformPoint(const Pose2D& pose, const Eigen::Vector2f& xy);
-// Angle wrapped to (-pi, pi].
-double wrapAngle(double angle);
 
 // All geometry of `table` (centroid x,y, axes, centre, hull, search
 // positions with their yaw) moved by `pose`: with pose = base in map, base

@@ -40,11 +40,6 @@ void checkArraySize(std::int32_t declared, std::size_t actual, std::string_view 
 
 bool finite(double v) { return std::isfinite(v); }
 
-double wrapAngle(double a) {
-  a = std::remainder(a, 2.0 * M_PI);  // (-pi, pi]
-  return a;
-}
-
 }  // namespace
 
 // ---- compression names ------------------------------------------------------------
@@ -325,11 +320,6 @@ LabelImageMessage decodeLabelImage(const void* data, std::size_t size, std::stri
 
 // ---- tables ------------------------------------------------------------------------------------
 
-Eigen::Vector2d toMapFrame(const RobotPose& pose, const Eigen::Vector2d& p) {
-  const double c = std::cos(pose.yaw), s = std::sin(pose.yaw);
-  return {c * p.x() - s * p.y() + pose.x, s * p.x() + c * p.y() + pose.y};
-}
-
 namespace {
 
 findmug_lcm::search_position_t toLcm(const SearchPosition& p) {
@@ -344,10 +334,10 @@ findmug_lcm::search_position_t toLcm(const SearchPosition& p) {
 
 findmug_lcm::search_position_t toLcmMap(const SearchPosition& p, const RobotPose& pose) {
   findmug_lcm::search_position_t out = toLcm(p);
-  const Eigen::Vector2d m = toMapFrame(pose, p.xy.cast<double>());
+  const Eigen::Vector2d m = transformPointD(pose.pose, p.xy.cast<double>());
   out.x = m.x();
   out.y = m.y();
-  out.yaw = wrapAngle(p.yaw + pose.yaw);
+  out.yaw = wrapAngle(p.yaw + pose.pose.yaw);
   return out;
 }
 
@@ -421,15 +411,16 @@ findmug_lcm::tables_t encodeTables(const TablesMessage& in) {
     out.num_search_positions = static_cast<std::int32_t>(t.search_positions.size());
     for (const auto& p : t.search_positions) out.search_positions.push_back(toLcm(p));
     if (in.map_pose) {
-      const Eigen::Vector2d c = toMapFrame(*in.map_pose, t.centroid.head<2>().cast<double>());
+      const Eigen::Vector2d c =
+          transformPointD(in.map_pose->pose, t.centroid.head<2>().cast<double>());
       out.map_centroid[0] = c.x();
       out.map_centroid[1] = c.y();
       out.map_centroid[2] = t.centroid.z();
-      const Eigen::Vector2d center = toMapFrame(*in.map_pose, t.center.cast<double>());
+      const Eigen::Vector2d center = transformPointD(in.map_pose->pose, t.center.cast<double>());
       out.map_center[0] = center.x();
       out.map_center[1] = center.y();
       for (const auto& p : t.hull) {
-        const Eigen::Vector2d m = toMapFrame(*in.map_pose, p.cast<double>());
+        const Eigen::Vector2d m = transformPointD(in.map_pose->pose, p.cast<double>());
         out.map_hull.push_back({m.x(), m.y()});
       }
       for (const auto& p : t.search_positions) {
@@ -476,7 +467,7 @@ TablesMessage decodeTables(const findmug_lcm::tables_t& msg, std::string_view ch
       throw Error(field(channel, type, "map_pose.utime") + ": negative time " +
                   std::to_string(p.utime));
     }
-    out.map_pose = RobotPose{static_cast<std::uint64_t>(p.utime), p.x, p.y, p.yaw};
+    out.map_pose = RobotPose{static_cast<std::uint64_t>(p.utime), {p.x, p.y, p.yaw}};
   }
   for (std::size_t k = 0; k < msg.tables.size(); ++k) {
     const findmug_lcm::table_t& t = msg.tables[k];
@@ -568,9 +559,9 @@ TablesMessage decodeTables(const void* data, std::size_t size, std::string_view 
 findmug_lcm::robot_pose_t encodeRobotPose(const RobotPose& pose) {
   findmug_lcm::robot_pose_t msg;
   msg.utime = static_cast<std::int64_t>(pose.utime);
-  msg.x = pose.x;
-  msg.y = pose.y;
-  msg.yaw = pose.yaw;
+  msg.x = pose.pose.x;
+  msg.y = pose.pose.y;
+  msg.yaw = pose.pose.yaw;
   return msg;
 }
 
@@ -582,7 +573,7 @@ RobotPose decodeRobotPose(const void* data, std::size_t size, std::string_view c
     throw Error(field(channel, "robot_pose_t", "utime") + ": negative time " +
                 std::to_string(msg.utime));
   }
-  return RobotPose{static_cast<std::uint64_t>(msg.utime), msg.x, msg.y, msg.yaw};
+  return RobotPose{static_cast<std::uint64_t>(msg.utime), {msg.x, msg.y, msg.yaw}};
 }
 
 }  // namespace findmug::io

@@ -169,106 +169,102 @@ void checkSize(std::size_t size, std::string_view type, std::string_view channel
   }
 }
 
+// Every decoder below: the size check, the walk over the type's layout (each length
+// capped before anything is allocated), then lcm-gen's decode of bytes now known to fit.
+template <typename Msg, typename Walk>
+Msg walkThenDecode(const void* data, std::size_t size, std::string_view channel, Walk walk) {
+  checkSize(size, Msg::getTypeName(), channel);
+  WireWalker w(data, size, Msg::getTypeName(), channel);
+  w.hash(Msg::getHash());
+  walk(w);
+  w.finish();
+  return decodeWalked<Msg>(data, size, channel);
+}
+
 }  // namespace
 
 template <>
 findmug_lcm::rgbd_frame_t decodeMessage<findmug_lcm::rgbd_frame_t>(const void* data,
                                                                    std::size_t size,
                                                                    std::string_view channel) {
-  checkSize(size, "rgbd_frame_t", channel);
-  WireWalker w(data, size, "rgbd_frame_t", channel);
-  w.hash(findmug_lcm::rgbd_frame_t::getHash());
-  w.skip(2 * kI64, "utime/seq");
-  w.string("source");
-  w.skip(2 * kI32, "width/height");
-  w.skip(4 * kF64, "fx/fy/cx/cy");
-  w.skip(kBool + 3 * kF64, "extrinsics");
-  w.skip(kI8, "depth_compression");
-  w.array(w.count("depth_size", 1), 1, "depth_data");
-  w.skip(kI8, "color_compression");
-  w.array(w.count("color_size", 1), 1, "color_data");
-  w.finish();
-  return decodeWalked<findmug_lcm::rgbd_frame_t>(data, size, channel);
+  return walkThenDecode<findmug_lcm::rgbd_frame_t>(data, size, channel, [](WireWalker& w) {
+    w.skip(2 * kI64, "utime/seq");
+    w.string("source");
+    w.skip(2 * kI32, "width/height");
+    w.skip(4 * kF64, "fx/fy/cx/cy");
+    w.skip(kBool + 3 * kF64, "extrinsics");
+    w.skip(kI8, "depth_compression");
+    w.array(w.count("depth_size", 1), 1, "depth_data");
+    w.skip(kI8, "color_compression");
+    w.array(w.count("color_size", 1), 1, "color_data");
+  });
 }
 
 template <>
 findmug_lcm::label_image_t decodeMessage<findmug_lcm::label_image_t>(const void* data,
                                                                      std::size_t size,
                                                                      std::string_view channel) {
-  checkSize(size, "label_image_t", channel);
-  WireWalker w(data, size, "label_image_t", channel);
-  w.hash(findmug_lcm::label_image_t::getHash());
-  w.skip(2 * kI64 + 2 * kI32, "utime/seq/width/height");
-  const std::int32_t names = w.count("num_labels", kMinString);
-  for (std::int32_t i = 0; i < names; ++i) w.string("label_names");
-  w.skip(kI8, "compression");
-  w.array(w.count("labels_size", 1), 1, "labels_data");
-  w.skip(kBool, "has_confidence");
-  w.array(w.count("confidence_size", 1), 1, "confidence_data");
-  w.skip(kI64, "latency_us");
-  w.finish();
-  return decodeWalked<findmug_lcm::label_image_t>(data, size, channel);
+  return walkThenDecode<findmug_lcm::label_image_t>(data, size, channel, [](WireWalker& w) {
+    w.skip(2 * kI64 + 2 * kI32, "utime/seq/width/height");
+    const std::int32_t names = w.count("num_labels", kMinString);
+    for (std::int32_t i = 0; i < names; ++i) w.string("label_names");
+    w.skip(kI8, "compression");
+    w.array(w.count("labels_size", 1), 1, "labels_data");
+    w.skip(kBool, "has_confidence");
+    w.array(w.count("confidence_size", 1), 1, "confidence_data");
+    w.skip(kI64, "latency_us");
+  });
 }
 
 template <>
 findmug_lcm::tables_t decodeMessage<findmug_lcm::tables_t>(const void* data, std::size_t size,
                                                            std::string_view channel) {
-  checkSize(size, "tables_t", channel);
-  WireWalker w(data, size, "tables_t", channel);
-  w.hash(findmug_lcm::tables_t::getHash());
-  w.skip(2 * kI64 + kBool, "utime/seq/has_map_pose");
-  walkRobotPose(w);
-  // A table is at least its fixed fields: id, centroid, top height, axes,
-  // extents, hull_size, point_count, mean_confidence, num_search_positions,
-  // map centroid, centres, map_id, confirmed, sightings.
-  const std::int32_t tables = w.count("num_tables", kI32 + 10 * kF64 + 2 * kI32 + kF32 + kI32 +
-                                                        3 * kF64 + 4 * kF64 + 2 * kI32 + kBool);
-  for (std::int32_t i = 0; i < tables; ++i) walkTable(w);
-  w.skip(kI8, "content");
-  w.finish();
-  return decodeWalked<findmug_lcm::tables_t>(data, size, channel);
+  return walkThenDecode<findmug_lcm::tables_t>(data, size, channel, [](WireWalker& w) {
+    w.skip(2 * kI64 + kBool, "utime/seq/has_map_pose");
+    walkRobotPose(w);
+    // A table is at least its fixed fields: id, centroid, top height, axes,
+    // extents, hull_size, point_count, mean_confidence, num_search_positions,
+    // map centroid, centres, map_id, confirmed, sightings.
+    const std::int32_t tables = w.count("num_tables", kI32 + 10 * kF64 + 2 * kI32 + kF32 + kI32 +
+                                                          3 * kF64 + 4 * kF64 + 2 * kI32 + kBool);
+    for (std::int32_t i = 0; i < tables; ++i) walkTable(w);
+    w.skip(kI8, "content");
+  });
 }
 
 template <>
 findmug_lcm::status_t decodeMessage<findmug_lcm::status_t>(const void* data, std::size_t size,
                                                            std::string_view channel) {
-  checkSize(size, "status_t", channel);
-  WireWalker w(data, size, "status_t", channel);
-  w.hash(findmug_lcm::status_t::getHash());
-  w.skip(2 * kI64 + 4 * kI64, "utime/uptime_us/frame counters");
-  w.skip(kF64 + 2 * kF32, "window_s/input_fps/output_fps");
-  const std::int32_t stages = w.count("num_stages", kMinString + 3 * kI64);
-  for (std::int32_t i = 0; i < stages; ++i) w.string("stage_names");
-  w.array(stages, kI64, "latency_p50_us");
-  w.array(stages, kI64, "latency_p95_us");
-  w.array(stages, kI64, "latency_max_us");
-  const std::int32_t queues = w.count("num_queues", kMinString + 2 * kI32);
-  for (std::int32_t i = 0; i < queues; ++i) w.string("queue_names");
-  w.array(queues, kI32, "queue_depths");
-  w.array(queues, kI32, "queue_capacities");
-  w.string("model_id");
-  w.string("source");
-  w.string("source_state_name");
-  w.skip(kI8, "source_state");
-  w.string("last_error");
-  w.skip(kI64, "last_error_utime");
-  w.skip(3 * kI64, "frames_dropped_at_door/in_pipeline/at_shutdown");
-  w.skip(2 * kF32 + kI32, "cpu_budget_cores/cpu_used_cores/processing_threads");
-  w.skip(kI64, "source_reconnects");
-  w.finish();
-  return decodeWalked<findmug_lcm::status_t>(data, size, channel);
+  return walkThenDecode<findmug_lcm::status_t>(data, size, channel, [](WireWalker& w) {
+    w.skip(2 * kI64 + 4 * kI64, "utime/uptime_us/frame counters");
+    w.skip(kF64 + 2 * kF32, "window_s/input_fps/output_fps");
+    const std::int32_t stages = w.count("num_stages", kMinString + 3 * kI64);
+    for (std::int32_t i = 0; i < stages; ++i) w.string("stage_names");
+    w.array(stages, kI64, "latency_p50_us");
+    w.array(stages, kI64, "latency_p95_us");
+    w.array(stages, kI64, "latency_max_us");
+    const std::int32_t queues = w.count("num_queues", kMinString + 2 * kI32);
+    for (std::int32_t i = 0; i < queues; ++i) w.string("queue_names");
+    w.array(queues, kI32, "queue_depths");
+    w.array(queues, kI32, "queue_capacities");
+    w.string("model_id");
+    w.string("source");
+    w.string("source_state_name");
+    w.skip(kI8, "source_state");
+    w.string("last_error");
+    w.skip(kI64, "last_error_utime");
+    w.skip(3 * kI64, "frames_dropped_at_door/in_pipeline/at_shutdown");
+    w.skip(2 * kF32 + kI32, "cpu_budget_cores/cpu_used_cores/processing_threads");
+    w.skip(kI64, "source_reconnects");
+  });
 }
 
 template <>
 findmug_lcm::robot_pose_t decodeMessage<findmug_lcm::robot_pose_t>(const void* data,
                                                                    std::size_t size,
                                                                    std::string_view channel) {
-  checkSize(size, "robot_pose_t", channel);
-  WireWalker w(data, size, "robot_pose_t", channel);
-  w.hash(findmug_lcm::robot_pose_t::getHash());
-  walkRobotPose(w);
-  w.finish();
-  return decodeWalked<findmug_lcm::robot_pose_t>(data, size, channel);
+  return walkThenDecode<findmug_lcm::robot_pose_t>(data, size, channel,
+                                                   [](WireWalker& w) { walkRobotPose(w); });
 }
 
 }  // namespace findmug::io

@@ -149,11 +149,11 @@ void lcmSeeds(SeedWriter& w) {
   auto decodeTables = [](const std::string& b) { (void)io::decodeTables(b.data(), b.size(), "seed"); };
   w.write("tables", "frame", frame_tables, decodeTables);
   tables.content = io::TablesContent::Map;
-  tables.map_pose = io::RobotPose{frame.utime, 2.0, -1.0, 0.3};
+  tables.map_pose = io::RobotPose{frame.utime, {2.0, -1.0, 0.3}};
   tables.map_info = {io::TableMapInfo{1, true, 5}};
   w.write("tables", "map", asString(io::encodeMessage(io::encodeTables(tables))), decodeTables);
 
-  const auto pose = asString(io::encodeMessage(io::encodeRobotPose(io::RobotPose{frame.utime, 2.0, -1.0, 0.3})));
+  const auto pose = asString(io::encodeMessage(io::encodeRobotPose(io::RobotPose{frame.utime, {2.0, -1.0, 0.3}})));
   w.write("robot_pose", "pose", pose,
           [](const std::string& b) { (void)io::decodeRobotPose(b.data(), b.size(), "seed"); });
 

@@ -36,7 +36,7 @@ bool eventually(Pred pred) {
 std::vector<std::uint8_t> bytesOf(const std::string& s) { return {s.begin(), s.end()}; }
 
 std::vector<std::uint8_t> poseBytes(std::uint64_t utime, double x) {
-  return encodeMessage(encodeRobotPose(RobotPose{utime, x, 0.0, 0.0}));
+  return encodeMessage(encodeRobotPose(RobotPose{utime, {x, 0.0, 0.0}}));
 }
 
 Subscriber<RobotPose>::Decode poseDecoder() {
@@ -149,7 +149,7 @@ TEST(Subscriber, DecodesCountsRejectsAndKeepsTheLatest) {
   EXPECT_EQ(poses.rejected(), 2u);
   EXPECT_EQ(seen, (std::vector<std::uint64_t>{10, 20}));
   ASSERT_TRUE(poses.latest().has_value());
-  EXPECT_DOUBLE_EQ(poses.latest()->x, 2.0);
+  EXPECT_DOUBLE_EQ(poses.latest()->pose.x, 2.0);
   ASSERT_EQ(errors.size(), 2u);
   for (const auto& e : errors) EXPECT_NE(e.find("POSE"), std::string::npos) << e;
 }
@@ -190,7 +190,7 @@ TEST(Subscriber, ReadsAnLcmLogFileToItsEnd) {
   EXPECT_EQ(poses.ended(), HandleResult::EndOfLog);
   EXPECT_EQ(poses.accepted(), 3u);
   EXPECT_EQ(poses.rejected(), 1u);
-  EXPECT_DOUBLE_EQ(poses.latest()->x, 3.0);
+  EXPECT_DOUBLE_EQ(poses.latest()->pose.x, 3.0);
 }
 
 std::vector<std::uint8_t> frameBytes(std::int64_t seq) {

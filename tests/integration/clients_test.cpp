@@ -323,7 +323,7 @@ io::TablesMessage mapFrameTables() {
   m.seq = 3;
   m.tables[1].search_positions[2].reachable = false;
   m.tables[1].search_positions[2].reason = "no observed floor";
-  m.map_pose = io::RobotPose{2'999'000, 10.0, -2.0, M_PI / 2};
+  m.map_pose = io::RobotPose{2'999'000, {10.0, -2.0, M_PI / 2}};
   return m;
 }
 
@@ -339,8 +339,8 @@ std::vector<Stop> expectedTour(const io::TablesMessage& message, bool map_frame,
   // Decode what was encoded: exactly the numbers the client sees.
   const auto bytes = io::encodeMessage(io::encodeTables(message));
   const io::TablesMessage m = io::decodeTables(bytes.data(), bytes.size(), "T");
-  *robot = map_frame ? Eigen::Vector2f(static_cast<float>(m.map_pose->x),
-                                       static_cast<float>(m.map_pose->y))
+  *robot = map_frame ? Eigen::Vector2f(static_cast<float>(m.map_pose->pose.x),
+                                       static_cast<float>(m.map_pose->pose.y))
                      : Eigen::Vector2f::Zero();
   std::vector<Stop> reachable;
   for (std::size_t t = 0; t < m.tables.size(); ++t) {

@@ -45,7 +45,7 @@ using findmug::test::TempDir;
 
 // ---- the pose history ---------------------------------------------------------------
 
-io::RobotPose poseAt(std::uint64_t utime, double x) { return io::RobotPose{utime, x, 0.0, 0.0}; }
+io::RobotPose poseAt(std::uint64_t utime, double x) { return io::RobotPose{utime, {x, 0.0, 0.0}}; }
 
 TEST(PoseHistory, ClosestInTimeWithinTheMaximumAge) {
   PoseHistory history(10'000'000);
@@ -72,17 +72,17 @@ TEST(PoseHistory, LatePosesAreOrderedDuplicatesReplaceOldOnesExpire) {
   history.insert(poseAt(1'500'000, 1.5));  // late, goes before
   history.insert(poseAt(1'700'000, 1.7));
   EXPECT_EQ(history.size(), 3u);
-  EXPECT_EQ(history.closest(1'550'000, 100'000)->x, 1.5);
-  EXPECT_EQ(history.closest(1'650'000, 100'000)->x, 1.7);
-  EXPECT_EQ(history.closest(1'900'000, 100'000)->x, 2.0);
+  EXPECT_EQ(history.closest(1'550'000, 100'000)->pose.x, 1.5);
+  EXPECT_EQ(history.closest(1'650'000, 100'000)->pose.x, 1.7);
+  EXPECT_EQ(history.closest(1'900'000, 100'000)->pose.x, 2.0);
   history.insert(poseAt(1'700'000, 9.0));  // same time: replaces
   EXPECT_EQ(history.size(), 3u);
-  EXPECT_EQ(history.closest(1'700'000, 0)->x, 9.0);
+  EXPECT_EQ(history.closest(1'700'000, 0)->pose.x, 9.0);
   // A pose 2.6 s: everything older than 1.6 s goes.
   history.insert(poseAt(2'600'000, 2.6));
   EXPECT_EQ(history.size(), 3u);  // 1.7, 2.0, 2.6
   EXPECT_FALSE(history.closest(1'500'000, 100'000).has_value());
-  EXPECT_EQ(history.closest(1'650'000, 100'000)->x, 9.0);
+  EXPECT_EQ(history.closest(1'650'000, 100'000)->pose.x, 9.0);
 }
 
 // ---- settings -------------------------------------------------------------------------
@@ -183,7 +183,7 @@ TEST(PoseInput, ReadsItsChannelRejectsBadMessagesAndReportsThem) {
   EXPECT_EQ(input.received(), 2u);
   EXPECT_EQ(input.rejected(), 3u);
   EXPECT_EQ(input.history().size(), 2u);
-  EXPECT_DOUBLE_EQ(input.history().closest(1'110'000, 50'000)->x, 1.1);
+  EXPECT_DOUBLE_EQ(input.history().closest(1'110'000, 50'000)->pose.x, 1.1);
   std::lock_guard lock(errors_mutex);
   ASSERT_EQ(errors.size(), 3u);
   for (const std::string& e : errors) EXPECT_NE(e.find(channel), std::string::npos) << e;
@@ -215,7 +215,7 @@ std::uint64_t utimeOf(const synth::CameraPose& pose) {
 
 // The base frame's pose in the map (= world) for a camera pose.
 io::RobotPose robotPose(const synth::CameraPose& pose) {
-  return io::RobotPose{utimeOf(pose), pose.xy.x(), pose.xy.y(), pose.yaw};
+  return io::RobotPose{utimeOf(pose), {pose.xy.x(), pose.xy.y(), pose.yaw}};
 }
 
 // Frames with no depth at all right after this frame, looking at table 1:
@@ -378,7 +378,7 @@ std::vector<test::LogMessage> poseLogMessages(const Sequence& seq, double shift_
       auto bytes = poseBytes(pose);
       log.push_back({channel, std::vector<std::uint8_t>(bytes.begin(), bytes.begin() + 20)});
       log.push_back({channel, std::vector<std::uint8_t>(40, 0x33)});
-      pose.yaw = std::nan("");
+      pose.pose.yaw = std::nan("");
       log.push_back({channel, poseBytes(pose)});
     }
   }
@@ -441,8 +441,8 @@ TEST(DaemonMap, PosesPutTablesInTheMapFrameAndTheMapHoldsEachTrueTableOnce) {
     }
     const io::RobotPose want = robotPose(submitted.pose);
     EXPECT_EQ(m.map_pose->utime, want.utime);
-    EXPECT_EQ(m.map_pose->x, want.x);
-    EXPECT_EQ(m.map_pose->yaw, want.yaw);
+    EXPECT_EQ(m.map_pose->pose.x, want.pose.x);
+    EXPECT_EQ(m.map_pose->pose.yaw, want.pose.yaw);
     ASSERT_EQ(m.map_tables.size(), m.tables.size());
     for (std::size_t k = 0; k < m.tables.size(); ++k) {
       EXPECT_GT(m.map_info[k].map_id, 0) << "frame " << i << " table " << k << " not mapped";

@@ -59,7 +59,7 @@ LabelledFrame labelledFrame(std::int64_t seq, bool ground, bool labelled_pixel,
   return l;
 }
 
-io::RobotPose poseAt(std::uint64_t utime) { return io::RobotPose{utime, 1.0, 2.0, 0.0}; }
+io::RobotPose poseAt(std::uint64_t utime) { return io::RobotPose{utime, {1.0, 2.0, 0.0}}; }
 
 TEST(TableMapSink, OnlyAFrameWithAPoseAndLabelsUpdatesTheMap) {
   std::vector<std::string> errors;
@@ -177,7 +177,7 @@ TEST(LcmPublisherSink, PublishesLabelsTablesAndMapInThatOrder) {
   EXPECT_EQ(p.tables[0].content, io::TablesContent::Frame);
   ASSERT_EQ(p.tables[0].tables.size(), 1u);
   ASSERT_TRUE(p.tables[0].map_pose.has_value());
-  EXPECT_DOUBLE_EQ(p.tables[0].map_pose->y, 2.0);
+  EXPECT_DOUBLE_EQ(p.tables[0].map_pose->pose.y, 2.0);
   ASSERT_EQ(p.tables[0].map_info.size(), 1u);
   EXPECT_EQ(p.tables[0].map_info[0].map_id, 5);
   EXPECT_EQ(p.tables[1].content, io::TablesContent::Map);

@@ -580,7 +580,7 @@ TEST(TablesCodec, RoundTripInBaseFrame) {
 
 TEST(TablesCodec, MapFrameCopiesFollowThePose) {
   TablesMessage in = makeTables();
-  in.map_pose = RobotPose{777, 10.0, -2.0, M_PI / 2};  // robot at (10,-2) facing map +y
+  in.map_pose = RobotPose{777, {10.0, -2.0, M_PI / 2}};  // robot at (10,-2) facing map +y
   const Bytes b = encodeMessage(encodeTables(in));
   const TablesMessage out = decodeTables(b.data(), b.size(), "C");
   ASSERT_TRUE(out.map_pose.has_value());
@@ -632,7 +632,7 @@ TEST(TablesCodec, MapEntriesCentresAndContentRoundTrip) {
   // A table map message: ids are the stable ids, the pose is mandatory.
   TablesMessage map = makeTables();
   map.content = TablesContent::Map;
-  map.map_pose = RobotPose{9, 10.0, -2.0, M_PI / 2};
+  map.map_pose = RobotPose{9, {10.0, -2.0, M_PI / 2}};
   map.tables[0].id = 3;
   map.tables[0].center = Eigen::Vector2f(1.5f, 0.25f);
   map.tables[1].id = 5;
@@ -659,7 +659,7 @@ TEST(TablesCodec, MapEntriesCentresAndContentRoundTrip) {
 
 TEST(TablesCorrupt, BadMapEntriesAndContentAreNamed) {
   TablesMessage in = makeTables();
-  in.map_pose = RobotPose{1, 1.0, 2.0, 0.3};
+  in.map_pose = RobotPose{1, {1.0, 2.0, 0.3}};
   in.map_info = {{2, true, 3}, {0, false, 0}};
   const findmug_lcm::tables_t good = encodeTables(in);
   findmug_lcm::tables_t bad = good;
@@ -689,7 +689,7 @@ TEST(TablesCorrupt, BadMapEntriesAndContentAreNamed) {
 
 TEST(TablesCorrupt, EveryClass) {
   TablesMessage in = makeTables();
-  in.map_pose = RobotPose{1, 1.0, 2.0, 0.3};
+  in.map_pose = RobotPose{1, {1.0, 2.0, 0.3}};
   in.map_info = {{2, true, 3}, {0, false, 0}};
   const findmug_lcm::tables_t good = encodeTables(in);
   const Bytes full = encodeMessage(good);
@@ -764,14 +764,14 @@ TEST(StatusAndPose, RoundTripAndTruncation) {
   expectError([&] { decodeMessage<findmug_lcm::status_t>(huge.data(), huge.size(), "C"); },
               "num_stages");
 
-  const Bytes p = encodeMessage(encodeRobotPose(RobotPose{5, 1.0, 2.0, -0.5}));
+  const Bytes p = encodeMessage(encodeRobotPose(RobotPose{5, {1.0, 2.0, -0.5}}));
   const RobotPose pose = decodeRobotPose(p.data(), p.size(), "FINDMUG_ROBOT_POSE");
   EXPECT_EQ(pose.utime, 5u);
-  EXPECT_EQ(pose.yaw, -0.5);
+  EXPECT_EQ(pose.pose.yaw, -0.5);
   for (std::size_t len = 0; len < p.size(); ++len) {
     EXPECT_THROW(decodeRobotPose(p.data(), len, "C"), Error) << len;
   }
-  findmug_lcm::robot_pose_t nan_pose = encodeRobotPose(RobotPose{5, std::nan(""), 0, 0});
+  findmug_lcm::robot_pose_t nan_pose = encodeRobotPose(RobotPose{5, {std::nan(""), 0, 0}});
   const Bytes n = encodeMessage(nan_pose);
   expectError([&] { decodeRobotPose(n.data(), n.size(), "C"); }, "x/y/yaw");
 }

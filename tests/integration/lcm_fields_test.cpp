@@ -168,7 +168,7 @@ std::vector<Case> cases() {
   p.reason = "ok";
   t.search_positions = {p, p};
   tables.tables = {t, t};
-  tables.map_pose = RobotPose{1, 2, 3, 0.5};
+  tables.map_pose = RobotPose{1, {2, 3, 0.5}};
   out.push_back({"tables", encodeMessage(encodeTables(tables)), walkTables,
                  [](const Bytes& b) { (void)decodeTables(b.data(), b.size(), "CH"); }, "tables_t"});
   findmug_lcm::status_t s{};
@@ -187,7 +187,7 @@ std::vector<Case> cases() {
       {"status", encodeMessage(s), walkStatus,
        [](const Bytes& b) { (void)decodeMessage<findmug_lcm::status_t>(b.data(), b.size(), "CH"); },
        "status_t"});
-  out.push_back({"robot_pose", encodeMessage(encodeRobotPose(RobotPose{1, 2, 3, 0.5})),
+  out.push_back({"robot_pose", encodeMessage(encodeRobotPose(RobotPose{1, {2, 3, 0.5}})),
                  [](Walk& w) { w.fixed(8 + 8 + 3 * 8); },
                  [](const Bytes& b) { (void)decodeRobotPose(b.data(), b.size(), "CH"); },
                  "robot_pose_t"});

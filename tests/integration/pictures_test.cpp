@@ -115,7 +115,7 @@ TEST(Pictures, VisitingOrderNumbersTheReachablePositionsOnly) {
 TEST(Pictures, TableMapShowsTablesPositionsAndTheRobotPose) {
   io::TablesMessage m = oneTable();
   m.content = io::TablesContent::Map;
-  m.map_pose = io::RobotPose{0, 4.0, -2.0, 1.0};
+  m.map_pose = io::RobotPose{0, {4.0, -2.0, 1.0}};
   io::MapFrameTable mt;
   mt.hull = {{5, -2}, {6, -2}, {6, -1}, {5, -1}};
   mt.center = {5.5, -1.5};

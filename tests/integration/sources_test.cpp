@@ -315,7 +315,7 @@ TEST(LcmSource, MemqFramesArriveInOrderAndBadMessagesAreCounted) {
   const std::vector<std::uint8_t> garbage(100, 0xab);
   std::vector<std::uint8_t> truncated = frameBytes(99);
   truncated.resize(truncated.size() / 2);
-  const auto other_type = encodeMessage(encodeRobotPose(RobotPose{1, 0, 0, 0}));
+  const auto other_type = encodeMessage(encodeRobotPose(RobotPose{1, {0, 0, 0}}));
   for (int i = 0; i < 5; ++i) {
     const auto b = frameBytes(i);
     ASSERT_TRUE(source.bus().publish("FINDMUG_RGBD_T", b.data(), b.size()));

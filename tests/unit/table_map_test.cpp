@@ -84,6 +84,10 @@ TEST(Pose2D, InverseComposeAndWrap) {
   // 90° turn then 1 m forward.
   const Eigen::Vector2f r = transformPoint({0, 0, kPi / 2}, {1, 0});
   EXPECT_LT((r - Eigen::Vector2f(0, 1)).norm(), 1e-6f);
+  // The double-precision transform (map-frame messages) agrees with the float one.
+  const Eigen::Vector2d q_double = transformPointD(a, p.cast<double>());
+  EXPECT_LT((q_double.cast<float>() - q).norm(), 1e-5f);
+  EXPECT_LT((transformPointD({0, 0, kPi / 2}, {1, 0}) - Eigen::Vector2d(0, 1)).norm(), 1e-12);
   EXPECT_NEAR(wrapAngle(3 * kPi), kPi, 1e-12);
   EXPECT_NEAR(wrapAngle(-kPi), kPi, 1e-12);
   EXPECT_NEAR(wrapAngle(-0.5), -0.5, 1e-12);

@@ -12,6 +12,7 @@
 #include <vector>
 
 #include "findmug/label_image.hpp"
+#include "findmug/pose2d.hpp"
 #include "findmug/tables.hpp"
 
 namespace findmug::io {
@@ -23,14 +24,11 @@ struct LabelImageMessage {
   std::int64_t latency_us = 0;
 };
 
-// The robot base's pose in the map (2-D).
+// The robot base's pose in the map at a time (robot_pose_t): a time-stamped Pose2D.
 struct RobotPose {
-  std::uint64_t utime = 0;
-  double x = 0.0, y = 0.0, yaw = 0.0;
+  std::uint64_t utime = 0;  // host clock, microseconds
+  Pose2D pose;
 };
-
-// A base-frame point in the map frame: R(yaw) * p + (x, y).
-Eigen::Vector2d toMapFrame(const RobotPose& pose, const Eigen::Vector2d& base_xy);
 
 // Map-frame copies of one table (tables_t with has_map_pose).
 struct MapFrameTable {
