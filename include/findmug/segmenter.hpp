@@ -30,7 +30,9 @@
 
 namespace findmug {
 
-// Wall time of each stage in milliseconds.
+// Time of each stage in milliseconds: wall time in `timings`, the calling
+// thread's CPU time in `cpu_timings` (what a stage costs on a shared machine,
+// where wall time also counts the time other processes ran).
 struct StageTimings {
   double cloud_ms = 0, normals_ms = 0, ground_ms = 0, overseg_ms = 0, features_ms = 0,
          regions_ms = 0, forest_ms = 0, context_ms = 0, mrf_ms = 0, labels_ms = 0,
@@ -50,6 +52,7 @@ struct PreparedFrame {
   OrganizedCloud cloud_ground;        // empty when no ground
   NormalImage normals_ground;
   StageTimings timings;
+  StageTimings cpu_timings;
 };
 
 // Stage 2 output.
@@ -57,6 +60,7 @@ struct SegmentedFrame {
   PreparedFrame prepared;
   Oversegmentation segmentation;
   StageTimings timings;
+  StageTimings cpu_timings;
 };
 
 // Stage 3 output: everything a client needs.
@@ -74,6 +78,7 @@ struct LabelledFrame {
   // Why tables were not found or were rejected (for the caller to log).
   std::vector<std::string> table_diagnostics;
   StageTimings timings;
+  StageTimings cpu_timings;
 };
 
 class Segmenter {
