@@ -71,6 +71,9 @@ void validateConfig(const GroundConfig& config, const char* where) {
     bad("prior_camera_height_m", config.prior_camera_height_m);
   if (!(config.gravity_refine_deg >= 0.0f && config.gravity_refine_deg < 90.0f))
     bad("gravity_refine_deg", config.gravity_refine_deg);
+  if (config.reestimate_every_frames < 1) bad("reestimate_every_frames", config.reestimate_every_frames);
+  if (!(config.reuse_min_support_fraction > 0.0f && config.reuse_min_support_fraction <= 1.0f))
+    bad("reuse_min_support_fraction", config.reuse_min_support_fraction);
 }
 
 float cosDeg(float deg) { return std::cos(deg * static_cast<float>(M_PI) / 180.0f); }
@@ -361,6 +364,41 @@ std::optional<GroundPlane> fitGroundToLabels(const OrganizedCloud& cloud_camera,
       groundFromPlane(plane.normal, plane.offset, static_cast<int>(inliers.size()));
   ground.method = GroundMethod::FloorLabels;
   return ground;
+}
+
+std::optional<GroundPlane> confirmGround(const OrganizedCloud& cloud_camera,
+                                         const NormalImage& normals_camera,
+                                         const GroundPlane& previous, const GroundConfig& config) {
+  validateConfig(config, "confirmGround");
+  if (normals_camera.normals.size() != cloud_camera.points.size() ||
+      normals_camera.width != cloud_camera.width) {
+    throw Error("confirmGround: normal image has " + std::to_string(normals_camera.normals.size()) +
+                " entries but the cloud has " + std::to_string(cloud_camera.points.size()) +
+                " points");
+  }
+  constexpr int kStep = 4;  // every 4th pixel of every 4th row
+  const Eigen::Vector3f camera_up(0.0f, -1.0f, 0.0f);
+  const float cos_tilt = cosDeg(config.max_tilt_deg);
+  const Plane plane{previous.normal_camera, previous.offset};
+  const Support supports{cloud_camera.points, &normals_camera.normals, config.ransac_inlier_m,
+                         cosDeg(config.normal_agreement_deg)};
+  std::size_t count = 0;
+  for (int v = 0; v < cloud_camera.height; v += kStep) {
+    const std::size_t row = static_cast<std::size_t>(v) * cloud_camera.width;
+    for (int u = 0; u < cloud_camera.width; u += kStep) {
+      const std::size_t i = row + static_cast<std::size_t>(u);
+      // NaN points and normals fail both comparisons.
+      if (normals_camera.normals[i].dot(camera_up) >= cos_tilt && supports(plane, i)) ++count;
+    }
+  }
+  const double support = static_cast<double>(count) * kStep * kStep;
+  if (support < config.min_floor_points ||
+      support < config.reuse_min_support_fraction * previous.support_points) {
+    return std::nullopt;
+  }
+  GroundPlane kept = previous;
+  kept.support_points = static_cast<int>(support);
+  return kept;
 }
 
 std::optional<GroundPlane> estimateGround(const OrganizedCloud& cloud_camera,

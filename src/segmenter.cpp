@@ -194,8 +194,7 @@ PreparedFrame Segmenter::prepare(RgbdFrame frame, const std::vector<std::uint8_t
   switch (config_.ground.source) {
     case GroundSource::Auto:
       out.ground = frame.extrinsics ? std::optional(groundFromExtrinsics(*frame.extrinsics))
-                                    : estimateGround(out.cloud_camera, out.normals_camera,
-                                                     config_.ground);
+                                    : groundOfStream(out.cloud_camera, out.normals_camera);
       break;
     case GroundSource::Extrinsics:
       if (!frame.extrinsics) {
@@ -216,7 +215,7 @@ PreparedFrame Segmenter::prepare(RgbdFrame frame, const std::vector<std::uint8_t
       out.ground = fitGroundToLabels(out.cloud_camera, *gt_labels, config_.ground);
       break;
     case GroundSource::Estimated:
-      out.ground = estimateGround(out.cloud_camera, out.normals_camera, config_.ground);
+      out.ground = groundOfStream(out.cloud_camera, out.normals_camera);
       break;
     case GroundSource::Gravity:
       // A robot knows its mount; a dataset frame brings its gravity; a frame
@@ -251,6 +250,24 @@ PreparedFrame Segmenter::prepare(RgbdFrame frame, const std::vector<std::uint8_t
   watch.lap(out.timings, out.cpu_timings, &StageTimings::ground_ms);
   out.frame = std::move(frame);
   return out;
+}
+
+std::optional<GroundPlane> Segmenter::groundOfStream(const OrganizedCloud& cloud,
+                                                     const NormalImage& normals) const {
+  if (config_.ground.reestimate_every_frames <= 1) {
+    return estimateGround(cloud, normals, config_.ground);
+  }
+  std::lock_guard lock(ground_memory_->mutex);
+  GroundMemory& memory = *ground_memory_;
+  if (memory.plane && memory.frames_since_estimate + 1 < config_.ground.reestimate_every_frames) {
+    if (auto kept = confirmGround(cloud, normals, *memory.plane, config_.ground)) {
+      ++memory.frames_since_estimate;
+      return kept;
+    }
+  }
+  memory.plane = estimateGround(cloud, normals, config_.ground);
+  memory.frames_since_estimate = 0;
+  return memory.plane;
 }
 
 SegmentedFrame Segmenter::oversegment(PreparedFrame prepared) const {

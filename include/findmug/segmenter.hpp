@@ -13,6 +13,7 @@
 #pragma once
 
 #include <memory>
+#include <mutex>
 #include <optional>
 #include <string>
 #include <vector>
@@ -88,6 +89,8 @@ class Segmenter {
   Segmenter(SegmenterConfig config, std::shared_ptr<const RandomForest> forest);
 
   // `gt_labels` is only used when config.ground.source == FloorLabels.
+  // With ground.reestimate_every_frames > 1 the frames are taken as a stream
+  // from one mount: an estimated floor may come from an earlier frame.
   PreparedFrame prepare(RgbdFrame frame, const std::vector<std::uint8_t>* gt_labels = nullptr) const;
   SegmentedFrame oversegment(PreparedFrame prepared) const;
   // Features only (used by the trainer).
@@ -101,9 +104,23 @@ class Segmenter {
   const RandomForest* forest() const { return forest_.get(); }
 
  private:
+  // estimateGround, or with ground.reestimate_every_frames > 1 the plane of
+  // an earlier frame while confirmGround accepts it (see GroundConfig).
+  std::optional<GroundPlane> groundOfStream(const OrganizedCloud& cloud,
+                                            const NormalImage& normals) const;
+
   SegmenterConfig config_;
   std::shared_ptr<const RandomForest> forest_;
   std::unique_ptr<Oversegmenter> oversegmenter_;
+  // The floor kept between frames (ground.reestimate_every_frames > 1). The
+  // daemon prepares frames in order on one thread; the mutex only keeps
+  // concurrent callers safe (they then share one stream).
+  struct GroundMemory {
+    std::mutex mutex;
+    std::optional<GroundPlane> plane;  // as last estimated (its support is the reference)
+    int frames_since_estimate = 0;
+  };
+  std::unique_ptr<GroundMemory> ground_memory_ = std::make_unique<GroundMemory>();
 };
 
 // Throws findmug::Error naming the model and every setting whose value

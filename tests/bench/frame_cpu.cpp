@@ -18,6 +18,7 @@
 // extrinsics, so the floor is estimated from the frame, as in the daemon).
 // Prints a Markdown table for BENCHMARKS.md section 9.
 #include <algorithm>
+#include <array>
 #include <atomic>
 #include <cstdio>
 #include <cstdlib>
@@ -104,6 +105,7 @@ int run(int argc, char** argv) {
       {"labels", &StageTimings::labels_ms},     {"tables", &StageTimings::tables_ms}};
   std::vector<std::vector<double>> cpu(std::size(stages)), wall(std::size(stages));
   std::vector<double> cpu_total, wall_total, news, megabytes;
+  std::array<std::vector<double>, 3> news_split;  // prepare, oversegment, classify
   std::size_t labelled = 0, runs = 0;
   std::FILE* digest = digest_path.empty() ? nullptr : std::fopen(digest_path.c_str(), "w");
   if (!digest_path.empty() && !digest) throw Error("cannot write " + digest_path);
@@ -113,8 +115,17 @@ int run(int argc, char** argv) {
       RgbdFrame frame = f;  // the copy is the caller's (the source's), not the pipeline's
       const std::uint64_t news_before = g_news.load();
       const std::uint64_t bytes_before = g_bytes.load();
-      LabelledFrame out = segmenter.process(std::move(frame));
+      // process() is exactly these three calls; made one by one to count the
+      // allocations of each.
+      PreparedFrame prepared = segmenter.prepare(std::move(frame));
+      const std::uint64_t news_prepared = g_news.load();
+      SegmentedFrame segmented = segmenter.oversegment(std::move(prepared));
+      const std::uint64_t news_segmented = g_news.load();
+      LabelledFrame out = segmenter.classify(std::move(segmented));
       const double calls = static_cast<double>(g_news.load() - news_before);
+      const std::array<double, 3> split = {static_cast<double>(news_prepared - news_before),
+                                           static_cast<double>(news_segmented - news_prepared),
+                                           static_cast<double>(g_news.load() - news_segmented)};
       const double mb = static_cast<double>(g_bytes.load() - bytes_before) / 1e6;
       ++runs;
       if (digest && pass == 0) {
@@ -132,6 +143,7 @@ int run(int argc, char** argv) {
       if (!out.segmented.prepared.ground) continue;
       ++labelled;
       news.push_back(calls);
+      for (std::size_t k = 0; k < split.size(); ++k) news_split[k].push_back(split[k]);
       megabytes.push_back(mb);
       for (std::size_t s = 0; s < std::size(stages); ++s) {
         cpu[s].push_back(out.cpu_timings.*stages[s].second);
@@ -155,6 +167,8 @@ int run(int argc, char** argv) {
   std::printf("\nheap allocations per labelled frame (operator new, Segmenter::process): median %.0f calls, "
               "%.1f MB; max %.0f calls\n",
               median(news), median(megabytes), *std::max_element(news.begin(), news.end()));
+  std::printf("of which (medians) prepare %.0f, oversegment %.0f, classify %.0f calls\n",
+              median(news_split[0]), median(news_split[1]), median(news_split[2]));
   return 0;
 }
 
