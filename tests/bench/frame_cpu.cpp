@@ -6,11 +6,12 @@
 // The first pass is a warm-up; the figures are over the following passes.
 //
 //   frame_cpu --model MODEL [--data DIR] [--passes N] [--config YAML] [--set section.key=value]...
-//             [--digest FILE]
+//             [--digest FILE] [--heap-keep-mb MB]
 //
 // --digest writes one line per frame of the first timed pass: the ground
 // plane and a hash of the label image and of the tables' hull sizes, so two
 // builds can be checked to give the same results (`diff` the files).
+// --heap-keep-mb sets the malloc thresholds as findmugd's daemon.heap_keep_mb.
 //
 // --config comes before the --set flags it should not override. Defaults:
 // the NYU labelled frames, 3 passes after the warm-up, the library's default
@@ -26,6 +27,8 @@
 #include <new>
 #include <string>
 #include <vector>
+
+#include <malloc.h>
 
 #include "findmug/config.hpp"
 #include "findmug/dataset.hpp"
@@ -74,24 +77,37 @@ int run(int argc, char** argv) {
   int passes = 3;
   Config config;
   std::string digest_path;
+  int heap_keep_mb = 0;
   for (int i = 1; i + 1 < argc; i += 2) {
     if (!std::strcmp(argv[i], "--data")) data = argv[i + 1];
     else if (!std::strcmp(argv[i], "--model")) model_path = argv[i + 1];
     else if (!std::strcmp(argv[i], "--passes")) passes = std::max(1, std::atoi(argv[i + 1]));
     else if (!std::strcmp(argv[i], "--digest")) digest_path = argv[i + 1];
+    else if (!std::strcmp(argv[i], "--heap-keep-mb")) heap_keep_mb = std::atoi(argv[i + 1]);
     else if (!std::strcmp(argv[i], "--config")) config = loadConfig(argv[i + 1]);
     else if (!std::strcmp(argv[i], "--set")) applyOverride(config, argv[i + 1]);
     else throw Error(std::string("unknown flag ") + argv[i]);
   }
   if (argc % 2 == 0) throw Error(std::string("flag ") + argv[argc - 1] + " has no value");
   if (model_path.empty()) throw Error("--model MODEL is required");
+  // As findmugd's daemon.heap_keep_mb: freed frame buffers stay in the heap.
+  if (heap_keep_mb > 0) {
+    mallopt(M_MMAP_THRESHOLD, 32 << 20);
+    mallopt(M_TRIM_THRESHOLD, heap_keep_mb << 20);
+  }
   config.segmenter.forest.num_threads = 1;
 
   DatasetOptions options;
   options.require_labels = false;
   const DatasetFolder dataset(data, options);
   std::vector<RgbdFrame> frames;
-  for (std::size_t i = 0; i < dataset.size(); ++i) frames.push_back(dataset.load(i).frame);
+  std::vector<std::vector<std::uint8_t>> truth;
+  for (std::size_t i = 0; i < dataset.size(); ++i) {
+    LabeledFrame f = dataset.load(i);
+    frames.push_back(std::move(f.frame));
+    truth.push_back(std::move(f.labels));
+  }
+  std::size_t truth_pixels = 0, correct_pixels = 0;  // first timed pass, labelled data only
   auto forest = std::make_shared<const RandomForest>(RandomForest::load(model_path));
   const Segmenter segmenter(config.segmenter, forest);
 
@@ -128,6 +144,13 @@ int run(int argc, char** argv) {
                                            static_cast<double>(g_news.load() - news_segmented)};
       const double mb = static_cast<double>(g_bytes.load() - bytes_before) / 1e6;
       ++runs;
+      if (pass == 0 && truth[fi].size() == out.labels.labels.size()) {
+        for (std::size_t p = 0; p < truth[fi].size(); ++p) {
+          if (truth[fi][p] == kVoidLabel) continue;
+          ++truth_pixels;
+          correct_pixels += out.labels.labels[p] == truth[fi][p];
+        }
+      }
       if (digest && pass == 0) {
         std::uint64_t h = 1469598103934665603ull;  // FNV-1a over labels, then table hull sizes
         auto mix = [&h](std::uint64_t x) { h = (h ^ x) * 1099511628211ull; };
@@ -157,6 +180,10 @@ int run(int argc, char** argv) {
   if (digest) std::fclose(digest);
   std::printf("%zu frames x %d passes from %s, model %s, one thread; medians over the %zu of %zu runs that found a ground plane (full pipeline)\n\n",
               frames.size(), passes, data.c_str(), model_path.c_str(), labelled, runs);
+  if (truth_pixels > 0) {
+    std::printf("pixel accuracy against the ground truth (first timed pass, every frame): %.2f %%\n\n",
+                100.0 * static_cast<double>(correct_pixels) / static_cast<double>(truth_pixels));
+  }
   std::printf("| stage | CPU ms median | CPU ms p95 | wall ms median |\n|---|---:|---:|---:|\n");
   for (std::size_t s = 0; s < std::size(stages); ++s) {
     std::printf("| %s | %.2f | %.2f | %.2f |\n", stages[s].first, median(cpu[s]),
