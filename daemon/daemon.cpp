@@ -207,7 +207,7 @@ int Daemon::run() {
     }
     if (now >= next_status_text && !hung) {
       // The same figures as status_t, for `systemctl status` and the journal.
-      const status_t s = pipeline_->makeStatus();
+      const findmug_lcm::status_t s = pipeline_->makeStatus();
       const auto total =
           std::find(s.stage_names.begin(), s.stage_names.end(), "total") - s.stage_names.begin();
       const std::string line = fmt::format(

@@ -294,7 +294,8 @@ void Pipeline::publishResult(ResultJob& job) {
   labels.utime = frame.utime;
   labels.seq = frame.seq;
   labels.latency_us = latency_us;
-  const label_image_t label_msg = io::encodeLabelImage(labels, daemon_config_.publish_confidence);
+  const findmug_lcm::label_image_t label_msg =
+      io::encodeLabelImage(labels, daemon_config_.publish_confidence);
   std::unique_lock lcm_lock(lcm_mutex_);
   if (lcm_->publish(labels_channel_, &label_msg) != 0) {
     throw Error("LCM publish on " + labels_channel_ + " failed for " + frameName(frame));
@@ -331,7 +332,7 @@ void Pipeline::publishResult(ResultJob& job) {
     tables.tables = labelled.tables;
     tables.map_pose = pose;
     tables.map_info = std::move(map_info);
-    const tables_t tables_msg = io::encodeTables(tables);
+    const findmug_lcm::tables_t tables_msg = io::encodeTables(tables);
     std::lock_guard lcm_lock2(lcm_mutex_);
     if (lcm_->publish(tables_channel_, &tables_msg) != 0) {
       throw Error("LCM publish on " + tables_channel_ + " failed for " + frameName(frame));
@@ -406,7 +407,7 @@ void Pipeline::publishTableMap(const RgbdFrame& frame, const io::RobotPose& pose
       message.map_info.push_back({t.table.id, true, t.sightings});
     }
   }
-  const tables_t msg = io::encodeTables(message);
+  const findmug_lcm::tables_t msg = io::encodeTables(message);
   std::lock_guard lcm_lock(lcm_mutex_);
   if (lcm_->publish(table_map_channel_, &msg) != 0) {
     throw Error("LCM publish on " + table_map_channel_ + " failed for " + frameName(frame));
@@ -463,8 +464,8 @@ ProgressSnapshot Pipeline::progress() const {
   return p;
 }
 
-status_t Pipeline::makeStatus() const {
-  status_t s{};
+findmug_lcm::status_t Pipeline::makeStatus() const {
+  findmug_lcm::status_t s{};
   const auto now = Clock::now();
   s.utime = static_cast<std::int64_t>(utimeNow());
   s.uptime_us = std::chrono::duration_cast<std::chrono::microseconds>(now - started_).count();
@@ -540,7 +541,7 @@ void Pipeline::publishStatus() {
     cpu_sample_s_ = cpu_s;
     cpu_sample_time_ = now;
   }
-  const status_t status = makeStatus();
+  const findmug_lcm::status_t status = makeStatus();
   std::lock_guard lcm_lock(lcm_mutex_);
   if (!lcm_) return;  // stopped: the final status has gone out already
   if (lcm_->publish(status_channel_, &status) != 0) {

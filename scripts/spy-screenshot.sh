@@ -18,7 +18,7 @@ repo="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 build="${1:-${FINDMUG_BUILD_DIR:-$repo/build}}"
 out="${2:-$PWD/findmug-spy.png}"
 data="${FINDMUG_DATA:-$repo/../shared/data}"
-grab="$build/daemon/io/findmug-grab"
+grab="$build/tools/findmug-grab"
 spy="$build/clients/findmug-spy"
 
 for f in "$grab" "$spy" "$build/lcmtypes/findmug_lcmtypes.jar"; do

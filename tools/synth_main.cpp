@@ -58,7 +58,7 @@ void writeLcmLog(const std::string& dataset_dir, const findmug::synth::SequenceG
     LabeledFrame frame = folder.load(i);
     frame.frame.seq = static_cast<std::int64_t>(i);
     if (i < truth.frame_utimes.size()) frame.frame.utime = truth.frame_utimes[i];
-    const rgbd_frame_t message = io::encodeRgbdFrame(frame.frame);
+    const findmug_lcm::rgbd_frame_t message = io::encodeRgbdFrame(frame.frame);
     std::vector<std::uint8_t> bytes(static_cast<std::size_t>(message.getEncodedSize()));
     if (message.encode(bytes.data(), 0, static_cast<int>(bytes.size())) < 0)
       throw Error(log_path + ": cannot encode frame " + frame.name);

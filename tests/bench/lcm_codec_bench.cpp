@@ -61,7 +61,8 @@ void BM_WireCheckAndLcmDecode(benchmark::State& state) {
   if (!frame) return state.SkipWithError("nyuv2_labeled missing (FINDMUG_DATA)");
   const auto data = encodeMessage(encodeRgbdFrame(*frame, options(1)));
   for (auto _ : state) {
-    rgbd_frame_t msg = decodeMessage<rgbd_frame_t>(data.data(), data.size(), "FINDMUG_RGBD");
+    findmug_lcm::rgbd_frame_t msg =
+        decodeMessage<findmug_lcm::rgbd_frame_t>(data.data(), data.size(), "FINDMUG_RGBD");
     benchmark::DoNotOptimize(msg.depth_data.data());
   }
 }

@@ -7,7 +7,7 @@
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   try {
-    (void)findmug::io::decodeMessage<findmug::status_t>(data, size, "FUZZ_STATUS");
+    (void)findmug::io::decodeMessage<findmug_lcm::status_t>(data, size, "FUZZ_STATUS");
   } catch (const findmug::Error&) {
     // The expected answer to a bad input.
   }

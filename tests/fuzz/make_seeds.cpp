@@ -156,7 +156,7 @@ void lcmSeeds(SeedWriter& w) {
   w.write("robot_pose", "pose", pose,
           [](const std::string& b) { (void)io::decodeRobotPose(b.data(), b.size(), "seed"); });
 
-  status_t s;
+  findmug_lcm::status_t s;
   s.utime = frame.utime;
   s.uptime_us = 1000000;
   s.frames_received = 10;
@@ -178,9 +178,9 @@ void lcmSeeds(SeedWriter& w) {
   s.model_id = "findmug.fmf:0123abcd";
   s.source = "openni2";
   s.source_state_name = "running";
-  s.source_state = status_t::SOURCE_RUNNING;
+  s.source_state = findmug_lcm::status_t::SOURCE_RUNNING;
   w.write("status", "status", asString(io::encodeMessage(s)), [](const std::string& b) {
-    (void)io::decodeMessage<status_t>(b.data(), b.size(), "seed");
+    (void)io::decodeMessage<findmug_lcm::status_t>(b.data(), b.size(), "seed");
   });
 }
 

@@ -429,9 +429,9 @@ const ClientLog& clientLog() {
     l->labels1.latency_us = 250'000;
     messages.push_back({labels_channel, io::encodeMessage(io::encodeLabelImage(l->labels1))});
     // A label id no class has: a well-formed message with bad content.
-    label_image_t bad = io::encodeLabelImage(l->labels1, false);
+    findmug_lcm::label_image_t bad = io::encodeLabelImage(l->labels1, false);
     bad.seq = 2;
-    bad.compression = label_image_t::COMPRESSION_NONE;
+    bad.compression = findmug_lcm::label_image_t::COMPRESSION_NONE;
     bad.labels_data.assign(l->labels1.image.labels.begin(), l->labels1.image.labels.end());
     bad.labels_data[17] = 42;
     bad.labels_size = static_cast<std::int32_t>(bad.labels_data.size());

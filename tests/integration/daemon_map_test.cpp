@@ -304,7 +304,7 @@ const Sequence& sequence() {
 struct MapRun {
   std::vector<io::TablesMessage> tables;     // FINDMUG_TABLES, frame order
   std::vector<io::TablesMessage> table_map;  // FINDMUG_TABLE_MAP
-  std::vector<status_t> statuses;
+  std::vector<findmug_lcm::status_t> statuses;
   PipelineCounters counters;
   std::vector<MappedTable> mapped;  // the map at the end, tentative tables included
 };
@@ -342,7 +342,8 @@ MapRun runPipeline(const Sequence& seq, const std::string& pose_log,
     } else if (m.channel == io::kTableMapChannel) {
       run.table_map.push_back(io::decodeTables(m.data.data(), m.data.size(), m.channel));
     } else if (m.channel == io::kStatusChannel) {
-      run.statuses.push_back(io::decodeMessage<status_t>(m.data.data(), m.data.size(), m.channel));
+      run.statuses.push_back(
+          io::decodeMessage<findmug_lcm::status_t>(m.data.data(), m.data.size(), m.channel));
     }
   }
   return run;

@@ -64,7 +64,7 @@ Config baseConfig(const std::string& source, const std::string& out_log) {
 struct Published {
   std::vector<io::LabelImageMessage> labels;
   std::vector<io::TablesMessage> tables;
-  std::vector<status_t> statuses;
+  std::vector<findmug_lcm::status_t> statuses;
 };
 
 Published readPublished(const std::string& log) {
@@ -75,7 +75,8 @@ Published readPublished(const std::string& log) {
     } else if (m.channel == io::kTablesChannel) {
       p.tables.push_back(io::decodeTables(m.data.data(), m.data.size(), m.channel));
     } else if (m.channel == io::kStatusChannel) {
-      p.statuses.push_back(io::decodeMessage<status_t>(m.data.data(), m.data.size(), m.channel));
+      p.statuses.push_back(
+          io::decodeMessage<findmug_lcm::status_t>(m.data.data(), m.data.size(), m.channel));
     } else {
       ADD_FAILURE() << "unexpected channel " << m.channel;
     }
@@ -151,13 +152,14 @@ void runAndCompare(const std::string& spec, std::size_t expected_frames,
     EXPECT_GT(got.latency_us, 0);
   }
   ASSERT_FALSE(published.statuses.empty());
-  const status_t& last = published.statuses.back();  // the final status, after the drain
+  const findmug_lcm::status_t& last =
+      published.statuses.back();  // the final status, after the drain
   EXPECT_EQ(last.frames_received, static_cast<std::int64_t>(expected_frames));
   EXPECT_EQ(last.frames_processed, static_cast<std::int64_t>(expected_frames));
   EXPECT_EQ(last.frames_dropped, 0);
   EXPECT_EQ(last.frames_rejected, 0);
   EXPECT_EQ(last.model_id, "tiny.fmf:" + sharedModel()->forest->id());
-  EXPECT_EQ(last.source_state, status_t::SOURCE_END_OF_STREAM);
+  EXPECT_EQ(last.source_state, findmug_lcm::status_t::SOURCE_END_OF_STREAM);
   EXPECT_EQ(last.num_queues, 3);
   const auto& names = last.stage_names;
   for (const char* stage : {"prepare", "segment", "publish", "supervoxels", "forest", "total"}) {
@@ -272,7 +274,7 @@ TEST(DaemonPipeline, HeldSegmentStageDropsTheOldestFramesAndTheNewestWin) {
   // prepare stage then waits at the door, and whatever arrives meanwhile
   // waits in the entry queue, which keeps the newest frames.
   auto segment_depth = [&] {
-    const status_t s = pipeline.makeStatus();
+    const findmug_lcm::status_t s = pipeline.makeStatus();
     for (int i = 0; i < s.num_queues; ++i) {
       if (s.queue_names[i] == "segment") return s.queue_depths[i];
     }
@@ -290,7 +292,7 @@ TEST(DaemonPipeline, HeldSegmentStageDropsTheOldestFramesAndTheNewestWin) {
   ASSERT_GE(pending, 3u);
   ASSERT_LE(pending, 5u);
   const auto kept = static_cast<std::int64_t>(pending);
-  const status_t held = pipeline.makeStatus();
+  const findmug_lcm::status_t held = pipeline.makeStatus();
   EXPECT_EQ(held.frames_dropped, kFrames - kept);
   // Every drop happened at the door, before any work was spent on the frame.
   EXPECT_EQ(held.frames_dropped_at_door, kFrames - kept);
@@ -397,7 +399,7 @@ TEST(DaemonPipeline, CorruptLcmMessagesAreCountedAndSkipped) {
   DatasetFolder ds(nyu.string());
   RgbdFrame good = ds.load(7).frame;
   good.seq = 10;
-  const rgbd_frame_t good_msg = io::encodeRgbdFrame(good);
+  const findmug_lcm::rgbd_frame_t good_msg = io::encodeRgbdFrame(good);
   const std::vector<std::uint8_t> good_bytes = io::encodeMessage(good_msg);
 
   std::vector<test::LogMessage> in;
@@ -409,19 +411,19 @@ TEST(DaemonPipeline, CorruptLcmMessagesAreCountedAndSkipped) {
   // Garbage (wrong type hash).
   in.push_back({ch, std::vector<std::uint8_t>(4096, 0xA5)});
   // Absurd dimensions.
-  rgbd_frame_t huge = good_msg;
+  findmug_lcm::rgbd_frame_t huge = good_msg;
   huge.width = 100000;
   huge.height = 100000;
   in.push_back({ch, io::encodeMessage(huge)});
   // Size field consistent with the array but not with width x height.
-  rgbd_frame_t short_depth = good_msg;
-  short_depth.depth_compression = rgbd_frame_t::DEPTH_NONE;
+  findmug_lcm::rgbd_frame_t short_depth = good_msg;
+  short_depth.depth_compression = findmug_lcm::rgbd_frame_t::DEPTH_NONE;
   short_depth.depth_size = 100;
   short_depth.depth_data.assign(100, 0);
   in.push_back({ch, io::encodeMessage(short_depth)});
   // Empty message.
   in.push_back({ch, {}});
-  rgbd_frame_t second = good_msg;
+  findmug_lcm::rgbd_frame_t second = good_msg;
   second.seq = 11;
   in.push_back({ch, io::encodeMessage(second)});
   const std::string in_log = tmp.str("in.lcmlog");
@@ -443,7 +445,7 @@ TEST(DaemonPipeline, CorruptLcmMessagesAreCountedAndSkipped) {
   const LabelledFrame expected = segmenter.process(io::decodeRgbdFrame(good_msg, ch));
   expectSameLabels(expected.labels, published.labels[0]);
   ASSERT_FALSE(published.statuses.empty());
-  const status_t& last = published.statuses.back();
+  const findmug_lcm::status_t& last = published.statuses.back();
   EXPECT_EQ(last.frames_received, 2);
   EXPECT_EQ(last.frames_processed, 2);
   EXPECT_EQ(last.frames_rejected, 5);
@@ -564,7 +566,7 @@ TEST(DaemonFaults, StreamThatRepeatsReordersJumpsBackAndHasACorruptFrameEveryThi
   ASSERT_TRUE(sharedModel());
   TempDir tmp;
   DatasetFolder ds(nyu.string());
-  const rgbd_frame_t base = io::encodeRgbdFrame(ds.load(3).frame);
+  const findmug_lcm::rgbd_frame_t base = io::encodeRgbdFrame(ds.load(3).frame);
   const std::int64_t u0 = 1'700'000'000'000'000;
   const std::vector<std::pair<std::int64_t, std::int64_t>> seq_utime = {
       {0, u0}, {1, u0 + 33'000}, {2, u0 + 66'000}, {3, u0 + 99'000},
@@ -576,7 +578,7 @@ TEST(DaemonFaults, StreamThatRepeatsReordersJumpsBackAndHasACorruptFrameEveryThi
   const std::string ch(io::kRgbdChannel);
   int corrupt = 0;
   for (std::size_t i = 0; i < seq_utime.size(); ++i) {
-    rgbd_frame_t m = base;
+    findmug_lcm::rgbd_frame_t m = base;
     m.seq = seq_utime[i].first;
     m.utime = seq_utime[i].second;
     const auto bytes = io::encodeMessage(m);
@@ -603,7 +605,7 @@ TEST(DaemonFaults, StreamThatRepeatsReordersJumpsBackAndHasACorruptFrameEveryThi
     EXPECT_EQ(static_cast<std::int64_t>(published.labels[i].utime), seq_utime[i].second) << i;
   }
   ASSERT_FALSE(published.statuses.empty());
-  const status_t& last = published.statuses.back();
+  const findmug_lcm::status_t& last = published.statuses.back();
   EXPECT_EQ(last.frames_received, static_cast<std::int64_t>(seq_utime.size()));
   EXPECT_EQ(last.frames_processed, static_cast<std::int64_t>(seq_utime.size()));
   EXPECT_EQ(last.frames_dropped, 0);

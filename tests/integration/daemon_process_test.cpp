@@ -151,7 +151,7 @@ TEST(Findmugd, NotifyProtocolWatchdogAndCleanShutdownOnSigterm) {
   const auto messages = test::readLcmLog(out);
   ASSERT_FALSE(messages.empty());
   ASSERT_EQ(messages.back().channel, io::kStatusChannel);
-  const auto final_status = io::decodeMessage<status_t>(
+  const auto final_status = io::decodeMessage<findmug_lcm::status_t>(
       messages.back().data.data(), messages.back().data.size(), messages.back().channel);
   std::size_t label_images = 0;
   for (const auto& m : messages) label_images += m.channel == io::kLabelsChannel;
@@ -160,7 +160,7 @@ TEST(Findmugd, NotifyProtocolWatchdogAndCleanShutdownOnSigterm) {
   EXPECT_EQ(
       final_status.frames_received,
       final_status.frames_processed + final_status.frames_dropped + final_status.frames_rejected);
-  EXPECT_EQ(final_status.source_state, status_t::SOURCE_STOPPED);
+  EXPECT_EQ(final_status.source_state, findmug_lcm::status_t::SOURCE_STOPPED);
   const std::string log = readFile(tmp.str("stderr.txt"));
   EXPECT_NE(log.find("effective config"), std::string::npos);
   EXPECT_NE(log.find("method: organized"), std::string::npos);
@@ -257,7 +257,7 @@ TEST(Findmugd, SigstopStopsTheKeepAlivesAndSigtermMidFrameExitsCleanly) {
   const auto messages = test::readLcmLog(out);
   ASSERT_FALSE(messages.empty());
   ASSERT_EQ(messages.back().channel, io::kStatusChannel);
-  const auto final_status = io::decodeMessage<status_t>(
+  const auto final_status = io::decodeMessage<findmug_lcm::status_t>(
       messages.back().data.data(), messages.back().data.size(), messages.back().channel);
   EXPECT_GT(final_status.frames_processed, 0);
   EXPECT_EQ(

@@ -94,7 +94,7 @@ struct RgbdOffsets {
   std::size_t source_len, width, height, fx, depth_compression, depth_size, depth_data,
       color_compression, color_size, color_data;
 };
-RgbdOffsets rgbdOffsets(const rgbd_frame_t& m) {
+RgbdOffsets rgbdOffsets(const findmug_lcm::rgbd_frame_t& m) {
   RgbdOffsets o{};
   o.source_len = 8 + 8 + 8;
   o.width = o.source_len + 4 + m.source.size() + 1;
@@ -144,7 +144,7 @@ TEST_P(RgbdRoundTrip, BytesInFrameOut) {
   RgbdEncodeOptions opt;
   opt.depth = GetParam().depth;
   opt.color = GetParam().color;
-  const rgbd_frame_t msg = encodeRgbdFrame(in, opt);
+  const findmug_lcm::rgbd_frame_t msg = encodeRgbdFrame(in, opt);
   EXPECT_EQ(msg.depth_compression, static_cast<std::int8_t>(opt.depth));
   EXPECT_EQ(msg.color_compression, static_cast<std::int8_t>(opt.color));
   const Bytes bytes = encodeMessage(msg);
@@ -239,7 +239,8 @@ TEST(RgbdCorrupt, FlippedBytesNeverCrash) {
 
 TEST(RgbdCorrupt, SizeFieldBeyondTheMessageIsRejectedBeforeAllocating) {
   const Bytes full = encodedFrame(DepthCompression::Zlib, ColorCompression::Jpeg);
-  rgbd_frame_t msg = decodeMessage<rgbd_frame_t>(full.data(), full.size(), "C");
+  findmug_lcm::rgbd_frame_t msg =
+      decodeMessage<findmug_lcm::rgbd_frame_t>(full.data(), full.size(), "C");
   const RgbdOffsets o = rgbdOffsets(msg);
   for (std::int32_t bad : {0x7fffffff, 2000000000, static_cast<std::int32_t>(full.size())}) {
     Bytes b = full;
@@ -266,7 +267,8 @@ TEST(RgbdCorrupt, SizeFieldBeyondTheMessageIsRejectedBeforeAllocating) {
 
 TEST(RgbdCorrupt, AbsurdOrMismatchedDimensions) {
   const Bytes full = encodedFrame(DepthCompression::None, ColorCompression::None);
-  const RgbdOffsets o = rgbdOffsets(decodeMessage<rgbd_frame_t>(full.data(), full.size(), "C"));
+  const RgbdOffsets o =
+      rgbdOffsets(decodeMessage<findmug_lcm::rgbd_frame_t>(full.data(), full.size(), "C"));
   for (std::int32_t w : {0, -16, 100000, 1 << 30}) {
     Bytes b = full;
     putBe32(b, o.width, w);
@@ -279,7 +281,8 @@ TEST(RgbdCorrupt, AbsurdOrMismatchedDimensions) {
               "rgbd_frame_t.depth_data");
   // Same with zlib and JPEG: inflated size and JPEG size disagree.
   const Bytes zj = encodedFrame(DepthCompression::Zlib, ColorCompression::Jpeg);
-  const RgbdOffsets oz = rgbdOffsets(decodeMessage<rgbd_frame_t>(zj.data(), zj.size(), "C"));
+  const RgbdOffsets oz =
+      rgbdOffsets(decodeMessage<findmug_lcm::rgbd_frame_t>(zj.data(), zj.size(), "C"));
   b = zj;
   putBe32(b, oz.height, 11);
   expectError([&] { decodeRgbdFrame(b.data(), b.size(), "C"); }, "inflates to more than");
@@ -290,7 +293,8 @@ TEST(RgbdCorrupt, AbsurdOrMismatchedDimensions) {
 
 TEST(RgbdCorrupt, UnknownCompressionIds) {
   const Bytes full = encodedFrame(DepthCompression::Zlib, ColorCompression::Jpeg);
-  const RgbdOffsets o = rgbdOffsets(decodeMessage<rgbd_frame_t>(full.data(), full.size(), "C"));
+  const RgbdOffsets o =
+      rgbdOffsets(decodeMessage<findmug_lcm::rgbd_frame_t>(full.data(), full.size(), "C"));
   Bytes b = full;
   b[o.depth_compression] = 7;
   expectError([&] { decodeRgbdFrame(b.data(), b.size(), "C"); },
@@ -303,9 +307,10 @@ TEST(RgbdCorrupt, UnknownCompressionIds) {
 
 TEST(RgbdCorrupt, BadZlibStreams) {
   RgbdFrame f = makeFrame(16, 12);
-  rgbd_frame_t msg = encodeRgbdFrame(f, {DepthCompression::Zlib, ColorCompression::None});
+  findmug_lcm::rgbd_frame_t msg =
+      encodeRgbdFrame(f, {DepthCompression::Zlib, ColorCompression::None});
   // Garbage instead of a zlib stream.
-  rgbd_frame_t bad = msg;
+  findmug_lcm::rgbd_frame_t bad = msg;
   bad.depth_data.assign(40, 0x5a);
   bad.depth_size = 40;
   expectError([&] { decodeRgbdFrame(bad, "C"); }, "corrupt zlib stream");
@@ -331,8 +336,9 @@ TEST(RgbdCorrupt, BadZlibStreams) {
 
 TEST(RgbdCorrupt, BadJpegAndPng) {
   const RgbdFrame f = makeFrame(32, 24);
-  const rgbd_frame_t jpeg = encodeRgbdFrame(f, {DepthCompression::None, ColorCompression::Jpeg});
-  rgbd_frame_t bad = jpeg;
+  const findmug_lcm::rgbd_frame_t jpeg =
+      encodeRgbdFrame(f, {DepthCompression::None, ColorCompression::Jpeg});
+  findmug_lcm::rgbd_frame_t bad = jpeg;
   bad.color_data.resize(bad.color_data.size() / 2);  // truncated: libjpeg would grey-fill
   bad.color_size = static_cast<std::int32_t>(bad.color_data.size());
   expectError([&] { decodeRgbdFrame(bad, "FINDMUG_RGBD"); }, "rgbd_frame_t.color_data: bad JPEG");
@@ -352,7 +358,8 @@ TEST(RgbdCorrupt, BadJpegAndPng) {
   bad.color_size = static_cast<std::int32_t>(bad.color_data.size());
   expectError([&] { decodeRgbdFrame(bad, "C"); }, "JPEG is 16x24, message says 32x24");
 
-  const rgbd_frame_t png = encodeRgbdFrame(f, {DepthCompression::None, ColorCompression::Png});
+  const findmug_lcm::rgbd_frame_t png =
+      encodeRgbdFrame(f, {DepthCompression::None, ColorCompression::Png});
   bad = png;
   bad.color_data.resize(bad.color_data.size() - 20);
   bad.color_size = static_cast<std::int32_t>(bad.color_data.size());
@@ -366,8 +373,8 @@ TEST(RgbdCorrupt, BadJpegAndPng) {
 }
 
 TEST(RgbdCorrupt, BadValuesAreRejected) {
-  rgbd_frame_t msg = encodeRgbdFrame(makeFrame(16, 12));
-  rgbd_frame_t bad = msg;
+  findmug_lcm::rgbd_frame_t msg = encodeRgbdFrame(makeFrame(16, 12));
+  findmug_lcm::rgbd_frame_t bad = msg;
   bad.fx = std::nan("");
   expectError([&] { decodeRgbdFrame(bad, "FINDMUG_RGBD"); }, "intrinsics");
   bad = msg;
@@ -388,7 +395,7 @@ TEST(RgbdCorrupt, OtherMessageTypeIsRejectedByHash) {
   labels.image.labels.assign(8, 1);
   const Bytes b = encodeMessage(encodeLabelImage(labels));
   expectError([&] { decodeRgbdFrame(b.data(), b.size(), "FINDMUG_RGBD"); },
-              "FINDMUG_RGBD: not a findmug.rgbd_frame_t");
+              "FINDMUG_RGBD: not a findmug_lcm.rgbd_frame_t");
 }
 
 // ---- label images ------------------------------------------------------------------------------
@@ -409,9 +416,9 @@ LabelImageMessage makeLabels(int w = 20, int h = 10, bool confidence = true) {
 
 TEST(LabelCodec, RoundTripWithConfidence) {
   const LabelImageMessage in = makeLabels();
-  const label_image_t msg = encodeLabelImage(in);
+  const findmug_lcm::label_image_t msg = encodeLabelImage(in);
   EXPECT_TRUE(msg.has_confidence);
-  EXPECT_EQ(msg.compression, label_image_t::COMPRESSION_ZLIB);
+  EXPECT_EQ(msg.compression, findmug_lcm::label_image_t::COMPRESSION_ZLIB);
   ASSERT_EQ(msg.label_names.size(), static_cast<std::size_t>(kNumLabels));
   EXPECT_EQ(msg.label_names[4], "table");
   const Bytes b = encodeMessage(msg);
@@ -429,15 +436,15 @@ TEST(LabelCodec, RoundTripWithConfidence) {
 
 TEST(LabelCodec, RoundTripWithoutConfidence) {
   LabelImageMessage in = makeLabels();
-  const label_image_t msg = encodeLabelImage(in, /*with_confidence=*/false);
+  const findmug_lcm::label_image_t msg = encodeLabelImage(in, /*with_confidence=*/false);
   EXPECT_FALSE(msg.has_confidence);
   EXPECT_EQ(msg.confidence_size, 0);
   const LabelImageMessage out = decodeLabelImage(msg, "C");
   EXPECT_TRUE(out.image.confidence.empty());
   EXPECT_EQ(out.image.labels, in.image.labels);
   // Uncompressed labels are accepted too.
-  label_image_t raw = msg;
-  raw.compression = label_image_t::COMPRESSION_NONE;
+  findmug_lcm::label_image_t raw = msg;
+  raw.compression = findmug_lcm::label_image_t::COMPRESSION_NONE;
   raw.labels_data = in.image.labels;
   raw.labels_size = static_cast<std::int32_t>(raw.labels_data.size());
   EXPECT_EQ(decodeLabelImage(raw, "C").image.labels, in.image.labels);
@@ -457,7 +464,7 @@ TEST(LabelCodec, EncoderRefusesBadInput) {
 
 TEST(LabelCorrupt, EveryClass) {
   const LabelImageMessage in = makeLabels();
-  const label_image_t good = encodeLabelImage(in);
+  const findmug_lcm::label_image_t good = encodeLabelImage(in);
   const Bytes full = encodeMessage(good);
   for (std::size_t len = 0; len < full.size(); ++len) {
     const std::string r = outcome([&] { decodeLabelImage(full.data(), len, "FINDMUG_LABELS"); });
@@ -470,7 +477,7 @@ TEST(LabelCorrupt, EveryClass) {
     const std::string r = outcome([&] { decodeLabelImage(b.data(), b.size(), "C"); });
     ASSERT_TRUE(r == "ok" || r.rfind("error: ", 0) == 0) << r;
   }
-  label_image_t bad = good;
+  findmug_lcm::label_image_t bad = good;
   bad.label_names[4] = "desk";
   expectError([&] { decodeLabelImage(bad, "C"); }, "id 4 is 'desk', expected 'table'");
   bad = good;
@@ -500,7 +507,7 @@ TEST(LabelCorrupt, EveryClass) {
   bad = good;
   std::vector<std::uint8_t> labels = in.image.labels;
   labels[17] = 42;
-  bad.compression = label_image_t::COMPRESSION_NONE;
+  bad.compression = findmug_lcm::label_image_t::COMPRESSION_NONE;
   bad.labels_data = labels;
   bad.labels_size = static_cast<std::int32_t>(labels.size());
   bad.has_confidence = false;
@@ -653,15 +660,16 @@ TEST(TablesCorrupt, BadMapEntriesAndContentAreNamed) {
   TablesMessage in = makeTables();
   in.map_pose = RobotPose{1, 1.0, 2.0, 0.3};
   in.map_info = {{2, true, 3}, {0, false, 0}};
-  const tables_t good = encodeTables(in);
-  tables_t bad = good;
+  const findmug_lcm::tables_t good = encodeTables(in);
+  findmug_lcm::tables_t bad = good;
   bad.content = 7;
   expectError([&] { decodeTables(bad, "C"); }, "tables_t.content: unknown content id 7");
   bad = good;
-  bad.content = tables_t::CONTENT_MAP;  // table 1 has map_id 0, table 0 id 0 != map_id 2
+  bad.content =
+      findmug_lcm::tables_t::CONTENT_MAP;  // table 1 has map_id 0, table 0 id 0 != map_id 2
   expectError([&] { decodeTables(bad, "C"); }, "tables[0].map_id");
   bad = good;
-  bad.content = tables_t::CONTENT_MAP;
+  bad.content = findmug_lcm::tables_t::CONTENT_MAP;
   bad.has_map_pose = false;
   expectError([&] { decodeTables(bad, "C"); }, "has_map_pose");
   bad = good;
@@ -682,7 +690,7 @@ TEST(TablesCorrupt, EveryClass) {
   TablesMessage in = makeTables();
   in.map_pose = RobotPose{1, 1.0, 2.0, 0.3};
   in.map_info = {{2, true, 3}, {0, false, 0}};
-  const tables_t good = encodeTables(in);
+  const findmug_lcm::tables_t good = encodeTables(in);
   const Bytes full = encodeMessage(good);
   for (std::size_t len = 0; len < full.size(); ++len) {
     const std::string r = outcome([&] { decodeTables(full.data(), len, "FINDMUG_TABLES"); });
@@ -699,7 +707,7 @@ TEST(TablesCorrupt, EveryClass) {
   Bytes b = full;
   putBe32(b, 8 + 8 + 8 + 1 + 32, 0x7fffffff);
   expectError([&] { decodeTables(b.data(), b.size(), "C"); }, "num_tables");
-  tables_t bad = good;
+  findmug_lcm::tables_t bad = good;
   bad.tables[0].major_axis[0] = 2.0;
   expectError([&] { decodeTables(bad, "C"); }, "not unit vectors");
   bad = good;
@@ -725,17 +733,19 @@ TEST(TablesCorrupt, EveryClass) {
 // ---- status and robot pose -----------------------------------------------------------------
 
 TEST(StatusAndPose, SourceStateValuesMatchStatusConstants) {
-  EXPECT_EQ(static_cast<int>(SourceState::Starting), status_t::SOURCE_STARTING);
-  EXPECT_EQ(static_cast<int>(SourceState::Running), status_t::SOURCE_RUNNING);
-  EXPECT_EQ(static_cast<int>(SourceState::Reconnecting), status_t::SOURCE_RECONNECTING);
-  EXPECT_EQ(static_cast<int>(SourceState::EndOfStream), status_t::SOURCE_END_OF_STREAM);
-  EXPECT_EQ(static_cast<int>(SourceState::Stopped), status_t::SOURCE_STOPPED);
-  EXPECT_EQ(static_cast<int>(SourceState::Failed), status_t::SOURCE_FAILED);
+  EXPECT_EQ(static_cast<int>(SourceState::Starting), findmug_lcm::status_t::SOURCE_STARTING);
+  EXPECT_EQ(static_cast<int>(SourceState::Running), findmug_lcm::status_t::SOURCE_RUNNING);
+  EXPECT_EQ(static_cast<int>(SourceState::Reconnecting),
+            findmug_lcm::status_t::SOURCE_RECONNECTING);
+  EXPECT_EQ(static_cast<int>(SourceState::EndOfStream),
+            findmug_lcm::status_t::SOURCE_END_OF_STREAM);
+  EXPECT_EQ(static_cast<int>(SourceState::Stopped), findmug_lcm::status_t::SOURCE_STOPPED);
+  EXPECT_EQ(static_cast<int>(SourceState::Failed), findmug_lcm::status_t::SOURCE_FAILED);
   EXPECT_EQ(sourceStateName(SourceState::Reconnecting), "reconnecting");
 }
 
 TEST(StatusAndPose, RoundTripAndTruncation) {
-  status_t s;
+  findmug_lcm::status_t s;
   s.utime = 99;
   s.uptime_us = 1000000;
   s.frames_received = 10;
@@ -757,23 +767,25 @@ TEST(StatusAndPose, RoundTripAndTruncation) {
   s.model_id = "forest.fmf";
   s.source = "openni2";
   s.source_state_name = "running";
-  s.source_state = status_t::SOURCE_RUNNING;
+  s.source_state = findmug_lcm::status_t::SOURCE_RUNNING;
   s.last_error = "";
   s.last_error_utime = 0;
   const Bytes b = encodeMessage(s);
-  const status_t out = decodeMessage<status_t>(b.data(), b.size(), "FINDMUG_STATUS");
+  const findmug_lcm::status_t out =
+      decodeMessage<findmug_lcm::status_t>(b.data(), b.size(), "FINDMUG_STATUS");
   EXPECT_EQ(out.stage_names, s.stage_names);
   EXPECT_EQ(out.latency_p95_us, s.latency_p95_us);
   EXPECT_EQ(out.queue_capacities, s.queue_capacities);
   EXPECT_EQ(out.model_id, "forest.fmf");
-  EXPECT_EQ(out.source_state, status_t::SOURCE_RUNNING);
+  EXPECT_EQ(out.source_state, findmug_lcm::status_t::SOURCE_RUNNING);
   for (std::size_t len = 0; len < b.size(); ++len) {
-    EXPECT_THROW(decodeMessage<status_t>(b.data(), len, "C"), Error) << len;
+    EXPECT_THROW(decodeMessage<findmug_lcm::status_t>(b.data(), len, "C"), Error) << len;
   }
   Bytes huge = b;
   // num_stages sits after hash, 6 int64, a double and two floats.
   putBe32(huge, 8 + 6 * 8 + 8 + 8, 0x40000000);
-  expectError([&] { decodeMessage<status_t>(huge.data(), huge.size(), "C"); }, "num_stages");
+  expectError([&] { decodeMessage<findmug_lcm::status_t>(huge.data(), huge.size(), "C"); },
+              "num_stages");
 
   const Bytes p = encodeMessage(encodeRobotPose(RobotPose{5, 1.0, 2.0, -0.5}));
   const RobotPose pose = decodeRobotPose(p.data(), p.size(), "FINDMUG_ROBOT_POSE");
@@ -782,7 +794,7 @@ TEST(StatusAndPose, RoundTripAndTruncation) {
   for (std::size_t len = 0; len < p.size(); ++len) {
     EXPECT_THROW(decodeRobotPose(p.data(), len, "C"), Error) << len;
   }
-  robot_pose_t nan_pose = encodeRobotPose(RobotPose{5, std::nan(""), 0, 0});
+  findmug_lcm::robot_pose_t nan_pose = encodeRobotPose(RobotPose{5, std::nan(""), 0, 0});
   const Bytes n = encodeMessage(nan_pose);
   expectError([&] { decodeRobotPose(n.data(), n.size(), "C"); }, "x/y/yaw");
 }

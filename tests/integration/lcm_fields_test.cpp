@@ -170,7 +170,7 @@ std::vector<Case> cases() {
   tables.map_pose = RobotPose{1, 2, 3, 0.5};
   out.push_back({"tables", encodeMessage(encodeTables(tables)), walkTables,
                  [](const Bytes& b) { (void)decodeTables(b.data(), b.size(), "CH"); }, "tables_t"});
-  status_t s{};
+  findmug_lcm::status_t s{};
   s.num_stages = 2;
   s.stage_names = {"cloud", "total"};
   s.latency_p50_us = s.latency_p95_us = s.latency_max_us = {1, 2};
@@ -182,9 +182,10 @@ std::vector<Case> cases() {
   s.source = "s";
   s.source_state_name = "running";
   s.last_error = "";
-  out.push_back({"status", encodeMessage(s), walkStatus,
-                 [](const Bytes& b) { (void)decodeMessage<status_t>(b.data(), b.size(), "CH"); },
-                 "status_t"});
+  out.push_back(
+      {"status", encodeMessage(s), walkStatus,
+       [](const Bytes& b) { (void)decodeMessage<findmug_lcm::status_t>(b.data(), b.size(), "CH"); },
+       "status_t"});
   out.push_back({"robot_pose", encodeMessage(encodeRobotPose(RobotPose{1, 2, 3, 0.5})),
                  [](Walk& w) { w.fixed(8 + 8 + 3 * 8); },
                  [](const Bytes& b) { (void)decodeRobotPose(b.data(), b.size(), "CH"); },

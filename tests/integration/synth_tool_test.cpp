@@ -29,7 +29,7 @@ TEST(SynthTool, WritesAnLcmLogEqualToTheDatasetFolder) {
   std::vector<std::int64_t> timestamps;
   while (const lcm::LogEvent* event = file.readNextEvent()) {
     EXPECT_EQ(event->channel, std::string(io::kRgbdChannel));
-    rgbd_frame_t message;
+    findmug_lcm::rgbd_frame_t message;
     ASSERT_GE(message.decode(event->data, 0, event->datalen), 0);
     frames.push_back(io::decodeRgbdFrame(message, event->channel));
     timestamps.push_back(event->timestamp);

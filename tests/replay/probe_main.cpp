@@ -122,7 +122,7 @@ void checkOptions(const Options& o) {
   if (!o.expect_file.empty() && !o.live) throw Error("--expect-file goes with --live");
 }
 
-FrameInfo frameInfo(const findmug::rgbd_frame_t& m) {
+FrameInfo frameInfo(const findmug_lcm::rgbd_frame_t& m) {
   return FrameInfo{m.seq, static_cast<std::uint64_t>(m.utime), m.width, m.height};
 }
 
@@ -135,7 +135,7 @@ std::vector<FrameInfo> readLog(const std::string& path, const std::string& chann
   std::vector<FrameInfo> frames;
   while (const lcm::LogEvent* event = log.readNextEvent()) {
     if (event->channel != channel) continue;
-    const auto msg = findmug::io::decodeMessage<findmug::rgbd_frame_t>(
+    const auto msg = findmug::io::decodeMessage<findmug_lcm::rgbd_frame_t>(
         event->data, static_cast<std::size_t>(event->datalen),
         path + " event " + std::to_string(event->eventnum) + " on " + channel);
     frames.push_back(frameInfo(msg));
@@ -241,7 +241,7 @@ class Probe {
 
   void onFrame(const lcm::ReceiveBuffer* buffer, const std::string& channel) {
     try {
-      const auto msg = findmug::io::decodeMessage<findmug::rgbd_frame_t>(
+      const auto msg = findmug::io::decodeMessage<findmug_lcm::rgbd_frame_t>(
           buffer->data, static_cast<std::size_t>(buffer->data_size), channel);
       check_.frameSeen(frameInfo(msg), buffer->recv_utime, options_.live);
     } catch (const Error& e) {
@@ -267,7 +267,7 @@ class Probe {
 
   void onStatus(const lcm::ReceiveBuffer* buffer, const std::string& channel) {
     try {
-      const auto s = findmug::io::decodeMessage<findmug::status_t>(
+      const auto s = findmug::io::decodeMessage<findmug_lcm::status_t>(
           buffer->data, static_cast<std::size_t>(buffer->data_size), channel);
       StatusInfo info;
       info.utime = s.utime;

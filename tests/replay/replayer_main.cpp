@@ -100,7 +100,7 @@ int run(int argc, char** argv) {
   spec.options.loop = false;
   spec.options.realtime = false;
   auto source = io::makeSource(spec);
-  std::vector<rgbd_frame_t> frames;
+  std::vector<findmug_lcm::rgbd_frame_t> frames;
   while (static_cast<long long>(frames.size()) < max_frames) {
     std::optional<RgbdFrame> frame = source->next();
     if (!frame) break;
@@ -133,7 +133,7 @@ int run(int argc, char** argv) {
     // More than half a period behind schedule counts as late (reported, the
     // schedule is kept: a late frame does not shift the ones after it).
     if (Clock::now() - due > period / 2) ++late;
-    rgbd_frame_t& msg = frames[static_cast<std::size_t>(published) % frames.size()];
+    findmug_lcm::rgbd_frame_t& msg = frames[static_cast<std::size_t>(published) % frames.size()];
     msg.seq = published;
     msg.utime = static_cast<std::int64_t>(io::hostUtimeNow());
     bytes = io::encodeMessage(msg);

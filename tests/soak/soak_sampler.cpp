@@ -116,11 +116,12 @@ bool readProc(int pid, Sample& s) {
 
 class StatusListener {
  public:
-  std::optional<findmug::status_t> latest;
+  std::optional<findmug_lcm::status_t> latest;
   long errors = 0;
   void onMessage(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
     try {
-      latest = findmug::io::decodeMessage<findmug::status_t>(rbuf->data, rbuf->data_size, channel);
+      latest =
+          findmug::io::decodeMessage<findmug_lcm::status_t>(rbuf->data, rbuf->data_size, channel);
     } catch (const findmug::Error& e) {
       ++errors;
       std::cerr << "findmug-soak-sampler: " << e.what() << "\n";
@@ -128,7 +129,7 @@ class StatusListener {
   }
 };
 
-void fillFromStatus(const findmug::status_t& st, Sample& s) {
+void fillFromStatus(const findmug_lcm::status_t& st, Sample& s) {
   s.received = st.frames_received;
   s.processed = st.frames_processed;
   s.dropped = st.frames_dropped;

@@ -9,7 +9,7 @@
 
 #include "findmug/io/channels.hpp"
 #include "findmug/io/lcm_codec.hpp"
-#include "findmug/status_t.hpp"
+#include "findmug_lcm/status_t.hpp"
 
 using namespace findmug;
 
@@ -80,12 +80,12 @@ int main(int argc, char** argv) {
 
     write(log, io::kRobotPoseChannel, io::encodeMessage(io::encodeRobotPose(*map.map_pose)), t + 4);
 
-    status_t status{};
+    findmug_lcm::status_t status{};
     status.utime = t + 5;
     status.model_id = "findmug.fmf:test";
     status.source = "dataset:/test";
     status.source_state_name = "running";
-    status.source_state = status_t::SOURCE_RUNNING;
+    status.source_state = findmug_lcm::status_t::SOURCE_RUNNING;
     write(log, io::kStatusChannel, io::encodeMessage(status), t + 5);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "findmug-test-spy-log: %s\n", e.what());

@@ -3,13 +3,13 @@
 // package test can check that both really linked and ran.
 #include <findmug/dataset.hpp>
 #include <findmug/labels.hpp>
-#include <findmug/tables_t.hpp>
 #include <findmug/version.hpp>
+#include <findmug_lcm/tables_t.hpp>
 #include <iostream>
 #include <vector>
 
 int main() {
-  findmug::tables_t tables{};
+  findmug_lcm::tables_t tables{};
   tables.num_tables = 0;
   const int size = tables.getEncodedSize();
   std::vector<unsigned char> buffer(static_cast<std::size_t>(size));

@@ -64,8 +64,8 @@
 #include "findmug/forest.hpp"
 #include "findmug/frame.hpp"
 #include "findmug/segmenter.hpp"
-#include "findmug/status_t.hpp"
 #include "findmug/table_map.hpp"
+#include "findmug_lcm/status_t.hpp"
 
 namespace lcm {
 class LCM;
@@ -141,7 +141,7 @@ class Pipeline {
 
   PipelineCounters counters() const;
   ProgressSnapshot progress() const;  // source_heartbeat left for the caller
-  status_t makeStatus() const;
+  findmug_lcm::status_t makeStatus() const;
   const std::string& modelId() const { return model_id_; }
   int workers() const { return workers_; }
   // The pose input, or nullptr when there is none (see effectivePoseUrl).

@@ -2,7 +2,7 @@
 //
 // With a pose, findmugd can give table positions in the map frame and keep
 // its persistent table map (findmug/table_map.hpp). The pose comes from the
-// robot's localisation as findmug::robot_pose_t on FINDMUG_ROBOT_POSE[_suffix]
+// robot's localisation as findmug_lcm::robot_pose_t on FINDMUG_ROBOT_POSE[_suffix]
 // (see lcmtypes/robot_pose_t.lcm); findmugd only listens, it never needs one.
 //
 //   PoseInput    one thread owning its own LCM handle (daemon.pose_url),

@@ -9,10 +9,9 @@
 // The queue holds the messages' bytes: next() decodes the message it takes,
 // so a frame dropped from the queue costs no decoding (dropped at the door).
 // Bad messages (truncated, corrupt, wrong type) are logged, counted in
-// stats().frames_rejected and skipped when next() reaches them. State: Starting until the first frame,
-// Running while frames come, Reconnecting when a live channel has been silent
-// for kSilenceTimeout (the publisher or its camera is gone), EndOfStream at
-// the end of a log.
+// stats().frames_rejected and skipped when next() reaches them. State: Starting until the first
+// frame, Running while frames come, Reconnecting when a live channel has been silent for
+// kSilenceTimeout (the publisher or its camera is gone), EndOfStream at the end of a log.
 #pragma once
 
 #include <atomic>
@@ -73,7 +72,7 @@ class LcmFrameSource : public FrameSourceBase {
     std::string channel;
   };
   std::deque<RawMessage> queue_;
-  std::vector<RawMessage> spare_;  // recycled buffers
+  std::vector<RawMessage> spare_;                            // recycled buffers
   std::atomic<Clock::time_point> last_frame_{Clock::now()};  // last good frame received
   bool finished_ = false;  // thread ended (end of log / fatal LCM error)
   bool stopping_ = false;

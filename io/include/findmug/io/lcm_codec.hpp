@@ -20,12 +20,12 @@
 
 #include "findmug/frame.hpp"
 #include "findmug/label_image.hpp"
-#include "findmug/label_image_t.hpp"
-#include "findmug/rgbd_frame_t.hpp"
-#include "findmug/robot_pose_t.hpp"
-#include "findmug/status_t.hpp"
 #include "findmug/tables.hpp"
-#include "findmug/tables_t.hpp"
+#include "findmug_lcm/label_image_t.hpp"
+#include "findmug_lcm/rgbd_frame_t.hpp"
+#include "findmug_lcm/robot_pose_t.hpp"
+#include "findmug_lcm/status_t.hpp"
+#include "findmug_lcm/tables_t.hpp"
 
 namespace findmug::io {
 
@@ -38,15 +38,20 @@ namespace findmug::io {
 template <typename Msg>
 Msg decodeMessage(const void* data, std::size_t size, std::string_view channel);
 template <>
-rgbd_frame_t decodeMessage<rgbd_frame_t>(const void*, std::size_t, std::string_view);
+findmug_lcm::rgbd_frame_t decodeMessage<findmug_lcm::rgbd_frame_t>(const void*, std::size_t,
+                                                                   std::string_view);
 template <>
-label_image_t decodeMessage<label_image_t>(const void*, std::size_t, std::string_view);
+findmug_lcm::label_image_t decodeMessage<findmug_lcm::label_image_t>(const void*, std::size_t,
+                                                                     std::string_view);
 template <>
-tables_t decodeMessage<tables_t>(const void*, std::size_t, std::string_view);
+findmug_lcm::tables_t decodeMessage<findmug_lcm::tables_t>(const void*, std::size_t,
+                                                           std::string_view);
 template <>
-status_t decodeMessage<status_t>(const void*, std::size_t, std::string_view);
+findmug_lcm::status_t decodeMessage<findmug_lcm::status_t>(const void*, std::size_t,
+                                                           std::string_view);
 template <>
-robot_pose_t decodeMessage<robot_pose_t>(const void*, std::size_t, std::string_view);
+findmug_lcm::robot_pose_t decodeMessage<findmug_lcm::robot_pose_t>(const void*, std::size_t,
+                                                                   std::string_view);
 
 template <typename Msg>
 std::vector<std::uint8_t> encodeMessage(const Msg& message) {
@@ -72,9 +77,10 @@ DepthCompression parseDepthCompression(std::string_view name);
 ColorCompression parseColorCompression(std::string_view name);
 
 // Validates `frame` (validateFrame) and encodes it. Throws findmug::Error.
-rgbd_frame_t encodeRgbdFrame(const RgbdFrame& frame, const RgbdEncodeOptions& options = {});
+findmug_lcm::rgbd_frame_t encodeRgbdFrame(const RgbdFrame& frame,
+                                          const RgbdEncodeOptions& options = {});
 // Decodes and validates; the returned frame's `source` is "<channel>: <message source>".
-RgbdFrame decodeRgbdFrame(const rgbd_frame_t& message, std::string_view channel);
+RgbdFrame decodeRgbdFrame(const findmug_lcm::rgbd_frame_t& message, std::string_view channel);
 RgbdFrame decodeRgbdFrame(const void* data, std::size_t size, std::string_view channel);
 
 // ---- label images -------------------------------------------------------------
@@ -88,9 +94,11 @@ struct LabelImageMessage {
 
 // Labels must be < kNumLabels or kVoidLabel; confidence (if given and
 // `with_confidence`) in [0, 1], quantised to 0..255.
-label_image_t encodeLabelImage(const LabelImageMessage& labels, bool with_confidence = true);
+findmug_lcm::label_image_t encodeLabelImage(const LabelImageMessage& labels,
+                                            bool with_confidence = true);
 // Checks label names against kLabelNames and every label id.
-LabelImageMessage decodeLabelImage(const label_image_t& message, std::string_view channel);
+LabelImageMessage decodeLabelImage(const findmug_lcm::label_image_t& message,
+                                   std::string_view channel);
 LabelImageMessage decodeLabelImage(const void* data, std::size_t size, std::string_view channel);
 
 // ---- tables ---------------------------------------------------------------------
@@ -138,15 +146,15 @@ struct TablesMessage {
 // Fills the map_ fields from `message.map_pose` when set (map_tables is
 // ignored). Throws findmug::Error when map_info is neither empty nor one per
 // table, or when a Map message breaks the rules decodeTables checks.
-tables_t encodeTables(const TablesMessage& message);
+findmug_lcm::tables_t encodeTables(const TablesMessage& message);
 // Checks finiteness, counts, unit axes, the content id and the map entries
 // (map_id >= 0, sightings >= 0, confirmed only with a map_id; a Map message
 // needs has_map_pose and id == map_id > 0 for every table); fills map_tables
 // when has_map_pose, and map_info always.
-TablesMessage decodeTables(const tables_t& message, std::string_view channel);
+TablesMessage decodeTables(const findmug_lcm::tables_t& message, std::string_view channel);
 TablesMessage decodeTables(const void* data, std::size_t size, std::string_view channel);
 
-robot_pose_t encodeRobotPose(const RobotPose& pose);
+findmug_lcm::robot_pose_t encodeRobotPose(const RobotPose& pose);
 RobotPose decodeRobotPose(const void* data, std::size_t size, std::string_view channel);
 
 }  // namespace findmug::io

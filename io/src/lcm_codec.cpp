@@ -64,9 +64,10 @@ ColorCompression parseColorCompression(std::string_view name) {
 
 // ---- RGB-D frames ---------------------------------------------------------------------
 
-rgbd_frame_t encodeRgbdFrame(const RgbdFrame& frame, const RgbdEncodeOptions& options) {
+findmug_lcm::rgbd_frame_t encodeRgbdFrame(const RgbdFrame& frame,
+                                          const RgbdEncodeOptions& options) {
   validateFrame(frame);
-  rgbd_frame_t msg;
+  findmug_lcm::rgbd_frame_t msg;
   msg.utime = static_cast<std::int64_t>(frame.utime);
   msg.seq = frame.seq;
   msg.source = frame.source;
@@ -116,7 +117,7 @@ rgbd_frame_t encodeRgbdFrame(const RgbdFrame& frame, const RgbdEncodeOptions& op
   return msg;
 }
 
-RgbdFrame decodeRgbdFrame(const rgbd_frame_t& msg, std::string_view channel) {
+RgbdFrame decodeRgbdFrame(const findmug_lcm::rgbd_frame_t& msg, std::string_view channel) {
   constexpr std::string_view type = "rgbd_frame_t";
   checkDimensions(msg.width, msg.height, channel, type);
   checkArraySize(msg.depth_size, msg.depth_data.size(), channel, type, "depth_size");
@@ -140,14 +141,14 @@ RgbdFrame decodeRgbdFrame(const rgbd_frame_t& msg, std::string_view channel) {
   std::vector<std::uint8_t> inflated;
   const std::vector<std::uint8_t>* depth_bytes = &msg.depth_data;
   switch (msg.depth_compression) {
-    case rgbd_frame_t::DEPTH_NONE:
+    case findmug_lcm::rgbd_frame_t::DEPTH_NONE:
       if (msg.depth_data.size() != pixels * 2) {
         throw Error(depth_field + ": " + std::to_string(msg.depth_data.size()) +
                     " bytes of raw depth, expected " + std::to_string(pixels * 2) + " for " +
                     std::to_string(msg.width) + "x" + std::to_string(msg.height));
       }
       break;
-    case rgbd_frame_t::DEPTH_ZLIB:
+    case findmug_lcm::rgbd_frame_t::DEPTH_ZLIB:
       inflated = detail::zlibDecompress(msg.depth_data.data(), msg.depth_data.size(), pixels * 2,
                                         depth_field);
       depth_bytes = &inflated;
@@ -164,7 +165,7 @@ RgbdFrame decodeRgbdFrame(const rgbd_frame_t& msg, std::string_view channel) {
 
   const std::string color_field = field(channel, type, "color_data");
   switch (msg.color_compression) {
-    case rgbd_frame_t::COLOR_NONE:
+    case findmug_lcm::rgbd_frame_t::COLOR_NONE:
       if (msg.color_data.size() != pixels * 3) {
         throw Error(color_field + ": " + std::to_string(msg.color_data.size()) +
                     " bytes of raw RGB, expected " + std::to_string(pixels * 3));
@@ -172,11 +173,11 @@ RgbdFrame decodeRgbdFrame(const rgbd_frame_t& msg, std::string_view channel) {
       frame.rgb.resize(pixels);
       std::memcpy(frame.rgb.data(), msg.color_data.data(), pixels * 3);
       break;
-    case rgbd_frame_t::COLOR_JPEG:
+    case findmug_lcm::rgbd_frame_t::COLOR_JPEG:
       frame.rgb = detail::jpegDecompressRgb(msg.color_data.data(), msg.color_data.size(), msg.width,
                                             msg.height, color_field);
       break;
-    case rgbd_frame_t::COLOR_PNG: {
+    case findmug_lcm::rgbd_frame_t::COLOR_PNG: {
       if (msg.color_data.empty()) throw Error(color_field + ": empty PNG data");
       Image<Rgb8> image = decodePngRgb(msg.color_data, color_field);
       if (image.width != msg.width || image.height != msg.height) {
@@ -196,12 +197,12 @@ RgbdFrame decodeRgbdFrame(const rgbd_frame_t& msg, std::string_view channel) {
 }
 
 RgbdFrame decodeRgbdFrame(const void* data, std::size_t size, std::string_view channel) {
-  return decodeRgbdFrame(decodeMessage<rgbd_frame_t>(data, size, channel), channel);
+  return decodeRgbdFrame(decodeMessage<findmug_lcm::rgbd_frame_t>(data, size, channel), channel);
 }
 
 // ---- label images -------------------------------------------------------------------------
 
-label_image_t encodeLabelImage(const LabelImageMessage& in, bool with_confidence) {
+findmug_lcm::label_image_t encodeLabelImage(const LabelImageMessage& in, bool with_confidence) {
   const LabelImage& image = in.image;
   checkDimensions(image.width, image.height, "encode", "label_image_t");
   const std::size_t pixels = static_cast<std::size_t>(image.width) * image.height;
@@ -215,14 +216,14 @@ label_image_t encodeLabelImage(const LabelImageMessage& in, bool with_confidence
                   std::to_string(image.labels[i]));
     }
   }
-  label_image_t msg;
+  findmug_lcm::label_image_t msg;
   msg.utime = static_cast<std::int64_t>(in.utime);
   msg.seq = in.seq;
   msg.width = image.width;
   msg.height = image.height;
   msg.num_labels = kNumLabels;
   for (auto name : kLabelNames) msg.label_names.emplace_back(name);
-  msg.compression = label_image_t::COMPRESSION_ZLIB;
+  msg.compression = findmug_lcm::label_image_t::COMPRESSION_ZLIB;
   msg.labels_data = detail::zlibCompress(image.labels.data(), pixels, 1, /*run_length=*/true);
   msg.labels_size = static_cast<std::int32_t>(msg.labels_data.size());
   msg.has_confidence = with_confidence && !image.confidence.empty();
@@ -247,7 +248,8 @@ label_image_t encodeLabelImage(const LabelImageMessage& in, bool with_confidence
   return msg;
 }
 
-LabelImageMessage decodeLabelImage(const label_image_t& msg, std::string_view channel) {
+LabelImageMessage decodeLabelImage(const findmug_lcm::label_image_t& msg,
+                                   std::string_view channel) {
   constexpr std::string_view type = "label_image_t";
   checkDimensions(msg.width, msg.height, channel, type);
   checkArraySize(msg.num_labels, msg.label_names.size(), channel, type, "num_labels");
@@ -277,13 +279,13 @@ LabelImageMessage decodeLabelImage(const label_image_t& msg, std::string_view ch
   auto unpack = [&](const std::vector<std::uint8_t>& data, std::string_view name) {
     const std::string where = field(channel, type, name);
     switch (msg.compression) {
-      case label_image_t::COMPRESSION_NONE:
+      case findmug_lcm::label_image_t::COMPRESSION_NONE:
         if (data.size() != pixels) {
           throw Error(where + ": " + std::to_string(data.size()) + " bytes, expected " +
                       std::to_string(pixels));
         }
         return data;
-      case label_image_t::COMPRESSION_ZLIB:
+      case findmug_lcm::label_image_t::COMPRESSION_ZLIB:
         return detail::zlibDecompress(data.data(), data.size(), pixels, where);
       default:
         throw Error(field(channel, type, "compression") + ": unknown compression id " +
@@ -318,7 +320,7 @@ LabelImageMessage decodeLabelImage(const label_image_t& msg, std::string_view ch
 }
 
 LabelImageMessage decodeLabelImage(const void* data, std::size_t size, std::string_view channel) {
-  return decodeLabelImage(decodeMessage<label_image_t>(data, size, channel), channel);
+  return decodeLabelImage(decodeMessage<findmug_lcm::label_image_t>(data, size, channel), channel);
 }
 
 // ---- tables ------------------------------------------------------------------------------------
@@ -330,8 +332,8 @@ Eigen::Vector2d toMapFrame(const RobotPose& pose, const Eigen::Vector2d& p) {
 
 namespace {
 
-search_position_t toLcm(const SearchPosition& p) {
-  search_position_t out;
+findmug_lcm::search_position_t toLcm(const SearchPosition& p) {
+  findmug_lcm::search_position_t out;
   out.x = p.xy.x();
   out.y = p.xy.y();
   out.yaw = p.yaw;
@@ -340,8 +342,8 @@ search_position_t toLcm(const SearchPosition& p) {
   return out;
 }
 
-search_position_t toLcmMap(const SearchPosition& p, const RobotPose& pose) {
-  search_position_t out = toLcm(p);
+findmug_lcm::search_position_t toLcmMap(const SearchPosition& p, const RobotPose& pose) {
+  findmug_lcm::search_position_t out = toLcm(p);
   const Eigen::Vector2d m = toMapFrame(pose, p.xy.cast<double>());
   out.x = m.x();
   out.y = m.y();
@@ -349,7 +351,7 @@ search_position_t toLcmMap(const SearchPosition& p, const RobotPose& pose) {
   return out;
 }
 
-SearchPosition fromLcm(const search_position_t& p, const std::string& where) {
+SearchPosition fromLcm(const findmug_lcm::search_position_t& p, const std::string& where) {
   if (!finite(p.x) || !finite(p.y) || !finite(p.yaw)) {
     throw Error(where + ": non-finite search position (" + std::to_string(p.x) + ", " +
                 std::to_string(p.y) + ", yaw " + std::to_string(p.yaw) + ")");
@@ -370,7 +372,7 @@ void checkFinite(std::initializer_list<double> values, const std::string& where)
 
 }  // namespace
 
-tables_t encodeTables(const TablesMessage& in) {
+findmug_lcm::tables_t encodeTables(const TablesMessage& in) {
   if (!in.map_info.empty() && in.map_info.size() != in.tables.size()) {
     throw Error("encodeTables: " + std::to_string(in.map_info.size()) + " map entries for " +
                 std::to_string(in.tables.size()) + " tables");
@@ -385,7 +387,7 @@ tables_t encodeTables(const TablesMessage& in) {
       }
     }
   }
-  tables_t msg;
+  findmug_lcm::tables_t msg;
   msg.utime = static_cast<std::int64_t>(in.utime);
   msg.seq = in.seq;
   msg.content = static_cast<std::int8_t>(in.content);
@@ -397,7 +399,7 @@ tables_t encodeTables(const TablesMessage& in) {
   msg.num_tables = static_cast<std::int32_t>(in.tables.size());
   for (std::size_t k = 0; k < in.tables.size(); ++k) {
     const TableCluster& t = in.tables[k];
-    table_t out;
+    findmug_lcm::table_t out;
     out.id = t.id;
     const TableMapInfo info = in.map_info.empty() ? TableMapInfo{} : in.map_info[k];
     out.map_id = info.map_id;
@@ -445,19 +447,20 @@ tables_t encodeTables(const TablesMessage& in) {
   return msg;
 }
 
-TablesMessage decodeTables(const tables_t& msg, std::string_view channel) {
+TablesMessage decodeTables(const findmug_lcm::tables_t& msg, std::string_view channel) {
   constexpr std::string_view type = "tables_t";
   checkArraySize(msg.num_tables, msg.tables.size(), channel, type, "num_tables");
   if (msg.utime < 0) {
     throw Error(field(channel, type, "utime") + ": negative time " + std::to_string(msg.utime));
   }
-  if (msg.content != tables_t::CONTENT_FRAME && msg.content != tables_t::CONTENT_MAP) {
+  if (msg.content != findmug_lcm::tables_t::CONTENT_FRAME &&
+      msg.content != findmug_lcm::tables_t::CONTENT_MAP) {
     throw Error(field(channel, type, "content") + ": unknown content id " +
                 std::to_string(static_cast<int>(msg.content)) + " (expected " +
-                std::to_string(static_cast<int>(tables_t::CONTENT_FRAME)) + " or " +
-                std::to_string(static_cast<int>(tables_t::CONTENT_MAP)) + ")");
+                std::to_string(static_cast<int>(findmug_lcm::tables_t::CONTENT_FRAME)) + " or " +
+                std::to_string(static_cast<int>(findmug_lcm::tables_t::CONTENT_MAP)) + ")");
   }
-  const bool map_content = msg.content == tables_t::CONTENT_MAP;
+  const bool map_content = msg.content == findmug_lcm::tables_t::CONTENT_MAP;
   if (map_content && !msg.has_map_pose) {
     throw Error(field(channel, type, "has_map_pose") +
                 ": a table map message (CONTENT_MAP) must carry the robot's map pose");
@@ -476,7 +479,7 @@ TablesMessage decodeTables(const tables_t& msg, std::string_view channel) {
     out.map_pose = RobotPose{static_cast<std::uint64_t>(p.utime), p.x, p.y, p.yaw};
   }
   for (std::size_t k = 0; k < msg.tables.size(); ++k) {
-    const table_t& t = msg.tables[k];
+    const findmug_lcm::table_t& t = msg.tables[k];
     const std::string where = field(channel, type, "tables[" + std::to_string(k) + "]");
     checkArraySize(t.hull_size, t.hull.size(), channel, type,
                    "tables[" + std::to_string(k) + "].hull_size");
@@ -559,11 +562,11 @@ TablesMessage decodeTables(const tables_t& msg, std::string_view channel) {
 }
 
 TablesMessage decodeTables(const void* data, std::size_t size, std::string_view channel) {
-  return decodeTables(decodeMessage<tables_t>(data, size, channel), channel);
+  return decodeTables(decodeMessage<findmug_lcm::tables_t>(data, size, channel), channel);
 }
 
-robot_pose_t encodeRobotPose(const RobotPose& pose) {
-  robot_pose_t msg;
+findmug_lcm::robot_pose_t encodeRobotPose(const RobotPose& pose) {
+  findmug_lcm::robot_pose_t msg;
   msg.utime = static_cast<std::int64_t>(pose.utime);
   msg.x = pose.x;
   msg.y = pose.y;
@@ -572,7 +575,8 @@ robot_pose_t encodeRobotPose(const RobotPose& pose) {
 }
 
 RobotPose decodeRobotPose(const void* data, std::size_t size, std::string_view channel) {
-  const robot_pose_t msg = decodeMessage<robot_pose_t>(data, size, channel);
+  const findmug_lcm::robot_pose_t msg =
+      decodeMessage<findmug_lcm::robot_pose_t>(data, size, channel);
   checkFinite({msg.x, msg.y, msg.yaw}, field(channel, "robot_pose_t", "x/y/yaw"));
   if (msg.utime < 0) {
     throw Error(field(channel, "robot_pose_t", "utime") + ": negative time " +

@@ -190,7 +190,8 @@ class Openni2Source : public FrameSourceBase {
     {
       const openni::DeviceInfo& info = device_.getDeviceInfo();
       std::lock_guard<std::mutex> lock(device_name_mutex_);
-      device_name_ = std::string(info.getVendor()) + " " + info.getName() + ", uri " + info.getUri();
+      device_name_ =
+          std::string(info.getVendor()) + " " + info.getName() + ", uri " + info.getUri();
     }
     last_depth_ = {};
     last_color_ = {};
@@ -461,7 +462,7 @@ class Openni2Source : public FrameSourceBase {
   openni::VideoStream depth_, color_;
   CameraIntrinsics intrinsics_;
   CapturedImage last_depth_, last_color_;  // the pair being delivered
-  std::deque<CapturedImage> recent_[2];     // unpaired images: 0 depth, 1 colour
+  std::deque<CapturedImage> recent_[2];    // unpaired images: 0 depth, 1 colour
   int playback_frames_ = 0;
   bool ended_ = false;
   std::int64_t seq_ = 0;

@@ -4,7 +4,7 @@
 //   findmug-grab --source 'dataset:/data/nyu?rate_hz=5' --count 20
 //                --url 'file:///tmp/nyu.lcm?mode=w'     (one line: an lcm-logger compatible log)
 //
-// Frames go out as findmug::rgbd_frame_t on FINDMUG_RGBD[_suffix] (depth zlib,
+// Frames go out as findmug_lcm::rgbd_frame_t on FINDMUG_RGBD[_suffix] (depth zlib,
 // colour JPEG by default). The LCM URL defaults to LCM's own default
 // (LCM_DEFAULT_URL, else udpm with ttl 0: this machine only).
 #include <spdlog/spdlog.h>
@@ -111,7 +111,7 @@ int main(int argc, char** argv) {
       while (count == 0 || published < count) {
         std::optional<RgbdFrame> frame = source->next();
         if (!frame) break;
-        const rgbd_frame_t msg = encodeRgbdFrame(*frame, encode);
+        const findmug_lcm::rgbd_frame_t msg = encodeRgbdFrame(*frame, encode);
         const std::vector<std::uint8_t> data = encodeMessage(msg);
         if (lcm.publish(channel, data.data(), static_cast<unsigned int>(data.size())) != 0) {
           throw Error("publishing on " + channel + " failed");

@@ -44,7 +44,7 @@
 
 namespace findmug::io {
 
-// Numeric values equal findmug::status_t::SOURCE_* (status_t.lcm).
+// Numeric values equal findmug_lcm::status_t::SOURCE_* (status_t.lcm).
 enum class SourceState : std::int8_t {
   Starting = 0,      // opening the device / files / channel
   Running = 1,       // delivering frames

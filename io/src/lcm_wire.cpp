@@ -36,7 +36,7 @@ class WireWalker {
     need(8, "<hash>");
     const auto got = static_cast<std::int64_t>(bigEndian(8));
     if (got != expected) {
-      throw Error(std::string(channel_) + ": not a findmug." + std::string(type_) +
+      throw Error(std::string(channel_) + ": not a findmug_lcm." + std::string(type_) +
                   " message (type hash mismatch, " + std::to_string(size_) + " bytes)");
     }
   }
@@ -170,11 +170,12 @@ void checkSize(std::size_t size, std::string_view type, std::string_view channel
 }  // namespace
 
 template <>
-rgbd_frame_t decodeMessage<rgbd_frame_t>(const void* data, std::size_t size,
-                                         std::string_view channel) {
+findmug_lcm::rgbd_frame_t decodeMessage<findmug_lcm::rgbd_frame_t>(const void* data,
+                                                                   std::size_t size,
+                                                                   std::string_view channel) {
   checkSize(size, "rgbd_frame_t", channel);
   WireWalker w(data, size, "rgbd_frame_t", channel);
-  w.hash(rgbd_frame_t::getHash());
+  w.hash(findmug_lcm::rgbd_frame_t::getHash());
   w.skip(2 * kI64, "utime/seq");
   w.string("source");
   w.skip(2 * kI32, "width/height");
@@ -185,15 +186,16 @@ rgbd_frame_t decodeMessage<rgbd_frame_t>(const void* data, std::size_t size,
   w.skip(kI8, "color_compression");
   w.array(w.count("color_size", 1), 1, "color_data");
   w.finish();
-  return decodeWalked<rgbd_frame_t>(data, size, channel);
+  return decodeWalked<findmug_lcm::rgbd_frame_t>(data, size, channel);
 }
 
 template <>
-label_image_t decodeMessage<label_image_t>(const void* data, std::size_t size,
-                                           std::string_view channel) {
+findmug_lcm::label_image_t decodeMessage<findmug_lcm::label_image_t>(const void* data,
+                                                                     std::size_t size,
+                                                                     std::string_view channel) {
   checkSize(size, "label_image_t", channel);
   WireWalker w(data, size, "label_image_t", channel);
-  w.hash(label_image_t::getHash());
+  w.hash(findmug_lcm::label_image_t::getHash());
   w.skip(2 * kI64 + 2 * kI32, "utime/seq/width/height");
   const std::int32_t names = w.count("num_labels", kMinString);
   for (std::int32_t i = 0; i < names; ++i) w.string("label_names");
@@ -203,14 +205,15 @@ label_image_t decodeMessage<label_image_t>(const void* data, std::size_t size,
   w.array(w.count("confidence_size", 1), 1, "confidence_data");
   w.skip(kI64, "latency_us");
   w.finish();
-  return decodeWalked<label_image_t>(data, size, channel);
+  return decodeWalked<findmug_lcm::label_image_t>(data, size, channel);
 }
 
 template <>
-tables_t decodeMessage<tables_t>(const void* data, std::size_t size, std::string_view channel) {
+findmug_lcm::tables_t decodeMessage<findmug_lcm::tables_t>(const void* data, std::size_t size,
+                                                           std::string_view channel) {
   checkSize(size, "tables_t", channel);
   WireWalker w(data, size, "tables_t", channel);
-  w.hash(tables_t::getHash());
+  w.hash(findmug_lcm::tables_t::getHash());
   w.skip(2 * kI64 + kBool, "utime/seq/has_map_pose");
   walkRobotPose(w);
   // A table is at least its fixed fields: id, centroid, top height, axes,
@@ -221,14 +224,15 @@ tables_t decodeMessage<tables_t>(const void* data, std::size_t size, std::string
   for (std::int32_t i = 0; i < tables; ++i) walkTable(w);
   w.skip(kI8, "content");
   w.finish();
-  return decodeWalked<tables_t>(data, size, channel);
+  return decodeWalked<findmug_lcm::tables_t>(data, size, channel);
 }
 
 template <>
-status_t decodeMessage<status_t>(const void* data, std::size_t size, std::string_view channel) {
+findmug_lcm::status_t decodeMessage<findmug_lcm::status_t>(const void* data, std::size_t size,
+                                                           std::string_view channel) {
   checkSize(size, "status_t", channel);
   WireWalker w(data, size, "status_t", channel);
-  w.hash(status_t::getHash());
+  w.hash(findmug_lcm::status_t::getHash());
   w.skip(2 * kI64 + 4 * kI64, "utime/uptime_us/frame counters");
   w.skip(kF64 + 2 * kF32, "window_s/input_fps/output_fps");
   const std::int32_t stages = w.count("num_stages", kMinString + 3 * kI64);
@@ -249,18 +253,19 @@ status_t decodeMessage<status_t>(const void* data, std::size_t size, std::string
   w.skip(3 * kI64, "frames_dropped_at_door/in_pipeline/at_shutdown");
   w.skip(2 * kF32 + kI32, "cpu_budget_cores/cpu_used_cores/processing_threads");
   w.finish();
-  return decodeWalked<status_t>(data, size, channel);
+  return decodeWalked<findmug_lcm::status_t>(data, size, channel);
 }
 
 template <>
-robot_pose_t decodeMessage<robot_pose_t>(const void* data, std::size_t size,
-                                         std::string_view channel) {
+findmug_lcm::robot_pose_t decodeMessage<findmug_lcm::robot_pose_t>(const void* data,
+                                                                   std::size_t size,
+                                                                   std::string_view channel) {
   checkSize(size, "robot_pose_t", channel);
   WireWalker w(data, size, "robot_pose_t", channel);
-  w.hash(robot_pose_t::getHash());
+  w.hash(findmug_lcm::robot_pose_t::getHash());
   walkRobotPose(w);
   w.finish();
-  return decodeWalked<robot_pose_t>(data, size, channel);
+  return decodeWalked<findmug_lcm::robot_pose_t>(data, size, channel);
 }
 
 }  // namespace findmug::io

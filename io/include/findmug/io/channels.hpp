@@ -5,13 +5,13 @@
 // FINDMUG_RGBD into FINDMUG_RGBD_KITCHEN. The suffix is configured once
 // (daemon.channel_suffix, --channel-suffix) and applied by channelName().
 //
-//   FINDMUG_RGBD        findmug::rgbd_frame_t   frames in (sensor, findmug-grab)
-//   FINDMUG_LABELS      findmug::label_image_t  per-pixel labels out
-//   FINDMUG_TABLES      findmug::tables_t       tables + search positions out (one frame)
-//   FINDMUG_TABLE_MAP   findmug::tables_t       confirmed tables of the persistent map, out
+//   FINDMUG_RGBD        findmug_lcm::rgbd_frame_t   frames in (sensor, findmug-grab)
+//   FINDMUG_LABELS      findmug_lcm::label_image_t  per-pixel labels out
+//   FINDMUG_TABLES      findmug_lcm::tables_t       tables + search positions out (one frame)
+//   FINDMUG_TABLE_MAP   findmug_lcm::tables_t       confirmed tables of the persistent map, out
 //                                               after each map update (needs robot poses)
-//   FINDMUG_STATUS      findmug::status_t       daemon health, about 1 Hz
-//   FINDMUG_ROBOT_POSE  findmug::robot_pose_t   robot pose in the map (input, optional)
+//   FINDMUG_STATUS      findmug_lcm::status_t       daemon health, about 1 Hz
+//   FINDMUG_ROBOT_POSE  findmug_lcm::robot_pose_t   robot pose in the map (input, optional)
 #pragma once
 
 #include <string>
