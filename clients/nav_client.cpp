@@ -25,6 +25,7 @@
 #include "findmug/io/lcm_codec.hpp"
 #include "findmug/tables.hpp"
 #include "findmug_cli.hpp"
+#include "visiting_order.hpp"
 
 namespace {
 

@@ -8,7 +8,7 @@
 #include <sstream>
 
 #include "findmug/ground.hpp"
-#include "findmug/tables.hpp"
+#include "visiting_order.hpp"
 
 namespace findmug::clients {
 namespace {

@@ -516,6 +516,7 @@ findmug_lcm::status_t Pipeline::makeStatus() const {
     s.source = source->describe();
     s.source_state = static_cast<std::int8_t>(state);
     s.source_state_name = std::string(io::sourceStateName(state));
+    s.source_reconnects = static_cast<std::int64_t>(stats.reconnects);
     if (stats.last_error_utime > last_error_utime) {
       last_error = stats.last_error;
       last_error_utime = stats.last_error_utime;

@@ -204,9 +204,12 @@ bool ransacPlane(const std::vector<Eigen::Vector3f>& points, const std::vector<s
   std::size_t best_score = 0;
   for (int it = 0; it < iterations; ++it) {
     Plane hyp;
-    if (!planeThrough(points[idx[pick(rng)]], points[idx[pick(rng)]], points[idx[pick(rng)]],
-                      hyp) ||
-        !accept(hyp)) {
+    // Drawn one by one, last first: inside one call's arguments the draws would come in an
+    // unspecified order (g++ right to left, clang left to right); this keeps g++'s planes.
+    const std::size_t third = idx[pick(rng)];
+    const std::size_t second = idx[pick(rng)];
+    const std::size_t first = idx[pick(rng)];
+    if (!planeThrough(points[first], points[second], points[third], hyp) || !accept(hyp)) {
       continue;
     }
     const std::size_t score = packed.count(hyp);

@@ -146,14 +146,6 @@ std::vector<SearchPosition> computeSearchPositions(const TableCluster& table,
 std::vector<int> euclideanClusterLabels(const std::vector<Eigen::Vector3f>& points,
                                         float tolerance);
 
-// Order in which to visit `points` starting from `start` (an open path, any
-// end): the shortest one for up to 12 points (dynamic programme), else
-// nearest neighbour improved by 2-opt until no reversal shortens it.
-// Returns indices into `points`. Used by navigation clients to list search
-// positions as a tour from the robot's position.
-std::vector<int> visitingOrder(const Eigen::Vector2f& start,
-                               const std::vector<Eigen::Vector2f>& points);
-
 // Convex hull of 2-D points, counter-clockwise, without collinear points.
 std::vector<Eigen::Vector2f> convexHull2d(std::vector<Eigen::Vector2f> points);
 

@@ -142,7 +142,8 @@ namespace {
 [[noreturn]] void specError(const std::string& spec, const std::string& what) {
   throw Error("frame source '" + spec + "': " + what +
               " (expected KIND[:TARGET][?key=value&...], KIND one of openni2, lcm, dataset, "
-              "pcd, pclzf, tiff; keys rate_hz, loop, realtime, queue, url)");
+              "pcd, pclzf, tiff; keys rate_hz, loop, realtime, queue, reconnect_ms, "
+              "reconnect_max_ms, frame_timeout_ms, url)");
 }
 
 bool parseBool(const std::string& spec, const std::string& key, const std::string& value) {
@@ -208,12 +209,26 @@ SourceSpec parseSourceSpec(const std::string& text) {
       if (q < 1 || q > 1000 || q != std::floor(q))
         specError(text, "queue=" + value + " not in 1..1000");
       spec.options.lcm_queue_size = static_cast<int>(q);
+    } else if (key == "reconnect_ms" || key == "reconnect_max_ms" || key == "frame_timeout_ms") {
+      if (spec.kind != "openni2") specError(text, key + "= only applies to openni2 sources");
+      const double ms = parseNumber(text, key, value);
+      if (ms < 1 || ms > 3'600'000 || ms != std::floor(ms)) {
+        specError(text, key + "=" + value + " not in 1..3600000 (milliseconds)");
+      }
+      const std::chrono::milliseconds v{static_cast<std::int64_t>(ms)};
+      (key == "reconnect_ms"       ? spec.options.reconnect_initial
+       : key == "reconnect_max_ms" ? spec.options.reconnect_max
+                                   : spec.options.frame_timeout) = v;
     } else if (key == "url") {
       if (spec.kind != "lcm") specError(text, "url= only applies to lcm sources");
       spec.options.lcm_url = value;
     } else {
       specError(text, "unknown option '" + key + "'");
     }
+  }
+  if (spec.options.reconnect_max < spec.options.reconnect_initial) {
+    specError(text, "reconnect_max_ms is below reconnect_ms (" +
+                        std::to_string(spec.options.reconnect_initial.count()) + " ms)");
   }
   return spec;
 }

@@ -5,10 +5,12 @@
 // (playback) and loss/reconnection (live device) differ.
 //
 // Live device: depth registered to colour, colour/depth frame sync, 640x480
-// at 30 fps when offered (else the device's own mode, logged). A device that
-// is absent or stops delivering frames is closed and re-opened with
-// exponential back-off; state() is Reconnecting meanwhile. Frames carry the
-// host time at which the pair was complete (device clocks are not host time).
+// at 30 fps when offered (else the device's own mode, logged). Frames carry
+// the host time at which the pair was complete (device clocks are not host
+// time). The device is a Device inside a DeviceSource (device_source.hpp):
+// a live device that is absent, fails or stops delivering frames is closed
+// and re-opened there with exponential back-off; a .oni file that fails ends
+// the source as Failed.
 #include <OpenNI.h>
 #include <spdlog/spdlog.h>
 
@@ -20,6 +22,7 @@
 #include <thread>
 
 #include "findmug/error.hpp"
+#include "findmug/io/device_source.hpp"
 #include "sources_internal.hpp"
 
 namespace findmug::io::detail {
@@ -51,10 +54,6 @@ std::string oniError(const std::string& what, Status status) {
 constexpr std::uint64_t kPairToleranceUs = 16000;
 // Unpaired images kept per stream while waiting for a partner (about 130 ms at 30 fps).
 constexpr std::size_t kPairHistory = 4;
-// A live device that delivers nothing for this long is considered lost.
-constexpr int kLiveFrameTimeoutMs = 2000;
-// Poll interval, so that stop() is noticed promptly.
-constexpr int kPollMs = 100;
 
 struct CapturedImage {
   bool valid = false;
@@ -65,29 +64,20 @@ struct CapturedImage {
   std::vector<Rgb8> rgb;             // colour stream
 };
 
-class Openni2Source : public FrameSourceBase {
+class Openni2Device : public Device {
  public:
-  Openni2Source(std::string target, SourceOptions options)
-      : target_(std::move(target)), options_(std::move(options)) {
-    initializeOpenNi();
-    std::error_code ec;
-    playback_ = !target_.empty() && std::filesystem::is_regular_file(target_, ec);
+  Openni2Device(std::string target, SourceOptions options, bool playback)
+      : target_(std::move(target)), options_(std::move(options)), playback_(playback) {
     if (playback_) {
       description_ = "openni2:" + target_ + " (" +
                      (options_.realtime ? "recorded speed" : "as fast as possible") +
                      (options_.loop ? ", loop" : "") + ")";
-      // A file that cannot be opened is a configuration error: say so now.
-      if (const std::string error = open(); !error.empty()) throw Error(target_ + ": " + error);
     } else {
       description_ = "openni2:" + (target_.empty() ? std::string("<first device>") : target_);
-      if (const std::string error = open(); !error.empty()) {
-        setState(SourceState::Reconnecting);
-        recordError(error + "; retrying");
-      }
     }
   }
 
-  ~Openni2Source() override { close(); }
+  ~Openni2Device() override { close(); }
 
   // Includes the device's own name once it has been opened ("openni2:<first
   // device> (PrimeSense Carmine 1.09, uri ...)"), for logs and findmugd --check.
@@ -96,46 +86,9 @@ class Openni2Source : public FrameSourceBase {
     return device_name_.empty() ? description_ : description_ + " (" + device_name_ + ")";
   }
 
-  std::optional<RgbdFrame> next() override {
-    auto backoff = options_.reconnect_initial;
-    while (!stopRequested()) {
-      if (!device_.isValid()) {
-        if (playback_) {  // cannot come back; close() only happens on errors
-          setState(SourceState::Failed);
-          return std::nullopt;
-        }
-        if (!sleepUntil(Clock::now() + backoff)) break;
-        backoff = std::min(backoff * 2, options_.reconnect_max);
-        if (const std::string error = open(); !error.empty()) {
-          setState(SourceState::Reconnecting);
-          recordError(error + "; retrying in " + std::to_string(backoff.count()) + " ms");
-          continue;
-        }
-        recordReconnect();
-        spdlog::info("{}: device open again", description_);
-      }
-      auto frame = readPair();
-      if (frame) {
-        if (playback_ && !pace(options_.rate_hz)) break;
-        frame->seq = seq_++;
-        recordDelivered();
-        return frame;
-      }
-      if (ended_) {
-        setState(SourceState::EndOfStream);
-        return std::nullopt;
-      }
-    }
-    setState(SourceState::Stopped);
-    return std::nullopt;
-  }
-
- private:
   // Opens device and streams; returns an error message, empty on success.
-  std::string open() {
+  std::string open() override {
     close();
-    // State is left alone: Starting at first, Reconnecting while recovering,
-    // Running again with the first delivered frame.
     const char* uri = target_.empty() ? openni::ANY_DEVICE : target_.c_str();
     if (Status s = device_.open(uri); s != openni::STATUS_OK) {
       device_.close();
@@ -198,10 +151,69 @@ class Openni2Source : public FrameSourceBase {
     recent_[0].clear();
     recent_[1].clear();
     ended_ = false;
-    last_frame_time_ = Clock::now();
     return {};
   }
 
+  void close() override {
+    const bool streaming = depth_.isValid() || color_.isValid();
+    depth_.stop();
+    color_.stop();
+    // A driver's frame thread may still touch a stream for about one frame
+    // period after stop() (OpenNI2's own Dummy driver crashes with a
+    // use-after-free otherwise). close() is rare — loss, shutdown — so wait
+    // three frame periods before freeing the streams.
+    if (streaming) std::this_thread::sleep_for(std::chrono::milliseconds(100));
+    depth_.destroy();
+    color_.destroy();
+    device_.close();
+  }
+
+  // One wait for either stream: a whole depth/colour pair is a Frame; an
+  // image that does not complete a pair is Pending; the end of a .oni
+  // recording is Ended.
+  DeviceRead read(std::chrono::milliseconds limit) override {
+    if (ended_) return DeviceRead::with(DeviceRead::Kind::Ended);
+    openni::VideoStream* streams[] = {&depth_, &color_};
+    int ready = -1;
+    const Status s = OpenNI::waitForAnyStream(streams, 2, &ready, static_cast<int>(limit.count()));
+    if (s == openni::STATUS_TIME_OUT) {
+      if (playback_ && atEndOfPlayback()) ended_ = true;
+      return DeviceRead::with(ended_ ? DeviceRead::Kind::Ended : DeviceRead::Kind::Idle);
+    }
+    if (s != openni::STATUS_OK || ready < 0 || ready > 1) {
+      return DeviceRead::with(DeviceRead::Kind::Lost, oniError("waiting for frames", s));
+    }
+    openni::VideoFrameRef ref;
+    if (Status rs = streams[ready]->readFrame(&ref); rs != openni::STATUS_OK || !ref.isValid()) {
+      return DeviceRead::with(DeviceRead::Kind::Lost, oniError("reading a frame", rs));
+    }
+    try {
+      recent_[ready].push_back(ready == 0 ? copyDepth(ref) : copyColor(ref));
+    } catch (const Error& e) {
+      return DeviceRead::with(DeviceRead::Kind::Rejected, e.what());
+    }
+    std::uint64_t dropped = 0;
+    if (!pairNewest(ready, dropped)) {
+      DeviceRead pending = DeviceRead::with(DeviceRead::Kind::Pending);
+      pending.dropped = dropped;
+      return pending;
+    }
+    DeviceRead got;
+    try {
+      got = DeviceRead::of(assemble());
+    } catch (const Error& e) {
+      got = DeviceRead::with(DeviceRead::Kind::Rejected, e.what());
+    }
+    got.dropped = dropped;
+    if (playback_ && playback_frames_ > 0 && !options_.loop &&
+        last_depth_.frame_index >= playback_frames_) {
+      ended_ = true;  // this was the last pair; the next read ends the stream
+    }
+    last_depth_.valid = last_color_.valid = false;
+    return got;
+  }
+
+ private:
   std::string configureLive() {
     // Prefer 640x480 at 30 fps in the formats we use; otherwise keep the
     // device's default mode (logged by open()).
@@ -254,79 +266,6 @@ class Openni2Source : public FrameSourceBase {
     return k;
   }
 
-  void close() {
-    const bool streaming = depth_.isValid() || color_.isValid();
-    depth_.stop();
-    color_.stop();
-    // A driver's frame thread may still touch a stream for about one frame
-    // period after stop() (OpenNI2's own Dummy driver crashes with a
-    // use-after-free otherwise). close() is rare — loss, shutdown — so wait
-    // three frame periods before freeing the streams.
-    if (streaming) std::this_thread::sleep_for(std::chrono::milliseconds(100));
-    depth_.destroy();
-    color_.destroy();
-    device_.close();
-  }
-
-  void lose(const std::string& why) {
-    recordError(why + (playback_ ? "" : "; device lost, reconnecting"));
-    close();
-    if (!playback_) setState(SourceState::Reconnecting);
-  }
-
-  // Reads frames until one depth/colour pair is complete; nullopt on
-  // timeout-with-nothing, loss or end of playback (see ended_).
-  std::optional<RgbdFrame> readPair() {
-    while (!stopRequested()) {
-      openni::VideoStream* streams[] = {&depth_, &color_};
-      int ready = -1;
-      const Status s = OpenNI::waitForAnyStream(streams, 2, &ready, kPollMs);
-      if (s == openni::STATUS_TIME_OUT) {
-        if (playback_) {
-          if (atEndOfPlayback()) ended_ = true;
-          if (ended_) return std::nullopt;
-        }
-        if (Clock::now() - last_frame_time_ > std::chrono::milliseconds(kLiveFrameTimeoutMs)) {
-          lose("no frame for " + std::to_string(kLiveFrameTimeoutMs) + " ms");
-          return std::nullopt;
-        }
-        continue;
-      }
-      if (s != openni::STATUS_OK || ready < 0 || ready > 1) {
-        lose(oniError("waiting for frames", s));
-        return std::nullopt;
-      }
-      openni::VideoFrameRef ref;
-      if (Status rs = streams[ready]->readFrame(&ref); rs != openni::STATUS_OK || !ref.isValid()) {
-        lose(oniError("reading a frame", rs));
-        return std::nullopt;
-      }
-      last_frame_time_ = Clock::now();
-      try {
-        recent_[ready].push_back(ready == 0 ? copyDepth(ref) : copyColor(ref));
-      } catch (const Error& e) {
-        recordRejected(e.what());
-        continue;
-      }
-      if (!pairNewest(ready)) continue;
-      RgbdFrame frame;
-      try {
-        frame = assemble();
-        finishFrame(frame, options_);
-      } catch (const Error& e) {
-        recordRejected(e.what());
-        continue;
-      }
-      if (playback_ && playback_frames_ > 0 && !options_.loop &&
-          last_depth_.frame_index >= playback_frames_) {
-        ended_ = true;  // this was the last pair; the next call ends the stream
-      }
-      last_depth_.valid = last_color_.valid = false;
-      return frame;
-    }
-    return std::nullopt;
-  }
-
   // Pairs the newest image of stream `stream` with the image of the other
   // stream closest in device time, into last_depth_ / last_color_. Keeping a
   // few recent images per stream matters: when one stream lags the other by a
@@ -334,7 +273,7 @@ class Openni2Source : public FrameSourceBase {
   // the latest of each would never pair again and the source would deliver
   // nothing while frames keep arriving. Images older than a pair, or pushed
   // out of the history, can no longer pair and are counted as dropped.
-  bool pairNewest(int stream) {
+  bool pairNewest(int stream, std::uint64_t& dropped) {
     auto& mine = recent_[stream];
     auto& other = recent_[1 - stream];
     const CapturedImage& newest = mine.back();
@@ -352,7 +291,7 @@ class Openni2Source : public FrameSourceBase {
     if (best == other.end() || best_dt > kPairToleranceUs) {
       if (mine.size() > kPairHistory) {
         mine.pop_front();
-        recordDropped();
+        ++dropped;
       }
       return false;
     }
@@ -361,9 +300,7 @@ class Openni2Source : public FrameSourceBase {
     last_depth_ = std::move(depth);
     last_color_ = std::move(color);
     const auto older_in_other = static_cast<std::uint64_t>(best - other.begin());
-    if (const std::uint64_t dropped = older_in_other + (mine.size() - 1); dropped > 0) {
-      recordDropped(dropped);
-    }
+    dropped += older_in_other + (mine.size() - 1);
     other.erase(other.begin(), best + 1);
     mine.clear();
     return true;
@@ -465,14 +402,22 @@ class Openni2Source : public FrameSourceBase {
   std::deque<CapturedImage> recent_[2];    // unpaired images: 0 depth, 1 colour
   int playback_frames_ = 0;
   bool ended_ = false;
-  std::int64_t seq_ = 0;
-  Clock::time_point last_frame_time_ = Clock::now();
 };
 
 }  // namespace
 
 std::unique_ptr<FrameSource> makeOpenni2Source(const SourceSpec& spec) {
-  return std::make_unique<Openni2Source>(spec.target, spec.options);
+  initializeOpenNi();
+  std::error_code ec;
+  const bool playback = !spec.target.empty() && std::filesystem::is_regular_file(spec.target, ec);
+  DeviceSourceSettings settings;
+  settings.reconnect_initial = spec.options.reconnect_initial;
+  settings.reconnect_max = spec.options.reconnect_max;
+  settings.frame_timeout = spec.options.frame_timeout;
+  settings.reconnect = !playback;                            // a file cannot come back
+  settings.rate_hz = playback ? spec.options.rate_hz : 0.0;  // a camera has its own rate
+  return std::make_unique<DeviceSource>(
+      std::make_unique<Openni2Device>(spec.target, spec.options, playback), settings, spec.options);
 }
 
 }  // namespace findmug::io::detail

@@ -34,6 +34,23 @@ const T& pick(const T (&options)[N], Rng& rng) {
   return options[rng.integer(0, static_cast<int>(N) - 1)];
 }
 
+// Uniform draws per component, the last component first. Drawn inside one call's arguments
+// they would come in an unspecified order (g++ evaluates right to left, clang left to right),
+// and a seed would render another scene with another compiler; this fixes the order g++ used,
+// so every seed keeps the scene it always had.
+Eigen::Vector2d uniform2(Rng& rng, const Eigen::Vector2d& lo, const Eigen::Vector2d& hi) {
+  const double y = rng.uniform(lo.y(), hi.y());
+  const double x = rng.uniform(lo.x(), hi.x());
+  return {x, y};
+}
+
+Eigen::Vector3d uniform3(Rng& rng, const Eigen::Vector3d& lo, const Eigen::Vector3d& hi) {
+  const double z = rng.uniform(lo.z(), hi.z());
+  const double y = rng.uniform(lo.y(), hi.y());
+  const double x = rng.uniform(lo.x(), hi.x());
+  return {x, y, z};
+}
+
 Primitive box(const Eigen::Vector3d& center, double yaw, const Eigen::Vector3d& half,
               const Material& material) {
   Primitive p;
@@ -135,7 +152,7 @@ void placeSmallObject(SynthScene& scene, Surface& surface, Rng& rng, bool uprigh
   }
   const double kind = rng.uniform();
   for (int attempt = 0; attempt < 30; ++attempt) {
-    const Eigen::Vector2d c(rng.uniform(lo.x(), hi.x()), rng.uniform(lo.y(), hi.y()));
+    const Eigen::Vector2d c = uniform2(rng, lo, hi);
     std::vector<Primitive> parts;
     Polygon2 footprint;
     std::string name;
@@ -152,10 +169,8 @@ void placeSmallObject(SynthScene& scene, Surface& surface, Rng& rng, bool uprigh
     } else if (kind < 0.7 || upright_books) {
       const bool book = kind >= 0.7;
       const Eigen::Vector3d half =
-          book ? Eigen::Vector3d(rng.uniform(0.01, 0.025), rng.uniform(0.07, 0.11),
-                                 rng.uniform(0.08, 0.13))
-               : Eigen::Vector3d(rng.uniform(0.04, 0.12), rng.uniform(0.04, 0.10),
-                                 rng.uniform(0.03, 0.10));
+          book ? uniform3(rng, {0.01, 0.07, 0.08}, {0.025, 0.11, 0.13})
+               : uniform3(rng, {0.04, 0.04, 0.03}, {0.12, 0.10, 0.10});
       if (2 * half.z() > surface.max_height) continue;
       const double yaw = upright_books ? 0.0 : rng.uniform(0.0, M_PI);
       footprint = detail::rectangle(c, yaw, half.x(), half.y());
@@ -167,8 +182,7 @@ void placeSmallObject(SynthScene& scene, Surface& surface, Rng& rng, bool uprigh
       double z = surface.z;
       double max_half_x = 0, max_half_y = 0;
       for (int k = 0; k < n; ++k) {
-        const Eigen::Vector3d half(rng.uniform(0.07, 0.12), rng.uniform(0.05, 0.085),
-                                   rng.uniform(0.01, 0.025));
+        const Eigen::Vector3d half = uniform3(rng, {0.07, 0.05, 0.01}, {0.12, 0.085, 0.025});
         Material bm{jitter(pick(kObjectColors, rng), 0.15, rng), Texture::Plain, 0.2f};
         parts.push_back(box(at(c, z + half.z()), base_yaw + rng.uniform(-0.15, 0.15), half, bm));
         z += 2 * half.z();
@@ -336,8 +350,12 @@ bool addTable(SynthScene& scene, Layout& layout, const ApartmentParams& params,
                                     t.size.y() / 2 + 0.35);
     } else {
       t.center_xy = {rng.uniform(0.0, layout.room.x()), rng.uniform(0.0, layout.room.y())};
-      t.yaw = rng.chance(0.7) ? (rng.chance(0.5) ? 0.0 : M_PI / 2) + 0.03 * rng.normal()
-                              : rng.uniform(0.0, M_PI);
+      if (rng.chance(0.7)) {  // mostly axis-aligned, a little off
+        const double axis_yaw = rng.chance(0.5) ? 0.0 : M_PI / 2;
+        t.yaw = axis_yaw + 0.03 * rng.normal();
+      } else {
+        t.yaw = rng.uniform(0.0, M_PI);
+      }
       const double pad = kind->chairs_hi > 0 ? 0.75 : 0.55;
       clearance =
           t.shape == TableShape::Round
@@ -541,9 +559,9 @@ void addWallOpenings(SynthScene& scene, Layout& layout, const ApartmentParams& p
 }
 
 SynthScene tryApartment(Rng& rng, const ApartmentParams& params) {
-  const Eigen::Vector3d size(rng.uniform(params.room_x_min, params.room_x_max),
-                             rng.uniform(params.room_y_min, params.room_y_max),
-                             rng.uniform(params.ceiling_min, params.ceiling_max));
+  const Eigen::Vector3d size =
+      uniform3(rng, {params.room_x_min, params.room_y_min, params.ceiling_min},
+               {params.room_x_max, params.room_y_max, params.ceiling_max});
   SynthScene scene = makeEmptyRoom(size);
   // Floor: boards, tiles or carpet; walls a pale paint; ceiling white.
   const double floor_kind = rng.uniform();

@@ -37,6 +37,7 @@
 #include "findmug/labels.hpp"
 #include "findmug/tables.hpp"
 #include "test_data.hpp"
+#include "visiting_order.hpp"
 
 extern char** environ;
 

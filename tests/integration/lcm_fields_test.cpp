@@ -114,8 +114,9 @@ void walkStatus(Walk& w) {
   w.fixed(1);
   w.string("last_error");
   w.fixed(8);
-  // frames_dropped_{at_door,in_pipeline,at_shutdown}, cpu_{budget,used}_cores, processing_threads
-  w.fixed(3 * 8 + 2 * 4 + 4);
+  // frames_dropped_{at_door,in_pipeline,at_shutdown}, cpu_{budget,used}_cores, processing_threads,
+  // source_reconnects
+  w.fixed(3 * 8 + 2 * 4 + 4 + 8);
 }
 
 RgbdFrame frame() {

@@ -2,7 +2,9 @@
 // PCLZF / TIFF sequence sources on PCL's 3-frame grabber sequence (same depth
 // in all three formats), bad files skipped and counted, the LCM source over
 // memq:// and file://, the OpenNI2 device path (OpenNI2's software "Dummy"
-// device), and findmug-grab writing a log that lcm::LogFile reads back.
+// device), a camera that disappears mid-run and comes back (DeviceSource's
+// back-off over a device unplugged on command), and findmug-grab writing a
+// log that lcm::LogFile reads back.
 #include <gtest/gtest.h>
 
 #include <chrono>
@@ -16,11 +18,13 @@
 #include "findmug/dataset.hpp"
 #include "findmug/error.hpp"
 #include "findmug/io/channels.hpp"
+#include "findmug/io/device_source.hpp"
 #include "findmug/io/frame_source.hpp"
 #include "findmug/io/lcm_codec.hpp"
 #include "findmug/io/lcm_source.hpp"
 #include "findmug/io/pcl_frames.hpp"
 #include "test_data.hpp"
+#include "unpluggable_device.hpp"
 
 namespace fs = std::filesystem;
 
@@ -491,6 +495,193 @@ TEST(Openni2Source, CorruptOniFileFailsAtStartUp) {
     FAIL() << "no error";
   } catch (const Error& e) {
     EXPECT_NE(std::string(e.what()).find("broken.oni"), std::string::npos) << e.what();
+  }
+}
+
+TEST(SourceSpec, OpenniBackoffAndTimeoutKeys) {
+  const SourceSpec spec =
+      parseSourceSpec("openni2?reconnect_ms=50&reconnect_max_ms=800&frame_timeout_ms=300");
+  EXPECT_EQ(spec.options.reconnect_initial, std::chrono::milliseconds(50));
+  EXPECT_EQ(spec.options.reconnect_max, std::chrono::milliseconds(800));
+  EXPECT_EQ(spec.options.frame_timeout, std::chrono::milliseconds(300));
+  const SourceSpec defaults = parseSourceSpec("openni2");
+  EXPECT_EQ(defaults.options.reconnect_initial, std::chrono::milliseconds(500));
+  EXPECT_EQ(defaults.options.reconnect_max, std::chrono::milliseconds(5000));
+  EXPECT_EQ(defaults.options.frame_timeout, std::chrono::milliseconds(2000));
+  auto message = [](const std::string& text) {
+    try {
+      parseSourceSpec(text);
+    } catch (const Error& e) {
+      return std::string(e.what());
+    }
+    return std::string("no error");
+  };
+  EXPECT_NE(message("openni2?reconnect_ms=0").find("reconnect_ms=0 not in"), std::string::npos);
+  EXPECT_NE(message("openni2?frame_timeout_ms=1.5").find("frame_timeout_ms=1.5"),
+            std::string::npos);
+  EXPECT_NE(message("openni2?reconnect_ms=6000").find("reconnect_max_ms is below reconnect_ms"),
+            std::string::npos);
+  EXPECT_NE(message("dataset:/x?reconnect_ms=5").find("only applies to openni2"),
+            std::string::npos);
+}
+
+// ---- a camera that disappears mid-run ------------------------------------------------------
+// DeviceSource is the reconnect loop of every device source (the OpenNI2
+// one included). Here its device is a "camera" streaming real NYU frames
+// that the test unplugs and plugs back in.
+
+TEST(Backoff, DoublesFromTheInitialDelayUpToTheCapAndResets) {
+  using std::chrono::milliseconds;
+  Backoff b(milliseconds(500), milliseconds(5000));
+  std::vector<long> got;
+  for (int i = 0; i < 7; ++i) got.push_back(static_cast<long>(b.next().count()));
+  EXPECT_EQ(got, (std::vector<long>{500, 1000, 2000, 4000, 5000, 5000, 5000}));
+  b.reset();
+  EXPECT_EQ(b.next(), milliseconds(500));
+  Backoff huge(milliseconds(1), milliseconds::max());  // doubling must not overflow
+  for (int i = 0; i < 80; ++i) EXPECT_GT(huge.next().count(), 0) << i;
+  EXPECT_THROW(Backoff(milliseconds(0), milliseconds(10)), Error);
+  EXPECT_THROW(Backoff(milliseconds(20), milliseconds(10)), Error);
+}
+
+// Waits (without asserting on time) until `done` holds, at most a minute
+// (the machine may be loaded).
+template <typename F>
+bool waitFor(F&& done) {
+  const auto end = std::chrono::steady_clock::now() + std::chrono::seconds(60);
+  while (std::chrono::steady_clock::now() < end) {
+    if (done()) return true;
+    std::this_thread::sleep_for(std::chrono::milliseconds(5));
+  }
+  return done();
+}
+
+// The attempts' back-off delays must be the schedule (initial, x2, ...,
+// capped), and each attempt must come at least its delay after the one
+// before (a lower bound only: a loaded machine may be late, never early).
+void expectBackoffSchedule(const std::vector<ReconnectAttempt>& attempts,
+                           std::chrono::milliseconds initial, std::chrono::milliseconds cap) {
+  auto expected = initial;
+  for (std::size_t i = 0; i < attempts.size(); ++i) {
+    EXPECT_EQ(attempts[i].waited, expected) << "attempt " << i;
+    expected = std::min(expected * 2, cap);
+    if (i > 0) {
+      EXPECT_GE(attempts[i].at - attempts[i - 1].at, attempts[i].waited) << "attempt " << i;
+    }
+  }
+}
+
+TEST(DeviceSource, CameraThatDisappearsMidRunComesBackWithBackoff) {
+  FINDMUG_REQUIRE_DATA(dir, "nyuv2_labeled");
+  using std::chrono::milliseconds;
+  const DatasetFolder folder(dir.string());
+  auto owned = std::make_unique<test::UnpluggableDevice>("dataset:" + dir.string() + "?loop=1");
+  test::UnpluggableDevice& camera = *owned;
+  DeviceSourceSettings settings;
+  settings.reconnect_initial = milliseconds(20);
+  settings.reconnect_max = milliseconds(80);
+  settings.poll = milliseconds(20);
+  DeviceSource source(std::move(owned), settings);
+  EXPECT_EQ(source.state(), SourceState::Starting);
+  EXPECT_NE(source.describe().find("unpluggable"), std::string::npos);
+
+  // Running: three frames.
+  for (std::int64_t i = 0; i < 3; ++i) {
+    auto f = source.next();
+    ASSERT_TRUE(f);
+    EXPECT_EQ(f->seq, i);
+  }
+  EXPECT_EQ(source.state(), SourceState::Running);
+
+  // Unplugged: the next read fails; the source reconnects with back-off
+  // while the consumer is blocked in next().
+  camera.unplug();
+  std::optional<RgbdFrame> after;
+  std::thread consumer, consumer2;
+  // A failed ASSERT returns early: stop the source and join, not terminate.
+  struct Cleanup {
+    FrameSource& source;
+    std::thread &a, &b;
+    ~Cleanup() {
+      source.stop();
+      if (a.joinable()) a.join();
+      if (b.joinable()) b.join();
+    }
+  } cleanup{source, consumer, consumer2};
+  consumer = std::thread([&] { after = source.next(); });
+  ASSERT_TRUE(waitFor([&] { return source.reconnectAttempts().size() >= 6; }));
+  EXPECT_EQ(source.state(), SourceState::Reconnecting);
+  const SourceStats lost = source.stats();
+  EXPECT_EQ(lost.reconnects, 0u);
+  EXPECT_NE(lost.last_error.find("test camera unplugged"), std::string::npos) << lost.last_error;
+  EXPECT_NE(lost.last_error.find("retrying in 80 ms"), std::string::npos) << lost.last_error;
+
+  // Plugged back in: frames flow again, numbered on from before the loss.
+  camera.plug();
+  consumer.join();
+  ASSERT_TRUE(after);
+  EXPECT_EQ(after->seq, 3);
+  // The camera was opened afresh: its stream starts at its first frame again.
+  EXPECT_EQ(after->depth_mm, folder.load(0).frame.depth_mm);
+  EXPECT_EQ(source.state(), SourceState::Running);
+  EXPECT_EQ(source.stats().reconnects, 1u);
+  EXPECT_EQ(camera.opens(), 2);
+  const auto attempts = source.reconnectAttempts();
+  ASSERT_GE(attempts.size(), 7u);
+  for (std::size_t i = 0; i + 1 < attempts.size(); ++i) {
+    EXPECT_FALSE(attempts[i].succeeded) << i;
+    EXPECT_NE(attempts[i].error.find("unplugged"), std::string::npos) << i;
+  }
+  EXPECT_TRUE(attempts.back().succeeded);
+  expectBackoffSchedule(attempts, settings.reconnect_initial, settings.reconnect_max);
+
+  // A second loss, this time a stalled driver (no frames, no error): the
+  // frame timeout notices it, and the back-off starts from the initial delay.
+  camera.silence(true);
+  consumer2 = std::thread([&] { after = source.next(); });
+  ASSERT_TRUE(waitFor([&] { return source.state() == SourceState::Reconnecting; }));
+  EXPECT_NE(source.stats().last_error.find("no frame for 2000 ms; device lost"),  // the default
+            std::string::npos)
+      << source.stats().last_error;
+  camera.silence(false);
+  consumer2.join();
+  ASSERT_TRUE(after);
+  EXPECT_EQ(after->seq, 4);
+  EXPECT_EQ(source.stats().reconnects, 2u);
+  const auto again = source.reconnectAttempts();
+  ASSERT_EQ(again.size(), attempts.size() + 1);  // plugged: the first attempt succeeds
+  EXPECT_TRUE(again.back().succeeded);
+  EXPECT_EQ(again.back().waited, settings.reconnect_initial);
+  EXPECT_EQ(source.stats().frames_delivered, 5u);
+}
+
+TEST(DeviceSource, StopEndsTheBackoffAndAnUnopenablePlaybackFailsAtStartUp) {
+  using std::chrono::milliseconds;
+  auto owned = std::make_unique<test::UnpluggableDevice>("dataset:/nonexistent");
+  owned->unplug();
+  DeviceSourceSettings settings;
+  settings.reconnect_initial = milliseconds(10000);  // stop() must not wait for it
+  settings.reconnect_max = milliseconds(10000);
+  DeviceSource source(std::move(owned), settings);
+  EXPECT_EQ(source.state(), SourceState::Reconnecting);
+  EXPECT_NE(source.stats().last_error.find("unplugged); retrying"), std::string::npos);
+  std::thread stopper([&] {
+    std::this_thread::sleep_for(milliseconds(50));
+    source.stop();
+  });
+  EXPECT_FALSE(source.next());
+  stopper.join();
+  EXPECT_EQ(source.state(), SourceState::Stopped);
+  EXPECT_TRUE(source.reconnectAttempts().empty());
+
+  auto file = std::make_unique<test::UnpluggableDevice>("dataset:/nonexistent");
+  file->unplug();
+  settings.reconnect = false;
+  try {
+    DeviceSource playback(std::move(file), settings);
+    FAIL() << "no error";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("unpluggable test camera"), std::string::npos) << e.what();
   }
 }
 

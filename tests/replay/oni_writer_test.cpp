@@ -7,8 +7,11 @@
 #include <cmath>
 #include <cstring>
 #include <filesystem>
+#include <optional>
+#include <thread>
 
 #include "findmug/error.hpp"
+#include "findmug/io/device_source.hpp"
 #include "findmug/io/frame_source.hpp"
 #include "oni_writer.hpp"
 #include "test_data.hpp"
@@ -90,6 +93,83 @@ TEST_F(OniWriterTest, JpegColourIsCloseAndRawDepthExact) {
     EXPECT_LT(mean, 4.0) << "JPEG mean absolute colour error, frame " << i;
     EXPECT_GT(mean, 0.0) << "JPEG is lossy: identical colour means the codec was not applied";
   }
+}
+
+// The OpenNI2 source's own reconnect path, without a camera: a device URI
+// that names no file yet is a live device that is absent (Reconnecting, the
+// OpenNI2 open failing on each back-off attempt); once a recording appears
+// under that URI, OpenNI2 opens it as a device and frames flow. Then the
+// "device" breaks under the driver (the file cut to nothing): no frame
+// within frame_timeout_ms, so the source closes it, retries (the open fails
+// on the broken file), and comes back when the recording is whole again.
+TEST_F(OniWriterTest, Openni2DeviceThatAppearsVanishesAndComesBackIsReopened) {
+  const std::string uri = tmp.str("camera.oni");
+  auto write = [&](const std::string& path) {
+    oni::OniWriter writer(path, 640, 480, frames[0].intrinsics,
+                          {oni::DepthCodec::Z16, oni::ColorCodec::Raw, 5});
+    for (std::size_t i = 0; i < frames.size(); ++i) writer.write(frames[i], i * 200'000);
+    writer.close();
+  };
+  auto owned = io::makeSource("openni2:" + uri +
+                              "?reconnect_ms=20&reconnect_max_ms=80&frame_timeout_ms=500");
+  auto* source = dynamic_cast<io::DeviceSource*>(owned.get());
+  ASSERT_NE(source, nullptr);
+  EXPECT_EQ(source->state(), io::SourceState::Reconnecting);
+  std::optional<RgbdFrame> got;
+  std::thread consumer, consumer2;
+  // A failed ASSERT returns early: stop the source and join, not terminate.
+  struct Cleanup {
+    io::FrameSource& source;
+    std::thread &a, &b;
+    ~Cleanup() {
+      source.stop();
+      if (a.joinable()) a.join();
+      if (b.joinable()) b.join();
+    }
+  } cleanup{*source, consumer, consumer2};
+  consumer = std::thread([&] { got = source->next(); });
+  auto wait_for = [](auto done) {
+    const auto end = std::chrono::steady_clock::now() + std::chrono::seconds(60);
+    while (!done() && std::chrono::steady_clock::now() < end) {
+      std::this_thread::sleep_for(std::chrono::milliseconds(5));
+    }
+    return done();
+  };
+  ASSERT_TRUE(wait_for([&] { return source->reconnectAttempts().size() >= 4; }));
+  EXPECT_NE(source->stats().last_error.find("camera.oni"), std::string::npos)
+      << source->stats().last_error;
+  // The camera is plugged in: written aside, then moved in whole.
+  write(tmp.str("aside.oni"));
+  std::filesystem::rename(tmp.str("aside.oni"), uri);
+  consumer.join();
+  ASSERT_TRUE(got);
+  EXPECT_EQ(got->width, 640);
+  EXPECT_EQ(source->stats().reconnects, 1u);
+  EXPECT_EQ(source->state(), io::SourceState::Running);
+  const std::size_t before = source->reconnectAttempts().size();
+
+  // The device breaks mid-run.
+  std::filesystem::resize_file(uri, 0);
+  got.reset();
+  consumer2 = std::thread([&] {  // frames already queued in the driver may still come first
+    while (auto f = source->next()) {
+      if (source->stats().reconnects >= 2) {
+        got = std::move(f);
+        break;
+      }
+    }
+  });
+  ASSERT_TRUE(wait_for([&] { return source->reconnectAttempts().size() >= before + 3; }))
+      << source->stats().last_error;
+  EXPECT_EQ(source->state(), io::SourceState::Reconnecting) << source->stats().last_error;
+  write(tmp.str("aside.oni"));
+  std::filesystem::rename(tmp.str("aside.oni"), uri);
+  ASSERT_TRUE(wait_for([&] { return source->stats().reconnects >= 2; }))
+      << source->stats().last_error;
+  consumer2.join();
+  ASSERT_TRUE(got);
+  EXPECT_EQ(got->width, 640);
+  EXPECT_EQ(source->state(), io::SourceState::Running);
 }
 
 TEST_F(OniWriterTest, BadInputIsAnErrorNamingTheFile) {

@@ -13,6 +13,7 @@
 #include <thread>
 
 #include "findmug/error.hpp"
+#include "forest_format.hpp"  // internal: file layout and checksum (src/)
 #include "test_data.hpp"
 
 namespace findmug {
@@ -470,20 +471,11 @@ TEST(ForestFile, SaveToUnwritablePlaceFails) {
   EXPECT_THROW(RandomForest().save("/tmp/findmug-empty.fmf"), Error);
 }
 
-// Helpers that know the documented file layout (see src/forest.cpp), to
+// Helpers that know the documented file layout (src/forest_format.hpp), to
 // build files that are intact (valid checksum) but wrong in one field.
-std::uint64_t fnv1a64(const std::uint8_t* data, std::size_t size) {
-  std::uint64_t h = 0xcbf29ce484222325ULL;
-  for (std::size_t i = 0; i < size; ++i) {
-    h ^= data[i];
-    h *= 0x100000001b3ULL;
-  }
-  return h;
-}
-
 void fixChecksum(std::vector<std::uint8_t>& bytes) {
-  const std::size_t body = bytes.size() - 8;
-  const std::uint64_t h = fnv1a64(bytes.data(), body);
+  const std::size_t body = bytes.size() - forest_format::kChecksumSize;
+  const std::uint64_t h = forest_format::fnv1a64(bytes.data(), body);
   for (int i = 0; i < 8; ++i) bytes[body + i] = static_cast<std::uint8_t>(h >> (8 * i));
 }
 
@@ -675,6 +667,7 @@ TEST_F(ForestFileCorruption, Format2FileLoadsAsFourteenColumnsWithoutContextStag
 
 TEST_F(ForestFileCorruption, BadContextStageFlag) {
   auto bytes = good_;
+  ASSERT_GT(bytes.size(), 9u);
   bytes[bytes.size() - 9] = 2;
   fixChecksum(bytes);
   expectRefused(bytes, "context stage flag = 2");

@@ -28,6 +28,7 @@
 #include "findmug/ground.hpp"
 #include "findmug/labels.hpp"
 #include "findmug/synth.hpp"
+#include "tables_internal.hpp"  // internal: clusterPoints with the image shortcut
 #include "test_data.hpp"
 
 namespace findmug {
@@ -185,6 +186,52 @@ TEST(EuclideanClusters, SamePartitionAsBruteForce) {
   }
 }
 
+// detectTables passes the points' pixels to the clustering, which then links
+// image neighbours without a search. Only a shortcut: on an organized cloud
+// with depth steps just below and above the tolerance, noise, holes and
+// pixels far apart (a coarse camera), the clusters are those without it and
+// those of brute force.
+TEST(EuclideanClusters, ImageNeighbourShortcutGivesTheSamePartition) {
+  std::mt19937 rng(23);
+  std::normal_distribution<float> noise(0.0f, 0.01f);
+  std::uniform_real_distribution<float> unit(0.0f, 1.0f);
+  const int width = 80, height = 60;
+  const float focal = 60.0f;  // about 2.5 cm between pixels at 1.5 m
+  for (float tol : {0.03f, 0.05f}) {
+    for (int trial = 0; trial < 3; ++trial) {
+      std::vector<Eigen::Vector3f> pts;
+      std::vector<int> pixels;
+      for (int y = 0; y < height; ++y) {
+        for (int x = 0; x < width; ++x) {
+          if (unit(rng) > 0.8f) continue;  // holes
+          float depth = 1.2f + 0.01f * x + 0.005f * y;
+          if (x > 20 && x < 40) depth += 0.04f;              // step below the tolerance
+          if (y > 30 && x > 45) depth += 0.07f;              // step above it
+          if (x > 60 && y < 15) depth += 0.3f * (trial + 1);  // a far patch
+          depth += noise(rng);
+          pts.emplace_back((x - width / 2) * depth / focal, depth,
+                           0.7f + (height / 2 - y) * depth / focal * 0.1f);
+          pixels.push_back(y * width + x);
+        }
+      }
+      const auto plain = tables_detail::clusterPoints(pts, tol);
+      const auto shortcut =
+          tables_detail::clusterPoints(pts, tol, tables_detail::PointGrid{&pixels, width});
+      // Ids are dense in order of first appearance: same partition = same ids.
+      ASSERT_EQ(shortcut, plain) << "tolerance " << tol << ", trial " << trial;
+      const auto reference = bruteForceClusters(pts, tol);
+      std::map<int, int> forward;
+      for (std::size_t i = 0; i < pts.size(); ++i) {
+        const auto f = forward.emplace(plain[i], reference[i]);
+        ASSERT_EQ(f.first->second, reference[i]) << "tolerance " << tol << ", point " << i;
+      }
+      EXPECT_EQ(forward.size(),
+                static_cast<std::size_t>(*std::max_element(reference.begin(), reference.end()) + 1));
+      EXPECT_GT(forward.size(), 1u) << "test needs more than one cluster";
+    }
+  }
+}
+
 TEST(EuclideanClusters, ChainsLinkAndGapsSplit) {
   std::vector<Eigen::Vector3f> chain, gaps;
   for (int i = 0; i < 50; ++i) {
@@ -281,63 +328,6 @@ TEST(SearchPositions, NoExtraPositionsWhenTheArmIsShorterThanTheSafetyDistance) 
   config.arm_reach_m = 0.5f;
   const auto positions = computeSearchPositions(boxTable({0, 0}, 0.0f, 4.0f, 0.8f), config);
   EXPECT_EQ(positions.size(), 2u);
-}
-
-float pathLength(const Eigen::Vector2f& start, const std::vector<Eigen::Vector2f>& pts,
-                 const std::vector<int>& order) {
-  float length = 0.0f;
-  Eigen::Vector2f at = start;
-  for (int i : order) {
-    length += (pts[i] - at).norm();
-    at = pts[i];
-  }
-  return length;
-}
-
-TEST(VisitingOrder, IsAPermutationAndOptimalOnSmallSets) {
-  EXPECT_TRUE(visitingOrder({0, 0}, {}).empty());
-  std::mt19937 rng(11);
-  std::uniform_real_distribution<float> coord(-4.0f, 4.0f);
-  for (int trial = 0; trial < 20; ++trial) {
-    std::vector<Eigen::Vector2f> pts;
-    for (int i = 0; i < 7; ++i) pts.emplace_back(coord(rng), coord(rng));
-    const Eigen::Vector2f start(coord(rng), coord(rng));
-    const auto order = visitingOrder(start, pts);
-    std::vector<int> sorted = order;
-    std::sort(sorted.begin(), sorted.end());
-    ASSERT_EQ(sorted, (std::vector<int>{0, 1, 2, 3, 4, 5, 6}));
-    // Brute force over all 5040 orders: the shortest path.
-    std::vector<int> perm = sorted;
-    float best = std::numeric_limits<float>::max();
-    do {
-      best = std::min(best, pathLength(start, pts, perm));
-    } while (std::next_permutation(perm.begin(), perm.end()));
-    EXPECT_NEAR(pathLength(start, pts, order), best, 1e-4f) << "trial " << trial;
-  }
-  // Many points (heuristic): a permutation, and no longer than the greedy
-  // nearest-neighbour tour it starts from.
-  std::vector<Eigen::Vector2f> many;
-  for (int i = 0; i < 40; ++i) many.emplace_back(coord(rng), coord(rng));
-  const auto order = visitingOrder({0, 0}, many);
-  std::vector<int> sorted = order;
-  std::sort(sorted.begin(), sorted.end());
-  for (int i = 0; i < 40; ++i) ASSERT_EQ(sorted[i], i);
-  std::vector<int> greedy;
-  std::vector<bool> used(many.size(), false);
-  Eigen::Vector2f at(0, 0);
-  for (int step = 0; step < 40; ++step) {
-    int best = -1;
-    for (int i = 0; i < 40; ++i) {
-      if (!used[i] && (best < 0 || (many[i] - at).norm() < (many[best] - at).norm())) best = i;
-    }
-    used[best] = true;
-    greedy.push_back(best);
-    at = many[best];
-  }
-  EXPECT_LE(pathLength({0, 0}, many, order), pathLength({0, 0}, many, greedy) + 1e-4f);
-  // Points on a line, robot at one end: visited in line order.
-  const std::vector<Eigen::Vector2f> line = {{3, 0}, {1, 0}, {4, 0}, {2, 0}};
-  EXPECT_EQ(visitingOrder({0, 0}, line), (std::vector<int>{1, 3, 0, 2}));
 }
 
 // ------------------------------------------------- hand-built labelled clouds

@@ -27,6 +27,8 @@
 //   pclzf:/dir                 PCL LZF triplets NAME_depth.pclzf, NAME_rgb.pclzf, NAME.xml
 //   tiff:/dir                  NAME_depth.tiff (uint16 mm) + NAME_rgb.tiff (RGB8) pairs
 // followed by options: ?rate_hz=5&loop=1&realtime=0&url=memq://
+// (openni2 also: reconnect_ms=500&reconnect_max_ms=5000&frame_timeout_ms=2000,
+// the back-off and loss detection of device_source.hpp)
 // (`url` must come last: its value is the rest of the string, since LCM URLs
 // carry their own '?' and '&').
 #pragma once
@@ -108,9 +110,12 @@ struct SourceOptions {
   // The camera mount, attached to every frame that has none (a robot knows it).
   std::optional<CameraExtrinsics> extrinsics;
   // openni2 device: waits between reconnection attempts, doubling from the
-  // first to the second.
+  // first to the second (spec keys reconnect_ms, reconnect_max_ms).
   std::chrono::milliseconds reconnect_initial{500};
   std::chrono::milliseconds reconnect_max{5000};
+  // openni2 device / .oni: no image for this long = the device is lost
+  // (spec key frame_timeout_ms).
+  std::chrono::milliseconds frame_timeout{2000};
 };
 
 struct SourceSpec {

@@ -1,0 +1,349 @@
+// table_clustering.cpp — exact Euclidean clustering of table points.
+//
+// Clustering: our own exact Euclidean clustering on a hashed voxel grid
+// rather than PCL's EuclideanClusterExtraction. Both give the same partition
+// (points linked by chains of steps <= tolerance), but PCL builds a kd-tree
+// and runs one radius search per point, which for the 20-100k table points
+// of a close table costs tens of milliseconds; the stage budget is 20 ms.
+// Here the voxel edge is tolerance/sqrt(3), so all points of one voxel are
+// within the tolerance of each other and are linked for free; voxels are
+// then joined with union-find, testing point pairs only for neighbouring
+// voxels (up to two voxels apart) that are not already joined and whose
+// bounding boxes come within the tolerance. On a dense table top almost
+// every voxel pair is already joined, so the cost is close to one hash
+// insert per point. The organized grid does not define the neighbourhoods,
+// because parts of one table split by an occluder (a chair back, a mug) must
+// still join when they are close in 3-D; but when the points come with their
+// pixels (detectTables), image neighbours within the tolerance are linked
+// first, for free, so that the voxel pass finds almost every neighbouring
+// voxel pair already joined and compares few points.
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <string>
+#include <utility>
+
+#include "findmug/error.hpp"
+#include "findmug/tables.hpp"
+#include "tables_internal.hpp"
+
+namespace findmug {
+
+using namespace tables_detail;
+
+namespace {
+
+// Open-addressing hash map from packed voxel keys to dense voxel ids. It
+// grows with the number of voxels (kept at most half full), not with the
+// number of points: a table top of 100k points has a few thousand voxels,
+// and a small table stays in cache for the neighbour lookups.
+class VoxelIndex {
+ public:
+  VoxelIndex() { reset(1024); }
+  // Id of `key`, inserting it with `next_id` when absent.
+  int findOrInsert(std::uint64_t key, int next_id, bool& inserted) {
+    std::size_t slot = hash(key);
+    while (true) {
+      if (keys_[slot] == key) {
+        inserted = false;
+        return values_[slot];
+      }
+      if (keys_[slot] == kEmpty) {
+        inserted = true;
+        if (2 * (size_ + 1) > keys_.size()) {
+          grow();
+          slot = hash(key);
+          while (keys_[slot] != kEmpty) slot = (slot + 1) & mask_;
+        }
+        keys_[slot] = key;
+        values_[slot] = next_id;
+        ++size_;
+        return next_id;
+      }
+      slot = (slot + 1) & mask_;
+    }
+  }
+  int find(std::uint64_t key) const {
+    std::size_t slot = hash(key);
+    while (keys_[slot] != kEmpty) {
+      if (keys_[slot] == key) return values_[slot];
+      slot = (slot + 1) & mask_;
+    }
+    return -1;
+  }
+
+ private:
+  static constexpr std::uint64_t kEmpty = ~std::uint64_t{0};  // never a packed key (63 bits)
+  std::size_t hash(std::uint64_t key) const {
+    // Fibonacci hashing: the top bits of the product depend on every bit of
+    // the key (x, y and z fields alike).
+    return static_cast<std::size_t>((key * 0x9E3779B97F4A7C15ull) >> shift_);
+  }
+  void reset(std::size_t capacity) {  // a power of two
+    keys_.assign(capacity, kEmpty);
+    values_.assign(capacity, -1);
+    mask_ = capacity - 1;
+    shift_ = 64;
+    for (std::size_t c = capacity; c > 1; c >>= 1) --shift_;
+  }
+  void grow() {
+    std::vector<std::uint64_t> keys = std::move(keys_);
+    std::vector<int> values = std::move(values_);
+    reset(2 * keys.size());
+    for (std::size_t i = 0; i < keys.size(); ++i) {
+      if (keys[i] == kEmpty) continue;
+      std::size_t slot = hash(keys[i]);
+      while (keys_[slot] != kEmpty) slot = (slot + 1) & mask_;
+      keys_[slot] = keys[i];
+      values_[slot] = values[i];
+    }
+  }
+  std::vector<std::uint64_t> keys_;
+  std::vector<int> values_;
+  std::size_t mask_ = 0;
+  int shift_ = 64;
+  std::size_t size_ = 0;
+};
+
+class DisjointSets {
+ public:
+  // A new singleton set; ids are 0, 1, ... in order of addition.
+  void add() { parent_.push_back(static_cast<int>(parent_.size())); }
+  int find(int x) {
+    while (parent_[x] != x) {
+      parent_[x] = parent_[parent_[x]];  // path halving
+      x = parent_[x];
+    }
+    return x;
+  }
+  void unite(int a, int b) {
+    a = find(a);
+    b = find(b);
+    if (a != b) parent_[std::max(a, b)] = std::min(a, b);
+  }
+
+ private:
+  std::vector<int> parent_;
+};
+
+constexpr int kFieldBits = 21;
+constexpr std::int64_t kFieldOffset = std::int64_t{1} << (kFieldBits - 1);
+
+std::uint64_t packVoxel(std::int64_t ix, std::int64_t iy, std::int64_t iz) {
+  return (static_cast<std::uint64_t>(ix + kFieldOffset) << (2 * kFieldBits)) |
+         (static_cast<std::uint64_t>(iy + kFieldOffset) << kFieldBits) |
+         static_cast<std::uint64_t>(iz + kFieldOffset);
+}
+
+// Squared distance between two axis-aligned boxes (0 when they overlap).
+float squaredGap(const Eigen::AlignedBox3f& a, const Eigen::AlignedBox3f& b) {
+  float gap2 = 0.0f;
+  for (int axis = 0; axis < 3; ++axis) {
+    const float g = std::max({0.0f, b.min()[axis] - a.max()[axis], a.min()[axis] - b.max()[axis]});
+    gap2 += g * g;
+  }
+  return gap2;
+}
+
+}  // namespace
+
+std::vector<int> tables_detail::clusterPoints(const std::vector<Eigen::Vector3f>& points,
+                                              float tolerance, const PointGrid& grid) {
+  const int n = static_cast<int>(points.size());
+  std::vector<int> labels(points.size(), -1);
+  if (n == 0) return labels;
+  const std::vector<int>* pixels = grid.pixels;
+  if (pixels && (pixels->size() != points.size() || grid.width < 1)) pixels = nullptr;
+
+  // Slightly under tolerance/sqrt(3) so the voxel diagonal never exceeds the
+  // tolerance through rounding; then neighbours within the tolerance are at
+  // most `reach` voxels away on each axis.
+  // With tolerance >= kMinToleranceM and points within kMaxPlausibleRangeM,
+  // voxel indices stay well inside their 21-bit fields.
+  const float voxel = tolerance / std::sqrt(3.0f) * 0.999f;
+  const int reach = static_cast<int>(std::ceil(tolerance / voxel));
+  const float tol2 = tolerance * tolerance;
+
+  // One pass over the points: voxel of each point, each voxel's bounding box
+  // and point count, and the links between image neighbours.
+  VoxelIndex index;
+  std::vector<int> point_voxel(points.size());
+  std::vector<Eigen::Vector3i> voxel_coords;
+  std::vector<Eigen::AlignedBox3f> boxes;
+  std::vector<int> voxel_size;
+  DisjointSets sets;
+  const float inv_voxel = 1.0f / voxel;
+  std::uint64_t last_key = ~std::uint64_t{0};
+  int last_voxel = -1;
+  int up = 0;        // first point whose pixel is not before the one above point i's
+  int row_end = 0;   // end of the image row of point i's pixel
+  for (int i = 0; i < n; ++i) {
+    const Eigen::Vector3f& p = points[i];
+    const Eigen::Vector3i c(static_cast<int>(std::floor(p.x() * inv_voxel)),
+                            static_cast<int>(std::floor(p.y() * inv_voxel)),
+                            static_cast<int>(std::floor(p.z() * inv_voxel)));
+    const std::uint64_t key = packVoxel(c.x(), c.y(), c.z());
+    // Points come in image order, so neighbours often share a voxel: the
+    // previous point's (last_key), or the one above's.
+    if (key != last_key && pixels) {
+      const int above = (*pixels)[i] - grid.width;
+      while (up < i && (*pixels)[up] < above) ++up;
+      if (up < i && (*pixels)[up] == above && voxel_coords[point_voxel[up]] == c) {
+        last_voxel = point_voxel[up];
+        last_key = key;
+      }
+    }
+    if (key != last_key) {
+      bool inserted = false;
+      last_voxel = index.findOrInsert(key, static_cast<int>(voxel_coords.size()), inserted);
+      last_key = key;
+      if (inserted) {
+        voxel_coords.push_back(c);
+        boxes.emplace_back();
+        voxel_size.push_back(0);
+        sets.add();
+      }
+    }
+    point_voxel[i] = last_voxel;
+    boxes[last_voxel].extend(p);
+    ++voxel_size[last_voxel];
+    if (pixels) {
+      // Image neighbours (left, above) within the tolerance are links of the
+      // exact partition found without any search; on a table top they join
+      // almost every pair of neighbouring voxels, so the voxel pass below
+      // rarely has to compare points.
+      const int px = (*pixels)[i];
+      while (px >= row_end) row_end += grid.width;  // pixels ascend: no division
+      if (i > 0 && (*pixels)[i - 1] == px - 1 && px != row_end - grid.width &&
+          point_voxel[i - 1] != last_voxel && (points[i - 1] - p).squaredNorm() <= tol2) {
+        sets.unite(point_voxel[i - 1], last_voxel);
+      }
+      const int above = px - grid.width;
+      while (up < i && (*pixels)[up] < above) ++up;
+      if (up < i && (*pixels)[up] == above && point_voxel[up] != last_voxel &&
+          (points[up] - p).squaredNorm() <= tol2) {
+        sets.unite(point_voxel[up], last_voxel);
+      }
+    }
+  }
+  const int voxels = static_cast<int>(voxel_coords.size());
+
+  // Points grouped by voxel (counting sort), built only when a pair of
+  // voxels has to be decided point by point: the pair tests then read
+  // memory sequentially.
+  std::vector<int> start;
+  std::vector<Eigen::Vector3f> sorted;
+  const auto groupPoints = [&] {
+    start.assign(static_cast<std::size_t>(voxels) + 1, 0);
+    for (int v = 0; v < voxels; ++v) start[v + 1] = start[v] + voxel_size[v];
+    std::vector<int> fill(start.begin(), start.end() - 1);
+    sorted.resize(points.size());
+    for (int i = 0; i < n; ++i) sorted[fill[point_voxel[i]]++] = points[i];
+  };
+
+  // Forward half of the neighbourhood (each unordered voxel pair once), the
+  // touching voxels first: on a dense surface they join nearly everything,
+  // so the farther pairs are then mostly skipped as already joined.
+  std::vector<Eigen::Vector3i> offsets;
+  for (int ring = 1; ring <= reach; ++ring) {
+    for (int dz = -ring; dz <= ring; ++dz) {
+      for (int dy = -ring; dy <= ring; ++dy) {
+        for (int dx = -ring; dx <= ring; ++dx) {
+          const bool forward = dz > 0 || (dz == 0 && (dy > 0 || (dy == 0 && dx > 0)));
+          const int chebyshev = std::max({std::abs(dx), std::abs(dy), std::abs(dz)});
+          if (forward && chebyshev == ring) offsets.emplace_back(dx, dy, dz);
+        }
+      }
+    }
+  }
+
+  // A lower bound of the gap between voxel a's points and any point of the
+  // voxel at offset d: the distance from a's box to that voxel's cell. Most
+  // voxels' points stay clear of most of their cell's faces (a table top is
+  // a thin layer), so most offsets are ruled out before the hash lookup.
+  // The slack covers the rounding of floor(p / voxel) at cell borders.
+  const float slack = 1e-4f;
+  const auto cellOutOfReach = [&](const Eigen::AlignedBox3f& box, const Eigen::Vector3i& ca,
+                                  const Eigen::Vector3i& d) {
+    float gap2 = 0.0f;
+    for (int axis = 0; axis < 3; ++axis) {
+      float g = 0.0f;
+      if (d[axis] > 0) {
+        g = static_cast<float>(ca[axis] + d[axis]) * voxel - box.max()[axis] - slack;
+      } else if (d[axis] < 0) {
+        g = box.min()[axis] - static_cast<float>(ca[axis] + d[axis] + 1) * voxel - slack;
+      }
+      if (g > 0.0f) gap2 += g * g;
+    }
+    return gap2 > tol2;
+  };
+
+  std::vector<int> near_a, near_b;
+  for (const Eigen::Vector3i& d : offsets) {
+    for (int a = 0; a < voxels; ++a) {
+      const Eigen::Vector3i& ca = voxel_coords[a];
+      if (cellOutOfReach(boxes[a], ca, d)) continue;
+      const int b = index.find(packVoxel(static_cast<std::int64_t>(ca.x()) + d.x(),
+                                         static_cast<std::int64_t>(ca.y()) + d.y(),
+                                         static_cast<std::int64_t>(ca.z()) + d.z()));
+      if (b < 0 || sets.find(a) == sets.find(b)) continue;
+      if (squaredGap(boxes[a], boxes[b]) > tol2) continue;
+      if (sorted.empty()) groupPoints();
+      // Only points within the tolerance of the other voxel's box can link.
+      near_a.clear();
+      near_b.clear();
+      for (int k = start[a]; k < start[a + 1]; ++k) {
+        if (boxes[b].squaredExteriorDistance(sorted[k]) <= tol2) near_a.push_back(k);
+      }
+      if (near_a.empty()) continue;
+      for (int k = start[b]; k < start[b + 1]; ++k) {
+        if (boxes[a].squaredExteriorDistance(sorted[k]) <= tol2) near_b.push_back(k);
+      }
+      bool linked = false;
+      for (std::size_t i = 0; i < near_a.size() && !linked; ++i) {
+        const Eigen::Vector3f& p = sorted[near_a[i]];
+        for (int k : near_b) {
+          if ((sorted[k] - p).squaredNorm() <= tol2) {
+            linked = true;
+            break;
+          }
+        }
+      }
+      if (linked) sets.unite(a, b);
+    }
+  }
+
+  // Dense cluster ids in order of first appearance.
+  std::vector<int> root_label(static_cast<std::size_t>(voxels), -1);
+  int next = 0;
+  last_voxel = -1;
+  int last_label = -1;
+  for (int i = 0; i < n; ++i) {
+    if (point_voxel[i] != last_voxel) {
+      last_voxel = point_voxel[i];
+      const int root = sets.find(last_voxel);
+      if (root_label[root] < 0) root_label[root] = next++;
+      last_label = root_label[root];
+    }
+    labels[i] = last_label;
+  }
+  return labels;
+}
+
+std::vector<int> euclideanClusterLabels(const std::vector<Eigen::Vector3f>& points,
+                                        float tolerance) {
+  if (!std::isfinite(tolerance) || tolerance < kMinToleranceM) {
+    throw Error("euclideanClusterLabels: tolerance " + fmt(tolerance, 6) +
+                " must be at least 0.001 m");
+  }
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    const Eigen::Vector3f& p = points[i];
+    if (!finitePoint(p) || p.cwiseAbs().maxCoeff() > kMaxPlausibleRangeM) {
+      throw Error("euclideanClusterLabels: point " + std::to_string(i) + " (" + fmt(p.x()) + ", " +
+                  fmt(p.y()) + ", " + fmt(p.z()) + ") is not finite or beyond 100 m");
+    }
+  }
+  return clusterPoints(points, tolerance);
+}
+
+}  // namespace findmug

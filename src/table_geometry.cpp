@@ -1,0 +1,275 @@
+// table_geometry.cpp — 2-D geometry of one table cluster: top height, the
+// top's principal axes on the floor, its oriented box with robust edges, and
+// its convex hull (convexHull2d).
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <string>
+
+#include "findmug/tables.hpp"
+#include "tables_internal.hpp"
+
+namespace findmug {
+
+using namespace tables_detail;
+
+namespace {
+
+// Cell of the floor occupancy grid the axes are computed on (see tables.hpp).
+constexpr float kAxisCellM = 0.02f;
+// Column width used to pick hull candidates (extremes per column/row). A
+// missed hull vertex lies within this of the computed hull.
+constexpr float kHullStripM = 0.005f;
+// Robust edges (see edgeRange).
+constexpr float kEdgeStripM = 0.05f;
+constexpr float kEdgeQuantile = 0.8f;
+
+float cross2(const Eigen::Vector2f& o, const Eigen::Vector2f& a, const Eigen::Vector2f& b) {
+  return (a.x() - o.x()) * (b.y() - o.y()) - (a.y() - o.y()) * (b.x() - o.x());
+}
+
+// Hull candidates: per narrow column the lowest and highest point in y, per
+// narrow row the extremes in x. Every hull vertex is, up to the strip width,
+// one of them; this cuts 100k top points to a few hundred before sorting.
+// `box` is the points' bounding box. The current extremes are kept by value
+// next to the arrays (not looked up through an index per point).
+std::vector<Eigen::Vector2f> hullCandidates(const std::vector<Eigen::Vector2f>& pts,
+                                            const Eigen::AlignedBox2f& box) {
+  const Eigen::Vector2f size = box.sizes();
+  // Cap the strip count for absurdly large inputs; the strip only sets accuracy.
+  const float strip = std::max({kHullStripM, size.x() / 20000.0f, size.y() / 20000.0f});
+  const int cols = static_cast<int>(size.x() / strip) + 1;
+  const int rows = static_cast<int>(size.y() / strip) + 1;
+  // Points are finite, so the first point of a strip always replaces these.
+  constexpr float kInf = std::numeric_limits<float>::infinity();
+  std::vector<Eigen::Vector2f> col_lo(cols, Eigen::Vector2f(0.0f, kInf)),
+      col_hi(cols, Eigen::Vector2f(0.0f, -kInf)), row_lo(rows, Eigen::Vector2f(kInf, 0.0f)),
+      row_hi(rows, Eigen::Vector2f(-kInf, 0.0f));
+  const float x0 = box.min().x(), y0 = box.min().y();
+  for (const Eigen::Vector2f& p : pts) {
+    const int c = std::min(cols - 1, static_cast<int>((p.x() - x0) / strip));
+    const int r = std::min(rows - 1, static_cast<int>((p.y() - y0) / strip));
+    if (p.y() < col_lo[c].y()) col_lo[c] = p;
+    if (p.y() > col_hi[c].y()) col_hi[c] = p;
+    if (p.x() < row_lo[r].x()) row_lo[r] = p;
+    if (p.x() > row_hi[r].x()) row_hi[r] = p;
+  }
+  std::vector<Eigen::Vector2f> out;
+  for (const auto* list : {&col_lo, &col_hi, &row_lo, &row_hi}) {
+    for (const Eigen::Vector2f& p : *list) {
+      if (std::isfinite(p.x()) && std::isfinite(p.y())) out.push_back(p);
+    }
+  }
+  return out;
+}
+
+// Principal axes of the top on the floor, from the occupied cells of a
+// kAxisCellM grid (each cell's mean point counts once), so that point
+// density (higher near the camera) does not bias the axes.
+// `box` is the points' bounding box.
+void principalAxes(const std::vector<Eigen::Vector2f>& pts, const Eigen::AlignedBox2f& box,
+                   Eigen::Vector2f& major, Eigen::Vector2f& minor) {
+  const Eigen::Vector2f size = box.sizes();
+  // Coarser cells for huge inputs keep the grid below ~4M cells.
+  const float cell = std::max(kAxisCellM, std::sqrt(size.x() * size.y() / 4.0e6f));
+  const int cols = static_cast<int>(size.x() / cell) + 1;
+  const int rows = static_cast<int>(size.y() / cell) + 1;
+  std::vector<Eigen::Vector2f> sums(static_cast<std::size_t>(cols) * rows, Eigen::Vector2f::Zero());
+  std::vector<int> counts(sums.size(), 0);
+  for (const auto& p : pts) {
+    const int c = std::min(cols - 1, static_cast<int>((p.x() - box.min().x()) / cell));
+    const int r = std::min(rows - 1, static_cast<int>((p.y() - box.min().y()) / cell));
+    const std::size_t k = static_cast<std::size_t>(r) * cols + c;
+    // Relative to the box corner: keeps float sums precise far from the robot.
+    sums[k] += p - box.min();
+    ++counts[k];
+  }
+  Eigen::Vector2d mean = Eigen::Vector2d::Zero();
+  Eigen::Matrix2d scatter = Eigen::Matrix2d::Zero();
+  int occupied = 0;
+  for (std::size_t k = 0; k < sums.size(); ++k) {
+    if (counts[k] == 0) continue;
+    const Eigen::Vector2d q = (sums[k] / static_cast<float>(counts[k])).cast<double>();
+    mean += q;
+    scatter += q * q.transpose();
+    ++occupied;
+  }
+  mean /= occupied;
+  const Eigen::Matrix2d cov = scatter / occupied - mean * mean.transpose();
+  // Closed-form eigenvector of the larger eigenvalue of a symmetric 2x2.
+  const double angle = 0.5 * std::atan2(2.0 * cov(0, 1), cov(0, 0) - cov(1, 1));
+  major = Eigen::Vector2f(static_cast<float>(std::cos(angle)), static_cast<float>(std::sin(angle)));
+  // Fixed sign so that the same table gives the same axes frame to frame.
+  if (major.x() < 0.0f || (major.x() == 0.0f && major.y() < 0.0f)) major = -major;
+  minor = Eigen::Vector2f(-major.y(), major.x());
+}
+
+// Edges of the top along axis `across`, robust to depth noise. Points are
+// cut into strips of kEdgeStripM along axis `along`; each strip's extreme
+// points are its edge samples, and the edges are the kEdgeQuantile-th most
+// outward of those (per side). Why not the plain extremes: the far edge of a
+// top is seen at a grazing angle, where depth noise (1 cm at 2.5 m) pushes
+// the most outward of hundreds of points 2-3 cm past the true edge. A high
+// quantile rather than the median keeps round tops (whose strips are shorter
+// towards the ends) within 1-2 % of their radius. Returns (low, high).
+// [lo_along, hi_along] is the points' range along `along`.
+Eigen::Vector2f edgeRange(const std::vector<Eigen::Vector2f>& local, int along, int across,
+                          float lo_along, float hi_along) {
+  const int strips = std::min(4096, static_cast<int>((hi_along - lo_along) / kEdgeStripM) + 1);
+  const float strip_width = std::max(kEdgeStripM, (hi_along - lo_along) / strips * 1.0001f);
+  std::vector<float> strip_lo(static_cast<std::size_t>(strips), std::numeric_limits<float>::max());
+  std::vector<float> strip_hi(static_cast<std::size_t>(strips),
+                              std::numeric_limits<float>::lowest());
+  std::vector<int> strip_count(static_cast<std::size_t>(strips), 0);
+  for (const auto& q : local) {
+    const int k = std::min(strips - 1, static_cast<int>((q[along] - lo_along) / strip_width));
+    strip_lo[k] = std::min(strip_lo[k], q[across]);
+    strip_hi[k] = std::max(strip_hi[k], q[across]);
+    ++strip_count[k];
+  }
+  std::vector<float> lows, highs;
+  for (int k = 0; k < strips; ++k) {
+    // A strip of one or two points says little about an edge.
+    if (strip_count[k] >= 3) {
+      lows.push_back(strip_lo[k]);
+      highs.push_back(strip_hi[k]);
+    }
+  }
+  if (lows.empty()) {  // tiny clusters: plain extremes
+    for (int k = 0; k < strips; ++k) {
+      if (strip_count[k] > 0) {
+        lows.push_back(strip_lo[k]);
+        highs.push_back(strip_hi[k]);
+      }
+    }
+  }
+  const auto quantile = [](std::vector<float>& v, float q) {
+    const auto k = static_cast<std::size_t>(q * static_cast<float>(v.size() - 1) + 0.5f);
+    std::nth_element(v.begin(), v.begin() + static_cast<std::ptrdiff_t>(k), v.end());
+    return v[k];
+  };
+  return Eigen::Vector2f(quantile(lows, 1.0f - kEdgeQuantile), quantile(highs, kEdgeQuantile));
+}
+
+}  // namespace
+
+std::vector<Eigen::Vector2f> convexHull2d(std::vector<Eigen::Vector2f> points) {
+  std::sort(points.begin(), points.end(), [](const Eigen::Vector2f& a, const Eigen::Vector2f& b) {
+    return a.x() < b.x() || (a.x() == b.x() && a.y() < b.y());
+  });
+  points.erase(std::unique(points.begin(), points.end()), points.end());
+  if (points.size() < 3) return points;
+  // Andrew's monotone chain; popping on cross <= 0 drops collinear points.
+  std::vector<Eigen::Vector2f> hull(2 * points.size());
+  std::size_t k = 0;
+  for (const auto& p : points) {
+    while (k >= 2 && cross2(hull[k - 2], hull[k - 1], p) <= 0.0f) --k;
+    hull[k++] = p;
+  }
+  for (std::size_t i = points.size() - 1, lower = k + 1; i-- > 0;) {
+    const auto& p = points[i];
+    while (k >= lower && cross2(hull[k - 2], hull[k - 1], p) <= 0.0f) --k;
+    hull[k++] = p;
+  }
+  hull.resize(k - 1);  // the last point repeats the first
+  return hull;
+}
+
+ClusterOutcome tables_detail::describeCluster(const std::vector<Eigen::Vector3f>& points,
+                                             const TableConfig& config, TableCluster& table) {
+  ClusterOutcome outcome;
+  const int n = static_cast<int>(points.size());
+
+  // Top height: the densest height band (the top is the one large horizontal
+  // surface; legs, aprons and lower shelves hold fewer points), refined by the
+  // mean height of the points within half a band of it.
+  float z_min = std::numeric_limits<float>::max(), z_max = std::numeric_limits<float>::lowest();
+  for (const auto& p : points) {
+    z_min = std::min(z_min, p.z());
+    z_max = std::max(z_max, p.z());
+  }
+  constexpr float kBin = 0.01f;
+  const int bins = static_cast<int>((z_max - z_min) / kBin) + 1;
+  std::vector<int> histogram(static_cast<std::size_t>(bins), 0);
+  for (const auto& p : points)
+    ++histogram[std::min(bins - 1, static_cast<int>((p.z() - z_min) / kBin))];
+  const int half_window = std::max(0, static_cast<int>(config.top_band_m / (2.0f * kBin)));
+  int best_bin = 0;
+  long best_count = -1;
+  long window = 0;
+  // Sliding window sum centred on each bin.
+  for (int b = 0; b < std::min(bins, half_window); ++b) window += histogram[b];
+  for (int b = 0; b < bins; ++b) {
+    if (b + half_window < bins) window += histogram[b + half_window];
+    if (b - half_window - 1 >= 0) window -= histogram[b - half_window - 1];
+    if (window > best_count) {
+      best_count = window;
+      best_bin = b;
+    }
+  }
+  const float peak = z_min + (static_cast<float>(best_bin) + 0.5f) * kBin;
+  double z_sum = 0.0;
+  int z_count = 0;
+  for (const auto& p : points) {
+    if (std::abs(p.z() - peak) <= 0.5f * config.top_band_m) {
+      z_sum += p.z();
+      ++z_count;
+    }
+  }
+  table.top_height = z_count > 0 ? static_cast<float>(z_sum / z_count) : peak;
+
+  std::vector<Eigen::Vector2f> top;
+  top.reserve(points.size());
+  Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
+  Eigen::AlignedBox2f top_box;
+  for (const auto& p : points) {
+    if (std::abs(p.z() - table.top_height) <= config.top_band_m) {
+      top.push_back(p.head<2>());
+      top_box.extend(top.back());
+      centroid += p.cast<double>();
+    }
+  }
+  table.point_count = n;
+  if (top.size() < 3) {
+    outcome.reason = "degenerate cluster of " + std::to_string(n) + " points: only " +
+                     std::to_string(top.size()) + " top points";
+    return outcome;
+  }
+  table.centroid = (centroid / static_cast<double>(top.size())).cast<float>();
+
+  principalAxes(top, top_box, table.major_axis, table.minor_axis);
+  const Eigen::Vector2f origin = table.centroid.head<2>();
+  std::vector<Eigen::Vector2f> local;  // (along major, along minor) relative to the centroid
+  local.reserve(top.size());
+  Eigen::AlignedBox2f local_box;
+  for (const auto& p : top) {
+    const Eigen::Vector2f q = p - origin;
+    local.emplace_back(q.dot(table.major_axis), q.dot(table.minor_axis));
+    local_box.extend(local.back());
+  }
+  const Eigen::Vector2f minor_range =
+      edgeRange(local, 0, 1, local_box.min().x(), local_box.max().x());
+  const Eigen::Vector2f major_range =
+      edgeRange(local, 1, 0, local_box.min().y(), local_box.max().y());
+  table.extents = Eigen::Vector2f(0.5f * (major_range[1] - major_range[0]),
+                                  0.5f * (minor_range[1] - minor_range[0]));
+  table.center = origin + table.major_axis * 0.5f * (major_range[1] + major_range[0]) +
+                 table.minor_axis * 0.5f * (minor_range[1] + minor_range[0]);
+  const float width = 2.0f * table.extents.y();
+  if (!(width >= config.min_table_width_m)) {
+    outcome.reason = "degenerate or narrow cluster of " + std::to_string(n) +
+                     " points: " + fmt(width) +
+                     " m wide along its second axis, below tables.min_table_width_m (" +
+                     fmt(config.min_table_width_m) + ")";
+    return outcome;
+  }
+  table.hull = convexHull2d(hullCandidates(top, top_box));
+  if (table.hull.size() < 3) {
+    outcome.reason = "degenerate cluster of " + std::to_string(n) + " points: its top has no area";
+    return outcome;
+  }
+  outcome.ok = true;
+  return outcome;
+}
+
+}  // namespace findmug

@@ -1,0 +1,96 @@
+// tables_internal.hpp — internal to findmug_core (not installed): what the
+// table files share. tables.cpp (detectTables) calls the clustering of
+// table_clustering.cpp, the per-cluster geometry of table_geometry.cpp and
+// the reachability grid of table_reachability.cpp; the limits and helpers
+// below are common to them.
+#pragma once
+
+#include <Eigen/Core>
+#include <Eigen/Geometry>
+#include <cmath>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "findmug/cloud.hpp"
+#include "findmug/label_image.hpp"
+#include "findmug/labels.hpp"
+#include "findmug/tables.hpp"
+
+namespace findmug::tables_detail {
+
+inline constexpr std::uint8_t kTableLabel = static_cast<std::uint8_t>(Label::Table);
+inline constexpr std::uint8_t kFloorLabel = static_cast<std::uint8_t>(Label::Floor);
+// Points further than this from the robot are corrupt, not far: no RGB-D
+// sensor sees 100 m. Keeps voxel coordinates inside their 21-bit fields.
+inline constexpr float kMaxPlausibleRangeM = 100.0f;
+// Smallest clustering tolerance: below a millimetre voxel indices would
+// overflow their fields at 100 m, and no depth sensor resolves it anyway.
+inline constexpr float kMinToleranceM = 0.001f;
+
+inline bool finitePoint(const Eigen::Vector3f& p) {
+  return std::isfinite(p.x()) && std::isfinite(p.y()) && std::isfinite(p.z());
+}
+
+// `value` with `precision` significant digits, for messages.
+std::string fmt(double value, int precision = 3);
+
+// Where the points of clusterPoints sit in an organized image, when they
+// come from one: point k at pixel (*pixels)[k] (ascending) of an image
+// `width` pixels wide. Only a shortcut: the partition is the same with or
+// without it.
+struct PointGrid {
+  const std::vector<int>* pixels = nullptr;
+  int width = 0;
+};
+
+// Exact Euclidean clustering (see euclideanClusterLabels in tables.hpp)
+// without the input checks: the caller guarantees finite points within
+// kMaxPlausibleRangeM and a tolerance of at least kMinToleranceM.
+std::vector<int> clusterPoints(const std::vector<Eigen::Vector3f>& points, float tolerance,
+                               const PointGrid& grid = {});
+
+struct ClusterOutcome {
+  bool ok = false;
+  std::string reason;  // why not
+};
+
+// Fills `table` (all but id, pixels, mean_confidence and search positions)
+// from the cluster's points: point count, top height, centroid, axes, box, hull.
+ClusterOutcome describeCluster(const std::vector<Eigen::Vector3f>& points,
+                               const TableConfig& config, TableCluster& table);
+
+// Observed floor cells and obstacle points around the search positions
+// (`region`), from one pass over the labelled cloud; assess() flags a
+// position unreachable with a reason (see tables.hpp, step 5).
+class ReachabilityGrid {
+ public:
+  // `positions`: every position that assess() will be asked about.
+  ReachabilityGrid(const OrganizedCloud& cloud, const LabelImage& labels,
+                   const Eigen::AlignedBox2f& region, const std::vector<Eigen::Vector2f>& positions,
+                   const TableConfig& config);
+  void assess(SearchPosition& position) const;
+
+ private:
+  // Cells (clamped to the grid) within robot_radius_m of `q` on each axis.
+  struct Window {
+    int c0 = 0, c1 = -1, r0 = 0, r1 = -1;
+  };
+  Window windowOf(const Eigen::Vector2f& q) const;
+  int cellOf(const Eigen::Vector2f& xy) const {
+    const int col = static_cast<int>(std::floor((xy.x() - origin_.x()) / cell_));
+    const int row = static_cast<int>(std::floor((xy.y() - origin_.y()) / cell_));
+    if (col < 0 || row < 0 || col >= cols_ || row >= rows_) return -1;
+    return row * cols_ + col;
+  }
+
+  const TableConfig& config_;
+  Eigen::Vector2f origin_;
+  float cell_;
+  int cols_ = 0, rows_ = 0;
+  std::vector<std::uint8_t> floor_seen_;
+  std::vector<int> obstacle_start_;
+  std::vector<Eigen::Vector2f> obstacle_points_;
+};
+
+}  // namespace findmug::tables_detail
