@@ -25,7 +25,6 @@
 #include <deque>
 #include <filesystem>
 #include <fstream>
-#include <lcm/lcm-cpp.hpp>
 #include <memory>
 #include <optional>
 #include <string>
@@ -35,9 +34,11 @@
 #include "client_common.hpp"
 #include "findmug/error.hpp"
 #include "findmug/image_io.hpp"
+#include "findmug/io/bus.hpp"
 #include "findmug/io/channels.hpp"
 #include "findmug/io/frame_source.hpp"
 #include "findmug/io/lcm_codec.hpp"
+#include "findmug/io/subscriber.hpp"
 #include "findmug/label_image.hpp"
 #include "findmug/labels.hpp"
 #include "findmug_cli.hpp"
@@ -73,22 +74,10 @@ class LabelViewer {
         write_png_(write_png),
         source_(std::move(source)) {}
 
-  void onFrame(const lcm::ReceiveBuffer* buffer, const std::string& channel) {
-    try {
-      keep(io::decodeRgbdFrame(buffer->data, buffer->data_size, channel));
-    } catch (const std::exception& e) {
-      std::fprintf(stderr, "%s: skipping bad frame: %s\n", kProgram, e.what());
-    }
-  }
+  // Decoded messages, from the subscribers (bad ones are reported there).
+  void onFrame(const RgbdFrame& frame) { keep(frame); }
 
-  void onTables(const lcm::ReceiveBuffer* buffer, const std::string& channel) {
-    io::TablesMessage message;
-    try {
-      message = io::decodeTables(buffer->data, buffer->data_size, channel);
-    } catch (const std::exception& e) {
-      std::fprintf(stderr, "%s: skipping bad tables message: %s\n", kProgram, e.what());
-      return;
-    }
+  void onTables(const io::TablesMessage& message) {
     const bool is_map = message.content == io::TablesContent::Map;
     if (write_png_ && (is_map || !have_map_)) {
       have_map_ = have_map_ || is_map;
@@ -112,15 +101,14 @@ class LabelViewer {
     }
   }
 
-  void onLabels(const lcm::ReceiveBuffer* buffer, const std::string& channel) {
+  // A bad label image counts as received (for --count and --every) and is skipped.
+  void onBadLabels(const std::string& what) {
     ++received_;
-    io::LabelImageMessage message;
-    try {
-      message = io::decodeLabelImage(buffer->data, buffer->data_size, channel);
-    } catch (const std::exception& e) {
-      std::fprintf(stderr, "%s: skipping bad label image: %s\n", kProgram, e.what());
-      return;
-    }
+    std::fprintf(stderr, "%s: skipping bad label image: %s\n", kProgram, what.c_str());
+  }
+
+  void onLabels(const io::LabelImageMessage& message) {
+    ++received_;
     const LabelImage& image = message.image;
     const std::size_t pixels = image.labels.size();
     std::array<std::size_t, kNumLabels + 1> counts{};  // last: void
@@ -313,20 +301,48 @@ int main(int argc, char** argv) {
     }
   }
 
-  lcm::LCM lcm(url);
-  if (!lcm.good()) {
+  std::unique_ptr<io::LcmBus> bus;
+  try {
+    bus = std::make_unique<io::LcmBus>(url, "--lcm-url");
+  } catch (const std::exception&) {
     std::fprintf(stderr, "%s: cannot open LCM provider '%s'\n", kProgram,
                  url.empty() ? "default" : url.c_str());
     return 1;
   }
   clients::installStopHandlers();
   LabelViewer viewer(out_dir, static_cast<float>(alpha), every, write_png, std::move(source));
-  lcm.subscribe(labels_channel, &LabelViewer::onLabels, &viewer);
-  lcm.subscribe(frames_channel, &LabelViewer::onFrame, &viewer);
-  lcm.subscribe(tables_channel, &LabelViewer::onTables, &viewer);
-  lcm.subscribe(map_channel, &LabelViewer::onTables, &viewer);
+  // This thread owns the bus: the subscribers' callbacks run inside receiveLoop.
+  auto report = [](const char* what) {
+    return [what](const std::string& error) {
+      std::fprintf(stderr, "%s: skipping bad %s: %s\n", kProgram, what, error.c_str());
+    };
+  };
+  auto decode_tables = [](const std::uint8_t* d, std::size_t n, const std::string& c) {
+    return io::decodeTables(d, n, c);
+  };
+  io::Subscriber<io::LabelImageMessage> labels(
+      *bus, labels_channel,
+      [](const std::uint8_t* d, std::size_t n, const std::string& c) {
+        return io::decodeLabelImage(d, n, c);
+      },
+      [&](const io::LabelImageMessage& m, const std::string&) { viewer.onLabels(m); },
+      [&](const std::string& error) { viewer.onBadLabels(error); });
+  io::Subscriber<RgbdFrame> frames(
+      *bus, frames_channel,
+      [](const std::uint8_t* d, std::size_t n, const std::string& c) {
+        return io::decodeRgbdFrame(d, n, c);
+      },
+      [&](const RgbdFrame& f, const std::string&) { viewer.onFrame(f); }, report("frame"));
+  io::Subscriber<io::TablesMessage> tables(
+      *bus, tables_channel, decode_tables,
+      [&](const io::TablesMessage& m, const std::string&) { viewer.onTables(m); },
+      report("tables message"));
+  io::Subscriber<io::TablesMessage> table_map(
+      *bus, map_channel, decode_tables,
+      [&](const io::TablesMessage& m, const std::string&) { viewer.onTables(m); },
+      report("tables message"));
   std::fprintf(stderr, "%s: listening on %s, %s, %s and %s\n", kProgram, labels_channel.c_str(),
                frames_channel.c_str(), tables_channel.c_str(), map_channel.c_str());
-  return clients::receiveLoop(lcm, url, kProgram,
+  return clients::receiveLoop(*bus, kProgram,
                               [&] { return count > 0 && viewer.received() >= count; });
 }

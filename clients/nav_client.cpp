@@ -14,17 +14,19 @@
 #include <cmath>
 #include <cstdio>
 #include <iostream>
-#include <lcm/lcm-cpp.hpp>
 #include <sstream>
 #include <string>
 #include <vector>
 
 #include "client_common.hpp"
 #include "findmug/error.hpp"
+#include "findmug/io/bus.hpp"
 #include "findmug/io/channels.hpp"
 #include "findmug/io/lcm_codec.hpp"
+#include "findmug/io/subscriber.hpp"
 #include "findmug/tables.hpp"
 #include "findmug_cli.hpp"
+#include "findmug_json.hpp"
 #include "visiting_order.hpp"
 
 namespace {
@@ -40,54 +42,12 @@ struct Position {
   SearchPosition position;  // in the chosen frame
 };
 
-std::string jsonEscape(const std::string& s) {
-  std::string out;
-  for (char c : s) {
-    switch (c) {
-      case '"':
-        out += "\\\"";
-        break;
-      case '\\':
-        out += "\\\\";
-        break;
-      case '\n':
-        out += "\\n";
-        break;
-      case '\t':
-        out += "\\t";
-        break;
-      default:
-        if (static_cast<unsigned char>(c) < 0x20) {
-          char buf[8];
-          std::snprintf(buf, sizeof(buf), "\\u%04x", c);
-          out += buf;
-        } else {
-          out += c;
-        }
-    }
-  }
-  return out;
-}
-
-std::string number(double v, int decimals = 3) {
-  char buf[64];
-  std::snprintf(buf, sizeof(buf), "%.*f", decimals, v);
-  return buf;
-}
-
 class NavClient {
  public:
   NavClient(FrameChoice frame, bool json) : frame_(frame), json_(json) {}
 
-  void onMessage(const lcm::ReceiveBuffer* buffer, const std::string& channel) {
-    ++received_;
-    io::TablesMessage message;
-    try {
-      message = io::decodeTables(buffer->data, buffer->data_size, channel);
-    } catch (const std::exception& e) {
-      std::fprintf(stderr, "%s: skipping bad message: %s\n", kProgram, e.what());
-      return;
-    }
+  // A decoded message (bad ones are reported by the subscriber and skipped).
+  void onMessage(const io::TablesMessage& message) {
     const bool use_map = message.map_pose.has_value() && frame_ != FrameChoice::Base;
     if (frame_ == FrameChoice::Map && !message.map_pose) {
       std::fprintf(stderr, "%s: message seq %lld has no map pose; positions in the base frame\n",
@@ -119,8 +79,6 @@ class NavClient {
     }
     std::fflush(stdout);
   }
-
-  long received() const { return received_; }
 
  private:
   void printText(const io::TablesMessage& m, bool use_map, const Eigen::Vector2f& robot,
@@ -155,9 +113,10 @@ class NavClient {
                  const std::vector<int>& order, const std::vector<Position>& unreachable) const {
     std::ostringstream out;
     out << "{\"utime\":" << m.utime << ",\"seq\":" << m.seq << ",\"frame\":\""
-        << (use_map ? "map" : "base") << "\",\"robot\":{\"x\":" << number(robot.x())
-        << ",\"y\":" << number(robot.y()) << ",\"yaw\":" << number(robot_yaw, 4)
-        << "},\"tables\":" << m.tables.size() << ",\"tour\":[";
+        << (use_map ? "map" : "base") << "\",\"robot\":{\"x\":" << cli::jsonNumber(robot.x(), 3)
+        << ",\"y\":" << cli::jsonNumber(robot.y(), 3)
+        << ",\"yaw\":" << cli::jsonNumber(robot_yaw, 4) << "},\"tables\":" << m.tables.size()
+        << ",\"tour\":[";
     Eigen::Vector2f at = robot;
     double total = 0.0;
     for (std::size_t k = 0; k < order.size(); ++k) {
@@ -165,15 +124,19 @@ class NavClient {
       total += (p.position.xy - at).norm();
       at = p.position.xy;
       out << (k ? "," : "") << "{\"order\":" << k + 1 << ",\"table\":" << p.table
-          << ",\"x\":" << number(p.position.xy.x()) << ",\"y\":" << number(p.position.xy.y())
-          << ",\"yaw\":" << number(p.position.yaw, 4) << ",\"path_m\":" << number(total) << "}";
+          << ",\"x\":" << cli::jsonNumber(p.position.xy.x(), 3)
+          << ",\"y\":" << cli::jsonNumber(p.position.xy.y(), 3)
+          << ",\"yaw\":" << cli::jsonNumber(p.position.yaw, 4)
+          << ",\"path_m\":" << cli::jsonNumber(total, 3) << "}";
     }
     out << "],\"unreachable\":[";
     for (std::size_t k = 0; k < unreachable.size(); ++k) {
       const Position& p = unreachable[k];
-      out << (k ? "," : "") << "{\"table\":" << p.table << ",\"x\":" << number(p.position.xy.x())
-          << ",\"y\":" << number(p.position.xy.y()) << ",\"yaw\":" << number(p.position.yaw, 4)
-          << ",\"reason\":\"" << jsonEscape(p.position.reason) << "\"}";
+      out << (k ? "," : "") << "{\"table\":" << p.table
+          << ",\"x\":" << cli::jsonNumber(p.position.xy.x(), 3)
+          << ",\"y\":" << cli::jsonNumber(p.position.xy.y(), 3)
+          << ",\"yaw\":" << cli::jsonNumber(p.position.yaw, 4)
+          << ",\"reason\":" << cli::jsonString(p.position.reason) << "}";
     }
     out << "]}";
     std::puts(out.str().c_str());
@@ -181,7 +144,6 @@ class NavClient {
 
   FrameChoice frame_;
   bool json_;
-  long received_ = 0;
 };
 
 }  // namespace
@@ -219,16 +181,29 @@ int main(int argc, char** argv) {
     return 2;
   }
 
-  lcm::LCM lcm(url);
-  if (!lcm.good()) {
+  std::unique_ptr<io::LcmBus> bus;
+  try {
+    bus = std::make_unique<io::LcmBus>(url, "--lcm-url");
+  } catch (const std::exception&) {
     std::fprintf(stderr, "%s: cannot open LCM provider '%s'\n", kProgram,
                  url.empty() ? "default" : url.c_str());
     return 1;
   }
   clients::installStopHandlers();
   NavClient client(frame, json);
-  lcm.subscribe(channel, &NavClient::onMessage, &client);
+  // This thread owns the bus: the callbacks run inside receiveLoop.
+  io::Subscriber<io::TablesMessage> tables(
+      *bus, channel,
+      [](const std::uint8_t* d, std::size_t n, const std::string& c) {
+        return io::decodeTables(d, n, c);
+      },
+      [&](const io::TablesMessage& m, const std::string&) { client.onMessage(m); },
+      [](const std::string& error) {
+        std::fprintf(stderr, "%s: skipping bad message: %s\n", kProgram, error.c_str());
+      });
   if (!json) std::fprintf(stderr, "%s: listening on %s\n", kProgram, channel.c_str());
-  return clients::receiveLoop(lcm, url, kProgram,
-                              [&] { return count > 0 && client.received() >= count; });
+  // --count counts every message, bad ones included.
+  return clients::receiveLoop(*bus, kProgram, [&] {
+    return count > 0 && tables.received() >= static_cast<std::uint64_t>(count);
+  });
 }

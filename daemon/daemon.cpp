@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <filesystem>
 
+#include "findmug/daemon/status_builder.hpp"
 #include "findmug/error.hpp"
 #include "findmug/io/frame_source.hpp"
 
@@ -42,7 +43,7 @@ Daemon::Daemon(const Config& config, const DaemonConfig& daemon_config,
     // A 640x480 frame allocates about 35 MB in buffers of a few MB, freed
     // when it is published. With glibc's default thresholds each comes fresh
     // from the kernel (page faults and zeroing, about a tenth of a frame's
-    // CPU time: BENCHMARKS.md section 9d); these keep them in the heap.
+    // CPU time: BENCHMARKS.md section 9e); these keep them in the heap.
     mallopt(M_MMAP_THRESHOLD, 32 << 20);
     mallopt(M_TRIM_THRESHOLD, daemon_config_.heap_keep_mb << 20);
   }
@@ -207,7 +208,7 @@ int Daemon::run() {
     }
     if (now >= next_status_text && !hung) {
       // The same figures as status_t, for `systemctl status` and the journal.
-      const findmug_lcm::status_t s = pipeline_->makeStatus();
+      const findmug_lcm::status_t s = makeStatus(*pipeline_);
       const auto total =
           std::find(s.stage_names.begin(), s.stage_names.end(), "total") - s.stage_names.begin();
       const std::string line = fmt::format(

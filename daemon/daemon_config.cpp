@@ -2,7 +2,6 @@
 #include "findmug/daemon/daemon_config.hpp"
 
 #include <algorithm>
-#include <charconv>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
@@ -11,6 +10,7 @@
 #include <thread>
 
 #include "findmug/error.hpp"
+#include "findmug/numbers.hpp"
 #include "findmug_cli.hpp"
 
 #ifndef FINDMUG_SYSCONF_DIR
@@ -46,22 +46,19 @@ namespace {
 }
 
 long long toInt(const std::string& key, const std::string& v, long long lo, long long hi) {
-  long long out = 0;
-  auto [ptr, ec] = std::from_chars(v.data(), v.data() + v.size(), out);
-  if (ec != std::errc() || ptr != v.data() + v.size() || out < lo || out > hi) {
+  const auto out = parseInteger(v);
+  if (!out || *out < lo || *out > hi) {
     bad(key, v, "an integer in [" + std::to_string(lo) + ", " + std::to_string(hi) + "]");
   }
-  return out;
+  return *out;
 }
 
 double toDouble(const std::string& key, const std::string& v, double lo, double hi) {
-  double out = 0;
-  auto [ptr, ec] = std::from_chars(v.data(), v.data() + v.size(), out);
-  if (ec != std::errc() || ptr != v.data() + v.size() || !std::isfinite(out) || out < lo ||
-      out > hi) {
+  const auto out = parseNumber(v);
+  if (!out || *out < lo || *out > hi) {
     bad(key, v, "a number in [" + std::to_string(lo) + ", " + std::to_string(hi) + "]");
   }
-  return out;
+  return *out;
 }
 
 bool toBool(const std::string& key, const std::string& v) {

@@ -2,10 +2,8 @@
 //
 // Thin: parse flags, load and log the config, set up logging, turn SIGTERM /
 // SIGINT into Daemon::requestStop(), run. Signals are blocked in every thread
-// and taken synchronously by one dedicated thread, so no library call on a
-// worker thread is interrupted by EINTR.
-#include <pthread.h>
-#include <signal.h>
+// and taken synchronously by one dedicated thread (cli::StopSignals), so no
+// library call on a worker thread is interrupted by EINTR.
 #include <spdlog/spdlog.h>
 
 #include <cstdio>
@@ -19,16 +17,13 @@
 #include "findmug/daemon/service.hpp"
 #include "findmug/error.hpp"
 #include "findmug/version.hpp"
+#include "findmug_signals.hpp"
 
 int main(int argc, char** argv) {
   using namespace findmug;
   using namespace findmug::daemon;
 
-  sigset_t signals;
-  sigemptyset(&signals);
-  sigaddset(&signals, SIGTERM);
-  sigaddset(&signals, SIGINT);
-  pthread_sigmask(SIG_BLOCK, &signals, nullptr);  // inherited by every thread created below
+  cli::StopSignals stop_signals;  // before any thread: the mask is inherited by every thread
 
   LoadedConfig loaded;
   CommandLine command_line;
@@ -74,19 +69,8 @@ int main(int argc, char** argv) {
                dumpConfig(loaded.config));
   try {
     Daemon daemon(loaded.config, loaded.daemon);
-    std::thread signal_thread([&daemon, &signals] {
-      int signal_number = 0;
-      while (sigwait(&signals, &signal_number) == 0) {
-        if (signal_number == SIGTERM || signal_number == SIGINT) {
-          daemon.requestStop();
-          return;
-        }
-      }
-    });
+    const auto stop_registration = stop_signals.onStop([&daemon] { daemon.requestStop(); });
     const int code = daemon.run();
-    // If run() ended on its own (source ended), wake the signal thread.
-    pthread_kill(signal_thread.native_handle(), SIGTERM);
-    signal_thread.join();
     spdlog::info("findmugd exiting with code {}", code);
     // Everything observable is done: final status published, LCM handles and
     // the source closed. A segmentation still running past the shutdown

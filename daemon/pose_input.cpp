@@ -5,9 +5,9 @@
 
 #include <algorithm>
 #include <cmath>
-#include <lcm/lcm-cpp.hpp>
 
 #include "findmug/error.hpp"
+#include "findmug/io/lcm_codec.hpp"
 
 namespace findmug::daemon {
 
@@ -66,55 +66,43 @@ std::uint64_t secondsToMicros(double seconds) {
 }  // namespace
 
 PoseInput::PoseInput(std::string url, std::string channel, double history_s, OnError on_error)
-    : url_(std::move(url)),
+    : PoseInput(
+          std::make_shared<io::LcmBus>(url, "daemon.pose_url (robot poses on " + channel + ")"),
+          channel, history_s, std::move(on_error)) {
+  url_ = std::move(url);
+}
+
+PoseInput::PoseInput(std::shared_ptr<io::Bus> bus, std::string channel, double history_s,
+                     OnError on_error)
+    : url_(bus->describe()),
       channel_(std::move(channel)),
-      replaying_log_(url_.rfind("file://", 0) == 0),
       on_error_(std::move(on_error)),
-      history_(secondsToMicros(history_s)) {
-  lcm_ = std::make_unique<lcm::LCM>(url_);
-  if (!lcm_->good()) {
-    throw Error("daemon.pose_url: cannot open LCM provider '" +
-                (url_.empty() ? std::string("<default>") : url_) + "' for " + channel_);
-  }
-  lcm_->subscribe(channel_, &PoseInput::onMessage, this);
-  thread_ = std::thread([this] { run(); });
+      history_(secondsToMicros(history_s)),
+      bus_(std::move(bus)) {
+  subscriber_ = std::make_unique<io::Subscriber<io::RobotPose>>(
+      *bus_, channel_,
+      [](const std::uint8_t* data, std::size_t size, const std::string& ch) {
+        return io::decodeRobotPose(data, size, ch);
+      },
+      [this](const io::RobotPose& pose, const std::string&) { history_.insert(pose); },
+      [this](const std::string& what) { report("skipping bad robot pose: " + what); });
+  subscriber_->startReceiving([this](io::HandleResult how) {
+    if (how == io::HandleResult::EndOfLog) {
+      spdlog::info("{} ({}): end of pose log after {} poses ({} rejected)", channel_, url_,
+                   subscriber_->accepted(), subscriber_->rejected());
+    } else {
+      report(channel_ + ": LCM handle for robot poses failed (" + url_ +
+             "); no more poses, tables stay in the base frame only");
+    }
+  });
 }
 
 PoseInput::~PoseInput() { stop(); }
 
 void PoseInput::stop() {
-  stop_requested_.store(true);
-  if (thread_.joinable()) thread_.join();
-  lcm_.reset();
-}
-
-void PoseInput::run() {
-  while (!stop_requested_.load()) {
-    // Short timeout: the loop must notice stop() promptly.
-    if (lcm_->handleTimeout(100) < 0) {
-      if (replaying_log_) {
-        spdlog::info("{} ({}): end of pose log after {} poses ({} rejected)", channel_, url_,
-                     received_.load(), rejected_.load());
-      } else {
-        report(channel_ + ": LCM handle for robot poses failed (" + url_ +
-               "); no more poses, tables stay in the base frame only");
-      }
-      break;
-    }
-  }
-  finished_.store(true);
-}
-
-void PoseInput::onMessage(const lcm::ReceiveBuffer* buffer, const std::string& channel) {
-  try {
-    const io::RobotPose pose =
-        io::decodeRobotPose(buffer->data, static_cast<std::size_t>(buffer->data_size), channel);
-    history_.insert(pose);
-    received_.fetch_add(1);
-  } catch (const std::exception& e) {
-    rejected_.fetch_add(1);
-    report(std::string("skipping bad robot pose: ") + e.what());
-  }
+  subscriber_->stop();
+  // Close the handle (leaves a udpm group); the counters stay readable.
+  bus_.reset();
 }
 
 void PoseInput::report(const std::string& what) {

@@ -46,7 +46,7 @@ while [[ $# -gt 0 ]]; do
 done
 BUILD="$(cd "$BUILD" && pwd)"
 FINDMUGD="$BUILD/daemon/findmugd"
-REPLAY="$BUILD/tests/replay/findmug-replay"
+REPLAY="$BUILD/tools/replay/findmug-replay"
 SAMPLER="$BUILD/tests/soak/findmug-soak-sampler"
 for exe in "$FINDMUGD" "$REPLAY" "$SAMPLER"; do
   [[ -x "$exe" ]] || { echo "soak.sh: $exe missing: build findmugd findmug-replay findmug-soak-sampler" >&2; exit 2; }

@@ -11,6 +11,7 @@
 #include <sstream>
 
 #include "findmug/error.hpp"
+#include "findmug/numbers.hpp"
 
 namespace findmug {
 
@@ -34,23 +35,15 @@ struct Setting {
 }
 
 double parseDouble(const std::string& origin, const std::string& key, const std::string& value) {
-  double out = 0;
-  const char* begin = value.data();
-  const char* end = begin + value.size();
-  auto [ptr, ec] = std::from_chars(begin, end, out);
-  if (ec != std::errc() || ptr != end || !std::isfinite(out)) {
-    badValue(origin, key, value, "a finite number");
-  }
-  return out;
+  const auto out = parseNumber(value);
+  if (!out) badValue(origin, key, value, "a finite number");
+  return *out;
 }
 
 long long parseInt(const std::string& origin, const std::string& key, const std::string& value) {
-  long long out = 0;
-  const char* begin = value.data();
-  const char* end = begin + value.size();
-  auto [ptr, ec] = std::from_chars(begin, end, out);
-  if (ec != std::errc() || ptr != end) badValue(origin, key, value, "an integer");
-  return out;
+  const auto out = parseInteger(value);
+  if (!out) badValue(origin, key, value, "an integer");
+  return *out;
 }
 
 bool parseBool(const std::string& origin, const std::string& key, const std::string& value) {

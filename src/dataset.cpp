@@ -21,6 +21,7 @@
 
 #include "findmug/error.hpp"
 #include "findmug/image_io.hpp"
+#include "findmug/numbers.hpp"
 
 namespace findmug {
 
@@ -62,18 +63,18 @@ std::vector<std::string> splitCommas(const std::string& line) {
 
 // Strict integer parse: the whole field must be a number.
 bool parseInt(const std::string& text, long& value) {
-  if (text.empty()) return false;
-  const auto* end = text.data() + text.size();
-  const auto result = std::from_chars(text.data(), end, value);
-  return result.ec == std::errc() && result.ptr == end;
+  const auto parsed = parseInteger(text);
+  if (!parsed) return false;
+  value = static_cast<long>(*parsed);
+  return true;
 }
 
-// Strict floating-point parse (std::from_chars for double needs GCC 11+, which we have).
+// Strict floating-point parse: a finite number and nothing else.
 bool parseDouble(const std::string& text, double& value) {
-  if (text.empty()) return false;
-  const auto* end = text.data() + text.size();
-  const auto result = std::from_chars(text.data(), end, value);
-  return result.ec == std::errc() && result.ptr == end && std::isfinite(value);
+  const auto parsed = parseNumber(text);
+  if (!parsed) return false;
+  value = *parsed;
+  return true;
 }
 
 std::string readTextFile(const std::string& path) {

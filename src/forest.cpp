@@ -40,7 +40,8 @@ void RandomForest::setExtractionSettings(Settings settings) {
                 " extraction settings (at most " + std::to_string(kMaxSettings) + ")");
   for (const auto& [key, value] : settings) {
     if (key.empty() || key.size() > kMaxNameLength || value.size() > kMaxNameLength)
-      throw Error("RandomForest: extraction setting '" + key + "' has an empty or too long name/value");
+      throw Error("RandomForest: extraction setting '" + key +
+                  "' has an empty or too long name/value");
   }
   extraction_settings_ = std::move(settings);
   updateId();

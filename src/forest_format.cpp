@@ -184,8 +184,7 @@ namespace {
 // Structural checks of one loaded tree: indices in range, every node except
 // the root referenced exactly once and only from a node with a smaller index
 // (so there are no cycles and every node is reachable), sane leaves.
-void validateTree(const RandomForest::Tree& tree, std::size_t t, int dim,
-                  const std::string& path) {
+void validateTree(const RandomForest::Tree& tree, std::size_t t, int dim, const std::string& path) {
   const auto n = static_cast<std::int64_t>(tree.size());
   std::vector<std::uint8_t> referenced(tree.size(), 0);
   auto fail = [&](std::size_t node, const std::string& problem) {
@@ -307,9 +306,10 @@ RandomForest RandomForest::load(const std::string& path) {
                        : (num_features < kFeatureDim || num_features > kMaxFeatures))
         throw Error(path + ": forest model " + stage + "has " + std::to_string(num_features) +
                     " features, this build computes " + std::to_string(kFeatureDim) +
-                    (version == 2 ? "" : " base features plus at most " +
-                                             std::to_string(kMaxFeatures - kFeatureDim) +
-                                             " extra ones"));
+                    (version == 2
+                         ? ""
+                         : " base features plus at most " +
+                               std::to_string(kMaxFeatures - kFeatureDim) + " extra ones"));
       std::vector<std::string> names;
       for (std::uint32_t f = 0; f < num_features; ++f) {
         std::string name = r.str(stage + "feature name");
@@ -330,8 +330,8 @@ RandomForest RandomForest::load(const std::string& path) {
       p.candidate_thresholds = r.i32(stage + "params.candidate_thresholds");
       const std::uint8_t weighting = r.u8(stage + "params.class_weighting");
       if (weighting > 1)
-        throw Error(path + ": forest model " + stage + "params.class_weighting = " +
-                    std::to_string(weighting) + " (expected 0 or 1)");
+        throw Error(path + ": forest model " + stage +
+                    "params.class_weighting = " + std::to_string(weighting) + " (expected 0 or 1)");
       p.class_weighting = weighting == 1;
       p.bagging_fraction = r.f64(stage + "params.bagging_fraction");
       p.seed = r.u64(stage + "params.seed");
@@ -384,7 +384,8 @@ RandomForest RandomForest::load(const std::string& path) {
     for (std::uint32_t i = 0; i < num_settings; ++i) {
       std::string key = r.str("extraction setting name");
       std::string value = r.str("extraction setting value");
-      if (key.empty()) throw Error(path + ": forest model has an extraction setting without a name");
+      if (key.empty())
+        throw Error(path + ": forest model has an extraction setting without a name");
       forest.extraction_settings_.emplace_back(std::move(key), std::move(value));
     }
 

@@ -128,8 +128,9 @@ struct TrainingView {
   std::vector<double> weights;  // per sample, including class weighting
   int dim() const { return kFeatureDim + extra_dim; }
   float value(std::uint32_t sample, int f) const {
-    return f < kFeatureDim ? features[sample][f]
-                           : extra[static_cast<std::size_t>(sample) * extra_dim + (f - kFeatureDim)];
+    return f < kFeatureDim
+               ? features[sample][f]
+               : extra[static_cast<std::size_t>(sample) * extra_dim + (f - kFeatureDim)];
   }
 };
 
@@ -322,8 +323,8 @@ RandomForest RandomForest::train(const TrainingSet& data, const ForestParams& pa
   validateParams(params, "forest training");
   validateTrainingSet(data);
 
-  TrainingView view{data.features, data.extra, static_cast<int>(data.extra_names.size()),
-                    data.labels, {}};
+  TrainingView view{
+      data.features, data.extra, static_cast<int>(data.extra_names.size()), data.labels, {}};
   if (params.candidate_features > view.dim())
     throw Error("forest training: forest parameter candidate_features = " +
                 std::to_string(params.candidate_features) + " is invalid (expected 1.." +

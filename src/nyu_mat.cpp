@@ -17,6 +17,7 @@
 
 #include "findmug/dataset.hpp"
 #include "findmug/error.hpp"
+#include "findmug/numbers.hpp"
 
 namespace findmug {
 
@@ -186,11 +187,10 @@ std::vector<int> loadNyu894To40(const std::string& csv_path) {
     if (fields.size() != 4) {
       throw Error(where + ": expected 4 fields, found " + std::to_string(fields.size()));
     }
-    char* end = nullptr;
-    const long id894 = std::strtol(fields[0].c_str(), &end, 10);
-    const bool id894_ok = !fields[0].empty() && *end == '\0' && id894 >= 1 && id894 <= kMaxNyu894Id;
-    const long id40 = std::strtol(fields[2].c_str(), &end, 10);
-    const bool id40_ok = !fields[2].empty() && *end == '\0' && id40 >= 1 && id40 <= 255;
+    const long long id894 = parseInteger(fields[0]).value_or(-1);
+    const bool id894_ok = id894 >= 1 && id894 <= kMaxNyu894Id;
+    const long long id40 = parseInteger(fields[2]).value_or(-1);
+    const bool id40_ok = id40 >= 1 && id40 <= 255;
     if (!id894_ok) throw Error(where + ": bad nyu894_id '" + fields[0] + "'");
     if (!id40_ok) throw Error(where + ": bad nyu40_id '" + fields[2] + "'");
     if (table[static_cast<std::size_t>(id894)] >= 0) {

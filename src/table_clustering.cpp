@@ -175,8 +175,8 @@ std::vector<int> tables_detail::clusterPoints(const std::vector<Eigen::Vector3f>
   const float inv_voxel = 1.0f / voxel;
   std::uint64_t last_key = ~std::uint64_t{0};
   int last_voxel = -1;
-  int up = 0;        // first point whose pixel is not before the one above point i's
-  int row_end = 0;   // end of the image row of point i's pixel
+  int up = 0;       // first point whose pixel is not before the one above point i's
+  int row_end = 0;  // end of the image row of point i's pixel
   for (int i = 0; i < n; ++i) {
     const Eigen::Vector3f& p = points[i];
     const Eigen::Vector3i c(static_cast<int>(std::floor(p.x() * inv_voxel)),

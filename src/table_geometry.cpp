@@ -176,7 +176,7 @@ std::vector<Eigen::Vector2f> convexHull2d(std::vector<Eigen::Vector2f> points) {
 }
 
 ClusterOutcome tables_detail::describeCluster(const std::vector<Eigen::Vector3f>& points,
-                                             const TableConfig& config, TableCluster& table) {
+                                              const TableConfig& config, TableCluster& table) {
   ClusterOutcome outcome;
   const int n = static_cast<int>(points.size());
 

@@ -24,6 +24,7 @@
 #include <filesystem>
 #include <fstream>
 #include <iostream>
+#include <limits>
 #include <map>
 #include <optional>
 #include <sstream>
@@ -33,6 +34,7 @@
 #include "findmug/image_io.hpp"
 #include "findmug/label_image.hpp"
 #include "findmug/metrics.hpp"
+#include "findmug/numbers.hpp"
 #include "findmug/synth.hpp"
 #include "findmug/table_metrics.hpp"
 #include "findmug/training.hpp"
@@ -69,11 +71,8 @@ std::unique_ptr<CLI::App> makeEvalApp(EvalFlags& f) {
            ->type_name("K")
            ->check(CLI::Validator(
                [](std::string& text) -> std::string {
-                 try {
-                   std::size_t used = 0;
-                   if (std::stoi(text, &used) >= 2 && used == text.size()) return {};
-                 } catch (const std::exception&) {
-                 }
+                 const auto folds = parseInteger(text);
+                 if (folds && *folds >= 2 && *folds <= std::numeric_limits<int>::max()) return {};
                  return "must be an integer >= 2, got '" + text + "'";
                },
                "INTEGER >= 2")));

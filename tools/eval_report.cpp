@@ -8,6 +8,7 @@
 
 #include "findmug/error.hpp"
 #include "findmug/labels.hpp"
+#include "findmug_json.hpp"
 
 namespace findmug::tools {
 
@@ -26,33 +27,10 @@ std::string percent(double x) {
   return buf;
 }
 
-std::string jsonNumber(double x) {
-  if (std::isnan(x)) return "null";
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%.6f", x);
-  return buf;
-}
+// Figures with six decimals; a figure that could not be measured (NaN) is null.
+std::string jsonNumber(double x) { return cli::jsonNumber(x, 6); }
 
-std::string jsonString(const std::string& s) {
-  std::string out = "\"";
-  for (char c : s) {
-    switch (c) {
-      case '"': out += "\\\""; break;
-      case '\\': out += "\\\\"; break;
-      case '\n': out += "\\n"; break;
-      case '\t': out += "\\t"; break;
-      default:
-        if (static_cast<unsigned char>(c) < 0x20) {
-          char buf[8];
-          std::snprintf(buf, sizeof buf, "\\u%04x", c);
-          out += buf;
-        } else {
-          out += c;
-        }
-    }
-  }
-  return out + "\"";
-}
+using cli::jsonString;
 
 std::string jsonMatrix(const ConfusionMatrix& m) {
   std::ostringstream out;

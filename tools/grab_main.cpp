@@ -11,25 +11,18 @@
 
 #include <atomic>
 #include <chrono>
-#include <csignal>
 #include <cstdlib>
 #include <iostream>
-#include <lcm/lcm-cpp.hpp>
 #include <string>
 #include <thread>
 
 #include "findmug/error.hpp"
+#include "findmug/io/bus.hpp"
 #include "findmug/io/channels.hpp"
 #include "findmug/io/frame_source.hpp"
 #include "findmug/io/lcm_codec.hpp"
 #include "findmug_cli.hpp"
-
-namespace {
-
-std::atomic<bool> g_interrupted{false};
-void onSignal(int) { g_interrupted = true; }
-
-}  // namespace
+#include "findmug_signals.hpp"
 
 int main(int argc, char** argv) {
   using namespace findmug;
@@ -78,6 +71,7 @@ int main(int argc, char** argv) {
     return 2;
   }
 
+  cli::StopSignals stop_signals;  // before the source and LCM start threads
   try {
     const std::string channel = channelName(channel_base, suffix);
     SourceSpec spec = parseSourceSpec(source_spec);
@@ -85,24 +79,12 @@ int main(int argc, char** argv) {
     if (loop) spec.options.loop = true;
     std::unique_ptr<FrameSource> source = makeSource(spec);
 
-    lcm::LCM lcm(url);
-    if (!lcm.good()) throw Error("cannot open LCM URL '" + url + "'");
+    LcmBus bus(url, "--lcm-url");
     spdlog::info("findmug-grab: {} -> {} on {}", source->describe(), channel,
                  url.empty() ? std::string("LCM default URL") : url);
 
-    std::signal(SIGINT, onSignal);
-    std::signal(SIGTERM, onSignal);
-    // The source may block in next(); a watcher turns a signal into stop().
-    std::atomic<bool> done{false};
-    std::thread watcher([&] {
-      while (!done) {
-        if (g_interrupted) {
-          source->stop();
-          break;
-        }
-        std::this_thread::sleep_for(std::chrono::milliseconds(50));
-      }
-    });
+    // The source may block in next(); a stop signal turns into stop().
+    const auto stop_registration = stop_signals.onStop([&source] { source->stop(); });
 
     long long published = 0;
     std::size_t bytes = 0;
@@ -113,7 +95,7 @@ int main(int argc, char** argv) {
         if (!frame) break;
         const findmug_lcm::rgbd_frame_t msg = encodeRgbdFrame(*frame, encode);
         const std::vector<std::uint8_t> data = encodeMessage(msg);
-        if (lcm.publish(channel, data.data(), static_cast<unsigned int>(data.size())) != 0) {
+        if (!bus.publish(channel, data.data(), data.size())) {
           throw Error("publishing on " + channel + " failed");
         }
         ++published;
@@ -127,8 +109,6 @@ int main(int argc, char** argv) {
       spdlog::error("findmug-grab: {}", e.what());
       exit_code = 1;
     }
-    done = true;
-    watcher.join();
     const SourceStats stats = source->stats();
     spdlog::info("findmug-grab: published {} frames ({:.1f} MB); source {} ({} rejected)",
                  published, bytes / 1e6, sourceStateName(source->state()), stats.frames_rejected);

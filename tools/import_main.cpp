@@ -23,6 +23,7 @@
 
 #include "findmug/error.hpp"
 #include "findmug/image_io.hpp"
+#include "findmug/numbers.hpp"
 #include "findmug_cli.hpp"
 
 namespace fs = std::filesystem;
@@ -116,17 +117,9 @@ std::vector<double> parseIntrinsics(const std::string& text) {
   std::istringstream in(text);
   std::string part;
   while (std::getline(in, part, ',')) {
-    std::size_t used = 0;
-    double v = 0.0;
-    try {
-      v = std::stod(part, &used);
-    } catch (const std::exception&) {
-      used = 0;
-    }
-    if (used == 0 || used != part.size() || !std::isfinite(v)) {
-      throw Error("--intrinsics: '" + part + "' is not a number");
-    }
-    values.push_back(v);
+    const auto v = findmug::parseNumber(part);
+    if (!v) throw Error("--intrinsics: '" + part + "' is not a number");
+    values.push_back(*v);
   }
   if (values.size() != 4 || values[0] <= 0 || values[1] <= 0) {
     throw Error("--intrinsics: expected fx,fy,cx,cy with positive focal lengths, got '" + text +

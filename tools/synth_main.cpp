@@ -15,6 +15,7 @@
 #include "findmug/error.hpp"
 #include "findmug/io/channels.hpp"
 #include "findmug/io/lcm_codec.hpp"
+#include "findmug/numbers.hpp"
 #include "findmug/synth.hpp"
 #include "findmug_cli.hpp"
 #include "tool_common.hpp"
@@ -33,14 +34,7 @@ std::pair<double, double> parseRange(const std::string& flag, const std::string&
 }
 
 std::uint64_t parseSeed(const std::string& text) {
-  try {
-    std::size_t used = 0;
-    if (!text.empty() && text[0] != '-') {
-      const unsigned long long v = std::stoull(text, &used);
-      if (used == text.size()) return v;
-    }
-  } catch (const std::exception&) {
-  }
+  if (const auto v = findmug::parseUnsigned(text)) return *v;
   throw findmug::Error("flag --seed: '" + text + "' is not a non-negative integer");
 }
 

@@ -5,19 +5,14 @@
 #include <cstdio>
 
 #include "findmug/error.hpp"
+#include "findmug/numbers.hpp"
 
 namespace findmug::tools {
 
 double parseNumber(const std::string& flag, const std::string& text) {
-  std::size_t used = 0;
-  double value = 0;
-  try {
-    value = std::stod(text, &used);
-  } catch (const std::exception&) {
-    used = 0;
-  }
-  if (used == 0 || used != text.size()) throw Error(flag + ": '" + text + "' is not a number");
-  return value;
+  const auto value = findmug::parseNumber(text);
+  if (!value) throw Error(flag + ": '" + text + "' is not a number");
+  return *value;
 }
 
 std::unique_ptr<LabeledInput> LabeledInput::folder(const std::string& dir,

@@ -1,5 +1,5 @@
 // Shared plumbing of the findmug tools: number flags, labelled inputs, progress.
-// (Flags themselves are parsed by the CLI11 layer in tools/cli/findmug_cli.hpp.)
+// (Flags themselves are parsed by the CLI11 layer in cli/findmug_cli.hpp.)
 #pragma once
 
 #include <memory>

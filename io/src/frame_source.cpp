@@ -6,6 +6,7 @@
 #include <cmath>
 
 #include "findmug/error.hpp"
+#include "findmug/numbers.hpp"
 #include "sources_internal.hpp"
 
 namespace findmug::io {
@@ -153,13 +154,9 @@ bool parseBool(const std::string& spec, const std::string& key, const std::strin
 }
 
 double parseNumber(const std::string& spec, const std::string& key, const std::string& value) {
-  double v = 0.0;
-  const auto* end = value.data() + value.size();
-  auto [ptr, ec] = std::from_chars(value.data(), end, v);
-  if (ec != std::errc() || ptr != end || !std::isfinite(v)) {
-    specError(spec, key + "=" + value + " is not a number");
-  }
-  return v;
+  const auto v = findmug::parseNumber(value);
+  if (!v) specError(spec, key + "=" + value + " is not a number");
+  return *v;
 }
 
 }  // namespace

@@ -2,8 +2,6 @@
 
 #include <spdlog/spdlog.h>
 
-#include <lcm/lcm-cpp.hpp>
-
 #include "findmug/error.hpp"
 #include "findmug/io/channels.hpp"
 #include "findmug/io/lcm_codec.hpp"
@@ -12,26 +10,26 @@
 namespace findmug::io {
 
 LcmFrameSource::LcmFrameSource(std::string channel, std::string url, SourceOptions options)
-    : channel_(std::move(channel)), url_(std::move(url)), options_(std::move(options)) {
+    : LcmFrameSource(std::move(channel), std::make_shared<LcmBus>(url, "lcm source (" + url + ")"),
+                     std::move(options)) {}
+
+LcmFrameSource::LcmFrameSource(std::string channel, std::shared_ptr<Bus> bus, SourceOptions options)
+    : channel_(std::move(channel)), options_(std::move(options)), bus_(std::move(bus)) {
   if (channel_.empty()) throw Error("lcm source: empty channel name");
   if (options_.lcm_queue_size < 1) {
     throw Error("lcm source: queue size " + std::to_string(options_.lcm_queue_size) + " < 1");
   }
-  replaying_log_ = url_.rfind("file://", 0) == 0;
-  description_ =
-      "lcm:" + channel_ + " (" + (url_.empty() ? std::string("default URL") : url_) + ")";
-  lcm_ = std::make_unique<lcm::LCM>(url_);
-  if (!lcm_->good()) {
-    throw Error("lcm source: cannot open LCM URL '" + url_ + "'" +
-                (url_.empty() ? " (the default, from LCM_DEFAULT_URL)" : ""));
-  }
-  lcm_->subscribe(channel_, &LcmFrameSource::onMessage, this);
-  thread_ = std::thread([this] { run(); });
+  replaying_log_ = bus_->replaysLog();
+  description_ = "lcm:" + channel_ + " (" + bus_->describe() + ")";
+  bus_->subscribe(channel_, [this](const std::string& ch, const std::uint8_t* bytes,
+                                   std::size_t size) { onMessage(ch, bytes, size); });
+  receiver_.start(
+      *bus_, [this](HandleResult how) { onEnd(how); }, [this] { afterWait(); });
 }
 
 LcmFrameSource::~LcmFrameSource() {
   stop();
-  if (thread_.joinable()) thread_.join();
+  receiver_.stop();
 }
 
 void LcmFrameSource::onStop() {
@@ -46,46 +44,38 @@ void LcmFrameSource::onStop() {
   queue_changed_.notify_all();
 }
 
-void LcmFrameSource::run() {
-  for (;;) {
-    {
-      std::lock_guard lock(queue_mutex_);
-      if (stopping_) break;
-    }
-    // Short timeout: the loop must notice stop() promptly.
-    const int rc = lcm_->handleTimeout(100);
-    // A live publisher that falls silent looks like a lost camera: say so in
-    // state() (back to Running with the next frame).
-    if (!replaying_log_ && state() == SourceState::Running &&
-        Clock::now() - last_frame_.load() > kSilenceTimeout) {
-      spdlog::warn("{}: no frame for {} ms; waiting for the publisher", description_,
-                   std::chrono::duration_cast<std::chrono::milliseconds>(kSilenceTimeout).count());
-      setState(SourceState::Reconnecting);
-    }
-    if (rc < 0) {
-      if (replaying_log_) {
-        spdlog::info("{}: end of log", description_);
-      } else {
-        recordError("LCM handle failed; no more messages can be received");
-        setState(SourceState::Failed);
-      }
-      break;
-    }
+void LcmFrameSource::afterWait() {
+  // A live publisher that falls silent looks like a lost camera: say so in
+  // state() (back to Running with the next frame).
+  if (!replaying_log_ && state() == SourceState::Running &&
+      Clock::now() - last_frame_.load() > kSilenceTimeout) {
+    spdlog::warn("{}: no frame for {} ms; waiting for the publisher", description_,
+                 std::chrono::duration_cast<std::chrono::milliseconds>(kSilenceTimeout).count());
+    setState(SourceState::Reconnecting);
+  }
+}
+
+void LcmFrameSource::onEnd(HandleResult how) {
+  if (how == HandleResult::EndOfLog) {
+    spdlog::info("{}: end of log", description_);
+  } else {
+    recordError("LCM handle failed; no more messages can be received");
+    setState(SourceState::Failed);
   }
   std::lock_guard lock(queue_mutex_);
   finished_ = true;
   queue_changed_.notify_all();
 }
 
-void LcmFrameSource::onMessage(const lcm::ReceiveBuffer* buffer, const std::string& channel) {
+void LcmFrameSource::onMessage(const std::string& channel, const std::uint8_t* bytes,
+                               std::size_t size) {
   // Only the bytes are kept here: decoding (JPEG, zlib) waits until next()
   // takes the message, so a frame dropped because the consumer is busy costs
   // a copy, not a decode. Buffers are recycled: no allocation per message in
   // the steady state.
   last_frame_ = Clock::now();
-  const auto* bytes = static_cast<const std::uint8_t*>(buffer->data);
-  const std::size_t size = buffer->data_size;
   std::unique_lock lock(queue_mutex_);
+  if (stopping_) return;  // stopped: next() takes nothing more (the queue was counted)
   if (replaying_log_) {
     queue_changed_.wait(lock, [&] {
       return stopping_ || queue_.size() < static_cast<std::size_t>(options_.lcm_queue_size);

@@ -15,6 +15,7 @@
 
 #include "findmug/error.hpp"
 #include "findmug/io/pcl_frames.hpp"
+#include "findmug/numbers.hpp"
 #include "sources_internal.hpp"
 
 namespace fs = std::filesystem;
@@ -364,14 +365,15 @@ std::string xmlValue(const std::string& text, const std::string& tag) {
 
 double xmlNumber(const std::string& section, const std::string& tag, const std::string& path) {
   const std::string value = xmlValue(section, tag);
-  char* end = nullptr;
-  const double v = std::strtod(value.c_str(), &end);
-  if (value.empty() || end == value.c_str() || !std::isfinite(v)) {
-    throw Error(path + ": <" + tag + "> missing or not a number ('" + value + "')");
-  }
-  while (*end == ' ' || *end == '\t' || *end == '\n' || *end == '\r') ++end;
-  if (*end != '\0') throw Error(path + ": <" + tag + "> is not a number ('" + value + "')");
-  return v;
+  if (value.empty()) throw Error(path + ": <" + tag + "> missing or not a number ('')");
+  // XML may put white space around the text of an element.
+  const auto first = value.find_first_not_of(" \t\n\r");
+  const auto last = value.find_last_not_of(" \t\n\r");
+  const auto v = first == std::string::npos
+                     ? std::nullopt
+                     : parseNumber(std::string_view(value).substr(first, last - first + 1));
+  if (!v) throw Error(path + ": <" + tag + "> is not a number ('" + value + "')");
+  return *v;
 }
 
 }  // namespace

@@ -64,9 +64,14 @@ while [[ $# -gt 0 ]]; do
 done
 BUILD="$(cd "$BUILD" && pwd)"
 FINDMUGD="$BUILD/daemon/findmugd"
-SEQUENTIAL="$BUILD/tests/replay/findmug-sequential"
-REPLAY="$BUILD/tests/replay/findmug-replay"
-PROBE="$BUILD/tests/replay/findmug-replay-probe"
+# The replay programs live in tools/replay; a base build of an older commit
+# (budget_compare.sh) has them in tests/replay.
+REPLAY_DIR="$BUILD/tools/replay"
+[[ -x "$REPLAY_DIR/findmug-replay" || ! -x "$BUILD/tests/replay/findmug-replay" ]] ||
+  REPLAY_DIR="$BUILD/tests/replay"
+SEQUENTIAL="$REPLAY_DIR/findmug-sequential"
+REPLAY="$REPLAY_DIR/findmug-replay"
+PROBE="$REPLAY_DIR/findmug-replay-probe"
 SYNTH="$BUILD/tools/findmug-synth"
 TRAIN="$BUILD/tools/findmug-train"
 for exe in "$FINDMUGD" "$SEQUENTIAL" "$REPLAY" "$PROBE"; do

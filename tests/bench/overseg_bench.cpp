@@ -30,6 +30,7 @@
 #include <string>
 #include <vector>
 
+#include "bench_support.hpp"
 #include "findmug/cloud.hpp"
 #include "findmug/dataset.hpp"
 #include "findmug/oversegmentation.hpp"
@@ -82,7 +83,8 @@ const Frames& frames() {
     const DatasetFolder dataset(dir.string());
     std::size_t count = dataset.size();
     if (const char* n = std::getenv("FINDMUG_BENCH_FRAMES"); n && *n) {
-      count = std::min<std::size_t>(count, static_cast<std::size_t>(std::max(1, std::atoi(n))));
+      count = std::min<std::size_t>(
+          count, static_cast<std::size_t>(bench::positiveCount("FINDMUG_BENCH_FRAMES", n)));
     }
     const auto pcl = makeOversegmenter(configFor(OversegmenterKind::PclSupervoxels));
     for (std::size_t i = 0; i < count; ++i) {

@@ -18,6 +18,7 @@
 #include <thread>
 #include <vector>
 
+#include "bench_support.hpp"
 #include "findmug/dataset.hpp"
 #include "findmug/error.hpp"
 #include "findmug/segmenter.hpp"
@@ -28,12 +29,7 @@ namespace {
 
 using namespace findmug;
 
-double median(std::vector<double> v) {
-  if (v.empty()) return 0;
-  std::sort(v.begin(), v.end());
-  const std::size_t n = v.size();
-  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
-}
+using bench::median;
 
 struct Column {
   std::string name;
@@ -59,7 +55,7 @@ int run(int argc, char** argv) {
   for (int i = 1; i + 1 < argc; i += 2) {
     if (!std::strcmp(argv[i], "--data")) data = argv[i + 1];
     else if (!std::strcmp(argv[i], "--model")) model_path = argv[i + 1];
-    else if (!std::strcmp(argv[i], "--repeat")) repeat = std::max(1, std::atoi(argv[i + 1]));
+    else if (!std::strcmp(argv[i], "--repeat")) repeat = bench::positiveCount("--repeat", argv[i + 1]);
     else throw Error(std::string("unknown flag ") + argv[i]);
   }
   const DatasetFolder dataset(data);
@@ -149,11 +145,4 @@ int run(int argc, char** argv) {
 
 }  // namespace
 
-int main(int argc, char** argv) {
-  try {
-    return run(argc, argv);
-  } catch (const std::exception& e) {
-    std::fprintf(stderr, "stage_times: error: %s\n", e.what());
-    return 1;
-  }
-}
+int main(int argc, char** argv) { return findmug::bench::benchMain("stage_times", run, argc, argv); }

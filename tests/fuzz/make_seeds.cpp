@@ -29,6 +29,7 @@
 #include "findmug/io/lcm_codec.hpp"
 #include "findmug/io/pcl_frames.hpp"
 #include "fuzz_support.hpp"
+#include "lcm_samples.hpp"
 
 // After the LCM types: tiff.h defines COMPRESSION_* macros that clash with their constants.
 #include <tiffio.h>
@@ -156,29 +157,10 @@ void lcmSeeds(SeedWriter& w) {
   w.write("robot_pose", "pose", pose,
           [](const std::string& b) { (void)io::decodeRobotPose(b.data(), b.size(), "seed"); });
 
-  findmug_lcm::status_t s;
+  findmug_lcm::status_t s = findmug::test::sampleStatus();
   s.utime = frame.utime;
-  s.uptime_us = 1000000;
-  s.frames_received = 10;
-  s.frames_processed = 8;
-  s.frames_dropped = 1;
-  s.frames_rejected = 1;
   s.window_s = 10.0;
-  s.input_fps = 30.0f;
-  s.output_fps = 4.0f;
-  s.num_stages = 2;
-  s.stage_names = {"cloud", "total"};
-  s.latency_p50_us = {1000, 200000};
-  s.latency_p95_us = {1500, 250000};
-  s.latency_max_us = {2000, 300000};
-  s.num_queues = 1;
-  s.queue_names = {"frames"};
-  s.queue_depths = {1};
-  s.queue_capacities = {2};
   s.model_id = "findmug.fmf:0123abcd";
-  s.source = "openni2";
-  s.source_state_name = "running";
-  s.source_state = findmug_lcm::status_t::SOURCE_RUNNING;
   w.write("status", "status", asString(io::encodeMessage(s)), [](const std::string& b) {
     (void)io::decodeMessage<findmug_lcm::status_t>(b.data(), b.size(), "seed");
   });

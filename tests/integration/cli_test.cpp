@@ -1,4 +1,4 @@
-// The shared command-line layer (tools/cli/findmug_cli.hpp) and findmugd's flags on it:
+// The shared command-line layer (cli/findmug_cli.hpp) and findmugd's flags on it:
 // --help/--version/bad flags give the same exit codes everywhere, number checks name the
 // flag and value, and findmugd keeps --set and its shortcuts in command-line order.
 // findmug-train and findmug-eval are run as programs to check their flags on the layer.

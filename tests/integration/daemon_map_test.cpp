@@ -12,19 +12,26 @@
 // Also: the pose history (closest in time, max age, late poses), the
 // daemon.pose_* and table_map.* settings, and bad pose messages.
 #include <gtest/gtest.h>
+#include <sched.h>
+#include <unistd.h>
 
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <map>
 #include <set>
+#include <thread>
 
 #include "daemon_test_support.hpp"
 #include "findmug/daemon/daemon_config.hpp"
 #include "findmug/daemon/pipeline.hpp"
 #include "findmug/daemon/pose_input.hpp"
+#include "findmug/daemon/status_builder.hpp"
 #include "findmug/error.hpp"
+#include "findmug/io/bus.hpp"
 #include "findmug/io/channels.hpp"
 #include "findmug/io/lcm_codec.hpp"
+#include "findmug/io/subscriber.hpp"
 #include "findmug/segmenter.hpp"
 #include "findmug/synth.hpp"
 #include "findmug/table_map.hpp"
@@ -355,7 +362,7 @@ bool inPoseGap(int frame) { return frame == 12 || frame == 13; }
 
 // The pose log: every pose of the path at kPoseHz (frames fall exactly on
 // poses), minus the gap, plus three bad messages.
-std::string writePoseLog(const Sequence& seq, const TempDir& dir, double shift_s = 0.0) {
+std::vector<test::LogMessage> poseLogMessages(const Sequence& seq, double shift_s) {
   std::vector<test::LogMessage> log;
   const std::string channel(io::kRobotPoseChannel);
   for (std::size_t i = 0; i < seq.poses.size(); ++i) {
@@ -375,8 +382,12 @@ std::string writePoseLog(const Sequence& seq, const TempDir& dir, double shift_s
       log.push_back({channel, poseBytes(pose)});
     }
   }
+  return log;
+}
+
+std::string writePoseLog(const Sequence& seq, const TempDir& dir, double shift_s = 0.0) {
   const std::string path = dir.str("poses.lcmlog");
-  test::writeLcmLog(path, log);
+  test::writeLcmLog(path, poseLogMessages(seq, shift_s));
   return path;
 }
 
@@ -555,6 +566,237 @@ TEST(DaemonMap, WithoutPosesInTimeNoMapIsPublishedAndMapFieldsStayEmpty) {
     detections += static_cast<int>(m.tables.size());
   }
   EXPECT_GT(detections, 0) << "no tables at all: the test would prove nothing";
+}
+
+}  // namespace
+}  // namespace findmug::daemon
+
+// ---- the same pipeline on an in-memory bus, and output faults --------------------------
+
+namespace findmug::daemon {
+namespace {
+
+// Everything published on the output bus, decoded, in arrival order.
+struct Collected {
+  std::vector<io::LabelImageMessage> labels;
+  std::vector<io::TablesMessage> tables, table_map;
+  std::vector<findmug_lcm::status_t> statuses;
+};
+
+void collect(io::MemoryBus& bus, Collected* out) {
+  bus.subscribe(std::string(io::kLabelsChannel),
+                [out](const std::string& c, const std::uint8_t* d, std::size_t n) {
+                  out->labels.push_back(io::decodeLabelImage(d, n, c));
+                });
+  bus.subscribe(std::string(io::kTablesChannel),
+                [out](const std::string& c, const std::uint8_t* d, std::size_t n) {
+                  out->tables.push_back(io::decodeTables(d, n, c));
+                });
+  bus.subscribe(std::string(io::kTableMapChannel),
+                [out](const std::string& c, const std::uint8_t* d, std::size_t n) {
+                  out->table_map.push_back(io::decodeTables(d, n, c));
+                });
+  bus.subscribe(std::string(io::kStatusChannel),
+                [out](const std::string& c, const std::uint8_t* d, std::size_t n) {
+                  out->statuses.push_back(io::decodeMessage<findmug_lcm::status_t>(d, n, c));
+                });
+}
+
+void drain(io::MemoryBus& bus) {
+  while (bus.handle(std::chrono::milliseconds(0)) == io::HandleResult::Handled) {
+  }
+}
+
+Config memoryConfig() {
+  Config config;
+  config.segmenter = mapSegmenterConfig();
+  config.extra["daemon.status_period_s"] = "60";
+  config.extra["daemon.pose_history_s"] = "1000";
+  return config;
+}
+
+TEST(DaemonMapOnMemoryBus, PublishesWhatTheLcmLogPathPublishes) {
+  const Sequence& seq = sequence();
+  TempDir tmp;
+  const MapRun file_run = runPipeline(seq, writePoseLog(seq, tmp));
+
+  // The same poses (bad ones included) on an in-memory bus that ends like the log.
+  auto pose_bus = std::make_shared<io::MemoryBus>(100000);
+  for (const auto& m : poseLogMessages(seq, 0.0)) {
+    ASSERT_TRUE(pose_bus->publish(m.channel, m.data.data(), m.data.size()));
+  }
+  pose_bus->end();
+  auto out = std::make_shared<io::MemoryBus>(100000);
+  Collected got;
+  collect(*out, &got);
+  PipelineHooks hooks;
+  hooks.output_bus = out;
+  hooks.pose_bus = pose_bus;
+  Config config = memoryConfig();
+  {
+    Pipeline pipeline(config.segmenter, resolveDaemonConfig(config), seq.forest, "synth",
+                      ExecutionMode::Sequential, hooks);
+    pipeline.start();
+    ASSERT_NE(pipeline.poseInput(), nullptr);
+    waitUntilFinished(*pipeline.poseInput());
+    EXPECT_EQ(pipeline.poseInput()->rejected(), 3u);
+    for (const Submitted& f : seq.submitted) EXPECT_TRUE(pipeline.submit(f.frame));
+    pipeline.stop(StopMode::Drain);
+    EXPECT_EQ(pipeline.counters().processed, file_run.counters.processed);
+    EXPECT_EQ(pipeline.counters().rejected, file_run.counters.rejected);
+  }
+  drain(*out);
+  EXPECT_EQ(out->discarded(), 0u);
+  EXPECT_EQ(got.labels.size(), seq.submitted.size());
+  ASSERT_EQ(got.tables.size(), file_run.tables.size());
+  for (std::size_t i = 0; i < got.tables.size(); ++i) {
+    EXPECT_EQ(got.tables[i].seq, file_run.tables[i].seq);
+    EXPECT_EQ(got.tables[i].tables.size(), file_run.tables[i].tables.size());
+    EXPECT_EQ(got.tables[i].map_pose.has_value(), file_run.tables[i].map_pose.has_value());
+    EXPECT_EQ(got.tables[i].map_info.size(), file_run.tables[i].map_info.size());
+  }
+  ASSERT_EQ(got.table_map.size(), file_run.table_map.size());
+  ASSERT_FALSE(got.table_map.empty());
+  EXPECT_EQ(got.table_map.back().tables.size(), file_run.table_map.back().tables.size());
+  ASSERT_FALSE(got.statuses.empty());  // the final status
+  EXPECT_EQ(got.statuses.back().frames_processed, file_run.statuses.back().frames_processed);
+}
+
+// Issue 11, output side: a subscriber that never reads, and publishes that
+// fail. The in-memory bus's bounded queue stands for the unread subscriber's
+// receive buffer (an LCM publisher never waits for subscribers: udpm sends
+// datagrams, and a full socket buffer drops them at the receiver); the
+// FaultyBus refuses publishes on command.
+TEST(DaemonOutputFaults, AnUnreadBusAndRefusedPublishesLeaveThePipelineRunning) {
+  const Sequence& seq = sequence();
+  constexpr std::size_t kCapacity = 8;
+  auto memory = std::make_shared<io::MemoryBus>(kCapacity);
+  auto faulty = std::make_shared<io::FaultyBus>(memory);
+  PipelineHooks hooks;
+  hooks.output_bus = faulty;
+  Config config = memoryConfig();
+  config.extra["daemon.pose_input"] = "false";
+  const DaemonConfig dc = resolveDaemonConfig(config);
+  Pipeline pipeline(config.segmenter, dc, seq.forest, "synth", ExecutionMode::Sequential, hooks);
+  pipeline.start();
+  auto expectBounded = [&] {
+    const findmug_lcm::status_t s = makeStatus(pipeline);
+    for (int q = 0; q < s.num_queues; ++q) {
+      EXPECT_LE(s.queue_depths[q], s.queue_capacities[q]) << s.queue_names[q];
+    }
+    EXPECT_LE(memory->queued(), kCapacity);
+  };
+  std::size_t next = 0;
+  auto submitFrames = [&](std::size_t n) {
+    for (std::size_t i = 0; i < n; ++i, ++next) {
+      ASSERT_TRUE(pipeline.submit(seq.frames[next].frame));
+      expectBounded();
+    }
+  };
+
+  // (a) Nobody reads: every frame is still processed; the unread queue keeps
+  // its newest kCapacity messages and discards the rest.
+  submitFrames(6);
+  EXPECT_EQ(pipeline.counters().processed, 6u);
+  EXPECT_EQ(memory->published(), 12u);  // labels + tables per frame
+  EXPECT_EQ(memory->queued(), kCapacity);
+  EXPECT_EQ(memory->discarded(), 12u - kCapacity);
+
+  // A reader arrives and takes what is queued.
+  Collected got;
+  collect(*memory, &got);
+  drain(*memory);
+  EXPECT_EQ(got.labels.size() + got.tables.size(), kCapacity);
+  const std::size_t labels_before = got.labels.size(), tables_before = got.tables.size();
+
+  // (b) Publishing tables fails: each frame's labels still go out, the frame
+  // counts as rejected (its tables_t is lost) and the error names the channel.
+  faulty->failPublish(std::string(io::kTablesChannel), true);
+  submitFrames(4);
+  drain(*memory);
+  EXPECT_EQ(got.labels.size(), labels_before + 4);
+  EXPECT_EQ(got.tables.size(), tables_before);
+  EXPECT_EQ(pipeline.counters().processed, 6u);
+  EXPECT_EQ(pipeline.counters().rejected, 4u);
+  EXPECT_EQ(pipeline.publishFailures(), 4u);
+  EXPECT_NE(makeStatus(pipeline).last_error.find("LCM publish on FINDMUG_TABLES failed"),
+            std::string::npos)
+      << makeStatus(pipeline).last_error;
+
+  // The status channel fails too: counted, and frames keep flowing.
+  faulty->failPublish(std::string(io::kStatusChannel), true);
+  pipeline.publishStatusNow();
+  EXPECT_EQ(pipeline.publishFailures(), 5u);
+  faulty->failPublish(std::string(io::kTablesChannel), false);
+  faulty->failPublish(std::string(io::kStatusChannel), false);
+
+  // Restored: frames are processed and published on every channel again.
+  submitFrames(2);
+  drain(*memory);
+  EXPECT_EQ(pipeline.counters().processed, 8u);
+  EXPECT_EQ(got.tables.size(), tables_before + 2);
+  EXPECT_EQ(faulty->refused(), 5u);
+  pipeline.stop(StopMode::Drain);
+  drain(*memory);
+  ASSERT_FALSE(got.statuses.empty());
+  const findmug_lcm::status_t& last = got.statuses.back();
+  EXPECT_EQ(last.frames_received, 12);
+  EXPECT_EQ(last.frames_processed, 8);
+  EXPECT_EQ(last.frames_rejected, 4);
+  EXPECT_EQ(last.frames_dropped, 0);
+}
+
+// The same fault over real LCM: findmug's udpm output with one subscriber
+// that never calls handle() (what it does not take is dropped on its side:
+// by LCM's bounded receive buffer, or by the kernel) and one that reads. Runs in a private network
+// namespace this test process enters (root only; skipped otherwise, like the replay tests).
+TEST(DaemonOutputFaults, AUdpmSubscriberThatNeverReadsDoesNotHoldThePipeline) {
+  if (::geteuid() != 0) GTEST_SKIP() << "needs root for a private network namespace";
+  ASSERT_EQ(::unshare(CLONE_NEWNET), 0) << "unshare(CLONE_NEWNET) failed";
+  ASSERT_EQ(std::system("ip link set lo up && ip route add 224.0.0.0/4 dev lo"), 0);
+  const Sequence& seq = sequence();
+  const std::string url = "udpm://239.255.76.67:7667?ttl=0";
+  // Never read: the default (small) receive buffer overflows after a few frames.
+  io::LcmBus never_read(url, "never-reading subscriber");
+  int never_called = 0;
+  never_read.subscribe(std::string(io::kLabelsChannel), [&](const std::string&, const std::uint8_t*,
+                                                            std::size_t) { ++never_called; });
+  // Reads on its own thread, with room for whole label images.
+  io::LcmBus reader_bus(url + "&recv_buf_size=4194304", "reading subscriber");
+  io::Subscriber<io::LabelImageMessage> reader(
+      reader_bus, std::string(io::kLabelsChannel),
+      [](const std::uint8_t* d, std::size_t n, const std::string& c) {
+        return io::decodeLabelImage(d, n, c);
+      });
+  reader.startReceiving();
+
+  Config config = memoryConfig();
+  config.extra["daemon.lcm_url"] = url;
+  config.extra["daemon.pose_input"] = "false";
+  const DaemonConfig dc = resolveDaemonConfig(config);
+  constexpr std::size_t kSubmitted = 12;
+  {
+    Pipeline pipeline(config.segmenter, dc, seq.forest, "synth", ExecutionMode::Sequential);
+    pipeline.start();
+    for (std::size_t i = 0; i < kSubmitted; ++i) {
+      ASSERT_TRUE(pipeline.submit(seq.frames[i].frame));
+      const findmug_lcm::status_t s = makeStatus(pipeline);
+      for (int q = 0; q < s.num_queues; ++q) EXPECT_LE(s.queue_depths[q], s.queue_capacities[q]);
+    }
+    pipeline.stop(StopMode::Drain);
+    EXPECT_EQ(pipeline.counters().processed, kSubmitted);
+    EXPECT_EQ(pipeline.counters().rejected, 0u);
+    EXPECT_EQ(pipeline.publishFailures(), 0u);  // udpm never waits for subscribers
+  }
+  // The reader got every label image (a deadline only guards a hang).
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(30);
+  while (reader.accepted() < kSubmitted && std::chrono::steady_clock::now() < deadline) {
+    std::this_thread::sleep_for(std::chrono::milliseconds(10));
+  }
+  EXPECT_EQ(reader.accepted(), kSubmitted);
+  EXPECT_EQ(reader.rejected(), 0u);
+  reader.stop();
+  EXPECT_EQ(never_called, 0);
 }
 
 }  // namespace

@@ -7,8 +7,8 @@
 #include <algorithm>
 #include <atomic>
 #include <chrono>
-#include <filesystem>
 #include <condition_variable>
+#include <filesystem>
 #include <fstream>
 #include <map>
 #include <mutex>
@@ -17,6 +17,7 @@
 #include "daemon_test_support.hpp"
 #include "findmug/daemon/daemon.hpp"
 #include "findmug/daemon/pipeline.hpp"
+#include "findmug/daemon/status_builder.hpp"
 #include "findmug/error.hpp"
 #include "findmug/io/channels.hpp"
 #include "findmug/io/frame_source.hpp"
@@ -274,7 +275,7 @@ TEST(DaemonPipeline, HeldSegmentStageDropsTheOldestFramesAndTheNewestWin) {
   // prepare stage then waits at the door, and whatever arrives meanwhile
   // waits in the entry queue, which keeps the newest frames.
   auto segment_depth = [&] {
-    const findmug_lcm::status_t s = pipeline.makeStatus();
+    const findmug_lcm::status_t s = makeStatus(pipeline);
     for (int i = 0; i < s.num_queues; ++i) {
       if (s.queue_names[i] == "segment") return s.queue_depths[i];
     }
@@ -292,7 +293,7 @@ TEST(DaemonPipeline, HeldSegmentStageDropsTheOldestFramesAndTheNewestWin) {
   ASSERT_GE(pending, 3u);
   ASSERT_LE(pending, 5u);
   const auto kept = static_cast<std::int64_t>(pending);
-  const findmug_lcm::status_t held = pipeline.makeStatus();
+  const findmug_lcm::status_t held = makeStatus(pipeline);
   EXPECT_EQ(held.frames_dropped, kFrames - kept);
   // Every drop happened at the door, before any work was spent on the frame.
   EXPECT_EQ(held.frames_dropped_at_door, kFrames - kept);

@@ -16,6 +16,7 @@
 #include "findmug/image_io.hpp"
 #include "findmug/io/channels.hpp"
 #include "findmug/io/frame_source.hpp"
+#include "lcm_samples.hpp"
 #include "test_data.hpp"
 
 namespace findmug::io {
@@ -745,31 +746,7 @@ TEST(StatusAndPose, SourceStateValuesMatchStatusConstants) {
 }
 
 TEST(StatusAndPose, RoundTripAndTruncation) {
-  findmug_lcm::status_t s;
-  s.utime = 99;
-  s.uptime_us = 1000000;
-  s.frames_received = 10;
-  s.frames_processed = 8;
-  s.frames_dropped = 1;
-  s.frames_rejected = 1;
-  s.window_s = 5.0;
-  s.input_fps = 30.0f;
-  s.output_fps = 4.0f;
-  s.num_stages = 2;
-  s.stage_names = {"cloud", "total"};
-  s.latency_p50_us = {1000, 200000};
-  s.latency_p95_us = {1500, 250000};
-  s.latency_max_us = {2000, 300000};
-  s.num_queues = 1;
-  s.queue_names = {"frames"};
-  s.queue_depths = {1};
-  s.queue_capacities = {2};
-  s.model_id = "forest.fmf";
-  s.source = "openni2";
-  s.source_state_name = "running";
-  s.source_state = findmug_lcm::status_t::SOURCE_RUNNING;
-  s.last_error = "";
-  s.last_error_utime = 0;
+  const findmug_lcm::status_t s = findmug::test::sampleStatus();
   const Bytes b = encodeMessage(s);
   const findmug_lcm::status_t out =
       decodeMessage<findmug_lcm::status_t>(b.data(), b.size(), "FINDMUG_STATUS");

@@ -51,9 +51,12 @@ class Random {
   // A length in [0, max]: often 0 or max, else anything between.
   int length(int max) {
     switch (rng_() % 4) {
-      case 0: return 0;
-      case 1: return max;
-      default: return static_cast<int>(rng_() % (static_cast<std::uint64_t>(max) + 1));
+      case 0:
+        return 0;
+      case 1:
+        return max;
+      default:
+        return static_cast<int>(rng_() % (static_cast<std::uint64_t>(max) + 1));
     }
   }
   // Printable, no NUL (an LCM string ends at its first NUL).
@@ -257,69 +260,62 @@ Msg expectExactWalk(const Msg& original, const std::string& what) {
 const Scale kScales[] = {{0, 0, 0}, {3, 8, 16}, {40, 100, 2000}, {400, 300, 70000}};
 constexpr int kMessagesPerScale = 60;
 
-TEST(LcmWire, RobotPoseWalkMatchesGeneratedCode) {
-  Random r(1);
-  for (int i = 0; i < 4 * kMessagesPerScale; ++i) {
-    const auto m = makePose(r);
-    const auto d = expectExactWalk(m, "robot_pose_t #" + std::to_string(i));
-    EXPECT_EQ(d.utime, m.utime);
-    EXPECT_EQ(d.yaw, m.yaw);
+// kMessagesPerScale messages per scale from `make(random, scale)`, each
+// through expectExactWalk, then `check(decoded, original)` on its fields.
+template <typename Make, typename Check>
+void forEachMessage(std::uint64_t seed, const Make& make, const Check& check) {
+  Random r(seed);
+  for (const Scale& s : kScales) {
+    for (int i = 0; i < kMessagesPerScale; ++i) {
+      const auto m = make(r, s);
+      const auto d = expectExactWalk(m, std::string(m.getTypeName()) + " #" + std::to_string(i));
+      check(d, m);
+    }
   }
+}
+
+TEST(LcmWire, RobotPoseWalkMatchesGeneratedCode) {
+  forEachMessage(
+      1, [](Random& r, const Scale&) { return makePose(r); },
+      [](const auto& d, const auto& m) {
+        EXPECT_EQ(d.utime, m.utime);
+        EXPECT_EQ(d.yaw, m.yaw);
+      });
 }
 
 TEST(LcmWire, RgbdFrameWalkMatchesGeneratedCode) {
-  Random r(2);
-  for (const Scale& s : kScales) {
-    for (int i = 0; i < kMessagesPerScale; ++i) {
-      const auto m = makeFrame(r, s);
-      const auto d = expectExactWalk(m, "rgbd_frame_t #" + std::to_string(i));
-      EXPECT_EQ(d.source, m.source);
-      EXPECT_EQ(d.depth_data, m.depth_data);
-      EXPECT_EQ(d.color_compression, m.color_compression);
-    }
-  }
+  forEachMessage(2, makeFrame, [](const auto& d, const auto& m) {
+    EXPECT_EQ(d.source, m.source);
+    EXPECT_EQ(d.depth_data, m.depth_data);
+    EXPECT_EQ(d.color_compression, m.color_compression);
+  });
 }
 
 TEST(LcmWire, LabelImageWalkMatchesGeneratedCode) {
-  Random r(3);
-  for (const Scale& s : kScales) {
-    for (int i = 0; i < kMessagesPerScale; ++i) {
-      const auto m = makeLabels(r, s);
-      const auto d = expectExactWalk(m, "label_image_t #" + std::to_string(i));
-      EXPECT_EQ(d.label_names, m.label_names);
-      EXPECT_EQ(d.confidence_data, m.confidence_data);
-      EXPECT_EQ(d.latency_us, m.latency_us);
-    }
-  }
+  forEachMessage(3, makeLabels, [](const auto& d, const auto& m) {
+    EXPECT_EQ(d.label_names, m.label_names);
+    EXPECT_EQ(d.confidence_data, m.confidence_data);
+    EXPECT_EQ(d.latency_us, m.latency_us);
+  });
 }
 
 TEST(LcmWire, TablesWalkMatchesGeneratedCode) {
-  Random r(4);
-  for (const Scale& s : kScales) {
-    for (int i = 0; i < kMessagesPerScale; ++i) {
-      const auto m = makeTables(r, s);
-      const auto d = expectExactWalk(m, "tables_t #" + std::to_string(i));
-      ASSERT_EQ(d.tables.size(), m.tables.size());
-      for (std::size_t t = 0; t < m.tables.size(); ++t) {
-        EXPECT_EQ(d.tables[t].map_hull, m.tables[t].map_hull);
-        EXPECT_EQ(d.tables[t].sightings, m.tables[t].sightings);
-      }
-      EXPECT_EQ(d.content, m.content);
+  forEachMessage(4, makeTables, [](const auto& d, const auto& m) {
+    ASSERT_EQ(d.tables.size(), m.tables.size());
+    for (std::size_t t = 0; t < m.tables.size(); ++t) {
+      EXPECT_EQ(d.tables[t].map_hull, m.tables[t].map_hull);
+      EXPECT_EQ(d.tables[t].sightings, m.tables[t].sightings);
     }
-  }
+    EXPECT_EQ(d.content, m.content);
+  });
 }
 
 TEST(LcmWire, StatusWalkMatchesGeneratedCode) {
-  Random r(5);
-  for (const Scale& s : kScales) {
-    for (int i = 0; i < kMessagesPerScale; ++i) {
-      const auto m = makeStatus(r, s);
-      const auto d = expectExactWalk(m, "status_t #" + std::to_string(i));
-      EXPECT_EQ(d.queue_names, m.queue_names);
-      EXPECT_EQ(d.last_error, m.last_error);
-      EXPECT_EQ(d.processing_threads, m.processing_threads);
-    }
-  }
+  forEachMessage(5, makeStatus, [](const auto& d, const auto& m) {
+    EXPECT_EQ(d.queue_names, m.queue_names);
+    EXPECT_EQ(d.last_error, m.last_error);
+    EXPECT_EQ(d.processing_threads, m.processing_threads);
+  });
 }
 
 }  // namespace

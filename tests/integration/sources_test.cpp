@@ -318,17 +318,12 @@ TEST(LcmSource, MemqFramesArriveInOrderAndBadMessagesAreCounted) {
   const auto other_type = encodeMessage(encodeRobotPose(RobotPose{1, 0, 0, 0}));
   for (int i = 0; i < 5; ++i) {
     const auto b = frameBytes(i);
-    ASSERT_EQ(source.lcm().publish("FINDMUG_RGBD_T", b.data(), static_cast<unsigned>(b.size())), 0);
-    if (i == 1)
-      source.lcm().publish("FINDMUG_RGBD_T", garbage.data(), static_cast<unsigned>(garbage.size()));
-    if (i == 2)
-      source.lcm().publish("FINDMUG_RGBD_T", truncated.data(),
-                           static_cast<unsigned>(truncated.size()));
-    if (i == 3)
-      source.lcm().publish("FINDMUG_RGBD_T", other_type.data(),
-                           static_cast<unsigned>(other_type.size()));
+    ASSERT_TRUE(source.bus().publish("FINDMUG_RGBD_T", b.data(), b.size()));
+    if (i == 1) source.bus().publish("FINDMUG_RGBD_T", garbage.data(), garbage.size());
+    if (i == 2) source.bus().publish("FINDMUG_RGBD_T", truncated.data(), truncated.size());
+    if (i == 3) source.bus().publish("FINDMUG_RGBD_T", other_type.data(), other_type.size());
     // Another channel is not ours.
-    source.lcm().publish("FINDMUG_RGBD_OTHER", b.data(), static_cast<unsigned>(b.size()));
+    source.bus().publish("FINDMUG_RGBD_OTHER", b.data(), b.size());
   }
   for (int i = 0; i < 5; ++i) {
     auto f = source.next();
@@ -352,7 +347,7 @@ TEST(LcmSource, SlowConsumerGetsTheNewestFrame) {
   LcmFrameSource source("FINDMUG_RGBD", "memq://", options);
   for (int i = 0; i < 6; ++i) {
     const auto b = frameBytes(i);
-    source.lcm().publish("FINDMUG_RGBD", b.data(), static_cast<unsigned>(b.size()));
+    source.bus().publish("FINDMUG_RGBD", b.data(), b.size());
   }
   ASSERT_TRUE(eventually([&] { return source.stats().frames_dropped == 5; }));
   auto f = source.next();
@@ -366,7 +361,7 @@ TEST(LcmSource, FramesQueuedAtStopAreCountedAsDropped) {
   LcmFrameSource source("FINDMUG_RGBD", "memq://", options);
   for (int i = 0; i < 3; ++i) {
     const auto b = frameBytes(i);
-    source.lcm().publish("FINDMUG_RGBD", b.data(), static_cast<unsigned>(b.size()));
+    source.bus().publish("FINDMUG_RGBD", b.data(), b.size());
   }
   // All three handled: two pushed out by newer ones, the newest still queued.
   ASSERT_TRUE(eventually([&] { return source.stats().frames_dropped == 2; }));
@@ -381,13 +376,13 @@ TEST(LcmSource, SilentPublisherShowsAsReconnectingUntilFramesReturn) {
   LcmFrameSource source("FINDMUG_RGBD", "memq://", SourceOptions{});
   EXPECT_EQ(source.state(), SourceState::Starting);
   auto b = frameBytes(0);
-  source.lcm().publish("FINDMUG_RGBD", b.data(), static_cast<unsigned>(b.size()));
+  source.bus().publish("FINDMUG_RGBD", b.data(), b.size());
   ASSERT_TRUE(source.next().has_value());
   EXPECT_EQ(source.state(), SourceState::Running);
   // Nothing for longer than the silence timeout.
   ASSERT_TRUE(eventually([&] { return source.state() == SourceState::Reconnecting; }));
   b = frameBytes(1);
-  source.lcm().publish("FINDMUG_RGBD", b.data(), static_cast<unsigned>(b.size()));
+  source.bus().publish("FINDMUG_RGBD", b.data(), b.size());
   auto f = source.next();
   ASSERT_TRUE(f.has_value());
   EXPECT_EQ(f->seq, 1);

@@ -20,21 +20,13 @@ set -euo pipefail
 build=$(cd "${1:?build dir}" && pwd)
 source_dir=$(cd "${2:?source dir}" && pwd)
 
-skip() {
-  if [[ "${CI:-}" == "true" ]]; then
-    echo "package test: FAIL under CI=true: $*" >&2
-    exit 1
-  fi
-  echo "package test: SKIPPED: $*"
-  exit 77
-}
-[[ $(id -u) -eq 0 ]] || skip "needs root (mount namespace, overlayfs, chroot)"
+SKIP_NAME="package test"
+source "$source_dir/tests/support/skip.sh"
+need_root "mount namespace, overlayfs, chroot"
 prefix=$(sed -n 's/^CMAKE_INSTALL_PREFIX:PATH=//p' "$build/CMakeCache.txt")
 [[ "$prefix" == "/usr" ]] ||
   skip "build configured with CMAKE_INSTALL_PREFIX=$prefix; the package needs /usr (scripts/test.sh, scripts/package.sh)"
-for tool in cpack lintian unshare chroot dpkg-deb; do
-  command -v "$tool" >/dev/null || skip "$tool not installed"
-done
+need_tools cpack lintian unshare chroot dpkg-deb
 
 work=$(mktemp -d /tmp/findmug-package-test.XXXXXX)
 cleanup() { rm -rf "$work"; }

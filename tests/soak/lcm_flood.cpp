@@ -19,6 +19,7 @@
 
 #include <array>
 #include <chrono>
+#include <climits>
 #include <cstdint>
 #include <cstring>
 #include <iostream>
@@ -28,6 +29,7 @@
 #include <vector>
 
 #include "findmug/io/lcm_codec.hpp"
+#include "findmug/numbers.hpp"
 
 namespace {
 
@@ -54,13 +56,22 @@ int main(int argc, char** argv) {
   unsigned seed = 1;
   for (int i = 1; i + 1 < argc; i += 2) {
     const std::string f = argv[i], v = argv[i + 1];
+    const auto integer = [&f, &v](long long lo, long long hi) {
+      const auto x = findmug::parseInteger(v);
+      if (!x || *x < lo || *x > hi) usage(f + ": bad value '" + v + "'");
+      return *x;
+    };
     if (f == "--group") group = v;
-    else if (f == "--port") port = std::stoi(v);
-    else if (f == "--count") count = std::stoll(v);
-    else if (f == "--seed") seed = static_cast<unsigned>(std::stoul(v));
+    else if (f == "--port") port = static_cast<int>(integer(1, 65535));
+    else if (f == "--count") count = integer(0, LLONG_MAX);
+    else if (f == "--seed") seed = static_cast<unsigned>(integer(0, UINT_MAX));
     else if (f == "--channel") channel = v;
-    else if (f == "--sockets") sockets_n = std::stoi(v);
-    else if (f == "--rate") rate = std::stod(v);
+    else if (f == "--sockets") sockets_n = static_cast<int>(integer(1, 1024));
+    else if (f == "--rate") {
+      const auto x = findmug::parseNumber(v);
+      if (!x || *x < 0) usage(f + ": bad value '" + v + "'");
+      rate = *x;
+    }
     else usage("unknown flag " + f);
   }
   if (argc % 2 == 0) usage("flags come in pairs");

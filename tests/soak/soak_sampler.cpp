@@ -12,18 +12,18 @@
 // (least-squares slope over the span, so that one allocation burst is not a
 // trend), fd and thread ranges, and drops. Exits 0 when every given bound
 // holds, 1 when one does not, 2 on usage errors or when no status ever arrived.
-#include <lcm/lcm-cpp.hpp>
 
 #include <algorithm>
 #include <atomic>
 #include <chrono>
 #include <cmath>
-#include <csignal>
+#include <climits>
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
 #include <map>
+#include <memory>
 #include <optional>
 #include <sstream>
 #include <string>
@@ -31,13 +31,15 @@
 #include <vector>
 
 #include "findmug/error.hpp"
+#include "findmug/io/bus.hpp"
 #include "findmug/io/channels.hpp"
 #include "findmug/io/lcm_codec.hpp"
+#include "findmug/io/subscriber.hpp"
+#include "findmug/numbers.hpp"
+#include "findmug_signals.hpp"
 
 namespace {
 
-std::atomic<bool> g_stop{false};
-void onSignal(int) { g_stop = true; }
 
 struct Options {
   int pid = 0;
@@ -70,24 +72,30 @@ Options parse(int argc, char** argv) {
     const std::string flag = argv[i];
     if (i + 1 >= argc) usage(flag + " needs a value");
     const std::string v = argv[++i];
-    try {
-      if (flag == "--pid") o.pid = std::stoi(v);
-      else if (flag == "--url") o.url = v;
-      else if (flag == "--channel") o.channel = v;
-      else if (flag == "--duration") o.duration_s = std::stod(v);
-      else if (flag == "--period") o.period_s = std::stod(v);
-      else if (flag == "--warmup") o.warmup_s = std::stod(v);
-      else if (flag == "--csv") o.csv = v;
-      else if (flag == "--svg") o.svg = v;
-      else if (flag == "--summary") o.summary = v;
-      else if (flag == "--max-rss-growth-mb") o.max_rss_growth_mb = std::stod(v);
-      else if (flag == "--max-fd-growth") o.max_fd_growth = std::stol(v);
-      else if (flag == "--max-thread-growth") o.max_thread_growth = std::stol(v);
-      else if (flag == "--max-drops") o.max_drops = std::stol(v);
-      else usage("unknown flag " + flag);
-    } catch (const std::logic_error&) {
-      usage(flag + ": bad value '" + v + "'");
-    }
+    const auto number = [&flag, &v] {
+      const auto x = findmug::parseNumber(v);
+      if (!x) usage(flag + ": bad value '" + v + "'");
+      return *x;
+    };
+    const auto integer = [&flag, &v] {
+      const auto x = findmug::parseInteger(v);
+      if (!x || *x < INT_MIN || *x > INT_MAX) usage(flag + ": bad value '" + v + "'");
+      return static_cast<int>(*x);
+    };
+    if (flag == "--pid") o.pid = integer();
+    else if (flag == "--url") o.url = v;
+    else if (flag == "--channel") o.channel = v;
+    else if (flag == "--duration") o.duration_s = number();
+    else if (flag == "--period") o.period_s = number();
+    else if (flag == "--warmup") o.warmup_s = number();
+    else if (flag == "--csv") o.csv = v;
+    else if (flag == "--svg") o.svg = v;
+    else if (flag == "--summary") o.summary = v;
+    else if (flag == "--max-rss-growth-mb") o.max_rss_growth_mb = number();
+    else if (flag == "--max-fd-growth") o.max_fd_growth = integer();
+    else if (flag == "--max-thread-growth") o.max_thread_growth = integer();
+    else if (flag == "--max-drops") o.max_drops = integer();
+    else usage("unknown flag " + flag);
   }
   if (o.pid <= 0 || o.csv.empty()) usage("--pid and --csv are required");
   if (!(o.period_s > 0) || !(o.duration_s > 0)) usage("--period and --duration must be > 0");
@@ -113,21 +121,6 @@ bool readProc(int pid, Sample& s) {
   std::ifstream("/proc/loadavg") >> s.load1;
   return s.rss_kb > 0;
 }
-
-class StatusListener {
- public:
-  std::optional<findmug_lcm::status_t> latest;
-  long errors = 0;
-  void onMessage(const lcm::ReceiveBuffer* rbuf, const std::string& channel) {
-    try {
-      latest =
-          findmug::io::decodeMessage<findmug_lcm::status_t>(rbuf->data, rbuf->data_size, channel);
-    } catch (const findmug::Error& e) {
-      ++errors;
-      std::cerr << "findmug-soak-sampler: " << e.what() << "\n";
-    }
-  }
-};
 
 void fillFromStatus(const findmug_lcm::status_t& st, Sample& s) {
   s.received = st.frames_received;
@@ -232,12 +225,20 @@ double slope(const std::vector<double>& t, const std::vector<double>& y) {
 
 int main(int argc, char** argv) {
   const Options o = parse(argc, argv);
-  std::signal(SIGTERM, onSignal);
-  std::signal(SIGINT, onSignal);
-  lcm::LCM lcm(o.url);
-  if (!lcm.good()) usage("cannot open LCM at '" + o.url + "'");
-  StatusListener listener;
-  lcm.subscribe(o.channel, &StatusListener::onMessage, &listener);
+  const findmug::cli::StopSignals stop_signals;
+  std::unique_ptr<findmug::io::LcmBus> bus;
+  try {
+    bus = std::make_unique<findmug::io::LcmBus>(o.url, "--url");
+  } catch (const std::exception&) {
+    usage("cannot open LCM at '" + o.url + "'");
+  }
+  // The latest status; this thread owns the bus (handle() below).
+  findmug::io::Subscriber<findmug_lcm::status_t> listener(
+      *bus, o.channel,
+      [](const std::uint8_t* d, std::size_t n, const std::string& c) {
+        return findmug::io::decodeMessage<findmug_lcm::status_t>(d, n, c);
+      },
+      {}, [](const std::string& e) { std::cerr << "findmug-soak-sampler: " << e << "\n"; });
 
   std::ofstream csv(o.csv);
   csv << "t_s,rss_kb,fds,threads,received,processed,dropped,rejected,input_fps,output_fps,"
@@ -246,7 +247,7 @@ int main(int argc, char** argv) {
   const auto start = std::chrono::steady_clock::now();
   auto next = start;
   bool alive = true;
-  while (!g_stop) {
+  while (!stop_signals.requested()) {
     const auto now = std::chrono::steady_clock::now();
     const double t = std::chrono::duration<double>(now - start).count();
     if (now >= next) {
@@ -254,7 +255,7 @@ int main(int argc, char** argv) {
       s.t_s = t;
       alive = readProc(o.pid, s);
       if (!alive) break;
-      if (listener.latest) fillFromStatus(*listener.latest, s);
+      if (const auto latest = listener.latest()) fillFromStatus(*latest, s);
       samples.push_back(s);
       csv << s.t_s << "," << s.rss_kb << "," << s.fds << "," << s.threads << "," << s.received << ","
           << s.processed << "," << s.dropped << "," << s.rejected << "," << s.input_fps << ","
@@ -263,7 +264,7 @@ int main(int argc, char** argv) {
       next += std::chrono::microseconds(static_cast<long long>(o.period_s * 1e6));
     }
     if (t >= o.duration_s) break;
-    lcm.handleTimeout(100);
+    bus->handle(std::chrono::milliseconds(100));
   }
   if (!o.svg.empty()) writeSvg(o.svg, samples);
 
@@ -281,7 +282,7 @@ int main(int argc, char** argv) {
   }
   std::ostringstream report;
   bool ok = true;
-  if (!listener.latest) {
+  if (!listener.latest()) {
     std::cerr << "findmug-soak-sampler: no status message on " << o.channel << " in " << o.duration_s
               << " s\n";
     return 2;
@@ -299,7 +300,7 @@ int main(int argc, char** argv) {
          << "latency p95 (10 s windows) max " << p95_max << " ms; last p50 " << last.lat_p50_ms
          << " ms, p95 " << last.lat_p95_ms << " ms\n"
          << "daemon " << (alive ? "alive" : "GONE") << " at the end; status decode errors "
-         << listener.errors << "\n";
+         << listener.rejected() << "\n";
   auto check = [&](bool good, const std::string& what) {
     if (!good) {
       ok = false;
@@ -307,7 +308,7 @@ int main(int argc, char** argv) {
     }
   };
   check(alive, "the daemon exited during the soak");
-  check(listener.errors == 0, "undecodable status messages");
+  check(listener.rejected() == 0, "undecodable status messages");
   if (o.max_rss_growth_mb) check(growth_mb <= *o.max_rss_growth_mb, "RSS trend above the bound");
   if (o.max_fd_growth) check(t.empty() || fd_hi - fd_lo <= *o.max_fd_growth, "fd count not flat");
   if (o.max_thread_growth) {

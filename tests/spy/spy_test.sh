@@ -15,18 +15,10 @@ set -euo pipefail
 build=$(cd "${1:?build dir}" && pwd)
 source_dir=$(cd "${2:?source dir}" && pwd)
 
-skip() {
-  if [[ "${CI:-}" == "true" ]]; then
-    echo "spy test: FAIL under CI=true: $*" >&2
-    exit 1
-  fi
-  echo "spy test: SKIPPED: $*"
-  exit 77
-}
-[[ $(id -u) -eq 0 ]] || skip "needs root (unshare --net)"
-for tool in unshare ip Xvfb java lcm-logplayer; do
-  command -v "$tool" >/dev/null || skip "$tool not installed"
-done
+SKIP_NAME="spy test"
+source "$source_dir/tests/support/skip.sh"
+need_root "unshare --net"
+need_tools unshare ip Xvfb java lcm-logplayer
 classpath=${SPY_TEST_CLASSPATH_OVERRIDE:-$("$build/clients/findmug-spy" --print-classpath)} || skip "findmug-spy has no class path"
 
 work=$(mktemp -d /tmp/findmug-spy-test.XXXXXX)

@@ -351,6 +351,36 @@ TEST(ForestFile, SaveLoadRoundTripGivesIdenticalPredictions) {
   EXPECT_EQ(readBytes(dir.str("again.fmf")), readBytes(path));
 }
 
+// The internal format header (src/forest_format.hpp) is what save() writes:
+// serialize() gives the file's bytes, which start with the magic and version
+// and end with the FNV-1a 64 of the rest; id() is idFromChecksum of it.
+TEST(ForestFile, FileIsSerializeEndingInItsChecksumAndTheIdComesFromIt) {
+  const RandomForest forest = RandomForest::train(makeBlobs(20, 12), ForestParams{});
+  TempDir dir;
+  const std::string path = dir.str("model.fmf");
+  forest.save(path);
+  const std::vector<std::uint8_t> bytes = readBytes(path);
+  EXPECT_EQ(forest_format::serialize(forest), bytes);
+  ASSERT_GT(bytes.size(), sizeof forest_format::kMagic + 4 + forest_format::kChecksumSize);
+  EXPECT_EQ(std::memcmp(bytes.data(), forest_format::kMagic, sizeof forest_format::kMagic), 0);
+  std::uint32_t version = 0;
+  for (int i = 0; i < 4; ++i)
+    version |= static_cast<std::uint32_t>(bytes[sizeof forest_format::kMagic + i]) << (8 * i);
+  EXPECT_EQ(version, forest_format::kFormatVersion);
+  const std::size_t body = bytes.size() - forest_format::kChecksumSize;
+  std::uint64_t stored = 0;
+  for (std::size_t i = 0; i < forest_format::kChecksumSize; ++i)
+    stored |= static_cast<std::uint64_t>(bytes[body + i]) << (8 * i);
+  EXPECT_EQ(stored, forest_format::fnv1a64(bytes.data(), body));
+  EXPECT_EQ(forest.id(), forest_format::idFromChecksum(stored));
+  EXPECT_EQ(RandomForest::load(path).id(), forest.id());
+  // FNV-1a 64 of nothing and of "a" (published test vectors).
+  EXPECT_EQ(forest_format::fnv1a64(nullptr, 0), 0xcbf29ce484222325ULL);
+  const std::uint8_t a = 'a';
+  EXPECT_EQ(forest_format::fnv1a64(&a, 1), 0xaf63dc4c8601ec8cULL);
+  EXPECT_EQ(forest_format::idFromChecksum(0x0123456789abcdefULL), "01234567");
+}
+
 TEST(ForestFile, ExtractionSettingsRoundTripAndChangeTheId) {
   RandomForest forest = RandomForest::train(makeBlobs(20, 3), ForestParams{});
   const std::string bare_id = forest.id();

@@ -15,7 +15,6 @@
 #include <algorithm>
 #include <atomic>
 #include <cmath>
-#include <csignal>
 #include <iostream>
 #include <memory>
 #include <optional>
@@ -24,12 +23,10 @@
 #include "findmug/error.hpp"
 #include "findmug/io/frame_source.hpp"
 #include "findmug_cli.hpp"
+#include "findmug_signals.hpp"
 #include "oni_writer.hpp"
 
 namespace {
-
-std::atomic<bool> g_interrupted{false};
-void onSignal(int) { g_interrupted = true; }
 
 int run(int argc, char** argv) {
   using namespace findmug;
@@ -61,13 +58,12 @@ int run(int argc, char** argv) {
   options.color = oni::parseColorCodec(color_codec);
   options.nominal_fps = std::max(1, std::min(120, static_cast<int>(std::lround(rate))));
 
+  cli::StopSignals stop_signals;  // before the source starts threads
   auto source = io::makeSource(source_spec);
-  std::signal(SIGINT, onSignal);
-  std::signal(SIGTERM, onSignal);
   std::unique_ptr<oni::OniWriter> writer;
   std::uint64_t first_utime = 0, last_stamp = 0;
   long long written = 0;
-  while (!g_interrupted && (count == 0 || written < count)) {
+  while (!stop_signals.requested() && (count == 0 || written < count)) {
     std::optional<RgbdFrame> frame = source->next();
     if (!frame) break;
     if (!writer) {

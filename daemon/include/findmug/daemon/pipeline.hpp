@@ -4,27 +4,31 @@
 //                     the door:          1 thread,   (never full)      reorder ▼
 //                     drop oldest        waits for room downstream
 //                                                   [publish queue] ◀──────────┘
-//                                                     blocking  ─▶ publish (1 thread: owns the LCM
-//                                                                  handle, also sends status)
+//                                                     blocking  ─▶ publish (1 thread: the sinks,
+//                                                                  also sends status)
 //
 //   prepare   Segmenter::prepare: cloud, normals, ground plane
 //   segment   Segmenter::oversegment + classify (supervoxels, features, forest,
 //             MRF, labels, tables): the bottleneck, run on N workers; results
 //             leave in frame order (ReorderBuffer)
-//   publish   label_image_t on FINDMUG_LABELS, tables_t on FINDMUG_TABLES, and
-//             status_t on FINDMUG_STATUS every daemon.status_period_s
+//   publish   hands each result, in frame order, to the sinks registered on
+//             the pipeline (result_sinks.hpp): the TableMapSink (the map
+//             update rule), then the LcmPublisherSink (label_image_t on
+//             FINDMUG_LABELS, tables_t on FINDMUG_TABLES, the map on
+//             FINDMUG_TABLE_MAP), then any added with addSink(); and, every
+//             daemon.status_period_s, status_t on FINDMUG_STATUS, built by
+//             StatusBuilder (status_builder.hpp) from statusSnapshot()
 //
 // Map frame (pose_input.hpp): when robot poses arrive on FINDMUG_ROBOT_POSE,
 // the publish stage looks up the pose closest in time to each frame (within
 // daemon.pose_max_age_s). With one, the frame's tables_t carries it and the
-// map-frame copies of every table, and — when the frame was labelled: it had
-// a ground plane and at least one pixel got a label — the frame's tables
-// update the persistent TableMap;
-// after each such update the map's confirmed tables go out on
-// FINDMUG_TABLE_MAP (tables_t, content CONTENT_MAP, ids stable). The map is
-// touched by the publish thread only, in frame order, as TableMap::update
-// requires. Table diagnostics (why a cluster was dropped) and map changes
-// (created / confirmed / forgotten) are logged at debug level.
+// map-frame copies of every table, and the TableMapSink decides whether the
+// frame updates the persistent TableMap (result_sinks.hpp); after each update
+// the map's confirmed tables go out on FINDMUG_TABLE_MAP (tables_t, content
+// CONTENT_MAP, ids stable). The map is touched by the publish thread only, in
+// frame order, as TableMap::update requires. Table diagnostics (why a cluster
+// was dropped) and map changes (created / confirmed / forgotten) are logged
+// at debug level.
 //
 // Frames are perishable, results are not. Frames are dropped at the door:
 // the prepare stage takes a frame only when the segment queue has room, so
@@ -43,8 +47,10 @@
 // In ExecutionMode::Sequential every submit() runs all stages on the
 // caller's thread and returns after publishing, deterministically.
 //
-// Thread use of LCM: the output handle is used only by the publish stage's
-// thread (and by stop(), after that thread has been joined).
+// The output bus (an io::LcmBus on daemon.lcm_url, or PipelineHooks::output_bus)
+// is only published on (Bus::publish is thread-safe: the publish thread, and
+// the status from the sequential caller or stop()); nobody handles it. The
+// pose input's bus is owned by the pose thread.
 #pragma once
 
 #include <atomic>
@@ -59,17 +65,15 @@
 #include "findmug/config.hpp"
 #include "findmug/daemon/daemon_config.hpp"
 #include "findmug/daemon/pose_input.hpp"
+#include "findmug/daemon/result_sinks.hpp"
 #include "findmug/daemon/service.hpp"
 #include "findmug/daemon/stage.hpp"
+#include "findmug/daemon/status_snapshot.hpp"
 #include "findmug/forest.hpp"
 #include "findmug/frame.hpp"
+#include "findmug/io/bus.hpp"
 #include "findmug/segmenter.hpp"
 #include "findmug/table_map.hpp"
-#include "findmug_lcm/status_t.hpp"
-
-namespace lcm {
-class LCM;
-}
 
 namespace findmug::io {
 class FrameSource;
@@ -81,26 +85,19 @@ struct PipelineHooks {
   // Called by a segment worker before it starts on a frame (tests use it to
   // make the bottleneck artificially slow or to hold it).
   std::function<void(const RgbdFrame&)> before_segment;
-};
-
-struct PipelineCounters {
-  std::uint64_t received = 0;   // submitted frames
-  std::uint64_t processed = 0;  // published label images
-  std::uint64_t dropped = 0;   // evicted from a full queue / discarded at shutdown (+ source drops)
-  std::uint64_t dropped_at_door = 0;      // of those: before any work (pipeline entry, source)
-  std::uint64_t dropped_in_pipeline = 0;  // after some work (an internal queue was full)
-  std::uint64_t dropped_at_shutdown = 0;  // queued or in flight at stop()
-  std::uint64_t rejected = 0;  // failed in a stage (+ bad input the source skipped,
-                               // + bad robot pose messages)
-  std::uint64_t pending = 0;   // inside the pipeline now
+  // Publish on this bus instead of opening daemon.lcm_url (tests: an
+  // io::MemoryBus, or an io::FaultyBus around one).
+  std::shared_ptr<io::Bus> output_bus;
+  // Listen for robot poses on this bus instead of daemon.pose_url.
+  std::shared_ptr<io::Bus> pose_bus;
 };
 
 class Pipeline {
  public:
   using Clock = std::chrono::steady_clock;
 
-  // Opens the output LCM handle (effectiveLcmUrl) and, when effectivePoseUrl
-  // gives one, the pose input (its own handle and thread); throws
+  // Opens the output bus (effectiveLcmUrl) and, when effectivePoseUrl
+  // gives one, the pose input (its own bus and thread); throws
   // findmug::Error naming the key when either cannot be opened. `forest`
   // must be trained; `model_id` goes into status_t.
   Pipeline(const SegmenterConfig& segmenter_config, const DaemonConfig& daemon_config,
@@ -113,6 +110,10 @@ class Pipeline {
   // The source whose description, state and counters go into status_t
   // (not owned; must outlive the pipeline or be detached with nullptr).
   void attachSource(const io::FrameSource* source);
+
+  // Adds a sink after the built-in ones (before start()); it sees every
+  // published frame on the publish thread.
+  void addSink(std::shared_ptr<ResultSink> sink);
 
   void start();
   // Threaded: never blocks (drop-oldest). Sequential: returns after publishing.
@@ -135,19 +136,22 @@ class Pipeline {
   int processingThreads() const;
   // Drain: finish every queued frame; Discard: drop queued frames and wait
   // for those in flight at most daemon.shutdown_grace_s (the rest are
-  // abandoned, counted as dropped). Then publishes a final status and closes
-  // the LCM handle. Idempotent.
+  // abandoned, counted as dropped). Then publishes a final status and
+  // releases the output bus (closing an LcmBus flushes a file:// log). Idempotent.
   void stop(StopMode mode);
 
   PipelineCounters counters() const;
   ProgressSnapshot progress() const;  // source_heartbeat left for the caller
-  findmug_lcm::status_t makeStatus() const;
+  // The figures status_t reports (StatusBuilder::build / makeStatus turn them into one).
+  StatusSnapshot statusSnapshot() const;
   const std::string& modelId() const { return model_id_; }
   int workers() const { return workers_; }
   // The pose input, or nullptr when there is none (see effectivePoseUrl).
   const PoseInput* poseInput() const { return pose_input_.get(); }
   // Tables in the map now, tentative ones included (thread-safe copy).
   std::vector<MappedTable> mappedTables() const;
+  // Publishes refused by the output bus (frames' messages and status).
+  std::uint64_t publishFailures() const { return publisher_->publishFailures(); }
 
  private:
   struct FrameJob;
@@ -155,31 +159,27 @@ class Pipeline {
   struct ResultJob;
   struct Published {};
 
-  void publishResult(ResultJob& job);
-  // Merges a labelled frame's tables into the map; fills one entry per table.
-  // False (error recorded) when the map refused the update.
-  bool updateTableMap(const LabelledFrame& labelled, const io::RobotPose& pose,
-                      std::vector<io::TableMapInfo>* map_info);
-  void publishTableMap(const RgbdFrame& frame, const io::RobotPose& pose);
+  // The stages' work, one frame each (the constructor wires them into Stages).
+  PreparedJob prepareFrame(FrameJob& job);   // validateFrame + Segmenter::prepare
+  ResultJob segmentFrame(PreparedJob& job);  // Segmenter::oversegment + classify
+  void publishResult(ResultJob& job);        // pose lookup, then every sink
   void publishStatus();
   void recordError(const std::string& message);
 
   DaemonConfig daemon_config_;
-  std::string labels_channel_, tables_channel_, status_channel_, table_map_channel_;
   Segmenter segmenter_;
   std::string model_id_;
   ExecutionMode mode_;
   PipelineHooks hooks_;
   int workers_;
-  std::unique_ptr<lcm::LCM> lcm_;
+  std::shared_ptr<TableMapSink> table_map_sink_;
+  std::shared_ptr<LcmPublisherSink> publisher_;
+  std::vector<std::shared_ptr<ResultSink>> sinks_;  // in the order they see a result
   std::unique_ptr<PoseInput> pose_input_;  // nullptr: no pose input
   std::uint64_t pose_max_age_us_ = 0;
-  mutable std::mutex map_mutex_;  // guards table_map_ (written by the publish thread only)
-  TableMap table_map_;
   Clock::time_point started_;
   Clock::time_point last_sequential_status_;
   std::mutex sequential_status_mutex_;  // guards last_sequential_status_
-  std::mutex lcm_mutex_;                // guards lcm_ (publishes may come from two threads)
   std::atomic<const io::FrameSource*> source_{nullptr};
 
   std::atomic<std::uint64_t> received_{0}, processed_{0}, abandoned_{0};

@@ -5,10 +5,11 @@
 // robot's localisation as findmug_lcm::robot_pose_t on FINDMUG_ROBOT_POSE[_suffix]
 // (see lcmtypes/robot_pose_t.lcm); findmugd only listens, it never needs one.
 //
-//   PoseInput    one thread owning its own LCM handle (daemon.pose_url),
-//                subscribed to the pose channel. Each message is decoded and
-//                checked (io::decodeRobotPose); a bad one is reported through
-//                the error callback, counted as rejected and skipped.
+//   PoseInput    an io::Subscriber<RobotPose> on its own bus (an LcmBus on
+//                daemon.pose_url, or one handed in by a test), whose receive
+//                thread owns that bus. Each message is decoded and checked
+//                (io::decodeRobotPose); a bad one is reported through the
+//                error callback, counted as rejected and skipped.
 //   PoseHistory  the poses of the last daemon.pose_history_s seconds, in time
 //                order. For a frame the pipeline asks for the pose closest in
 //                time to the frame's utime and takes it only when it is at
@@ -31,12 +32,9 @@
 #include <string>
 #include <thread>
 
-#include "findmug/io/lcm_codec.hpp"
-
-namespace lcm {
-class LCM;
-class ReceiveBuffer;
-}  // namespace lcm
+#include "findmug/io/bus.hpp"
+#include "findmug/io/messages.hpp"
+#include "findmug/io/subscriber.hpp"
 
 namespace findmug::daemon {
 
@@ -73,6 +71,9 @@ class PoseInput {
   // daemon.pose_url when the provider cannot be opened. `on_error` receives
   // one line per rejected message or provider failure (default: spdlog warning).
   PoseInput(std::string url, std::string channel, double history_s, OnError on_error = {});
+  // Listens on `bus` instead (tests: an io::MemoryBus); the pose thread owns it.
+  PoseInput(std::shared_ptr<io::Bus> bus, std::string channel, double history_s,
+            OnError on_error = {});
   ~PoseInput();
   PoseInput(const PoseInput&) = delete;
   PoseInput& operator=(const PoseInput&) = delete;
@@ -81,26 +82,21 @@ class PoseInput {
   void stop();
 
   const PoseHistory& history() const { return history_; }
-  std::uint64_t received() const { return received_.load(); }  // accepted poses
-  std::uint64_t rejected() const { return rejected_.load(); }  // bad messages skipped
+  std::uint64_t received() const { return subscriber_->accepted(); }  // accepted poses
+  std::uint64_t rejected() const { return subscriber_->rejected(); }  // bad messages skipped
   // The receive loop has ended: end of a replayed log, provider failure, or stop().
-  bool finished() const { return finished_.load(); }
+  bool finished() const { return subscriber_->finished(); }
   const std::string& url() const { return url_; }
   const std::string& channel() const { return channel_; }
 
  private:
-  void run();
-  void onMessage(const lcm::ReceiveBuffer* buffer, const std::string& channel);
   void report(const std::string& what);
 
   std::string url_, channel_;
-  bool replaying_log_ = false;
   OnError on_error_;
   PoseHistory history_;
-  std::unique_ptr<lcm::LCM> lcm_;
-  std::thread thread_;
-  std::atomic<bool> stop_requested_{false}, finished_{false};
-  std::atomic<std::uint64_t> received_{0}, rejected_{0};
+  std::shared_ptr<io::Bus> bus_;
+  std::unique_ptr<io::Subscriber<io::RobotPose>> subscriber_;
 };
 
 }  // namespace findmug::daemon

@@ -19,6 +19,7 @@
 #include <vector>
 
 #include "findmug/frame.hpp"
+#include "findmug/io/messages.hpp"
 #include "findmug/label_image.hpp"
 #include "findmug/tables.hpp"
 #include "findmug_lcm/label_image_t.hpp"
@@ -83,14 +84,7 @@ findmug_lcm::rgbd_frame_t encodeRgbdFrame(const RgbdFrame& frame,
 RgbdFrame decodeRgbdFrame(const findmug_lcm::rgbd_frame_t& message, std::string_view channel);
 RgbdFrame decodeRgbdFrame(const void* data, std::size_t size, std::string_view channel);
 
-// ---- label images -------------------------------------------------------------
-
-struct LabelImageMessage {
-  LabelImage image;         // confidence empty when the message had none
-  std::uint64_t utime = 0;  // source frame's utime
-  std::int64_t seq = 0;     // source frame's seq
-  std::int64_t latency_us = 0;
-};
+// ---- label images (LabelImageMessage: messages.hpp) ----------------------------
 
 // Labels must be < kNumLabels or kVoidLabel; confidence (if given and
 // `with_confidence`) in [0, 1], quantised to 0..255.
@@ -102,46 +96,7 @@ LabelImageMessage decodeLabelImage(const findmug_lcm::label_image_t& message,
 LabelImageMessage decodeLabelImage(const void* data, std::size_t size, std::string_view channel);
 
 // ---- tables ---------------------------------------------------------------------
-
-// The robot base's pose in the map (2-D).
-struct RobotPose {
-  std::uint64_t utime = 0;
-  double x = 0.0, y = 0.0, yaw = 0.0;
-};
-
-// A base-frame point in the map frame: R(yaw) * p + (x, y).
-Eigen::Vector2d toMapFrame(const RobotPose& pose, const Eigen::Vector2d& base_xy);
-
-// Map-frame copies of one table (tables_t with has_map_pose).
-struct MapFrameTable {
-  Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
-  Eigen::Vector2d center = Eigen::Vector2d::Zero();  // oriented box centre
-  std::vector<Eigen::Vector2d> hull;
-  std::vector<SearchPosition> search_positions;  // xy, yaw in the map frame
-};
-
-// What a tables_t holds (tables_t.content): one frame's detections
-// (FINDMUG_TABLES) or the confirmed tables of the persistent table map
-// (FINDMUG_TABLE_MAP).
-enum class TablesContent : std::int8_t { Frame = 0, Map = 1 };
-
-// A table's entry in the daemon's table map (table_t.map_id/confirmed/sightings).
-struct TableMapInfo {
-  int map_id = 0;  // stable id, 1, 2, ...; 0 = not in the map
-  bool confirmed = false;
-  int sightings = 0;
-};
-
-struct TablesMessage {
-  std::uint64_t utime = 0;  // source frame's utime
-  std::int64_t seq = 0;
-  TablesContent content = TablesContent::Frame;
-  std::vector<TableCluster> tables;       // robot base frame
-  std::optional<RobotPose> map_pose;      // when the pose was known
-  std::vector<MapFrameTable> map_tables;  // one per table when map_pose, else empty
-  // One per table, or empty (= no table is in the map). Always filled by the decoder.
-  std::vector<TableMapInfo> map_info;
-};
+// (RobotPose, TablesMessage & co.: messages.hpp)
 
 // Fills the map_ fields from `message.map_pose` when set (map_tables is
 // ignored). Throws findmug::Error when map_info is neither empty nor one per

@@ -1,7 +1,9 @@
 // findmug/io/lcm_source.hpp — frames from rgbd_frame_t messages on an LCM channel.
 //
-// The source owns its LCM handle and a thread that runs handleTimeout() on
-// it; next() takes frames from a small queue the thread fills.
+// The source owns its bus (an LcmBus on the URL, or one handed in: tests use an
+// io::MemoryBus) and a ReceiveThread (bus.hpp), the bus's owner thread, that
+// handles it every 100 ms; next() takes frames from a small queue that thread
+// fills. (Not a Subscriber<T>: frames are decoded by next(), not on arrival.)
 //   * live URLs (udpm://, memq://): when the queue is full the oldest frame is
 //     dropped (stats().frames_dropped): the consumer always sees fresh data;
 //   * file:// URLs (replaying a log): the thread waits for room instead, so no
@@ -24,12 +26,8 @@
 #include <thread>
 #include <vector>
 
+#include "findmug/io/bus.hpp"
 #include "findmug/io/frame_source.hpp"
-
-namespace lcm {
-class LCM;
-class ReceiveBuffer;
-}  // namespace lcm
 
 namespace findmug::io {
 
@@ -39,6 +37,8 @@ class LcmFrameSource : public FrameSourceBase {
 
   // Throws findmug::Error when the URL cannot be opened.
   LcmFrameSource(std::string channel, std::string url, SourceOptions options);
+  // Listens on `bus` (its replaysLog() chooses the log behaviour above).
+  LcmFrameSource(std::string channel, std::shared_ptr<Bus> bus, SourceOptions options);
   ~LcmFrameSource() override;
   LcmFrameSource(const LcmFrameSource&) = delete;
   LcmFrameSource& operator=(const LcmFrameSource&) = delete;
@@ -46,24 +46,22 @@ class LcmFrameSource : public FrameSourceBase {
   std::optional<RgbdFrame> next() override;
   std::string describe() const override { return description_; }
 
-  // The handle the source listens on. memq:// delivers only within one
+  // The bus the source listens on. memq:// delivers only within one LCM
   // handle, so in-process publishers (tests, an embedded grabber) publish here.
-  // lcm::LCM::publish is thread-safe.
-  lcm::LCM& lcm() { return *lcm_; }
-
-  // Message handler, called on the source's thread (public for LCM's subscribe).
-  void onMessage(const lcm::ReceiveBuffer* buffer, const std::string& channel);
+  // Bus::publish is thread-safe.
+  Bus& bus() { return *bus_; }
 
  private:
   void onStop() override;
-  void run();
+  void onMessage(const std::string& channel, const std::uint8_t* bytes, std::size_t size);
+  void afterWait();
+  void onEnd(HandleResult how);
 
   std::string channel_;
-  std::string url_;
   SourceOptions options_;
   bool replaying_log_ = false;
   std::string description_;
-  std::unique_ptr<lcm::LCM> lcm_;
+  std::shared_ptr<Bus> bus_;
 
   std::mutex queue_mutex_;
   std::condition_variable queue_changed_;
@@ -76,7 +74,7 @@ class LcmFrameSource : public FrameSourceBase {
   std::atomic<Clock::time_point> last_frame_{Clock::now()};  // last good frame received
   bool finished_ = false;  // thread ended (end of log / fatal LCM error)
   bool stopping_ = false;
-  std::thread thread_;
+  ReceiveThread receiver_;  // last member: stopped before the rest goes
 };
 
 }  // namespace findmug::io

@@ -8,6 +8,8 @@
 #include <numeric>
 #include <sstream>
 
+#include "findmug_json.hpp"
+
 namespace findmug::replay {
 
 namespace {
@@ -25,31 +27,13 @@ std::string fixed(double v, int digits = 1) {
   return s.str();
 }
 
-std::string jsonString(const std::string& text) {
-  std::string out = "\"";
-  for (char c : text) {
-    switch (c) {
-      case '"': out += "\\\""; break;
-      case '\\': out += "\\\\"; break;
-      case '\n': out += "\\n"; break;
-      case '\t': out += "\\t"; break;
-      default:
-        if (static_cast<unsigned char>(c) < 0x20) {
-          std::ostringstream hex;
-          hex << "\\u" << std::hex << std::setw(4) << std::setfill('0') << static_cast<int>(c);
-          out += hex.str();
-        } else {
-          out += c;
-        }
-    }
-  }
-  return out + "\"";
-}
+using cli::jsonNumber;
+using cli::jsonString;
 
 void jsonPercentiles(std::ostream& out, const Percentiles& p) {
-  out << "{\"count\": " << p.count << ", \"mean\": " << fixed(p.mean, 2)
-      << ", \"p50\": " << fixed(p.p50, 2) << ", \"p90\": " << fixed(p.p90, 2)
-      << ", \"p99\": " << fixed(p.p99, 2) << ", \"max\": " << fixed(p.max, 2) << "}";
+  out << "{\"count\": " << p.count << ", \"mean\": " << jsonNumber(p.mean, 2)
+      << ", \"p50\": " << jsonNumber(p.p50, 2) << ", \"p90\": " << jsonNumber(p.p90, 2)
+      << ", \"p99\": " << jsonNumber(p.p99, 2) << ", \"max\": " << jsonNumber(p.max, 2) << "}";
 }
 
 }  // namespace
@@ -275,9 +259,9 @@ void writeJson(std::ostream& out, const std::string& name, const Report& r) {
       << ",\n  \"labels_received\": " << r.labels_received
       << ",\n  \"frames_without_label\": " << r.dropped_by_seq_gap
       << ",\n  \"labels_all_void\": " << r.labels_all_void
-      << ",\n  \"input_fps\": " << fixed(r.input_fps, 3)
-      << ",\n  \"output_fps\": " << fixed(r.output_fps, 3) << ",\n  \"span_s\": "
-      << fixed(r.span_s, 3) << ",\n  \"latency_ms\": ";
+      << ",\n  \"input_fps\": " << jsonNumber(r.input_fps, 3)
+      << ",\n  \"output_fps\": " << jsonNumber(r.output_fps, 3)
+      << ",\n  \"span_s\": " << jsonNumber(r.span_s, 3) << ",\n  \"latency_ms\": ";
   jsonPercentiles(out, r.latency_ms);
   out << ",\n  \"daemon_latency_ms\": ";
   jsonPercentiles(out, r.daemon_latency_ms);
@@ -294,8 +278,9 @@ void writeJson(std::ostream& out, const std::string& name, const Report& r) {
     for (std::size_t i = 0; i < s.stages.size(); ++i) {
       const auto& st = s.stages[i];
       out << (i ? ", " : "") << "{\"name\": " << jsonString(st.name)
-          << ", \"p50_ms\": " << fixed(st.p50_ms, 2) << ", \"p95_ms\": " << fixed(st.p95_ms, 2)
-          << ", \"max_ms\": " << fixed(st.max_ms, 2) << "}";
+          << ", \"p50_ms\": " << jsonNumber(st.p50_ms, 2)
+          << ", \"p95_ms\": " << jsonNumber(st.p95_ms, 2)
+          << ", \"max_ms\": " << jsonNumber(st.max_ms, 2) << "}";
     }
     out << "]}";
   }

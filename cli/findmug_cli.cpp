@@ -3,6 +3,7 @@
 #include <iostream>
 
 #include "findmug/version.hpp"
+#include "findmug/numbers.hpp"
 
 namespace findmug::cli {
 
@@ -60,15 +61,9 @@ CLI::Validator numberAtLeast(double min, bool inclusive) {
   const std::string rule = std::string(inclusive ? ">= " : "> ") + (min == 0 ? "0" : "1");
   return CLI::Validator(
       [min, inclusive, rule](std::string& text) -> std::string {
-        double value = 0;
-        try {
-          std::size_t used = 0;
-          value = std::stod(text, &used);
-          if (used != text.size()) return "must be a number " + rule + ", got '" + text + "'";
-        } catch (const std::exception&) {
-          return "must be a number " + rule + ", got '" + text + "'";
-        }
-        if (inclusive ? value >= min : value > min) return {};
+        const auto value = parseNumber(text);
+        if (!value) return "must be a number " + rule + ", got '" + text + "'";
+        if (inclusive ? *value >= min : *value > min) return {};
         return "must be " + rule + ", got '" + text + "'";
       },
       "NUMBER " + rule);

@@ -28,12 +28,11 @@
 #include <atomic>
 #include <cerrno>
 #include <chrono>
-#include <csignal>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
-#include <lcm/lcm-cpp.hpp>
+#include <lcm/lcm-cpp.hpp>  // lcm::LogFile for --inspect-log and --log
 #include <optional>
 #include <sstream>
 #include <string>
@@ -41,10 +40,12 @@
 #include <vector>
 
 #include "findmug/error.hpp"
+#include "findmug/io/bus.hpp"
 #include "findmug/io/channels.hpp"
 #include "findmug/io/lcm_codec.hpp"
 #include "findmug/labels.hpp"
 #include "findmug_cli.hpp"
+#include "findmug_signals.hpp"
 #include "replay_check.hpp"
 
 namespace {
@@ -52,8 +53,9 @@ namespace {
 using findmug::Error;
 using namespace findmug::replay;
 
-std::atomic<bool> g_stop{false};
-void onSignal(int) { g_stop = true; }
+// Set by main() to its StopSignals (made before anything starts a thread).
+const findmug::cli::StopSignals* g_stop_signals = nullptr;
+bool stopRequested() { return g_stop_signals != nullptr && g_stop_signals->requested(); }
 
 struct Options {
   std::string url;
@@ -176,25 +178,33 @@ class Probe {
         rgbd_channel_(findmug::io::channelName(findmug::io::kRgbdChannel, o.suffix)),
         labels_channel_(findmug::io::channelName(findmug::io::kLabelsChannel, o.suffix)),
         status_channel_(findmug::io::channelName(findmug::io::kStatusChannel, o.suffix)),
-        lcm_(o.url) {
-    if (!lcm_.good()) throw Error("cannot open LCM URL '" + o.url + "'");
+        bus_(o.url, "--url") {
     if (!o.log.empty()) {
       for (const FrameInfo& f : readLog(o.log, rgbd_channel_)) check_.addReplayedFrame(f);
       if (check_.framesReplayed() == 0) throw Error(o.log + ": no frames on " + rgbd_channel_);
       expected_ = check_.framesReplayed();
     }
-    lcm_.subscribe(rgbd_channel_, &Probe::onFrame, this);
-    lcm_.subscribe(labels_channel_, &Probe::onLabels, this);
-    lcm_.subscribe(status_channel_, &Probe::onStatus, this);
+    // This thread owns the bus; the handlers run inside handle().
+    auto handler = [this](void (Probe::*on)(const std::uint8_t*, std::size_t, const std::string&,
+                                            std::int64_t)) {
+      return [this, on](const std::string& ch, const std::uint8_t* d, std::size_t n,
+                        std::int64_t recv_utime) { (this->*on)(d, n, ch, recv_utime); };
+    };
+    bus_.subscribeTimed(rgbd_channel_, handler(&Probe::onFrame));
+    bus_.subscribeTimed(labels_channel_, handler(&Probe::onLabels));
+    bus_.subscribeTimed(status_channel_, handler(&Probe::onStatus));
   }
 
   int run() {
     const auto deadline =
         std::chrono::steady_clock::now() + std::chrono::duration<double>(options_.timeout_s);
     bool timed_out = false;
-    while (!g_stop) {
-      // A signal interrupts the wait (EINTR): the loop condition sees g_stop.
-      if (lcm_.handleTimeout(100) < 0 && errno != EINTR) throw Error("LCM receive failed");
+    while (!stopRequested()) {
+      // handle() returns every 100 ms at the latest: the loop condition sees a stop.
+      const findmug::io::HandleResult rc = bus_.handle(std::chrono::milliseconds(100));
+      if (rc == findmug::io::HandleResult::Failed || rc == findmug::io::HandleResult::EndOfLog) {
+        throw Error("LCM receive failed");
+      }
       if (std::chrono::steady_clock::now() > deadline) {
         timed_out = true;
         break;
@@ -211,10 +221,11 @@ class Probe {
     }
     // The daemon has exited (or we were told to stop): take what is queued.
     for (int quiet_ms = 0; quiet_ms < 500;) {
-      const int rc = lcm_.handleTimeout(100);
-      if (rc < 0 && errno == EINTR) continue;
-      if (rc < 0) break;
-      quiet_ms = rc == 0 ? quiet_ms + 100 : 0;
+      const findmug::io::HandleResult rc = bus_.handle(std::chrono::milliseconds(100));
+      if (rc == findmug::io::HandleResult::Failed || rc == findmug::io::HandleResult::EndOfLog) {
+        break;
+      }
+      quiet_ms = rc == findmug::io::HandleResult::Timeout ? quiet_ms + 100 : 0;
     }
     pollExpectFile();
     if (timed_out) {
@@ -239,36 +250,35 @@ class Probe {
     if (f >> n && n >= 0) expected_ = n;
   }
 
-  void onFrame(const lcm::ReceiveBuffer* buffer, const std::string& channel) {
+  void onFrame(const std::uint8_t* data, std::size_t size, const std::string& channel,
+               std::int64_t recv_utime) {
     try {
-      const auto msg = findmug::io::decodeMessage<findmug_lcm::rgbd_frame_t>(
-          buffer->data, static_cast<std::size_t>(buffer->data_size), channel);
-      check_.frameSeen(frameInfo(msg), buffer->recv_utime, options_.live);
+      const auto msg = findmug::io::decodeMessage<findmug_lcm::rgbd_frame_t>(data, size, channel);
+      check_.frameSeen(frameInfo(msg), recv_utime, options_.live);
     } catch (const Error& e) {
       check_.addViolation(std::string("undecodable frame on the bus: ") + e.what());
     }
   }
 
-  void onLabels(const lcm::ReceiveBuffer* buffer, const std::string& channel) {
+  void onLabels(const std::uint8_t* data, std::size_t size, const std::string& channel,
+                std::int64_t recv_utime) {
     try {
       // Full decode: checks sizes, compression and every label id.
-      const auto labels = findmug::io::decodeLabelImage(
-          buffer->data, static_cast<std::size_t>(buffer->data_size), channel);
+      const auto labels = findmug::io::decodeLabelImage(data, size, channel);
       const auto& ids = labels.image.labels;
       const bool all_void = std::all_of(ids.begin(), ids.end(),
                                         [](std::uint8_t id) { return id == findmug::kVoidLabel; });
       check_.labelReceived(LabelInfo{labels.seq, labels.utime, labels.image.width,
-                                     labels.image.height, buffer->recv_utime, labels.latency_us,
-                                     all_void});
+                                     labels.image.height, recv_utime, labels.latency_us, all_void});
     } catch (const Error& e) {
       check_.addViolation(std::string("label image does not decode: ") + e.what());
     }
   }
 
-  void onStatus(const lcm::ReceiveBuffer* buffer, const std::string& channel) {
+  void onStatus(const std::uint8_t* data, std::size_t size, const std::string& channel,
+                std::int64_t) {
     try {
-      const auto s = findmug::io::decodeMessage<findmug_lcm::status_t>(
-          buffer->data, static_cast<std::size_t>(buffer->data_size), channel);
+      const auto s = findmug::io::decodeMessage<findmug_lcm::status_t>(data, size, channel);
       StatusInfo info;
       info.utime = s.utime;
       info.frames_received = s.frames_received;
@@ -306,7 +316,7 @@ class Probe {
 
   Options options_;
   std::string rgbd_channel_, labels_channel_, status_channel_;
-  lcm::LCM lcm_;
+  findmug::io::LcmBus bus_;  // owned by the thread that runs run()
   ReplayCheck check_;
   std::optional<std::int64_t> expected_;
   bool ready_ = false;
@@ -322,8 +332,8 @@ int main(int argc, char** argv) {
   try {
     checkOptions(options);
     if (!options.inspect_log.empty()) return inspectLog(options);
-    std::signal(SIGTERM, onSignal);
-    std::signal(SIGINT, onSignal);
+    const findmug::cli::StopSignals stop_signals;
+    g_stop_signals = &stop_signals;
     Probe probe(options);
     return probe.run();
   } catch (const Error& e) {

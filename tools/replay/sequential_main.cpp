@@ -12,8 +12,6 @@
 //
 // Stops on SIGTERM/SIGINT or at the end of a finite source, then publishes a
 // final status (source_state STOPPED / END_OF_STREAM) like findmugd.
-#include <pthread.h>
-#include <signal.h>
 #include <spdlog/spdlog.h>
 
 #include <chrono>
@@ -31,17 +29,14 @@
 #include "findmug/error.hpp"
 #include "findmug/io/frame_source.hpp"
 #include "findmug/version.hpp"
+#include "findmug_signals.hpp"
 
 int main(int argc, char** argv) {
   using namespace findmug;
   using namespace findmug::daemon;
 
   // Signals are taken by one thread (sigwait), as in findmugd.
-  sigset_t signals;
-  sigemptyset(&signals);
-  sigaddset(&signals, SIGTERM);
-  sigaddset(&signals, SIGINT);
-  pthread_sigmask(SIG_BLOCK, &signals, nullptr);
+  cli::StopSignals stop_signals;
 
   LoadedConfig loaded;
   try {
@@ -80,15 +75,7 @@ int main(int argc, char** argv) {
     pipeline.publishStatusNow();
     spdlog::info("findmug-sequential: model {}, source {}", model_id, source->describe());
 
-    std::thread signal_thread([&source, &signals] {
-      int signal_number = 0;
-      while (sigwait(&signals, &signal_number) == 0) {
-        if (signal_number == SIGTERM || signal_number == SIGINT) {
-          source->stop();
-          return;
-        }
-      }
-    });
+    const auto stop_registration = stop_signals.onStop([&source] { source->stop(); });
 
     // A reader thread takes frames from the source and hands them over one at
     // a time (it holds at most one while the main thread is busy; the source's
@@ -137,9 +124,6 @@ int main(int argc, char** argv) {
     const io::SourceState state = source->state();
     source->stop();
     pipeline.stop(StopMode::Discard);
-    // Wake the signal thread if the source ended on its own.
-    pthread_kill(signal_thread.native_handle(), SIGTERM);
-    signal_thread.join();
     return state == io::SourceState::Failed ? 1 : 0;
   } catch (const std::exception& e) {
     spdlog::critical("findmug-sequential: {}", e.what());

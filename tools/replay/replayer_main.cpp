@@ -20,27 +20,28 @@
 
 #include <atomic>
 #include <chrono>
-#include <csignal>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
-#include <lcm/lcm-cpp.hpp>
 #include <string>
 #include <thread>
 #include <vector>
 
 #include "findmug/error.hpp"
+#include "findmug/io/bus.hpp"
 #include "findmug/io/channels.hpp"
 #include "findmug/io/frame_source.hpp"
 #include "findmug/io/lcm_codec.hpp"
 #include "findmug_cli.hpp"
+#include "findmug_signals.hpp"
 
 namespace {
 
 using findmug::Error;
 
-std::atomic<bool> g_stop{false};
-void onSignal(int) { g_stop = true; }
+// Set by main() to its StopSignals (made before anything starts a thread).
+const findmug::cli::StopSignals* g_stop_signals = nullptr;
+bool stopRequested() { return g_stop_signals != nullptr && g_stop_signals->requested(); }
 
 void writeCount(const std::string& path, long long count) {
   // Write then rename, so that a reader polling the file never sees it half written.
@@ -110,14 +111,11 @@ int run(int argc, char** argv) {
   source.reset();
   if (frames.empty()) throw Error(source_spec + ": the source delivered no frames");
 
-  lcm::LCM lcm(url);
-  if (!lcm.good()) throw Error("cannot open LCM URL '" + url + "'");
+  io::LcmBus bus(url, "--lcm-url");
   const std::string channel = io::channelName(io::kRgbdChannel, suffix);
   spdlog::info("findmug-replay: {} frames from {}, {} Hz on {} ({})", frames.size(), described,
                rate, channel, url.empty() ? std::string("default URL") : url);
 
-  std::signal(SIGTERM, onSignal);
-  std::signal(SIGINT, onSignal);
   using Clock = std::chrono::steady_clock;
   if (warmup > 0) std::this_thread::sleep_for(std::chrono::duration<double>(warmup));
   const auto period = std::chrono::duration<double>(1.0 / rate);
@@ -125,7 +123,7 @@ int run(int argc, char** argv) {
   const auto end = start + std::chrono::duration<double>(duration);
   long long published = 0, late = 0;
   std::vector<std::uint8_t> bytes;
-  while (!g_stop) {
+  while (!stopRequested()) {
     if (count > 0 && published >= count) break;
     const auto due = start + std::chrono::duration_cast<Clock::duration>(period * published);
     if (duration > 0 && due >= end) break;
@@ -137,7 +135,7 @@ int run(int argc, char** argv) {
     msg.seq = published;
     msg.utime = static_cast<std::int64_t>(io::hostUtimeNow());
     bytes = io::encodeMessage(msg);
-    if (lcm.publish(channel, bytes.data(), static_cast<unsigned int>(bytes.size())) != 0) {
+    if (!bus.publish(channel, bytes.data(), bytes.size())) {
       throw Error("publishing on " + channel + " failed");
     }
     ++published;
@@ -152,6 +150,8 @@ int run(int argc, char** argv) {
 }  // namespace
 
 int main(int argc, char** argv) {
+  const findmug::cli::StopSignals stop_signals;
+  g_stop_signals = &stop_signals;
   try {
     return run(argc, argv);
   } catch (const findmug::Error& e) {

@@ -1,0 +1,58 @@
+// findmug/daemon/status_snapshot.hpp — the pipeline's figures at one instant, in
+// plain types (no generated LCM type): the counters and the snapshot that
+// StatusBuilder (status_builder.hpp) turns into status_t.
+#pragma once
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "findmug/daemon/stats.hpp"
+#include "findmug/io/frame_source.hpp"
+
+namespace findmug::daemon {
+
+struct PipelineCounters {
+  std::uint64_t received = 0;   // submitted frames
+  std::uint64_t processed = 0;  // published label images
+  std::uint64_t dropped = 0;  // evicted from a full queue / discarded at shutdown (+ source drops)
+  std::uint64_t dropped_at_door = 0;      // of those: before any work (pipeline entry, source)
+  std::uint64_t dropped_in_pipeline = 0;  // after some work (an internal queue was full)
+  std::uint64_t dropped_at_shutdown = 0;  // queued or in flight at stop()
+  std::uint64_t rejected = 0;             // failed in a stage (+ bad input the source skipped,
+                                          // + bad robot pose messages)
+  std::uint64_t pending = 0;              // inside the pipeline now
+};
+
+struct StatusSnapshot {
+  struct Queue {
+    std::string name;  // the pipeline stage it feeds
+    std::size_t depth = 0, capacity = 0;
+  };
+  struct Source {
+    std::string description;
+    io::SourceState state = io::SourceState::Running;
+    std::string last_error;
+    std::uint64_t last_error_utime = 0;
+    std::uint64_t reconnects = 0;  // times the source re-opened its device after a loss
+  };
+
+  std::uint64_t utime = 0;     // host clock, microseconds
+  std::int64_t uptime_us = 0;  // since the pipeline was made
+  PipelineCounters counters;
+  double window_s = 0.0;  // daemon.stats_window_s
+  double input_fps = 0.0, output_fps = 0.0;
+  // (name, latency) in report order: pipeline stages, sub-stages, "total".
+  std::vector<std::pair<std::string, LatencySummary>> latencies;
+  std::vector<Queue> queues;
+  std::string model_id;
+  double cpu_budget_cores = 0.0, cpu_used_cores = 0.0;
+  int processing_threads = 0;
+  std::string last_error;  // the pipeline's own
+  std::uint64_t last_error_utime = 0;
+  std::optional<Source> source;  // nullopt: frames submitted in-process
+};
+
+}  // namespace findmug::daemon

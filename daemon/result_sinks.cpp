@@ -1,0 +1,175 @@
+// The table-map and LCM publisher sinks; see result_sinks.hpp.
+#include "findmug/daemon/result_sinks.hpp"
+
+#include <spdlog/spdlog.h>
+
+#include <algorithm>
+
+#include "findmug/daemon/status_builder.hpp"
+#include "findmug/error.hpp"
+#include "findmug/io/lcm_codec.hpp"
+
+namespace findmug::daemon {
+
+std::string frameName(const RgbdFrame& f) {
+  return (f.source.empty() ? std::string("frame") : f.source) + " seq " + std::to_string(f.seq);
+}
+
+// ---- TableMapSink -------------------------------------------------------------------
+
+TableMapSink::TableMapSink(const TableMapConfig& map_config, const TableConfig& tables_config,
+                           bool publish_map, OnError on_error)
+    : publish_map_(publish_map), on_error_(std::move(on_error)), map_(map_config, tables_config) {}
+
+bool TableMapSink::isEvidence(const LabelledFrame& labelled) {
+  return labelled.segmented.prepared.ground.has_value() &&
+         std::any_of(labelled.labels.labels.begin(), labelled.labels.labels.end(),
+                     [](std::uint8_t id) { return id != kVoidLabel; });
+}
+
+void TableMapSink::consume(FrameResult& result) {
+  if (!result.pose || !isEvidence(result.labelled)) return;
+  if (!update(result.labelled, *result.pose, &result.map_info)) return;
+  updates_.fetch_add(1);
+  if (publish_map_) {
+    result.table_map = mapMessage(result.labelled.segmented.prepared.frame, *result.pose);
+  }
+}
+
+bool TableMapSink::update(const LabelledFrame& labelled, const io::RobotPose& pose,
+                          std::vector<io::TableMapInfo>* map_info) {
+  const RgbdFrame& frame = labelled.segmented.prepared.frame;
+  const Pose2D base_in_map{pose.x, pose.y, pose.yaw};
+  std::lock_guard lock(mutex_);
+  TableMapUpdate update;
+  try {
+    update = map_.update(labelled.tables, base_in_map, frame.utime);
+  } catch (const std::exception& e) {
+    // E.g. a source that restarted its clock: the frame is still published,
+    // in the base frame and with its map pose, but the map skips it.
+    if (on_error_) on_error_(frameName(frame) + ": table map not updated: " + e.what());
+    return false;
+  }
+  if (spdlog::should_log(spdlog::level::debug)) {
+    auto ids = [](const std::vector<int>& v) {
+      std::string out;
+      for (int id : v) {
+        if (!out.empty()) out += ',';
+        out += std::to_string(id);
+      }
+      return out.empty() ? std::string("-") : out;
+    };
+    spdlog::debug(
+        "{}: table map at ({:.2f}, {:.2f}, yaw {:.3f}): {} seen -> ids [{}]; created [{}], "
+        "confirmed [{}], forgotten [{}]; {} mapped",
+        frameName(frame), pose.x, pose.y, pose.yaw, labelled.tables.size(),
+        ids(update.assigned_ids), ids(update.created), ids(update.confirmed), ids(update.forgotten),
+        map_.tables().size());
+    for (const std::string& line : update.diagnostics) {
+      spdlog::debug("{}: table map: {}", frameName(frame), line);
+    }
+  }
+  map_info->clear();
+  for (int id : update.assigned_ids) {
+    io::TableMapInfo info;
+    for (const MappedTable& t : map_.tables()) {
+      if (t.table.id == id) info = {id, t.confirmed, t.sightings};
+    }
+    map_info->push_back(info);
+  }
+  return true;
+}
+
+io::TablesMessage TableMapSink::mapMessage(const RgbdFrame& frame,
+                                           const io::RobotPose& pose) const {
+  io::TablesMessage message;
+  message.utime = frame.utime;
+  message.seq = frame.seq;
+  message.content = io::TablesContent::Map;
+  message.map_pose = pose;
+  // The encoder derives the map_ fields from base-frame tables and the pose:
+  // hand it the mapped tables relative to the robot at this pose.
+  const Pose2D map_to_base = inversePose(Pose2D{pose.x, pose.y, pose.yaw});
+  std::lock_guard lock(mutex_);
+  for (const MappedTable& t : map_.tables()) {
+    if (!t.confirmed) continue;
+    message.tables.push_back(transformTable(t.table, map_to_base));
+    message.map_info.push_back({t.table.id, true, t.sightings});
+  }
+  return message;
+}
+
+std::vector<MappedTable> TableMapSink::tables() const {
+  std::lock_guard lock(mutex_);
+  return map_.tables();
+}
+
+// ---- LcmPublisherSink -----------------------------------------------------------------
+
+LcmPublisherSink::LcmPublisherSink(std::shared_ptr<io::Bus> bus, Channels channels,
+                                   bool publish_confidence, bool publish_tables)
+    : bus_(std::move(bus)),
+      channels_(std::move(channels)),
+      publish_confidence_(publish_confidence),
+      publish_tables_(publish_tables) {}
+
+std::shared_ptr<io::Bus> LcmPublisherSink::bus() const {
+  std::lock_guard lock(bus_mutex_);
+  return bus_;
+}
+
+template <class Msg>
+bool LcmPublisherSink::send(const std::string& channel, const Msg& message) {
+  const std::shared_ptr<io::Bus> bus = this->bus();
+  if (bus && io::publishMessage(*bus, channel, message)) return true;
+  failures_.fetch_add(1);
+  return false;
+}
+
+void LcmPublisherSink::consume(FrameResult& result) {
+  const RgbdFrame& frame = result.labelled.segmented.prepared.frame;
+  io::LabelImageMessage labels;
+  labels.image = result.labelled.labels;
+  labels.utime = frame.utime;
+  labels.seq = frame.seq;
+  labels.latency_us = result.latency_us;
+  if (!send(channels_.labels, io::encodeLabelImage(labels, publish_confidence_))) {
+    throw Error("LCM publish on " + channels_.labels + " failed for " + frameName(frame));
+  }
+  if (publish_tables_) {
+    io::TablesMessage tables;
+    tables.utime = frame.utime;
+    tables.seq = frame.seq;
+    tables.tables = result.labelled.tables;
+    tables.map_pose = result.pose;
+    tables.map_info = result.map_info;
+    if (!send(channels_.tables, io::encodeTables(tables))) {
+      throw Error("LCM publish on " + channels_.tables + " failed for " + frameName(frame));
+    }
+  }
+  if (result.table_map) {
+    if (!send(channels_.table_map, io::encodeTables(*result.table_map))) {
+      throw Error("LCM publish on " + channels_.table_map + " failed for " + frameName(frame));
+    }
+  }
+}
+
+bool LcmPublisherSink::publishStatus(const StatusSnapshot& snapshot) {
+  if (!bus()) return false;  // closed: the final status has gone out already
+  if (!send(channels_.status, StatusBuilder::build(snapshot))) {
+    spdlog::warn("LCM publish on {} failed", channels_.status);
+    return false;
+  }
+  return true;
+}
+
+void LcmPublisherSink::close() {
+  std::shared_ptr<io::Bus> released;
+  {
+    std::lock_guard lock(bus_mutex_);
+    released = std::move(bus_);
+  }
+  // `released` goes here (unless a publish still holds it: then after that one).
+}
+
+}  // namespace findmug::daemon

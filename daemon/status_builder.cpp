@@ -1,0 +1,61 @@
+// status_t from a StatusSnapshot; see status_builder.hpp.
+#include "findmug/daemon/status_builder.hpp"
+
+namespace findmug::daemon {
+
+findmug_lcm::status_t StatusBuilder::build(const StatusSnapshot& in) {
+  findmug_lcm::status_t s{};
+  s.utime = static_cast<std::int64_t>(in.utime);
+  s.uptime_us = in.uptime_us;
+  const PipelineCounters& c = in.counters;
+  s.frames_received = static_cast<std::int64_t>(c.received);
+  s.frames_processed = static_cast<std::int64_t>(c.processed);
+  s.frames_dropped = static_cast<std::int64_t>(c.dropped);
+  s.frames_rejected = static_cast<std::int64_t>(c.rejected);
+  s.frames_dropped_at_door = static_cast<std::int64_t>(c.dropped_at_door);
+  s.frames_dropped_in_pipeline = static_cast<std::int64_t>(c.dropped_in_pipeline);
+  s.frames_dropped_at_shutdown = static_cast<std::int64_t>(c.dropped_at_shutdown);
+  s.cpu_budget_cores = static_cast<float>(in.cpu_budget_cores);
+  s.cpu_used_cores = static_cast<float>(in.cpu_used_cores);
+  s.processing_threads = static_cast<std::int32_t>(in.processing_threads);
+  s.window_s = in.window_s;
+  s.input_fps = static_cast<float>(in.input_fps);
+  s.output_fps = static_cast<float>(in.output_fps);
+
+  for (const auto& [name, l] : in.latencies) {
+    s.stage_names.push_back(name);
+    s.latency_p50_us.push_back(static_cast<std::int64_t>(l.p50_ms * 1000.0));
+    s.latency_p95_us.push_back(static_cast<std::int64_t>(l.p95_ms * 1000.0));
+    s.latency_max_us.push_back(static_cast<std::int64_t>(l.max_ms * 1000.0));
+  }
+  s.num_stages = static_cast<std::int32_t>(s.stage_names.size());
+  for (const auto& q : in.queues) {
+    s.queue_names.push_back(q.name);
+    s.queue_depths.push_back(static_cast<std::int32_t>(q.depth));
+    s.queue_capacities.push_back(static_cast<std::int32_t>(q.capacity));
+  }
+  s.num_queues = static_cast<std::int32_t>(s.queue_names.size());
+  s.model_id = in.model_id;
+
+  std::string last_error = in.last_error;
+  std::uint64_t last_error_utime = in.last_error_utime;
+  if (in.source) {
+    s.source = in.source->description;
+    s.source_state = static_cast<std::int8_t>(in.source->state);
+    s.source_state_name = std::string(io::sourceStateName(in.source->state));
+    s.source_reconnects = static_cast<std::int64_t>(in.source->reconnects);
+    if (in.source->last_error_utime > last_error_utime) {
+      last_error = in.source->last_error;
+      last_error_utime = in.source->last_error_utime;
+    }
+  } else {
+    s.source = "(in-process)";
+    s.source_state = static_cast<std::int8_t>(io::SourceState::Running);
+    s.source_state_name = std::string(io::sourceStateName(io::SourceState::Running));
+  }
+  s.last_error = last_error;
+  s.last_error_utime = static_cast<std::int64_t>(last_error_utime);
+  return s;
+}
+
+}  // namespace findmug::daemon

@@ -1,0 +1,304 @@
+// The pipeline's result sinks and status builder (result_sinks.hpp,
+// status_builder.hpp) on their own: the table-map update rule, what the LCM
+// publisher sink puts on a bus (an in-memory one), and status_t from a
+// snapshot. No data, no LCM traffic.
+#include <gtest/gtest.h>
+
+#include <chrono>
+#include <string>
+#include <vector>
+
+#include "findmug/daemon/result_sinks.hpp"
+#include "findmug/daemon/status_builder.hpp"
+#include "findmug/error.hpp"
+#include "findmug/io/bus.hpp"
+#include "findmug/io/lcm_codec.hpp"
+#include "findmug_lcm/status_t.hpp"
+
+namespace findmug::daemon {
+namespace {
+
+using namespace std::chrono_literals;
+
+// A 1.2 m x 0.8 m table top, 0.75 m high, `ahead_m` in front of the robot (base frame).
+TableCluster tableAhead(float ahead_m) {
+  TableCluster t;
+  const float a = 0.6f, b = 0.4f;
+  t.center = Eigen::Vector2f(ahead_m, 0.0f);
+  t.hull = {{ahead_m - a, -b}, {ahead_m + a, -b}, {ahead_m + a, b}, {ahead_m - a, b}};
+  t.major_axis = Eigen::Vector2f(1, 0);
+  t.minor_axis = Eigen::Vector2f(0, 1);
+  t.extents = Eigen::Vector2f(a, b);
+  t.centroid = Eigen::Vector3f(ahead_m, 0.0f, 0.75f);
+  t.top_height = 0.75f;
+  t.point_count = 5000;
+  t.mean_confidence = 0.9f;
+  return t;
+}
+
+// A labelled frame: with a ground plane or not, with a labelled pixel or not.
+LabelledFrame labelledFrame(std::int64_t seq, bool ground, bool labelled_pixel,
+                            std::vector<TableCluster> tables) {
+  LabelledFrame l;
+  RgbdFrame& f = l.segmented.prepared.frame;
+  f.width = 2;
+  f.height = 2;
+  f.seq = seq;
+  f.utime = 1000000 + static_cast<std::uint64_t>(seq) * 100000;
+  f.source = "test";
+  if (ground) l.segmented.prepared.ground = GroundPlane{};
+  l.labels.width = 2;
+  l.labels.height = 2;
+  l.labels.labels.assign(4, kVoidLabel);
+  l.labels.confidence.assign(4, 0.0f);
+  if (labelled_pixel) {
+    l.labels.labels[0] = 1;
+    l.labels.confidence[0] = 0.8f;
+  }
+  l.tables = std::move(tables);
+  return l;
+}
+
+io::RobotPose poseAt(std::uint64_t utime) { return io::RobotPose{utime, 1.0, 2.0, 0.0}; }
+
+TEST(TableMapSink, OnlyAFrameWithAPoseAndLabelsUpdatesTheMap) {
+  std::vector<std::string> errors;
+  TableMapSink sink(TableMapConfig{}, TableConfig{}, true,
+                    [&](const std::string& e) { errors.push_back(e); });
+  const std::vector<TableCluster> one_table = {tableAhead(2.0f)};
+
+  struct Case {
+    bool pose, ground, labelled_pixel;
+  };
+  // No pose; no ground plane; not a single labelled pixel: no evidence, no update.
+  for (const Case c : {Case{false, true, true}, Case{true, false, true}, Case{true, true, false}}) {
+    const LabelledFrame l = labelledFrame(1, c.ground, c.labelled_pixel, one_table);
+    FrameResult r{l, 0, std::nullopt, {}, std::nullopt};
+    if (c.pose) r.pose = poseAt(l.segmented.prepared.frame.utime);
+    sink.consume(r);
+    EXPECT_TRUE(r.map_info.empty());
+    EXPECT_FALSE(r.table_map.has_value());
+  }
+  EXPECT_EQ(sink.updates(), 0u);
+  EXPECT_TRUE(sink.tables().empty());
+  EXPECT_FALSE(TableMapSink::isEvidence(labelledFrame(1, true, false, one_table)));
+  EXPECT_TRUE(TableMapSink::isEvidence(labelledFrame(1, true, true, {})));
+
+  // With both: every frame updates the map; the map is due after each update
+  // and holds the table once it is confirmed (table_map.confirm_sightings = 3).
+  for (std::int64_t seq = 2; seq <= 4; ++seq) {
+    const LabelledFrame l = labelledFrame(seq, true, true, one_table);
+    FrameResult r{l, 0, poseAt(l.segmented.prepared.frame.utime), {}, std::nullopt};
+    sink.consume(r);
+    ASSERT_EQ(r.map_info.size(), 1u);
+    ASSERT_TRUE(r.table_map.has_value());
+    EXPECT_EQ(r.table_map->content, io::TablesContent::Map);
+    EXPECT_EQ(r.table_map->seq, seq);
+    const bool confirmed = seq == 4;
+    EXPECT_EQ(r.map_info[0].confirmed, confirmed);
+    EXPECT_EQ(r.table_map->tables.size(), confirmed ? 1u : 0u);  // confirmed tables only
+  }
+  EXPECT_EQ(sink.updates(), 3u);
+  EXPECT_EQ(sink.tables().size(), 1u);
+  EXPECT_TRUE(errors.empty());
+
+  // A frame older than the last update (a restarted clock): reported, map untouched.
+  const LabelledFrame old = labelledFrame(0, true, true, one_table);
+  FrameResult r{old, 0, poseAt(old.segmented.prepared.frame.utime), {}, std::nullopt};
+  sink.consume(r);
+  EXPECT_EQ(sink.updates(), 3u);
+  EXPECT_FALSE(r.table_map.has_value());
+  ASSERT_EQ(errors.size(), 1u);
+  EXPECT_NE(errors[0].find("test seq 0: table map not updated"), std::string::npos) << errors[0];
+}
+
+TEST(TableMapSink, WithoutPublishingTheMapIsStillUpdated) {
+  TableMapSink sink(TableMapConfig{}, TableConfig{}, false, {});
+  const LabelledFrame l = labelledFrame(1, true, true, {tableAhead(2.0f)});
+  FrameResult r{l, 0, poseAt(l.segmented.prepared.frame.utime), {}, std::nullopt};
+  sink.consume(r);
+  EXPECT_EQ(sink.updates(), 1u);
+  EXPECT_EQ(r.map_info.size(), 1u);
+  EXPECT_FALSE(r.table_map.has_value());
+}
+
+// What arrives on the bus's channels, subscribed once, collected by drain().
+class Collector {
+ public:
+  Collector(io::MemoryBus& bus, const LcmPublisherSink::Channels& ch) : bus_(bus) {
+    bus.subscribe(ch.labels, [this](const std::string& c, const std::uint8_t* d, std::size_t n) {
+      channels.push_back(c);
+      labels.push_back(io::decodeLabelImage(d, n, c));
+    });
+    for (const std::string& name : {ch.tables, ch.table_map}) {
+      bus.subscribe(name, [this](const std::string& c, const std::uint8_t* d, std::size_t n) {
+        channels.push_back(c);
+        tables.push_back(io::decodeTables(d, n, c));
+      });
+    }
+    bus.subscribe(ch.status, [this](const std::string& c, const std::uint8_t*, std::size_t) {
+      channels.push_back(c);
+    });
+  }
+  // Handles everything published so far; returns the channels in arrival order.
+  std::vector<std::string> drain() {
+    while (bus_.handle(0ms) == io::HandleResult::Handled) {
+    }
+    return channels;
+  }
+
+  std::vector<std::string> channels;
+  std::vector<io::LabelImageMessage> labels;
+  std::vector<io::TablesMessage> tables;
+
+ private:
+  io::MemoryBus& bus_;
+};
+
+const LcmPublisherSink::Channels kChannels{"L", "T", "M", "S"};
+
+TEST(LcmPublisherSink, PublishesLabelsTablesAndMapInThatOrder) {
+  auto bus = std::make_shared<io::MemoryBus>();
+  LcmPublisherSink sink(bus, kChannels, true, true);
+  const LabelledFrame l = labelledFrame(7, true, true, {tableAhead(2.0f)});
+  FrameResult r{
+      l, 1234, poseAt(l.segmented.prepared.frame.utime), {{5, false, 1}}, io::TablesMessage{}};
+  r.table_map->content = io::TablesContent::Map;
+  r.table_map->seq = 7;
+  r.table_map->map_pose = r.pose;
+  Collector p(*bus, kChannels);
+  sink.consume(r);
+  EXPECT_EQ(p.drain(), (std::vector<std::string>{"L", "T", "M"}));
+  ASSERT_EQ(p.labels.size(), 1u);
+  EXPECT_EQ(p.labels[0].seq, 7);
+  EXPECT_EQ(p.labels[0].latency_us, 1234);
+  EXPECT_EQ(p.labels[0].image.labels, l.labels.labels);
+  ASSERT_EQ(p.tables.size(), 2u);
+  EXPECT_EQ(p.tables[0].content, io::TablesContent::Frame);
+  ASSERT_EQ(p.tables[0].tables.size(), 1u);
+  ASSERT_TRUE(p.tables[0].map_pose.has_value());
+  EXPECT_DOUBLE_EQ(p.tables[0].map_pose->y, 2.0);
+  ASSERT_EQ(p.tables[0].map_info.size(), 1u);
+  EXPECT_EQ(p.tables[0].map_info[0].map_id, 5);
+  EXPECT_EQ(p.tables[1].content, io::TablesContent::Map);
+  EXPECT_EQ(sink.publishFailures(), 0u);
+}
+
+TEST(LcmPublisherSink, TablesCanBeSwitchedOff) {
+  auto bus = std::make_shared<io::MemoryBus>();
+  LcmPublisherSink sink(bus, kChannels, false, false);
+  const LabelledFrame l = labelledFrame(1, true, true, {tableAhead(2.0f)});
+  FrameResult r{l, 0, std::nullopt, {}, std::nullopt};
+  Collector p(*bus, kChannels);
+  sink.consume(r);
+  EXPECT_EQ(p.drain(), (std::vector<std::string>{"L"}));
+  EXPECT_TRUE(p.labels[0].image.confidence.empty());  // daemon.publish_confidence off
+}
+
+TEST(LcmPublisherSink, ARefusedPublishNamesTheChannelAndFrameAndIsCounted) {
+  auto memory = std::make_shared<io::MemoryBus>();
+  auto faulty = std::make_shared<io::FaultyBus>(memory);
+  LcmPublisherSink sink(faulty, kChannels, true, true);
+  Collector p(*memory, kChannels);
+  const LabelledFrame l = labelledFrame(3, true, true, {});
+  faulty->failPublish("T", true);
+  FrameResult r{l, 0, std::nullopt, {}, std::nullopt};
+  try {
+    sink.consume(r);
+    FAIL() << "a refused publish must throw";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("LCM publish on T failed for test seq 3"),
+              std::string::npos)
+        << e.what();
+  }
+  EXPECT_EQ(sink.publishFailures(), 1u);
+  // The labels went out before the refused tables.
+  EXPECT_EQ(p.drain(), (std::vector<std::string>{"L"}));
+  // A refused status is counted, not thrown; after close() nothing goes out.
+  faulty->failPublish("S", true);
+  EXPECT_FALSE(sink.publishStatus(StatusSnapshot{}));
+  EXPECT_EQ(sink.publishFailures(), 2u);
+  faulty->failPublish("S", false);
+  EXPECT_TRUE(sink.publishStatus(StatusSnapshot{}));
+  sink.close();
+  EXPECT_FALSE(sink.publishStatus(StatusSnapshot{}));
+  EXPECT_EQ(p.drain(), (std::vector<std::string>{"L", "S"}));
+}
+
+StatusSnapshot sampleSnapshot() {
+  StatusSnapshot s;
+  s.utime = 5000000;
+  s.uptime_us = 42;
+  s.counters.received = 10;
+  s.counters.processed = 6;
+  s.counters.dropped = 3;
+  s.counters.dropped_at_door = 2;
+  s.counters.dropped_in_pipeline = 1;
+  s.counters.rejected = 1;
+  s.window_s = 10.0;
+  s.input_fps = 30.0;
+  s.output_fps = 5.5;
+  s.latencies = {{"prepare", {10.0, 20.0, 30.0, 4}}, {"total", {100.0, 200.0, 300.0, 4}}};
+  s.queues = {{"prepare", 1, 4}, {"segment", 2, 4}};
+  s.model_id = "model";
+  s.cpu_budget_cores = 2.0;
+  s.cpu_used_cores = 1.5;
+  s.processing_threads = 3;
+  s.last_error = "pipeline error";
+  s.last_error_utime = 100;
+  return s;
+}
+
+TEST(StatusBuilder, FillsEveryFieldFromTheSnapshot) {
+  const findmug_lcm::status_t s = StatusBuilder::build(sampleSnapshot());
+  EXPECT_EQ(s.utime, 5000000);
+  EXPECT_EQ(s.uptime_us, 42);
+  EXPECT_EQ(s.frames_received, 10);
+  EXPECT_EQ(s.frames_processed, 6);
+  EXPECT_EQ(s.frames_dropped, 3);
+  EXPECT_EQ(s.frames_dropped_at_door, 2);
+  EXPECT_EQ(s.frames_dropped_in_pipeline, 1);
+  EXPECT_EQ(s.frames_dropped_at_shutdown, 0);
+  EXPECT_EQ(s.frames_rejected, 1);
+  EXPECT_DOUBLE_EQ(s.window_s, 10.0);
+  EXPECT_FLOAT_EQ(s.input_fps, 30.0f);
+  EXPECT_FLOAT_EQ(s.output_fps, 5.5f);
+  ASSERT_EQ(s.num_stages, 2);
+  EXPECT_EQ(s.stage_names, (std::vector<std::string>{"prepare", "total"}));
+  EXPECT_EQ(s.latency_p50_us, (std::vector<std::int64_t>{10000, 100000}));
+  EXPECT_EQ(s.latency_p95_us, (std::vector<std::int64_t>{20000, 200000}));
+  EXPECT_EQ(s.latency_max_us, (std::vector<std::int64_t>{30000, 300000}));
+  ASSERT_EQ(s.num_queues, 2);
+  EXPECT_EQ(s.queue_names, (std::vector<std::string>{"prepare", "segment"}));
+  EXPECT_EQ(s.queue_depths, (std::vector<std::int32_t>{1, 2}));
+  EXPECT_EQ(s.queue_capacities, (std::vector<std::int32_t>{4, 4}));
+  EXPECT_EQ(s.model_id, "model");
+  EXPECT_FLOAT_EQ(s.cpu_budget_cores, 2.0f);
+  EXPECT_FLOAT_EQ(s.cpu_used_cores, 1.5f);
+  EXPECT_EQ(s.processing_threads, 3);
+  // No source: frames come in-process.
+  EXPECT_EQ(s.source, "(in-process)");
+  EXPECT_EQ(s.source_state, findmug_lcm::status_t::SOURCE_RUNNING);
+  EXPECT_EQ(s.source_state_name, "running");
+  EXPECT_EQ(s.last_error, "pipeline error");
+  EXPECT_EQ(s.last_error_utime, 100);
+}
+
+TEST(StatusBuilder, TheSourceStateAndTheNewerErrorWin) {
+  StatusSnapshot snap = sampleSnapshot();
+  snap.source = StatusSnapshot::Source{"lcm:FINDMUG_RGBD (memq://)", io::SourceState::Reconnecting,
+                                       "source error", 200};
+  findmug_lcm::status_t s = StatusBuilder::build(snap);
+  EXPECT_EQ(s.source, "lcm:FINDMUG_RGBD (memq://)");
+  EXPECT_EQ(s.source_state, findmug_lcm::status_t::SOURCE_RECONNECTING);
+  EXPECT_EQ(s.source_state_name, "reconnecting");
+  EXPECT_EQ(s.last_error, "source error");
+  EXPECT_EQ(s.last_error_utime, 200);
+  snap.source->last_error_utime = 50;  // older than the pipeline's
+  s = StatusBuilder::build(snap);
+  EXPECT_EQ(s.last_error, "pipeline error");
+  EXPECT_EQ(s.last_error_utime, 100);
+}
+
+}  // namespace
+}  // namespace findmug::daemon

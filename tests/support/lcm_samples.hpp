@@ -1,0 +1,38 @@
+// lcm_samples.hpp — a filled-in findmug_lcm message for tests and the fuzz seed maker, so
+// that one place says what a plausible daemon status looks like (two stages, one queue).
+#pragma once
+
+#include <findmug_lcm/status_t.hpp>
+
+namespace findmug::test {
+
+inline findmug_lcm::status_t sampleStatus() {
+  findmug_lcm::status_t s{};
+  s.utime = 99;
+  s.uptime_us = 1000000;
+  s.frames_received = 10;
+  s.frames_processed = 8;
+  s.frames_dropped = 1;
+  s.frames_rejected = 1;
+  s.window_s = 5.0;
+  s.input_fps = 30.0f;
+  s.output_fps = 4.0f;
+  s.num_stages = 2;
+  s.stage_names = {"cloud", "total"};
+  s.latency_p50_us = {1000, 200000};
+  s.latency_p95_us = {1500, 250000};
+  s.latency_max_us = {2000, 300000};
+  s.num_queues = 1;
+  s.queue_names = {"frames"};
+  s.queue_depths = {1};
+  s.queue_capacities = {2};
+  s.model_id = "forest.fmf";
+  s.source = "openni2";
+  s.source_state_name = "running";
+  s.source_state = findmug_lcm::status_t::SOURCE_RUNNING;
+  s.last_error = "";
+  s.last_error_utime = 0;
+  return s;
+}
+
+}  // namespace findmug::test
