@@ -14,6 +14,7 @@
 
 #include "daemon_test_support.hpp"
 #include "findmug/daemon/daemon.hpp"
+#include "findmug/daemon/status_builder.hpp"
 #include "findmug/io/channels.hpp"
 #include "findmug/io/device_source.hpp"
 #include "findmug/io/lcm_codec.hpp"
@@ -79,7 +80,7 @@ TEST(DaemonFaults, CameraThatDisappearsMidRunIsReconnectedWithBackoffAndFramesFl
       if (runner.joinable()) runner.join();
     }
   } cleanup{daemon, runner};
-  auto status = [&] { return daemon->pipeline().makeStatus(); };
+  auto status = [&] { return makeStatus(daemon->pipeline()); };
 
   // Running: frames are segmented and published.
   ASSERT_TRUE(waitFor([&] { return status().frames_processed >= 2; }));
