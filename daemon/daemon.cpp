@@ -39,6 +39,14 @@ Daemon::Daemon(const Config& config, const DaemonConfig& daemon_config, Pipeline
 Daemon::Daemon(const Config& config, const DaemonConfig& daemon_config,
                std::unique_ptr<io::FrameSource> source, PipelineHooks hooks)
     : daemon_config_(daemon_config), source_(std::move(source)) {
+  if (daemon_config_.heap_keep_mb > 0) {
+    // A 640x480 frame allocates about 35 MB in buffers of a few MB, freed
+    // when it is published. With glibc's default thresholds each comes fresh
+    // from the kernel (page faults and zeroing, about a tenth of a frame's
+    // CPU time: BENCHMARKS.md section 9e); these keep them in the heap.
+    mallopt(M_MMAP_THRESHOLD, 32 << 20);
+    mallopt(M_TRIM_THRESHOLD, daemon_config_.heap_keep_mb << 20);
+  }
   std::string model_id;
   auto forest = loadModel(daemon_config_.model_path, &model_id);
   spdlog::info("model {} loaded from {} ({} trees)", model_id, daemon_config_.model_path,

@@ -128,6 +128,11 @@ const std::map<std::string, Key>& keys() {
           d.max_cpu_cores = toDouble(k, v, 0, 1024);
         },
         [](const D& d) { return fmt(d.max_cpu_cores); }}},
+      {"daemon.heap_keep_mb",
+       {[](D& d, const std::string& k, const std::string& v) {
+          d.heap_keep_mb = static_cast<int>(toInt(k, v, 0, 2047));
+        },
+        [](const D& d) { return std::to_string(d.heap_keep_mb); }}},
       {"daemon.status_period_s",
        {[](D& d, const std::string& k, const std::string& v) {
           d.status_period_s = toDouble(k, v, 0.05, 60);

@@ -171,6 +171,10 @@ const std::vector<Setting>& settings() {
                    [](C& c) -> float& { return c.ground.gravity_refine_deg; }, 0, 89),
       floatSetting("ground.max_tilt_deg", [](C& c) -> float& { return c.ground.max_tilt_deg; },
                    1, 89),
+      intSetting("ground.reestimate_every_frames",
+                 [](C& c) -> int& { return c.ground.reestimate_every_frames; }, 1, 100000),
+      floatSetting("ground.reuse_min_support_fraction",
+                   [](C& c) -> float& { return c.ground.reuse_min_support_fraction; }, 0.01, 1),
       enumSetting<OversegmenterKind>(
           "overseg.method", [](C& c) -> OversegmenterKind& { return c.overseg.kind; },
           {{"pcl", OversegmenterKind::PclSupervoxels},

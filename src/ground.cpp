@@ -71,6 +71,9 @@ void validateConfig(const GroundConfig& config, const char* where) {
     bad("prior_camera_height_m", config.prior_camera_height_m);
   if (!(config.gravity_refine_deg >= 0.0f && config.gravity_refine_deg < 90.0f))
     bad("gravity_refine_deg", config.gravity_refine_deg);
+  if (config.reestimate_every_frames < 1) bad("reestimate_every_frames", config.reestimate_every_frames);
+  if (!(config.reuse_min_support_fraction > 0.0f && config.reuse_min_support_fraction <= 1.0f))
+    bad("reuse_min_support_fraction", config.reuse_min_support_fraction);
 }
 
 float cosDeg(float deg) { return std::cos(deg * static_cast<float>(M_PI) / 180.0f); }
@@ -108,22 +111,94 @@ Plane refitPlane(const std::vector<Eigen::Vector3f>& points, const std::vector<s
   return plane;
 }
 
+// Plane support: a point within `tol` of the plane and, when `normals` is
+// given, with a normal within acos(cos_agree) of the plane's.
+struct Support {
+  const std::vector<Eigen::Vector3f>& points;
+  const std::vector<Eigen::Vector3f>* normals = nullptr;
+  float tol = 0.0f;
+  float cos_agree = -1.0f;
+  bool operator()(const Plane& p, std::size_t i) const {
+    return std::abs(p.distance(points[i])) < tol &&
+           (!normals || (*normals)[i].dot(p.normal) >= cos_agree);
+  }
+};
+
+// The RANSAC scoring subset copied out of the image into contiguous arrays:
+// scoring a hypothesis then streams through a few kB instead of gathering
+// two 12-byte vectors per point from all over a 7 MB image (that gather was
+// most of estimateGround's time). The arithmetic is Support's, in the same
+// order, so the counts are the same.
+class PackedSupport {
+ public:
+  void gather(const Support& support, const std::vector<std::size_t>& idx) {
+    const std::size_t n = idx.size();
+    const bool with_normals = support.normals != nullptr;
+    px_.resize(n);
+    py_.resize(n);
+    pz_.resize(n);
+    nx_.resize(with_normals ? n : 0);
+    ny_.resize(with_normals ? n : 0);
+    nz_.resize(with_normals ? n : 0);
+    for (std::size_t k = 0; k < n; ++k) {
+      const Eigen::Vector3f& p = support.points[idx[k]];
+      px_[k] = p.x();
+      py_[k] = p.y();
+      pz_[k] = p.z();
+      if (with_normals) {
+        const Eigen::Vector3f& q = (*support.normals)[idx[k]];
+        nx_[k] = q.x();
+        ny_[k] = q.y();
+        nz_[k] = q.z();
+      }
+    }
+    tol_ = support.tol;
+    cos_agree_ = support.cos_agree;
+    with_normals_ = with_normals;
+  }
+  std::size_t count(const Plane& p) const {
+    const float a = p.normal.x(), b = p.normal.y(), c = p.normal.z(), d = p.offset;
+    const std::size_t n = px_.size();
+    std::size_t score = 0;
+    if (with_normals_) {
+      for (std::size_t k = 0; k < n; ++k) {
+        const bool near = std::abs(a * px_[k] + b * py_[k] + c * pz_[k] + d) < tol_;
+        const bool agree = nx_[k] * a + ny_[k] * b + nz_[k] * c >= cos_agree_;
+        score += (near && agree) ? 1 : 0;
+      }
+    } else {
+      for (std::size_t k = 0; k < n; ++k)
+        score += std::abs(a * px_[k] + b * py_[k] + c * pz_[k] + d) < tol_ ? 1 : 0;
+    }
+    return score;
+  }
+
+ private:
+  std::vector<float> px_, py_, pz_, nx_, ny_, nz_;
+  float tol_ = 0.0f, cos_agree_ = -1.0f;
+  bool with_normals_ = false;
+};
+
 // Generic RANSAC + least-squares refinement over `points[idx]`. `accept`
-// vets a hypothesis (and may reorient it), `inlier(plane, i)` decides
-// support. Returns false when no hypothesis was accepted.
-template <typename Accept, typename Inlier>
+// vets a hypothesis (and may reorient it), `inlier` decides support.
+// Returns false when no hypothesis was accepted.
+template <typename Accept>
 bool ransacPlane(const std::vector<Eigen::Vector3f>& points, const std::vector<std::size_t>& idx,
-                 int iterations, std::mt19937_64& rng, Accept accept, Inlier inlier, Plane& result,
-                 std::vector<std::size_t>& inliers) {
+                 int iterations, std::mt19937_64& rng, Accept accept, const Support& inlier,
+                 Plane& result, std::vector<std::size_t>& inliers) {
   if (idx.size() < 3) return false;
   // Score on a fixed random subset so cost does not grow with the image.
-  std::vector<std::size_t> scoring;
+  // Per-thread buffers: no allocation per call once warm.
+  thread_local std::vector<std::size_t> scoring;
+  thread_local PackedSupport packed;
+  scoring.clear();
   if (idx.size() <= kScoringSubset) {
-    scoring = idx;
+    scoring.assign(idx.begin(), idx.end());
   } else {
     scoring.reserve(kScoringSubset);
     std::sample(idx.begin(), idx.end(), std::back_inserter(scoring), kScoringSubset, rng);
   }
+  packed.gather(inlier, scoring);
   std::uniform_int_distribution<std::size_t> pick(0, idx.size() - 1);
   Plane best;
   std::size_t best_score = 0;
@@ -137,8 +212,7 @@ bool ransacPlane(const std::vector<Eigen::Vector3f>& points, const std::vector<s
     if (!planeThrough(points[first], points[second], points[third], hyp) || !accept(hyp)) {
       continue;
     }
-    std::size_t score = 0;
-    for (std::size_t i : scoring) score += inlier(hyp, i) ? 1 : 0;
+    const std::size_t score = packed.count(hyp);
     if (score > best_score) {
       best_score = score;
       best = hyp;
@@ -284,8 +358,7 @@ std::optional<GroundPlane> fitGroundToLabels(const OrganizedCloud& cloud_camera,
   std::vector<std::size_t> inliers;
   const bool found = ransacPlane(
       pts, floor, config.ransac_iterations, rng, [](Plane&) { return true; },
-      [&](const Plane& p, std::size_t i) { return std::abs(p.distance(pts[i])) < tol; }, plane,
-      inliers);
+      Support{pts, nullptr, tol}, plane, inliers);
   if (!found || static_cast<double>(inliers.size()) < config.min_inlier_fraction * floor.size()) {
     return std::nullopt;
   }
@@ -294,6 +367,41 @@ std::optional<GroundPlane> fitGroundToLabels(const OrganizedCloud& cloud_camera,
       groundFromPlane(plane.normal, plane.offset, static_cast<int>(inliers.size()));
   ground.method = GroundMethod::FloorLabels;
   return ground;
+}
+
+std::optional<GroundPlane> confirmGround(const OrganizedCloud& cloud_camera,
+                                         const NormalImage& normals_camera,
+                                         const GroundPlane& previous, const GroundConfig& config) {
+  validateConfig(config, "confirmGround");
+  if (normals_camera.normals.size() != cloud_camera.points.size() ||
+      normals_camera.width != cloud_camera.width) {
+    throw Error("confirmGround: normal image has " + std::to_string(normals_camera.normals.size()) +
+                " entries but the cloud has " + std::to_string(cloud_camera.points.size()) +
+                " points");
+  }
+  constexpr int kStep = 4;  // every 4th pixel of every 4th row
+  const Eigen::Vector3f camera_up(0.0f, -1.0f, 0.0f);
+  const float cos_tilt = cosDeg(config.max_tilt_deg);
+  const Plane plane{previous.normal_camera, previous.offset};
+  const Support supports{cloud_camera.points, &normals_camera.normals, config.ransac_inlier_m,
+                         cosDeg(config.normal_agreement_deg)};
+  std::size_t count = 0;
+  for (int v = 0; v < cloud_camera.height; v += kStep) {
+    const std::size_t row = static_cast<std::size_t>(v) * cloud_camera.width;
+    for (int u = 0; u < cloud_camera.width; u += kStep) {
+      const std::size_t i = row + static_cast<std::size_t>(u);
+      // NaN points and normals fail both comparisons.
+      if (normals_camera.normals[i].dot(camera_up) >= cos_tilt && supports(plane, i)) ++count;
+    }
+  }
+  const double support = static_cast<double>(count) * kStep * kStep;
+  if (support < config.min_floor_points ||
+      support < config.reuse_min_support_fraction * previous.support_points) {
+    return std::nullopt;
+  }
+  GroundPlane kept = previous;
+  kept.support_points = static_cast<int>(support);
+  return kept;
 }
 
 std::optional<GroundPlane> estimateGround(const OrganizedCloud& cloud_camera,
@@ -333,9 +441,7 @@ std::optional<GroundPlane> estimateGround(const OrganizedCloud& cloud_camera,
     }
     return p.normal.dot(camera_up) >= cos_tilt;
   };
-  auto supports = [&](const Plane& p, std::size_t i) {
-    return std::abs(p.distance(pts[i])) < tol && nrm[i].dot(p.normal) >= cos_agree;
-  };
+  const Support supports{pts, &nrm, tol, cos_agree};
 
   // Sequential RANSAC: peel off the horizontal planes one by one.
   struct Found {

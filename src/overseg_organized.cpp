@@ -376,6 +376,11 @@ class OrganizedOversegmenter final : public Oversegmenter {
         const int cx = x / kCoarseStride;
         const int ox = other(x, cx, cw);
         const std::array<int, 4> around = {row_a[cx], row_a[ox], row_b[cx], row_b[ox]};
+        // Inside a segment (most pixels) the four agree: no search.
+        if (around[0] == around[1] && around[0] == around[2] && around[0] == around[3]) {
+          out[i] = around[0] >= 0 ? around[0] : kUnassigned;
+          continue;
+        }
         std::array<int, 4> candidates{};
         int count = 0;
         for (const int k : around) {

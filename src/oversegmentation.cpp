@@ -192,7 +192,11 @@ void finalizeOversegmentation(Oversegmentation& seg, int min_points, EdgeSource 
   } else {
     // Neighbour lists (a segment has a handful) instead of sorting every
     // boundary pixel pair.
-    std::vector<std::vector<int>> neighbours(static_cast<std::size_t>(next));
+    // Per-thread and kept between calls: the lists keep their capacity, so a
+    // frame's ~1500 segments cost no allocation once warm.
+    thread_local std::vector<std::vector<int>> neighbours;
+    if (neighbours.size() < static_cast<std::size_t>(next)) neighbours.resize(next);
+    for (int a = 0; a < next; ++a) neighbours[a].clear();
     const int w = seg.width;
     const int h = seg.height;
     int last_a = -1, last_b = -1;
@@ -213,6 +217,9 @@ void finalizeOversegmentation(Oversegmentation& seg, int min_points, EdgeSource 
         if (below && row[x] != below[x]) add(row[x], below[x]);
       }
     }
+    std::size_t edge_count = 0;
+    for (int a = 0; a < next; ++a) edge_count += neighbours[a].size();
+    edges.reserve(edge_count);
     for (int a = 0; a < next; ++a) {
       std::sort(neighbours[a].begin(), neighbours[a].end());
       for (const int b : neighbours[a]) edges.emplace_back(a, b);

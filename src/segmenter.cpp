@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <chrono>
+#include <ctime>
 
 #include "findmug/error.hpp"
 
@@ -10,9 +11,15 @@ namespace findmug {
 
 namespace {
 
+double threadCpuMs() {
+  timespec ts{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+  return static_cast<double>(ts.tv_sec) * 1e3 + static_cast<double>(ts.tv_nsec) * 1e-6;
+}
+
 class Stopwatch {
  public:
-  Stopwatch() : start_(std::chrono::steady_clock::now()) {}
+  Stopwatch() : start_(std::chrono::steady_clock::now()), cpu_start_(threadCpuMs()) {}
   // Milliseconds since construction or the previous lap.
   double lap() {
     const auto now = std::chrono::steady_clock::now();
@@ -20,9 +27,18 @@ class Stopwatch {
     start_ = now;
     return ms;
   }
+  // Wall time into `field` of `wall`, this thread's CPU time into the same
+  // field of `cpu`, both since construction or the previous lap.
+  void lap(StageTimings& wall, StageTimings& cpu, double StageTimings::*field) {
+    wall.*field = lap();
+    const double now = threadCpuMs();
+    cpu.*field = now - cpu_start_;
+    cpu_start_ = now;
+  }
 
  private:
   std::chrono::steady_clock::time_point start_;
+  double cpu_start_;
 };
 
 std::uint8_t argmax(const ClassProbabilities& p) {
@@ -171,15 +187,14 @@ PreparedFrame Segmenter::prepare(RgbdFrame frame, const std::vector<std::uint8_t
   PreparedFrame out;
   Stopwatch watch;
   out.cloud_camera = frameToCloud(frame, config_.max_depth_m);
-  out.timings.cloud_ms = watch.lap();
+  watch.lap(out.timings, out.cpu_timings, &StageTimings::cloud_ms);
   out.normals_camera = computeNormals(out.cloud_camera, config_.normals);
-  out.timings.normals_ms = watch.lap();
+  watch.lap(out.timings, out.cpu_timings, &StageTimings::normals_ms);
 
   switch (config_.ground.source) {
     case GroundSource::Auto:
       out.ground = frame.extrinsics ? std::optional(groundFromExtrinsics(*frame.extrinsics))
-                                    : estimateGround(out.cloud_camera, out.normals_camera,
-                                                     config_.ground);
+                                    : groundOfStream(out.cloud_camera, out.normals_camera);
       break;
     case GroundSource::Extrinsics:
       if (!frame.extrinsics) {
@@ -200,7 +215,7 @@ PreparedFrame Segmenter::prepare(RgbdFrame frame, const std::vector<std::uint8_t
       out.ground = fitGroundToLabels(out.cloud_camera, *gt_labels, config_.ground);
       break;
     case GroundSource::Estimated:
-      out.ground = estimateGround(out.cloud_camera, out.normals_camera, config_.ground);
+      out.ground = groundOfStream(out.cloud_camera, out.normals_camera);
       break;
     case GroundSource::Gravity:
       // A robot knows its mount; a dataset frame brings its gravity; a frame
@@ -232,14 +247,33 @@ PreparedFrame Segmenter::prepare(RgbdFrame frame, const std::vector<std::uint8_t
     out.cloud_ground = transformCloud(out.cloud_camera, out.ground->camera_to_ground);
     out.normals_ground = rotateNormals(out.normals_camera, out.ground->camera_to_ground.linear());
   }
-  out.timings.ground_ms = watch.lap();
+  watch.lap(out.timings, out.cpu_timings, &StageTimings::ground_ms);
   out.frame = std::move(frame);
   return out;
+}
+
+std::optional<GroundPlane> Segmenter::groundOfStream(const OrganizedCloud& cloud,
+                                                     const NormalImage& normals) const {
+  if (config_.ground.reestimate_every_frames <= 1) {
+    return estimateGround(cloud, normals, config_.ground);
+  }
+  std::lock_guard lock(ground_memory_->mutex);
+  GroundMemory& memory = *ground_memory_;
+  if (memory.plane && memory.frames_since_estimate + 1 < config_.ground.reestimate_every_frames) {
+    if (auto kept = confirmGround(cloud, normals, *memory.plane, config_.ground)) {
+      ++memory.frames_since_estimate;
+      return kept;
+    }
+  }
+  memory.plane = estimateGround(cloud, normals, config_.ground);
+  memory.frames_since_estimate = 0;
+  return memory.plane;
 }
 
 SegmentedFrame Segmenter::oversegment(PreparedFrame prepared) const {
   SegmentedFrame out;
   out.timings = prepared.timings;
+  out.cpu_timings = prepared.cpu_timings;
   Stopwatch watch;
   if (prepared.ground) {
     out.segmentation = oversegmenter_->segment(prepared.cloud_camera, prepared.normals_camera);
@@ -249,7 +283,7 @@ SegmentedFrame Segmenter::oversegment(PreparedFrame prepared) const {
     out.segmentation.height = prepared.cloud_camera.height;
     out.segmentation.pixel_segment.assign(prepared.cloud_camera.size(), -1);
   }
-  out.timings.overseg_ms = watch.lap();
+  watch.lap(out.timings, out.cpu_timings, &StageTimings::overseg_ms);
   out.prepared = std::move(prepared);
   return out;
 }
@@ -273,6 +307,7 @@ LabelledFrame Segmenter::classify(SegmentedFrame segmented) const {
   }
   LabelledFrame out;
   out.timings = segmented.timings;
+  out.cpu_timings = segmented.cpu_timings;
   const int width = segmented.prepared.cloud_camera.width;
   const int height = segmented.prepared.cloud_camera.height;
   if (!segmented.prepared.ground) {
@@ -284,14 +319,14 @@ LabelledFrame Segmenter::classify(SegmentedFrame segmented) const {
   Stopwatch watch;
   out.features = computeFeatures(segmented.prepared.cloud_ground,
                                  segmented.prepared.normals_ground, segmented.segmentation);
-  out.timings.features_ms = watch.lap();
+  watch.lap(out.timings, out.cpu_timings, &StageTimings::features_ms);
   if (config_.regions.enabled) {
     out.features.regions = computeRegionFeatures(segmented.prepared.cloud_ground,
                                                  segmented.prepared.normals_ground,
                                                  segmented.segmentation, config_.regions)
                                .values;
   }
-  out.timings.regions_ms = watch.lap();
+  watch.lap(out.timings, out.cpu_timings, &StageTimings::regions_ms);
 
   const std::size_t n = out.features.features.size();
   std::vector<float> weights(n);
@@ -305,7 +340,8 @@ LabelledFrame Segmenter::classify(SegmentedFrame segmented) const {
   for (std::size_t i = 0; i < n; ++i) out.forest_labels[i] = argmax(out.forest_probabilities[i]);
   // The context stage's time is measured inside and reported on its own.
   out.timings.context_ms = context_ms;
-  out.timings.forest_ms = watch.lap() - context_ms;
+  watch.lap(out.timings, out.cpu_timings, &StageTimings::forest_ms);
+  out.timings.forest_ms -= context_ms;  // CPU time: the context stage stays in forest_ms
 
   std::vector<float> confidence(n);
   const std::vector<std::uint8_t>* final_labels = &out.forest_labels;
@@ -319,16 +355,16 @@ LabelledFrame Segmenter::classify(SegmentedFrame segmented) const {
       confidence[i] = out.forest_probabilities[i][out.forest_labels[i]];
     }
   }
-  out.timings.mrf_ms = watch.lap();
+  watch.lap(out.timings, out.cpu_timings, &StageTimings::mrf_ms);
 
   out.labels = projectLabels(segmented.segmentation, *final_labels, confidence);
-  out.timings.labels_ms = watch.lap();
+  watch.lap(out.timings, out.cpu_timings, &StageTimings::labels_ms);
 
   TableDetection detection =
       detectTables(segmented.prepared.cloud_ground, out.labels, config_.tables);
   out.tables = std::move(detection.tables);
   out.table_diagnostics = std::move(detection.diagnostics);
-  out.timings.tables_ms = watch.lap();
+  watch.lap(out.timings, out.cpu_timings, &StageTimings::tables_ms);
   out.segmented = std::move(segmented);
   return out;
 }

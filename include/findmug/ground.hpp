@@ -93,6 +93,14 @@ struct GroundConfig {
   // it. The median over the NYU labelled frames whose floor is labelled
   // (17 frames, 0.82..1.41 m, median 1.28 m; BENCHMARKS.md "Ground from gravity").
   float prior_camera_height_m = 1.28f;
+  // A stream of frames from one mount (Segmenter::prepare with the floor
+  // estimated from the frame): the floor found in one frame is kept for the
+  // next ones while confirmGround finds that it still holds at least
+  // `reuse_min_support_fraction` of the support it had, and re-estimated at
+  // the latest every `reestimate_every_frames` frames. 1 = estimate in every
+  // frame (the paper; what evaluation on independent frames needs).
+  int reestimate_every_frames = 1;
+  float reuse_min_support_fraction = 0.8f;
 };
 
 // Builds the plane and transform from a known camera mount.
@@ -120,6 +128,18 @@ std::optional<GroundPlane> fitGroundToLabels(const OrganizedCloud& cloud_camera,
 std::optional<GroundPlane> estimateGround(const OrganizedCloud& cloud_camera,
                                           const NormalImage& normals_camera,
                                           const GroundConfig& config);
+
+// Whether `previous` (a plane from estimateGround on an earlier frame of the
+// same mount) is still this frame's floor: its support, counted as
+// estimateGround counts it (within ransac_inlier_m, normal within
+// max_tilt_deg of camera up and normal_agreement_deg of the plane) on every
+// fourth pixel of every fourth row and scaled by 16, must reach
+// min_floor_points and reuse_min_support_fraction x previous.support_points.
+// Returns `previous` with support_points set to this frame's count, or
+// nullopt (then estimate again). About 1/20 of estimateGround's cost.
+std::optional<GroundPlane> confirmGround(const OrganizedCloud& cloud_camera,
+                                         const NormalImage& normals_camera,
+                                         const GroundPlane& previous, const GroundConfig& config);
 
 // The ground frame from a known "up" direction (unit, camera coordinates,
 // against gravity) and the floor height along it:

@@ -13,6 +13,7 @@
 #pragma once
 
 #include <memory>
+#include <mutex>
 #include <optional>
 #include <string>
 #include <vector>
@@ -30,7 +31,10 @@
 
 namespace findmug {
 
-// Wall time of each stage in milliseconds.
+// Time of each stage in milliseconds: wall time in `timings`, the calling
+// thread's CPU time in `cpu_timings` (what a stage costs on a shared machine,
+// where wall time also counts the time other processes ran). In
+// `cpu_timings` the context stage is part of forest_ms (context_ms stays 0).
 struct StageTimings {
   double cloud_ms = 0, normals_ms = 0, ground_ms = 0, overseg_ms = 0, features_ms = 0,
          regions_ms = 0, forest_ms = 0, context_ms = 0, mrf_ms = 0, labels_ms = 0,
@@ -50,6 +54,7 @@ struct PreparedFrame {
   OrganizedCloud cloud_ground;        // empty when no ground
   NormalImage normals_ground;
   StageTimings timings;
+  StageTimings cpu_timings;
 };
 
 // Stage 2 output.
@@ -57,6 +62,7 @@ struct SegmentedFrame {
   PreparedFrame prepared;
   Oversegmentation segmentation;
   StageTimings timings;
+  StageTimings cpu_timings;
 };
 
 // Stage 3 output: everything a client needs.
@@ -74,6 +80,7 @@ struct LabelledFrame {
   // Why tables were not found or were rejected (for the caller to log).
   std::vector<std::string> table_diagnostics;
   StageTimings timings;
+  StageTimings cpu_timings;
 };
 
 class Segmenter {
@@ -83,6 +90,8 @@ class Segmenter {
   Segmenter(SegmenterConfig config, std::shared_ptr<const RandomForest> forest);
 
   // `gt_labels` is only used when config.ground.source == FloorLabels.
+  // With ground.reestimate_every_frames > 1 the frames are taken as a stream
+  // from one mount: an estimated floor may come from an earlier frame.
   PreparedFrame prepare(RgbdFrame frame, const std::vector<std::uint8_t>* gt_labels = nullptr) const;
   SegmentedFrame oversegment(PreparedFrame prepared) const;
   // Features only (used by the trainer).
@@ -96,9 +105,23 @@ class Segmenter {
   const RandomForest* forest() const { return forest_.get(); }
 
  private:
+  // estimateGround, or with ground.reestimate_every_frames > 1 the plane of
+  // an earlier frame while confirmGround accepts it (see GroundConfig).
+  std::optional<GroundPlane> groundOfStream(const OrganizedCloud& cloud,
+                                            const NormalImage& normals) const;
+
   SegmenterConfig config_;
   std::shared_ptr<const RandomForest> forest_;
   std::unique_ptr<Oversegmenter> oversegmenter_;
+  // The floor kept between frames (ground.reestimate_every_frames > 1). The
+  // daemon prepares frames in order on one thread; the mutex only keeps
+  // concurrent callers safe (they then share one stream).
+  struct GroundMemory {
+    std::mutex mutex;
+    std::optional<GroundPlane> plane;  // as last estimated (its support is the reference)
+    int frames_since_estimate = 0;
+  };
+  std::unique_ptr<GroundMemory> ground_memory_ = std::make_unique<GroundMemory>();
 };
 
 // Throws findmug::Error naming the model and every setting whose value

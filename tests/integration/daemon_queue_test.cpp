@@ -374,6 +374,25 @@ TEST(DaemonConfig, CpuBudgetBoundsTheSegmentationWorkers) {
   }
 }
 
+TEST(DaemonConfig, HeapKeepIsReadAndBounded) {
+  auto resolve = [](const std::string& yaml) {
+    Config config = parseConfig(yaml, "test.yaml");
+    return resolveDaemonConfig(config);
+  };
+  EXPECT_EQ(resolve("daemon:\n  workers: 1\n").heap_keep_mb, 256);
+  EXPECT_EQ(resolve("daemon:\n  heap_keep_mb: 0\n").heap_keep_mb, 0);
+  EXPECT_EQ(resolve("daemon:\n  heap_keep_mb: 2047\n").heap_keep_mb, 2047);
+  // 2048 MB would overflow mallopt's int byte count.
+  for (const char* bad : {"-1", "2048", "lots"}) {
+    try {
+      resolve(std::string("daemon:\n  heap_keep_mb: ") + bad + "\n");
+      ADD_FAILURE() << "heap_keep_mb " << bad << " was accepted";
+    } catch (const Error& e) {
+      EXPECT_NE(std::string(e.what()).find("daemon.heap_keep_mb"), std::string::npos) << e.what();
+    }
+  }
+}
+
 TEST(DaemonConfig, BadValuesAndUnknownKeysNameTheKey) {
   auto error_of = [](const std::string& yaml) -> std::string {
     try {

@@ -58,6 +58,7 @@ struct Scene {
 };
 
 struct Rendered {
+  RgbdFrame frame;
   OrganizedCloud cloud;
   std::vector<std::uint8_t> labels;
   int floor_pixels = 0, table_pixels = 0;
@@ -123,6 +124,7 @@ Rendered render(const Scene& s, std::uint64_t seed = 7) {
     }
   }
   out.cloud = frameToCloud(f);
+  out.frame = std::move(f);
   return out;
 }
 
@@ -269,6 +271,90 @@ TEST(EstimateGround, PicksTheFloorNotTheBiggerTable) {
   EXPECT_NEAR(g->offset, 1.4f, 0.02f);
   EXPECT_GT(g->support_points, r.floor_pixels / 2);
   EXPECT_LE(g->support_points, r.floor_pixels);
+}
+
+TEST(ConfirmGround, KeepsTheFloorOfTheSameMountAndRejectsAnother) {
+  const Scene s = roomWithTable();
+  const Rendered first = render(s, 7);
+  const auto g = estimateGround(first.cloud, computeNormals(first.cloud, NormalConfig{}),
+                                GroundConfig{});
+  ASSERT_TRUE(g.has_value());
+
+  // The same mount, other sensor noise: the plane is kept as it was.
+  const Rendered again = render(s, 8);
+  const auto kept =
+      confirmGround(again.cloud, computeNormals(again.cloud, NormalConfig{}), *g, GroundConfig{});
+  ASSERT_TRUE(kept.has_value());
+  EXPECT_EQ(kept->normal_camera, g->normal_camera);
+  EXPECT_EQ(kept->offset, g->offset);
+  EXPECT_NEAR(kept->support_points, g->support_points, 0.1 * g->support_points);
+
+  // The camera 25 cm lower: the old floor lies above the new one.
+  Scene lower = s;
+  lower.mount.height_m -= 0.25;
+  const Rendered moved = render(lower, 9);
+  EXPECT_FALSE(
+      confirmGround(moved.cloud, computeNormals(moved.cloud, NormalConfig{}), *g, GroundConfig{}));
+  // Pitched 10 degrees further down: same height, tilted plane.
+  Scene pitched = s;
+  pitched.mount.pitch_rad += 10.0 * M_PI / 180.0;
+  const Rendered tilted = render(pitched, 10);
+  EXPECT_FALSE(confirmGround(tilted.cloud, computeNormals(tilted.cloud, NormalConfig{}), *g,
+                             GroundConfig{}));
+
+  // Most of the floor hidden (a wall 1.6 m ahead): less than 80 % support left.
+  Scene blocked = s;
+  blocked.wall_distance = 1.6f;
+  blocked.table_height = 0.0f;
+  const Rendered wall = render(blocked, 11);
+  GroundConfig config;
+  config.min_floor_points = 100;
+  EXPECT_FALSE(confirmGround(wall.cloud, computeNormals(wall.cloud, NormalConfig{}), *g, config));
+  config.reuse_min_support_fraction = 0.01f;
+  EXPECT_TRUE(confirmGround(wall.cloud, computeNormals(wall.cloud, NormalConfig{}), *g, config));
+}
+
+TEST(SegmenterGround, ReestimatesEveryNFramesAndWhenTheCheckFails) {
+  const Scene s = roomWithTable();
+  Scene lower = s;
+  lower.mount.height_m -= 0.25;
+  const Rendered a1 = render(s, 1), a2 = render(s, 2), a3 = render(s, 3), b = render(lower, 4);
+  auto estimated = [](const Rendered& r) {
+    return *estimateGround(r.cloud, computeNormals(r.cloud, NormalConfig{}), GroundConfig{});
+  };
+  auto planeOf = [](const Segmenter& seg, const Rendered& r) {
+    const PreparedFrame p = seg.prepare(r.frame);
+    EXPECT_TRUE(p.ground.has_value());
+    return p.ground.value_or(GroundPlane{});
+  };
+  // Noise makes every frame's own estimate differ a little.
+  ASSERT_NE(estimated(a1).offset, estimated(a2).offset);
+
+  SegmenterConfig config;
+  config.ground.source = GroundSource::Estimated;
+  {
+    // Default: every frame its own estimate.
+    const Segmenter seg(config, nullptr);
+    EXPECT_EQ(planeOf(seg, a1).offset, estimated(a1).offset);
+    EXPECT_EQ(planeOf(seg, a2).offset, estimated(a2).offset);
+  }
+  config.ground.reestimate_every_frames = 2;
+  {
+    const Segmenter seg(config, nullptr);
+    EXPECT_EQ(planeOf(seg, a1).offset, estimated(a1).offset);
+    EXPECT_EQ(planeOf(seg, a2).offset, estimated(a1).offset);  // kept
+    EXPECT_EQ(planeOf(seg, a3).offset, estimated(a3).offset);  // second frame: estimated again
+  }
+  config.ground.reestimate_every_frames = 100;
+  {
+    const Segmenter seg(config, nullptr);
+    EXPECT_EQ(planeOf(seg, a1).offset, estimated(a1).offset);
+    EXPECT_EQ(planeOf(seg, a2).offset, estimated(a1).offset);
+    EXPECT_EQ(planeOf(seg, a3).offset, estimated(a1).offset);
+    // Another mount: the check fails and the floor is estimated again.
+    EXPECT_EQ(planeOf(seg, b).offset, estimated(b).offset);
+    EXPECT_NEAR(planeOf(seg, b).offset, lower.mount.height_m, 0.03);
+  }
 }
 
 TEST(EstimateGround, SlopedSurfaceBelowFloorLevelIsNotTheFloor) {

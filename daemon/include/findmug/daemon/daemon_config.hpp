@@ -45,6 +45,10 @@ struct DaemonConfig {
   // runs one after another on the source's thread; from 2: the threaded
   // pipeline with at most floor(max_cpu_cores) - 1 segmentation workers.
   double max_cpu_cores = 0.0;
+  // Freed memory glibc keeps in the heap for the next frame instead of
+  // returning it to the kernel (MB; 0 = glibc's own thresholds). A frame's
+  // buffers are then reused instead of being page-faulted in and zeroed again.
+  int heap_keep_mb = 256;
   double status_period_s = 1.0;       // FINDMUG_STATUS period
   double stats_window_s = 10.0;       // window of the status rates and latency percentiles
   bool publish_confidence = true;     // include per-pixel confidence in label images
