@@ -36,6 +36,7 @@
 #include <string>
 #include <vector>
 
+#include "findmug/settings.hpp"
 #include "findmug/tables.hpp"
 
 namespace findmug {
@@ -80,6 +81,11 @@ struct TableMapConfig {
 
 // Throws findmug::Error naming the setting (as `table_map.KEY`) when out of range.
 void validateTableMapConfig(const TableMapConfig& config);
+
+// The `table_map:` section of the config file, one key per field above. Its
+// ranges only keep single numbers sane; validateTableMapConfig has the final
+// word on consistency (see resolveTableMapConfig in config.hpp).
+const SettingsTable<TableMapConfig>& tableMapSettings();
 
 struct MappedTable {
   TableCluster table;  // map frame; table.id is the stable id (1, 2, ...; never reused)
