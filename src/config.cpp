@@ -44,7 +44,14 @@ std::string formatDouble(double v) { return formatSettingNumber(v); }
 // Builders for the kinds of settings, with inclusive ranges (settings.hpp).
 CoreSetting floatSetting(std::string key, std::function<float&(SegmenterConfig&)> field,
                          double lo, double hi) {
-  return numberSetting<SegmenterConfig, float>(std::move(key), std::move(field), lo, hi);
+  CoreSetting s = numberSetting<SegmenterConfig, float>(std::move(key), field, lo, hi);
+  // Printed as the float widened to double with 9 digits ("0.00999999978"):
+  // models store the feature settings in this text (extractionSettings) and
+  // are compared with it, so it must not change.
+  s.get = [field](const SegmenterConfig& c) {
+    return formatDouble(field(const_cast<SegmenterConfig&>(c)));
+  };
+  return s;
 }
 
 CoreSetting intSetting(std::string key, std::function<int&(SegmenterConfig&)> field, long long lo,

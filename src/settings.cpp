@@ -1,6 +1,7 @@
 // settings.cpp — the settings mechanism shared by every layer (see settings.hpp).
 #include "findmug/settings.hpp"
 
+#include <charconv>
 #include <sstream>
 
 #include "findmug/config.hpp"
@@ -18,6 +19,18 @@ std::string formatSettingNumber(double value) {
   s << value;
   return s.str();
 }
+
+namespace {
+template <typename Number>
+std::string shortestText(Number value) {
+  char text[64];
+  const auto end = std::to_chars(text, text + sizeof text, value);
+  return std::string(text, end.ptr);
+}
+}  // namespace
+
+std::string settingValueText(double value) { return shortestText(value); }
+std::string settingValueText(float value) { return shortestText(value); }
 
 bool parseSettingBool(const std::string& key, const std::string& value) {
   if (value == "true" || value == "yes" || value == "on" || value == "1") return true;

@@ -39,8 +39,12 @@ namespace findmug {
 // "invalid value 'V' for KEY (expected EXPECTED)".
 [[noreturn]] void throwBadSettingValue(const std::string& key, const std::string& value,
                                        const std::string& expected);
-// Values as printed back: numbers with 9 significant digits, as stored in models.
+// Numbers in messages (ranges): up to 9 significant digits, no exponent for 1e-4.
 std::string formatSettingNumber(double value);
+// A value as printed back (--check-config, Config::extra): the shortest text
+// that reads back as the same float or double ("0.15", not "0.150000006").
+std::string settingValueText(double value);
+std::string settingValueText(float value);
 bool parseSettingBool(const std::string& key, const std::string& value);
 
 template <typename T>
@@ -124,7 +128,7 @@ Setting<T> numberSetting(std::string key, std::function<Number&(T&)> field, doub
     }
     field(t) = static_cast<Number>(*x);
   };
-  s.get = [field](const T& t) { return formatSettingNumber(field(const_cast<T&>(t))); };
+  s.get = [field](const T& t) { return settingValueText(field(const_cast<T&>(t))); };
   return s;
 }
 

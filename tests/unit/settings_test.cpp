@@ -135,6 +135,7 @@ TEST(TableMapSettings, TheCoreParsesValidatesAndWritesBackItsSection) {
   EXPECT_EQ(m.forget_misses, TableMapConfig{}.forget_misses);
   EXPECT_EQ(c.extra.at("table_map.forget_misses"), "3");  // every key written back
   EXPECT_EQ(c.extra.at("table_map.view_max_range_m"), "4");
+  EXPECT_EQ(c.extra.at("table_map.match_height_m"), "0.15");  // the float's shortest text
   EXPECT_EQ(tableMapSettings().settings().size(), 10u);
 
   EXPECT_THAT(errorOf([] { parseConfig("table_map:\n  no_such_key: 1\n", "map.yaml"); }),
