@@ -104,8 +104,8 @@ const SettingsTable<DaemonConfig>& daemonSettings() {
         "daemon.shutdown_grace_s", [](D& d) -> double& { return d.shutdown_grace_s; }, 0, 10,
         "on SIGTERM, wait this long for frames in flight"));
     t.add(numberSetting<D, double>(
-        "daemon.source_timeout_s", [](D& d) -> double& { return d.source_timeout_s; }, 0.1,
-        3600, "a source silent this long counts as hung"));
+        "daemon.source_timeout_s", [](D& d) -> double& { return d.source_timeout_s; }, 0.1, 3600,
+        "a source silent this long counts as hung"));
     t.add(textSetting<D>(
         "daemon.log_level", [](D& d) -> std::string& { return d.log_level; },
         [](const std::string& v) -> std::string {

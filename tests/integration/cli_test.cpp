@@ -191,7 +191,8 @@ TEST(Cli, ConfigFromChecksTheDaemonsKeysWhereTheDaemonIsLinked) {
     (void)cli::configFrom(flags);
     ADD_FAILURE() << "daemon.wokers accepted";
   } catch (const Error& e) {
-    EXPECT_TRUE(has(e.what(), path + ": unknown setting 'daemon.wokers' (daemon keys: ")) << e.what();
+    EXPECT_TRUE(has(e.what(), path + ": unknown setting 'daemon.wokers' (daemon keys: "))
+        << e.what();
   }
   flags.overrides = {"daemon.workers=2"};
   std::ofstream(path) << "clients:\n  viewer_scale: 2\n";
