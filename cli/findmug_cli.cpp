@@ -4,6 +4,7 @@
 
 #include "findmug/version.hpp"
 #include "findmug/numbers.hpp"
+#include "findmug/settings.hpp"
 
 namespace findmug::cli {
 
@@ -31,7 +32,12 @@ void addConfigFlags(CLI::App& app, ConfigFlags& flags, const std::string& config
       });
 }
 
+void declareProjectSections() {
+  for (const char* name : kProjectSections) configSections().addSectionName(name);
+}
+
 Config configFrom(const ConfigFlags& flags) {
+  declareProjectSections();
   Config config = flags.config_path ? loadConfig(*flags.config_path) : Config{};
   for (const auto& kv : flags.overrides) applyOverride(config, kv);
   return config;

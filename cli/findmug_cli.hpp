@@ -13,6 +13,7 @@
 #pragma once
 
 #include <CLI/CLI.hpp>
+#include <array>
 #include <memory>
 #include <optional>
 #include <string>
@@ -25,6 +26,16 @@ namespace findmug::cli {
 // An app named `program` (used in messages and --version) with --version.
 std::unique_ptr<CLI::App> makeApp(const std::string& program, const std::string& description);
 
+// The config file is shared by the project's programs. These are the sections
+// that belong to one program and that every other one must accept unread
+// (findmug-train reads findmugd.yaml): the daemon's `daemon:` and `check:`,
+// the clients' `clients:`. The owner registers its section with its keys
+// (findmugd: daemon/daemon_config.cpp); others know only the name. The core's
+// own sections (SegmenterConfig and `table_map:`) are not listed here.
+inline constexpr std::array<const char*, 3> kProjectSections = {"daemon", "check", "clients"};
+// Registers kProjectSections by name in findmug::configSections(). Idempotent.
+void declareProjectSections();
+
 // --config FILE and repeatable --set KEY=VALUE.
 struct ConfigFlags {
   std::optional<std::string> config_path;
@@ -32,6 +43,7 @@ struct ConfigFlags {
 };
 void addConfigFlags(CLI::App& app, ConfigFlags& flags, const std::string& config_help);
 // The config those flags give: the --config file (or the defaults) with every --set on top.
+// Declares the project's sections first (declareProjectSections).
 // Throws findmug::Error naming the file or the setting that is wrong.
 Config configFrom(const ConfigFlags& flags);
 

@@ -10,7 +10,7 @@
 #include <thread>
 
 #include "findmug/error.hpp"
-#include "findmug/numbers.hpp"
+#include "findmug/settings.hpp"
 #include "findmug_cli.hpp"
 
 #ifndef FINDMUG_SYSCONF_DIR
@@ -40,291 +40,153 @@ int DaemonConfig::effectiveWorkers() const {
 
 namespace {
 
-[[noreturn]] void bad(const std::string& key, const std::string& value,
-                      const std::string& expected) {
-  throw Error("invalid value '" + value + "' for " + key + " (expected " + expected + ")");
-}
-
-long long toInt(const std::string& key, const std::string& v, long long lo, long long hi) {
-  const auto out = parseInteger(v);
-  if (!out || *out < lo || *out > hi) {
-    bad(key, v, "an integer in [" + std::to_string(lo) + ", " + std::to_string(hi) + "]");
+std::string lcmUrlRule(const std::string& v) {
+  if (!v.empty() && v.find("://") == std::string::npos) {
+    return "an LCM URL such as udpm://239.255.76.67:7667?ttl=0, or empty";
   }
-  return *out;
+  return {};
 }
 
-double toDouble(const std::string& key, const std::string& v, double lo, double hi) {
-  const auto out = parseNumber(v);
-  if (!out || *out < lo || *out > hi) {
-    bad(key, v, "a number in [" + std::to_string(lo) + ", " + std::to_string(hi) + "]");
-  }
-  return *out;
-}
-
-bool toBool(const std::string& key, const std::string& v) {
-  if (v == "true" || v == "yes" || v == "on" || v == "1") return true;
-  if (v == "false" || v == "no" || v == "off" || v == "0") return false;
-  bad(key, v, "true or false");
-}
-
-std::string fmt(double v) {
-  std::string s = std::to_string(v);
-  while (s.size() > 1 && s.back() == '0') s.pop_back();
-  if (!s.empty() && s.back() == '.') s.pop_back();
-  return s;
-}
-
-// One daemon key: how to read it into DaemonConfig and how to print it back.
-struct Key {
-  std::function<void(DaemonConfig&, const std::string& key, const std::string& value)> set;
-  std::function<std::string(const DaemonConfig&)> get;
-};
-
-const std::map<std::string, Key>& keys() {
+// The `daemon:` section, on the core's settings mechanism (findmug/settings.hpp).
+const SettingsTable<DaemonConfig>& daemonSettings() {
   using D = DaemonConfig;
-  static const std::map<std::string, Key> all = {
-      {"daemon.source",
-       {[](D& d, const std::string& k, const std::string& v) {
-          if (v.empty()) bad(k, v, "a frame source spec, e.g. openni2 or dataset:/path");
-          d.source = v;
+  static const SettingsTable<D> table = [] {
+    SettingsTable<D> t("daemon");
+    t.add(textSetting<D>(
+        "daemon.source", [](D& d) -> std::string& { return d.source; },
+        [](const std::string& v) {
+          return v.empty() ? "a frame source spec, e.g. openni2 or dataset:/path" : "";
         },
-        [](const D& d) { return d.source; }}},
-      {"daemon.lcm_url",
-       {[](D& d, const std::string& k, const std::string& v) {
-          if (!v.empty() && v.find("://") == std::string::npos) {
-            bad(k, v, "an LCM URL such as udpm://239.255.76.67:7667?ttl=0, or empty");
-          }
-          d.lcm_url = v;
-        },
-        [](const D& d) { return d.lcm_url; }}},
-      {"daemon.channel_suffix",
-       {[](D& d, const std::string& k, const std::string& v) {
+        "frame source spec"));
+    t.add(textSetting<D>(
+        "daemon.lcm_url", [](D& d) -> std::string& { return d.lcm_url; }, lcmUrlRule,
+        "output LCM provider"));
+    t.add(textSetting<D>(
+        "daemon.channel_suffix", [](D& d) -> std::string& { return d.channel_suffix; },
+        [](const std::string& v) -> std::string {
           for (char c : v) {
             if (!std::isalnum(static_cast<unsigned char>(c)) && c != '_') {
-              bad(k, v, "letters, digits and '_' only");
+              return "letters, digits and '_' only";
             }
           }
-          d.channel_suffix = v;
+          return {};
         },
-        [](const D& d) { return d.channel_suffix; }}},
-      {"daemon.model_path",
-       {[](D& d, const std::string& k, const std::string& v) {
-          if (v.empty()) bad(k, v, "the path of a .fmf model file");
-          d.model_path = v;
-        },
-        [](const D& d) { return d.model_path; }}},
-      {"daemon.queue_capacity",
-       {[](D& d, const std::string& k, const std::string& v) {
-          d.queue_capacity = static_cast<int>(toInt(k, v, 1, 64));
-        },
-        [](const D& d) { return std::to_string(d.queue_capacity); }}},
-      {"daemon.workers",
-       {[](D& d, const std::string& k, const std::string& v) {
-          d.workers = static_cast<int>(toInt(k, v, 0, 64));
-        },
-        [](const D& d) { return std::to_string(d.workers); }}},
-      {"daemon.max_cpu_cores",
-       {[](D& d, const std::string& k, const std::string& v) {
-          d.max_cpu_cores = toDouble(k, v, 0, 1024);
-        },
-        [](const D& d) { return fmt(d.max_cpu_cores); }}},
-      {"daemon.heap_keep_mb",
-       {[](D& d, const std::string& k, const std::string& v) {
-          d.heap_keep_mb = static_cast<int>(toInt(k, v, 0, 2047));
-        },
-        [](const D& d) { return std::to_string(d.heap_keep_mb); }}},
-      {"daemon.status_period_s",
-       {[](D& d, const std::string& k, const std::string& v) {
-          d.status_period_s = toDouble(k, v, 0.05, 60);
-        },
-        [](const D& d) { return fmt(d.status_period_s); }}},
-      {"daemon.stats_window_s",
-       {[](D& d, const std::string& k, const std::string& v) {
-          d.stats_window_s = toDouble(k, v, 1, 3600);
-        },
-        [](const D& d) { return fmt(d.stats_window_s); }}},
-      {"daemon.publish_confidence",
-       {[](D& d, const std::string& k, const std::string& v) {
-          d.publish_confidence = toBool(k, v);
-        },
-        [](const D& d) { return std::string(d.publish_confidence ? "true" : "false"); }}},
-      {"daemon.publish_tables",
-       {[](D& d, const std::string& k, const std::string& v) { d.publish_tables = toBool(k, v); },
-        [](const D& d) { return std::string(d.publish_tables ? "true" : "false"); }}},
-      {"daemon.exit_at_end_of_stream",
-       {[](D& d, const std::string& k, const std::string& v) {
-          d.exit_at_end_of_stream = toBool(k, v);
-        },
-        [](const D& d) { return std::string(d.exit_at_end_of_stream ? "true" : "false"); }}},
-      {"daemon.shutdown_grace_s",
-       {[](D& d, const std::string& k, const std::string& v) {
-          d.shutdown_grace_s = toDouble(k, v, 0, 10);
-        },
-        [](const D& d) { return fmt(d.shutdown_grace_s); }}},
-      {"daemon.source_timeout_s",
-       {[](D& d, const std::string& k, const std::string& v) {
-          d.source_timeout_s = toDouble(k, v, 0.1, 3600);
-        },
-        [](const D& d) { return fmt(d.source_timeout_s); }}},
-      {"daemon.log_level",
-       {[](D& d, const std::string& k, const std::string& v) {
+        "appended as _SUFFIX to every channel name"));
+    t.add(textSetting<D>(
+        "daemon.model_path", [](D& d) -> std::string& { return d.model_path; },
+        [](const std::string& v) { return v.empty() ? "the path of a .fmf model file" : ""; },
+        "forest model file"));
+    t.add(integerSetting<D, int>(
+        "daemon.queue_capacity", [](D& d) -> int& { return d.queue_capacity; }, 1, 64,
+        "frames per queue between stages"));
+    t.add(integerSetting<D, int>(
+        "daemon.workers", [](D& d) -> int& { return d.workers; }, 0, 64,
+        "segmentation workers; 0 = one per CPU core"));
+    t.add(numberSetting<D, double>(
+        "daemon.max_cpu_cores", [](D& d) -> double& { return d.max_cpu_cores; }, 0, 1024,
+        "CPU budget in cores; 0 = none"));
+    t.add(integerSetting<D, int>(
+        "daemon.heap_keep_mb", [](D& d) -> int& { return d.heap_keep_mb; }, 0, 2047,
+        "MB of freed heap malloc keeps for the next frames; 0 = glibc's defaults"));
+    t.add(numberSetting<D, double>(
+        "daemon.status_period_s", [](D& d) -> double& { return d.status_period_s; }, 0.05, 60,
+        "FINDMUG_STATUS period"));
+    t.add(numberSetting<D, double>(
+        "daemon.stats_window_s", [](D& d) -> double& { return d.stats_window_s; }, 1, 3600,
+        "window of the status rates and latency percentiles"));
+    t.add(boolSetting<D>(
+        "daemon.publish_confidence", [](D& d) -> bool& { return d.publish_confidence; },
+        "per-pixel confidence in label images"));
+    t.add(boolSetting<D>(
+        "daemon.publish_tables", [](D& d) -> bool& { return d.publish_tables; },
+        "publish FINDMUG_TABLES"));
+    t.add(boolSetting<D>(
+        "daemon.exit_at_end_of_stream", [](D& d) -> bool& { return d.exit_at_end_of_stream; },
+        "finite source exhausted: drain, publish, exit 0"));
+    t.add(numberSetting<D, double>(
+        "daemon.shutdown_grace_s", [](D& d) -> double& { return d.shutdown_grace_s; }, 0, 10,
+        "on SIGTERM, wait this long for frames in flight"));
+    t.add(numberSetting<D, double>(
+        "daemon.source_timeout_s", [](D& d) -> double& { return d.source_timeout_s; }, 0.1, 3600,
+        "a source silent this long counts as hung"));
+    t.add(textSetting<D>(
+        "daemon.log_level", [](D& d) -> std::string& { return d.log_level; },
+        [](const std::string& v) -> std::string {
           if (v != "trace" && v != "debug" && v != "info" && v != "warn" && v != "error") {
-            bad(k, v, "one of trace debug info warn error");
+            return "one of trace debug info warn error";
           }
-          d.log_level = v;
+          return {};
         },
-        [](const D& d) { return d.log_level; }}},
-      {"daemon.pose_input",
-       {[](D& d, const std::string& k, const std::string& v) { d.pose_input = toBool(k, v); },
-        [](const D& d) { return std::string(d.pose_input ? "true" : "false"); }}},
-      {"daemon.pose_url",
-       {[](D& d, const std::string& k, const std::string& v) {
-          if (!v.empty() && v.find("://") == std::string::npos) {
-            bad(k, v, "an LCM URL such as udpm://239.255.76.67:7667?ttl=0, or empty");
-          }
-          d.pose_url = v;
-        },
-        [](const D& d) { return d.pose_url; }}},
-      {"daemon.pose_max_age_s",
-       {[](D& d, const std::string& k, const std::string& v) {
-          d.pose_max_age_s = toDouble(k, v, 0, 10);
-        },
-        [](const D& d) { return fmt(d.pose_max_age_s); }}},
-      {"daemon.pose_history_s",
-       {[](D& d, const std::string& k, const std::string& v) {
-          d.pose_history_s = toDouble(k, v, 0.1, 3600);
-        },
-        [](const D& d) { return fmt(d.pose_history_s); }}},
-      {"daemon.publish_table_map",
-       {[](D& d, const std::string& k, const std::string& v) {
-          d.publish_table_map = toBool(k, v);
-        },
-        [](const D& d) { return std::string(d.publish_table_map ? "true" : "false"); }}},
-  };
-  return all;
+        "trace, debug, info, warn, error"));
+    t.add(boolSetting<D>(
+        "daemon.pose_input", [](D& d) -> bool& { return d.pose_input; },
+        "listen for robot_pose_t"));
+    t.add(textSetting<D>(
+        "daemon.pose_url", [](D& d) -> std::string& { return d.pose_url; }, lcmUrlRule,
+        "pose LCM provider; empty = the output provider"));
+    t.add(numberSetting<D, double>(
+        "daemon.pose_max_age_s", [](D& d) -> double& { return d.pose_max_age_s; }, 0, 10,
+        "a frame takes the closest pose only this close in time"));
+    t.add(numberSetting<D, double>(
+        "daemon.pose_history_s", [](D& d) -> double& { return d.pose_history_s; }, 0.1, 3600,
+        "poses kept for the lookup"));
+    t.add(boolSetting<D>(
+        "daemon.publish_table_map", [](D& d) -> bool& { return d.publish_table_map; },
+        "publish FINDMUG_TABLE_MAP after each map update"));
+    return t;
+  }();
+  return table;
 }
 
-// The table_map section: findmug::TableMapConfig, one key per field. Ranges
-// here only keep the numbers sane; validateTableMapConfig (core) has the
-// final word on consistency.
-const std::map<std::string, Key>& tableMapKeys() {
-  using D = DaemonConfig;
-  static const std::map<std::string, Key> all = {
-      {"table_map.confirm_sightings",
-       {[](D& d, const std::string& k, const std::string& v) {
-          d.table_map.confirm_sightings = static_cast<int>(toInt(k, v, 1, 1000));
-        },
-        [](const D& d) { return std::to_string(d.table_map.confirm_sightings); }}},
-      {"table_map.forget_misses",
-       {[](D& d, const std::string& k, const std::string& v) {
-          d.table_map.forget_misses = static_cast<int>(toInt(k, v, 1, 1000));
-        },
-        [](const D& d) { return std::to_string(d.table_map.forget_misses); }}},
-      {"table_map.tentative_timeout_s",
-       {[](D& d, const std::string& k, const std::string& v) {
-          d.table_map.tentative_timeout_s = toDouble(k, v, 0, 86400);
-        },
-        [](const D& d) { return fmt(d.table_map.tentative_timeout_s); }}},
-      {"table_map.match_gap_m",
-       {[](D& d, const std::string& k, const std::string& v) {
-          d.table_map.match_gap_m = static_cast<float>(toDouble(k, v, 0, 5));
-        },
-        [](const D& d) { return fmt(d.table_map.match_gap_m); }}},
-      {"table_map.match_height_m",
-       {[](D& d, const std::string& k, const std::string& v) {
-          d.table_map.match_height_m = static_cast<float>(toDouble(k, v, 0, 2));
-        },
-        [](const D& d) { return fmt(d.table_map.match_height_m); }}},
-      {"table_map.view_half_angle_rad",
-       {[](D& d, const std::string& k, const std::string& v) {
-          d.table_map.view_half_angle_rad = static_cast<float>(toDouble(k, v, 0, 3.14159));
-        },
-        [](const D& d) { return fmt(d.table_map.view_half_angle_rad); }}},
-      {"table_map.view_min_range_m",
-       {[](D& d, const std::string& k, const std::string& v) {
-          d.table_map.view_min_range_m = static_cast<float>(toDouble(k, v, 0, 100));
-        },
-        [](const D& d) { return fmt(d.table_map.view_min_range_m); }}},
-      {"table_map.view_max_range_m",
-       {[](D& d, const std::string& k, const std::string& v) {
-          d.table_map.view_max_range_m = static_cast<float>(toDouble(k, v, 0, 100));
-        },
-        [](const D& d) { return fmt(d.table_map.view_max_range_m); }}},
-      {"table_map.max_observations",
-       {[](D& d, const std::string& k, const std::string& v) {
-          d.table_map.max_observations = static_cast<int>(toInt(k, v, 1, 1000));
-        },
-        [](const D& d) { return std::to_string(d.table_map.max_observations); }}},
-      {"table_map.position_match_m",
-       {[](D& d, const std::string& k, const std::string& v) {
-          d.table_map.position_match_m = static_cast<float>(toDouble(k, v, 0, 5));
-        },
-        [](const D& d) { return fmt(d.table_map.position_match_m); }}},
-  };
-  return all;
+// The `check:` section: findmugd --check (check.hpp).
+const SettingsTable<CheckConfig>& checkSettings() {
+  using C = CheckConfig;
+  static const SettingsTable<C> table = [] {
+    SettingsTable<C> t("check");
+    t.add(integerSetting<C, int>(
+        "check.frames", [](C& c) -> int& { return c.frames; }, 1, 10000,
+        "frames to read from the source"));
+    t.add(numberSetting<C, double>(
+        "check.timeout_s", [](C& c) -> double& { return c.timeout_s; }, 0.1, 3600,
+        "give up waiting for them after this long"));
+    t.add(numberSetting<C, double>(
+        "check.min_valid_depth", [](C& c) -> double& { return c.min_valid_depth; }, 0, 1,
+        "below this share of pixels with depth: a warning"));
+    return t;
+  }();
+  return table;
 }
 
-// The check section: findmugd --check (check.hpp).
-const std::map<std::string, Key>& checkKeys() {
-  using D = DaemonConfig;
-  static const std::map<std::string, Key> all = {
-      {"check.frames",
-       {[](D& d, const std::string& k, const std::string& v) {
-          d.check.frames = static_cast<int>(toInt(k, v, 1, 10000));
-        },
-        [](const D& d) { return std::to_string(d.check.frames); }}},
-      {"check.timeout_s",
-       {[](D& d, const std::string& k, const std::string& v) {
-          d.check.timeout_s = toDouble(k, v, 0.1, 3600);
-        },
-        [](const D& d) { return fmt(d.check.timeout_s); }}},
-      {"check.min_valid_depth",
-       {[](D& d, const std::string& k, const std::string& v) {
-          d.check.min_valid_depth = toDouble(k, v, 0, 1);
-        },
-        [](const D& d) { return fmt(d.check.min_valid_depth); }}},
-  };
-  return all;
-}
-
-std::string keyList(const std::map<std::string, Key>& keys) {
-  std::string known;
-  for (const auto& [name, k] : keys) known += (known.empty() ? "" : ", ") + name;
-  return known;
-}
+// findmugd's sections join the registry parseConfig consults before main()
+// runs, so every program linking this library (findmugd, its tests, the
+// fuzzers) checks daemon and check keys while it reads the file.
+[[maybe_unused]] const bool kSectionsRegistered = [] {
+  cli::declareProjectSections();
+  configSections().addSection("daemon", [](const std::string& key, const std::string& value) {
+    daemonSettings().check(key, value);
+  });
+  configSections().addSection("check", [](const std::string& key, const std::string& value) {
+    checkSettings().check(key, value);
+  });
+  return true;
+}();
 
 }  // namespace
 
 DaemonConfig resolveDaemonConfig(Config& config) {
   DaemonConfig daemon;
   for (const auto& [key, value] : config.extra) {
-    const std::map<std::string, Key>* section = nullptr;
-    std::string section_name;
     if (key.rfind("daemon.", 0) == 0) {
-      section = &keys();
-      section_name = "daemon";
-    } else if (key.rfind("table_map.", 0) == 0) {
-      section = &tableMapKeys();
-      section_name = "table_map";
+      daemonSettings().set(daemon, key, value);
     } else if (key.rfind("check.", 0) == 0) {
-      section = &checkKeys();
-      section_name = "check";
-    } else {
-      continue;  // other owners' sections
-    }
-    const auto it = section->find(key);
-    if (it == section->end()) {
-      throw Error("unknown setting '" + key + "' (" + section_name +
-                  " keys: " + keyList(*section) + ")");
-    }
-    it->second.set(daemon, key, value);
+      checkSettings().set(daemon.check, key, value);
+    }  // other owners' sections
   }
-  // Consistency across keys (e.g. view_min_range_m below view_max_range_m);
-  // the message names the key as table_map.KEY.
-  validateTableMapConfig(daemon.table_map);
-  for (const auto& [name, k] : keys()) config.extra[name] = k.get(daemon);
-  for (const auto& [name, k] : tableMapKeys()) config.extra[name] = k.get(daemon);
-  for (const auto& [name, k] : checkKeys()) config.extra[name] = k.get(daemon);
+  // The core's table_map section: its keys, then consistency across them
+  // (validateTableMapConfig names the key as table_map.KEY).
+  daemon.table_map = resolveTableMapConfig(config);
+  for (const auto& [key, value] : daemonSettings().values(daemon)) config.extra[key] = value;
+  for (const auto& [key, value] : checkSettings().values(daemon.check)) config.extra[key] = value;
   return daemon;
 }
 

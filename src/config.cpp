@@ -12,21 +12,14 @@
 
 #include "findmug/error.hpp"
 #include "findmug/numbers.hpp"
+#include "findmug/settings.hpp"
 
 namespace findmug {
 
 namespace {
 
-// Sections the core does not interpret; their keys are passed through in
-// Config::extra for the daemon and clients to validate themselves.
-const std::set<std::string> kPassThroughSections = {"daemon", "clients", "table_map", "check"};
-
-// One named setting: how to parse it into the config and how to print it.
-struct Setting {
-  std::string key;
-  std::function<void(SegmenterConfig&, const std::string& value, const std::string& origin)> set;
-  std::function<std::string(const SegmenterConfig&)> get;
-};
+// One named setting of the segmenter (the shared mechanism, settings.hpp).
+using CoreSetting = Setting<SegmenterConfig>;
 
 [[noreturn]] void badValue(const std::string& origin, const std::string& key,
                            const std::string& value, const std::string& expected) {
@@ -46,96 +39,40 @@ long long parseInt(const std::string& origin, const std::string& key, const std:
   return *out;
 }
 
-bool parseBool(const std::string& origin, const std::string& key, const std::string& value) {
-  if (value == "true" || value == "yes" || value == "on" || value == "1") return true;
-  if (value == "false" || value == "no" || value == "off" || value == "0") return false;
-  badValue(origin, key, value, "true or false");
-}
+std::string formatDouble(double v) { return formatSettingNumber(v); }
 
-std::string formatDouble(double v) {
-  std::ostringstream s;
-  s.precision(9);
-  s << v;
-  return s.str();
-}
-
-// Builders for the kinds of settings, with inclusive ranges.
-Setting floatSetting(std::string key, std::function<float&(SegmenterConfig&)> field, double lo,
-                     double hi) {
-  Setting s;
-  s.key = key;
-  s.set = [key, field, lo, hi](SegmenterConfig& c, const std::string& v, const std::string& o) {
-    const double x = parseDouble(o, key, v);
-    if (x < lo || x > hi) {
-      badValue(o, key, v, "a number in [" + formatDouble(lo) + ", " + formatDouble(hi) + "]");
-    }
-    field(c) = static_cast<float>(x);
-  };
+// Builders for the kinds of settings, with inclusive ranges (settings.hpp).
+CoreSetting floatSetting(std::string key, std::function<float&(SegmenterConfig&)> field,
+                         double lo, double hi) {
+  CoreSetting s = numberSetting<SegmenterConfig, float>(std::move(key), field, lo, hi);
+  // Printed as the float widened to double with 9 digits ("0.00999999978"):
+  // models store the feature settings in this text (extractionSettings) and
+  // are compared with it, so it must not change.
   s.get = [field](const SegmenterConfig& c) {
     return formatDouble(field(const_cast<SegmenterConfig&>(c)));
   };
   return s;
 }
 
-Setting intSetting(std::string key, std::function<int&(SegmenterConfig&)> field, long long lo,
-                   long long hi) {
-  Setting s;
-  s.key = key;
-  s.set = [key, field, lo, hi](SegmenterConfig& c, const std::string& v, const std::string& o) {
-    const long long x = parseInt(o, key, v);
-    if (x < lo || x > hi) {
-      badValue(o, key, v,
-               "an integer in [" + std::to_string(lo) + ", " + std::to_string(hi) + "]");
-    }
-    field(c) = static_cast<int>(x);
-  };
-  s.get = [field](const SegmenterConfig& c) {
-    return std::to_string(field(const_cast<SegmenterConfig&>(c)));
-  };
-  return s;
+CoreSetting intSetting(std::string key, std::function<int&(SegmenterConfig&)> field, long long lo,
+                       long long hi) {
+  return integerSetting<SegmenterConfig, int>(std::move(key), std::move(field), lo, hi);
 }
 
-Setting boolSetting(std::string key, std::function<bool&(SegmenterConfig&)> field) {
-  Setting s;
-  s.key = key;
-  s.set = [key, field](SegmenterConfig& c, const std::string& v, const std::string& o) {
-    field(c) = parseBool(o, key, v);
-  };
-  s.get = [field](const SegmenterConfig& c) {
-    return std::string(field(const_cast<SegmenterConfig&>(c)) ? "true" : "false");
-  };
-  return s;
+CoreSetting boolSetting(std::string key, std::function<bool&(SegmenterConfig&)> field) {
+  return findmug::boolSetting<SegmenterConfig>(std::move(key), std::move(field));
 }
 
 template <typename Enum>
-Setting enumSetting(std::string key, std::function<Enum&(SegmenterConfig&)> field,
-                    std::vector<std::pair<std::string, Enum>> names) {
-  Setting s;
-  s.key = key;
-  s.set = [key, field, names](SegmenterConfig& c, const std::string& v, const std::string& o) {
-    for (const auto& [name, value] : names) {
-      if (name == v) {
-        field(c) = value;
-        return;
-      }
-    }
-    std::string expected = "one of";
-    for (const auto& n : names) expected += " " + n.first;
-    badValue(o, key, v, expected);
-  };
-  s.get = [field, names](const SegmenterConfig& c) {
-    const Enum e = field(const_cast<SegmenterConfig&>(c));
-    for (const auto& [name, value] : names) {
-      if (value == e) return name;
-    }
-    return std::string("?");
-  };
-  return s;
+CoreSetting enumSetting(std::string key, std::function<Enum&(SegmenterConfig&)> field,
+                        std::vector<std::pair<std::string, Enum>> names) {
+  return findmug::enumSetting<SegmenterConfig, Enum>(std::move(key), std::move(field),
+                                                     std::move(names));
 }
 
-const std::vector<Setting>& settings() {
+const std::vector<CoreSetting>& settings() {
   using C = SegmenterConfig;
-  static const std::vector<Setting> all = {
+  static const std::vector<CoreSetting> all = {
       floatSetting("cloud.max_depth_m", [](C& c) -> float& { return c.max_depth_m; }, 0.5, 20),
       intSetting("normals.window_radius_px",
                  [](C& c) -> int& { return c.normals.window_radius_px; }, 1, 32),
@@ -296,14 +233,25 @@ void setValue(Config& config, const std::string& key, const std::string& value,
     throw Error(origin + ": setting '" + key + "' must be of the form section.name");
   }
   const std::string section = key.substr(0, dot);
-  if (kPassThroughSections.count(section)) {
+  // Sections outside SegmenterConfig, registered by their owners (settings.hpp):
+  // checked now when the owner gave a check, kept as text for it to resolve.
+  if (configSections().has(section)) {
+    try {
+      configSections().check(section, key, value);
+    } catch (const Error& e) {
+      throw Error(origin + ": " + e.what());
+    }
     config.extra[key] = value;
     return;
   }
   if (setSpecial(config.segmenter, key, value, origin)) return;
   for (const auto& s : settings()) {
     if (s.key == key) {
-      s.set(config.segmenter, value, origin);
+      try {
+        s.set(config.segmenter, value);
+      } catch (const Error& e) {
+        throw Error(origin + ": " + e.what());
+      }
       return;
     }
   }
@@ -420,6 +368,17 @@ RandomForest::Settings extractionSettings(const SegmenterConfig& config) {
       out.emplace_back(s.key, s.get(config));
     }
   }
+  return out;
+}
+
+TableMapConfig resolveTableMapConfig(Config& config) {
+  const auto& table = tableMapSettings();
+  TableMapConfig out;
+  for (const auto& [key, value] : config.extra) {
+    if (key.rfind(table.section() + ".", 0) == 0) table.set(out, key, value);
+  }
+  validateTableMapConfig(out);
+  for (const auto& [key, value] : table.values(out)) config.extra[key] = value;
   return out;
 }
 

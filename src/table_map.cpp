@@ -426,4 +426,43 @@ TableMapUpdate TableMap::update(const std::vector<TableCluster>& tables_base,
   return result;
 }
 
+const SettingsTable<TableMapConfig>& tableMapSettings() {
+  using M = TableMapConfig;
+  static const SettingsTable<M> table = [] {
+    SettingsTable<M> t("table_map");
+    t.add(integerSetting<M, int>(
+        "table_map.confirm_sightings", [](M& m) -> int& { return m.confirm_sightings; }, 1, 1000,
+        "sightings (updates with a match) to confirm a table"));
+    t.add(integerSetting<M, int>(
+        "table_map.forget_misses", [](M& m) -> int& { return m.forget_misses; }, 1, 1000,
+        "consecutive expected-but-unseen updates to forget a table"));
+    t.add(numberSetting<M, double>(
+        "table_map.tentative_timeout_s", [](M& m) -> double& { return m.tentative_timeout_s; },
+        0, 86400, "unconfirmed tables older than this are dropped"));
+    t.add(numberSetting<M, float>(
+        "table_map.match_gap_m", [](M& m) -> float& { return m.match_gap_m; }, 0, 5,
+        "footprints this close may be one table"));
+    t.add(numberSetting<M, float>(
+        "table_map.match_height_m", [](M& m) -> float& { return m.match_height_m; }, 0, 2,
+        "... when their top heights differ by at most this"));
+    t.add(numberSetting<M, float>(
+        "table_map.view_half_angle_rad", [](M& m) -> float& { return m.view_half_angle_rad; },
+        0, 3.14159, "half opening angle of the camera's view on the floor"));
+    t.add(numberSetting<M, float>(
+        "table_map.view_min_range_m", [](M& m) -> float& { return m.view_min_range_m; }, 0, 100,
+        "near end of the range where a mapped table is expected in view"));
+    t.add(numberSetting<M, float>(
+        "table_map.view_max_range_m", [](M& m) -> float& { return m.view_max_range_m; }, 0, 100,
+        "far end of that range"));
+    t.add(integerSetting<M, int>(
+        "table_map.max_observations", [](M& m) -> int& { return m.max_observations; }, 1, 1000,
+        "newest observations kept per table"));
+    t.add(numberSetting<M, float>(
+        "table_map.position_match_m", [](M& m) -> float& { return m.position_match_m; }, 0, 5,
+        "observed search position this near a recomputed one lends its verdict"));
+    return t;
+  }();
+  return table;
+}
+
 }  // namespace findmug

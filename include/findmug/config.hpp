@@ -2,8 +2,10 @@
 //
 // Keys are `section.name` (e.g. `forest.num_trees`, `mrf.lambda`,
 // `overseg.seed_resolution_m`, `tables.safety_distance_m`). Unknown keys and
-// bad values are errors that name the key. Sections other than the core ones
-// (e.g. `daemon`) are kept as raw key/value pairs for their owners to read.
+// bad values are errors that name the key. Sections outside SegmenterConfig
+// are accepted only when registered (settings.hpp: configSections(); the core
+// registers `table_map`, other layers their own) and are kept as raw
+// key/value pairs in Config::extra for their owners to resolve.
 #pragma once
 
 #include <map>
@@ -17,6 +19,7 @@
 #include "findmug/mrf.hpp"
 #include "findmug/oversegmentation.hpp"
 #include "findmug/region_features.hpp"
+#include "findmug/table_map.hpp"
 #include "findmug/table_metrics.hpp"
 #include "findmug/tables.hpp"
 
@@ -38,7 +41,8 @@ struct SegmenterConfig {
 
 struct Config {
   SegmenterConfig segmenter;
-  // Everything under sections the core does not own, flattened: "daemon.source" -> "openni2".
+  // Everything under the registered sections outside SegmenterConfig, flattened:
+  // "daemon.source" -> "openni2", "table_map.forget_misses" -> "3".
   std::map<std::string, std::string> extra;
 };
 
@@ -49,6 +53,11 @@ Config loadConfig(const std::string& path);
 void applyOverride(Config& config, const std::string& key_equals_value);
 // The effective config as YAML, for the start-up log and reports.
 std::string dumpConfig(const Config& config);
+
+// The `table_map:` section: reads every "table_map.*" entry of config.extra
+// (tableMapSettings), checks consistency (validateTableMapConfig), writes the
+// effective values of every key back. Throws findmug::Error naming the key.
+TableMapConfig resolveTableMapConfig(Config& config);
 
 // The settings that shape the features (cloud.*, normals.*, overseg.*,
 // features.* except the training-only features.context_cross_fit_folds), as

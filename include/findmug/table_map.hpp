@@ -37,6 +37,7 @@
 #include <vector>
 
 #include "findmug/pose2d.hpp"
+#include "findmug/settings.hpp"
 #include "findmug/tables.hpp"
 
 namespace findmug {
@@ -67,6 +68,11 @@ struct TableMapConfig {
 
 // Throws findmug::Error naming the setting (as `table_map.KEY`) when out of range.
 void validateTableMapConfig(const TableMapConfig& config);
+
+// The `table_map:` section of the config file, one key per field above. Its
+// ranges only keep single numbers sane; validateTableMapConfig has the final
+// word on consistency (see resolveTableMapConfig in config.hpp).
+const SettingsTable<TableMapConfig>& tableMapSettings();
 
 struct MappedTable {
   TableCluster table;  // map frame; table.id is the stable id (1, 2, ...; never reused)

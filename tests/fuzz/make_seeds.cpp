@@ -28,6 +28,7 @@
 #include "findmug/image_io.hpp"
 #include "findmug/io/lcm_codec.hpp"
 #include "findmug/io/pcl_frames.hpp"
+#include "findmug_cli.hpp"
 #include "fuzz_support.hpp"
 #include "lcm_samples.hpp"
 
@@ -196,6 +197,7 @@ void modelSeeds(SeedWriter& w, const fs::path& scratch) {
 }
 
 void configSeeds(SeedWriter& w, const fs::path& source_dir) {
+  cli::declareProjectSections();  // findmugd.yaml has the daemon's sections
   auto checkYaml = [](const std::string& b) { (void)parseConfig(b, "seed"); };
   w.write("config_yaml", "defaults", dumpConfig(Config{}), checkYaml);
   w.write("config_yaml", "findmugd", readFile(source_dir / "daemon/findmugd.yaml"), checkYaml);

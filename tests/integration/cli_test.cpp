@@ -160,6 +160,47 @@ TEST(Cli, TrainAndEvalReadBothFlagFormsAndLastValueWins) {
   EXPECT_FALSE(has(r.err, "/nonexistent/first")) << r.err;
 }
 
+// findmug-eval reads findmugd's file without knowing the daemon's keys: the
+// project's other sections are accepted by name (cli::kProjectSections) and
+// kept, a section nobody registered is refused naming the setting.
+TEST(Cli, EvalAcceptsTheDaemonsSectionsByNameAndRefusesUnknownOnes) {
+  const std::string dir = ::testing::TempDir();
+  const std::string shared = dir + "/cli_test_shared.yaml";
+  const std::string typo = dir + "/cli_test_typo.yaml";
+  std::ofstream(shared) << "daemon:\n  not_a_key_eval_knows: 1\nclients:\n  viewer_scale: 2\n"
+                           "check:\n  frames: 3\nforest:\n  num_trees: 3\n";
+  std::ofstream(typo) << "forrest:\n  num_trees: 3\n";
+  const std::string eval(FINDMUG_EVAL_EXE);
+  const ProgramRun ok = runProgram(eval + " --config " + shared + " --data /nonexistent/d");
+  EXPECT_EQ(ok.exit_code, 1) << ok.err;
+  EXPECT_TRUE(has(ok.err, "/nonexistent/d")) << ok.err;  // got past the config
+  EXPECT_FALSE(has(ok.err, "not_a_key_eval_knows")) << ok.err;
+  const ProgramRun bad = runProgram(eval + " --config " + typo + " --data /nonexistent/d");
+  EXPECT_EQ(bad.exit_code, 1) << bad.err;
+  EXPECT_TRUE(has(bad.err, "unknown setting 'forrest.num_trees'")) << bad.err;
+}
+
+// In a program that links the daemon (as this test does), findmugd registers
+// its sections with their keys: the same file is checked while it is read.
+TEST(Cli, ConfigFromChecksTheDaemonsKeysWhereTheDaemonIsLinked) {
+  const std::string path = ::testing::TempDir() + "/cli_test_daemon.yaml";
+  std::ofstream(path) << "daemon:\n  wokers: 2\nclients:\n  viewer_scale: 2\n";
+  cli::ConfigFlags flags;
+  flags.config_path = path;
+  try {
+    (void)cli::configFrom(flags);
+    ADD_FAILURE() << "daemon.wokers accepted";
+  } catch (const Error& e) {
+    EXPECT_TRUE(has(e.what(), path + ": unknown setting 'daemon.wokers' (daemon keys: "))
+        << e.what();
+  }
+  flags.overrides = {"daemon.workers=2"};
+  std::ofstream(path) << "clients:\n  viewer_scale: 2\n";
+  const Config config = cli::configFrom(flags);
+  EXPECT_EQ(config.extra.at("clients.viewer_scale"), "2");
+  EXPECT_EQ(config.extra.at("daemon.workers"), "2");
+}
+
 #if defined(FINDMUG_REPLAY_EXE) && defined(FINDMUG_REPLAY_PROBE_EXE) && \
     defined(FINDMUG_SEQUENTIAL_EXE)
 TEST(Cli, ReplayHelpersGiveHelpVersionAndNameBadFlags) {

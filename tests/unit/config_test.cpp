@@ -6,12 +6,21 @@
 
 #include "findmug/config.hpp"
 #include "findmug/error.hpp"
+#include "findmug/settings.hpp"
 #include "test_data.hpp"
 
 namespace findmug {
 namespace {
 
 using ::testing::HasSubstr;
+
+// This program reads the daemon's file as findmug-train does: it knows the
+// daemon's sections by name only (what cli::declareProjectSections does).
+[[maybe_unused]] const bool kDaemonSectionsDeclared = [] {
+  configSections().addSectionName("daemon");
+  configSections().addSectionName("check");
+  return true;
+}();
 
 std::string errorOf(const std::function<void()>& f) {
   try {

@@ -7,7 +7,10 @@
 // findmug::Error naming the key, and start-up stops.
 //
 // The `table_map:` section (Config::extra "table_map.NAME") configures the
-// persistent table map (findmug::TableMapConfig) and is validated here too.
+// persistent table map (findmug::TableMapConfig); the core owns and checks it
+// (findmug::resolveTableMapConfig), resolveDaemonConfig puts it into DaemonConfig.
+// This library registers `daemon` and `check` in findmug::configSections()
+// when it is loaded (settings.hpp), so parseConfig checks their keys as it reads.
 //
 // Precedence, lowest first: built-in defaults < YAML file < command-line
 // flags. daemon.lcm_url left empty means $LCM_DEFAULT_URL, then liblcm's
@@ -81,8 +84,9 @@ struct DaemonConfig {
   bool singleThreaded() const { return max_cpu_cores > 0.0 && max_cpu_cores < 2.0; }
 };
 
-// Reads and validates every "daemon.*" entry of `config.extra`, then writes
-// the effective daemon values back into it (so dumpConfig shows all of them).
+// Reads and validates every "daemon.*", "check.*" and "table_map.*" entry of
+// `config.extra`, then writes the effective values back into it (so
+// dumpConfig shows all of them).
 // Throws findmug::Error naming the key for unknown keys and bad values.
 DaemonConfig resolveDaemonConfig(Config& config);
 
