@@ -18,6 +18,8 @@
 // config (ground.source auto: NYU frames carry no
 // extrinsics, so the floor is estimated from the frame, as in the daemon).
 // Prints a Markdown table for BENCHMARKS.md section 9.
+#include <malloc.h>
+
 #include <algorithm>
 #include <array>
 #include <atomic>
@@ -28,8 +30,8 @@
 #include <string>
 #include <vector>
 
-#include <malloc.h>
-
+#include "bench_support.hpp"
+#include "counting_new.hpp"  // this program's operator new counts allocations
 #include "findmug/config.hpp"
 #include "findmug/dataset.hpp"
 #include "findmug/error.hpp"
@@ -37,32 +39,10 @@
 #include "test_data.hpp"
 
 namespace {
-std::atomic<std::uint64_t> g_news{0}, g_bytes{0};
-}  // namespace
-
-// Counting allocator: every operator new of this program goes through here.
-void* operator new(std::size_t size) {
-  g_news.fetch_add(1, std::memory_order_relaxed);
-  g_bytes.fetch_add(size, std::memory_order_relaxed);
-  if (void* p = std::malloc(size == 0 ? 1 : size)) return p;
-  throw std::bad_alloc();
-}
-void* operator new[](std::size_t size) { return operator new(size); }
-void operator delete(void* p) noexcept { std::free(p); }
-void operator delete[](void* p) noexcept { std::free(p); }
-void operator delete(void* p, std::size_t) noexcept { std::free(p); }
-void operator delete[](void* p, std::size_t) noexcept { std::free(p); }
-
-namespace {
 
 using namespace findmug;
 
-double median(std::vector<double> v) {
-  if (v.empty()) return 0;
-  std::sort(v.begin(), v.end());
-  const std::size_t n = v.size();
-  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
-}
+using bench::median;
 
 double percentile(std::vector<double> v, double p) {
   if (v.empty()) return 0;
@@ -79,14 +59,22 @@ int run(int argc, char** argv) {
   std::string digest_path;
   int heap_keep_mb = 0;
   for (int i = 1; i + 1 < argc; i += 2) {
-    if (!std::strcmp(argv[i], "--data")) data = argv[i + 1];
-    else if (!std::strcmp(argv[i], "--model")) model_path = argv[i + 1];
-    else if (!std::strcmp(argv[i], "--passes")) passes = std::max(1, std::atoi(argv[i + 1]));
-    else if (!std::strcmp(argv[i], "--digest")) digest_path = argv[i + 1];
-    else if (!std::strcmp(argv[i], "--heap-keep-mb")) heap_keep_mb = std::atoi(argv[i + 1]);
-    else if (!std::strcmp(argv[i], "--config")) config = loadConfig(argv[i + 1]);
-    else if (!std::strcmp(argv[i], "--set")) applyOverride(config, argv[i + 1]);
-    else throw Error(std::string("unknown flag ") + argv[i]);
+    if (!std::strcmp(argv[i], "--data"))
+      data = argv[i + 1];
+    else if (!std::strcmp(argv[i], "--model"))
+      model_path = argv[i + 1];
+    else if (!std::strcmp(argv[i], "--passes"))
+      passes = std::max(1, std::atoi(argv[i + 1]));
+    else if (!std::strcmp(argv[i], "--digest"))
+      digest_path = argv[i + 1];
+    else if (!std::strcmp(argv[i], "--heap-keep-mb"))
+      heap_keep_mb = std::atoi(argv[i + 1]);
+    else if (!std::strcmp(argv[i], "--config"))
+      config = loadConfig(argv[i + 1]);
+    else if (!std::strcmp(argv[i], "--set"))
+      applyOverride(config, argv[i + 1]);
+    else
+      throw Error(std::string("unknown flag ") + argv[i]);
   }
   if (argc % 2 == 0) throw Error(std::string("flag ") + argv[argc - 1] + " has no value");
   if (model_path.empty()) throw Error("--model MODEL is required");
@@ -129,20 +117,21 @@ int run(int argc, char** argv) {
     for (std::size_t fi = 0; fi < frames.size(); ++fi) {
       const RgbdFrame& f = frames[fi];
       RgbdFrame frame = f;  // the copy is the caller's (the source's), not the pipeline's
-      const std::uint64_t news_before = g_news.load();
-      const std::uint64_t bytes_before = g_bytes.load();
+      const std::uint64_t news_before = bench::g_news.load();
+      const std::uint64_t bytes_before = bench::g_bytes.load();
       // process() is exactly these three calls; made one by one to count the
       // allocations of each.
       PreparedFrame prepared = segmenter.prepare(std::move(frame));
-      const std::uint64_t news_prepared = g_news.load();
+      const std::uint64_t news_prepared = bench::g_news.load();
       SegmentedFrame segmented = segmenter.oversegment(std::move(prepared));
-      const std::uint64_t news_segmented = g_news.load();
+      const std::uint64_t news_segmented = bench::g_news.load();
       LabelledFrame out = segmenter.classify(std::move(segmented));
-      const double calls = static_cast<double>(g_news.load() - news_before);
-      const std::array<double, 3> split = {static_cast<double>(news_prepared - news_before),
-                                           static_cast<double>(news_segmented - news_prepared),
-                                           static_cast<double>(g_news.load() - news_segmented)};
-      const double mb = static_cast<double>(g_bytes.load() - bytes_before) / 1e6;
+      const double calls = static_cast<double>(bench::g_news.load() - news_before);
+      const std::array<double, 3> split = {
+          static_cast<double>(news_prepared - news_before),
+          static_cast<double>(news_segmented - news_prepared),
+          static_cast<double>(bench::g_news.load() - news_segmented)};
+      const double mb = static_cast<double>(bench::g_bytes.load() - bytes_before) / 1e6;
       ++runs;
       if (pass == 0 && truth[fi].size() == out.labels.labels.size()) {
         for (std::size_t p = 0; p < truth[fi].size(); ++p) {
@@ -159,8 +148,8 @@ int run(int argc, char** argv) {
         const auto& g = out.segmented.prepared.ground;
         std::fprintf(digest, "%s ground %s %.5f %.5f %.5f %.4f labels %016llx tables %zu\n",
                      dataset.names()[fi].c_str(), g ? "yes" : "no", g ? g->normal_camera.x() : 0.0,
-                     g ? g->normal_camera.y() : 0.0, g ? g->normal_camera.z() : 0.0, g ? g->offset : 0.0f,
-                     static_cast<unsigned long long>(h), out.tables.size());
+                     g ? g->normal_camera.y() : 0.0, g ? g->normal_camera.z() : 0.0,
+                     g ? g->offset : 0.0f, static_cast<unsigned long long>(h), out.tables.size());
       }
       // Frames without a ground plane skip most stages: time full runs only.
       if (!out.segmented.prepared.ground) continue;
@@ -178,11 +167,14 @@ int run(int argc, char** argv) {
   }
 
   if (digest) std::fclose(digest);
-  std::printf("%zu frames x %d passes from %s, model %s, one thread; medians over the %zu of %zu runs that found a ground plane (full pipeline)\n\n",
-              frames.size(), passes, data.c_str(), model_path.c_str(), labelled, runs);
+  std::printf(
+      "%zu frames x %d passes from %s, model %s, one thread; medians over the %zu of %zu runs that "
+      "found a ground plane (full pipeline)\n\n",
+      frames.size(), passes, data.c_str(), model_path.c_str(), labelled, runs);
   if (truth_pixels > 0) {
-    std::printf("pixel accuracy against the ground truth (first timed pass, every frame): %.2f %%\n\n",
-                100.0 * static_cast<double>(correct_pixels) / static_cast<double>(truth_pixels));
+    std::printf(
+        "pixel accuracy against the ground truth (first timed pass, every frame): %.2f %%\n\n",
+        100.0 * static_cast<double>(correct_pixels) / static_cast<double>(truth_pixels));
   }
   std::printf("| stage | CPU ms median | CPU ms p95 | wall ms median |\n|---|---:|---:|---:|\n");
   for (std::size_t s = 0; s < std::size(stages); ++s) {
@@ -191,9 +183,11 @@ int run(int argc, char** argv) {
   }
   std::printf("| **total** | **%.2f** | %.2f | %.2f |\n", median(cpu_total),
               percentile(cpu_total, 95), median(wall_total));
-  std::printf("\nheap allocations per labelled frame (operator new, Segmenter::process): median %.0f calls, "
-              "%.1f MB; max %.0f calls\n",
-              median(news), median(megabytes), *std::max_element(news.begin(), news.end()));
+  std::printf(
+      "\nheap allocations per labelled frame (operator new, Segmenter::process): median %.0f "
+      "calls, "
+      "%.1f MB; max %.0f calls\n",
+      median(news), median(megabytes), *std::max_element(news.begin(), news.end()));
   std::printf("of which (medians) prepare %.0f, oversegment %.0f, classify %.0f calls\n",
               median(news_split[0]), median(news_split[1]), median(news_split[2]));
   return 0;

@@ -21,28 +21,12 @@
 #include <vector>
 
 #include "bench_support.hpp"
+#include "counting_new.hpp"  // this program's operator new counts allocations
 #include "findmug/dataset.hpp"
 #include "findmug/error.hpp"
 #include "findmug/segmenter.hpp"
 #include "findmug/training.hpp"
 #include "test_data.hpp"
-
-namespace {
-std::atomic<std::uint64_t> g_news{0}, g_bytes{0};
-}  // namespace
-
-// Counting allocator: every operator new of this program goes through here.
-void* operator new(std::size_t size) {
-  g_news.fetch_add(1, std::memory_order_relaxed);
-  g_bytes.fetch_add(size, std::memory_order_relaxed);
-  if (void* p = std::malloc(size == 0 ? 1 : size)) return p;
-  throw std::bad_alloc();
-}
-void* operator new[](std::size_t size) { return operator new(size); }
-void operator delete(void* p) noexcept { std::free(p); }
-void operator delete[](void* p) noexcept { std::free(p); }
-void operator delete(void* p, std::size_t) noexcept { std::free(p); }
-void operator delete[](void* p, std::size_t) noexcept { std::free(p); }
 
 namespace {
 
@@ -75,9 +59,12 @@ int run(int argc, char** argv) {
   std::string data = (test::dataRoot() / "nyuv2_labeled").string();
   int repeat = 3;
   for (int i = 1; i + 1 < argc; i += 2) {
-    if (!std::strcmp(argv[i], "--data")) data = argv[i + 1];
-    else if (!std::strcmp(argv[i], "--repeat")) repeat = bench::positiveCount("--repeat", argv[i + 1]);
-    else throw Error(std::string("unknown flag ") + argv[i]);
+    if (!std::strcmp(argv[i], "--data"))
+      data = argv[i + 1];
+    else if (!std::strcmp(argv[i], "--repeat"))
+      repeat = bench::positiveCount("--repeat", argv[i + 1]);
+    else
+      throw Error(std::string("unknown flag ") + argv[i]);
   }
   const DatasetFolder dataset(data);
   std::vector<LabeledFrame> frames;
@@ -96,8 +83,10 @@ int run(int argc, char** argv) {
   const auto forest = std::make_shared<const RandomForest>(
       RandomForest::train(makeTrainingSet(samples, all), train_config.forest));
 
-  std::printf("load_curve: %zu frames of %s, %d repetitions, one thread, medians over frames "
-              "with a ground plane\n\n", frames.size(), data.c_str(), repeat);
+  std::printf(
+      "load_curve: %zu frames of %s, %d repetitions, one thread, medians over frames "
+      "with a ground plane\n\n",
+      frames.size(), data.c_str(), repeat);
 
   // 1. Resolution.
   std::printf("| input | total ms (median) | p90 ms | segments (median) | frames timed |\n");
@@ -117,13 +106,14 @@ int run(int argc, char** argv) {
     std::vector<double> sorted = total;
     std::sort(sorted.begin(), sorted.end());
     const double p90 = sorted.empty() ? 0 : sorted[sorted.size() * 9 / 10];
-    std::printf("| %s | %.1f | %.1f | %.0f | %zu |\n", qvga ? "320x240" : "640x480",
-                median(total), p90, median(segments), total.size());
+    std::printf("| %s | %.1f | %.1f | %.0f | %zu |\n", qvga ? "320x240" : "640x480", median(total),
+                p90, median(segments), total.size());
   }
 
   // 2. Seed resolution (segment count).
-  std::printf("\n| overseg.seed_resolution_m | segments (median) | total ms | oversegmentation ms | "
-              "features ms | MRF ms |\n|---:|---:|---:|---:|---:|---:|\n");
+  std::printf(
+      "\n| overseg.seed_resolution_m | segments (median) | total ms | oversegmentation ms | "
+      "features ms | MRF ms |\n|---:|---:|---:|---:|---:|---:|\n");
   for (const float seed : {0.05f, 0.075f, 0.1f, 0.15f, 0.2f}) {
     SegmenterConfig config = base;
     config.overseg.seed_resolution_m = seed;
@@ -151,21 +141,23 @@ int run(int argc, char** argv) {
       std::size_t lo, hi;
       std::vector<double> ms;
     };
-    std::vector<Bin> bins = {{0, 1, {}},          {1, 10000, {}},      {10000, 30000, {}},
+    std::vector<Bin> bins = {{0, 1, {}},         {1, 10000, {}},      {10000, 30000, {}},
                              {30000, 60000, {}}, {60000, 120000, {}}, {120000, 400000, {}}};
     for (int r = 0; r < repeat; ++r) {
       for (const auto& f : frames) {
         const LabelledFrame out = segmenter.process(f.frame);
         if (!out.segmented.prepared.ground) continue;
-        const auto n = static_cast<std::size_t>(std::count(
-            out.labels.labels.begin(), out.labels.labels.end(), static_cast<std::uint8_t>(Label::Table)));
+        const auto n =
+            static_cast<std::size_t>(std::count(out.labels.labels.begin(), out.labels.labels.end(),
+                                                static_cast<std::uint8_t>(Label::Table)));
         for (auto& b : bins) {
           if (n >= b.lo && n < b.hi) b.ms.push_back(out.timings.tables_ms);
         }
       }
     }
-    std::printf("\n| pixels labelled table | frames | tables ms (median) | max ms |\n"
-                "|---|---:|---:|---:|\n");
+    std::printf(
+        "\n| pixels labelled table | frames | tables ms (median) | max ms |\n"
+        "|---|---:|---:|---:|\n");
     for (const auto& b : bins) {
       if (b.ms.empty()) continue;
       std::printf("| %zu–%zu | %zu | %.1f | %.1f |\n", b.lo, b.hi - 1, b.ms.size(), median(b.ms),
@@ -180,14 +172,15 @@ int run(int argc, char** argv) {
     std::vector<double> news, mbytes;
     for (const auto& f : frames) {
       const RgbdFrame frame = f.frame;  // the copy is the caller's, not counted
-      const std::uint64_t n0 = g_news.load(), b0 = g_bytes.load();
+      const std::uint64_t n0 = bench::g_news.load(), b0 = bench::g_bytes.load();
       { const LabelledFrame out = segmenter.process(frame); }
-      news.push_back(static_cast<double>(g_news.load() - n0));
-      mbytes.push_back(static_cast<double>(g_bytes.load() - b0) / 1048576.0);
+      news.push_back(static_cast<double>(bench::g_news.load() - n0));
+      mbytes.push_back(static_cast<double>(bench::g_bytes.load() - b0) / 1048576.0);
     }
-    std::printf("\nHeap allocations per frame in Segmenter::process (steady state, 640x480): "
-                "median %.0f operator-new calls, %.1f MB; max %.0f calls\n", median(news),
-                median(mbytes), *std::max_element(news.begin(), news.end()));
+    std::printf(
+        "\nHeap allocations per frame in Segmenter::process (steady state, 640x480): "
+        "median %.0f operator-new calls, %.1f MB; max %.0f calls\n",
+        median(news), median(mbytes), *std::max_element(news.begin(), news.end()));
   }
   return 0;
 }

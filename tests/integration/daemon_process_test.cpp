@@ -184,9 +184,8 @@ TEST(Findmugd, InvalidConfigValueStopsStartupNamingTheKey) {
       << readFile(tmp.str("stderr.txt"));
   EXPECT_FALSE(notify.receive(0ms)) << "no READY=1 for a daemon that failed to start";
 
-  // A core key is validated the same way, from a flag.
-  const pid_t pid2 = spawnDaemon({"--config", tmp.str("bad.yaml"), "--set", "mrf.lambda=-3"}, {},
-                                 tmp.str("stderr2.txt"));
+  // A core key is validated the same way, from a flag (no file: a bad file is reported first).
+  const pid_t pid2 = spawnDaemon({"--set", "mrf.lambda=-3"}, {}, tmp.str("stderr2.txt"));
   const auto status2 = waitFor(pid2, 30s);
   ASSERT_TRUE(status2);
   EXPECT_NE(WEXITSTATUS(*status2), 0);
