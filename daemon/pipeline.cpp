@@ -15,19 +15,6 @@
 
 namespace findmug::daemon {
 
-struct Pipeline::FrameJob {
-  RgbdFrame frame;
-  Clock::time_point arrival;
-};
-struct Pipeline::PreparedJob {
-  PreparedFrame prepared;
-  Clock::time_point arrival;
-};
-struct Pipeline::ResultJob {
-  LabelledFrame labelled;
-  Clock::time_point arrival;
-};
-
 namespace {
 
 // Sub-stage names reported in status_t, in pipeline order, with the
@@ -69,6 +56,9 @@ Pipeline::Pipeline(const SegmenterConfig& segmenter_config, const DaemonConfig& 
       workers_(daemon_config.effectiveWorkers()),
       pose_max_age_us_(
           static_cast<std::uint64_t>(std::llround(daemon_config.pose_max_age_s * 1e6))),
+      prepare_step_(segmenter_),
+      segment_step_(segmenter_, hooks_.before_segment),
+      publish_step_(pose_max_age_us_),
       started_(Clock::now()),
       last_sequential_status_(started_),
       cpu_sample_time_(started_),
@@ -89,7 +79,8 @@ Pipeline::Pipeline(const SegmenterConfig& segmenter_config, const DaemonConfig& 
                                  io::channelName(io::kTableMapChannel, suffix),
                                  io::channelName(io::kStatusChannel, suffix)},
       daemon_config_.publish_confidence, daemon_config_.publish_tables);
-  sinks_ = {table_map_sink_, publisher_};
+  publish_step_.addSink(table_map_sink_);
+  publish_step_.addSink(publisher_);
   const auto window = std::chrono::duration_cast<Clock::duration>(
       std::chrono::duration<double>(daemon_config_.stats_window_s));
   input_rate_ = RateMeter(1000, window);
@@ -121,7 +112,7 @@ Pipeline::Pipeline(const SegmenterConfig& segmenter_config, const DaemonConfig& 
                                window};
   segment_ = std::make_unique<Stage<PreparedJob, ResultJob>>(
       segment_options,
-      [this](PreparedJob& job) -> std::optional<ResultJob> { return segmentFrame(job); },
+      [this](PreparedJob& job) -> std::optional<ResultJob> { return segment_step_(job); },
       [this](ResultJob&& r) {
         if (!publish_->push(std::move(r))) abandoned_.fetch_add(1);  // only after stop()
       },
@@ -133,7 +124,7 @@ Pipeline::Pipeline(const SegmenterConfig& segmenter_config, const DaemonConfig& 
   StageOptions prepare_options{"prepare", mode_, 1, capacity, DropPolicy::DropOldest, window};
   prepare_ = std::make_unique<Stage<FrameJob, PreparedJob>>(
       prepare_options,
-      [this](FrameJob& job) -> std::optional<PreparedJob> { return prepareFrame(job); },
+      [this](FrameJob& job) -> std::optional<PreparedJob> { return prepare_step_(job); },
       [this](PreparedJob&& p) {
         if (!segment_->push(std::move(p))) abandoned_.fetch_add(1);  // only after stop()
       },
@@ -167,6 +158,7 @@ Pipeline::Pipeline(const SegmenterConfig& segmenter_config, const DaemonConfig& 
       pose_input_ = std::make_unique<PoseInput>(*pose_url, channel, daemon_config_.pose_history_s,
                                                 on_pose_error);
     }
+    publish_step_.setPoseInput(pose_input_.get());
     spdlog::info("robot poses from {} on {}: tables also in the map frame, table map on {}",
                  hooks_.pose_bus     ? hooks_.pose_bus->describe()
                  : pose_url->empty() ? std::string("the default LCM provider")
@@ -183,9 +175,7 @@ Pipeline::~Pipeline() { stop(StopMode::Discard); }
 
 void Pipeline::attachSource(const io::FrameSource* source) { source_.store(source); }
 
-void Pipeline::addSink(std::shared_ptr<ResultSink> sink) {
-  if (sink) sinks_.push_back(std::move(sink));
-}
+void Pipeline::addSink(std::shared_ptr<ResultSink> sink) { publish_step_.addSink(std::move(sink)); }
 
 void Pipeline::start() {
   publish_->start();
@@ -276,49 +266,16 @@ void Pipeline::recordError(const std::string& message) {
   last_error_utime_ = utimeNow();
 }
 
-// ---- the three stages' work on one frame ----------------------------------------------
-
-Pipeline::PreparedJob Pipeline::prepareFrame(FrameJob& job) {
-  const std::string name = frameName(job.frame);
-  try {
-    validateFrame(job.frame);
-    return PreparedJob{segmenter_.prepare(std::move(job.frame)), job.arrival};
-  } catch (const std::exception& e) {
-    throw Error(name + ": " + e.what());
-  }
-}
-
-Pipeline::ResultJob Pipeline::segmentFrame(PreparedJob& job) {
-  if (hooks_.before_segment) hooks_.before_segment(job.prepared.frame);
-  const std::string name = frameName(job.prepared.frame);
-  try {
-    return ResultJob{segmenter_.classify(segmenter_.oversegment(std::move(job.prepared))),
-                     job.arrival};
-  } catch (const std::exception& e) {
-    throw Error(name + ": " + e.what());
-  }
-}
-
-// The result goes to the sinks, in registration order (result_sinks.hpp).
+// The result goes to the sinks (PublishStep), then into the output statistics.
 void Pipeline::publishResult(ResultJob& job) {
-  const LabelledFrame& labelled = job.labelled;
-  const RgbdFrame& frame = labelled.segmented.prepared.frame;
   const auto now = Clock::now();
-  const auto latency_us =
-      std::chrono::duration_cast<std::chrono::microseconds>(now - job.arrival).count();
-  if (spdlog::should_log(spdlog::level::debug)) {
-    for (const std::string& line : labelled.table_diagnostics) {
-      spdlog::debug("{}: tables: {}", frameName(frame), line);
-    }
-  }
-  FrameResult result{labelled, latency_us, std::nullopt, {}, std::nullopt};
-  // The robot's pose for this frame, if one close enough in time has arrived.
-  if (pose_input_) result.pose = pose_input_->history().closest(frame.utime, pose_max_age_us_);
-  for (const auto& sink : sinks_) sink->consume(result);
+  const std::int64_t latency_us = publish_step_(job, now);
   processed_.fetch_add(1);
   std::lock_guard lock(stats_mutex_);
   output_rate_.tick(now);
-  for (const auto& [name, field] : subStages()) latency_.at(name).add(labelled.timings.*field, now);
+  for (const auto& [name, field] : subStages()) {
+    latency_.at(name).add(job.labelled.timings.*field, now);
+  }
   latency_.at("total").add(static_cast<double>(latency_us) / 1000.0, now);
 }
 

@@ -16,6 +16,7 @@
 
 #include "daemon_test_support.hpp"
 #include "findmug/daemon/daemon.hpp"
+#include "findmug/daemon/frame_steps.hpp"
 #include "findmug/daemon/pipeline.hpp"
 #include "findmug/daemon/status_builder.hpp"
 #include "findmug/error.hpp"
@@ -170,6 +171,75 @@ void runAndCompare(const std::string& spec, std::size_t expected_frames,
   EXPECT_GT(last.latency_p50_us[total], 0);
   EXPECT_GE(last.latency_max_us[total], last.latency_p95_us[total]);
   EXPECT_GE(last.latency_p95_us[total], last.latency_p50_us[total]);
+}
+
+// A sink that keeps what it was handed (the pipeline's extension point, used as a client would).
+struct RecordingSink : ResultSink {
+  std::string name;
+  std::vector<std::string>* order;
+  std::vector<std::int64_t> seqs, latencies_us;
+  std::vector<bool> had_pose;
+  RecordingSink(std::string n, std::vector<std::string>* o) : name(std::move(n)), order(o) {}
+  void consume(FrameResult& r) override {
+    order->push_back(name);
+    seqs.push_back(r.labelled.segmented.prepared.frame.seq);
+    latencies_us.push_back(r.latency_us);
+    had_pose.push_back(r.pose.has_value());
+  }
+};
+
+// The three steps on their own, on real frames: prepare + segment give exactly
+// Segmenter::process, and publish hands the result to every sink in order.
+TEST(FrameSteps, PrepareSegmentPublishDoWhatSegmenterProcessDoesInOrder) {
+  FINDMUG_REQUIRE_DATA(nyu, "nyuv2_labeled");
+  const Segmenter segmenter(test::fastSegmenterConfig(), sharedModel()->forest);
+  const PrepareStep prepare(segmenter);
+  std::vector<std::int64_t> held;
+  const SegmentStep segment(segmenter, [&](const RgbdFrame& f) { held.push_back(f.seq); });
+  PublishStep publish(/*pose_max_age_us=*/100000);
+  std::vector<std::string> order;
+  auto first = std::make_shared<RecordingSink>("first", &order);
+  auto second = std::make_shared<RecordingSink>("second", &order);
+  publish.addSink(first);
+  publish.addSink(second);
+
+  const std::vector<LabeledFrame> frames = test::framesWithGround(nyu.string(), 2);
+  ASSERT_EQ(frames.size(), 2u);
+  for (std::size_t i = 0; i < frames.size(); ++i) {
+    RgbdFrame frame = frames[i].frame;
+    frame.seq = static_cast<std::int64_t>(10 + i);
+    const LabelledFrame want = segmenter.process(frame);
+    const auto arrival = StepClock::now();
+    FrameJob job{frame, arrival};
+    PreparedJob prepared = prepare(job);
+    EXPECT_TRUE(prepared.prepared.ground.has_value());
+    ResultJob result = segment(prepared);
+    EXPECT_EQ(result.labelled.labels.labels, want.labels.labels) << frames[i].name;
+    EXPECT_EQ(result.labelled.tables.size(), want.tables.size()) << frames[i].name;
+    EXPECT_EQ(publish(result, arrival + std::chrono::milliseconds(42)), 42000);
+  }
+  EXPECT_EQ(held, (std::vector<std::int64_t>{10, 11}));
+  EXPECT_EQ(order, (std::vector<std::string>{"first", "second", "first", "second"}));
+  EXPECT_EQ(second->seqs, (std::vector<std::int64_t>{10, 11}));
+  EXPECT_EQ(second->latencies_us, (std::vector<std::int64_t>{42000, 42000}));
+  EXPECT_EQ(second->had_pose, (std::vector<bool>{false, false}));  // no pose input
+}
+
+TEST(FrameSteps, ABrokenFrameIsRefusedByPrepareNamingIt) {
+  const Segmenter segmenter(SegmenterConfig{}, nullptr);
+  const PrepareStep prepare(segmenter);
+  RgbdFrame frame;
+  frame.width = 640;
+  frame.height = 480;
+  frame.seq = 77;
+  frame.depth_mm.assign(10, 1000);  // not 640 x 480 pixels
+  FrameJob job{frame, StepClock::now()};
+  try {
+    prepare(job);
+    FAIL() << "a frame whose depth buffer does not match its size was prepared";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("seq 77"), std::string::npos) << e.what();
+  }
 }
 
 TEST(DaemonPipeline, NyuFramesArePublishedEqualToTheLibraryOutput) {
@@ -330,7 +400,8 @@ TEST(DaemonPipeline, HeldSegmentStageDropsTheOldestFramesAndTheNewestWin) {
 // Counts the threads of this process (/proc/self/task).
 int threadCount() {
   int n = 0;
-  for ([[maybe_unused]] const auto& entry : std::filesystem::directory_iterator("/proc/self/task")) {
+  for ([[maybe_unused]] const auto& entry :
+       std::filesystem::directory_iterator("/proc/self/task")) {
     ++n;
   }
   return n;
@@ -570,11 +641,15 @@ TEST(DaemonFaults, StreamThatRepeatsReordersJumpsBackAndHasACorruptFrameEveryThi
   const findmug_lcm::rgbd_frame_t base = io::encodeRgbdFrame(ds.load(3).frame);
   const std::int64_t u0 = 1'700'000'000'000'000;
   const std::vector<std::pair<std::int64_t, std::int64_t>> seq_utime = {
-      {0, u0}, {1, u0 + 33'000}, {2, u0 + 66'000}, {3, u0 + 99'000},
-      {3, u0 + 99'000},                                    // repeated
-      {2, u0 + 66'000},                                    // reordered: older than the last
-      {0, u0 - 3'600'000'000}, {1, u0 - 3'600'000'000 + 33'000},  // replay restarted
-      {7, u0 + 500'000}};                                  // jumps ahead again
+      {0, u0},
+      {1, u0 + 33'000},
+      {2, u0 + 66'000},
+      {3, u0 + 99'000},
+      {3, u0 + 99'000},  // repeated
+      {2, u0 + 66'000},  // reordered: older than the last
+      {0, u0 - 3'600'000'000},
+      {1, u0 - 3'600'000'000 + 33'000},  // replay restarted
+      {7, u0 + 500'000}};                // jumps ahead again
   std::vector<test::LogMessage> in;
   const std::string ch(io::kRgbdChannel);
   int corrupt = 0;

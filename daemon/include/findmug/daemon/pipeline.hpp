@@ -7,6 +7,9 @@
 //                                                     blocking  ─▶ publish (1 thread: the sinks,
 //                                                                  also sends status)
 //
+// Each stage runs one step class of frame_steps.hpp (PrepareStep, SegmentStep,
+// PublishStep) on its thread(s); the Pipeline only wires them and keeps the counters.
+//
 //   prepare   Segmenter::prepare: cloud, normals, ground plane
 //   segment   Segmenter::oversegment + classify (supervoxels, features, forest,
 //             MRF, labels, tables): the bottleneck, run on N workers; results
@@ -64,6 +67,7 @@
 
 #include "findmug/config.hpp"
 #include "findmug/daemon/daemon_config.hpp"
+#include "findmug/daemon/frame_steps.hpp"
 #include "findmug/daemon/pose_input.hpp"
 #include "findmug/daemon/result_sinks.hpp"
 #include "findmug/daemon/service.hpp"
@@ -154,15 +158,10 @@ class Pipeline {
   std::uint64_t publishFailures() const { return publisher_->publishFailures(); }
 
  private:
-  struct FrameJob;
-  struct PreparedJob;
-  struct ResultJob;
   struct Published {};
 
-  // The stages' work, one frame each (the constructor wires them into Stages).
-  PreparedJob prepareFrame(FrameJob& job);   // validateFrame + Segmenter::prepare
-  ResultJob segmentFrame(PreparedJob& job);  // Segmenter::oversegment + classify
-  void publishResult(ResultJob& job);        // pose lookup, then every sink
+  // PublishStep on one result, then the output rate and latency statistics.
+  void publishResult(ResultJob& job);
   void publishStatus();
   void recordError(const std::string& message);
 
@@ -174,9 +173,12 @@ class Pipeline {
   int workers_;
   std::shared_ptr<TableMapSink> table_map_sink_;
   std::shared_ptr<LcmPublisherSink> publisher_;
-  std::vector<std::shared_ptr<ResultSink>> sinks_;  // in the order they see a result
   std::unique_ptr<PoseInput> pose_input_;  // nullptr: no pose input
   std::uint64_t pose_max_age_us_ = 0;
+  // The three steps (frame_steps.hpp), each run by its Stage below.
+  PrepareStep prepare_step_;
+  SegmentStep segment_step_;
+  PublishStep publish_step_;  // holds the sinks, in the order they see a result
   Clock::time_point started_;
   Clock::time_point last_sequential_status_;
   std::mutex sequential_status_mutex_;  // guards last_sequential_status_

@@ -1,0 +1,55 @@
+// The pipeline's three steps (frame_steps.hpp).
+#include "findmug/daemon/frame_steps.hpp"
+
+#include <spdlog/spdlog.h>
+
+#include <exception>
+#include <string>
+
+#include "findmug/error.hpp"
+
+namespace findmug::daemon {
+
+PreparedJob PrepareStep::operator()(FrameJob& job) const {
+  const std::string name = frameName(job.frame);
+  try {
+    validateFrame(job.frame);
+    return PreparedJob{segmenter_.prepare(std::move(job.frame)), job.arrival};
+  } catch (const std::exception& e) {
+    throw Error(name + ": " + e.what());
+  }
+}
+
+ResultJob SegmentStep::operator()(PreparedJob& job) const {
+  if (before_segment_) before_segment_(job.prepared.frame);
+  const std::string name = frameName(job.prepared.frame);
+  try {
+    return ResultJob{segmenter_.classify(segmenter_.oversegment(std::move(job.prepared))),
+                     job.arrival};
+  } catch (const std::exception& e) {
+    throw Error(name + ": " + e.what());
+  }
+}
+
+void PublishStep::addSink(std::shared_ptr<ResultSink> sink) {
+  if (sink) sinks_.push_back(std::move(sink));
+}
+
+std::int64_t PublishStep::operator()(const ResultJob& job, StepClock::time_point now) const {
+  const LabelledFrame& labelled = job.labelled;
+  const RgbdFrame& frame = labelled.segmented.prepared.frame;
+  const auto latency_us =
+      std::chrono::duration_cast<std::chrono::microseconds>(now - job.arrival).count();
+  if (spdlog::should_log(spdlog::level::debug)) {
+    for (const std::string& line : labelled.table_diagnostics) {
+      spdlog::debug("{}: tables: {}", frameName(frame), line);
+    }
+  }
+  FrameResult result{labelled, latency_us, std::nullopt, {}, std::nullopt};
+  // The robot's pose for this frame, if one close enough in time has arrived.
+  if (poses_) result.pose = poses_->history().closest(frame.utime, pose_max_age_us_);
+  for (const auto& sink : sinks_) sink->consume(result);
+  return latency_us;
+}
+
+}  // namespace findmug::daemon

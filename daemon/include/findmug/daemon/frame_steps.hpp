@@ -1,0 +1,83 @@
+// findmug/daemon/frame_steps.hpp — the pipeline's three steps, one named class each.
+//
+//   PrepareStep   the frame checked (validateFrame), then Segmenter::prepare: cloud,
+//                 normals, ground plane
+//   SegmentStep   Segmenter::oversegment + classify: supervoxels, features, forest, MRF,
+//                 labels, tables
+//   PublishStep   the robot's pose for the frame (PoseInput, if any), then every
+//                 ResultSink in the order they were added (result_sinks.hpp)
+//
+// Each step does one frame's work and knows nothing of threads, queues or drop policies:
+// Pipeline (pipeline.hpp) runs each inside a Stage, which owns those. So a test can run a
+// step on one frame, and a step can be reused in another arrangement. A failing step throws
+// findmug::Error naming the frame; the Stage counts it as rejected.
+#pragma once
+
+#include <chrono>
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <vector>
+
+#include "findmug/daemon/pose_input.hpp"
+#include "findmug/daemon/result_sinks.hpp"
+#include "findmug/frame.hpp"
+#include "findmug/segmenter.hpp"
+
+namespace findmug::daemon {
+
+using StepClock = std::chrono::steady_clock;
+
+// What travels between the steps: the frame's data and when it arrived (for latency).
+struct FrameJob {
+  RgbdFrame frame;
+  StepClock::time_point arrival;
+};
+struct PreparedJob {
+  PreparedFrame prepared;
+  StepClock::time_point arrival;
+};
+struct ResultJob {
+  LabelledFrame labelled;
+  StepClock::time_point arrival;
+};
+
+class PrepareStep {
+ public:
+  explicit PrepareStep(const Segmenter& segmenter) : segmenter_(segmenter) {}
+  PreparedJob operator()(FrameJob& job) const;
+
+ private:
+  const Segmenter& segmenter_;
+};
+
+class SegmentStep {
+ public:
+  // `before_segment` (tests: hold a worker) runs first on every frame, if set.
+  explicit SegmentStep(const Segmenter& segmenter,
+                       std::function<void(const RgbdFrame&)> before_segment = {})
+      : segmenter_(segmenter), before_segment_(std::move(before_segment)) {}
+  ResultJob operator()(PreparedJob& job) const;
+
+ private:
+  const Segmenter& segmenter_;
+  std::function<void(const RgbdFrame&)> before_segment_;
+};
+
+class PublishStep {
+ public:
+  explicit PublishStep(std::uint64_t pose_max_age_us) : pose_max_age_us_(pose_max_age_us) {}
+  // Both before the first frame (not thread-safe against operator()).
+  void addSink(std::shared_ptr<ResultSink> sink);
+  void setPoseInput(const PoseInput* poses) { poses_ = poses; }  // nullptr: no poses
+  // Hands the result, with the pose closest in time (within pose_max_age_us), to every
+  // sink; returns the frame's latency from arrival to `now`, in microseconds.
+  std::int64_t operator()(const ResultJob& job, StepClock::time_point now) const;
+
+ private:
+  std::uint64_t pose_max_age_us_;
+  const PoseInput* poses_ = nullptr;
+  std::vector<std::shared_ptr<ResultSink>> sinks_;  // in the order they see a result
+};
+
+}  // namespace findmug::daemon
