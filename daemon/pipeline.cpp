@@ -6,6 +6,9 @@
 #include <algorithm>
 #include <cmath>
 #include <ctime>
+#if defined(__GLIBC__)
+#include <malloc.h>
+#endif
 #include <thread>
 
 #include "findmug/daemon/status_builder.hpp"
@@ -41,6 +44,18 @@ double processCpuSeconds() {
   timespec ts{};
   if (clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts) != 0) return 0.0;
   return static_cast<double>(ts.tv_sec) + static_cast<double>(ts.tv_nsec) * 1e-9;
+}
+
+// Bytes the allocator has handed out and not got back (the heap's own view):
+// a leak grows this; memory freed but kept for reuse (daemon.heap_keep_mb,
+// glibc arenas) shows in RSS only. -1 where the C library cannot say.
+std::int64_t heapInUseBytes() {
+#if defined(__GLIBC__) && (__GLIBC__ > 2 || (__GLIBC__ == 2 && __GLIBC_MINOR__ >= 33))
+  const struct mallinfo2 m = mallinfo2();
+  return static_cast<std::int64_t>(m.uordblks + m.hblkhd);
+#else
+  return -1;
+#endif
 }
 
 }  // namespace
@@ -336,6 +351,8 @@ StatusSnapshot Pipeline::statusSnapshot() const {
   s.processing_threads = processingThreads();
   s.window_s = daemon_config_.stats_window_s;
   s.model_id = model_id_;
+  s.publish_failures = publishFailures();
+  s.heap_in_use_bytes = heapInUseBytes();
 
   const StageStats stages[] = {prepare_->stats(), segment_->stats(), publish_->stats()};
   {
@@ -356,7 +373,8 @@ StatusSnapshot Pipeline::statusSnapshot() const {
   if (const io::FrameSource* source = source_.load()) {
     const io::SourceStats stats = source->stats();
     s.source = StatusSnapshot::Source{source->describe(), source->state(), stats.last_error,
-                                      stats.last_error_utime, stats.reconnects};
+                                      stats.last_error_utime, stats.reconnects,
+                                      stats.frames_lost_in_transit};
   }
   return s;
 }

@@ -36,6 +36,8 @@ findmug_lcm::status_t StatusBuilder::build(const StatusSnapshot& in) {
   }
   s.num_queues = static_cast<std::int32_t>(s.queue_names.size());
   s.model_id = in.model_id;
+  s.publish_failures = static_cast<std::int64_t>(in.publish_failures);
+  s.heap_in_use_bytes = in.heap_in_use_bytes;
 
   std::string last_error = in.last_error;
   std::uint64_t last_error_utime = in.last_error_utime;
@@ -44,6 +46,7 @@ findmug_lcm::status_t StatusBuilder::build(const StatusSnapshot& in) {
     s.source_state = static_cast<std::int8_t>(in.source->state);
     s.source_state_name = std::string(io::sourceStateName(in.source->state));
     s.source_reconnects = static_cast<std::int64_t>(in.source->reconnects);
+    s.frames_lost_in_transit = static_cast<std::int64_t>(in.source->lost_in_transit);
     if (in.source->last_error_utime > last_error_utime) {
       last_error = in.source->last_error;
       last_error_utime = in.source->last_error_utime;

@@ -102,6 +102,11 @@ void FrameSourceBase::recordDropped(std::uint64_t count) {
   stats_.frames_dropped += count;
 }
 
+void FrameSourceBase::recordLostInTransit(std::uint64_t total) {
+  std::lock_guard lock(mutex_);
+  stats_.frames_lost_in_transit = total;
+}
+
 void FrameSourceBase::recordReconnect() {
   std::lock_guard lock(mutex_);
   ++stats_.reconnects;

@@ -191,6 +191,21 @@ RgbdFrame decodeRgbdFrame(const findmug_lcm::rgbd_frame_t& msg, std::string_view
   return frame;
 }
 
+std::optional<std::int64_t> peekRgbdFrameSeq(const void* data, std::size_t size) {
+  // Wire layout: 8-byte fingerprint, int64 utime, int64 seq, all big-endian.
+  if (data == nullptr || size < 24) return std::nullopt;
+  const auto* b = static_cast<const std::uint8_t*>(data);
+  auto be64 = [b](std::size_t at) {
+    std::uint64_t v = 0;
+    for (std::size_t i = 0; i < 8; ++i) v = (v << 8) | b[at + i];
+    return v;
+  };
+  if (be64(0) != static_cast<std::uint64_t>(findmug_lcm::rgbd_frame_t::getHash())) {
+    return std::nullopt;
+  }
+  return static_cast<std::int64_t>(be64(16));
+}
+
 RgbdFrame decodeRgbdFrame(const void* data, std::size_t size, std::string_view channel) {
   return decodeRgbdFrame(decodeMessage<findmug_lcm::rgbd_frame_t>(data, size, channel), channel);
 }

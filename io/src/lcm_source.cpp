@@ -74,6 +74,13 @@ void LcmFrameSource::onMessage(const std::string& channel, const std::uint8_t* b
   // a copy, not a decode. Buffers are recycled: no allocation per message in
   // the steady state.
   last_frame_ = Clock::now();
+  // Holes in seq are frames the network lost (udpm drops a whole frame when one
+  // of its datagrams is lost): counted on arrival, before any queueing.
+  if (const auto seq = peekRgbdFrameSeq(bytes, size)) {
+    const std::uint64_t before = transit_.lost();
+    transit_.observe(*seq);
+    if (transit_.lost() != before) recordLostInTransit(transit_.lost());
+  }
   std::unique_lock lock(queue_mutex_);
   if (stopping_) return;  // stopped: next() takes nothing more (the queue was counted)
   if (replaying_log_) {

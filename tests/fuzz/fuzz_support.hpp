@@ -41,6 +41,13 @@ inline const std::string& scratchDir() {
     std::filesystem::create_directories(dir);
     return dir.string();
   }();
+  // Removed at exit: every replay of the corpus by ctest is a process of its own.
+  static const struct Cleanup {
+    ~Cleanup() {
+      std::error_code ignored;
+      std::filesystem::remove_all(dir, ignored);
+    }
+  } cleanup;
   return dir;
 }
 

@@ -744,6 +744,11 @@ TEST(DaemonOutputFaults, AnUnreadBusAndRefusedPublishesLeaveThePipelineRunning) 
   EXPECT_EQ(last.frames_processed, 8);
   EXPECT_EQ(last.frames_rejected, 4);
   EXPECT_EQ(last.frames_dropped, 0);
+  // Refused publishes have their own count on the wire (the status refused is among them).
+  EXPECT_EQ(last.publish_failures, 5);
+#if defined(__GLIBC__)
+  EXPECT_GT(last.heap_in_use_bytes, 1 << 20);  // the model and a frame's buffers at least
+#endif
 }
 
 // The same fault over real LCM: findmug's udpm output with one subscriber

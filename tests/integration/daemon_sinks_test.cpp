@@ -246,6 +246,8 @@ StatusSnapshot sampleSnapshot() {
   s.processing_threads = 3;
   s.last_error = "pipeline error";
   s.last_error_utime = 100;
+  s.publish_failures = 7;
+  s.heap_in_use_bytes = 123456789;
   return s;
 }
 
@@ -282,13 +284,18 @@ TEST(StatusBuilder, FillsEveryFieldFromTheSnapshot) {
   EXPECT_EQ(s.source_state_name, "running");
   EXPECT_EQ(s.last_error, "pipeline error");
   EXPECT_EQ(s.last_error_utime, 100);
+  EXPECT_EQ(s.publish_failures, 7);
+  EXPECT_EQ(s.heap_in_use_bytes, 123456789);
+  EXPECT_EQ(s.frames_lost_in_transit, 0);
 }
 
 TEST(StatusBuilder, TheSourceStateAndTheNewerErrorWin) {
   StatusSnapshot snap = sampleSnapshot();
   snap.source = StatusSnapshot::Source{"lcm:FINDMUG_RGBD (memq://)", io::SourceState::Reconnecting,
-                                       "source error", 200};
+                                       "source error", 200, 2, 9};
   findmug_lcm::status_t s = StatusBuilder::build(snap);
+  EXPECT_EQ(s.source_reconnects, 2);
+  EXPECT_EQ(s.frames_lost_in_transit, 9);
   EXPECT_EQ(s.source, "lcm:FINDMUG_RGBD (memq://)");
   EXPECT_EQ(s.source_state, findmug_lcm::status_t::SOURCE_RECONNECTING);
   EXPECT_EQ(s.source_state_name, "reconnecting");

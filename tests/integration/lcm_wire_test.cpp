@@ -223,6 +223,10 @@ findmug_lcm::status_t makeStatus(Random& r, const Scale& s) {
   m.cpu_budget_cores = r.f32();
   m.cpu_used_cores = r.f32();
   m.processing_threads = r.i32();
+  m.source_reconnects = r.i64();
+  m.frames_lost_in_transit = r.i64();
+  m.publish_failures = r.i64();
+  m.heap_in_use_bytes = r.i64();
   return m;
 }
 
@@ -315,6 +319,10 @@ TEST(LcmWire, StatusWalkMatchesGeneratedCode) {
     EXPECT_EQ(d.queue_names, m.queue_names);
     EXPECT_EQ(d.last_error, m.last_error);
     EXPECT_EQ(d.processing_threads, m.processing_threads);
+    EXPECT_EQ(d.source_reconnects, m.source_reconnects);
+    EXPECT_EQ(d.frames_lost_in_transit, m.frames_lost_in_transit);
+    EXPECT_EQ(d.publish_failures, m.publish_failures);
+    EXPECT_EQ(d.heap_in_use_bytes, m.heap_in_use_bytes);
   });
 }
 

@@ -12,6 +12,8 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <limits>
+#include <optional>
 #include <lcm/lcm-cpp.hpp>
 #include <thread>
 
@@ -23,6 +25,7 @@
 #include "findmug/io/lcm_codec.hpp"
 #include "findmug/io/lcm_source.hpp"
 #include "findmug/io/pcl_frames.hpp"
+#include "findmug/io/transit_loss.hpp"
 #include "test_data.hpp"
 #include "unpluggable_device.hpp"
 
@@ -339,6 +342,73 @@ TEST(LcmSource, MemqFramesArriveInOrderAndBadMessagesAreCounted) {
   EXPECT_EQ(source.stats().frames_dropped, 0u);
   EXPECT_EQ(source.state(), SourceState::Running);
   EXPECT_NE(source.stats().last_error.find("FINDMUG_RGBD_T"), std::string::npos);
+}
+
+// Seq holes are frames the network lost; late (reordered) frames are taken
+// back; repeats and a publisher starting over are not losses.
+TEST(TransitLoss, CountsHolesTakesBackLateFramesAndIgnoresRestarts) {
+  TransitLossCounter c;
+  for (std::int64_t s : {10, 11, 12}) c.observe(s);
+  EXPECT_EQ(c.lost(), 0u);
+  c.observe(15);  // 13 and 14 missing
+  EXPECT_EQ(c.lost(), 2u);
+  c.observe(13);  // late, not lost
+  EXPECT_EQ(c.lost(), 1u);
+  c.observe(13);  // a repeat of a late frame is not taken back twice: a restart at 13
+  EXPECT_EQ(c.lost(), 1u);
+  EXPECT_EQ(c.restarts(), 1u);
+  c.observe(14);
+  c.observe(14);  // repeat of the newest
+  EXPECT_EQ(c.lost(), 1u);
+  c.observe(0);  // log replay restarted from the beginning
+  c.observe(1);
+  c.observe(3);
+  EXPECT_EQ(c.lost(), 2u);
+  EXPECT_EQ(c.restarts(), 2u);
+  c.observe(3 + TransitLossCounter::kMaxGap + 2);  // another publisher's numbering: no loss
+  EXPECT_EQ(c.lost(), 2u);
+  EXPECT_EQ(c.restarts(), 3u);
+  c.observe(std::numeric_limits<std::int64_t>::min());  // extreme values: no overflow
+  c.observe(std::numeric_limits<std::int64_t>::max());
+  EXPECT_EQ(c.lost(), 2u);
+}
+
+TEST(TransitLoss, OnlyTheLastRememberedHolesCanBeTakenBack) {
+  TransitLossCounter c;
+  c.observe(0);
+  c.observe(901);  // 900 lost, the last 256 remembered
+  EXPECT_EQ(c.lost(), 900u);
+  c.observe(900);
+  c.observe(901 - static_cast<std::int64_t>(TransitLossCounter::kRemembered));
+  EXPECT_EQ(c.lost(), 898u);
+}
+
+TEST(LcmSource, PeekReadsTheSeqOfAFrameAndNothingElse) {
+  const auto b = frameBytes(123456789012);
+  ASSERT_EQ(peekRgbdFrameSeq(b.data(), b.size()), std::optional<std::int64_t>(123456789012));
+  EXPECT_FALSE(peekRgbdFrameSeq(b.data(), 23).has_value());
+  const auto pose = encodeMessage(encodeRobotPose(RobotPose{1, {0, 0, 0}}));
+  EXPECT_FALSE(peekRgbdFrameSeq(pose.data(), pose.size()).has_value());
+}
+
+// Frames the publisher numbered but the channel never delivered are counted
+// apart from drops (never received) and from rejects (arrived broken).
+TEST(LcmSource, SeqHolesAreCountedAsLostInTransit) {
+  SourceOptions options;
+  options.lcm_queue_size = 32;
+  LcmFrameSource source("FINDMUG_RGBD", "memq://", options);
+  const std::vector<std::uint8_t> garbage(100, 0xab);
+  for (std::int64_t seq : {0, 1, 4, 3, 5, 9}) {  // 2, 6, 7, 8 never sent; 3 late
+    const auto b = frameBytes(seq);
+    ASSERT_TRUE(source.bus().publish("FINDMUG_RGBD", b.data(), b.size()));
+    // A broken message among them (rejected when next() reaches it): no seq, no hole.
+    if (seq == 4) source.bus().publish("FINDMUG_RGBD", garbage.data(), garbage.size());
+  }
+  for (int i = 0; i < 6; ++i) ASSERT_TRUE(source.next().has_value());
+  ASSERT_TRUE(eventually([&] { return source.stats().frames_rejected == 1; }));
+  EXPECT_EQ(source.stats().frames_lost_in_transit, 4u);
+  EXPECT_EQ(source.stats().frames_delivered, 6u);
+  EXPECT_EQ(source.stats().frames_dropped, 0u);
 }
 
 TEST(LcmSource, SlowConsumerGetsTheNewestFrame) {

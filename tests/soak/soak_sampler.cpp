@@ -54,7 +54,8 @@ struct Options {
 struct Sample {
   double t_s = 0;
   long rss_kb = 0, fds = 0, threads = 0;
-  long long received = 0, processed = 0, dropped = 0, rejected = 0;
+  long long received = 0, processed = 0, dropped = 0, rejected = 0, lost_in_transit = 0;
+  double heap_mb = -1;  // daemon's heap in use (status), -1 unknown
   double input_fps = 0, output_fps = 0;
   long queue_total = 0, queue_max = 0;
   double lat_p50_ms = 0, lat_p95_ms = 0, lat_max_ms = 0;
@@ -127,6 +128,8 @@ void fillFromStatus(const findmug_lcm::status_t& st, Sample& s) {
   s.processed = st.frames_processed;
   s.dropped = st.frames_dropped;
   s.rejected = st.frames_rejected;
+  s.lost_in_transit = st.frames_lost_in_transit;
+  s.heap_mb = st.heap_in_use_bytes >= 0 ? double(st.heap_in_use_bytes) / (1 << 20) : -1.0;
   s.input_fps = st.input_fps;
   s.output_fps = st.output_fps;
   for (int q = 0; q < st.num_queues; ++q) {
@@ -242,7 +245,8 @@ int main(int argc, char** argv) {
 
   std::ofstream csv(o.csv);
   csv << "t_s,rss_kb,fds,threads,received,processed,dropped,rejected,input_fps,output_fps,"
-         "queue_depth_sum,queue_depth_max,latency_p50_ms,latency_p95_ms,latency_max_ms,load1\n";
+         "queue_depth_sum,queue_depth_max,latency_p50_ms,latency_p95_ms,latency_max_ms,load1,"
+         "lost_in_transit,heap_in_use_mb\n";
   std::vector<Sample> samples;
   const auto start = std::chrono::steady_clock::now();
   auto next = start;
@@ -260,7 +264,8 @@ int main(int argc, char** argv) {
       csv << s.t_s << "," << s.rss_kb << "," << s.fds << "," << s.threads << "," << s.received << ","
           << s.processed << "," << s.dropped << "," << s.rejected << "," << s.input_fps << ","
           << s.output_fps << "," << s.queue_total << "," << s.queue_max << "," << s.lat_p50_ms << ","
-          << s.lat_p95_ms << "," << s.lat_max_ms << "," << s.load1 << std::endl;
+          << s.lat_p95_ms << "," << s.lat_max_ms << "," << s.load1 << "," << s.lost_in_transit
+          << "," << s.heap_mb << std::endl;
       next += std::chrono::microseconds(static_cast<long long>(o.period_s * 1e6));
     }
     if (t >= o.duration_s) break;
@@ -269,13 +274,14 @@ int main(int argc, char** argv) {
   if (!o.svg.empty()) writeSvg(o.svg, samples);
 
   // Judge the samples after warm-up.
-  std::vector<double> t, rss;
+  std::vector<double> t, rss, heap_t, heap;
   long fd_lo = 1L << 40, fd_hi = 0, th_lo = 1L << 40, th_hi = 0;
   double p95_max = 0;
   for (const auto& s : samples) {
     if (s.t_s < o.warmup_s) continue;
     t.push_back(s.t_s);
     rss.push_back(s.rss_kb / 1024.0);
+    if (s.heap_mb >= 0) heap_t.push_back(s.t_s), heap.push_back(s.heap_mb);
     fd_lo = std::min(fd_lo, s.fds), fd_hi = std::max(fd_hi, s.fds);
     th_lo = std::min(th_lo, s.threads), th_hi = std::max(th_hi, s.threads);
     p95_max = std::max(p95_max, s.lat_p95_ms);
@@ -294,9 +300,19 @@ int main(int argc, char** argv) {
          << " s warm-up), span " << span << " s\n"
          << "rss after warm-up: first " << (rss.empty() ? 0 : rss.front()) << " MB, last "
          << (rss.empty() ? 0 : rss.back()) << " MB, trend " << growth_mb << " MB over the span\n"
+         << "heap in use after warm-up (status): "
+         << (heap.empty() ? std::string("unknown")
+                          : "first " + std::to_string(heap.front()) + " MB, last " +
+                                std::to_string(heap.back()) + " MB, max " +
+                                std::to_string(*std::max_element(heap.begin(), heap.end())) +
+                                " MB, trend " +
+                                std::to_string(slope(heap_t, heap) * (heap_t.back() - heap_t.front())) +
+                                " MB over the span")
+         << "\n"
          << "fds " << fd_lo << ".." << fd_hi << ", threads " << th_lo << ".." << th_hi << "\n"
          << "frames received " << last.received << ", processed " << last.processed << ", dropped "
-         << last.dropped << ", rejected " << last.rejected << "\n"
+         << last.dropped << ", rejected " << last.rejected << ", lost in transit "
+         << last.lost_in_transit << "\n"
          << "latency p95 (10 s windows) max " << p95_max << " ms; last p50 " << last.lat_p50_ms
          << " ms, p95 " << last.lat_p95_ms << " ms\n"
          << "daemon " << (alive ? "alive" : "GONE") << " at the end; status decode errors "

@@ -37,6 +37,7 @@ struct StatusSnapshot {
     std::string last_error;
     std::uint64_t last_error_utime = 0;
     std::uint64_t reconnects = 0;  // times the source re-opened its device after a loss
+    std::uint64_t lost_in_transit = 0;  // publisher's frames that never arrived (seq holes)
   };
 
   std::uint64_t utime = 0;     // host clock, microseconds
@@ -50,6 +51,8 @@ struct StatusSnapshot {
   std::string model_id;
   double cpu_budget_cores = 0.0, cpu_used_cores = 0.0;
   int processing_threads = 0;
+  std::uint64_t publish_failures = 0;  // refused publishes, every channel (status included)
+  std::int64_t heap_in_use_bytes = -1;  // allocated and not freed (-1: unknown)
   std::string last_error;  // the pipeline's own
   std::uint64_t last_error_utime = 0;
   std::optional<Source> source;  // nullopt: frames submitted in-process

@@ -64,6 +64,9 @@ struct SourceStats {
   std::uint64_t frames_rejected = 0;   // bad input skipped (corrupt file / message / frame)
   std::uint64_t frames_dropped = 0;  // good frames discarded because next() was not called in time
   std::uint64_t reconnects = 0;      // times the device was (re)opened after a loss
+  // Frames the publisher numbered (seq) that never arrived: lost on the way
+  // (LCM sources; transit_loss.hpp). Not part of frames_dropped: never received.
+  std::uint64_t frames_lost_in_transit = 0;
   std::string last_error;            // most recent problem, empty if none
   std::uint64_t last_error_utime = 0;  // when (microseconds, host clock), 0 if none
 };
@@ -156,6 +159,7 @@ class FrameSourceBase : public FrameSource {
   void recordDelivered();
   void recordDropped(std::uint64_t count = 1);
   void recordReconnect();
+  void recordLostInTransit(std::uint64_t total);
   // Sleeps until `deadline` or stop(); returns false when stopped.
   bool sleepUntil(Clock::time_point deadline);
   // Paces delivery at `rate_hz` (no-op for <= 0): waits until one period

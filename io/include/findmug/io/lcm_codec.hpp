@@ -83,6 +83,10 @@ findmug_lcm::rgbd_frame_t encodeRgbdFrame(const RgbdFrame& frame,
 // Decodes and validates; the returned frame's `source` is "<channel>: <message source>".
 RgbdFrame decodeRgbdFrame(const findmug_lcm::rgbd_frame_t& message, std::string_view channel);
 RgbdFrame decodeRgbdFrame(const void* data, std::size_t size, std::string_view channel);
+// The seq of an encoded rgbd_frame_t without decoding it: the fingerprint and
+// the fixed-size head (utime, seq) only. nullopt when the bytes are too short
+// or carry another type's fingerprint (decodeRgbdFrame then says what is wrong).
+std::optional<std::int64_t> peekRgbdFrameSeq(const void* data, std::size_t size);
 
 // ---- label images (LabelImageMessage: messages.hpp) ----------------------------
 

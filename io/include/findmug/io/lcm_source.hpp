@@ -11,7 +11,8 @@
 // The queue holds the messages' bytes: next() decodes the message it takes,
 // so a frame dropped from the queue costs no decoding (dropped at the door).
 // Bad messages (truncated, corrupt, wrong type) are logged, counted in
-// stats().frames_rejected and skipped when next() reaches them. State: Starting until the first
+// stats().frames_rejected and skipped when next() reaches them. Holes in the
+// publisher's seq are counted as stats().frames_lost_in_transit (transit_loss.hpp). State: Starting until the first
 // frame, Running while frames come, Reconnecting when a live channel has been silent for
 // kSilenceTimeout (the publisher or its camera is gone), EndOfStream at the end of a log.
 #pragma once
@@ -28,6 +29,7 @@
 
 #include "findmug/io/bus.hpp"
 #include "findmug/io/frame_source.hpp"
+#include "findmug/io/transit_loss.hpp"
 
 namespace findmug::io {
 
@@ -73,6 +75,7 @@ class LcmFrameSource : public FrameSourceBase {
   std::vector<RawMessage> spare_;                            // recycled buffers
   std::atomic<Clock::time_point> last_frame_{Clock::now()};  // last good frame received
   bool finished_ = false;  // thread ended (end of log / fatal LCM error)
+  TransitLossCounter transit_;  // seq holes, in arrival order (receive thread only)
   bool stopping_ = false;
   ReceiveThread receiver_;  // last member: stopped before the rest goes
 };
