@@ -50,6 +50,10 @@
 #if defined(__SSE2__)
 #include <emmintrin.h>
 #endif
+#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
+#include <immintrin.h>
+#define FINDMUG_AVX_DISPATCH 1
+#endif
 
 #include "findmug/error.hpp"
 #include "findmug/oversegmentation.hpp"
@@ -165,8 +169,9 @@ struct Weights {
 };
 
 // For each pixel of rows [y0, y1) x columns [x0, x1): if it is nearer to the
-// cluster centre than `best`, take it.
-void assignWindow(const FeatureGrid& g, const std::array<float, kNumChannels>& c, const Weights& wt,
+// cluster centre than `best`, take it. (Portable SSE2 version; the AVX one
+// below does the same arithmetic eight pixels at a time.)
+void assignWindowSse(const FeatureGrid& g, const std::array<float, kNumChannels>& c, const Weights& wt,
                   int label, int x0, int x1, int y0, int y1, float* best, int* labels) {
   const float* ch[kNumChannels];
   for (int k = 0; k < kNumChannels; ++k) ch[k] = g.ch[k].data();
@@ -223,6 +228,86 @@ void assignWindow(const FeatureGrid& g, const std::array<float, kNumChannels>& c
       }
     }
   }
+}
+
+#if defined(FINDMUG_AVX_DISPATCH)
+// assignWindowSse with 8-wide AVX registers. The same IEEE operations in the
+// same order per pixel (no FMA: the target is "avx2", not "fma"), so the
+// result is bit-identical to the SSE2 and scalar code; only the lane count
+// differs. About 40 % of the oversegmenter's time is this loop.
+__attribute__((target("avx2"))) void assignWindowAvx(const FeatureGrid& g,
+                                                    const std::array<float, kNumChannels>& c,
+                                                    const Weights& wt, int label, int x0, int x1,
+                                                    int y0, int y1, float* best, int* labels) {
+  const float* ch[kNumChannels];
+  for (int k = 0; k < kNumChannels; ++k) ch[k] = g.ch[k].data();
+  const __m256 cl = _mm256_set1_ps(c[kL]), ca = _mm256_set1_ps(c[kA]), cb = _mm256_set1_ps(c[kB]);
+  const __m256 cx = _mm256_set1_ps(c[kX]), cy = _mm256_set1_ps(c[kY]), cz = _mm256_set1_ps(c[kZ]);
+  const __m256 cnx = _mm256_set1_ps(c[kNX]), cny = _mm256_set1_ps(c[kNY]),
+               cnz = _mm256_set1_ps(c[kNZ]);
+  const __m256 wc = _mm256_set1_ps(wt.color), ws = _mm256_set1_ps(wt.spatial),
+               wn = _mm256_set1_ps(wt.normal);
+  const __m256 abs_mask = _mm256_castsi256_ps(_mm256_set1_epi32(0x7fffffff));
+  const __m256 one = _mm256_set1_ps(1.0f);
+  const __m256 lab = _mm256_castsi256_ps(_mm256_set1_epi32(label));
+  const std::size_t grid_size = static_cast<std::size_t>(g.width) * g.height;
+  const __m256i lane_index = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
+  for (int y = y0; y < y1; ++y) {
+    const std::size_t row = static_cast<std::size_t>(y) * g.width;
+    // A window row is 10-20 pixels wide: the last vector runs past x1 and
+    // its extra lanes are masked off (they read pixels beyond the window,
+    // inside the grid, and write back what they read), so no pixel takes the
+    // scalar path except at the very end of the grid.
+    for (int x = x0; x < x1; x += 8) {
+      const std::size_t i = row + x;
+      if (i + 8 > grid_size) {
+        assignWindowSse(g, c, wt, label, x, x1, y, y + 1, best, labels);
+        break;
+      }
+      const __m256 inside = _mm256_castsi256_ps(
+          _mm256_cmpgt_epi32(_mm256_set1_epi32(x1 - x), lane_index));
+      const __m256 dl = _mm256_sub_ps(_mm256_loadu_ps(ch[kL] + i), cl);
+      const __m256 da = _mm256_sub_ps(_mm256_loadu_ps(ch[kA] + i), ca);
+      const __m256 db = _mm256_sub_ps(_mm256_loadu_ps(ch[kB] + i), cb);
+      const __m256 dx = _mm256_sub_ps(_mm256_loadu_ps(ch[kX] + i), cx);
+      const __m256 dy = _mm256_sub_ps(_mm256_loadu_ps(ch[kY] + i), cy);
+      const __m256 dz = _mm256_sub_ps(_mm256_loadu_ps(ch[kZ] + i), cz);
+      const __m256 color2 = _mm256_add_ps(
+          _mm256_add_ps(_mm256_mul_ps(dl, dl), _mm256_mul_ps(da, da)), _mm256_mul_ps(db, db));
+      const __m256 space2 = _mm256_add_ps(
+          _mm256_add_ps(_mm256_mul_ps(dx, dx), _mm256_mul_ps(dy, dy)), _mm256_mul_ps(dz, dz));
+      const __m256 dot =
+          _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(_mm256_loadu_ps(ch[kNX] + i), cnx),
+                                      _mm256_mul_ps(_mm256_loadu_ps(ch[kNY] + i), cny)),
+                        _mm256_mul_ps(_mm256_loadu_ps(ch[kNZ] + i), cnz));
+      const __m256 d = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(wc, _mm256_sqrt_ps(color2)),
+                                                   _mm256_mul_ps(ws, _mm256_sqrt_ps(space2))),
+                                     _mm256_mul_ps(wn, _mm256_sub_ps(one, _mm256_and_ps(dot, abs_mask))));
+      const __m256 old = _mm256_loadu_ps(best + i);
+      // false for NaN (invalid pixels) and for lanes outside the window
+      const __m256 closer = _mm256_and_ps(_mm256_cmp_ps(d, old, _CMP_LT_OQ), inside);
+      _mm256_storeu_ps(best + i, _mm256_blendv_ps(old, d, closer));
+      float* label_slot = reinterpret_cast<float*>(labels + i);
+      _mm256_storeu_ps(label_slot, _mm256_blendv_ps(_mm256_loadu_ps(label_slot), lab, closer));
+    }
+  }
+}
+
+bool cpuHasAvx() {
+  static const bool has = __builtin_cpu_supports("avx2");
+  return has;
+}
+#endif
+
+void assignWindow(const FeatureGrid& g, const std::array<float, kNumChannels>& c, const Weights& wt,
+                  int label, int x0, int x1, int y0, int y1, float* best, int* labels) {
+#if defined(FINDMUG_AVX_DISPATCH)
+  if (cpuHasAvx()) {
+    assignWindowAvx(g, c, wt, label, x0, x1, y0, y1, best, labels);
+    return;
+  }
+#endif
+  assignWindowSse(g, c, wt, label, x0, x1, y0, y1, best, labels);
 }
 
 float featureDistance(const FeatureGrid& g, std::size_t i, std::size_t j, const Weights& wt) {
