@@ -431,6 +431,42 @@ class OrganizedOversegmenter final : public Oversegmenter {
            weights_.normal * (1.0f - std::fabs(dot));
   }
 
+  // distance(f, centre of clusters[candidates[c]]) into d[c] for c < count
+  // (2..4): one SSE2 lane per candidate, the same operations in the same
+  // order as distance(), so the same values.
+  void candidateDistances(const std::array<float, kNumChannels>& f,
+                          const std::vector<Cluster>& clusters, const std::array<int, 4>& candidates,
+                          int count, std::array<float, 4>& d) const {
+#if defined(__SSE2__)
+    const float* c0 = clusters[candidates[0]].centre.data();
+    const float* c1 = clusters[candidates[1]].centre.data();
+    const float* c2 = count > 2 ? clusters[candidates[2]].centre.data() : c0;
+    const float* c3 = count > 3 ? clusters[candidates[3]].centre.data() : c0;
+    const auto diff = [&](int k) {
+      return _mm_sub_ps(_mm_set1_ps(f[k]), _mm_setr_ps(c0[k], c1[k], c2[k], c3[k]));
+    };
+    const auto times = [&](int k) {
+      return _mm_mul_ps(_mm_set1_ps(f[k]), _mm_setr_ps(c0[k], c1[k], c2[k], c3[k]));
+    };
+    const __m128 dl = diff(kL), da = diff(kA), db = diff(kB);
+    const __m128 dx = diff(kX), dy = diff(kY), dz = diff(kZ);
+    const __m128 color2 =
+        _mm_add_ps(_mm_add_ps(_mm_mul_ps(dl, dl), _mm_mul_ps(da, da)), _mm_mul_ps(db, db));
+    const __m128 space2 =
+        _mm_add_ps(_mm_add_ps(_mm_mul_ps(dx, dx), _mm_mul_ps(dy, dy)), _mm_mul_ps(dz, dz));
+    const __m128 dot = _mm_add_ps(_mm_add_ps(times(kNX), times(kNY)), times(kNZ));
+    const __m128 abs_mask = _mm_castsi128_ps(_mm_set1_epi32(0x7fffffff));
+    const __m128 result = _mm_add_ps(
+        _mm_add_ps(_mm_mul_ps(_mm_set1_ps(weights_.color), _mm_sqrt_ps(color2)),
+                   _mm_mul_ps(_mm_set1_ps(weights_.spatial), _mm_sqrt_ps(space2))),
+        _mm_mul_ps(_mm_set1_ps(weights_.normal),
+                   _mm_sub_ps(_mm_set1_ps(1.0f), _mm_and_ps(dot, abs_mask))));
+    _mm_storeu_ps(d.data(), result);
+#else
+    for (int c = 0; c < count; ++c) d[c] = distance(f, clusters[candidates[c]].centre);
+#endif
+  }
+
   // Full-resolution labels from the coarse ones. A pixel lies between the
   // (up to) 2x2 coarse samples nearest to it; where they agree it takes
   // their label, along boundaries it picks the nearest of their clusters.
@@ -479,12 +515,13 @@ class OrganizedOversegmenter final : public Oversegmenter {
           continue;
         }
         pixelFeatures(cloud, normals, i, f);
+        std::array<float, 4> d{};
+        candidateDistances(f, clusters, candidates, count, d);
         int best_k = candidates[0];
-        float best_d = distance(f, clusters[best_k].centre);
+        float best_d = d[0];
         for (int c = 1; c < count; ++c) {
-          const float d = distance(f, clusters[candidates[c]].centre);
-          if (d < best_d) {
-            best_d = d;
+          if (d[c] < best_d) {
+            best_d = d[c];
             best_k = candidates[c];
           }
         }
