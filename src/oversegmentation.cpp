@@ -164,7 +164,8 @@ void finalizeOversegmentation(Oversegmentation& seg, int min_points, EdgeSource 
   // Not assign(): a recycled `seg` keeps the capacity of its pixel lists
   // (one allocation per segment and frame otherwise). Lists beyond this
   // frame's count wait in a per-thread spare pool for a frame with more.
-  thread_local std::vector<std::vector<int>> spare_lists;
+  thread_local std::vector<std::vector<int>> spare_lists_tls;
+  std::vector<std::vector<int>>& spare_lists = spare_lists_tls;
   while (seg.segments.size() > static_cast<std::size_t>(next)) {
     spare_lists.push_back(std::move(seg.segments.back()));
     seg.segments.pop_back();
@@ -219,7 +220,8 @@ void finalizeOversegmentation(Oversegmentation& seg, int min_points, EdgeSource 
     // boundary pixel pair.
     // Per-thread and kept between calls: the lists keep their capacity, so a
     // frame's ~1500 segments cost no allocation once warm.
-    thread_local std::vector<std::vector<int>> neighbours;
+    thread_local std::vector<std::vector<int>> neighbours_tls;
+    std::vector<std::vector<int>>& neighbours = neighbours_tls;
     if (neighbours.size() < static_cast<std::size_t>(next)) neighbours.resize(next);
     for (int a = 0; a < next; ++a) neighbours[a].clear();
     const int w = seg.width;
