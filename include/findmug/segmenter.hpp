@@ -109,7 +109,7 @@ class Segmenter {
   // nothing in those stages. Results are the same either way. Thread-safe;
   // at most kRecycledFrames frames are kept, further ones are freed.
   void recycle(LabelledFrame&& done) const;
-  static constexpr std::size_t kRecycledFrames = 4;
+  static constexpr std::size_t kRecycledFrames = 2;
 
   const SegmenterConfig& config() const { return config_; }
   const RandomForest* forest() const { return forest_.get(); }
