@@ -292,6 +292,9 @@ void Pipeline::publishResult(ResultJob& job) {
     latency_.at(name).add(job.labelled.timings.*field, now);
   }
   latency_.at("total").add(static_cast<double>(latency_us) / 1000.0, now);
+  // The sinks are done with it: its buffers serve the next frames (no
+  // per-frame allocation of clouds, normals and segment lists once warm).
+  segmenter_.recycle(std::move(job.labelled));
 }
 
 std::vector<MappedTable> Pipeline::mappedTables() const { return table_map_sink_->tables(); }

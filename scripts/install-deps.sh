@@ -13,7 +13,7 @@ packages=(
   # logging, config, service integration
   libspdlog-dev libfmt-dev libyaml-cpp-dev libsystemd-dev systemd
   # image and data formats
-  libpng-dev libjpeg-dev zlib1g-dev libhdf5-dev libtiff-dev
+  libpng-dev libjpeg-dev zlib1g-dev libdeflate-dev libhdf5-dev libtiff-dev
   # tests and benchmarks
   libgtest-dev libgmock-dev libbenchmark-dev
   # command-line flags of the programs

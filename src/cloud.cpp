@@ -174,12 +174,17 @@ void smoothNormals(std::vector<Eigen::Vector3f>& n, const OrganizedCloud& cloud,
 }  // namespace
 
 OrganizedCloud frameToCloud(const RgbdFrame& frame, float max_depth_m) {
+  OrganizedCloud cloud;
+  frameToCloud(frame, max_depth_m, cloud);
+  return cloud;
+}
+
+void frameToCloud(const RgbdFrame& frame, float max_depth_m, OrganizedCloud& cloud) {
   validateFrame(frame);
   if (!std::isfinite(max_depth_m) || max_depth_m <= 0.0f) {
     throw Error((frame.source.empty() ? std::string("frameToCloud") : frame.source) +
                 ": invalid max_depth_m " + std::to_string(max_depth_m));
   }
-  OrganizedCloud cloud;
   cloud.width = frame.width;
   cloud.height = frame.height;
   const std::size_t pixels = static_cast<std::size_t>(frame.width) * frame.height;
@@ -209,10 +214,15 @@ OrganizedCloud frameToCloud(const RgbdFrame& frame, float max_depth_m) {
       cloud.points[row + u] = Eigen::Vector3f(ray_x * z, ray_y * z, z);
     }
   }
-  return cloud;
 }
 
 NormalImage computeNormals(const OrganizedCloud& cloud, const NormalConfig& config) {
+  NormalImage out;
+  computeNormals(cloud, config, out);
+  return out;
+}
+
+void computeNormals(const OrganizedCloud& cloud, const NormalConfig& config, NormalImage& out) {
   checkCloudShape(cloud, "computeNormals");
   if (config.window_radius_px < 1 || config.window_radius_px > 64) {
     throw Error("computeNormals: normals.window_radius_px must be in 1..64, got " +
@@ -231,7 +241,6 @@ NormalImage computeNormals(const OrganizedCloud& cloud, const NormalConfig& conf
   const int r = config.window_radius_px;
   const Eigen::Vector3f* pts = cloud.points.data();
 
-  NormalImage out;
   out.width = w;
   out.height = h;
   out.normals.assign(cloud.points.size(), kNaNVector);
@@ -277,11 +286,16 @@ NormalImage computeNormals(const OrganizedCloud& cloud, const NormalConfig& conf
     thread_local SmoothingScratch scratch;
     smoothNormals(n, cloud, smooth_r, config.max_depth_jump_m, scratch);
   }
-  return out;
 }
 
 OrganizedCloud transformCloud(const OrganizedCloud& cloud, const Eigen::Isometry3f& transform) {
   OrganizedCloud out;
+  transformCloud(cloud, transform, out);
+  return out;
+}
+
+void transformCloud(const OrganizedCloud& cloud, const Eigen::Isometry3f& transform,
+                    OrganizedCloud& out) {
   out.width = cloud.width;
   out.height = cloud.height;
   out.colors = cloud.colors;
@@ -292,11 +306,15 @@ OrganizedCloud transformCloud(const OrganizedCloud& cloud, const Eigen::Isometry
     const Eigen::Vector3f& p = cloud.points[i];
     out.points[i] = std::isfinite(p.z()) ? Eigen::Vector3f(rotation * p + translation) : kNaNVector;
   }
-  return out;
 }
 
 NormalImage rotateNormals(const NormalImage& normals, const Eigen::Matrix3f& rotation) {
   NormalImage out;
+  rotateNormals(normals, rotation, out);
+  return out;
+}
+
+void rotateNormals(const NormalImage& normals, const Eigen::Matrix3f& rotation, NormalImage& out) {
   out.width = normals.width;
   out.height = normals.height;
   out.normals.resize(normals.normals.size());
@@ -304,7 +322,6 @@ NormalImage rotateNormals(const NormalImage& normals, const Eigen::Matrix3f& rot
     const Eigen::Vector3f& n = normals.normals[i];
     out.normals[i] = std::isfinite(n.x()) ? Eigen::Vector3f(rotation * n) : kNaNVector;
   }
-  return out;
 }
 
 }  // namespace findmug

@@ -161,9 +161,31 @@ void finalizeOversegmentation(Oversegmentation& seg, int min_points, EdgeSource 
     if (counts[id] >= keep_at_least) remap[id] = next++;
   }
 
-  seg.segments.assign(static_cast<std::size_t>(next), {});
+  // Not assign(): a recycled `seg` keeps the capacity of its pixel lists
+  // (one allocation per segment and frame otherwise). Lists beyond this
+  // frame's count wait in a per-thread spare pool for a frame with more.
+  thread_local std::vector<std::vector<int>> spare_lists_tls;
+  std::vector<std::vector<int>>& spare_lists = spare_lists_tls;
+  while (seg.segments.size() > static_cast<std::size_t>(next)) {
+    spare_lists.push_back(std::move(seg.segments.back()));
+    seg.segments.pop_back();
+  }
+  while (seg.segments.size() < static_cast<std::size_t>(next)) {
+    if (spare_lists.empty()) {
+      seg.segments.emplace_back();
+    } else {
+      seg.segments.push_back(std::move(spare_lists.back()));
+      spare_lists.pop_back();
+    }
+  }
+  for (auto& pixels : seg.segments) pixels.clear();
   for (std::size_t id = 0; id < counts.size(); ++id) {
-    if (remap[id] >= 0) seg.segments[remap[id]].reserve(counts[id]);
+    if (remap[id] < 0) continue;
+    std::vector<int>& pixels = seg.segments[remap[id]];
+    const auto count = static_cast<std::size_t>(counts[id]);
+    // A recycled list that is too small grows with a quarter to spare, so
+    // that over a stream the lists settle at sizes that fit every frame.
+    if (pixels.capacity() < count) pixels.reserve(pixels.capacity() == 0 ? count : count + count / 4);
   }
   for (std::size_t i = 0; i < n; ++i) {
     int& id = seg.pixel_segment[i];
@@ -172,7 +194,11 @@ void finalizeOversegmentation(Oversegmentation& seg, int min_points, EdgeSource 
     if (id >= 0) seg.segments[id].push_back(static_cast<int>(i));
   }
 
-  std::vector<std::pair<int, int>> edges;
+  // Grid edges are written into seg.edges itself (its capacity is reused);
+  // kept edges need the input list while the new one is built.
+  std::vector<std::pair<int, int>> kept_edges;
+  std::vector<std::pair<int, int>>& edges =
+      edge_source == EdgeSource::Keep ? kept_edges : seg.edges;
   if (edge_source == EdgeSource::Keep) {
     edges.reserve(seg.edges.size());
     for (const auto& [a, b] : seg.edges) {
@@ -194,7 +220,8 @@ void finalizeOversegmentation(Oversegmentation& seg, int min_points, EdgeSource 
     // boundary pixel pair.
     // Per-thread and kept between calls: the lists keep their capacity, so a
     // frame's ~1500 segments cost no allocation once warm.
-    thread_local std::vector<std::vector<int>> neighbours;
+    thread_local std::vector<std::vector<int>> neighbours_tls;
+    std::vector<std::vector<int>>& neighbours = neighbours_tls;
     if (neighbours.size() < static_cast<std::size_t>(next)) neighbours.resize(next);
     for (int a = 0; a < next; ++a) neighbours[a].clear();
     const int w = seg.width;
@@ -219,14 +246,17 @@ void finalizeOversegmentation(Oversegmentation& seg, int min_points, EdgeSource 
     }
     std::size_t edge_count = 0;
     for (int a = 0; a < next; ++a) edge_count += neighbours[a].size();
+    edges.clear();
     edges.reserve(edge_count);
     for (int a = 0; a < next; ++a) {
       std::sort(neighbours[a].begin(), neighbours[a].end());
       for (const int b : neighbours[a]) edges.emplace_back(a, b);
     }
   }
-  if (edge_source == EdgeSource::Keep) sortUniqueEdges(edges);  // grid edges come out sorted
-  seg.edges = std::move(edges);
+  if (edge_source == EdgeSource::Keep) {
+    sortUniqueEdges(kept_edges);  // grid edges come out sorted
+    seg.edges = std::move(kept_edges);
+  }
 }
 
 OversegmentationQuality evaluateOversegmentation(const Oversegmentation& seg,

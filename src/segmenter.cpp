@@ -183,12 +183,36 @@ void checkModelMatchesConfig(const RandomForest& forest, const SegmenterConfig& 
   }
 }
 
+void Segmenter::recycle(LabelledFrame&& done) const {
+  PreparedFrame& prepared = done.segmented.prepared;
+  prepared.frame = RgbdFrame{};  // the frame's own buffers are the caller's
+  std::lock_guard lock(recycled_->mutex);
+  if (recycled_->prepared.size() < kRecycledFrames) {
+    recycled_->prepared.push_back(std::move(prepared));
+  }
+  // A frame without a ground plane has no segments: nothing worth keeping.
+  if (!done.segmented.segmentation.segments.empty() &&
+      recycled_->segmentations.size() < kRecycledFrames) {
+    recycled_->segmentations.push_back(std::move(done.segmented.segmentation));
+  }
+}
+
 PreparedFrame Segmenter::prepare(RgbdFrame frame, const std::vector<std::uint8_t>* gt_labels) const {
   PreparedFrame out;
+  {
+    std::lock_guard lock(recycled_->mutex);
+    if (!recycled_->prepared.empty()) {
+      out = std::move(recycled_->prepared.back());
+      recycled_->prepared.pop_back();
+      out.ground.reset();
+      out.timings = {};
+      out.cpu_timings = {};
+    }
+  }
   Stopwatch watch;
-  out.cloud_camera = frameToCloud(frame, config_.max_depth_m);
+  frameToCloud(frame, config_.max_depth_m, out.cloud_camera);
   watch.lap(out.timings, out.cpu_timings, &StageTimings::cloud_ms);
-  out.normals_camera = computeNormals(out.cloud_camera, config_.normals);
+  computeNormals(out.cloud_camera, config_.normals, out.normals_camera);
   watch.lap(out.timings, out.cpu_timings, &StageTimings::normals_ms);
 
   switch (config_.ground.source) {
@@ -244,8 +268,15 @@ PreparedFrame Segmenter::prepare(RgbdFrame frame, const std::vector<std::uint8_t
       break;
   }
   if (out.ground) {
-    out.cloud_ground = transformCloud(out.cloud_camera, out.ground->camera_to_ground);
-    out.normals_ground = rotateNormals(out.normals_camera, out.ground->camera_to_ground.linear());
+    transformCloud(out.cloud_camera, out.ground->camera_to_ground, out.cloud_ground);
+    rotateNormals(out.normals_camera, out.ground->camera_to_ground.linear(), out.normals_ground);
+  } else {
+    // Empty without a ground plane (a recycled frame's buffers are kept).
+    out.cloud_ground.width = out.cloud_ground.height = 0;
+    out.cloud_ground.points.clear();
+    out.cloud_ground.colors.clear();
+    out.normals_ground.width = out.normals_ground.height = 0;
+    out.normals_ground.normals.clear();
   }
   watch.lap(out.timings, out.cpu_timings, &StageTimings::ground_ms);
   out.frame = std::move(frame);
@@ -274,9 +305,16 @@ SegmentedFrame Segmenter::oversegment(PreparedFrame prepared) const {
   SegmentedFrame out;
   out.timings = prepared.timings;
   out.cpu_timings = prepared.cpu_timings;
+  if (prepared.ground) {
+    std::lock_guard lock(recycled_->mutex);
+    if (!recycled_->segmentations.empty()) {
+      out.segmentation = std::move(recycled_->segmentations.back());
+      recycled_->segmentations.pop_back();
+    }
+  }
   Stopwatch watch;
   if (prepared.ground) {
-    out.segmentation = oversegmenter_->segment(prepared.cloud_camera, prepared.normals_camera);
+    oversegmenter_->segmentInto(prepared.cloud_camera, prepared.normals_camera, out.segmentation);
   } else {
     // Without a ground plane no feature can be computed: skip the work.
     out.segmentation.width = prepared.cloud_camera.width;

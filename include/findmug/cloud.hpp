@@ -36,6 +36,11 @@ struct NormalImage {
 // become NaN. Validates the frame first.
 OrganizedCloud frameToCloud(const RgbdFrame& frame, float max_depth_m = 10.0f);
 
+// The variants below that take an `out` argument write the same result into
+// it, reusing the memory it already holds (a buffer recycled from an earlier
+// frame: no allocation once warm). `out` must not be an input.
+void frameToCloud(const RgbdFrame& frame, float max_depth_m, OrganizedCloud& out);
+
 struct NormalConfig {
   int window_radius_px = 4;        // half size of the neighbourhood used per pixel
   float max_depth_jump_m = 0.05f;  // neighbours further than this (scaled by depth) are ignored
@@ -49,9 +54,13 @@ struct NormalConfig {
 // to a one-sided difference), then box-averaged over `smoothing_radius_px`.
 // NaN where no valid neighbour pair exists.
 NormalImage computeNormals(const OrganizedCloud& cloud, const NormalConfig& config);
+void computeNormals(const OrganizedCloud& cloud, const NormalConfig& config, NormalImage& out);
 
 // Applies a rigid transform to every valid point (NaNs stay NaN).
 OrganizedCloud transformCloud(const OrganizedCloud& cloud, const Eigen::Isometry3f& transform);
 NormalImage rotateNormals(const NormalImage& normals, const Eigen::Matrix3f& rotation);
+void transformCloud(const OrganizedCloud& cloud, const Eigen::Isometry3f& transform,
+                    OrganizedCloud& out);
+void rotateNormals(const NormalImage& normals, const Eigen::Matrix3f& rotation, NormalImage& out);
 
 }  // namespace findmug

@@ -68,6 +68,14 @@ class Oversegmenter {
   // Throws findmug::Error when their sizes disagree.
   virtual Oversegmentation segment(const OrganizedCloud& cloud_camera,
                                    const NormalImage& normals_camera) const = 0;
+  // The same result written into `out`, reusing the memory it holds (e.g.
+  // the segmentation of an earlier frame: the per-segment pixel lists keep
+  // their capacity, so a warm frame allocates next to nothing). What `out`
+  // held before does not matter. The default just assigns segment().
+  virtual void segmentInto(const OrganizedCloud& cloud_camera, const NormalImage& normals_camera,
+                           Oversegmentation& out) const {
+    out = segment(cloud_camera, normals_camera);
+  }
   virtual std::string name() const = 0;
 };
 
@@ -84,7 +92,8 @@ enum class EdgeSource {
 // segments densely. Shared by both oversegmenters.
 //
 // Input: `pixel_segment` (width*height ids, -1 = none; ids need not be
-// dense but must be < width*height). `segments` is ignored and rebuilt.
+// dense but must be < width*height). `segments` is ignored and rebuilt (its
+// inner vectors keep their capacity, for callers that recycle `seg`).
 // Kept ids are renumbered in increasing order, so the result is
 // deterministic. With EdgeSource::Keep, edges touching a dropped segment are
 // removed, self-loops and duplicates too. Throws findmug::Error on sizes or

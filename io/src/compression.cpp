@@ -1,6 +1,7 @@
 #include "compression.hpp"
 
 #include <jpeglib.h>
+#include <libdeflate.h>
 #include <zlib.h>
 
 #include <csetjmp>
@@ -8,6 +9,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <limits>
+#include <memory>
 
 #include "findmug/error.hpp"
 
@@ -38,50 +40,43 @@ std::vector<std::uint8_t> zlibCompress(const std::uint8_t* data, std::size_t siz
 
 std::vector<std::uint8_t> zlibDecompress(const std::uint8_t* data, std::size_t size,
                                          std::size_t expected_size, const std::string& what) {
-  if (size > std::numeric_limits<uInt>::max() || expected_size > std::numeric_limits<uInt>::max()) {
+  std::vector<std::uint8_t> out(expected_size);
+  zlibDecompressInto(data, size, out.data(), expected_size, what);
+  return out;
+}
+
+void zlibDecompressInto(const std::uint8_t* data, std::size_t size, std::uint8_t* out,
+                        std::size_t expected_size, const std::string& what) {
+  if (size > std::numeric_limits<std::uint32_t>::max() ||
+      expected_size > std::numeric_limits<std::uint32_t>::max()) {
     throw Error(what + ": zlib stream or expected size too large");
   }
-  std::vector<std::uint8_t> out(expected_size);
-  z_stream zs{};
-  if (inflateInit(&zs) != Z_OK) throw Error(what + ": inflateInit failed");
-  zs.next_in = const_cast<Bytef*>(data);
-  zs.avail_in = static_cast<uInt>(size);
-  // One spare byte past the expected end tells "too long" from "exactly right".
-  std::uint8_t spare = 0;
-  zs.next_out = out.data();
-  zs.avail_out = static_cast<uInt>(expected_size);
-  int rc = inflate(&zs, Z_FINISH);
-  if ((rc == Z_BUF_ERROR || rc == Z_OK) && zs.avail_out == 0) {
-    zs.next_out = &spare;
-    zs.avail_out = 1;
-    rc = inflate(&zs, Z_FINISH);
+  // One decompressor per thread (a few kB of tables, allocated once).
+  thread_local const std::unique_ptr<libdeflate_decompressor, void (*)(libdeflate_decompressor*)>
+      decompressor(libdeflate_alloc_decompressor(), &libdeflate_free_decompressor);
+  if (!decompressor) throw Error(what + ": cannot allocate a zlib decompressor");
+  std::size_t used = 0;
+  std::size_t produced = 0;
+  const libdeflate_result rc = libdeflate_zlib_decompress_ex(
+      decompressor.get(), data, size, out, expected_size, &used, &produced);
+  switch (rc) {
+    case LIBDEFLATE_SUCCESS:
+      if (produced != expected_size) {
+        throw Error(what + ": zlib stream inflates to " + std::to_string(produced) +
+                    " bytes, expected " + std::to_string(expected_size));
+      }
+      if (used != size) {
+        throw Error(what + ": " + std::to_string(size - used) +
+                    " bytes after the end of the zlib stream");
+      }
+      return;
+    case LIBDEFLATE_INSUFFICIENT_SPACE:
+      throw Error(what + ": zlib stream inflates to more than the expected " +
+                  std::to_string(expected_size) + " bytes");
+    default:  // LIBDEFLATE_BAD_DATA (libdeflate also reports a cut stream so)
+      throw Error(what + ": corrupt zlib stream (" + std::to_string(size) +
+                  " bytes: invalid, cut short, or the checksum does not match)");
   }
-  const std::size_t produced = zs.total_out;
-  const uInt left_in = zs.avail_in;
-  const std::string zmsg = zs.msg ? zs.msg : "";
-  inflateEnd(&zs);
-
-  if (rc == Z_STREAM_END) {
-    if (produced != expected_size) {
-      throw Error(what + ": zlib stream inflates to " + std::to_string(produced) +
-                  " bytes, expected " + std::to_string(expected_size));
-    }
-    if (left_in != 0) {
-      throw Error(what + ": " + std::to_string(left_in) +
-                  " bytes after the end of the zlib stream");
-    }
-    return out;
-  }
-  if (rc == Z_DATA_ERROR || rc == Z_NEED_DICT || rc == Z_STREAM_ERROR || rc == Z_MEM_ERROR) {
-    throw Error(what + ": corrupt zlib stream (" +
-                (zmsg.empty() ? "code " + std::to_string(rc) : zmsg) + ")");
-  }
-  if (produced > expected_size) {
-    throw Error(what + ": zlib stream inflates to more than the expected " +
-                std::to_string(expected_size) + " bytes");
-  }
-  throw Error(what + ": truncated zlib stream (" + std::to_string(produced) + " of " +
-              std::to_string(expected_size) + " bytes inflated)");
 }
 
 // ---- JPEG -----------------------------------------------------------------------

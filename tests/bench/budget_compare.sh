@@ -6,10 +6,14 @@
 #   new-1core   this build with daemon.max_cpu_cores=1 (every stage on one thread)
 #
 #   tests/bench/budget_compare.sh BASE_BUILD_DIR [--duration 15] [--rate 30] [--out DIR] [--model FMF]
+#       [--set KEY=VALUE]...
 #
-# --model: the forest every row runs (default models/findmug.fmf). An older base
-# build may not read the current model format; give it a model it reads (e.g.
-# that commit's models/findmug.fmf), and every row runs that same model.
+# --model: the forest every row runs. Without it, daemon_bench.sh's default:
+# the committed models/findmug.fmf with features.regions=true (the settings it
+# was trained with). An older base build may not read the current model
+# format; give it a model it reads (e.g. that commit's models/findmug.fmf, a
+# format-2 forest without region features), and every row runs that model.
+# --set: extra daemon settings for every row (both builds).
 #
 # Each configuration is one tests/bench/daemon_bench.sh run (threaded mode,
 # no rate search); the table of the three goes to DIR/compare.md.
@@ -17,29 +21,32 @@
 set -euo pipefail
 ROOT="$(cd "$(dirname "$0")/../.." && pwd)"
 BASE=$1; shift
-TABLES_ONLY=0 DURATION=15 RATE=30 MODEL="$ROOT/models/findmug.fmf" OUT="$ROOT/build/bench-results/budget-$(date -u +%Y%m%dT%H%M%SZ)"
+TABLES_ONLY=0 DURATION=15 RATE=30 MODEL="" SETS=() OUT="$ROOT/build/bench-results/budget-$(date -u +%Y%m%dT%H%M%SZ)"
 while [[ $# -gt 0 ]]; do
   case "$1" in
     --duration) DURATION=$2; shift 2 ;;
     --rate) RATE=$2; shift 2 ;;
     --out) OUT=$2; shift 2 ;;
     --model) MODEL=$2; shift 2 ;;
+    --set) SETS+=(--set "$2"); shift 2 ;;
     --tables-only) TABLES_ONLY=1; shift ;;
     *) echo "budget_compare: unknown argument '$1'" >&2; exit 2 ;;
   esac
 done
 mkdir -p "$OUT"
 BENCH="$ROOT/tests/bench/daemon_bench.sh"
+MODEL_ARGS=()
+[[ -n "$MODEL" ]] && MODEL_ARGS=(--model "$MODEL")
 [[ $TABLES_ONLY == 1 ]] || echo "load before: $(cut -d' ' -f1-3 /proc/loadavg)" > "$OUT/load"
 DATASETS=${DATASETS:-nyu synth}
 for ds in $DATASETS; do
   [[ $TABLES_ONLY == 1 ]] && break
   "$BENCH" --build-dir "$BASE" --datasets "$ds" --rates "$RATE" --modes threaded --no-search \
-    --duration "$DURATION" --model "$MODEL" --results "$OUT/base-$ds" --out "$OUT/base-$ds.md"
+    --duration "$DURATION" "${MODEL_ARGS[@]+"${MODEL_ARGS[@]}"}" "${SETS[@]+"${SETS[@]}"}" --results "$OUT/base-$ds" --out "$OUT/base-$ds.md"
   "$BENCH" --build-dir "$ROOT/build" --datasets "$ds" --rates "$RATE" --modes threaded --no-search \
-    --duration "$DURATION" --model "$MODEL" --results "$OUT/new-$ds" --out "$OUT/new-$ds.md"
+    --duration "$DURATION" "${MODEL_ARGS[@]+"${MODEL_ARGS[@]}"}" "${SETS[@]+"${SETS[@]}"}" --results "$OUT/new-$ds" --out "$OUT/new-$ds.md"
   "$BENCH" --build-dir "$ROOT/build" --datasets "$ds" --rates "$RATE" --modes threaded --no-search \
-    --duration "$DURATION" --model "$MODEL" --results "$OUT/new-1core-$ds" \
+    --duration "$DURATION" "${MODEL_ARGS[@]+"${MODEL_ARGS[@]}"}" "${SETS[@]+"${SETS[@]}"}" --results "$OUT/new-1core-$ds" \
     --out "$OUT/new-1core-$ds.md" --set daemon.max_cpu_cores=1
 done
 [[ $TABLES_ONLY == 1 ]] || echo "load after: $(cut -d' ' -f1-3 /proc/loadavg)" >> "$OUT/load"

@@ -6,12 +6,14 @@
 // The first pass is a warm-up; the figures are over the following passes.
 //
 //   frame_cpu --model MODEL [--data DIR] [--passes N] [--config YAML] [--set section.key=value]...
-//             [--digest FILE] [--heap-keep-mb MB]
+//             [--digest FILE] [--heap-keep-mb MB] [--recycle 0|1]
 //
 // --digest writes one line per frame of the first timed pass: the ground
 // plane and a hash of the label image and of the tables' hull sizes, so two
 // builds can be checked to give the same results (`diff` the files).
 // --heap-keep-mb sets the malloc thresholds as findmugd's daemon.heap_keep_mb.
+// --recycle 1 (default) hands each finished frame back with
+// Segmenter::recycle, as findmugd does after publishing; 0 does not.
 //
 // --config comes before the --set flags it should not override. Defaults:
 // the NYU labelled frames, 3 passes after the warm-up, the library's default
@@ -58,6 +60,7 @@ int run(int argc, char** argv) {
   Config config;
   std::string digest_path;
   int heap_keep_mb = 0;
+  bool recycle = true;
   for (int i = 1; i + 1 < argc; i += 2) {
     if (!std::strcmp(argv[i], "--data"))
       data = argv[i + 1];
@@ -67,6 +70,8 @@ int run(int argc, char** argv) {
       passes = std::max(1, std::atoi(argv[i + 1]));
     else if (!std::strcmp(argv[i], "--digest"))
       digest_path = argv[i + 1];
+    else if (!std::strcmp(argv[i], "--recycle"))
+      recycle = std::atoi(argv[i + 1]) != 0;
     else if (!std::strcmp(argv[i], "--heap-keep-mb"))
       heap_keep_mb = std::atoi(argv[i + 1]);
     else if (!std::strcmp(argv[i], "--config"))
@@ -99,7 +104,10 @@ int run(int argc, char** argv) {
   auto forest = std::make_shared<const RandomForest>(RandomForest::load(model_path));
   const Segmenter segmenter(config.segmenter, forest);
 
-  for (const auto& f : frames) segmenter.process(f);  // warm-up: caches, page faults, scratch
+  for (const auto& f : frames) {  // warm-up: caches, page faults, scratch
+    LabelledFrame out = segmenter.process(f);
+    if (recycle) segmenter.recycle(std::move(out));
+  }
 
   const std::pair<const char*, double StageTimings::*> stages[] = {
       {"cloud", &StageTimings::cloud_ms},       {"normals", &StageTimings::normals_ms},
@@ -152,7 +160,10 @@ int run(int argc, char** argv) {
                      g ? g->offset : 0.0f, static_cast<unsigned long long>(h), out.tables.size());
       }
       // Frames without a ground plane skip most stages: time full runs only.
-      if (!out.segmented.prepared.ground) continue;
+      if (!out.segmented.prepared.ground) {
+        if (recycle) segmenter.recycle(std::move(out));
+        continue;
+      }
       ++labelled;
       news.push_back(calls);
       for (std::size_t k = 0; k < split.size(); ++k) news_split[k].push_back(split[k]);
@@ -163,6 +174,8 @@ int run(int argc, char** argv) {
       }
       cpu_total.push_back(out.cpu_timings.total());
       wall_total.push_back(out.timings.total());
+      // As findmugd does after publishing: the buffers serve the next frame.
+      if (recycle) segmenter.recycle(std::move(out));
     }
   }
 

@@ -435,6 +435,36 @@ TEST(LabelCodec, RoundTripWithConfidence) {
   }
 }
 
+TEST(LabelCodec, ConfidenceIsQuantisedAsLroundDoes) {
+  // Every float c in [0, 1] whose c * 255 lies at or next to a half step
+  // (where rounding can go either way), plus a regular sweep: the byte sent
+  // is std::lround(c * 255) for each.
+  std::vector<float> values;
+  for (int k = 0; k <= 255; ++k) {
+    for (const float step : {k - 0.5f, static_cast<float>(k), k + 0.5f}) {
+      float c = step / 255.0f;
+      for (int n = 0; n < 3; ++n) c = std::nextafter(c, 0.0f);
+      for (int n = 0; n < 7; ++n, c = std::nextafter(c, 2.0f)) {
+        if (c >= 0.0f && c <= 1.0f) values.push_back(c);
+      }
+    }
+  }
+  for (int i = 0; i <= 10000; ++i) values.push_back(static_cast<float>(i) / 10000.0f);
+  while (values.size() % 64 != 0) values.push_back(1.0f);  // a 64-pixel-wide image
+  LabelImageMessage in;
+  in.image.width = 64;
+  in.image.height = static_cast<int>(values.size() / 64);
+  in.image.labels.assign(values.size(), 0);
+  in.image.confidence = values;
+  const LabelImageMessage out = decodeLabelImage(encodeLabelImage(in), "C");
+  ASSERT_EQ(out.image.confidence.size(), values.size());
+  for (std::size_t i = 0; i < values.size(); ++i) {
+    // The decoder gives byte / 255.
+    ASSERT_EQ(out.image.confidence[i], static_cast<float>(std::lround(values[i] * 255.0f)) / 255.0f)
+        << "c = " << values[i];
+  }
+}
+
 TEST(LabelCodec, RoundTripWithoutConfidence) {
   LabelImageMessage in = makeLabels();
   const findmug_lcm::label_image_t msg = encodeLabelImage(in, /*with_confidence=*/false);

@@ -42,7 +42,9 @@ namespace findmug::daemon {
 
 struct StatusSnapshot;
 
-// One frame's result on its way through the sinks.
+// One frame's result on its way through the sinks. `labelled` is valid only
+// during consume(): afterwards the pipeline hands its buffers back to the
+// Segmenter (Segmenter::recycle) for the next frames. Copy what you keep.
 struct FrameResult {
   const LabelledFrame& labelled;
   std::int64_t latency_us = 0;        // arrival to publish
