@@ -80,11 +80,12 @@ std::vector<float> computeSceneFeatures(const OrganizedCloud& cloud_ground,
   const float cell = config.cell_m;
   const int cols = static_cast<int>((max_x - min_x) / cell) + 1;
   const int rows = static_cast<int>((max_y - min_y) / cell) + 1;
+  const float inv_cell = 1.0f / cell;
   auto cellOf = [&](float v, float lo, int count) {
-    return std::clamp(static_cast<int>((v - lo) / cell), 0, count - 1);
+    return std::clamp(static_cast<int>((v - lo) * inv_cell), 0, count - 1);
   };
   auto binOf = [&](float z) {
-    return std::clamp(static_cast<int>(std::floor(z / cell)), 0, kHeightBins - 1);
+    return std::clamp(static_cast<int>(std::floor(z * inv_cell)), 0, kHeightBins - 1);
   };
 
   std::vector<std::uint64_t> occupied(static_cast<std::size_t>(cols) * rows, 0);
@@ -92,18 +93,33 @@ std::vector<float> computeSceneFeatures(const OrganizedCloud& cloud_ground,
   const int histogram_bins =
       std::max(1, static_cast<int>(std::max(0.0f, max_z) / kHistogramStep) + 1);
   std::vector<std::uint32_t> heights(static_cast<std::size_t>(histogram_bins), 0);
+  // Squared distances in the loop (one square root per band afterwards), and
+  // multiplications by reciprocals: this pass visits every valid point.
+  // The image columns each patch spans, for its bands.
+  std::vector<int> first_column(n, width), last_column(n, -1);
   std::size_t valid = 0;
-  for (std::size_t i = 0; i < pixels; ++i) {
-    const Eigen::Vector3f& p = cloud_ground.points[i];
-    if (!std::isfinite(p.z())) continue;
-    ++valid;
-    const int cx = cellOf(p.x(), min_x, cols), cy = cellOf(p.y(), min_y, rows);
-    occupied[static_cast<std::size_t>(cy) * cols + cx] |= std::uint64_t{1} << binOf(p.z());
-    const int band = static_cast<int>(i % static_cast<std::size_t>(width)) / config.band_px;
-    band_far[band] = std::max(band_far[band], horizontalDistance(p, camera_position));
-    const int h = std::clamp(static_cast<int>(p.z() / kHistogramStep), 0, histogram_bins - 1);
-    ++heights[h];
+  const float inv_step = 1.0f / kHistogramStep;
+  const std::size_t grid_rows = pixels / static_cast<std::size_t>(width);
+  for (std::size_t v = 0; v < grid_rows; ++v) {
+    for (int u = 0; u < width; ++u) {
+      const std::size_t i = v * static_cast<std::size_t>(width) + u;
+      const int segment = segmentation.pixel_segment[i];
+      if (segment >= 0 && static_cast<std::size_t>(segment) < n) {
+        first_column[segment] = std::min(first_column[segment], u);
+        last_column[segment] = std::max(last_column[segment], u);
+      }
+      const Eigen::Vector3f& p = cloud_ground.points[i];
+      if (!std::isfinite(p.z())) continue;
+      ++valid;
+      const int cx = cellOf(p.x(), min_x, cols), cy = cellOf(p.y(), min_y, rows);
+      occupied[static_cast<std::size_t>(cy) * cols + cx] |= std::uint64_t{1} << binOf(p.z());
+      const float dx = p.x() - camera_position.x(), dy = p.y() - camera_position.y();
+      float& far = band_far[static_cast<std::size_t>(u / config.band_px)];
+      far = std::max(far, dx * dx + dy * dy);
+      ++heights[std::clamp(static_cast<int>(p.z() * inv_step), 0, histogram_bins - 1)];
+    }
   }
+  for (float& far : band_far) far = std::sqrt(far);
   // The frame's top: the 98th percentile of the point heights.
   float top = 0.0f;
   {
@@ -126,14 +142,12 @@ std::vector<float> computeSceneFeatures(const OrganizedCloud& cloud_ground,
     float* row = out.data() + s * kSceneFeatureDim;
     row[0] = top - max_height;
 
-    // Farthest point over the bands this patch's pixels fall in.
+    // Farthest point over the bands this patch's columns fall in.
     float far = 0.0f;
-    int last_band = -1;
-    for (int pixel : segmentation.segments[s]) {
-      const int band = (pixel % width) / config.band_px;
-      if (band == last_band) continue;
-      last_band = band;
-      far = std::max(far, band_far[band]);
+    if (last_column[s] >= 0) {
+      for (int band = first_column[s] / config.band_px; band <= last_column[s] / config.band_px;
+           ++band)
+        far = std::max(far, band_far[static_cast<std::size_t>(band)]);
     }
     row[1] = far > 0.0f ? horizontalDistance(c, camera_position) / far : 1.0f;
 
