@@ -6,6 +6,7 @@
 #include <ctime>
 
 #include "findmug/error.hpp"
+#include "findmug/scene_features.hpp"
 
 namespace findmug {
 
@@ -69,6 +70,7 @@ Segmenter::Segmenter(SegmenterConfig config, std::shared_ptr<const RandomForest>
 std::vector<std::string> firstStageFeatureNames(const SegmenterConfig& config) {
   std::vector<std::string> names(kFeatureNames.begin(), kFeatureNames.end());
   if (config.regions.enabled) names.insert(names.end(), kRegionFeatureNames.begin(), kRegionFeatureNames.end());
+  if (config.scene.enabled) names.insert(names.end(), kSceneFeatureNames.begin(), kSceneFeatureNames.end());
   return names;
 }
 
@@ -86,7 +88,13 @@ std::vector<float> firstStageRows(const SegmentFeatures& features) {
     throw Error("firstStageRows: " + std::to_string(n) + " segments but " +
                 std::to_string(features.regions.size()) + " region feature values");
   }
-  const std::size_t dim = kFeatureDim + (regions ? kRegionFeatureDim : 0);
+  const bool scene = !features.scene.empty();
+  if (scene && features.scene.size() != n * kSceneFeatureDim) {
+    throw Error("firstStageRows: " + std::to_string(n) + " segments but " +
+                std::to_string(features.scene.size()) + " scene feature values");
+  }
+  const std::size_t region_dim = regions ? kRegionFeatureDim : 0;
+  const std::size_t dim = kFeatureDim + region_dim + (scene ? kSceneFeatureDim : 0);
   std::vector<float> rows(n * dim);
   for (std::size_t i = 0; i < n; ++i) {
     float* row = rows.data() + i * dim;
@@ -94,6 +102,10 @@ std::vector<float> firstStageRows(const SegmentFeatures& features) {
     if (regions) {
       std::copy_n(features.regions.begin() + static_cast<std::ptrdiff_t>(i * kRegionFeatureDim),
                   kRegionFeatureDim, row + kFeatureDim);
+    }
+    if (scene) {
+      std::copy_n(features.scene.begin() + static_cast<std::ptrdiff_t>(i * kSceneFeatureDim),
+                  kSceneFeatureDim, row + kFeatureDim + region_dim);
     }
   }
   return rows;
@@ -112,7 +124,7 @@ std::vector<ClassProbabilities> predictSegments(const RandomForest& model,
     throw Error("predictSegments: the model reads " + std::to_string(dim) +
                 " columns per segment, the features give " +
                 std::to_string(n == 0 ? 0 : rows.size() / n) +
-                " (features.regions differs from the model's)");
+                " (features.regions or features.scene differs from the model's)");
   }
   std::vector<ClassProbabilities> probs(n);
   for (std::size_t i = 0; i < n; ++i) probs[i] = model.predict({rows.data() + i * dim, dim});
@@ -146,11 +158,16 @@ void checkModelMatchesConfig(const RandomForest& forest, const SegmenterConfig& 
   const auto expected = firstStageFeatureNames(config);
   if (forest.featureNames() != expected) {
     const bool model_regions = forest.dim() == kFeatureDim + kRegionFeatureDim;
+    const auto& names = forest.featureNames();
+    const bool model_scene =
+        std::find(names.begin(), names.end(), std::string(kSceneFeatureNames[0])) != names.end();
     throw Error("model " + name + " reads " + std::to_string(forest.dim()) +
                 " feature columns" + (model_regions ? " (with region features)" : "") +
+                (model_scene ? " (with scene features)" : "") +
                 " but the config computes " + std::to_string(expected.size()) +
                 " (features.regions = " + (config.regions.enabled ? "true" : "false") +
-                "); set features.regions to match the model or retrain" +
+                ", features.scene = " + (config.scene.enabled ? "true" : "false") +
+                "); set features.regions and features.scene to match the model or retrain" +
                 (forest.formatVersion() == 2 ? " (a format-2 model has no region features)" : ""));
   }
   if (config.context.enabled != (forest.contextStage() != nullptr)) {
@@ -336,6 +353,11 @@ SegmentFeatures Segmenter::features(const SegmentedFrame& segmented) const {
                                         config_.regions)
                       .values;
   }
+  if (config_.scene.enabled) {
+    out.scene = computeSceneFeatures(segmented.prepared.cloud_ground, segmented.segmentation, out,
+                                     segmented.prepared.ground->camera_to_ground.translation(),
+                                     config_.scene);
+  }
   return out;
 }
 
@@ -364,6 +386,12 @@ LabelledFrame Segmenter::classify(SegmentedFrame segmented) const {
                                                  segmented.segmentation, config_.regions)
                                .values;
   }
+  if (config_.scene.enabled) {
+    out.features.scene = computeSceneFeatures(
+        segmented.prepared.cloud_ground, segmented.segmentation, out.features,
+        segmented.prepared.ground->camera_to_ground.translation(), config_.scene);
+  }
+  // Region and scene features share this stage's time.
   watch.lap(out.timings, out.cpu_timings, &StageTimings::regions_ms);
 
   const std::size_t n = out.features.features.size();

@@ -1,5 +1,7 @@
 #include "findmug/training.hpp"
 
+#include <cmath>
+
 #include "findmug/error.hpp"
 
 namespace findmug {
@@ -18,12 +20,78 @@ std::vector<FrameSample> extractSamples(const DatasetFolder& dataset, const Segm
   return extractSamples(framesOf(dataset), segmenter, report, progress);
 }
 
+namespace {
+
+// Names of the first stage's extra columns: region, then scene features.
+std::vector<std::string> extraColumnNames(bool regions, bool scene) {
+  std::vector<std::string> names;
+  if (regions) names.assign(kRegionFeatureNames.begin(), kRegionFeatureNames.end());
+  if (scene) names.insert(names.end(), kSceneFeatureNames.begin(), kSceneFeatureNames.end());
+  return names;
+}
+
+// Segment k's extra columns (region, then scene features, as present).
+void appendExtraColumns(const SegmentFeatures& f, std::size_t k, std::vector<float>& out) {
+  if (!f.regions.empty()) {
+    const auto begin = f.regions.begin() + static_cast<std::ptrdiff_t>(k * kRegionFeatureDim);
+    out.insert(out.end(), begin, begin + kRegionFeatureDim);
+  }
+  if (!f.scene.empty()) {
+    const auto begin = f.scene.begin() + static_cast<std::ptrdiff_t>(k * kSceneFeatureDim);
+    out.insert(out.end(), begin, begin + kSceneFeatureDim);
+  }
+}
+
+// A frame's sample from one oversegmentation of its prepared geometry.
+FrameSample sampleOf(const Segmenter& segmenter, PreparedFrame prepared,
+                     const std::vector<std::uint8_t>& labels) {
+  const SegmentedFrame segmented = segmenter.oversegment(std::move(prepared));
+  FrameSample sample;
+  sample.width = segmented.segmentation.width;
+  sample.height = segmented.segmentation.height;
+  sample.features = segmenter.features(segmented);
+  sample.segment_labels = segmentMajorityLabels(segmented.segmentation, labels);
+  sample.segment_pixels.reserve(segmented.segmentation.segments.size());
+  for (const auto& pixels : segmented.segmentation.segments) {
+    sample.segment_pixels.push_back(static_cast<std::uint32_t>(pixels.size()));
+  }
+  sample.edges = segmented.segmentation.edges;
+  sample.pixel_segment = segmented.segmentation.pixel_segment;
+  return sample;
+}
+
+// Segmenters (no forest) for the training-only oversegmentations: seed
+// resolution scaled by s, 1/s, s^2, 1/s^2, ... (training.extra_*).
+std::vector<Segmenter> variantSegmenters(const SegmenterConfig& config) {
+  std::vector<Segmenter> out;
+  const TrainingOptions& t = config.training;
+  for (int k = 0; k < t.extra_oversegmentations; ++k) {
+    const int power = (k / 2 + 1) * (k % 2 == 0 ? 1 : -1);
+    SegmenterConfig variant = config;
+    variant.overseg.seed_resolution_m =
+        config.overseg.seed_resolution_m * std::pow(t.extra_seed_scale, static_cast<float>(power));
+    if (variant.overseg.seed_resolution_m <= variant.overseg.voxel_resolution_m) {
+      throw Error("training.extra_oversegmentations = " + std::to_string(t.extra_oversegmentations) +
+                  " with training.extra_seed_scale = " + std::to_string(t.extra_seed_scale) +
+                  " takes overseg.seed_resolution_m down to " +
+                  std::to_string(variant.overseg.seed_resolution_m) +
+                  ", not above overseg.voxel_resolution_m");
+    }
+    variant.ground.reestimate_every_frames = 1;
+    out.emplace_back(variant, nullptr);
+  }
+  return out;
+}
+
+}  // namespace
+
 std::vector<FrameSample> extractSamples(const LabeledFrames& frames, const Segmenter& segmenter,
                                         ExtractionReport& report,
                                         const std::function<void(int, int)>& progress) {
   std::vector<FrameSample> samples;
   report = {};
   report.frames_total = static_cast<int>(frames.count);
+  const std::vector<Segmenter> variants = variantSegmenters(segmenter.config());
   for (std::size_t i = 0; i < frames.count; ++i) {
     LabeledFrame labelled = frames.load(i);
     PreparedFrame prepared = segmenter.prepare(std::move(labelled.frame), &labelled.labels);
@@ -31,22 +99,19 @@ std::vector<FrameSample> extractSamples(const LabeledFrames& frames, const Segme
       report.dropped.push_back(labelled.name + ": no ground plane found");
     } else {
       const GroundMethod method = prepared.ground->method;
-      SegmentedFrame segmented = segmenter.oversegment(std::move(prepared));
-      FrameSample sample;
+      std::vector<FrameSample> views;
+      for (const Segmenter& variant : variants) {
+        views.push_back(sampleOf(variant, prepared, labelled.labels));
+        views.back().name = labelled.name;
+        views.back().source_index = i;
+        views.back().ground_method = method;
+      }
+      FrameSample sample = sampleOf(segmenter, std::move(prepared), labelled.labels);
       sample.name = labelled.name;
       sample.source_index = i;
-      sample.width = segmented.segmentation.width;
-      sample.height = segmented.segmentation.height;
-      sample.features = segmenter.features(segmented);
-      sample.segment_labels = segmentMajorityLabels(segmented.segmentation, labelled.labels);
-      sample.segment_pixels.reserve(segmented.segmentation.segments.size());
-      for (const auto& pixels : segmented.segmentation.segments) {
-        sample.segment_pixels.push_back(static_cast<std::uint32_t>(pixels.size()));
-      }
-      sample.edges = std::move(segmented.segmentation.edges);
-      sample.pixel_segment = std::move(segmented.segmentation.pixel_segment);
       sample.ground_truth = std::move(labelled.labels);
       sample.ground_method = method;
+      sample.variants = std::move(views);
       report.ground_methods.emplace_back(sample.name, groundMethodName(method));
       samples.push_back(std::move(sample));
       ++report.frames_used;
@@ -57,30 +122,41 @@ std::vector<FrameSample> extractSamples(const LabeledFrames& frames, const Segme
 }
 
 TrainingSet makeTrainingSet(const std::vector<FrameSample>& samples,
-                            const std::vector<std::size_t>& frame_indices) {
+                            const std::vector<std::size_t>& frame_indices,
+                            SampleWeighting weighting) {
   std::vector<const FrameSample*> frames;
   for (std::size_t f : frame_indices) frames.push_back(&samples.at(f));
-  return makeTrainingSet(frames);
+  return makeTrainingSet(frames, weighting);
 }
 
-TrainingSet makeTrainingSet(const std::vector<const FrameSample*>& frames) {
+TrainingSet makeTrainingSet(const std::vector<const FrameSample*>& given,
+                            SampleWeighting weighting) {
   TrainingSet set;
+  std::vector<const FrameSample*> frames;
+  for (const FrameSample* s : given) {
+    frames.push_back(s);
+    for (const FrameSample& v : s->variants) frames.push_back(&v);
+  }
   const bool regions = !frames.empty() && !frames.front()->features.regions.empty();
-  if (regions) set.extra_names.assign(kRegionFeatureNames.begin(), kRegionFeatureNames.end());
+  const bool scene = !frames.empty() && !frames.front()->features.scene.empty();
+  set.extra_names = extraColumnNames(regions, scene);
   for (const FrameSample* s : frames) {
     if (s->features.regions.empty() == regions && !s->features.features.empty()) {
       throw Error("makeTrainingSet: frame " + s->name + (regions ? " lacks" : " has") +
                   " region features unlike the first frame");
     }
+    if (s->features.scene.empty() == scene && !s->features.features.empty()) {
+      throw Error("makeTrainingSet: frame " + s->name + (scene ? " lacks" : " has") +
+                  " scene features unlike the first frame");
+    }
     for (std::size_t k = 0; k < s->segment_labels.size(); ++k) {
       if (s->segment_labels[k] >= kNumLabels) continue;
       set.features.push_back(s->features.features[k]);
-      if (regions) {
-        const auto begin = s->features.regions.begin() +
-                           static_cast<std::ptrdiff_t>(k * kRegionFeatureDim);
-        set.extra.insert(set.extra.end(), begin, begin + kRegionFeatureDim);
-      }
+      appendExtraColumns(s->features, k, set.extra);
       set.labels.push_back(s->segment_labels[k]);
+      const auto pixels = static_cast<float>(s->segment_pixels[k]);
+      if (weighting == SampleWeighting::Pixels) set.weights.push_back(pixels);
+      if (weighting == SampleWeighting::SqrtPixels) set.weights.push_back(std::sqrt(pixels));
     }
   }
   return set;
@@ -111,7 +187,8 @@ RandomForest trainModel(const std::vector<const FrameSample*>& frames,
   auto tick = [&] {
     if (progress) progress(++done, total);
   };
-  RandomForest first = RandomForest::train(makeTrainingSet(frames), config.forest);
+  const SampleWeighting weighting = config.training.sample_weight;
+  RandomForest first = RandomForest::train(makeTrainingSet(frames, weighting), config.forest);
   tick();
   if (!config.context.enabled) return first;
 
@@ -136,7 +213,7 @@ RandomForest trainModel(const std::vector<const FrameSample*>& frames,
       if (held_out.empty()) continue;
       ForestParams params = config.forest;
       params.seed += 1000 + static_cast<std::uint64_t>(g);
-      const TrainingSet set = makeTrainingSet(train);
+      const TrainingSet set = makeTrainingSet(train, weighting);
       if (set.labels.empty()) throw Error("trainModel: cross-fitting group " + std::to_string(g) +
                                           " leaves no labelled segment to train on");
       const RandomForest forest = RandomForest::train(set, params);
@@ -150,10 +227,10 @@ RandomForest trainModel(const std::vector<const FrameSample*>& frames,
 
   // Context-stage rows: first-stage rows, then context columns.
   TrainingSet set;
-  if (!frames.empty() && !frames.front()->features.regions.empty())
-    set.extra_names.assign(kRegionFeatureNames.begin(), kRegionFeatureNames.end());
+  if (!frames.empty())
+    set.extra_names = extraColumnNames(!frames.front()->features.regions.empty(),
+                                       !frames.front()->features.scene.empty());
   for (const auto& name : contextFeatureNames()) set.extra_names.push_back(name);
-  const std::size_t first_extra = set.extra_names.size() - kContextFeatureDim;
   for (std::size_t i = 0; i < n; ++i) {
     const FrameSample& s = *frames[i];
     const std::vector<float> ctx =
@@ -161,13 +238,13 @@ RandomForest trainModel(const std::vector<const FrameSample*>& frames,
     for (std::size_t k = 0; k < s.segment_labels.size(); ++k) {
       if (s.segment_labels[k] >= kNumLabels) continue;
       set.features.push_back(s.features.features[k]);
-      if (first_extra > 0) {
-        const auto begin = s.features.regions.begin() + static_cast<std::ptrdiff_t>(k * first_extra);
-        set.extra.insert(set.extra.end(), begin, begin + static_cast<std::ptrdiff_t>(first_extra));
-      }
+      appendExtraColumns(s.features, k, set.extra);
       const auto begin = ctx.begin() + static_cast<std::ptrdiff_t>(k * kContextFeatureDim);
       set.extra.insert(set.extra.end(), begin, begin + kContextFeatureDim);
       set.labels.push_back(s.segment_labels[k]);
+      const auto pixels = static_cast<float>(s.segment_pixels[k]);
+      if (weighting == SampleWeighting::Pixels) set.weights.push_back(pixels);
+      if (weighting == SampleWeighting::SqrtPixels) set.weights.push_back(std::sqrt(pixels));
     }
   }
   ForestParams params = config.forest;

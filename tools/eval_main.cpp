@@ -319,6 +319,7 @@ int run(int argc, char** argv) {
     report.protocol = std::to_string(folds) + "-fold cross-validation by frame";
     eval = crossValidate(samples, extra_training, folds, config.segmenter, true);
   }
+  for (const FrameSample& s : samples) report.oracle.add(s.ground_truth, pixelLabels(s, s.segment_labels));
   report.forest = eval.forest;
   report.mrf = eval.mrf;
   std::optional<synth::SequenceGroundTruth> synth_truth;

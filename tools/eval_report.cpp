@@ -81,25 +81,48 @@ std::string formatTable(const EvalReport& r) {
       out << "  ground " << method << ": " << frames << "\n";
     }
   }
-  out << "\n  class        forest   +MRF   paper\n";
+  out << "\n  class        forest   +MRF   paper  oracle\n";
   const auto f = r.forest.perClassAccuracy();
   const auto m = r.mrf.perClassAccuracy();
+  const auto o = r.oracle.perClassAccuracy();
   for (int c = 1; c <= kNumLabels; ++c) {
     const int k = c % kNumLabels;  // unknown last, as a footnote class
     char line[96];
-    std::snprintf(line, sizeof line, "  %-10s %s %s %s\n", std::string(kLabelNames[k]).c_str(),
+    std::snprintf(line, sizeof line, "  %-10s %s %s %s %s\n", std::string(kLabelNames[k]).c_str(),
                   percent(f[k]).c_str(), percent(m[k]).c_str(),
-                  percent(kPaperPerClass[k] / 100.0).c_str());
+                  percent(kPaperPerClass[k] / 100.0).c_str(), percent(o[k]).c_str());
     out << line;
   }
-  char line[128];
-  std::snprintf(line, sizeof line, "  %-10s %s %s %s\n  %-10s %s %s %s\n", "class avg",
+  char line[160];
+  std::snprintf(line, sizeof line, "  %-10s %s %s %s %s\n  %-10s %s %s %s %s\n", "class avg",
                 percent(r.forest.classAverageAccuracy()).c_str(),
                 percent(r.mrf.classAverageAccuracy()).c_str(),
-                percent(kPaperClassAverage / 100).c_str(), "global",
+                percent(kPaperClassAverage / 100).c_str(),
+                percent(r.oracle.classAverageAccuracy()).c_str(), "global",
                 percent(r.forest.globalAccuracy()).c_str(), percent(r.mrf.globalAccuracy()).c_str(),
-                percent(kPaperGlobal / 100).c_str());
+                percent(kPaperGlobal / 100).c_str(), percent(r.oracle.globalAccuracy()).c_str());
   out << line;
+  out << "  (oracle: every patch labelled with its majority true label)\n";
+  // Where each class's pixels go with the MRF: rows truth, columns prediction,
+  // row-normalised; the last column is pixels left without a label.
+  out << "\n  +MRF confusion, % of each true class (rows: truth, columns: predicted)\n  "
+      << std::string(10, ' ');
+  for (int p = 0; p < kNumLabels; ++p) {
+    std::snprintf(line, sizeof line, " %7.7s", std::string(kLabelNames[p]).c_str());
+    out << line;
+  }
+  out << "    none\n";
+  for (int t = 0; t < kNumLabels; ++t) {
+    const double row = static_cast<double>(r.mrf.rowTotal(t));
+    std::snprintf(line, sizeof line, "  %-10s", std::string(kLabelNames[t]).c_str());
+    out << line;
+    for (int p = 0; p <= kNumLabels; ++p) {
+      std::snprintf(line, sizeof line, " %7.1f",
+                    row > 0 ? 100.0 * static_cast<double>(r.mrf.count(t, p)) / row : 0.0);
+      out << line;
+    }
+    out << "\n";
+  }
   {
     const TableMetrics& t = r.tables;
     std::snprintf(line, sizeof line,
@@ -170,7 +193,8 @@ std::string formatJson(const EvalReport& r) {
   }
   out << "],\n  \"labels\": [";
   for (int c = 0; c < kNumLabels; ++c) out << (c ? ", " : "") << "\"" << kLabelNames[c] << "\"";
-  out << "],\n  \"forest\": " << jsonMatrix(r.forest) << ",\n  \"mrf\": " << jsonMatrix(r.mrf);
+  out << "],\n  \"forest\": " << jsonMatrix(r.forest) << ",\n  \"mrf\": " << jsonMatrix(r.mrf)
+      << ",\n  \"oracle\": " << jsonMatrix(r.oracle);
   {
     const TableMetrics& t = r.tables;
     out << ",\n  \"table_instances\": {\"labels\": \"forest+mrf\", \"truth\": " << t.truth()

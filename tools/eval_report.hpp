@@ -33,6 +33,10 @@ struct EvalReport {
   std::vector<std::pair<std::string, std::string>> ground_methods;
   std::string config_yaml;
   ConfusionMatrix forest, mrf;
+  // The oversegmentation's ceiling: every patch given its majority true label
+  // (what a perfect patch classifier would score; void-majority patches count
+  // as unlabelled).
+  ConfusionMatrix oracle;
   // Tables detected on the forest+MRF labels against ground-truth instances.
   TableMetrics tables;
   std::vector<FrameTables> frame_tables;
@@ -44,7 +48,7 @@ struct EvalReport {
 };
 
 std::string formatTable(const EvalReport& report);
-// JSON with `forest` and `mrf` objects holding class_average, global,
+// JSON with `forest`, `mrf` and `oracle` objects holding class_average, global,
 // per_class (by label name) and the confusion matrix; plus the sweeps.
 std::string formatJson(const EvalReport& report);
 void writeConfusionSvg(const std::string& path, const ConfusionMatrix& matrix,

@@ -19,11 +19,31 @@
 #include "findmug/mrf.hpp"
 #include "findmug/oversegmentation.hpp"
 #include "findmug/region_features.hpp"
+#include "findmug/scene_features.hpp"
 #include "findmug/table_map.hpp"
 #include "findmug/table_metrics.hpp"
 #include "findmug/tables.hpp"
 
 namespace findmug {
+
+// How the forest's training set is built from labelled frames (training
+// only: findmug-train, findmug-eval's cross-validation; a model does not
+// depend on them at run time, so they are not recorded as extraction settings).
+enum class SampleWeighting {
+  Patches,     // one vote per patch (the paper's)
+  Pixels,      // each patch weighs its pixel count: the figures are per pixel
+  SqrtPixels,  // in between: large patches count more, but not in proportion
+};
+struct TrainingOptions {
+  SampleWeighting sample_weight = SampleWeighting::Patches;  // training.sample_weight
+  // Augmentation: each training frame also contributes the patches of this
+  // many other oversegmentations (training.extra_oversegmentations), the k-th
+  // with overseg.seed_resolution_m scaled by extra_seed_scale^j, j = 1, -1,
+  // 2, -2, ... (training.extra_seed_scale): more and more varied patches per
+  // frame. Evaluation and the daemon still use the configured one only.
+  int extra_oversegmentations = 0;
+  float extra_seed_scale = 0.8f;
+};
 
 struct SegmenterConfig {
   float max_depth_m = 10.0f;
@@ -31,12 +51,14 @@ struct SegmenterConfig {
   GroundConfig ground;
   OversegmentationConfig overseg;
   RegionConfig regions;    // features.regions, features.region_*
+  SceneConfig scene;       // features.scene, features.scene_*
   ContextConfig context;   // features.context, features.context_*
   ForestParams forest;
   MrfParams mrf;
   bool use_mrf = true;
   TableConfig tables;
   TableMetricsConfig table_metrics;  // findmug-eval only: table instances and their matching
+  TrainingOptions training;          // training.*
 };
 
 struct Config {

@@ -40,6 +40,10 @@ struct SegmentFeatures {
   // Region features (region_features.hpp), row-major, kRegionFeatureDim per
   // segment; empty unless features.regions is on.
   std::vector<float> regions;
+  // Scene features (scene_features.hpp), row-major, kSceneFeatureDim per
+  // segment; empty unless features.scene is on. They follow the region
+  // features in a model's rows.
+  std::vector<float> scene;
 };
 
 // sRGB (0..255) to CIELAB (D65).

@@ -28,6 +28,10 @@ struct FrameSample {
   std::vector<std::uint32_t> segment_pixels;     // pixel count per segment
   std::vector<std::uint8_t> ground_truth;        // per pixel, 255 = void
   GroundMethod ground_method = GroundMethod::Given;  // how its ground frame was obtained
+  // Training-only views of the same frame through other oversegmentations
+  // (training.extra_oversegmentations): their patches join every training
+  // set this frame is part of; predictions use this sample's own patches.
+  std::vector<FrameSample> variants;
 };
 
 // Any indexed collection of labelled frames (a dataset folder, the official
@@ -50,7 +54,8 @@ struct ExtractionReport {
 
 // Runs the segmenter's geometric stages on every frame. Frames for which no
 // ground plane is found are dropped (the paper drops frames with too few floor
-// points) and listed in the report. `progress(done, total)` after each frame.
+// points) and listed in the report. With training.extra_oversegmentations each
+// sample also gets its variants. `progress(done, total)` after each frame.
 std::vector<FrameSample> extractSamples(const LabeledFrames& frames, const Segmenter& segmenter,
                                         ExtractionReport& report,
                                         const std::function<void(int, int)>& progress = {});
@@ -58,12 +63,16 @@ std::vector<FrameSample> extractSamples(const DatasetFolder& dataset, const Segm
                                         ExtractionReport& report,
                                         const std::function<void(int, int)>& progress = {});
 
-// Segments with a non-void label from the given frames, as a training set
-// (weights empty: one vote per patch; class weighting is the forest's job).
-// Region features, when the samples have them, become the extra columns.
+// Segments with a non-void label from the given frames and their variants,
+// as a training set. Sample weights follow `weighting` (training.sample_weight;
+// Patches leaves them empty: one vote per patch); class weighting is the
+// forest's job. Region features, when the samples have them, become the
+// extra columns.
 TrainingSet makeTrainingSet(const std::vector<FrameSample>& samples,
-                            const std::vector<std::size_t>& frame_indices);
-TrainingSet makeTrainingSet(const std::vector<const FrameSample*>& frames);
+                            const std::vector<std::size_t>& frame_indices,
+                            SampleWeighting weighting = SampleWeighting::Patches);
+TrainingSet makeTrainingSet(const std::vector<const FrameSample*>& frames,
+                            SampleWeighting weighting = SampleWeighting::Patches);
 
 // Trains the model `config` asks for on the given frames: the first-stage
 // forest (config.forest), and with features.context an auto-context stage

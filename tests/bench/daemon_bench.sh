@@ -154,9 +154,9 @@ if [[ -z "$MODEL" ]]; then
   for candidate in "$ROOT/models/findmug.fmf" "$ROOT"/models/*.fmf; do
     [[ -f "$candidate" ]] && { MODEL=$candidate; break; }
   done
-  # The committed models are trained with region features (models/README.md);
+  # The committed models are trained with region and scene features (models/README.md);
   # findmugd refuses a model whose stages differ from its config.
-  [[ -n "$MODEL" ]] && MODEL_SETS=(--set features.regions=true)
+  [[ -n "$MODEL" ]] && MODEL_SETS=(--set features.regions=true --set features.scene=true)
 fi
 if [[ -z "$MODEL" && $TABLES_ONLY == 0 ]]; then
   MODEL="$RESULTS/nyu31.fmf"

@@ -1,13 +1,13 @@
 // stage_times: wall time of each pipeline stage per 640x480 frame, median over
 // a labelled dataset, for each oversegmenter side by side in one run, and for
-// the organized oversegmenter with the region and auto-context stages.
+// the organized oversegmenter with the region, scene and auto-context stages.
 //
-//   stage_times [--data DIR] [--model MODEL] [--repeat N]
+//   stage_times [--data DIR] [--model MODEL] [--repeat N] [--clock wall|cpu]
 //
 // Without --model the forests are trained in-process on the same frames (the
 // timing of prediction does not depend on what the trees learnt, only on
 // their size); --model replaces the forest of the columns whose settings it
-// matches (features.regions/context, overseg.method). Prints a Markdown table
+// matches (features.regions/scene/context, overseg.method). Prints a Markdown table
 // for BENCHMARKS.md. Single-threaded.
 #include <algorithm>
 #include <cstdio>
@@ -52,7 +52,14 @@ int run(int argc, char** argv) {
   std::string data = (test::dataRoot() / "nyuv2_labeled").string();
   std::string model_path;
   int repeat = 1;
+  bool cpu_clock = false;  // --clock cpu: the calling thread's CPU time instead of wall time
   for (int i = 1; i + 1 < argc; i += 2) {
+    if (!std::strcmp(argv[i], "--clock")) {
+      if (std::strcmp(argv[i + 1], "cpu") && std::strcmp(argv[i + 1], "wall"))
+        throw Error(std::string("--clock: expected cpu or wall, got '") + argv[i + 1] + "'");
+      cpu_clock = !std::strcmp(argv[i + 1], "cpu");
+      continue;
+    }
     if (!std::strcmp(argv[i], "--data")) data = argv[i + 1];
     else if (!std::strcmp(argv[i], "--model")) model_path = argv[i + 1];
     else if (!std::strcmp(argv[i], "--repeat")) repeat = bench::positiveCount("--repeat", argv[i + 1]);
@@ -83,6 +90,14 @@ int run(int argc, char** argv) {
         {kind == OversegmenterKind::PclSupervoxels ? "PCL supervoxels" : "organized", config, {}});
   }
   variants.push_back({"organized + regions + context", contextual, {}});
+  // The shipped model's configuration and the one before it (scene features
+  // are timed in the `regions` row).
+  SegmenterConfig regions = contextual;
+  regions.context.enabled = false;
+  variants.push_back({"organized + regions", regions, {}});
+  SegmenterConfig scene = regions;
+  scene.scene.enabled = true;
+  variants.push_back({"organized + regions + scene", scene, {}});
 
   std::shared_ptr<const RandomForest> loaded;
   if (!model_path.empty()) loaded = std::make_shared<const RandomForest>(RandomForest::load(model_path));
@@ -115,15 +130,17 @@ int run(int argc, char** argv) {
       for (const auto& f : frames) {
         const LabelledFrame out = segmenter.process(f.frame);
         if (!out.segmented.prepared.ground) continue;  // no plane: not a full pipeline run
-        record(column, out.timings, out.segmented.segmentation.segments.size());
+        record(column, cpu_clock ? out.cpu_timings : out.timings,
+               out.segmented.segmentation.segments.size());
       }
     }
     columns.push_back(std::move(column));
   }
 
-  std::printf("Median wall time per stage (ms) over %zu frames x %d, %s, one thread, "
+  std::printf("Median %s time per stage (ms) over %zu frames x %d, %s, one thread, "
               "forest %zu trees\n\n",
-              frames.size(), repeat, data.c_str(), variants.front().forest->trees().size());
+              cpu_clock ? "CPU" : "wall", frames.size(), repeat, data.c_str(),
+              variants.front().forest->trees().size());
   std::printf("| stage |");
   for (const auto& c : columns) std::printf(" %s |", c.name.c_str());
   std::printf("\n|---|");

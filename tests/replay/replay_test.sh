@@ -120,9 +120,9 @@ if [[ -z "$MODEL" ]]; then
   for candidate in "$SOURCE_DIR/models/findmug.fmf" "$SOURCE_DIR"/models/*.fmf; do
     if [[ -f "$candidate" ]]; then MODEL=$candidate; break; fi
   done
-  # The committed models are trained with region features (models/README.md);
+  # The committed models are trained with region and scene features (models/README.md);
   # findmugd refuses a model whose stages differ from its config.
-  [[ -n "$MODEL" ]] && MODEL_SETS=(--set features.regions=true)
+  [[ -n "$MODEL" ]] && MODEL_SETS=(--set features.regions=true --set features.scene=true)
 fi
 if [[ -z "$MODEL" ]]; then
   # No committed model: train a small one (the replay test checks plumbing

@@ -106,6 +106,38 @@ TEST(Config, BadValuesNameKeyAndValue) {
               HasSubstr("not valid YAML"));
 }
 
+// Issue 10's settings: the scene feature group and the training levers.
+TEST(Config, SceneAndTrainingSettings) {
+  const Config c = parseConfig(
+      "features:\n  scene: true\n  scene_cell_m: 0.2\n  scene_band_px: 10\n"
+      "training:\n  sample_weight: sqrt_pixels\n  extra_oversegmentations: 2\n"
+      "  extra_seed_scale: 0.9\n",
+      "t.yaml");
+  EXPECT_TRUE(c.segmenter.scene.enabled);
+  EXPECT_FLOAT_EQ(c.segmenter.scene.cell_m, 0.2f);
+  EXPECT_EQ(c.segmenter.scene.band_px, 10);
+  EXPECT_EQ(c.segmenter.training.sample_weight, SampleWeighting::SqrtPixels);
+  EXPECT_EQ(c.segmenter.training.extra_oversegmentations, 2);
+  EXPECT_FLOAT_EQ(c.segmenter.training.extra_seed_scale, 0.9f);
+  EXPECT_THAT(errorOf([] { parseConfig("training:\n  sample_weight: area\n", "a.yaml"); }),
+              HasSubstr("one of patches pixels sqrt_pixels"));
+  EXPECT_THAT(errorOf([] { parseConfig("features:\n  scene_band_px: 0\n", "a.yaml"); }),
+              HasSubstr("features.scene_band_px"));
+  EXPECT_THAT(errorOf([] { parseConfig("training:\n  extra_seed_scale: 1\n", "a.yaml"); }),
+              HasSubstr("training.extra_seed_scale"));
+  // The scene switches shape the features and go into the model; training.* does not.
+  const auto recorded = extractionSettings(c.segmenter);
+  auto has = [&](const std::string& key) {
+    for (const auto& kv : recorded)
+      if (kv.first == key) return true;
+    return false;
+  };
+  EXPECT_TRUE(has("features.scene"));
+  EXPECT_TRUE(has("features.scene_band_px"));
+  EXPECT_FALSE(has("training.sample_weight"));
+  EXPECT_FALSE(has("training.extra_oversegmentations"));
+}
+
 TEST(Config, InconsistentResolutionsRefused) {
   const auto msg = errorOf([] {
     parseConfig("overseg:\n  voxel_resolution_m: 0.2\n  seed_resolution_m: 0.1\n", "a.yaml");

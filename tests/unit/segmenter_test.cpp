@@ -283,6 +283,80 @@ TEST(Segmenter, RefusesModelWhoseStagesDifferFromTheConfig) {
   EXPECT_NO_THROW(Segmenter(fastConfig(), plain));
 }
 
+// features.scene adds its columns after the region features; the daemon's
+// path (process) gives what evaluation computes, and a model trained without
+// them is refused with a message naming the setting.
+TEST(Segmenter, RunsTheSceneFeaturesOfTheModel) {
+  const Scene scene = floorAndWall(true);
+  SegmenterConfig config = fastConfig();
+  config.regions.enabled = true;
+  config.scene.enabled = true;
+  config.forest.num_trees = 4;
+  config.forest.max_depth = 6;
+  const auto samples = extractScene(Segmenter(config, nullptr), scene);
+  ASSERT_EQ(samples.size(), 1u);
+  const std::size_t n = samples[0].features.features.size();
+  ASSERT_EQ(samples[0].features.scene.size(), n * kSceneFeatureDim);
+  RandomForest trained = trainModel({&samples[0]}, config);
+  EXPECT_EQ(trained.dim(), kFeatureDim + kRegionFeatureDim + kSceneFeatureDim);
+  EXPECT_EQ(trained.featureNames(), firstStageFeatureNames(config));
+  EXPECT_EQ(trained.featureNames().back(), std::string(kSceneFeatureNames.back()));
+  trained.setExtractionSettings(extractionSettings(config));
+  const auto model = std::make_shared<const RandomForest>(trained);
+  const LabelledFrame out = Segmenter(config, model).process(scene.frame);
+  ASSERT_EQ(out.features.scene.size(), n * kSceneFeatureDim);
+  const auto expected = predictSample(*model, samples[0], config);
+  ASSERT_EQ(out.forest_probabilities.size(), n);
+  for (std::size_t i = 0; i < n; ++i) ASSERT_EQ(out.forest_probabilities[i], expected[i]) << i;
+
+  SegmenterConfig no_scene = config;
+  no_scene.scene.enabled = false;
+  try {
+    Segmenter segmenter(no_scene, model);
+    FAIL() << "expected the model to be refused";
+  } catch (const Error& e) {
+    EXPECT_THAT(e.what(), HasSubstr("features.scene = false"));
+    EXPECT_THAT(e.what(), HasSubstr("with scene features"));
+  }
+}
+
+// training.extra_oversegmentations: each frame gets training-only views
+// through other seed resolutions, whose patches join the training set;
+// training.sample_weight=pixels weighs each patch by its pixel count.
+TEST(Segmenter, TrainingAugmentationAndSampleWeights) {
+  const Scene scene = floorAndWall(true);
+  SegmenterConfig config = fastConfig();
+  config.training.extra_oversegmentations = 2;
+  config.training.extra_seed_scale = 0.7f;
+  const auto samples = extractScene(Segmenter(config, nullptr), scene);
+  ASSERT_EQ(samples.size(), 1u);
+  ASSERT_EQ(samples[0].variants.size(), 2u);
+  const std::size_t own = samples[0].segment_labels.size();
+  // Seed resolution x0.7 gives more patches, x1/0.7 fewer.
+  EXPECT_GT(samples[0].variants[0].segment_labels.size(), own);
+  EXPECT_LT(samples[0].variants[1].segment_labels.size(), own);
+  std::size_t labelled = 0;
+  for (const FrameSample* s : {&samples[0], &samples[0].variants[0], &samples[0].variants[1]})
+    for (auto y : s->segment_labels) labelled += y < kNumLabels;
+  const TrainingSet patches = makeTrainingSet({&samples[0]});
+  EXPECT_EQ(patches.labels.size(), labelled);
+  EXPECT_TRUE(patches.weights.empty());
+
+  const auto plain = extractScene(Segmenter(fastConfig(), nullptr), scene);
+  EXPECT_TRUE(plain[0].variants.empty());
+  const TrainingSet pixels = makeTrainingSet({&plain[0]}, SampleWeighting::Pixels);
+  ASSERT_EQ(pixels.weights.size(), pixels.labels.size());
+  std::size_t row = 0;
+  for (std::size_t k = 0; k < plain[0].segment_labels.size(); ++k) {
+    if (plain[0].segment_labels[k] >= kNumLabels) continue;
+    EXPECT_EQ(pixels.weights[row++], static_cast<float>(plain[0].segment_pixels[k]));
+  }
+  const TrainingSet roots = makeTrainingSet({&plain[0]}, SampleWeighting::SqrtPixels);
+  ASSERT_EQ(roots.weights.size(), pixels.weights.size());
+  for (std::size_t i = 0; i < roots.weights.size(); ++i)
+    EXPECT_FLOAT_EQ(roots.weights[i] * roots.weights[i], pixels.weights[i]);
+}
+
 TEST(Segmenter, MajorityLabelsPerSegment) {
   Oversegmentation seg;
   seg.width = 4;
