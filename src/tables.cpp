@@ -97,6 +97,16 @@ void validateTableConfig(const TableConfig& c) {
       c.min_floor_observed_fraction > 1.0f) {
     badSetting("min_floor_observed_fraction", c.min_floor_observed_fraction, "must be in [0, 1]");
   }
+  if (!std::isfinite(c.region_max_tilt_deg) || c.region_max_tilt_deg < 0.0f ||
+      c.region_max_tilt_deg > 90.0f) {
+    badSetting("region_max_tilt_deg", c.region_max_tilt_deg, "must be in [0, 90] degrees");
+  }
+  nonNegative("region_min_area_m2", c.region_min_area_m2);
+  positive("table_weight", c.table_weight);
+  nonNegative("min_top_area_m2", c.min_top_area_m2);
+  if (!std::isfinite(c.min_confidence) || c.min_confidence < 0.0f || c.min_confidence > 1.0f) {
+    badSetting("min_confidence", c.min_confidence, "must be in [0, 1]");
+  }
 }
 
 TableDetection detectTables(const OrganizedCloud& cloud_ground, const LabelImage& labels,
@@ -197,6 +207,21 @@ TableDetection detectTables(const OrganizedCloud& cloud_ground, const LabelImage
     if (!outcome.ok) {
       ++result.clusters_rejected;
       result.diagnostics.push_back(outcome.reason + ": dropped");
+      continue;
+    }
+    if (table.top_area_m2 < config.min_top_area_m2) {
+      ++result.clusters_rejected;
+      result.diagnostics.push_back("cluster of " + std::to_string(n) + " points with a top of " +
+                                   fmt(table.top_area_m2) + " m² (below tables.min_top_area_m2 " +
+                                   fmt(config.min_top_area_m2) + "): dropped");
+      continue;
+    }
+    if (table.mean_confidence < config.min_confidence) {
+      ++result.clusters_rejected;
+      result.diagnostics.push_back("cluster of " + std::to_string(n) +
+                                   " points with mean confidence " + fmt(table.mean_confidence) +
+                                   " (below tables.min_confidence " + fmt(config.min_confidence) +
+                                   "): dropped");
       continue;
     }
     table.pixels.resize(static_cast<std::size_t>(n));

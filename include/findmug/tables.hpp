@@ -63,6 +63,9 @@ struct TableCluster {
   // differs from the centroid's x,y when the points are unevenly spread.
   Eigen::Vector2f center = Eigen::Vector2f::Zero();
   std::vector<Eigen::Vector2f> hull;  // convex hull of the top, CCW
+  // The visible top's size: floor area of the cells (tables.cluster_tolerance_m
+  // on a side) that hold top points; a vertical panel's top band is a thin line.
+  float top_area_m2 = 0.0f;
   int point_count = 0;
   // Image pixels (y * width + x) of all the cluster's points, ascending: its
   // image mask, for matching against ground truth (table_metrics.hpp).
@@ -97,6 +100,22 @@ struct TableConfig {
   float floor_tolerance_m = 0.1f;
   float floor_cell_m = 0.1f;
   float min_floor_observed_fraction = 0.5f;
+  // Region vote before clustering (table_regions.hpp; needs a model with
+  // region features): each horizontal region at table height gets one label.
+  // Off: on the 31 NYU frames it changed no match (BENCHMARKS.md 1f).
+  bool region_vote = false;
+  // Bias of the label decision towards tables (weightTableProbability in
+  // table_regions.hpp): p(table) times this before the MRF. 1 = none; 1.5
+  // measured best on the 31 NYU frames (BENCHMARKS.md 1f).
+  float table_weight = 1.5f;
+  float region_max_tilt_deg = 15.0f;  // region normal within this of vertical
+  float region_min_area_m2 = 0.04f;   // smaller regions keep their patches' labels
+  // Detection filters (after the geometry): a table needs a visible top of at
+  // least min_top_area_m2 (TableCluster::top_area_m2; a vertical panel or a
+  // chair back has almost none) and a mean label confidence of at least
+  // min_confidence. Dropped clusters are reported in the diagnostics.
+  float min_top_area_m2 = 0.15f;
+  float min_confidence = 0.0f;
 };
 
 // Why something produced no table or was flagged, for the caller to log.
