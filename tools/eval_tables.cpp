@@ -109,7 +109,14 @@ std::string describe(const FrameTableEvidence& f, const TableCluster& t) {
     x0 = std::min(x0, p % f.width), x1 = std::max(x1, p % f.width);
     y0 = std::min(y0, p / f.width), y1 = std::max(y1, p / f.width);
   }
-  const bool border = x0 <= 8 || y0 <= 8 || x1 >= f.width - 9 || y1 >= f.height - 9;
+  // The border of the labelled area (NYU frames have a masked white border).
+  int bx0 = f.width, bx1 = -1, by0 = f.height, by1 = -1;
+  for (int p = 0; p < f.width * f.height; ++p) {
+    if ((*f.truth_labels)[static_cast<std::size_t>(p)] == kVoidLabel) continue;
+    bx0 = std::min(bx0, p % f.width), bx1 = std::max(bx1, p % f.width);
+    by0 = std::min(by0, p / f.width), by1 = std::max(by1, p / f.width);
+  }
+  const bool border = x0 <= bx0 + 2 || y0 <= by0 + 2 || x1 >= bx1 - 2 || y1 >= by1 - 2;
   char line[320];
   std::snprintf(line, sizeof line,
                 "%6d px, top %.2f m, box %.2f x %.2f m, top area %.2f m2, p(table) %.2f, confidence %.2f, "
