@@ -214,6 +214,10 @@ const std::vector<CoreSetting>& settings() {
                    [](C& c) -> float& { return c.tables.min_top_area_m2; }, 0, 100),
       floatSetting("tables.min_confidence",
                    [](C& c) -> float& { return c.tables.min_confidence; }, 0, 1),
+      floatSetting("tables.min_horizontal_share",
+                   [](C& c) -> float& { return c.tables.min_horizontal_share; }, 0, 1),
+      floatSetting("tables.horizontal_tilt_deg",
+                   [](C& c) -> float& { return c.tables.horizontal_tilt_deg; }, 0, 90),
   };
   return all;
 }

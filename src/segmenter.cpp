@@ -373,7 +373,8 @@ LabelledFrame Segmenter::classify(SegmentedFrame segmented) const {
   watch.lap(out.timings, out.cpu_timings, &StageTimings::labels_ms);
 
   TableDetection detection =
-      detectTables(segmented.prepared.cloud_ground, out.labels, config_.tables);
+      detectTables(segmented.prepared.cloud_ground, out.labels, config_.tables,
+                   &segmented.prepared.normals_ground);
   out.tables = std::move(detection.tables);
   out.table_diagnostics = std::move(detection.diagnostics);
   watch.lap(out.timings, out.cpu_timings, &StageTimings::tables_ms);

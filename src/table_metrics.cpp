@@ -49,6 +49,7 @@ std::vector<TableCluster> groundTruthTables(const OrganizedCloud& cloud_ground,
   // The detector's filters are not part of the instance definition.
   truth_config.min_top_area_m2 = 0.0f;
   truth_config.min_confidence = 0.0f;
+  truth_config.min_horizontal_share = 0.0f;
   truth_config.max_cluster_points =
       std::max(truth_config.max_cluster_points, static_cast<int>(cloud_ground.points.size()));
   LabelImage labels;

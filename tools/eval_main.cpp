@@ -242,7 +242,9 @@ void measureTables(const LabeledFrames& frames, const std::vector<FrameSample>& 
       confidence[p] = eval.mrf_results[f].confidence[static_cast<std::size_t>(s)];
     }
     const LabelImage predicted{sample.width, sample.height, eval.mrf_pixels[f], confidence};
-    const auto detected = detectTables(prepared.cloud_ground, predicted, config.tables).tables;
+    const auto detected =
+        detectTables(prepared.cloud_ground, predicted, config.tables, &prepared.normals_ground)
+            .tables;
     const auto matches = matchTables(truth, detected, config.table_metrics.min_iou);
     if (diagnosis) {
       const FrameTableEvidence evidence{sample.name,          sample.width,

@@ -182,8 +182,8 @@ std::string diagnoseFrameTables(const FrameTableEvidence& f, const std::vector<T
           reason = iou(t, d) >= 0.2 ? "partly covered (IoU 0.2-0.5)" : "partly covered (IoU < 0.2)";
         }
       } else {
-        reason = "table-labelled but no detection (small cluster, out of height range or top "
-                 "below tables.min_top_area_m2)";
+        reason = "table-labelled but no detection (small cluster, out of height range, or "
+                 "dropped by tables.min_top_area_m2 / min_horizontal_share)";
       }
       (void)best;
     }

@@ -227,6 +227,55 @@ TEST(TableTopFilter, VerticalPanelHasAlmostNoTopAndIsDropped) {
   EXPECT_TRUE(detectTables(scene.cloud, scene.labels, config).tables.empty());
 }
 
+TEST(TableTopFilter, ClustersWithFewHorizontalNormalsAreDroppedWhenNormalsAreGiven) {
+  GroundScene scene(200, 60);
+  scene.top(0, 0.5f, 0.75f, 0.0f);  // a table top: normals up
+  scene.panel(100, 2.0f);           // a cabinet front: normals along x
+  NormalImage normals;
+  normals.width = scene.cloud.width;
+  normals.height = scene.cloud.height;
+  normals.normals.assign(scene.cloud.points.size(), Eigen::Vector3f::Constant(std::nanf("")));
+  for (int v = 0; v < 60; ++v) {
+    for (int u = 0; u < 200; ++u) {
+      const auto i = static_cast<std::size_t>(v * 200 + u);
+      if (!std::isfinite(scene.cloud.points[i].z())) continue;
+      // The front's upper tenth is rounded: its normals tilt 10° from up.
+      const bool rim = u >= 100 && v < 5;
+      normals.normals[i] = u < 100  ? Eigen::Vector3f::UnitZ()
+                           : rim    ? Eigen::Vector3f(std::sin(0.17f), 0.0f, std::cos(0.17f))
+                                    : Eigen::Vector3f::UnitX();
+    }
+  }
+  TableConfig config;
+  config.min_top_area_m2 = 0.0f;
+  config.min_table_width_m = 0.0f;
+  ASSERT_FLOAT_EQ(config.min_horizontal_share, 0.2f);
+  // Without normals both clusters are tables, the share unknown.
+  const auto blind = detectTables(scene.cloud, scene.labels, config);
+  ASSERT_EQ(blind.tables.size(), 2u);
+  EXPECT_TRUE(std::isnan(blind.tables[0].horizontal_share));
+  // With them the front (10 % horizontal) is dropped, the top (100 %) kept.
+  const auto seen = detectTables(scene.cloud, scene.labels, config, &normals);
+  ASSERT_EQ(seen.tables.size(), 1u);
+  EXPECT_FLOAT_EQ(seen.tables[0].horizontal_share, 1.0f);
+  EXPECT_NEAR(seen.tables[0].centroid.x(), 0.245f, 0.01f);
+  bool reported = false;
+  for (const auto& line : seen.diagnostics)
+    reported |= line.find("tables.min_horizontal_share") != std::string::npos;
+  EXPECT_TRUE(reported);
+  // A lower bar keeps the front: 10 % of its points are within 20° of up.
+  config.min_horizontal_share = 0.05f;
+  const auto low = detectTables(scene.cloud, scene.labels, config, &normals);
+  ASSERT_EQ(low.tables.size(), 2u);
+  for (const auto& t : low.tables) {
+    if (t.centroid.x() > 1.0f) {
+      EXPECT_NEAR(t.horizontal_share, 0.1f, 1e-5f);
+    }
+  }
+  normals.normals.pop_back();
+  EXPECT_THROW(detectTables(scene.cloud, scene.labels, config, &normals), Error);
+}
+
 TEST(TableTopFilter, LowConfidenceClustersAreDropped) {
   GroundScene scene(200, 60);
   scene.top(0, 0.5f, 0.75f, 0.0f);
@@ -259,6 +308,14 @@ TEST(TableDecisionSettings, OutOfRangeValuesNameTheSetting) {
     ADD_FAILURE() << "no error";
   } catch (const Error& e) {
     EXPECT_THAT(e.what(), HasSubstr("tables.min_confidence"));
+  }
+  c = TableConfig{};
+  c.min_horizontal_share = -0.1f;
+  try {
+    validateTableConfig(c);
+    ADD_FAILURE() << "no error";
+  } catch (const Error& e) {
+    EXPECT_THAT(e.what(), HasSubstr("tables.min_horizontal_share"));
   }
   c = TableConfig{};
   c.region_max_tilt_deg = 95.0f;
