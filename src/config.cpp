@@ -216,6 +216,21 @@ const std::vector<CoreSetting>& settings() {
                    0.01, 1),
       floatSetting("tables.min_floor_observed_fraction",
                    [](C& c) -> float& { return c.tables.min_floor_observed_fraction; }, 0, 1),
+      boolSetting("tables.region_vote", [](C& c) -> bool& { return c.tables.region_vote; }),
+      floatSetting("tables.table_weight", [](C& c) -> float& { return c.tables.table_weight; },
+                   0.01, 100),
+      floatSetting("tables.region_max_tilt_deg",
+                   [](C& c) -> float& { return c.tables.region_max_tilt_deg; }, 0, 90),
+      floatSetting("tables.region_min_area_m2",
+                   [](C& c) -> float& { return c.tables.region_min_area_m2; }, 0, 100),
+      floatSetting("tables.min_top_area_m2",
+                   [](C& c) -> float& { return c.tables.min_top_area_m2; }, 0, 100),
+      floatSetting("tables.min_confidence",
+                   [](C& c) -> float& { return c.tables.min_confidence; }, 0, 1),
+      floatSetting("tables.min_horizontal_share",
+                   [](C& c) -> float& { return c.tables.min_horizontal_share; }, 0, 1),
+      floatSetting("tables.horizontal_tilt_deg",
+                   [](C& c) -> float& { return c.tables.horizontal_tilt_deg; }, 0, 90),
   };
   return all;
 }

@@ -7,6 +7,7 @@
 
 #include "findmug/error.hpp"
 #include "findmug/scene_features.hpp"
+#include "findmug/table_regions.hpp"
 
 namespace findmug {
 
@@ -380,11 +381,12 @@ LabelledFrame Segmenter::classify(SegmentedFrame segmented) const {
   out.features = computeFeatures(segmented.prepared.cloud_ground,
                                  segmented.prepared.normals_ground, segmented.segmentation);
   watch.lap(out.timings, out.cpu_timings, &StageTimings::features_ms);
+  RegionFeatures regions;  // kept for the table region vote after the MRF
   if (config_.regions.enabled) {
-    out.features.regions = computeRegionFeatures(segmented.prepared.cloud_ground,
-                                                 segmented.prepared.normals_ground,
-                                                 segmented.segmentation, config_.regions)
-                               .values;
+    regions = computeRegionFeatures(segmented.prepared.cloud_ground,
+                                    segmented.prepared.normals_ground, segmented.segmentation,
+                                    config_.regions);
+    out.features.regions = regions.values;
   }
   if (config_.scene.enabled) {
     out.features.scene = computeSceneFeatures(
@@ -412,8 +414,8 @@ LabelledFrame Segmenter::classify(SegmentedFrame segmented) const {
   std::vector<float> confidence(n);
   const std::vector<std::uint8_t>* final_labels = &out.forest_labels;
   if (config_.use_mrf) {
-    out.mrf = solveMrf(out.forest_probabilities, out.features.centroids,
-                       segmented.segmentation.edges, config_.mrf);
+    out.mrf = solveMrf(weightTableProbability(out.forest_probabilities, config_.tables.table_weight),
+                       out.features.centroids, segmented.segmentation.edges, config_.mrf);
     final_labels = &out.mrf.labels;
     confidence = out.mrf.confidence;
   } else {
@@ -421,13 +423,24 @@ LabelledFrame Segmenter::classify(SegmentedFrame segmented) const {
       confidence[i] = out.forest_probabilities[i][out.forest_labels[i]];
     }
   }
+  // One label per horizontal surface at table height (table_regions.hpp).
+  RegionVoteResult vote;
+  if (config_.tables.region_vote && config_.regions.enabled) {
+    vote = voteTableRegions(*final_labels, confidence,
+                            weightTableProbability(out.forest_probabilities,
+                                                   config_.tables.table_weight),
+                            weights, regions, config_.tables);
+    final_labels = &vote.labels;
+    confidence = std::move(vote.confidence);
+  }
   watch.lap(out.timings, out.cpu_timings, &StageTimings::mrf_ms);
 
   out.labels = projectLabels(segmented.segmentation, *final_labels, confidence);
   watch.lap(out.timings, out.cpu_timings, &StageTimings::labels_ms);
 
   TableDetection detection =
-      detectTables(segmented.prepared.cloud_ground, out.labels, config_.tables);
+      detectTables(segmented.prepared.cloud_ground, out.labels, config_.tables,
+                   &segmented.prepared.normals_ground);
   out.tables = std::move(detection.tables);
   out.table_diagnostics = std::move(detection.diagnostics);
   watch.lap(out.timings, out.cpu_timings, &StageTimings::tables_ms);

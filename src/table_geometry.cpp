@@ -3,6 +3,7 @@
 // its convex hull (convexHull2d).
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <limits>
 #include <string>
 
@@ -61,6 +62,29 @@ std::vector<Eigen::Vector2f> hullCandidates(const std::vector<Eigen::Vector2f>& 
     }
   }
   return out;
+}
+
+// Floor area covered by the points: occupied cells of edge `cell` (coarser
+// for huge inputs, at most ~4M cells) times the cell area. Unlike the hull's
+// area it stays small for a thin strip (the top band of a vertical panel or
+// of a chair back, seen from above as a line) and for scattered points.
+float occupiedArea(const std::vector<Eigen::Vector2f>& pts, const Eigen::AlignedBox2f& box,
+                   float cell) {
+  if (pts.empty()) return 0.0f;
+  const Eigen::Vector2f size = box.sizes();
+  cell = std::max(cell, std::sqrt(size.x() * size.y() / 4.0e6f));
+  const int cols = static_cast<int>(size.x() / cell) + 1;
+  const int rows = static_cast<int>(size.y() / cell) + 1;
+  std::vector<std::uint8_t> occupied(static_cast<std::size_t>(cols) * rows, 0);
+  int count = 0;
+  for (const auto& p : pts) {
+    const int c = std::min(cols - 1, static_cast<int>((p.x() - box.min().x()) / cell));
+    const int r = std::min(rows - 1, static_cast<int>((p.y() - box.min().y()) / cell));
+    std::uint8_t& o = occupied[static_cast<std::size_t>(r) * cols + c];
+    count += o == 0 ? 1 : 0;
+    o = 1;
+  }
+  return static_cast<float>(count) * cell * cell;
 }
 
 // Principal axes of the top on the floor, from the occupied cells of a
@@ -264,6 +288,7 @@ ClusterOutcome tables_detail::describeCluster(const std::vector<Eigen::Vector3f>
     return outcome;
   }
   table.hull = convexHull2d(hullCandidates(top, top_box));
+  table.top_area_m2 = occupiedArea(top, top_box, config.cluster_tolerance_m);
   if (table.hull.size() < 3) {
     outcome.reason = "degenerate cluster of " + std::to_string(n) + " points: its top has no area";
     return outcome;

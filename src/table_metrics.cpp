@@ -46,6 +46,10 @@ std::vector<TableCluster> groundTruthTables(const OrganizedCloud& cloud_ground,
   if (cloud_ground.points.empty()) return {};
   TableConfig truth_config = tables;
   truth_config.min_cluster_points = config.min_instance_points;
+  // The detector's filters are not part of the instance definition.
+  truth_config.min_top_area_m2 = 0.0f;
+  truth_config.min_confidence = 0.0f;
+  truth_config.min_horizontal_share = 0.0f;
   truth_config.max_cluster_points =
       std::max(truth_config.max_cluster_points, static_cast<int>(cloud_ground.points.size()));
   LabelImage labels;
@@ -128,6 +132,47 @@ double TableMetrics::recall() const { return ratio(matched(), truth_); }
 double TableMetrics::medianHeightError() const { return median(height_errors_); }
 double TableMetrics::medianCentroidError() const { return median(centroid_errors_); }
 double TableMetrics::medianAxisErrorDeg() const { return median(axis_errors_); }
+
+std::vector<PrecisionRecallPoint> precisionRecallCurve(std::vector<ScoredDetection> detections,
+                                                       int truth) {
+  if (truth < 0) throw Error("precisionRecallCurve: " + std::to_string(truth) + " true instances");
+  for (const auto& d : detections) {
+    if (!std::isfinite(d.score)) {
+      throw Error("precisionRecallCurve: non-finite detection score " + std::to_string(d.score));
+    }
+  }
+  std::sort(detections.begin(), detections.end(),
+            [](const ScoredDetection& a, const ScoredDetection& b) { return a.score > b.score; });
+  std::vector<PrecisionRecallPoint> curve;
+  int detected = 0, matched = 0;
+  for (std::size_t i = 0; i < detections.size(); ++i) {
+    ++detected;
+    matched += detections[i].matched ? 1 : 0;
+    // A threshold keeps every detection of equal score: one point per score.
+    if (i + 1 < detections.size() && detections[i + 1].score == detections[i].score) continue;
+    PrecisionRecallPoint p;
+    p.threshold = detections[i].score;
+    p.detected = detected;
+    p.matched = matched;
+    p.precision = ratio(matched, detected);
+    p.recall = ratio(matched, truth);
+    curve.push_back(p);
+  }
+  return curve;
+}
+
+const PrecisionRecallPoint* operatingPoint(const std::vector<PrecisionRecallPoint>& curve,
+                                           double min_precision) {
+  const PrecisionRecallPoint* best = nullptr;
+  for (const auto& p : curve) {
+    if (!(p.precision >= min_precision) || p.matched == 0) continue;
+    if (!best || p.recall > best->recall ||
+        (p.recall == best->recall && p.precision > best->precision)) {
+      best = &p;
+    }
+  }
+  return best;
+}
 
 std::vector<SearchPosition> searchPositionsOfBox(const Eigen::Vector2f& center, float yaw,
                                                  const Eigen::Vector2f& size, float height,

@@ -97,11 +97,37 @@ void validateTableConfig(const TableConfig& c) {
       c.min_floor_observed_fraction > 1.0f) {
     badSetting("min_floor_observed_fraction", c.min_floor_observed_fraction, "must be in [0, 1]");
   }
+  if (!std::isfinite(c.region_max_tilt_deg) || c.region_max_tilt_deg < 0.0f ||
+      c.region_max_tilt_deg > 90.0f) {
+    badSetting("region_max_tilt_deg", c.region_max_tilt_deg, "must be in [0, 90] degrees");
+  }
+  nonNegative("region_min_area_m2", c.region_min_area_m2);
+  positive("table_weight", c.table_weight);
+  nonNegative("min_top_area_m2", c.min_top_area_m2);
+  if (!std::isfinite(c.min_confidence) || c.min_confidence < 0.0f || c.min_confidence > 1.0f) {
+    badSetting("min_confidence", c.min_confidence, "must be in [0, 1]");
+  }
+  if (!std::isfinite(c.min_horizontal_share) || c.min_horizontal_share < 0.0f ||
+      c.min_horizontal_share > 1.0f) {
+    badSetting("min_horizontal_share", c.min_horizontal_share, "must be in [0, 1]");
+  }
+  if (!std::isfinite(c.horizontal_tilt_deg) || c.horizontal_tilt_deg < 0.0f ||
+      c.horizontal_tilt_deg > 90.0f) {
+    badSetting("horizontal_tilt_deg", c.horizontal_tilt_deg, "must be in [0, 90] degrees");
+  }
 }
 
 TableDetection detectTables(const OrganizedCloud& cloud_ground, const LabelImage& labels,
-                            const TableConfig& config) {
+                            const TableConfig& config, const NormalImage* normals_ground) {
   validateTableConfig(config);
+  if (normals_ground && !cloud_ground.points.empty() &&
+      normals_ground->normals.size() != cloud_ground.points.size()) {
+    throw Error("findTables: " + std::to_string(normals_ground->normals.size()) +
+                " normals for a cloud of " + std::to_string(cloud_ground.points.size()) +
+                " points");
+  }
+  const float cos_tilt =
+      std::cos(config.horizontal_tilt_deg * static_cast<float>(M_PI) / 180.0f);
   TableDetection result;
   if (cloud_ground.points.empty()) {
     result.diagnostics.push_back(
@@ -198,6 +224,39 @@ TableDetection detectTables(const OrganizedCloud& cloud_ground, const LabelImage
       ++result.clusters_rejected;
       result.diagnostics.push_back(outcome.reason + ": dropped");
       continue;
+    }
+    if (table.top_area_m2 < config.min_top_area_m2) {
+      ++result.clusters_rejected;
+      result.diagnostics.push_back("cluster of " + std::to_string(n) + " points with a top of " +
+                                   fmt(table.top_area_m2) + " m² (below tables.min_top_area_m2 " +
+                                   fmt(config.min_top_area_m2) + "): dropped");
+      continue;
+    }
+    if (table.mean_confidence < config.min_confidence) {
+      ++result.clusters_rejected;
+      result.diagnostics.push_back("cluster of " + std::to_string(n) +
+                                   " points with mean confidence " + fmt(table.mean_confidence) +
+                                   " (below tables.min_confidence " + fmt(config.min_confidence) +
+                                   "): dropped");
+      continue;
+    }
+    if (normals_ground) {
+      int valid = 0, horizontal = 0;
+      for (int k = 0; k < n; ++k) {
+        const float nz = normals_ground->normals[static_cast<std::size_t>(pixels[member[k]])].z();
+        if (!std::isfinite(nz)) continue;
+        ++valid;
+        horizontal += std::abs(nz) >= cos_tilt ? 1 : 0;
+      }
+      table.horizontal_share = valid > 0 ? static_cast<float>(horizontal) / valid : 0.0f;
+      if (table.horizontal_share < config.min_horizontal_share) {
+        ++result.clusters_rejected;
+        result.diagnostics.push_back(
+            "cluster of " + std::to_string(n) + " points with " +
+            fmt(100.0 * table.horizontal_share) + " % horizontal points (below " +
+            "tables.min_horizontal_share " + fmt(config.min_horizontal_share) + "): dropped");
+        continue;
+      }
     }
     table.pixels.resize(static_cast<std::size_t>(n));
     for (int k = 0; k < n; ++k) table.pixels[k] = pixels[member[k]];

@@ -30,12 +30,14 @@
 #include <sstream>
 
 #include "eval_report.hpp"
+#include "eval_tables.hpp"
 #include "findmug/error.hpp"
 #include "findmug/image_io.hpp"
 #include "findmug/label_image.hpp"
 #include "findmug/metrics.hpp"
 #include "findmug/numbers.hpp"
 #include "findmug/synth.hpp"
+#include "findmug/table_regions.hpp"
 #include "findmug/table_metrics.hpp"
 #include "findmug/training.hpp"
 #include "findmug_cli.hpp"
@@ -51,7 +53,7 @@ constexpr const char* kDescription =
     "gravity (for --set ground.source=gravity).";
 
 struct EvalFlags {
-  std::string data, mat, nyu894_csv, nyu_rotations, model, json, out;
+  std::string data, mat, nyu894_csv, nyu_rotations, model, json, out, table_report;
   int folds = 5;
   bool sweep = false, no_nyu_border = false;
   std::vector<std::string> train_extra;
@@ -97,41 +99,94 @@ std::unique_ptr<CLI::App> makeEvalApp(EvalFlags& f) {
   last(app->add_option("--nyu-rotations", f.nyu_rotations,
                        "NYU's camera_rotations_NYU.txt: every NYU frame's gravity")
            ->type_name("FILE"));
+  last(app->add_option("--table-report", f.table_report,
+                       "write a per-frame diagnosis of table instances and detections "
+                       "(why each unmatched one failed) to FILE")
+           ->type_name("FILE"));
   return app;
 }
 
 struct Evaluation {
   ConfusionMatrix forest, mrf;
   std::vector<std::vector<std::uint8_t>> mrf_pixels;  // per frame, for overlays
+  // Per frame and segment (kept with mrf_pixels): the model's p(y|x) and the
+  // MRF's labels and confidence, for the table stage and its diagnosis.
+  std::vector<std::vector<ClassProbabilities>> probabilities;
+  std::vector<MrfResult> mrf_results;
 };
 
 std::uint8_t argmax(const ClassProbabilities& p) {
   return static_cast<std::uint8_t>(std::max_element(p.begin(), p.end()) - p.begin());
 }
 
-// Labels the test frames with `forest` and accumulates both confusions.
+// The regions of every sample's segmentation (region_features.hpp), for the
+// table region vote that follows the MRF in the pipeline (table_regions.hpp);
+// empty when the vote is off. FrameSample keeps only the region features, so
+// the geometry is recomputed: prepare and oversegment are deterministic.
+std::vector<RegionFeatures> sampleRegions(const LabeledFrames& frames,
+                                          const std::vector<FrameSample>& samples,
+                                          const Segmenter& segmenter) {
+  const SegmenterConfig& config = segmenter.config();
+  if (!config.regions.enabled || !config.tables.region_vote) return {};
+  std::vector<RegionFeatures> out;
+  out.reserve(samples.size());
+  for (const FrameSample& s : samples) {
+    LabeledFrame frame = frames.load(s.source_index);
+    const SegmentedFrame segmented =
+        segmenter.oversegment(segmenter.prepare(std::move(frame.frame), &frame.labels));
+    out.push_back(computeRegionFeatures(segmented.prepared.cloud_ground,
+                                        segmented.prepared.normals_ground, segmented.segmentation,
+                                        config.regions));
+    if (out.back().segment_region.size() != s.features.features.size()) {
+      throw Error(s.name + ": " + std::to_string(out.back().segment_region.size()) +
+                  " segments on the second pass, " + std::to_string(s.features.features.size()) +
+                  " before");
+    }
+  }
+  return out;
+}
+
+// Labels the test frames with `forest` and accumulates both confusions. The
+// "+MRF" labels are the pipeline's final ones: with `regions`, after the
+// table region vote, as in Segmenter::classify.
 void labelFrames(const RandomForest& forest, const SegmenterConfig& config,
                  const std::vector<FrameSample>& samples, const std::vector<std::size_t>& frames,
-                 Evaluation& eval, bool keep_pixels) {
+                 const std::vector<RegionFeatures>& regions, Evaluation& eval, bool keep_pixels) {
   for (std::size_t f : frames) {
     const FrameSample& s = samples[f];
     const std::size_t n = s.features.features.size();
     const std::vector<ClassProbabilities> probs = predictSample(forest, s, config);
     std::vector<std::uint8_t> forest_labels(n);
     for (std::size_t k = 0; k < n; ++k) forest_labels[k] = argmax(probs[k]);
-    const MrfResult mrf = solveMrf(probs, s.features.centroids, s.edges, config.mrf);
+    const std::vector<ClassProbabilities> unaries =
+        weightTableProbability(probs, config.tables.table_weight);
+    MrfResult mrf = solveMrf(unaries, s.features.centroids, s.edges, config.mrf);
+    if (!regions.empty()) {
+      const std::vector<float> weights(s.segment_pixels.begin(), s.segment_pixels.end());
+      RegionVoteResult vote = voteTableRegions(mrf.labels, mrf.confidence, unaries, weights,
+                                               regions[f], config.tables);
+      mrf.labels = std::move(vote.labels);
+      mrf.confidence = std::move(vote.confidence);
+    }
     eval.forest.add(s.ground_truth, pixelLabels(s, forest_labels));
     auto mrf_pixels = pixelLabels(s, mrf.labels);
     eval.mrf.add(s.ground_truth, mrf_pixels);
-    if (keep_pixels) eval.mrf_pixels[f] = std::move(mrf_pixels);
+    if (keep_pixels) {
+      eval.mrf_pixels[f] = std::move(mrf_pixels);
+      eval.probabilities[f] = probs;
+      eval.mrf_results[f] = mrf;
+    }
   }
 }
 
 Evaluation crossValidate(const std::vector<FrameSample>& samples,
                          const std::vector<FrameSample>& extra_training, int folds,
-                         const SegmenterConfig& config, bool keep_pixels) {
+                         const SegmenterConfig& config, const std::vector<RegionFeatures>& regions,
+                         bool keep_pixels) {
   Evaluation eval;
   eval.mrf_pixels.resize(samples.size());
+  eval.probabilities.resize(samples.size());
+  eval.mrf_results.resize(samples.size());
   const std::size_t n = samples.size();
   for (int fold = 0; fold < folds; ++fold) {
     std::vector<std::size_t> train, test;
@@ -146,7 +201,7 @@ Evaluation crossValidate(const std::vector<FrameSample>& samples,
     SegmenterConfig fold_config = config;
     fold_config.forest.seed += static_cast<std::uint64_t>(fold);
     const RandomForest forest = trainModel(frames, fold_config);
-    labelFrames(forest, config, samples, test, eval, keep_pixels);
+    labelFrames(forest, config, samples, test, regions, eval, keep_pixels);
   }
   return eval;
 }
@@ -156,9 +211,12 @@ Evaluation crossValidate(const std::vector<FrameSample>& samples,
 // recomputed (cloud, ground): cheap, and it keeps FrameSample small.
 // On synthetic folders (`synth` = their ground_truth.yaml) also the search
 // positions of the detected tables against those of the true tables.
+// With `diagnosis`, each frame's instances and detections are described
+// there, with why each unmatched one failed (eval_tables.hpp).
 void measureTables(const LabeledFrames& frames, const std::vector<FrameSample>& samples,
                    const Evaluation& eval, const Segmenter& segmenter,
-                   const synth::SequenceGroundTruth* synth, EvalReport& report) {
+                   const synth::SequenceGroundTruth* synth, EvalReport& report,
+                   std::ostream* diagnosis) {
   const SegmenterConfig& config = segmenter.config();
   std::map<std::string, std::size_t> pose_of;
   if (synth) {
@@ -173,10 +231,36 @@ void measureTables(const LabeledFrames& frames, const std::vector<FrameSample>& 
     }
     const auto truth = groundTruthTables(prepared.cloud_ground, samples[f].ground_truth,
                                          config.tables, config.table_metrics);
-    const LabelImage predicted{samples[f].width, samples[f].height, eval.mrf_pixels[f], {}};
-    const auto detected = detectTables(prepared.cloud_ground, predicted, config.tables).tables;
+    const FrameSample& sample = samples[f];
+    std::vector<float> table_probability(sample.pixel_segment.size(), 0.0f);
+    std::vector<float> confidence(sample.pixel_segment.size(), 0.0f);
+    for (std::size_t p = 0; p < sample.pixel_segment.size(); ++p) {
+      const int s = sample.pixel_segment[p];
+      if (s < 0) continue;
+      table_probability[p] =
+          eval.probabilities[f][static_cast<std::size_t>(s)][static_cast<int>(Label::Table)];
+      confidence[p] = eval.mrf_results[f].confidence[static_cast<std::size_t>(s)];
+    }
+    const LabelImage predicted{sample.width, sample.height, eval.mrf_pixels[f], confidence};
+    const auto detected =
+        detectTables(prepared.cloud_ground, predicted, config.tables, &prepared.normals_ground)
+            .tables;
     const auto matches = matchTables(truth, detected, config.table_metrics.min_iou);
+    if (diagnosis) {
+      const FrameTableEvidence evidence{sample.name,          sample.width,
+                                        sample.height,        &sample.ground_truth,
+                                        &eval.mrf_pixels[f],  &table_probability,
+                                        &prepared.normals_ground};
+      *diagnosis << diagnoseFrameTables(evidence, truth, detected, matches, report.diagnosis);
+    }
     report.tables.add(static_cast<int>(truth.size()), static_cast<int>(detected.size()), matches);
+    {
+      std::vector<bool> matched(detected.size(), false);
+      for (const auto& m : matches) matched[static_cast<std::size_t>(m.detected)] = true;
+      for (std::size_t d = 0; d < detected.size(); ++d) {
+        report.scored_tables.push_back({detected[d].mean_confidence, matched[d]});
+      }
+    }
     report.frame_tables.push_back({samples[f].name, static_cast<int>(truth.size()),
                                    static_cast<int>(detected.size()),
                                    static_cast<int>(matches.size())});
@@ -307,17 +391,20 @@ int run(int argc, char** argv) {
   report.ground_methods = extraction.ground_methods;
   report.config_yaml = dumpConfig(config);
 
+  const std::vector<RegionFeatures> regions = sampleRegions(input->frames(), samples, segmenter);
   Evaluation eval;
   if (model) {
     const RandomForest& forest = *model;
     report.protocol = "model " + f.model + " (id " + forest.id() + ") on all frames";
     eval.mrf_pixels.resize(samples.size());
+    eval.probabilities.resize(samples.size());
+    eval.mrf_results.resize(samples.size());
     std::vector<std::size_t> all(samples.size());
     for (std::size_t i = 0; i < all.size(); ++i) all[i] = i;
-    labelFrames(forest, config.segmenter, samples, all, eval, true);
+    labelFrames(forest, config.segmenter, samples, all, regions, eval, true);
   } else {
     report.protocol = std::to_string(folds) + "-fold cross-validation by frame";
-    eval = crossValidate(samples, extra_training, folds, config.segmenter, true);
+    eval = crossValidate(samples, extra_training, folds, config.segmenter, regions, true);
   }
   for (const FrameSample& s : samples) report.oracle.add(s.ground_truth, pixelLabels(s, s.segment_labels));
   report.forest = eval.forest;
@@ -328,15 +415,26 @@ int run(int argc, char** argv) {
     if (std::filesystem::exists(truth_path))
       synth_truth = synth::readGroundTruth(truth_path.string());
   }
-  measureTables(input->frames(), samples, eval, segmenter, synth_truth ? &*synth_truth : nullptr,
-                report);
+  {
+    std::ofstream diagnosis;
+    if (!f.table_report.empty()) {
+      diagnosis.open(f.table_report);
+      if (!diagnosis) throw Error(f.table_report + ": cannot write the table report");
+    }
+    measureTables(input->frames(), samples, eval, segmenter,
+                  synth_truth ? &*synth_truth : nullptr, report,
+                  f.table_report.empty() ? nullptr : &diagnosis);
+    if (diagnosis.is_open()) {
+      diagnosis << "\nsummary over all frames\n" << formatDiagnosisCounts(report.diagnosis);
+    }
+  }
 
   if (f.sweep) {
     if (!f.model.empty()) throw Error("--sweep retrains forests; it cannot be used with --model");
     for (int trees : {1, 2, 4, 6, 8, 10, 12, 14, 16}) {
       SegmenterConfig c = config.segmenter;
       c.forest.num_trees = trees;
-      const Evaluation e = crossValidate(samples, extra_training, folds, c, false);
+      const Evaluation e = crossValidate(samples, extra_training, folds, c, regions, false);
       report.sweep_trees.push_back({trees, c.forest.max_depth, e.forest, e.mrf});
       std::fprintf(stderr, "sweep trees=%d: forest %.1f/%.1f mrf %.1f/%.1f\n", trees,
                    100 * e.forest.classAverageAccuracy(), 100 * e.forest.globalAccuracy(),
@@ -345,7 +443,7 @@ int run(int argc, char** argv) {
     for (int depth : {2, 4, 6, 8, 10, 12, 14, 16}) {
       SegmenterConfig c = config.segmenter;
       c.forest.max_depth = depth;
-      const Evaluation e = crossValidate(samples, extra_training, folds, c, false);
+      const Evaluation e = crossValidate(samples, extra_training, folds, c, regions, false);
       report.sweep_depth.push_back({c.forest.num_trees, depth, e.forest, e.mrf});
       std::fprintf(stderr, "sweep depth=%d: forest %.1f/%.1f mrf %.1f/%.1f\n", depth,
                    100 * e.forest.classAverageAccuracy(), 100 * e.forest.globalAccuracy(),

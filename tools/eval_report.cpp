@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <iterator>
 #include <sstream>
 
 #include "findmug/error.hpp"
@@ -13,6 +14,10 @@
 namespace findmug::tools {
 
 namespace {
+
+// Precisions at which the table precision/recall curve's operating point
+// (highest recall) is reported: issue 10's target, and a looser one.
+constexpr double kOperatingPrecisions[] = {0.8, 0.5};
 
 // Wolf et al. 2014, NYU Depth V2, 5-fold CV: per class (floor .. object),
 // class average, global. The paper gives no figure for "unknown".
@@ -133,6 +138,21 @@ std::string formatTable(const EvalReport& r) {
     std::snprintf(line, sizeof line, "  %-10s %s\n  %-10s %s\n", "precision",
                   percent(t.precision()).c_str(), "recall", percent(t.recall()).c_str());
     out << line;
+    const auto curve = precisionRecallCurve(r.scored_tables, t.truth());
+    for (double min_precision : kOperatingPrecisions) {
+      const PrecisionRecallPoint* p = operatingPoint(curve, min_precision);
+      if (p) {
+        std::snprintf(line, sizeof line,
+                      "  at precision >= %.0f %%: recall %s (%d of %d detected, confidence >= "
+                      "%.3f)\n",
+                      100 * min_precision, percent(p->recall).c_str(), p->matched, p->detected,
+                      p->threshold);
+      } else {
+        std::snprintf(line, sizeof line, "  at precision >= %.0f %%: no threshold reaches it\n",
+                      100 * min_precision);
+      }
+      out << line;
+    }
     if (t.matched() > 0) {
       std::snprintf(line, sizeof line,
                     "  matched tables, median error: height %.1f cm, centroid %.1f cm, "
@@ -204,7 +224,30 @@ std::string formatJson(const EvalReport& r) {
         << ", \"median_height_error_m\": " << jsonNumber(t.medianHeightError())
         << ", \"median_centroid_error_m\": " << jsonNumber(t.medianCentroidError())
         << ", \"median_axis_error_deg\": " << jsonNumber(t.medianAxisErrorDeg())
-        << ", \"per_frame\": [";
+        << ", \"precision_recall\": [";
+    const auto curve = precisionRecallCurve(r.scored_tables, t.truth());
+    for (std::size_t i = 0; i < curve.size(); ++i) {
+      const auto& p = curve[i];
+      out << (i ? ", " : "") << "{\"min_confidence\": " << jsonNumber(p.threshold)
+          << ", \"detected\": " << p.detected << ", \"matched\": " << p.matched
+          << ", \"precision\": " << jsonNumber(p.precision)
+          << ", \"recall\": " << jsonNumber(p.recall) << "}";
+    }
+    out << "], \"operating_points\": [";
+    for (std::size_t i = 0; i < std::size(kOperatingPrecisions); ++i) {
+      const PrecisionRecallPoint* p = operatingPoint(curve, kOperatingPrecisions[i]);
+      out << (i ? ", " : "") << "{\"min_precision\": " << jsonNumber(kOperatingPrecisions[i]);
+      if (p) {
+        out << ", \"min_confidence\": " << jsonNumber(p->threshold)
+            << ", \"detected\": " << p->detected << ", \"matched\": " << p->matched
+            << ", \"precision\": " << jsonNumber(p->precision)
+            << ", \"recall\": " << jsonNumber(p->recall);
+      } else {
+        out << ", \"recall\": null";
+      }
+      out << "}";
+    }
+    out << "], \"per_frame\": [";
     for (std::size_t i = 0; i < r.frame_tables.size(); ++i) {
       const auto& f = r.frame_tables[i];
       out << (i ? ",\n    " : "\n    ") << "{\"frame\": " << jsonString(f.frame)

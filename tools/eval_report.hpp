@@ -7,6 +7,7 @@
 
 #include "findmug/metrics.hpp"
 #include "findmug/table_metrics.hpp"
+#include "eval_tables.hpp"
 
 namespace findmug::tools {
 
@@ -40,6 +41,11 @@ struct EvalReport {
   // Tables detected on the forest+MRF labels against ground-truth instances.
   TableMetrics tables;
   std::vector<FrameTables> frame_tables;
+  // Every detection's score (mean label confidence) and whether it matched,
+  // for the precision/recall curve over a score threshold.
+  std::vector<ScoredDetection> scored_tables;
+  // Why true instances and detections were not matched (eval_tables.hpp).
+  TableDiagnosisCounts diagnosis;
   // Synthetic folders only: their search positions against the true tables'.
   bool has_search_truth = false;
   SearchPositionMetrics search;

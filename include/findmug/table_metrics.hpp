@@ -81,6 +81,39 @@ class TableMetrics {
 };
 
 // ---------------------------------------------------------------------------
+// Precision/recall over a detection score threshold.
+
+// One detection with its score (TableCluster::mean_confidence in
+// findmug-eval) and whether it matched a true instance.
+struct ScoredDetection {
+  float score = 0.0f;
+  bool matched = false;
+};
+
+// The figures if only detections with score >= threshold were kept.
+// Matches do not change with the threshold: detections are disjoint, so
+// (but for exact ties of IoU 0.5) each matches the same instance, or none,
+// whichever others are kept.
+struct PrecisionRecallPoint {
+  float threshold = 0.0f;
+  int detected = 0, matched = 0;
+  double precision = 0.0;  // NaN when nothing is kept
+  double recall = 0.0;     // NaN without true instances
+};
+
+// One point per distinct score, by decreasing threshold (so increasing
+// recall); `truth` = the number of true instances. Throws findmug::Error for
+// a non-finite score or a negative `truth`.
+std::vector<PrecisionRecallPoint> precisionRecallCurve(std::vector<ScoredDetection> detections,
+                                                       int truth);
+
+// The point of highest recall whose precision is at least `min_precision`
+// (ties: the higher precision, then the higher threshold); nullptr when no
+// point reaches it.
+const PrecisionRecallPoint* operatingPoint(const std::vector<PrecisionRecallPoint>& curve,
+                                           double min_precision);
+
+// ---------------------------------------------------------------------------
 // Search positions against exactly known tables (synthetic scenes).
 
 // The search positions of a table whose top is known exactly: a box with

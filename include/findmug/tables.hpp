@@ -31,6 +31,7 @@
 
 #include <Eigen/Core>
 #include <cstdint>
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -63,6 +64,13 @@ struct TableCluster {
   // differs from the centroid's x,y when the points are unevenly spread.
   Eigen::Vector2f center = Eigen::Vector2f::Zero();
   std::vector<Eigen::Vector2f> hull;  // convex hull of the top, CCW
+  // The visible top's size: floor area of the cells (tables.cluster_tolerance_m
+  // on a side) that hold top points; a vertical panel's top band is a thin line.
+  float top_area_m2 = 0.0f;
+  // Share of the cluster's points whose normal is within
+  // tables.horizontal_tilt_deg of vertical (NaN when detectTables had no
+  // normals): table tops are horizontal, chair backs and cabinet fronts not.
+  float horizontal_share = std::numeric_limits<float>::quiet_NaN();
   int point_count = 0;
   // Image pixels (y * width + x) of all the cluster's points, ascending: its
   // image mask, for matching against ground truth (table_metrics.hpp).
@@ -97,6 +105,26 @@ struct TableConfig {
   float floor_tolerance_m = 0.1f;
   float floor_cell_m = 0.1f;
   float min_floor_observed_fraction = 0.5f;
+  // Region vote before clustering (table_regions.hpp; needs a model with
+  // region features): each horizontal region at table height gets one label.
+  // Off: on the 31 NYU frames it changed no match (BENCHMARKS.md 1f).
+  bool region_vote = false;
+  // Bias of the label decision towards tables (weightTableProbability in
+  // table_regions.hpp): p(table) times this before the MRF. 1 = none; 1.5
+  // measured best on the 31 NYU frames (BENCHMARKS.md 1f).
+  float table_weight = 1.5f;
+  float region_max_tilt_deg = 15.0f;  // region normal within this of vertical
+  float region_min_area_m2 = 0.04f;   // smaller regions keep their patches' labels
+  // Detection filters (after the geometry): a table needs a visible top of at
+  // least min_top_area_m2 (TableCluster::top_area_m2; a vertical panel or a
+  // chair back has almost none) and a mean label confidence of at least
+  // min_confidence. Dropped clusters are reported in the diagnostics.
+  float min_top_area_m2 = 0.15f;
+  float min_confidence = 0.0f;
+  // With normals: at least min_horizontal_share of a table's points must
+  // have a normal within horizontal_tilt_deg of vertical.
+  float min_horizontal_share = 0.2f;
+  float horizontal_tilt_deg = 20.0f;
 };
 
 // Why something produced no table or was flagged, for the caller to log.
@@ -118,8 +146,13 @@ void validateTableConfig(const TableConfig& config);
 // Throws findmug::Error when `labels` and `cloud_ground` disagree in size or
 // a setting is out of range (message names the setting). An empty cloud
 // means "no ground plane for this frame": no tables, with that reason.
+//
+// `normals_ground` (optional, the cloud's normals in the ground frame) gives
+// each table its horizontal_share; without it the share stays NaN and
+// tables.min_horizontal_share is not applied.
 TableDetection detectTables(const OrganizedCloud& cloud_ground, const LabelImage& labels,
-                            const TableConfig& config);
+                            const TableConfig& config,
+                            const NormalImage* normals_ground = nullptr);
 
 // detectTables(...).tables, for callers that do not log the reasons.
 std::vector<TableCluster> findTables(const OrganizedCloud& cloud_ground, const LabelImage& labels,

@@ -833,15 +833,25 @@ TEST(SynthTables, EveryTableInViewAndRangeIsFoundInApartments) {
       for (const auto& truth : scene.tables) {
         const auto g = synth::tableInGroundFrame(truth, pose);
         // In view and range: enough of its top has depth, centre within 4 m.
+        // And its visible top covers at least tables.min_top_area_m2 (cells of
+        // cluster_tolerance_m, as TableCluster::top_area_m2 counts them).
         int top_points = 0;
+        std::set<std::pair<int, int>> top_cells;
         for (std::size_t i = 0; i < v.cloud_ground.points.size(); ++i) {
           const auto& p = v.cloud_ground.points[i];
           if (v.rendered.object[i] == truth.object && std::isfinite(p.z()) &&
               std::abs(p.z() - truth.height) < 0.03) {
             ++top_points;
+            top_cells.emplace(static_cast<int>(std::floor(p.x() / config.cluster_tolerance_m)),
+                              static_cast<int>(std::floor(p.y() / config.cluster_tolerance_m)));
           }
         }
-        if (top_points < 2 * config.min_cluster_points || g.center_xy.norm() > 4.0) continue;
+        const float top_area = static_cast<float>(top_cells.size()) * config.cluster_tolerance_m *
+                               config.cluster_tolerance_m;
+        if (top_points < 2 * config.min_cluster_points || g.center_xy.norm() > 4.0 ||
+            top_area < 1.2f * config.min_top_area_m2) {
+          continue;
+        }
         ++tables_checked;
         bool found = false;
         for (const auto& t : d.tables) {
@@ -1046,14 +1056,18 @@ TEST(RealDataTables, NyuFramesWithTablesGiveTableClusters) {
     labels.width = cloud.width;
     labels.height = cloud.height;
     labels.labels = frame.labels;
+    // The counts are those of the clustering: the visible-top filter
+    // (tables.min_top_area_m2, table_regions_test) is off.
+    TableConfig config;
+    config.min_top_area_m2 = 0.0f;
     const TableDetection d =
-        detectTables(transformCloud(cloud, ground->camera_to_ground), labels, TableConfig{});
+        detectTables(transformCloud(cloud, ground->camera_to_ground), labels, config);
     EXPECT_EQ(static_cast<int>(d.tables.size()), it->second)
         << "frame " << frame.name << joined(d.diagnostics);
     for (const auto& t : d.tables) {
       EXPECT_GT(t.top_height, 0.4f) << frame.name;
       EXPECT_LT(t.top_height, 1.2f) << frame.name;
-      EXPECT_GE(t.point_count, TableConfig{}.min_cluster_points);
+      EXPECT_GE(t.point_count, config.min_cluster_points);
       EXPECT_GE(t.search_positions.size(), 2u);
       for (const auto& p : t.search_positions) {
         EXPECT_EQ(p.reachable, p.reason.empty()) << frame.name << ": " << p.reason;
