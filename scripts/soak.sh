@@ -26,6 +26,9 @@
 # held and the daemon stopped cleanly on SIGTERM; 1 = a bound failed; 77 = the
 # data set is missing and CI is not set (skip); 2 = set-up error.
 set -euo pipefail
+# The whole script is one compound command: bash parses it before running any of it, so
+# editing this file during an hour-long soak cannot break the run in progress.
+{
 ROOT="$(cd "$(dirname "$0")/.." && pwd)"
 DURATION=${1:-}
 [[ "$DURATION" =~ ^[0-9]+$ && "$DURATION" -gt 0 ]] || { sed -n '2,16p' "$0"; exit 2; }
@@ -182,3 +185,4 @@ if [[ -n "$LOSSY" ]]; then
   [[ $ok -eq 1 ]] || exit 1
 fi
 exit "$verdict"
+}
