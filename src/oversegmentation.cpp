@@ -119,6 +119,10 @@ std::unique_ptr<Oversegmenter> makeOversegmenter(const OversegmentationConfig& c
               std::to_string(static_cast<int>(config.kind)));
 }
 
+// Pixel lists kept per thread for frames with more segments than the last
+// (a VGA frame has about 1500); more are freed.
+constexpr std::size_t kMaxSpareLists = 8192;
+
 void finalizeOversegmentation(Oversegmentation& seg, int min_points, EdgeSource edge_source) {
   if (seg.width < 0 || seg.height < 0 || seg.width > 100000 || seg.height > 100000) {
     throw Error("finalizeOversegmentation: grid size " + std::to_string(seg.width) + "x" +
@@ -164,11 +168,22 @@ void finalizeOversegmentation(Oversegmentation& seg, int min_points, EdgeSource 
   // Not assign(): a recycled `seg` keeps the capacity of its pixel lists
   // (one allocation per segment and frame otherwise). Lists beyond this
   // frame's count wait in a per-thread spare pool for a frame with more.
+  //
+  // The largest lists go to the largest segments. Handed out in any order,
+  // every list would in time grow to fit the largest segment it ever met
+  // (lists only grow), and the memory of a long stream with it: the 2026-11-25
+  // soak saw the heap in use climb 10 MB a minute that way. By rank, the k-th
+  // largest list only grows to the k-th largest segment ever seen, which is
+  // bounded by the frame's size over k.
   thread_local std::vector<std::vector<int>> spare_lists_tls;
   std::vector<std::vector<int>>& spare_lists = spare_lists_tls;
+  const auto by_capacity = [](const std::vector<int>& a, const std::vector<int>& b) {
+    return a.capacity() > b.capacity();
+  };
+  std::sort(seg.segments.begin(), seg.segments.end(), by_capacity);
   while (seg.segments.size() > static_cast<std::size_t>(next)) {
-    spare_lists.push_back(std::move(seg.segments.back()));
-    seg.segments.pop_back();
+    if (spare_lists.size() < kMaxSpareLists) spare_lists.push_back(std::move(seg.segments.back()));
+    seg.segments.pop_back();  // the smallest go first
   }
   while (seg.segments.size() < static_cast<std::size_t>(next)) {
     if (spare_lists.empty()) {
@@ -178,6 +193,23 @@ void finalizeOversegmentation(Oversegmentation& seg, int min_points, EdgeSource 
       spare_lists.pop_back();
     }
   }
+  std::sort(seg.segments.begin(), seg.segments.end(), by_capacity);
+  // New ids by decreasing pixel count (ties by id, so the order is fixed),
+  // then list r goes to the id of rank r.
+  thread_local std::vector<int> rank_order_tls;
+  thread_local std::vector<std::vector<int>> ranked_tls;
+  std::vector<int>& rank_order = rank_order_tls;
+  std::vector<std::vector<int>>& ranked = ranked_tls;
+  rank_order.clear();
+  for (std::size_t id = 0; id < counts.size(); ++id) {
+    if (remap[id] >= 0) rank_order.push_back(static_cast<int>(id));
+  }
+  std::stable_sort(rank_order.begin(), rank_order.end(),
+                   [&counts](int a, int b) { return counts[a] > counts[b]; });
+  ranked.resize(static_cast<std::size_t>(next));
+  for (std::size_t r = 0; r < rank_order.size(); ++r)
+    ranked[static_cast<std::size_t>(remap[rank_order[r]])] = std::move(seg.segments[r]);
+  seg.segments.swap(ranked);  // `ranked` keeps the moved-from shells for next time
   for (auto& pixels : seg.segments) pixels.clear();
   for (std::size_t id = 0; id < counts.size(); ++id) {
     if (remap[id] < 0) continue;
