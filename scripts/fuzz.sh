@@ -76,8 +76,15 @@ run_one() {
                 -artifact_prefix="$findings/")
   [[ "$SECONDS_EACH" != 0 ]] && limits+=(-max_total_time="$SECONDS_EACH")
   [[ -n "${FUZZ_RUNS:-}" ]] && limits+=(-runs="$FUZZ_RUNS")
+  # nyu_mat: libhdf5 mallocs sizes it reads from a corrupt file (two such inputs are
+  # in tests/fuzz/known/nyu_mat, third-party, not fixable here). Allocations over
+  # 256 MB then get NULL, as glibc gives for absurd sizes, so HDF5's own failure path
+  # runs and the target goes on. This does not hide ours: a C++ `new` that gets NULL
+  # is still an ASan out-of-memory report.
+  local asan=$ASAN_OPTIONS
+  [[ $t == nyu_mat ]] && asan+=":allocator_may_return_null=1:max_allocation_size_mb=256"
   set +e
-  "$exe" "${limits[@]}" "$corpus" "tests/fuzz/corpus/$t" "${extra[@]}" >"$log" 2>&1
+  ASAN_OPTIONS=$asan "$exe" "${limits[@]}" "$corpus" "tests/fuzz/corpus/$t" "${extra[@]}" >"$log" 2>&1
   local rc=$?
   set -e
   local runs

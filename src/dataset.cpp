@@ -468,6 +468,10 @@ DatasetFolder::DatasetFolder(const std::string& dir, const DatasetOptions& optio
     has_labels_ = false;
   }
   const char* label_dir = has_labels_ ? (has_label8_ ? "label8" : "label40") : "rgb";
+  if (options.fine_labels && !fs::is_directory(root / "label40", ec)) {
+    throw Error(dir + ": NYU-40 labels asked for (training.split_labels = nyu40) but there is no "
+                "label40/ folder");
+  }
 
   if (has_labels_ && !has_label8_) {
     mapping_ = options.mapping_csv ? loadLabelMapping(*options.mapping_csv) : defaultNyu40Mapping();
@@ -610,6 +614,24 @@ LabeledFrame DatasetFolder::load(std::size_t i) const {
     out.labels[p] = static_cast<std::uint8_t>(lookup[label_ids.pixels[p]]);
   }
 
+  if (options_.fine_labels) {
+    const std::string fine_path = (root / "label40" / (name + ".png")).string();
+    auto fine = readPng8(fine_path);
+    if (fine.width != rgb.width || fine.height != rgb.height) {
+      throw Error(fine_path + " is " + sizeText(fine.width, fine.height) + " but " + rgb_path +
+                  " is " + sizeText(rgb.width, rgb.height));
+    }
+    for (std::size_t p = 0; p < fine.pixels.size(); ++p) {
+      if (fine.pixels[p] > kNyu40Classes) {
+        throw Error(fine_path + ": label " + std::to_string(fine.pixels[p]) + " at pixel " +
+                    std::to_string(p) + " is not an NYU-40 id (0..40)");
+      }
+      // Unlabelled in the coarse labels = unlabelled here too.
+      if (out.labels[p] == kVoidLabel) fine.pixels[p] = 0;
+    }
+    out.fine_labels = std::move(fine.pixels);
+  }
+
   if (options_.mask_nyu_border && nyu_calibration_) {
     const int x0 = options_.border_left, x1 = frame.width - options_.border_right;
     const int y0 = options_.border_top, y1 = frame.height - options_.border_bottom;
@@ -626,6 +648,7 @@ LabeledFrame DatasetFolder::load(std::size_t i) const {
         if (row_inside && x >= x0 && x < x1) continue;
         const auto p = static_cast<std::size_t>(y) * frame.width + x;
         out.labels[p] = kVoidLabel;
+        if (!out.fine_labels.empty()) out.fine_labels[p] = 0;
         frame.depth_mm[p] = 0;
       }
     }

@@ -10,6 +10,12 @@
 // A node becomes a leaf at max_depth, when it is pure, or when no candidate
 // leaves at least min_samples_leaf samples on each side.
 //
+// Split labels (TrainingSet::split_labels): the gain may be measured over
+// finer classes than the ones the leaves hold (e.g. NYU-40 "bookshelf",
+// "dresser", "night stand" instead of one "cabinet"). A coarse class made of
+// unlike things then gets split by what tells its parts apart, while the
+// leaves, and so the model file and prediction, stay in the 8 classes.
+//
 // Reproducibility: tree t draws every random number from its own generator
 // seeded with seed + t, and random numbers are turned into integers/reals by
 // our own code (not std::*_distribution, whose output is implementation
@@ -58,6 +64,19 @@ void validateTrainingSet(const TrainingSet& data) {
                 std::to_string(extra_dim) + " extra features need " +
                 std::to_string(n * extra_dim) + " extra values, got " +
                 std::to_string(data.extra.size()));
+  if (!data.split_labels.empty()) {
+    if (data.split_labels.size() != n)
+      throw Error("forest training: " + std::to_string(n) + " feature vectors but " +
+                  std::to_string(data.split_labels.size()) + " split labels");
+    if (data.split_classes < 1 || data.split_classes > kMaxSplitClasses)
+      throw Error("forest training: split_classes = " + std::to_string(data.split_classes) +
+                  " (expected 1.." + std::to_string(kMaxSplitClasses) + ")");
+    for (std::size_t i = 0; i < n; ++i)
+      if (data.split_labels[i] >= data.split_classes)
+        throw Error("forest training: sample " + std::to_string(i) + " has split label " +
+                    std::to_string(data.split_labels[i]) + " (expected 0.." +
+                    std::to_string(data.split_classes - 1) + ")");
+  }
   for (std::size_t i = 0; i < n; ++i) {
     if (data.labels[i] >= kNumLabels)
       throw Error("forest training: sample " + std::to_string(i) + " has label " +
@@ -108,12 +127,13 @@ class TreeRng {
 
 using Histogram = std::array<double, kNumLabels>;
 
-double entropy(const Histogram& h, double total) {
+// Entropy of the first k bins of a histogram with the given total.
+double entropy(const double* h, int k, double total) {
   if (total <= 0.0) return 0.0;
   double e = 0.0;
-  for (double c : h) {
-    if (c > 0.0) {
-      const double p = c / total;
+  for (int c = 0; c < k; ++c) {
+    if (h[c] > 0.0) {
+      const double p = h[c] / total;
       e -= p * std::log2(p);
     }
   }
@@ -125,6 +145,10 @@ struct TrainingView {
   const std::vector<float>& extra;
   int extra_dim;
   const std::vector<std::uint8_t>& labels;
+  // The classes the split gain is measured over: `labels` itself (k = 8) or
+  // the training set's split labels.
+  const std::vector<std::uint8_t>& split_labels;
+  int split_classes;
   std::vector<double> weights;  // per sample, including class weighting
   int dim() const { return kFeatureDim + extra_dim; }
   float value(std::uint32_t sample, int f) const {
@@ -180,7 +204,17 @@ class TreeBuilder {
       const std::size_t count = job.end - job.begin;
       const bool can_split = job.depth < params_.max_depth && classes_present > 1 &&
                              count >= 2 * static_cast<std::size_t>(params_.min_samples_leaf);
-      if (can_split) split = findSplit(samples, job.begin, job.end, hist, total);
+      if (can_split) {
+        // The parent histogram over the split classes (the same sums as
+        // `hist` when the split classes are the labels).
+        const int k = data_.split_classes;
+        parent_.assign(static_cast<std::size_t>(k), 0.0);
+        for (std::size_t s = job.begin; s < job.end; ++s)
+          parent_[data_.split_labels[samples[s]]] += data_.weights[samples[s]];
+        double split_total = 0.0;
+        for (double c : parent_) split_total += c;
+        split = findSplit(samples, job.begin, job.end, parent_.data(), split_total);
+      }
 
       if (!split.valid) {
         RandomForest::Node& leaf = tree[job.node];
@@ -220,8 +254,10 @@ class TreeBuilder {
   };
 
   Split findSplit(const std::vector<std::uint32_t>& samples, std::size_t begin, std::size_t end,
-                  const Histogram& parent, double parent_total) {
-    const double parent_entropy = entropy(parent, parent_total);
+                  const double* parent, double parent_total) {
+    const int k_classes = data_.split_classes;
+    const auto k_size = static_cast<std::size_t>(k_classes);
+    const double parent_entropy = entropy(parent, k_classes, parent_total);
     const int num_thresholds = params_.candidate_thresholds;
     const auto min_leaf = static_cast<std::size_t>(params_.min_samples_leaf);
 
@@ -237,7 +273,7 @@ class TreeBuilder {
 
     Split best;
     thresholds_.resize(num_thresholds);
-    bins_.assign(static_cast<std::size_t>(num_thresholds) + 1, Histogram{});
+    bins_.assign((static_cast<std::size_t>(num_thresholds) + 1) * k_size, 0.0);
     bin_counts_.assign(static_cast<std::size_t>(num_thresholds) + 1, 0);
     for (int k = 0; k < params_.candidate_features; ++k) {
       const int feature = order[k];
@@ -261,37 +297,40 @@ class TreeBuilder {
 
       // Bin b holds samples with thresholds[b-1] <= x < thresholds[b]; the
       // left side of threshold b is then bins 0..b. O(n log T + T L).
-      std::fill(bins_.begin(), bins_.end(), Histogram{});
+      std::fill(bins_.begin(), bins_.end(), 0.0);
       std::fill(bin_counts_.begin(), bin_counts_.end(), 0);
       for (std::size_t s = begin; s < end; ++s) {
         const std::uint32_t sample = samples[s];
         const float v = data_.value(sample, feature);
         const auto bin = static_cast<std::size_t>(
             std::upper_bound(thresholds_.begin(), thresholds_.end(), v) - thresholds_.begin());
-        bins_[bin][data_.labels[sample]] += data_.weights[sample];
+        bins_[bin * k_size + data_.split_labels[sample]] += data_.weights[sample];
         ++bin_counts_[bin];
       }
-      Histogram left{};
+      left_.assign(k_size, 0.0);
+      right_.resize(k_size);
+      double* left = left_.data();
+      double* right = right_.data();
       double left_total = 0.0;
       std::size_t left_count = 0;
       const std::size_t count = end - begin;
       for (int b = 0; b < num_thresholds; ++b) {
-        for (int c = 0; c < kNumLabels; ++c) {
-          left[c] += bins_[b][c];
-          left_total += bins_[b][c];
+        const double* bin = bins_.data() + static_cast<std::size_t>(b) * k_size;
+        for (int c = 0; c < k_classes; ++c) {
+          left[c] += bin[c];
+          left_total += bin[c];
         }
         left_count += bin_counts_[b];
         const std::size_t right_count = count - left_count;
         if (left_count < min_leaf || right_count < min_leaf) continue;
-        Histogram right;
         double right_total = 0.0;
-        for (int c = 0; c < kNumLabels; ++c) {
+        for (int c = 0; c < k_classes; ++c) {
           right[c] = std::max(0.0, parent[c] - left[c]);
           right_total += right[c];
         }
-        const double children =
-            (left_total * entropy(left, left_total) + right_total * entropy(right, right_total)) /
-            parent_total;
+        const double children = (left_total * entropy(left, k_classes, left_total) +
+                                 right_total * entropy(right, k_classes, right_total)) /
+                                parent_total;
         const double gain = parent_entropy - children;
         // Strictly better only: ties keep the first candidate (deterministic).
         if (gain > best.gain + 1e-12) {
@@ -310,8 +349,9 @@ class TreeBuilder {
   TreeRng rng_;
   std::vector<int> order_;
   std::vector<float> thresholds_;
-  std::vector<Histogram> bins_;
+  std::vector<double> bins_;  // (thresholds + 1) x split classes
   std::vector<std::size_t> bin_counts_;
+  std::vector<double> parent_, left_, right_;
 };
 
 }  // namespace
@@ -323,8 +363,14 @@ RandomForest RandomForest::train(const TrainingSet& data, const ForestParams& pa
   validateParams(params, "forest training");
   validateTrainingSet(data);
 
-  TrainingView view{
-      data.features, data.extra, static_cast<int>(data.extra_names.size()), data.labels, {}};
+  const bool own_split_labels = !data.split_labels.empty();
+  TrainingView view{data.features,
+                    data.extra,
+                    static_cast<int>(data.extra_names.size()),
+                    data.labels,
+                    own_split_labels ? data.split_labels : data.labels,
+                    own_split_labels ? data.split_classes : kNumLabels,
+                    {}};
   if (params.candidate_features > view.dim())
     throw Error("forest training: forest parameter candidate_features = " +
                 std::to_string(params.candidate_features) + " is invalid (expected 1.." +

@@ -29,6 +29,11 @@ namespace {
 
 // NYU-894 ids are 1..894; the table covers 0..kMaxNyu894Id (0 = unlabelled).
 constexpr int kMaxNyu894Id = 65535;
+// The largest frame accepted: NYU's are 640x480; 1280x1024 (Kinect-class
+// high resolution) leaves room for other sensors in the same layout while
+// keeping one frame's buffers (16 bytes a pixel here) near 20 MB, so that a
+// forged header cannot make a load take seconds or hundreds of MB.
+constexpr hsize_t kMaxMatWidth = 1280, kMaxMatHeight = 1024;
 
 // Silences HDF5's automatic error-stack printing for a scope: we turn every
 // failure into a findmug::Error instead of spraying the stack on stderr.
@@ -255,10 +260,15 @@ NyuMatFile::NyuMatFile(const std::string& path, const std::string& nyu894_to_40_
     requireType(path, "labels", impl_->labels, H5T_INTEGER, 2, "uint16 (NYU-894 ids)");
 
     const auto& im = impl_->images.dims;
-    if (im.size() != 4 || im[1] != 3 || im[0] == 0 || im[2] == 0 || im[3] == 0 || im[2] > 4096 ||
-        im[3] > 4096) {
+    if (im.size() != 4 || im[1] != 3 || im[0] == 0 || im[2] == 0 || im[3] == 0) {
       throw Error(path + ": dataset 'images' has dims " + dimsText(im) +
                   ", expected [N][3][width][height] (MATLAB height x width x 3 x N)");
+    }
+    if (im[2] > kMaxMatWidth || im[3] > kMaxMatHeight) {
+      throw Error(path + ": dataset 'images' has dims " + dimsText(im) + ": frames of " +
+                  std::to_string(im[2]) + "x" + std::to_string(im[3]) + " exceed the " +
+                  std::to_string(kMaxMatWidth) + "x" + std::to_string(kMaxMatHeight) +
+                  " this reader accepts (NYU frames are 640x480)");
     }
     impl_->count = im[0];
     impl_->width = static_cast<int>(im[2]);
@@ -312,6 +322,7 @@ LabeledFrame NyuMatFile::load(std::size_t index0) const {
   frame.rgb.resize(pixels);
   frame.depth_mm.resize(pixels);
   out.labels.resize(pixels);
+  out.fine_labels.assign(pixels, 0);
 
   const auto& to8 = defaultNyu40Mapping().to_findmug;
   std::vector<std::size_t> unknown_counts;  // by NYU-894 id, only filled on error
@@ -336,6 +347,8 @@ LabeledFrame NyuMatFile::load(std::size_t index0) const {
         continue;
       }
       out.labels[dst] = static_cast<std::uint8_t>(to8[static_cast<std::size_t>(id40)]);
+      if (out.labels[dst] != kVoidLabel && id40 <= kNyu40Classes)
+        out.fine_labels[dst] = static_cast<std::uint8_t>(id40);
     }
   }
   if (!unknown_counts.empty()) {

@@ -1,5 +1,6 @@
 #include "findmug/training.hpp"
 
+#include <array>
 #include <cmath>
 
 #include "findmug/error.hpp"
@@ -42,15 +43,54 @@ void appendExtraColumns(const SegmentFeatures& f, std::size_t k, std::vector<flo
   }
 }
 
+// Per segment, the plurality fine class among the pixels whose coarse label
+// is the segment's (so that a patch's split label always belongs to its
+// label); 0 for void segments. Ties go to the lower id.
+std::vector<std::uint8_t> segmentFineLabels(const Oversegmentation& segmentation,
+                                            const std::vector<std::uint8_t>& labels,
+                                            const std::vector<std::uint8_t>& fine,
+                                            const std::vector<std::uint8_t>& segment_labels) {
+  if (fine.size() != labels.size())
+    throw Error("segmentFineLabels: " + std::to_string(fine.size()) + " fine labels for " +
+                std::to_string(labels.size()) + " pixels");
+  std::vector<std::uint8_t> out(segmentation.segments.size(), 0);
+  std::array<std::uint32_t, kNyu40Classes + 1> votes{};
+  for (std::size_t s = 0; s < segmentation.segments.size(); ++s) {
+    const std::uint8_t label = segment_labels[s];
+    if (label >= kNumLabels) continue;
+    votes.fill(0);
+    for (const auto p : segmentation.segments[s]) {
+      const auto pixel = static_cast<std::size_t>(p);
+      if (labels[pixel] == label && fine[pixel] <= kNyu40Classes) ++votes[fine[pixel]];
+    }
+    // Pixels of the segment's class with fine id 0 would be a data error
+    // (labelled coarse, unlabelled fine); they do not vote.
+    std::size_t best = 0;
+    std::uint32_t best_votes = 0;
+    for (std::size_t c = 1; c < votes.size(); ++c) {
+      if (votes[c] > best_votes) {
+        best = c;
+        best_votes = votes[c];
+      }
+    }
+    out[s] = static_cast<std::uint8_t>(best);
+  }
+  return out;
+}
+
 // A frame's sample from one oversegmentation of its prepared geometry.
 FrameSample sampleOf(const Segmenter& segmenter, PreparedFrame prepared,
-                     const std::vector<std::uint8_t>& labels) {
+                     const std::vector<std::uint8_t>& labels,
+                     const std::vector<std::uint8_t>& fine_labels) {
   const SegmentedFrame segmented = segmenter.oversegment(std::move(prepared));
   FrameSample sample;
   sample.width = segmented.segmentation.width;
   sample.height = segmented.segmentation.height;
   sample.features = segmenter.features(segmented);
   sample.segment_labels = segmentMajorityLabels(segmented.segmentation, labels);
+  if (!fine_labels.empty())
+    sample.segment_fine_labels =
+        segmentFineLabels(segmented.segmentation, labels, fine_labels, sample.segment_labels);
   sample.segment_pixels.reserve(segmented.segmentation.segments.size());
   for (const auto& pixels : segmented.segmentation.segments) {
     sample.segment_pixels.push_back(static_cast<std::uint32_t>(pixels.size()));
@@ -101,12 +141,13 @@ std::vector<FrameSample> extractSamples(const LabeledFrames& frames, const Segme
       const GroundMethod method = prepared.ground->method;
       std::vector<FrameSample> views;
       for (const Segmenter& variant : variants) {
-        views.push_back(sampleOf(variant, prepared, labelled.labels));
+        views.push_back(sampleOf(variant, prepared, labelled.labels, labelled.fine_labels));
         views.back().name = labelled.name;
         views.back().source_index = i;
         views.back().ground_method = method;
       }
-      FrameSample sample = sampleOf(segmenter, std::move(prepared), labelled.labels);
+      FrameSample sample =
+          sampleOf(segmenter, std::move(prepared), labelled.labels, labelled.fine_labels);
       sample.name = labelled.name;
       sample.source_index = i;
       sample.ground_truth = std::move(labelled.labels);
@@ -123,14 +164,31 @@ std::vector<FrameSample> extractSamples(const LabeledFrames& frames, const Segme
 
 TrainingSet makeTrainingSet(const std::vector<FrameSample>& samples,
                             const std::vector<std::size_t>& frame_indices,
-                            SampleWeighting weighting) {
+                            SampleWeighting weighting, SplitLabels split) {
   std::vector<const FrameSample*> frames;
   for (std::size_t f : frame_indices) frames.push_back(&samples.at(f));
-  return makeTrainingSet(frames, weighting);
+  return makeTrainingSet(frames, weighting, split);
 }
 
+namespace {
+
+// The split label of segment k (SplitLabels::Nyu40), or an error naming the frame.
+std::uint8_t splitLabelOf(const FrameSample& s, std::size_t k) {
+  if (s.segment_fine_labels.size() != s.segment_labels.size())
+    throw Error("training.split_labels = nyu40: frame " + s.name +
+                " has no NYU-40 labels (a dataset folder needs label40/)");
+  const std::uint8_t fine = s.segment_fine_labels[k];
+  if (fine == 0 || fine > kNyu40Classes)
+    throw Error("training.split_labels = nyu40: frame " + s.name + " segment " +
+                std::to_string(k) + " is labelled " + std::string(labelName(s.segment_labels[k])) +
+                " but has no NYU-40 class (id " + std::to_string(fine) + ")");
+  return fine;
+}
+
+}  // namespace
+
 TrainingSet makeTrainingSet(const std::vector<const FrameSample*>& given,
-                            SampleWeighting weighting) {
+                            SampleWeighting weighting, SplitLabels split) {
   TrainingSet set;
   std::vector<const FrameSample*> frames;
   for (const FrameSample* s : given) {
@@ -154,11 +212,13 @@ TrainingSet makeTrainingSet(const std::vector<const FrameSample*>& given,
       set.features.push_back(s->features.features[k]);
       appendExtraColumns(s->features, k, set.extra);
       set.labels.push_back(s->segment_labels[k]);
+      if (split == SplitLabels::Nyu40) set.split_labels.push_back(splitLabelOf(*s, k));
       const auto pixels = static_cast<float>(s->segment_pixels[k]);
       if (weighting == SampleWeighting::Pixels) set.weights.push_back(pixels);
       if (weighting == SampleWeighting::SqrtPixels) set.weights.push_back(std::sqrt(pixels));
     }
   }
+  if (split == SplitLabels::Nyu40) set.split_classes = kNyu40Classes + 1;
   return set;
 }
 
@@ -188,7 +248,9 @@ RandomForest trainModel(const std::vector<const FrameSample*>& frames,
     if (progress) progress(++done, total);
   };
   const SampleWeighting weighting = config.training.sample_weight;
-  RandomForest first = RandomForest::train(makeTrainingSet(frames, weighting), config.forest);
+  const SplitLabels split = config.training.split_labels;
+  RandomForest first =
+      RandomForest::train(makeTrainingSet(frames, weighting, split), config.forest);
   tick();
   if (!config.context.enabled) return first;
 
@@ -213,7 +275,7 @@ RandomForest trainModel(const std::vector<const FrameSample*>& frames,
       if (held_out.empty()) continue;
       ForestParams params = config.forest;
       params.seed += 1000 + static_cast<std::uint64_t>(g);
-      const TrainingSet set = makeTrainingSet(train, weighting);
+      const TrainingSet set = makeTrainingSet(train, weighting, split);
       if (set.labels.empty()) throw Error("trainModel: cross-fitting group " + std::to_string(g) +
                                           " leaves no labelled segment to train on");
       const RandomForest forest = RandomForest::train(set, params);
@@ -242,11 +304,13 @@ RandomForest trainModel(const std::vector<const FrameSample*>& frames,
       const auto begin = ctx.begin() + static_cast<std::ptrdiff_t>(k * kContextFeatureDim);
       set.extra.insert(set.extra.end(), begin, begin + kContextFeatureDim);
       set.labels.push_back(s.segment_labels[k]);
+      if (split == SplitLabels::Nyu40) set.split_labels.push_back(splitLabelOf(s, k));
       const auto pixels = static_cast<float>(s.segment_pixels[k]);
       if (weighting == SampleWeighting::Pixels) set.weights.push_back(pixels);
       if (weighting == SampleWeighting::SqrtPixels) set.weights.push_back(std::sqrt(pixels));
     }
   }
+  if (split == SplitLabels::Nyu40) set.split_classes = kNyu40Classes + 1;
   ForestParams params = config.forest;
   params.seed += 500;
   RandomForest second = RandomForest::train(set, params);

@@ -344,6 +344,8 @@ int run(int argc, char** argv) {
 
   DatasetOptions options;
   options.mask_nyu_border = !f.no_nyu_border;
+  // Split labels need each patch's NYU-40 class (label40/ beside label8/).
+  options.fine_labels = config.segmenter.training.split_labels == SplitLabels::Nyu40;
   if (!f.nyu_rotations.empty()) options.nyu_rotations_file = f.nyu_rotations;
   const auto input = !f.data.empty()
                          ? LabeledInput::folder(f.data, options)

@@ -63,6 +63,8 @@ int run(int argc, char** argv) {
   const Segmenter segmenter(config.segmenter, nullptr);
   DatasetOptions options;
   options.mask_nyu_border = !f.no_nyu_border;
+  // Split labels need each patch's NYU-40 class (label40/ beside label8/).
+  options.fine_labels = config.segmenter.training.split_labels == SplitLabels::Nyu40;
   if (!f.nyu_rotations.empty()) options.nyu_rotations_file = f.nyu_rotations;
 
   const auto start = std::chrono::steady_clock::now();
@@ -91,7 +93,8 @@ int run(int argc, char** argv) {
 
   std::vector<std::size_t> all(samples.size());
   for (std::size_t i = 0; i < all.size(); ++i) all[i] = i;
-  const TrainingSet training = makeTrainingSet(samples, all);
+  const TrainingSet training = makeTrainingSet(samples, all, config.segmenter.training.sample_weight,
+                                               config.segmenter.training.split_labels);
   if (training.labels.empty()) throw Error("no labelled supervoxel to train on");
 
   tools::ProgressBar bar("forests");

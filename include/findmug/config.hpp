@@ -34,8 +34,17 @@ enum class SampleWeighting {
   Pixels,      // each patch weighs its pixel count: the figures are per pixel
   SqrtPixels,  // in between: large patches count more, but not in proportion
 };
+// The classes the forest's splits are chosen by (training.split_labels).
+enum class SplitLabels {
+  Labels,  // the 8 findmug classes the leaves hold (the paper's)
+  Nyu40,   // the NYU-40 class of each patch (needs label40/ or the .mat file):
+           // "cabinet", "object" and "unknown" each gather unlike things, and
+           // splits that tell those apart can help the 8-class answer
+};
+
 struct TrainingOptions {
   SampleWeighting sample_weight = SampleWeighting::Patches;  // training.sample_weight
+  SplitLabels split_labels = SplitLabels::Labels;            // training.split_labels
   // Augmentation: each training frame also contributes the patches of this
   // many other oversegmentations (training.extra_oversegmentations), the k-th
   // with overseg.seed_resolution_m scaled by extra_seed_scale^j, j = 1, -1,

@@ -83,10 +83,17 @@ std::string defaultNyuRotationsPath();
 // Reads DIR/gravity.csv (header `name,up_x,up_y,up_z`); errors name the file and line.
 std::vector<std::pair<std::string, std::array<double, 3>>> loadGravityCsv(const std::string& path);
 
+// NYU-40 class ids are 1..40; 0 = unlabelled.
+inline constexpr int kNyu40Classes = 40;
+
 struct LabeledFrame {
   std::string name;
   RgbdFrame frame;
   std::vector<std::uint8_t> labels;  // findmug ids, kVoidLabel = no ground truth
+  // NYU-40 class ids (0 = unlabelled) per pixel: from a folder's label40/
+  // when asked for (DatasetOptions::fine_labels, training.split_labels), and
+  // always from NyuMatFile; empty otherwise. 0 wherever `labels` is void.
+  std::vector<std::uint8_t> fine_labels;
 };
 
 struct DatasetOptions {
@@ -108,6 +115,9 @@ struct DatasetOptions {
   // folder without label8/ and label40/ lists the frames present in rgb/ and
   // depth/, and load() returns labels that are all kVoidLabel.
   bool require_labels = true;
+  // Also read label40/<name>.png into LabeledFrame::fine_labels (for
+  // training.split_labels = nyu40). A folder without label40/ is then an error.
+  bool fine_labels = false;
 };
 
 class DatasetFolder {

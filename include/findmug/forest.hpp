@@ -49,7 +49,16 @@ struct TrainingSet {
   std::vector<float> extra;
   std::vector<std::uint8_t> labels;  // 0..kNumLabels-1 (no void)
   std::vector<float> weights;        // optional, empty = 1 each (e.g. patch pixel count)
+  // Optional finer classes, used only to choose splits (training.split_labels):
+  // the gain is measured over split_labels (0..split_classes-1) while leaves
+  // hold distributions over `labels`, so the model stays an 8-class model.
+  // Empty = split on `labels`.
+  std::vector<std::uint8_t> split_labels;
+  int split_classes = 0;
 };
+
+// The most split classes a training set may have (NYU-40 plus headroom).
+inline constexpr int kMaxSplitClasses = 64;
 
 class RandomForest {
  public:

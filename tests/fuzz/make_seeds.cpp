@@ -359,15 +359,21 @@ void nyuSeeds(SeedWriter& w, const fs::path& scratch) {
     csv += std::to_string(id) + ",class" + std::to_string(id) + "," + std::to_string(id40) +
            ",nyu40class" + std::to_string(id40) + "\n";
   }
-  w.write("nyu_mat", "two-frames", fuzz::joinParts({csv, readFile(mat)}),
-          [&scratch](const std::string& b) {
-            const auto parts = fuzz::splitParts(bytesOf(b), b.size(), 2);
-            const auto c = scratch / "c.csv", m = scratch / "c.mat";
-            std::ofstream(c, std::ios::binary) << parts[0];
-            std::ofstream(m, std::ios::binary) << parts[1];
-            NyuMatFile f(m.string(), c.string());
-            for (std::size_t i = 0; i < f.size(); ++i) (void)f.load(i);
-          });
+  auto check = [&scratch](const std::string& b) {
+    const auto parts = fuzz::splitParts(bytesOf(b), b.size(), 2);
+    const auto c = scratch / "c.csv", m = scratch / "c.mat";
+    std::ofstream(c, std::ios::binary) << parts[0];
+    std::ofstream(m, std::ios::binary) << parts[1];
+    NyuMatFile f(m.string(), c.string());
+    for (std::size_t i = 0; i < f.size(); ++i) (void)f.load(i);
+  };
+  w.write("nyu_mat", "two-frames", fuzz::joinParts({csv, readFile(mat)}), check);
+  // The same file with a mapping of just the ids its labels use (0..4): most
+  // of the bytes are then the HDF5 file, where the mutations should go.
+  std::string short_csv = "nyu894_id,name,nyu40_id,nyu40_name\n";
+  for (int id = 1; id <= 4; ++id)
+    short_csv += std::to_string(id) + ",c" + std::to_string(id) + "," + std::to_string(id) + ",n\n";
+  w.write("nyu_mat", "short-mapping", fuzz::joinParts({short_csv, readFile(mat)}), check);
 }
 
 }  // namespace

@@ -111,7 +111,7 @@ TEST(Config, SceneAndTrainingSettings) {
   const Config c = parseConfig(
       "features:\n  scene: true\n  scene_cell_m: 0.2\n  scene_band_px: 10\n"
       "training:\n  sample_weight: sqrt_pixels\n  extra_oversegmentations: 2\n"
-      "  extra_seed_scale: 0.9\n",
+      "  extra_seed_scale: 0.9\n  split_labels: nyu40\n",
       "t.yaml");
   EXPECT_TRUE(c.segmenter.scene.enabled);
   EXPECT_FLOAT_EQ(c.segmenter.scene.cell_m, 0.2f);
@@ -119,6 +119,10 @@ TEST(Config, SceneAndTrainingSettings) {
   EXPECT_EQ(c.segmenter.training.sample_weight, SampleWeighting::SqrtPixels);
   EXPECT_EQ(c.segmenter.training.extra_oversegmentations, 2);
   EXPECT_FLOAT_EQ(c.segmenter.training.extra_seed_scale, 0.9f);
+  EXPECT_EQ(c.segmenter.training.split_labels, SplitLabels::Nyu40);
+  EXPECT_EQ(SegmenterConfig{}.training.split_labels, SplitLabels::Labels);
+  EXPECT_THAT(errorOf([] { parseConfig("training:\n  split_labels: nyu13\n", "a.yaml"); }),
+              HasSubstr("one of labels nyu40"));
   EXPECT_THAT(errorOf([] { parseConfig("training:\n  sample_weight: area\n", "a.yaml"); }),
               HasSubstr("one of patches pixels sqrt_pixels"));
   EXPECT_THAT(errorOf([] { parseConfig("features:\n  scene_band_px: 0\n", "a.yaml"); }),
@@ -136,6 +140,7 @@ TEST(Config, SceneAndTrainingSettings) {
   EXPECT_TRUE(has("features.scene_band_px"));
   EXPECT_FALSE(has("training.sample_weight"));
   EXPECT_FALSE(has("training.extra_oversegmentations"));
+  EXPECT_FALSE(has("training.split_labels"));
 }
 
 TEST(Config, InconsistentResolutionsRefused) {

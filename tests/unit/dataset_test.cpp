@@ -266,6 +266,58 @@ TEST(DatasetFolder, Label40MappedByOurCsvEqualsShippedLabel8) {
   }
 }
 
+// training.split_labels = nyu40 reads label40/ beside label8/: every labelled
+// pixel's NYU-40 class maps to its findmug label, void pixels (the border
+// included) have class 0.
+TEST(DatasetFolder, FineLabelsComeFromLabel40AndAgreeWithTheLabels) {
+  FINDMUG_REQUIRE_DATA(nyu, "nyuv2_labeled");
+  DatasetOptions options;
+  options.fine_labels = true;
+  DatasetFolder folder(nyu.string(), options);
+  EXPECT_TRUE(DatasetFolder(nyu.string()).load(0).fine_labels.empty());  // only when asked
+  const auto& to8 = defaultNyu40Mapping().to_findmug;
+  for (std::size_t i : {0u, 7u, 30u}) {
+    const auto f = folder.load(i);
+    ASSERT_EQ(f.fine_labels.size(), f.labels.size()) << f.name;
+    std::size_t labelled = 0;
+    std::array<std::size_t, kNyu40Classes + 1> seen{};
+    for (std::size_t p = 0; p < f.labels.size(); ++p) {
+      ASSERT_LE(f.fine_labels[p], kNyu40Classes);
+      if (f.labels[p] == kVoidLabel) {
+        ASSERT_EQ(f.fine_labels[p], 0) << f.name << " pixel " << p;
+      } else {
+        ASSERT_EQ(to8[f.fine_labels[p]], f.labels[p]) << f.name << " pixel " << p;
+        ++labelled;
+        ++seen[f.fine_labels[p]];
+      }
+    }
+    EXPECT_GT(labelled, f.labels.size() / 3) << f.name;
+    // Finer than the 8 classes: more NYU-40 classes than findmug labels occur.
+    EXPECT_GT(std::count_if(seen.begin(), seen.end(), [](std::size_t c) { return c > 0; }), 4)
+        << f.name;
+    EXPECT_EQ(f.fine_labels[0], 0) << f.name;  // the NYU border
+  }
+}
+
+TEST(DatasetFolder, FineLabelsNeedAValidLabel40Folder) {
+  TempDir dir;
+  RawFolder raw(dir.path() / "a", "label8");
+  raw.rgb("x", 8, 6);
+  raw.depth16("x", 8, 6, 1500);
+  raw.labels("label8", "x", 8, 6, 1);
+  DatasetOptions options = noBorder();
+  options.fine_labels = true;
+  EXPECT_CONTAINS(errorOf([&] { DatasetFolder(dir.str("a"), options); }), "no label40/ folder");
+  fs::create_directories(dir.path() / "a" / "label40");
+  raw.labels("label40", "x", 8, 6, 41);
+  const DatasetFolder folder(dir.str("a"), options);
+  const std::string msg = errorOf([&] { folder.load(0); });
+  EXPECT_CONTAINS(msg, "label40/x.png");
+  EXPECT_CONTAINS(msg, "label 41");
+  raw.labels("label40", "x", 4, 6, 1);
+  EXPECT_CONTAINS(errorOf([&] { folder.load(0); }), "is 4x6");
+}
+
 TEST(DatasetFolder, BorderMaskCanBeSwitchedOff) {
   FINDMUG_REQUIRE_DATA(nyu, "nyuv2_labeled");
   DatasetFolder folder(nyu.string(), noBorder());

@@ -315,7 +315,77 @@ TEST(Forest, RefusesBadTrainingInput) {
   p = params;
   p.min_samples_leaf = 0;
   expectError(good, p, "min_samples_leaf");
+  bad = good;
+  bad.split_labels.assign(good.labels.size() - 1, 0);
+  bad.split_classes = 3;
+  expectError(bad, params, "split labels");
+  bad.split_labels.assign(good.labels.size(), 0);
+  bad.split_labels[4] = 3;
+  expectError(bad, params, "split label 3");
+  bad.split_labels[4] = 0;
+  bad.split_classes = kMaxSplitClasses + 1;
+  expectError(bad, params, "split_classes");
   EXPECT_THROW(RandomForest().predict(FeatureVector{}), Error);
+}
+
+// Split labels equal to the labels are no change at all: the same model,
+// byte for byte (the split code path is shared).
+TEST(Forest, SplitLabelsEqualToTheLabelsGiveTheSameModel) {
+  TempDir dir;
+  const TrainingSet plain = makeBlobs(30, 5, 3.0f);
+  TrainingSet split = plain;
+  split.split_labels = plain.labels;
+  split.split_classes = kNumLabels;
+  ForestParams params;
+  params.num_trees = 3;
+  params.max_depth = 6;
+  RandomForest::train(plain, params).save(dir.str("plain.fmf"));
+  RandomForest::train(split, params).save(dir.str("split.fmf"));
+  EXPECT_EQ(readBytes(dir.str("plain.fmf")), readBytes(dir.str("split.fmf")));
+}
+
+// Class A is made of two kinds (split classes 1 and 2) at either end of
+// feature 0, class B (split class 3) is spread over it; feature 1 tells A
+// from B only in part. On the labels feature 0 has no gain (both sides are
+// 2/3 A) and the stump splits on feature 1; on the split labels feature 0
+// separates the two kinds of A and wins. The leaves still hold labels A and B.
+TEST(Forest, SplitLabelsChooseSplitsTheLabelsCannotSee) {
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<float> unit(0.0f, 1.0f);
+  TrainingSet set;
+  constexpr std::uint8_t kA = 3, kB = 5;  // any two findmug labels
+  for (int i = 0; i < 300; ++i) {
+    const int kind = i % 3;  // 0: A of kind 1, 1: A of kind 2, 2: B
+    FeatureVector x{};
+    x[0] = kind == 0 ? unit(rng) : kind == 1 ? 2.0f + unit(rng) : 3.0f * unit(rng);
+    x[1] = kind == 2 ? 0.5f + unit(rng) : unit(rng);
+    set.features.push_back(x);
+    set.labels.push_back(kind == 2 ? kB : kA);
+    set.split_labels.push_back(static_cast<std::uint8_t>(kind + 1));
+  }
+  set.split_classes = 4;  // 0 unused, as with NYU-40 ids
+  ForestParams params;
+  params.num_trees = 1;
+  params.max_depth = 1;
+  params.candidate_features = kFeatureDim;
+  params.candidate_thresholds = 200;
+  params.class_weighting = false;
+  TrainingSet coarse = set;
+  coarse.split_labels.clear();
+  coarse.split_classes = 0;
+  const RandomForest by_labels = RandomForest::train(coarse, params);
+  const RandomForest by_split = RandomForest::train(set, params);
+  ASSERT_EQ(by_labels.trees()[0].size(), 3u);
+  ASSERT_EQ(by_split.trees()[0].size(), 3u);
+  EXPECT_EQ(by_labels.trees()[0][0].feature, 1);
+  EXPECT_EQ(by_split.trees()[0][0].feature, 0);
+  EXPECT_GT(by_split.trees()[0][0].threshold, 1.0f);
+  EXPECT_LT(by_split.trees()[0][0].threshold, 2.0f);
+  for (int leaf : {1, 2}) {
+    const auto& d = by_split.trees()[0][static_cast<std::size_t>(leaf)].distribution;
+    EXPECT_NEAR(d[kA] + d[kB], 1.0f, 1e-5f);  // leaves hold labels, not split classes
+    EXPECT_NEAR(d[kA], 2.0f / 3.0f, 0.1f);
+  }
 }
 
 // ---------------------------------------------------------------------------

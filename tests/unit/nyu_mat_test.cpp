@@ -14,6 +14,7 @@
 #include <fstream>
 #include <functional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "findmug/dataset.hpp"
@@ -201,7 +202,9 @@ TEST_F(NyuMat, PixelsLandAtTheRightPlaceAndLabelsMap894To40To8) {
     ASSERT_EQ(f.frame.height, kH);
     EXPECT_DOUBLE_EQ(f.frame.intrinsics.fx, kNyuIntrinsics.fx);
     EXPECT_FALSE(f.frame.extrinsics.has_value());
-    std::size_t wrong_rgb = 0, wrong_depth = 0, wrong_label = 0;
+    std::size_t wrong_rgb = 0, wrong_depth = 0, wrong_label = 0, wrong_fine = 0;
+    ASSERT_EQ(f.fine_labels.size(), f.labels.size());
+    const auto& to8 = defaultNyu40Mapping().to_findmug;
     for (int y = 0; y < kH; ++y) {
       for (int x = 0; x < kW; ++x) {
         const auto p = static_cast<std::size_t>(y) * kW + x;
@@ -210,8 +213,15 @@ TEST_F(NyuMat, PixelsLandAtTheRightPlaceAndLabelsMap894To40To8) {
         const auto mm = static_cast<std::uint16_t>(std::lround(depthAt(n, x, y) * 1000.0f));
         if (f.frame.depth_mm[p] != mm) ++wrong_depth;
         if (f.labels[p] != expectedLabel(n, x, y)) ++wrong_label;
+        // The NYU-40 class (training.split_labels) maps to the label; 0 where void.
+        const int fine = f.fine_labels[p];
+        if (f.labels[p] == kVoidLabel ? fine != 0 : (fine == 0 || to8[fine] != f.labels[p]))
+          ++wrong_fine;
       }
     }
+    EXPECT_EQ(wrong_fine, 0u) << "frame " << n;
+    EXPECT_EQ(f.fine_labels[450 * kW + 320], 2);  // NYU-40 floor
+    EXPECT_EQ(f.fine_labels[200 * kW + 10], 1);   // NYU-40 wall
     EXPECT_EQ(wrong_rgb, 0u) << "frame " << n;
     EXPECT_EQ(wrong_depth, 0u) << "frame " << n;
     EXPECT_EQ(wrong_label, 0u) << "frame " << n;
@@ -273,6 +283,25 @@ TEST_F(NyuMat, WrongTypesAndDimsAreRejected) {
   writeMat(dir_.str("u16.mat"), u16);
   msg = errorOf([&] { NyuMatFile(dir_.str("u16.mat"), csv_); });
   EXPECT_CONTAINS(msg, "dataset 'images' has type uint16, expected uint8");
+
+  // A header may claim frames of any size; past 1280x1024 it is refused
+  // before anything is allocated for them (a forged 4096x4096 frame took
+  // seconds and hundreds of MB to load).
+  for (const auto& [w, h] : {std::pair<hsize_t, hsize_t>{1281, 2}, {2, 1025}}) {
+    const auto path = dir_.str("big.mat");
+    const hid_t file = H5Fcreate(path.c_str(), H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT);
+    ASSERT_GE(file, 0);
+    std::vector<std::uint8_t> images(3 * w * h, 1);
+    std::vector<float> depths(w * h, 1.0f);
+    std::vector<std::uint16_t> labels(w * h, 0);
+    writeDataset(file, "images", H5T_STD_U8LE, H5T_NATIVE_UINT8, {1, 3, w, h}, images.data());
+    writeDataset(file, "depths", H5T_IEEE_F32LE, H5T_NATIVE_FLOAT, {1, w, h}, depths.data());
+    writeDataset(file, "labels", H5T_STD_U16LE, H5T_NATIVE_UINT16, {1, w, h}, labels.data());
+    H5Fclose(file);
+    msg = errorOf([&] { NyuMatFile(path, csv_); });
+    EXPECT_CONTAINS(msg, path);
+    EXPECT_CONTAINS(msg, "exceed the 1280x1024 this reader accepts");
+  }
 
   Layout swapped;
   swapped.frames = 1;

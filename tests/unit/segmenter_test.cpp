@@ -2,7 +2,10 @@
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <array>
 #include <cmath>
+#include <set>
 
 #include "findmug/error.hpp"
 #include "findmug/metrics.hpp"
@@ -209,7 +212,7 @@ TEST(Segmenter, RefusesModelTrainedWithOtherExtractionSettings) {
 // The frame's features as the trainer and findmug-eval see them.
 std::vector<FrameSample> extractScene(const Segmenter& segmenter, const Scene& scene) {
   LabeledFrames frames{"scene", 1, [&](std::size_t) {
-                         return LabeledFrame{"scene", scene.frame, scene.truth};
+                         return LabeledFrame{"scene", scene.frame, scene.truth, {}};
                        }};
   ExtractionReport report;
   auto samples = extractSamples(frames, segmenter, report);
@@ -355,6 +358,69 @@ TEST(Segmenter, TrainingAugmentationAndSampleWeights) {
   ASSERT_EQ(roots.weights.size(), pixels.weights.size());
   for (std::size_t i = 0; i < roots.weights.size(); ++i)
     EXPECT_FLOAT_EQ(roots.weights[i] * roots.weights[i], pixels.weights[i]);
+}
+
+// training.split_labels = nyu40: each patch carries the plurality NYU-40
+// class of its pixels of the patch's own label, and the training set hands
+// them to the forest as split labels; a frame without them is refused.
+TEST(Segmenter, SplitLabelsFromTheFineLabelsOfEachPatch) {
+  const Scene scene = floorAndWall(true);
+  const int w = scene.frame.width;
+  LabeledFrame labelled{"scene", scene.frame, scene.truth, {}};
+  labelled.fine_labels.assign(scene.truth.size(), 0);
+  for (std::size_t p = 0; p < scene.truth.size(); ++p) {
+    const int x = static_cast<int>(p % static_cast<std::size_t>(w));
+    if (scene.truth[p] == static_cast<std::uint8_t>(Label::Floor)) labelled.fine_labels[p] = 2;
+    // The wall is two kinds: "wall" on the left, "door" on the right.
+    if (scene.truth[p] == static_cast<std::uint8_t>(Label::Wall))
+      labelled.fine_labels[p] = x < w / 2 ? 1 : 8;
+  }
+  LabeledFrames frames{"scene", 1, [&](std::size_t) { return labelled; }};
+  ExtractionReport report;
+  const auto samples = extractSamples(frames, Segmenter(fastConfig(), nullptr), report);
+  ASSERT_EQ(samples.size(), 1u);
+  const FrameSample& s = samples[0];
+  ASSERT_EQ(s.segment_fine_labels.size(), s.segment_labels.size());
+  // Brute force: the plurality fine class per segment among its pixels of its label.
+  std::vector<std::array<int, kNyu40Classes + 1>> votes(s.segment_labels.size());
+  for (std::size_t p = 0; p < s.pixel_segment.size(); ++p) {
+    const int k = s.pixel_segment[p];
+    if (k < 0 || scene.truth[p] != s.segment_labels[static_cast<std::size_t>(k)]) continue;
+    ++votes[static_cast<std::size_t>(k)][labelled.fine_labels[p]];
+  }
+  std::set<int> kinds;
+  for (std::size_t k = 0; k < s.segment_labels.size(); ++k) {
+    if (s.segment_labels[k] >= kNumLabels) {
+      EXPECT_EQ(s.segment_fine_labels[k], 0);
+      continue;
+    }
+    const auto& v = votes[k];
+    EXPECT_EQ(v[s.segment_fine_labels[k]], *std::max_element(v.begin() + 1, v.end())) << k;
+    kinds.insert(s.segment_fine_labels[k]);
+  }
+  EXPECT_EQ(kinds, (std::set<int>{1, 2, 8}));
+
+  const TrainingSet set = makeTrainingSet({&s}, SampleWeighting::Patches, SplitLabels::Nyu40);
+  EXPECT_EQ(set.split_classes, kNyu40Classes + 1);
+  ASSERT_EQ(set.split_labels.size(), set.labels.size());
+  std::size_t row = 0;
+  for (std::size_t k = 0; k < s.segment_labels.size(); ++k) {
+    if (s.segment_labels[k] < kNumLabels) {
+      EXPECT_EQ(set.split_labels[row++], s.segment_fine_labels[k]);
+    }
+  }
+  EXPECT_TRUE(makeTrainingSet({&s}).split_labels.empty());  // the default splits on labels
+
+  SegmenterConfig config = fastConfig();
+  config.training.split_labels = SplitLabels::Nyu40;
+  EXPECT_FALSE(trainModel({&s}, config).empty());
+  const auto without = extractScene(Segmenter(fastConfig(), nullptr), scene);
+  try {
+    trainModel({&without[0]}, config);
+    FAIL() << "expected a frame without NYU-40 labels to be refused";
+  } catch (const Error& e) {
+    EXPECT_THAT(e.what(), HasSubstr("frame scene has no NYU-40 labels"));
+  }
 }
 
 TEST(Segmenter, MajorityLabelsPerSegment) {
