@@ -170,7 +170,9 @@ const std::vector<CoreSetting>& settings() {
            {"sqrt_pixels", SampleWeighting::SqrtPixels}}),
       enumSetting<SplitLabels>(
           "training.split_labels", [](C& c) -> SplitLabels& { return c.training.split_labels; },
-          {{"labels", SplitLabels::Labels}, {"nyu40", SplitLabels::Nyu40}}),
+          {{"labels", SplitLabels::Labels},
+           {"nyu40", SplitLabels::Nyu40},
+           {"nyu13", SplitLabels::Nyu13}}),
       intSetting("training.extra_oversegmentations",
                  [](C& c) -> int& { return c.training.extra_oversegmentations; }, 0, 8),
       floatSetting("training.extra_seed_scale",

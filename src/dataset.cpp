@@ -468,9 +468,14 @@ DatasetFolder::DatasetFolder(const std::string& dir, const DatasetOptions& optio
     has_labels_ = false;
   }
   const char* label_dir = has_labels_ ? (has_label8_ ? "label8" : "label40") : "rgb";
-  if (options.fine_labels && !fs::is_directory(root / "label40", ec)) {
-    throw Error(dir + ": NYU-40 labels asked for (training.split_labels = nyu40) but there is no "
-                "label40/ folder");
+  if (!options.fine_labels_folder.empty()) {
+    if (options.fine_labels_folder != "label40" && options.fine_labels_folder != "label13")
+      throw Error(dir + ": fine labels folder '" + options.fine_labels_folder +
+                  "' (expected label40 or label13)");
+    if (!fs::is_directory(root / options.fine_labels_folder, ec))
+      throw Error(dir + ": " + options.fine_labels_folder +
+                  "/ labels asked for (training.split_labels) but there is no " +
+                  options.fine_labels_folder + "/ folder");
   }
 
   if (has_labels_ && !has_label8_) {
@@ -614,17 +619,19 @@ LabeledFrame DatasetFolder::load(std::size_t i) const {
     out.labels[p] = static_cast<std::uint8_t>(lookup[label_ids.pixels[p]]);
   }
 
-  if (options_.fine_labels) {
-    const std::string fine_path = (root / "label40" / (name + ".png")).string();
+  if (!options_.fine_labels_folder.empty()) {
+    const std::string fine_path = (root / options_.fine_labels_folder / (name + ".png")).string();
+    const int max_id = options_.fine_labels_folder == "label13" ? kNyu13Classes : kNyu40Classes;
     auto fine = readPng8(fine_path);
     if (fine.width != rgb.width || fine.height != rgb.height) {
       throw Error(fine_path + " is " + sizeText(fine.width, fine.height) + " but " + rgb_path +
                   " is " + sizeText(rgb.width, rgb.height));
     }
     for (std::size_t p = 0; p < fine.pixels.size(); ++p) {
-      if (fine.pixels[p] > kNyu40Classes) {
+      if (fine.pixels[p] > max_id) {
         throw Error(fine_path + ": label " + std::to_string(fine.pixels[p]) + " at pixel " +
-                    std::to_string(p) + " is not an NYU-40 id (0..40)");
+                    std::to_string(p) + " is not an NYU-" + std::to_string(max_id) + " id (0.." +
+                    std::to_string(max_id) + ")");
       }
       // Unlabelled in the coarse labels = unlabelled here too.
       if (out.labels[p] == kVoidLabel) fine.pixels[p] = 0;

@@ -162,6 +162,18 @@ std::vector<FrameSample> extractSamples(const LabeledFrames& frames, const Segme
   return samples;
 }
 
+std::string fineLabelsFolder(SplitLabels split) {
+  switch (split) {
+    case SplitLabels::Labels:
+      return "";
+    case SplitLabels::Nyu40:
+      return "label40";
+    case SplitLabels::Nyu13:
+      return "label13";
+  }
+  return "";
+}
+
 TrainingSet makeTrainingSet(const std::vector<FrameSample>& samples,
                             const std::vector<std::size_t>& frame_indices,
                             SampleWeighting weighting, SplitLabels split) {
@@ -172,16 +184,35 @@ TrainingSet makeTrainingSet(const std::vector<FrameSample>& samples,
 
 namespace {
 
-// The split label of segment k (SplitLabels::Nyu40), or an error naming the frame.
-std::uint8_t splitLabelOf(const FrameSample& s, std::size_t k) {
+// Classes of a split kind: ids 0..n-1 (0 unused: unlabelled).
+int splitClasses(SplitLabels split) {
+  switch (split) {
+    case SplitLabels::Labels:
+      return kNumLabels;
+    case SplitLabels::Nyu40:
+      return kNyu40Classes + 1;
+    case SplitLabels::Nyu13:
+      return kNyu13Classes + 1;
+  }
+  return kNumLabels;
+}
+
+const char* splitName(SplitLabels split) {
+  return split == SplitLabels::Nyu13 ? "NYU-13" : "NYU-40";
+}
+
+// The split label of segment k (training.split_labels), or an error naming the frame.
+std::uint8_t splitLabelOf(const FrameSample& s, std::size_t k, SplitLabels split) {
+  const std::string setting = std::string("training.split_labels = ") +
+                              (split == SplitLabels::Nyu13 ? "nyu13" : "nyu40");
   if (s.segment_fine_labels.size() != s.segment_labels.size())
-    throw Error("training.split_labels = nyu40: frame " + s.name +
-                " has no NYU-40 labels (a dataset folder needs label40/)");
+    throw Error(setting + ": frame " + s.name + " has no " + splitName(split) +
+                " labels (a dataset folder needs " + fineLabelsFolder(split) + "/)");
   const std::uint8_t fine = s.segment_fine_labels[k];
-  if (fine == 0 || fine > kNyu40Classes)
-    throw Error("training.split_labels = nyu40: frame " + s.name + " segment " +
-                std::to_string(k) + " is labelled " + std::string(labelName(s.segment_labels[k])) +
-                " but has no NYU-40 class (id " + std::to_string(fine) + ")");
+  if (fine == 0 || fine >= splitClasses(split))
+    throw Error(setting + ": frame " + s.name + " segment " + std::to_string(k) +
+                " is labelled " + std::string(labelName(s.segment_labels[k])) + " but has no " +
+                splitName(split) + " class (id " + std::to_string(fine) + ")");
   return fine;
 }
 
@@ -212,13 +243,13 @@ TrainingSet makeTrainingSet(const std::vector<const FrameSample*>& given,
       set.features.push_back(s->features.features[k]);
       appendExtraColumns(s->features, k, set.extra);
       set.labels.push_back(s->segment_labels[k]);
-      if (split == SplitLabels::Nyu40) set.split_labels.push_back(splitLabelOf(*s, k));
+      if (split != SplitLabels::Labels) set.split_labels.push_back(splitLabelOf(*s, k, split));
       const auto pixels = static_cast<float>(s->segment_pixels[k]);
       if (weighting == SampleWeighting::Pixels) set.weights.push_back(pixels);
       if (weighting == SampleWeighting::SqrtPixels) set.weights.push_back(std::sqrt(pixels));
     }
   }
-  if (split == SplitLabels::Nyu40) set.split_classes = kNyu40Classes + 1;
+  if (split != SplitLabels::Labels) set.split_classes = splitClasses(split);
   return set;
 }
 
@@ -304,13 +335,13 @@ RandomForest trainModel(const std::vector<const FrameSample*>& frames,
       const auto begin = ctx.begin() + static_cast<std::ptrdiff_t>(k * kContextFeatureDim);
       set.extra.insert(set.extra.end(), begin, begin + kContextFeatureDim);
       set.labels.push_back(s.segment_labels[k]);
-      if (split == SplitLabels::Nyu40) set.split_labels.push_back(splitLabelOf(s, k));
+      if (split != SplitLabels::Labels) set.split_labels.push_back(splitLabelOf(s, k, split));
       const auto pixels = static_cast<float>(s.segment_pixels[k]);
       if (weighting == SampleWeighting::Pixels) set.weights.push_back(pixels);
       if (weighting == SampleWeighting::SqrtPixels) set.weights.push_back(std::sqrt(pixels));
     }
   }
-  if (split == SplitLabels::Nyu40) set.split_classes = kNyu40Classes + 1;
+  if (split != SplitLabels::Labels) set.split_classes = splitClasses(split);
   ForestParams params = config.forest;
   params.seed += 500;
   RandomForest second = RandomForest::train(set, params);

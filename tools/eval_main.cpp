@@ -344,8 +344,11 @@ int run(int argc, char** argv) {
 
   DatasetOptions options;
   options.mask_nyu_border = !f.no_nyu_border;
-  // Split labels need each patch's NYU-40 class (label40/ beside label8/).
-  options.fine_labels = config.segmenter.training.split_labels == SplitLabels::Nyu40;
+  // Split labels need each patch's finer class (label40/ or label13/ beside label8/).
+  options.fine_labels_folder = fineLabelsFolder(config.segmenter.training.split_labels);
+  if (config.segmenter.training.split_labels == SplitLabels::Nyu13 && !f.mat.empty())
+    throw Error("training.split_labels = nyu13: --mat gives NYU-40 classes only (use nyu40, or a "
+                "dataset folder with label13/)");
   if (!f.nyu_rotations.empty()) options.nyu_rotations_file = f.nyu_rotations;
   const auto input = !f.data.empty()
                          ? LabeledInput::folder(f.data, options)

@@ -40,6 +40,8 @@ enum class SplitLabels {
   Nyu40,   // the NYU-40 class of each patch (needs label40/ or the .mat file):
            // "cabinet", "object" and "unknown" each gather unlike things, and
            // splits that tell those apart can help the 8-class answer
+  Nyu13,   // the NYU-13 class of each patch (needs label13/): fewer, larger
+           // classes (books / objects / tv, bed / sofa, wall / window / picture)
 };
 
 struct TrainingOptions {

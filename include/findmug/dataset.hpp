@@ -83,16 +83,18 @@ std::string defaultNyuRotationsPath();
 // Reads DIR/gravity.csv (header `name,up_x,up_y,up_z`); errors name the file and line.
 std::vector<std::pair<std::string, std::array<double, 3>>> loadGravityCsv(const std::string& path);
 
-// NYU-40 class ids are 1..40; 0 = unlabelled.
+// NYU-40 class ids are 1..40, NYU-13 ids 1..13; 0 = unlabelled.
 inline constexpr int kNyu40Classes = 40;
+inline constexpr int kNyu13Classes = 13;
 
 struct LabeledFrame {
   std::string name;
   RgbdFrame frame;
   std::vector<std::uint8_t> labels;  // findmug ids, kVoidLabel = no ground truth
-  // NYU-40 class ids (0 = unlabelled) per pixel: from a folder's label40/
-  // when asked for (DatasetOptions::fine_labels, training.split_labels), and
-  // always from NyuMatFile; empty otherwise. 0 wherever `labels` is void.
+  // Finer class ids (0 = unlabelled) per pixel: from a folder's label40/ or
+  // label13/ when asked for (DatasetOptions::fine_labels_folder,
+  // training.split_labels), and NYU-40 ids always from NyuMatFile; empty
+  // otherwise. 0 wherever `labels` is void.
   std::vector<std::uint8_t> fine_labels;
 };
 
@@ -115,9 +117,10 @@ struct DatasetOptions {
   // folder without label8/ and label40/ lists the frames present in rgb/ and
   // depth/, and load() returns labels that are all kVoidLabel.
   bool require_labels = true;
-  // Also read label40/<name>.png into LabeledFrame::fine_labels (for
-  // training.split_labels = nyu40). A folder without label40/ is then an error.
-  bool fine_labels = false;
+  // Also read <fine_labels_folder>/<name>.png ("label40": ids 0..40, or
+  // "label13": ids 0..13) into LabeledFrame::fine_labels, for
+  // training.split_labels. "" = not read. A folder without it is then an error.
+  std::string fine_labels_folder;
 };
 
 class DatasetFolder {

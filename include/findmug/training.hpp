@@ -25,9 +25,9 @@ struct FrameSample {
   std::vector<std::pair<int, int>> edges;        // adjacency
   SegmentFeatures features;                      // one per segment
   std::vector<std::uint8_t> segment_labels;      // plurality ground truth per segment (255 = void)
-  // Per segment, the plurality NYU-40 class among its pixels of class
-  // segment_labels (0 where void); empty when the frame came without
-  // fine labels (LabeledFrame::fine_labels).
+  // Per segment, the plurality fine class (NYU-40 or NYU-13) among its pixels
+  // of class segment_labels (0 where void); empty when the frame came
+  // without fine labels (LabeledFrame::fine_labels).
   std::vector<std::uint8_t> segment_fine_labels;
   std::vector<std::uint32_t> segment_pixels;     // pixel count per segment
   std::vector<std::uint8_t> ground_truth;        // per pixel, 255 = void
@@ -71,8 +71,9 @@ std::vector<FrameSample> extractSamples(const DatasetFolder& dataset, const Segm
 // as a training set. Sample weights follow `weighting` (training.sample_weight;
 // Patches leaves them empty: one vote per patch); class weighting is the
 // forest's job. Region features, when the samples have them, become the
-// extra columns. With SplitLabels::Nyu40 the set carries each patch's NYU-40
-// class as its split label; a frame without fine labels is then an error.
+// extra columns. With SplitLabels::Nyu40 / Nyu13 the set carries each patch's
+// NYU-40 / NYU-13 class as its split label; a frame without fine labels (or
+// with ids beyond the classes) is then an error.
 TrainingSet makeTrainingSet(const std::vector<FrameSample>& samples,
                             const std::vector<std::size_t>& frame_indices,
                             SampleWeighting weighting = SampleWeighting::Patches,
@@ -80,6 +81,9 @@ TrainingSet makeTrainingSet(const std::vector<FrameSample>& samples,
 TrainingSet makeTrainingSet(const std::vector<const FrameSample*>& frames,
                             SampleWeighting weighting = SampleWeighting::Patches,
                             SplitLabels split = SplitLabels::Labels);
+
+// The dataset folder training.split_labels reads ("" for Labels).
+std::string fineLabelsFolder(SplitLabels split);
 
 // Trains the model `config` asks for on the given frames: the first-stage
 // forest (config.forest), and with features.context an auto-context stage

@@ -121,8 +121,10 @@ TEST(Config, SceneAndTrainingSettings) {
   EXPECT_FLOAT_EQ(c.segmenter.training.extra_seed_scale, 0.9f);
   EXPECT_EQ(c.segmenter.training.split_labels, SplitLabels::Nyu40);
   EXPECT_EQ(SegmenterConfig{}.training.split_labels, SplitLabels::Labels);
-  EXPECT_THAT(errorOf([] { parseConfig("training:\n  split_labels: nyu13\n", "a.yaml"); }),
-              HasSubstr("one of labels nyu40"));
+  EXPECT_EQ(parseConfig("training:\n  split_labels: nyu13\n", "a.yaml").segmenter.training.split_labels,
+            SplitLabels::Nyu13);
+  EXPECT_THAT(errorOf([] { parseConfig("training:\n  split_labels: nyu894\n", "a.yaml"); }),
+              HasSubstr("one of labels nyu40 nyu13"));
   EXPECT_THAT(errorOf([] { parseConfig("training:\n  sample_weight: area\n", "a.yaml"); }),
               HasSubstr("one of patches pixels sqrt_pixels"));
   EXPECT_THAT(errorOf([] { parseConfig("features:\n  scene_band_px: 0\n", "a.yaml"); }),

@@ -272,7 +272,7 @@ TEST(DatasetFolder, Label40MappedByOurCsvEqualsShippedLabel8) {
 TEST(DatasetFolder, FineLabelsComeFromLabel40AndAgreeWithTheLabels) {
   FINDMUG_REQUIRE_DATA(nyu, "nyuv2_labeled");
   DatasetOptions options;
-  options.fine_labels = true;
+  options.fine_labels_folder = "label40";
   DatasetFolder folder(nyu.string(), options);
   EXPECT_TRUE(DatasetFolder(nyu.string()).load(0).fine_labels.empty());  // only when asked
   const auto& to8 = defaultNyu40Mapping().to_findmug;
@@ -299,6 +299,26 @@ TEST(DatasetFolder, FineLabelsComeFromLabel40AndAgreeWithTheLabels) {
   }
 }
 
+// training.split_labels = nyu13 reads label13/: 1..13 where the frame is
+// labelled, 0 where it is void.
+TEST(DatasetFolder, FineLabelsFromLabel13CoverEveryLabelledPixel) {
+  FINDMUG_REQUIRE_DATA(nyu, "nyuv2_labeled");
+  DatasetOptions options;
+  options.fine_labels_folder = "label13";
+  DatasetFolder folder(nyu.string(), options);
+  for (std::size_t i = 0; i < folder.size(); ++i) {
+    const auto f = folder.load(i);
+    ASSERT_EQ(f.fine_labels.size(), f.labels.size()) << f.name;
+    std::size_t unlabelled_fine = 0;
+    for (std::size_t p = 0; p < f.labels.size(); ++p) {
+      ASSERT_LE(f.fine_labels[p], kNyu13Classes);
+      if (f.labels[p] == kVoidLabel) ASSERT_EQ(f.fine_labels[p], 0);
+      else unlabelled_fine += f.fine_labels[p] == 0;
+    }
+    EXPECT_EQ(unlabelled_fine, 0u) << f.name;
+  }
+}
+
 TEST(DatasetFolder, FineLabelsNeedAValidLabel40Folder) {
   TempDir dir;
   RawFolder raw(dir.path() / "a", "label8");
@@ -306,8 +326,12 @@ TEST(DatasetFolder, FineLabelsNeedAValidLabel40Folder) {
   raw.depth16("x", 8, 6, 1500);
   raw.labels("label8", "x", 8, 6, 1);
   DatasetOptions options = noBorder();
-  options.fine_labels = true;
+  options.fine_labels_folder = "label40";
   EXPECT_CONTAINS(errorOf([&] { DatasetFolder(dir.str("a"), options); }), "no label40/ folder");
+  options.fine_labels_folder = "label12";
+  EXPECT_CONTAINS(errorOf([&] { DatasetFolder(dir.str("a"), options); }),
+                  "expected label40 or label13");
+  options.fine_labels_folder = "label40";
   fs::create_directories(dir.path() / "a" / "label40");
   raw.labels("label40", "x", 8, 6, 41);
   const DatasetFolder folder(dir.str("a"), options);
@@ -316,6 +340,14 @@ TEST(DatasetFolder, FineLabelsNeedAValidLabel40Folder) {
   EXPECT_CONTAINS(msg, "label 41");
   raw.labels("label40", "x", 4, 6, 1);
   EXPECT_CONTAINS(errorOf([&] { folder.load(0); }), "is 4x6");
+  // label13/ holds ids 0..13 only.
+  fs::create_directories(dir.path() / "a" / "label13");
+  raw.labels("label13", "x", 8, 6, 14);
+  options.fine_labels_folder = "label13";
+  const DatasetFolder folder13(dir.str("a"), options);
+  EXPECT_CONTAINS(errorOf([&] { folder13.load(0); }), "not an NYU-13 id (0..13)");
+  raw.labels("label13", "x", 8, 6, 13);
+  EXPECT_EQ(folder13.load(0).fine_labels, std::vector<std::uint8_t>(48, 13));
 }
 
 TEST(DatasetFolder, BorderMaskCanBeSwitchedOff) {

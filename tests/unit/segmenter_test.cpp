@@ -410,6 +410,17 @@ TEST(Segmenter, SplitLabelsFromTheFineLabelsOfEachPatch) {
     }
   }
   EXPECT_TRUE(makeTrainingSet({&s}).split_labels.empty());  // the default splits on labels
+  EXPECT_EQ(makeTrainingSet({&s}, SampleWeighting::Patches, SplitLabels::Nyu13).split_classes,
+            kNyu13Classes + 1);
+  FrameSample beyond = s;  // an NYU-40 id read as NYU-13 is refused
+  for (std::size_t k = 0; k < beyond.segment_labels.size(); ++k)
+    if (beyond.segment_labels[k] < kNumLabels) beyond.segment_fine_labels[k] = 20;
+  try {
+    makeTrainingSet({&beyond}, SampleWeighting::Patches, SplitLabels::Nyu13);
+    FAIL() << "expected id 20 to be refused as an NYU-13 class";
+  } catch (const Error& e) {
+    EXPECT_THAT(e.what(), HasSubstr("has no NYU-13 class (id 20)"));
+  }
 
   SegmenterConfig config = fastConfig();
   config.training.split_labels = SplitLabels::Nyu40;
@@ -419,7 +430,7 @@ TEST(Segmenter, SplitLabelsFromTheFineLabelsOfEachPatch) {
     trainModel({&without[0]}, config);
     FAIL() << "expected a frame without NYU-40 labels to be refused";
   } catch (const Error& e) {
-    EXPECT_THAT(e.what(), HasSubstr("frame scene has no NYU-40 labels"));
+    EXPECT_THAT(e.what(), HasSubstr("frame scene has no NYU-40 labels (a dataset folder needs label40/)"));
   }
 }
 
