@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "findmug/io/bus.hpp"
+#include "findmug/io/udpm.hpp"
 #include "findmug_signals.hpp"
 
 namespace findmug::clients {
@@ -30,12 +31,12 @@ inline void installStopHandlers() { stopSignals(); }
 
 // The client's bus on `url` (--lcm-url; empty = LCM's default provider), or null after
 // saying on stderr that it cannot be opened.
-inline std::unique_ptr<io::LcmBus> openBus(const std::string& url, const char* program) {
+inline std::unique_ptr<io::Bus> openBus(const std::string& url, const char* program) {
   try {
-    return std::make_unique<io::LcmBus>(url, "--lcm-url");
-  } catch (const std::exception&) {
-    std::fprintf(stderr, "%s: cannot open LCM provider '%s'\n", program,
-                 url.empty() ? "default" : url.c_str());
+    return io::openBus(url, "--lcm-url");
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "%s: cannot open LCM provider '%s': %s\n", program,
+                 url.empty() ? "default" : url.c_str(), e.what());
     return nullptr;
   }
 }

@@ -301,7 +301,7 @@ int main(int argc, char** argv) {
     }
   }
 
-  const std::unique_ptr<io::LcmBus> bus = clients::openBus(url, kProgram);
+  const std::unique_ptr<io::Bus> bus = clients::openBus(url, kProgram);
   if (!bus) return 1;
   clients::installStopHandlers();
   LabelViewer viewer(out_dir, static_cast<float>(alpha), every, write_png, std::move(source));

@@ -181,7 +181,7 @@ int main(int argc, char** argv) {
     return 2;
   }
 
-  const std::unique_ptr<io::LcmBus> bus = clients::openBus(url, kProgram);
+  const std::unique_ptr<io::Bus> bus = clients::openBus(url, kProgram);
   if (!bus) return 1;
   clients::installStopHandlers();
   NavClient client(frame, json);

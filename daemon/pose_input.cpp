@@ -8,6 +8,7 @@
 
 #include "findmug/error.hpp"
 #include "findmug/io/lcm_codec.hpp"
+#include "findmug/io/udpm.hpp"
 
 namespace findmug::daemon {
 
@@ -67,7 +68,8 @@ std::uint64_t secondsToMicros(double seconds) {
 
 PoseInput::PoseInput(std::string url, std::string channel, double history_s, OnError on_error)
     : PoseInput(
-          std::make_shared<io::LcmBus>(url, "daemon.pose_url (robot poses on " + channel + ")"),
+          std::shared_ptr<io::Bus>(
+              io::openBus(url, "daemon.pose_url (robot poses on " + channel + ")")),
           channel, history_s, std::move(on_error)) {
   url_ = std::move(url);
 }

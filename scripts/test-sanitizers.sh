@@ -47,7 +47,7 @@ for step in "${STEPS[@]}"; do
       configure "$ASAN_DIR" -DFINDMUG_FUZZ=ON
       # shellcheck disable=SC2046
       timed "asan build" cmake --build "$ASAN_DIR" -j"$JOBS" $(unit_targets) --target lcm_codec_test \
-        --target lcm_fields_test --target sources_test --target daemon_queue_test --target findmug-grab \
+        --target lcm_fields_test --target sources_test --target bus_test --target udpm_test --target daemon_queue_test --target findmug-grab \
         --target replay_check_test
       timed "asan tests" ctest --test-dir "$ASAN_DIR" --output-on-failure -j"$JOBS" --timeout 1800 \
         -L '^(unit|io)$'

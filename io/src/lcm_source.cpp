@@ -5,12 +5,13 @@
 #include "findmug/error.hpp"
 #include "findmug/io/channels.hpp"
 #include "findmug/io/lcm_codec.hpp"
+#include "findmug/io/udpm.hpp"
 #include "sources_internal.hpp"
 
 namespace findmug::io {
 
 LcmFrameSource::LcmFrameSource(std::string channel, std::string url, SourceOptions options)
-    : LcmFrameSource(std::move(channel), std::make_shared<LcmBus>(url, "lcm source (" + url + ")"),
+    : LcmFrameSource(std::move(channel), std::shared_ptr<Bus>(openBus(url, "lcm source (" + url + ")")),
                      std::move(options)) {}
 
 LcmFrameSource::LcmFrameSource(std::string channel, std::shared_ptr<Bus> bus, SourceOptions options)

@@ -376,6 +376,59 @@ void nyuSeeds(SeedWriter& w, const fs::path& scratch) {
   w.write("nyu_mat", "short-mapping", fuzz::joinParts({short_csv, readFile(mat)}), check);
 }
 
+// udpm: records of [u8 sender][u16 big-endian length][datagram] (fuzz_udpm.cpp):
+// a frame message cut into LCM fragments, a short message, and the two
+// datagrams that crash liblcm 1.3.1 (a wrapping fragment offset).
+void udpmSeeds(SeedWriter& w) {
+  const auto be32 = [](std::string& b, std::uint32_t v) {
+    for (int k = 3; k >= 0; --k) b.push_back(static_cast<char>(v >> (8 * k)));
+  };
+  const auto be16 = [](std::string& b, std::uint16_t v) {
+    b.push_back(static_cast<char>(v >> 8));
+    b.push_back(static_cast<char>(v));
+  };
+  const auto record = [&](std::string& out, std::uint8_t sender, const std::string& d) {
+    out.push_back(static_cast<char>(sender));
+    be16(out, static_cast<std::uint16_t>(d.size()));
+    out += d;
+  };
+  const auto fragment = [&](std::uint32_t seq, std::uint32_t size, std::uint32_t offset,
+                            std::uint16_t number, std::uint16_t count, const std::string& payload) {
+    std::string d;
+    be32(d, 0x4c433033);
+    be32(d, seq);
+    be32(d, size);
+    be32(d, offset);
+    be16(d, number);
+    be16(d, count);
+    if (number == 0) d += std::string("FINDMUG_RGBD") + '\0';
+    return d + payload;
+  };
+  const std::string message = asString(io::encodeMessage(io::encodeRgbdFrame(syntheticFrame())));
+  const std::size_t chunk = 1000;
+  const auto count = static_cast<std::uint16_t>((message.size() + chunk - 1) / chunk);
+  std::string frames;
+  for (std::uint16_t i = 0; i < count; ++i) {
+    const std::size_t off = i * chunk;
+    record(frames, 1, fragment(5, static_cast<std::uint32_t>(message.size()),
+                               static_cast<std::uint32_t>(off), i, count,
+                               message.substr(off, chunk)));
+  }
+  std::string short_message;
+  be32(short_message, 0x4c433032);
+  be32(short_message, 6);
+  short_message += std::string("FUZZ") + '\0' + "payload";
+  std::string mixed;
+  record(mixed, 2, short_message);
+  std::string killer;
+  record(killer, 3, fragment(7, 100000, 0, 0, 100, std::string(100, 'x')));
+  record(killer, 3, fragment(7, 100000, 0xFFFFFF00u, 1, 100, std::string(0x200, 'y')));
+  const auto check = [](const std::string&) {};
+  w.write("udpm", "frame-fragments", frames, check);
+  w.write("udpm", "short", mixed, check);
+  w.write("udpm", "liblcm-wrap", killer, check);
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -390,6 +443,7 @@ int main(int argc, char** argv) {
     const fs::path scratch = fs::temp_directory_path() / ("findmug-seeds-" + std::to_string(::getpid()));
     fs::create_directories(scratch);
     lcmSeeds(w);
+    udpmSeeds(w);
     modelSeeds(w, scratch);
     configSeeds(w, argv[1]);
     pngSeeds(w, scratch);

@@ -9,7 +9,9 @@
 // channel with random, truncated or bit-flipped rgbd_frame_t payloads; and
 // fragments ("LC03") with random message sizes (0 .. 2^32-1), offsets,
 // fragment numbers and counts, including a first fragment that announces a
-// large message and never completes. Only for private network namespaces
+// large message and never completes; and the pair that kills a liblcm 1.3.1
+// subscriber (a first fragment naming the channel, then one whose offset
+// wraps liblcm's 32-bit bounds check). Only for private network namespaces
 // (scripts/soak.sh --flood): it refuses groups outside 239.0.0.0/8 and ttl is 0.
 // Prints how many datagrams of each kind went out.
 #include <arpa/inet.h>
@@ -103,14 +105,14 @@ int main(int argc, char** argv) {
 
   std::mt19937_64 rng(seed);
   auto u32 = [&rng] { return static_cast<std::uint32_t>(rng()); };
-  std::array<long long, 5> sent{};
+  std::array<long long, 6> sent{};
   const char* names[] = {"random", "short-truncated", "short-flipped", "fragment-random",
-                         "fragment-huge-never-completes"};
+                         "fragment-huge-never-completes", "liblcm-offset-wrap-pairs"};
   const auto start = std::chrono::steady_clock::now();
   std::uint32_t seqno = 0;
   for (long long n = 0; n < count; ++n) {
     std::vector<std::uint8_t> d;
-    const int kind = static_cast<int>(n % 5);
+    const int kind = static_cast<int>(n % 6);
     switch (kind) {
       case 0: {
         const std::size_t len = u32() % 1500;
@@ -158,6 +160,31 @@ int main(int argc, char** argv) {
       }
     }
     const int fd = socks[static_cast<std::size_t>(n) % socks.size()];
+    if (kind == 5) {
+      // Two datagrams from one port: a first fragment of a 100 kB message on
+      // the channel, then fragment 1 at offset 0xFFFFFF00 (0x200 bytes).
+      const std::uint32_t seq = seqno++;
+      for (int part = 0; part < 2; ++part) {
+        d.clear();
+        put32(d, 0x4c433033);
+        put32(d, seq);
+        put32(d, 100000);
+        put32(d, part == 0 ? 0 : 0xFFFFFF00u);
+        put16(d, static_cast<std::uint16_t>(part));
+        put16(d, 100);
+        if (part == 0) {
+          d.insert(d.end(), channel.begin(), channel.end());
+          d.push_back(0);
+        }
+        d.insert(d.end(), part == 0 ? 100 : 0x200, static_cast<std::uint8_t>('x'));
+        (void)sendto(fd, d.data(), d.size(), 0, reinterpret_cast<sockaddr*>(&dest), sizeof dest);
+      }
+      ++sent[5];
+      if (rate > 0) {
+        std::this_thread::sleep_until(start + std::chrono::duration<double>((n + 1) / rate));
+      }
+      continue;
+    }
     // ENOBUFS etc. just means the kernel dropped it: that is fine for a flood.
     (void)sendto(fd, d.data(), d.size(), 0, reinterpret_cast<sockaddr*>(&dest), sizeof dest);
     ++sent[static_cast<std::size_t>(kind)];

@@ -32,6 +32,7 @@
 
 #include "findmug/error.hpp"
 #include "findmug/io/bus.hpp"
+#include "findmug/io/udpm.hpp"
 #include "findmug/io/channels.hpp"
 #include "findmug/io/lcm_codec.hpp"
 #include "findmug/io/subscriber.hpp"
@@ -229,9 +230,9 @@ double slope(const std::vector<double>& t, const std::vector<double>& y) {
 int main(int argc, char** argv) {
   const Options o = parse(argc, argv);
   const findmug::cli::StopSignals stop_signals;
-  std::unique_ptr<findmug::io::LcmBus> bus;
+  std::unique_ptr<findmug::io::Bus> bus;
   try {
-    bus = std::make_unique<findmug::io::LcmBus>(o.url, "--url");
+    bus = findmug::io::openBus(o.url, "--url");
   } catch (const std::exception&) {
     usage("cannot open LCM at '" + o.url + "'");
   }

@@ -43,6 +43,7 @@
 #include "findmug/io/bus.hpp"
 #include "findmug/io/channels.hpp"
 #include "findmug/io/lcm_codec.hpp"
+#include "findmug/io/udpm.hpp"
 #include "findmug/labels.hpp"
 #include "findmug_cli.hpp"
 #include "findmug_signals.hpp"
@@ -178,7 +179,7 @@ class Probe {
         rgbd_channel_(findmug::io::channelName(findmug::io::kRgbdChannel, o.suffix)),
         labels_channel_(findmug::io::channelName(findmug::io::kLabelsChannel, o.suffix)),
         status_channel_(findmug::io::channelName(findmug::io::kStatusChannel, o.suffix)),
-        bus_(o.url, "--url") {
+        bus_(findmug::io::openBus(o.url, "--url")) {
     if (!o.log.empty()) {
       for (const FrameInfo& f : readLog(o.log, rgbd_channel_)) check_.addReplayedFrame(f);
       if (check_.framesReplayed() == 0) throw Error(o.log + ": no frames on " + rgbd_channel_);
@@ -190,9 +191,9 @@ class Probe {
       return [this, on](const std::string& ch, const std::uint8_t* d, std::size_t n,
                         std::int64_t recv_utime) { (this->*on)(d, n, ch, recv_utime); };
     };
-    bus_.subscribeTimed(rgbd_channel_, handler(&Probe::onFrame));
-    bus_.subscribeTimed(labels_channel_, handler(&Probe::onLabels));
-    bus_.subscribeTimed(status_channel_, handler(&Probe::onStatus));
+    bus_->subscribeTimed(rgbd_channel_, handler(&Probe::onFrame));
+    bus_->subscribeTimed(labels_channel_, handler(&Probe::onLabels));
+    bus_->subscribeTimed(status_channel_, handler(&Probe::onStatus));
   }
 
   int run() {
@@ -201,7 +202,7 @@ class Probe {
     bool timed_out = false;
     while (!stopRequested()) {
       // handle() returns every 100 ms at the latest: the loop condition sees a stop.
-      const findmug::io::HandleResult rc = bus_.handle(std::chrono::milliseconds(100));
+      const findmug::io::HandleResult rc = bus_->handle(std::chrono::milliseconds(100));
       if (rc == findmug::io::HandleResult::Failed || rc == findmug::io::HandleResult::EndOfLog) {
         throw Error("LCM receive failed");
       }
@@ -221,7 +222,7 @@ class Probe {
     }
     // The daemon has exited (or we were told to stop): take what is queued.
     for (int quiet_ms = 0; quiet_ms < 500;) {
-      const findmug::io::HandleResult rc = bus_.handle(std::chrono::milliseconds(100));
+      const findmug::io::HandleResult rc = bus_->handle(std::chrono::milliseconds(100));
       if (rc == findmug::io::HandleResult::Failed || rc == findmug::io::HandleResult::EndOfLog) {
         break;
       }
@@ -316,7 +317,7 @@ class Probe {
 
   Options options_;
   std::string rgbd_channel_, labels_channel_, status_channel_;
-  findmug::io::LcmBus bus_;  // owned by the thread that runs run()
+  std::unique_ptr<findmug::io::Bus> bus_;  // owned by the thread that runs run()
   ReplayCheck check_;
   std::optional<std::int64_t> expected_;
   bool ready_ = false;
