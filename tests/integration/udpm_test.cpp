@@ -291,7 +291,9 @@ TEST(UdpmReassembler, RandomAndMutatedDatagramsNeverCrashAndStayBounded) {
       }
     }
     const auto m = f.feed(d, rng() % 16, i);
-    if (m) ASSERT_LE(m->size, UdpmReassembler::kMaxMessageBytes);
+    if (m) {
+      ASSERT_LE(m->size, UdpmReassembler::kMaxMessageBytes);
+    }
     ASSERT_LE(f.r.inFlightBytes(), UdpmReassembler::kMaxInFlightBytes);
   }
   EXPECT_GT(f.r.stats().rejectedTotal(), 100000u);
