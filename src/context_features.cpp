@@ -8,6 +8,7 @@
 #include <string>
 
 #include "findmug/error.hpp"
+#include "scratch.hpp"
 
 namespace findmug {
 
@@ -37,7 +38,11 @@ std::vector<float> computeContextFeatures(const std::vector<ClassProbabilities>&
   const float column2 = config.column_radius_m * config.column_radius_m;
   std::vector<float> out(n * kContextFeatureDim, 0.0f);
   // Weighted distributions, so the inner loop is one multiply-free add.
-  std::vector<ClassProbabilities> weighted(n);
+  // Working memory kept per thread between frames (scratch.hpp).
+  thread_local std::vector<ClassProbabilities> weighted_tls;
+  detail::Borrowed weighted_buffer(weighted_tls);
+  std::vector<ClassProbabilities>& weighted = *weighted_buffer;
+  weighted.resize(n);
   for (std::size_t j = 0; j < n; ++j) {
     if (!(weights[j] > 0.0f) || !centroids[j].allFinite()) {
       throw Error("computeContextFeatures: patch " + std::to_string(j) +

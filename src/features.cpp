@@ -28,6 +28,7 @@
 #include <string>
 
 #include "findmug/error.hpp"
+#include "scratch.hpp"
 
 namespace findmug {
 
@@ -244,6 +245,13 @@ FeatureVector computePatchFeatures(const std::vector<Eigen::Vector3f>& points_gr
 SegmentFeatures computeFeatures(const OrganizedCloud& cloud_ground,
                                 const NormalImage& normals_ground,
                                 const Oversegmentation& segmentation) {
+  SegmentFeatures out;
+  computeFeaturesInto(cloud_ground, normals_ground, segmentation, out);
+  return out;
+}
+
+void computeFeaturesInto(const OrganizedCloud& cloud_ground, const NormalImage& normals_ground,
+                         const Oversegmentation& segmentation, SegmentFeatures& out) {
   const std::size_t pixels = static_cast<std::size_t>(std::max(segmentation.width, 0)) *
                              static_cast<std::size_t>(std::max(segmentation.height, 0));
   if (cloud_ground.width != segmentation.width || cloud_ground.height != segmentation.height ||
@@ -260,7 +268,11 @@ SegmentFeatures computeFeatures(const OrganizedCloud& cloud_ground,
     throw Error(msg.str());
   }
   const std::size_t segment_count = segmentation.segments.size();
-  std::vector<PatchAccumulator> acc(segment_count);
+  // Working memory kept per thread between frames (scratch.hpp).
+  thread_local std::vector<PatchAccumulator> acc_tls;
+  detail::Borrowed acc_buffer(acc_tls);
+  std::vector<PatchAccumulator>& acc = *acc_buffer;
+  acc.assign(segment_count, PatchAccumulator{});
   const FastLab& lab = fastLab();
 
   // One sequential pass over the image. Pixels come in horizontal runs of
@@ -297,9 +309,10 @@ SegmentFeatures computeFeatures(const OrganizedCloud& cloud_ground,
   }
   flush();
 
-  SegmentFeatures out;
   out.features.resize(segment_count);
   out.centroids.resize(segment_count);
+  out.regions.clear();
+  out.scene.clear();
   for (std::size_t s = 0; s < segment_count; ++s) {
     if (acc[s].count == 0) {
       throw Error("computeFeatures: segment " + std::to_string(s) + " (" +
@@ -307,7 +320,6 @@ SegmentFeatures computeFeatures(const OrganizedCloud& cloud_ground,
     }
     out.features[s] = acc[s].finish(&out.centroids[s]);
   }
-  return out;
 }
 
 }  // namespace findmug

@@ -423,14 +423,18 @@ std::optional<GroundPlane> estimateGround(const OrganizedCloud& cloud_camera,
   // Candidates: points whose own normal is roughly "up". Normals face the
   // camera, so a floor or table top seen from above has n.dot(-y) > 0, while
   // a ceiling (seen from below) does not qualify.
-  std::vector<std::size_t> all;
+  // Per-thread buffers: estimateGround runs once per frame, and a stream of
+  // frames then reuses them instead of allocating.
+  thread_local std::vector<std::size_t> all_tls, remaining_tls, rest_tls, inliers_tls;
+  std::vector<std::size_t>& all = all_tls;
+  all.clear();
   for (std::size_t i = 0; i < pts.size(); ++i) {
     if (!cloud_camera.valid(i) || !std::isfinite(nrm[i].x())) continue;
     if (nrm[i].dot(camera_up) >= cos_tilt) all.push_back(i);
   }
   const std::size_t stride = all.size() / kMaxCandidates + 1;
-  std::vector<std::size_t> remaining;
-  remaining.reserve(all.size() / stride + 1);
+  std::vector<std::size_t>& remaining = remaining_tls;
+  remaining.clear();
   for (std::size_t k = 0; k < all.size(); k += stride) remaining.push_back(all[k]);
   const auto min_sampled = static_cast<std::size_t>(config.min_floor_points) / stride;
 
@@ -449,9 +453,11 @@ std::optional<GroundPlane> estimateGround(const OrganizedCloud& cloud_camera,
     std::size_t support;
     Eigen::Vector3f centroid;  // of the supporting points, camera frame
   };
-  std::vector<Found> planes;
+  thread_local std::vector<Found> planes_tls;
+  std::vector<Found>& planes = planes_tls;
+  planes.clear();
   std::mt19937_64 rng(config.seed);
-  std::vector<std::size_t> inliers;
+  std::vector<std::size_t>& inliers = inliers_tls;
   for (int k = 0; k < kMaxPlanes && remaining.size() >= std::max<std::size_t>(min_sampled, 3);
        ++k) {
     Plane plane;
@@ -465,8 +471,8 @@ std::optional<GroundPlane> estimateGround(const OrganizedCloud& cloud_camera,
       planes.push_back({plane, inliers.size(), centroid / static_cast<float>(inliers.size())});
     }
     // Remove this plane's points (inliers is sorted: it follows `remaining`).
-    std::vector<std::size_t> rest;
-    rest.reserve(remaining.size() - inliers.size());
+    std::vector<std::size_t>& rest = rest_tls;
+    rest.clear();
     std::set_difference(remaining.begin(), remaining.end(), inliers.begin(), inliers.end(),
                         std::back_inserter(rest));
     remaining.swap(rest);

@@ -14,6 +14,14 @@ namespace findmug {
 LabelImage projectLabels(const Oversegmentation& segmentation,
                          const std::vector<std::uint8_t>& segment_labels,
                          const std::vector<float>& segment_confidence) {
+  LabelImage out;
+  projectLabelsInto(segmentation, segment_labels, segment_confidence, out);
+  return out;
+}
+
+void projectLabelsInto(const Oversegmentation& segmentation,
+                       const std::vector<std::uint8_t>& segment_labels,
+                       const std::vector<float>& segment_confidence, LabelImage& out) {
   const std::size_t segments = segmentation.segments.size();
   const std::size_t pixels = static_cast<std::size_t>(std::max(segmentation.width, 0)) *
                              static_cast<std::size_t>(std::max(segmentation.height, 0));
@@ -44,7 +52,6 @@ LabelImage projectLabels(const Oversegmentation& segmentation,
     }
   }
 
-  LabelImage out;
   out.width = segmentation.width;
   out.height = segmentation.height;
   out.labels.assign(pixels, kVoidLabel);
@@ -60,7 +67,6 @@ LabelImage projectLabels(const Oversegmentation& segmentation,
     out.labels[i] = id;
     out.confidence[i] = id == kVoidLabel ? 0.0f : segment_confidence[static_cast<std::size_t>(s)];
   }
-  return out;
 }
 
 std::vector<Rgb8> colorizeLabels(const LabelImage& labels, const std::vector<Rgb8>& rgb,

@@ -24,6 +24,7 @@
 #include <string>
 
 #include "findmug/error.hpp"
+#include "scratch.hpp"
 
 namespace findmug {
 
@@ -87,21 +88,50 @@ float pairwiseWeight(const Eigen::Vector3f& a, const Eigen::Vector3f& b, float s
 MrfResult solveMrf(const std::vector<ClassProbabilities>& unaries,
                    const std::vector<Eigen::Vector3f>& centroids,
                    const std::vector<std::pair<int, int>>& edges, const MrfParams& params) {
+  MrfResult result;
+  solveMrfInto(unaries, centroids, edges, params, result);
+  return result;
+}
+
+void solveMrfInto(const std::vector<ClassProbabilities>& unaries,
+                  const std::vector<Eigen::Vector3f>& centroids,
+                  const std::vector<std::pair<int, int>>& edges, const MrfParams& params,
+                  MrfResult& result) {
   validateParams(params);
   validateGraph(unaries, centroids, edges);
 
   const std::size_t num_nodes = unaries.size();
   const std::size_t num_directed = 2 * edges.size();
 
+  // Working memory kept per thread between frames (scratch.hpp).
+  struct Buffers {
+    std::vector<Costs> unary, messages, next, belief;
+    std::vector<std::uint32_t> source, target, in_begin, incoming, fill;
+    std::vector<float> weight;
+  };
+  thread_local Buffers buffers;
+  detail::Borrowed unary_buffer(buffers.unary), messages_buffer(buffers.messages),
+      next_buffer(buffers.next), belief_buffer(buffers.belief);
+  detail::Borrowed source_buffer(buffers.source), target_buffer(buffers.target),
+      in_begin_buffer(buffers.in_begin), incoming_buffer(buffers.incoming),
+      fill_buffer(buffers.fill);
+  detail::Borrowed weight_buffer(buffers.weight);
+
   // Unary costs.
-  std::vector<Costs> unary(num_nodes);
+  std::vector<Costs>& unary = *unary_buffer;
+  unary.resize(num_nodes);
   for (std::size_t i = 0; i < num_nodes; ++i)
     unary[i] = params.lambda * (1.0f - Eigen::Map<const Costs>(unaries[i].data()));
 
   // Directed edges: source, target, weight; plus per-node incoming lists (CSR).
-  std::vector<std::uint32_t> source(num_directed), target(num_directed);
-  std::vector<float> weight(edges.size());
-  std::vector<std::uint32_t> in_begin(num_nodes + 1, 0);
+  std::vector<std::uint32_t>& source = *source_buffer;
+  std::vector<std::uint32_t>& target = *target_buffer;
+  source.resize(num_directed);
+  target.resize(num_directed);
+  std::vector<float>& weight = *weight_buffer;
+  weight.resize(edges.size());
+  std::vector<std::uint32_t>& in_begin = *in_begin_buffer;
+  in_begin.assign(num_nodes + 1, 0);
   for (std::size_t k = 0; k < edges.size(); ++k) {
     const auto a = static_cast<std::uint32_t>(edges[k].first);
     const auto b = static_cast<std::uint32_t>(edges[k].second);
@@ -114,16 +144,21 @@ MrfResult solveMrf(const std::vector<ClassProbabilities>& unaries,
     ++in_begin[b + 1];
   }
   for (std::size_t i = 0; i < num_nodes; ++i) in_begin[i + 1] += in_begin[i];
-  std::vector<std::uint32_t> incoming(num_directed);
+  std::vector<std::uint32_t>& incoming = *incoming_buffer;
+  incoming.resize(num_directed);
   {
-    std::vector<std::uint32_t> fill(in_begin.begin(), in_begin.end() - 1);
+    std::vector<std::uint32_t>& fill = *fill_buffer;
+    fill.assign(in_begin.begin(), in_begin.end() - 1);
     for (std::size_t e = 0; e < num_directed; ++e)
       incoming[fill[target[e]]++] = static_cast<std::uint32_t>(e);
   }
 
-  std::vector<Costs> messages(num_directed, Costs::Zero());
-  std::vector<Costs> next(num_directed);
-  std::vector<Costs> belief(num_nodes);
+  std::vector<Costs>& messages = *messages_buffer;
+  messages.assign(num_directed, Costs::Zero());
+  std::vector<Costs>& next = *next_buffer;
+  next.resize(num_directed);
+  std::vector<Costs>& belief = *belief_buffer;
+  belief.resize(num_nodes);
   auto computeBeliefs = [&] {
     for (std::size_t i = 0; i < num_nodes; ++i) {
       Costs b = unary[i];
@@ -132,7 +167,7 @@ MrfResult solveMrf(const std::vector<ClassProbabilities>& unaries,
     }
   };
 
-  MrfResult result;
+  result.iterations = 0;
   result.converged = edges.empty();
   const float keep = params.damping;
   const float take = 1.0f - params.damping;
@@ -174,7 +209,6 @@ MrfResult solveMrf(const std::vector<ClassProbabilities>& unaries,
     result.labels[i] = static_cast<std::uint8_t>(best);
     result.confidence[i] = static_cast<float>(1.0 / z);
   }
-  return result;
 }
 
 double mrfEnergy(const std::vector<ClassProbabilities>& unaries,

@@ -58,6 +58,7 @@
 #include "findmug/error.hpp"
 #include "findmug/oversegmentation.hpp"
 #include "oversegmentation_internal.hpp"
+#include "scratch.hpp"
 
 namespace findmug {
 namespace {
@@ -80,13 +81,6 @@ constexpr double kMaxFootprint = 4.0 * 4.0;
 constexpr int kCoarseStride = 2;
 constexpr int kUnassigned = -2;  // usable pixel that no cluster reached
 
-// The capacity the growing working vectors of this thread's earlier frames
-// reached: reserving it at once makes each one allocation per frame instead
-// of a dozen doublings.
-struct CapacityHints {
-  std::size_t clusters = 0, stack = 0, runs = 0, pieces = 0, contacts = 0;
-};
-thread_local CapacityHints g_capacity_hints;
 
 // sRGB (D65) -> CIELAB with tables: a 256-entry sRGB -> linear table and a
 // table of the CIELAB f(t) (cube root above the knee) with linear
@@ -175,6 +169,44 @@ struct Weights {
   float spatial;  // spatial_importance / seed_resolution
   float normal;   // normal_importance
 };
+
+struct SeedRect {  // placeSeeds: a cell of the adaptive seed grid, coarse pixels
+  int x0, y0, x1, y1;
+};
+struct CentreSum {  // updateCentres: sums over a cluster's pixels
+  std::array<double, kNumChannels> ch{};
+  double u = 0, v = 0;
+  int count = 0;
+};
+struct Run {  // enforceConnectivity: [x0, x1) of one row with one key
+  int x0, x1;
+  int key;
+};
+struct Contact {  // enforceConnectivity: border between a small piece and a neighbour
+  std::uint64_t pair;  // small << 32 | neighbour
+  int length;
+};
+
+// The working memory of one segmentInto call, kept per thread between frames
+// so that a stream of frames of one size allocates nothing here once warm.
+// Each function borrows the vectors it needs for the call (scratch.hpp).
+struct OversegBuffers {
+  FeatureGrid coarse;
+  std::vector<std::uint8_t> block_valid, small;
+  std::vector<Cluster> clusters;
+  std::vector<float> best;
+  std::vector<int> labels, labels_full;
+  std::vector<double> density;
+  std::vector<int> valid;
+  std::vector<SeedRect> stack;
+  std::vector<CentreSum> sums;
+  std::vector<Run> runs;
+  std::vector<int> row_begin, parent, run_piece, piece_size, piece_key, merged, target, target_len;
+  std::vector<Contact> contacts;
+};
+thread_local OversegBuffers g_buffers;
+
+using detail::Borrowed;
 
 // For each pixel of rows [y0, y1) x columns [x0, x1): if it is nearer to the
 // cluster centre than `best`, take it. (Portable SSE2 version; the AVX one
@@ -380,26 +412,30 @@ class OrganizedOversegmenter final : public Oversegmenter {
     seg.height = h;
     seg.pixel_segment.assign(n, -1);
 
-    // The working buffers below stay local (one allocation each per frame;
-    // g_capacity_hints keeps the growing ones from doubling step by step).
-    // Kept per thread between frames they cost 1.4 ms more per VGA frame
-    // than the allocations they save: the compiler must then assume that a
-    // store into one may change another's pointers, and reloads them.
+    // Working buffers: this thread's from earlier frames (see OversegBuffers).
     // Half-resolution features; a pixel is usable when it has a point in
     // front of the camera (z <= 0 cannot come from one).
-    FeatureGrid coarse;
-    std::vector<std::uint8_t> block_valid;  // usable full pixels per coarse pixel
+    Borrowed coarse_buffer(g_buffers.coarse);
+    FeatureGrid& coarse = *coarse_buffer;
+    Borrowed block_valid_buffer(g_buffers.block_valid);
+    std::vector<std::uint8_t>& block_valid = *block_valid_buffer;  // usable full pixels per coarse pixel
     if (buildCoarse(cloud, normals, coarse, block_valid) == 0) {
       finalizeOversegmentation(seg, config_.min_segment_points);
       return;
     }
 
-    std::vector<Cluster> clusters = placeSeeds(cloud, coarse, block_valid);
+    Borrowed clusters_buffer(g_buffers.clusters);
+    std::vector<Cluster>& clusters = *clusters_buffer;
+    placeSeeds(cloud, coarse, block_valid, clusters);
 
     // Iterations on the coarse grid.
     const std::size_t nc = static_cast<std::size_t>(coarse.width) * coarse.height;
-    std::vector<float> best(nc);
-    std::vector<int> labels(nc);
+    Borrowed best_buffer(g_buffers.best);
+    std::vector<float>& best = *best_buffer;
+    best.resize(nc);
+    Borrowed labels_buffer(g_buffers.labels);
+    std::vector<int>& labels = *labels_buffer;
+    labels.resize(nc);
     for (int iter = 0; iter < config_.max_iterations; ++iter) {
       std::fill(best.begin(), best.end(), std::numeric_limits<float>::infinity());
       std::fill(labels.begin(), labels.end(), -1);
@@ -414,7 +450,9 @@ class OrganizedOversegmenter final : public Oversegmenter {
       updateCentres(coarse, labels, clusters);
     }
 
-    std::vector<int> labels_full = refineToFullResolution(cloud, normals, coarse, labels, clusters);
+    Borrowed labels_full_buffer(g_buffers.labels_full);
+    std::vector<int>& labels_full = *labels_full_buffer;
+    refineToFullResolution(cloud, normals, coarse, labels, clusters, labels_full);
     enforceConnectivity(w, h, clusters, labels_full, seg.pixel_segment);
     finalizeOversegmentation(seg, config_.min_segment_points);
   }
@@ -491,14 +529,14 @@ class OrganizedOversegmenter final : public Oversegmenter {
   // Pixels with no labelled sample around are kUnassigned, unusable ones -1.
   // Only boundary pixels need their own features, which is most of the
   // saving over a full-resolution SLIC pass.
-  std::vector<int> refineToFullResolution(const OrganizedCloud& cloud, const NormalImage& normals,
-                                          const FeatureGrid& coarse, const std::vector<int>& labels,
-                                          const std::vector<Cluster>& clusters) const {
+  void refineToFullResolution(const OrganizedCloud& cloud, const NormalImage& normals,
+                              const FeatureGrid& coarse, const std::vector<int>& labels,
+                              const std::vector<Cluster>& clusters, std::vector<int>& out) const {
     const int w = cloud.width;
     const int h = cloud.height;
     const int cw = coarse.width;
     const int chh = coarse.height;
-    std::vector<int> out(cloud.size(), -1);
+    out.assign(cloud.size(), -1);
     std::array<float, kNumChannels> f{};
     // The sample of coarse pixel c is (usually) full pixel 2c: an even pixel
     // sits on it (its other neighbour is c - 1), an odd one between c, c + 1.
@@ -546,7 +584,6 @@ class OrganizedOversegmenter final : public Oversegmenter {
         out[i] = best_k;
       }
     }
-    return out;
   }
 
   // One usable pixel per 2x2 block (not the mean: a mean across a depth
@@ -588,15 +625,15 @@ class OrganizedOversegmenter final : public Oversegmenter {
     return total;
   }
 
-  std::vector<Cluster> placeSeeds(const OrganizedCloud& cloud, const FeatureGrid& coarse,
-                                  const std::vector<std::uint8_t>& block_valid) const {
-    std::vector<Cluster> clusters;
-    clusters.reserve(g_capacity_hints.clusters);
+  // The seeds, into `clusters` (whatever it held before).
+  void placeSeeds(const OrganizedCloud& cloud, const FeatureGrid& coarse,
+                  const std::vector<std::uint8_t>& block_valid, std::vector<Cluster>& clusters) const {
+    clusters.clear();
     double fx = estimateFocal(cloud, true);
     double fy = estimateFocal(cloud, false);
     if (std::isnan(fx)) fx = fy;  // square pixels when one axis cannot tell
     if (std::isnan(fy)) fy = fx;
-    if (std::isnan(fx)) return clusters;  // valid points in a single pixel: no segment
+    if (std::isnan(fx)) return;  // valid points in a single pixel: no segment
 
     // Seeds per full-resolution pixel = surface area / area per seed.
     const int cw = coarse.width;
@@ -605,8 +642,12 @@ class OrganizedOversegmenter final : public Oversegmenter {
                                  config_.seed_resolution_m / config_.organized_seed_density;
     const double pixel_solid = 1.0 / (fx * fy);
     // Integral images (cw+1)x(chh+1) of seed density and of valid pixels.
-    std::vector<double> density((cw + 1) * static_cast<std::size_t>(chh + 1), 0.0);
-    std::vector<int> valid((cw + 1) * static_cast<std::size_t>(chh + 1), 0);
+    Borrowed density_buffer(g_buffers.density);
+    std::vector<double>& density = *density_buffer;
+    density.assign((cw + 1) * static_cast<std::size_t>(chh + 1), 0.0);
+    Borrowed valid_buffer(g_buffers.valid);
+    std::vector<int>& valid = *valid_buffer;
+    valid.assign((cw + 1) * static_cast<std::size_t>(chh + 1), 0);
     const auto at = [cw](int x, int y) { return static_cast<std::size_t>(y) * (cw + 1) + x; };
     for (int y = 0; y < chh; ++y) {
       double row_density = 0;
@@ -637,14 +678,11 @@ class OrganizedOversegmenter final : public Oversegmenter {
     // Coarse pixels a seed needs: its segment would be dropped otherwise.
     const int min_valid = std::max(1, config_.min_segment_points / (kCoarseStride * kCoarseStride));
     const float half_factor = 0.5f * static_cast<float>(config_.search_window_factor);
-    struct Rect {
-      int x0, y0, x1, y1;
-    };
-    std::vector<Rect> stack;
-    stack.reserve(g_capacity_hints.stack);
-    stack.assign(1, Rect{0, 0, cw, chh});
+    Borrowed stack_buffer(g_buffers.stack);
+    std::vector<SeedRect>& stack = *stack_buffer;
+    stack.assign(1, SeedRect{0, 0, cw, chh});
     while (!stack.empty()) {
-      const Rect r = stack.back();
+      const SeedRect r = stack.back();
       stack.pop_back();
       const int rw = r.x1 - r.x0;
       const int rh = r.y1 - r.y0;
@@ -700,9 +738,6 @@ class OrganizedOversegmenter final : public Oversegmenter {
       c.nominal_area_px = static_cast<float>(rw) * rh * kCoarseStride * kCoarseStride;
       clusters.push_back(c);
     }
-    g_capacity_hints.clusters = clusters.capacity();
-    g_capacity_hints.stack = stack.capacity();
-    return clusters;
   }
 
   // The valid pixel nearest the cell centre, moved to the lowest-gradient
@@ -757,18 +792,15 @@ class OrganizedOversegmenter final : public Oversegmenter {
 
   static void updateCentres(const FeatureGrid& g, const std::vector<int>& labels,
                             std::vector<Cluster>& clusters) {
-    struct Sum {
-      std::array<double, kNumChannels> ch{};
-      double u = 0, v = 0;
-      int count = 0;
-    };
-    std::vector<Sum> sums(clusters.size());
+    Borrowed sums_buffer(g_buffers.sums);
+    std::vector<CentreSum>& sums = *sums_buffer;
+    sums.assign(clusters.size(), CentreSum{});
     for (int y = 0; y < g.height; ++y) {
       for (int x = 0; x < g.width; ++x) {
         const std::size_t i = static_cast<std::size_t>(y) * g.width + x;
         const int k = labels[i];
         if (k < 0) continue;
-        Sum& s = sums[k];
+        CentreSum& s = sums[k];
         for (int c = 0; c < kNumChannels; ++c) s.ch[c] += g.ch[c][i];
         s.u += x;
         s.v += y;
@@ -776,7 +808,7 @@ class OrganizedOversegmenter final : public Oversegmenter {
       }
     }
     for (std::size_t k = 0; k < clusters.size(); ++k) {
-      const Sum& s = sums[k];
+      const CentreSum& s = sums[k];
       if (s.count == 0) continue;  // keeps its old centre; may win pixels next round
       Cluster& c = clusters[k];
       const double inv = 1.0 / s.count;
@@ -801,13 +833,12 @@ class OrganizedOversegmenter final : public Oversegmenter {
   // `key`: cluster per pixel, kUnassigned, or -1 (unusable: in no piece).
   void enforceConnectivity(int w, int h, const std::vector<Cluster>& clusters,
                            const std::vector<int>& key, std::vector<int>& out) const {
-    struct Run {
-      int x0, x1;  // [x0, x1) in its row
-      int key;
-    };
-    std::vector<Run> runs;
-    runs.reserve(g_capacity_hints.runs);
-    std::vector<int> row_begin(static_cast<std::size_t>(h) + 1, 0);
+    Borrowed runs_buffer(g_buffers.runs);
+    std::vector<Run>& runs = *runs_buffer;
+    runs.clear();
+    Borrowed row_begin_buffer(g_buffers.row_begin);
+    std::vector<int>& row_begin = *row_begin_buffer;
+    row_begin.assign(static_cast<std::size_t>(h) + 1, 0);
     for (int y = 0; y < h; ++y) {
       row_begin[y] = static_cast<int>(runs.size());
       const int* row = key.data() + static_cast<std::size_t>(y) * w;
@@ -820,10 +851,11 @@ class OrganizedOversegmenter final : public Oversegmenter {
       }
     }
     row_begin[h] = static_cast<int>(runs.size());
-    g_capacity_hints.runs = runs.capacity();
     const int run_count = static_cast<int>(runs.size());
 
-    std::vector<int> parent(run_count);
+    Borrowed parent_buffer(g_buffers.parent);
+    std::vector<int>& parent = *parent_buffer;
+    parent.resize(run_count);
     std::iota(parent.begin(), parent.end(), 0);
     const auto find = [&parent](int p) {
       while (parent[p] != p) {
@@ -858,11 +890,15 @@ class OrganizedOversegmenter final : public Oversegmenter {
     });
 
     // Pieces: dense ids for the union-find roots, with sizes and keys.
-    std::vector<int> run_piece(run_count);
-    std::vector<int> piece_size;
-    std::vector<int> piece_key;
-    piece_size.reserve(g_capacity_hints.pieces);
-    piece_key.reserve(g_capacity_hints.pieces);
+    Borrowed run_piece_buffer(g_buffers.run_piece);
+    std::vector<int>& run_piece = *run_piece_buffer;
+    run_piece.resize(run_count);
+    Borrowed piece_size_buffer(g_buffers.piece_size);
+    std::vector<int>& piece_size = *piece_size_buffer;
+    piece_size.clear();
+    Borrowed piece_key_buffer(g_buffers.piece_key);
+    std::vector<int>& piece_key = *piece_key_buffer;
+    piece_key.clear();
     for (int r = 0; r < run_count; ++r) {
       const int root = find(r);
       if (root == r) {
@@ -875,8 +911,9 @@ class OrganizedOversegmenter final : public Oversegmenter {
       piece_size[run_piece[r]] += runs[r].x1 - runs[r].x0;
     }
     const int pieces = static_cast<int>(piece_size.size());
-    g_capacity_hints.pieces = piece_size.capacity();
-    std::vector<std::uint8_t> small(pieces, 0);
+    Borrowed small_buffer(g_buffers.small);
+    std::vector<std::uint8_t>& small = *small_buffer;
+    small.assign(pieces, 0);
     bool any_small = false;
     for (int p = 0; p < pieces; ++p) {
       const float nominal = piece_key[p] >= 0 ? clusters[piece_key[p]].nominal_area_px : 0.0f;
@@ -886,16 +923,15 @@ class OrganizedOversegmenter final : public Oversegmenter {
       any_small = any_small || small[p];
     }
 
-    std::vector<int> merged(pieces);
+    Borrowed merged_buffer(g_buffers.merged);
+    std::vector<int>& merged = *merged_buffer;
+    merged.resize(pieces);
     std::iota(merged.begin(), merged.end(), 0);
     if (any_small) {
       // Border lengths between a small piece and its neighbours.
-      struct Contact {
-        std::uint64_t pair;  // small << 32 | neighbour
-        int length;
-      };
-      std::vector<Contact> contacts;
-      contacts.reserve(g_capacity_hints.contacts);
+      Borrowed contacts_buffer(g_buffers.contacts);
+      std::vector<Contact>& contacts = *contacts_buffer;
+      contacts.clear();
       const auto touch = [&](int pa, int pb, int length) {
         if (pa == pb) return;
         if (small[pa])
@@ -912,11 +948,14 @@ class OrganizedOversegmenter final : public Oversegmenter {
       }
       forEachVerticalContact(
           [&](int a, int b, int overlap) { touch(run_piece[a], run_piece[b], overlap); });
-      g_capacity_hints.contacts = contacts.capacity();
       std::sort(contacts.begin(), contacts.end(),
                 [](const Contact& a, const Contact& b) { return a.pair < b.pair; });
-      std::vector<int> target(pieces, -1);  // neighbour with the longest border
-      std::vector<int> target_len(pieces, 0);
+      Borrowed target_buffer(g_buffers.target);
+      std::vector<int>& target = *target_buffer;  // neighbour with the longest border
+      target.assign(pieces, -1);
+      Borrowed target_len_buffer(g_buffers.target_len);
+      std::vector<int>& target_len = *target_len_buffer;
+      target_len.assign(pieces, 0);
       for (std::size_t i = 0; i < contacts.size();) {
         int length = 0;
         std::size_t j = i;

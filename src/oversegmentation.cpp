@@ -85,20 +85,21 @@ namespace detail {
 
 void checkOversegmentationInput(const OrganizedCloud& cloud, const NormalImage& normals,
                                 const char* who) {
-  const std::string prefix = std::string(who) + ": ";
+  // The message prefix is built only on failure: this runs once per frame.
+  const auto prefix = [who] { return std::string(who) + ": "; };
   if (cloud.width <= 0 || cloud.height <= 0 || cloud.width > 100000 || cloud.height > 100000) {
-    throw Error(prefix + "cloud size " + std::to_string(cloud.width) + "x" +
+    throw Error(prefix() + "cloud size " + std::to_string(cloud.width) + "x" +
                 std::to_string(cloud.height) + " is not a valid organized grid");
   }
   const std::size_t n = static_cast<std::size_t>(cloud.width) * cloud.height;
   if (cloud.points.size() != n || cloud.colors.size() != n) {
-    throw Error(prefix + "cloud " + std::to_string(cloud.width) + "x" +
+    throw Error(prefix() + "cloud " + std::to_string(cloud.width) + "x" +
                 std::to_string(cloud.height) + " has " + std::to_string(cloud.points.size()) +
                 " points and " + std::to_string(cloud.colors.size()) + " colours");
   }
   if (normals.width != cloud.width || normals.height != cloud.height ||
       normals.normals.size() != n) {
-    throw Error(prefix + "normal image " + std::to_string(normals.width) + "x" +
+    throw Error(prefix() + "normal image " + std::to_string(normals.width) + "x" +
                 std::to_string(normals.height) + " with " + std::to_string(normals.normals.size()) +
                 " normals does not match the cloud " + std::to_string(cloud.width) + "x" +
                 std::to_string(cloud.height));
@@ -151,7 +152,9 @@ void finalizeOversegmentation(Oversegmentation& seg, int min_points, EdgeSource 
     }
     max_id = std::max(max_id, id);
   }
-  std::vector<int> counts(static_cast<std::size_t>(max_id + 1), 0);
+  thread_local std::vector<int> counts_tls, remap_tls;
+  std::vector<int>& counts = counts_tls;
+  counts.assign(static_cast<std::size_t>(max_id + 1), 0);
   for (const int id : seg.pixel_segment) {
     if (id >= 0) ++counts[id];
   }
@@ -159,7 +162,8 @@ void finalizeOversegmentation(Oversegmentation& seg, int min_points, EdgeSource 
   // Dense renumbering in increasing id order; segments below the threshold
   // (and ids without pixels) map to -1.
   const int keep_at_least = std::max(min_points, 1);
-  std::vector<int> remap(counts.size(), -1);
+  std::vector<int>& remap = remap_tls;
+  remap.assign(counts.size(), -1);
   int next = 0;
   for (std::size_t id = 0; id < counts.size(); ++id) {
     if (counts[id] >= keep_at_least) remap[id] = next++;

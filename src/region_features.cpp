@@ -11,6 +11,7 @@
 #include <string>
 
 #include "findmug/error.hpp"
+#include "scratch.hpp"
 
 namespace findmug {
 
@@ -53,6 +54,15 @@ RegionFeatures computeRegionFeatures(const OrganizedCloud& cloud_ground,
                                      const NormalImage& normals_ground,
                                      const Oversegmentation& segmentation,
                                      const RegionConfig& config) {
+  RegionFeatures out;
+  computeRegionFeaturesInto(cloud_ground, normals_ground, segmentation, config, out);
+  return out;
+}
+
+void computeRegionFeaturesInto(const OrganizedCloud& cloud_ground,
+                               const NormalImage& normals_ground,
+                               const Oversegmentation& segmentation, const RegionConfig& config,
+                               RegionFeatures& out) {
   const std::size_t pixels = segmentation.pixel_segment.size();
   if (cloud_ground.points.size() != pixels || normals_ground.normals.size() != pixels) {
     throw Error("computeRegionFeatures: grids disagree: segmentation has " +
@@ -69,7 +79,15 @@ RegionFeatures computeRegionFeatures(const OrganizedCloud& cloud_ground,
       break;
     }
   }
-  std::vector<Moments> patch(n);
+  // Working memory kept per thread between frames (scratch.hpp).
+  thread_local std::vector<Moments> patch_tls, region_tls;
+  thread_local std::vector<int> parent_tls, root_region_tls;
+  thread_local std::vector<std::array<float, kRegionFeatureDim>> per_region_tls;
+  detail::Borrowed patch_buffer(patch_tls), region_buffer(region_tls);
+  detail::Borrowed parent_buffer(parent_tls), root_region_buffer(root_region_tls);
+  detail::Borrowed per_region_buffer(per_region_tls);
+  std::vector<Moments>& patch = *patch_buffer;
+  patch.assign(n, Moments{});
   for (std::size_t i = 0; i < pixels; ++i) {
     const int s = segmentation.pixel_segment[i];
     if (s < 0 || !cloud_ground.valid(i)) continue;
@@ -96,7 +114,8 @@ RegionFeatures computeRegionFeatures(const OrganizedCloud& cloud_ground,
   // Merge neighbours that continue each other's surface.
   const double cos_limit = std::cos(static_cast<double>(config.normal_angle_deg) * M_PI / 180.0);
   const double max_offset = config.plane_distance_m;
-  std::vector<int> parent(n);
+  std::vector<int>& parent = *parent_buffer;
+  parent.resize(n);
   std::iota(parent.begin(), parent.end(), 0);
   for (const auto& [a, b] : segmentation.edges) {
     if (a < 0 || b < 0 || static_cast<std::size_t>(a) >= n || static_cast<std::size_t>(b) >= n) {
@@ -115,10 +134,11 @@ RegionFeatures computeRegionFeatures(const OrganizedCloud& cloud_ground,
     if (ra != rb) parent[std::max(ra, rb)] = std::min(ra, rb);
   }
 
-  RegionFeatures out;
   out.segment_region.assign(n, -1);
-  std::vector<int> root_region(n, -1);
-  std::vector<Moments> region;
+  std::vector<int>& root_region = *root_region_buffer;
+  root_region.assign(n, -1);
+  std::vector<Moments>& region = *region_buffer;
+  region.clear();
   for (std::size_t s = 0; s < n; ++s) {
     const int root = findRoot(parent, static_cast<int>(s));
     if (root_region[root] < 0) {
@@ -130,7 +150,8 @@ RegionFeatures computeRegionFeatures(const OrganizedCloud& cloud_ground,
   }
   out.region_count = static_cast<int>(region.size());
 
-  std::vector<std::array<float, kRegionFeatureDim>> per_region(region.size());
+  std::vector<std::array<float, kRegionFeatureDim>>& per_region = *per_region_buffer;
+  per_region.resize(region.size());
   for (std::size_t r = 0; r < region.size(); ++r) {
     const Moments& m = region[r];
     Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(m.covariance(), Eigen::EigenvaluesOnly);
@@ -154,7 +175,6 @@ RegionFeatures computeRegionFeatures(const OrganizedCloud& cloud_ground,
     std::copy(v.begin(), v.end(),
               out.values.begin() + static_cast<std::ptrdiff_t>(s * kRegionFeatureDim));
   }
-  return out;
 }
 
 }  // namespace findmug

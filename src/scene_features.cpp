@@ -11,6 +11,7 @@
 #include <string>
 
 #include "findmug/error.hpp"
+#include "scratch.hpp"
 
 namespace findmug {
 
@@ -42,6 +43,16 @@ std::vector<float> computeSceneFeatures(const OrganizedCloud& cloud_ground,
                                         const SegmentFeatures& features,
                                         const Eigen::Vector3f& camera_position,
                                         const SceneConfig& config) {
+  std::vector<float> out;
+  computeSceneFeaturesInto(cloud_ground, segmentation, features, camera_position, config, out);
+  return out;
+}
+
+void computeSceneFeaturesInto(const OrganizedCloud& cloud_ground,
+                              const Oversegmentation& segmentation,
+                              const SegmentFeatures& features,
+                              const Eigen::Vector3f& camera_position, const SceneConfig& config,
+                              std::vector<float>& out) {
   const std::size_t pixels = segmentation.pixel_segment.size();
   if (cloud_ground.points.size() != pixels || cloud_ground.width != segmentation.width) {
     throw Error("computeSceneFeatures: grids disagree: segmentation has " +
@@ -59,8 +70,8 @@ std::vector<float> computeSceneFeatures(const OrganizedCloud& cloud_ground,
   if (config.band_px < 1)
     throw Error("computeSceneFeatures: features.scene_band_px = " +
                 std::to_string(config.band_px) + " must be at least 1");
-  std::vector<float> out(n * kSceneFeatureDim, 0.0f);
-  if (n == 0) return out;
+  out.assign(n * kSceneFeatureDim, 0.0f);
+  if (n == 0) return;
 
   const int width = std::max(1, segmentation.width);
   const int bands = (width + config.band_px - 1) / config.band_px;
@@ -76,7 +87,7 @@ std::vector<float> computeSceneFeatures(const OrganizedCloud& cloud_ground,
     max_y = std::max(max_y, p.y());
     max_z = std::max(max_z, p.z());
   }
-  if (!std::isfinite(min_x)) return out;
+  if (!std::isfinite(min_x)) return;
   const float cell = config.cell_m;
   const int cols = static_cast<int>((max_x - min_x) / cell) + 1;
   const int rows = static_cast<int>((max_y - min_y) / cell) + 1;
@@ -88,15 +99,30 @@ std::vector<float> computeSceneFeatures(const OrganizedCloud& cloud_ground,
     return std::clamp(static_cast<int>(std::floor(z * inv_cell)), 0, kHeightBins - 1);
   };
 
-  std::vector<std::uint64_t> occupied(static_cast<std::size_t>(cols) * rows, 0);
-  std::vector<float> band_far(static_cast<std::size_t>(bands), 0.0f);
+  // Working memory kept per thread between frames (scratch.hpp).
+  thread_local std::vector<std::uint64_t> occupied_tls;
+  thread_local std::vector<float> band_far_tls;
+  thread_local std::vector<std::uint32_t> heights_tls;
+  thread_local std::vector<int> first_column_tls, last_column_tls;
+  detail::Borrowed occupied_buffer(occupied_tls);
+  detail::Borrowed band_far_buffer(band_far_tls);
+  detail::Borrowed heights_buffer(heights_tls);
+  detail::Borrowed first_column_buffer(first_column_tls), last_column_buffer(last_column_tls);
+  std::vector<std::uint64_t>& occupied = *occupied_buffer;
+  occupied.assign(static_cast<std::size_t>(cols) * rows, 0);
+  std::vector<float>& band_far = *band_far_buffer;
+  band_far.assign(static_cast<std::size_t>(bands), 0.0f);
   const int histogram_bins =
       std::max(1, static_cast<int>(std::max(0.0f, max_z) / kHistogramStep) + 1);
-  std::vector<std::uint32_t> heights(static_cast<std::size_t>(histogram_bins), 0);
+  std::vector<std::uint32_t>& heights = *heights_buffer;
+  heights.assign(static_cast<std::size_t>(histogram_bins), 0);
   // Squared distances in the loop (one square root per band afterwards), and
   // multiplications by reciprocals: this pass visits every valid point.
   // The image columns each patch spans, for its bands.
-  std::vector<int> first_column(n, width), last_column(n, -1);
+  std::vector<int>& first_column = *first_column_buffer;
+  first_column.assign(n, width);
+  std::vector<int>& last_column = *last_column_buffer;
+  last_column.assign(n, -1);
   std::size_t valid = 0;
   const float inv_step = 1.0f / kHistogramStep;
   const std::size_t grid_rows = pixels / static_cast<std::size_t>(width);
@@ -161,7 +187,6 @@ std::vector<float> computeSceneFeatures(const OrganizedCloud& cloud_ground,
     row[2] = fill(around, 0, binOf(min_height));
     row[3] = fill(around, binOf(max_height) + 1, top_bin);
   }
-  return out;
 }
 
 }  // namespace findmug

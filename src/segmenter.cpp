@@ -8,6 +8,7 @@
 #include "findmug/error.hpp"
 #include "findmug/scene_features.hpp"
 #include "findmug/table_regions.hpp"
+#include "scratch.hpp"
 
 namespace findmug {
 
@@ -50,13 +51,11 @@ std::uint8_t argmax(const ClassProbabilities& p) {
 // A label image in which every pixel is void: the answer for a frame that
 // cannot be labelled (no ground plane), so that the consumer still gets one
 // message per frame.
-LabelImage voidLabels(int width, int height) {
-  LabelImage image;
+void voidLabelsInto(int width, int height, LabelImage& image) {
   image.width = width;
   image.height = height;
   image.labels.assign(static_cast<std::size_t>(width) * height, kVoidLabel);
   image.confidence.assign(image.labels.size(), 0.0f);
-  return image;
 }
 
 }  // namespace
@@ -82,7 +81,10 @@ std::vector<std::string> contextStageFeatureNames(const SegmenterConfig& config)
   return names;
 }
 
-std::vector<float> firstStageRows(const SegmentFeatures& features) {
+namespace {
+
+// firstStageRows into `rows`, reusing its memory.
+void firstStageRowsInto(const SegmentFeatures& features, std::vector<float>& rows) {
   const std::size_t n = features.features.size();
   const bool regions = !features.regions.empty();
   if (regions && features.regions.size() != n * kRegionFeatureDim) {
@@ -96,7 +98,7 @@ std::vector<float> firstStageRows(const SegmentFeatures& features) {
   }
   const std::size_t region_dim = regions ? kRegionFeatureDim : 0;
   const std::size_t dim = kFeatureDim + region_dim + (scene ? kSceneFeatureDim : 0);
-  std::vector<float> rows(n * dim);
+  rows.resize(n * dim);
   for (std::size_t i = 0; i < n; ++i) {
     float* row = rows.data() + i * dim;
     std::copy(features.features[i].begin(), features.features[i].end(), row);
@@ -109,6 +111,60 @@ std::vector<float> firstStageRows(const SegmentFeatures& features) {
                   kSceneFeatureDim, row + kFeatureDim + region_dim);
     }
   }
+}
+
+// predictSegments into `out` and `first_stage` (emptied without a context
+// stage), reusing their memory; the rows are per-thread scratch.
+void predictSegmentsInto(const RandomForest& model, const SegmentFeatures& features,
+                         const std::vector<float>& weights, const ContextConfig& context,
+                         std::vector<ClassProbabilities>& out,
+                         std::vector<ClassProbabilities>& first_stage, double* context_ms) {
+  const std::size_t n = features.features.size();
+  thread_local std::vector<float> rows_tls, row_tls;
+  detail::Borrowed rows_buffer(rows_tls), row_buffer(row_tls);
+  std::vector<float>& rows = *rows_buffer;
+  firstStageRowsInto(features, rows);
+  const auto dim = static_cast<std::size_t>(model.dim());
+  if (rows.size() != n * dim) {
+    throw Error("predictSegments: the model reads " + std::to_string(dim) +
+                " columns per segment, the features give " +
+                std::to_string(n == 0 ? 0 : rows.size() / n) +
+                " (features.regions or features.scene differs from the model's)");
+  }
+  const RandomForest* stage = model.contextStage();
+  // Without a context stage the first stage's answers are the output.
+  std::vector<ClassProbabilities>& probs = stage ? first_stage : out;
+  probs.resize(n);
+  for (std::size_t i = 0; i < n; ++i) probs[i] = model.predict({rows.data() + i * dim, dim});
+  if (!stage) {
+    first_stage.clear();
+    return;
+  }
+
+  Stopwatch watch;
+  const std::vector<float> ctx = computeContextFeatures(probs, features.centroids, weights, context);
+  const std::size_t dim2 = dim + kContextFeatureDim;
+  if (static_cast<std::size_t>(stage->dim()) != dim2) {
+    throw Error("predictSegments: the context stage reads " + std::to_string(stage->dim()) +
+                " columns, expected " + std::to_string(dim2));
+  }
+  std::vector<float>& row = *row_buffer;
+  row.resize(dim2);
+  out.resize(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    std::copy_n(rows.begin() + static_cast<std::ptrdiff_t>(i * dim), dim, row.begin());
+    std::copy_n(ctx.begin() + static_cast<std::ptrdiff_t>(i * kContextFeatureDim),
+                kContextFeatureDim, row.begin() + static_cast<std::ptrdiff_t>(dim));
+    out[i] = stage->predict(row);
+  }
+  if (context_ms) *context_ms = watch.lap();
+}
+
+}  // namespace
+
+std::vector<float> firstStageRows(const SegmentFeatures& features) {
+  std::vector<float> rows;
+  firstStageRowsInto(features, rows);
   return rows;
 }
 
@@ -118,37 +174,9 @@ std::vector<ClassProbabilities> predictSegments(const RandomForest& model,
                                                 const ContextConfig& context,
                                                 std::vector<ClassProbabilities>* first_stage,
                                                 double* context_ms) {
-  const std::size_t n = features.features.size();
-  const std::vector<float> rows = firstStageRows(features);
-  const auto dim = static_cast<std::size_t>(model.dim());
-  if (rows.size() != n * dim) {
-    throw Error("predictSegments: the model reads " + std::to_string(dim) +
-                " columns per segment, the features give " +
-                std::to_string(n == 0 ? 0 : rows.size() / n) +
-                " (features.regions or features.scene differs from the model's)");
-  }
-  std::vector<ClassProbabilities> probs(n);
-  for (std::size_t i = 0; i < n; ++i) probs[i] = model.predict({rows.data() + i * dim, dim});
-  const RandomForest* stage = model.contextStage();
-  if (!stage) return probs;
-
-  Stopwatch watch;
-  const std::vector<float> ctx = computeContextFeatures(probs, features.centroids, weights, context);
-  const std::size_t dim2 = dim + kContextFeatureDim;
-  if (static_cast<std::size_t>(stage->dim()) != dim2) {
-    throw Error("predictSegments: the context stage reads " + std::to_string(stage->dim()) +
-                " columns, expected " + std::to_string(dim2));
-  }
-  std::vector<float> row(dim2);
-  std::vector<ClassProbabilities> out(n);
-  for (std::size_t i = 0; i < n; ++i) {
-    std::copy_n(rows.begin() + static_cast<std::ptrdiff_t>(i * dim), dim, row.begin());
-    std::copy_n(ctx.begin() + static_cast<std::ptrdiff_t>(i * kContextFeatureDim),
-                kContextFeatureDim, row.begin() + static_cast<std::ptrdiff_t>(dim));
-    out[i] = stage->predict(row);
-  }
-  if (context_ms) *context_ms = watch.lap();
-  if (first_stage) *first_stage = std::move(probs);
+  std::vector<ClassProbabilities> out, first;
+  predictSegmentsInto(model, features, weights, context, out, first, context_ms);
+  if (first_stage) *first_stage = std::move(first);
   return out;
 }
 
@@ -212,6 +240,14 @@ void Segmenter::recycle(LabelledFrame&& done) const {
   if (!done.segmented.segmentation.segments.empty() &&
       recycled_->segmentations.size() < kRecycledFrames) {
     recycled_->segmentations.push_back(std::move(done.segmented.segmentation));
+  }
+  // The rest: the classify stage's outputs (features, distributions, MRF,
+  // label image). Tables and diagnostics are few and small, and not reused.
+  if (recycled_->labelled.size() < kRecycledFrames) {
+    done.segmented = SegmentedFrame{};
+    done.tables.clear();
+    done.table_diagnostics.clear();
+    recycled_->labelled.push_back(std::move(done));
   }
 }
 
@@ -366,44 +402,70 @@ LabelledFrame Segmenter::classify(SegmentedFrame segmented) const {
   if (!forest_ || forest_->empty()) {
     throw Error("Segmenter::classify: no trained forest loaded");
   }
+  // The outputs go into the vectors of a frame handed back by recycle(), if any.
   LabelledFrame out;
+  {
+    std::lock_guard lock(recycled_->mutex);
+    if (!recycled_->labelled.empty()) {
+      out = std::move(recycled_->labelled.back());
+      recycled_->labelled.pop_back();
+    }
+  }
   out.timings = segmented.timings;
   out.cpu_timings = segmented.cpu_timings;
   const int width = segmented.prepared.cloud_camera.width;
   const int height = segmented.prepared.cloud_camera.height;
   if (!segmented.prepared.ground) {
-    out.labels = voidLabels(width, height);
+    out.features = SegmentFeatures{};
+    out.forest_probabilities.clear();
+    out.first_stage_probabilities.clear();
+    out.forest_labels.clear();
+    out.mrf = MrfResult{};
+    voidLabelsInto(width, height, out.labels);
     out.segmented = std::move(segmented);
     return out;
   }
 
+  // Per-thread working memory (scratch.hpp).
+  struct Buffers {
+    RegionFeatures regions;
+    std::vector<float> weights, confidence;
+    std::vector<ClassProbabilities> weighted;
+  };
+  thread_local Buffers buffers;
+  detail::Borrowed regions_buffer(buffers.regions);
+  detail::Borrowed weights_buffer(buffers.weights), confidence_buffer(buffers.confidence);
+  detail::Borrowed weighted_buffer(buffers.weighted);
+
   Stopwatch watch;
-  out.features = computeFeatures(segmented.prepared.cloud_ground,
-                                 segmented.prepared.normals_ground, segmented.segmentation);
+  computeFeaturesInto(segmented.prepared.cloud_ground, segmented.prepared.normals_ground,
+                      segmented.segmentation, out.features);
   watch.lap(out.timings, out.cpu_timings, &StageTimings::features_ms);
-  RegionFeatures regions;  // kept for the table region vote after the MRF
+  RegionFeatures& regions = *regions_buffer;  // kept for the table region vote after the MRF
   if (config_.regions.enabled) {
-    regions = computeRegionFeatures(segmented.prepared.cloud_ground,
-                                    segmented.prepared.normals_ground, segmented.segmentation,
-                                    config_.regions);
+    computeRegionFeaturesInto(segmented.prepared.cloud_ground, segmented.prepared.normals_ground,
+                              segmented.segmentation, config_.regions, regions);
     out.features.regions = regions.values;
   }
   if (config_.scene.enabled) {
-    out.features.scene = computeSceneFeatures(
-        segmented.prepared.cloud_ground, segmented.segmentation, out.features,
-        segmented.prepared.ground->camera_to_ground.translation(), config_.scene);
+    std::vector<float> scene = std::move(out.features.scene);
+    computeSceneFeaturesInto(segmented.prepared.cloud_ground, segmented.segmentation,
+                             out.features,
+                             segmented.prepared.ground->camera_to_ground.translation(),
+                             config_.scene, scene);
+    out.features.scene = std::move(scene);
   }
   // Region and scene features share this stage's time.
   watch.lap(out.timings, out.cpu_timings, &StageTimings::regions_ms);
 
   const std::size_t n = out.features.features.size();
-  std::vector<float> weights(n);
+  std::vector<float>& weights = *weights_buffer;
+  weights.resize(n);
   for (std::size_t i = 0; i < n; ++i)
     weights[i] = static_cast<float>(segmented.segmentation.segments[i].size());
   double context_ms = 0;
-  out.forest_probabilities =
-      predictSegments(*forest_, out.features, weights, config_.context,
-                      &out.first_stage_probabilities, &context_ms);
+  predictSegmentsInto(*forest_, out.features, weights, config_.context, out.forest_probabilities,
+                      out.first_stage_probabilities, &context_ms);
   out.forest_labels.resize(n);
   for (std::size_t i = 0; i < n; ++i) out.forest_labels[i] = argmax(out.forest_probabilities[i]);
   // The context stage's time is measured inside and reported on its own.
@@ -411,14 +473,20 @@ LabelledFrame Segmenter::classify(SegmentedFrame segmented) const {
   watch.lap(out.timings, out.cpu_timings, &StageTimings::forest_ms);
   out.timings.forest_ms -= context_ms;  // CPU time: the context stage stays in forest_ms
 
-  std::vector<float> confidence(n);
+  std::vector<float>& confidence = *confidence_buffer;
+  confidence.resize(n);
   const std::vector<std::uint8_t>* final_labels = &out.forest_labels;
+  // The distributions with the decision's bias towards tables.
+  std::vector<ClassProbabilities>& weighted = *weighted_buffer;
+  weighted = out.forest_probabilities;
+  weightTableProbabilityInPlace(weighted, config_.tables.table_weight);
   if (config_.use_mrf) {
-    out.mrf = solveMrf(weightTableProbability(out.forest_probabilities, config_.tables.table_weight),
-                       out.features.centroids, segmented.segmentation.edges, config_.mrf);
+    solveMrfInto(weighted, out.features.centroids, segmented.segmentation.edges, config_.mrf,
+                 out.mrf);
     final_labels = &out.mrf.labels;
     confidence = out.mrf.confidence;
   } else {
+    out.mrf = MrfResult{};
     for (std::size_t i = 0; i < n; ++i) {
       confidence[i] = out.forest_probabilities[i][out.forest_labels[i]];
     }
@@ -426,16 +494,13 @@ LabelledFrame Segmenter::classify(SegmentedFrame segmented) const {
   // One label per horizontal surface at table height (table_regions.hpp).
   RegionVoteResult vote;
   if (config_.tables.region_vote && config_.regions.enabled) {
-    vote = voteTableRegions(*final_labels, confidence,
-                            weightTableProbability(out.forest_probabilities,
-                                                   config_.tables.table_weight),
-                            weights, regions, config_.tables);
+    vote = voteTableRegions(*final_labels, confidence, weighted, weights, regions, config_.tables);
     final_labels = &vote.labels;
     confidence = std::move(vote.confidence);
   }
   watch.lap(out.timings, out.cpu_timings, &StageTimings::mrf_ms);
 
-  out.labels = projectLabels(segmented.segmentation, *final_labels, confidence);
+  projectLabelsInto(segmented.segmentation, *final_labels, confidence, out.labels);
   watch.lap(out.timings, out.cpu_timings, &StageTimings::labels_ms);
 
   TableDetection detection =

@@ -40,6 +40,12 @@ namespace {
 class VoxelIndex {
  public:
   VoxelIndex() { reset(1024); }
+  // Empty again, keeping the table it grew to (a stream of similar frames
+  // then inserts without rehashing or allocating).
+  void clear() {
+    std::fill(keys_.begin(), keys_.end(), kEmpty);
+    size_ = 0;
+  }
   // Id of `key`, inserting it with `next_id` when absent.
   int findOrInsert(std::uint64_t key, int next_id, bool& inserted) {
     std::size_t slot = hash(key);
@@ -107,6 +113,7 @@ class VoxelIndex {
 
 class DisjointSets {
  public:
+  void clear() { parent_.clear(); }
   // A new singleton set; ids are 0, 1, ... in order of addition.
   void add() { parent_.push_back(static_cast<int>(parent_.size())); }
   int find(int x) {
@@ -124,6 +131,16 @@ class DisjointSets {
 
  private:
   std::vector<int> parent_;
+};
+
+// clusterPoints' working memory (see there).
+struct ClusterScratch {
+  VoxelIndex index;
+  DisjointSets sets;
+  std::vector<int> point_voxel, voxel_size, start, fill, near_a, near_b, root_label;
+  std::vector<Eigen::Vector3i> voxel_coords, offsets;
+  std::vector<Eigen::AlignedBox3f> boxes;
+  std::vector<Eigen::Vector3f> sorted;
 };
 
 constexpr int kFieldBits = 21;
@@ -152,6 +169,10 @@ std::vector<int> tables_detail::clusterPoints(const std::vector<Eigen::Vector3f>
   const int n = static_cast<int>(points.size());
   std::vector<int> labels(points.size(), -1);
   if (n == 0) return labels;
+  // Working memory kept per thread: the table stage runs once per frame, and
+  // in a stream its buffers settle at the size of the largest table seen.
+  thread_local ClusterScratch scratch_tls;
+  ClusterScratch& scratch = scratch_tls;
   const std::vector<int>* pixels = grid.pixels;
   if (pixels && (pixels->size() != points.size() || grid.width < 1)) pixels = nullptr;
 
@@ -166,12 +187,18 @@ std::vector<int> tables_detail::clusterPoints(const std::vector<Eigen::Vector3f>
 
   // One pass over the points: voxel of each point, each voxel's bounding box
   // and point count, and the links between image neighbours.
-  VoxelIndex index;
-  std::vector<int> point_voxel(points.size());
-  std::vector<Eigen::Vector3i> voxel_coords;
-  std::vector<Eigen::AlignedBox3f> boxes;
-  std::vector<int> voxel_size;
-  DisjointSets sets;
+  VoxelIndex& index = scratch.index;
+  index.clear();
+  std::vector<int>& point_voxel = scratch.point_voxel;
+  point_voxel.resize(points.size());
+  std::vector<Eigen::Vector3i>& voxel_coords = scratch.voxel_coords;
+  voxel_coords.clear();
+  std::vector<Eigen::AlignedBox3f>& boxes = scratch.boxes;
+  boxes.clear();
+  std::vector<int>& voxel_size = scratch.voxel_size;
+  voxel_size.clear();
+  DisjointSets& sets = scratch.sets;
+  sets.clear();
   const float inv_voxel = 1.0f / voxel;
   std::uint64_t last_key = ~std::uint64_t{0};
   int last_voxel = -1;
@@ -231,20 +258,24 @@ std::vector<int> tables_detail::clusterPoints(const std::vector<Eigen::Vector3f>
   // Points grouped by voxel (counting sort), built only when a pair of
   // voxels has to be decided point by point: the pair tests then read
   // memory sequentially.
-  std::vector<int> start;
-  std::vector<Eigen::Vector3f> sorted;
+  std::vector<int>& start = scratch.start;
+  std::vector<Eigen::Vector3f>& sorted = scratch.sorted;
+  bool grouped = false;
   const auto groupPoints = [&] {
     start.assign(static_cast<std::size_t>(voxels) + 1, 0);
     for (int v = 0; v < voxels; ++v) start[v + 1] = start[v] + voxel_size[v];
-    std::vector<int> fill(start.begin(), start.end() - 1);
+    std::vector<int>& fill = scratch.fill;
+    fill.assign(start.begin(), start.end() - 1);
     sorted.resize(points.size());
     for (int i = 0; i < n; ++i) sorted[fill[point_voxel[i]]++] = points[i];
+    grouped = true;
   };
 
   // Forward half of the neighbourhood (each unordered voxel pair once), the
   // touching voxels first: on a dense surface they join nearly everything,
   // so the farther pairs are then mostly skipped as already joined.
-  std::vector<Eigen::Vector3i> offsets;
+  std::vector<Eigen::Vector3i>& offsets = scratch.offsets;
+  offsets.clear();
   for (int ring = 1; ring <= reach; ++ring) {
     for (int dz = -ring; dz <= ring; ++dz) {
       for (int dy = -ring; dy <= ring; ++dy) {
@@ -278,7 +309,8 @@ std::vector<int> tables_detail::clusterPoints(const std::vector<Eigen::Vector3f>
     return gap2 > tol2;
   };
 
-  std::vector<int> near_a, near_b;
+  std::vector<int>& near_a = scratch.near_a;
+  std::vector<int>& near_b = scratch.near_b;
   for (const Eigen::Vector3i& d : offsets) {
     for (int a = 0; a < voxels; ++a) {
       const Eigen::Vector3i& ca = voxel_coords[a];
@@ -288,7 +320,7 @@ std::vector<int> tables_detail::clusterPoints(const std::vector<Eigen::Vector3f>
                                          static_cast<std::int64_t>(ca.z()) + d.z()));
       if (b < 0 || sets.find(a) == sets.find(b)) continue;
       if (squaredGap(boxes[a], boxes[b]) > tol2) continue;
-      if (sorted.empty()) groupPoints();
+      if (!grouped) groupPoints();
       // Only points within the tolerance of the other voxel's box can link.
       near_a.clear();
       near_b.clear();
@@ -314,7 +346,8 @@ std::vector<int> tables_detail::clusterPoints(const std::vector<Eigen::Vector3f>
   }
 
   // Dense cluster ids in order of first appearance.
-  std::vector<int> root_label(static_cast<std::size_t>(voxels), -1);
+  std::vector<int>& root_label = scratch.root_label;
+  root_label.assign(static_cast<std::size_t>(voxels), -1);
   int next = 0;
   last_voxel = -1;
   int last_label = -1;

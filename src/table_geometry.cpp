@@ -34,8 +34,8 @@ float cross2(const Eigen::Vector2f& o, const Eigen::Vector2f& a, const Eigen::Ve
 // one of them; this cuts 100k top points to a few hundred before sorting.
 // `box` is the points' bounding box. The current extremes are kept by value
 // next to the arrays (not looked up through an index per point).
-std::vector<Eigen::Vector2f> hullCandidates(const std::vector<Eigen::Vector2f>& pts,
-                                            const Eigen::AlignedBox2f& box) {
+void hullCandidates(const std::vector<Eigen::Vector2f>& pts, const Eigen::AlignedBox2f& box,
+                    std::vector<Eigen::Vector2f>& out) {
   const Eigen::Vector2f size = box.sizes();
   // Cap the strip count for absurdly large inputs; the strip only sets accuracy.
   const float strip = std::max({kHullStripM, size.x() / 20000.0f, size.y() / 20000.0f});
@@ -43,9 +43,12 @@ std::vector<Eigen::Vector2f> hullCandidates(const std::vector<Eigen::Vector2f>& 
   const int rows = static_cast<int>(size.y() / strip) + 1;
   // Points are finite, so the first point of a strip always replaces these.
   constexpr float kInf = std::numeric_limits<float>::infinity();
-  std::vector<Eigen::Vector2f> col_lo(cols, Eigen::Vector2f(0.0f, kInf)),
-      col_hi(cols, Eigen::Vector2f(0.0f, -kInf)), row_lo(rows, Eigen::Vector2f(kInf, 0.0f)),
-      row_hi(rows, Eigen::Vector2f(-kInf, 0.0f));
+  // Per-thread buffers: no allocation per table once a stream is warm.
+  thread_local std::vector<Eigen::Vector2f> col_lo, col_hi, row_lo, row_hi;
+  col_lo.assign(cols, Eigen::Vector2f(0.0f, kInf));
+  col_hi.assign(cols, Eigen::Vector2f(0.0f, -kInf));
+  row_lo.assign(rows, Eigen::Vector2f(kInf, 0.0f));
+  row_hi.assign(rows, Eigen::Vector2f(-kInf, 0.0f));
   const float x0 = box.min().x(), y0 = box.min().y();
   for (const Eigen::Vector2f& p : pts) {
     const int c = std::min(cols - 1, static_cast<int>((p.x() - x0) / strip));
@@ -55,13 +58,12 @@ std::vector<Eigen::Vector2f> hullCandidates(const std::vector<Eigen::Vector2f>& 
     if (p.x() < row_lo[r].x()) row_lo[r] = p;
     if (p.x() > row_hi[r].x()) row_hi[r] = p;
   }
-  std::vector<Eigen::Vector2f> out;
+  out.clear();
   for (const auto* list : {&col_lo, &col_hi, &row_lo, &row_hi}) {
     for (const Eigen::Vector2f& p : *list) {
       if (std::isfinite(p.x()) && std::isfinite(p.y())) out.push_back(p);
     }
   }
-  return out;
 }
 
 // Floor area covered by the points: occupied cells of edge `cell` (coarser
@@ -75,7 +77,8 @@ float occupiedArea(const std::vector<Eigen::Vector2f>& pts, const Eigen::Aligned
   cell = std::max(cell, std::sqrt(size.x() * size.y() / 4.0e6f));
   const int cols = static_cast<int>(size.x() / cell) + 1;
   const int rows = static_cast<int>(size.y() / cell) + 1;
-  std::vector<std::uint8_t> occupied(static_cast<std::size_t>(cols) * rows, 0);
+  thread_local std::vector<std::uint8_t> occupied;
+  occupied.assign(static_cast<std::size_t>(cols) * rows, 0);
   int count = 0;
   for (const auto& p : pts) {
     const int c = std::min(cols - 1, static_cast<int>((p.x() - box.min().x()) / cell));
@@ -98,8 +101,10 @@ void principalAxes(const std::vector<Eigen::Vector2f>& pts, const Eigen::Aligned
   const float cell = std::max(kAxisCellM, std::sqrt(size.x() * size.y() / 4.0e6f));
   const int cols = static_cast<int>(size.x() / cell) + 1;
   const int rows = static_cast<int>(size.y() / cell) + 1;
-  std::vector<Eigen::Vector2f> sums(static_cast<std::size_t>(cols) * rows, Eigen::Vector2f::Zero());
-  std::vector<int> counts(sums.size(), 0);
+  thread_local std::vector<Eigen::Vector2f> sums;
+  thread_local std::vector<int> counts;
+  sums.assign(static_cast<std::size_t>(cols) * rows, Eigen::Vector2f::Zero());
+  counts.assign(sums.size(), 0);
   for (const auto& p : pts) {
     const int c = std::min(cols - 1, static_cast<int>((p.x() - box.min().x()) / cell));
     const int r = std::min(rows - 1, static_cast<int>((p.y() - box.min().y()) / cell));
@@ -141,17 +146,19 @@ Eigen::Vector2f edgeRange(const std::vector<Eigen::Vector2f>& local, int along, 
                           float lo_along, float hi_along) {
   const int strips = std::min(4096, static_cast<int>((hi_along - lo_along) / kEdgeStripM) + 1);
   const float strip_width = std::max(kEdgeStripM, (hi_along - lo_along) / strips * 1.0001f);
-  std::vector<float> strip_lo(static_cast<std::size_t>(strips), std::numeric_limits<float>::max());
-  std::vector<float> strip_hi(static_cast<std::size_t>(strips),
-                              std::numeric_limits<float>::lowest());
-  std::vector<int> strip_count(static_cast<std::size_t>(strips), 0);
+  thread_local std::vector<float> strip_lo, strip_hi, lows, highs;
+  thread_local std::vector<int> strip_count;
+  strip_lo.assign(static_cast<std::size_t>(strips), std::numeric_limits<float>::max());
+  strip_hi.assign(static_cast<std::size_t>(strips), std::numeric_limits<float>::lowest());
+  strip_count.assign(static_cast<std::size_t>(strips), 0);
   for (const auto& q : local) {
     const int k = std::min(strips - 1, static_cast<int>((q[along] - lo_along) / strip_width));
     strip_lo[k] = std::min(strip_lo[k], q[across]);
     strip_hi[k] = std::max(strip_hi[k], q[across]);
     ++strip_count[k];
   }
-  std::vector<float> lows, highs;
+  lows.clear();
+  highs.clear();
   for (int k = 0; k < strips; ++k) {
     // A strip of one or two points says little about an edge.
     if (strip_count[k] >= 3) {
@@ -177,14 +184,21 @@ Eigen::Vector2f edgeRange(const std::vector<Eigen::Vector2f>& local, int along, 
 
 }  // namespace
 
-std::vector<Eigen::Vector2f> convexHull2d(std::vector<Eigen::Vector2f> points) {
+namespace {
+
+// convexHull2d's work: sorts `points` in place and writes the hull into
+// `hull` (whose memory is reused).
+void convexHullInto(std::vector<Eigen::Vector2f>& points, std::vector<Eigen::Vector2f>& hull) {
   std::sort(points.begin(), points.end(), [](const Eigen::Vector2f& a, const Eigen::Vector2f& b) {
     return a.x() < b.x() || (a.x() == b.x() && a.y() < b.y());
   });
   points.erase(std::unique(points.begin(), points.end()), points.end());
-  if (points.size() < 3) return points;
+  if (points.size() < 3) {
+    hull.assign(points.begin(), points.end());
+    return;
+  }
   // Andrew's monotone chain; popping on cross <= 0 drops collinear points.
-  std::vector<Eigen::Vector2f> hull(2 * points.size());
+  hull.resize(2 * points.size());
   std::size_t k = 0;
   for (const auto& p : points) {
     while (k >= 2 && cross2(hull[k - 2], hull[k - 1], p) <= 0.0f) --k;
@@ -196,6 +210,13 @@ std::vector<Eigen::Vector2f> convexHull2d(std::vector<Eigen::Vector2f> points) {
     hull[k++] = p;
   }
   hull.resize(k - 1);  // the last point repeats the first
+}
+
+}  // namespace
+
+std::vector<Eigen::Vector2f> convexHull2d(std::vector<Eigen::Vector2f> points) {
+  std::vector<Eigen::Vector2f> hull;
+  convexHullInto(points, hull);
   return hull;
 }
 
@@ -214,7 +235,10 @@ ClusterOutcome tables_detail::describeCluster(const std::vector<Eigen::Vector3f>
   }
   constexpr float kBin = 0.01f;
   const int bins = static_cast<int>((z_max - z_min) / kBin) + 1;
-  std::vector<int> histogram(static_cast<std::size_t>(bins), 0);
+  // Per-thread buffers: no allocation per table once a stream is warm.
+  thread_local std::vector<int> histogram;
+  thread_local std::vector<Eigen::Vector2f> top, local, candidates;
+  histogram.assign(static_cast<std::size_t>(bins), 0);
   for (const auto& p : points)
     ++histogram[std::min(bins - 1, static_cast<int>((p.z() - z_min) / kBin))];
   const int half_window = std::max(0, static_cast<int>(config.top_band_m / (2.0f * kBin)));
@@ -242,8 +266,7 @@ ClusterOutcome tables_detail::describeCluster(const std::vector<Eigen::Vector3f>
   }
   table.top_height = z_count > 0 ? static_cast<float>(z_sum / z_count) : peak;
 
-  std::vector<Eigen::Vector2f> top;
-  top.reserve(points.size());
+  top.clear();
   Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
   Eigen::AlignedBox2f top_box;
   for (const auto& p : points) {
@@ -263,8 +286,7 @@ ClusterOutcome tables_detail::describeCluster(const std::vector<Eigen::Vector3f>
 
   principalAxes(top, top_box, table.major_axis, table.minor_axis);
   const Eigen::Vector2f origin = table.centroid.head<2>();
-  std::vector<Eigen::Vector2f> local;  // (along major, along minor) relative to the centroid
-  local.reserve(top.size());
+  local.clear();  // (along major, along minor) relative to the centroid
   Eigen::AlignedBox2f local_box;
   for (const auto& p : top) {
     const Eigen::Vector2f q = p - origin;
@@ -287,7 +309,8 @@ ClusterOutcome tables_detail::describeCluster(const std::vector<Eigen::Vector3f>
                      fmt(config.min_table_width_m) + ")";
     return outcome;
   }
-  table.hull = convexHull2d(hullCandidates(top, top_box));
+  hullCandidates(top, top_box, candidates);
+  convexHullInto(candidates, table.hull);
   table.top_area_m2 = occupiedArea(top, top_box, config.cluster_tolerance_m);
   if (table.hull.size() < 3) {
     outcome.reason = "degenerate cluster of " + std::to_string(n) + " points: its top has no area";

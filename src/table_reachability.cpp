@@ -14,6 +14,11 @@ namespace findmug {
 
 using namespace tables_detail;
 
+ReachabilityGrid::Buffers& ReachabilityGrid::threadBuffers() {
+  thread_local Buffers buffers;
+  return buffers;
+}
+
 ReachabilityGrid::ReachabilityGrid(const OrganizedCloud& cloud, const LabelImage& labels,
                                    const Eigen::AlignedBox2f& region,
                                    const std::vector<Eigen::Vector2f>& positions,
@@ -23,12 +28,17 @@ ReachabilityGrid::ReachabilityGrid(const OrganizedCloud& cloud, const LabelImage
   cols_ = static_cast<int>(size.x() / cell_) + 1;
   rows_ = static_cast<int>(size.y() / cell_) + 1;
   const std::size_t cells = static_cast<std::size_t>(cols_) * rows_;
-  floor_seen_.assign(cells, 0);
-  obstacle_start_.assign(cells + 1, 0);
+  std::vector<std::uint8_t>& floor_seen = *floor_seen_;
+  std::vector<int>& obstacle_start = *obstacle_start_;
+  std::vector<Eigen::Vector2f>& obstacle_points = *obstacle_points_;
+  floor_seen.assign(cells, 0);
+  obstacle_start.assign(cells + 1, 0);
   // Cells that assess() reads obstacles from (the window around each
   // position). The region also holds the table itself, whose points are at
   // obstacle height: they are kept only where a robot could stand.
-  std::vector<std::uint8_t> in_window(cells, 0);
+  detail::Borrowed in_window_buffer(threadBuffers().in_window);
+  std::vector<std::uint8_t>& in_window = *in_window_buffer;
+  in_window.assign(cells, 0);
   for (const Eigen::Vector2f& q : positions) {
     const Window w = windowOf(q);
     for (int row = w.r0; row <= w.r1; ++row) {
@@ -43,7 +53,9 @@ ReachabilityGrid::ReachabilityGrid(const OrganizedCloud& cloud, const LabelImage
   const float x_min = origin_.x(), y_min = origin_.y();
   const float x_max = origin_.x() + static_cast<float>(cols_ + 1) * cell_;
   const float y_max = origin_.y() + static_cast<float>(rows_ + 1) * cell_;
-  std::vector<std::pair<int, Eigen::Vector2f>> obstacles;
+  detail::Borrowed obstacles_buffer(threadBuffers().obstacles);
+  std::vector<std::pair<int, Eigen::Vector2f>>& obstacles = *obstacles_buffer;
+  obstacles.clear();
   for (std::size_t i = 0; i < cloud.points.size(); ++i) {
     const Eigen::Vector3f& p = cloud.points[i];
     if (!(p.x() >= x_min && p.x() <= x_max && p.y() >= y_min && p.y() <= y_max)) continue;
@@ -51,17 +63,19 @@ ReachabilityGrid::ReachabilityGrid(const OrganizedCloud& cloud, const LabelImage
     if (c < 0) continue;
     const std::uint8_t label = labels.labels[i];
     if (label == kFloorLabel) {
-      if (std::abs(p.z()) <= config.floor_tolerance_m) floor_seen_[c] = 1;
+      if (std::abs(p.z()) <= config.floor_tolerance_m) floor_seen[c] = 1;
     } else if (p.z() >= config.obstacle_min_height_m && p.z() <= config.robot_height_m &&
                in_window[c]) {
       obstacles.emplace_back(c, p.head<2>());
     }
   }
-  for (const auto& [c, xy] : obstacles) ++obstacle_start_[c + 1];
-  for (std::size_t c = 0; c < cells; ++c) obstacle_start_[c + 1] += obstacle_start_[c];
-  obstacle_points_.resize(obstacles.size());
-  std::vector<int> fill(obstacle_start_.begin(), obstacle_start_.end() - 1);
-  for (const auto& [c, xy] : obstacles) obstacle_points_[fill[c]++] = xy;
+  for (const auto& [c, xy] : obstacles) ++obstacle_start[c + 1];
+  for (std::size_t c = 0; c < cells; ++c) obstacle_start[c + 1] += obstacle_start[c];
+  obstacle_points.resize(obstacles.size());
+  detail::Borrowed fill_buffer(threadBuffers().fill);
+  std::vector<int>& fill = *fill_buffer;
+  fill.assign(obstacle_start.begin(), obstacle_start.end() - 1);
+  for (const auto& [c, xy] : obstacles) obstacle_points[fill[c]++] = xy;
 }
 
 void ReachabilityGrid::assess(SearchPosition& position) const {
@@ -70,6 +84,9 @@ void ReachabilityGrid::assess(SearchPosition& position) const {
   int footprint = 0, seen = 0, obstacle_count = 0;
   const Window w = windowOf(q);
   const int own = cellOf(q);
+  const std::vector<std::uint8_t>& floor_seen = *floor_seen_;
+  const std::vector<int>& obstacle_start = *obstacle_start_;
+  const std::vector<Eigen::Vector2f>& obstacle_points = *obstacle_points_;
   for (int row = w.r0; row <= w.r1; ++row) {
     for (int col = w.c0; col <= w.c1; ++col) {
       const int c = row * cols_ + col;
@@ -79,10 +96,10 @@ void ReachabilityGrid::assess(SearchPosition& position) const {
       // cell of the position itself (for radii below half a cell).
       if ((centre - q).norm() <= r || c == own) {
         ++footprint;
-        seen += floor_seen_[c];
+        seen += floor_seen[c];
       }
-      for (int k = obstacle_start_[c]; k < obstacle_start_[c + 1]; ++k) {
-        if ((obstacle_points_[k] - q).squaredNorm() <= r * r) ++obstacle_count;
+      for (int k = obstacle_start[c]; k < obstacle_start[c + 1]; ++k) {
+        if ((obstacle_points[k] - q).squaredNorm() <= r * r) ++obstacle_count;
       }
     }
   }

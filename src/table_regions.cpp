@@ -5,6 +5,7 @@
 #include <string>
 
 #include "findmug/error.hpp"
+#include "scratch.hpp"
 
 namespace findmug {
 
@@ -33,9 +34,26 @@ RegionVoteResult voteTableRegions(const std::vector<std::uint8_t>& labels,
   }
   RegionVoteResult out{labels, confidence, 0, 0};
   const int count = regions.region_count;
-  std::vector<ClassProbabilities> sum(static_cast<std::size_t>(count), ClassProbabilities{});
-  std::vector<double> weight(static_cast<std::size_t>(count), 0.0);
-  std::vector<char> eligible(static_cast<std::size_t>(count), 0);
+  // Working memory kept per thread between frames (scratch.hpp).
+  struct Buffers {
+    std::vector<ClassProbabilities> sum;
+    std::vector<double> weight;
+    std::vector<char> eligible;
+    std::vector<std::uint8_t> region_label;
+    std::vector<float> region_confidence;
+  };
+  thread_local Buffers buffers;
+  detail::Borrowed sum_buffer(buffers.sum);
+  detail::Borrowed weight_buffer(buffers.weight);
+  detail::Borrowed eligible_buffer(buffers.eligible);
+  detail::Borrowed region_label_buffer(buffers.region_label);
+  detail::Borrowed region_confidence_buffer(buffers.region_confidence);
+  std::vector<ClassProbabilities>& sum = *sum_buffer;
+  sum.assign(static_cast<std::size_t>(count), ClassProbabilities{});
+  std::vector<double>& weight = *weight_buffer;
+  weight.assign(static_cast<std::size_t>(count), 0.0);
+  std::vector<char>& eligible = *eligible_buffer;
+  eligible.assign(static_cast<std::size_t>(count), 0);
   const float max_tilt_rad = config.region_max_tilt_deg * static_cast<float>(M_PI) / 180.0f;
   for (std::size_t s = 0; s < n; ++s) {
     const int r = regions.segment_region[s];
@@ -52,8 +70,10 @@ RegionVoteResult voteTableRegions(const std::vector<std::uint8_t>& labels,
     for (int c = 0; c < kNumLabels; ++c) sum[static_cast<std::size_t>(r)][c] += weights[s] * probabilities[s][c];
     weight[static_cast<std::size_t>(r)] += weights[s];
   }
-  std::vector<std::uint8_t> region_label(static_cast<std::size_t>(count), kVoidLabel);
-  std::vector<float> region_confidence(static_cast<std::size_t>(count), 0.0f);
+  std::vector<std::uint8_t>& region_label = *region_label_buffer;
+  region_label.assign(static_cast<std::size_t>(count), kVoidLabel);
+  std::vector<float>& region_confidence = *region_confidence_buffer;
+  region_confidence.assign(static_cast<std::size_t>(count), 0.0f);
   for (int r = 0; r < count; ++r) {
     const auto k = static_cast<std::size_t>(r);
     if (!eligible[k] || weight[k] <= 0.0) continue;
@@ -75,18 +95,22 @@ RegionVoteResult voteTableRegions(const std::vector<std::uint8_t>& labels,
   return out;
 }
 
-std::vector<ClassProbabilities> weightTableProbability(std::vector<ClassProbabilities> p,
-                                                       float weight) {
+void weightTableProbabilityInPlace(std::vector<ClassProbabilities>& p, float weight) {
   if (!std::isfinite(weight) || weight <= 0.0f) {
     throw Error("tables.table_weight = " + std::to_string(weight) + ": must be a positive number");
   }
-  if (weight == 1.0f) return p;
+  if (weight == 1.0f) return;
   constexpr int kTable = static_cast<int>(Label::Table);
   for (auto& d : p) {
     const float total = 1.0f + (weight - 1.0f) * d[kTable];
     d[kTable] *= weight;
     for (float& v : d) v /= total;
   }
+}
+
+std::vector<ClassProbabilities> weightTableProbability(std::vector<ClassProbabilities> p,
+                                                       float weight) {
+  weightTableProbabilityInPlace(p, weight);
   return p;
 }
 

@@ -136,9 +136,14 @@ TableDetection detectTables(const OrganizedCloud& cloud_ground, const LabelImage
   }
   checkInputs(cloud_ground, labels);
 
-  // 1. Table points.
-  std::vector<Eigen::Vector3f> points;
-  std::vector<int> pixels;
+  // 1. Table points. Working buffers are kept per thread: the stage runs
+  // once per frame and a stream of frames then reuses them.
+  thread_local std::vector<Eigen::Vector3f> points_tls, cluster_points_tls;
+  thread_local std::vector<int> pixels_tls, member_start_tls, members_tls, fill_tls;
+  std::vector<Eigen::Vector3f>& points = points_tls;
+  std::vector<int>& pixels = pixels_tls;
+  points.clear();
+  pixels.clear();
   {
     const auto table_pixels = static_cast<std::size_t>(
         std::count(labels.labels.begin(), labels.labels.end(), kTableLabel));
@@ -182,18 +187,21 @@ TableDetection detectTables(const OrganizedCloud& cloud_ground, const LabelImage
   const std::vector<int> cluster_of =
       clusterPoints(points, config.cluster_tolerance_m, PointGrid{&pixels, cloud_ground.width});
   const int clusters = *std::max_element(cluster_of.begin(), cluster_of.end()) + 1;
-  std::vector<int> member_start(static_cast<std::size_t>(clusters) + 1, 0);
+  std::vector<int>& member_start = member_start_tls;
+  member_start.assign(static_cast<std::size_t>(clusters) + 1, 0);
   for (int c : cluster_of) ++member_start[c + 1];
   for (int c = 0; c < clusters; ++c) member_start[c + 1] += member_start[c];
-  std::vector<int> members(points.size());
+  std::vector<int>& members = members_tls;
+  members.resize(points.size());
   {
-    std::vector<int> fill(member_start.begin(), member_start.end() - 1);
+    std::vector<int>& fill = fill_tls;
+    fill.assign(member_start.begin(), member_start.end() - 1);
     for (int i = 0; i < static_cast<int>(points.size()); ++i) members[fill[cluster_of[i]]++] = i;
   }
 
   int small_clusters = 0, largest_small = 0;
   std::vector<TableCluster> tables;
-  std::vector<Eigen::Vector3f> cluster_points;
+  std::vector<Eigen::Vector3f>& cluster_points = cluster_points_tls;
   for (int c = 0; c < clusters; ++c) {
     const int* member = members.data() + member_start[c];
     const int n = member_start[c + 1] - member_start[c];

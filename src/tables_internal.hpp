@@ -10,12 +10,14 @@
 #include <cmath>
 #include <cstdint>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "findmug/cloud.hpp"
 #include "findmug/label_image.hpp"
 #include "findmug/labels.hpp"
 #include "findmug/tables.hpp"
+#include "scratch.hpp"
 
 namespace findmug::tables_detail {
 
@@ -84,13 +86,23 @@ class ReachabilityGrid {
     return row * cols_ + col;
   }
 
+  // This thread's buffers from earlier frames (scratch.hpp), borrowed for
+  // the grid's lifetime.
+  struct Buffers {
+    std::vector<std::uint8_t> floor_seen, in_window;
+    std::vector<int> obstacle_start, fill;
+    std::vector<Eigen::Vector2f> obstacle_points;
+    std::vector<std::pair<int, Eigen::Vector2f>> obstacles;
+  };
+  static Buffers& threadBuffers();
+
   const TableConfig& config_;
   Eigen::Vector2f origin_;
   float cell_;
   int cols_ = 0, rows_ = 0;
-  std::vector<std::uint8_t> floor_seen_;
-  std::vector<int> obstacle_start_;
-  std::vector<Eigen::Vector2f> obstacle_points_;
+  detail::Borrowed<std::vector<std::uint8_t>> floor_seen_{threadBuffers().floor_seen};
+  detail::Borrowed<std::vector<int>> obstacle_start_{threadBuffers().obstacle_start};
+  detail::Borrowed<std::vector<Eigen::Vector2f>> obstacle_points_{threadBuffers().obstacle_points};
 };
 
 }  // namespace findmug::tables_detail

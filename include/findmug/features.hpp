@@ -59,5 +59,10 @@ FeatureVector computePatchFeatures(const std::vector<Eigen::Vector3f>& points_gr
 SegmentFeatures computeFeatures(const OrganizedCloud& cloud_ground,
                                 const NormalImage& normals_ground,
                                 const Oversegmentation& segmentation);
+// The same into `out` (features and centroids; regions and scene are
+// emptied), reusing the memory it holds: a stream of frames then allocates
+// nothing here (Segmenter::recycle).
+void computeFeaturesInto(const OrganizedCloud& cloud_ground, const NormalImage& normals_ground,
+                         const Oversegmentation& segmentation, SegmentFeatures& out);
 
 }  // namespace findmug

@@ -20,6 +20,10 @@ struct LabelImage {
 LabelImage projectLabels(const Oversegmentation& segmentation,
                          const std::vector<std::uint8_t>& segment_labels,
                          const std::vector<float>& segment_confidence);
+// The same into `out`, reusing the memory it holds.
+void projectLabelsInto(const Oversegmentation& segmentation,
+                       const std::vector<std::uint8_t>& segment_labels,
+                       const std::vector<float>& segment_confidence, LabelImage& out);
 
 // Colour overlay in the paper's palette, blended with `rgb` (alpha = label weight).
 std::vector<Rgb8> colorizeLabels(const LabelImage& labels, const std::vector<Rgb8>& rgb,

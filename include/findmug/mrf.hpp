@@ -36,6 +36,11 @@ struct MrfResult {
 MrfResult solveMrf(const std::vector<ClassProbabilities>& unaries,
                    const std::vector<Eigen::Vector3f>& centroids,
                    const std::vector<std::pair<int, int>>& edges, const MrfParams& params);
+// The same into `out`, reusing the memory it holds.
+void solveMrfInto(const std::vector<ClassProbabilities>& unaries,
+                  const std::vector<Eigen::Vector3f>& centroids,
+                  const std::vector<std::pair<int, int>>& edges, const MrfParams& params,
+                  MrfResult& out);
 
 // The energy above for a labelling, for tests and diagnostics.
 double mrfEnergy(const std::vector<ClassProbabilities>& unaries,

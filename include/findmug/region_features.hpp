@@ -50,5 +50,10 @@ RegionFeatures computeRegionFeatures(const OrganizedCloud& cloud_ground,
                                      const NormalImage& normals_ground,
                                      const Oversegmentation& segmentation,
                                      const RegionConfig& config);
+// The same into `out`, reusing the memory it holds.
+void computeRegionFeaturesInto(const OrganizedCloud& cloud_ground,
+                               const NormalImage& normals_ground,
+                               const Oversegmentation& segmentation, const RegionConfig& config,
+                               RegionFeatures& out);
 
 }  // namespace findmug

@@ -60,5 +60,12 @@ std::vector<float> computeSceneFeatures(const OrganizedCloud& cloud_ground,
                                         const SegmentFeatures& features,
                                         const Eigen::Vector3f& camera_position,
                                         const SceneConfig& config);
+// The same into `out`, reusing the memory it holds. `out` must not be
+// features.scene.
+void computeSceneFeaturesInto(const OrganizedCloud& cloud_ground,
+                              const Oversegmentation& segmentation,
+                              const SegmentFeatures& features,
+                              const Eigen::Vector3f& camera_position, const SceneConfig& config,
+                              std::vector<float>& out);
 
 }  // namespace findmug

@@ -102,12 +102,13 @@ class Segmenter {
   LabelledFrame process(RgbdFrame frame, const std::vector<std::uint8_t>* gt_labels = nullptr) const;
 
   // Hands the buffers of a frame the caller is done with back to the
-  // Segmenter: the next prepare() and oversegment() write into them instead
-  // of allocating (clouds, normal images, the segmentation with its
-  // per-segment pixel lists). Optional: without it every frame allocates
-  // fresh buffers; with it a stream of frames of one size allocates next to
-  // nothing in those stages. Results are the same either way. Thread-safe;
-  // at most kRecycledFrames frames are kept, further ones are freed.
+  // Segmenter: the next prepare(), oversegment() and classify() write into
+  // them instead of allocating (clouds, normal images, the segmentation with
+  // its per-segment pixel lists, features, distributions, MRF result, label
+  // image). Optional: without it every frame allocates fresh buffers; with it
+  // a stream of frames of one size allocates next to nothing (BENCHMARKS.md
+  // 9i). Results are the same either way. Thread-safe; at most
+  // kRecycledFrames frames are kept, further ones are freed.
   void recycle(LabelledFrame&& done) const;
   static constexpr std::size_t kRecycledFrames = 2;
 
@@ -137,6 +138,7 @@ class Segmenter {
     std::mutex mutex;
     std::vector<PreparedFrame> prepared;         // clouds and normal images
     std::vector<Oversegmentation> segmentations;
+    std::vector<LabelledFrame> labelled;  // classify()'s outputs
   };
   std::unique_ptr<Recycled> recycled_ = std::make_unique<Recycled>();
 };

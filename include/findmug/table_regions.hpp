@@ -46,6 +46,7 @@ RegionVoteResult voteTableRegions(const std::vector<std::uint8_t>& labels,
 // every distribution multiplied by `weight`, then renormalised. Applied to
 // the MRF's unaries (and so to the region vote): with weight > 1 a patch the
 // forest finds about as likely table as object becomes table. 1 = unchanged.
+void weightTableProbabilityInPlace(std::vector<ClassProbabilities>& p, float weight);
 std::vector<ClassProbabilities> weightTableProbability(std::vector<ClassProbabilities> p,
                                                        float weight);
 

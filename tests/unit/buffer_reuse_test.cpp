@@ -14,6 +14,7 @@
 #include "findmug/cloud.hpp"
 #include "findmug/oversegmentation.hpp"
 #include "findmug/segmenter.hpp"
+#include "findmug/dataset.hpp"
 #include "findmug/training.hpp"
 
 namespace findmug {
@@ -130,10 +131,47 @@ void expectSameFrame(const LabelledFrame& got, const LabelledFrame& want) {
   EXPECT_EQ(g.cloud_ground.width, w.cloud_ground.width);
   EXPECT_EQ(g.ground.has_value(), w.ground.has_value());
   expectSameSegmentation(got.segmented.segmentation, want.segmented.segmentation);
+  // The classify stage's outputs, which also come from recycled frames.
+  EXPECT_TRUE(sameBytes(got.features.features, want.features.features));
+  EXPECT_TRUE(sameBytes(got.features.centroids, want.features.centroids));
+  EXPECT_TRUE(sameBytes(got.features.regions, want.features.regions));
+  EXPECT_TRUE(sameBytes(got.features.scene, want.features.scene));
+  EXPECT_TRUE(sameBytes(got.forest_probabilities, want.forest_probabilities));
+  EXPECT_TRUE(sameBytes(got.first_stage_probabilities, want.first_stage_probabilities));
+  EXPECT_EQ(got.mrf.labels, want.mrf.labels);
+  EXPECT_TRUE(sameBytes(got.mrf.confidence, want.mrf.confidence));
+  EXPECT_EQ(got.mrf.iterations, want.mrf.iterations);
+  EXPECT_EQ(got.labels.width, want.labels.width);
   EXPECT_EQ(got.labels.labels, want.labels.labels);
   EXPECT_TRUE(sameBytes(got.labels.confidence, want.labels.confidence));
   EXPECT_EQ(got.forest_labels, want.forest_labels);
   EXPECT_EQ(got.tables.size(), want.tables.size());
+}
+
+// Every optional stage on (region and scene features, the auto-context
+// stage), with a model trained for them on `scene`.
+SegmenterConfig allStagesConfig() {
+  SegmenterConfig c = config();
+  c.regions.enabled = true;
+  c.scene.enabled = true;
+  c.context.enabled = true;
+  c.context.cross_fit_folds = 0;  // one frame: nothing to cross-fit over
+  c.forest.num_trees = 4;
+  c.forest.max_depth = 6;
+  return c;
+}
+
+std::shared_ptr<const RandomForest> trainAllStagesOn(const Scene& scene) {
+  const SegmenterConfig c = allStagesConfig();
+  const LabeledFrames frames{"scene", 1, [&](std::size_t) {
+                               return LabeledFrame{"scene", scene.frame, scene.truth, {}};
+                             }};
+  ExtractionReport report;
+  const auto samples = extractSamples(frames, Segmenter(c, nullptr), report);
+  EXPECT_EQ(samples.size(), 1u);
+  RandomForest forest = trainModel({&samples[0]}, c);
+  forest.setExtractionSettings(extractionSettings(c));
+  return std::make_shared<const RandomForest>(std::move(forest));
 }
 
 TEST(BufferReuse, CloudFunctionsWriteIntoUsedBuffersAsIntoFreshOnes) {
@@ -225,6 +263,30 @@ TEST(BufferReuse, RecycledFramesGiveTheResultsOfFreshOnes) {
   }
 }
 
+TEST(BufferReuse, RecycledFramesGiveTheResultsOfFreshOnesWithEveryStage) {
+  const Scene a = floorAndWall(320, 240, 3.0, 1.2);
+  const Scene b = floorAndWall(640, 480, 2.2, 1.0);
+  const auto forest = trainAllStagesOn(a);
+  ASSERT_NE(forest->contextStage(), nullptr);
+  const Segmenter fresh(allStagesConfig(), forest);
+  const LabelledFrame want_a = fresh.process(a.frame);
+  const LabelledFrame want_b = fresh.process(b.frame);
+  const LabelledFrame want_empty = fresh.process(emptyFrame());
+  ASSERT_FALSE(want_a.features.scene.empty());
+  ASSERT_FALSE(want_a.first_stage_probabilities.empty());
+
+  const Segmenter reusing(allStagesConfig(), forest);
+  const std::vector<std::pair<const RgbdFrame*, const LabelledFrame*>> stream = {
+      {&a.frame, &want_a}, {&b.frame, &want_b}, {nullptr, &want_empty},
+      {&a.frame, &want_a}, {&b.frame, &want_b}, {&a.frame, &want_a}};
+  for (std::size_t k = 0; k < stream.size(); ++k) {
+    SCOPED_TRACE("frame " + std::to_string(k) + " of the stream");
+    LabelledFrame got = reusing.process(stream[k].first ? *stream[k].first : emptyFrame());
+    expectSameFrame(got, *stream[k].second);
+    reusing.recycle(std::move(got));
+  }
+}
+
 // Allocations of prepare() + oversegment() for one frame.
 std::uint64_t allocationsOfPrepareAndOversegment(const Segmenter& segmenter, const RgbdFrame& frame,
                                                  SegmentedFrame& out) {
@@ -256,7 +318,34 @@ TEST(BufferReuse, AWarmRecyclingStreamAllocatesNextToNothingBeforeClassification
     LabelledFrame done = reusing.classify(std::move(segmented));
     reusing.recycle(std::move(done));
   }
-  EXPECT_LE(reusing_news, 48u) << "segments: " << segments << ", without recycle: " << plain_news;
+  EXPECT_LE(reusing_news, 4u) << "segments: " << segments << ", without recycle: " << plain_news;
+}
+
+// The whole per-frame path, every optional stage on. What may still
+// allocate is the table stage's text (why no table was found, one message)
+// and the tables themselves (none in this scene).
+TEST(BufferReuse, AWarmRecyclingStreamAllocatesNextToNothing) {
+  const Scene a = floorAndWall(640, 480, 3.0, 1.2);
+  const auto forest = trainAllStagesOn(a);
+  const Segmenter plain(allStagesConfig(), forest);
+  const Segmenter reusing(allStagesConfig(), forest);
+  std::uint64_t plain_news = 0, reusing_news = 0;
+  for (int k = 0; k < 4; ++k) {
+    RgbdFrame copy = a.frame;  // the caller's frame, not counted
+    std::uint64_t before = bench::g_news.load();
+    const LabelledFrame fresh = plain.process(std::move(copy));
+    plain_news = bench::g_news.load() - before;
+
+    copy = a.frame;
+    before = bench::g_news.load();
+    LabelledFrame done = reusing.process(std::move(copy));
+    reusing_news = bench::g_news.load() - before;
+    ASSERT_TRUE(done.segmented.prepared.ground);
+    EXPECT_TRUE(done.tables.empty());
+    reusing.recycle(std::move(done));
+  }
+  EXPECT_GE(plain_news, 100u);
+  EXPECT_LE(reusing_news, 6u) << "without recycle: " << plain_news;
 }
 
 }  // namespace
