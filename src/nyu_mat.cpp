@@ -129,6 +129,31 @@ DatasetInfo openDataset(hid_t file, const std::string& path, const char* name) {
   info.type_class = H5Tget_class(type.get());
   info.type_size = H5Tget_size(type.get());
   if (info.type_class == H5T_INTEGER) info.sign = H5Tget_sign(type.get());
+
+  // Unchunked data must be stored whole. libhdf5 1.10 trusts the stored size of
+  // a compact or contiguous dataset and copies its shape's worth of bytes from
+  // a buffer of the stored size: a corrupt file read past the end of the heap
+  // (found by fuzzing, tests/fuzz/regressions/nyu_mat).
+  Hid create(H5Dget_create_plist(info.dataset.get()), H5Pclose);
+  const H5D_layout_t layout = create.valid() ? H5Pget_layout(create.get()) : H5D_LAYOUT_ERROR;
+  if (layout == H5D_LAYOUT_ERROR) {
+    throw Error(path + ": cannot read the storage layout of '" + name + "'");
+  }
+  if (layout == H5D_COMPACT || layout == H5D_CONTIGUOUS) {
+    hsize_t needed = info.type_size;
+    for (const hsize_t d : info.dims) {
+      if (__builtin_mul_overflow(needed, d, &needed)) {
+        throw Error(path + ": dataset '" + name + "' of shape " + dimsText(info.dims) +
+                    " is too large");
+      }
+    }
+    const hsize_t stored = H5Dget_storage_size(info.dataset.get());
+    if (stored < needed) {
+      throw Error(path + ": dataset '" + name + "' stores " + std::to_string(stored) +
+                  " bytes but its shape " + dimsText(info.dims) + " of " + typeText(info) +
+                  " needs " + std::to_string(needed) + " (truncated or corrupt file)");
+    }
+  }
   return info;
 }
 

@@ -8,11 +8,13 @@
 #include <gtest/gtest.h>
 #include <hdf5.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <functional>
+#include <iterator>
 #include <string>
 #include <utility>
 #include <vector>
@@ -332,6 +334,35 @@ TEST_F(NyuMat, BadFilesAreErrors) {
         for (std::size_t i = 0; i < mat.size(); ++i) mat.load(i);
       },
       Error);
+}
+
+// A corrupt file found by fuzzing (tests/fuzz/regressions/nyu_mat): a compact
+// dataset that stores 8 bytes for a shape of hundreds. libhdf5 1.10 would copy
+// the shape's worth from the 8-byte buffer (a heap overflow under ASan); the
+// reader refuses the dataset first, naming it and both sizes.
+TEST_F(NyuMat, DatasetStoringLessThanItsShapeIsRefusedBeforeReading) {
+  const auto input = test::sourceDir() / "tests/fuzz/regressions/nyu_mat" /
+                     "crash-d911c150ed9f6977f0a6d33ad2b854aa870c2335";
+  std::ifstream in(input, std::ios::binary);
+  ASSERT_TRUE(in) << input;
+  const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  // The fuzz container: a 4-byte little-endian length, the CSV, then the .mat.
+  ASSERT_GE(bytes.size(), 4u);
+  std::size_t csv_size = 0;
+  for (int k = 3; k >= 0; --k) csv_size = (csv_size << 8) | static_cast<unsigned char>(bytes[k]);
+  csv_size = std::min(csv_size, bytes.size() - 4);
+  const auto mat_path = dir_.str("overflow.mat");
+  {
+    std::ofstream out(mat_path, std::ios::binary);
+    out << bytes.substr(4 + csv_size);
+  }
+  const std::string msg = errorOf([&] {
+    NyuMatFile mat(mat_path, csv_);
+    for (std::size_t i = 0; i < mat.size(); ++i) mat.load(i);
+  });
+  EXPECT_CONTAINS(msg, mat_path);
+  EXPECT_CONTAINS(msg, "bytes but its shape");
+  EXPECT_CONTAINS(msg, "truncated or corrupt file");
 }
 
 TEST_F(NyuMat, UnknownLabelIdsAndBadDepthsAreReported) {
