@@ -174,6 +174,23 @@ std::shared_ptr<const RandomForest> trainAllStagesOn(const Scene& scene) {
   return std::make_shared<const RandomForest>(std::move(forest));
 }
 
+// A, B, no ground, A, B, A again through `reusing`, each frame through the
+// buffers of the frames before: each must equal its fresh result.
+void expectRecycledStreamGivesFreshResults(const Segmenter& reusing, const Scene& a,
+                                           const Scene& b, const LabelledFrame& want_a,
+                                           const LabelledFrame& want_b,
+                                           const LabelledFrame& want_empty) {
+  const std::vector<std::pair<const RgbdFrame*, const LabelledFrame*>> stream = {
+      {&a.frame, &want_a}, {&b.frame, &want_b}, {nullptr, &want_empty},
+      {&a.frame, &want_a}, {&b.frame, &want_b}, {&a.frame, &want_a}};
+  for (std::size_t k = 0; k < stream.size(); ++k) {
+    SCOPED_TRACE("frame " + std::to_string(k) + " of the stream");
+    LabelledFrame got = reusing.process(stream[k].first ? *stream[k].first : emptyFrame());
+    expectSameFrame(got, *stream[k].second);
+    reusing.recycle(std::move(got));
+  }
+}
+
 TEST(BufferReuse, CloudFunctionsWriteIntoUsedBuffersAsIntoFreshOnes) {
   const Scene small = floorAndWall(320, 240, 3.0, 1.2);
   const Scene big = floorAndWall(640, 480, 2.2, 1.0);
@@ -250,17 +267,8 @@ TEST(BufferReuse, RecycledFramesGiveTheResultsOfFreshOnes) {
   ASSERT_TRUE(want_a.segmented.prepared.ground);
   ASSERT_FALSE(want_empty.segmented.prepared.ground);
 
-  // A, B, no ground, A, B, A again, each through the buffers of the frames before.
   const Segmenter reusing(config(), forest);
-  const std::vector<std::pair<const RgbdFrame*, const LabelledFrame*>> stream = {
-      {&a.frame, &want_a}, {&b.frame, &want_b}, {nullptr, &want_empty},
-      {&a.frame, &want_a}, {&b.frame, &want_b}, {&a.frame, &want_a}};
-  for (std::size_t k = 0; k < stream.size(); ++k) {
-    SCOPED_TRACE("frame " + std::to_string(k) + " of the stream");
-    LabelledFrame got = reusing.process(stream[k].first ? *stream[k].first : emptyFrame());
-    expectSameFrame(got, *stream[k].second);
-    reusing.recycle(std::move(got));
-  }
+  expectRecycledStreamGivesFreshResults(reusing, a, b, want_a, want_b, want_empty);
 }
 
 TEST(BufferReuse, RecycledFramesGiveTheResultsOfFreshOnesWithEveryStage) {
@@ -276,15 +284,7 @@ TEST(BufferReuse, RecycledFramesGiveTheResultsOfFreshOnesWithEveryStage) {
   ASSERT_FALSE(want_a.first_stage_probabilities.empty());
 
   const Segmenter reusing(allStagesConfig(), forest);
-  const std::vector<std::pair<const RgbdFrame*, const LabelledFrame*>> stream = {
-      {&a.frame, &want_a}, {&b.frame, &want_b}, {nullptr, &want_empty},
-      {&a.frame, &want_a}, {&b.frame, &want_b}, {&a.frame, &want_a}};
-  for (std::size_t k = 0; k < stream.size(); ++k) {
-    SCOPED_TRACE("frame " + std::to_string(k) + " of the stream");
-    LabelledFrame got = reusing.process(stream[k].first ? *stream[k].first : emptyFrame());
-    expectSameFrame(got, *stream[k].second);
-    reusing.recycle(std::move(got));
-  }
+  expectRecycledStreamGivesFreshResults(reusing, a, b, want_a, want_b, want_empty);
 }
 
 // Allocations of prepare() + oversegment() for one frame.
