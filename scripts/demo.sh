@@ -27,6 +27,7 @@ quietly() {
 }
 echo "== 0. Installing packages and building (log: $OUT/setup.log)"
 quietly scripts/install-deps.sh
+source scripts/build-env.sh
 quietly cmake -S . -B "$BUILD_DIR" -DCMAKE_BUILD_TYPE=Release
 quietly cmake --build "$BUILD_DIR" -j"$(nproc)" --target findmugd findmug-synth \
   findmug-nav-client findmug-label-viewer

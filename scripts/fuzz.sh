@@ -16,6 +16,7 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 ROOT=$PWD
+source scripts/build-env.sh
 SECONDS_EACH=${1:-30}
 shift || true
 BUILD_DIR=${BUILD_DIR:-build-fuzz}

@@ -5,7 +5,7 @@
 set -euo pipefail
 
 packages=(
-  build-essential cmake pkg-config git
+  build-essential cmake ninja-build pkg-config git
   # messaging: liblcm-dev forgets libglib2.0-dev, without which `pkg-config lcm` fails
   liblcm-dev liblcm-bin liblcm-java libglib2.0-dev
   # perception

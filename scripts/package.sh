@@ -12,6 +12,7 @@ BUILD_DIR=${BUILD_DIR:-build-package}
 JOBS=${JOBS:-$(nproc)}
 
 scripts/install-deps.sh
+source scripts/build-env.sh
 cmake -S . -B "$BUILD_DIR" -DCMAKE_BUILD_TYPE=Release -DCMAKE_INSTALL_PREFIX=/usr \
   -DFINDMUG_BUILD_TESTS=OFF -DFINDMUG_BUILD_BENCHMARKS=OFF
 cmake --build "$BUILD_DIR" -j"$JOBS"

@@ -17,6 +17,7 @@ JOBS=${JOBS:-$(nproc)}
 ASAN_DIR=${ASAN_BUILD_DIR:-build-asan}
 TSAN_DIR=${TSAN_BUILD_DIR:-build-tsan}
 STEPS=("$@")
+source scripts/build-env.sh
 [[ ${#STEPS[@]} -gt 0 ]] || STEPS=(asan fuzz tsan)
 launcher=()
 command -v ccache >/dev/null && launcher=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache -DCMAKE_C_COMPILER_LAUNCHER=ccache)

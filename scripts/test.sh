@@ -11,6 +11,7 @@ BUILD_DIR=${BUILD_DIR:-build}
 JOBS=${JOBS:-$(nproc)}
 
 scripts/install-deps.sh
+source scripts/build-env.sh
 # Prefix /usr: the tree the package test (label package) turns into the Debian package.
 cmake -S . -B "$BUILD_DIR" -DCMAKE_BUILD_TYPE=Release -DFINDMUG_WERROR=ON -DCMAKE_INSTALL_PREFIX=/usr
 cmake --build "$BUILD_DIR" -j"$JOBS"

@@ -1,0 +1,12 @@
+# Sourced by the scripts that configure a build tree (test.sh, demo.sh, test-sanitizers.sh,
+# fuzz.sh, bench.sh, package.sh, fuzz-seeds.sh).
+#
+# New build trees use Ninja when it is installed (scripts/install-deps.sh installs it).
+# With make, the targets named on one `cmake --build --target a --target b ...` are built
+# one after another (CMake's top-level Makefile is .NOTPARALLEL): a sanitizer build of ~35
+# one-file test programs then ran on one core, 850 s where Ninja takes 480 s (BENCHMARKS.md
+# 10). An existing tree keeps the generator it was made with; CMAKE_GENERATOR in the
+# environment still overrides.
+if [[ -z "${CMAKE_GENERATOR:-}" ]] && command -v ninja >/dev/null; then
+  export CMAKE_GENERATOR=Ninja
+fi
