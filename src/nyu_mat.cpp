@@ -7,9 +7,16 @@
 // (y * width + x) layout; getting that wrong gives a mirrored, rotated image
 // that still "looks like" data, so the tests check exact pixel positions.
 #include <hdf5.h>
+#include <sys/resource.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
+#include <cerrno>
 #include <cmath>
+#include <csignal>
+#include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <fstream>
 #include <sstream>
 #include <string>
@@ -241,13 +248,111 @@ std::string defaultNyu894To40CsvPath() {
   return root + "/nyuv2_meta/nyu894_to_40.csv";
 }
 
-struct NyuMatFile::Impl {
-  std::string path;
-  std::string mapping_path;
+namespace {
+
+// What the reader keeps of the file's structure.
+struct MatStructure {
   Hid file;
   DatasetInfo images, depths, labels;
   std::size_t count = 0;
   int width = 0, height = 0;
+};
+
+// Opens the file and its three datasets and checks their types and shapes
+// (everything the constructor reads of the file's structure).
+void openStructure(const std::string& path, MatStructure& impl) {
+  QuietHdf5Errors quiet;
+  if (H5Fis_hdf5(path.c_str()) <= 0) {
+    throw Error(path + ": not an HDF5 file (expected a MATLAB v7.3 .mat)");
+  }
+  impl.file = Hid(H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT), H5Fclose);
+  if (!impl.file.valid()) throw Error(path + ": cannot open as HDF5");
+  const hid_t file = impl.file.get();
+  impl.images = openDataset(file, path, "images");
+  impl.depths = openDataset(file, path, "depths");
+  impl.labels = openDataset(file, path, "labels");
+  requireType(path, "images", impl.images, H5T_INTEGER, 1, "uint8");
+  requireType(path, "depths", impl.depths, H5T_FLOAT, 4, "float32 (metres)");
+  requireType(path, "labels", impl.labels, H5T_INTEGER, 2, "uint16 (NYU-894 ids)");
+
+  const auto& im = impl.images.dims;
+  if (im.size() != 4 || im[1] != 3 || im[0] == 0 || im[2] == 0 || im[3] == 0) {
+    throw Error(path + ": dataset 'images' has dims " + dimsText(im) +
+                ", expected [N][3][width][height] (MATLAB height x width x 3 x N)");
+  }
+  if (im[2] > kMaxMatWidth || im[3] > kMaxMatHeight) {
+    throw Error(path + ": dataset 'images' has dims " + dimsText(im) + ": frames of " +
+                std::to_string(im[2]) + "x" + std::to_string(im[3]) + " exceed the " +
+                std::to_string(kMaxMatWidth) + "x" + std::to_string(kMaxMatHeight) +
+                " this reader accepts (NYU frames are 640x480)");
+  }
+  impl.count = im[0];
+  impl.width = static_cast<int>(im[2]);
+  impl.height = static_cast<int>(im[3]);
+  const std::vector<hsize_t> expected = {im[0], im[2], im[3]};
+  for (const auto* d : {&impl.depths, &impl.labels}) {
+    if (d->dims != expected) {
+      throw Error(path + ": dataset '" + (d == &impl.depths ? "depths" : "labels") +
+                  "' has dims " + dimsText(d->dims) + ", expected " + dimsText(expected) +
+                  " to match 'images' " + dimsText(im));
+    }
+  }
+}
+
+// libhdf5 1.10.8 (Debian 12) can crash on a corrupt file while it walks the
+// file's structure, before it returns any error we could turn into one: a
+// group's symbol-table lookup reading through a NULL buffer (SIGSEGV in
+// H5F__accum_read under H5Lexists, found by fuzzing:
+// tests/fuzz/regressions/nyu_mat/crash-7062bed8...). That is not ours to fix,
+// but a training run given a damaged download must get an error naming the
+// file, not a segmentation fault. So the structure is read once in a forked
+// child: if libhdf5 kills the child, the file is refused here and never read
+// in this process; if the child comes back (read or refused), this process
+// does the same reads, which then go the same way. Costs one fork per file
+// opened (a few ms); the readers are offline tools, never the daemon.
+void openStructureInChild(const std::string& path) {
+  std::fflush(nullptr);  // the child must not flush the parent's buffered output again
+  const pid_t child = fork();
+  if (child < 0) {
+    throw Error(path + ": cannot start the process that checks the file with libhdf5: " +
+                std::strerror(errno));
+  }
+  if (child == 0) {
+    // A crash here must end this child quietly: no core file, and the signal
+    // (not a sanitizer's or fuzzer's own report) is the answer.
+    const rlimit no_core{0, 0};
+    setrlimit(RLIMIT_CORE, &no_core);
+    for (int sig : {SIGSEGV, SIGBUS, SIGFPE, SIGILL, SIGABRT}) std::signal(sig, SIG_DFL);
+    int code = 0;
+    try {
+      MatStructure scratch;
+      openStructure(path, scratch);
+    } catch (...) {
+      code = 1;  // an ordinary refusal: the parent's own read gives the message
+    }
+    _exit(code);
+  }
+  int status = 0;
+  while (waitpid(child, &status, 0) < 0) {
+    if (errno != EINTR) {
+      throw Error(path + ": cannot wait for the process that checks the file with libhdf5: " +
+                  std::strerror(errno));
+    }
+  }
+  if (WIFSIGNALED(status)) {
+    const char* name = sigabbrev_np(WTERMSIG(status));
+    throw Error(path + ": corrupt HDF5 file: libhdf5 " + std::to_string(H5_VERS_MAJOR) + "." +
+                std::to_string(H5_VERS_MINOR) + "." + std::to_string(H5_VERS_RELEASE) +
+                " crashed reading its structure (SIG" + (name ? name : "?") +
+                " in a child process), so it is not read");
+  }
+}
+
+}  // namespace
+
+struct NyuMatFile::Impl : MatStructure {
+  std::string path;
+  std::string mapping_path;
   std::vector<int> to40;  // NYU-894 id -> NYU-40 id, -1 = unknown
 };
 
@@ -266,46 +371,14 @@ NyuMatFile::NyuMatFile(const std::string& path, const std::string& nyu894_to_40_
       }
     }
 
-    QuietHdf5Errors quiet;
     {
       std::ifstream probe(path, std::ios::binary);
       if (!probe) throw Error(path + ": cannot open");
     }
-    if (H5Fis_hdf5(path.c_str()) <= 0) {
-      throw Error(path + ": not an HDF5 file (expected a MATLAB v7.3 .mat)");
-    }
-    impl_->file = Hid(H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT), H5Fclose);
-    if (!impl_->file.valid()) throw Error(path + ": cannot open as HDF5");
-    const hid_t file = impl_->file.get();
-    impl_->images = openDataset(file, path, "images");
-    impl_->depths = openDataset(file, path, "depths");
-    impl_->labels = openDataset(file, path, "labels");
-    requireType(path, "images", impl_->images, H5T_INTEGER, 1, "uint8");
-    requireType(path, "depths", impl_->depths, H5T_FLOAT, 4, "float32 (metres)");
-    requireType(path, "labels", impl_->labels, H5T_INTEGER, 2, "uint16 (NYU-894 ids)");
-
-    const auto& im = impl_->images.dims;
-    if (im.size() != 4 || im[1] != 3 || im[0] == 0 || im[2] == 0 || im[3] == 0) {
-      throw Error(path + ": dataset 'images' has dims " + dimsText(im) +
-                  ", expected [N][3][width][height] (MATLAB height x width x 3 x N)");
-    }
-    if (im[2] > kMaxMatWidth || im[3] > kMaxMatHeight) {
-      throw Error(path + ": dataset 'images' has dims " + dimsText(im) + ": frames of " +
-                  std::to_string(im[2]) + "x" + std::to_string(im[3]) + " exceed the " +
-                  std::to_string(kMaxMatWidth) + "x" + std::to_string(kMaxMatHeight) +
-                  " this reader accepts (NYU frames are 640x480)");
-    }
-    impl_->count = im[0];
-    impl_->width = static_cast<int>(im[2]);
-    impl_->height = static_cast<int>(im[3]);
-    const std::vector<hsize_t> expected = {im[0], im[2], im[3]};
-    for (const auto* d : {&impl_->depths, &impl_->labels}) {
-      if (d->dims != expected) {
-        throw Error(path + ": dataset '" + (d == &impl_->depths ? "depths" : "labels") +
-                    "' has dims " + dimsText(d->dims) + ", expected " + dimsText(expected) +
-                    " to match 'images' " + dimsText(im));
-      }
-    }
+    // libhdf5 first reads the file's structure in a child process: a corrupt
+    // file can crash libhdf5 itself (see openStructureInChild).
+    openStructureInChild(path);
+    openStructure(path, *impl_);
   } catch (...) {
     delete impl_;
     throw;

@@ -336,26 +336,29 @@ TEST_F(NyuMat, BadFilesAreErrors) {
       Error);
 }
 
-// A corrupt file found by fuzzing (tests/fuzz/regressions/nyu_mat): a compact
-// dataset that stores 8 bytes for a shape of hundreds. libhdf5 1.10 would copy
-// the shape's worth from the 8-byte buffer (a heap overflow under ASan); the
-// reader refuses the dataset first, naming it and both sizes.
-TEST_F(NyuMat, DatasetStoringLessThanItsShapeIsRefusedBeforeReading) {
-  const auto input = test::sourceDir() / "tests/fuzz/regressions/nyu_mat" /
-                     "crash-d911c150ed9f6977f0a6d33ad2b854aa870c2335";
+// The .mat part of a fuzz input in tests/fuzz/regressions/nyu_mat, written to
+// `mat_path`. The fuzz container: a 4-byte little-endian length, the CSV, then
+// the .mat.
+void writeMatOfFuzzInput(const std::string& input_name, const std::string& mat_path) {
+  const auto input = test::sourceDir() / "tests/fuzz/regressions/nyu_mat" / input_name;
   std::ifstream in(input, std::ios::binary);
   ASSERT_TRUE(in) << input;
   const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  // The fuzz container: a 4-byte little-endian length, the CSV, then the .mat.
   ASSERT_GE(bytes.size(), 4u);
   std::size_t csv_size = 0;
   for (int k = 3; k >= 0; --k) csv_size = (csv_size << 8) | static_cast<unsigned char>(bytes[k]);
   csv_size = std::min(csv_size, bytes.size() - 4);
+  std::ofstream out(mat_path, std::ios::binary);
+  out << bytes.substr(4 + csv_size);
+}
+
+// A corrupt file found by fuzzing: a compact dataset that stores 8 bytes for a
+// shape of hundreds. libhdf5 1.10 would copy the shape's worth from the 8-byte
+// buffer (a heap overflow under ASan); the reader refuses the dataset first,
+// naming it and both sizes.
+TEST_F(NyuMat, DatasetStoringLessThanItsShapeIsRefusedBeforeReading) {
   const auto mat_path = dir_.str("overflow.mat");
-  {
-    std::ofstream out(mat_path, std::ios::binary);
-    out << bytes.substr(4 + csv_size);
-  }
+  writeMatOfFuzzInput("crash-d911c150ed9f6977f0a6d33ad2b854aa870c2335", mat_path);
   const std::string msg = errorOf([&] {
     NyuMatFile mat(mat_path, csv_);
     for (std::size_t i = 0; i < mat.size(); ++i) mat.load(i);
@@ -363,6 +366,25 @@ TEST_F(NyuMat, DatasetStoringLessThanItsShapeIsRefusedBeforeReading) {
   EXPECT_CONTAINS(msg, mat_path);
   EXPECT_CONTAINS(msg, "bytes but its shape");
   EXPECT_CONTAINS(msg, "truncated or corrupt file");
+}
+
+// Another one, on which libhdf5 1.10.8 itself dies (SIGSEGV in a symbol-table
+// lookup, before it could return an error): the reader tries the file's
+// structure in a child process first, so this process gets an error naming the
+// file and goes on (the next file opens as usual).
+TEST_F(NyuMat, FileThatCrashesLibhdf5IsRefusedAndTheProcessGoesOn) {
+  const auto mat_path = dir_.str("crashes_libhdf5.mat");
+  writeMatOfFuzzInput("crash-7062bed8ee31805b61b429b3c7671b59f6125e5a", mat_path);
+  const std::string msg = errorOf([&] { NyuMatFile mat(mat_path, csv_); });
+  EXPECT_CONTAINS(msg, mat_path + ": corrupt HDF5 file: libhdf5 ");
+  EXPECT_CONTAINS(msg, "crashed reading its structure (SIGSEGV in a child process)");
+
+  Layout layout;
+  layout.frames = 2;
+  writeMat(dir_.str("good.mat"), layout);
+  NyuMatFile good(dir_.str("good.mat"), csv_);
+  EXPECT_EQ(good.size(), 2u);
+  EXPECT_EQ(good.load(1).name, "0002");
 }
 
 TEST_F(NyuMat, UnknownLabelIdsAndBadDepthsAreReported) {
