@@ -260,22 +260,22 @@ struct MatStructure {
 
 // Opens the file and its three datasets and checks their types and shapes
 // (everything the constructor reads of the file's structure).
-void openStructure(const std::string& path, MatStructure& impl) {
+void openStructure(const std::string& path, MatStructure& out) {
   QuietHdf5Errors quiet;
   if (H5Fis_hdf5(path.c_str()) <= 0) {
     throw Error(path + ": not an HDF5 file (expected a MATLAB v7.3 .mat)");
   }
-  impl.file = Hid(H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT), H5Fclose);
-  if (!impl.file.valid()) throw Error(path + ": cannot open as HDF5");
-  const hid_t file = impl.file.get();
-  impl.images = openDataset(file, path, "images");
-  impl.depths = openDataset(file, path, "depths");
-  impl.labels = openDataset(file, path, "labels");
-  requireType(path, "images", impl.images, H5T_INTEGER, 1, "uint8");
-  requireType(path, "depths", impl.depths, H5T_FLOAT, 4, "float32 (metres)");
-  requireType(path, "labels", impl.labels, H5T_INTEGER, 2, "uint16 (NYU-894 ids)");
+  out.file = Hid(H5Fopen(path.c_str(), H5F_ACC_RDONLY, H5P_DEFAULT), H5Fclose);
+  if (!out.file.valid()) throw Error(path + ": cannot open as HDF5");
+  const hid_t file = out.file.get();
+  out.images = openDataset(file, path, "images");
+  out.depths = openDataset(file, path, "depths");
+  out.labels = openDataset(file, path, "labels");
+  requireType(path, "images", out.images, H5T_INTEGER, 1, "uint8");
+  requireType(path, "depths", out.depths, H5T_FLOAT, 4, "float32 (metres)");
+  requireType(path, "labels", out.labels, H5T_INTEGER, 2, "uint16 (NYU-894 ids)");
 
-  const auto& im = impl.images.dims;
+  const auto& im = out.images.dims;
   if (im.size() != 4 || im[1] != 3 || im[0] == 0 || im[2] == 0 || im[3] == 0) {
     throw Error(path + ": dataset 'images' has dims " + dimsText(im) +
                 ", expected [N][3][width][height] (MATLAB height x width x 3 x N)");
@@ -286,13 +286,13 @@ void openStructure(const std::string& path, MatStructure& impl) {
                 std::to_string(kMaxMatWidth) + "x" + std::to_string(kMaxMatHeight) +
                 " this reader accepts (NYU frames are 640x480)");
   }
-  impl.count = im[0];
-  impl.width = static_cast<int>(im[2]);
-  impl.height = static_cast<int>(im[3]);
+  out.count = im[0];
+  out.width = static_cast<int>(im[2]);
+  out.height = static_cast<int>(im[3]);
   const std::vector<hsize_t> expected = {im[0], im[2], im[3]};
-  for (const auto* d : {&impl.depths, &impl.labels}) {
+  for (const auto* d : {&out.depths, &out.labels}) {
     if (d->dims != expected) {
-      throw Error(path + ": dataset '" + (d == &impl.depths ? "depths" : "labels") +
+      throw Error(path + ": dataset '" + (d == &out.depths ? "depths" : "labels") +
                   "' has dims " + dimsText(d->dims) + ", expected " + dimsText(expected) +
                   " to match 'images' " + dimsText(im));
     }
