@@ -195,6 +195,7 @@ const std::vector<CoreSetting>& settings() {
                  [](C& c) -> int& { return c.tables.min_cluster_points; }, 1, 10000000),
       intSetting("tables.max_cluster_points",
                  [](C& c) -> int& { return c.tables.max_cluster_points; }, 1, 10000000),
+      intSetting("tables.point_stride", [](C& c) -> int& { return c.tables.point_stride; }, 1, 8),
       floatSetting("tables.safety_distance_m",
                    [](C& c) -> float& { return c.tables.safety_distance_m; }, 0, 5),
       floatSetting("tables.arm_reach_m", [](C& c) -> float& { return c.tables.arm_reach_m; },

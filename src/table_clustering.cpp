@@ -174,7 +174,12 @@ std::vector<int> tables_detail::clusterPoints(const std::vector<Eigen::Vector3f>
   thread_local ClusterScratch scratch_tls;
   ClusterScratch& scratch = scratch_tls;
   const std::vector<int>* pixels = grid.pixels;
-  if (pixels && (pixels->size() != points.size() || grid.width < 1)) pixels = nullptr;
+  if (pixels && (pixels->size() != points.size() || grid.width < 1 || grid.stride < 1)) {
+    pixels = nullptr;
+  }
+  // Pixel offsets of a point's grid neighbours: left and above.
+  const int step_x = pixels ? grid.stride : 0;
+  const int step_y = pixels ? grid.stride * grid.width : 0;
 
   // Slightly under tolerance/sqrt(3) so the voxel diagonal never exceeds the
   // tolerance through rounding; then neighbours within the tolerance are at
@@ -213,7 +218,7 @@ std::vector<int> tables_detail::clusterPoints(const std::vector<Eigen::Vector3f>
     // Points come in image order, so neighbours often share a voxel: the
     // previous point's (last_key), or the one above's.
     if (key != last_key && pixels) {
-      const int above = (*pixels)[i] - grid.width;
+      const int above = (*pixels)[i] - step_y;
       while (up < i && (*pixels)[up] < above) ++up;
       if (up < i && (*pixels)[up] == above && voxel_coords[point_voxel[up]] == c) {
         last_voxel = point_voxel[up];
@@ -241,11 +246,11 @@ std::vector<int> tables_detail::clusterPoints(const std::vector<Eigen::Vector3f>
       // rarely has to compare points.
       const int px = (*pixels)[i];
       while (px >= row_end) row_end += grid.width;  // pixels ascend: no division
-      if (i > 0 && (*pixels)[i - 1] == px - 1 && px != row_end - grid.width &&
+      if (i > 0 && (*pixels)[i - 1] == px - step_x && px - step_x >= row_end - grid.width &&
           point_voxel[i - 1] != last_voxel && (points[i - 1] - p).squaredNorm() <= tol2) {
         sets.unite(point_voxel[i - 1], last_voxel);
       }
-      const int above = px - grid.width;
+      const int above = px - step_y;
       while (up < i && (*pixels)[up] < above) ++up;
       if (up < i && (*pixels)[up] == above && point_voxel[up] != last_voxel &&
           (points[up] - p).squaredNorm() <= tol2) {

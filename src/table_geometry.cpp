@@ -221,9 +221,10 @@ std::vector<Eigen::Vector2f> convexHull2d(std::vector<Eigen::Vector2f> points) {
 }
 
 ClusterOutcome tables_detail::describeCluster(const std::vector<Eigen::Vector3f>& points,
-                                              const TableConfig& config, TableCluster& table) {
+                                              int point_count, const TableConfig& config,
+                                              TableCluster& table) {
   ClusterOutcome outcome;
-  const int n = static_cast<int>(points.size());
+  const int n = point_count;
 
   // Top height: the densest height band (the top is the one large horizontal
   // surface; legs, aprons and lower shelves hold fewer points), refined by the

@@ -46,6 +46,8 @@ std::vector<TableCluster> groundTruthTables(const OrganizedCloud& cloud_ground,
   if (cloud_ground.points.empty()) return {};
   TableConfig truth_config = tables;
   truth_config.min_cluster_points = config.min_instance_points;
+  // Instances are the exact partition of every table point, not a sample's.
+  truth_config.point_stride = 1;
   // The detector's filters are not part of the instance definition.
   truth_config.min_top_area_m2 = 0.0f;
   truth_config.min_confidence = 0.0f;

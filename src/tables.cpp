@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <sstream>
 #include <string>
 
@@ -72,6 +73,9 @@ void validateTableConfig(const TableConfig& c) {
   }
   if (c.min_cluster_points < 1)
     badSetting("min_cluster_points", c.min_cluster_points, "must be >= 1");
+  if (c.point_stride < 1 || c.point_stride > 8) {
+    badSetting("point_stride", c.point_stride, "must be in [1, 8] pixels");
+  }
   if (c.max_cluster_points < c.min_cluster_points) {
     badSetting("max_cluster_points", c.max_cluster_points,
                "must not be below tables.min_cluster_points (" +
@@ -126,8 +130,7 @@ TableDetection detectTables(const OrganizedCloud& cloud_ground, const LabelImage
                 " normals for a cloud of " + std::to_string(cloud_ground.points.size()) +
                 " points");
   }
-  const float cos_tilt =
-      std::cos(config.horizontal_tilt_deg * static_cast<float>(M_PI) / 180.0f);
+  const float cos_tilt = std::cos(config.horizontal_tilt_deg * static_cast<float>(M_PI) / 180.0f);
   TableDetection result;
   if (cloud_ground.points.empty()) {
     result.diagnostics.push_back(
@@ -136,36 +139,64 @@ TableDetection detectTables(const OrganizedCloud& cloud_ground, const LabelImage
   }
   checkInputs(cloud_ground, labels);
 
-  // 1. Table points. Working buffers are kept per thread: the stage runs
-  // once per frame and a stream of frames then reuses them.
+  // 1. Table points: every one (`full_*`, for pixels, counts, confidence
+  // and normals) and those at the sampled pixels (`points`, `pixels`, for
+  // clustering and geometry; see "Point stride" in tables.hpp). With a
+  // stride of 1 the two are the same lists. Working buffers are kept per
+  // thread: the stage runs once per frame and a stream of frames then
+  // reuses them.
+  const int stride = config.point_stride;
+  const int width = cloud_ground.width, height = cloud_ground.height;
+  // The sample grid: cell (gx, gy) holds pixel (gx * stride, gy * stride).
+  const int grid_width = (width + stride - 1) / stride;
+  const int grid_height = (height + stride - 1) / stride;
   thread_local std::vector<Eigen::Vector3f> points_tls, cluster_points_tls;
   thread_local std::vector<int> pixels_tls, member_start_tls, members_tls, fill_tls;
+  thread_local std::vector<int> full_pixels_tls, full_cluster_tls, sample_at_tls;
+  thread_local std::vector<int> sample_start_tls, sample_members_tls;
   std::vector<Eigen::Vector3f>& points = points_tls;
   std::vector<int>& pixels = pixels_tls;
+  std::vector<int>& full_pixels_buffer = full_pixels_tls;
+  std::vector<int>& sample_at = sample_at_tls;  // sample index per grid cell, or -1
   points.clear();
   pixels.clear();
-  {
-    const auto table_pixels = static_cast<std::size_t>(
-        std::count(labels.labels.begin(), labels.labels.end(), kTableLabel));
-    points.reserve(table_pixels);
-    pixels.reserve(table_pixels);
-  }
-  for (std::size_t i = 0; i < cloud_ground.points.size(); ++i) {
-    if (labels.labels[i] != kTableLabel) continue;
-    const Eigen::Vector3f& p = cloud_ground.points[i];
-    if (!finitePoint(p)) {
-      ++result.nonfinite_points;
-      continue;
+  full_pixels_buffer.clear();
+  if (stride > 1) sample_at.assign(static_cast<std::size_t>(grid_width) * grid_height, -1);
+  for (int y = 0; y < height; ++y) {
+    const bool sampled_row = y % stride == 0;
+    const std::size_t row = static_cast<std::size_t>(y) * width;
+    const std::uint8_t* label_row = labels.labels.data() + row;
+    for (int x = 0; x < width; ++x) {
+      if (label_row[x] != kTableLabel) {
+        // Most of a frame is not table: skip to the next table pixel with
+        // memchr (vectorised) instead of a compare and branch per pixel.
+        const void* next =
+            std::memchr(label_row + x, kTableLabel, static_cast<std::size_t>(width - x));
+        if (!next) break;
+        x = static_cast<int>(static_cast<const std::uint8_t*>(next) - label_row);
+      }
+      const std::size_t i = row + static_cast<std::size_t>(x);
+      const Eigen::Vector3f& p = cloud_ground.points[i];
+      if (!finitePoint(p)) {
+        ++result.nonfinite_points;
+        continue;
+      }
+      if (p.z() < config.min_table_height_m || p.z() > config.max_table_height_m ||
+          std::abs(p.x()) > kMaxPlausibleRangeM || std::abs(p.y()) > kMaxPlausibleRangeM) {
+        ++result.implausible_points;
+        continue;
+      }
+      ++result.table_points;
+      if (stride > 1) {
+        full_pixels_buffer.push_back(static_cast<int>(i));
+        if (!sampled_row || x % stride != 0) continue;
+        sample_at[static_cast<std::size_t>(y / stride) * grid_width + x / stride] =
+            static_cast<int>(points.size());
+      }
+      points.push_back(p);
+      pixels.push_back(static_cast<int>(i));
     }
-    if (p.z() < config.min_table_height_m || p.z() > config.max_table_height_m ||
-        std::abs(p.x()) > kMaxPlausibleRangeM || std::abs(p.y()) > kMaxPlausibleRangeM) {
-      ++result.implausible_points;
-      continue;
-    }
-    points.push_back(p);
-    pixels.push_back(static_cast<int>(i));
   }
-  result.table_points = static_cast<int>(points.size());
   if (result.nonfinite_points > 0) {
     result.diagnostics.push_back(std::to_string(result.nonfinite_points) +
                                  " table-labelled points with non-finite coordinates ignored");
@@ -176,28 +207,76 @@ TableDetection detectTables(const OrganizedCloud& cloud_ground, const LabelImage
         fmt(config.min_table_height_m) + ", " + fmt(config.max_table_height_m) +
         "] m height (tables.min/max_table_height_m) or beyond 100 m ignored");
   }
-  if (points.empty()) {
+  if (result.table_points == 0) {
     result.diagnostics.push_back("no table-labelled points at table height: no tables");
     return result;
   }
-
-  // 2. Clusters, their members grouped by a counting sort. Members stay in
-  // ascending point order, hence ascending pixel order: table.pixels needs no
-  // sort, and sums over members run in the same order as before.
-  const std::vector<int> cluster_of =
-      clusterPoints(points, config.cluster_tolerance_m, PointGrid{&pixels, cloud_ground.width});
-  const int clusters = *std::max_element(cluster_of.begin(), cluster_of.end()) + 1;
-  std::vector<int>& member_start = member_start_tls;
-  member_start.assign(static_cast<std::size_t>(clusters) + 1, 0);
-  for (int c : cluster_of) ++member_start[c + 1];
-  for (int c = 0; c < clusters; ++c) member_start[c + 1] += member_start[c];
-  std::vector<int>& members = members_tls;
-  members.resize(points.size());
-  {
-    std::vector<int>& fill = fill_tls;
-    fill.assign(member_start.begin(), member_start.end() - 1);
-    for (int i = 0; i < static_cast<int>(points.size()); ++i) members[fill[cluster_of[i]]++] = i;
+  if (points.empty()) {
+    result.unsampled_points = result.table_points;
+    result.diagnostics.push_back(std::to_string(result.table_points) +
+                                 " table points, none at a sampled pixel " +
+                                 "(tables.point_stride " + std::to_string(stride) + "): no tables");
+    return result;
   }
+
+  // 2. Clusters of the sampled points; with a stride, every other table
+  // point joins the cluster of a sampled corner of its grid cell within the
+  // tolerance (tables.hpp). Then the members of each cluster, full and
+  // sampled, grouped by counting sorts: they stay in ascending point order,
+  // hence ascending pixel order, so table.pixels needs no sort, and sums over
+  // members run in the same order as before.
+  const std::vector<int> cluster_of =
+      clusterPoints(points, config.cluster_tolerance_m, PointGrid{&pixels, width, stride});
+  const int clusters = *std::max_element(cluster_of.begin(), cluster_of.end()) + 1;
+  const std::vector<int>& full_pixels = stride > 1 ? full_pixels_buffer : pixels;
+  std::vector<int>& full_cluster_buffer = full_cluster_tls;
+  if (stride > 1) {
+    const float tol2 = config.cluster_tolerance_m * config.cluster_tolerance_m;
+    full_cluster_buffer.resize(full_pixels.size());
+    for (std::size_t k = 0; k < full_pixels.size(); ++k) {
+      const int pixel = full_pixels[k];
+      const int gx = (pixel % width) / stride, gy = (pixel / width) / stride;
+      const Eigen::Vector3f& p = cloud_ground.points[static_cast<std::size_t>(pixel)];
+      int cluster = -1;
+      // Own corner first (the point itself when it is sampled), then the
+      // cell's other corners.
+      for (int corner = 0; corner < 4 && cluster < 0; ++corner) {
+        const int cx = gx + (corner & 1), cy = gy + (corner >> 1);
+        if (cx >= grid_width || cy >= grid_height) continue;
+        const int s = sample_at[static_cast<std::size_t>(cy) * grid_width + cx];
+        if (s >= 0 && (points[s] - p).squaredNorm() <= tol2) cluster = cluster_of[s];
+      }
+      full_cluster_buffer[k] = cluster;
+      if (cluster < 0) ++result.unsampled_points;
+    }
+    if (result.unsampled_points > 0) {
+      result.diagnostics.push_back(std::to_string(result.unsampled_points) +
+                                   " table points with no sampled point " +
+                                   "within tables.cluster_tolerance_m (tables.point_stride " +
+                                   std::to_string(stride) + ") left out");
+    }
+  }
+  const std::vector<int>& full_cluster = stride > 1 ? full_cluster_buffer : cluster_of;
+  // Counting sort of `of` (cluster per point, -1 = none) into `start` and `order`.
+  const auto groupByCluster = [clusters](const std::vector<int>& of, std::vector<int>& start,
+                                         std::vector<int>& order, std::vector<int>& fill) {
+    start.assign(static_cast<std::size_t>(clusters) + 1, 0);
+    for (int c : of) {
+      if (c >= 0) ++start[c + 1];
+    }
+    for (int c = 0; c < clusters; ++c) start[c + 1] += start[c];
+    order.resize(static_cast<std::size_t>(start[clusters]));
+    fill.assign(start.begin(), start.end() - 1);
+    for (int i = 0; i < static_cast<int>(of.size()); ++i) {
+      if (of[i] >= 0) order[fill[of[i]]++] = i;
+    }
+  };
+  std::vector<int>& member_start = member_start_tls;
+  std::vector<int>& members = members_tls;  // indices into full_pixels
+  groupByCluster(full_cluster, member_start, members, fill_tls);
+  std::vector<int>& sample_start = stride > 1 ? sample_start_tls : member_start;
+  std::vector<int>& sample_members = stride > 1 ? sample_members_tls : members;  // into points
+  if (stride > 1) groupByCluster(cluster_of, sample_start, sample_members, fill_tls);
 
   int small_clusters = 0, largest_small = 0;
   std::vector<TableCluster> tables;
@@ -217,17 +296,19 @@ TableDetection detectTables(const OrganizedCloud& cloud_ground, const LabelImage
                                    std::to_string(config.max_cluster_points) + ") dropped");
       continue;
     }
-    // 3. Geometry.
-    cluster_points.resize(static_cast<std::size_t>(n));
+    // 3. Geometry, from the cluster's sampled points.
+    const int* sample_member = sample_members.data() + sample_start[c];
+    const int samples = sample_start[c + 1] - sample_start[c];
+    cluster_points.resize(static_cast<std::size_t>(samples));
+    for (int k = 0; k < samples; ++k) cluster_points[k] = points[sample_member[k]];
     // A label image without confidence (ground truth) counts as certain.
     double confidence_sum = labels.confidence.empty() ? static_cast<double>(n) : 0.0;
-    for (int k = 0; k < n; ++k) {
-      cluster_points[k] = points[member[k]];
-      if (!labels.confidence.empty()) confidence_sum += labels.confidence[pixels[member[k]]];
+    if (!labels.confidence.empty()) {
+      for (int k = 0; k < n; ++k) confidence_sum += labels.confidence[full_pixels[member[k]]];
     }
     TableCluster table;
     table.mean_confidence = static_cast<float>(confidence_sum / n);
-    const ClusterOutcome outcome = describeCluster(cluster_points, config, table);
+    const ClusterOutcome outcome = describeCluster(cluster_points, n, config, table);
     if (!outcome.ok) {
       ++result.clusters_rejected;
       result.diagnostics.push_back(outcome.reason + ": dropped");
@@ -251,7 +332,8 @@ TableDetection detectTables(const OrganizedCloud& cloud_ground, const LabelImage
     if (normals_ground) {
       int valid = 0, horizontal = 0;
       for (int k = 0; k < n; ++k) {
-        const float nz = normals_ground->normals[static_cast<std::size_t>(pixels[member[k]])].z();
+        const float nz =
+            normals_ground->normals[static_cast<std::size_t>(full_pixels[member[k]])].z();
         if (!std::isfinite(nz)) continue;
         ++valid;
         horizontal += std::abs(nz) >= cos_tilt ? 1 : 0;
@@ -267,7 +349,7 @@ TableDetection detectTables(const OrganizedCloud& cloud_ground, const LabelImage
       }
     }
     table.pixels.resize(static_cast<std::size_t>(n));
-    for (int k = 0; k < n; ++k) table.pixels[k] = pixels[member[k]];
+    for (int k = 0; k < n; ++k) table.pixels[k] = full_pixels[member[k]];
     tables.push_back(std::move(table));
   }
   if (small_clusters > 0) {

@@ -39,11 +39,13 @@ std::string fmt(double value, int precision = 3);
 
 // Where the points of clusterPoints sit in an organized image, when they
 // come from one: point k at pixel (*pixels)[k] (ascending) of an image
-// `width` pixels wide. Only a shortcut: the partition is the same with or
-// without it.
+// `width` pixels wide, sampled every `stride` pixels of every `stride`-th
+// row (so a point's grid neighbours are `stride` pixels left and `stride`
+// rows up). Only a shortcut: the partition is the same with or without it.
 struct PointGrid {
   const std::vector<int>* pixels = nullptr;
   int width = 0;
+  int stride = 1;
 };
 
 // Exact Euclidean clustering (see euclideanClusterLabels in tables.hpp)
@@ -58,8 +60,10 @@ struct ClusterOutcome {
 };
 
 // Fills `table` (all but id, pixels, mean_confidence and search positions)
-// from the cluster's points: point count, top height, centroid, axes, box, hull.
-ClusterOutcome describeCluster(const std::vector<Eigen::Vector3f>& points,
+// from the cluster's points (or a sample of them): top height, centroid,
+// axes, box, hull; point_count = `point_count`, the full cluster's size,
+// which the reasons for a rejection also name.
+ClusterOutcome describeCluster(const std::vector<Eigen::Vector3f>& points, int point_count,
                                const TableConfig& config, TableCluster& table);
 
 // Observed floor cells and obstacle points around the search positions

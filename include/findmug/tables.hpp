@@ -24,6 +24,21 @@
 //      `robot_height_m`) within `robot_radius_m`, or too little observed floor
 //      under the robot's footprint, makes it unreachable with a reason. Such
 //      positions are kept and flagged, never silently dropped.
+// Point stride: with tables.point_stride s > 1, steps 2 and 3 run on the
+// table points at every s-th pixel of every s-th row (a quarter of them for
+// s = 2: the stage's cost is mostly per point, and a table top 1-4 m away
+// has points every 2-8 mm, far below the 5 cm tolerance). Every other table
+// point then joins the cluster of the first sampled point of its s x s cell
+// corner (its own cell's, then the right, lower and diagonal neighbours')
+// within cluster_tolerance_m; those with none are left out and counted in
+// the diagnostics. Pixels, point counts, confidence and the horizontal share
+// stay those of the full-resolution cluster; only the geometry of step 3
+// (top height, axes, edges, hull, top area) is computed from the samples,
+// which holds it to within about a sample spacing in the middle of a top;
+// but at a far, sparse edge the robust edges (table_geometry.cpp) move
+// inwards, and the top area shrinks by the cells that only unsampled points
+// reach. Two parts of a table joined only through unsampled points split (a
+// bridge one pixel wide at s = 2).
 // Anything skipped (no ground-aligned cloud, non-finite points, degenerate or
 // out-of-size clusters) is reported in TableDetection::diagnostics for the
 // caller to log; the core library itself does not log.
@@ -81,8 +96,14 @@ struct TableCluster {
 
 struct TableConfig {
   float cluster_tolerance_m = 0.05f;
+  // Point counts are of the full-resolution cluster (every table pixel).
   int min_cluster_points = 500;
   int max_cluster_points = 1000000;  // above a VGA frame: a close table may fill the view
+  // Pixel stride of the points that steps 2 and 3 work on (see "Point
+  // stride" above). 1 = every table point (the exact definition of step 2).
+  // 2 takes about 40 % off the stage on table-rich views but costs table
+  // instances on NYU (BENCHMARKS.md 9j): a knob for a tight CPU budget.
+  int point_stride = 1;
   float safety_distance_m = 0.5f;    // d: from the table edge to the search position
   float arm_reach_m = 0.8f;
   float robot_radius_m = 0.3f;
@@ -131,11 +152,14 @@ struct TableConfig {
 struct TableDetection {
   std::vector<TableCluster> tables;
   std::vector<std::string> diagnostics;  // one human-readable line per reason
-  int table_points = 0;                  // table-labelled points used for clustering
+  int table_points = 0;                  // table-labelled points at table height (all pixels)
   int nonfinite_points = 0;              // table-labelled points with a NaN/inf coordinate
   int implausible_points = 0;            // table-labelled points outside the height range or
                                          // absurdly far (> 100 m) from the robot
   int clusters_rejected = 0;             // clusters dropped (size, degenerate)
+  // With tables.point_stride > 1: table points with no sampled point within
+  // cluster_tolerance_m among their cell's corners, left out of every cluster.
+  int unsampled_points = 0;
 };
 
 // Throws findmug::Error naming the setting (`tables.KEY = value: rule`) when

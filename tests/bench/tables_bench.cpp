@@ -4,11 +4,13 @@
 //                        ground plane fitted to the floor labels (real clutter)
 //   tables/synth/SEED_F  rendered apartment frames (Kinect noise model)
 //   tables/close_table   the worst case: a table filling most of the view
-// The target is <= 20 ms per frame, median over the frames. Inputs are
-// prepared once outside the timed loop. Run e.g.
+// The target is <= 20 ms per frame, median over the frames. Each frame runs
+// with tables.point_stride 1 (the default, every table point: .../stride1)
+// and 2 (.../stride2), side by side. Inputs are prepared once outside the
+// timed loop. Run e.g.
 //   tables_bench --benchmark_repetitions=5 --benchmark_report_aggregates_only=true
 // With FINDMUG_TABLES_DUMP=FILE set, every field of every input's detection
-// (floats exact, in hex) is written to FILE before timing: running the same
+// at both strides (floats exact, in hex) is written to FILE before timing: running the same
 // binary against two builds of the core (LD_LIBRARY_PATH) and diffing the
 // files shows whether a change to the table stage changed its output.
 #include <benchmark/benchmark.h>
@@ -98,8 +100,14 @@ std::vector<Input> synthInputs() {
   return out;
 }
 
-void runTables(benchmark::State& state, const Input* input) {
-  const TableConfig config;
+TableConfig configWithStride(int stride) {
+  TableConfig config;
+  config.point_stride = stride;
+  return config;
+}
+
+void runTables(benchmark::State& state, const Input* input, int stride) {
+  const TableConfig config = configWithStride(stride);
   std::size_t tables = 0, positions = 0;
   for (auto _ : state) {
     TableDetection d = detectTables(input->cloud_ground, input->labels, config);
@@ -136,30 +144,33 @@ void dumpDetections(const char* path) {
     std::fprintf(out, " %s=%a,%a", name, v.x(), v.y());
   };
   for (const Input& in : inputs()) {
-    const TableDetection d = detectTables(in.cloud_ground, in.labels, TableConfig{});
-    std::fprintf(out, "%s points=%d nonfinite=%d implausible=%d rejected=%d tables=%zu\n",
-                 in.name.c_str(), d.table_points, d.nonfinite_points, d.implausible_points,
-                 d.clusters_rejected, d.tables.size());
-    for (const auto& line : d.diagnostics) std::fprintf(out, "  diag %s\n", line.c_str());
-    for (const auto& t : d.tables) {
-      std::uint64_t h = 0xcbf29ce484222325ULL;  // FNV-1a of the pixel list
-      for (int px : t.pixels) h = (h ^ static_cast<std::uint32_t>(px)) * 0x100000001b3ULL;
-      std::fprintf(out, "  table id=%d n=%d top=%a conf=%a c=%a,%a,%a pixels=%zu/%016llx", t.id,
-                   t.point_count, t.top_height, t.mean_confidence, t.centroid.x(),
-                   t.centroid.y(), t.centroid.z(), t.pixels.size(),
-                   static_cast<unsigned long long>(h));
-      v2("major", t.major_axis);
-      v2("minor", t.minor_axis);
-      v2("ext", t.extents);
-      v2("center", t.center);
-      std::fprintf(out, "\n   hull");
-      for (const auto& q : t.hull) std::fprintf(out, " %a,%a", q.x(), q.y());
-      std::fprintf(out, "\n");
-      for (const auto& p : t.search_positions) {
-        std::fprintf(out, "   pos side=%d along=%a yaw=%a reachable=%d", p.side, p.along_m, p.yaw,
-                     p.reachable ? 1 : 0);
-        v2("xy", p.xy);
-        std::fprintf(out, " reason='%s'\n", p.reason.c_str());
+    for (int stride : {1, 2}) {
+      const TableDetection d = detectTables(in.cloud_ground, in.labels, configWithStride(stride));
+      std::fprintf(out,
+                   "%s/stride%d points=%d nonfinite=%d implausible=%d rejected=%d unsampled=%d "
+                   "tables=%zu\n",
+                   in.name.c_str(), stride, d.table_points, d.nonfinite_points,
+                   d.implausible_points, d.clusters_rejected, d.unsampled_points, d.tables.size());
+      for (const auto& line : d.diagnostics) std::fprintf(out, "  diag %s\n", line.c_str());
+      for (const auto& t : d.tables) {
+        std::uint64_t h = 0xcbf29ce484222325ULL;  // FNV-1a of the pixel list
+        for (int px : t.pixels) h = (h ^ static_cast<std::uint32_t>(px)) * 0x100000001b3ULL;
+        std::fprintf(out, "  table id=%d n=%d top=%a conf=%a c=%a,%a,%a pixels=%zu/%016llx", t.id,
+                     t.point_count, t.top_height, t.mean_confidence, t.centroid.x(), t.centroid.y(),
+                     t.centroid.z(), t.pixels.size(), static_cast<unsigned long long>(h));
+        v2("major", t.major_axis);
+        v2("minor", t.minor_axis);
+        v2("ext", t.extents);
+        v2("center", t.center);
+        std::fprintf(out, "\n   hull");
+        for (const auto& q : t.hull) std::fprintf(out, " %a,%a", q.x(), q.y());
+        std::fprintf(out, "\n");
+        for (const auto& p : t.search_positions) {
+          std::fprintf(out, "   pos side=%d along=%a yaw=%a reachable=%d", p.side, p.along_m, p.yaw,
+                       p.reachable ? 1 : 0);
+          v2("xy", p.xy);
+          std::fprintf(out, " reason='%s'\n", p.reason.c_str());
+        }
       }
     }
   }
@@ -169,7 +180,11 @@ void dumpDetections(const char* path) {
 const bool registered = [] {
   if (const char* dump = std::getenv("FINDMUG_TABLES_DUMP")) dumpDetections(dump);
   for (const Input& in : inputs()) {
-    benchmark::RegisterBenchmark(in.name.c_str(), runTables, &in)->Unit(benchmark::kMillisecond);
+    for (int stride : {1, 2}) {
+      benchmark::RegisterBenchmark((in.name + "/stride" + std::to_string(stride)).c_str(),
+                                   runTables, &in, stride)
+          ->Unit(benchmark::kMillisecond);
+    }
   }
   return true;
 }();

@@ -190,44 +190,49 @@ TEST(EuclideanClusters, SamePartitionAsBruteForce) {
 // image neighbours without a search. Only a shortcut: on an organized cloud
 // with depth steps just below and above the tolerance, noise, holes and
 // pixels far apart (a coarse camera), the clusters are those without it and
-// those of brute force.
+// those of brute force. With tables.point_stride 2 the points sit at every
+// other pixel of every other row of an image twice as wide, and the shortcut
+// links points two pixels apart: the same cloud must give the same clusters.
 TEST(EuclideanClusters, ImageNeighbourShortcutGivesTheSamePartition) {
   std::mt19937 rng(23);
   std::normal_distribution<float> noise(0.0f, 0.01f);
   std::uniform_real_distribution<float> unit(0.0f, 1.0f);
-  const int width = 80, height = 60;
-  const float focal = 60.0f;  // about 2.5 cm between pixels at 1.5 m
-  for (float tol : {0.03f, 0.05f}) {
-    for (int trial = 0; trial < 3; ++trial) {
-      std::vector<Eigen::Vector3f> pts;
-      std::vector<int> pixels;
-      for (int y = 0; y < height; ++y) {
-        for (int x = 0; x < width; ++x) {
-          if (unit(rng) > 0.8f) continue;  // holes
-          float depth = 1.2f + 0.01f * x + 0.005f * y;
-          if (x > 20 && x < 40) depth += 0.04f;              // step below the tolerance
-          if (y > 30 && x > 45) depth += 0.07f;              // step above it
-          if (x > 60 && y < 15) depth += 0.3f * (trial + 1);  // a far patch
-          depth += noise(rng);
-          pts.emplace_back((x - width / 2) * depth / focal, depth,
-                           0.7f + (height / 2 - y) * depth / focal * 0.1f);
-          pixels.push_back(y * width + x);
+  const int width = 80, height = 60;  // sampled pixels
+  const float focal = 60.0f;          // about 2.5 cm between sampled pixels at 1.5 m
+  for (int stride : {1, 2}) {
+    for (float tol : {0.03f, 0.05f}) {
+      for (int trial = 0; trial < 3; ++trial) {
+        std::vector<Eigen::Vector3f> pts;
+        std::vector<int> pixels;
+        for (int y = 0; y < height; ++y) {
+          for (int x = 0; x < width; ++x) {
+            if (unit(rng) > 0.8f) continue;  // holes
+            float depth = 1.2f + 0.01f * x + 0.005f * y;
+            if (x > 20 && x < 40) depth += 0.04f;               // step below the tolerance
+            if (y > 30 && x > 45) depth += 0.07f;               // step above it
+            if (x > 60 && y < 15) depth += 0.3f * (trial + 1);  // a far patch
+            depth += noise(rng);
+            pts.emplace_back((x - width / 2) * depth / focal, depth,
+                             0.7f + (height / 2 - y) * depth / focal * 0.1f);
+            pixels.push_back(y * stride * width * stride + x * stride);
+          }
         }
+        const auto plain = tables_detail::clusterPoints(pts, tol);
+        const auto shortcut = tables_detail::clusterPoints(
+            pts, tol, tables_detail::PointGrid{&pixels, width * stride, stride});
+        // Ids are dense in order of first appearance: same partition = same ids.
+        ASSERT_EQ(shortcut, plain)
+            << "stride " << stride << ", tolerance " << tol << ", trial " << trial;
+        const auto reference = bruteForceClusters(pts, tol);
+        std::map<int, int> forward;
+        for (std::size_t i = 0; i < pts.size(); ++i) {
+          const auto f = forward.emplace(plain[i], reference[i]);
+          ASSERT_EQ(f.first->second, reference[i]) << "tolerance " << tol << ", point " << i;
+        }
+        EXPECT_EQ(forward.size(), static_cast<std::size_t>(
+                                      *std::max_element(reference.begin(), reference.end()) + 1));
+        EXPECT_GT(forward.size(), 1u) << "test needs more than one cluster";
       }
-      const auto plain = tables_detail::clusterPoints(pts, tol);
-      const auto shortcut =
-          tables_detail::clusterPoints(pts, tol, tables_detail::PointGrid{&pixels, width});
-      // Ids are dense in order of first appearance: same partition = same ids.
-      ASSERT_EQ(shortcut, plain) << "tolerance " << tol << ", trial " << trial;
-      const auto reference = bruteForceClusters(pts, tol);
-      std::map<int, int> forward;
-      for (std::size_t i = 0; i < pts.size(); ++i) {
-        const auto f = forward.emplace(plain[i], reference[i]);
-        ASSERT_EQ(f.first->second, reference[i]) << "tolerance " << tol << ", point " << i;
-      }
-      EXPECT_EQ(forward.size(),
-                static_cast<std::size_t>(*std::max_element(reference.begin(), reference.end()) + 1));
-      EXPECT_GT(forward.size(), 1u) << "test needs more than one cluster";
     }
   }
 }
@@ -533,6 +538,11 @@ TEST(FindTablesBadInput, SizeMismatchAndBadSettingsThrow) {
   c = TableConfig{};
   c.floor_cell_m = 0.0f;
   expectSettingError(c, "tables.floor_cell_m");
+  for (int stride : {0, -1, 9}) {
+    c = TableConfig{};
+    c.point_stride = stride;
+    expectSettingError(c, "tables.point_stride");
+  }
 }
 
 TEST(FindTablesReachability, ObstacleAndUnseenFloorAreFlaggedNotDropped) {
@@ -735,6 +745,102 @@ TEST(SynthTables, LongTableGetsPositionsAlongItsLongSides) {
   // (0.7 m away) over ±0.39 m of edge, so ceil(1.0 / 0.39) = 3 positions per side.
   EXPECT_EQ(d.tables[0].search_positions.size(), 6u);
   expectMatchesTruth(d.tables[0], synth::tableInGroundFrame(truth, pose), config, "long table");
+}
+
+// tables.point_stride 2: clustering and geometry on a quarter of the table
+// points. Every table pixel but the few (flying pixels at the edge) with no
+// sampled point within the tolerance still belongs to the table, and the
+// geometry stays close to that of every point: the bounds below are what
+// the approximation is documented to give (tables.hpp, BENCHMARKS.md 9j),
+// a little looser than expectMatchesTruth's at stride 1.
+TEST(SynthTables, PointStrideTwoKeepsThePixelsAndNearlyTheGeometry) {
+  synth::SynthScene scene = synth::makeEmptyRoom({7.0, 6.0, 2.6});
+  const synth::TableTruth truth = addRectTable(scene, {3.5, 3.0}, 0.35, 1.4, 0.8, 0.75);
+  synth::CameraPose pose;
+  pose.xy = {2.9, 1.2};
+  pose.yaw = std::atan2(truth.center_xy.y() - 1.2, truth.center_xy.x() - 2.9);
+  pose.height_m = 1.2;
+  pose.pitch_rad = 0.55;
+  View v = renderView(scene, pose, 11);
+  v.labels.confidence.assign(v.labels.labels.size(), 0.7f);
+  TableConfig exact, strided;
+  strided.point_stride = 2;
+  const TableDetection all = detectTables(v.cloud_ground, v.labels, exact);
+  const TableDetection sampled = detectTables(v.cloud_ground, v.labels, strided);
+  ASSERT_EQ(all.tables.size(), 1u) << joined(all.diagnostics);
+  ASSERT_EQ(sampled.tables.size(), 1u) << joined(sampled.diagnostics);
+  EXPECT_EQ(sampled.table_points, all.table_points);
+  const TableCluster& a = all.tables[0];
+  const TableCluster& b = sampled.tables[0];
+  // Left-out points may also be noise outside the table (clusters of their own at stride 1).
+  EXPECT_LE(b.point_count, a.point_count);
+  EXPECT_GE(b.point_count + sampled.unsampled_points, a.point_count);
+  EXPECT_LT(sampled.unsampled_points, a.point_count / 1000) << joined(sampled.diagnostics);
+  EXPECT_EQ(b.point_count, static_cast<int>(b.pixels.size()));
+  EXPECT_TRUE(std::includes(a.pixels.begin(), a.pixels.end(), b.pixels.begin(), b.pixels.end()));
+  EXPECT_NEAR(b.mean_confidence, 0.7f, 1e-5f);
+  EXPECT_NEAR(b.top_height, a.top_height, 0.005f);
+  EXPECT_LT((b.center - a.center).norm(), 0.02f);
+  EXPECT_LT(axisAngleDeg(b.major_axis, a.major_axis), 3.0f);
+  EXPECT_NEAR(b.extents.x(), a.extents.x(), 0.02f);
+  EXPECT_NEAR(b.extents.y(), a.extents.y(), 0.02f);
+  EXPECT_NEAR(b.top_area_m2, a.top_area_m2, 0.1f * a.top_area_m2);
+  ASSERT_EQ(b.search_positions.size(), a.search_positions.size());
+  const auto outline = polygonOf(synth::tableInGroundFrame(truth, pose));
+  for (std::size_t k = 0; k < b.search_positions.size(); ++k) {
+    EXPECT_LT((b.search_positions[k].xy - a.search_positions[k].xy).norm(), 0.05f);
+    EXPECT_NEAR(distanceToPolygon(b.search_positions[k].xy, outline), strided.safety_distance_m,
+                0.05f);
+  }
+}
+
+// A table point with no sampled point near it (a flying pixel between two
+// sampled ones) is left out at stride 2 and counted, not silently dropped.
+TEST(FindTables, PointStrideCountsTablePointsWithNoSampledNeighbour) {
+  // A 200 x 100 pixel organized top, 1 cm apart, at 0.75 m; floor around it
+  // is not needed to find the table (only to reach it).
+  const int width = 200, height = 100;
+  OrganizedCloud cloud;
+  LabelImage labels;
+  cloud.width = labels.width = width;
+  cloud.height = labels.height = height;
+  for (int y = 0; y < height; ++y) {
+    for (int x = 0; x < width; ++x) {
+      cloud.points.emplace_back(1.5f + 0.01f * y, -1.0f + 0.01f * x, 0.75f);
+      labels.labels.push_back(kTable);
+    }
+  }
+  // Pixel (51, 31) is odd in x and y: no sampled pixel of its own; lifted
+  // 0.3 m it is no sampled corner's neighbour either.
+  cloud.points[31 * width + 51].z() += 0.3f;
+  TableConfig config;
+  config.point_stride = 2;
+  const TableDetection d = detectTables(cloud, labels, config);
+  ASSERT_EQ(d.tables.size(), 1u) << joined(d.diagnostics);
+  EXPECT_EQ(d.table_points, width * height);
+  EXPECT_EQ(d.unsampled_points, 1);
+  EXPECT_TRUE(hasDiagnostic(d, "no sampled point within tables.cluster_tolerance_m"))
+      << joined(d.diagnostics);
+  EXPECT_EQ(d.tables[0].point_count, width * height - 1);
+  EXPECT_EQ(std::count(d.tables[0].pixels.begin(), d.tables[0].pixels.end(), 31 * width + 51), 0);
+  EXPECT_TRUE(std::is_sorted(d.tables[0].pixels.begin(), d.tables[0].pixels.end()));
+  // Table labels on odd rows only: no table point at a sampled pixel at all.
+  LabelImage odd_rows = labels;
+  for (int y = 0; y < height; y += 2) {
+    std::fill_n(odd_rows.labels.begin() + y * width, width, kFloor);
+  }
+  const TableDetection none = detectTables(cloud, odd_rows, config);
+  EXPECT_TRUE(none.tables.empty());
+  EXPECT_EQ(none.table_points, width * height / 2);
+  EXPECT_EQ(none.unsampled_points, none.table_points);
+  EXPECT_TRUE(hasDiagnostic(none, "none at a sampled pixel")) << joined(none.diagnostics);
+  // At stride 1 the same point is its own cluster, dropped as too small.
+  config.point_stride = 1;
+  const TableDetection exact = detectTables(cloud, labels, config);
+  ASSERT_EQ(exact.tables.size(), 1u);
+  EXPECT_EQ(exact.unsampled_points, 0);
+  EXPECT_EQ(exact.tables[0].point_count, width * height - 1);
+  EXPECT_TRUE(hasDiagnostic(exact, "below tables.min_cluster_points")) << joined(exact.diagnostics);
 }
 
 TEST(SynthTables, FloorHiddenBehindASolidTableIsNoObservedFloor) {

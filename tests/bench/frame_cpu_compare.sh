@@ -1,0 +1,56 @@
+#!/usr/bin/env bash
+# frame_cpu_compare.sh — CPU per frame of two builds of the core, side by side.
+#
+#   tests/bench/frame_cpu_compare.sh BASE_BUILD [ROUNDS] [OUT.csv]
+#
+# Runs frame_cpu (one pass over the data after its warm-up pass, pinned to
+# CPU 0, the shipped model and features) of BASE_BUILD and of ./build in
+# turn, ROUNDS times (default 6), on the NYU frames and on a 60-frame
+# synthetic apartment walk (findmug-synth --seed 7, rendered once into a
+# temporary folder), and also ./build with tables.point_stride=2. On a
+# virtual machine whose speed drifts from minute to minute, many short
+# alternating runs and the median over them compare builds more fairly
+# than one long run each. Prints the medians of the table stage and of the
+# whole frame, and writes every run to OUT.csv (default frame_cpu_compare.csv).
+set -euo pipefail
+cd "$(dirname "$0")/../.."
+base=${1:?usage: frame_cpu_compare.sh BASE_BUILD [ROUNDS] [OUT.csv]}
+rounds=${2:-6}
+out=${3:-frame_cpu_compare.csv}
+[[ -x $base/tests/bench/frame_cpu ]] || { echo "no $base/tests/bench/frame_cpu" >&2; exit 1; }
+[[ -x build/tests/bench/frame_cpu ]] || { echo "no build/tests/bench/frame_cpu" >&2; exit 1; }
+export FINDMUG_DATA=${FINDMUG_DATA:-$PWD/../shared/data}
+synth=$(mktemp -d)
+trap 'rm -rf "$synth"' EXIT
+build/tools/findmug-synth --seed 7 --frames 60 --out "$synth" >/dev/null
+
+echo "data,variant,round,tables_ms,total_ms" >"$out"
+for round in $(seq "$rounds"); do
+  for data in synthetic nyu; do
+    for variant in base new new-stride2; do
+      exe=build/tests/bench/frame_cpu
+      extra=()
+      [[ $variant == base ]] && exe=$base/tests/bench/frame_cpu
+      [[ $variant == new-stride2 ]] && extra=(--set tables.point_stride=2)
+      [[ $data == synthetic ]] && extra+=(--data "$synth")
+      report=$(taskset -c 0 "$exe" --model models/findmug.fmf --passes 1 \
+        --set features.regions=true --set features.scene=true --heap-keep-mb 256 "${extra[@]}")
+      tables=$(awk -F'|' '$2 ~ /^ tables / {print $3 + 0}' <<<"$report")
+      total=$(awk -F'|' '$2 ~ /total/ {gsub(/\*/, "", $3); print $3 + 0}' <<<"$report")
+      echo "$data,$variant,$round,$tables,$total" >>"$out"
+    done
+  done
+done
+
+python3 - "$out" <<'EOF'
+import csv, statistics, sys
+rows = list(csv.DictReader(open(sys.argv[1])))
+print("| data | variant | runs | table stage, ms (median) | whole frame, ms (median) |")
+print("|---|---|---:|---:|---:|")
+for data in ("nyu", "synthetic"):
+    for variant in ("base", "new", "new-stride2"):
+        sel = [r for r in rows if r["data"] == data and r["variant"] == variant]
+        t = statistics.median(float(r["tables_ms"]) for r in sel)
+        f = statistics.median(float(r["total_ms"]) for r in sel)
+        print(f"| {data} | {variant} | {len(sel)} | {t:.2f} | {f:.2f} |")
+EOF
