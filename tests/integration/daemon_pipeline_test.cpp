@@ -609,8 +609,16 @@ TEST(DaemonPipeline, WatchdogIsWithheldWhileTheSegmentStageIsStuck) {
     ASSERT_TRUE(cv.wait_for(lock, 120s, [&] { return stuck; }));
   }
   // Frames keep arriving (and being dropped) but none completes: after the
-  // stall limit the pings must stop.
-  count_pings(2000ms);  // drain what was sent before the stall was noticed
+  // stall limit the pings must stop. The limit counts from the last frame
+  // completed, and frames already past the segment stage may still complete
+  // after it got stuck (under TSan on a slow host a frame takes up to 1.7 s):
+  // drain until a spell longer than the ping period passes without a ping,
+  // which must come within 30 s.
+  const auto drain_deadline = std::chrono::steady_clock::now() + 30s;
+  bool pings_stopped = false;
+  while (!pings_stopped && std::chrono::steady_clock::now() < drain_deadline) {
+    pings_stopped = count_pings(1500ms) == 0;
+  }
   const int pings_while_stuck = count_pings(2000ms);
   {
     std::lock_guard lock(m);
@@ -624,6 +632,7 @@ TEST(DaemonPipeline, WatchdogIsWithheldWhileTheSegmentStageIsStuck) {
   unsetenv("NOTIFY_SOCKET");
   unsetenv("WATCHDOG_USEC");
   EXPECT_EQ(code, 0);
+  EXPECT_TRUE(pings_stopped) << "the watchdog was still fed 30 s after the segment stage got stuck";
   EXPECT_EQ(pings_while_stuck, 0);
   EXPECT_GT(pings_after_recovery, 0)
       << c.received << " received, " << c.processed << " processed, " << c.pending << " pending";
