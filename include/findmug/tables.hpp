@@ -28,10 +28,10 @@
 // table points at every s-th pixel of every s-th row (a quarter of them for
 // s = 2: the stage's cost is mostly per point, and a table top 1-4 m away
 // has points every 2-8 mm, far below the 5 cm tolerance). Every other table
-// point then joins the cluster of the first sampled point of its s x s cell
-// corner (its own cell's, then the right, lower and diagonal neighbours')
-// within cluster_tolerance_m; those with none are left out and counted in
-// the diagnostics. Pixels, point counts, confidence and the horizontal share
+// point then joins the cluster of the first sampled corner of its s x s cell
+// (top left, top right, bottom left, bottom right) within
+// cluster_tolerance_m; those with none are left out and counted in the
+// diagnostics. Pixels, point counts, confidence and the horizontal share
 // stay those of the full-resolution cluster; only the geometry of step 3
 // (top height, axes, edges, hull, top area) is computed from the samples,
 // which holds it to within about a sample spacing in the middle of a top;

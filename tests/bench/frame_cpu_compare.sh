@@ -11,7 +11,8 @@
 # virtual machine whose speed drifts from minute to minute, many short
 # alternating runs and the median over them compare builds more fairly
 # than one long run each. Prints the medians of the table stage and of the
-# whole frame, and writes every run to OUT.csv (default frame_cpu_compare.csv).
+# whole frame, and of their per-round ratios to the base build (with their
+# range), and writes every run to OUT.csv (default frame_cpu_compare.csv).
 set -euo pipefail
 cd "$(dirname "$0")/../.."
 base=${1:?usage: frame_cpu_compare.sh BASE_BUILD [ROUNDS] [OUT.csv]}
@@ -42,15 +43,22 @@ for round in $(seq "$rounds"); do
   done
 done
 
-python3 - "$out" <<'EOF'
-import csv, statistics, sys
-rows = list(csv.DictReader(open(sys.argv[1])))
-print("| data | variant | runs | table stage, ms (median) | whole frame, ms (median) |")
-print("|---|---|---:|---:|---:|")
-for data in ("nyu", "synthetic"):
-    for variant in ("base", "new", "new-stride2"):
-        sel = [r for r in rows if r["data"] == data and r["variant"] == variant]
-        t = statistics.median(float(r["tables_ms"]) for r in sel)
-        f = statistics.median(float(r["total_ms"]) for r in sel)
-        print(f"| {data} | {variant} | {len(sel)} | {t:.2f} | {f:.2f} |")
-EOF
+# Medians of each stage, and of the per-round ratios to the base run (both
+# ran seconds apart, so the host's drift cancels), with their range.
+median() { sort -g | awk '{v[NR] = $1} END {print (NR % 2 ? v[(NR + 1) / 2] : (v[NR / 2] + v[NR / 2 + 1]) / 2)}'; }
+range() { sort -g | awk 'NR == 1 {lo = $1} {hi = $1} END {printf "%.2f-%.2f", lo, hi}'; }
+echo "| data | variant | runs | table stage ms | whole frame ms | tables / base per round | frame / base per round |"
+echo "|---|---|---:|---:|---:|---|---|"
+for data in nyu synthetic; do
+  for variant in base new new-stride2; do
+    rows=$(awk -F, -v d="$data" -v v="$variant" '$1 == d && $2 == v' "$out")
+    ratios=$(awk -F, -v d="$data" -v v="$variant" '
+      $1 == d && $2 == "base" {bt[$3] = $4; bf[$3] = $5}
+      $1 == d && $2 == v {t[$3] = $4; f[$3] = $5}
+      END {for (r in t) print t[r] / bt[r], f[r] / bf[r]}' "$out")
+    printf "| %s | %s | %d | %.2f | %.2f | %.2f (%s) | %.2f (%s) |\n" "$data" "$variant" \
+      "$(wc -l <<<"$rows")" "$(cut -d, -f4 <<<"$rows" | median)" "$(cut -d, -f5 <<<"$rows" | median)" \
+      "$(cut -d' ' -f1 <<<"$ratios" | median)" "$(cut -d' ' -f1 <<<"$ratios" | range)" \
+      "$(cut -d' ' -f2 <<<"$ratios" | median)" "$(cut -d' ' -f2 <<<"$ratios" | range)"
+  done
+done
