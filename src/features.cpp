@@ -151,7 +151,7 @@ struct PatchAccumulator {
     l += o.l, a += o.a, b += o.b, ll += o.ll, aa += o.aa, bb += o.bb;
   }
 
-  FeatureVector finish(Eigen::Vector3f* centroid) const {
+  FeatureVector finish(Eigen::Vector3f* centroid, SegmentMoments* moments = nullptr) const {
     FeatureVector f{};
     const double n = count;
     const Eigen::Vector3d mean_rel(sx / n, sy / n, sz / n);
@@ -182,6 +182,13 @@ struct PatchAccumulator {
 
     const Eigen::Vector3d mean = ref.cast<double>() + mean_rel;
     if (centroid) *centroid = mean.cast<float>();
+    if (moments) {
+      moments->count = n;
+      moments->mean = mean;
+      moments->scatter = cov * n;
+      moments->normal_sum = Eigen::Vector3d(nx, ny, nz);
+      moments->max_z = z_max;
+    }
     f[3] = static_cast<float>(mean.z());
     f[4] = z_min;
     f[5] = z_max;
@@ -276,41 +283,83 @@ void computeFeaturesInto(const OrganizedCloud& cloud_ground, const NormalImage& 
   const FastLab& lab = fastLab();
 
   // One sequential pass over the image. Pixels come in horizontal runs of
-  // the same segment; each run is summed in a local accumulator (kept in
-  // registers) and merged into its segment's once, instead of a memory
-  // round trip per pixel. The run uses the segment's reference point, so
-  // merging is plain addition.
-  PatchAccumulator run;
-  int run_segment = -1;
-  auto flush = [&] {
-    if (run_segment >= 0 && run.count > 0) acc[static_cast<std::size_t>(run_segment)].merge(run);
-  };
-  for (std::size_t i = 0; i < pixels; ++i) {
-    const int s = segmentation.pixel_segment[i];
-    if (s < 0) continue;
-    const Eigen::Vector3f& p = cloud_ground.points[i];
-    if (!std::isfinite(p.z())) continue;
-    if (s != run_segment) {
-      if (static_cast<std::size_t>(s) >= segment_count) {
-        throw Error("computeFeatures: pixel " + std::to_string(i) + " belongs to segment " +
-                    std::to_string(s) + " but there are only " + std::to_string(segment_count));
-      }
-      flush();
-      PatchAccumulator& target = acc[static_cast<std::size_t>(s)];
-      if (target.count == 0) target.ref = p;
-      run = PatchAccumulator{};
-      run.ref = target.ref;
-      run.ref_fixed = true;
-      run_segment = s;
+  // the same segment (a run goes on across pixels without a valid point or
+  // a segment); each run is summed in local variables and merged into its
+  // segment's accumulator once. Plain locals, not a PatchAccumulator: the
+  // compiler keeps them in registers, where the 24 sums of a struct stayed
+  // in memory with a load and a store each per pixel (that made this pass
+  // store-bound). The arithmetic is addPoint, addNormal and addLab's, in
+  // the same order, so the sums are the same to the bit. The run uses the
+  // segment's reference point, so merging is plain addition.
+  const int* pixel_segment = segmentation.pixel_segment.data();
+  const Eigen::Vector3f* points = cloud_ground.points.data();
+  const Eigen::Vector3f* normals = normals_ground.normals.data();
+  const Rgb8* colors = cloud_ground.colors.data();
+  std::size_t i = 0;
+  while (i < pixels) {
+    const int s = pixel_segment[i];
+    if (s < 0 || !std::isfinite(points[i].z())) {
+      ++i;
+      continue;
     }
-    run.addPoint(p);
-    run.addNormal(normals_ground.normals[i]);
-    run.addLab(lab(cloud_ground.colors[i]));
+    if (static_cast<std::size_t>(s) >= segment_count) {
+      throw Error("computeFeatures: pixel " + std::to_string(i) + " belongs to segment " +
+                  std::to_string(s) + " but there are only " + std::to_string(segment_count));
+    }
+    PatchAccumulator& target = acc[static_cast<std::size_t>(s)];
+    if (target.count == 0) target.ref = points[i];
+    const float rx = target.ref.x(), ry = target.ref.y(), rz = target.ref.z();
+    int count = 0, normal_count = 0;
+    double sx = 0, sy = 0, sz = 0, sxx = 0, sxy = 0, sxz = 0, syy = 0, syz = 0, szz = 0;
+    float z_min = std::numeric_limits<float>::infinity();
+    float z_max = -std::numeric_limits<float>::infinity();
+    double nx = 0, ny = 0, nz = 0, cos_sum = 0, sin_sum = 0;
+    double l = 0, a = 0, b = 0, ll = 0, aa = 0, bb = 0;
+    for (; i < pixels; ++i) {
+      const int t = pixel_segment[i];
+      if (t < 0) continue;
+      const Eigen::Vector3f& p = points[i];
+      if (!std::isfinite(p.z())) continue;
+      if (t != s) break;
+      // addPoint
+      ++count;
+      const double x = p.x() - rx, y = p.y() - ry, z = p.z() - rz;
+      sx += x, sy += y, sz += z;
+      sxx += x * x, sxy += x * y, sxz += x * z, syy += y * y, syz += y * z, szz += z * z;
+      z_min = std::min(z_min, p.z());
+      z_max = std::max(z_max, p.z());
+      // addNormal
+      const Eigen::Vector3f& n = normals[i];
+      const float len2 = n.squaredNorm();
+      if (len2 > 0.0f && std::isfinite(len2)) {
+        const float inv = 1.0f / std::sqrt(len2);
+        const float ux = n.x() * inv, uy = n.y() * inv, uz = n.z() * inv;
+        ++normal_count;
+        nx += ux, ny += uy, nz += uz;
+        cos_sum += uz;
+        sin_sum += std::sqrt(ux * ux + uy * uy);
+      }
+      // addLab
+      const Eigen::Vector3f c = lab(colors[i]);
+      l += c.x(), a += c.y(), b += c.z();
+      ll += double(c.x()) * c.x(), aa += double(c.y()) * c.y(), bb += double(c.z()) * c.z();
+    }
+    // merge
+    target.count += count;
+    target.sx += sx, target.sy += sy, target.sz += sz;
+    target.sxx += sxx, target.sxy += sxy, target.sxz += sxz;
+    target.syy += syy, target.syz += syz, target.szz += szz;
+    target.z_min = std::min(target.z_min, z_min);
+    target.z_max = std::max(target.z_max, z_max);
+    target.normal_count += normal_count;
+    target.nx += nx, target.ny += ny, target.nz += nz;
+    target.cos_sum += cos_sum, target.sin_sum += sin_sum;
+    target.l += l, target.a += a, target.b += b, target.ll += ll, target.aa += aa, target.bb += bb;
   }
-  flush();
 
   out.features.resize(segment_count);
   out.centroids.resize(segment_count);
+  out.moments.resize(segment_count);
   out.regions.clear();
   out.scene.clear();
   for (std::size_t s = 0; s < segment_count; ++s) {
@@ -318,7 +367,7 @@ void computeFeaturesInto(const OrganizedCloud& cloud_ground, const NormalImage& 
       throw Error("computeFeatures: segment " + std::to_string(s) + " (" +
                   std::to_string(segmentation.segments[s].size()) + " pixels) has no valid point");
     }
-    out.features[s] = acc[s].finish(&out.centroids[s]);
+    out.features[s] = acc[s].finish(&out.centroids[s], &out.moments[s]);
   }
 }
 

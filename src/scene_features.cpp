@@ -126,24 +126,43 @@ void computeSceneFeaturesInto(const OrganizedCloud& cloud_ground,
   std::size_t valid = 0;
   const float inv_step = 1.0f / kHistogramStep;
   const std::size_t grid_rows = pixels / static_cast<std::size_t>(width);
+  // Row by row, band by band: a band's farthest distance stays in a register
+  // (a max through memory per pixel is a store-to-load chain), there is no
+  // division per pixel, and a patch's column span is updated once per run
+  // of its pixels rather than per pixel.
   for (std::size_t v = 0; v < grid_rows; ++v) {
-    for (int u = 0; u < width; ++u) {
-      const std::size_t i = v * static_cast<std::size_t>(width) + u;
-      const int segment = segmentation.pixel_segment[i];
-      if (segment >= 0 && static_cast<std::size_t>(segment) < n) {
-        first_column[segment] = std::min(first_column[segment], u);
-        last_column[segment] = std::max(last_column[segment], u);
+    const std::size_t row = v * static_cast<std::size_t>(width);
+    const int* row_segment = segmentation.pixel_segment.data() + row;
+    const Eigen::Vector3f* row_point = cloud_ground.points.data() + row;
+    int run_segment = -1, run_start = 0;
+    const auto closeRun = [&](int end) {  // the run [run_start, end) of run_segment
+      if (run_segment >= 0 && static_cast<std::size_t>(run_segment) < n) {
+        first_column[run_segment] = std::min(first_column[run_segment], run_start);
+        last_column[run_segment] = std::max(last_column[run_segment], end - 1);
       }
-      const Eigen::Vector3f& p = cloud_ground.points[i];
-      if (!std::isfinite(p.z())) continue;
-      ++valid;
-      const int cx = cellOf(p.x(), min_x, cols), cy = cellOf(p.y(), min_y, rows);
-      occupied[static_cast<std::size_t>(cy) * cols + cx] |= std::uint64_t{1} << binOf(p.z());
-      const float dx = p.x() - camera_position.x(), dy = p.y() - camera_position.y();
-      float& far = band_far[static_cast<std::size_t>(u / config.band_px)];
-      far = std::max(far, dx * dx + dy * dy);
-      ++heights[std::clamp(static_cast<int>(p.z() * inv_step), 0, histogram_bins - 1)];
+    };
+    for (int band = 0, band_start = 0; band_start < width; ++band, band_start += config.band_px) {
+      const int band_end = std::min(width, band_start + config.band_px);
+      float far = band_far[static_cast<std::size_t>(band)];
+      for (int u = band_start; u < band_end; ++u) {
+        const int segment = row_segment[u];
+        if (segment != run_segment) {
+          closeRun(u);
+          run_segment = segment;
+          run_start = u;
+        }
+        const Eigen::Vector3f& p = row_point[u];
+        if (!std::isfinite(p.z())) continue;
+        ++valid;
+        const int cx = cellOf(p.x(), min_x, cols), cy = cellOf(p.y(), min_y, rows);
+        occupied[static_cast<std::size_t>(cy) * cols + cx] |= std::uint64_t{1} << binOf(p.z());
+        const float dx = p.x() - camera_position.x(), dy = p.y() - camera_position.y();
+        far = std::max(far, dx * dx + dy * dy);
+        ++heights[std::clamp(static_cast<int>(p.z() * inv_step), 0, histogram_bins - 1)];
+      }
+      band_far[static_cast<std::size_t>(band)] = far;
     }
+    closeRun(width);
   }
   for (float& far : band_far) far = std::sqrt(far);
   // The frame's top: the 98th percentile of the point heights.

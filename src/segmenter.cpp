@@ -385,10 +385,7 @@ SegmentFeatures Segmenter::features(const SegmentedFrame& segmented) const {
   SegmentFeatures out = computeFeatures(segmented.prepared.cloud_ground,
                                         segmented.prepared.normals_ground, segmented.segmentation);
   if (config_.regions.enabled) {
-    out.regions = computeRegionFeatures(segmented.prepared.cloud_ground,
-                                        segmented.prepared.normals_ground, segmented.segmentation,
-                                        config_.regions)
-                      .values;
+    out.regions = computeRegionFeatures(out, segmented.segmentation, config_.regions).values;
   }
   if (config_.scene.enabled) {
     out.scene = computeSceneFeatures(segmented.prepared.cloud_ground, segmented.segmentation, out,
@@ -443,8 +440,7 @@ LabelledFrame Segmenter::classify(SegmentedFrame segmented) const {
   watch.lap(out.timings, out.cpu_timings, &StageTimings::features_ms);
   RegionFeatures& regions = *regions_buffer;  // kept for the table region vote after the MRF
   if (config_.regions.enabled) {
-    computeRegionFeaturesInto(segmented.prepared.cloud_ground, segmented.prepared.normals_ground,
-                              segmented.segmentation, config_.regions, regions);
+    computeRegionFeaturesInto(out.features, segmented.segmentation, config_.regions, regions);
     out.features.regions = regions.values;
   }
   if (config_.scene.enabled) {

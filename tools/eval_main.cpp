@@ -121,27 +121,31 @@ std::uint8_t argmax(const ClassProbabilities& p) {
 
 // The regions of every sample's segmentation (region_features.hpp), for the
 // table region vote that follows the MRF in the pipeline (table_regions.hpp);
-// empty when the vote is off. FrameSample keeps only the region features, so
-// the geometry is recomputed: prepare and oversegment are deterministic.
-std::vector<RegionFeatures> sampleRegions(const LabeledFrames& frames,
-                                          const std::vector<FrameSample>& samples,
-                                          const Segmenter& segmenter) {
-  const SegmenterConfig& config = segmenter.config();
+// empty when the vote is off. They come from what the sample kept: its
+// segments' moments (SegmentFeatures::moments) and its adjacency.
+std::vector<RegionFeatures> sampleRegions(const std::vector<FrameSample>& samples,
+                                          const SegmenterConfig& config) {
   if (!config.regions.enabled || !config.tables.region_vote) return {};
   std::vector<RegionFeatures> out;
   out.reserve(samples.size());
   for (const FrameSample& s : samples) {
-    LabeledFrame frame = frames.load(s.source_index);
-    const SegmentedFrame segmented =
-        segmenter.oversegment(segmenter.prepare(std::move(frame.frame), &frame.labels));
-    out.push_back(computeRegionFeatures(segmented.prepared.cloud_ground,
-                                        segmented.prepared.normals_ground, segmented.segmentation,
-                                        config.regions));
-    if (out.back().segment_region.size() != s.features.features.size()) {
-      throw Error(s.name + ": " + std::to_string(out.back().segment_region.size()) +
-                  " segments on the second pass, " + std::to_string(s.features.features.size()) +
-                  " before");
+    Oversegmentation segmentation;
+    segmentation.width = s.width;
+    segmentation.height = s.height;
+    segmentation.pixel_segment = s.pixel_segment;
+    segmentation.segments.resize(s.features.features.size());
+    for (std::size_t i = 0; i < s.pixel_segment.size(); ++i) {
+      const int segment = s.pixel_segment[i];
+      if (segment < 0) continue;
+      if (static_cast<std::size_t>(segment) >= segmentation.segments.size()) {
+        throw Error(s.name + ": pixel " + std::to_string(i) + " is in segment " +
+                    std::to_string(segment) + " of " +
+                    std::to_string(segmentation.segments.size()));
+      }
+      segmentation.segments[static_cast<std::size_t>(segment)].push_back(static_cast<int>(i));
     }
+    segmentation.edges = s.edges;
+    out.push_back(computeRegionFeatures(s.features, segmentation, config.regions));
   }
   return out;
 }
@@ -396,7 +400,7 @@ int run(int argc, char** argv) {
   report.ground_methods = extraction.ground_methods;
   report.config_yaml = dumpConfig(config);
 
-  const std::vector<RegionFeatures> regions = sampleRegions(input->frames(), samples, segmenter);
+  const std::vector<RegionFeatures> regions = sampleRegions(samples, segmenter.config());
   Evaluation eval;
   if (model) {
     const RandomForest& forest = *model;

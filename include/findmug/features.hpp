@@ -34,9 +34,21 @@ inline constexpr std::array<std::string_view, kFeatureDim> kFeatureNames = {
     "normal_angle", "normal_angle_circular_std", "lab_l_mean", "lab_a_mean", "lab_b_mean",
     "lab_l_std", "lab_a_std", "lab_b_std"};
 
+// The sums a segment's features were computed from, kept so that a later
+// stage needing more of the same points (region features merge whole
+// segments) does not make another pass over the pixels.
+struct SegmentMoments {
+  double count = 0;                                     // valid points
+  Eigen::Vector3d mean = Eigen::Vector3d::Zero();       // ground frame, metres
+  Eigen::Matrix3d scatter = Eigen::Matrix3d::Zero();    // sum of (p - mean)(p - mean)^T
+  Eigen::Vector3d normal_sum = Eigen::Vector3d::Zero();  // sum of the unit normals
+  float max_z = 0.0f;                                   // highest point (m)
+};
+
 struct SegmentFeatures {
   std::vector<FeatureVector> features;     // one per segment
   std::vector<Eigen::Vector3f> centroids;  // ground frame, metres (used by the MRF)
+  std::vector<SegmentMoments> moments;     // one per segment (computeFeatures fills them)
   // Region features (region_features.hpp), row-major, kRegionFeatureDim per
   // segment; empty unless features.regions is on.
   std::vector<float> regions;
@@ -59,7 +71,7 @@ FeatureVector computePatchFeatures(const std::vector<Eigen::Vector3f>& points_gr
 SegmentFeatures computeFeatures(const OrganizedCloud& cloud_ground,
                                 const NormalImage& normals_ground,
                                 const Oversegmentation& segmentation);
-// The same into `out` (features and centroids; regions and scene are
+// The same into `out` (features, centroids and moments; regions and scene are
 // emptied), reusing the memory it holds: a stream of frames then allocates
 // nothing here (Segmenter::recycle).
 void computeFeaturesInto(const OrganizedCloud& cloud_ground, const NormalImage& normals_ground,

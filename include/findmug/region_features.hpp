@@ -23,6 +23,7 @@
 #include <vector>
 
 #include "findmug/cloud.hpp"
+#include "findmug/features.hpp"
 #include "findmug/oversegmentation.hpp"
 
 namespace findmug {
@@ -44,8 +45,9 @@ struct RegionFeatures {
   std::vector<float> values;  // row-major, kRegionFeatureDim per segment
 };
 
-// `cloud_ground` and `normals_ground` share the oversegmentation's grid.
-// Throws findmug::Error when the grids disagree or a segment has no valid point.
+// From the points: `cloud_ground` and `normals_ground` share the
+// oversegmentation's grid. Throws findmug::Error when the grids disagree or a
+// segment has no valid point.
 RegionFeatures computeRegionFeatures(const OrganizedCloud& cloud_ground,
                                      const NormalImage& normals_ground,
                                      const Oversegmentation& segmentation,
@@ -53,6 +55,19 @@ RegionFeatures computeRegionFeatures(const OrganizedCloud& cloud_ground,
 // The same into `out`, reusing the memory it holds.
 void computeRegionFeaturesInto(const OrganizedCloud& cloud_ground,
                                const NormalImage& normals_ground,
+                               const Oversegmentation& segmentation, const RegionConfig& config,
+                               RegionFeatures& out);
+
+// From the segments' moments (computeFeatures of the same segmentation), with
+// no pass over the pixels: the same regions and, up to rounding in the last
+// bits, the same values as from the points (the segment sums are pooled
+// instead of summed point by point). The pipeline uses this one: the pixel
+// pass cost as much as the 14-D features themselves. Throws findmug::Error
+// when `features` does not match the segmentation.
+RegionFeatures computeRegionFeatures(const SegmentFeatures& features,
+                                     const Oversegmentation& segmentation,
+                                     const RegionConfig& config);
+void computeRegionFeaturesInto(const SegmentFeatures& features,
                                const Oversegmentation& segmentation, const RegionConfig& config,
                                RegionFeatures& out);
 

@@ -13,11 +13,15 @@
 # than one long run each. Prints the medians of the table stage and of the
 # whole frame, and of their per-round ratios to the base build (with their
 # range), and writes every run to OUT.csv (default frame_cpu_compare.csv).
+# STAGE=NAME compares another row of frame_cpu's table instead of the table
+# stage (e.g. STAGE=regions); VARIANTS="base new" leaves out the stride run.
 set -euo pipefail
 cd "$(dirname "$0")/../.."
 base=${1:?usage: frame_cpu_compare.sh BASE_BUILD [ROUNDS] [OUT.csv]}
 rounds=${2:-6}
 out=${3:-frame_cpu_compare.csv}
+stage=${STAGE:-tables}
+read -r -a variants <<<"${VARIANTS:-base new new-stride2}"
 [[ -x $base/tests/bench/frame_cpu ]] || { echo "no $base/tests/bench/frame_cpu" >&2; exit 1; }
 [[ -x build/tests/bench/frame_cpu ]] || { echo "no build/tests/bench/frame_cpu" >&2; exit 1; }
 export FINDMUG_DATA=${FINDMUG_DATA:-$PWD/../shared/data}
@@ -25,10 +29,10 @@ synth=$(mktemp -d)
 trap 'rm -rf "$synth"' EXIT
 build/tools/findmug-synth --seed 7 --frames 60 --out "$synth" >/dev/null
 
-echo "data,variant,round,tables_ms,total_ms" >"$out"
+echo "data,variant,round,${stage}_ms,total_ms" >"$out"
 for round in $(seq "$rounds"); do
   for data in synthetic nyu; do
-    for variant in base new new-stride2; do
+    for variant in "${variants[@]}"; do
       exe=build/tests/bench/frame_cpu
       extra=()
       [[ $variant == base ]] && exe=$base/tests/bench/frame_cpu
@@ -36,7 +40,7 @@ for round in $(seq "$rounds"); do
       [[ $data == synthetic ]] && extra+=(--data "$synth")
       report=$(taskset -c 0 "$exe" --model models/findmug.fmf --passes 1 \
         --set features.regions=true --set features.scene=true --heap-keep-mb 256 "${extra[@]}")
-      tables=$(awk -F'|' '$2 ~ /^ tables / {print $3 + 0}' <<<"$report")
+      tables=$(awk -F'|' -v s=" $stage " '$2 == s {print $3 + 0}' <<<"$report")
       total=$(awk -F'|' '$2 ~ /total/ {gsub(/\*/, "", $3); print $3 + 0}' <<<"$report")
       echo "$data,$variant,$round,$tables,$total" >>"$out"
     done
@@ -47,10 +51,10 @@ done
 # ran seconds apart, so the host's drift cancels), with their range.
 median() { sort -g | awk '{v[NR] = $1} END {print (NR % 2 ? v[(NR + 1) / 2] : (v[NR / 2] + v[NR / 2 + 1]) / 2)}'; }
 range() { sort -g | awk 'NR == 1 {lo = $1} {hi = $1} END {printf "%.2f-%.2f", lo, hi}'; }
-echo "| data | variant | runs | table stage ms | whole frame ms | tables / base per round | frame / base per round |"
+echo "| data | variant | runs | $stage stage ms | whole frame ms | $stage / base per round | frame / base per round |"
 echo "|---|---|---:|---:|---:|---|---|"
 for data in nyu synthetic; do
-  for variant in base new new-stride2; do
+  for variant in "${variants[@]}"; do
     rows=$(awk -F, -v d="$data" -v v="$variant" '$1 == d && $2 == v' "$out")
     ratios=$(awk -F, -v d="$data" -v v="$variant" '
       $1 == d && $2 == "base" {bt[$3] = $4; bf[$3] = $5}

@@ -1,7 +1,10 @@
 // geometry_bench: the geometric front of the pipeline on one real 640x480
 // NYU Depth V2 frame (raw Kinect depth with holes, frame 0433):
 // back-projection, normals, ground plane (from labels and estimated),
-// transform into the ground frame and the 14-D features of ~1000 patches.
+// transform into the ground frame and the 14-D features of ~1000 patches;
+// then, on the frame's own oversegmentation, the 14-D features, the region
+// features both ways (from the pixels, and from the 14-D features' moments
+// as the pipeline does) and the scene features.
 //
 //   geometry_bench [--benchmark_filter=REGEX]
 //
@@ -18,6 +21,9 @@
 #include "findmug/features.hpp"
 #include "findmug/ground.hpp"
 #include "findmug/image_io.hpp"
+#include "findmug/oversegmentation.hpp"
+#include "findmug/region_features.hpp"
+#include "findmug/scene_features.hpp"
 
 namespace {
 
@@ -37,6 +43,8 @@ struct Fixture {
   OrganizedCloud cloud_ground;
   NormalImage normals_ground;
   Oversegmentation blocks;  // 20x16-pixel blocks: 960 patches, as many as supervoxels
+  Oversegmentation segmentation;  // the organized oversegmenter's, with its adjacency
+  SegmentFeatures features;       // of `segmentation`
 };
 
 // Loads once; throws when the data is missing (reported per benchmark).
@@ -81,6 +89,8 @@ const Fixture& fixture() {
         seg.segments[s].push_back(static_cast<int>(i));
       }
     }
+    x.segmentation = makeOversegmenter(OversegmentationConfig{})->segment(x.cloud, x.normals);
+    x.features = computeFeatures(x.cloud_ground, x.normals_ground, x.segmentation);
     return x;
   }();
   return f;
@@ -138,5 +148,45 @@ void BM_ComputeFeatures(benchmark::State& state) {
   });
 }
 BENCHMARK(BM_ComputeFeatures)->Unit(benchmark::kMillisecond);
+
+void BM_ComputeFeaturesOversegmented(benchmark::State& state) {
+  SegmentFeatures out;
+  run(state, [&](const Fixture& f) {
+    computeFeaturesInto(f.cloud_ground, f.normals_ground, f.segmentation, out);
+    benchmark::DoNotOptimize(out.features.data());
+    state.counters["segments"] = static_cast<double>(f.segmentation.segments.size());
+  });
+}
+BENCHMARK(BM_ComputeFeaturesOversegmented)->Unit(benchmark::kMillisecond);
+
+void BM_RegionFeaturesFromPixels(benchmark::State& state) {
+  RegionFeatures out;
+  run(state, [&](const Fixture& f) {
+    computeRegionFeaturesInto(f.cloud_ground, f.normals_ground, f.segmentation, RegionConfig{},
+                              out);
+    benchmark::DoNotOptimize(out.values.data());
+  });
+}
+BENCHMARK(BM_RegionFeaturesFromPixels)->Unit(benchmark::kMillisecond);
+
+void BM_RegionFeaturesFromMoments(benchmark::State& state) {
+  RegionFeatures out;
+  run(state, [&](const Fixture& f) {
+    computeRegionFeaturesInto(f.features, f.segmentation, RegionConfig{}, out);
+    benchmark::DoNotOptimize(out.values.data());
+    state.counters["regions"] = out.region_count;
+  });
+}
+BENCHMARK(BM_RegionFeaturesFromMoments)->Unit(benchmark::kMillisecond);
+
+void BM_SceneFeatures(benchmark::State& state) {
+  std::vector<float> out;
+  run(state, [&](const Fixture& f) {
+    computeSceneFeaturesInto(f.cloud_ground, f.segmentation, f.features,
+                             f.ground.camera_to_ground.translation(), SceneConfig{}, out);
+    benchmark::DoNotOptimize(out.data());
+  });
+}
+BENCHMARK(BM_SceneFeatures)->Unit(benchmark::kMillisecond);
 
 }  // namespace

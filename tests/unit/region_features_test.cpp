@@ -6,8 +6,12 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstddef>
 
+#include "findmug/dataset.hpp"
 #include "findmug/error.hpp"
+#include "findmug/features.hpp"
+#include "test_data.hpp"
 
 namespace findmug {
 namespace {
@@ -119,6 +123,81 @@ TEST(RegionFeatures, RefusesInconsistentInput) {
   // A segment whose points are all invalid has no features.
   for (int i : scene.seg.segments[3]) scene.cloud.points[i].z() = std::nanf("");
   EXPECT_THROW(computeRegionFeatures(scene.cloud, scene.normals, scene.seg, RegionConfig{}), Error);
+}
+
+// The pipeline computes region features from the 14-D features' moments
+// (no second pass over the pixels). Both ways must give the same regions and
+// the same values up to rounding.
+void expectSameRegions(const RegionFeatures& from_pixels, const RegionFeatures& from_moments,
+                       float tolerance) {
+  ASSERT_EQ(from_moments.region_count, from_pixels.region_count);
+  ASSERT_EQ(from_moments.segment_region, from_pixels.segment_region);
+  ASSERT_EQ(from_moments.values.size(), from_pixels.values.size());
+  for (std::size_t k = 0; k < from_pixels.values.size(); ++k) {
+    const float a = from_pixels.values[k], b = from_moments.values[k];
+    ASSERT_NEAR(b, a, tolerance * std::max(1.0f, std::abs(a)))
+        << "segment " << k / kRegionFeatureDim << ", feature "
+        << kRegionFeatureNames[k % kRegionFeatureDim];
+  }
+}
+
+TEST(RegionFeatures, FromTheFeaturesMomentsEqualsFromThePoints) {
+  for (const float step : {0.0f, 0.05f}) {
+    for (const float shift : {0.0f, 60.0f}) {  // far from the origin: no cancellation
+      SCOPED_TRACE("step " + std::to_string(step) + ", shift " + std::to_string(shift));
+      Scene scene(step);
+      for (auto& p : scene.cloud.points) p += Eigen::Vector3f(shift, -shift, 0.0f);
+      const SegmentFeatures features = computeFeatures(scene.cloud, scene.normals, scene.seg);
+      ASSERT_EQ(features.moments.size(), 4u);
+      EXPECT_EQ(features.moments[0].count, 100.0);
+      EXPECT_NEAR(features.moments[2].max_z, 0.7f + step, 1e-6f);
+      for (const float distance : {0.03f, 0.06f}) {
+        RegionConfig config;
+        config.plane_distance_m = distance;
+        const RegionFeatures from_pixels =
+            computeRegionFeatures(scene.cloud, scene.normals, scene.seg, config);
+        expectSameRegions(from_pixels, computeRegionFeatures(features, scene.seg, config), 1e-5f);
+      }
+      // The extents are those of the hand-made surface, whatever the shift.
+      const RegionFeatures r = computeRegionFeatures(features, scene.seg, RegionConfig{});
+      EXPECT_NEAR(scene.feature(r, 0, 1), 0.025f * std::sqrt(step == 0 ? 899.0f : 399.0f), 1e-4f);
+    }
+  }
+}
+
+TEST(RegionFeatures, FromMomentsRefusesFeaturesOfAnotherSegmentation) {
+  const Scene scene(0.0f);
+  SegmentFeatures features = computeFeatures(scene.cloud, scene.normals, scene.seg);
+  features.moments.pop_back();
+  EXPECT_THROW(computeRegionFeatures(features, scene.seg, RegionConfig{}), Error);
+  features = computeFeatures(scene.cloud, scene.normals, scene.seg);
+  features.moments[1].count = 0;
+  EXPECT_THROW(computeRegionFeatures(features, scene.seg, RegionConfig{}), Error);
+  features = computeFeatures(scene.cloud, scene.normals, scene.seg);
+  features.moments[2].scatter(0, 0) = std::nan("");
+  EXPECT_THROW(computeRegionFeatures(features, scene.seg, RegionConfig{}), Error);
+}
+
+TEST(RegionFeaturesNyu, FromTheFeaturesMomentsEqualsFromThePoints) {
+  FINDMUG_REQUIRE_DATA(dir, "nyuv2_labeled");
+  const DatasetFolder dataset(dir.string());
+  ASSERT_GE(dataset.size(), 10u);
+  const auto oversegmenter = makeOversegmenter(OversegmentationConfig{});
+  int regions = 0, merged = 0;
+  for (std::size_t index = 0; index < dataset.size(); index += 5) {
+    const LabeledFrame lf = dataset.load(index);
+    SCOPED_TRACE(lf.name);
+    const OrganizedCloud cloud = frameToCloud(lf.frame);
+    const NormalImage normals = computeNormals(cloud, NormalConfig{});
+    const Oversegmentation seg = oversegmenter->segment(cloud, normals);
+    const SegmentFeatures features = computeFeatures(cloud, normals, seg);
+    const RegionFeatures from_pixels = computeRegionFeatures(cloud, normals, seg, RegionConfig{});
+    expectSameRegions(from_pixels, computeRegionFeatures(features, seg, RegionConfig{}), 1e-4f);
+    regions += from_pixels.region_count;
+    merged += static_cast<int>(seg.segments.size()) - from_pixels.region_count;
+  }
+  // Real frames do merge patches (else this compares nothing of the merging).
+  EXPECT_GT(merged, regions / 4) << merged << " patches merged into " << regions << " regions";
 }
 
 }  // namespace
