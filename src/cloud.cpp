@@ -21,7 +21,13 @@
 #include <sstream>
 #include <string>
 
+#include "cloud_internal.hpp"
 #include "findmug/error.hpp"
+
+#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
+#include <immintrin.h>
+#define FINDMUG_NORMALS_AVX2 1
+#endif
 
 namespace findmug {
 
@@ -66,6 +72,232 @@ inline bool tangent(const Eigen::Vector3f& a, const Eigen::Vector3f& c, const Ei
   return true;
 }
 
+// Raw normal of pixel (u, v) (valid) from differences at +-r pixels,
+// oriented towards the camera (the optical centre is the origin, so
+// n.dot(p) < 0). False when there is none (no tangent along an axis, or a
+// degenerate cross product).
+inline bool rawNormal(const Eigen::Vector3f* pts, int w, int h, int r, float max_jump_rel, int u,
+                      int v, Eigen::Vector3f& normal) {
+  const std::size_t i = static_cast<std::size_t>(v) * w + u;
+  const Eigen::Vector3f& c = pts[i];
+  // The tolerated depth step grows with depth: both the sensor noise and
+  // the depth change across r pixels of an oblique surface do.
+  const float max_jump = max_jump_rel * c.z();
+  const int u_left = std::max(0, u - r);
+  const int u_right = std::min(w - 1, u + r);
+  const int v_up = std::max(0, v - r);
+  const int v_down = std::min(h - 1, v + r);
+  Eigen::Vector3f th, tv;
+  if (!tangent(pts[static_cast<std::size_t>(v) * w + u_left], c,
+               pts[static_cast<std::size_t>(v) * w + u_right], max_jump, th) ||
+      !tangent(pts[static_cast<std::size_t>(v_up) * w + u], c,
+               pts[static_cast<std::size_t>(v_down) * w + u], max_jump, tv)) {
+    return false;
+  }
+  normal = th.cross(tv);
+  const float norm = normal.norm();
+  if (!(norm > 0.0f)) return false;
+  normal /= norm;
+  if (normal.dot(c) > 0.0f) normal = -normal;
+  return true;
+}
+
+// Raw normals of pixels [u0, u1) of row v into n (NaN where there is none).
+void rawNormalsScalar(const Eigen::Vector3f* pts, int w, int h, int r, float max_jump_rel, int v,
+                      int u0, int u1, Eigen::Vector3f* n) {
+  for (int u = u0; u < u1; ++u) {
+    const std::size_t i = static_cast<std::size_t>(v) * w + u;
+    if (!std::isfinite(pts[i].z())) continue;
+    Eigen::Vector3f normal;
+    if (rawNormal(pts, w, h, r, max_jump_rel, u, v, normal)) n[i] = normal;
+  }
+}
+
+#if defined(FINDMUG_NORMALS_AVX2)
+// Eight consecutive points (24 floats, x y z interleaved) into one register
+// per coordinate, and back. Lanes {0,3,6}, {1,4,7} and {2,5} of the three
+// loaded registers hold one coordinate each in a fixed rotation; blends
+// gather them and a lane permutation puts them in order. A blend keeps its
+// first operand in lanes {0,3,6} and takes lanes {1,4,7} (kLanesB) and
+// {2,5} (kLanesC) from the others.
+constexpr int kLanesB = 0x92, kLanesC = 0x24;
+
+__attribute__((target("avx2"))) inline void loadPoints8(const Eigen::Vector3f* p, __m256& x,
+                                                       __m256& y, __m256& z) {
+  const float* f = p->data();
+  const __m256 m0 = _mm256_loadu_ps(f), m1 = _mm256_loadu_ps(f + 8), m2 = _mm256_loadu_ps(f + 16);
+  const __m256 tx = _mm256_blend_ps(_mm256_blend_ps(m0, m1, kLanesB), m2, kLanesC);
+  const __m256 ty = _mm256_blend_ps(_mm256_blend_ps(m2, m0, kLanesB), m1, kLanesC);
+  const __m256 tz = _mm256_blend_ps(_mm256_blend_ps(m1, m2, kLanesB), m0, kLanesC);
+  x = _mm256_permutevar8x32_ps(tx, _mm256_setr_epi32(0, 3, 6, 1, 4, 7, 2, 5));
+  y = _mm256_permutevar8x32_ps(ty, _mm256_setr_epi32(1, 4, 7, 2, 5, 0, 3, 6));
+  z = _mm256_permutevar8x32_ps(tz, _mm256_setr_epi32(2, 5, 0, 3, 6, 1, 4, 7));
+}
+
+__attribute__((target("avx2"))) inline void storePoints8(Eigen::Vector3f* p, __m256 x, __m256 y,
+                                                        __m256 z) {
+  const __m256 tx = _mm256_permutevar8x32_ps(x, _mm256_setr_epi32(0, 3, 6, 1, 4, 7, 2, 5));
+  const __m256 ty = _mm256_permutevar8x32_ps(y, _mm256_setr_epi32(5, 0, 3, 6, 1, 4, 7, 2));
+  const __m256 tz = _mm256_permutevar8x32_ps(z, _mm256_setr_epi32(2, 5, 0, 3, 6, 1, 4, 7));
+  float* f = p->data();
+  _mm256_storeu_ps(f, _mm256_blend_ps(_mm256_blend_ps(tx, ty, kLanesB), tz, kLanesC));
+  _mm256_storeu_ps(f + 8, _mm256_blend_ps(_mm256_blend_ps(tz, tx, kLanesB), ty, kLanesC));
+  _mm256_storeu_ps(f + 16, _mm256_blend_ps(_mm256_blend_ps(ty, tz, kLanesB), tx, kLanesC));
+}
+
+// tangent() on eight pixels: the tangent's coordinates and whether it exists.
+__attribute__((target("avx2"))) inline __m256 tangent8(const Eigen::Vector3f* a,
+                                                      const Eigen::Vector3f* b, __m256 cx,
+                                                      __m256 cy, __m256 cz, __m256 max_jump,
+                                                      __m256& tx, __m256& ty, __m256& tz) {
+  const __m256 abs_mask = _mm256_castsi256_ps(_mm256_set1_epi32(0x7fffffff));
+  const __m256 inf = _mm256_set1_ps(std::numeric_limits<float>::infinity());
+  __m256 ax, ay, az, bx, by, bz;
+  loadPoints8(a, ax, ay, az);
+  loadPoints8(b, bx, by, bz);
+  // isfinite(z) && |z - c.z| <= max_jump; every comparison is false on NaN.
+  const __m256 a_ok = _mm256_and_ps(
+      _mm256_cmp_ps(_mm256_and_ps(az, abs_mask), inf, _CMP_LT_OQ),
+      _mm256_cmp_ps(_mm256_and_ps(_mm256_sub_ps(az, cz), abs_mask), max_jump, _CMP_LE_OQ));
+  const __m256 b_ok = _mm256_and_ps(
+      _mm256_cmp_ps(_mm256_and_ps(bz, abs_mask), inf, _CMP_LT_OQ),
+      _mm256_cmp_ps(_mm256_and_ps(_mm256_sub_ps(bz, cz), abs_mask), max_jump, _CMP_LE_OQ));
+  // Both: b - a; only b: b - c; only a: c - a.
+  const __m256 lo_x = _mm256_blendv_ps(cx, ax, a_ok), lo_y = _mm256_blendv_ps(cy, ay, a_ok),
+               lo_z = _mm256_blendv_ps(cz, az, a_ok);
+  const __m256 hi_x = _mm256_blendv_ps(cx, bx, b_ok), hi_y = _mm256_blendv_ps(cy, by, b_ok),
+               hi_z = _mm256_blendv_ps(cz, bz, b_ok);
+  tx = _mm256_sub_ps(hi_x, lo_x);
+  ty = _mm256_sub_ps(hi_y, lo_y);
+  tz = _mm256_sub_ps(hi_z, lo_z);
+  return _mm256_or_ps(a_ok, b_ok);
+}
+
+// rawNormalsScalar for a whole image, eight pixels at a time where the
+// +-r neighbours of all eight lie inside the row; the rest scalar. The same
+// IEEE operations in the same order as rawNormal (Eigen's 3-term sums are
+// x + (y + z); no FMA: the target is "avx2", not "fma"), so the normals are
+// bit-identical to the scalar code (NormalsAvx2.MatchesTheScalarCodeBitForBit).
+__attribute__((target("avx2"))) void rawNormalsAvx2(const Eigen::Vector3f* pts, int w, int h,
+                                                   int r, float max_jump_rel,
+                                                   Eigen::Vector3f* n) {
+  const __m256 abs_mask = _mm256_castsi256_ps(_mm256_set1_epi32(0x7fffffff));
+  const __m256 sign_mask = _mm256_castsi256_ps(_mm256_set1_epi32(static_cast<int>(0x80000000u)));
+  const __m256 inf = _mm256_set1_ps(std::numeric_limits<float>::infinity());
+  const __m256 zero = _mm256_setzero_ps();
+  const __m256 nan = _mm256_set1_ps(std::numeric_limits<float>::quiet_NaN());
+  const __m256 jump_rel = _mm256_set1_ps(max_jump_rel);
+  for (int v = 0; v < h; ++v) {
+    const std::size_t row = static_cast<std::size_t>(v) * w;
+    const std::size_t up = static_cast<std::size_t>(std::max(0, v - r)) * w;
+    const std::size_t down = static_cast<std::size_t>(std::min(h - 1, v + r)) * w;
+    int u = std::min(r, w);
+    rawNormalsScalar(pts, w, h, r, max_jump_rel, v, 0, u, n);
+    for (; u + 8 + r <= w; u += 8) {
+      __m256 cx, cy, cz;
+      loadPoints8(pts + row + u, cx, cy, cz);
+      const __m256 valid = _mm256_cmp_ps(_mm256_and_ps(cz, abs_mask), inf, _CMP_LT_OQ);
+      if (_mm256_movemask_ps(valid) == 0) continue;  // a hole: n keeps its NaN
+      const __m256 max_jump = _mm256_mul_ps(jump_rel, cz);
+      __m256 hx, hy, hz, vx, vy, vz;
+      const __m256 h_ok =
+          tangent8(pts + row + u - r, pts + row + u + r, cx, cy, cz, max_jump, hx, hy, hz);
+      const __m256 v_ok = tangent8(pts + up + u, pts + down + u, cx, cy, cz, max_jump, vx, vy, vz);
+      // th.cross(tv)
+      __m256 nx = _mm256_sub_ps(_mm256_mul_ps(hy, vz), _mm256_mul_ps(hz, vy));
+      __m256 ny = _mm256_sub_ps(_mm256_mul_ps(hz, vx), _mm256_mul_ps(hx, vz));
+      __m256 nz = _mm256_sub_ps(_mm256_mul_ps(hx, vy), _mm256_mul_ps(hy, vx));
+      const __m256 norm = _mm256_sqrt_ps(_mm256_add_ps(
+          _mm256_mul_ps(nx, nx), _mm256_add_ps(_mm256_mul_ps(ny, ny), _mm256_mul_ps(nz, nz))));
+      nx = _mm256_div_ps(nx, norm);
+      ny = _mm256_div_ps(ny, norm);
+      nz = _mm256_div_ps(nz, norm);
+      const __m256 dot = _mm256_add_ps(
+          _mm256_mul_ps(nx, cx), _mm256_add_ps(_mm256_mul_ps(ny, cy), _mm256_mul_ps(nz, cz)));
+      const __m256 flip = _mm256_and_ps(_mm256_cmp_ps(dot, zero, _CMP_GT_OQ), sign_mask);
+      nx = _mm256_xor_ps(nx, flip);
+      ny = _mm256_xor_ps(ny, flip);
+      nz = _mm256_xor_ps(nz, flip);
+      const __m256 ok = _mm256_and_ps(_mm256_and_ps(valid, _mm256_and_ps(h_ok, v_ok)),
+                                      _mm256_cmp_ps(norm, zero, _CMP_GT_OQ));
+      storePoints8(n + row + u, _mm256_blendv_ps(nan, nx, ok), _mm256_blendv_ps(nan, ny, ok),
+                   _mm256_blendv_ps(nan, nz, ok));
+    }
+    rawNormalsScalar(pts, w, h, r, max_jump_rel, v, u, w, n);
+  }
+}
+
+// k % ring for prefix rows k >= k0 with k - k0 < ring, given k0 and k0 % ring.
+__attribute__((target("avx2"))) inline __m256i ringSlot(__m256i k, __m256i k0, __m256i k0_slot,
+                                                       __m256i ring_last, __m256i ring) {
+  const __m256i slot = _mm256_add_epi32(_mm256_sub_epi32(k, k0), k0_slot);
+  return _mm256_sub_epi32(slot, _mm256_and_si256(_mm256_cmpgt_epi32(slot, ring_last), ring));
+}
+
+// The column step of smoothNormals for pixels [u0, u1) of row v: each
+// pixel's box sum is the difference of two prefix rows, picked per pixel
+// (its vertical run clips the box), so the eight lanes gather their rows.
+// The same operations as the scalar loop there (Eigen's norm is
+// sqrt(x^2 + (y^2 + z^2))), so the same normals to the bit. `prefix` holds
+// rows k of the column prefix table at slot k % ring (of width w); slots of
+// rows max(0, v - r) .. v + r + 1 are all valid.
+__attribute__((target("avx2"))) void smoothColumnsAvx2(
+    Eigen::Vector3f* n, const std::int32_t* run_start, const std::int32_t* run_end,
+    const Eigen::Vector3f* prefix, int w, int r, int ring, int v, int u0, int u1) {
+  const __m256 abs_mask = _mm256_castsi256_ps(_mm256_set1_epi32(0x7fffffff));
+  const __m256 inf = _mm256_set1_ps(std::numeric_limits<float>::infinity());
+  const __m256 min_norm = _mm256_set1_ps(1e-3f);
+  const int k0 = std::max(0, v - r);  // lowest prefix row a pixel of this row reads
+  const __m256i first_row = _mm256_set1_epi32(k0);
+  const __m256i first_slot = _mm256_set1_epi32(k0 % ring);
+  const __m256i ring_size = _mm256_set1_epi32(ring);
+  const __m256i ring_last = _mm256_set1_epi32(ring - 1);
+  const __m256i row_floats = _mm256_set1_epi32(3 * w);
+  const __m256i lane_floats = _mm256_setr_epi32(0, 3, 6, 9, 12, 15, 18, 21);
+  const __m256i lowest = _mm256_set1_epi32(v - r), highest = _mm256_set1_epi32(v + r);
+  const float* table = prefix->data();
+  const std::size_t base = static_cast<std::size_t>(v) * w;
+  for (int u = u0; u + 8 <= u1; u += 8) {
+    const std::size_t i = base + u;
+    __m256 x, y, z;
+    loadPoints8(n + i, x, y, z);
+    const __m256 has_normal = _mm256_cmp_ps(_mm256_and_ps(x, abs_mask), inf, _CMP_LT_OQ);
+    if (_mm256_movemask_ps(has_normal) == 0) continue;
+    const __m256i lo = _mm256_max_epi32(
+        lowest, _mm256_loadu_si256(reinterpret_cast<const __m256i*>(run_start + i)));
+    const __m256i hi = _mm256_min_epi32(
+        highest, _mm256_loadu_si256(reinterpret_cast<const __m256i*>(run_end + i)));
+    const __m256i column = _mm256_add_epi32(_mm256_set1_epi32(3 * u), lane_floats);
+    const __m256i top = _mm256_add_epi32(
+        _mm256_mullo_epi32(ringSlot(_mm256_add_epi32(hi, _mm256_set1_epi32(1)), first_row,
+                                    first_slot, ring_last, ring_size),
+                           row_floats),
+        column);
+    const __m256i bottom = _mm256_add_epi32(
+        _mm256_mullo_epi32(ringSlot(lo, first_row, first_slot, ring_last, ring_size), row_floats),
+        column);
+    const __m256 sx = _mm256_sub_ps(_mm256_i32gather_ps(table, top, 4),
+                                    _mm256_i32gather_ps(table, bottom, 4));
+    const __m256 sy = _mm256_sub_ps(_mm256_i32gather_ps(table + 1, top, 4),
+                                    _mm256_i32gather_ps(table + 1, bottom, 4));
+    const __m256 sz = _mm256_sub_ps(_mm256_i32gather_ps(table + 2, top, 4),
+                                    _mm256_i32gather_ps(table + 2, bottom, 4));
+    const __m256 norm = _mm256_sqrt_ps(_mm256_add_ps(
+        _mm256_mul_ps(sx, sx), _mm256_add_ps(_mm256_mul_ps(sy, sy), _mm256_mul_ps(sz, sz))));
+    // Lanes without a normal, or whose sum nearly cancels, keep what they had.
+    const __m256 take = _mm256_and_ps(has_normal, _mm256_cmp_ps(norm, min_norm, _CMP_GT_OQ));
+    storePoints8(n + i, _mm256_blendv_ps(x, _mm256_div_ps(sx, norm), take),
+                 _mm256_blendv_ps(y, _mm256_div_ps(sy, norm), take),
+                 _mm256_blendv_ps(z, _mm256_div_ps(sz, norm), take));
+  }
+}
+
+bool cpuHasAvx2() {
+  static const bool has = __builtin_cpu_supports("avx2");
+  return has;
+}
+#endif
+
 // Reusable buffers for the smoothing pass (see computeNormals).
 struct SmoothingScratch {
   std::vector<std::uint8_t> links;      // bit 0: linked to the right, bit 1: to below
@@ -92,7 +324,7 @@ constexpr std::uint8_t kLinkDown = 2;
 // the row sums of every row up to v + r are in the ring (no later read of
 // row v remains).
 void smoothNormals(std::vector<Eigen::Vector3f>& n, const OrganizedCloud& cloud, int r,
-                   float max_jump_rel, SmoothingScratch& s) {
+                   float max_jump_rel, SmoothingScratch& s, bool avx2) {
   const int w = cloud.width;
   const int h = cloud.height;
   const std::size_t count = n.size();
@@ -157,7 +389,17 @@ void smoothNormals(std::vector<Eigen::Vector3f>& n, const OrganizedCloud& cloud,
   for (int v = 0; v < h; ++v) {
     for (const int need = std::min(h - 1, v + r); added <= need; ++added) addRow(added);
     const std::size_t base = static_cast<std::size_t>(v) * w;
-    for (int u = 0; u < w; ++u) {
+    int u = 0;
+#if defined(FINDMUG_NORMALS_AVX2)
+    if (avx2) {
+      smoothColumnsAvx2(n.data(), s.run_start.data(), s.run_end.data(), s.prefix.data(), w, r, ring,
+                        v, 0, w);
+      u = w - w % 8;
+    }
+#else
+    (void)avx2;
+#endif
+    for (; u < w; ++u) {
       const std::size_t i = base + u;
       if (!std::isfinite(n[i].x())) continue;
       const int lo = std::max(v - r, static_cast<int>(s.run_start[i]));
@@ -223,6 +465,11 @@ NormalImage computeNormals(const OrganizedCloud& cloud, const NormalConfig& conf
 }
 
 void computeNormals(const OrganizedCloud& cloud, const NormalConfig& config, NormalImage& out) {
+  detail::computeNormals(cloud, config, out, detail::NormalSimd::Auto);
+}
+
+void detail::computeNormals(const OrganizedCloud& cloud, const NormalConfig& config,
+                            NormalImage& out, NormalSimd simd) {
   checkCloudShape(cloud, "computeNormals");
   if (config.window_radius_px < 1 || config.window_radius_px > 64) {
     throw Error("computeNormals: normals.window_radius_px must be in 1..64, got " +
@@ -247,32 +494,16 @@ void computeNormals(const OrganizedCloud& cloud, const NormalConfig& config, Nor
   std::vector<Eigen::Vector3f>& n = out.normals;
 
   // 1. Raw normals from differences at +-r pixels, oriented towards the
-  //    camera (the optical centre is the origin, so n.dot(p) < 0).
-  for (int v = 0; v < h; ++v) {
-    const int v_up = std::max(0, v - r);
-    const int v_down = std::min(h - 1, v + r);
-    for (int u = 0; u < w; ++u) {
-      const std::size_t i = static_cast<std::size_t>(v) * w + u;
-      const Eigen::Vector3f& c = pts[i];
-      if (!std::isfinite(c.z())) continue;
-      // The tolerated depth step grows with depth: both the sensor noise and
-      // the depth change across r pixels of an oblique surface do.
-      const float max_jump = config.max_depth_jump_m * c.z();
-      const int u_left = std::max(0, u - r);
-      const int u_right = std::min(w - 1, u + r);
-      Eigen::Vector3f th, tv;
-      if (!tangent(pts[static_cast<std::size_t>(v) * w + u_left], c,
-                   pts[static_cast<std::size_t>(v) * w + u_right], max_jump, th) ||
-          !tangent(pts[static_cast<std::size_t>(v_up) * w + u], c,
-                   pts[static_cast<std::size_t>(v_down) * w + u], max_jump, tv)) {
-        continue;
-      }
-      Eigen::Vector3f normal = th.cross(tv);
-      const float norm = normal.norm();
-      if (!(norm > 0.0f)) continue;
-      normal /= norm;
-      if (normal.dot(c) > 0.0f) normal = -normal;
-      n[i] = normal;
+  //    camera (rawNormal).
+  (void)simd;  // no SIMD path on this platform
+#if defined(FINDMUG_NORMALS_AVX2)
+  if (simd == detail::NormalSimd::Auto && cpuHasAvx2()) {
+    rawNormalsAvx2(pts, w, h, r, config.max_depth_jump_m, n.data());
+  } else
+#endif
+  {
+    for (int v = 0; v < h; ++v) {
+      rawNormalsScalar(pts, w, h, r, config.max_depth_jump_m, v, 0, w, n.data());
     }
   }
 
@@ -284,7 +515,11 @@ void computeNormals(const OrganizedCloud& cloud, const NormalConfig& config, Nor
     // multi-megabyte buffers per 640x480 frame (a quarter of the run time).
     // It costs ~3 MB per thread that ever computed normals of a VGA frame.
     thread_local SmoothingScratch scratch;
-    smoothNormals(n, cloud, smooth_r, config.max_depth_jump_m, scratch);
+    bool avx2 = false;
+#if defined(FINDMUG_NORMALS_AVX2)
+    avx2 = simd == detail::NormalSimd::Auto && cpuHasAvx2();
+#endif
+    smoothNormals(n, cloud, smooth_r, config.max_depth_jump_m, scratch, avx2);
   }
 }
 

@@ -4,9 +4,14 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstring>
 #include <random>
+#include <string>
 
+#include "cloud_internal.hpp"
+#include "findmug/dataset.hpp"
 #include "findmug/error.hpp"
+#include "test_data.hpp"
 
 namespace findmug {
 namespace {
@@ -189,6 +194,72 @@ TEST(TransformCloud, MovesValidPointsAndKeepsNaN) {
   const NormalImage r = rotateNormals(n, t.linear());
   EXPECT_TRUE(r.normals[0].isApprox(Eigen::Vector3f(0, 1, 0), 1e-5f));
   EXPECT_FALSE(r.normals[1].allFinite());
+}
+
+// The raw normals have an AVX2 path (taken where the CPU has AVX2, as on
+// every machine this project runs on) beside the scalar code. Both must give
+// the same normals to the bit, or labels would depend on the CPU.
+void expectSameNormalsBitForBit(const OrganizedCloud& cloud, const NormalConfig& config,
+                                const std::string& what) {
+  NormalImage simd, scalar;
+  detail::computeNormals(cloud, config, simd, detail::NormalSimd::Auto);
+  detail::computeNormals(cloud, config, scalar, detail::NormalSimd::Off);
+  ASSERT_EQ(simd.normals.size(), scalar.normals.size()) << what;
+  std::size_t finite = 0;
+  for (std::size_t i = 0; i < scalar.normals.size(); ++i) {
+    ASSERT_EQ(std::memcmp(simd.normals[i].data(), scalar.normals[i].data(), sizeof(float) * 3), 0)
+        << what << ": pixel " << i << " (" << i % cloud.width << ", " << i / cloud.width
+        << "): SIMD " << simd.normals[i].transpose() << ", scalar "
+        << scalar.normals[i].transpose();
+    finite += scalar.normals[i].allFinite();
+  }
+  // Else the comparison says nothing.
+  EXPECT_GT(finite, scalar.normals.size() / 3) << what;
+}
+
+TEST(NormalsSimd, MatchesTheScalarCodeBitForBitOnRandomSurfacesWithHoles) {
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<float> unit(0.0f, 1.0f);
+  // Widths that are and are not multiples of 8, narrower than 2r + 8, and
+  // every window radius up to 9 (the SIMD path runs between r and w - r).
+  for (const int w : {5, 17, 24, 37, 64, 101}) {
+    for (int r = 1; r <= 9; r += 2) {
+      const int h = 23;
+      OrganizedCloud cloud;
+      cloud.width = w;
+      cloud.height = h;
+      const float tilt = unit(rng) - 0.5f;
+      for (int v = 0; v < h; ++v) {
+        for (int u = 0; u < w; ++u) {
+          // A wavy, tilted surface 1-4 m away with depth steps and holes.
+          float z = 1.0f + 0.002f * unit(rng) + tilt * u * 0.005f + 0.02f * std::sin(0.3f * u) +
+                    (u > w / 2 ? 0.3f : 0.0f) + 0.004f * v;
+          if (unit(rng) < 0.08f) z = std::nanf("");
+          cloud.points.emplace_back((u - w / 2) * 0.002f * z, (v - h / 2) * 0.002f * z, z);
+        }
+      }
+      NormalConfig config;
+      config.window_radius_px = r;
+      expectSameNormalsBitForBit(cloud, config, "w " + std::to_string(w) + ", r " + std::to_string(r));
+      config.smoothing_radius_px = 0;  // the raw normals themselves
+      expectSameNormalsBitForBit(cloud, config,
+                                 "raw, w " + std::to_string(w) + ", r " + std::to_string(r));
+    }
+  }
+}
+
+TEST(NormalsSimdNyu, MatchesTheScalarCodeBitForBit) {
+  FINDMUG_REQUIRE_DATA(dir, "nyuv2_labeled");
+  const DatasetFolder dataset(dir.string());
+  ASSERT_GE(dataset.size(), 10u);
+  NormalConfig raw;
+  raw.smoothing_radius_px = 0;
+  for (std::size_t index = 0; index < dataset.size(); index += 6) {
+    const LabeledFrame lf = dataset.load(index);
+    const OrganizedCloud cloud = frameToCloud(lf.frame);
+    expectSameNormalsBitForBit(cloud, NormalConfig{}, lf.name);
+    expectSameNormalsBitForBit(cloud, raw, lf.name + " (raw)");
+  }
 }
 
 }  // namespace
