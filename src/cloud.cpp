@@ -22,12 +22,8 @@
 #include <string>
 
 #include "cloud_internal.hpp"
+#include "cpu_features.hpp"
 #include "findmug/error.hpp"
-
-#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
-#include <immintrin.h>
-#define FINDMUG_NORMALS_AVX2 1
-#endif
 
 namespace findmug {
 
@@ -113,7 +109,7 @@ void rawNormalsScalar(const Eigen::Vector3f* pts, int w, int h, int r, float max
   }
 }
 
-#if defined(FINDMUG_NORMALS_AVX2)
+#if defined(FINDMUG_AVX2_DISPATCH)
 // Eight consecutive points (24 floats, x y z interleaved) into one register
 // per coordinate, and back. Lanes {0,3,6}, {1,4,7} and {2,5} of the three
 // loaded registers hold one coordinate each in a fixed rotation; blends
@@ -292,10 +288,6 @@ __attribute__((target("avx2"))) void smoothColumnsAvx2(
   }
 }
 
-bool cpuHasAvx2() {
-  static const bool has = __builtin_cpu_supports("avx2");
-  return has;
-}
 #endif
 
 // Reusable buffers for the smoothing pass (see computeNormals).
@@ -390,7 +382,7 @@ void smoothNormals(std::vector<Eigen::Vector3f>& n, const OrganizedCloud& cloud,
     for (const int need = std::min(h - 1, v + r); added <= need; ++added) addRow(added);
     const std::size_t base = static_cast<std::size_t>(v) * w;
     int u = 0;
-#if defined(FINDMUG_NORMALS_AVX2)
+#if defined(FINDMUG_AVX2_DISPATCH)
     if (avx2) {
       smoothColumnsAvx2(n.data(), s.run_start.data(), s.run_end.data(), s.prefix.data(), w, r, ring,
                         v, 0, w);
@@ -496,8 +488,8 @@ void detail::computeNormals(const OrganizedCloud& cloud, const NormalConfig& con
   // 1. Raw normals from differences at +-r pixels, oriented towards the
   //    camera (rawNormal).
   (void)simd;  // no SIMD path on this platform
-#if defined(FINDMUG_NORMALS_AVX2)
-  if (simd == detail::NormalSimd::Auto && cpuHasAvx2()) {
+#if defined(FINDMUG_AVX2_DISPATCH)
+  if (simd == detail::NormalSimd::Auto && detail::cpuHasAvx2()) {
     rawNormalsAvx2(pts, w, h, r, config.max_depth_jump_m, n.data());
   } else
 #endif
@@ -516,8 +508,8 @@ void detail::computeNormals(const OrganizedCloud& cloud, const NormalConfig& con
     // It costs ~3 MB per thread that ever computed normals of a VGA frame.
     thread_local SmoothingScratch scratch;
     bool avx2 = false;
-#if defined(FINDMUG_NORMALS_AVX2)
-    avx2 = simd == detail::NormalSimd::Auto && cpuHasAvx2();
+#if defined(FINDMUG_AVX2_DISPATCH)
+    avx2 = simd == detail::NormalSimd::Auto && detail::cpuHasAvx2();
 #endif
     smoothNormals(n, cloud, smooth_r, config.max_depth_jump_m, scratch, avx2);
   }

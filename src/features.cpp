@@ -285,12 +285,12 @@ void computeFeaturesInto(const OrganizedCloud& cloud_ground, const NormalImage& 
   // One sequential pass over the image. Pixels come in horizontal runs of
   // the same segment (a run goes on across pixels without a valid point or
   // a segment); each run is summed in local variables and merged into its
-  // segment's accumulator once. Plain locals, not a PatchAccumulator: the
-  // compiler keeps them in registers, where the 24 sums of a struct stayed
-  // in memory with a load and a store each per pixel (that made this pass
-  // store-bound). The arithmetic is addPoint, addNormal and addLab's, in
-  // the same order, so the sums are the same to the bit. The run uses the
-  // segment's reference point, so merging is plain addition.
+  // segment's accumulator once. The run's accumulator is a local whose
+  // address never escapes (no lambda captures it), so the compiler keeps its
+  // sums in registers; captured by a lambda, its 24 sums stayed in memory
+  // with a load and a store each per pixel, which made this pass
+  // store-bound. The run uses the segment's reference point, so merging is
+  // plain addition.
   const int* pixel_segment = segmentation.pixel_segment.data();
   const Eigen::Vector3f* points = cloud_ground.points.data();
   const Eigen::Vector3f* normals = normals_ground.normals.data();
@@ -308,53 +308,20 @@ void computeFeaturesInto(const OrganizedCloud& cloud_ground, const NormalImage& 
     }
     PatchAccumulator& target = acc[static_cast<std::size_t>(s)];
     if (target.count == 0) target.ref = points[i];
-    const float rx = target.ref.x(), ry = target.ref.y(), rz = target.ref.z();
-    int count = 0, normal_count = 0;
-    double sx = 0, sy = 0, sz = 0, sxx = 0, sxy = 0, sxz = 0, syy = 0, syz = 0, szz = 0;
-    float z_min = std::numeric_limits<float>::infinity();
-    float z_max = -std::numeric_limits<float>::infinity();
-    double nx = 0, ny = 0, nz = 0, cos_sum = 0, sin_sum = 0;
-    double l = 0, a = 0, b = 0, ll = 0, aa = 0, bb = 0;
+    PatchAccumulator run;  // never leaves this scope: its sums stay in registers
+    run.ref = target.ref;
+    run.ref_fixed = true;
     for (; i < pixels; ++i) {
       const int t = pixel_segment[i];
       if (t < 0) continue;
       const Eigen::Vector3f& p = points[i];
       if (!std::isfinite(p.z())) continue;
       if (t != s) break;
-      // addPoint
-      ++count;
-      const double x = p.x() - rx, y = p.y() - ry, z = p.z() - rz;
-      sx += x, sy += y, sz += z;
-      sxx += x * x, sxy += x * y, sxz += x * z, syy += y * y, syz += y * z, szz += z * z;
-      z_min = std::min(z_min, p.z());
-      z_max = std::max(z_max, p.z());
-      // addNormal
-      const Eigen::Vector3f& n = normals[i];
-      const float len2 = n.squaredNorm();
-      if (len2 > 0.0f && std::isfinite(len2)) {
-        const float inv = 1.0f / std::sqrt(len2);
-        const float ux = n.x() * inv, uy = n.y() * inv, uz = n.z() * inv;
-        ++normal_count;
-        nx += ux, ny += uy, nz += uz;
-        cos_sum += uz;
-        sin_sum += std::sqrt(ux * ux + uy * uy);
-      }
-      // addLab
-      const Eigen::Vector3f c = lab(colors[i]);
-      l += c.x(), a += c.y(), b += c.z();
-      ll += double(c.x()) * c.x(), aa += double(c.y()) * c.y(), bb += double(c.z()) * c.z();
+      run.addPoint(p);
+      run.addNormal(normals[i]);
+      run.addLab(lab(colors[i]));
     }
-    // merge
-    target.count += count;
-    target.sx += sx, target.sy += sy, target.sz += sz;
-    target.sxx += sxx, target.sxy += sxy, target.sxz += sxz;
-    target.syy += syy, target.syz += syz, target.szz += szz;
-    target.z_min = std::min(target.z_min, z_min);
-    target.z_max = std::max(target.z_max, z_max);
-    target.normal_count += normal_count;
-    target.nx += nx, target.ny += ny, target.nz += nz;
-    target.cos_sum += cos_sum, target.sin_sum += sin_sum;
-    target.l += l, target.a += a, target.b += b, target.ll += ll, target.aa += aa, target.bb += bb;
+    target.merge(run);
   }
 
   out.features.resize(segment_count);

@@ -50,11 +50,8 @@
 #if defined(__SSE2__)
 #include <emmintrin.h>
 #endif
-#if defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
-#include <immintrin.h>
-#define FINDMUG_AVX_DISPATCH 1
-#endif
 
+#include "cpu_features.hpp"
 #include "findmug/error.hpp"
 #include "findmug/oversegmentation.hpp"
 #include "oversegmentation_internal.hpp"
@@ -270,7 +267,7 @@ void assignWindowSse(const FeatureGrid& g, const std::array<float, kNumChannels>
   }
 }
 
-#if defined(FINDMUG_AVX_DISPATCH)
+#if defined(FINDMUG_AVX2_DISPATCH)
 // assignWindowSse with 8-wide AVX registers. The same IEEE operations in the
 // same order per pixel (no FMA: the target is "avx2", not "fma"), so the
 // result is bit-identical to the SSE2 and scalar code; only the lane count
@@ -333,16 +330,12 @@ __attribute__((target("avx2"))) void assignWindowAvx(const FeatureGrid& g,
   }
 }
 
-bool cpuHasAvx() {
-  static const bool has = __builtin_cpu_supports("avx2");
-  return has;
-}
 #endif
 
 void assignWindow(const FeatureGrid& g, const std::array<float, kNumChannels>& c, const Weights& wt,
                   int label, int x0, int x1, int y0, int y1, float* best, int* labels) {
-#if defined(FINDMUG_AVX_DISPATCH)
-  if (cpuHasAvx()) {
+#if defined(FINDMUG_AVX2_DISPATCH)
+  if (detail::cpuHasAvx2()) {
     assignWindowAvx(g, c, wt, label, x0, x1, y0, y1, best, labels);
     return;
   }
