@@ -292,6 +292,7 @@ __attribute__((target("avx2"))) void smoothColumnsAvx2(
 
 // Reusable buffers for the smoothing pass (see computeNormals).
 struct SmoothingScratch {
+  std::vector<float> depth;             // z of every point, contiguous
   std::vector<std::uint8_t> links;      // bit 0: linked to the right, bit 1: to below
   std::vector<Eigen::Vector3f> prefix;  // ring of 2r + 2 rows of the column prefix table
   std::vector<std::int32_t> run_start;  // first row of each pixel's vertical run
@@ -302,6 +303,20 @@ struct SmoothingScratch {
 
 constexpr std::uint8_t kLinkRight = 1;
 constexpr std::uint8_t kLinkDown = 2;
+
+// Links of a pixel at depth z to its right and lower neighbours: each when
+// the depth step is at most max_jump_rel * z. None for a non-finite z (an
+// infinite one would pass its own tolerance); a NaN anywhere fails the
+// comparison. `down` is kLinkDown, or 0 on the last row.
+inline std::uint8_t linkBits(float z, float right, float below, float max_jump_rel,
+                             std::uint8_t down) {
+  const float tol = max_jump_rel * z;
+  // Bitwise, not && and ?:, so that the loops over a row vectorise.
+  const int finite = std::abs(z) <= std::numeric_limits<float>::max();
+  const int r = finite & (std::abs(right - z) <= tol);
+  const int d = finite & (std::abs(below - z) <= tol);
+  return static_cast<std::uint8_t>((r * kLinkRight) | (d * down));
+}
 
 // Replaces each finite entry of `n` by its box sum (radius r) over the finite
 // entries, normalised (kept as it is where the sum nearly cancels). The box
@@ -321,27 +336,38 @@ void smoothNormals(std::vector<Eigen::Vector3f>& n, const OrganizedCloud& cloud,
   const int h = cloud.height;
   const std::size_t count = n.size();
   const Eigen::Vector3f* pts = cloud.points.data();
+  if (count == 0) return;  // an empty grid (0 x h or w x 0): nothing to smooth
 
-  s.links.assign(count, 0);
+  // The links, from the depths copied out of the points: the loops below
+  // are plain array loops over floats, which the compiler vectorises (on the
+  // points' 12-byte stride it did not).
+  s.depth.resize(count);
+  for (std::size_t i = 0; i < count; ++i) s.depth[i] = pts[i].z();
+  s.links.resize(count);
   for (int v = 0; v < h; ++v) {
     const std::size_t base = static_cast<std::size_t>(v) * w;
-    for (int u = 0; u < w; ++u) {
-      const float z = pts[base + u].z();
-      if (!std::isfinite(z)) continue;  // NaN compares false below, but be explicit
-      const float tol = max_jump_rel * z;
-      std::uint8_t l = 0;
-      if (u + 1 < w && std::abs(pts[base + u + 1].z() - z) <= tol) l |= kLinkRight;
-      if (v + 1 < h && std::abs(pts[base + w + u].z() - z) <= tol) l |= kLinkDown;
-      s.links[base + u] = l;
+    const float* __restrict z = s.depth.data() + base;
+    // The row below; the last row has none (compared with itself, unused).
+    const float* __restrict below = v + 1 < h ? z + w : z;
+    const std::uint8_t down = v + 1 < h ? kLinkDown : 0;
+    std::uint8_t* __restrict links = s.links.data() + base;
+    for (int u = 0; u + 1 < w; ++u) {
+      links[u] = linkBits(z[u], z[u + 1], below[u], max_jump_rel, down);
     }
+    links[w - 1] = linkBits(z[w - 1], std::numeric_limits<float>::quiet_NaN(), below[w - 1],
+                            max_jump_rel, down);
   }
   // Vertical run ends, bottom to top (from the links alone).
   s.run_end.resize(count);
   for (int v = h - 1; v >= 0; --v) {
     const std::size_t base = static_cast<std::size_t>(v) * w;
+    const std::uint8_t* __restrict links = s.links.data() + base;
+    std::int32_t* __restrict end = s.run_end.data() + base;
+    // Only read where linked down, so never beyond the last row.
+    const std::int32_t* __restrict end_below = v + 1 < h ? end + w : end;
     for (int u = 0; u < w; ++u) {
-      s.run_end[base + u] =
-          (s.links[base + u] & kLinkDown) ? s.run_end[base + w + u] : static_cast<std::int32_t>(v);
+      const std::int32_t below = end_below[u];  // unconditional: a select vectorises
+      end[u] = (links[u] & kLinkDown) ? below : static_cast<std::int32_t>(v);
     }
   }
 
@@ -364,8 +390,18 @@ void smoothNormals(std::vector<Eigen::Vector3f>& n, const OrganizedCloud& cloud,
       const Eigen::Vector3f& x = n[base + u];
       s.row_prefix[u + 1] = s.row_prefix[u] + (std::isfinite(x.x()) ? x : Eigen::Vector3f::Zero());
       s.row_start[u] = (u > 0 && (links[u - 1] & kLinkRight)) ? s.row_start[u - 1] : u;
-      s.run_start[base + u] =
-          (v > 0 && (s.links[base - w + u] & kLinkDown)) ? s.run_start[base - w + u] : v;
+    }
+    // A loop of its own: element-wise, so it vectorises.
+    std::int32_t* __restrict start = s.run_start.data() + base;
+    if (v == 0) {
+      std::fill(start, start + w, 0);
+    } else {
+      const std::uint8_t* __restrict links_above = s.links.data() + base - w;
+      const std::int32_t* __restrict start_above = start - w;
+      for (int u = 0; u < w; ++u) {
+        const std::int32_t above = start_above[u];  // unconditional: a select vectorises
+        start[u] = (links_above[u] & kLinkDown) ? above : v;
+      }
     }
     // Right to left: the run end is known from the right neighbour.
     int row_end = w - 1;

@@ -23,7 +23,9 @@
 #include <limits>
 #include <string>
 
+#include "cpu_features.hpp"
 #include "findmug/error.hpp"
+#include "mrf_internal.hpp"
 #include "scratch.hpp"
 
 namespace findmug {
@@ -83,6 +85,66 @@ float pairwiseWeight(const Eigen::Vector3f& a, const Eigen::Vector3f& b, float s
   return std::exp(-(a - b).norm() / sigma);
 }
 
+#if defined(FINDMUG_AVX2_DISPATCH)
+static_assert(kNumLabels == 8 && sizeof(Costs) == 8 * sizeof(float),
+              "the AVX2 path holds one node's costs in one register");
+
+// The minimum of v's eight lanes, in every lane (exact in any order).
+__attribute__((target("avx2"))) inline __m256 laneMin(__m256 v) {
+  __m256 t = _mm256_min_ps(v, _mm256_permute2f128_ps(v, v, 1));
+  t = _mm256_min_ps(t, _mm256_shuffle_ps(t, t, _MM_SHUFFLE(1, 0, 3, 2)));
+  return _mm256_min_ps(t, _mm256_shuffle_ps(t, t, _MM_SHUFFLE(2, 3, 0, 1)));
+}
+
+__attribute__((target("avx2"))) inline __m256 laneMax(__m256 v) {
+  __m256 t = _mm256_max_ps(v, _mm256_permute2f128_ps(v, v, 1));
+  t = _mm256_max_ps(t, _mm256_shuffle_ps(t, t, _MM_SHUFFLE(1, 0, 3, 2)));
+  return _mm256_max_ps(t, _mm256_shuffle_ps(t, t, _MM_SHUFFLE(2, 3, 0, 1)));
+}
+
+// computeBeliefs of solveMrfInto: each node's unary plus its incoming
+// messages, added in the same order.
+__attribute__((target("avx2"))) void beliefsAvx2(const Costs* unary, const Costs* messages,
+                                                const std::uint32_t* in_begin,
+                                                const std::uint32_t* incoming,
+                                                std::size_t num_nodes, Costs* belief) {
+  for (std::size_t i = 0; i < num_nodes; ++i) {
+    __m256 b = _mm256_loadu_ps(unary[i].data());
+    for (std::uint32_t k = in_begin[i]; k < in_begin[i + 1]; ++k)
+      b = _mm256_add_ps(b, _mm256_loadu_ps(messages[incoming[k]].data()));
+    _mm256_storeu_ps(belief[i].data(), b);
+  }
+}
+
+// One round of messages of solveMrfInto's loop, one directed edge's eight
+// labels per register (Eigen's portable code takes two SSE halves). The
+// same operations per label in the same order (no FMA: the target is
+// "avx2", not "fma"), and min/max are exact in any order, so the same
+// messages to the bit. Returns the largest change of any message entry.
+__attribute__((target("avx2"))) float messageRoundAvx2(const Costs* belief, const Costs* messages,
+                                                      const std::uint32_t* source,
+                                                      const float* weight, std::size_t num_directed,
+                                                      float take, float keep, Costs* next) {
+  const __m256 take8 = _mm256_set1_ps(take);
+  const __m256 keep8 = _mm256_set1_ps(keep);
+  const __m256 abs_mask = _mm256_castsi256_ps(_mm256_set1_epi32(0x7fffffff));
+  __m256 max_change = _mm256_setzero_ps();
+  for (std::size_t e = 0; e < num_directed; ++e) {
+    const __m256 h = _mm256_sub_ps(_mm256_loadu_ps(belief[source[e]].data()),
+                                   _mm256_loadu_ps(messages[e ^ 1].data()));
+    const __m256 old = _mm256_loadu_ps(messages[e].data());
+    __m256 m = _mm256_add_ps(
+        _mm256_mul_ps(take8, _mm256_min_ps(_mm256_sub_ps(h, laneMin(h)),
+                                           _mm256_set1_ps(weight[e / 2]))),
+        _mm256_mul_ps(keep8, old));
+    m = _mm256_sub_ps(m, laneMin(m));
+    max_change = _mm256_max_ps(max_change, _mm256_and_ps(_mm256_sub_ps(m, old), abs_mask));
+    _mm256_storeu_ps(next[e].data(), m);
+  }
+  return _mm_cvtss_f32(_mm256_castps256_ps128(laneMax(max_change)));
+}
+#endif
+
 }  // namespace
 
 MrfResult solveMrf(const std::vector<ClassProbabilities>& unaries,
@@ -97,6 +159,13 @@ void solveMrfInto(const std::vector<ClassProbabilities>& unaries,
                   const std::vector<Eigen::Vector3f>& centroids,
                   const std::vector<std::pair<int, int>>& edges, const MrfParams& params,
                   MrfResult& result) {
+  detail::solveMrfInto(unaries, centroids, edges, params, result, detail::MrfSimd::Auto);
+}
+
+void detail::solveMrfInto(const std::vector<ClassProbabilities>& unaries,
+                          const std::vector<Eigen::Vector3f>& centroids,
+                          const std::vector<std::pair<int, int>>& edges, const MrfParams& params,
+                          MrfResult& result, MrfSimd simd) {
   validateParams(params);
   validateGraph(unaries, centroids, edges);
 
@@ -159,7 +228,19 @@ void solveMrfInto(const std::vector<ClassProbabilities>& unaries,
   next.resize(num_directed);
   std::vector<Costs>& belief = *belief_buffer;
   belief.resize(num_nodes);
+#if defined(FINDMUG_AVX2_DISPATCH)
+  const bool avx2 = simd == detail::MrfSimd::Auto && detail::cpuHasAvx2();
+#else
+  (void)simd;  // no SIMD path on this platform
+#endif
   auto computeBeliefs = [&] {
+#if defined(FINDMUG_AVX2_DISPATCH)
+    if (avx2) {
+      beliefsAvx2(unary.data(), messages.data(), in_begin.data(), incoming.data(), num_nodes,
+                  belief.data());
+      return;
+    }
+#endif
     for (std::size_t i = 0; i < num_nodes; ++i) {
       Costs b = unary[i];
       for (std::uint32_t k = in_begin[i]; k < in_begin[i + 1]; ++k) b += messages[incoming[k]];
@@ -174,6 +255,12 @@ void solveMrfInto(const std::vector<ClassProbabilities>& unaries,
   for (int iter = 0; iter < params.max_iterations && !edges.empty(); ++iter) {
     computeBeliefs();
     float max_change = 0.0f;
+#if defined(FINDMUG_AVX2_DISPATCH)
+    if (avx2) {
+      max_change = messageRoundAvx2(belief.data(), messages.data(), source.data(), weight.data(),
+                                    num_directed, take, keep, next.data());
+    } else
+#endif
     for (std::size_t e = 0; e < num_directed; ++e) {
       const Costs h = belief[source[e]] - messages[e ^ 1];
       const Costs& old = messages[e];

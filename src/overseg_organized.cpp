@@ -54,6 +54,7 @@
 #include "cpu_features.hpp"
 #include "findmug/error.hpp"
 #include "findmug/oversegmentation.hpp"
+#include "lab_internal.hpp"
 #include "oversegmentation_internal.hpp"
 #include "scratch.hpp"
 
@@ -100,6 +101,20 @@ class LabConverter {
     f_[kFSize + 1] = f_[kFSize];
   }
 
+  // convert() of colors[pixel[j]] into l[j], a[j], b[j] for j < count.
+  void convertBatch(const Rgb8* colors, const int* pixel, std::size_t count, float* l, float* a,
+                    float* b, detail::LabSimd simd) const {
+    std::size_t j = 0;
+#if defined(FINDMUG_AVX2_DISPATCH)
+    if (simd == detail::LabSimd::Auto && detail::cpuHasAvx2()) {
+      j = convertBatchAvx2(colors, pixel, count, l, a, b);
+    }
+#else
+    (void)simd;
+#endif
+    for (; j < count; ++j) convert(colors[pixel[j]], l[j], a[j], b[j]);
+  }
+
   void convert(const Rgb8& rgb, float& l, float& a, float& b) const {
     const float r = linear_[rgb.r];
     const float g = linear_[rgb.g];
@@ -126,6 +141,67 @@ class LabConverter {
     const float frac = pos - static_cast<float>(i);
     return f_[i] + frac * (f_[i + 1] - f_[i]);
   }
+
+#if defined(FINDMUG_AVX2_DISPATCH)
+  // convert() eight colours at a time, with the same IEEE operations in the
+  // same order (no FMA), so the same bits; the tables are read by gathers.
+  // Returns how many it converted (a multiple of 8); the caller does the rest.
+  __attribute__((target("avx2"))) std::size_t convertBatchAvx2(const Rgb8* colors,
+                                                               const int* pixel, std::size_t count,
+                                                               float* l, float* a,
+                                                               float* b) const {
+    const __m256 one = _mm256_set1_ps(1.0f);
+    std::size_t j = 0;
+    for (; j + 8 <= count; j += 8) {
+      alignas(32) int red[8], green[8], blue[8];
+      for (int k = 0; k < 8; ++k) {
+        const Rgb8& c = colors[pixel[j + k]];
+        red[k] = c.r;
+        green[k] = c.g;
+        blue[k] = c.b;
+      }
+      const __m256 r = linearAvx2(red), g = linearAvx2(green), bl = linearAvx2(blue);
+      const __m256 x = _mm256_mul_ps(rowAvx2(r, g, bl, 0.4124564f, 0.3575761f, 0.1804375f),
+                                     _mm256_set1_ps(1.0f / 0.95047f));
+      const __m256 y = rowAvx2(r, g, bl, 0.2126729f, 0.7151522f, 0.0721750f);
+      const __m256 z = _mm256_mul_ps(rowAvx2(r, g, bl, 0.0193339f, 0.1191920f, 0.9503041f),
+                                     _mm256_set1_ps(1.0f / 1.08883f));
+      const __m256 fx = fAvx2(x, one), fy = fAvx2(y, one), fz = fAvx2(z, one);
+      _mm256_storeu_ps(l + j, _mm256_sub_ps(_mm256_mul_ps(_mm256_set1_ps(116.0f), fy),
+                                            _mm256_set1_ps(16.0f)));
+      _mm256_storeu_ps(a + j, _mm256_mul_ps(_mm256_set1_ps(500.0f), _mm256_sub_ps(fx, fy)));
+      _mm256_storeu_ps(b + j, _mm256_mul_ps(_mm256_set1_ps(200.0f), _mm256_sub_ps(fy, fz)));
+    }
+    return j;
+  }
+
+  // Helpers are member functions, not lambdas: a lambda in an avx2 function
+  // is compiled for the base target.
+  __attribute__((target("avx2"))) __m256 linearAvx2(const int* v) const {
+    return _mm256_i32gather_ps(linear_.data(),
+                               _mm256_load_si256(reinterpret_cast<const __m256i*>(v)), 4);
+  }
+  // cr * r + cg * g + cb * bl, in convert()'s order.
+  __attribute__((target("avx2"))) static __m256 rowAvx2(__m256 r, __m256 g, __m256 bl, float cr,
+                                                        float cg, float cb) {
+    return _mm256_add_ps(
+        _mm256_add_ps(_mm256_mul_ps(_mm256_set1_ps(cr), r), _mm256_mul_ps(_mm256_set1_ps(cg), g)),
+        _mm256_mul_ps(_mm256_set1_ps(cb), bl));
+  }
+
+  // f() on eight lanes. max/min stand for std::clamp: they differ only for
+  // t = -0 (clamp keeps -0, max gives +0), and both give f_[0] then.
+  __attribute__((target("avx2"))) __m256 fAvx2(__m256 t, __m256 one) const {
+    static_assert(kFMax == 1.0f, "the clamp below is to [0, 1]");
+    const __m256 pos = _mm256_mul_ps(_mm256_min_ps(_mm256_max_ps(t, _mm256_setzero_ps()), one),
+                                     _mm256_set1_ps(kFSize / kFMax));
+    const __m256i i = _mm256_cvttps_epi32(pos);
+    const __m256 frac = _mm256_sub_ps(pos, _mm256_cvtepi32_ps(i));
+    const __m256 f0 = _mm256_i32gather_ps(f_.data(), i, 4);
+    const __m256 f1 = _mm256_i32gather_ps(f_.data() + 1, i, 4);
+    return _mm256_add_ps(f0, _mm256_mul_ps(frac, _mm256_sub_ps(f1, f0)));
+  }
+#endif
 
   std::array<float, 256> linear_{};
   std::array<float, kFSize + 2> f_{};
@@ -175,6 +251,10 @@ struct CentreSum {  // updateCentres: sums over a cluster's pixels
   double u = 0, v = 0;
   int count = 0;
 };
+struct Pending {  // refineToFullResolution: a boundary pixel's candidate clusters
+  std::array<int, 4> candidates;
+  int count;
+};
 struct Run {  // enforceConnectivity: [x0, x1) of one row with one key
   int x0, x1;
   int key;
@@ -200,6 +280,11 @@ struct OversegBuffers {
   std::vector<Run> runs;
   std::vector<int> row_begin, parent, run_piece, piece_size, piece_key, merged, target, target_len;
   std::vector<Contact> contacts;
+  // buildCoarse, refineToFullResolution: a row's pixels whose colour is
+  // wanted, their cells (buildCoarse), candidates (refine) and L, a, b
+  std::vector<int> picks, cells;
+  std::vector<Pending> pending;
+  std::vector<float> lab;
 };
 thread_local OversegBuffers g_buffers;
 
@@ -453,10 +538,10 @@ class OrganizedOversegmenter final : public Oversegmenter {
  private:
   static bool usable(const Eigen::Vector3f& p) { return p.z() > 0.0f && p.allFinite(); }
 
-  // Features of full-resolution pixel i (usable) into f.
-  static void pixelFeatures(const OrganizedCloud& cloud, const NormalImage& normals, std::size_t i,
-                            std::array<float, kNumChannels>& f) {
-    labConverter().convert(cloud.colors[i], f[kL], f[kA], f[kB]);
+  // Point and normal channels (kX..kNZ) of full-resolution pixel i (usable)
+  // into f.
+  static void pointAndNormal(const OrganizedCloud& cloud, const NormalImage& normals,
+                             std::size_t i, std::array<float, kNumChannels>& f) {
     const Eigen::Vector3f& p = cloud.points[i];
     f[kX] = p.x();
     f[kY] = p.y();
@@ -536,7 +621,19 @@ class OrganizedOversegmenter final : public Oversegmenter {
     const auto other = [](int full, int c, int size) {
       return std::clamp(full % kCoarseStride == 0 ? c - 1 : c + 1, 0, size - 1);
     };
+    // A row's boundary pixels wait here until their colours have been
+    // converted together (eight at a time with AVX2).
+    Borrowed pending_buffer(g_buffers.pending);
+    std::vector<Pending>& pending = *pending_buffer;
+    Borrowed picks_buffer(g_buffers.picks);
+    std::vector<int>& picks = *picks_buffer;
+    Borrowed lab_buffer(g_buffers.lab);
+    std::vector<float>& lab = *lab_buffer;
+    pending.resize(w);
+    picks.resize(w);
+    lab.resize(3 * static_cast<std::size_t>(w));
     for (int y = 0; y < h; ++y) {
+      std::size_t waiting = 0;
       const int cy = y / kCoarseStride;
       const int* row_a = labels.data() + static_cast<std::size_t>(cy) * cw;
       const int* row_b = labels.data() + static_cast<std::size_t>(other(y, cy, chh)) * cw;
@@ -563,18 +660,32 @@ class OrganizedOversegmenter final : public Oversegmenter {
           out[i] = count == 1 ? candidates[0] : kUnassigned;
           continue;
         }
-        pixelFeatures(cloud, normals, i, f);
+        pending[waiting] = {candidates, count};
+        picks[waiting] = static_cast<int>(i);
+        ++waiting;
+      }
+      float* l = lab.data();
+      float* a = l + w;
+      float* b = a + w;
+      detail::labFromRgb(cloud.colors.data(), picks.data(), waiting, l, a, b,
+                         detail::LabSimd::Auto);
+      for (std::size_t j = 0; j < waiting; ++j) {
+        const Pending& p = pending[j];
+        f[kL] = l[j];
+        f[kA] = a[j];
+        f[kB] = b[j];
+        pointAndNormal(cloud, normals, static_cast<std::size_t>(picks[j]), f);
         std::array<float, 4> d{};
-        candidateDistances(f, clusters, candidates, count, d);
-        int best_k = candidates[0];
+        candidateDistances(f, clusters, p.candidates, p.count, d);
+        int best_k = p.candidates[0];
         float best_d = d[0];
-        for (int c = 1; c < count; ++c) {
+        for (int c = 1; c < p.count; ++c) {
           if (d[c] < best_d) {
             best_d = d[c];
-            best_k = candidates[c];
+            best_k = p.candidates[c];
           }
         }
-        out[i] = best_k;
+        out[static_cast<std::size_t>(picks[j])] = best_k;
       }
     }
   }
@@ -592,7 +703,19 @@ class OrganizedOversegmenter final : public Oversegmenter {
     const float nan = std::numeric_limits<float>::quiet_NaN();
     std::size_t total = 0;
     std::array<float, kNumChannels> f{};
+    // The colours of a row's picks are converted together (eight at a time
+    // with AVX2), then scattered to their cells.
+    Borrowed picks_buffer(g_buffers.picks);
+    std::vector<int>& picks = *picks_buffer;
+    Borrowed cells_buffer(g_buffers.cells);
+    std::vector<int>& cells = *cells_buffer;
+    Borrowed lab_buffer(g_buffers.lab);
+    std::vector<float>& lab = *lab_buffer;
+    picks.resize(cw);
+    cells.resize(cw);
+    lab.resize(3 * static_cast<std::size_t>(cw));
     for (int cy = 0; cy < chh; ++cy) {
+      std::size_t picked = 0;
       for (int cx = 0; cx < cw; ++cx) {
         const std::size_t ci = static_cast<std::size_t>(cy) * cw + cx;
         std::size_t pick = 0;
@@ -611,8 +734,21 @@ class OrganizedOversegmenter final : public Oversegmenter {
           coarse.ch[kX][ci] = coarse.ch[kY][ci] = coarse.ch[kZ][ci] = nan;
           continue;
         }
-        pixelFeatures(cloud, normals, pick, f);
-        for (int k = 0; k < kNumChannels; ++k) coarse.ch[k][ci] = f[k];
+        pointAndNormal(cloud, normals, pick, f);
+        for (int k = kX; k < kNumChannels; ++k) coarse.ch[k][ci] = f[k];
+        picks[picked] = static_cast<int>(pick);
+        cells[picked] = static_cast<int>(ci);
+        ++picked;
+      }
+      float* l = lab.data();
+      float* a = l + cw;
+      float* b = a + cw;
+      detail::labFromRgb(cloud.colors.data(), picks.data(), picked, l, a, b,
+                         detail::LabSimd::Auto);
+      for (std::size_t j = 0; j < picked; ++j) {
+        coarse.ch[kL][cells[j]] = l[j];
+        coarse.ch[kA][cells[j]] = a[j];
+        coarse.ch[kB][cells[j]] = b[j];
       }
     }
     return total;
@@ -783,21 +919,55 @@ class OrganizedOversegmenter final : public Oversegmenter {
     return featureDistance(g, l, r, weights_) + featureDistance(g, u, d, weights_);
   }
 
+  // Adds pixels [x0, x1) of row y (starting at grid index row) to s, one
+  // after the other.
+  static void addRun(const float* const* ch, std::size_t row, int x0, int x1, int y,
+                     CentreSum& s) {
+    double l = s.ch[kL], a = s.ch[kA], b = s.ch[kB];
+    double px = s.ch[kX], py = s.ch[kY], pz = s.ch[kZ];
+    double nx = s.ch[kNX], ny = s.ch[kNY], nz = s.ch[kNZ];
+    double u = s.u;
+    for (int x = x0; x < x1; ++x) {
+      const std::size_t i = row + x;
+      l += ch[kL][i];
+      a += ch[kA][i];
+      b += ch[kB][i];
+      px += ch[kX][i];
+      py += ch[kY][i];
+      pz += ch[kZ][i];
+      nx += ch[kNX][i];
+      ny += ch[kNY][i];
+      nz += ch[kNZ][i];
+      u += x;
+    }
+    static_assert(kNumChannels == 9 && kL == 0 && kNZ == 8, "channel order of s.ch below");
+    s.ch = {l, a, b, px, py, pz, nx, ny, nz};
+    s.u = u;
+    // Sums of pixel coordinates are integers far below 2^53, exact in any
+    // order.
+    s.v += static_cast<double>(y) * (x1 - x0);
+    s.count += x1 - x0;
+  }
+
   static void updateCentres(const FeatureGrid& g, const std::vector<int>& labels,
                             std::vector<Cluster>& clusters) {
     Borrowed sums_buffer(g_buffers.sums);
     std::vector<CentreSum>& sums = *sums_buffer;
     sums.assign(clusters.size(), CentreSum{});
+    const float* ch[kNumChannels];
+    for (int c = 0; c < kNumChannels; ++c) ch[c] = g.ch[c].data();
+    // A row holds a few runs of one cluster each: a run's sums are added in
+    // locals (registers), then stored. Per cluster the additions happen in
+    // the same order as pixel by pixel, so the centres are the same bits;
+    // through sums[k] every pixel cost a load and a store per sum.
     for (int y = 0; y < g.height; ++y) {
-      for (int x = 0; x < g.width; ++x) {
-        const std::size_t i = static_cast<std::size_t>(y) * g.width + x;
-        const int k = labels[i];
-        if (k < 0) continue;
-        CentreSum& s = sums[k];
-        for (int c = 0; c < kNumChannels; ++c) s.ch[c] += g.ch[c][i];
-        s.u += x;
-        s.v += y;
-        ++s.count;
+      const int* row = labels.data() + static_cast<std::size_t>(y) * g.width;
+      for (int x = 0; x < g.width;) {
+        const int k = row[x];
+        int x1 = x + 1;
+        while (x1 < g.width && row[x1] == k) ++x1;
+        if (k >= 0) addRun(ch, static_cast<std::size_t>(y) * g.width, x, x1, y, sums[k]);
+        x = x1;
       }
     }
     for (std::size_t k = 0; k < clusters.size(); ++k) {
@@ -995,6 +1165,11 @@ class OrganizedOversegmenter final : public Oversegmenter {
 }  // namespace
 
 namespace detail {
+void labFromRgb(const Rgb8* colors, const int* pixel, std::size_t count, float* l, float* a,
+                float* b, LabSimd simd) {
+  labConverter().convertBatch(colors, pixel, count, l, a, b, simd);
+}
+
 std::unique_ptr<Oversegmenter> makeOrganizedOversegmenter(const OversegmentationConfig& config) {
   return std::make_unique<OrganizedOversegmenter>(config);
 }

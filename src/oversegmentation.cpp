@@ -214,6 +214,11 @@ void finalizeOversegmentation(Oversegmentation& seg, int min_points, EdgeSource 
   for (std::size_t r = 0; r < rank_order.size(); ++r)
     ranked[static_cast<std::size_t>(remap[rank_order[r]])] = std::move(seg.segments[r]);
   seg.segments.swap(ranked);  // `ranked` keeps the moved-from shells for next time
+  // Each list is sized to its count first and written through a cursor:
+  // push_back per pixel reloaded and stored the list's end every time.
+  thread_local std::vector<int*> cursor_tls;
+  std::vector<int*>& cursor = cursor_tls;
+  cursor.resize(static_cast<std::size_t>(next));
   for (auto& pixels : seg.segments) pixels.clear();
   for (std::size_t id = 0; id < counts.size(); ++id) {
     if (remap[id] < 0) continue;
@@ -222,12 +227,21 @@ void finalizeOversegmentation(Oversegmentation& seg, int min_points, EdgeSource 
     // A recycled list that is too small grows with a quarter to spare, so
     // that over a stream the lists settle at sizes that fit every frame.
     if (pixels.capacity() < count) pixels.reserve(pixels.capacity() == 0 ? count : count + count / 4);
+    pixels.resize(count);
+    cursor[static_cast<std::size_t>(remap[id])] = pixels.data();
   }
-  for (std::size_t i = 0; i < n; ++i) {
-    int& id = seg.pixel_segment[i];
-    if (id < 0) continue;
-    id = remap[id];
-    if (id >= 0) seg.segments[id].push_back(static_cast<int>(i));
+  // Runs of one id along a row (a segment crosses a row in one or two).
+  for (std::size_t i = 0; i < n;) {
+    const int old_id = seg.pixel_segment[i];
+    std::size_t end = i + 1;
+    while (end < n && seg.pixel_segment[end] == old_id) ++end;
+    const int id = old_id >= 0 ? remap[old_id] : old_id;
+    if (old_id >= 0) std::fill(seg.pixel_segment.begin() + i, seg.pixel_segment.begin() + end, id);
+    if (id >= 0) {
+      int*& out = cursor[static_cast<std::size_t>(id)];
+      for (std::size_t j = i; j < end; ++j) *out++ = static_cast<int>(j);
+    }
+    i = end;
   }
 
   // Grid edges are written into seg.edges itself (its capacity is reused);

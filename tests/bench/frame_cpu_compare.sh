@@ -15,6 +15,8 @@
 # range), and writes every run to OUT.csv (default frame_cpu_compare.csv).
 # STAGE=NAME compares another row of frame_cpu's table instead of the table
 # stage (e.g. STAGE=regions); VARIANTS="base new" leaves out the stride run.
+# REPORTS=DIR keeps every frame_cpu report there and ends with the per-round
+# ratio to the base build of every stage (several changes, one run).
 set -euo pipefail
 cd "$(dirname "$0")/../.."
 base=${1:?usage: frame_cpu_compare.sh BASE_BUILD [ROUNDS] [OUT.csv]}
@@ -40,6 +42,7 @@ for round in $(seq "$rounds"); do
       [[ $data == synthetic ]] && extra+=(--data "$synth")
       report=$(taskset -c 0 "$exe" --model models/findmug.fmf --passes 1 \
         --set features.regions=true --set features.scene=true --heap-keep-mb 256 "${extra[@]}")
+      [[ -n ${REPORTS:-} ]] && mkdir -p "$REPORTS" && echo "$report" >"$REPORTS/$data-$variant-$round.md"
       tables=$(awk -F'|' -v s=" $stage " '$2 == s {print $3 + 0}' <<<"$report")
       total=$(awk -F'|' '$2 ~ /total/ {gsub(/\*/, "", $3); print $3 + 0}' <<<"$report")
       echo "$data,$variant,$round,$tables,$total" >>"$out"
@@ -66,3 +69,30 @@ for data in nyu synthetic; do
       "$(cut -d' ' -f2 <<<"$ratios" | median)" "$(cut -d' ' -f2 <<<"$ratios" | range)"
   done
 done
+
+# Every stage from the kept reports: median over rounds of variant / base.
+if [[ -n ${REPORTS:-} ]]; then
+  echo
+  echo "| data | variant | stage | base ms (median) | variant ms (median) | variant / base per round |"
+  echo "|---|---|---|---:|---:|---|"
+  for data in nyu synthetic; do
+    for variant in "${variants[@]}"; do
+      [[ $variant == base ]] && continue
+      stages=$(awk -F'|' 'NF > 4 && $3 ~ /[0-9]/ {gsub(/^ +| +$|\*/, "", $2); print $2}' \
+        "$REPORTS/$data-base-1.md")
+      while read -r name; do
+        pairs=$(for round in $(seq "$rounds"); do
+          b=$(awk -F'|' -v s="$name" '{n = $2; gsub(/^ +| +$|\*/, "", n)} n == s {gsub(/\*/, "", $3); print $3 + 0}' \
+            "$REPORTS/$data-base-$round.md")
+          v=$(awk -F'|' -v s="$name" '{n = $2; gsub(/^ +| +$|\*/, "", n)} n == s {gsub(/\*/, "", $3); print $3 + 0}' \
+            "$REPORTS/$data-$variant-$round.md")
+          echo "$b $v"
+        done)
+        printf "| %s | %s | %s | %.2f | %.2f | %.2f (%s) |\n" "$data" "$variant" "$name" \
+          "$(cut -d' ' -f1 <<<"$pairs" | median)" "$(cut -d' ' -f2 <<<"$pairs" | median)" \
+          "$(awk '$1 > 0 {print $2 / $1}' <<<"$pairs" | median)" \
+          "$(awk '$1 > 0 {print $2 / $1}' <<<"$pairs" | range)"
+      done <<<"$stages"
+    done
+  done
+fi

@@ -1,7 +1,8 @@
 // geometry_bench: the geometric front of the pipeline on one real 640x480
 // NYU Depth V2 frame (raw Kinect depth with holes, frame 0433):
 // back-projection, normals, ground plane (from labels and estimated),
-// transform into the ground frame and the 14-D features of ~1000 patches;
+// transform into the ground frame, the organized oversegmentation, and the
+// 14-D features of ~1000 patches;
 // then, on the frame's own oversegmentation, the 14-D features, the region
 // features both ways (from the pixels, and from the 14-D features' moments
 // as the pipeline does) and the scene features.
@@ -24,6 +25,7 @@
 #include "findmug/oversegmentation.hpp"
 #include "findmug/region_features.hpp"
 #include "findmug/scene_features.hpp"
+#include "lab_internal.hpp"
 
 namespace {
 
@@ -140,6 +142,41 @@ void BM_TransformToGround(benchmark::State& state) {
   });
 }
 BENCHMARK(BM_TransformToGround)->Unit(benchmark::kMillisecond);
+
+void BM_OversegmentOrganized(benchmark::State& state) {
+  // Into a recycled result, as the pipeline does: the pixel lists keep
+  // their capacity.
+  const auto oversegmenter = makeOversegmenter(OversegmentationConfig{});
+  Oversegmentation out;
+  run(state, [&](const Fixture& f) {
+    oversegmenter->segmentInto(f.cloud, f.normals, out);
+    benchmark::DoNotOptimize(out.pixel_segment.data());
+    state.counters["segments"] = static_cast<double>(out.segments.size());
+  });
+}
+BENCHMARK(BM_OversegmentOrganized)->Unit(benchmark::kMillisecond);
+
+// The oversegmenter's sRGB -> CIELAB of every pixel of the frame, with the
+// AVX2 path (Auto) and without (Off).
+void labOfEveryPixel(benchmark::State& state, detail::LabSimd simd) {
+  std::vector<int> pixel;
+  std::vector<float> lab;
+  run(state, [&](const Fixture& f) {
+    if (pixel.empty()) {
+      pixel.resize(f.cloud.size());
+      for (std::size_t i = 0; i < pixel.size(); ++i) pixel[i] = static_cast<int>(i);
+      lab.resize(3 * pixel.size());
+    }
+    float* l = lab.data();
+    detail::labFromRgb(f.cloud.colors.data(), pixel.data(), pixel.size(), l, l + pixel.size(),
+                       l + 2 * pixel.size(), simd);
+    benchmark::DoNotOptimize(l);
+  });
+}
+void BM_LabFromRgbAuto(benchmark::State& state) { labOfEveryPixel(state, detail::LabSimd::Auto); }
+void BM_LabFromRgbScalar(benchmark::State& state) { labOfEveryPixel(state, detail::LabSimd::Off); }
+BENCHMARK(BM_LabFromRgbAuto)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_LabFromRgbScalar)->Unit(benchmark::kMillisecond);
 
 void BM_ComputeFeatures(benchmark::State& state) {
   run(state, [&state](const Fixture& f) {
