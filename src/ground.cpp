@@ -15,7 +15,9 @@
 #include <sstream>
 #include <string>
 
+#include "cpu_features.hpp"
 #include "findmug/error.hpp"
+#include "ground_internal.hpp"
 
 namespace findmug {
 
@@ -74,6 +76,15 @@ void validateConfig(const GroundConfig& config, const char* where) {
   if (config.reestimate_every_frames < 1) bad("reestimate_every_frames", config.reestimate_every_frames);
   if (!(config.reuse_min_support_fraction > 0.0f && config.reuse_min_support_fraction <= 1.0f))
     bad("reuse_min_support_fraction", config.reuse_min_support_fraction);
+}
+
+// Whether this CPU runs the AVX2 variants below.
+bool cpuAvx2() {
+#if defined(FINDMUG_AVX2_DISPATCH)
+  return detail::cpuHasAvx2();
+#else
+  return false;
+#endif
 }
 
 float cosDeg(float deg) { return std::cos(deg * static_cast<float>(M_PI) / 180.0f); }
@@ -156,28 +167,167 @@ class PackedSupport {
     cos_agree_ = support.cos_agree;
     with_normals_ = with_normals;
   }
-  std::size_t count(const Plane& p) const {
+  std::size_t count(const Plane& p, bool avx2) const {
+#if defined(FINDMUG_AVX2_DISPATCH)
+    if (avx2) return countAvx2(p);
+#endif
+    (void)avx2;
+    return countPortable(p, 0, 0);
+  }
+
+ private:
+  // Points [begin, size) counted one by one, added to `score`.
+  std::size_t countPortable(const Plane& p, std::size_t begin, std::size_t score) const {
     const float a = p.normal.x(), b = p.normal.y(), c = p.normal.z(), d = p.offset;
     const std::size_t n = px_.size();
-    std::size_t score = 0;
     if (with_normals_) {
-      for (std::size_t k = 0; k < n; ++k) {
+      for (std::size_t k = begin; k < n; ++k) {
         const bool near = std::abs(a * px_[k] + b * py_[k] + c * pz_[k] + d) < tol_;
         const bool agree = nx_[k] * a + ny_[k] * b + nz_[k] * c >= cos_agree_;
         score += (near && agree) ? 1 : 0;
       }
     } else {
-      for (std::size_t k = 0; k < n; ++k)
+      for (std::size_t k = begin; k < n; ++k)
         score += std::abs(a * px_[k] + b * py_[k] + c * pz_[k] + d) < tol_ ? 1 : 0;
     }
     return score;
   }
 
- private:
+#if defined(FINDMUG_AVX2_DISPATCH)
+  // Eight points per step, the same IEEE operations in the same order as
+  // countPortable (no FMA; the ordered comparisons are false for NaN as `<`
+  // and `>=` are), counted in 32-bit lanes (n <= kScoringSubset): the same
+  // count. RANSAC scores 200 hypotheses per plane, up to five planes a frame.
+  __attribute__((target("avx2"))) std::size_t countAvx2(const Plane& p) const {
+    const __m256 a = _mm256_set1_ps(p.normal.x()), b = _mm256_set1_ps(p.normal.y());
+    const __m256 c = _mm256_set1_ps(p.normal.z()), d = _mm256_set1_ps(p.offset);
+    const __m256 tol = _mm256_set1_ps(tol_), cos_agree = _mm256_set1_ps(cos_agree_);
+    const __m256 abs_mask = _mm256_castsi256_ps(_mm256_set1_epi32(0x7fffffff));
+    const std::size_t n = px_.size();
+    __m256i counts = _mm256_setzero_si256();
+    std::size_t k = 0;
+    for (; k + 8 <= n; k += 8) {
+      const __m256 x = _mm256_loadu_ps(px_.data() + k);
+      const __m256 y = _mm256_loadu_ps(py_.data() + k);
+      const __m256 z = _mm256_loadu_ps(pz_.data() + k);
+      const __m256 dist = _mm256_add_ps(
+          _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(a, x), _mm256_mul_ps(b, y)),
+                        _mm256_mul_ps(c, z)),
+          d);
+      __m256 hit = _mm256_cmp_ps(_mm256_and_ps(dist, abs_mask), tol, _CMP_LT_OQ);
+      if (with_normals_) {
+        const __m256 nx = _mm256_loadu_ps(nx_.data() + k);
+        const __m256 ny = _mm256_loadu_ps(ny_.data() + k);
+        const __m256 nz = _mm256_loadu_ps(nz_.data() + k);
+        const __m256 dot = _mm256_add_ps(
+            _mm256_add_ps(_mm256_mul_ps(nx, a), _mm256_mul_ps(ny, b)), _mm256_mul_ps(nz, c));
+        hit = _mm256_and_ps(hit, _mm256_cmp_ps(dot, cos_agree, _CMP_GE_OQ));
+      }
+      counts = _mm256_sub_epi32(counts, _mm256_castps_si256(hit));  // a hit is -1
+    }
+    alignas(32) std::uint32_t lanes[8];
+    _mm256_store_si256(reinterpret_cast<__m256i*>(lanes), counts);
+    std::size_t score = 0;
+    for (std::uint32_t lane : lanes) score += lane;
+    return countPortable(p, k, score);
+  }
+#endif
+
   std::vector<float> px_, py_, pz_, nx_, ny_, nz_;
   float tol_ = 0.0f, cos_agree_ = -1.0f;
   bool with_normals_ = false;
 };
+
+// The indices among `idx` whose points support `plane`, in order, into `out`.
+// Written without a branch per point: along the borders of planes, and in
+// the candidates of several planes interleaved, the test is a coin flip that
+// a branch would mispredict.
+void selectSupport(const Support& support, const Plane& plane, const std::vector<std::size_t>& idx,
+                   std::vector<std::size_t>& out) {
+  out.resize(idx.size());
+  std::size_t n = 0;
+  for (std::size_t i : idx) {
+    out[n] = i;
+    n += support(plane, i) ? 1 : 0;
+  }
+  out.resize(n);
+}
+
+#if defined(FINDMUG_AVX2_DISPATCH)
+// Eight consecutive Eigen::Vector3f (24 floats from p) as their x, y and z
+// lanes, in order.
+__attribute__((target("avx2"))) inline void deinterleave8(const float* p, __m256& x, __m256& y,
+                                                         __m256& z) {
+  __m256 m03 = _mm256_castps128_ps256(_mm_loadu_ps(p));       // x0 y0 z0 x1
+  __m256 m14 = _mm256_castps128_ps256(_mm_loadu_ps(p + 4));   // y1 z1 x2 y2
+  __m256 m25 = _mm256_castps128_ps256(_mm_loadu_ps(p + 8));   // z2 x3 y3 z3
+  m03 = _mm256_insertf128_ps(m03, _mm_loadu_ps(p + 12), 1);   // x4 y4 z4 x5
+  m14 = _mm256_insertf128_ps(m14, _mm_loadu_ps(p + 16), 1);   // y5 z5 x6 y6
+  m25 = _mm256_insertf128_ps(m25, _mm_loadu_ps(p + 20), 1);   // z6 x7 y7 z7
+  const __m256 xy = _mm256_shuffle_ps(m14, m25, _MM_SHUFFLE(2, 1, 3, 2));  // x2 y2 x3 y3
+  const __m256 yz = _mm256_shuffle_ps(m03, m14, _MM_SHUFFLE(1, 0, 2, 1));  // y0 z0 y1 z1
+  x = _mm256_shuffle_ps(m03, xy, _MM_SHUFFLE(2, 0, 3, 0));
+  y = _mm256_shuffle_ps(yz, xy, _MM_SHUFFLE(3, 1, 2, 0));
+  z = _mm256_shuffle_ps(yz, m25, _MM_SHUFFLE(3, 0, 3, 1));
+}
+
+// selectSupport over every index 0 .. count-1, eight points at a time: the
+// same IEEE operations as Support (Eigen's dot of three is x + (y + z); no
+// FMA), so the same indices.
+__attribute__((target("avx2"))) void selectSupportAllAvx2(const Support& support,
+                                                          const Plane& plane, std::size_t count,
+                                                          std::vector<std::size_t>& out) {
+  const float* points = support.points.front().data();
+  const float* normals = support.normals->front().data();
+  const __m256 a = _mm256_set1_ps(plane.normal.x()), b = _mm256_set1_ps(plane.normal.y());
+  const __m256 c = _mm256_set1_ps(plane.normal.z()), d = _mm256_set1_ps(plane.offset);
+  const __m256 tol = _mm256_set1_ps(support.tol), cos_agree = _mm256_set1_ps(support.cos_agree);
+  const __m256 abs_mask = _mm256_castsi256_ps(_mm256_set1_epi32(0x7fffffff));
+  out.resize(count);
+  std::size_t n = 0, k = 0;
+  for (; k + 8 <= count; k += 8) {
+    __m256 x, y, z, nx, ny, nz;
+    deinterleave8(points + 3 * k, x, y, z);
+    deinterleave8(normals + 3 * k, nx, ny, nz);
+    const __m256 dist = _mm256_add_ps(
+        _mm256_add_ps(_mm256_mul_ps(a, x), _mm256_add_ps(_mm256_mul_ps(b, y), _mm256_mul_ps(c, z))),
+        d);
+    const __m256 dot = _mm256_add_ps(_mm256_mul_ps(nx, a),
+                                     _mm256_add_ps(_mm256_mul_ps(ny, b), _mm256_mul_ps(nz, c)));
+    const __m256 hit = _mm256_and_ps(_mm256_cmp_ps(_mm256_and_ps(dist, abs_mask), tol, _CMP_LT_OQ),
+                                     _mm256_cmp_ps(dot, cos_agree, _CMP_GE_OQ));
+    const unsigned bits = static_cast<unsigned>(_mm256_movemask_ps(hit));
+    for (unsigned j = 0; j < 8; ++j) {
+      out[n] = k + j;
+      n += (bits >> j) & 1u;
+    }
+  }
+  for (; k < count; ++k) {
+    out[n] = k;
+    n += support(plane, k) ? 1 : 0;
+  }
+  out.resize(n);
+}
+#endif
+
+// selectSupport over every index 0 .. count-1 of support.points (with normals).
+void selectSupportAll(const Support& support, const Plane& plane, std::size_t count, bool avx2,
+                      std::vector<std::size_t>& out) {
+#if defined(FINDMUG_AVX2_DISPATCH)
+  if (avx2 && count > 0) {
+    selectSupportAllAvx2(support, plane, count, out);
+    return;
+  }
+#endif
+  (void)avx2;
+  out.resize(count);
+  std::size_t n = 0;
+  for (std::size_t k = 0; k < count; ++k) {
+    out[n] = k;
+    n += support(plane, k) ? 1 : 0;
+  }
+  out.resize(n);
+}
 
 // Generic RANSAC + least-squares refinement over `points[idx]`. `accept`
 // vets a hypothesis (and may reorient it), `inlier` decides support.
@@ -185,7 +335,7 @@ class PackedSupport {
 template <typename Accept>
 bool ransacPlane(const std::vector<Eigen::Vector3f>& points, const std::vector<std::size_t>& idx,
                  int iterations, std::mt19937_64& rng, Accept accept, const Support& inlier,
-                 Plane& result, std::vector<std::size_t>& inliers) {
+                 bool avx2, Plane& result, std::vector<std::size_t>& inliers) {
   if (idx.size() < 3) return false;
   // Score on a fixed random subset so cost does not grow with the image.
   // Per-thread buffers: no allocation per call once warm.
@@ -212,7 +362,7 @@ bool ransacPlane(const std::vector<Eigen::Vector3f>& points, const std::vector<s
     if (!planeThrough(points[first], points[second], points[third], hyp) || !accept(hyp)) {
       continue;
     }
-    const std::size_t score = packed.count(hyp);
+    const std::size_t score = packed.count(hyp, avx2);
     if (score > best_score) {
       best_score = score;
       best = hyp;
@@ -224,15 +374,11 @@ bool ransacPlane(const std::vector<Eigen::Vector3f>& points, const std::vector<s
   // three-point sample, the second settles the inlier set.
   Plane plane = best;
   for (int round = 0; round < 2; ++round) {
-    inliers.clear();
-    for (std::size_t i : idx)
-      if (inlier(plane, i)) inliers.push_back(i);
+    selectSupport(inlier, plane, idx, inliers);
     if (inliers.size() < 3) return false;
     plane = refitPlane(points, inliers, plane);
   }
-  inliers.clear();
-  for (std::size_t i : idx)
-    if (inlier(plane, i)) inliers.push_back(i);
+  selectSupport(inlier, plane, idx, inliers);
   result = plane;
   return inliers.size() >= 3;
 }
@@ -358,7 +504,7 @@ std::optional<GroundPlane> fitGroundToLabels(const OrganizedCloud& cloud_camera,
   std::vector<std::size_t> inliers;
   const bool found = ransacPlane(
       pts, floor, config.ransac_iterations, rng, [](Plane&) { return true; },
-      Support{pts, nullptr, tol}, plane, inliers);
+      Support{pts, nullptr, tol}, cpuAvx2(), plane, inliers);
   if (!found || static_cast<double>(inliers.size()) < config.min_inlier_fraction * floor.size()) {
     return std::nullopt;
   }
@@ -407,7 +553,14 @@ std::optional<GroundPlane> confirmGround(const OrganizedCloud& cloud_camera,
 std::optional<GroundPlane> estimateGround(const OrganizedCloud& cloud_camera,
                                           const NormalImage& normals_camera,
                                           const GroundConfig& config) {
+  return detail::estimateGround(cloud_camera, normals_camera, config, detail::GroundSimd::Auto);
+}
+
+std::optional<GroundPlane> detail::estimateGround(const OrganizedCloud& cloud_camera,
+                                                  const NormalImage& normals_camera,
+                                                  const GroundConfig& config, GroundSimd simd) {
   validateConfig(config, "estimateGround");
+  const bool avx2 = simd == GroundSimd::Auto && cpuAvx2();
   if (normals_camera.normals.size() != cloud_camera.points.size()) {
     throw Error("estimateGround: normal image has " +
                 std::to_string(normals_camera.normals.size()) + " entries but the cloud has " +
@@ -425,17 +578,30 @@ std::optional<GroundPlane> estimateGround(const OrganizedCloud& cloud_camera,
   // a ceiling (seen from below) does not qualify.
   // Per-thread buffers: estimateGround runs once per frame, and a stream of
   // frames then reuses them instead of allocating.
-  thread_local std::vector<std::size_t> all_tls, remaining_tls, rest_tls, inliers_tls;
-  std::vector<std::size_t>& all = all_tls;
-  all.clear();
+  // The candidates' points and normals are copied out, in pixel order, and
+  // everything below works on the copies by position: the RANSAC and refit
+  // passes then stream through them instead of gathering from all over the
+  // image (same values in the same order, so the same planes).
+  thread_local std::vector<Eigen::Vector3f> candidate_points_tls, candidate_normals_tls;
+  thread_local std::vector<std::size_t> remaining_tls, rest_tls, inliers_tls;
+  std::vector<Eigen::Vector3f>& candidate_points = candidate_points_tls;
+  std::vector<Eigen::Vector3f>& candidate_normals = candidate_normals_tls;
+  candidate_points.clear();
+  candidate_normals.clear();
+  // The normal test first: it rules out most pixels, whose points are then
+  // never read (half the memory traffic of this pass).
   for (std::size_t i = 0; i < pts.size(); ++i) {
-    if (!cloud_camera.valid(i) || !std::isfinite(nrm[i].x())) continue;
-    if (nrm[i].dot(camera_up) >= cos_tilt) all.push_back(i);
+    const Eigen::Vector3f& n = nrm[i];
+    if (std::isfinite(n.x()) && n.dot(camera_up) >= cos_tilt && cloud_camera.valid(i)) {
+      candidate_points.push_back(pts[i]);
+      candidate_normals.push_back(n);
+    }
   }
-  const std::size_t stride = all.size() / kMaxCandidates + 1;
+  const std::size_t candidates = candidate_points.size();
+  const std::size_t stride = candidates / kMaxCandidates + 1;
   std::vector<std::size_t>& remaining = remaining_tls;
   remaining.clear();
-  for (std::size_t k = 0; k < all.size(); k += stride) remaining.push_back(all[k]);
+  for (std::size_t k = 0; k < candidates; k += stride) remaining.push_back(k);
   const auto min_sampled = static_cast<std::size_t>(config.min_floor_points) / stride;
 
   auto accept = [&](Plane& p) {
@@ -445,7 +611,7 @@ std::optional<GroundPlane> estimateGround(const OrganizedCloud& cloud_camera,
     }
     return p.normal.dot(camera_up) >= cos_tilt;
   };
-  const Support supports{pts, &nrm, tol, cos_agree};
+  const Support supports{candidate_points, &candidate_normals, tol, cos_agree};
 
   // Sequential RANSAC: peel off the horizontal planes one by one.
   struct Found {
@@ -461,13 +627,13 @@ std::optional<GroundPlane> estimateGround(const OrganizedCloud& cloud_camera,
   for (int k = 0; k < kMaxPlanes && remaining.size() >= std::max<std::size_t>(min_sampled, 3);
        ++k) {
     Plane plane;
-    if (!ransacPlane(pts, remaining, config.ransac_iterations, rng, accept, supports, plane,
-                     inliers)) {
+    if (!ransacPlane(candidate_points, remaining, config.ransac_iterations, rng, accept, supports,
+                     avx2, plane, inliers)) {
       break;
     }
     if (inliers.size() >= min_sampled && plane.offset > 0.0f) {
       Eigen::Vector3f centroid = Eigen::Vector3f::Zero();
-      for (std::size_t i : inliers) centroid += pts[i];
+      for (std::size_t i : inliers) centroid += candidate_points[i];
       planes.push_back({plane, inliers.size(), centroid / static_cast<float>(inliers.size())});
     }
     // Remove this plane's points (inliers is sorted: it follows `remaining`).
@@ -520,11 +686,9 @@ std::optional<GroundPlane> estimateGround(const OrganizedCloud& cloud_camera,
   // that supports the chosen plane, and the support at full resolution.
   Plane plane = chosen->plane;
   for (int round = 0; round < 2; ++round) {
-    inliers.clear();
-    for (std::size_t i : all)
-      if (supports(plane, i)) inliers.push_back(i);
+    selectSupportAll(supports, plane, candidates, avx2, inliers);
     if (inliers.size() < static_cast<std::size_t>(config.min_floor_points)) return std::nullopt;
-    plane = refitPlane(pts, inliers, plane);
+    plane = refitPlane(candidate_points, inliers, plane);
   }
   if (plane.normal.dot(camera_up) < cos_tilt || plane.offset < config.min_camera_height_m) {
     return std::nullopt;
@@ -533,6 +697,34 @@ std::optional<GroundPlane> estimateGround(const OrganizedCloud& cloud_camera,
       groundFromPlane(plane.normal, plane.offset, static_cast<int>(inliers.size()));
   ground.method = GroundMethod::Estimated;
   return ground;
+}
+
+std::vector<std::size_t> detail::planeSupport(const std::vector<Eigen::Vector3f>& points,
+                                              const std::vector<Eigen::Vector3f>& normals,
+                                              const Eigen::Vector3f& plane_normal,
+                                              float plane_offset, float tol, float cos_agree,
+                                              GroundSimd simd) {
+  if (normals.size() != points.size()) throw Error("planeSupport: normals and points differ in size");
+  const Support support{points, &normals, tol, cos_agree};
+  std::vector<std::size_t> out;
+  selectSupportAll(support, Plane{plane_normal, plane_offset}, points.size(),
+                   simd == GroundSimd::Auto && cpuAvx2(), out);
+  return out;
+}
+
+std::size_t detail::planeSupportCount(const std::vector<Eigen::Vector3f>& points,
+                                      const std::vector<Eigen::Vector3f>& normals,
+                                      const Eigen::Vector3f& plane_normal, float plane_offset,
+                                      float tol, float cos_agree, GroundSimd simd) {
+  if (normals.size() != points.size()) {
+    throw Error("planeSupportCount: normals and points differ in size");
+  }
+  const Support support{points, &normals, tol, cos_agree};
+  std::vector<std::size_t> idx(points.size());
+  for (std::size_t k = 0; k < idx.size(); ++k) idx[k] = k;
+  PackedSupport packed;
+  packed.gather(support, idx);
+  return packed.count(Plane{plane_normal, plane_offset}, simd == GroundSimd::Auto && cpuAvx2());
 }
 
 std::optional<GroundPlane> groundFromGravity(const OrganizedCloud& cloud_camera,

@@ -89,18 +89,18 @@ float pairwiseWeight(const Eigen::Vector3f& a, const Eigen::Vector3f& b, float s
 static_assert(kNumLabels == 8 && sizeof(Costs) == 8 * sizeof(float),
               "the AVX2 path holds one node's costs in one register");
 
-// The minimum of v's eight lanes, in every lane (exact in any order).
-__attribute__((target("avx2"))) inline __m256 laneMin(__m256 v) {
-  __m256 t = _mm256_min_ps(v, _mm256_permute2f128_ps(v, v, 1));
-  t = _mm256_min_ps(t, _mm256_shuffle_ps(t, t, _MM_SHUFFLE(1, 0, 3, 2)));
-  return _mm256_min_ps(t, _mm256_shuffle_ps(t, t, _MM_SHUFFLE(2, 3, 0, 1)));
+// The minimum (or maximum) of v's eight lanes, in every lane. Exact in any
+// order, so it matches the portable code's minCoeff/maxCoeff.
+__attribute__((target("avx2"))) inline __m256 pickExtreme(__m256 a, __m256 b, bool maximum) {
+  return maximum ? _mm256_max_ps(a, b) : _mm256_min_ps(a, b);
 }
-
-__attribute__((target("avx2"))) inline __m256 laneMax(__m256 v) {
-  __m256 t = _mm256_max_ps(v, _mm256_permute2f128_ps(v, v, 1));
-  t = _mm256_max_ps(t, _mm256_shuffle_ps(t, t, _MM_SHUFFLE(1, 0, 3, 2)));
-  return _mm256_max_ps(t, _mm256_shuffle_ps(t, t, _MM_SHUFFLE(2, 3, 0, 1)));
+__attribute__((target("avx2"))) inline __m256 laneExtreme(__m256 v, bool maximum) {
+  __m256 t = pickExtreme(v, _mm256_permute2f128_ps(v, v, 1), maximum);
+  t = pickExtreme(t, _mm256_shuffle_ps(t, t, _MM_SHUFFLE(1, 0, 3, 2)), maximum);
+  return pickExtreme(t, _mm256_shuffle_ps(t, t, _MM_SHUFFLE(2, 3, 0, 1)), maximum);
 }
+__attribute__((target("avx2"))) inline __m256 laneMin(__m256 v) { return laneExtreme(v, false); }
+__attribute__((target("avx2"))) inline __m256 laneMax(__m256 v) { return laneExtreme(v, true); }
 
 // computeBeliefs of solveMrfInto: each node's unary plus its incoming
 // messages, added in the same order.

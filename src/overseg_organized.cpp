@@ -212,6 +212,25 @@ const LabConverter& labConverter() {
   return converter;
 }
 
+// The L, a and b planes of one row's picked pixels, in `lab` (sized here to
+// three planes of picks.size(), the row's capacity).
+struct LabPlanes {
+  const float* l;
+  const float* a;
+  const float* b;
+};
+LabPlanes convertPicks(const OrganizedCloud& cloud, const std::vector<int>& picks,
+                       std::size_t count, std::vector<float>& lab) {
+  const std::size_t capacity = picks.size();
+  lab.resize(3 * capacity);
+  float* l = lab.data();
+  float* a = l + capacity;
+  float* b = a + capacity;
+  labConverter().convertBatch(cloud.colors.data(), picks.data(), count, l, a, b,
+                              detail::LabSimd::Auto);
+  return {l, a, b};
+}
+
 // Per-pixel features, structure of arrays (the assignment loop streams them).
 // Invalid pixels have NaN x/y/z, so every distance to them is NaN and never
 // wins a comparison.
@@ -631,7 +650,6 @@ class OrganizedOversegmenter final : public Oversegmenter {
     std::vector<float>& lab = *lab_buffer;
     pending.resize(w);
     picks.resize(w);
-    lab.resize(3 * static_cast<std::size_t>(w));
     for (int y = 0; y < h; ++y) {
       std::size_t waiting = 0;
       const int cy = y / kCoarseStride;
@@ -664,16 +682,12 @@ class OrganizedOversegmenter final : public Oversegmenter {
         picks[waiting] = static_cast<int>(i);
         ++waiting;
       }
-      float* l = lab.data();
-      float* a = l + w;
-      float* b = a + w;
-      detail::labFromRgb(cloud.colors.data(), picks.data(), waiting, l, a, b,
-                         detail::LabSimd::Auto);
+      const LabPlanes colour = convertPicks(cloud, picks, waiting, lab);
       for (std::size_t j = 0; j < waiting; ++j) {
         const Pending& p = pending[j];
-        f[kL] = l[j];
-        f[kA] = a[j];
-        f[kB] = b[j];
+        f[kL] = colour.l[j];
+        f[kA] = colour.a[j];
+        f[kB] = colour.b[j];
         pointAndNormal(cloud, normals, static_cast<std::size_t>(picks[j]), f);
         std::array<float, 4> d{};
         candidateDistances(f, clusters, p.candidates, p.count, d);
@@ -713,7 +727,6 @@ class OrganizedOversegmenter final : public Oversegmenter {
     std::vector<float>& lab = *lab_buffer;
     picks.resize(cw);
     cells.resize(cw);
-    lab.resize(3 * static_cast<std::size_t>(cw));
     for (int cy = 0; cy < chh; ++cy) {
       std::size_t picked = 0;
       for (int cx = 0; cx < cw; ++cx) {
@@ -740,15 +753,11 @@ class OrganizedOversegmenter final : public Oversegmenter {
         cells[picked] = static_cast<int>(ci);
         ++picked;
       }
-      float* l = lab.data();
-      float* a = l + cw;
-      float* b = a + cw;
-      detail::labFromRgb(cloud.colors.data(), picks.data(), picked, l, a, b,
-                         detail::LabSimd::Auto);
+      const LabPlanes colour = convertPicks(cloud, picks, picked, lab);
       for (std::size_t j = 0; j < picked; ++j) {
-        coarse.ch[kL][cells[j]] = l[j];
-        coarse.ch[kA][cells[j]] = a[j];
-        coarse.ch[kB][cells[j]] = b[j];
+        coarse.ch[kL][cells[j]] = colour.l[j];
+        coarse.ch[kA][cells[j]] = colour.a[j];
+        coarse.ch[kB][cells[j]] = colour.b[j];
       }
     }
     return total;

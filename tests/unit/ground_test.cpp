@@ -7,6 +7,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <random>
 #include <string>
@@ -15,6 +16,7 @@
 #include "findmug/error.hpp"
 #include "findmug/image_io.hpp"
 #include "findmug/segmenter.hpp"
+#include "ground_internal.hpp"
 #include "test_data.hpp"
 
 namespace findmug {
@@ -778,6 +780,102 @@ TEST(GroundOnNyu, EstimateAgreesWithFloorLabelFit) {
   EXPECT_GE(compared, 10);
   ASSERT_GE(no_floor, 5);
   EXPECT_GE(no_floor_rejected * 4, no_floor * 3) << no_floor_rejected << " of " << no_floor;
+}
+
+
+// The AVX2 support tests of estimateGround against the portable ones, on
+// points placed within a rounding error of the distance and angle limits,
+// where any change in the order of the arithmetic flips some of them.
+TEST(GroundSimd, SupportTestsMatchThePortableCodeBitForBit) {
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<float> unit(-1.0f, 1.0f);
+  std::uniform_int_distribution<int> sizes(0, 700);
+  const float tol = 0.02f, cos_agree = std::cos(15.0f * kDeg);
+  std::size_t inside = 0, total = 0, count_total = 0;
+  for (int trial = 0; trial < 300; ++trial) {
+    const Eigen::Vector3f n =
+        Eigen::Vector3f(0.3f * unit(rng), -1.0f, 0.3f * unit(rng)).normalized();
+    const float offset = 1.0f + unit(rng);
+    const Eigen::Vector3f t1 = n.unitOrthogonal(), t2 = n.cross(t1);
+    const int size = sizes(rng);
+    std::vector<Eigen::Vector3f> points(size), normals(size);
+    for (int k = 0; k < size; ++k) {
+      // On the plane, then out along the normal by about the tolerance.
+      const Eigen::Vector3f on = -offset * n + 3.0f * unit(rng) * t1 + 3.0f * unit(rng) * t2;
+      const float out = tol * (1.0f + 2e-6f * unit(rng)) * (unit(rng) < 0.0f ? -1.0f : 1.0f);
+      points[k] = on + out * n;
+      // A normal about the agreement angle away from the plane's.
+      const float angle = std::acos(cos_agree) * (1.0f + 1e-5f * unit(rng));
+      const Eigen::Vector3f side = (unit(rng) * t1 + unit(rng) * t2).normalized();
+      normals[k] = std::cos(angle) * n + std::sin(angle) * side;
+      if (k % 97 == 5) points[k].z() = std::numeric_limits<float>::quiet_NaN();
+      if (k % 89 == 7) normals[k].x() = std::numeric_limits<float>::infinity();
+    }
+    const auto simd = detail::planeSupport(points, normals, n, offset, tol, cos_agree,
+                                           detail::GroundSimd::Auto);
+    const auto portable = detail::planeSupport(points, normals, n, offset, tol, cos_agree,
+                                               detail::GroundSimd::Off);
+    ASSERT_EQ(simd, portable) << "trial " << trial << ", " << size << " points";
+    const std::size_t count = detail::planeSupportCount(points, normals, n, offset, tol,
+                                                        cos_agree, detail::GroundSimd::Auto);
+    ASSERT_EQ(count, detail::planeSupportCount(points, normals, n, offset, tol, cos_agree,
+                                               detail::GroundSimd::Off))
+        << "trial " << trial;
+    inside += portable.size();
+    count_total += count;
+    total += static_cast<std::size_t>(size);
+  }
+  // Both sides of the limits are represented, so a changed rounding shows.
+  EXPECT_GT(inside, total / 10);
+  EXPECT_LT(inside, total * 9 / 10);
+  EXPECT_GT(count_total, total / 10);
+  EXPECT_LT(count_total, total * 9 / 10);
+}
+
+// The whole estimate with and without the AVX2 paths: the same plane to the
+// bit, on every NYU frame and on rendered rooms.
+TEST(GroundSimd, EstimateMatchesThePortableCodeBitForBit) {
+  FINDMUG_REQUIRE_DATA(root, "nyuv2_labeled");
+  std::vector<OrganizedCloud> clouds;
+  for (const auto& entry : std::filesystem::directory_iterator(root / "depth")) {
+    const std::string name = entry.path().stem().string();
+    const auto depth = readPng16(entry.path().string());
+    const auto rgb = readPngRgb((root / "rgb" / (name + ".png")).string());
+    RgbdFrame f;
+    f.width = depth.width;
+    f.height = depth.height;
+    f.depth_mm = depth.pixels;
+    f.rgb = rgb.pixels;
+    f.intrinsics = kNyuIntrinsics;
+    f.source = name;
+    clouds.push_back(frameToCloud(f));
+  }
+  ASSERT_GE(clouds.size(), 30u);
+  for (int seed = 1; seed <= 6; ++seed) {
+    Scene s;
+    s.table_height = seed % 2 ? 0.75f : 0.0f;
+    s.table_near = 1.0f, s.table_far = 2.0f, s.table_half_width = 0.6f;
+    s.wall_distance = seed % 3 ? 4.0f : 0.0f;
+    s.noise_m = 0.004f * static_cast<float>(seed);
+    clouds.push_back(render(s, static_cast<std::uint64_t>(seed)).cloud);
+  }
+  int planes = 0;
+  for (std::size_t c = 0; c < clouds.size(); ++c) {
+    const NormalImage normals = computeNormals(clouds[c], NormalConfig{});
+    const GroundConfig config;
+    const auto simd = detail::estimateGround(clouds[c], normals, config, detail::GroundSimd::Auto);
+    const auto portable =
+        detail::estimateGround(clouds[c], normals, config, detail::GroundSimd::Off);
+    ASSERT_EQ(simd.has_value(), portable.has_value()) << "cloud " << c;
+    if (!simd) continue;
+    ++planes;
+    EXPECT_EQ(0, std::memcmp(simd->normal_camera.data(), portable->normal_camera.data(),
+                             sizeof(float) * 3))
+        << "cloud " << c;
+    EXPECT_EQ(0, std::memcmp(&simd->offset, &portable->offset, sizeof(float))) << "cloud " << c;
+    EXPECT_EQ(simd->support_points, portable->support_points) << "cloud " << c;
+  }
+  EXPECT_GE(planes, 15);
 }
 
 }  // namespace
