@@ -24,6 +24,7 @@
 #include "cloud_internal.hpp"
 #include "cpu_features.hpp"
 #include "findmug/error.hpp"
+#include "simd_vec3.hpp"
 
 namespace findmug {
 
@@ -493,11 +494,11 @@ NormalImage computeNormals(const OrganizedCloud& cloud, const NormalConfig& conf
 }
 
 void computeNormals(const OrganizedCloud& cloud, const NormalConfig& config, NormalImage& out) {
-  detail::computeNormals(cloud, config, out, detail::NormalSimd::Auto);
+  detail::computeNormals(cloud, config, out, detail::CloudSimd::Auto);
 }
 
 void detail::computeNormals(const OrganizedCloud& cloud, const NormalConfig& config,
-                            NormalImage& out, NormalSimd simd) {
+                            NormalImage& out, CloudSimd simd) {
   checkCloudShape(cloud, "computeNormals");
   if (config.window_radius_px < 1 || config.window_radius_px > 64) {
     throw Error("computeNormals: normals.window_radius_px must be in 1..64, got " +
@@ -525,7 +526,7 @@ void detail::computeNormals(const OrganizedCloud& cloud, const NormalConfig& con
   //    camera (rawNormal).
   (void)simd;  // no SIMD path on this platform
 #if defined(FINDMUG_AVX2_DISPATCH)
-  if (simd == detail::NormalSimd::Auto && detail::cpuHasAvx2()) {
+  if (simd == detail::CloudSimd::Auto && detail::cpuHasAvx2()) {
     rawNormalsAvx2(pts, w, h, r, config.max_depth_jump_m, n.data());
   } else
 #endif
@@ -545,7 +546,7 @@ void detail::computeNormals(const OrganizedCloud& cloud, const NormalConfig& con
     thread_local SmoothingScratch scratch;
     bool avx2 = false;
 #if defined(FINDMUG_AVX2_DISPATCH)
-    avx2 = simd == detail::NormalSimd::Auto && detail::cpuHasAvx2();
+    avx2 = simd == detail::CloudSimd::Auto && detail::cpuHasAvx2();
 #endif
     smoothNormals(n, cloud, smooth_r, config.max_depth_jump_m, scratch, avx2);
   }
@@ -559,16 +560,7 @@ OrganizedCloud transformCloud(const OrganizedCloud& cloud, const Eigen::Isometry
 
 void transformCloud(const OrganizedCloud& cloud, const Eigen::Isometry3f& transform,
                     OrganizedCloud& out) {
-  out.width = cloud.width;
-  out.height = cloud.height;
-  out.colors = cloud.colors;
-  out.points.resize(cloud.points.size());
-  const Eigen::Matrix3f rotation = transform.linear();
-  const Eigen::Vector3f translation = transform.translation();
-  for (std::size_t i = 0; i < cloud.points.size(); ++i) {
-    const Eigen::Vector3f& p = cloud.points[i];
-    out.points[i] = std::isfinite(p.z()) ? Eigen::Vector3f(rotation * p + translation) : kNaNVector;
-  }
+  detail::transformCloud(cloud, transform, out, detail::CloudSimd::Auto);
 }
 
 NormalImage rotateNormals(const NormalImage& normals, const Eigen::Matrix3f& rotation) {
@@ -578,10 +570,83 @@ NormalImage rotateNormals(const NormalImage& normals, const Eigen::Matrix3f& rot
 }
 
 void rotateNormals(const NormalImage& normals, const Eigen::Matrix3f& rotation, NormalImage& out) {
+  detail::rotateNormals(normals, rotation, out, detail::CloudSimd::Auto);
+}
+
+namespace {
+
+#if defined(FINDMUG_AVX2_DISPATCH)
+// rotation * v (+ translation) of `count` vectors, eight at a time, with
+// Eigen's operations in Eigen's order: each row is r0 x + (r1 y + r2 z), then
+// the translation is added. A vector whose `finite_axis` coordinate is not
+// finite becomes NaN, as in the portable loops. Returns how many were done
+// (a multiple of eight); the caller does the rest.
+__attribute__((target("avx2"))) std::size_t transformVec3Avx2(
+    const Eigen::Vector3f* in, std::size_t count, const Eigen::Matrix3f& rotation,
+    const Eigen::Vector3f* translation, int finite_axis, Eigen::Vector3f* out) {
+  __m256 r[3][3];
+  for (int row = 0; row < 3; ++row)
+    for (int col = 0; col < 3; ++col) r[row][col] = _mm256_set1_ps(rotation(row, col));
+  const __m256 abs_mask = _mm256_castsi256_ps(_mm256_set1_epi32(0x7fffffff));
+  const __m256 infinity = _mm256_set1_ps(std::numeric_limits<float>::infinity());
+  const __m256 nan = _mm256_set1_ps(std::numeric_limits<float>::quiet_NaN());
+  std::size_t k = 0;
+  for (; k + 8 <= count; k += 8) {
+    __m256 v[3];
+    detail::loadVec3x8(in[k].data(), v[0], v[1], v[2]);
+    // Finite: |c| < infinity (false for NaN, as std::isfinite).
+    const __m256 finite =
+        _mm256_cmp_ps(_mm256_and_ps(v[finite_axis], abs_mask), infinity, _CMP_LT_OQ);
+    __m256 o[3];
+    for (int row = 0; row < 3; ++row) {
+      o[row] = detail::dot3x8(r[row][0], r[row][1], r[row][2], v[0], v[1], v[2]);
+      if (translation) o[row] = _mm256_add_ps(o[row], _mm256_set1_ps((*translation)[row]));
+      o[row] = _mm256_blendv_ps(nan, o[row], finite);
+    }
+    detail::storeVec3x8(out[k].data(), o[0], o[1], o[2]);
+  }
+  return k;
+}
+#endif
+
+}  // namespace
+
+void detail::transformCloud(const OrganizedCloud& cloud, const Eigen::Isometry3f& transform,
+                            OrganizedCloud& out, CloudSimd simd) {
+  out.width = cloud.width;
+  out.height = cloud.height;
+  out.colors = cloud.colors;
+  out.points.resize(cloud.points.size());
+  const Eigen::Matrix3f rotation = transform.linear();
+  const Eigen::Vector3f translation = transform.translation();
+  std::size_t done = 0;
+#if defined(FINDMUG_AVX2_DISPATCH)
+  if (simd == CloudSimd::Auto && cpuHasAvx2()) {
+    done = transformVec3Avx2(cloud.points.data(), cloud.points.size(), rotation, &translation, 2,
+                             out.points.data());
+  }
+#endif
+  (void)simd;
+  for (std::size_t i = done; i < cloud.points.size(); ++i) {
+    const Eigen::Vector3f& p = cloud.points[i];
+    out.points[i] = std::isfinite(p.z()) ? Eigen::Vector3f(rotation * p + translation) : kNaNVector;
+  }
+}
+
+void detail::rotateNormals(const NormalImage& normals, const Eigen::Matrix3f& rotation,
+                           NormalImage& out, CloudSimd simd) {
   out.width = normals.width;
   out.height = normals.height;
   out.normals.resize(normals.normals.size());
-  for (std::size_t i = 0; i < normals.normals.size(); ++i) {
+  std::size_t done = 0;
+#if defined(FINDMUG_AVX2_DISPATCH)
+  if (simd == CloudSimd::Auto && cpuHasAvx2()) {
+    done = transformVec3Avx2(normals.normals.data(), normals.normals.size(), rotation, nullptr, 0,
+                             out.normals.data());
+  }
+#endif
+  (void)simd;
+  for (std::size_t i = done; i < normals.normals.size(); ++i) {
     const Eigen::Vector3f& n = normals.normals[i];
     out.normals[i] = std::isfinite(n.x()) ? Eigen::Vector3f(rotation * n) : kNaNVector;
   }

@@ -1,18 +1,22 @@
 // cloud_internal.hpp — what the unit tests need of cloud.cpp beyond the
-// public API: the normals with the SIMD path switched off, to check that
-// both paths give the same normals bit for bit.
+// public API: the normals and the ground-frame transforms with the SIMD
+// paths switched off, to check that both paths give the same bits.
 #pragma once
 
 #include "findmug/cloud.hpp"
 
 namespace findmug::detail {
 
-enum class NormalSimd {
-  Auto,  // AVX2 where the CPU has it (what computeNormals does)
+enum class CloudSimd {
+  Auto,  // AVX2 where the CPU has it (what the public functions do)
   Off,   // the scalar code only
 };
 
 void computeNormals(const OrganizedCloud& cloud, const NormalConfig& config, NormalImage& out,
-                    NormalSimd simd);
+                    CloudSimd simd);
+void transformCloud(const OrganizedCloud& cloud, const Eigen::Isometry3f& transform,
+                    OrganizedCloud& out, CloudSimd simd);
+void rotateNormals(const NormalImage& normals, const Eigen::Matrix3f& rotation, NormalImage& out,
+                   CloudSimd simd);
 
 }  // namespace findmug::detail

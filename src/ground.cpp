@@ -18,6 +18,7 @@
 #include "cpu_features.hpp"
 #include "findmug/error.hpp"
 #include "ground_internal.hpp"
+#include "simd_vec3.hpp"
 
 namespace findmug {
 
@@ -254,21 +255,20 @@ void selectSupport(const Support& support, const Plane& plane, const std::vector
 }
 
 #if defined(FINDMUG_AVX2_DISPATCH)
-// Eight consecutive Eigen::Vector3f (24 floats from p) as their x, y and z
-// lanes, in order.
-__attribute__((target("avx2"))) inline void deinterleave8(const float* p, __m256& x, __m256& y,
-                                                         __m256& z) {
-  __m256 m03 = _mm256_castps128_ps256(_mm_loadu_ps(p));       // x0 y0 z0 x1
-  __m256 m14 = _mm256_castps128_ps256(_mm_loadu_ps(p + 4));   // y1 z1 x2 y2
-  __m256 m25 = _mm256_castps128_ps256(_mm_loadu_ps(p + 8));   // z2 x3 y3 z3
-  m03 = _mm256_insertf128_ps(m03, _mm_loadu_ps(p + 12), 1);   // x4 y4 z4 x5
-  m14 = _mm256_insertf128_ps(m14, _mm_loadu_ps(p + 16), 1);   // y5 z5 x6 y6
-  m25 = _mm256_insertf128_ps(m25, _mm_loadu_ps(p + 20), 1);   // z6 x7 y7 z7
-  const __m256 xy = _mm256_shuffle_ps(m14, m25, _MM_SHUFFLE(2, 1, 3, 2));  // x2 y2 x3 y3
-  const __m256 yz = _mm256_shuffle_ps(m03, m14, _MM_SHUFFLE(1, 0, 2, 1));  // y0 z0 y1 z1
-  x = _mm256_shuffle_ps(m03, xy, _MM_SHUFFLE(2, 0, 3, 0));
-  y = _mm256_shuffle_ps(yz, xy, _MM_SHUFFLE(3, 1, 2, 0));
-  z = _mm256_shuffle_ps(yz, m25, _MM_SHUFFLE(3, 0, 3, 1));
+// Whether any of the eight normals at n (24 floats) has a finite x and
+// n.dot(up) >= cos_tilt, computed as Eigen computes it.
+__attribute__((target("avx2"))) bool anyUpwardNormalAvx2(const float* n, const Eigen::Vector3f& up,
+                                                         float cos_tilt) {
+  __m256 x, y, z;
+  detail::loadVec3x8(n, x, y, z);
+  const __m256 abs_mask = _mm256_castsi256_ps(_mm256_set1_epi32(0x7fffffff));
+  const __m256 finite = _mm256_cmp_ps(_mm256_and_ps(x, abs_mask),
+                                      _mm256_set1_ps(std::numeric_limits<float>::infinity()),
+                                      _CMP_LT_OQ);
+  const __m256 dot = detail::dot3x8(x, y, z, _mm256_set1_ps(up.x()), _mm256_set1_ps(up.y()),
+                                    _mm256_set1_ps(up.z()));
+  const __m256 pass = _mm256_and_ps(finite, _mm256_cmp_ps(dot, _mm256_set1_ps(cos_tilt), _CMP_GE_OQ));
+  return _mm256_movemask_ps(pass) != 0;
 }
 
 // selectSupport over every index 0 .. count-1, eight points at a time: the
@@ -287,13 +287,10 @@ __attribute__((target("avx2"))) void selectSupportAllAvx2(const Support& support
   std::size_t n = 0, k = 0;
   for (; k + 8 <= count; k += 8) {
     __m256 x, y, z, nx, ny, nz;
-    deinterleave8(points + 3 * k, x, y, z);
-    deinterleave8(normals + 3 * k, nx, ny, nz);
-    const __m256 dist = _mm256_add_ps(
-        _mm256_add_ps(_mm256_mul_ps(a, x), _mm256_add_ps(_mm256_mul_ps(b, y), _mm256_mul_ps(c, z))),
-        d);
-    const __m256 dot = _mm256_add_ps(_mm256_mul_ps(nx, a),
-                                     _mm256_add_ps(_mm256_mul_ps(ny, b), _mm256_mul_ps(nz, c)));
+    detail::loadVec3x8(points + 3 * k, x, y, z);
+    detail::loadVec3x8(normals + 3 * k, nx, ny, nz);
+    const __m256 dist = _mm256_add_ps(detail::dot3x8(a, b, c, x, y, z), d);
+    const __m256 dot = detail::dot3x8(nx, ny, nz, a, b, c);
     const __m256 hit = _mm256_and_ps(_mm256_cmp_ps(_mm256_and_ps(dist, abs_mask), tol, _CMP_LT_OQ),
                                      _mm256_cmp_ps(dot, cos_agree, _CMP_GE_OQ));
     const unsigned bits = static_cast<unsigned>(_mm256_movemask_ps(hit));
@@ -309,6 +306,28 @@ __attribute__((target("avx2"))) void selectSupportAllAvx2(const Support& support
   out.resize(n);
 }
 #endif
+
+// Calls visit(i), in order, for every i of each block of eight normals among
+// the first `count` where at least one passes estimateGround's candidate
+// test (finite x, n.dot(up) >= cos_tilt; Eigen's dot, no FMA); blocks
+// where none does are skipped. Returns where the blocks ended (a multiple
+// of eight); the caller visits the rest.
+template <typename Visit>
+std::size_t upwardNormalBlocks(const Eigen::Vector3f* normals, std::size_t count,
+                               const Eigen::Vector3f& up, float cos_tilt, Visit&& visit) {
+#if defined(FINDMUG_AVX2_DISPATCH)
+  std::size_t k = 0;
+  for (; k + 8 <= count; k += 8) {
+    if (anyUpwardNormalAvx2(normals[k].data(), up, cos_tilt)) {
+      for (std::size_t j = k; j < k + 8; ++j) visit(j);
+    }
+  }
+  return k;
+#else
+  (void)normals, (void)count, (void)up, (void)cos_tilt, (void)visit;
+  return 0;
+#endif
+}
 
 // selectSupport over every index 0 .. count-1 of support.points (with normals).
 void selectSupportAll(const Support& support, const Plane& plane, std::size_t count, bool avx2,
@@ -589,14 +608,20 @@ std::optional<GroundPlane> detail::estimateGround(const OrganizedCloud& cloud_ca
   candidate_points.clear();
   candidate_normals.clear();
   // The normal test first: it rules out most pixels, whose points are then
-  // never read (half the memory traffic of this pass).
-  for (std::size_t i = 0; i < pts.size(); ++i) {
+  // never read (half the memory traffic of this pass). With AVX2 it tests
+  // eight normals at a time and skips the blocks where none points up.
+  const auto take = [&](std::size_t i) {
     const Eigen::Vector3f& n = nrm[i];
     if (std::isfinite(n.x()) && n.dot(camera_up) >= cos_tilt && cloud_camera.valid(i)) {
       candidate_points.push_back(pts[i]);
       candidate_normals.push_back(n);
     }
+  };
+  std::size_t first_unscanned = 0;
+  if (avx2) {
+    first_unscanned = upwardNormalBlocks(nrm.data(), nrm.size(), camera_up, cos_tilt, take);
   }
+  for (std::size_t i = first_unscanned; i < pts.size(); ++i) take(i);
   const std::size_t candidates = candidate_points.size();
   const std::size_t stride = candidates / kMaxCandidates + 1;
   std::vector<std::size_t>& remaining = remaining_tls;
