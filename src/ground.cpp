@@ -254,21 +254,39 @@ void selectSupport(const Support& support, const Plane& plane, const std::vector
   out.resize(n);
 }
 
+// selectSupport's loop for the indices from .. count-1 of support.points,
+// appended to out[0 .. n) (out holds at least count entries); returns the
+// new n.
+std::size_t appendSupport(const Support& support, const Plane& plane, std::size_t from,
+                          std::size_t count, std::vector<std::size_t>& out, std::size_t n) {
+  for (std::size_t k = from; k < count; ++k) {
+    out[n] = k;
+    n += support(plane, k) ? 1 : 0;
+  }
+  return n;
+}
+
 #if defined(FINDMUG_AVX2_DISPATCH)
-// Whether any of the eight normals at n (24 floats) has a finite x and
-// n.dot(up) >= cos_tilt, computed as Eigen computes it.
-__attribute__((target("avx2"))) bool anyUpwardNormalAvx2(const float* n, const Eigen::Vector3f& up,
-                                                         float cos_tilt) {
-  __m256 x, y, z;
-  detail::loadVec3x8(n, x, y, z);
+// The first block of eight normals [k, k + 8), k = begin, begin + 8, ...
+// below end8, in which at least one has a finite x and n.dot(up) >=
+// cos_tilt (Eigen's dot, no FMA); end8 when there is none.
+__attribute__((target("avx2"))) std::size_t nextUpwardBlockAvx2(const Eigen::Vector3f* normals,
+                                                                std::size_t begin, std::size_t end8,
+                                                                const Eigen::Vector3f& up,
+                                                                float cos_tilt) {
   const __m256 abs_mask = _mm256_castsi256_ps(_mm256_set1_epi32(0x7fffffff));
-  const __m256 finite = _mm256_cmp_ps(_mm256_and_ps(x, abs_mask),
-                                      _mm256_set1_ps(std::numeric_limits<float>::infinity()),
-                                      _CMP_LT_OQ);
-  const __m256 dot = detail::dot3x8(x, y, z, _mm256_set1_ps(up.x()), _mm256_set1_ps(up.y()),
-                                    _mm256_set1_ps(up.z()));
-  const __m256 pass = _mm256_and_ps(finite, _mm256_cmp_ps(dot, _mm256_set1_ps(cos_tilt), _CMP_GE_OQ));
-  return _mm256_movemask_ps(pass) != 0;
+  const __m256 infinity = _mm256_set1_ps(std::numeric_limits<float>::infinity());
+  const __m256 ux = _mm256_set1_ps(up.x()), uy = _mm256_set1_ps(up.y()), uz = _mm256_set1_ps(up.z());
+  const __m256 limit = _mm256_set1_ps(cos_tilt);
+  for (std::size_t k = begin; k < end8; k += 8) {
+    __m256 x, y, z;
+    detail::loadVec3x8(normals[k].data(), x, y, z);
+    const __m256 finite = _mm256_cmp_ps(_mm256_and_ps(x, abs_mask), infinity, _CMP_LT_OQ);
+    const __m256 dot = detail::dot3x8(x, y, z, ux, uy, uz);
+    const __m256 pass = _mm256_and_ps(finite, _mm256_cmp_ps(dot, limit, _CMP_GE_OQ));
+    if (_mm256_movemask_ps(pass) != 0) return k;
+  }
+  return end8;
 }
 
 // selectSupport over every index 0 .. count-1, eight points at a time: the
@@ -299,11 +317,7 @@ __attribute__((target("avx2"))) void selectSupportAllAvx2(const Support& support
       n += (bits >> j) & 1u;
     }
   }
-  for (; k < count; ++k) {
-    out[n] = k;
-    n += support(plane, k) ? 1 : 0;
-  }
-  out.resize(n);
+  out.resize(appendSupport(support, plane, k, count, out, n));
 }
 #endif
 
@@ -316,13 +330,12 @@ template <typename Visit>
 std::size_t upwardNormalBlocks(const Eigen::Vector3f* normals, std::size_t count,
                                const Eigen::Vector3f& up, float cos_tilt, Visit&& visit) {
 #if defined(FINDMUG_AVX2_DISPATCH)
-  std::size_t k = 0;
-  for (; k + 8 <= count; k += 8) {
-    if (anyUpwardNormalAvx2(normals[k].data(), up, cos_tilt)) {
-      for (std::size_t j = k; j < k + 8; ++j) visit(j);
-    }
+  const std::size_t end8 = count / 8 * 8;
+  for (std::size_t k = nextUpwardBlockAvx2(normals, 0, end8, up, cos_tilt); k < end8;
+       k = nextUpwardBlockAvx2(normals, k + 8, end8, up, cos_tilt)) {
+    for (std::size_t j = k; j < k + 8; ++j) visit(j);
   }
-  return k;
+  return end8;
 #else
   (void)normals, (void)count, (void)up, (void)cos_tilt, (void)visit;
   return 0;
@@ -340,12 +353,7 @@ void selectSupportAll(const Support& support, const Plane& plane, std::size_t co
 #endif
   (void)avx2;
   out.resize(count);
-  std::size_t n = 0;
-  for (std::size_t k = 0; k < count; ++k) {
-    out[n] = k;
-    n += support(plane, k) ? 1 : 0;
-  }
-  out.resize(n);
+  out.resize(appendSupport(support, plane, 0, count, out, 0));
 }
 
 // Generic RANSAC + least-squares refinement over `points[idx]`. `accept`

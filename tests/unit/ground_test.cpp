@@ -837,18 +837,9 @@ TEST(GroundSimd, SupportTestsMatchThePortableCodeBitForBit) {
 TEST(GroundSimd, EstimateMatchesThePortableCodeBitForBit) {
   FINDMUG_REQUIRE_DATA(root, "nyuv2_labeled");
   std::vector<OrganizedCloud> clouds;
-  for (const auto& entry : std::filesystem::directory_iterator(root / "depth")) {
-    const std::string name = entry.path().stem().string();
-    const auto depth = readPng16(entry.path().string());
-    const auto rgb = readPngRgb((root / "rgb" / (name + ".png")).string());
-    RgbdFrame f;
-    f.width = depth.width;
-    f.height = depth.height;
-    f.depth_mm = depth.pixels;
-    f.rgb = rgb.pixels;
-    f.intrinsics = kNyuIntrinsics;
-    f.source = name;
-    clouds.push_back(frameToCloud(f));
+  const DatasetFolder dataset(root.string());
+  for (std::size_t index = 0; index < dataset.size(); ++index) {
+    clouds.push_back(frameToCloud(dataset.load(index).frame));
   }
   ASSERT_GE(clouds.size(), 30u);
   for (int seed = 1; seed <= 6; ++seed) {
