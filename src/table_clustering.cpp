@@ -138,10 +138,14 @@ struct ClusterScratch {
   VoxelIndex index;
   DisjointSets sets;
   std::vector<int> point_voxel, voxel_size, start, fill, near_a, near_b, root_label;
-  std::vector<Eigen::Vector3i> voxel_coords, offsets;
+  std::vector<Eigen::Vector3i> voxel_coords;
   std::vector<Eigen::AlignedBox3f> boxes;
   std::vector<Eigen::Vector3f> sorted;
 };
+
+// Voxels whose points can be within the tolerance are at most this many
+// cells apart on each axis: ceil(tolerance / voxel) = ceil(sqrt(3) / 0.999).
+constexpr int kReach = 2;
 
 constexpr int kFieldBits = 21;
 constexpr std::int64_t kFieldOffset = std::int64_t{1} << (kFieldBits - 1);
@@ -183,11 +187,10 @@ std::vector<int> tables_detail::clusterPoints(const std::vector<Eigen::Vector3f>
 
   // Slightly under tolerance/sqrt(3) so the voxel diagonal never exceeds the
   // tolerance through rounding; then neighbours within the tolerance are at
-  // most `reach` voxels away on each axis.
+  // most kReach voxels away on each axis.
   // With tolerance >= kMinToleranceM and points within kMaxPlausibleRangeM,
   // voxel indices stay well inside their 21-bit fields.
   const float voxel = tolerance / std::sqrt(3.0f) * 0.999f;
-  const int reach = static_cast<int>(std::ceil(tolerance / voxel));
   const float tol2 = tolerance * tolerance;
 
   // One pass over the points: voxel of each point, each voxel's bounding box
@@ -207,16 +210,46 @@ std::vector<int> tables_detail::clusterPoints(const std::vector<Eigen::Vector3f>
   const float inv_voxel = 1.0f / voxel;
   std::uint64_t last_key = ~std::uint64_t{0};
   int last_voxel = -1;
+  // The current run of consecutive points in one voxel keeps its box and
+  // count here, in registers, and adds them to the voxel's when the run
+  // ends: updating boxes[v] and voxel_size[v] in memory point by point
+  // made every point wait for the previous point's store. Folding a run's
+  // box into the voxel's keeps each coordinate's minimum and maximum (and
+  // which of equal values, as Eigen's extend keeps the earlier one).
+  Eigen::AlignedBox3f run_box;
+  int run_size = 0;
+  const auto endRun = [&] {
+    if (run_size == 0) return;
+    boxes[last_voxel].extend(run_box);
+    voxel_size[last_voxel] += run_size;
+    run_box.setEmpty();
+    run_size = 0;
+  };
   int up = 0;       // first point whose pixel is not before the one above point i's
   int row_end = 0;  // end of the image row of point i's pixel
+  // Voxel coordinates kBlock points at a time: split into x, y, z arrays,
+  // then a loop the compiler makes four wide (the same products and floors
+  // as point by point).
+  constexpr int kBlock = 256;
+  alignas(16) float coord[3][kBlock];
+  alignas(16) int cell[3][kBlock];
   for (int i = 0; i < n; ++i) {
+    const int j = i % kBlock;
+    if (j == 0) {
+      const int m = std::min(kBlock, n - i);
+      for (int k = 0; k < m; ++k) {
+        for (int axis = 0; axis < 3; ++axis) coord[axis][k] = points[i + k][axis];
+      }
+      for (int axis = 0; axis < 3; ++axis) {
+        for (int k = 0; k < m; ++k) cell[axis][k] = floorToInt(coord[axis][k] * inv_voxel);
+      }
+    }
     const Eigen::Vector3f& p = points[i];
-    const Eigen::Vector3i c(static_cast<int>(std::floor(p.x() * inv_voxel)),
-                            static_cast<int>(std::floor(p.y() * inv_voxel)),
-                            static_cast<int>(std::floor(p.z() * inv_voxel)));
+    const Eigen::Vector3i c(cell[0][j], cell[1][j], cell[2][j]);
     const std::uint64_t key = packVoxel(c.x(), c.y(), c.z());
     // Points come in image order, so neighbours often share a voxel: the
     // previous point's (last_key), or the one above's.
+    if (key != last_key) endRun();
     if (key != last_key && pixels) {
       const int above = (*pixels)[i] - step_y;
       while (up < i && (*pixels)[up] < above) ++up;
@@ -237,8 +270,8 @@ std::vector<int> tables_detail::clusterPoints(const std::vector<Eigen::Vector3f>
       }
     }
     point_voxel[i] = last_voxel;
-    boxes[last_voxel].extend(p);
-    ++voxel_size[last_voxel];
+    run_box.extend(p);
+    ++run_size;
     if (pixels) {
       // Image neighbours (left, above) within the tolerance are links of the
       // exact partition found without any search; on a table top they join
@@ -258,6 +291,7 @@ std::vector<int> tables_detail::clusterPoints(const std::vector<Eigen::Vector3f>
       }
     }
   }
+  endRun();
   const int voxels = static_cast<int>(voxel_coords.size());
 
   // Points grouped by voxel (counting sort), built only when a pair of
@@ -272,81 +306,95 @@ std::vector<int> tables_detail::clusterPoints(const std::vector<Eigen::Vector3f>
     std::vector<int>& fill = scratch.fill;
     fill.assign(start.begin(), start.end() - 1);
     sorted.resize(points.size());
-    for (int i = 0; i < n; ++i) sorted[fill[point_voxel[i]]++] = points[i];
+    // By runs of one voxel (see the first pass): one counter update per run,
+    // not a chain of read-modify-writes of the same counter.
+    for (int i = 0; i < n;) {
+      const int v = point_voxel[i];
+      int end = i + 1;
+      while (end < n && point_voxel[end] == v) ++end;
+      std::copy(points.begin() + i, points.begin() + end, sorted.begin() + fill[v]);
+      fill[v] += end - i;
+      i = end;
+    }
     grouped = true;
   };
 
-  // Forward half of the neighbourhood (each unordered voxel pair once), the
-  // touching voxels first: on a dense surface they join nearly everything,
-  // so the farther pairs are then mostly skipped as already joined.
-  std::vector<Eigen::Vector3i>& offsets = scratch.offsets;
-  offsets.clear();
-  for (int ring = 1; ring <= reach; ++ring) {
-    for (int dz = -ring; dz <= ring; ++dz) {
-      for (int dy = -ring; dy <= ring; ++dy) {
-        for (int dx = -ring; dx <= ring; ++dx) {
-          const bool forward = dz > 0 || (dz == 0 && (dy > 0 || (dy == 0 && dx > 0)));
-          const int chebyshev = std::max({std::abs(dx), std::abs(dy), std::abs(dz)});
-          if (forward && chebyshev == ring) offsets.emplace_back(dx, dy, dz);
+  // A lower bound of the gap between voxel a's points and any point of the
+  // voxel at offset d: the distance from a's box to that voxel's cell, the
+  // root of the sum over the axes of gap[axis][d[axis]] (squared gaps to the
+  // cells `d` steps away along one axis, 0 for d = 0). Most voxels' points
+  // stay clear of most of their cell's faces (a table top is a thin layer),
+  // so most offsets are ruled out before the hash lookup, and whole planes
+  // of them (dz, then dz and dy) at once: a partial sum of the non-negative
+  // squared gaps never exceeds the full one, rounding included. The slack
+  // covers the rounding of floor(p / voxel) at cell borders.
+  const float slack = 1e-4f;
+  float gap_store[3][2 * kReach + 1];
+  const auto gapsOf = [&](const Eigen::AlignedBox3f& box, const Eigen::Vector3i& ca) {
+    for (int axis = 0; axis < 3; ++axis) {
+      for (int d = -kReach; d <= kReach; ++d) {
+        float g = 0.0f;
+        if (d > 0) {
+          g = static_cast<float>(ca[axis] + d) * voxel - box.max()[axis] - slack;
+        } else if (d < 0) {
+          g = box.min()[axis] - static_cast<float>(ca[axis] + d + 1) * voxel - slack;
+        }
+        gap_store[axis][d + kReach] = g > 0.0f ? g * g : 0.0f;
+      }
+    }
+  };
+  const auto gap = [&](int axis, int d) { return gap_store[axis][d + kReach]; };
+
+  // Each unordered voxel pair once (the forward half of the neighbourhood),
+  // the touching voxels (ring 1) of every voxel first: on a dense surface
+  // they join nearly everything, so the farther pairs are then mostly
+  // skipped as already joined.
+  std::vector<int>& near_a = scratch.near_a;
+  std::vector<int>& near_b = scratch.near_b;
+  const auto tryPair = [&](int a, const Eigen::Vector3i& ca, int dx, int dy, int dz) {
+    const int b = index.find(packVoxel(static_cast<std::int64_t>(ca.x()) + dx,
+                                       static_cast<std::int64_t>(ca.y()) + dy,
+                                       static_cast<std::int64_t>(ca.z()) + dz));
+    if (b < 0 || sets.find(a) == sets.find(b)) return;
+    if (squaredGap(boxes[a], boxes[b]) > tol2) return;
+    if (!grouped) groupPoints();
+    // Only points within the tolerance of the other voxel's box can link.
+    near_a.clear();
+    near_b.clear();
+    for (int k = start[a]; k < start[a + 1]; ++k) {
+      if (boxes[b].squaredExteriorDistance(sorted[k]) <= tol2) near_a.push_back(k);
+    }
+    if (near_a.empty()) return;
+    for (int k = start[b]; k < start[b + 1]; ++k) {
+      if (boxes[a].squaredExteriorDistance(sorted[k]) <= tol2) near_b.push_back(k);
+    }
+    for (const int ka : near_a) {
+      const Eigen::Vector3f& p = sorted[ka];
+      for (const int kb : near_b) {
+        if ((sorted[kb] - p).squaredNorm() <= tol2) {
+          sets.unite(a, b);
+          return;
         }
       }
     }
-  }
-
-  // A lower bound of the gap between voxel a's points and any point of the
-  // voxel at offset d: the distance from a's box to that voxel's cell. Most
-  // voxels' points stay clear of most of their cell's faces (a table top is
-  // a thin layer), so most offsets are ruled out before the hash lookup.
-  // The slack covers the rounding of floor(p / voxel) at cell borders.
-  const float slack = 1e-4f;
-  const auto cellOutOfReach = [&](const Eigen::AlignedBox3f& box, const Eigen::Vector3i& ca,
-                                  const Eigen::Vector3i& d) {
-    float gap2 = 0.0f;
-    for (int axis = 0; axis < 3; ++axis) {
-      float g = 0.0f;
-      if (d[axis] > 0) {
-        g = static_cast<float>(ca[axis] + d[axis]) * voxel - box.max()[axis] - slack;
-      } else if (d[axis] < 0) {
-        g = box.min()[axis] - static_cast<float>(ca[axis] + d[axis] + 1) * voxel - slack;
-      }
-      if (g > 0.0f) gap2 += g * g;
-    }
-    return gap2 > tol2;
   };
-
-  std::vector<int>& near_a = scratch.near_a;
-  std::vector<int>& near_b = scratch.near_b;
-  for (const Eigen::Vector3i& d : offsets) {
+  for (int ring = 1; ring <= kReach; ++ring) {
     for (int a = 0; a < voxels; ++a) {
       const Eigen::Vector3i& ca = voxel_coords[a];
-      if (cellOutOfReach(boxes[a], ca, d)) continue;
-      const int b = index.find(packVoxel(static_cast<std::int64_t>(ca.x()) + d.x(),
-                                         static_cast<std::int64_t>(ca.y()) + d.y(),
-                                         static_cast<std::int64_t>(ca.z()) + d.z()));
-      if (b < 0 || sets.find(a) == sets.find(b)) continue;
-      if (squaredGap(boxes[a], boxes[b]) > tol2) continue;
-      if (!grouped) groupPoints();
-      // Only points within the tolerance of the other voxel's box can link.
-      near_a.clear();
-      near_b.clear();
-      for (int k = start[a]; k < start[a + 1]; ++k) {
-        if (boxes[b].squaredExteriorDistance(sorted[k]) <= tol2) near_a.push_back(k);
-      }
-      if (near_a.empty()) continue;
-      for (int k = start[b]; k < start[b + 1]; ++k) {
-        if (boxes[a].squaredExteriorDistance(sorted[k]) <= tol2) near_b.push_back(k);
-      }
-      bool linked = false;
-      for (std::size_t i = 0; i < near_a.size() && !linked; ++i) {
-        const Eigen::Vector3f& p = sorted[near_a[i]];
-        for (int k : near_b) {
-          if ((sorted[k] - p).squaredNorm() <= tol2) {
-            linked = true;
-            break;
+      gapsOf(boxes[a], ca);
+      for (int dz = 0; dz <= ring; ++dz) {  // forward: dz > 0, or dz == 0 and ...
+        const float gz = gap(2, dz);
+        if (gz > tol2) continue;
+        for (int dy = dz > 0 ? -ring : 0; dy <= ring; ++dy) {  // ... dy > 0, or dy == 0 and ...
+          if (gz + gap(1, dy) > tol2) continue;
+          for (int dx = dz > 0 || dy > 0 ? -ring : 1; dx <= ring; ++dx) {  // ... dx > 0
+            if (std::max({std::abs(dx), std::abs(dy), dz}) != ring) continue;
+            // Summed in the order x, y, z.
+            if ((gap(0, dx) + gap(1, dy)) + gz > tol2) continue;
+            tryPair(a, ca, dx, dy, dz);
           }
         }
       }
-      if (linked) sets.unite(a, b);
     }
   }
 

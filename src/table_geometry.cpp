@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <limits>
 #include <string>
+#include <utility>
 
 #include "findmug/tables.hpp"
 #include "tables_internal.hpp"
@@ -24,6 +25,32 @@ constexpr float kHullStripM = 0.005f;
 // Robust edges (see edgeRange).
 constexpr float kEdgeStripM = 0.05f;
 constexpr float kEdgeQuantile = 0.8f;
+
+// The passes below put each point in a strip or cell of a grid. They take
+// the points kBlock at a time: first every point's strip index, in a plain
+// loop the compiler turns into four-wide divisions (IEEE division: the same
+// quotient as one at a time), then the per-point updates, which read the
+// indices. One division per point and axis was what these passes spent most
+// of their time on.
+constexpr int kBlock = 256;
+
+// out[k] = min(last, int((values[k * Stride] - origin) / width)), k < count:
+// the strip of a coordinate, for points stored as Stride floats each
+// (Vector2f: 2, Vector3f: 3), clamped to the last strip.
+template <int Stride>
+void stripIndices(const float* __restrict values, int count, float origin, float width, int last,
+                  int* __restrict out) {
+  for (int k = 0; k < count; ++k) {
+    const int i = static_cast<int>((values[k * Stride] - origin) / width);
+    out[k] = i < last ? i : last;
+  }
+}
+
+// Coordinate `axis` of points[first] as the start of a strided float array.
+inline const float* coordinates(const std::vector<Eigen::Vector2f>& points, std::size_t first,
+                                int axis) {
+  return points.data()->data() + 2 * first + axis;
+}
 
 float cross2(const Eigen::Vector2f& o, const Eigen::Vector2f& a, const Eigen::Vector2f& b) {
   return (a.x() - o.x()) * (b.y() - o.y()) - (a.y() - o.y()) * (b.x() - o.x());
@@ -50,13 +77,37 @@ void hullCandidates(const std::vector<Eigen::Vector2f>& pts, const Eigen::Aligne
   row_lo.assign(rows, Eigen::Vector2f(kInf, 0.0f));
   row_hi.assign(rows, Eigen::Vector2f(-kInf, 0.0f));
   const float x0 = box.min().x(), y0 = box.min().y();
-  for (const Eigen::Vector2f& p : pts) {
-    const int c = std::min(cols - 1, static_cast<int>((p.x() - x0) / strip));
-    const int r = std::min(rows - 1, static_cast<int>((p.y() - y0) / strip));
-    if (p.y() < col_lo[c].y()) col_lo[c] = p;
-    if (p.y() > col_hi[c].y()) col_hi[c] = p;
-    if (p.x() < row_lo[r].x()) row_lo[r] = p;
-    if (p.x() > row_hi[r].x()) row_hi[r] = p;
+  // Points in image order run along a row of the top: many in a row fall in
+  // one y strip, and that strip's extremes stay in registers until the strip
+  // changes (same comparisons in the same order; stores only at the change).
+  int r_cur = -1;
+  Eigen::Vector2f lo_cur(kInf, 0.0f), hi_cur(-kInf, 0.0f);
+  int col_of[kBlock], row_of[kBlock];
+  for (std::size_t first = 0; first < pts.size(); first += kBlock) {
+    const int m = static_cast<int>(std::min<std::size_t>(kBlock, pts.size() - first));
+    stripIndices<2>(coordinates(pts, first, 0), m, x0, strip, cols - 1, col_of);
+    stripIndices<2>(coordinates(pts, first, 1), m, y0, strip, rows - 1, row_of);
+    for (int j = 0; j < m; ++j) {
+      const Eigen::Vector2f& p = pts[first + j];
+      const int c = col_of[j], r = row_of[j];
+      if (p.y() < col_lo[c].y()) col_lo[c] = p;
+      if (p.y() > col_hi[c].y()) col_hi[c] = p;
+      if (r != r_cur) {
+        if (r_cur >= 0) {
+          row_lo[r_cur] = lo_cur;
+          row_hi[r_cur] = hi_cur;
+        }
+        r_cur = r;
+        lo_cur = row_lo[r];
+        hi_cur = row_hi[r];
+      }
+      if (p.x() < lo_cur.x()) lo_cur = p;
+      if (p.x() > hi_cur.x()) hi_cur = p;
+    }
+  }
+  if (r_cur >= 0) {
+    row_lo[r_cur] = lo_cur;
+    row_hi[r_cur] = hi_cur;
   }
   out.clear();
   for (const auto* list : {&col_lo, &col_hi, &row_lo, &row_hi}) {
@@ -80,12 +131,22 @@ float occupiedArea(const std::vector<Eigen::Vector2f>& pts, const Eigen::Aligned
   thread_local std::vector<std::uint8_t> occupied;
   occupied.assign(static_cast<std::size_t>(cols) * rows, 0);
   int count = 0;
-  for (const auto& p : pts) {
-    const int c = std::min(cols - 1, static_cast<int>((p.x() - box.min().x()) / cell));
-    const int r = std::min(rows - 1, static_cast<int>((p.y() - box.min().y()) / cell));
-    std::uint8_t& o = occupied[static_cast<std::size_t>(r) * cols + c];
-    count += o == 0 ? 1 : 0;
-    o = 1;
+  // Consecutive points mostly share a cell: testing the previous cell first
+  // spares the load that would wait for the previous point's store.
+  std::size_t last = std::numeric_limits<std::size_t>::max();
+  int col_of[kBlock], row_of[kBlock];
+  for (std::size_t first = 0; first < pts.size(); first += kBlock) {
+    const int m = static_cast<int>(std::min<std::size_t>(kBlock, pts.size() - first));
+    stripIndices<2>(coordinates(pts, first, 0), m, box.min().x(), cell, cols - 1, col_of);
+    stripIndices<2>(coordinates(pts, first, 1), m, box.min().y(), cell, rows - 1, row_of);
+    for (int j = 0; j < m; ++j) {
+      const std::size_t k = static_cast<std::size_t>(row_of[j]) * cols + col_of[j];
+      if (k == last) continue;
+      last = k;
+      std::uint8_t& o = occupied[k];
+      count += o == 0 ? 1 : 0;
+      o = 1;
+    }
   }
   return static_cast<float>(count) * cell * cell;
 }
@@ -105,14 +166,33 @@ void principalAxes(const std::vector<Eigen::Vector2f>& pts, const Eigen::Aligned
   thread_local std::vector<int> counts;
   sums.assign(static_cast<std::size_t>(cols) * rows, Eigen::Vector2f::Zero());
   counts.assign(sums.size(), 0);
-  for (const auto& p : pts) {
-    const int c = std::min(cols - 1, static_cast<int>((p.x() - box.min().x()) / cell));
-    const int r = std::min(rows - 1, static_cast<int>((p.y() - box.min().y()) / cell));
-    const std::size_t k = static_cast<std::size_t>(r) * cols + c;
-    // Relative to the box corner: keeps float sums precise far from the robot.
-    sums[k] += p - box.min();
-    ++counts[k];
+  // The current cell's sum and count stay in registers while consecutive
+  // points fall in it (the same additions in the same order as updating the
+  // cell point by point, without each waiting for the last one's store).
+  std::size_t k_cur = 0;
+  Eigen::Vector2f sum_cur = sums[0];
+  int count_cur = counts[0];
+  int col_of[kBlock], row_of[kBlock];
+  for (std::size_t first = 0; first < pts.size(); first += kBlock) {
+    const int m = static_cast<int>(std::min<std::size_t>(kBlock, pts.size() - first));
+    stripIndices<2>(coordinates(pts, first, 0), m, box.min().x(), cell, cols - 1, col_of);
+    stripIndices<2>(coordinates(pts, first, 1), m, box.min().y(), cell, rows - 1, row_of);
+    for (int j = 0; j < m; ++j) {
+      const std::size_t k = static_cast<std::size_t>(row_of[j]) * cols + col_of[j];
+      if (k != k_cur) {
+        sums[k_cur] = sum_cur;
+        counts[k_cur] = count_cur;
+        k_cur = k;
+        sum_cur = sums[k];
+        count_cur = counts[k];
+      }
+      // Relative to the box corner: keeps float sums precise far from the robot.
+      sum_cur += pts[first + j] - box.min();
+      ++count_cur;
+    }
   }
+  sums[k_cur] = sum_cur;
+  counts[k_cur] = count_cur;
   Eigen::Vector2d mean = Eigen::Vector2d::Zero();
   Eigen::Matrix2d scatter = Eigen::Matrix2d::Zero();
   int occupied = 0;
@@ -151,12 +231,36 @@ Eigen::Vector2f edgeRange(const std::vector<Eigen::Vector2f>& local, int along, 
   strip_lo.assign(static_cast<std::size_t>(strips), std::numeric_limits<float>::max());
   strip_hi.assign(static_cast<std::size_t>(strips), std::numeric_limits<float>::lowest());
   strip_count.assign(static_cast<std::size_t>(strips), 0);
-  for (const auto& q : local) {
-    const int k = std::min(strips - 1, static_cast<int>((q[along] - lo_along) / strip_width));
-    strip_lo[k] = std::min(strip_lo[k], q[across]);
-    strip_hi[k] = std::max(strip_hi[k], q[across]);
-    ++strip_count[k];
+  // The current strip's extremes and count in registers while consecutive
+  // points stay in it (as in principalAxes).
+  int k_cur = 0;
+  float lo_cur = strip_lo[0], hi_cur = strip_hi[0];
+  int count_cur = 0;
+  int strip_of[kBlock];
+  for (std::size_t first = 0; first < local.size(); first += kBlock) {
+    const int m = static_cast<int>(std::min<std::size_t>(kBlock, local.size() - first));
+    stripIndices<2>(coordinates(local, first, along), m, lo_along, strip_width, strips - 1,
+                    strip_of);
+    for (int j = 0; j < m; ++j) {
+      const int k = strip_of[j];
+      const float v = local[first + j][across];
+      if (k != k_cur) {
+        strip_lo[k_cur] = lo_cur;
+        strip_hi[k_cur] = hi_cur;
+        strip_count[k_cur] = count_cur;
+        k_cur = k;
+        lo_cur = strip_lo[k];
+        hi_cur = strip_hi[k];
+        count_cur = strip_count[k];
+      }
+      lo_cur = std::min(lo_cur, v);
+      hi_cur = std::max(hi_cur, v);
+      ++count_cur;
+    }
   }
+  strip_lo[k_cur] = lo_cur;
+  strip_hi[k_cur] = hi_cur;
+  strip_count[k_cur] = count_cur;
   lows.clear();
   highs.clear();
   for (int k = 0; k < strips; ++k) {
@@ -180,6 +284,33 @@ Eigen::Vector2f edgeRange(const std::vector<Eigen::Vector2f>& local, int along, 
     return v[k];
   };
   return Eigen::Vector2f(quantile(lows, 1.0f - kEdgeQuantile), quantile(highs, kEdgeQuantile));
+}
+
+// Lowest and highest z of `points` (not empty, finite). Four running
+// extremes instead of one: each point then waits for the one four back, not
+// for the last. Only which of a +0 and a -0 comes out can differ from one
+// running pair, and describeCluster uses the range only through z - z_min
+// for z != 0 and z_max - z_min, where that sign makes no difference.
+std::pair<float, float> heightRange(const std::vector<Eigen::Vector3f>& points) {
+  float lo[4], hi[4];
+  for (int j = 0; j < 4; ++j) {
+    lo[j] = std::numeric_limits<float>::max();
+    hi[j] = std::numeric_limits<float>::lowest();
+  }
+  const std::size_t n = points.size(), n4 = n - n % 4;
+  for (std::size_t i = 0; i < n4; i += 4) {
+    for (int j = 0; j < 4; ++j) {
+      const float z = points[i + j].z();
+      lo[j] = z < lo[j] ? z : lo[j];
+      hi[j] = z > hi[j] ? z : hi[j];
+    }
+  }
+  for (std::size_t i = n4; i < n; ++i) {
+    const float z = points[i].z();
+    lo[0] = z < lo[0] ? z : lo[0];
+    hi[0] = z > hi[0] ? z : hi[0];
+  }
+  return {std::min({lo[0], lo[1], lo[2], lo[3]}), std::max({hi[0], hi[1], hi[2], hi[3]})};
 }
 
 }  // namespace
@@ -229,19 +360,31 @@ ClusterOutcome tables_detail::describeCluster(const std::vector<Eigen::Vector3f>
   // Top height: the densest height band (the top is the one large horizontal
   // surface; legs, aprons and lower shelves hold fewer points), refined by the
   // mean height of the points within half a band of it.
-  float z_min = std::numeric_limits<float>::max(), z_max = std::numeric_limits<float>::lowest();
-  for (const auto& p : points) {
-    z_min = std::min(z_min, p.z());
-    z_max = std::max(z_max, p.z());
-  }
+  const auto [z_min, z_max] = heightRange(points);
   constexpr float kBin = 0.01f;
   const int bins = static_cast<int>((z_max - z_min) / kBin) + 1;
   // Per-thread buffers: no allocation per table once a stream is warm.
   thread_local std::vector<int> histogram;
   thread_local std::vector<Eigen::Vector2f> top, local, candidates;
   histogram.assign(static_cast<std::size_t>(bins), 0);
-  for (const auto& p : points)
-    ++histogram[std::min(bins - 1, static_cast<int>((p.z() - z_min) / kBin))];
+  {
+    // Neighbouring points of a top share a bin: count a run, then add it.
+    int b_cur = 0, run = 0;
+    int bin_of[kBlock];
+    for (std::size_t first = 0; first < points.size(); first += kBlock) {
+      const int m = static_cast<int>(std::min<std::size_t>(kBlock, points.size() - first));
+      stripIndices<3>(points.data()->data() + 3 * first + 2, m, z_min, kBin, bins - 1, bin_of);
+      for (int j = 0; j < m; ++j) {
+        if (bin_of[j] != b_cur) {
+          histogram[b_cur] += run;
+          b_cur = bin_of[j];
+          run = 0;
+        }
+        ++run;
+      }
+    }
+    histogram[b_cur] += run;
+  }
   const int half_window = std::max(0, static_cast<int>(config.top_band_m / (2.0f * kBin)));
   int best_bin = 0;
   long best_count = -1;

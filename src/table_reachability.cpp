@@ -56,16 +56,25 @@ ReachabilityGrid::ReachabilityGrid(const OrganizedCloud& cloud, const LabelImage
   detail::Borrowed obstacles_buffer(threadBuffers().obstacles);
   std::vector<std::pair<int, Eigen::Vector2f>>& obstacles = *obstacles_buffer;
   obstacles.clear();
+  // A point counts only as observed floor (floor label, at floor height) or
+  // as an obstacle (any other label, between obstacle_min_height_m and
+  // robot_height_m); its cell is worked out only then. (A vectorised pass
+  // over every pixel was tried and was slower: most pixels fail the box test
+  // above, which a predicted branch rejects more cheaply.)
+  const float floor_tolerance = config.floor_tolerance_m;
+  const float obstacle_low = config.obstacle_min_height_m, obstacle_high = config.robot_height_m;
   for (std::size_t i = 0; i < cloud.points.size(); ++i) {
     const Eigen::Vector3f& p = cloud.points[i];
     if (!(p.x() >= x_min && p.x() <= x_max && p.y() >= y_min && p.y() <= y_max)) continue;
+    const bool floor_label = labels.labels[i] == kFloorLabel;
+    const bool floor = floor_label && std::abs(p.z()) <= floor_tolerance;
+    const bool obstacle = !floor_label && p.z() >= obstacle_low && p.z() <= obstacle_high;
+    if (!floor && !obstacle) continue;
     const int c = cellOf(p.head<2>());
     if (c < 0) continue;
-    const std::uint8_t label = labels.labels[i];
-    if (label == kFloorLabel) {
-      if (std::abs(p.z()) <= config.floor_tolerance_m) floor_seen[c] = 1;
-    } else if (p.z() >= config.obstacle_min_height_m && p.z() <= config.robot_height_m &&
-               in_window[c]) {
+    if (floor) {
+      floor_seen[c] = 1;
+    } else if (in_window[c]) {
       obstacles.emplace_back(c, p.head<2>());
     }
   }

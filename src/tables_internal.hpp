@@ -34,6 +34,15 @@ inline bool finitePoint(const Eigen::Vector3f& p) {
   return std::isfinite(p.x()) && std::isfinite(p.y()) && std::isfinite(p.z());
 }
 
+// floor(v) as an int, for |v| < 2^31: truncate, then step down where the
+// truncation rounded up (negative non-integers). The same value as
+// static_cast<int>(std::floor(v)), without the rounding-mode sequence that
+// std::floor compiles to on x86-64 before SSE4.1.
+inline int floorToInt(float v) {
+  const int t = static_cast<int>(v);
+  return t - (static_cast<float>(t) > v ? 1 : 0);
+}
+
 // `value` with `precision` significant digits, for messages.
 std::string fmt(double value, int precision = 3);
 
@@ -84,8 +93,8 @@ class ReachabilityGrid {
   };
   Window windowOf(const Eigen::Vector2f& q) const;
   int cellOf(const Eigen::Vector2f& xy) const {
-    const int col = static_cast<int>(std::floor((xy.x() - origin_.x()) / cell_));
-    const int row = static_cast<int>(std::floor((xy.y() - origin_.y()) / cell_));
+    const int col = floorToInt((xy.x() - origin_.x()) / cell_);
+    const int row = floorToInt((xy.y() - origin_.y()) / cell_);
     if (col < 0 || row < 0 || col >= cols_ || row >= rows_) return -1;
     return row * cols_ + col;
   }

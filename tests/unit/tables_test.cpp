@@ -237,6 +237,27 @@ TEST(EuclideanClusters, ImageNeighbourShortcutGivesTheSamePartition) {
   }
 }
 
+// The table stage's voxel and grid cells use floorToInt instead of
+// std::floor: it must give the same cell for every coordinate, on both sides
+// of zero and at and next to integers, where a truncation alone would be one
+// cell off for negative values.
+TEST(EuclideanClusters, FloorToIntMatchesStdFloor) {
+  std::vector<float> values = {0.0f, -0.0f, 1.0f, -1.0f, 0.5f, -0.5f, 1e-30f, -1e-30f,
+                               2147483520.0f, -2147483648.0f};
+  for (int k = -2000; k <= 2000; ++k) {
+    const float v = static_cast<float>(k) * 0.25f;
+    values.push_back(v);
+    values.push_back(std::nextafter(v, -1e9f));
+    values.push_back(std::nextafter(v, 1e9f));
+  }
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<float> wide(-2.0e5f, 2.0e5f);
+  for (int k = 0; k < 10000; ++k) values.push_back(wide(rng));
+  for (const float v : values) {
+    ASSERT_EQ(tables_detail::floorToInt(v), static_cast<int>(std::floor(v))) << v;
+  }
+}
+
 TEST(EuclideanClusters, ChainsLinkAndGapsSplit) {
   std::vector<Eigen::Vector3f> chain, gaps;
   for (int i = 0; i < 50; ++i) {
