@@ -5,9 +5,17 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstring>
+#include <limits>
 #include <random>
+#include <string>
 
+#include "features_internal.hpp"
+#include "findmug/cloud.hpp"
+#include "findmug/dataset.hpp"
 #include "findmug/error.hpp"
+#include "findmug/oversegmentation.hpp"
+#include "test_data.hpp"
 
 namespace findmug {
 namespace {
@@ -273,6 +281,99 @@ TEST(ComputeFeatures, RejectsInconsistentInputs) {
   bad = g;
   for (int i : bad.seg.segments[1]) bad.cloud.points[i] = Eigen::Vector3f::Constant(std::nanf(""));
   EXPECT_THROW(computeFeatures(bad.cloud, bad.normals, bad.seg), Error);
+}
+
+// The same bits from the AVX2 feature pass as from the scalar one: every
+// feature, centroid and moment, compared with memcmp. `what` names the input.
+void expectSameFeaturesBothPaths(const OrganizedCloud& cloud, const NormalImage& normals,
+                                 const Oversegmentation& seg, const std::string& what) {
+  SegmentFeatures simd, portable;
+  detail::computeFeaturesInto(cloud, normals, seg, simd, detail::FeatureSimd::Auto);
+  detail::computeFeaturesInto(cloud, normals, seg, portable, detail::FeatureSimd::Off);
+  ASSERT_EQ(simd.features.size(), portable.features.size()) << what;
+  for (std::size_t s = 0; s < simd.features.size(); ++s) {
+    EXPECT_EQ(0, std::memcmp(simd.features[s].data(), portable.features[s].data(),
+                             sizeof(FeatureVector)))
+        << what << ", segment " << s;
+    EXPECT_EQ(0, std::memcmp(simd.centroids[s].data(), portable.centroids[s].data(),
+                             sizeof(float) * 3))
+        << what << ", segment " << s;
+    const SegmentMoments& a = simd.moments[s];
+    const SegmentMoments& b = portable.moments[s];
+    EXPECT_TRUE(a.count == b.count &&
+                !std::memcmp(a.mean.data(), b.mean.data(), sizeof(double) * 3) &&
+                !std::memcmp(a.scatter.data(), b.scatter.data(), sizeof(double) * 9) &&
+                !std::memcmp(a.normal_sum.data(), b.normal_sum.data(), sizeof(double) * 3) &&
+                !std::memcmp(&a.max_z, &b.max_z, sizeof(float)))
+        << what << ", segment " << s;
+  }
+}
+
+// Real frames: NYU clouds oversegmented as the pipeline does (camera frame:
+// the pass does not care which frame it is).
+TEST(FeatureSimd, NyuFramesMatchThePortableCodeBitForBit) {
+  FINDMUG_REQUIRE_DATA(root, "nyuv2_labeled");
+  const DatasetFolder dataset(root.string());
+  ASSERT_GE(dataset.size(), 30u);
+  OversegmentationConfig config;
+  config.kind = OversegmenterKind::Organized;
+  const auto oversegmenter = makeOversegmenter(config);
+  for (std::size_t index = 0; index < dataset.size(); ++index) {
+    const OrganizedCloud cloud = frameToCloud(dataset.load(index).frame);
+    const NormalImage normals = computeNormals(cloud, NormalConfig{});
+    const Oversegmentation seg = oversegmenter->segment(cloud, normals);
+    ASSERT_GT(seg.segments.size(), 50u);
+    expectSameFeaturesBothPaths(cloud, normals, seg, "NYU frame " + std::to_string(index));
+  }
+}
+
+// The corners of the AVX2 pass: an image width that is not a multiple of
+// eight (the last pixels of the image go one by one) and runs across its
+// 256-pixel blocks; zero, NaN and infinite normals (no normal); black
+// (CIELAB f at t <= 0), white and near-white colours (f at t >= 1, by the
+// cube root); NaN points and pixels without a segment inside runs.
+TEST(FeatureSimd, EdgeCasesMatchThePortableCodeBitForBit) {
+  const int w = 203, h = 37;
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<float> unit(0.0f, 1.0f);
+  std::uniform_int_distribution<int> byte(0, 255);
+  OrganizedCloud cloud;
+  NormalImage normals;
+  Oversegmentation seg;
+  cloud.width = normals.width = seg.width = w;
+  cloud.height = normals.height = seg.height = h;
+  const int segments = 9;
+  seg.segments.resize(segments);
+  const float nan = std::nanf("");
+  for (int v = 0; v < h; ++v) {
+    for (int u = 0; u < w; ++u) {
+      const int i = v * w + u;
+      Eigen::Vector3f p(0.01f * u - 1.0f, 0.3f + 0.02f * v, 0.7f + 0.05f * unit(rng));
+      Eigen::Vector3f n(unit(rng) - 0.5f, unit(rng) - 0.5f, unit(rng));
+      Rgb8 c{static_cast<std::uint8_t>(byte(rng)), static_cast<std::uint8_t>(byte(rng)),
+             static_cast<std::uint8_t>(byte(rng))};
+      switch (i % 13) {
+        case 1: n = Eigen::Vector3f::Zero(); break;
+        case 3: n = Eigen::Vector3f(nan, 0.0f, 1.0f); break;
+        case 5: n = Eigen::Vector3f(std::numeric_limits<float>::infinity(), 0.0f, 0.0f); break;
+        case 7: c = Rgb8{0, 0, 0}; break;
+        case 8: c = Rgb8{255, 255, 255}; break;
+        case 9: c = Rgb8{255, 254, 255}; break;
+        case 11: p = Eigen::Vector3f::Constant(nan); break;
+        default: break;
+      }
+      // Long runs (a third of the width) that cross block borders, and
+      // some pixels with no segment.
+      int s = (u / 68 + 3 * (v / 13)) % segments;
+      if (i % 29 == 0) s = -1;
+      cloud.points.push_back(p);
+      cloud.colors.push_back(c);
+      normals.normals.push_back(n);
+      seg.pixel_segment.push_back(s);
+      if (s >= 0) seg.segments[s].push_back(i);
+    }
+  }
+  expectSameFeaturesBothPaths(cloud, normals, seg, "edge-case grid");
 }
 
 }  // namespace
