@@ -11,6 +11,7 @@
 #include <string>
 
 #include "findmug/error.hpp"
+#include "floor_to_int.hpp"
 #include "scratch.hpp"
 
 namespace findmug {
@@ -48,6 +49,32 @@ std::vector<float> computeSceneFeatures(const OrganizedCloud& cloud_ground,
   return out;
 }
 
+namespace {
+
+struct Extent {
+  float min_x, min_y, max_x, max_y, max_z;
+};
+
+// The points' extent (infinite where none has a finite z). A function of its
+// own: in computeSceneFeaturesInto the running extremes were captured by
+// reference by the cell lambdas, so the compiler kept them in memory and
+// every point waited for the last one's stores.
+Extent extentOf(const std::vector<Eigen::Vector3f>& points) {
+  const float inf = std::numeric_limits<float>::infinity();
+  float min_x = inf, min_y = inf, max_x = -inf, max_y = -inf, max_z = -inf;
+  for (const auto& p : points) {
+    if (!std::isfinite(p.z())) continue;
+    min_x = std::min(min_x, p.x());
+    max_x = std::max(max_x, p.x());
+    min_y = std::min(min_y, p.y());
+    max_y = std::max(max_y, p.y());
+    max_z = std::max(max_z, p.z());
+  }
+  return {min_x, min_y, max_x, max_y, max_z};
+}
+
+}  // namespace
+
 void computeSceneFeaturesInto(const OrganizedCloud& cloud_ground,
                               const Oversegmentation& segmentation,
                               const SegmentFeatures& features,
@@ -77,16 +104,9 @@ void computeSceneFeaturesInto(const OrganizedCloud& cloud_ground,
   const int bands = (width + config.band_px - 1) / config.band_px;
 
   // Extent of the valid points in the ground plane, for the cell grid.
-  float min_x = std::numeric_limits<float>::infinity(), min_y = min_x;
-  float max_x = -min_x, max_y = -min_x, max_z = -min_x;
-  for (const auto& p : cloud_ground.points) {
-    if (!std::isfinite(p.z())) continue;
-    min_x = std::min(min_x, p.x());
-    max_x = std::max(max_x, p.x());
-    min_y = std::min(min_y, p.y());
-    max_y = std::max(max_y, p.y());
-    max_z = std::max(max_z, p.z());
-  }
+  const Extent extent = extentOf(cloud_ground.points);
+  const float min_x = extent.min_x, min_y = extent.min_y;
+  const float max_x = extent.max_x, max_y = extent.max_y, max_z = extent.max_z;
   if (!std::isfinite(min_x)) return;
   const float cell = config.cell_m;
   const int cols = static_cast<int>((max_x - min_x) / cell) + 1;
@@ -96,7 +116,7 @@ void computeSceneFeaturesInto(const OrganizedCloud& cloud_ground,
     return std::clamp(static_cast<int>((v - lo) * inv_cell), 0, count - 1);
   };
   auto binOf = [&](float z) {
-    return std::clamp(static_cast<int>(std::floor(z * inv_cell)), 0, kHeightBins - 1);
+    return std::clamp(detail::floorToInt(z * inv_cell), 0, kHeightBins - 1);
   };
 
   // Working memory kept per thread between frames (scratch.hpp).

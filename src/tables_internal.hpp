@@ -17,6 +17,7 @@
 #include "findmug/label_image.hpp"
 #include "findmug/labels.hpp"
 #include "findmug/tables.hpp"
+#include "floor_to_int.hpp"
 #include "scratch.hpp"
 
 namespace findmug::tables_detail {
@@ -34,14 +35,7 @@ inline bool finitePoint(const Eigen::Vector3f& p) {
   return std::isfinite(p.x()) && std::isfinite(p.y()) && std::isfinite(p.z());
 }
 
-// floor(v) as an int, for |v| < 2^31: truncate, then step down where the
-// truncation rounded up (negative non-integers). The same value as
-// static_cast<int>(std::floor(v)), without the rounding-mode sequence that
-// std::floor compiles to on x86-64 before SSE4.1.
-inline int floorToInt(float v) {
-  const int t = static_cast<int>(v);
-  return t - (static_cast<float>(t) > v ? 1 : 0);
-}
+using detail::floorToInt;
 
 // `value` with `precision` significant digits, for messages.
 std::string fmt(double value, int precision = 3);

@@ -237,11 +237,11 @@ TEST(EuclideanClusters, ImageNeighbourShortcutGivesTheSamePartition) {
   }
 }
 
-// The table stage's voxel and grid cells use floorToInt instead of
-// std::floor: it must give the same cell for every coordinate, on both sides
-// of zero and at and next to integers, where a truncation alone would be one
-// cell off for negative values.
-TEST(EuclideanClusters, FloorToIntMatchesStdFloor) {
+// The table stage's voxel and grid cells and the scene features' height bins
+// use floorToInt instead of std::floor: it must give the same cell for every
+// coordinate, on both sides of zero and at and next to integers, where a
+// truncation alone would be one cell off for negative values.
+TEST(FloorToInt, MatchesStdFloor) {
   std::vector<float> values = {0.0f, -0.0f, 1.0f, -1.0f, 0.5f, -0.5f, 1e-30f, -1e-30f,
                                2147483520.0f, -2147483648.0f};
   for (int k = -2000; k <= 2000; ++k) {
@@ -254,7 +254,7 @@ TEST(EuclideanClusters, FloorToIntMatchesStdFloor) {
   std::uniform_real_distribution<float> wide(-2.0e5f, 2.0e5f);
   for (int k = 0; k < 10000; ++k) values.push_back(wide(rng));
   for (const float v : values) {
-    ASSERT_EQ(tables_detail::floorToInt(v), static_cast<int>(std::floor(v))) << v;
+    ASSERT_EQ(detail::floorToInt(v), static_cast<int>(std::floor(v))) << v;
   }
 }
 
