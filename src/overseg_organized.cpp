@@ -57,6 +57,7 @@
 #include "lab_internal.hpp"
 #include "oversegmentation_internal.hpp"
 #include "scratch.hpp"
+#include "simd_vec3.hpp"
 
 namespace findmug {
 namespace {
@@ -482,9 +483,55 @@ double estimateFocal(const OrganizedCloud& cloud, bool along_x) {
   return f > 0 && std::isfinite(f) ? f : std::numeric_limits<double>::quiet_NaN();
 }
 
+#if defined(FINDMUG_AVX2_DISPATCH)
+// refineToFullResolution's first test for full pixels x0..x0+7 of a row
+// (x0 even, 2 <= x0, x0 + 8 <= width, x0 / 2 + 7 <= coarse width): `points`
+// is the row's first point, row_a and row_b the two coarse label rows. Pixel
+// x's samples are coarse columns x / 2 and x / 2 - 1 (x even) or x / 2 + 1
+// (x odd), in both rows. Writes out[x0..x0+7] for the lanes that are not
+// usable (-1) or whose four samples agree (their label, or kUnassigned), as
+// the scalar code does, and returns the mask of the other lanes (usable,
+// samples differ), which the scalar code then decides one by one.
+__attribute__((target("avx2"))) int refineBlockAvx2(const Eigen::Vector3f* points,
+                                                   const int* row_a, const int* row_b, int x0,
+                                                   int* out) {
+  const int c = x0 / 2;
+  // Coarse columns c-1 .. c+6; the lanes use c-1 .. c+4.
+  const __m256i a = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(row_a + c - 1));
+  const __m256i b = _mm256_loadu_si256(reinterpret_cast<const __m256i*>(row_b + c - 1));
+  const __m256i own = _mm256_setr_epi32(1, 1, 2, 2, 3, 3, 4, 4);    // x / 2
+  const __m256i other = _mm256_setr_epi32(0, 2, 1, 3, 2, 4, 3, 5);  // x / 2 -+ 1
+  const __m256i a0 = _mm256_permutevar8x32_epi32(a, own);
+  const __m256i agree = _mm256_and_si256(
+      _mm256_and_si256(_mm256_cmpeq_epi32(a0, _mm256_permutevar8x32_epi32(a, other)),
+                       _mm256_cmpeq_epi32(a0, _mm256_permutevar8x32_epi32(b, own))),
+      _mm256_cmpeq_epi32(a0, _mm256_permutevar8x32_epi32(b, other)));
+  // usable(): z > 0 and every coordinate finite (|v| < inf, false for NaN).
+  __m256 x, y, z;
+  detail::loadVec3x8(points[x0].data(), x, y, z);
+  const __m256 abs_mask = _mm256_castsi256_ps(_mm256_set1_epi32(0x7fffffff));
+  const __m256 inf = _mm256_set1_ps(std::numeric_limits<float>::infinity());
+  const __m256 finite_x = _mm256_cmp_ps(_mm256_and_ps(x, abs_mask), inf, _CMP_LT_OQ);
+  const __m256 finite_y = _mm256_cmp_ps(_mm256_and_ps(y, abs_mask), inf, _CMP_LT_OQ);
+  const __m256 finite_z = _mm256_cmp_ps(_mm256_and_ps(z, abs_mask), inf, _CMP_LT_OQ);
+  const __m256i usable = _mm256_castps_si256(
+      _mm256_and_ps(_mm256_and_ps(_mm256_cmp_ps(z, _mm256_setzero_ps(), _CMP_GT_OQ), finite_x),
+                    _mm256_and_ps(finite_y, finite_z)));
+  const __m256i label = _mm256_blendv_epi8(_mm256_set1_epi32(kUnassigned), a0,
+                                           _mm256_cmpgt_epi32(a0, _mm256_set1_epi32(-1)));
+  const __m256i decided = _mm256_and_si256(usable, agree);
+  _mm256_storeu_si256(reinterpret_cast<__m256i*>(out + x0),
+                      _mm256_blendv_epi8(_mm256_set1_epi32(-1), label, decided));
+  return _mm256_movemask_ps(_mm256_castsi256_ps(_mm256_andnot_si256(agree, usable)));
+}
+#endif
+
 class OrganizedOversegmenter final : public Oversegmenter {
  public:
-  explicit OrganizedOversegmenter(const OversegmentationConfig& config) : config_(config) {
+  // `simd`: detail::OversegSimd::Off keeps to the scalar refinement (tests).
+  explicit OrganizedOversegmenter(const OversegmentationConfig& config,
+                                  detail::OversegSimd simd = detail::OversegSimd::Auto)
+      : config_(config), simd_(simd) {
     weights_.color = config.color_importance * kLabScale;
     weights_.spatial = config.spatial_importance / config.seed_resolution_m;
     weights_.normal = config.normal_importance;
@@ -650,21 +697,25 @@ class OrganizedOversegmenter final : public Oversegmenter {
     std::vector<float>& lab = *lab_buffer;
     pending.resize(w);
     picks.resize(w);
+#if defined(FINDMUG_AVX2_DISPATCH)
+    const bool avx2 = simd_ == detail::OversegSimd::Auto && detail::cpuHasAvx2();
+#endif
     for (int y = 0; y < h; ++y) {
       std::size_t waiting = 0;
       const int cy = y / kCoarseStride;
       const int* row_a = labels.data() + static_cast<std::size_t>(cy) * cw;
       const int* row_b = labels.data() + static_cast<std::size_t>(other(y, cy, chh)) * cw;
-      for (int x = 0; x < w; ++x) {
+      // The scalar decision for pixel x of this row.
+      const auto refinePixel = [&](int x) {
         const std::size_t i = static_cast<std::size_t>(y) * w + x;
-        if (!usable(cloud.points[i])) continue;
+        if (!usable(cloud.points[i])) return;
         const int cx = x / kCoarseStride;
         const int ox = other(x, cx, cw);
         const std::array<int, 4> around = {row_a[cx], row_a[ox], row_b[cx], row_b[ox]};
         // Inside a segment (most pixels) the four agree: no search.
         if (around[0] == around[1] && around[0] == around[2] && around[0] == around[3]) {
           out[i] = around[0] >= 0 ? around[0] : kUnassigned;
-          continue;
+          return;
         }
         std::array<int, 4> candidates{};
         int count = 0;
@@ -676,12 +727,30 @@ class OrganizedOversegmenter final : public Oversegmenter {
         }
         if (count <= 1) {
           out[i] = count == 1 ? candidates[0] : kUnassigned;
-          continue;
+          return;
         }
         pending[waiting] = {candidates, count};
         picks[waiting] = static_cast<int>(i);
         ++waiting;
+      };
+      int x = 0;
+#if defined(FINDMUG_AVX2_DISPATCH)
+      if (avx2) {
+        // Eight pixels at a time where the block's samples stay inside the
+        // coarse row; the lanes whose samples differ go to refinePixel, in
+        // order, so `pending` is the same list as pixel by pixel.
+        const Eigen::Vector3f* row_points = cloud.points.data() + static_cast<std::size_t>(y) * w;
+        int* row_out = out.data() + static_cast<std::size_t>(y) * w;
+        for (; x < 2; ++x) refinePixel(x);
+        for (; x + 8 <= w && x / 2 + 7 <= cw; x += 8) {
+          for (int left = refineBlockAvx2(row_points, row_a, row_b, x, row_out); left != 0;
+               left &= left - 1) {
+            refinePixel(x + __builtin_ctz(static_cast<unsigned>(left)));
+          }
+        }
       }
+#endif
+      for (; x < w; ++x) refinePixel(x);
       const LabPlanes colour = convertPicks(cloud, picks, waiting, lab);
       for (std::size_t j = 0; j < waiting; ++j) {
         const Pending& p = pending[j];
@@ -1168,6 +1237,7 @@ class OrganizedOversegmenter final : public Oversegmenter {
   }
 
   OversegmentationConfig config_;
+  detail::OversegSimd simd_ = detail::OversegSimd::Auto;
   Weights weights_{};
 };
 
@@ -1179,8 +1249,9 @@ void labFromRgb(const Rgb8* colors, const int* pixel, std::size_t count, float* 
   labConverter().convertBatch(colors, pixel, count, l, a, b, simd);
 }
 
-std::unique_ptr<Oversegmenter> makeOrganizedOversegmenter(const OversegmentationConfig& config) {
-  return std::make_unique<OrganizedOversegmenter>(config);
+std::unique_ptr<Oversegmenter> makeOrganizedOversegmenter(const OversegmentationConfig& config,
+                                                          OversegSimd simd) {
+  return std::make_unique<OrganizedOversegmenter>(config, simd);
 }
 }  // namespace detail
 

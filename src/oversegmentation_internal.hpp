@@ -9,7 +9,13 @@
 namespace findmug::detail {
 
 std::unique_ptr<Oversegmenter> makePclSupervoxelOversegmenter(const OversegmentationConfig& config);
-std::unique_ptr<Oversegmenter> makeOrganizedOversegmenter(const OversegmentationConfig& config);
+enum class OversegSimd {
+  Auto,  // AVX2 where the CPU has it (what makeOversegmenter builds)
+  Off,   // the organized oversegmenter's full-resolution refinement scalar only
+};
+
+std::unique_ptr<Oversegmenter> makeOrganizedOversegmenter(
+    const OversegmentationConfig& config, OversegSimd simd = OversegSimd::Auto);
 
 // Throws findmug::Error (prefixed with `who`) unless cloud and normals share
 // one non-empty grid and every array has width*height entries.

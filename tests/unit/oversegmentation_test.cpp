@@ -21,6 +21,7 @@
 #include "findmug/features.hpp"
 #include "findmug/labels.hpp"
 #include "lab_internal.hpp"
+#include "oversegmentation_internal.hpp"
 #include "test_data.hpp"
 
 namespace findmug {
@@ -624,6 +625,56 @@ TEST(OrganizedOversegmenter, SegmentsAreConnectedAndAvoidHoles) {
   expectWellFormed(seg, s.cloud, 20, 0.02);
   for (int k = 0; k < static_cast<int>(seg.segments.size()); ++k) {
     EXPECT_EQ(pieces(seg, k), 1) << "segment " << k << " is in pieces";
+  }
+}
+
+// The organized oversegmenter decides most full-resolution pixels eight at
+// a time with AVX2 (refineBlockAvx2) and the rest one by one: the same
+// segmentation as deciding every pixel one by one, on the NYU frames and on
+// the box scene with holes, NaN coordinates, a zero depth and image widths
+// that leave a tail of every length after the blocks.
+TEST(OrganizedOversegmenter, AvxRefinementMatchesTheScalarCodeExactly) {
+  FINDMUG_REQUIRE_DATA(root, "nyuv2_labeled");
+  OversegmentationConfig config;
+  config.kind = OversegmenterKind::Organized;
+  const auto simd = detail::makeOrganizedOversegmenter(config, detail::OversegSimd::Auto);
+  const auto scalar = detail::makeOrganizedOversegmenter(config, detail::OversegSimd::Off);
+  const auto expectSame = [&](const OrganizedCloud& cloud, const NormalImage& normals,
+                              const std::string& what) {
+    const Oversegmentation a = simd->segment(cloud, normals);
+    const Oversegmentation b = scalar->segment(cloud, normals);
+    EXPECT_EQ(a.pixel_segment, b.pixel_segment) << what;
+    EXPECT_EQ(a.segments.size(), b.segments.size()) << what;
+  };
+  const DatasetFolder dataset(root.string());
+  ASSERT_GE(dataset.size(), 30u);
+  for (std::size_t index = 0; index < dataset.size(); ++index) {
+    const OrganizedCloud cloud = frameToCloud(dataset.load(index).frame);
+    expectSame(cloud, computeNormals(cloud, NormalConfig{}), "NYU frame " + std::to_string(index));
+  }
+  const Scene full = boxScene();
+  for (const int width : {full.cloud.width, 161, 150, 31, 17, 9}) {
+    Scene s = full;
+    // Crop to `width` columns, then spoil some points.
+    OrganizedCloud cloud;
+    NormalImage normals;
+    cloud.width = normals.width = width;
+    cloud.height = normals.height = s.cloud.height;
+    for (int y = 0; y < s.cloud.height; ++y) {
+      for (int x = 0; x < width; ++x) {
+        const std::size_t i = static_cast<std::size_t>(y) * s.cloud.width + x;
+        Eigen::Vector3f p = s.cloud.points[i];
+        const int k = y * width + x;
+        if (k % 37 == 5) p.x() = kNaN;
+        if (k % 41 == 7) p.y() = std::numeric_limits<float>::infinity();
+        if (k % 43 == 9) p.z() = 0.0f;
+        if (y > 40 && y < 60 && x > 20 && x < 50) p = Eigen::Vector3f::Constant(kNaN);
+        cloud.points.push_back(p);
+        cloud.colors.push_back(s.cloud.colors[i]);
+        normals.normals.push_back(s.normals.normals[i]);
+      }
+    }
+    expectSame(cloud, normals, "box scene " + std::to_string(width) + " px wide");
   }
 }
 
