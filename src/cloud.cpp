@@ -386,11 +386,21 @@ void smoothNormals(std::vector<Eigen::Vector3f>& n, const OrganizedCloud& cloud,
     const std::uint8_t* links = s.links.data() + base;
     const Eigen::Vector3f* above = prefixRow(v);
     Eigen::Vector3f* row = prefixRow(v + 1);
-    s.row_prefix[0].setZero();
+    // The running sum and run start are carried in locals: read back from
+    // the arrays, each pixel waited for the previous pixel's store (the
+    // compiler cannot tell the arrays from the normals they are built from).
+    // The same additions in the same order.
+    Eigen::Vector3f* __restrict row_prefix = s.row_prefix.data();
+    int* __restrict row_start = s.row_start.data();
+    Eigen::Vector3f running = Eigen::Vector3f::Zero();
+    int start_here = 0;
+    row_prefix[0] = running;
     for (int u = 0; u < w; ++u) {
       const Eigen::Vector3f& x = n[base + u];
-      s.row_prefix[u + 1] = s.row_prefix[u] + (std::isfinite(x.x()) ? x : Eigen::Vector3f::Zero());
-      s.row_start[u] = (u > 0 && (links[u - 1] & kLinkRight)) ? s.row_start[u - 1] : u;
+      running = running + (std::isfinite(x.x()) ? x : Eigen::Vector3f::Zero());
+      row_prefix[u + 1] = running;
+      if (!(u > 0 && (links[u - 1] & kLinkRight))) start_here = u;
+      row_start[u] = start_here;
     }
     // A loop of its own: element-wise, so it vectorises.
     std::int32_t* __restrict start = s.run_start.data() + base;
