@@ -8,6 +8,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <limits>
 #include <cstring>
 #include <random>
 
@@ -488,6 +489,19 @@ TEST(LabelCodec, EncoderRefusesBadInput) {
   m = makeLabels();
   m.image.confidence[5] = 1.5f;
   expectError([&] { encodeLabelImage(m); }, "confidence");
+  // The message names the first bad pixel, in the sixteen-wide part of the
+  // check and in its tail (200 pixels: 192 + 8), NaN included.
+  m = makeLabels();
+  m.image.labels[150] = 200;
+  m.image.labels[170] = 9;
+  expectError([&] { encodeLabelImage(m); }, "pixel 150 has label id 200");
+  m = makeLabels();
+  m.image.confidence[37] = -0.25f;
+  m.image.confidence[90] = std::numeric_limits<float>::quiet_NaN();
+  expectError([&] { encodeLabelImage(m); }, "pixel 37 confidence");
+  m = makeLabels();
+  m.image.confidence[197] = std::numeric_limits<float>::quiet_NaN();
+  expectError([&] { encodeLabelImage(m); }, "pixel 197 confidence");
   m = makeLabels();
   m.image.labels.pop_back();
   EXPECT_THROW(encodeLabelImage(m), Error);
