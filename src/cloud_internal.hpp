@@ -1,5 +1,5 @@
 // cloud_internal.hpp — what the unit tests need of cloud.cpp beyond the
-// public API: the normals and the ground-frame transforms with the SIMD
+// public API: the cloud, the normals and the ground-frame transforms with the SIMD
 // paths switched off, to check that both paths give the same bits.
 #pragma once
 
@@ -12,6 +12,8 @@ enum class CloudSimd {
   Off,   // the scalar code only
 };
 
+void frameToCloud(const RgbdFrame& frame, float max_depth_m, OrganizedCloud& cloud,
+                  CloudSimd simd);
 void computeNormals(const OrganizedCloud& cloud, const NormalConfig& config, NormalImage& out,
                     CloudSimd simd);
 void transformCloud(const OrganizedCloud& cloud, const Eigen::Isometry3f& transform,

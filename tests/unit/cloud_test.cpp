@@ -3,6 +3,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <limits>
@@ -268,6 +269,42 @@ TEST(NormalsSimdNyu, MatchesTheScalarCodeBitForBit) {
 // portable expressions, bit for bit: random rotations and translations,
 // vectors of every magnitude, NaN and infinite coordinates, and every tail
 // length (counts 0-40).
+// frameToCloud's AVX2 rows give the scalar code's points to the bit: random
+// depths with zeros, the sensor's largest value and depths next to the
+// max_depth_m limit (whole and fractional millimetre limits), image widths
+// that leave every tail length after the eight-pixel steps, odd intrinsics.
+TEST(FrameToCloudSimd, MatchesTheScalarCodeBitForBit) {
+  std::mt19937 rng(17);
+  std::uniform_int_distribution<int> depth(1, 65535);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  for (int trial = 0; trial < 60; ++trial) {
+    const int width = 1 + trial % 29, height = 1 + trial % 5;
+    const CameraIntrinsics k{300.0 + 500.0 * unit(rng), 300.0 + 500.0 * unit(rng),
+                             width * unit(rng), height * unit(rng)};
+    RgbdFrame f = blankFrame(width, height, k);
+    const float max_depth_m = trial % 3 == 0 ? 4.0f : 0.5f + 8.0f * static_cast<float>(unit(rng));
+    const int limit = static_cast<int>(max_depth_m * 1000.0f);
+    for (std::size_t i = 0; i < f.depth_mm.size(); ++i) {
+      int d = depth(rng);
+      switch (i % 6) {
+        case 0: d = 0; break;
+        case 1: d = std::clamp(limit + static_cast<int>(i / 6 % 3) - 1, 0, 65535); break;
+        case 2: d = 65535; break;
+        default: break;
+      }
+      f.depth_mm[i] = static_cast<std::uint16_t>(d);
+    }
+    OrganizedCloud simd, scalar;
+    detail::frameToCloud(f, max_depth_m, simd, detail::CloudSimd::Auto);
+    detail::frameToCloud(f, max_depth_m, scalar, detail::CloudSimd::Off);
+    ASSERT_EQ(simd.points.size(), scalar.points.size());
+    EXPECT_EQ(0, std::memcmp(simd.points.data(), scalar.points.data(),
+                             simd.points.size() * sizeof(Eigen::Vector3f)))
+        << "trial " << trial << ", " << width << "x" << height << ", max " << max_depth_m;
+    EXPECT_EQ(simd.colors, scalar.colors);
+  }
+}
+
 TEST(TransformSimd, MatchesEigenBitForBit) {
   std::mt19937 rng(5);
   std::uniform_real_distribution<float> unit(-1.0f, 1.0f);
