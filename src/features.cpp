@@ -400,6 +400,9 @@ __attribute__((target("avx2"))) void FeatureBlock::prepare(const Eigen::Vector3f
 // running sums for 16 SSE registers and kept some in memory, so each pixel
 // waited for the previous one's stores, and it spent as long again on each
 // pixel's square roots, division and colour table lookups one at a time.
+// It walks the whole image itself, as computeFeaturesInto's portable loop
+// does, rather than being called once per run from that loop: the call per
+// run made the pass 1.08-1.10 of this (stage_ab, 31 NYU frames).
 // Returns the first pixel whose segment is not below `segment_count` (the
 // caller reports it), or `pixels`.
 __attribute__((target("avx2"))) std::size_t accumulateImageAvx2(

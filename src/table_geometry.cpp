@@ -52,6 +52,19 @@ inline const float* coordinates(const std::vector<Eigen::Vector2f>& points, std:
   return points.data()->data() + 2 * first + axis;
 }
 
+// cell[k] = row * cols + col of points[first + k], k < count, on a grid of
+// `cols` x `rows` cells of edge `edge` from `origin` (clamped to the last
+// row and column), via stripIndices.
+void gridCells(const std::vector<Eigen::Vector2f>& points, std::size_t first, int count,
+               const Eigen::Vector2f& origin, float edge, int cols, int rows, std::size_t* cell) {
+  int col_of[kBlock], row_of[kBlock];
+  stripIndices<2>(coordinates(points, first, 0), count, origin.x(), edge, cols - 1, col_of);
+  stripIndices<2>(coordinates(points, first, 1), count, origin.y(), edge, rows - 1, row_of);
+  for (int k = 0; k < count; ++k) {
+    cell[k] = static_cast<std::size_t>(row_of[k]) * cols + col_of[k];
+  }
+}
+
 float cross2(const Eigen::Vector2f& o, const Eigen::Vector2f& a, const Eigen::Vector2f& b) {
   return (a.x() - o.x()) * (b.y() - o.y()) - (a.y() - o.y()) * (b.x() - o.x());
 }
@@ -134,13 +147,12 @@ float occupiedArea(const std::vector<Eigen::Vector2f>& pts, const Eigen::Aligned
   // Consecutive points mostly share a cell: testing the previous cell first
   // spares the load that would wait for the previous point's store.
   std::size_t last = std::numeric_limits<std::size_t>::max();
-  int col_of[kBlock], row_of[kBlock];
+  std::size_t cell_of[kBlock];
   for (std::size_t first = 0; first < pts.size(); first += kBlock) {
     const int m = static_cast<int>(std::min<std::size_t>(kBlock, pts.size() - first));
-    stripIndices<2>(coordinates(pts, first, 0), m, box.min().x(), cell, cols - 1, col_of);
-    stripIndices<2>(coordinates(pts, first, 1), m, box.min().y(), cell, rows - 1, row_of);
+    gridCells(pts, first, m, box.min(), cell, cols, rows, cell_of);
     for (int j = 0; j < m; ++j) {
-      const std::size_t k = static_cast<std::size_t>(row_of[j]) * cols + col_of[j];
+      const std::size_t k = cell_of[j];
       if (k == last) continue;
       last = k;
       std::uint8_t& o = occupied[k];
@@ -172,13 +184,12 @@ void principalAxes(const std::vector<Eigen::Vector2f>& pts, const Eigen::Aligned
   std::size_t k_cur = 0;
   Eigen::Vector2f sum_cur = sums[0];
   int count_cur = counts[0];
-  int col_of[kBlock], row_of[kBlock];
+  std::size_t cell_of[kBlock];
   for (std::size_t first = 0; first < pts.size(); first += kBlock) {
     const int m = static_cast<int>(std::min<std::size_t>(kBlock, pts.size() - first));
-    stripIndices<2>(coordinates(pts, first, 0), m, box.min().x(), cell, cols - 1, col_of);
-    stripIndices<2>(coordinates(pts, first, 1), m, box.min().y(), cell, rows - 1, row_of);
+    gridCells(pts, first, m, box.min(), cell, cols, rows, cell_of);
     for (int j = 0; j < m; ++j) {
-      const std::size_t k = static_cast<std::size_t>(row_of[j]) * cols + col_of[j];
+      const std::size_t k = cell_of[j];
       if (k != k_cur) {
         sums[k_cur] = sum_cur;
         counts[k_cur] = count_cur;
