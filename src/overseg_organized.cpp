@@ -731,6 +731,12 @@ class OrganizedOversegmenter final : public Oversegmenter {
         }
         pending[waiting] = {candidates, count};
         picks[waiting] = static_cast<int>(i);
+        // Nothing else in this pass reads the normal and colour images, so a
+        // boundary pixel's normal and colour were cache misses when the
+        // distances below read them (a third of the refinement's time on the
+        // synthetic walk): ask for them now, while the row is scanned.
+        __builtin_prefetch(normals.normals.data() + i);
+        __builtin_prefetch(cloud.colors.data() + i);
         ++waiting;
       };
       int x = 0;

@@ -9,6 +9,10 @@
 #include <limits>
 #include <string>
 
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
 #include "findmug/error.hpp"
 #include "findmug/labels.hpp"
 #include "oversegmentation_internal.hpp"
@@ -142,22 +146,42 @@ void finalizeOversegmentation(Oversegmentation& seg, int min_points, EdgeSource 
   }
 
   // Pixel count per input id. Ids are bounded by the pixel count so that the
-  // dense table below stays small.
-  int max_id = -1;
+  // dense table below stays small. The range check is a plain minimum and
+  // maximum (a loop the compiler vectorises); only a bad image is walked
+  // again, to name its first bad pixel.
+  const int* ids = seg.pixel_segment.data();
+  int min_id = -1, max_id = -1;
   for (std::size_t i = 0; i < n; ++i) {
-    const int id = seg.pixel_segment[i];
-    if (id < -1 || (id >= 0 && static_cast<std::size_t>(id) >= n)) {
-      throw Error("finalizeOversegmentation: pixel " + std::to_string(i) + " has segment id " +
-                  std::to_string(id) + ", outside -1.." + std::to_string(n - 1));
-    }
-    max_id = std::max(max_id, id);
+    min_id = std::min(min_id, ids[i]);
+    max_id = std::max(max_id, ids[i]);
   }
+  if (min_id < -1 || (max_id >= 0 && static_cast<std::size_t>(max_id) >= n)) {
+    for (std::size_t i = 0; i < n; ++i) {
+      const int id = ids[i];
+      if (id < -1 || (id >= 0 && static_cast<std::size_t>(id) >= n)) {
+        throw Error("finalizeOversegmentation: pixel " + std::to_string(i) + " has segment id " +
+                    std::to_string(id) + ", outside -1.." + std::to_string(n - 1));
+      }
+    }
+  }
+  // Runs of one id (a segment crosses a row in one or two): counted per run,
+  // and kept for the renumbering pass below. Pixel by pixel, each count
+  // waited for the previous pixel's store to the same counter.
   thread_local std::vector<int> counts_tls, remap_tls;
+  thread_local std::vector<std::uint32_t> run_start_tls;
   std::vector<int>& counts = counts_tls;
   counts.assign(static_cast<std::size_t>(max_id + 1), 0);
-  for (const int id : seg.pixel_segment) {
-    if (id >= 0) ++counts[id];
+  std::vector<std::uint32_t>& run_start = run_start_tls;  // n < 2^32 (grid checked above)
+  run_start.clear();
+  for (std::size_t i = 0; i < n;) {
+    const int id = ids[i];
+    std::size_t end = i + 1;
+    while (end < n && ids[end] == id) ++end;
+    if (id >= 0) counts[id] += static_cast<int>(end - i);
+    run_start.push_back(static_cast<std::uint32_t>(i));
+    i = end;
   }
+  run_start.push_back(static_cast<std::uint32_t>(n));
 
   // Dense renumbering in increasing id order; segments below the threshold
   // (and ids without pixels) map to -1.
@@ -230,18 +254,16 @@ void finalizeOversegmentation(Oversegmentation& seg, int min_points, EdgeSource 
     pixels.resize(count);
     cursor[static_cast<std::size_t>(remap[id])] = pixels.data();
   }
-  // Runs of one id along a row (a segment crosses a row in one or two).
-  for (std::size_t i = 0; i < n;) {
+  // The runs found above, renumbered and listed.
+  for (std::size_t r = 0; r + 1 < run_start.size(); ++r) {
+    const std::size_t i = run_start[r], end = run_start[r + 1];
     const int old_id = seg.pixel_segment[i];
-    std::size_t end = i + 1;
-    while (end < n && seg.pixel_segment[end] == old_id) ++end;
     const int id = old_id >= 0 ? remap[old_id] : old_id;
     if (old_id >= 0) std::fill(seg.pixel_segment.begin() + i, seg.pixel_segment.begin() + end, id);
     if (id >= 0) {
       int*& out = cursor[static_cast<std::size_t>(id)];
       for (std::size_t j = i; j < end; ++j) *out++ = static_cast<int>(j);
     }
-    i = end;
   }
 
   // Grid edges are written into seg.edges itself (its capacity is reused);
@@ -289,7 +311,27 @@ void finalizeOversegmentation(Oversegmentation& seg, int min_points, EdgeSource 
     for (int y = 0; y < h; ++y) {
       const int* row = seg.pixel_segment.data() + static_cast<std::size_t>(y) * w;
       const int* below = y + 1 < h ? row + w : nullptr;
-      for (int x = 0; x < w; ++x) {
+      int x = 0;
+#if defined(__SSE2__)
+      // Most pixels equal their right and lower neighbours: four at a time,
+      // and only a group with a boundary goes pixel by pixel (in the same
+      // order, so the same calls to add()).
+      if (below) {
+        for (; x + 5 <= w; x += 4) {
+          const __m128i here = _mm_loadu_si128(reinterpret_cast<const __m128i*>(row + x));
+          const __m128i right = _mm_loadu_si128(reinterpret_cast<const __m128i*>(row + x + 1));
+          const __m128i under = _mm_loadu_si128(reinterpret_cast<const __m128i*>(below + x));
+          const __m128i same =
+              _mm_and_si128(_mm_cmpeq_epi32(here, right), _mm_cmpeq_epi32(here, under));
+          if (_mm_movemask_epi8(same) == 0xffff) continue;
+          for (int k = x; k < x + 4; ++k) {
+            if (row[k] != row[k + 1]) add(row[k], row[k + 1]);
+            if (row[k] != below[k]) add(row[k], below[k]);
+          }
+        }
+      }
+#endif
+      for (; x < w; ++x) {
         if (x + 1 < w && row[x] != row[x + 1]) add(row[x], row[x + 1]);
         if (below && row[x] != below[x]) add(row[x], below[x]);
       }

@@ -335,6 +335,73 @@ TEST(FinalizeOversegmentation, RejectsBadInput) {
   EXPECT_THROW(finalizeOversegmentation(seg, -1), Error);
 }
 
+// The finalisation against a plain reference (count, renumber in id order,
+// list pixels, set of 4-neighbour pairs) on random blocky images whose widths
+// are not multiples of four, with -1 holes and small segments: the counting
+// by runs and the four-pixel boundary skip must give the same result
+// everywhere, in the vector part, its row tail and the last row.
+TEST(FinalizeOversegmentation, MatchesAPlainReferenceOnRandomImages) {
+  std::mt19937 rng(11);
+  for (int trial = 0; trial < 200; ++trial) {
+    const int w = std::uniform_int_distribution<int>(1, 23)(rng);
+    const int h = std::uniform_int_distribution<int>(1, 9)(rng);
+    // Ids stay below the pixel count (finalizeOversegmentation's contract).
+    const int ids = std::min(w * h, std::uniform_int_distribution<int>(1, 12)(rng));
+    const int block = std::uniform_int_distribution<int>(1, 5)(rng);
+    const int min_points = std::uniform_int_distribution<int>(0, 4)(rng);
+    std::uniform_int_distribution<int> pick(-1, ids - 1);
+    std::vector<int> image(static_cast<std::size_t>(w) * h);
+    // Blocks of one id (long runs and flat rows, as real images have), with
+    // single-pixel noise.
+    std::vector<int> block_id(static_cast<std::size_t>((w / block + 1) * (h / block + 1)));
+    for (int& b : block_id) b = pick(rng);
+    for (int y = 0; y < h; ++y) {
+      for (int x = 0; x < w; ++x) {
+        int id = block_id[static_cast<std::size_t>((y / block) * (w / block + 1) + x / block)];
+        if (std::uniform_int_distribution<int>(0, 9)(rng) == 0) id = pick(rng);
+        image[static_cast<std::size_t>(y) * w + x] = id;
+      }
+    }
+    // Reference.
+    std::vector<int> count(static_cast<std::size_t>(ids), 0);
+    for (const int id : image) {
+      if (id >= 0) ++count[id];
+    }
+    std::vector<int> remap(static_cast<std::size_t>(ids), -1);
+    int next = 0;
+    for (int id = 0; id < ids; ++id) {
+      if (count[id] >= std::max(min_points, 1)) remap[id] = next++;
+    }
+    std::vector<int> expected_pixels(image.size());
+    std::vector<std::vector<int>> expected_lists(static_cast<std::size_t>(next));
+    for (std::size_t i = 0; i < image.size(); ++i) {
+      expected_pixels[i] = image[i] >= 0 ? remap[image[i]] : -1;
+      if (expected_pixels[i] >= 0) expected_lists[expected_pixels[i]].push_back(static_cast<int>(i));
+    }
+    std::set<std::pair<int, int>> pairs;
+    for (int y = 0; y < h; ++y) {
+      for (int x = 0; x < w; ++x) {
+        const int a = expected_pixels[static_cast<std::size_t>(y) * w + x];
+        for (const auto& [nx, ny] : {std::pair{x + 1, y}, std::pair{x, y + 1}}) {
+          if (nx >= w || ny >= h) continue;
+          const int b = expected_pixels[static_cast<std::size_t>(ny) * w + nx];
+          if (a >= 0 && b >= 0 && a != b) pairs.insert({std::min(a, b), std::max(a, b)});
+        }
+      }
+    }
+    Oversegmentation seg;
+    seg.width = w;
+    seg.height = h;
+    seg.pixel_segment = image;
+    finalizeOversegmentation(seg, min_points);
+    SCOPED_TRACE("trial " + std::to_string(trial) + ", " + std::to_string(w) + "x" +
+                 std::to_string(h));
+    ASSERT_EQ(seg.pixel_segment, expected_pixels);
+    ASSERT_EQ(seg.segments, expected_lists);
+    ASSERT_EQ(seg.edges, (std::vector<std::pair<int, int>>(pairs.begin(), pairs.end())));
+  }
+}
+
 // A recycled Oversegmentation (the daemon reuses one per frame in flight)
 // keeps its pixel lists' capacity. Over a long stream of frames with unlike
 // segment sizes that capacity must stay near one frame's worth: handed out
