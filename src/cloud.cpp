@@ -661,9 +661,10 @@ __attribute__((target("avx2"))) std::size_t transformVec3Avx2(
   for (; k + 8 <= count; k += 8) {
     __m256 v[3];
     detail::loadVec3x8(in[k].data(), v[0], v[1], v[2]);
-    // Finite: |c| < infinity (false for NaN, as std::isfinite).
-    const __m256 finite =
-        _mm256_cmp_ps(_mm256_and_ps(v[finite_axis], abs_mask), infinity, _CMP_LT_OQ);
+    // Finite: |c| < infinity (false for NaN, as std::isfinite). Selected, not
+    // indexed: v[finite_axis] made the compiler keep v on the stack.
+    const __m256 tested = finite_axis == 0 ? v[0] : finite_axis == 1 ? v[1] : v[2];
+    const __m256 finite = _mm256_cmp_ps(_mm256_and_ps(tested, abs_mask), infinity, _CMP_LT_OQ);
     __m256 o[3];
     for (int row = 0; row < 3; ++row) {
       o[row] = detail::dot3x8(r[row][0], r[row][1], r[row][2], v[0], v[1], v[2]);

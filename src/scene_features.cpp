@@ -12,6 +12,7 @@
 
 #include "findmug/error.hpp"
 #include "floor_to_int.hpp"
+#include "point_extent.hpp"
 #include "scratch.hpp"
 
 namespace findmug {
@@ -49,31 +50,6 @@ std::vector<float> computeSceneFeatures(const OrganizedCloud& cloud_ground,
   return out;
 }
 
-namespace {
-
-struct Extent {
-  float min_x, min_y, max_x, max_y, max_z;
-};
-
-// The points' extent (infinite where none has a finite z). A function of its
-// own: in computeSceneFeaturesInto the running extremes were captured by
-// reference by the cell lambdas, so the compiler kept them in memory and
-// every point waited for the last one's stores.
-Extent extentOf(const std::vector<Eigen::Vector3f>& points) {
-  const float inf = std::numeric_limits<float>::infinity();
-  float min_x = inf, min_y = inf, max_x = -inf, max_y = -inf, max_z = -inf;
-  for (const auto& p : points) {
-    if (!std::isfinite(p.z())) continue;
-    min_x = std::min(min_x, p.x());
-    max_x = std::max(max_x, p.x());
-    min_y = std::min(min_y, p.y());
-    max_y = std::max(max_y, p.y());
-    max_z = std::max(max_z, p.z());
-  }
-  return {min_x, min_y, max_x, max_y, max_z};
-}
-
-}  // namespace
 
 void computeSceneFeaturesInto(const OrganizedCloud& cloud_ground,
                               const Oversegmentation& segmentation,
@@ -104,7 +80,7 @@ void computeSceneFeaturesInto(const OrganizedCloud& cloud_ground,
   const int bands = (width + config.band_px - 1) / config.band_px;
 
   // Extent of the valid points in the ground plane, for the cell grid.
-  const Extent extent = extentOf(cloud_ground.points);
+  const detail::PointExtent extent = detail::pointExtent(cloud_ground.points);
   const float min_x = extent.min_x, min_y = extent.min_y;
   const float max_x = extent.max_x, max_y = extent.max_y, max_z = extent.max_z;
   if (!std::isfinite(min_x)) return;

@@ -8,6 +8,10 @@
 #include <string>
 #include <utility>
 
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+
 #include "findmug/tables.hpp"
 #include "tables_internal.hpp"
 
@@ -33,6 +37,42 @@ constexpr float kEdgeQuantile = 0.8f;
 // indices. One division per point and axis was what these passes spent most
 // of their time on.
 constexpr int kBlock = 256;
+
+// An AlignedBox2f grown point by point, with its corners in a register: an
+// Eigen box extended in a loop stayed in memory (the compiler kept its four
+// floats on the stack), so every point waited for the previous one's
+// stores. The same result as AlignedBox2f::extend point by point: it starts
+// empty (highest, lowest), and minps(p, lo) is p < lo ? p : lo, as Eigen's
+// cwiseMin(lo, p) (std::min(lo, p)); maxps likewise.
+class BoxBuilder2 {
+ public:
+#if defined(__SSE2__)
+  BoxBuilder2()
+      : lo_(_mm_set1_ps(std::numeric_limits<float>::max())),
+        hi_(_mm_set1_ps(std::numeric_limits<float>::lowest())) {}
+  void extend(const Eigen::Vector2f& p) {
+    // x and y into the low lanes (an 8-byte load; __m64 may alias floats).
+    const __m128 xy = _mm_loadl_pi(_mm_setzero_ps(), reinterpret_cast<const __m64*>(p.data()));
+    lo_ = _mm_min_ps(xy, lo_);
+    hi_ = _mm_max_ps(xy, hi_);
+  }
+  Eigen::AlignedBox2f box() const {
+    alignas(16) float lo[4], hi[4];
+    _mm_store_ps(lo, lo_);
+    _mm_store_ps(hi, hi_);
+    return Eigen::AlignedBox2f(Eigen::Vector2f(lo[0], lo[1]), Eigen::Vector2f(hi[0], hi[1]));
+  }
+
+ private:
+  __m128 lo_, hi_;
+#else
+  void extend(const Eigen::Vector2f& p) { box_.extend(p); }
+  Eigen::AlignedBox2f box() const { return box_; }
+
+ private:
+  Eigen::AlignedBox2f box_;
+#endif
+};
 
 // out[k] = min(last, int((values[k * Stride] - origin) / width)), k < count:
 // the strip of a coordinate, for points stored as Stride floats each
@@ -423,14 +463,15 @@ ClusterOutcome tables_detail::describeCluster(const std::vector<Eigen::Vector3f>
 
   top.clear();
   Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
-  Eigen::AlignedBox2f top_box;
+  BoxBuilder2 top_builder;
   for (const auto& p : points) {
     if (std::abs(p.z() - table.top_height) <= config.top_band_m) {
       top.push_back(p.head<2>());
-      top_box.extend(top.back());
+      top_builder.extend(top.back());
       centroid += p.cast<double>();
     }
   }
+  const Eigen::AlignedBox2f top_box = top_builder.box();
   table.point_count = n;
   if (top.size() < 3) {
     outcome.reason = "degenerate cluster of " + std::to_string(n) + " points: only " +
@@ -442,12 +483,13 @@ ClusterOutcome tables_detail::describeCluster(const std::vector<Eigen::Vector3f>
   principalAxes(top, top_box, table.major_axis, table.minor_axis);
   const Eigen::Vector2f origin = table.centroid.head<2>();
   local.clear();  // (along major, along minor) relative to the centroid
-  Eigen::AlignedBox2f local_box;
+  BoxBuilder2 local_builder;
   for (const auto& p : top) {
     const Eigen::Vector2f q = p - origin;
     local.emplace_back(q.dot(table.major_axis), q.dot(table.minor_axis));
-    local_box.extend(local.back());
+    local_builder.extend(local.back());
   }
+  const Eigen::AlignedBox2f local_box = local_builder.box();
   const Eigen::Vector2f minor_range =
       edgeRange(local, 0, 1, local_box.min().x(), local_box.max().x());
   const Eigen::Vector2f major_range =

@@ -8,9 +8,13 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstring>
 #include <limits>
+#include <random>
+#include <vector>
 
 #include "findmug/error.hpp"
+#include "point_extent.hpp"
 
 namespace findmug {
 namespace {
@@ -153,6 +157,45 @@ TEST(SceneFeatures, MismatchedInputsAreErrors) {
   small.cloud.points.pop_back();
   EXPECT_THROW(computeSceneFeatures(small.cloud, small.seg, small.features, small.camera, config()),
                Error);
+}
+
+// The scene grid's extent (detail::pointExtent, SSE2) against running
+// std::min / std::max over the points with a finite z, bit for bit: random
+// points with NaN and infinite z (skipped), NaN and infinite x or y (a NaN
+// never replaces an extreme), and signed zeros (the first of equal values
+// stays, as std::min keeps it). And no point at all: infinite extremes.
+TEST(PointExtent, MatchesRunningStdMinAndMax) {
+  const float inf = std::numeric_limits<float>::infinity();
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<float> coordinate(-8.0f, 8.0f);
+  const float specials[] = {nan, inf, -inf, 0.0f, -0.0f};
+  for (int trial = 0; trial < 300; ++trial) {
+    const int n = std::uniform_int_distribution<int>(0, 40)(rng);
+    std::vector<Eigen::Vector3f> points(static_cast<std::size_t>(n));
+    for (auto& p : points) {
+      for (int axis = 0; axis < 3; ++axis) {
+        p[axis] = std::uniform_int_distribution<int>(0, 5)(rng) == 0
+                      ? specials[std::uniform_int_distribution<int>(0, 4)(rng)]
+                      : coordinate(rng);
+      }
+    }
+    float expected[5] = {inf, inf, -inf, -inf, -inf};  // min x, min y, max x, max y, max z
+    for (const auto& p : points) {
+      if (!std::isfinite(p.z())) continue;
+      expected[0] = std::min(expected[0], p.x());
+      expected[1] = std::min(expected[1], p.y());
+      expected[2] = std::max(expected[2], p.x());
+      expected[3] = std::max(expected[3], p.y());
+      expected[4] = std::max(expected[4], p.z());
+    }
+    const detail::PointExtent e = detail::pointExtent(points);
+    const float got[5] = {e.min_x, e.min_y, e.max_x, e.max_y, e.max_z};
+    for (int k = 0; k < 5; ++k) {
+      EXPECT_EQ(std::memcmp(&got[k], &expected[k], sizeof(float)), 0)
+          << "trial " << trial << ", extreme " << k << ": " << got[k] << " vs " << expected[k];
+    }
+  }
 }
 
 }  // namespace
