@@ -138,8 +138,10 @@ struct ClusterScratch {
   VoxelIndex index;
   DisjointSets sets;
   std::vector<int> point_voxel, voxel_size, start, fill, near_a, near_b, root_label;
+  std::vector<int> set_of, near_sets, near_start;
+  std::vector<std::uint8_t> may_link;
   std::vector<Eigen::Vector3i> voxel_coords;
-  std::vector<Eigen::AlignedBox3f> boxes;
+  std::vector<Eigen::AlignedBox3f> boxes, set_boxes;
   std::vector<Eigen::Vector3f> sorted;
 };
 
@@ -164,6 +166,57 @@ float squaredGap(const Eigen::AlignedBox3f& a, const Eigen::AlignedBox3f& b) {
     gap2 += g * g;
   }
   return gap2;
+}
+
+// may_link[v] = 1 when voxel v's box comes within the tolerance (squared:
+// tol2) of the box of a set other than its own, in the partition `sets`
+// holds now; 0 otherwise (clusterPoints says why such voxels need no look).
+// With many sets (fragmented points) every voxel is marked: the test would
+// cost more than it saves.
+void markVoxelsThatMayLink(DisjointSets& sets, const std::vector<Eigen::AlignedBox3f>& boxes,
+                           float tol2, ClusterScratch& scratch, std::vector<std::uint8_t>& may_link) {
+  constexpr int kMaxSets = 64;
+  const int voxels = static_cast<int>(boxes.size());
+  std::vector<int>& set_of = scratch.set_of;  // dense set index per voxel
+  std::vector<int>& index_of_root = scratch.root_label;  // borrowed; reset by the caller later
+  index_of_root.assign(static_cast<std::size_t>(voxels), -1);
+  set_of.resize(static_cast<std::size_t>(voxels));
+  std::vector<Eigen::AlignedBox3f>& set_boxes = scratch.set_boxes;
+  set_boxes.clear();
+  for (int v = 0; v < voxels; ++v) {
+    const int root = sets.find(v);
+    if (index_of_root[root] < 0) {
+      if (static_cast<int>(set_boxes.size()) == kMaxSets) {
+        may_link.assign(static_cast<std::size_t>(voxels), 1);
+        return;
+      }
+      index_of_root[root] = static_cast<int>(set_boxes.size());
+      set_boxes.emplace_back();
+    }
+    set_of[v] = index_of_root[root];
+    set_boxes[set_of[v]].extend(boxes[v]);
+  }
+  // The sets near each set (boxes within the tolerance), as lists.
+  const int set_count = static_cast<int>(set_boxes.size());
+  std::vector<int>& near_start = scratch.near_start;
+  std::vector<int>& near_sets = scratch.near_sets;
+  near_start.assign(static_cast<std::size_t>(set_count) + 1, 0);
+  near_sets.clear();
+  for (int s = 0; s < set_count; ++s) {
+    for (int t = 0; t < set_count; ++t) {
+      if (t != s && squaredGap(set_boxes[s], set_boxes[t]) <= tol2) near_sets.push_back(t);
+    }
+    near_start[s + 1] = static_cast<int>(near_sets.size());
+  }
+  may_link.resize(static_cast<std::size_t>(voxels));
+  for (int v = 0; v < voxels; ++v) {
+    const int s = set_of[v];
+    std::uint8_t mark = 0;
+    for (int k = near_start[s]; k < near_start[s + 1] && !mark; ++k) {
+      mark = squaredGap(boxes[v], set_boxes[near_sets[k]]) <= tol2 ? 1 : 0;
+    }
+    may_link[v] = mark;
+  }
 }
 
 }  // namespace
@@ -378,8 +431,21 @@ std::vector<int> tables_detail::clusterPoints(const std::vector<Eigen::Vector3f>
       }
     }
   };
+  // Voxels that cannot link to another set. After the first pass the image
+  // links have joined most voxels (a table top is usually one set, or a few
+  // far apart), yet the pass below would still look up every neighbour of
+  // every voxel only to find it joined already. A voxel whose box is farther
+  // than the tolerance from the box of every other set (of the partition so
+  // far) needs no look: each pair it would test is joined already, or its
+  // boxes are farther apart than the tolerance (a set's box holds its
+  // voxels' boxes, and the squared gap only shrinks as a box grows, in
+  // floats too), and then tryPair returns without a change. Skipping them
+  // leaves the partition, and so the labels, as they are.
+  std::vector<std::uint8_t>& may_link = scratch.may_link;
+  markVoxelsThatMayLink(sets, boxes, tol2, scratch, may_link);
   for (int ring = 1; ring <= kReach; ++ring) {
     for (int a = 0; a < voxels; ++a) {
+      if (!may_link[a]) continue;
       const Eigen::Vector3i& ca = voxel_coords[a];
       gapsOf(boxes[a], ca);
       for (int dz = 0; dz <= ring; ++dz) {  // forward: dz > 0, or dz == 0 and ...

@@ -342,6 +342,39 @@ Eigen::Vector2f edgeRange(const std::vector<Eigen::Vector2f>& local, int along, 
 // for the last. Only which of a +0 and a -0 comes out can differ from one
 // running pair, and describeCluster uses the range only through z - z_min
 // for z != 0 and z_max - z_min, where that sign makes no difference.
+struct TopBand {
+  Eigen::Vector3d sum;      // of the band's points, in point order
+  Eigen::AlignedBox2f box;  // of their (x, y)
+};
+
+// The points within `band` of `height`: their (x, y) into `top` (in point
+// order), the sum of the points and the box of their (x, y). A function of
+// its own, with plain locals and a cursor into room for every point: written
+// inside describeCluster with push_back and Eigen objects, the compiler kept
+// the box, the sums and even the height in memory, and each point waited for
+// the previous one's stores. The same operations in the same order (Eigen's
+// += per coordinate; the box as BoxBuilder2).
+__attribute__((noinline)) TopBand topBand(const std::vector<Eigen::Vector3f>& points,
+                                          float height, float band,
+                                          std::vector<Eigen::Vector2f>& top) {
+  top.resize(points.size());
+  Eigen::Vector2f* top_end = top.data();
+  double sum_x = 0.0, sum_y = 0.0, sum_z = 0.0;
+  BoxBuilder2 builder;
+  for (const auto& p : points) {
+    if (std::abs(p.z() - height) <= band) {
+      *top_end = p.head<2>();
+      builder.extend(*top_end);
+      ++top_end;
+      sum_x += static_cast<double>(p.x());
+      sum_y += static_cast<double>(p.y());
+      sum_z += static_cast<double>(p.z());
+    }
+  }
+  top.resize(static_cast<std::size_t>(top_end - top.data()));
+  return {Eigen::Vector3d(sum_x, sum_y, sum_z), builder.box()};
+}
+
 std::pair<float, float> heightRange(const std::vector<Eigen::Vector3f>& points) {
   float lo[4], hi[4];
   for (int j = 0; j < 4; ++j) {
@@ -461,17 +494,9 @@ ClusterOutcome tables_detail::describeCluster(const std::vector<Eigen::Vector3f>
   }
   table.top_height = z_count > 0 ? static_cast<float>(z_sum / z_count) : peak;
 
-  top.clear();
-  Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
-  BoxBuilder2 top_builder;
-  for (const auto& p : points) {
-    if (std::abs(p.z() - table.top_height) <= config.top_band_m) {
-      top.push_back(p.head<2>());
-      top_builder.extend(top.back());
-      centroid += p.cast<double>();
-    }
-  }
-  const Eigen::AlignedBox2f top_box = top_builder.box();
+  const TopBand band = topBand(points, table.top_height, config.top_band_m, top);
+  const Eigen::Vector3d& centroid = band.sum;
+  const Eigen::AlignedBox2f& top_box = band.box;
   table.point_count = n;
   if (top.size() < 3) {
     outcome.reason = "degenerate cluster of " + std::to_string(n) + " points: only " +
@@ -482,12 +507,12 @@ ClusterOutcome tables_detail::describeCluster(const std::vector<Eigen::Vector3f>
 
   principalAxes(top, top_box, table.major_axis, table.minor_axis);
   const Eigen::Vector2f origin = table.centroid.head<2>();
-  local.clear();  // (along major, along minor) relative to the centroid
+  local.resize(top.size());  // (along major, along minor) relative to the centroid
   BoxBuilder2 local_builder;
-  for (const auto& p : top) {
-    const Eigen::Vector2f q = p - origin;
-    local.emplace_back(q.dot(table.major_axis), q.dot(table.minor_axis));
-    local_builder.extend(local.back());
+  for (std::size_t k = 0; k < top.size(); ++k) {
+    const Eigen::Vector2f q = top[k] - origin;
+    local[k] = Eigen::Vector2f(q.dot(table.major_axis), q.dot(table.minor_axis));
+    local_builder.extend(local[k]);
   }
   const Eigen::AlignedBox2f local_box = local_builder.box();
   const Eigen::Vector2f minor_range =
