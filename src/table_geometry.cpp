@@ -50,9 +50,12 @@ class BoxBuilder2 {
   BoxBuilder2()
       : lo_(_mm_set1_ps(std::numeric_limits<float>::max())),
         hi_(_mm_set1_ps(std::numeric_limits<float>::lowest())) {}
-  void extend(const Eigen::Vector2f& p) {
-    // x and y into the low lanes (an 8-byte load; __m64 may alias floats).
-    const __m128 xy = _mm_loadl_pi(_mm_setzero_ps(), reinterpret_cast<const __m64*>(p.data()));
+  // From registers, not from memory: the callers have just stored x and y
+  // one float at a time, and an 8-byte load of two 4-byte stores cannot be
+  // forwarded from the store buffer (it waited for both stores to retire,
+  // which was most of the top band's time).
+  void extend(float x, float y) {
+    const __m128 xy = _mm_unpacklo_ps(_mm_set_ss(x), _mm_set_ss(y));
     lo_ = _mm_min_ps(xy, lo_);
     hi_ = _mm_max_ps(xy, hi_);
   }
@@ -66,7 +69,7 @@ class BoxBuilder2 {
  private:
   __m128 lo_, hi_;
 #else
-  void extend(const Eigen::Vector2f& p) { box_.extend(p); }
+  void extend(float x, float y) { box_.extend(Eigen::Vector2f(x, y)); }
   Eigen::AlignedBox2f box() const { return box_; }
 
  private:
@@ -364,7 +367,7 @@ __attribute__((noinline)) TopBand topBand(const std::vector<Eigen::Vector3f>& po
   for (const auto& p : points) {
     if (std::abs(p.z() - height) <= band) {
       *top_end = p.head<2>();
-      builder.extend(*top_end);
+      builder.extend(p.x(), p.y());
       ++top_end;
       sum_x += static_cast<double>(p.x());
       sum_y += static_cast<double>(p.y());
@@ -511,8 +514,9 @@ ClusterOutcome tables_detail::describeCluster(const std::vector<Eigen::Vector3f>
   BoxBuilder2 local_builder;
   for (std::size_t k = 0; k < top.size(); ++k) {
     const Eigen::Vector2f q = top[k] - origin;
-    local[k] = Eigen::Vector2f(q.dot(table.major_axis), q.dot(table.minor_axis));
-    local_builder.extend(local[k]);
+    const float along = q.dot(table.major_axis), across = q.dot(table.minor_axis);
+    local[k] = Eigen::Vector2f(along, across);
+    local_builder.extend(along, across);
   }
   const Eigen::AlignedBox2f local_box = local_builder.box();
   const Eigen::Vector2f minor_range =
