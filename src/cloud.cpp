@@ -289,6 +289,23 @@ __attribute__((target("avx2"))) void smoothColumnsAvx2(
   }
 }
 
+// The horizontal pass of smoothNormals for pixels u0 .. u0 + 7 of a row
+// whose boxes are not clipped (every pixel from u0 - r to u0 + 7 + r in one
+// run): row[u] = above[u] + (row_prefix[u + r + 1] - row_prefix[u - r]),
+// Eigen's operations in Eigen's order, eight pixels at a time. The window of
+// a pixel inside a run is a contiguous slice of the row prefix, so the loads
+// are plain (no gathers).
+__attribute__((target("avx2"))) void rowSumsAvx2(const Eigen::Vector3f* above,
+                                                const Eigen::Vector3f* row_prefix,
+                                                Eigen::Vector3f* row, int u0, int r) {
+  __m256 ax, ay, az, hx, hy, hz, lx, ly, lz;
+  loadPoints8(above + u0, ax, ay, az);
+  loadPoints8(row_prefix + u0 + r + 1, hx, hy, hz);
+  loadPoints8(row_prefix + u0 - r, lx, ly, lz);
+  storePoints8(row + u0, _mm256_add_ps(ax, _mm256_sub_ps(hx, lx)),
+               _mm256_add_ps(ay, _mm256_sub_ps(hy, ly)), _mm256_add_ps(az, _mm256_sub_ps(hz, lz)));
+}
+
 #endif
 
 // Reusable buffers for the smoothing pass (see computeNormals).
@@ -416,11 +433,23 @@ void smoothNormals(std::vector<Eigen::Vector3f>& n, const OrganizedCloud& cloud,
     }
     // Right to left: the run end is known from the right neighbour.
     int row_end = w - 1;
-    for (int u = w - 1; u >= 0; --u) {
+    for (int u = w - 1; u >= 0;) {
+#if defined(FINDMUG_AVX2_DISPATCH)
+      // Eight pixels u - 7 .. u at once where every pixel from u - 7 - r to
+      // u + 1 + r lies in one run (the run holding u + 1 + r started at or
+      // before u - 7 - r): no box is clipped, and there is no run end among
+      // them, so row_end stays what it is.
+      if (avx2 && u - 7 >= r && u + 1 + r < w && s.row_start[u + 1 + r] <= u - 7 - r) {
+        rowSumsAvx2(above, s.row_prefix.data(), row, u - 7, r);
+        u -= 8;
+        continue;
+      }
+#endif
       if (!(links[u] & kLinkRight)) row_end = u;
       const int lo = std::max(u - r, s.row_start[u]);
       const int hi = std::min(u + r, row_end);
       row[u] = above[u] + (s.row_prefix[hi + 1] - s.row_prefix[lo]);
+      --u;
     }
   };
 
