@@ -45,6 +45,41 @@ void checkInputs(const OrganizedCloud& cloud, const LabelImage& labels) {
   }
 }
 
+// Per cluster, over its member pixels: the sum of the label confidences (the
+// member count when the labels carry none: ground truth counts as certain),
+// and, with normals, how many have a finite normal and how many of those are
+// within the tilt of vertical. One pass for both: the normals' pass on its
+// own waited on memory, here it runs beside the confidence sum's additions
+// (which keep their order, so the same sum).
+struct MemberSums {
+  double confidence = 0.0;
+  int valid_normals = 0;
+  int horizontal = 0;
+};
+__attribute__((noinline)) MemberSums memberSums(const int* member, int n, const int* full_pixels,
+                                                const std::vector<float>& confidence,
+                                                const NormalImage* normals, float cos_tilt) {
+  MemberSums sums;
+  const float* conf = confidence.empty() ? nullptr : confidence.data();
+  const Eigen::Vector3f* normal = normals ? normals->normals.data() : nullptr;
+  double confidence_sum = conf ? 0.0 : static_cast<double>(n);
+  int valid = 0, horizontal = 0;
+  for (int k = 0; k < n; ++k) {
+    const std::size_t pixel = static_cast<std::size_t>(full_pixels[member[k]]);
+    if (conf) confidence_sum += conf[pixel];
+    if (normal) {
+      const float nz = normal[pixel].z();
+      const int finite = std::isfinite(nz) ? 1 : 0;
+      valid += finite;
+      horizontal += finite & (std::abs(nz) >= cos_tilt ? 1 : 0);
+    }
+  }
+  sums.confidence = confidence_sum;
+  sums.valid_normals = valid;
+  sums.horizontal = horizontal;
+  return sums;
+}
+
 }  // namespace
 
 std::string tables_detail::fmt(double value, int precision) {
@@ -301,13 +336,10 @@ TableDetection detectTables(const OrganizedCloud& cloud_ground, const LabelImage
     const int samples = sample_start[c + 1] - sample_start[c];
     cluster_points.resize(static_cast<std::size_t>(samples));
     for (int k = 0; k < samples; ++k) cluster_points[k] = points[sample_member[k]];
-    // A label image without confidence (ground truth) counts as certain.
-    double confidence_sum = labels.confidence.empty() ? static_cast<double>(n) : 0.0;
-    if (!labels.confidence.empty()) {
-      for (int k = 0; k < n; ++k) confidence_sum += labels.confidence[full_pixels[member[k]]];
-    }
+    const MemberSums sums = memberSums(member, n, full_pixels.data(), labels.confidence,
+                                       normals_ground, cos_tilt);
     TableCluster table;
-    table.mean_confidence = static_cast<float>(confidence_sum / n);
+    table.mean_confidence = static_cast<float>(sums.confidence / n);
     const ClusterOutcome outcome = describeCluster(cluster_points, n, config, table);
     if (!outcome.ok) {
       ++result.clusters_rejected;
@@ -330,15 +362,8 @@ TableDetection detectTables(const OrganizedCloud& cloud_ground, const LabelImage
       continue;
     }
     if (normals_ground) {
-      int valid = 0, horizontal = 0;
-      for (int k = 0; k < n; ++k) {
-        const float nz =
-            normals_ground->normals[static_cast<std::size_t>(full_pixels[member[k]])].z();
-        if (!std::isfinite(nz)) continue;
-        ++valid;
-        horizontal += std::abs(nz) >= cos_tilt ? 1 : 0;
-      }
-      table.horizontal_share = valid > 0 ? static_cast<float>(horizontal) / valid : 0.0f;
+      table.horizontal_share =
+          sums.valid_normals > 0 ? static_cast<float>(sums.horizontal) / sums.valid_normals : 0.0f;
       if (table.horizontal_share < config.min_horizontal_share) {
         ++result.clusters_rejected;
         result.diagnostics.push_back(
