@@ -134,6 +134,11 @@ void finalizeOversegmentation(Oversegmentation& seg, int min_points, EdgeSource 
                 std::to_string(seg.height) + " is invalid");
   }
   const std::size_t n = static_cast<std::size_t>(seg.width) * seg.height;
+  if (n > static_cast<std::size_t>(std::numeric_limits<int>::max())) {
+    throw Error("finalizeOversegmentation: grid " + std::to_string(seg.width) + "x" +
+                std::to_string(seg.height) + " has " + std::to_string(n) +
+                " pixels, more than an int pixel index holds");
+  }
   if (seg.pixel_segment.size() != n) {
     throw Error("finalizeOversegmentation: pixel_segment has " +
                 std::to_string(seg.pixel_segment.size()) + " entries, grid " +
@@ -168,20 +173,20 @@ void finalizeOversegmentation(Oversegmentation& seg, int min_points, EdgeSource 
   // and kept for the renumbering pass below. Pixel by pixel, each count
   // waited for the previous pixel's store to the same counter.
   thread_local std::vector<int> counts_tls, remap_tls;
-  thread_local std::vector<std::uint32_t> run_start_tls;
+  thread_local std::vector<int> run_start_tls;
   std::vector<int>& counts = counts_tls;
   counts.assign(static_cast<std::size_t>(max_id + 1), 0);
-  std::vector<std::uint32_t>& run_start = run_start_tls;  // n < 2^32 (grid checked above)
+  std::vector<int>& run_start = run_start_tls;  // n fits an int (checked above)
   run_start.clear();
   for (std::size_t i = 0; i < n;) {
     const int id = ids[i];
     std::size_t end = i + 1;
     while (end < n && ids[end] == id) ++end;
     if (id >= 0) counts[id] += static_cast<int>(end - i);
-    run_start.push_back(static_cast<std::uint32_t>(i));
+    run_start.push_back(static_cast<int>(i));
     i = end;
   }
-  run_start.push_back(static_cast<std::uint32_t>(n));
+  run_start.push_back(static_cast<int>(n));
 
   // Dense renumbering in increasing id order; segments below the threshold
   // (and ids without pixels) map to -1.
@@ -256,7 +261,8 @@ void finalizeOversegmentation(Oversegmentation& seg, int min_points, EdgeSource 
   }
   // The runs found above, renumbered and listed.
   for (std::size_t r = 0; r + 1 < run_start.size(); ++r) {
-    const std::size_t i = run_start[r], end = run_start[r + 1];
+    const auto i = static_cast<std::size_t>(run_start[r]);
+    const auto end = static_cast<std::size_t>(run_start[r + 1]);
     const int old_id = seg.pixel_segment[i];
     const int id = old_id >= 0 ? remap[old_id] : old_id;
     if (old_id >= 0) std::fill(seg.pixel_segment.begin() + i, seg.pixel_segment.begin() + end, id);

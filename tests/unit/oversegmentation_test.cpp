@@ -333,6 +333,17 @@ TEST(FinalizeOversegmentation, RejectsBadInput) {
   seg.edges = {{0, 7}};
   EXPECT_THROW(finalizeOversegmentation(seg, 1, EdgeSource::Keep), Error);
   EXPECT_THROW(finalizeOversegmentation(seg, -1), Error);
+  // Pixel indices are ints: a grid of more pixels is refused by name (before
+  // anything is sized from it).
+  Oversegmentation huge;
+  huge.width = 100000;
+  huge.height = 100000;
+  try {
+    finalizeOversegmentation(huge, 1);
+    FAIL() << "no error for a 100000x100000 grid";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("int pixel index"), std::string::npos) << e.what();
+  }
 }
 
 // The finalisation against a plain reference (count, renumber in id order,
