@@ -330,6 +330,8 @@ void finalizeOversegmentation(Oversegmentation& seg, int min_points, EdgeSource 
           const __m128i same =
               _mm_and_si128(_mm_cmpeq_epi32(here, right), _mm_cmpeq_epi32(here, under));
           if (_mm_movemask_epi8(same) == 0xffff) continue;
+          // The loop below's body, written out (k + 1 < w holds here): a
+          // lambda shared by both made the oversegmenter 1.03 of itself.
           for (int k = x; k < x + 4; ++k) {
             if (row[k] != row[k + 1]) add(row[k], row[k + 1]);
             if (row[k] != below[k]) add(row[k], below[k]);

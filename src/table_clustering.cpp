@@ -138,7 +138,7 @@ struct ClusterScratch {
   VoxelIndex index;
   DisjointSets sets;
   std::vector<int> point_voxel, voxel_size, start, fill, near_a, near_b, root_label;
-  std::vector<int> set_of, near_sets, near_start;
+  std::vector<int> set_of, index_of_root, near_sets, near_start;
   std::vector<std::uint8_t> may_link;
   std::vector<Eigen::Vector3i> voxel_coords;
   std::vector<Eigen::AlignedBox3f> boxes, set_boxes;
@@ -178,7 +178,7 @@ void markVoxelsThatMayLink(DisjointSets& sets, const std::vector<Eigen::AlignedB
   constexpr int kMaxSets = 64;
   const int voxels = static_cast<int>(boxes.size());
   std::vector<int>& set_of = scratch.set_of;  // dense set index per voxel
-  std::vector<int>& index_of_root = scratch.root_label;  // borrowed; reset by the caller later
+  std::vector<int>& index_of_root = scratch.index_of_root;  // dense set index per root, or -1
   index_of_root.assign(static_cast<std::size_t>(voxels), -1);
   set_of.resize(static_cast<std::size_t>(voxels));
   std::vector<Eigen::AlignedBox3f>& set_boxes = scratch.set_boxes;

@@ -8,11 +8,8 @@
 #include <string>
 #include <utility>
 
-#if defined(__SSE2__)
-#include <emmintrin.h>
-#endif
-
 #include "findmug/tables.hpp"
+#include "min_max2.hpp"
 #include "tables_internal.hpp"
 
 namespace findmug {
@@ -38,43 +35,22 @@ constexpr float kEdgeQuantile = 0.8f;
 // of their time on.
 constexpr int kBlock = 256;
 
-// An AlignedBox2f grown point by point, with its corners in a register: an
-// Eigen box extended in a loop stayed in memory (the compiler kept its four
-// floats on the stack), so every point waited for the previous one's
-// stores. The same result as AlignedBox2f::extend point by point: it starts
-// empty (highest, lowest), and minps(p, lo) is p < lo ? p : lo, as Eigen's
-// cwiseMin(lo, p) (std::min(lo, p)); maxps likewise.
+// An AlignedBox2f grown point by point (MinMax2, from an empty box's
+// highest / lowest): the same result as AlignedBox2f::extend per point, with
+// the corners in registers rather than on the stack.
 class BoxBuilder2 {
  public:
-#if defined(__SSE2__)
-  BoxBuilder2()
-      : lo_(_mm_set1_ps(std::numeric_limits<float>::max())),
-        hi_(_mm_set1_ps(std::numeric_limits<float>::lowest())) {}
-  // From registers, not from memory: the callers have just stored x and y
-  // one float at a time, and an 8-byte load of two 4-byte stores cannot be
-  // forwarded from the store buffer (it waited for both stores to retire,
-  // which was most of the top band's time).
-  void extend(float x, float y) {
-    const __m128 xy = _mm_unpacklo_ps(_mm_set_ss(x), _mm_set_ss(y));
-    lo_ = _mm_min_ps(xy, lo_);
-    hi_ = _mm_max_ps(xy, hi_);
-  }
+  // Values in registers (see MinMax2::add).
+  void extend(float x, float y) { extremes_.add(x, y); }
   Eigen::AlignedBox2f box() const {
-    alignas(16) float lo[4], hi[4];
-    _mm_store_ps(lo, lo_);
-    _mm_store_ps(hi, hi_);
+    float lo[2], hi[2];
+    extremes_.get(lo, hi);
     return Eigen::AlignedBox2f(Eigen::Vector2f(lo[0], lo[1]), Eigen::Vector2f(hi[0], hi[1]));
   }
 
  private:
-  __m128 lo_, hi_;
-#else
-  void extend(float x, float y) { box_.extend(Eigen::Vector2f(x, y)); }
-  Eigen::AlignedBox2f box() const { return box_; }
-
- private:
-  Eigen::AlignedBox2f box_;
-#endif
+  detail::MinMax2 extremes_{std::numeric_limits<float>::max(),
+                            std::numeric_limits<float>::lowest()};
 };
 
 // out[k] = min(last, int((values[k * Stride] - origin) / width)), k < count:
@@ -340,11 +316,6 @@ Eigen::Vector2f edgeRange(const std::vector<Eigen::Vector2f>& local, int along, 
   return Eigen::Vector2f(quantile(lows, 1.0f - kEdgeQuantile), quantile(highs, kEdgeQuantile));
 }
 
-// Lowest and highest z of `points` (not empty, finite). Four running
-// extremes instead of one: each point then waits for the one four back, not
-// for the last. Only which of a +0 and a -0 comes out can differ from one
-// running pair, and describeCluster uses the range only through z - z_min
-// for z != 0 and z_max - z_min, where that sign makes no difference.
 struct TopBand {
   Eigen::Vector3d sum;      // of the band's points, in point order
   Eigen::AlignedBox2f box;  // of their (x, y)
@@ -378,6 +349,11 @@ __attribute__((noinline)) TopBand topBand(const std::vector<Eigen::Vector3f>& po
   return {Eigen::Vector3d(sum_x, sum_y, sum_z), builder.box()};
 }
 
+// Lowest and highest z of `points` (not empty, finite). Four running
+// extremes instead of one: each point then waits for the one four back, not
+// for the last. Only which of a +0 and a -0 comes out can differ from one
+// running pair, and describeCluster uses the range only through z - z_min
+// for z != 0 and z_max - z_min, where that sign makes no difference.
 std::pair<float, float> heightRange(const std::vector<Eigen::Vector3f>& points) {
   float lo[4], hi[4];
   for (int j = 0; j < 4; ++j) {

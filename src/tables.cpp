@@ -59,7 +59,6 @@ struct MemberSums {
 __attribute__((noinline)) MemberSums memberSums(const int* member, int n, const int* full_pixels,
                                                 const std::vector<float>& confidence,
                                                 const NormalImage* normals, float cos_tilt) {
-  MemberSums sums;
   const float* conf = confidence.empty() ? nullptr : confidence.data();
   const Eigen::Vector3f* normal = normals ? normals->normals.data() : nullptr;
   double confidence_sum = conf ? 0.0 : static_cast<double>(n);
@@ -74,10 +73,7 @@ __attribute__((noinline)) MemberSums memberSums(const int* member, int n, const 
       horizontal += finite & (std::abs(nz) >= cos_tilt ? 1 : 0);
     }
   }
-  sums.confidence = confidence_sum;
-  sums.valid_normals = valid;
-  sums.horizontal = horizontal;
-  return sums;
+  return {confidence_sum, valid, horizontal};
 }
 
 }  // namespace
