@@ -5,14 +5,132 @@
 // pass over the cloud.
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <string>
 #include <utility>
 
+#include "cpu_features.hpp"
+#include "simd_vec3.hpp"
 #include "tables_internal.hpp"
 
 namespace findmug {
 
 using namespace tables_detail;
+
+namespace {
+
+// What the pass over the cloud needs: the box that rejects most points, the
+// grid, the height bands, and where the results go.
+struct CloudPass {
+  float x_min, x_max, y_min, y_max;  // the grid one cell larger on each side
+  float origin_x, origin_y, cell;
+  int cols, rows;
+  float floor_tolerance, obstacle_low, obstacle_high;
+  std::uint8_t* floor_seen;
+  const std::uint8_t* in_window;
+  std::vector<std::pair<int, Eigen::Vector2f>>* obstacles;
+};
+
+// Points [begin, end): a point counts only as observed floor (floor label,
+// at floor height) or as an obstacle (any other label, between
+// obstacle_min_height_m and robot_height_m); its cell is worked out only
+// then. Obstacles are kept only in cells that assess() reads (in_window).
+void passPortable(const Eigen::Vector3f* points, const std::uint8_t* labels, std::size_t begin,
+                  std::size_t end, const CloudPass& pass) {
+  for (std::size_t i = begin; i < end; ++i) {
+    const Eigen::Vector3f& p = points[i];
+    if (!(p.x() >= pass.x_min && p.x() <= pass.x_max && p.y() >= pass.y_min &&
+          p.y() <= pass.y_max)) {
+      continue;
+    }
+    const bool floor_label = labels[i] == kFloorLabel;
+    const bool floor = floor_label && std::abs(p.z()) <= pass.floor_tolerance;
+    const bool obstacle = !floor_label && p.z() >= pass.obstacle_low && p.z() <= pass.obstacle_high;
+    if (!floor && !obstacle) continue;
+    // ReachabilityGrid::cellOf.
+    const int col = floorToInt((p.x() - pass.origin_x) / pass.cell);
+    const int row = floorToInt((p.y() - pass.origin_y) / pass.cell);
+    if (col < 0 || row < 0 || col >= pass.cols || row >= pass.rows) continue;
+    const int c = row * pass.cols + col;
+    if (floor) {
+      pass.floor_seen[c] = 1;
+    } else if (pass.in_window[c]) {
+      pass.obstacles->emplace_back(c, p.head<2>());
+    }
+  }
+}
+
+#ifdef FINDMUG_AVX2_DISPATCH
+// passPortable eight points at a time, up to the last whole group of eight;
+// returns where it stopped. The same comparisons, subtractions, divisions
+// and floors per point, as lanes; the points that pass are then handled
+// one by one in point order (so obstacles are listed in the same order).
+// On a table-rich view most points lie inside the box, and the portable
+// loop paid two divisions and a hard-to-predict branch for each.
+__attribute__((target("avx2"))) std::size_t passAvx2(const Eigen::Vector3f* points,
+                                                     const std::uint8_t* labels, std::size_t n,
+                                                     const CloudPass& pass) {
+  const __m256 x_min = _mm256_set1_ps(pass.x_min), x_max = _mm256_set1_ps(pass.x_max);
+  const __m256 y_min = _mm256_set1_ps(pass.y_min), y_max = _mm256_set1_ps(pass.y_max);
+  const __m256 origin_x = _mm256_set1_ps(pass.origin_x);
+  const __m256 origin_y = _mm256_set1_ps(pass.origin_y);
+  const __m256 cell = _mm256_set1_ps(pass.cell);
+  const __m256 floor_tolerance = _mm256_set1_ps(pass.floor_tolerance);
+  const __m256 obstacle_low = _mm256_set1_ps(pass.obstacle_low);
+  const __m256 obstacle_high = _mm256_set1_ps(pass.obstacle_high);
+  const __m256 abs_mask = _mm256_castsi256_ps(_mm256_set1_epi32(0x7fffffff));
+  const __m256i floor_label = _mm256_set1_epi32(kFloorLabel);
+  const __m256i cols = _mm256_set1_epi32(pass.cols), rows = _mm256_set1_epi32(pass.rows);
+  const __m256i minus_one = _mm256_set1_epi32(-1);
+  std::size_t i = 0;
+  for (; i + 8 <= n; i += 8) {
+    __m256 x, y, z;
+    detail::loadVec3x8(points[i].data(), x, y, z);
+    const __m256 in_box = _mm256_and_ps(
+        _mm256_and_ps(_mm256_cmp_ps(x, x_min, _CMP_GE_OQ), _mm256_cmp_ps(x, x_max, _CMP_LE_OQ)),
+        _mm256_and_ps(_mm256_cmp_ps(y, y_min, _CMP_GE_OQ), _mm256_cmp_ps(y, y_max, _CMP_LE_OQ)));
+    if (_mm256_movemask_ps(in_box) == 0) continue;
+    std::int64_t label_bytes;
+    std::memcpy(&label_bytes, labels + i, sizeof label_bytes);
+    const __m256 is_floor_label = _mm256_castsi256_ps(_mm256_cmpeq_epi32(
+        _mm256_cvtepu8_epi32(_mm_cvtsi64_si128(label_bytes)), floor_label));
+    const __m256 floor = _mm256_and_ps(
+        is_floor_label, _mm256_cmp_ps(_mm256_and_ps(z, abs_mask), floor_tolerance, _CMP_LE_OQ));
+    const __m256 obstacle =
+        _mm256_andnot_ps(is_floor_label, _mm256_and_ps(_mm256_cmp_ps(z, obstacle_low, _CMP_GE_OQ),
+                                                       _mm256_cmp_ps(z, obstacle_high, _CMP_LE_OQ)));
+    const int floor_lanes = _mm256_movemask_ps(_mm256_and_ps(in_box, floor));
+    const int obstacle_lanes = _mm256_movemask_ps(_mm256_and_ps(in_box, obstacle));
+    if ((floor_lanes | obstacle_lanes) == 0) continue;
+    // floorToInt: truncate, then one less where that rounded up.
+    const __m256 col_f = _mm256_div_ps(_mm256_sub_ps(x, origin_x), cell);
+    const __m256 row_f = _mm256_div_ps(_mm256_sub_ps(y, origin_y), cell);
+    __m256i col = _mm256_cvttps_epi32(col_f), row = _mm256_cvttps_epi32(row_f);
+    col = _mm256_add_epi32(
+        col, _mm256_castps_si256(_mm256_cmp_ps(_mm256_cvtepi32_ps(col), col_f, _CMP_GT_OQ)));
+    row = _mm256_add_epi32(
+        row, _mm256_castps_si256(_mm256_cmp_ps(_mm256_cvtepi32_ps(row), row_f, _CMP_GT_OQ)));
+    // 0 <= col < cols and 0 <= row < rows.
+    const __m256i inside = _mm256_and_si256(
+        _mm256_and_si256(_mm256_cmpgt_epi32(col, minus_one), _mm256_cmpgt_epi32(cols, col)),
+        _mm256_and_si256(_mm256_cmpgt_epi32(row, minus_one), _mm256_cmpgt_epi32(rows, row)));
+    const int inside_lanes = _mm256_movemask_ps(_mm256_castsi256_ps(inside));
+    alignas(32) int cells[8];
+    _mm256_store_si256(reinterpret_cast<__m256i*>(cells),
+                       _mm256_add_epi32(_mm256_mullo_epi32(row, cols), col));
+    for (int lanes = floor_lanes & inside_lanes; lanes != 0; lanes &= lanes - 1) {
+      pass.floor_seen[cells[__builtin_ctz(static_cast<unsigned>(lanes))]] = 1;
+    }
+    for (int lanes = obstacle_lanes & inside_lanes; lanes != 0; lanes &= lanes - 1) {
+      const int j = __builtin_ctz(static_cast<unsigned>(lanes));
+      if (pass.in_window[cells[j]]) pass.obstacles->emplace_back(cells[j], points[i + j].head<2>());
+    }
+  }
+  return i;
+}
+#endif
+
+}  // namespace
 
 ReachabilityGrid::Buffers& ReachabilityGrid::threadBuffers() {
   thread_local Buffers buffers;
@@ -22,7 +140,7 @@ ReachabilityGrid::Buffers& ReachabilityGrid::threadBuffers() {
 ReachabilityGrid::ReachabilityGrid(const OrganizedCloud& cloud, const LabelImage& labels,
                                    const Eigen::AlignedBox2f& region,
                                    const std::vector<Eigen::Vector2f>& positions,
-                                   const TableConfig& config)
+                                   const TableConfig& config, bool simd)
     : config_(config), origin_(region.min()), cell_(config.floor_cell_m) {
   const Eigen::Vector2f size = region.sizes();
   cols_ = static_cast<int>(size.x() / cell_) + 1;
@@ -49,35 +167,36 @@ ReachabilityGrid::ReachabilityGrid(const OrganizedCloud& cloud, const LabelImage
   // Most of the frame lies outside the region: a plain comparison with a box
   // one cell larger than the grid rejects those points before cellOf's
   // divisions (and rejects NaN and infinite x, y; a NaN or infinite z fails
-  // both the floor and the obstacle test below).
-  const float x_min = origin_.x(), y_min = origin_.y();
-  const float x_max = origin_.x() + static_cast<float>(cols_ + 1) * cell_;
-  const float y_max = origin_.y() + static_cast<float>(rows_ + 1) * cell_;
+  // both the floor and the obstacle test).
   detail::Borrowed obstacles_buffer(threadBuffers().obstacles);
   std::vector<std::pair<int, Eigen::Vector2f>>& obstacles = *obstacles_buffer;
   obstacles.clear();
-  // A point counts only as observed floor (floor label, at floor height) or
-  // as an obstacle (any other label, between obstacle_min_height_m and
-  // robot_height_m); its cell is worked out only then. (A vectorised pass
-  // over every pixel was tried and was slower: most pixels fail the box test
-  // above, which a predicted branch rejects more cheaply.)
-  const float floor_tolerance = config.floor_tolerance_m;
-  const float obstacle_low = config.obstacle_min_height_m, obstacle_high = config.robot_height_m;
-  for (std::size_t i = 0; i < cloud.points.size(); ++i) {
-    const Eigen::Vector3f& p = cloud.points[i];
-    if (!(p.x() >= x_min && p.x() <= x_max && p.y() >= y_min && p.y() <= y_max)) continue;
-    const bool floor_label = labels.labels[i] == kFloorLabel;
-    const bool floor = floor_label && std::abs(p.z()) <= floor_tolerance;
-    const bool obstacle = !floor_label && p.z() >= obstacle_low && p.z() <= obstacle_high;
-    if (!floor && !obstacle) continue;
-    const int c = cellOf(p.head<2>());
-    if (c < 0) continue;
-    if (floor) {
-      floor_seen[c] = 1;
-    } else if (in_window[c]) {
-      obstacles.emplace_back(c, p.head<2>());
-    }
+  CloudPass pass;
+  pass.x_min = origin_.x();
+  pass.y_min = origin_.y();
+  pass.x_max = origin_.x() + static_cast<float>(cols_ + 1) * cell_;
+  pass.y_max = origin_.y() + static_cast<float>(rows_ + 1) * cell_;
+  pass.origin_x = origin_.x();
+  pass.origin_y = origin_.y();
+  pass.cell = cell_;
+  pass.cols = cols_;
+  pass.rows = rows_;
+  pass.floor_tolerance = config.floor_tolerance_m;
+  pass.obstacle_low = config.obstacle_min_height_m;
+  pass.obstacle_high = config.robot_height_m;
+  pass.floor_seen = floor_seen.data();
+  pass.in_window = in_window.data();
+  pass.obstacles = &obstacles;
+  const std::size_t n = std::min(cloud.points.size(), labels.labels.size());
+  std::size_t done = 0;
+#ifdef FINDMUG_AVX2_DISPATCH
+  if (simd && detail::cpuHasAvx2()) {
+    done = passAvx2(cloud.points.data(), labels.labels.data(), n, pass);
   }
+#else
+  (void)simd;
+#endif
+  passPortable(cloud.points.data(), labels.labels.data(), done, n, pass);
   for (const auto& [c, xy] : obstacles) ++obstacle_start[c + 1];
   for (std::size_t c = 0; c < cells; ++c) obstacle_start[c + 1] += obstacle_start[c];
   obstacle_points.resize(obstacles.size());

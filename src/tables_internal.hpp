@@ -75,10 +75,19 @@ ClusterOutcome describeCluster(const std::vector<Eigen::Vector3f>& points, int p
 class ReachabilityGrid {
  public:
   // `positions`: every position that assess() will be asked about.
+  // `simd` false: the portable pass over the cloud even where the CPU has
+  // AVX2 (the tests check that both build the same grid).
   ReachabilityGrid(const OrganizedCloud& cloud, const LabelImage& labels,
                    const Eigen::AlignedBox2f& region, const std::vector<Eigen::Vector2f>& positions,
-                   const TableConfig& config);
+                   const TableConfig& config, bool simd = true);
   void assess(SearchPosition& position) const;
+
+  // What the pass over the cloud built, for the tests: per cell whether
+  // floor was seen, and the obstacle points bucketed by cell (the points of
+  // cell c are obstacle_points[obstacle_start[c] .. obstacle_start[c + 1])).
+  const std::vector<std::uint8_t>& floorSeen() const { return *floor_seen_; }
+  const std::vector<int>& obstacleStart() const { return *obstacle_start_; }
+  const std::vector<Eigen::Vector2f>& obstaclePoints() const { return *obstacle_points_; }
 
  private:
   // Cells (clamped to the grid) within robot_radius_m of `q` on each axis.

@@ -611,6 +611,69 @@ TEST(FindTablesReachability, ObstacleAndUnseenFloorAreFlaggedNotDropped) {
   }
 }
 
+// The reachability grid's pass over the cloud has an AVX2 variant: it must
+// build the same grid as the portable loop, bit for bit, whatever the points
+// (NaN, infinities, points on cell borders and on the region's edges, every
+// label, heights at the band limits), and for cloud sizes that leave a tail
+// of fewer than eight points.
+TEST(FindTablesReachability, VectorPassBuildsTheSameGridAsThePortableOne) {
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<float> coord(-1.0f, 5.0f);
+  std::uniform_real_distribution<float> height(-0.3f, 1.8f);
+  std::uniform_int_distribution<int> label(0, 7);
+  std::uniform_int_distribution<int> kind(0, 19);
+  const TableConfig config;
+  const float inf = std::numeric_limits<float>::infinity();
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  const Eigen::AlignedBox2f region(Eigen::Vector2f(0.25f, -0.5f), Eigen::Vector2f(3.5f, 3.0f));
+  const std::vector<Eigen::Vector2f> positions = {{1.0f, 0.0f}, {3.4f, 2.9f}, {0.3f, 1.5f}};
+  std::size_t obstacles = 0, floor_cells = 0;
+  for (int trial = 0; trial < 40; ++trial) {
+    const int n = 1 + static_cast<int>(rng() % 3000);
+    OrganizedCloud cloud;
+    cloud.width = n;
+    cloud.height = 1;
+    LabelImage labels;
+    labels.width = n;
+    labels.height = 1;
+    for (int i = 0; i < n; ++i) {
+      Eigen::Vector3f p(coord(rng), coord(rng), height(rng));
+      switch (kind(rng)) {
+        case 0: p[static_cast<int>(rng() % 3)] = nan; break;
+        case 1: p[static_cast<int>(rng() % 3)] = (rng() & 1) ? inf : -inf; break;
+        case 2:  // on a cell border
+          p.x() = region.min().x() + static_cast<float>(rng() % 70) * config.floor_cell_m;
+          break;
+        case 3: p.y() = region.min().y(); break;  // on the region's edge
+        case 4: p.z() = (rng() & 1) ? config.obstacle_min_height_m : config.robot_height_m; break;
+        case 5: p.z() = (rng() & 1) ? config.floor_tolerance_m : -config.floor_tolerance_m; break;
+        case 6: p.z() = -0.0f; break;
+        default: break;
+      }
+      cloud.points.push_back(p);
+      labels.labels.push_back(kind(rng) < 6 ? kFloor : static_cast<std::uint8_t>(label(rng)));
+    }
+    labels.confidence.assign(labels.labels.size(), 1.0f);
+    const tables_detail::ReachabilityGrid portable(cloud, labels, region, positions, config, false);
+    const std::vector<std::uint8_t>& floor_seen = portable.floorSeen();
+    const std::vector<int>& start = portable.obstacleStart();
+    const std::vector<Eigen::Vector2f>& points = portable.obstaclePoints();
+    const tables_detail::ReachabilityGrid vector(cloud, labels, region, positions, config, true);
+    ASSERT_EQ(vector.floorSeen(), floor_seen) << "trial " << trial;
+    ASSERT_EQ(vector.obstacleStart(), start) << "trial " << trial;
+    ASSERT_EQ(vector.obstaclePoints().size(), points.size()) << "trial " << trial;
+    for (std::size_t k = 0; k < points.size(); ++k) {
+      ASSERT_EQ(std::memcmp(vector.obstaclePoints()[k].data(), points[k].data(), 8), 0)
+          << "trial " << trial << ", obstacle point " << k;
+    }
+    obstacles += points.size();
+    floor_cells += static_cast<std::size_t>(std::count(floor_seen.begin(), floor_seen.end(), 1));
+  }
+  // The cases above must have exercised both kinds of point.
+  EXPECT_GT(obstacles, 100u);
+  EXPECT_GT(floor_cells, 100u);
+}
+
 // ------------------------------------------------- rendered synthetic scenes
 
 struct View {
