@@ -349,24 +349,32 @@ std::vector<int> tables_detail::clusterPoints(const std::vector<Eigen::Vector3f>
 
   // Points grouped by voxel (counting sort), built only when a pair of
   // voxels has to be decided point by point: the pair tests then read
-  // memory sequentially.
+  // memory sequentially. Only the points of voxels marked in may_link (see
+  // below) are grouped: both voxels of a pair tested point by point are
+  // marked (a pair of different sets whose boxes come within the tolerance
+  // now was such a pair when the marks were made, as sets only merge and a
+  // set's box holds its voxels'), and on a table top they are a few per cent
+  // of the points, where copying all of them cost more than all the tests.
+  std::vector<std::uint8_t>& may_link = scratch.may_link;
   std::vector<int>& start = scratch.start;
   std::vector<Eigen::Vector3f>& sorted = scratch.sorted;
   bool grouped = false;
   const auto groupPoints = [&] {
     start.assign(static_cast<std::size_t>(voxels) + 1, 0);
-    for (int v = 0; v < voxels; ++v) start[v + 1] = start[v] + voxel_size[v];
+    for (int v = 0; v < voxels; ++v) start[v + 1] = start[v] + (may_link[v] ? voxel_size[v] : 0);
     std::vector<int>& fill = scratch.fill;
     fill.assign(start.begin(), start.end() - 1);
-    sorted.resize(points.size());
+    sorted.resize(static_cast<std::size_t>(start[voxels]));
     // By runs of one voxel (see the first pass): one counter update per run,
     // not a chain of read-modify-writes of the same counter.
     for (int i = 0; i < n;) {
       const int v = point_voxel[i];
       int end = i + 1;
       while (end < n && point_voxel[end] == v) ++end;
-      std::copy(points.begin() + i, points.begin() + end, sorted.begin() + fill[v]);
-      fill[v] += end - i;
+      if (may_link[v]) {
+        std::copy(points.begin() + i, points.begin() + end, sorted.begin() + fill[v]);
+        fill[v] += end - i;
+      }
       i = end;
     }
     grouped = true;
@@ -441,7 +449,6 @@ std::vector<int> tables_detail::clusterPoints(const std::vector<Eigen::Vector3f>
   // voxels' boxes, and the squared gap only shrinks as a box grows, in
   // floats too), and then tryPair returns without a change. Skipping them
   // leaves the partition, and so the labels, as they are.
-  std::vector<std::uint8_t>& may_link = scratch.may_link;
   markVoxelsThatMayLink(sets, boxes, tol2, scratch, may_link);
   for (int ring = 1; ring <= kReach; ++ring) {
     for (int a = 0; a < voxels; ++a) {
