@@ -32,6 +32,7 @@
 #include "features_internal.hpp"
 #include "findmug/error.hpp"
 #include "scratch.hpp"
+#include "simd_table.hpp"
 #include "simd_vec3.hpp"
 
 namespace findmug {
@@ -65,10 +66,7 @@ class FastLab {
   FastLab() {
     for (int c = 0; c < 256; ++c) linear_[c] = static_cast<float>(srgbToLinear(c));
     for (int k = 0; k <= kSteps; ++k) f_[k] = static_cast<float>(labF(double(k) / kSteps));
-    for (int k = 0; k < kSteps; ++k) {
-      f_step_[2 * k] = f_[k];
-      f_step_[2 * k + 1] = f_[k + 1] - f_[k];  // the same float subtraction as f()
-    }
+    detail::fillInterpolationSteps(f_.data(), kSteps, f_step_.data());
     // The matrix rows pre-divided by the white point, in float.
     for (int row = 0; row < 3; ++row)
       for (int col = 0; col < 3; ++col)
@@ -131,21 +129,7 @@ class FastLab {
                          _mm256_or_ps(high, low));
     const __m256i k = _mm256_cvttps_epi32(x);
     const __m256 w = _mm256_sub_ps(x, _mm256_cvtepi32_ps(k));
-    // Each lane's f_[k] and f_[k + 1] - f_[k] in one 8-byte gather (four
-    // lanes a gather): half the gathered elements of two 4-byte gathers.
-    const double* steps = reinterpret_cast<const double*>(f_step_.data());
-    // (The masked form: GCC 12 warns of the plain one's undefined source.)
-    const __m256d none = _mm256_setzero_pd(), all = _mm256_castsi256_pd(_mm256_set1_epi64x(-1));
-    const __m256 pairs_lo = _mm256_castpd_ps(_mm256_mask_i32gather_pd(
-        none, steps, _mm256_castsi256_si128(k), all, 8));  // f0 d0 f1 d1 | f2 d2 f3 d3
-    const __m256 pairs_hi = _mm256_castpd_ps(_mm256_mask_i32gather_pd(
-        none, steps, _mm256_extracti128_si256(k, 1), all, 8));  // f4 d4 f5 d5 | f6 d6 f7 d7
-    // f0 f1 f4 f5 | f2 f3 f6 f7 -> f0 .. f7 (64-bit lanes 0 2 1 3), and the same for d.
-    const __m256 f0 = _mm256_castpd_ps(_mm256_permute4x64_pd(
-        _mm256_castps_pd(_mm256_shuffle_ps(pairs_lo, pairs_hi, _MM_SHUFFLE(2, 0, 2, 0))), 0xD8));
-    const __m256 step = _mm256_castpd_ps(_mm256_permute4x64_pd(
-        _mm256_castps_pd(_mm256_shuffle_ps(pairs_lo, pairs_hi, _MM_SHUFFLE(3, 1, 3, 1))), 0xD8));
-    __m256 v = _mm256_add_ps(f0, _mm256_mul_ps(w, step));
+    __m256 v = detail::interpolate8(f_step_.data(), k, w);
     v = _mm256_blendv_ps(v, _mm256_set1_ps(f_[0]), low);
     if (const int high_lanes = _mm256_movemask_ps(high)) {
       alignas(32) float lanes[8], ts[8];
@@ -161,7 +145,7 @@ class FastLab {
 #endif
   std::array<float, 256> linear_{};
   std::array<float, kSteps + 1> f_{};
-  // (f_[k], f_[k + 1] - f_[k]) for k < kSteps, for f8's gathers.
+  // (f_[k], f_[k + 1] - f_[k]) for k < kSteps, for f8 (simd_table.hpp).
   alignas(8) std::array<float, 2 * kSteps> f_step_{};
   float m_[3][3] = {};
 };

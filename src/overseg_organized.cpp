@@ -57,6 +57,7 @@
 #include "lab_internal.hpp"
 #include "oversegmentation_internal.hpp"
 #include "scratch.hpp"
+#include "simd_table.hpp"
 #include "simd_vec3.hpp"
 
 namespace findmug {
@@ -100,6 +101,7 @@ class LabConverter {
           t > kDelta * kDelta * kDelta ? std::cbrt(t) : t / (3 * kDelta * kDelta) + 4.0 / 29.0);
     }
     f_[kFSize + 1] = f_[kFSize];
+    detail::fillInterpolationSteps(f_.data(), kFSize + 1, f_step_.data());
   }
 
   // convert() of colors[pixel[j]] into l[j], a[j], b[j] for j < count.
@@ -198,14 +200,14 @@ class LabConverter {
                                      _mm256_set1_ps(kFSize / kFMax));
     const __m256i i = _mm256_cvttps_epi32(pos);
     const __m256 frac = _mm256_sub_ps(pos, _mm256_cvtepi32_ps(i));
-    const __m256 f0 = _mm256_i32gather_ps(f_.data(), i, 4);
-    const __m256 f1 = _mm256_i32gather_ps(f_.data() + 1, i, 4);
-    return _mm256_add_ps(f0, _mm256_mul_ps(frac, _mm256_sub_ps(f1, f0)));
+    return detail::interpolate8(f_step_.data(), i, frac);
   }
 #endif
 
   std::array<float, 256> linear_{};
   std::array<float, kFSize + 2> f_{};
+  // (f_[i], f_[i + 1] - f_[i]) for i <= kFSize, for fAvx2 (simd_table.hpp).
+  alignas(8) std::array<float, 2 * (kFSize + 1)> f_step_{};
 };
 
 const LabConverter& labConverter() {
