@@ -439,6 +439,80 @@ __attribute__((target("avx2"))) void assignWindowAvx(const FeatureGrid& g,
 
 #endif
 
+// updateCentres: the sum of the pixel columns x0 .. x1 - 1 of a run. Sums of
+// integers far below 2^53 are exact in any order, so this is the sum pixel
+// by pixel, to the bit.
+double columnSum(int x0, int x1) {
+  return static_cast<double>(static_cast<std::int64_t>(x0 + x1 - 1) * (x1 - x0) / 2);
+}
+
+// Adds the channels of pixels [x0, x1) of one row (starting at grid index
+// row) to s.ch, one pixel after the other (updateCentres).
+void addRunChannels(const float* const* ch, std::size_t row, int x0, int x1, CentreSum& s) {
+  double l = s.ch[kL], a = s.ch[kA], b = s.ch[kB];
+  double px = s.ch[kX], py = s.ch[kY], pz = s.ch[kZ];
+  double nx = s.ch[kNX], ny = s.ch[kNY], nz = s.ch[kNZ];
+  for (int x = x0; x < x1; ++x) {
+    const std::size_t i = row + x;
+    l += ch[kL][i];
+    a += ch[kA][i];
+    b += ch[kB][i];
+    px += ch[kX][i];
+    py += ch[kY][i];
+    pz += ch[kZ][i];
+    nx += ch[kNX][i];
+    ny += ch[kNY][i];
+    nz += ch[kNZ][i];
+  }
+  static_assert(kNumChannels == 9 && kL == 0 && kNZ == 8, "channel order of s.ch below");
+  s.ch = {l, a, b, px, py, pz, nx, ny, nz};
+}
+
+#if defined(FINDMUG_AVX2_DISPATCH)
+// addRunChannels four pixels at a time: channels 0-3 and 4-7 of four pixels
+// are loaded as rows and transposed, so that one pixel's (L, a, b, x) and
+// (y, z, nx, ny) each convert to doubles and add in one instruction; nz goes
+// one by one. Each sum still adds the run's pixels one after the other in
+// image order (a lane per sum), so the centres are the same bits. Why: the
+// scalar loop converts and adds nine floats per pixel one at a time, and
+// that, not the additions' latency, bounds it.
+__attribute__((target("avx2"))) void addRunChannelsAvx2(const float* const* ch, std::size_t row,
+                                                        int x0, int x1, CentreSum& s) {
+  static_assert(kL == 0 && kA == 1 && kB == 2 && kX == 3 && kY == 4 && kZ == 5 && kNX == 6 &&
+                    kNY == 7 && kNZ == 8,
+                "lanes of first and second below");
+  __m256d first = _mm256_loadu_pd(s.ch.data());       // L a b x
+  __m256d second = _mm256_loadu_pd(s.ch.data() + 4);  // y z nx ny
+  double nz = s.ch[kNZ];
+  int x = x0;
+  for (; x + 4 <= x1; x += 4) {
+    const std::size_t i = row + x;
+    __m128 p0 = _mm_loadu_ps(ch[0] + i), p1 = _mm_loadu_ps(ch[1] + i);
+    __m128 p2 = _mm_loadu_ps(ch[2] + i), p3 = _mm_loadu_ps(ch[3] + i);
+    __m128 q0 = _mm_loadu_ps(ch[4] + i), q1 = _mm_loadu_ps(ch[5] + i);
+    __m128 q2 = _mm_loadu_ps(ch[6] + i), q3 = _mm_loadu_ps(ch[7] + i);
+    _MM_TRANSPOSE4_PS(p0, p1, p2, p3);  // p0 = channels 0-3 of pixel i, p1 of i + 1, ...
+    _MM_TRANSPOSE4_PS(q0, q1, q2, q3);
+    first = _mm256_add_pd(first, _mm256_cvtps_pd(p0));
+    second = _mm256_add_pd(second, _mm256_cvtps_pd(q0));
+    nz += ch[kNZ][i];
+    first = _mm256_add_pd(first, _mm256_cvtps_pd(p1));
+    second = _mm256_add_pd(second, _mm256_cvtps_pd(q1));
+    nz += ch[kNZ][i + 1];
+    first = _mm256_add_pd(first, _mm256_cvtps_pd(p2));
+    second = _mm256_add_pd(second, _mm256_cvtps_pd(q2));
+    nz += ch[kNZ][i + 2];
+    first = _mm256_add_pd(first, _mm256_cvtps_pd(p3));
+    second = _mm256_add_pd(second, _mm256_cvtps_pd(q3));
+    nz += ch[kNZ][i + 3];
+  }
+  _mm256_storeu_pd(s.ch.data(), first);
+  _mm256_storeu_pd(s.ch.data() + 4, second);
+  s.ch[kNZ] = nz;
+  addRunChannels(ch, row, x, x1, s);  // the last pixels
+}
+#endif
+
 void assignWindow(const FeatureGrid& g, const std::array<float, kNumChannels>& c, const Weights& wt,
                   int label, int x0, int x1, int y0, int y1, float* best, int* labels) {
 #if defined(FINDMUG_AVX2_DISPATCH)
@@ -582,6 +656,11 @@ class OrganizedOversegmenter final : public Oversegmenter {
     Borrowed labels_buffer(g_buffers.labels);
     std::vector<int>& labels = *labels_buffer;
     labels.resize(nc);
+#if defined(FINDMUG_AVX2_DISPATCH)
+    const bool centre_sums_avx2 = simd_ == detail::OversegSimd::Auto && detail::cpuHasAvx2();
+#else
+    const bool centre_sums_avx2 = false;
+#endif
     for (int iter = 0; iter < config_.max_iterations; ++iter) {
       std::fill(best.begin(), best.end(), std::numeric_limits<float>::infinity());
       std::fill(labels.begin(), labels.end(), -1);
@@ -593,7 +672,7 @@ class OrganizedOversegmenter final : public Oversegmenter {
                      std::min(coarse.width, cu + c.half_w + 1), std::max(0, cv - c.half_h),
                      std::min(coarse.height, cv + c.half_h + 1), best.data(), labels.data());
       }
-      updateCentres(coarse, labels, clusters);
+      updateCentres(coarse, labels, clusters, centre_sums_avx2);
     }
 
     Borrowed labels_full_buffer(g_buffers.labels_full);
@@ -1005,38 +1084,9 @@ class OrganizedOversegmenter final : public Oversegmenter {
     return featureDistance(g, l, r, weights_) + featureDistance(g, u, d, weights_);
   }
 
-  // Adds pixels [x0, x1) of row y (starting at grid index row) to s, one
-  // after the other.
-  static void addRun(const float* const* ch, std::size_t row, int x0, int x1, int y,
-                     CentreSum& s) {
-    double l = s.ch[kL], a = s.ch[kA], b = s.ch[kB];
-    double px = s.ch[kX], py = s.ch[kY], pz = s.ch[kZ];
-    double nx = s.ch[kNX], ny = s.ch[kNY], nz = s.ch[kNZ];
-    double u = s.u;
-    for (int x = x0; x < x1; ++x) {
-      const std::size_t i = row + x;
-      l += ch[kL][i];
-      a += ch[kA][i];
-      b += ch[kB][i];
-      px += ch[kX][i];
-      py += ch[kY][i];
-      pz += ch[kZ][i];
-      nx += ch[kNX][i];
-      ny += ch[kNY][i];
-      nz += ch[kNZ][i];
-      u += x;
-    }
-    static_assert(kNumChannels == 9 && kL == 0 && kNZ == 8, "channel order of s.ch below");
-    s.ch = {l, a, b, px, py, pz, nx, ny, nz};
-    s.u = u;
-    // Sums of pixel coordinates are integers far below 2^53, exact in any
-    // order.
-    s.v += static_cast<double>(y) * (x1 - x0);
-    s.count += x1 - x0;
-  }
-
+  // `avx2`: the channel sums four pixels at a time (the same bits).
   static void updateCentres(const FeatureGrid& g, const std::vector<int>& labels,
-                            std::vector<Cluster>& clusters) {
+                            std::vector<Cluster>& clusters, bool avx2) {
     Borrowed sums_buffer(g_buffers.sums);
     std::vector<CentreSum>& sums = *sums_buffer;
     sums.assign(clusters.size(), CentreSum{});
@@ -1052,7 +1102,25 @@ class OrganizedOversegmenter final : public Oversegmenter {
         const int k = row[x];
         int x1 = x + 1;
         while (x1 < g.width && row[x1] == k) ++x1;
-        if (k >= 0) addRun(ch, static_cast<std::size_t>(y) * g.width, x, x1, y, sums[k]);
+        if (k >= 0) {
+          CentreSum& sum = sums[k];
+          const std::size_t row_start = static_cast<std::size_t>(y) * g.width;
+#if defined(FINDMUG_AVX2_DISPATCH)
+          if (avx2) {
+            addRunChannelsAvx2(ch, row_start, x, x1, sum);
+          } else {
+            addRunChannels(ch, row_start, x, x1, sum);
+          }
+#else
+          (void)avx2;
+          addRunChannels(ch, row_start, x, x1, sum);
+#endif
+          // Sums of pixel coordinates are integers far below 2^53, exact
+          // in any order: whole runs at once.
+          sum.u += columnSum(x, x1);
+          sum.v += static_cast<double>(y) * (x1 - x);
+          sum.count += x1 - x;
+        }
         x = x1;
       }
     }

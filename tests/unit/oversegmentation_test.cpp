@@ -707,8 +707,9 @@ TEST(OrganizedOversegmenter, SegmentsAreConnectedAndAvoidHoles) {
 }
 
 // The organized oversegmenter decides most full-resolution pixels eight at
-// a time with AVX2 (refineBlockAvx2) and the rest one by one: the same
-// segmentation as deciding every pixel one by one, on the NYU frames and on
+// a time with AVX2 (refineBlockAvx2) and the rest one by one, and sums its
+// cluster centres four pixels at a time (addRunChannelsAvx2): the same
+// segmentation as the scalar code for both, on the NYU frames and on
 // the box scene with holes, NaN coordinates, a zero depth and image widths
 // that leave a tail of every length after the blocks.
 TEST(OrganizedOversegmenter, AvxRefinementMatchesTheScalarCodeExactly) {
