@@ -139,6 +139,7 @@ struct ClusterScratch {
   DisjointSets sets;
   std::vector<int> point_voxel, voxel_size, start, fill, near_a, near_b, root_label;
   std::vector<int> set_of, index_of_root, near_sets, near_start;
+  std::vector<int> run_end, run_voxel;
   std::vector<std::uint8_t> may_link;
   std::vector<Eigen::Vector3i> voxel_coords;
   std::vector<Eigen::AlignedBox3f> boxes, set_boxes;
@@ -269,12 +270,20 @@ std::vector<int> tables_detail::clusterPoints(const std::vector<Eigen::Vector3f>
   // made every point wait for the previous point's store. Folding a run's
   // box into the voxel's keeps each coordinate's minimum and maximum (and
   // which of equal values, as Eigen's extend keeps the earlier one).
+  // The runs are also listed (where each ends, and its voxel): the passes
+  // after this one go run by run instead of point by point.
   Eigen::AlignedBox3f run_box;
   int run_size = 0;
-  const auto endRun = [&] {
+  std::vector<int>& run_end = scratch.run_end;
+  std::vector<int>& run_voxel = scratch.run_voxel;
+  run_end.clear();
+  run_voxel.clear();
+  const auto endRun = [&](int end) {
     if (run_size == 0) return;
     boxes[last_voxel].extend(run_box);
     voxel_size[last_voxel] += run_size;
+    run_end.push_back(end);
+    run_voxel.push_back(last_voxel);
     run_box.setEmpty();
     run_size = 0;
   };
@@ -302,7 +311,7 @@ std::vector<int> tables_detail::clusterPoints(const std::vector<Eigen::Vector3f>
     const std::uint64_t key = packVoxel(c.x(), c.y(), c.z());
     // Points come in image order, so neighbours often share a voxel: the
     // previous point's (last_key), or the one above's.
-    if (key != last_key) endRun();
+    if (key != last_key) endRun(i);
     if (key != last_key && pixels) {
       const int above = (*pixels)[i] - step_y;
       while (up < i && (*pixels)[up] < above) ++up;
@@ -344,7 +353,8 @@ std::vector<int> tables_detail::clusterPoints(const std::vector<Eigen::Vector3f>
       }
     }
   }
-  endRun();
+  endRun(n);
+  const int runs = static_cast<int>(run_end.size());
   const int voxels = static_cast<int>(voxel_coords.size());
 
   // Points grouped by voxel (counting sort), built only when a pair of
@@ -365,17 +375,14 @@ std::vector<int> tables_detail::clusterPoints(const std::vector<Eigen::Vector3f>
     std::vector<int>& fill = scratch.fill;
     fill.assign(start.begin(), start.end() - 1);
     sorted.resize(static_cast<std::size_t>(start[voxels]));
-    // By runs of one voxel (see the first pass): one counter update per run,
-    // not a chain of read-modify-writes of the same counter.
-    for (int i = 0; i < n;) {
-      const int v = point_voxel[i];
-      int end = i + 1;
-      while (end < n && point_voxel[end] == v) ++end;
+    // By the runs of the first pass: one counter update per run, not a
+    // chain of read-modify-writes of the same counter.
+    for (int r = 0, begin = 0; r < runs; begin = run_end[r++]) {
+      const int v = run_voxel[r];
       if (may_link[v]) {
-        std::copy(points.begin() + i, points.begin() + end, sorted.begin() + fill[v]);
-        fill[v] += end - i;
+        std::copy(points.begin() + begin, points.begin() + run_end[r], sorted.begin() + fill[v]);
+        fill[v] += run_end[r] - begin;
       }
-      i = end;
     }
     grouped = true;
   };
@@ -475,16 +482,10 @@ std::vector<int> tables_detail::clusterPoints(const std::vector<Eigen::Vector3f>
   std::vector<int>& root_label = scratch.root_label;
   root_label.assign(static_cast<std::size_t>(voxels), -1);
   int next = 0;
-  last_voxel = -1;
-  int last_label = -1;
-  for (int i = 0; i < n; ++i) {
-    if (point_voxel[i] != last_voxel) {
-      last_voxel = point_voxel[i];
-      const int root = sets.find(last_voxel);
-      if (root_label[root] < 0) root_label[root] = next++;
-      last_label = root_label[root];
-    }
-    labels[i] = last_label;
+  for (int r = 0, begin = 0; r < runs; begin = run_end[r++]) {
+    const int root = sets.find(run_voxel[r]);
+    if (root_label[root] < 0) root_label[root] = next++;
+    std::fill(labels.begin() + begin, labels.begin() + run_end[r], root_label[root]);
   }
   return labels;
 }
