@@ -8,10 +8,16 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
+#include <limits>
 #include <sstream>
 #include <string>
 
+#include "cpu_features.hpp"
 #include "findmug/error.hpp"
+#include "simd_vec3.hpp"
 #include "tables_internal.hpp"
 
 namespace findmug {
@@ -76,7 +82,128 @@ __attribute__((noinline)) MemberSums memberSums(const int* member, int n, const 
   return {confidence_sum, valid, horizontal};
 }
 
+// What step 1 does with a table-labelled point.
+enum class TablePoint { kKept, kNonFinite, kImplausible };
+TablePoint classifyTablePoint(const Eigen::Vector3f& p, const TableConfig& config) {
+  if (!finitePoint(p)) return TablePoint::kNonFinite;
+  if (p.z() < config.min_table_height_m || p.z() > config.max_table_height_m ||
+      std::abs(p.x()) > kMaxPlausibleRangeM || std::abs(p.y()) > kMaxPlausibleRangeM) {
+    return TablePoint::kImplausible;
+  }
+  return TablePoint::kKept;
+}
+
+// Where the run of table labels that starts at row[x] ends (the first
+// other label, or width): sixteen labels a time.
+int tableRunEnd(const std::uint8_t* row, int x, int width) {
+#if defined(__SSE2__)
+  const __m128i table = _mm_set1_epi8(static_cast<char>(kTableLabel));
+  for (; x + 16 <= width; x += 16) {
+    const __m128i v = _mm_loadu_si128(reinterpret_cast<const __m128i*>(row + x));
+    const unsigned other =
+        ~static_cast<unsigned>(_mm_movemask_epi8(_mm_cmpeq_epi8(v, table))) & 0xFFFFu;
+    if (other != 0) return x + __builtin_ctz(other);
+  }
+#endif
+  while (x < width && row[x] == kTableLabel) ++x;
+  return x;
+}
+
+#ifdef FINDMUG_AVX2_DISPATCH
+// Step 1 over pixels [begin, end) of one run of table labels, eight at a
+// time: classifyTablePoint's comparisons as lanes (a lane is finite when
+// |v| < inf on all three axes, false for NaN), the kept points appended in
+// pixel order. Returns where it stopped (the caller does the last ones).
+__attribute__((target("avx2"))) std::size_t collectRunAvx2(
+    const Eigen::Vector3f* cloud_points, std::size_t begin, std::size_t end,
+    const TableConfig& config, std::vector<Eigen::Vector3f>& points, std::vector<int>& pixels,
+    TableDetection& result) {
+  const __m256 abs_mask = _mm256_castsi256_ps(_mm256_set1_epi32(0x7fffffff));
+  const __m256 inf = _mm256_set1_ps(std::numeric_limits<float>::infinity());
+  const __m256 z_min = _mm256_set1_ps(config.min_table_height_m);
+  const __m256 z_max = _mm256_set1_ps(config.max_table_height_m);
+  const __m256 range = _mm256_set1_ps(kMaxPlausibleRangeM);
+  const __m256i lane_index = _mm256_setr_epi32(0, 1, 2, 3, 4, 5, 6, 7);
+  std::size_t i = begin;
+  for (; i + 8 <= end; i += 8) {
+    __m256 x, y, z;
+    detail::loadVec3x8(cloud_points[i].data(), x, y, z);
+    const __m256 ax = _mm256_and_ps(x, abs_mask), ay = _mm256_and_ps(y, abs_mask);
+    const __m256 finite = _mm256_and_ps(
+        _mm256_and_ps(_mm256_cmp_ps(ax, inf, _CMP_LT_OQ), _mm256_cmp_ps(ay, inf, _CMP_LT_OQ)),
+        _mm256_cmp_ps(_mm256_and_ps(z, abs_mask), inf, _CMP_LT_OQ));
+    // For finite lanes, the negation of classifyTablePoint's rejection.
+    const __m256 plausible = _mm256_and_ps(
+        _mm256_and_ps(_mm256_cmp_ps(z, z_min, _CMP_GE_OQ), _mm256_cmp_ps(z, z_max, _CMP_LE_OQ)),
+        _mm256_and_ps(_mm256_cmp_ps(ax, range, _CMP_LE_OQ), _mm256_cmp_ps(ay, range, _CMP_LE_OQ)));
+    const unsigned finite_lanes = static_cast<unsigned>(_mm256_movemask_ps(finite));
+    const unsigned kept_lanes =
+        static_cast<unsigned>(_mm256_movemask_ps(_mm256_and_ps(finite, plausible)));
+    result.nonfinite_points += 8 - __builtin_popcount(finite_lanes);
+    result.implausible_points += __builtin_popcount(finite_lanes & ~kept_lanes);
+    result.table_points += __builtin_popcount(kept_lanes);
+    if (kept_lanes == 0xFFu) {  // the common case: all eight
+      points.insert(points.end(), cloud_points + i, cloud_points + i + 8);
+      alignas(32) int index[8];
+      _mm256_store_si256(reinterpret_cast<__m256i*>(index),
+                         _mm256_add_epi32(_mm256_set1_epi32(static_cast<int>(i)), lane_index));
+      pixels.insert(pixels.end(), index, index + 8);
+      continue;
+    }
+    for (unsigned lanes = kept_lanes; lanes != 0; lanes &= lanes - 1) {
+      const std::size_t k = i + static_cast<std::size_t>(__builtin_ctz(lanes));
+      points.push_back(cloud_points[k]);
+      pixels.push_back(static_cast<int>(k));
+    }
+  }
+  return i;
+}
+#endif
+
 }  // namespace
+
+void tables_detail::collectTablePoints(const OrganizedCloud& cloud, const LabelImage& labels,
+                                       const TableConfig& config,
+                                       std::vector<Eigen::Vector3f>& points,
+                                       std::vector<int>& pixels, TableDetection& result,
+                                       bool simd) {
+  const int width = cloud.width, height = cloud.height;
+#ifdef FINDMUG_AVX2_DISPATCH
+  const bool avx2 = simd && detail::cpuHasAvx2();
+#else
+  (void)simd;
+#endif
+  for (int y = 0; y < height; ++y) {
+    const std::size_t row = static_cast<std::size_t>(y) * width;
+    const std::uint8_t* label_row = labels.labels.data() + row;
+    for (int x = 0; x < width;) {
+      // Most of a frame is not table: skip to the next table pixel with
+      // memchr (vectorised) instead of a compare and branch per pixel.
+      const void* next =
+          std::memchr(label_row + x, kTableLabel, static_cast<std::size_t>(width - x));
+      if (!next) break;
+      x = static_cast<int>(static_cast<const std::uint8_t*>(next) - label_row);
+      const int run_end = tableRunEnd(label_row, x, width);
+      std::size_t i = row + static_cast<std::size_t>(x);
+      const std::size_t end = row + static_cast<std::size_t>(run_end);
+#ifdef FINDMUG_AVX2_DISPATCH
+      if (avx2) i = collectRunAvx2(cloud.points.data(), i, end, config, points, pixels, result);
+#endif
+      for (; i < end; ++i) {
+        switch (classifyTablePoint(cloud.points[i], config)) {
+          case TablePoint::kNonFinite: ++result.nonfinite_points; break;
+          case TablePoint::kImplausible: ++result.implausible_points; break;
+          case TablePoint::kKept:
+            ++result.table_points;
+            points.push_back(cloud.points[i]);
+            pixels.push_back(static_cast<int>(i));
+            break;
+        }
+      }
+      x = run_end;
+    }
+  }
+}
 
 std::string tables_detail::fmt(double value, int precision) {
   std::ostringstream out;
@@ -192,15 +319,18 @@ TableDetection detectTables(const OrganizedCloud& cloud_ground, const LabelImage
   points.clear();
   pixels.clear();
   full_pixels_buffer.clear();
-  if (stride > 1) sample_at.assign(static_cast<std::size_t>(grid_width) * grid_height, -1);
-  for (int y = 0; y < height; ++y) {
+  if (stride == 1) {
+    collectTablePoints(cloud_ground, labels, config, points, pixels, result);
+  } else {
+    sample_at.assign(static_cast<std::size_t>(grid_width) * grid_height, -1);
+  }
+  for (int y = 0; y < height && stride > 1; ++y) {
     const bool sampled_row = y % stride == 0;
     const std::size_t row = static_cast<std::size_t>(y) * width;
     const std::uint8_t* label_row = labels.labels.data() + row;
     for (int x = 0; x < width; ++x) {
       if (label_row[x] != kTableLabel) {
-        // Most of a frame is not table: skip to the next table pixel with
-        // memchr (vectorised) instead of a compare and branch per pixel.
+        // Skip to the next table pixel (as collectTablePoints).
         const void* next =
             std::memchr(label_row + x, kTableLabel, static_cast<std::size_t>(width - x));
         if (!next) break;
@@ -208,22 +338,20 @@ TableDetection detectTables(const OrganizedCloud& cloud_ground, const LabelImage
       }
       const std::size_t i = row + static_cast<std::size_t>(x);
       const Eigen::Vector3f& p = cloud_ground.points[i];
-      if (!finitePoint(p)) {
+      const TablePoint kind = classifyTablePoint(p, config);
+      if (kind == TablePoint::kNonFinite) {
         ++result.nonfinite_points;
         continue;
       }
-      if (p.z() < config.min_table_height_m || p.z() > config.max_table_height_m ||
-          std::abs(p.x()) > kMaxPlausibleRangeM || std::abs(p.y()) > kMaxPlausibleRangeM) {
+      if (kind == TablePoint::kImplausible) {
         ++result.implausible_points;
         continue;
       }
       ++result.table_points;
-      if (stride > 1) {
-        full_pixels_buffer.push_back(static_cast<int>(i));
-        if (!sampled_row || x % stride != 0) continue;
-        sample_at[static_cast<std::size_t>(y / stride) * grid_width + x / stride] =
-            static_cast<int>(points.size());
-      }
+      full_pixels_buffer.push_back(static_cast<int>(i));
+      if (!sampled_row || x % stride != 0) continue;
+      sample_at[static_cast<std::size_t>(y / stride) * grid_width + x / stride] =
+          static_cast<int>(points.size());
       points.push_back(p);
       pixels.push_back(static_cast<int>(i));
     }

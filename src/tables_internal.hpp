@@ -69,6 +69,16 @@ struct ClusterOutcome {
 ClusterOutcome describeCluster(const std::vector<Eigen::Vector3f>& points, int point_count,
                                const TableConfig& config, TableCluster& table);
 
+// Step 1 of detectTables: the table-labelled pixels' points, in pixel order,
+// that are finite and at a plausible table height and position (appended to
+// `points`, their pixel indices to `pixels`); the others counted by reason
+// in `result` (nonfinite_points, implausible_points; table_points counts
+// those kept). Every pixel is taken (point stride 1). `simd` false: the
+// portable loop even where the CPU has AVX2 (the tests compare the two).
+void collectTablePoints(const OrganizedCloud& cloud, const LabelImage& labels,
+                        const TableConfig& config, std::vector<Eigen::Vector3f>& points,
+                        std::vector<int>& pixels, TableDetection& result, bool simd = true);
+
 // Observed floor cells and obstacle points around the search positions
 // (`region`), from one pass over the labelled cloud; assess() flags a
 // position unreachable with a reason (see tables.hpp, step 5).

@@ -611,6 +611,78 @@ TEST(FindTablesReachability, ObstacleAndUnseenFloorAreFlaggedNotDropped) {
   }
 }
 
+// Step 1 of detectTables (the table points) has an AVX2 variant: the same
+// points and pixels in the same order, and the same counts by reason, as the
+// portable loop, whatever the labels' runs (image widths that leave tails of
+// every length, runs across rows) and points (NaN, infinities, heights at
+// and beyond the limits, beyond 100 m).
+TEST(FindTables, VectorTablePointsMatchThePortableLoop) {
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<float> coord(-3.0f, 3.0f);
+  std::uniform_real_distribution<float> height(0.0f, 1.5f);
+  std::uniform_int_distribution<int> kind(0, 29);
+  const TableConfig config;
+  const float inf = std::numeric_limits<float>::infinity();
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  int nonfinite = 0, implausible = 0, kept = 0;
+  for (int trial = 0; trial < 60; ++trial) {
+    const int w = 1 + static_cast<int>(rng() % 90), h = 1 + static_cast<int>(rng() % 20);
+    OrganizedCloud cloud;
+    cloud.width = w;
+    cloud.height = h;
+    LabelImage labels;
+    labels.width = w;
+    labels.height = h;
+    bool table = false;
+    for (int i = 0; i < w * h; ++i) {
+      if (rng() % 13 == 0) table = !table;  // runs of table labels
+      Eigen::Vector3f p(coord(rng), coord(rng), height(rng));
+      switch (kind(rng)) {
+        case 0: p[static_cast<int>(rng() % 3)] = nan; break;
+        case 1: p[static_cast<int>(rng() % 3)] = (rng() & 1) ? inf : -inf; break;
+        case 2: p.z() = (rng() & 1) ? config.min_table_height_m : config.max_table_height_m; break;
+        case 3: p.x() = (rng() & 1) ? 100.0f : -100.5f; break;
+        case 4: p.y() = (rng() & 1) ? -100.0f : 1e30f; break;
+        default: break;
+      }
+      cloud.points.push_back(p);
+      labels.labels.push_back(table ? kTable : kFloor);
+    }
+    labels.confidence.assign(labels.labels.size(), 1.0f);
+    std::vector<Eigen::Vector3f> points_simd, points_portable;
+    std::vector<int> pixels_simd, pixels_portable;
+    TableDetection simd, portable;
+    tables_detail::collectTablePoints(cloud, labels, config, points_simd, pixels_simd, simd, true);
+    tables_detail::collectTablePoints(cloud, labels, config, points_portable, pixels_portable,
+                                      portable, false);
+    ASSERT_EQ(pixels_simd, pixels_portable) << "trial " << trial;
+    ASSERT_EQ(points_simd.size(), points_portable.size()) << "trial " << trial;
+    for (std::size_t k = 0; k < points_simd.size(); ++k) {
+      ASSERT_EQ(std::memcmp(points_simd[k].data(), points_portable[k].data(), 12), 0)
+          << "trial " << trial << ", point " << k;
+    }
+    EXPECT_EQ(simd.table_points, portable.table_points) << "trial " << trial;
+    EXPECT_EQ(simd.nonfinite_points, portable.nonfinite_points) << "trial " << trial;
+    EXPECT_EQ(simd.implausible_points, portable.implausible_points) << "trial " << trial;
+    // Both against the labels themselves: every table pixel is counted once,
+    // and only table pixels are kept.
+    EXPECT_EQ(portable.table_points, static_cast<int>(pixels_portable.size()));
+    EXPECT_EQ(portable.table_points + portable.nonfinite_points + portable.implausible_points,
+              std::count(labels.labels.begin(), labels.labels.end(), kTable))
+        << "trial " << trial;
+    for (const int pixel : pixels_portable) {
+      ASSERT_EQ(labels.labels[static_cast<std::size_t>(pixel)], kTable) << "trial " << trial;
+    }
+    nonfinite += portable.nonfinite_points;
+    implausible += portable.implausible_points;
+    kept += portable.table_points;
+  }
+  // Every kind of point occurred.
+  EXPECT_GT(nonfinite, 50);
+  EXPECT_GT(implausible, 50);
+  EXPECT_GT(kept, 1000);
+}
+
 // The reachability grid's pass over the cloud has an AVX2 variant: it must
 // build the same grid as the portable loop, bit for bit, whatever the points
 // (NaN, infinities, points on cell borders and on the region's edges, every
