@@ -287,6 +287,7 @@ std::vector<int> tables_detail::clusterPoints(const std::vector<Eigen::Vector3f>
     run_box.setEmpty();
     run_size = 0;
   };
+  int joined_above = -1, joined_below = -1;  // the last voxels an upper link joined
   int up = 0;       // first point whose pixel is not before the one above point i's
   int row_end = 0;  // end of the image row of point i's pixel
   // Voxel coordinates kBlock points at a time: split into x, y, z arrays,
@@ -347,9 +348,16 @@ std::vector<int> tables_detail::clusterPoints(const std::vector<Eigen::Vector3f>
       }
       const int above = px - step_y;
       while (up < i && (*pixels)[up] < above) ++up;
+      // Along a row the points of one voxel often have their upper
+      // neighbours in one other voxel: once that pair is joined, the next
+      // points of the run need neither the distance nor the join (joining
+      // twice changes nothing).
       if (up < i && (*pixels)[up] == above && point_voxel[up] != last_voxel &&
+          (point_voxel[up] != joined_above || last_voxel != joined_below) &&
           (points[up] - p).squaredNorm() <= tol2) {
         sets.unite(point_voxel[up], last_voxel);
+        joined_above = point_voxel[up];
+        joined_below = last_voxel;
       }
     }
   }
