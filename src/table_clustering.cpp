@@ -289,7 +289,7 @@ std::vector<int> tables_detail::clusterPoints(const std::vector<Eigen::Vector3f>
   };
   int joined_above = -1, joined_below = -1;  // the last voxels an upper link joined
   int up = 0;       // first point whose pixel is not before the one above point i's
-  int row_end = 0;  // end of the image row of point i's pixel
+  int row_end = 0;  // end of the image row of point i's pixel (kept up to date at run starts)
   // Voxel coordinates kBlock points at a time: split into x, y, z arrays,
   // then a loop the compiler makes four wide (the same products and floors
   // as point by point).
@@ -312,24 +312,27 @@ std::vector<int> tables_detail::clusterPoints(const std::vector<Eigen::Vector3f>
     const std::uint64_t key = packVoxel(c.x(), c.y(), c.z());
     // Points come in image order, so neighbours often share a voxel: the
     // previous point's (last_key), or the one above's.
-    if (key != last_key) endRun(i);
-    if (key != last_key && pixels) {
-      const int above = (*pixels)[i] - step_y;
-      while (up < i && (*pixels)[up] < above) ++up;
-      if (up < i && (*pixels)[up] == above && voxel_coords[point_voxel[up]] == c) {
-        last_voxel = point_voxel[up];
-        last_key = key;
+    const bool new_run = key != last_key;
+    if (new_run) {
+      endRun(i);
+      if (pixels) {
+        const int above = (*pixels)[i] - step_y;
+        while (up < i && (*pixels)[up] < above) ++up;
+        if (up < i && (*pixels)[up] == above && voxel_coords[point_voxel[up]] == c) {
+          last_voxel = point_voxel[up];
+          last_key = key;
+        }
       }
-    }
-    if (key != last_key) {
-      bool inserted = false;
-      last_voxel = index.findOrInsert(key, static_cast<int>(voxel_coords.size()), inserted);
-      last_key = key;
-      if (inserted) {
-        voxel_coords.push_back(c);
-        boxes.emplace_back();
-        voxel_size.push_back(0);
-        sets.add();
+      if (key != last_key) {
+        bool inserted = false;
+        last_voxel = index.findOrInsert(key, static_cast<int>(voxel_coords.size()), inserted);
+        last_key = key;
+        if (inserted) {
+          voxel_coords.push_back(c);
+          boxes.emplace_back();
+          voxel_size.push_back(0);
+          sets.add();
+        }
       }
     }
     point_voxel[i] = last_voxel;
@@ -341,10 +344,14 @@ std::vector<int> tables_detail::clusterPoints(const std::vector<Eigen::Vector3f>
       // almost every pair of neighbouring voxels, so the voxel pass below
       // rarely has to compare points.
       const int px = (*pixels)[i];
-      while (px >= row_end) row_end += grid.width;  // pixels ascend: no division
-      if (i > 0 && (*pixels)[i - 1] == px - step_x && px - step_x >= row_end - grid.width &&
-          point_voxel[i - 1] != last_voxel && (points[i - 1] - p).squaredNorm() <= tol2) {
-        sets.unite(point_voxel[i - 1], last_voxel);
+      // The left neighbour is the previous point (when its pixel is): in
+      // the same voxel, hence linked already, unless a new run starts here.
+      if (new_run && i > 0) {
+        while (px >= row_end) row_end += grid.width;  // pixels ascend: no division
+        if ((*pixels)[i - 1] == px - step_x && px - step_x >= row_end - grid.width &&
+            (points[i - 1] - p).squaredNorm() <= tol2) {
+          sets.unite(point_voxel[i - 1], last_voxel);
+        }
       }
       const int above = px - step_y;
       while (up < i && (*pixels)[up] < above) ++up;
