@@ -295,7 +295,7 @@ struct OversegBuffers {
   std::vector<Cluster> clusters;
   std::vector<float> best;
   std::vector<int> labels, labels_full;
-  std::vector<double> density;
+  std::vector<double> density, row_terms;
   std::vector<int> valid;
   std::vector<SeedRect> stack;
   std::vector<CentreSum> sums;
@@ -510,6 +510,73 @@ __attribute__((target("avx2"))) void addRunChannelsAvx2(const float* const* ch, 
   _mm256_storeu_pd(s.ch.data() + 4, second);
   s.ch[kNZ] = nz;
   addRunChannels(ch, row, x, x1, s);  // the last pixels
+}
+#endif
+
+// placeSeeds: the seed density of coarse pixel i, the seeds its surface
+// needs (0 where no full pixel of its block is valid).
+double seedDensity(const FeatureGrid& coarse, const std::uint8_t* block_valid, std::size_t i,
+                   double pixel_solid, double per_seed_area) {
+  if (block_valid[i] == 0) return 0.0;
+  const float px = coarse.ch[kX][i], py = coarse.ch[kY][i], pz = coarse.ch[kZ][i];
+  const float range = std::sqrt(px * px + py * py + pz * pz);
+  const float dot = px * coarse.ch[kNX][i] + py * coarse.ch[kNY][i] + pz * coarse.ch[kNZ][i];
+  const bool has_normal =
+      coarse.ch[kNX][i] != 0.0f || coarse.ch[kNY][i] != 0.0f || coarse.ch[kNZ][i] != 0.0f;
+  const float cosine = has_normal ? std::max(std::fabs(dot) / range, kMinCosine) : 1.0f;
+  const double footprint = std::min(static_cast<double>(pz) * pz / cosine, kMaxFootprint);
+  return block_valid[i] * footprint * pixel_solid / per_seed_area;
+}
+
+#if defined(FINDMUG_AVX2_DISPATCH)
+// seedDensity of coarse pixels first .. first + 7 into out[0..7]: the same
+// float and double operations as lanes (std::max and std::min as max/min
+// with the operands in the order that returns a NaN first operand, as they
+// do). Its square root and three divisions per pixel were most of
+// placeSeeds' time one pixel at a time.
+__attribute__((target("avx2"))) void seedDensity8(const FeatureGrid& coarse,
+                                                  const std::uint8_t* block_valid,
+                                                  std::size_t first, double pixel_solid,
+                                                  double per_seed_area, double* out) {
+  const __m256 px = _mm256_loadu_ps(coarse.ch[kX].data() + first);
+  const __m256 py = _mm256_loadu_ps(coarse.ch[kY].data() + first);
+  const __m256 pz = _mm256_loadu_ps(coarse.ch[kZ].data() + first);
+  const __m256 nx = _mm256_loadu_ps(coarse.ch[kNX].data() + first);
+  const __m256 ny = _mm256_loadu_ps(coarse.ch[kNY].data() + first);
+  const __m256 nz = _mm256_loadu_ps(coarse.ch[kNZ].data() + first);
+  const __m256 range = _mm256_sqrt_ps(_mm256_add_ps(
+      _mm256_add_ps(_mm256_mul_ps(px, px), _mm256_mul_ps(py, py)), _mm256_mul_ps(pz, pz)));
+  const __m256 dot = _mm256_add_ps(_mm256_add_ps(_mm256_mul_ps(px, nx), _mm256_mul_ps(py, ny)),
+                                   _mm256_mul_ps(pz, nz));
+  const __m256 zero = _mm256_setzero_ps();
+  const __m256 has_normal = _mm256_or_ps(
+      _mm256_or_ps(_mm256_cmp_ps(nx, zero, _CMP_NEQ_UQ), _mm256_cmp_ps(ny, zero, _CMP_NEQ_UQ)),
+      _mm256_cmp_ps(nz, zero, _CMP_NEQ_UQ));
+  const __m256 abs_dot = _mm256_and_ps(dot, _mm256_castsi256_ps(_mm256_set1_epi32(0x7fffffff)));
+  // std::max(a, m) = a < m ? m : a: max_ps(m, a) = m > a ? m : a.
+  const __m256 slant = _mm256_max_ps(_mm256_set1_ps(kMinCosine), _mm256_div_ps(abs_dot, range));
+  const __m256 cosine = _mm256_blendv_ps(_mm256_set1_ps(1.0f), slant, has_normal);
+  const __m256i valid_bytes = _mm256_cvtepu8_epi32(
+      _mm_loadl_epi64(reinterpret_cast<const __m128i*>(block_valid + first)));
+  for (int half = 0; half < 2; ++half) {
+    const __m128 pz4 = half == 0 ? _mm256_castps256_ps128(pz) : _mm256_extractf128_ps(pz, 1);
+    const __m128 cos4 =
+        half == 0 ? _mm256_castps256_ps128(cosine) : _mm256_extractf128_ps(cosine, 1);
+    const __m128i valid4 = half == 0 ? _mm256_castsi256_si128(valid_bytes)
+                                     : _mm256_extracti128_si256(valid_bytes, 1);
+    const __m256d pzd = _mm256_cvtps_pd(pz4);
+    // std::min(f, k) = k < f ? k : f: min_pd(k, f) = k < f ? k : f.
+    const __m256d footprint = _mm256_min_pd(
+        _mm256_set1_pd(kMaxFootprint), _mm256_div_pd(_mm256_mul_pd(pzd, pzd), _mm256_cvtps_pd(cos4)));
+    const __m256d count = _mm256_cvtepi32_pd(valid4);
+    const __m256d density = _mm256_div_pd(
+        _mm256_mul_pd(_mm256_mul_pd(count, footprint), _mm256_set1_pd(pixel_solid)),
+        _mm256_set1_pd(per_seed_area));
+    // Pixels without a valid full pixel: 0, as seedDensity.
+    const __m256d none = _mm256_castsi256_pd(_mm256_cmpeq_epi64(_mm256_cvtepi32_epi64(valid4),
+                                                                _mm256_setzero_si256()));
+    _mm256_storeu_pd(out + 4 * half, _mm256_andnot_pd(none, density));
+  }
 }
 #endif
 
@@ -943,23 +1010,34 @@ class OrganizedOversegmenter final : public Oversegmenter {
     std::vector<int>& valid = *valid_buffer;
     valid.assign((cw + 1) * static_cast<std::size_t>(chh + 1), 0);
     const auto at = [cw](int x, int y) { return static_cast<std::size_t>(y) * (cw + 1) + x; };
+    // Each row's densities first (eight at a time with AVX2), then its
+    // running sums in order. A pixel without a valid full pixel adds +0,
+    // which leaves the sum (never -0) as it is.
+    Borrowed row_terms_buffer(g_buffers.row_terms);
+    std::vector<double>& row_terms = *row_terms_buffer;
+    row_terms.resize(static_cast<std::size_t>(cw));
+#if defined(FINDMUG_AVX2_DISPATCH)
+    const bool avx2 = simd_ == detail::OversegSimd::Auto && detail::cpuHasAvx2();
+#endif
     for (int y = 0; y < chh; ++y) {
+      const std::size_t row = static_cast<std::size_t>(y) * cw;
+      int x = 0;
+#if defined(FINDMUG_AVX2_DISPATCH)
+      if (avx2) {
+        for (; x + 8 <= cw; x += 8) {
+          seedDensity8(coarse, block_valid.data(), row + x, pixel_solid, per_seed_area,
+                       row_terms.data() + x);
+        }
+      }
+#endif
+      for (; x < cw; ++x) {
+        row_terms[x] = seedDensity(coarse, block_valid.data(), row + x, pixel_solid, per_seed_area);
+      }
       double row_density = 0;
       int row_valid = 0;
-      for (int x = 0; x < cw; ++x) {
-        const std::size_t i = static_cast<std::size_t>(y) * cw + x;
-        if (block_valid[i] > 0) {
-          const float px = coarse.ch[kX][i], py = coarse.ch[kY][i], pz = coarse.ch[kZ][i];
-          const float range = std::sqrt(px * px + py * py + pz * pz);
-          const float dot =
-              px * coarse.ch[kNX][i] + py * coarse.ch[kNY][i] + pz * coarse.ch[kNZ][i];
-          const bool has_normal =
-              coarse.ch[kNX][i] != 0.0f || coarse.ch[kNY][i] != 0.0f || coarse.ch[kNZ][i] != 0.0f;
-          const float cosine = has_normal ? std::max(std::fabs(dot) / range, kMinCosine) : 1.0f;
-          const double footprint = std::min(static_cast<double>(pz) * pz / cosine, kMaxFootprint);
-          row_density += block_valid[i] * footprint * pixel_solid / per_seed_area;
-          ++row_valid;
-        }
+      for (x = 0; x < cw; ++x) {
+        row_density += row_terms[x];
+        row_valid += block_valid[row + x] > 0 ? 1 : 0;
         density[at(x + 1, y + 1)] = density[at(x + 1, y)] + row_density;
         valid[at(x + 1, y + 1)] = valid[at(x + 1, y)] + row_valid;
       }

@@ -11,7 +11,7 @@ namespace findmug::detail {
 std::unique_ptr<Oversegmenter> makePclSupervoxelOversegmenter(const OversegmentationConfig& config);
 enum class OversegSimd {
   Auto,  // AVX2 where the CPU has it (what makeOversegmenter builds)
-  Off,   // the organized oversegmenter's refinement and centre sums scalar only
+  Off,   // the organized oversegmenter's refinement, centre sums and seed density scalar only
 };
 
 std::unique_ptr<Oversegmenter> makeOrganizedOversegmenter(

@@ -707,9 +707,10 @@ TEST(OrganizedOversegmenter, SegmentsAreConnectedAndAvoidHoles) {
 }
 
 // The organized oversegmenter decides most full-resolution pixels eight at
-// a time with AVX2 (refineBlockAvx2) and the rest one by one, and sums its
-// cluster centres four pixels at a time (addRunChannelsAvx2): the same
-// segmentation as the scalar code for both, on the NYU frames and on
+// a time with AVX2 (refineBlockAvx2) and the rest one by one, sums its
+// cluster centres four pixels at a time (addRunChannelsAvx2) and works out
+// the seed density eight coarse pixels at a time (seedDensity8): the same
+// segmentation as the scalar code for all three, on the NYU frames and on
 // the box scene with holes, NaN coordinates, a zero depth and image widths
 // that leave a tail of every length after the blocks.
 TEST(OrganizedOversegmenter, AvxRefinementMatchesTheScalarCodeExactly) {
