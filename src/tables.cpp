@@ -94,7 +94,7 @@ TablePoint classifyTablePoint(const Eigen::Vector3f& p, const TableConfig& confi
 }
 
 // Where the run of table labels that starts at row[x] ends (the first
-// other label, or width): sixteen labels a time.
+// other label, or width): sixteen labels at a time.
 int tableRunEnd(const std::uint8_t* row, int x, int width) {
 #if defined(__SSE2__)
   const __m128i table = _mm_set1_epi8(static_cast<char>(kTableLabel));
