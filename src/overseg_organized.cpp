@@ -566,8 +566,9 @@ __attribute__((target("avx2"))) void seedDensity8(const FeatureGrid& coarse,
                                      : _mm256_extracti128_si256(valid_bytes, 1);
     const __m256d pzd = _mm256_cvtps_pd(pz4);
     // std::min(f, k) = k < f ? k : f: min_pd(k, f) = k < f ? k : f.
-    const __m256d footprint = _mm256_min_pd(
-        _mm256_set1_pd(kMaxFootprint), _mm256_div_pd(_mm256_mul_pd(pzd, pzd), _mm256_cvtps_pd(cos4)));
+    const __m256d footprint =
+        _mm256_min_pd(_mm256_set1_pd(kMaxFootprint),
+                      _mm256_div_pd(_mm256_mul_pd(pzd, pzd), _mm256_cvtps_pd(cos4)));
     const __m256d count = _mm256_cvtepi32_pd(valid4);
     const __m256d density = _mm256_div_pd(
         _mm256_mul_pd(_mm256_mul_pd(count, footprint), _mm256_set1_pd(pixel_solid)),

@@ -96,9 +96,9 @@ __attribute__((target("avx2"))) std::size_t passAvx2(const Eigen::Vector3f* poin
         _mm256_cvtepu8_epi32(_mm_cvtsi64_si128(label_bytes)), floor_label));
     const __m256 floor = _mm256_and_ps(
         is_floor_label, _mm256_cmp_ps(_mm256_and_ps(z, abs_mask), floor_tolerance, _CMP_LE_OQ));
-    const __m256 obstacle =
-        _mm256_andnot_ps(is_floor_label, _mm256_and_ps(_mm256_cmp_ps(z, obstacle_low, _CMP_GE_OQ),
-                                                       _mm256_cmp_ps(z, obstacle_high, _CMP_LE_OQ)));
+    const __m256 in_band = _mm256_and_ps(_mm256_cmp_ps(z, obstacle_low, _CMP_GE_OQ),
+                                         _mm256_cmp_ps(z, obstacle_high, _CMP_LE_OQ));
+    const __m256 obstacle = _mm256_andnot_ps(is_floor_label, in_band);
     const int floor_lanes = _mm256_movemask_ps(_mm256_and_ps(in_box, floor));
     const int obstacle_lanes = _mm256_movemask_ps(_mm256_and_ps(in_box, obstacle));
     if ((floor_lanes | obstacle_lanes) == 0) continue;
