@@ -724,11 +724,7 @@ class OrganizedOversegmenter final : public Oversegmenter {
     Borrowed labels_buffer(g_buffers.labels);
     std::vector<int>& labels = *labels_buffer;
     labels.resize(nc);
-#if defined(FINDMUG_AVX2_DISPATCH)
-    const bool centre_sums_avx2 = simd_ == detail::OversegSimd::Auto && detail::cpuHasAvx2();
-#else
-    const bool centre_sums_avx2 = false;
-#endif
+    const bool centre_sums_avx2 = useAvx2();
     for (int iter = 0; iter < config_.max_iterations; ++iter) {
       std::fill(best.begin(), best.end(), std::numeric_limits<float>::infinity());
       std::fill(labels.begin(), labels.end(), -1);
@@ -847,7 +843,7 @@ class OrganizedOversegmenter final : public Oversegmenter {
     pending.resize(w);
     picks.resize(w);
 #if defined(FINDMUG_AVX2_DISPATCH)
-    const bool avx2 = simd_ == detail::OversegSimd::Auto && detail::cpuHasAvx2();
+    const bool avx2 = useAvx2();
 #endif
     for (int y = 0; y < h; ++y) {
       std::size_t waiting = 0;
@@ -1018,7 +1014,7 @@ class OrganizedOversegmenter final : public Oversegmenter {
     std::vector<double>& row_terms = *row_terms_buffer;
     row_terms.resize(static_cast<std::size_t>(cw));
 #if defined(FINDMUG_AVX2_DISPATCH)
-    const bool avx2 = simd_ == detail::OversegSimd::Auto && detail::cpuHasAvx2();
+    const bool avx2 = useAvx2();
 #endif
     for (int y = 0; y < chh; ++y) {
       const std::size_t row = static_cast<std::size_t>(y) * cw;
@@ -1389,6 +1385,16 @@ class OrganizedOversegmenter final : public Oversegmenter {
         std::fill(row + runs[r].x0, row + runs[r].x1, merged[run_piece[r]]);
       }
     }
+  }
+
+  // Whether the AVX2 variants (refinement, centre sums, seed density) run:
+  // the CPU has AVX2 and the tests did not switch them off.
+  bool useAvx2() const {
+#if defined(FINDMUG_AVX2_DISPATCH)
+    return simd_ == detail::OversegSimd::Auto && detail::cpuHasAvx2();
+#else
+    return false;
+#endif
   }
 
   OversegmentationConfig config_;

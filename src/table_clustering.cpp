@@ -169,14 +169,15 @@ float squaredGap(const Eigen::AlignedBox3f& a, const Eigen::AlignedBox3f& b) {
   return gap2;
 }
 
-// may_link[v] = 1 when voxel v's box comes within the tolerance (squared:
+// scratch.may_link[v] = 1 when voxel v's box comes within the tolerance (squared:
 // tol2) of the box of a set other than its own, in the partition `sets`
 // holds now; 0 otherwise (clusterPoints says why such voxels need no look).
 // With many sets (fragmented points) every voxel is marked: the test would
 // cost more than it saves.
 void markVoxelsThatMayLink(DisjointSets& sets, const std::vector<Eigen::AlignedBox3f>& boxes,
-                           float tol2, ClusterScratch& scratch, std::vector<std::uint8_t>& may_link) {
+                           float tol2, ClusterScratch& scratch) {
   constexpr int kMaxSets = 64;
+  std::vector<std::uint8_t>& may_link = scratch.may_link;
   const int voxels = static_cast<int>(boxes.size());
   std::vector<int>& set_of = scratch.set_of;  // dense set index per voxel
   std::vector<int>& index_of_root = scratch.index_of_root;  // dense set index per root, or -1
@@ -471,7 +472,7 @@ std::vector<int> tables_detail::clusterPoints(const std::vector<Eigen::Vector3f>
   // voxels' boxes, and the squared gap only shrinks as a box grows, in
   // floats too), and then tryPair returns without a change. Skipping them
   // leaves the partition, and so the labels, as they are.
-  markVoxelsThatMayLink(sets, boxes, tol2, scratch, may_link);
+  markVoxelsThatMayLink(sets, boxes, tol2, scratch);
   for (int ring = 1; ring <= kReach; ++ring) {
     for (int a = 0; a < voxels; ++a) {
       if (!may_link[a]) continue;

@@ -22,8 +22,9 @@ namespace {
 // What the pass over the cloud needs: the box that rejects most points, the
 // grid, the height bands, and where the results go.
 struct CloudPass {
-  float x_min, x_max, y_min, y_max;  // the grid one cell larger on each side
-  float origin_x, origin_y, cell;
+  float origin_x, origin_y;  // the grid's corner, also the box's lower corner
+  float x_max, y_max;        // the box's upper corner: the grid one cell larger
+  float cell;
   int cols, rows;
   float floor_tolerance, obstacle_low, obstacle_high;
   std::uint8_t* floor_seen;
@@ -39,7 +40,7 @@ void passPortable(const Eigen::Vector3f* points, const std::uint8_t* labels, std
                   std::size_t end, const CloudPass& pass) {
   for (std::size_t i = begin; i < end; ++i) {
     const Eigen::Vector3f& p = points[i];
-    if (!(p.x() >= pass.x_min && p.x() <= pass.x_max && p.y() >= pass.y_min &&
+    if (!(p.x() >= pass.origin_x && p.x() <= pass.x_max && p.y() >= pass.origin_y &&
           p.y() <= pass.y_max)) {
       continue;
     }
@@ -47,11 +48,9 @@ void passPortable(const Eigen::Vector3f* points, const std::uint8_t* labels, std
     const bool floor = floor_label && std::abs(p.z()) <= pass.floor_tolerance;
     const bool obstacle = !floor_label && p.z() >= pass.obstacle_low && p.z() <= pass.obstacle_high;
     if (!floor && !obstacle) continue;
-    // ReachabilityGrid::cellOf.
-    const int col = floorToInt((p.x() - pass.origin_x) / pass.cell);
-    const int row = floorToInt((p.y() - pass.origin_y) / pass.cell);
-    if (col < 0 || row < 0 || col >= pass.cols || row >= pass.rows) continue;
-    const int c = row * pass.cols + col;
+    const int c =
+        gridCell(p.x(), p.y(), pass.origin_x, pass.origin_y, pass.cell, pass.cols, pass.rows);
+    if (c < 0) continue;
     if (floor) {
       pass.floor_seen[c] = 1;
     } else if (pass.in_window[c]) {
@@ -70,10 +69,8 @@ void passPortable(const Eigen::Vector3f* points, const std::uint8_t* labels, std
 __attribute__((target("avx2"))) std::size_t passAvx2(const Eigen::Vector3f* points,
                                                      const std::uint8_t* labels, std::size_t n,
                                                      const CloudPass& pass) {
-  const __m256 x_min = _mm256_set1_ps(pass.x_min), x_max = _mm256_set1_ps(pass.x_max);
-  const __m256 y_min = _mm256_set1_ps(pass.y_min), y_max = _mm256_set1_ps(pass.y_max);
-  const __m256 origin_x = _mm256_set1_ps(pass.origin_x);
-  const __m256 origin_y = _mm256_set1_ps(pass.origin_y);
+  const __m256 origin_x = _mm256_set1_ps(pass.origin_x), x_max = _mm256_set1_ps(pass.x_max);
+  const __m256 origin_y = _mm256_set1_ps(pass.origin_y), y_max = _mm256_set1_ps(pass.y_max);
   const __m256 cell = _mm256_set1_ps(pass.cell);
   const __m256 floor_tolerance = _mm256_set1_ps(pass.floor_tolerance);
   const __m256 obstacle_low = _mm256_set1_ps(pass.obstacle_low);
@@ -87,8 +84,8 @@ __attribute__((target("avx2"))) std::size_t passAvx2(const Eigen::Vector3f* poin
     __m256 x, y, z;
     detail::loadVec3x8(points[i].data(), x, y, z);
     const __m256 in_box = _mm256_and_ps(
-        _mm256_and_ps(_mm256_cmp_ps(x, x_min, _CMP_GE_OQ), _mm256_cmp_ps(x, x_max, _CMP_LE_OQ)),
-        _mm256_and_ps(_mm256_cmp_ps(y, y_min, _CMP_GE_OQ), _mm256_cmp_ps(y, y_max, _CMP_LE_OQ)));
+        _mm256_and_ps(_mm256_cmp_ps(x, origin_x, _CMP_GE_OQ), _mm256_cmp_ps(x, x_max, _CMP_LE_OQ)),
+        _mm256_and_ps(_mm256_cmp_ps(y, origin_y, _CMP_GE_OQ), _mm256_cmp_ps(y, y_max, _CMP_LE_OQ)));
     if (_mm256_movemask_ps(in_box) == 0) continue;
     std::int64_t label_bytes;
     std::memcpy(&label_bytes, labels + i, sizeof label_bytes);
@@ -102,7 +99,8 @@ __attribute__((target("avx2"))) std::size_t passAvx2(const Eigen::Vector3f* poin
     const int floor_lanes = _mm256_movemask_ps(_mm256_and_ps(in_box, floor));
     const int obstacle_lanes = _mm256_movemask_ps(_mm256_and_ps(in_box, obstacle));
     if ((floor_lanes | obstacle_lanes) == 0) continue;
-    // floorToInt: truncate, then one less where that rounded up.
+    // gridCell as lanes. floorToInt: truncate, then one less where that
+    // rounded up.
     const __m256 col_f = _mm256_div_ps(_mm256_sub_ps(x, origin_x), cell);
     const __m256 row_f = _mm256_div_ps(_mm256_sub_ps(y, origin_y), cell);
     __m256i col = _mm256_cvttps_epi32(col_f), row = _mm256_cvttps_epi32(row_f);
@@ -172,12 +170,10 @@ ReachabilityGrid::ReachabilityGrid(const OrganizedCloud& cloud, const LabelImage
   std::vector<std::pair<int, Eigen::Vector2f>>& obstacles = *obstacles_buffer;
   obstacles.clear();
   CloudPass pass;
-  pass.x_min = origin_.x();
-  pass.y_min = origin_.y();
-  pass.x_max = origin_.x() + static_cast<float>(cols_ + 1) * cell_;
-  pass.y_max = origin_.y() + static_cast<float>(rows_ + 1) * cell_;
   pass.origin_x = origin_.x();
   pass.origin_y = origin_.y();
+  pass.x_max = origin_.x() + static_cast<float>(cols_ + 1) * cell_;
+  pass.y_max = origin_.y() + static_cast<float>(rows_ + 1) * cell_;
   pass.cell = cell_;
   pass.cols = cols_;
   pass.rows = rows_;

@@ -82,6 +82,17 @@ void collectTablePoints(const OrganizedCloud& cloud, const LabelImage& labels,
 // Observed floor cells and obstacle points around the search positions
 // (`region`), from one pass over the labelled cloud; assess() flags a
 // position unreachable with a reason (see tables.hpp, step 5).
+// Index of the cell holding (x, y) on a grid of cols x rows square cells of
+// edge `cell` from (origin_x, origin_y), or -1 outside it. The reachability
+// grid's cells (ReachabilityGrid::cellOf and the pass that builds it).
+inline int gridCell(float x, float y, float origin_x, float origin_y, float cell, int cols,
+                    int rows) {
+  const int col = floorToInt((x - origin_x) / cell);
+  const int row = floorToInt((y - origin_y) / cell);
+  if (col < 0 || row < 0 || col >= cols || row >= rows) return -1;
+  return row * cols + col;
+}
+
 class ReachabilityGrid {
  public:
   // `positions`: every position that assess() will be asked about.
@@ -106,10 +117,7 @@ class ReachabilityGrid {
   };
   Window windowOf(const Eigen::Vector2f& q) const;
   int cellOf(const Eigen::Vector2f& xy) const {
-    const int col = floorToInt((xy.x() - origin_.x()) / cell_);
-    const int row = floorToInt((xy.y() - origin_.y()) / cell_);
-    if (col < 0 || row < 0 || col >= cols_ || row >= rows_) return -1;
-    return row * cols_ + col;
+    return gridCell(xy.x(), xy.y(), origin_.x(), origin_.y(), cell_, cols_, rows_);
   }
 
   // This thread's buffers from earlier frames (scratch.hpp), borrowed for
