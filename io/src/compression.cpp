@@ -4,12 +4,18 @@
 #include <libdeflate.h>
 #include <zlib.h>
 
+#include <algorithm>
+#include <array>
 #include <csetjmp>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
 #include <limits>
 #include <memory>
+
+#if defined(__SSE2__)
+#include <emmintrin.h>
+#endif
 
 #include "findmug/error.hpp"
 
@@ -36,6 +42,337 @@ std::vector<std::uint8_t> zlibCompress(const std::uint8_t* data, std::size_t siz
   if (rc != Z_STREAM_END) throw Error("zlib: deflate failed with code " + std::to_string(rc));
   out.resize(written);
   return out;
+}
+
+namespace {
+
+// ---- zlibCompressRuns: deflate (RFC 1951) for images made of runs ----------
+//
+// The data becomes tokens: a run of one byte value is the byte as a literal,
+// then matches at distance 1 (lengths 3..258) for its other copies. One
+// block with Huffman codes fitted to this image's tokens (a label image uses
+// a handful of literals and length symbols, so they cost a few bits each),
+// or stored blocks when that would be larger.
+
+constexpr int kMinMatch = 3;
+constexpr int kMaxMatch = 258;
+constexpr int kEndOfBlock = 256;
+constexpr int kLitLenSymbols = 286;  // 0..255 literals, 256 end, 257..285 lengths
+constexpr int kMaxCodeBits = 15;
+constexpr int kCodeLengthSymbols = 19;
+constexpr int kMaxCodeLengthBits = 7;
+
+// Length symbols 257..285: base lengths and extra bit counts (RFC 1951 3.2.5).
+constexpr int kLengthBase[29] = {3,  4,  5,  6,  7,  8,  9,  10, 11,  13,  15,  17,  19,  23, 27,
+                                 31, 35, 43, 51, 59, 67, 83, 99, 115, 131, 163, 195, 227, 258};
+constexpr int kLengthExtra[29] = {0, 0, 0, 0, 0, 0, 0, 0, 1, 1, 1, 1, 2, 2, 2,
+                                  2, 3, 3, 3, 3, 4, 4, 4, 4, 5, 5, 5, 5, 0};
+
+// Index into kLengthBase of each match length.
+struct LengthTable {
+  LengthTable() {
+    for (int length = kMinMatch; length <= kMaxMatch; ++length) {
+      int k = 28;
+      while (kLengthBase[k] > length) --k;
+      index[length] = static_cast<std::uint8_t>(k);
+    }
+  }
+  std::array<std::uint8_t, kMaxMatch + 1> index{};
+};
+
+// LSB-first bit writer into a buffer the caller sized: whole 32-bit words
+// are stored as soon as they are full. Huffman codes go in bit-reversed
+// (deflate sends them most significant bit first).
+class BitWriter {
+ public:
+  explicit BitWriter(std::uint8_t* out) : out_(out) {}
+  void put(std::uint32_t value, std::uint32_t count) {  // count <= 32
+    pending_ |= static_cast<std::uint64_t>(value) << count_;
+    count_ += count;
+    if (count_ >= 32) {
+      const auto word = static_cast<std::uint32_t>(pending_);
+      for (int k = 0; k < 4; ++k) out_[k] = static_cast<std::uint8_t>(word >> (8 * k));
+      out_ += 4;
+      pending_ >>= 32;
+      count_ -= 32;
+    }
+  }
+  // Pads to a whole byte and returns the end of the output.
+  std::uint8_t* finish() {
+    while (count_ > 0) {
+      *out_++ = static_cast<std::uint8_t>(pending_);
+      pending_ >>= 8;
+      count_ = count_ > 8 ? count_ - 8 : 0;
+    }
+    return out_;
+  }
+
+ private:
+  std::uint8_t* out_;
+  std::uint64_t pending_ = 0;
+  std::uint32_t count_ = 0;
+};
+
+// Huffman code lengths for freq[0..n), none longer than max_bits: Huffman's
+// construction (two queues over the symbols sorted by count), and while the
+// deepest code is too long, the counts halved (kept above 0) and the code
+// built again. Symbols of count 0 get length 0. At least two symbols get a
+// code (a one-symbol code is not a complete prefix code; deflate decoders
+// reject most incomplete ones), so a lone symbol is paired with another.
+void huffmanLengths(std::vector<std::uint32_t> freq, int max_bits, std::uint8_t* lengths) {
+  const int n = static_cast<int>(freq.size());
+  int used = 0;
+  for (int s = 0; s < n; ++s) used += freq[s] > 0 ? 1 : 0;
+  for (int s = 0; s < n && used < 2; ++s) {
+    if (freq[s] == 0) {
+      freq[s] = 1;
+      ++used;
+    }
+  }
+  std::vector<int> leaves, parent;
+  std::vector<std::uint64_t> weight;
+  while (true) {
+    leaves.clear();
+    for (int s = 0; s < n; ++s) {
+      if (freq[s] > 0) leaves.push_back(s);
+    }
+    std::sort(leaves.begin(), leaves.end(),
+              [&](int a, int b) { return freq[a] != freq[b] ? freq[a] < freq[b] : a < b; });
+    const int m = static_cast<int>(leaves.size());
+    // Nodes 0..m-1 are the leaves in sorted order, m.. the merged ones in
+    // the order they are made (their weights never decrease).
+    weight.assign(static_cast<std::size_t>(2 * m - 1), 0);
+    parent.assign(static_cast<std::size_t>(2 * m - 1), -1);
+    for (int k = 0; k < m; ++k) weight[k] = freq[leaves[k]];
+    int next_leaf = 0, next_merged = m;
+    const auto take = [&](int made) {
+      if (next_leaf < m && (next_merged >= made || weight[next_leaf] <= weight[next_merged])) {
+        return next_leaf++;
+      }
+      return next_merged++;
+    };
+    for (int made = m; made < 2 * m - 1; ++made) {
+      const int a = take(made);
+      const int b = take(made);
+      weight[made] = weight[a] + weight[b];
+      parent[a] = parent[b] = made;
+    }
+    // Depths, from the root (the last node) down.
+    std::vector<int> depth(static_cast<std::size_t>(2 * m - 1), 0);
+    int deepest = 0;
+    for (int k = 2 * m - 3; k >= 0; --k) {
+      depth[k] = depth[parent[k]] + 1;
+      if (k < m) deepest = std::max(deepest, depth[k]);
+    }
+    if (deepest <= max_bits) {
+      for (int s = 0; s < n; ++s) lengths[s] = 0;
+      for (int k = 0; k < m; ++k) lengths[leaves[k]] = static_cast<std::uint8_t>(depth[k]);
+      return;
+    }
+    for (auto& f : freq) {
+      if (f > 0) f = (f + 1) / 2;
+    }
+  }
+}
+
+// Canonical codes of `lengths` (RFC 1951 3.2.2), bit-reversed for BitWriter.
+void canonicalCodes(const std::uint8_t* lengths, int n, std::uint32_t* codes) {
+  int count[kMaxCodeBits + 1] = {};
+  for (int s = 0; s < n; ++s) ++count[lengths[s]];
+  count[0] = 0;
+  std::uint32_t next[kMaxCodeBits + 2] = {};
+  std::uint32_t code = 0;
+  for (int bits = 1; bits <= kMaxCodeBits; ++bits) {
+    code = (code + static_cast<std::uint32_t>(count[bits - 1])) << 1;
+    next[bits] = code;
+  }
+  for (int s = 0; s < n; ++s) {
+    const int len = lengths[s];
+    if (len == 0) {
+      codes[s] = 0;
+      continue;
+    }
+    const std::uint32_t c = next[len]++;
+    std::uint32_t reversed = 0;
+    for (int b = 0; b < len; ++b) reversed |= ((c >> b) & 1u) << (len - 1 - b);
+    codes[s] = reversed;
+  }
+}
+
+// End of the run of data[i]'s value that starts at i (i < size).
+std::size_t runEnd(const std::uint8_t* data, std::size_t i, std::size_t size) {
+  const std::uint8_t v = data[i];
+  std::size_t end = i + 1;
+#if defined(__SSE2__)
+  const __m128i value = _mm_set1_epi8(static_cast<char>(v));
+  for (; end + 16 <= size; end += 16) {
+    const __m128i bytes = _mm_loadu_si128(reinterpret_cast<const __m128i*>(data + end));
+    const int same = _mm_movemask_epi8(_mm_cmpeq_epi8(bytes, value));
+    if (same != 0xffff) return end + static_cast<std::size_t>(__builtin_ctz(~same & 0xffff));
+  }
+#endif
+  while (end < size && data[end] == v) ++end;
+  return end;
+}
+
+constexpr std::uint8_t kZlibHeader[2] = {0x78, 0x01};  // deflate, 32 KiB window; no dictionary
+
+void putAdler32(std::uint32_t adler, std::uint8_t* out) {  // big-endian (RFC 1950)
+  for (int k = 0; k < 4; ++k) out[k] = static_cast<std::uint8_t>(adler >> (24 - 8 * k));
+}
+
+// The zlib stream of `data` in stored blocks (RFC 1951 3.2.4) into `out`;
+// returns its end.
+std::uint8_t* storedZlib(const std::uint8_t* data, std::size_t size, std::uint8_t* out) {
+  *out++ = kZlibHeader[0];
+  *out++ = kZlibHeader[1];
+  std::size_t done = 0;
+  do {
+    const std::size_t length = std::min<std::size_t>(size - done, 65535);
+    *out++ = done + length == size ? 1 : 0;  // BFINAL, BTYPE 00, padding
+    const auto len = static_cast<std::uint16_t>(length);
+    const auto nlen = static_cast<std::uint16_t>(~len);
+    *out++ = static_cast<std::uint8_t>(len);
+    *out++ = static_cast<std::uint8_t>(len >> 8);
+    *out++ = static_cast<std::uint8_t>(nlen);
+    *out++ = static_cast<std::uint8_t>(nlen >> 8);
+    if (length > 0) std::memcpy(out, data + done, length);
+    out += length;
+    done += length;
+  } while (done < size);
+  putAdler32(static_cast<std::uint32_t>(libdeflate_adler32(1, data, size)), out);
+  return out + 4;
+}
+
+// A token: a literal byte (< 256) or a match at distance 1 of length
+// token - 256 + kMinMatch.
+std::uint16_t matchToken(std::size_t length) {
+  return static_cast<std::uint16_t>(256 + length - kMinMatch);
+}
+
+}  // namespace
+
+std::vector<std::uint8_t> zlibCompressRuns(const std::uint8_t* data, std::size_t size) {
+  static const LengthTable length_table;
+  // Per thread, grown to the largest image and then kept: no allocation per
+  // image but the result.
+  thread_local std::vector<std::uint16_t> tokens;
+  thread_local std::vector<std::uint8_t> scratch;
+  tokens.resize(size + 1);
+
+  // Tokens and the counts of the literal/length symbols.
+  std::vector<std::uint32_t> lit_freq(kLitLenSymbols, 0);
+  std::size_t count = 0;
+  for (std::size_t i = 0; i < size;) {
+    const std::size_t end = runEnd(data, i, size);
+    const std::uint8_t value = data[i];
+    tokens[count++] = value;
+    ++lit_freq[value];
+    std::size_t left = end - i - 1;  // copies of the value after the literal
+    while (left >= kMinMatch) {
+      std::size_t length = std::min<std::size_t>(left, kMaxMatch);
+      // Never leave 1 or 2 behind a full match when a shorter one avoids it.
+      if (left > length && left - length < kMinMatch) length -= kMinMatch;
+      tokens[count++] = matchToken(length);
+      ++lit_freq[257 + length_table.index[length]];
+      left -= length;
+    }
+    for (; left > 0; --left) {
+      tokens[count++] = value;
+      ++lit_freq[value];
+    }
+    i = end;
+  }
+  lit_freq[kEndOfBlock] = 1;
+
+  // Codes: literal/length from the counts; distance: codes 0 and 1 of one
+  // bit each (only code 0, distance 1, is used; two make a complete code).
+  std::uint8_t lengths[kLitLenSymbols + 2];
+  huffmanLengths(lit_freq, kMaxCodeBits, lengths);
+  int hlit = kLitLenSymbols;
+  while (hlit > 257 && lengths[hlit - 1] == 0) --hlit;
+  lengths[hlit] = 1;
+  lengths[hlit + 1] = 1;
+  std::uint32_t lit_code[kLitLenSymbols];
+  canonicalCodes(lengths, hlit, lit_code);
+  // The two lengths sequences, run-length coded: 0..15 as themselves, runs
+  // of zeros as 17 (3..10, 3 extra bits) and 18 (11..138, 7 extra bits).
+  const int total = hlit + 2;
+  std::uint8_t cl_symbol[kLitLenSymbols + 2], cl_extra[kLitLenSymbols + 2];
+  int cl_count = 0;
+  std::vector<std::uint32_t> cl_freq(kCodeLengthSymbols, 0);
+  for (int k = 0; k < total;) {
+    int zeros = 0;
+    while (k + zeros < total && lengths[k + zeros] == 0 && zeros < 138) ++zeros;
+    if (zeros >= 11) {
+      cl_symbol[cl_count] = 18, cl_extra[cl_count++] = static_cast<std::uint8_t>(zeros - 11);
+      k += zeros;
+    } else if (zeros >= 3) {
+      cl_symbol[cl_count] = 17, cl_extra[cl_count++] = static_cast<std::uint8_t>(zeros - 3);
+      k += zeros;
+    } else {
+      cl_symbol[cl_count] = lengths[k], cl_extra[cl_count++] = 0;
+      ++k;
+    }
+    ++cl_freq[cl_symbol[cl_count - 1]];
+  }
+  std::uint8_t cl_lengths[kCodeLengthSymbols];
+  huffmanLengths(cl_freq, kMaxCodeLengthBits, cl_lengths);
+  std::uint32_t cl_code[kCodeLengthSymbols];
+  canonicalCodes(cl_lengths, kCodeLengthSymbols, cl_code);
+  static constexpr int kClOrder[kCodeLengthSymbols] = {16, 17, 18, 0, 8,  7, 9,  6, 10, 5,
+                                                       11, 4,  12, 3, 13, 2, 14, 1, 15};
+  int hclen = kCodeLengthSymbols;
+  while (hclen > 4 && cl_lengths[kClOrder[hclen - 1]] == 0) --hclen;
+
+  // The stream, into scratch sized for the worst case or the stored form:
+  // a token takes at most 15 + 5 + 1 bits (a match), the header and the
+  // tables under 600 bytes (288 code lengths of at most 7 + 7 bits).
+  const std::size_t stored_size = size + 5 * (size / 65535 + 1) + 6;
+  const std::size_t coded_bound = (count + 1) * 3 + 600;
+  if (scratch.size() < std::max(stored_size, coded_bound)) {
+    scratch.resize(std::max(stored_size, coded_bound));
+  }
+  std::uint8_t* const begin = scratch.data();
+  begin[0] = kZlibHeader[0];
+  begin[1] = kZlibHeader[1];
+  BitWriter writer(begin + 2);
+  writer.put(1 | (2 << 1), 3);  // BFINAL = 1, BTYPE = 10 (dynamic Huffman codes)
+  writer.put(static_cast<std::uint32_t>(hlit - 257), 5);
+  writer.put(1, 5);  // HDIST: two distance codes
+  writer.put(static_cast<std::uint32_t>(hclen - 4), 4);
+  for (int k = 0; k < hclen; ++k) writer.put(cl_lengths[kClOrder[k]], 3);
+  for (int k = 0; k < cl_count; ++k) {
+    const int sym = cl_symbol[k];
+    writer.put(cl_code[sym], cl_lengths[sym]);
+    if (sym == 17) writer.put(cl_extra[k], 3);
+    if (sym == 18) writer.put(cl_extra[k], 7);
+  }
+  const std::uint32_t distance_bits = 1;  // code 0 of a one-bit code: the bit 0
+  for (std::size_t t = 0; t < count; ++t) {
+    const std::uint16_t token = tokens[t];
+    if (token < 256) {
+      writer.put(lit_code[token], lengths[token]);
+      continue;
+    }
+    const int length = token - 256 + kMinMatch;
+    const int k = length_table.index[length];
+    writer.put(lit_code[257 + k], lengths[257 + k]);
+    if (kLengthExtra[k] > 0) {
+      writer.put(static_cast<std::uint32_t>(length - kLengthBase[k]),
+                 static_cast<std::uint32_t>(kLengthExtra[k]));
+    }
+    writer.put(0, distance_bits);
+  }
+  writer.put(lit_code[kEndOfBlock], lengths[kEndOfBlock]);
+  std::uint8_t* end = writer.finish();
+  if (static_cast<std::size_t>(end - begin) + 4 > stored_size) {
+    end = storedZlib(data, size, begin);
+  } else {
+    putAdler32(static_cast<std::uint32_t>(libdeflate_adler32(1, data, size)), end);
+    end += 4;
+  }
+  return std::vector<std::uint8_t>(begin, end);
 }
 
 std::vector<std::uint8_t> zlibDecompress(const std::uint8_t* data, std::size_t size,

@@ -265,7 +265,7 @@ findmug_lcm::label_image_t encodeLabelImage(const LabelImageMessage& in, bool wi
   msg.num_labels = kNumLabels;
   for (auto name : kLabelNames) msg.label_names.emplace_back(name);
   msg.compression = findmug_lcm::label_image_t::COMPRESSION_ZLIB;
-  msg.labels_data = detail::zlibCompress(image.labels.data(), pixels, 1, /*run_length=*/true);
+  msg.labels_data = detail::zlibCompressRuns(image.labels.data(), pixels);
   msg.labels_size = static_cast<std::int32_t>(msg.labels_data.size());
   msg.has_confidence = with_confidence && !image.confidence.empty();
   if (msg.has_confidence) {
@@ -324,7 +324,7 @@ findmug_lcm::label_image_t encodeLabelImage(const LabelImageMessage& in, bool wi
       throw Error("label image encode: pixel " + std::to_string(i) + " confidence " +
                   std::to_string(image.confidence[i]) + " outside [0, 1]");
     }
-    msg.confidence_data = detail::zlibCompress(quantised.data(), pixels, 1, /*run_length=*/true);
+    msg.confidence_data = detail::zlibCompressRuns(quantised.data(), pixels);
   }
   msg.confidence_size = static_cast<std::int32_t>(msg.confidence_data.size());
   msg.latency_us = in.latency_us;

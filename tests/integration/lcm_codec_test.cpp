@@ -7,10 +7,14 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <cstring>
 #include <random>
+
+#include <zlib.h>
 
 #include "findmug/dataset.hpp"
 #include "findmug/error.hpp"
@@ -480,6 +484,126 @@ TEST(LabelCodec, RoundTripWithoutConfidence) {
   raw.labels_data = in.image.labels;
   raw.labels_size = static_cast<std::int32_t>(raw.labels_data.size());
   EXPECT_EQ(decodeLabelImage(raw, "C").image.labels, in.image.labels);
+}
+
+// zlib's own inflate (not the libdeflate decoder the codec uses) of a
+// compressed label or confidence array: what any client library would see.
+Bytes inflateWithZlib(const std::vector<std::uint8_t>& stream, std::size_t size) {
+  Bytes out(size + 1);  // one spare byte: a stream that inflates to more fails the size check
+  uLongf out_size = static_cast<uLongf>(out.size());
+  const int rc = uncompress(out.data(), &out_size, stream.data(), static_cast<uLong>(stream.size()));
+  EXPECT_EQ(rc, Z_OK);
+  out.resize(out_size);
+  return out;
+}
+
+// The encoder's own deflate (fixed codes, runs as distance-1 matches, stored
+// blocks for data without runs) must give streams that zlib itself inflates
+// to the same bytes, for every byte value (the 8- and 9-bit literal codes,
+// through the confidence), every run length up to past two maximal matches
+// (how a run is split into matches), and data without runs.
+TEST(LabelCodec, StreamsInflateWithZlibItself) {
+  const auto check = [](const LabelImageMessage& in, const std::string& what) {
+    const findmug_lcm::label_image_t msg = encodeLabelImage(in);
+    const std::size_t pixels = in.image.labels.size();
+    EXPECT_EQ(inflateWithZlib(msg.labels_data, pixels), in.image.labels) << what;
+    Bytes quantised;
+    for (const float c : in.image.confidence) {
+      quantised.push_back(static_cast<std::uint8_t>(std::lround(c * 255.0f)));
+    }
+    EXPECT_EQ(inflateWithZlib(msg.confidence_data, pixels), quantised) << what;
+    return msg;
+  };
+  // Runs of every length 1..600 (labels) and of every confidence byte value.
+  LabelImageMessage runs;
+  for (int length = 1; length <= 600; ++length) {
+    for (int k = 0; k < length; ++k) {
+      runs.image.labels.push_back(length % 3 == 0 ? kVoidLabel : static_cast<std::uint8_t>(length % 8));
+      runs.image.confidence.push_back(static_cast<float>((length * 7) % 256) / 255.0f);
+    }
+  }
+  while (runs.image.labels.size() % 600 != 0) {
+    runs.image.labels.push_back(1);
+    runs.image.confidence.push_back(1.0f);
+  }
+  runs.image.width = 600;
+  runs.image.height = static_cast<int>(runs.image.labels.size() / 600);
+  const auto runs_msg = check(runs, "runs of 1..600");
+  // 180,300 bytes in 600 runs: a few bytes per run, far below the data.
+  EXPECT_LT(runs_msg.labels_data.size(), 8000u);
+
+  // No runs at all: random confidence bytes go into stored blocks (several
+  // of them: 640 x 480 is more than one 64 KiB block), never much larger.
+  LabelImageMessage noise;
+  noise.image.width = 640;
+  noise.image.height = 480;
+  std::mt19937 rng(11);
+  for (int i = 0; i < 640 * 480; ++i) {
+    noise.image.labels.push_back(static_cast<std::uint8_t>(rng() % kNumLabels));
+    noise.image.confidence.push_back(static_cast<float>(rng() % 256) / 255.0f);
+  }
+  const auto noise_msg = check(noise, "noise");
+  EXPECT_LE(noise_msg.confidence_data.size(), 640u * 480u + 5u * 5u + 6u);
+
+  // Byte counts that follow the Fibonacci numbers (1, 1, 2, 3, 5, ... for 24
+  // values, shuffled): their Huffman code is 23 bits deep, beyond deflate's
+  // 15, so the encoder must limit the code lengths.
+  LabelImageMessage skewed;
+  {
+    std::vector<std::uint8_t> bytes;
+    std::uint32_t a = 1, b = 1;
+    for (int value = 0; value < 24; ++value) {
+      bytes.insert(bytes.end(), a, static_cast<std::uint8_t>(value * 10));
+      const std::uint32_t next = a + b;
+      a = b;
+      b = next;
+    }
+    std::shuffle(bytes.begin(), bytes.end(), rng);
+    while (bytes.size() % 640 != 0) bytes.push_back(0);
+    skewed.image.width = 640;
+    skewed.image.height = static_cast<int>(bytes.size() / 640);
+    skewed.image.labels.assign(bytes.size(), 3);
+    for (const std::uint8_t q : bytes) skewed.image.confidence.push_back(q / 255.0f);
+  }
+  const auto skewed_msg = check(skewed, "Fibonacci counts");
+  EXPECT_LT(skewed_msg.confidence_data.size(), skewed.image.labels.size() / 2);
+
+  // One value everywhere, and a single pixel.
+  LabelImageMessage flat;
+  flat.image.width = 640;
+  flat.image.height = 480;
+  flat.image.labels.assign(640 * 480, 4);
+  flat.image.confidence.assign(640 * 480, 0.5f);
+  EXPECT_LT(check(flat, "flat").labels_data.size(), 1000u);
+  check(makeLabels(1, 1), "one pixel");
+}
+
+// A real label image (NYU frame 0's ground truth, void included) comes out
+// no larger than zlib's own run-length deflate made it (level 1, Z_RLE: the
+// encoder before its own deflate), give or take a few per cent.
+TEST(LabelCodec, RealLabelImageIsAsSmallAsZlibRle) {
+  FINDMUG_REQUIRE_DATA(dir, "nyuv2_labeled");
+  LabelImageMessage in;
+  const auto frame = DatasetFolder(dir.string()).load(0);
+  in.image.width = 640;
+  in.image.height = 480;
+  in.image.labels = frame.labels;
+  ASSERT_EQ(in.image.labels.size(), 640u * 480u);
+  const findmug_lcm::label_image_t msg = encodeLabelImage(in, /*with_confidence=*/false);
+  EXPECT_EQ(inflateWithZlib(msg.labels_data, in.image.labels.size()), in.image.labels);
+  z_stream zs{};
+  ASSERT_EQ(deflateInit2(&zs, 1, Z_DEFLATED, 15, 8, Z_RLE), Z_OK);
+  Bytes rle(deflateBound(&zs, 640 * 480));
+  zs.next_in = in.image.labels.data();
+  zs.avail_in = 640 * 480;
+  zs.next_out = rle.data();
+  zs.avail_out = static_cast<uInt>(rle.size());
+  ASSERT_EQ(deflate(&zs, Z_FINISH), Z_STREAM_END);
+  const std::size_t rle_size = zs.total_out;
+  deflateEnd(&zs);
+  EXPECT_LE(msg.labels_data.size(), rle_size * 105 / 100) << "zlib Z_RLE: " << rle_size;
+  std::printf("label image of NYU frame 0: %zu bytes (zlib level 1 Z_RLE: %zu)\n",
+              msg.labels_data.size(), rle_size);
 }
 
 TEST(LabelCodec, EncoderRefusesBadInput) {
