@@ -698,7 +698,9 @@ class OrganizedOversegmenter final : public Oversegmenter {
 
     seg.width = w;
     seg.height = h;
-    seg.pixel_segment.assign(n, -1);
+    // Every pixel is written below (enforceConnectivity), or here when no
+    // pixel is usable.
+    seg.pixel_segment.resize(n);
 
     // Working buffers: this thread's from earlier frames (see OversegBuffers).
     // Half-resolution features; a pixel is usable when it has a point in
@@ -708,6 +710,7 @@ class OrganizedOversegmenter final : public Oversegmenter {
     Borrowed block_valid_buffer(g_buffers.block_valid);
     std::vector<std::uint8_t>& block_valid = *block_valid_buffer;  // usable full pixels per coarse pixel
     if (buildCoarse(cloud, normals, coarse, block_valid) == 0) {
+      std::fill(seg.pixel_segment.begin(), seg.pixel_segment.end(), -1);
       finalizeOversegmentation(seg, config_.min_segment_points);
       return;
     }
@@ -825,7 +828,7 @@ class OrganizedOversegmenter final : public Oversegmenter {
     const int h = cloud.height;
     const int cw = coarse.width;
     const int chh = coarse.height;
-    out.assign(cloud.size(), -1);
+    out.resize(cloud.size());  // every pixel is written below, once
     std::array<float, kNumChannels> f{};
     // The sample of coarse pixel c is (usually) full pixel 2c: an even pixel
     // sits on it (its other neighbour is c - 1), an odd one between c, c + 1.
@@ -853,7 +856,10 @@ class OrganizedOversegmenter final : public Oversegmenter {
       // The scalar decision for pixel x of this row.
       const auto refinePixel = [&](int x) {
         const std::size_t i = static_cast<std::size_t>(y) * w + x;
-        if (!usable(cloud.points[i])) return;
+        if (!usable(cloud.points[i])) {
+          out[i] = -1;
+          return;
+        }
         const int cx = x / kCoarseStride;
         const int ox = other(x, cx, cw);
         const std::array<int, 4> around = {row_a[cx], row_a[ox], row_b[cx], row_b[ox]};
@@ -1378,12 +1384,16 @@ class OrganizedOversegmenter final : public Oversegmenter {
       for (int p = 0; p < pieces; ++p) merged[p] = find_merged(p);
     }
 
-    std::fill(out.begin(), out.end(), -1);
+    // Each pixel once: the runs their pieces, the gaps between them -1.
     for (int y = 0; y < h; ++y) {
       int* row = out.data() + static_cast<std::size_t>(y) * w;
+      int x = 0;
       for (int r = row_begin[y]; r < row_begin[y + 1]; ++r) {
+        std::fill(row + x, row + runs[r].x0, -1);
         std::fill(row + runs[r].x0, row + runs[r].x1, merged[run_piece[r]]);
+        x = runs[r].x1;
       }
+      std::fill(row + x, row + w, -1);
     }
   }
 
