@@ -54,6 +54,7 @@
 #include "cpu_features.hpp"
 #include "findmug/error.hpp"
 #include "findmug/oversegmentation.hpp"
+#include "int_runs.hpp"
 #include "lab_internal.hpp"
 #include "oversegmentation_internal.hpp"
 #include "scratch.hpp"
@@ -1242,8 +1243,8 @@ class OrganizedOversegmenter final : public Oversegmenter {
       const int* row = key.data() + static_cast<std::size_t>(y) * w;
       for (int x = 0; x < w;) {
         const int k = row[x];
-        int x1 = x + 1;
-        while (x1 < w && row[x1] == k) ++x1;
+        const int x1 = static_cast<int>(detail::intRunEnd(row, static_cast<std::size_t>(x),
+                                                          static_cast<std::size_t>(w)));
         if (k != -1) runs.push_back({x, x1, k});
         x = x1;
       }

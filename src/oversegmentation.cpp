@@ -15,6 +15,7 @@
 
 #include "findmug/error.hpp"
 #include "findmug/labels.hpp"
+#include "int_runs.hpp"
 #include "oversegmentation_internal.hpp"
 
 namespace findmug {
@@ -180,8 +181,7 @@ void finalizeOversegmentation(Oversegmentation& seg, int min_points, EdgeSource 
   run_start.clear();
   for (std::size_t i = 0; i < n;) {
     const int id = ids[i];
-    std::size_t end = i + 1;
-    while (end < n && ids[end] == id) ++end;
+    const std::size_t end = detail::intRunEnd(ids, i, n);
     if (id >= 0) counts[id] += static_cast<int>(end - i);
     run_start.push_back(static_cast<int>(i));
     i = end;

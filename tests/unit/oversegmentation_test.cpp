@@ -20,6 +20,7 @@
 #include "findmug/error.hpp"
 #include "findmug/features.hpp"
 #include "findmug/labels.hpp"
+#include "int_runs.hpp"
 #include "lab_internal.hpp"
 #include "oversegmentation_internal.hpp"
 #include "test_data.hpp"
@@ -275,6 +276,31 @@ Oversegmentation regularGrid(const OrganizedCloud& cloud, int target) {
 
 // ---------------------------------------------------------------------------
 // finalizeOversegmentation
+
+// intRunEnd (eight values per step) against a plain loop, from every start
+// of arrays of runs of 1..20 values (ids, -1 and -2 among them), whose
+// lengths put run ends at every position of a step and at the array's end.
+TEST(IntRunEnd, FindsTheEndOfEveryRunAsAPlainLoopDoes) {
+  std::mt19937 rng(5);
+  for (int trial = 0; trial < 200; ++trial) {
+    std::vector<int> values;
+    const std::size_t size = 1 + rng() % 120;
+    while (values.size() < size) {
+      const int value = static_cast<int>(rng() % 5) - 2;
+      const std::size_t length = 1 + rng() % 20;
+      for (std::size_t k = 0; k < length && values.size() < size; ++k) values.push_back(value);
+    }
+    for (std::size_t begin = 0; begin < size; ++begin) {
+      std::size_t expected = begin + 1;
+      while (expected < size && values[expected] == values[begin]) ++expected;
+      ASSERT_EQ(detail::intRunEnd(values.data(), begin, size), expected)
+          << "trial " << trial << ", begin " << begin << " of " << size;
+      // A shorter limit stops the run there.
+      const std::size_t limit = begin + 1 + (size - begin - 1) / 2;
+      ASSERT_EQ(detail::intRunEnd(values.data(), begin, limit), std::min(expected, limit));
+    }
+  }
+}
 
 TEST(FinalizeOversegmentation, DropsSmallSegmentsAndRenumbersInIdOrder) {
   Oversegmentation seg;
