@@ -124,6 +124,13 @@ void lcmSeeds(SeedWriter& w) {
     w.write("label_image", confidence ? "with-confidence" : "labels-only", bytes,
             [](const std::string& b) { (void)io::decodeLabelImage(b.data(), b.size(), "seed"); });
   }
+  // label_deflate takes any bytes: the raw label bytes above, and runs of
+  // every length up to past two maximal deflate matches.
+  w.write("label_deflate", "labels", asString(labels.image.labels), [](const std::string&) {});
+  std::string runs;
+  for (int length = 1; length <= 520; length += 7) runs.append(static_cast<std::size_t>(length),
+                                                                static_cast<char>(length % 9));
+  w.write("label_deflate", "runs", runs, [](const std::string&) {});
 
   io::TablesMessage tables;
   tables.utime = frame.utime;
