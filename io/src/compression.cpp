@@ -113,14 +113,18 @@ class BitWriter {
   std::uint32_t count_ = 0;
 };
 
-// Huffman code lengths for freq[0..n), none longer than max_bits: Huffman's
-// construction (two queues over the symbols sorted by count), and while the
-// deepest code is too long, the counts halved (kept above 0) and the code
-// built again. Symbols of count 0 get length 0. At least two symbols get a
-// code (a one-symbol code is not a complete prefix code; deflate decoders
-// reject most incomplete ones), so a lone symbol is paired with another.
-void huffmanLengths(std::vector<std::uint32_t> freq, int max_bits, std::uint8_t* lengths) {
-  const int n = static_cast<int>(freq.size());
+// Huffman code lengths for counts[0..n) (n <= kLitLenSymbols), none longer
+// than max_bits: Huffman's construction (two queues over the symbols sorted
+// by count), and while the deepest code is too long, the counts halved (kept
+// above 0) and the code built again. Symbols of count 0 get length 0. At
+// least two symbols get a code (a one-symbol code is not a complete prefix
+// code; deflate decoders reject most incomplete ones), so a lone symbol is
+// paired with another. Fixed-size arrays on the stack: no allocation per
+// image.
+void huffmanLengths(const std::uint32_t* counts, int n, int max_bits, std::uint8_t* lengths) {
+  constexpr int kMaxNodes = 2 * kLitLenSymbols - 1;
+  std::array<std::uint32_t, kLitLenSymbols> freq{};
+  std::copy(counts, counts + n, freq.begin());
   int used = 0;
   for (int s = 0; s < n; ++s) used += freq[s] > 0 ? 1 : 0;
   for (int s = 0; s < n && used < 2; ++s) {
@@ -129,20 +133,18 @@ void huffmanLengths(std::vector<std::uint32_t> freq, int max_bits, std::uint8_t*
       ++used;
     }
   }
-  std::vector<int> leaves, parent;
-  std::vector<std::uint64_t> weight;
+  std::array<int, kLitLenSymbols> leaves{};
+  std::array<int, kMaxNodes> parent{}, depth{};
+  std::array<std::uint64_t, kMaxNodes> weight{};
   while (true) {
-    leaves.clear();
+    int m = 0;
     for (int s = 0; s < n; ++s) {
-      if (freq[s] > 0) leaves.push_back(s);
+      if (freq[s] > 0) leaves[m++] = s;
     }
-    std::sort(leaves.begin(), leaves.end(),
+    std::sort(leaves.begin(), leaves.begin() + m,
               [&](int a, int b) { return freq[a] != freq[b] ? freq[a] < freq[b] : a < b; });
-    const int m = static_cast<int>(leaves.size());
     // Nodes 0..m-1 are the leaves in sorted order, m.. the merged ones in
     // the order they are made (their weights never decrease).
-    weight.assign(static_cast<std::size_t>(2 * m - 1), 0);
-    parent.assign(static_cast<std::size_t>(2 * m - 1), -1);
     for (int k = 0; k < m; ++k) weight[k] = freq[leaves[k]];
     int next_leaf = 0, next_merged = m;
     const auto take = [&](int made) {
@@ -158,7 +160,7 @@ void huffmanLengths(std::vector<std::uint32_t> freq, int max_bits, std::uint8_t*
       parent[a] = parent[b] = made;
     }
     // Depths, from the root (the last node) down.
-    std::vector<int> depth(static_cast<std::size_t>(2 * m - 1), 0);
+    depth[2 * m - 2] = 0;
     int deepest = 0;
     for (int k = 2 * m - 3; k >= 0; --k) {
       depth[k] = depth[parent[k]] + 1;
@@ -169,8 +171,8 @@ void huffmanLengths(std::vector<std::uint32_t> freq, int max_bits, std::uint8_t*
       for (int k = 0; k < m; ++k) lengths[leaves[k]] = static_cast<std::uint8_t>(depth[k]);
       return;
     }
-    for (auto& f : freq) {
-      if (f > 0) f = (f + 1) / 2;
+    for (int s = 0; s < n; ++s) {
+      if (freq[s] > 0) freq[s] = (freq[s] + 1) / 2;
     }
   }
 }
@@ -261,7 +263,7 @@ std::vector<std::uint8_t> zlibCompressRuns(const std::uint8_t* data, std::size_t
   tokens.resize(size + 1);
 
   // Tokens and the counts of the literal/length symbols.
-  std::vector<std::uint32_t> lit_freq(kLitLenSymbols, 0);
+  std::array<std::uint32_t, kLitLenSymbols> lit_freq{};
   std::size_t count = 0;
   for (std::size_t i = 0; i < size;) {
     const std::size_t end = runEnd(data, i, size);
@@ -288,7 +290,7 @@ std::vector<std::uint8_t> zlibCompressRuns(const std::uint8_t* data, std::size_t
   // Codes: literal/length from the counts; distance: codes 0 and 1 of one
   // bit each (only code 0, distance 1, is used; two make a complete code).
   std::uint8_t lengths[kLitLenSymbols + 2];
-  huffmanLengths(lit_freq, kMaxCodeBits, lengths);
+  huffmanLengths(lit_freq.data(), kLitLenSymbols, kMaxCodeBits, lengths);
   int hlit = kLitLenSymbols;
   while (hlit > 257 && lengths[hlit - 1] == 0) --hlit;
   lengths[hlit] = 1;
@@ -300,7 +302,7 @@ std::vector<std::uint8_t> zlibCompressRuns(const std::uint8_t* data, std::size_t
   const int total = hlit + 2;
   std::uint8_t cl_symbol[kLitLenSymbols + 2], cl_extra[kLitLenSymbols + 2];
   int cl_count = 0;
-  std::vector<std::uint32_t> cl_freq(kCodeLengthSymbols, 0);
+  std::array<std::uint32_t, kCodeLengthSymbols> cl_freq{};
   for (int k = 0; k < total;) {
     int zeros = 0;
     while (k + zeros < total && lengths[k + zeros] == 0 && zeros < 138) ++zeros;
@@ -317,7 +319,7 @@ std::vector<std::uint8_t> zlibCompressRuns(const std::uint8_t* data, std::size_t
     ++cl_freq[cl_symbol[cl_count - 1]];
   }
   std::uint8_t cl_lengths[kCodeLengthSymbols];
-  huffmanLengths(cl_freq, kMaxCodeLengthBits, cl_lengths);
+  huffmanLengths(cl_freq.data(), kCodeLengthSymbols, kMaxCodeLengthBits, cl_lengths);
   std::uint32_t cl_code[kCodeLengthSymbols];
   canonicalCodes(cl_lengths, kCodeLengthSymbols, cl_code);
   static constexpr int kClOrder[kCodeLengthSymbols] = {16, 17, 18, 0, 8,  7, 9,  6, 10, 5,
