@@ -79,9 +79,6 @@ void collectTablePoints(const OrganizedCloud& cloud, const LabelImage& labels,
                         const TableConfig& config, std::vector<Eigen::Vector3f>& points,
                         std::vector<int>& pixels, TableDetection& result, bool simd = true);
 
-// Observed floor cells and obstacle points around the search positions
-// (`region`), from one pass over the labelled cloud; assess() flags a
-// position unreachable with a reason (see tables.hpp, step 5).
 // Index of the cell holding (x, y) on a grid of cols x rows square cells of
 // edge `cell` from (origin_x, origin_y), or -1 outside it. The reachability
 // grid's cells (ReachabilityGrid::cellOf and the pass that builds it).
@@ -93,6 +90,9 @@ inline int gridCell(float x, float y, float origin_x, float origin_y, float cell
   return row * cols + col;
 }
 
+// Observed floor cells and obstacle points around the search positions
+// (`region`), from one pass over the labelled cloud; assess() flags a
+// position unreachable with a reason (see tables.hpp, step 5).
 class ReachabilityGrid {
  public:
   // `positions`: every position that assess() will be asked about.

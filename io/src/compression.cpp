@@ -23,12 +23,10 @@ namespace findmug::io::detail {
 
 // ---- zlib -----------------------------------------------------------------------
 
-std::vector<std::uint8_t> zlibCompress(const std::uint8_t* data, std::size_t size, int level,
-                                       bool run_length) {
+std::vector<std::uint8_t> zlibCompress(const std::uint8_t* data, std::size_t size, int level) {
   if (size > std::numeric_limits<uInt>::max()) throw Error("zlib: input too large");
   z_stream zs{};
-  if (deflateInit2(&zs, level, Z_DEFLATED, 15, 8, run_length ? Z_RLE : Z_DEFAULT_STRATEGY) !=
-      Z_OK) {
+  if (deflateInit2(&zs, level, Z_DEFLATED, 15, 8, Z_DEFAULT_STRATEGY) != Z_OK) {
     throw Error("zlib: deflateInit2 failed (level " + std::to_string(level) + ")");
   }
   std::vector<std::uint8_t> out(deflateBound(&zs, static_cast<uLong>(size)));

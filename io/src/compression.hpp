@@ -14,11 +14,8 @@
 
 namespace findmug::io::detail {
 
-// `run_length`: zlib's Z_RLE strategy (matches only runs of one byte). For
-// piecewise-constant images — labels, quantised confidences — it is several
-// times faster than the default matcher at a similar size; any inflate reads it.
-std::vector<std::uint8_t> zlibCompress(const std::uint8_t* data, std::size_t size, int level,
-                                       bool run_length = false);
+// A zlib stream of `data` at `level` (zlib's default strategy): depth images.
+std::vector<std::uint8_t> zlibCompress(const std::uint8_t* data, std::size_t size, int level);
 // A zlib stream of `data` made for piecewise-constant images (labels,
 // quantised confidences), several times faster than zlib's own Z_RLE at
 // level 1 at a similar size: one deflate block whose Huffman codes are
