@@ -12,11 +12,13 @@
 #include <emmintrin.h>
 #endif
 #include <limits>
+#include <numeric>
 #include <sstream>
 #include <string>
 
 #include "cpu_features.hpp"
 #include "findmug/error.hpp"
+#include "int_runs.hpp"
 #include "simd_vec3.hpp"
 #include "tables_internal.hpp"
 
@@ -80,6 +82,31 @@ __attribute__((noinline)) MemberSums memberSums(const int* member, int n, const 
     }
   }
   return {confidence_sum, valid, horizontal};
+}
+
+// out[k] = values[index[k]] for k < n, where `index` ascends strictly (a
+// cluster's members): whole stretches of consecutive indices are copied at
+// once. A stretch is found by doubling and halving its length, as
+// index[k + m] - index[k] == m exactly when the m indices after index[k]
+// are consecutive. A table's members are mostly such stretches (its points
+// in pixel order), which one copy moves faster than an index each.
+template <typename T>
+void gatherByIndex(const T* values, const int* index, int n, T* out) {
+  for (int k = 0; k < n;) {
+    // The stretch index[k .. k + len) is consecutive; try to double it.
+    int len = 1;
+    while (k + 2 * len <= n && index[k + 2 * len - 1] - index[k] == 2 * len - 1) len *= 2;
+    // Then grow it by halving steps up to its end (or n).
+    for (int step = len / 2; step > 0; step /= 2) {
+      if (k + len + step <= n && index[k + len + step - 1] - index[k] == len + step - 1) {
+        len += step;
+      }
+    }
+    // (The halving steps add any length below len: the stretch's end is
+    // found to the element.)
+    std::copy(values + index[k], values + index[k] + len, out + k);
+    k += len;
+  }
 }
 
 // What step 1 does with a table-labelled point.
@@ -420,18 +447,29 @@ TableDetection detectTables(const OrganizedCloud& cloud_ground, const LabelImage
     }
   }
   const std::vector<int>& full_cluster = stride > 1 ? full_cluster_buffer : cluster_of;
-  // Counting sort of `of` (cluster per point, -1 = none) into `start` and `order`.
+  // Counting sort of `of` (cluster per point, -1 = none) into `start` and
+  // `order`, a run of one cluster at a time: points come in pixel order, so
+  // a table's points lie in long runs of one cluster, and point by point
+  // every count and every placement waited for the previous one's store to
+  // the same counter.
   const auto groupByCluster = [clusters](const std::vector<int>& of, std::vector<int>& start,
                                          std::vector<int>& order, std::vector<int>& fill) {
     start.assign(static_cast<std::size_t>(clusters) + 1, 0);
-    for (int c : of) {
-      if (c >= 0) ++start[c + 1];
+    const std::size_t count = of.size();
+    for (std::size_t i = 0, end = 0; i < count; i = end) {
+      end = detail::intRunEnd(of.data(), i, count);
+      if (of[i] >= 0) start[of[i] + 1] += static_cast<int>(end - i);
     }
     for (int c = 0; c < clusters; ++c) start[c + 1] += start[c];
     order.resize(static_cast<std::size_t>(start[clusters]));
     fill.assign(start.begin(), start.end() - 1);
-    for (int i = 0; i < static_cast<int>(of.size()); ++i) {
-      if (of[i] >= 0) order[fill[of[i]]++] = i;
+    for (std::size_t i = 0, end = 0; i < count; i = end) {
+      end = detail::intRunEnd(of.data(), i, count);
+      const int c = of[i];
+      if (c < 0) continue;
+      std::iota(order.begin() + fill[c], order.begin() + fill[c] + static_cast<int>(end - i),
+                static_cast<int>(i));
+      fill[c] += static_cast<int>(end - i);
     }
   };
   std::vector<int>& member_start = member_start_tls;
@@ -463,7 +501,7 @@ TableDetection detectTables(const OrganizedCloud& cloud_ground, const LabelImage
     const int* sample_member = sample_members.data() + sample_start[c];
     const int samples = sample_start[c + 1] - sample_start[c];
     cluster_points.resize(static_cast<std::size_t>(samples));
-    for (int k = 0; k < samples; ++k) cluster_points[k] = points[sample_member[k]];
+    gatherByIndex(points.data(), sample_member, samples, cluster_points.data());
     const MemberSums sums = memberSums(member, n, full_pixels.data(), labels.confidence,
                                        normals_ground, cos_tilt);
     TableCluster table;
@@ -502,7 +540,7 @@ TableDetection detectTables(const OrganizedCloud& cloud_ground, const LabelImage
       }
     }
     table.pixels.resize(static_cast<std::size_t>(n));
-    for (int k = 0; k < n; ++k) table.pixels[k] = full_pixels[member[k]];
+    gatherByIndex(full_pixels.data(), member, n, table.pixels.data());
     tables.push_back(std::move(table));
   }
   if (small_clusters > 0) {
