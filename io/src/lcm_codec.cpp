@@ -235,7 +235,12 @@ RgbdFrame decodeRgbdFrame(const void* data, std::size_t size, std::string_view c
 // ---- label images -------------------------------------------------------------------------
 
 findmug_lcm::label_image_t encodeLabelImage(const LabelImageMessage& in, bool with_confidence) {
-  const LabelImage& image = in.image;
+  return encodeLabelImage(in.image, in.utime, in.seq, in.latency_us, with_confidence);
+}
+
+findmug_lcm::label_image_t encodeLabelImage(const LabelImage& image, std::uint64_t utime,
+                                            std::int64_t seq, std::int64_t latency_us,
+                                            bool with_confidence) {
   checkDimensions(image.width, image.height, "encode", "label_image_t");
   const std::size_t pixels = static_cast<std::size_t>(image.width) * image.height;
   if (image.labels.size() != pixels) {
@@ -258,8 +263,8 @@ findmug_lcm::label_image_t encodeLabelImage(const LabelImageMessage& in, bool wi
                 std::to_string(image.labels[i]));
   }
   findmug_lcm::label_image_t msg;
-  msg.utime = static_cast<std::int64_t>(in.utime);
-  msg.seq = in.seq;
+  msg.utime = static_cast<std::int64_t>(utime);
+  msg.seq = seq;
   msg.width = image.width;
   msg.height = image.height;
   msg.num_labels = kNumLabels;
@@ -273,7 +278,11 @@ findmug_lcm::label_image_t encodeLabelImage(const LabelImageMessage& in, bool wi
       throw Error("label image encode: " + std::to_string(image.confidence.size()) +
                   " confidences for " + std::to_string(pixels) + " pixels");
     }
-    std::vector<std::uint8_t> quantised(pixels);
+    // Kept per thread: a stream of frames of one size then allocates (and
+    // clears) nothing here; every byte is written below.
+    thread_local std::vector<std::uint8_t> quantised_buffer;
+    std::vector<std::uint8_t>& quantised = quantised_buffer;
+    quantised.resize(pixels);
     const float* confidence = image.confidence.data();
     // Every value is checked and quantised in one branch-free pass, an
     // out-of-range one (or NaN) as 0; the first bad value is looked for only
@@ -327,7 +336,7 @@ findmug_lcm::label_image_t encodeLabelImage(const LabelImageMessage& in, bool wi
     msg.confidence_data = detail::zlibCompressRuns(quantised.data(), pixels);
   }
   msg.confidence_size = static_cast<std::int32_t>(msg.confidence_data.size());
-  msg.latency_us = in.latency_us;
+  msg.latency_us = latency_us;
   return msg;
 }
 
@@ -451,35 +460,41 @@ void checkFinite(std::initializer_list<double> values, const std::string& where)
 }  // namespace
 
 findmug_lcm::tables_t encodeTables(const TablesMessage& in) {
-  if (!in.map_info.empty() && in.map_info.size() != in.tables.size()) {
-    throw Error("encodeTables: " + std::to_string(in.map_info.size()) + " map entries for " +
-                std::to_string(in.tables.size()) + " tables");
+  return encodeTables(in.utime, in.seq, in.content, in.tables, in.map_pose, in.map_info);
+}
+
+findmug_lcm::tables_t encodeTables(std::uint64_t utime, std::int64_t seq, TablesContent content,
+                                   std::span<const TableCluster> tables,
+                                   const std::optional<RobotPose>& map_pose,
+                                   std::span<const TableMapInfo> map_info) {
+  if (!map_info.empty() && map_info.size() != tables.size()) {
+    throw Error("encodeTables: " + std::to_string(map_info.size()) + " map entries for " +
+                std::to_string(tables.size()) + " tables");
   }
-  if (in.content == TablesContent::Map) {
-    if (!in.map_pose) throw Error("encodeTables: a table map message needs the robot's map pose");
-    for (std::size_t k = 0; k < in.tables.size(); ++k) {
-      if (in.map_info.empty() || in.map_info[k].map_id <= 0 ||
-          in.map_info[k].map_id != in.tables[k].id) {
+  if (content == TablesContent::Map) {
+    if (!map_pose) throw Error("encodeTables: a table map message needs the robot's map pose");
+    for (std::size_t k = 0; k < tables.size(); ++k) {
+      if (map_info.empty() || map_info[k].map_id <= 0 || map_info[k].map_id != tables[k].id) {
         throw Error("encodeTables: table map entry " + std::to_string(k) +
                     " needs id == map_id > 0");
       }
     }
   }
   findmug_lcm::tables_t msg;
-  msg.utime = static_cast<std::int64_t>(in.utime);
-  msg.seq = in.seq;
-  msg.content = static_cast<std::int8_t>(in.content);
-  msg.has_map_pose = in.map_pose.has_value();
-  if (in.map_pose)
-    msg.map_pose = encodeRobotPose(*in.map_pose);
+  msg.utime = static_cast<std::int64_t>(utime);
+  msg.seq = seq;
+  msg.content = static_cast<std::int8_t>(content);
+  msg.has_map_pose = map_pose.has_value();
+  if (map_pose)
+    msg.map_pose = encodeRobotPose(*map_pose);
   else
     msg.map_pose = encodeRobotPose(RobotPose{});
-  msg.num_tables = static_cast<std::int32_t>(in.tables.size());
-  for (std::size_t k = 0; k < in.tables.size(); ++k) {
-    const TableCluster& t = in.tables[k];
+  msg.num_tables = static_cast<std::int32_t>(tables.size());
+  for (std::size_t k = 0; k < tables.size(); ++k) {
+    const TableCluster& t = tables[k];
     findmug_lcm::table_t out;
     out.id = t.id;
-    const TableMapInfo info = in.map_info.empty() ? TableMapInfo{} : in.map_info[k];
+    const TableMapInfo info = map_info.empty() ? TableMapInfo{} : map_info[k];
     out.map_id = info.map_id;
     out.confirmed = info.confirmed;
     out.sightings = info.sightings;
@@ -498,21 +513,21 @@ findmug_lcm::tables_t encodeTables(const TablesMessage& in) {
     out.mean_confidence = t.mean_confidence;
     out.num_search_positions = static_cast<std::int32_t>(t.search_positions.size());
     for (const auto& p : t.search_positions) out.search_positions.push_back(toLcm(p));
-    if (in.map_pose) {
+    if (map_pose) {
       const Eigen::Vector2d c =
-          transformPointD(in.map_pose->pose, t.centroid.head<2>().cast<double>());
+          transformPointD(map_pose->pose, t.centroid.head<2>().cast<double>());
       out.map_centroid[0] = c.x();
       out.map_centroid[1] = c.y();
       out.map_centroid[2] = t.centroid.z();
-      const Eigen::Vector2d center = transformPointD(in.map_pose->pose, t.center.cast<double>());
+      const Eigen::Vector2d center = transformPointD(map_pose->pose, t.center.cast<double>());
       out.map_center[0] = center.x();
       out.map_center[1] = center.y();
       for (const auto& p : t.hull) {
-        const Eigen::Vector2d m = transformPointD(in.map_pose->pose, p.cast<double>());
+        const Eigen::Vector2d m = transformPointD(map_pose->pose, p.cast<double>());
         out.map_hull.push_back({m.x(), m.y()});
       }
       for (const auto& p : t.search_positions) {
-        out.map_search_positions.push_back(toLcmMap(p, *in.map_pose));
+        out.map_search_positions.push_back(toLcmMap(p, *map_pose));
       }
     } else {
       // The arrays share their length fields with the base-frame ones.

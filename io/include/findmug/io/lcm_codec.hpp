@@ -14,6 +14,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <optional>
+#include <span>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -94,6 +95,11 @@ std::optional<std::int64_t> peekRgbdFrameSeq(const void* data, std::size_t size)
 // `with_confidence`) in [0, 1], quantised to 0..255.
 findmug_lcm::label_image_t encodeLabelImage(const LabelImageMessage& labels,
                                             bool with_confidence = true);
+// The same from an image held elsewhere: the daemon encodes each frame's
+// label image where it lies, rather than copying it (1.5 MB) into a message.
+findmug_lcm::label_image_t encodeLabelImage(const LabelImage& image, std::uint64_t utime,
+                                            std::int64_t seq, std::int64_t latency_us,
+                                            bool with_confidence = true);
 // Checks label names against kLabelNames and every label id.
 LabelImageMessage decodeLabelImage(const findmug_lcm::label_image_t& message,
                                    std::string_view channel);
@@ -106,6 +112,13 @@ LabelImageMessage decodeLabelImage(const void* data, std::size_t size, std::stri
 // ignored). Throws findmug::Error when map_info is neither empty nor one per
 // table, or when a Map message breaks the rules decodeTables checks.
 findmug_lcm::tables_t encodeTables(const TablesMessage& message);
+// The same from the message's parts, the tables held elsewhere (the daemon
+// encodes a frame's tables where they lie: copying them into a message
+// copied every table's pixel list).
+findmug_lcm::tables_t encodeTables(std::uint64_t utime, std::int64_t seq, TablesContent content,
+                                   std::span<const TableCluster> tables,
+                                   const std::optional<RobotPose>& map_pose,
+                                   std::span<const TableMapInfo> map_info);
 // Checks finiteness, counts, unit axes, the content id and the map entries
 // (map_id >= 0, sightings >= 0, confirmed only with a map_id; a Map message
 // needs has_map_pose and id == map_id > 0 for every table); fills map_tables
