@@ -8,6 +8,7 @@
 #include <string>
 
 #include "findmug/error.hpp"
+#include "int_runs.hpp"
 
 namespace findmug {
 
@@ -54,18 +55,29 @@ void projectLabelsInto(const Oversegmentation& segmentation,
 
   out.width = segmentation.width;
   out.height = segmentation.height;
-  out.labels.assign(pixels, kVoidLabel);
-  out.confidence.assign(pixels, 0.0f);
-  for (std::size_t i = 0; i < pixels; ++i) {
-    const int s = segmentation.pixel_segment[i];
-    if (s < 0) continue;
-    if (static_cast<std::size_t>(s) >= segments) {
-      throw Error("projectLabels: pixel " + std::to_string(i) + " belongs to segment " +
-                  std::to_string(s) + " but there are only " + std::to_string(segments));
+  // Every pixel is written below (a recycled image is not cleared first),
+  // a run of one segment at a time: a segment crosses a row in a run of
+  // tens of pixels, and the runs' fills are what memset does.
+  out.labels.resize(pixels);
+  out.confidence.resize(pixels);
+  const int* pixel_segment = segmentation.pixel_segment.data();
+  for (std::size_t i = 0, end = 0; i < pixels; i = end) {
+    end = detail::intRunEnd(pixel_segment, i, pixels);
+    const int s = pixel_segment[i];
+    std::uint8_t id = kVoidLabel;
+    float confidence = 0.0f;
+    if (s >= 0) {
+      if (static_cast<std::size_t>(s) >= segments) {
+        throw Error("projectLabels: pixel " + std::to_string(i) + " belongs to segment " +
+                    std::to_string(s) + " but there are only " + std::to_string(segments));
+      }
+      id = segment_labels[static_cast<std::size_t>(s)];
+      if (id != kVoidLabel) confidence = segment_confidence[static_cast<std::size_t>(s)];
     }
-    const std::uint8_t id = segment_labels[static_cast<std::size_t>(s)];
-    out.labels[i] = id;
-    out.confidence[i] = id == kVoidLabel ? 0.0f : segment_confidence[static_cast<std::size_t>(s)];
+    std::fill(out.labels.begin() + static_cast<std::ptrdiff_t>(i),
+              out.labels.begin() + static_cast<std::ptrdiff_t>(end), id);
+    std::fill(out.confidence.begin() + static_cast<std::ptrdiff_t>(i),
+              out.confidence.begin() + static_cast<std::ptrdiff_t>(end), confidence);
   }
 }
 

@@ -37,6 +37,45 @@ TEST(ProjectLabels, PaintsSegmentsAndLeavesTheRestVoid) {
   EXPECT_FLOAT_EQ(floor.confidence[7], 1.0f);
 }
 
+// projectLabelsInto writes every pixel of a recycled image, in runs of one
+// segment: checked against a pixel-by-pixel painting on a segment image with
+// runs of every length from 1 to 40 (and unsegmented runs), into an image
+// that still holds another frame's labels and confidences.
+TEST(ProjectLabels, IntoARecycledImageEveryPixelIsWritten) {
+  Oversegmentation seg;
+  seg.width = 97;
+  seg.height = 23;
+  const std::size_t pixels = static_cast<std::size_t>(seg.width) * seg.height;
+  int next_segment = 0;
+  for (int run = 1; seg.pixel_segment.size() < pixels; run = run % 40 + 1) {
+    const int id = run % 7 == 3 ? -1 : next_segment++;
+    for (int k = 0; k < run && seg.pixel_segment.size() < pixels; ++k) {
+      seg.pixel_segment.push_back(id);
+    }
+  }
+  seg.segments.resize(static_cast<std::size_t>(next_segment));
+  std::vector<std::uint8_t> labels;
+  std::vector<float> confidence;
+  for (int s = 0; s < next_segment; ++s) {
+    labels.push_back(s % 9 == 8 ? kVoidLabel : static_cast<std::uint8_t>(s % kNumLabels));
+    confidence.push_back(static_cast<float>(s % 11) / 10.0f);
+  }
+  LabelImage out;
+  out.labels.assign(pixels + 50, 7);
+  out.confidence.assign(pixels + 50, 0.25f);
+  projectLabelsInto(seg, labels, confidence, out);
+  ASSERT_EQ(out.labels.size(), pixels);
+  ASSERT_EQ(out.confidence.size(), pixels);
+  for (std::size_t i = 0; i < pixels; ++i) {
+    const int s = seg.pixel_segment[i];
+    const std::uint8_t want = s < 0 ? kVoidLabel : labels[static_cast<std::size_t>(s)];
+    const float want_confidence =
+        want == kVoidLabel ? 0.0f : confidence[static_cast<std::size_t>(s)];
+    ASSERT_EQ(out.labels[i], want) << "pixel " << i;
+    ASSERT_EQ(out.confidence[i], want_confidence) << "pixel " << i;
+  }
+}
+
 TEST(ProjectLabels, RejectsInconsistentInput) {
   EXPECT_THROW(projectLabels(twoSegments(), {1}, {0.5f}), Error);
   EXPECT_THROW(projectLabels(twoSegments(), {1, 2}, {0.5f}), Error);
