@@ -242,11 +242,9 @@ void Segmenter::recycle(LabelledFrame&& done) const {
     recycled_->segmentations.push_back(std::move(done.segmented.segmentation));
   }
   // The rest: the classify stage's outputs (features, distributions, MRF,
-  // label image). Tables and diagnostics are few and small, and not reused.
+  // label image, tables: detectTablesInto reuses the tables' pixel lists).
   if (recycled_->labelled.size() < kRecycledFrames) {
     done.segmented = SegmentedFrame{};
-    done.tables.clear();
-    done.table_diagnostics.clear();
     recycled_->labelled.push_back(std::move(done));
   }
 }
@@ -419,6 +417,8 @@ LabelledFrame Segmenter::classify(SegmentedFrame segmented) const {
     out.forest_labels.clear();
     out.mrf = MrfResult{};
     voidLabelsInto(width, height, out.labels);
+    out.tables.clear();  // a recycled frame's
+    out.table_diagnostics.clear();
     out.segmented = std::move(segmented);
     return out;
   }
@@ -499,9 +499,12 @@ LabelledFrame Segmenter::classify(SegmentedFrame segmented) const {
   projectLabelsInto(segmented.segmentation, *final_labels, confidence, out.labels);
   watch.lap(out.timings, out.cpu_timings, &StageTimings::labels_ms);
 
-  TableDetection detection =
-      detectTables(segmented.prepared.cloud_ground, out.labels, config_.tables,
-                   &segmented.prepared.normals_ground);
+  // A recycled frame's tables lend their buffers to this frame's.
+  TableDetection detection;
+  detection.tables = std::move(out.tables);
+  detection.diagnostics = std::move(out.table_diagnostics);
+  detectTablesInto(segmented.prepared.cloud_ground, out.labels, config_.tables,
+                   &segmented.prepared.normals_ground, detection);
   out.tables = std::move(detection.tables);
   out.table_diagnostics = std::move(detection.diagnostics);
   watch.lap(out.timings, out.cpu_timings, &StageTimings::tables_ms);

@@ -225,9 +225,17 @@ void markVoxelsThatMayLink(DisjointSets& sets, const std::vector<Eigen::AlignedB
 
 std::vector<int> tables_detail::clusterPoints(const std::vector<Eigen::Vector3f>& points,
                                               float tolerance, const PointGrid& grid) {
+  std::vector<int> labels;
+  clusterPointsInto(points, tolerance, grid, labels);
+  return labels;
+}
+
+void tables_detail::clusterPointsInto(const std::vector<Eigen::Vector3f>& points,
+                                      float tolerance, const PointGrid& grid,
+                                      std::vector<int>& labels) {
   const int n = static_cast<int>(points.size());
-  std::vector<int> labels(points.size(), -1);
-  if (n == 0) return labels;
+  labels.resize(points.size());  // every entry is written at the end (runs cover all points)
+  if (n == 0) return;
   // Working memory kept per thread: the table stage runs once per frame, and
   // in a stream its buffers settle at the size of the largest table seen.
   thread_local ClusterScratch scratch_tls;
@@ -503,7 +511,6 @@ std::vector<int> tables_detail::clusterPoints(const std::vector<Eigen::Vector3f>
     if (root_label[root] < 0) root_label[root] = next++;
     std::fill(labels.begin() + begin, labels.begin() + run_end[r], root_label[root]);
   }
-  return labels;
 }
 
 std::vector<int> euclideanClusterLabels(const std::vector<Eigen::Vector3f>& points,

@@ -308,6 +308,49 @@ void validateTableConfig(const TableConfig& c) {
 
 TableDetection detectTables(const OrganizedCloud& cloud_ground, const LabelImage& labels,
                             const TableConfig& config, const NormalImage* normals_ground) {
+  TableDetection result;
+  detectTablesInto(cloud_ground, labels, config, normals_ground, result);
+  return result;
+}
+
+namespace {
+// Spare tables whose vectors keep their capacity for the next frame's
+// tables (detectTablesInto). A few: a frame has a handful of tables, and
+// each spare may hold up to a frame's worth of pixel indices.
+constexpr std::size_t kMaxSpareTables = 8;
+
+// A default table that takes over `old`'s vectors, emptied.
+TableCluster reusedTable(TableCluster&& old) {
+  TableCluster table;
+  table.hull = std::move(old.hull);
+  table.hull.clear();
+  table.pixels = std::move(old.pixels);
+  table.pixels.clear();
+  table.search_positions = std::move(old.search_positions);
+  table.search_positions.clear();
+  return table;
+}
+}  // namespace
+
+void detectTablesInto(const OrganizedCloud& cloud_ground, const LabelImage& labels,
+                      const TableConfig& config, const NormalImage* normals_ground,
+                      TableDetection& result) {
+  // The earlier frame's tables become spares, the rest of `result` is reset.
+  thread_local std::vector<TableCluster> spare_tls;
+  std::vector<TableCluster>& spare = spare_tls;
+  for (TableCluster& old : result.tables) {
+    if (spare.size() < kMaxSpareTables) spare.push_back(std::move(old));
+  }
+  result.tables.clear();
+  result.diagnostics.clear();
+  result.table_points = result.nonfinite_points = result.implausible_points = 0;
+  result.clusters_rejected = result.unsampled_points = 0;
+  const auto takeTable = [&spare] {
+    if (spare.empty()) return TableCluster{};
+    TableCluster table = reusedTable(std::move(spare.back()));
+    spare.pop_back();
+    return table;
+  };
   validateTableConfig(config);
   if (normals_ground && !cloud_ground.points.empty() &&
       normals_ground->normals.size() != cloud_ground.points.size()) {
@@ -316,11 +359,10 @@ TableDetection detectTables(const OrganizedCloud& cloud_ground, const LabelImage
                 " points");
   }
   const float cos_tilt = std::cos(config.horizontal_tilt_deg * static_cast<float>(M_PI) / 180.0f);
-  TableDetection result;
   if (cloud_ground.points.empty()) {
     result.diagnostics.push_back(
         "no ground-aligned cloud (no ground plane for this frame): no tables");
-    return result;
+    return;
   }
   checkInputs(cloud_ground, labels);
 
@@ -399,14 +441,14 @@ TableDetection detectTables(const OrganizedCloud& cloud_ground, const LabelImage
   }
   if (result.table_points == 0) {
     result.diagnostics.push_back("no table-labelled points at table height: no tables");
-    return result;
+    return;
   }
   if (points.empty()) {
     result.unsampled_points = result.table_points;
     result.diagnostics.push_back(std::to_string(result.table_points) +
                                  " table points, none at a sampled pixel " +
                                  "(tables.point_stride " + std::to_string(stride) + "): no tables");
-    return result;
+    return;
   }
 
   // 2. Clusters of the sampled points; with a stride, every other table
@@ -415,8 +457,10 @@ TableDetection detectTables(const OrganizedCloud& cloud_ground, const LabelImage
   // sampled, grouped by counting sorts: they stay in ascending point order,
   // hence ascending pixel order, so table.pixels needs no sort, and sums over
   // members run in the same order as before.
-  const std::vector<int> cluster_of =
-      clusterPoints(points, config.cluster_tolerance_m, PointGrid{&pixels, width, stride});
+  thread_local std::vector<int> cluster_of_tls;
+  std::vector<int>& cluster_of = cluster_of_tls;
+  clusterPointsInto(points, config.cluster_tolerance_m, PointGrid{&pixels, width, stride},
+                    cluster_of);
   const int clusters = *std::max_element(cluster_of.begin(), cluster_of.end()) + 1;
   const std::vector<int>& full_pixels = stride > 1 ? full_pixels_buffer : pixels;
   std::vector<int>& full_cluster_buffer = full_cluster_tls;
@@ -480,8 +524,11 @@ TableDetection detectTables(const OrganizedCloud& cloud_ground, const LabelImage
   if (stride > 1) groupByCluster(cluster_of, sample_start, sample_members, fill_tls);
 
   int small_clusters = 0, largest_small = 0;
-  std::vector<TableCluster> tables;
+  std::vector<TableCluster>& tables = result.tables;  // empty (see the top)
   std::vector<Eigen::Vector3f>& cluster_points = cluster_points_tls;
+  // The table being described: a spare's buffers, kept across rejected
+  // clusters and replaced when it is taken.
+  TableCluster table = takeTable();
   for (int c = 0; c < clusters; ++c) {
     const int* member = members.data() + member_start[c];
     const int n = member_start[c + 1] - member_start[c];
@@ -504,7 +551,7 @@ TableDetection detectTables(const OrganizedCloud& cloud_ground, const LabelImage
     gatherByIndex(points.data(), sample_member, samples, cluster_points.data());
     const MemberSums sums = memberSums(member, n, full_pixels.data(), labels.confidence,
                                        normals_ground, cos_tilt);
-    TableCluster table;
+    table = reusedTable(std::move(table));
     table.mean_confidence = static_cast<float>(sums.confidence / n);
     const ClusterOutcome outcome = describeCluster(cluster_points, n, config, table);
     if (!outcome.ok) {
@@ -539,10 +586,16 @@ TableDetection detectTables(const OrganizedCloud& cloud_ground, const LabelImage
         continue;
       }
     }
-    table.pixels.resize(static_cast<std::size_t>(n));
+    // A spare list that is too small grows with a quarter to spare, so that
+    // over a stream the lists settle at sizes that fit the tables seen.
+    const auto pixel_count = static_cast<std::size_t>(n);
+    if (table.pixels.capacity() < pixel_count) table.pixels.reserve(pixel_count + pixel_count / 4);
+    table.pixels.resize(pixel_count);
     gatherByIndex(full_pixels.data(), member, n, table.pixels.data());
     tables.push_back(std::move(table));
+    table = takeTable();
   }
+  if (spare.size() < kMaxSpareTables) spare.push_back(std::move(table));
   if (small_clusters > 0) {
     result.clusters_rejected += small_clusters;
     result.diagnostics.push_back(
@@ -550,13 +603,19 @@ TableDetection detectTables(const OrganizedCloud& cloud_ground, const LabelImage
         std::to_string(config.min_cluster_points) + ") dropped, the largest of " +
         std::to_string(largest_small) + " points");
   }
-  std::stable_sort(tables.begin(), tables.end(), [](const TableCluster& a, const TableCluster& b) {
-    return a.point_count > b.point_count;
-  });
+  // Largest first, ties in cluster order: a stable insertion sort (a frame
+  // has a handful of tables; std::stable_sort allocates a buffer).
+  for (std::size_t k = 1; k < tables.size(); ++k) {
+    for (std::size_t j = k; j > 0 && tables[j - 1].point_count < tables[j].point_count; --j) {
+      std::swap(tables[j - 1], tables[j]);
+    }
+  }
 
   // 4. Search positions, 5. their reachability.
   Eigen::AlignedBox2f region;
-  std::vector<Eigen::Vector2f> position_xy;
+  thread_local std::vector<Eigen::Vector2f> position_xy_tls;
+  std::vector<Eigen::Vector2f>& position_xy = position_xy_tls;
+  position_xy.clear();
   for (std::size_t k = 0; k < tables.size(); ++k) {
     tables[k].id = static_cast<int>(k);
     tables[k].search_positions = computeSearchPositions(tables[k], config);
@@ -570,12 +629,10 @@ TableDetection detectTables(const OrganizedCloud& cloud_ground, const LabelImage
     region.extend(region.min() - Eigen::Vector2f::Constant(margin));
     region.extend(region.max() + Eigen::Vector2f::Constant(margin));
     const ReachabilityGrid grid(cloud_ground, labels, region, position_xy, config);
-    for (auto& table : tables) {
-      for (auto& position : table.search_positions) grid.assess(position);
+    for (auto& found : tables) {
+      for (auto& position : found.search_positions) grid.assess(position);
     }
   }
-  result.tables = std::move(tables);
-  return result;
 }
 
 std::vector<TableCluster> findTables(const OrganizedCloud& cloud_ground, const LabelImage& labels,

@@ -56,6 +56,9 @@ struct PointGrid {
 // kMaxPlausibleRangeM and a tolerance of at least kMinToleranceM.
 std::vector<int> clusterPoints(const std::vector<Eigen::Vector3f>& points, float tolerance,
                                const PointGrid& grid = {});
+// The same into `labels` (resized; its capacity is reused frame to frame).
+void clusterPointsInto(const std::vector<Eigen::Vector3f>& points, float tolerance,
+                       const PointGrid& grid, std::vector<int>& labels);
 
 struct ClusterOutcome {
   bool ok = false;

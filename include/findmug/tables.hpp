@@ -177,6 +177,12 @@ void validateTableConfig(const TableConfig& config);
 TableDetection detectTables(const OrganizedCloud& cloud_ground, const LabelImage& labels,
                             const TableConfig& config,
                             const NormalImage* normals_ground = nullptr);
+// The same into `out`, whose tables (from an earlier frame) lend their
+// buffers (pixel lists, hulls) to this frame's: a stream of frames then
+// allocates almost nothing here once warm. Every field of `out` is replaced.
+void detectTablesInto(const OrganizedCloud& cloud_ground, const LabelImage& labels,
+                      const TableConfig& config, const NormalImage* normals_ground,
+                      TableDetection& out);
 
 // detectTables(...).tables, for callers that do not log the reasons.
 std::vector<TableCluster> findTables(const OrganizedCloud& cloud_ground, const LabelImage& labels,

@@ -287,6 +287,31 @@ TEST(BufferReuse, RecycledFramesGiveTheResultsOfFreshOnesWithEveryStage) {
   expectRecycledStreamGivesFreshResults(reusing, a, b, want_a, want_b, want_empty);
 }
 
+// A recycled frame's tables lend their buffers to the next frame's table
+// stage: they must never come out as that frame's tables, also when the
+// frame has no ground plane (the table stage does not run) or no table.
+TEST(BufferReuse, ARecycledFramesTablesAreNotTheNextFramesTables) {
+  const Scene a = floorAndWall(320, 240, 3.0, 1.2);
+  const auto forest = trainOn(a);
+  const Segmenter reusing(config(), forest);
+  for (const bool with_ground : {false, true}) {
+    SCOPED_TRACE(with_ground ? "a frame without tables" : "a frame without a ground plane");
+    LabelledFrame done = reusing.process(a.frame);
+    ASSERT_TRUE(done.tables.empty());
+    TableCluster stale;
+    stale.point_count = 1234;
+    stale.pixels.assign(1234, 7);
+    stale.hull = {{0.0f, 0.0f}, {1.0f, 0.0f}, {0.0f, 1.0f}};
+    done.tables.push_back(stale);
+    done.table_diagnostics = {"stale"};
+    reusing.recycle(std::move(done));
+    const LabelledFrame next = reusing.process(with_ground ? a.frame : emptyFrame());
+    EXPECT_EQ(next.segmented.prepared.ground.has_value(), with_ground);
+    EXPECT_TRUE(next.tables.empty());
+    for (const std::string& line : next.table_diagnostics) EXPECT_NE(line, "stale");
+  }
+}
+
 // Allocations of prepare() + oversegment() for one frame.
 std::uint64_t allocationsOfPrepareAndOversegment(const Segmenter& segmenter, const RgbdFrame& frame,
                                                  SegmentedFrame& out) {

@@ -456,6 +456,90 @@ TEST(FindTables, SeparateTablesSmallClustersAndSizeLimits) {
   EXPECT_NEAR(d.tables[0].extents.y(), 0.5f, 0.02f);
 }
 
+// Every field of two detections, bit for bit.
+void expectSameDetection(const TableDetection& got, const TableDetection& want,
+                         const std::string& what) {
+  SCOPED_TRACE(what);
+  EXPECT_EQ(got.diagnostics, want.diagnostics);
+  EXPECT_EQ(got.table_points, want.table_points);
+  EXPECT_EQ(got.nonfinite_points, want.nonfinite_points);
+  EXPECT_EQ(got.implausible_points, want.implausible_points);
+  EXPECT_EQ(got.clusters_rejected, want.clusters_rejected);
+  EXPECT_EQ(got.unsampled_points, want.unsampled_points);
+  ASSERT_EQ(got.tables.size(), want.tables.size());
+  for (std::size_t k = 0; k < got.tables.size(); ++k) {
+    const TableCluster& a = got.tables[k];
+    const TableCluster& b = want.tables[k];
+    EXPECT_EQ(a.id, b.id);
+    EXPECT_EQ(a.centroid, b.centroid);
+    EXPECT_EQ(a.top_height, b.top_height);
+    EXPECT_EQ(a.major_axis, b.major_axis);
+    EXPECT_EQ(a.minor_axis, b.minor_axis);
+    EXPECT_EQ(a.extents, b.extents);
+    EXPECT_EQ(a.center, b.center);
+    EXPECT_EQ(a.hull, b.hull);
+    EXPECT_EQ(a.top_area_m2, b.top_area_m2);
+    EXPECT_EQ(std::isnan(a.horizontal_share), std::isnan(b.horizontal_share));
+    if (!std::isnan(b.horizontal_share)) {
+      EXPECT_EQ(a.horizontal_share, b.horizontal_share);
+    }
+    EXPECT_EQ(a.point_count, b.point_count);
+    EXPECT_EQ(a.pixels, b.pixels);
+    EXPECT_EQ(a.mean_confidence, b.mean_confidence);
+    ASSERT_EQ(a.search_positions.size(), b.search_positions.size());
+    for (std::size_t j = 0; j < a.search_positions.size(); ++j) {
+      const SearchPosition& p = a.search_positions[j];
+      const SearchPosition& q = b.search_positions[j];
+      EXPECT_EQ(p.xy, q.xy);
+      EXPECT_EQ(p.yaw, q.yaw);
+      EXPECT_EQ(p.reachable, q.reachable);
+      EXPECT_EQ(p.reason, q.reason);
+      EXPECT_EQ(p.side, q.side);
+      EXPECT_EQ(p.along_m, q.along_m);
+    }
+  }
+}
+
+// detectTablesInto reuses the tables of the detection it writes into (their
+// pixel lists and hulls): whatever that detection held (more tables, fewer,
+// larger ones, rejected clusters and their reasons, nothing), the result is
+// the fresh one's, field for field.
+TEST(FindTables, IntoAUsedDetectionEqualsAFreshOne) {
+  Scene two;  // two tables, a small cluster and its reason
+  two.addFloor(-1.0f, 6.0f, -3.0f, 3.0f);
+  two.addTop({2.0f, -1.0f}, 0.0f, 1.6f, 0.6f, 0.72f);
+  two.addTop({2.0f, -0.45f}, 0.0f, 1.6f, 0.3f, 0.72f);
+  two.addTop({4.5f, 1.5f}, 0.0f, 0.1f, 0.1f, 0.9f);
+  Scene one;  // one table, rotated, fewer points than the larger of `two`
+  one.addFloor(-1.0f, 5.0f, -3.0f, 3.0f);
+  one.addTop({2.0f, 0.3f}, 0.5f, 1.2f, 0.7f, 0.74f, 0.01f, 0.8f);
+  Scene big;  // one table with more points than any table above
+  big.addFloor(-1.0f, 5.0f, -3.0f, 3.0f);
+  big.addTop({2.5f, 0.0f}, -0.2f, 2.0f, 1.0f, 0.70f, 0.008f);
+  Scene none;  // floor only
+  none.addFloor(-1.0f, 4.0f, -2.0f, 2.0f);
+  Scene no_ground;  // no ground plane: an empty cloud
+  no_ground.labels = one.labels;
+  const std::vector<std::pair<const Scene*, std::string>> stream = {
+      {&two, "two tables"}, {&one, "one table"},  {&big, "a big table"},
+      {&two, "two tables"}, {&none, "no table"},  {&two, "two tables"},
+      {&no_ground, "no ground"}, {&big, "a big table"}, {&one, "one table"}};
+  const TableConfig config;
+  TableDetection used;
+  for (const auto& [scene, what] : stream) {
+    const TableDetection fresh = detectTables(scene->cloud, scene->labels, config);
+    detectTablesInto(scene->cloud, scene->labels, config, nullptr, used);
+    expectSameDetection(used, fresh, what);
+  }
+  // And a detection's own contents are not kept by mistake: every field is
+  // replaced, also those the function only counts.
+  used.table_points = used.clusters_rejected = 12345;
+  used.diagnostics = {"stale"};
+  used.tables.emplace_back();
+  detectTablesInto(none.cloud, none.labels, config, nullptr, used);
+  expectSameDetection(used, detectTables(none.cloud, none.labels, config), "stale fields");
+}
+
 TEST(FindTables, ImplausibleHeightsAreNotTables) {
   Scene s;
   s.addFloor(-1.0f, 4.0f, -2.0f, 2.0f);
