@@ -8,7 +8,6 @@
 #include <string>
 
 #include "findmug/error.hpp"
-#include "int_runs.hpp"
 
 namespace findmug {
 
@@ -56,28 +55,48 @@ void projectLabelsInto(const Oversegmentation& segmentation,
   out.width = segmentation.width;
   out.height = segmentation.height;
   // Every pixel is written below (a recycled image is not cleared first),
-  // a run of one segment at a time: a segment crosses a row in a run of
-  // tens of pixels, and the runs' fills are what memset does.
+  // through a table of each segment's label and confidence (entry 0: no
+  // segment), without a branch per pixel: segments cross a row in runs of a
+  // few pixels on a cluttered view, where a run at a time lost more on the
+  // runs' ends than it saved. A segment id out of range is found by the
+  // same pass and reported afterwards.
   out.labels.resize(pixels);
   out.confidence.resize(pixels);
+  thread_local std::vector<std::uint8_t> label_of_tls;
+  thread_local std::vector<float> confidence_of_tls;
+  std::vector<std::uint8_t>& label_of = label_of_tls;
+  std::vector<float>& confidence_of = confidence_of_tls;
+  label_of.resize(segments + 1);
+  confidence_of.resize(segments + 1);
+  label_of[0] = kVoidLabel;
+  confidence_of[0] = 0.0f;
+  for (std::size_t s = 0; s < segments; ++s) {
+    label_of[s + 1] = segment_labels[s];
+    confidence_of[s + 1] = segment_labels[s] == kVoidLabel ? 0.0f : segment_confidence[s];
+  }
   const int* pixel_segment = segmentation.pixel_segment.data();
-  for (std::size_t i = 0, end = 0; i < pixels; i = end) {
-    end = detail::intRunEnd(pixel_segment, i, pixels);
+  std::uint8_t* labels = out.labels.data();
+  float* confidence = out.confidence.data();
+  const std::uint8_t* label_table = label_of.data();
+  const float* confidence_table = confidence_of.data();
+  bool any_bad = false;
+  for (std::size_t i = 0; i < pixels; ++i) {
+    // A negative id (no segment) -> entry 0, segment s -> s + 1.
     const int s = pixel_segment[i];
-    std::uint8_t id = kVoidLabel;
-    float confidence = 0.0f;
-    if (s >= 0) {
-      if (static_cast<std::size_t>(s) >= segments) {
+    const bool bad = s >= 0 && static_cast<std::size_t>(s) >= segments;
+    any_bad |= bad;
+    const std::size_t entry = s < 0 || bad ? 0 : static_cast<std::size_t>(s) + 1;
+    labels[i] = label_table[entry];
+    confidence[i] = confidence_table[entry];
+  }
+  if (any_bad) {
+    for (std::size_t i = 0; i < pixels; ++i) {
+      const int s = pixel_segment[i];
+      if (s >= 0 && static_cast<std::size_t>(s) >= segments) {
         throw Error("projectLabels: pixel " + std::to_string(i) + " belongs to segment " +
                     std::to_string(s) + " but there are only " + std::to_string(segments));
       }
-      id = segment_labels[static_cast<std::size_t>(s)];
-      if (id != kVoidLabel) confidence = segment_confidence[static_cast<std::size_t>(s)];
     }
-    std::fill(out.labels.begin() + static_cast<std::ptrdiff_t>(i),
-              out.labels.begin() + static_cast<std::ptrdiff_t>(end), id);
-    std::fill(out.confidence.begin() + static_cast<std::ptrdiff_t>(i),
-              out.confidence.begin() + static_cast<std::ptrdiff_t>(end), confidence);
   }
 }
 
