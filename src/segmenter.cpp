@@ -411,11 +411,25 @@ LabelledFrame Segmenter::classify(SegmentedFrame segmented) const {
   const int width = segmented.prepared.cloud_camera.width;
   const int height = segmented.prepared.cloud_camera.height;
   if (!segmented.prepared.ground) {
-    out.features = SegmentFeatures{};
+    // Emptied, not replaced: a recycled frame's vectors keep their capacity
+    // for the frames after this one (a stream with frames lacking a ground
+    // plane otherwise reallocated them all on the next frame with one).
+    // (A new member of either struct must be emptied here too.)
+    static_assert(sizeof(SegmentFeatures) == 5 * sizeof(std::vector<float>));
+    static_assert(sizeof(MrfResult) ==
+                  2 * sizeof(std::vector<float>) + sizeof(std::int64_t));
+    out.features.features.clear();
+    out.features.centroids.clear();
+    out.features.moments.clear();
+    out.features.regions.clear();
+    out.features.scene.clear();
     out.forest_probabilities.clear();
     out.first_stage_probabilities.clear();
     out.forest_labels.clear();
-    out.mrf = MrfResult{};
+    out.mrf.labels.clear();
+    out.mrf.confidence.clear();
+    out.mrf.iterations = 0;
+    out.mrf.converged = false;
     voidLabelsInto(width, height, out.labels);
     out.tables.clear();  // a recycled frame's
     out.table_diagnostics.clear();

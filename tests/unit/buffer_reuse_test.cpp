@@ -373,5 +373,25 @@ TEST(BufferReuse, AWarmRecyclingStreamAllocatesNextToNothing) {
   EXPECT_LE(reusing_news, 6u) << "without recycle: " << plain_news;
 }
 
+// Frames without a ground plane between others (a third of the NYU frames
+// estimate none): the frame after one must still find the recycled
+// buffers, and allocate next to nothing.
+TEST(BufferReuse, FramesWithoutAGroundPlaneKeepTheRecycledBuffers) {
+  const Scene a = floorAndWall(640, 480, 3.0, 1.2);
+  const auto forest = trainAllStagesOn(a);
+  const Segmenter reusing(allStagesConfig(), forest);
+  std::uint64_t after_empty_news = 0;
+  for (int k = 0; k < 8; ++k) {
+    const bool empty = k % 2 == 1;
+    RgbdFrame copy = empty ? emptyFrame() : a.frame;  // the caller's frame, not counted
+    const std::uint64_t before = bench::g_news.load();
+    LabelledFrame done = reusing.process(std::move(copy));
+    if (!empty && k > 0) after_empty_news = bench::g_news.load() - before;
+    ASSERT_EQ(done.segmented.prepared.ground.has_value(), !empty);
+    reusing.recycle(std::move(done));
+  }
+  EXPECT_LE(after_empty_news, 6u);
+}
+
 }  // namespace
 }  // namespace findmug
