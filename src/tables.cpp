@@ -319,15 +319,14 @@ namespace {
 // each spare may hold up to a frame's worth of pixel indices.
 constexpr std::size_t kMaxSpareTables = 8;
 
-// A default table that takes over `old`'s vectors, emptied.
+// A default table that takes over `old`'s pixel list and hull, emptied.
+// (Not its search positions: computeSearchPositions returns a new list.)
 TableCluster reusedTable(TableCluster&& old) {
   TableCluster table;
   table.hull = std::move(old.hull);
   table.hull.clear();
   table.pixels = std::move(old.pixels);
   table.pixels.clear();
-  table.search_positions = std::move(old.search_positions);
-  table.search_positions.clear();
   return table;
 }
 }  // namespace
