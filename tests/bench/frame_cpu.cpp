@@ -20,6 +20,7 @@
 // config (ground.source auto: NYU frames carry no
 // extrinsics, so the floor is estimated from the frame, as in the daemon).
 // Prints a Markdown table for BENCHMARKS.md section 9.
+#include <dlfcn.h>
 #include <malloc.h>
 
 #include <algorithm>
@@ -38,6 +39,7 @@
 #include "findmug/dataset.hpp"
 #include "findmug/error.hpp"
 #include "findmug/segmenter.hpp"
+#include "findmug/tables.hpp"
 #include "test_data.hpp"
 
 namespace {
@@ -180,6 +182,12 @@ int run(int argc, char** argv) {
   }
 
   if (digest) std::fclose(digest);
+  // Which copy of the core ran: the loader may pick the x86-64-v3 one in a
+  // glibc-hwcaps folder (src/CMakeLists.txt); tests/hwcaps reads this line.
+  Dl_info core{};
+  if (dladdr(reinterpret_cast<const void*>(&validateTableConfig), &core) != 0 && core.dli_fname) {
+    std::printf("core library: %s\n", core.dli_fname);
+  }
   std::printf(
       "%zu frames x %d passes from %s, model %s, one thread; medians over the %zu of %zu runs that "
       "found a ground plane (full pipeline)\n\n",

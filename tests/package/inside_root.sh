@@ -23,6 +23,24 @@ grep -q '^User=findmug' /lib/systemd/system/findmugd.service || fail "unit does 
 [[ -f /usr/share/java/findmug_lcmtypes.jar ]] || fail "LCM types jar missing"
 [[ -f /lib/sysctl.d/60-findmug-lcm.conf ]] || fail "sysctl snippet missing"
 
+echo "== the core library the loader picks"
+# LD_DEBUG=libs names each library as its constructors run ("calling init: PATH").
+core_loaded() { env "$@" LD_DEBUG=libs findmugd --version 2>&1 >/dev/null |
+  sed -n 's/.*calling init: \(.*libfindmug_core[^ ]*\).*/\1/p' | head -n 1; }
+plain=$(core_loaded GLIBC_TUNABLES=glibc.cpu.hwcaps=-AVX2)
+echo "without AVX2 (GLIBC_TUNABLES): $plain"
+[[ -n "$plain" && "$plain" != *glibc-hwcaps* ]] || fail "the plain core was not loaded ($plain)"
+if [[ "${HWCAPS_COPY:-0}" == 1 ]]; then
+  dpkg -L findmug | grep -q '/glibc-hwcaps/x86-64-v3/libfindmug_core.so.0.1$' ||
+    fail "the x86-64-v3 copy of the core is not in the package"
+  if /lib64/ld-linux-x86-64.so.2 --help | grep -q 'x86-64-v3 (supported'; then
+    chosen=$(core_loaded)
+    echo "as the loader chooses: $chosen"
+    [[ "$chosen" == */glibc-hwcaps/x86-64-v3/libfindmug_core.so* ]] ||
+      fail "the loader did not pick the installed x86-64-v3 copy ($chosen)"
+  fi
+fi
+
 echo "== findmugd --version"
 out=$(findmugd --version)
 echo "$out"

@@ -57,7 +57,11 @@ mkdir -p "$work/upper" "$work/ovl-work" "$work/root" "$work/in"
 cp "$deb" "$dev" "$work/in/"
 cp -r "$source_dir/tests/package/consumer" "$work/in/consumer"
 cp "$source_dir/tests/package/inside_root.sh" "$work/in/"
-export work version
+# The x86-64-v3 copy of the core (src/CMakeLists.txt, FINDMUG_CORE_HWCAPS): checked inside
+# when this build made one.
+hwcaps_copy=0
+[[ -e "$build/src/glibc-hwcaps/x86-64-v3/libfindmug_core.so.0.1" ]] && hwcaps_copy=1
+export work version hwcaps_copy
 unshare --mount --pid --fork --propagation private bash -euo pipefail -c '
   mount -t overlay overlay -o "lowerdir=/,upperdir=$work/upper,workdir=$work/ovl-work" "$work/root"
   mount -t proc proc "$work/root/proc"
@@ -68,7 +72,7 @@ unshare --mount --pid --fork --propagation private bash -euo pipefail -c '
   # No systemd runs in the throwaway root: maintainer scripts must cope, as in a chroot.
   mount -t tmpfs tmpfs "$work/root/run"
   chroot "$work/root" /usr/bin/env -i PATH=/usr/sbin:/usr/bin:/sbin:/bin HOME=/root \
-    LANG=C.UTF-8 VERSION="$version" bash /tmp/in/inside_root.sh
+    LANG=C.UTF-8 VERSION="$version" HWCAPS_COPY="$hwcaps_copy" bash /tmp/in/inside_root.sh
 '
 
 echo "== what the package left behind"
