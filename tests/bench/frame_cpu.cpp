@@ -6,11 +6,15 @@
 // The first pass is a warm-up; the figures are over the following passes.
 //
 //   frame_cpu --model MODEL [--data DIR] [--passes N] [--config YAML] [--set section.key=value]...
-//             [--digest FILE] [--heap-keep-mb MB] [--recycle 0|1]
+//             [--digest FILE] [--per-frame CSV] [--heap-keep-mb MB] [--recycle 0|1]
 //
 // --digest writes one line per frame of the first timed pass: the ground
 // plane and a hash of the label image and of the tables' hull sizes, so two
 // builds can be checked to give the same results (`diff` the files).
+// --per-frame writes one CSV row per run the medians cover (pass, frame, CPU
+// ms of each stage, total): which frames are the slow ones, and in which
+// stage. The daemon drops frames when slow ones come in a row, which medians
+// hide.
 // --heap-keep-mb sets the malloc thresholds as findmugd's daemon.heap_keep_mb.
 // --recycle 1 (default) hands each finished frame back with
 // Segmenter::recycle, as findmugd does after publishing; 0 does not.
@@ -61,6 +65,7 @@ int run(int argc, char** argv) {
   int passes = 3;
   Config config;
   std::string digest_path;
+  std::string per_frame_path;
   int heap_keep_mb = 0;
   bool recycle = true;
   for (int i = 1; i + 1 < argc; i += 2) {
@@ -72,6 +77,8 @@ int run(int argc, char** argv) {
       passes = std::max(1, std::atoi(argv[i + 1]));
     else if (!std::strcmp(argv[i], "--digest"))
       digest_path = argv[i + 1];
+    else if (!std::strcmp(argv[i], "--per-frame"))
+      per_frame_path = argv[i + 1];
     else if (!std::strcmp(argv[i], "--recycle"))
       recycle = std::atoi(argv[i + 1]) != 0;
     else if (!std::strcmp(argv[i], "--heap-keep-mb"))
@@ -123,6 +130,13 @@ int run(int argc, char** argv) {
   std::size_t labelled = 0, runs = 0;
   std::FILE* digest = digest_path.empty() ? nullptr : std::fopen(digest_path.c_str(), "w");
   if (!digest_path.empty() && !digest) throw Error("cannot write " + digest_path);
+  std::FILE* per_frame = per_frame_path.empty() ? nullptr : std::fopen(per_frame_path.c_str(), "w");
+  if (!per_frame_path.empty() && !per_frame) throw Error("cannot write " + per_frame_path);
+  if (per_frame) {
+    std::fprintf(per_frame, "pass,frame");
+    for (const auto& stage : stages) std::fprintf(per_frame, ",%s", stage.first);
+    std::fprintf(per_frame, ",total\n");
+  }
   for (int pass = 0; pass < passes; ++pass) {
     for (std::size_t fi = 0; fi < frames.size(); ++fi) {
       const RgbdFrame& f = frames[fi];
@@ -175,6 +189,13 @@ int run(int argc, char** argv) {
         wall[s].push_back(out.timings.*stages[s].second);
       }
       cpu_total.push_back(out.cpu_timings.total());
+      if (per_frame) {
+        std::fprintf(per_frame, "%d,%s", pass, dataset.names()[fi].c_str());
+        for (const auto& stage : stages) {
+          std::fprintf(per_frame, ",%.3f", out.cpu_timings.*stage.second);
+        }
+        std::fprintf(per_frame, ",%.3f\n", out.cpu_timings.total());
+      }
       wall_total.push_back(out.timings.total());
       // As findmugd does after publishing: the buffers serve the next frame.
       if (recycle) segmenter.recycle(std::move(out));
@@ -182,6 +203,7 @@ int run(int argc, char** argv) {
   }
 
   if (digest) std::fclose(digest);
+  if (per_frame && std::fclose(per_frame) != 0) throw Error("cannot write " + per_frame_path);
   // Which copy of the core ran: the loader may pick the x86-64-v3 one in a
   // glibc-hwcaps folder (src/CMakeLists.txt); tests/hwcaps reads this line.
   Dl_info core{};
