@@ -582,13 +582,18 @@ __attribute__((target("avx2"))) void seedDensity8(const FeatureGrid& coarse,
 }
 #endif
 
+// `avx2`: assignWindowAvx when the CPU has AVX2, the SSE2 loop otherwise
+// (the tests compare the two: OversegSimd::Off).
 void assignWindow(const FeatureGrid& g, const std::array<float, kNumChannels>& c, const Weights& wt,
-                  int label, int x0, int x1, int y0, int y1, float* best, int* labels) {
+                  int label, int x0, int x1, int y0, int y1, float* best, int* labels,
+                  bool avx2) {
 #if defined(FINDMUG_AVX2_DISPATCH)
-  if (detail::cpuHasAvx2()) {
+  if (avx2) {
     assignWindowAvx(g, c, wt, label, x0, x1, y0, y1, best, labels);
     return;
   }
+#else
+  (void)avx2;
 #endif
   assignWindowSse(g, c, wt, label, x0, x1, y0, y1, best, labels);
 }
@@ -728,7 +733,7 @@ class OrganizedOversegmenter final : public Oversegmenter {
     Borrowed labels_buffer(g_buffers.labels);
     std::vector<int>& labels = *labels_buffer;
     labels.resize(nc);
-    const bool centre_sums_avx2 = useAvx2();
+    const bool iterate_avx2 = useAvx2();  // window search and centre sums
     for (int iter = 0; iter < config_.max_iterations; ++iter) {
       std::fill(best.begin(), best.end(), std::numeric_limits<float>::infinity());
       std::fill(labels.begin(), labels.end(), -1);
@@ -738,9 +743,10 @@ class OrganizedOversegmenter final : public Oversegmenter {
         const int cv = static_cast<int>(std::lround(c.v));
         assignWindow(coarse, c.centre, weights_, static_cast<int>(k), std::max(0, cu - c.half_w),
                      std::min(coarse.width, cu + c.half_w + 1), std::max(0, cv - c.half_h),
-                     std::min(coarse.height, cv + c.half_h + 1), best.data(), labels.data());
+                     std::min(coarse.height, cv + c.half_h + 1), best.data(), labels.data(),
+                     iterate_avx2);
       }
-      updateCentres(coarse, labels, clusters, centre_sums_avx2);
+      updateCentres(coarse, labels, clusters, iterate_avx2);
     }
 
     Borrowed labels_full_buffer(g_buffers.labels_full);
@@ -1398,8 +1404,8 @@ class OrganizedOversegmenter final : public Oversegmenter {
     }
   }
 
-  // Whether the AVX2 variants (refinement, centre sums, seed density) run:
-  // the CPU has AVX2 and the tests did not switch them off.
+  // Whether the AVX2 variants (window search, refinement, centre sums, seed
+  // density) run: the CPU has AVX2 and the tests did not switch them off.
   bool useAvx2() const {
 #if defined(FINDMUG_AVX2_DISPATCH)
     return simd_ == detail::OversegSimd::Auto && detail::cpuHasAvx2();

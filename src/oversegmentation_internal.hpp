@@ -11,7 +11,8 @@ namespace findmug::detail {
 std::unique_ptr<Oversegmenter> makePclSupervoxelOversegmenter(const OversegmentationConfig& config);
 enum class OversegSimd {
   Auto,  // AVX2 where the CPU has it (what makeOversegmenter builds)
-  Off,   // the organized oversegmenter's refinement, centre sums and seed density scalar only
+  Off,   // the organized oversegmenter's window search (SSE2), refinement, centre sums and
+         // seed density without AVX2
 };
 
 std::unique_ptr<Oversegmenter> makeOrganizedOversegmenter(

@@ -734,11 +734,15 @@ TEST(OrganizedOversegmenter, SegmentsAreConnectedAndAvoidHoles) {
 
 // The organized oversegmenter decides most full-resolution pixels eight at
 // a time with AVX2 (refineBlockAvx2) and the rest one by one, sums its
-// cluster centres four pixels at a time (addRunChannelsAvx2) and works out
-// the seed density eight coarse pixels at a time (seedDensity8): the same
-// segmentation as the scalar code for all three, on the NYU frames and on
-// the box scene with holes, NaN coordinates, a zero depth and image widths
-// that leave a tail of every length after the blocks.
+// cluster centres four pixels at a time (addRunChannelsAvx2), works out
+// the seed density eight coarse pixels at a time (seedDensity8) and runs its
+// window search eight pixels at a time (assignWindowAvx, against SSE2's
+// four): the same segmentation as the scalar and SSE2 code for all four, on
+// the NYU frames and on the box scene with holes, NaN coordinates, a zero
+// depth and image widths that leave a tail of every length after the blocks;
+// and with normals of length 1 to 5, for which the normal term of the
+// distance goes negative (a shortcut that assumed unit normals, as one tried
+// in BENCHMARKS.md 9w, fails there).
 TEST(OrganizedOversegmenter, AvxRefinementMatchesTheScalarCodeExactly) {
   FINDMUG_REQUIRE_DATA(root, "nyuv2_labeled");
   OversegmentationConfig config;
@@ -781,6 +785,14 @@ TEST(OrganizedOversegmenter, AvxRefinementMatchesTheScalarCodeExactly) {
       }
     }
     expectSame(cloud, normals, "box scene " + std::to_string(width) + " px wide");
+  }
+  for (std::size_t index = 0; index < 4; ++index) {
+    const OrganizedCloud cloud = frameToCloud(dataset.load(index).frame);
+    NormalImage normals = computeNormals(cloud, NormalConfig{});
+    for (std::size_t i = 0; i < normals.normals.size(); ++i) {
+      normals.normals[i] *= 1.0f + static_cast<float>(i % 5);  // lengths 1 .. 5
+    }
+    expectSame(cloud, normals, "NYU frame " + std::to_string(index) + ", long normals");
   }
 }
 
