@@ -17,7 +17,7 @@
 # and scene features like the committed ones (they get
 # features.regions=true and features.scene=true): models/findmug-nyu-synth.fmf
 # is the model for rendered scenes, as the README demo runs it. The NYU-only
-# model labels a third of the rendered pixels wrong, many of them table, and
+# model labels 39 % of the rendered pixels wrong, many of them table, and
 # the table stage then measures surfaces that are no tables (BENCHMARKS.md 9w).
 # --set: extra daemon settings for every row (both builds).
 #
