@@ -15,14 +15,9 @@ BUILD=$(cd "$1" && pwd)
 MODEL=$2
 ROOT="$(cd "$(dirname "$0")/../.." && pwd)"
 DATA=${FINDMUG_DATA:-$ROOT/../shared/data}
-if [[ ! -d "$DATA/nyuv2_labeled" ]]; then
-  if [[ "${CI:-}" == "true" ]]; then
-    echo "FAIL: $DATA/nyuv2_labeled is missing (set FINDMUG_DATA)" >&2
-    exit 1
-  fi
-  echo "SKIP: $DATA/nyuv2_labeled is missing (set FINDMUG_DATA)"
-  exit 77
-fi
+SKIP_NAME=frame_cpu_per_frame_test
+source "$ROOT/tests/support/skip.sh"
+[[ -d "$DATA/nyuv2_labeled" ]] || skip "$DATA/nyuv2_labeled is missing (set FINDMUG_DATA)"
 TMP=$(mktemp -d)
 trap 'rm -rf "$TMP"' EXIT
 

@@ -32,14 +32,9 @@ if ! "$LOADER" --help 2>/dev/null | grep -q 'x86-64-v3 (supported'; then
        "the copy is never loaded here"
   exit 77
 fi
-if [[ ! -d "$DATA/nyuv2_labeled" ]]; then
-  if [[ "${CI:-}" == "true" ]]; then
-    echo "FAIL: $DATA/nyuv2_labeled is missing (set FINDMUG_DATA)" >&2
-    exit 1
-  fi
-  echo "SKIP: $DATA/nyuv2_labeled is missing (set FINDMUG_DATA)"
-  exit 77
-fi
+SKIP_NAME=core_hwcaps_test
+source "$ROOT/tests/support/skip.sh"
+[[ -d "$DATA/nyuv2_labeled" ]] || skip "$DATA/nyuv2_labeled is missing (set FINDMUG_DATA)"
 export FINDMUG_DATA="$DATA"
 
 WORK=$(mktemp -d)
