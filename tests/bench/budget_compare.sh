@@ -23,6 +23,13 @@
 #
 # Each configuration is one tests/bench/daemon_bench.sh run (threaded mode,
 # no rate search); the table of the three goes to DIR/compare.md.
+# Host speed: this VM's speed drifts by up to 30-40 % within minutes
+# (BENCHMARKS.md 9w, 9x), which moves a row's CPU % as much as a build does.
+# Right before each row, this build's frame_cpu times the 31 NYU frames on
+# CPU 0 (one pass, findmug.fmf); the median CPU ms per frame goes in the
+# "host ref ms" column. The same program on the same frames every time, so
+# it changes only with the host: rows with a higher figure ran on a slower
+# host.
 # --tables-only rewrites compare.md from an existing --out directory.
 set -euo pipefail
 ROOT="$(cd "$(dirname "$0")/../.." && pwd)"
@@ -42,6 +49,15 @@ while [[ $# -gt 0 ]]; do
 done
 mkdir -p "$OUT"
 BENCH="$ROOT/tests/bench/daemon_bench.sh"
+# The host reference of the next row into FILE ("-" if frame_cpu cannot run,
+# e.g. without the NYU data: the column is then empty, the runs go on).
+host_ref() {
+  local ms
+  ms=$(taskset -c 0 "$ROOT/build/tests/bench/frame_cpu" --model "$ROOT/models/findmug.fmf" \
+         --passes 1 --set features.regions=true --set features.scene=true --heap-keep-mb 256 \
+         2>/dev/null | awk -F'|' '/\*\*total\*\*/ { gsub(/[* ]/, "", $3); print $3 }') || true
+  echo "${ms:--}" > "$1"
+}
 [[ $TABLES_ONLY == 1 ]] || echo "load before: $(cut -d' ' -f1-3 /proc/loadavg)" > "$OUT/load"
 DATASETS=${DATASETS:-nyu synth}
 for ds in $DATASETS; do
@@ -51,26 +67,31 @@ for ds in $DATASETS; do
   if [[ $ds == synth && -n "$SYNTH_MODEL" ]]; then
     MODEL_ARGS=(--model "$SYNTH_MODEL" --set features.regions=true --set features.scene=true)
   fi
+  host_ref "$OUT/base-$ds.host"
   "$BENCH" --build-dir "$BASE" --datasets "$ds" --rates "$RATE" --modes threaded --no-search \
     --duration "$DURATION" "${MODEL_ARGS[@]+"${MODEL_ARGS[@]}"}" "${SETS[@]+"${SETS[@]}"}" --results "$OUT/base-$ds" --out "$OUT/base-$ds.md"
+  host_ref "$OUT/new-$ds.host"
   "$BENCH" --build-dir "$ROOT/build" --datasets "$ds" --rates "$RATE" --modes threaded --no-search \
     --duration "$DURATION" "${MODEL_ARGS[@]+"${MODEL_ARGS[@]}"}" "${SETS[@]+"${SETS[@]}"}" --results "$OUT/new-$ds" --out "$OUT/new-$ds.md"
+  host_ref "$OUT/new-1core-$ds.host"
   "$BENCH" --build-dir "$ROOT/build" --datasets "$ds" --rates "$RATE" --modes threaded --no-search \
     --duration "$DURATION" "${MODEL_ARGS[@]+"${MODEL_ARGS[@]}"}" "${SETS[@]+"${SETS[@]}"}" --results "$OUT/new-1core-$ds" \
     --out "$OUT/new-1core-$ds.md" --set daemon.max_cpu_cores=1
 done
 [[ $TABLES_ONLY == 1 ]] || echo "load after: $(cut -d' ' -f1-3 /proc/loadavg)" >> "$OUT/load"
 {
-  echo "| data | build | input fps | out fps | frames in | published | dropped | p50 ms | p99 ms | max ms | CPU % | CPU ms per published frame | peak RSS MB |"
-  echo "|---|---|---|---|---|---|---|---|---|---|---|---|---|"
+  echo "| data | build | input fps | out fps | frames in | published | dropped | p50 ms | p99 ms | max ms | CPU % | CPU ms per published frame | peak RSS MB | host ref ms |"
+  echo "|---|---|---|---|---|---|---|---|---|---|---|---|---|---|"
   for ds in nyu synth; do
     for b in base new new-1core; do
       [[ -f "$OUT/$b-$ds.md" ]] || continue
       row=$(grep "^| $ds | $RATE | threaded" "$OUT/$b-$ds.md" || true)
       # daemon_bench's columns: data rate mode in out frames published labelled dropped p50 p99 max cpu rss
-      awk -F'|' -v b="$b" -v ds="$ds" 'NF > 10 {
+      host=-
+      [[ -f "$OUT/$b-$ds.host" ]] && host=$(cat "$OUT/$b-$ds.host")
+      awk -F'|' -v b="$b" -v ds="$ds" -v host="$host" 'NF > 10 {
         per = ($6 + 0 > 0) ? sprintf("%.1f", 10 * $14 / $6) : "-";
-        printf "| %s | %s |%s|%s|%s|%s|%s|%s|%s|%s|%s| %s |%s|\n", ds, b, $5, $6, $7, $8, $10, $11, $12, $13, $14, per, $15 }' <<< "$row"
+        printf "| %s | %s |%s|%s|%s|%s|%s|%s|%s|%s|%s| %s |%s| %s |\n", ds, b, $5, $6, $7, $8, $10, $11, $12, $13, $14, per, $15, host }' <<< "$row"
     done
   done
   echo
