@@ -10,3 +10,8 @@
 if [[ -z "${CMAKE_GENERATOR:-}" ]] && command -v ninja >/dev/null; then
   export CMAKE_GENERATOR=Ninja
 fi
+
+# ccache: paths below the checkout are hashed relative to it (and the build directory is not
+# hashed), so a fresh clone elsewhere, as CI makes, reuses what an earlier build compiled.
+export CCACHE_BASEDIR=${CCACHE_BASEDIR:-$(pwd -P)}
+export CCACHE_NOHASHDIR=${CCACHE_NOHASHDIR:-1}

@@ -756,7 +756,7 @@ TEST(DaemonOutputFaults, AnUnreadBusAndRefusedPublishesLeaveThePipelineRunning) 
 // by LCM's bounded receive buffer, or by the kernel) and one that reads. Runs in a private network
 // namespace this test process enters (root only; skipped otherwise, like the replay tests).
 TEST(DaemonOutputFaults, AUdpmSubscriberThatNeverReadsDoesNotHoldThePipeline) {
-  if (::geteuid() != 0) GTEST_SKIP() << "needs root for a private network namespace";
+  FINDMUG_REQUIRE_ROOT();
   ASSERT_EQ(::unshare(CLONE_NEWNET), 0) << "unshare(CLONE_NEWNET) failed";
   ASSERT_EQ(std::system("ip link set lo up && ip route add 224.0.0.0/4 dev lo"), 0);
   const Sequence& seq = sequence();

@@ -10,6 +10,7 @@
 #include <chrono>
 #include <condition_variable>
 #include <fstream>
+#include <map>
 #include <mutex>
 #include <random>
 #include <sstream>
@@ -470,6 +471,80 @@ TEST(DaemonConfig, ShippedDefaultFileIsValidAndDocumentsEveryKey) {
     EXPECT_TRUE(documented) << section << "." << key << " is not in " << path;
   }
   EXPECT_GT(keys, 40);
+}
+
+// The effective values of a config dump, "section.key" -> "value".
+std::map<std::string, std::string> flattenDump(const std::string& dump) {
+  std::map<std::string, std::string> values;
+  std::istringstream in(dump);
+  std::string line, section;
+  while (std::getline(in, line)) {
+    if (line.empty()) continue;
+    const auto colon = line.find(':');
+    if (line[0] != ' ') {
+      section = line.substr(0, colon);
+      continue;
+    }
+    const std::string key = line.substr(2, colon - 2);
+    std::string value = colon + 1 < line.size() ? line.substr(colon + 1) : "";
+    if (!value.empty() && value[0] == ' ') value.erase(0, 1);
+    values[section + "." + key] = value;
+  }
+  return values;
+}
+
+// The comment block above `key:` in `section:` of the YAML text, and the key's own line.
+std::string commentsOfKey(const std::string& text, const std::string& section,
+                          const std::string& key) {
+  const auto section_at = text.find("\n" + section + ":\n");
+  if (section_at == std::string::npos) return {};
+  const auto key_at = text.find("\n  " + key + ":", section_at);
+  if (key_at == std::string::npos) return {};
+  auto line_end = text.find('\n', key_at + 1);
+  std::string block = text.substr(key_at + 1, line_end - key_at - 1);
+  std::size_t end = key_at;  // walk back over the comment lines right above the key
+  while (end > 0) {
+    const auto start = text.rfind('\n', end - 1);
+    const std::string above = text.substr(start + 1, end - start - 1);
+    if (above.rfind("  #", 0) != 0) break;
+    block = above + "\n" + block;
+    end = start;
+  }
+  return block;
+}
+
+// Both directions between daemon/findmugd.yaml and the built-in defaults: the file
+// names the same keys as the built-in configuration, and every value it sets is
+// the built-in default unless the comment on that key says "not the built-in
+// default" and why, so that a reader of the file never mistakes a choice for a default.
+TEST(DaemonConfig, ShippedFileHoldsTheBuiltInDefaultsOrSaysWhyNot) {
+  const std::string path = (findmug::test::sourceDir() / "daemon" / "findmugd.yaml").string();
+  Config shipped = loadConfig(path);
+  resolveDaemonConfig(shipped);
+  Config builtin = parseConfig("", "<built-in>");
+  resolveDaemonConfig(builtin);
+  const auto file_values = flattenDump(dumpConfig(shipped));
+  const auto default_values = flattenDump(dumpConfig(builtin));
+  std::ifstream in(path);
+  const std::string text((std::istreambuf_iterator<char>(in)), {});
+  int differing = 0;
+  for (const auto& [key, value] : default_values) {
+    const auto it = file_values.find(key);
+    ASSERT_NE(it, file_values.end()) << key << " is a built-in key the shipped file lacks";
+    if (it->second == value) continue;
+    ++differing;
+    const auto dot = key.find('.');
+    const std::string comments = commentsOfKey(text, key.substr(0, dot), key.substr(dot + 1));
+    EXPECT_NE(comments.find("not the built-in default"), std::string::npos)
+        << key << " is " << it->second << " in " << path << " but " << value
+        << " built in, and its comment does not say 'not the built-in default' and why";
+  }
+  for (const auto& [key, value] : file_values) {
+    EXPECT_TRUE(default_values.count(key)) << key << " in the shipped file is no built-in key";
+  }
+  // The file is read as a whole: a lost section or key would show as a smaller count.
+  EXPECT_GT(default_values.size(), 40u);
+  EXPECT_LT(differing, static_cast<int>(default_values.size()) / 4);
 }
 
 }  // namespace

@@ -24,6 +24,7 @@
 #include "findmug/io/lcm_codec.hpp"
 #include "findmug/io/lcm_source.hpp"
 #include "findmug/io/udpm.hpp"
+#include "test_data.hpp"
 
 namespace findmug::io {
 namespace {
@@ -331,10 +332,11 @@ TEST(UdpmUrl, ParsesLcmOptionsAndNamesWhatIsWrong) {
 
 const char* kUrl = "udpm://239.255.76.67:7667?ttl=0&recv_buf_size=4194304";
 
-bool enterPrivateNetwork() {
-  if (::geteuid() != 0) return false;
-  if (::unshare(CLONE_NEWNET) != 0) return false;
-  return std::system("ip link set lo up && ip route add 224.0.0.0/4 dev lo") == 0;
+// As root: enters a private network namespace with multicast routed over
+// loopback, or fails the test (a root that cannot is a broken test host).
+void enterPrivateNetwork() {
+  ASSERT_EQ(::unshare(CLONE_NEWNET), 0) << "unshare(CLONE_NEWNET) failed";
+  ASSERT_EQ(std::system("ip link set lo up && ip route add 224.0.0.0/4 dev lo"), 0);
 }
 
 // Sends raw datagrams to the group from one source port.
@@ -369,7 +371,8 @@ void handleUntil(Bus& bus, Done done) {
 }
 
 TEST(UdpmBus, ReceivesWhatLiblcmSendsShortAndFragmentedAndSurvivesTheLiblcmKiller) {
-  if (!enterPrivateNetwork()) GTEST_SKIP() << "needs root for a private network namespace";
+  FINDMUG_REQUIRE_ROOT();
+  ASSERT_NO_FATAL_FAILURE(enterPrivateNetwork());
   const auto bus = openBus(kUrl, "test");
   ASSERT_NE(dynamic_cast<UdpmBus*>(bus.get()), nullptr) << "a udpm URL opens findmug's receiver";
   std::vector<Bytes> got;
@@ -399,7 +402,8 @@ TEST(UdpmBus, ReceivesWhatLiblcmSendsShortAndFragmentedAndSurvivesTheLiblcmKille
 }
 
 TEST(UdpmBus, TheDaemonsFrameSourceKeepsReceivingFramesThroughHostileDatagrams) {
-  if (!enterPrivateNetwork()) GTEST_SKIP() << "needs root for a private network namespace";
+  FINDMUG_REQUIRE_ROOT();
+  ASSERT_NO_FATAL_FAILURE(enterPrivateNetwork());
   SourceOptions options;
   LcmFrameSource source("FINDMUG_RGBD", kUrl, options);
   EXPECT_NE(source.describe().find("udpm://"), std::string::npos);

@@ -12,6 +12,8 @@
 #include <random>
 #include <string>
 
+#include <unistd.h>
+
 namespace findmug::test {
 
 inline std::filesystem::path dataRoot() {
@@ -56,6 +58,15 @@ class TempDir {
 };
 
 }  // namespace findmug::test
+
+// Use at the top of a test that needs root (a private network namespace):
+// skips on a developer's unprivileged machine, FAILS under CI=true (CI runs as
+// root, so a skip there would hide a test that never ran).
+#define FINDMUG_REQUIRE_ROOT()                                                           \
+  if (::geteuid() != 0) {                                                                \
+    if (::findmug::test::runningInCi()) FAIL() << "needs root under CI=true";            \
+    GTEST_SKIP() << "needs root for a private network namespace";                         \
+  }
 
 // Use at the top of a test that needs the data: skips locally, fails in CI.
 #define FINDMUG_REQUIRE_DATA(var, relative)                                              \

@@ -16,6 +16,7 @@
 #include "findmug/segmenter.hpp"
 #include "findmug/dataset.hpp"
 #include "findmug/training.hpp"
+#include "small_forest.hpp"
 
 namespace findmug {
 namespace {
@@ -88,20 +89,7 @@ SegmenterConfig config() {
 }
 
 std::shared_ptr<const RandomForest> trainOn(const Scene& scene) {
-  const Segmenter segmenter(config(), nullptr);
-  SegmentedFrame segmented = segmenter.oversegment(segmenter.prepare(scene.frame));
-  const SegmentFeatures features = segmenter.features(segmented);
-  const auto labels = segmentMajorityLabels(segmented.segmentation, scene.truth);
-  TrainingSet set;
-  for (std::size_t k = 0; k < labels.size(); ++k) {
-    if (labels[k] >= kNumLabels) continue;
-    set.features.push_back(features.features[k]);
-    set.labels.push_back(labels[k]);
-  }
-  ForestParams params;
-  params.num_trees = 4;
-  params.max_depth = 6;
-  return std::make_shared<const RandomForest>(RandomForest::train(set, params));
+  return test::trainSmallForest(Segmenter(config(), nullptr), scene.frame, scene.truth);
 }
 
 // Bitwise equality of float arrays (NaN == NaN here: invalid points must stay

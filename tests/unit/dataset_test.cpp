@@ -13,27 +13,15 @@
 
 #include "findmug/error.hpp"
 #include "findmug/image_io.hpp"
+#include "expect_error.hpp"
 #include "test_data.hpp"
 
 namespace findmug {
 namespace {
 
 namespace fs = std::filesystem;
+using test::errorOf;
 using test::TempDir;
-
-template <typename F>
-std::string errorOf(F&& f) {
-  try {
-    f();
-  } catch (const Error& e) {
-    return e.what();
-  }
-  ADD_FAILURE() << "expected findmug::Error";
-  return {};
-}
-
-#define EXPECT_CONTAINS(haystack, needle) \
-  EXPECT_NE(std::string(haystack).find(needle), std::string::npos) << (haystack)
 
 void writeText(const fs::path& path, const std::string& text) {
   std::ofstream out(path, std::ios::binary);

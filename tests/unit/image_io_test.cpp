@@ -13,24 +13,14 @@
 #include <vector>
 
 #include "findmug/error.hpp"
+#include "expect_error.hpp"
 #include "test_data.hpp"
 
 namespace findmug {
 namespace {
 
+using test::errorOf;
 using test::TempDir;
-
-// Runs `f` and returns the findmug::Error message (fails if nothing thrown).
-template <typename F>
-std::string errorOf(F&& f) {
-  try {
-    f();
-  } catch (const Error& e) {
-    return e.what();
-  }
-  ADD_FAILURE() << "expected findmug::Error";
-  return {};
-}
 
 std::vector<std::uint8_t> readBytes(const std::string& path) {
   std::ifstream in(path, std::ios::binary);

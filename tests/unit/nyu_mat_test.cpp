@@ -21,29 +21,17 @@
 
 #include "findmug/dataset.hpp"
 #include "findmug/error.hpp"
+#include "expect_error.hpp"
 #include "test_data.hpp"
 
 namespace findmug {
 namespace {
 
 namespace fs = std::filesystem;
+using test::errorOf;
 using test::TempDir;
 
 constexpr int kW = 640, kH = 480;
-
-template <typename F>
-std::string errorOf(F&& f) {
-  try {
-    f();
-  } catch (const Error& e) {
-    return e.what();
-  }
-  ADD_FAILURE() << "expected findmug::Error";
-  return {};
-}
-
-#define EXPECT_CONTAINS(haystack, needle) \
-  EXPECT_NE(std::string(haystack).find(needle), std::string::npos) << (haystack)
 
 // NYU-894 ids (checked against nyu894_to_40.csv) and what they become.
 constexpr std::uint16_t kBook = 1;     // -> 40 otherprop -> object (7)

@@ -11,6 +11,7 @@
 #include "findmug/metrics.hpp"
 #include "findmug/segmenter.hpp"
 #include "findmug/training.hpp"
+#include "small_forest.hpp"
 
 namespace findmug {
 namespace {
@@ -60,19 +61,7 @@ Scene floorAndWall(bool with_extrinsics) {
 }
 
 std::shared_ptr<const RandomForest> trainOn(const Segmenter& segmenter, const Scene& scene) {
-  SegmentedFrame segmented = segmenter.oversegment(segmenter.prepare(scene.frame));
-  const SegmentFeatures features = segmenter.features(segmented);
-  const auto labels = segmentMajorityLabels(segmented.segmentation, scene.truth);
-  TrainingSet set;
-  for (std::size_t k = 0; k < labels.size(); ++k) {
-    if (labels[k] >= kNumLabels) continue;
-    set.features.push_back(features.features[k]);
-    set.labels.push_back(labels[k]);
-  }
-  ForestParams params;
-  params.num_trees = 4;
-  params.max_depth = 6;
-  return std::make_shared<const RandomForest>(RandomForest::train(set, params));
+  return test::trainSmallForest(segmenter, scene.frame, scene.truth);
 }
 
 SegmenterConfig fastConfig() {
