@@ -43,7 +43,7 @@ Daemon::Daemon(const Config& config, const DaemonConfig& daemon_config,
     // A 640x480 frame allocates about 35 MB in buffers of a few MB, freed
     // when it is published. With glibc's default thresholds each comes fresh
     // from the kernel (page faults and zeroing, about a tenth of a frame's
-    // CPU time: BENCHMARKS.md section 9e); these keep them in the heap.
+    // CPU time: perf-log §9e); these keep them in the heap.
     mallopt(M_MMAP_THRESHOLD, 32 << 20);
     mallopt(M_TRIM_THRESHOLD, daemon_config_.heap_keep_mb << 20);
   }

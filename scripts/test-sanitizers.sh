@@ -53,7 +53,7 @@ for step in "${STEPS[@]}"; do
         --target lcm_fields_test --target sources_test --target bus_test --target udpm_test --target daemon_queue_test --target findmug-grab \
         --target replay_check_test
       # Not under ASan: five sweeps that run code covered here by smaller tests over many
-      # frames again (52, 49, 35, 30 and 24 s under ASan, 2026-11-26; BENCHMARKS.md 10,
+      # frames again (52, 49, 35, 30 and 24 s under ASan, 2026-11-26; perf-log §10,
       # "Sanitizer runs"). They run in the Release suite of scripts/test.sh.
       timed "asan tests" ctest --test-dir "$ASAN_DIR" --output-on-failure -j"$JOBS" --timeout 1800 \
         -L '^(unit|io)$' -E "$ASAN_SKIPPED_SWEEPS"

@@ -57,7 +57,7 @@ const LabelMapping& defaultNyu40Mapping();
 // in NYU index order (1-based).
 //
 // Convention, measured on the 14 labelled frames whose floor labels give a
-// plane (BENCHMARKS.md 1d): R, read row by row as written, maps camera
+// plane (perf-log §1d): R, read row by row as written, maps camera
 // coordinates (x right, y down, z forward) to a gravity-aligned frame whose
 // y axis points DOWN, so "up" in camera coordinates is -R^T (0,1,0), i.e.
 // minus row 1 (0-based) of R. It is 0.75..6.35 degrees (median 3.0) from the

@@ -91,7 +91,7 @@ struct GroundConfig {
   float gravity_refine_deg = 8.0f;
   // groundFromGravity, floor out of view: the camera is taken this high above
   // it. The median over the NYU labelled frames whose floor is labelled
-  // (17 frames, 0.82..1.41 m, median 1.28 m; BENCHMARKS.md "Ground from gravity").
+  // (17 frames, 0.82..1.41 m, median 1.28 m; perf-log §1d).
   float prior_camera_height_m = 1.28f;
   // A stream of frames from one mount (Segmenter::prepare with the floor
   // estimated from the frame): the floor found in one frame is kept for the

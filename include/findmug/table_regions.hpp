@@ -1,7 +1,7 @@
 // findmug/table_regions.hpp — one label per horizontal surface at table height.
 //
 // The MRF decides patch by patch, so a table top is often split between
-// table, object, cabinet and chair (BENCHMARKS.md 1f: the commonest reason a
+// table, object, cabinet and chair (perf-log §1f: the commonest reason a
 // true table is not matched). The region vote takes the regions of
 // region_features.hpp (neighbouring patches merged while their normals and
 // planes agree) and gives every patch of a region that is

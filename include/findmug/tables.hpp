@@ -102,7 +102,7 @@ struct TableConfig {
   // Pixel stride of the points that steps 2 and 3 work on (see "Point
   // stride" above). 1 = every table point (the exact definition of step 2).
   // 2 takes about 40 % off the stage on table-rich views but costs table
-  // instances on NYU (BENCHMARKS.md 9j): a knob for a tight CPU budget.
+  // instances on NYU (perf-log §9j): a knob for a tight CPU budget.
   int point_stride = 1;
   float safety_distance_m = 0.5f;    // d: from the table edge to the search position
   float arm_reach_m = 0.8f;
@@ -128,11 +128,11 @@ struct TableConfig {
   float min_floor_observed_fraction = 0.5f;
   // Region vote before clustering (table_regions.hpp; needs a model with
   // region features): each horizontal region at table height gets one label.
-  // Off: on the 31 NYU frames it changed no match (BENCHMARKS.md 1f).
+  // Off: on the 31 NYU frames it changed no match (perf-log §1f).
   bool region_vote = false;
   // Bias of the label decision towards tables (weightTableProbability in
   // table_regions.hpp): p(table) times this before the MRF. 1 = none; 1.5
-  // measured best on the 31 NYU frames (BENCHMARKS.md 1f).
+  // measured best on the 31 NYU frames (perf-log §1f).
   float table_weight = 1.5f;
   float region_max_tilt_deg = 15.0f;  // region normal within this of vertical
   float region_min_area_m2 = 0.04f;   // smaller regions keep their patches' labels

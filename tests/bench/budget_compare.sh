@@ -18,13 +18,13 @@
 # features.regions=true and features.scene=true): models/findmug-nyu-synth.fmf
 # is the model for rendered scenes, as the README demo runs it. The NYU-only
 # model labels 39 % of the rendered pixels wrong, many of them table, and
-# the table stage then measures surfaces that are no tables (BENCHMARKS.md 9w).
+# the table stage then measures surfaces that are no tables (perf-log §9w).
 # --set: extra daemon settings for every row (both builds).
 #
 # Each configuration is one tests/bench/daemon_bench.sh run (threaded mode,
 # no rate search); the table of the three goes to DIR/compare.md.
 # Host speed: this VM's speed drifts by up to 30-40 % within minutes
-# (BENCHMARKS.md 9w, 9x), which moves a row's CPU % as much as a build does.
+# (perf-log §9w, 9x), which moves a row's CPU % as much as a build does.
 # Right before each row, this build's frame_cpu times the 31 NYU frames on
 # CPU 0 (one pass, findmug.fmf); the median CPU ms per frame goes in the
 # "host ref ms" column. The same program on the same frames every time, so

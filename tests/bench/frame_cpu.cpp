@@ -23,7 +23,7 @@
 // the NYU labelled frames, 3 passes after the warm-up, the library's default
 // config (ground.source auto: NYU frames carry no
 // extrinsics, so the floor is estimated from the frame, as in the daemon).
-// Prints a Markdown table for BENCHMARKS.md section 9.
+// Prints a Markdown table for perf-log §9.
 #include <dlfcn.h>
 #include <malloc.h>
 

@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # frame_cpu_per_frame_test.sh — frame_cpu --per-frame writes one row per timed
-# frame, and each row's stages add up to its total (BENCHMARKS.md 9w reads the
+# frame, and each row's stages add up to its total (perf-log §9w reads the
 # slow frames of a stream from it).
 #
 #   frame_cpu_per_frame_test.sh BUILD_DIR MODEL

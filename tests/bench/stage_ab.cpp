@@ -19,7 +19,7 @@
 // are the same bits (a changed output is reported, not hidden).
 //
 // The core library keeps its thread_locals in the initial-exec TLS model
-// (BENCHMARKS.md 9j), which dlopen() can only place in the static TLS
+// (perf-log §9j), which dlopen() can only place in the static TLS
 // surplus: the program re-executes itself with
 // GLIBC_TUNABLES=glibc.rtld.optional_static_tls=1048576 when that is not set.
 #include <dlfcn.h>

@@ -133,7 +133,7 @@ TEST(ToolsEval, CrossValidationBeatsMajorityBaselineWidely) {
 
 // Issue 10: on all 31 frames (ground.source=gravity), the region features of
 // the default model must beat today's 14-D pipeline on the same folds.
-// Measured (BENCHMARKS.md 1d, commit of this test): 14-D forest+MRF class
+// Measured (perf-log §1d, commit of this test): 14-D forest+MRF class
 // average 0.461, global 0.575; with features.regions 0.477 and 0.590, i.e.
 // +0.016 and +0.015. The bars ask for +0.005 each: a third of the measured
 // gain, so a broken region stage (no gain, or a loss) fails, while the
@@ -144,7 +144,7 @@ TEST(ToolsEval, RegionFeaturesBeatTheFourteenDimensionalPipelineOnAllFrames) {
   FINDMUG_REQUIRE_DATA(meta, "nyuv2_meta");
   test::TempDir tmp;
   // Features are compared under the argmax decision they were measured with
-  // (tables.table_weight=1): the table weight (BENCHMARKS.md 1f) lifts the
+  // (tables.table_weight=1): the table weight (perf-log §1f) lifts the
   // 14-D pipeline's class average by a point and the regions' by none.
   const std::string common = std::string(FINDMUG_EVAL_EXE) + " --data " + nyu.string() +
                              " --folds 5 --set ground.source=gravity --set tables.table_weight=1" +
@@ -170,7 +170,7 @@ TEST(ToolsEval, RegionFeaturesBeatTheFourteenDimensionalPipelineOnAllFrames) {
 // Issue 10, the shipped configuration (daemon/findmugd.yaml: regions and
 // scene features): on all 31 frames it must beat region features alone on
 // the same folds, and the oversegmentation's oracle must stay far above both.
-// Measured (BENCHMARKS.md 1g, commit of this test), forest+MRF at the default
+// Measured (perf-log §1g, commit of this test), forest+MRF at the default
 // seed: regions class average 0.477, global 0.590; + scene 0.478 and 0.627
 // (+0.037 global). Over six forest seeds the global gain was 0.026 to 0.062
 // and the class-average gain -0.001 to +0.036 (mean +0.019). So the bars:
@@ -270,7 +270,7 @@ TEST(ToolsEval, GravityGroundUsesEveryFrameAndTablesAreMeasured) {
   EXPECT_LE(number(tables, "recall"), 1.0) << tables;
 }
 
-// Issue 10, tables as objects (BENCHMARKS.md 1f): on all 31 frames with the
+// Issue 10, tables as objects (perf-log §1f): on all 31 frames with the
 // shipped model's settings (region features), today's table decisions
 // (tables.table_weight=1: argmax of the MRF; no visible-top or horizontal
 // filter) against the defaults (table_weight 1.5, min_top_area_m2 0.15,

@@ -611,7 +611,7 @@ TEST(GroundFromGravity, BadInputsAndNothingBelowTheCamera) {
 // NYU's per-frame rotations (camera_rotations_NYU.txt): on every labelled
 // frame whose floor labels give a plane (the paper's protocol), the gravity
 // "up" read with nyuUpFromRotation must agree with that plane's normal.
-// Measured (BENCHMARKS.md "Ground from gravity"): see the printed angles.
+// Measured (perf-log §1d): see the printed angles.
 TEST(GroundOnNyu, GravityFromRotationsAgreesWithFloorLabelFit) {
   FINDMUG_REQUIRE_DATA(root, "nyuv2_labeled");
   FINDMUG_REQUIRE_DATA(rotations_file, "nyuv2_meta/camera_rotations_NYU.txt");

@@ -742,7 +742,7 @@ TEST(OrganizedOversegmenter, SegmentsAreConnectedAndAvoidHoles) {
 // depth and image widths that leave a tail of every length after the blocks;
 // and with normals of length 1 to 5, for which the normal term of the
 // distance goes negative (a shortcut that assumed unit normals, as one tried
-// in BENCHMARKS.md 9w, fails there).
+// in perf-log §9w, fails there).
 TEST(OrganizedOversegmenter, AvxRefinementMatchesTheScalarCodeExactly) {
   FINDMUG_REQUIRE_DATA(root, "nyuv2_labeled");
   OversegmentationConfig config;

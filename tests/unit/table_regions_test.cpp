@@ -1,4 +1,4 @@
-// Tests for the table decisions after the forest (BENCHMARKS.md 1f): the
+// Tests for the table decisions after the forest (perf-log §1f): the
 // region vote and the table weight (table_regions.hpp), the visible-top
 // filter of detectTables, and the precision/recall curve over a detection
 // score (table_metrics.hpp). Hand-made inputs whose answers follow from

@@ -991,7 +991,7 @@ TEST(SynthTables, LongTableGetsPositionsAlongItsLongSides) {
 // points. Every table pixel but the few (flying pixels at the edge) with no
 // sampled point within the tolerance still belongs to the table, and the
 // geometry stays close to that of every point: the bounds below are what
-// the approximation is documented to give (tables.hpp, BENCHMARKS.md 9j),
+// the approximation is documented to give (tables.hpp, perf-log §9j),
 // a little looser than expectMatchesTruth's at stride 1.
 TEST(SynthTables, PointStrideTwoKeepsThePixelsAndNearlyTheGeometry) {
   synth::SynthScene scene = synth::makeEmptyRoom({7.0, 6.0, 2.6});
