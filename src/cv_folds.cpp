@@ -105,6 +105,54 @@ std::vector<std::string> nyuIndexRunScenes(const std::vector<long>& nyu_indices,
   return scenes;
 }
 
+std::vector<long> parseNyuTestIndices(const std::string& text, const std::string& source) {
+  std::istringstream in(text);
+  std::vector<long> out;
+  std::string token;
+  while (in >> token) {
+    const auto index = parseInteger(token);
+    if (!index || *index < 1 || *index > 100000000) {
+      throw Error(source + ": '" + token + "' is not an NYU index (an integer >= 1), entry " +
+                  std::to_string(out.size() + 1));
+    }
+    out.push_back(static_cast<long>(*index));
+  }
+  if (out.empty()) throw Error(source + ": no index");
+  return out;
+}
+
+std::vector<long> loadNyuTestIndices(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw Error(path + ": cannot read the NYU test indices");
+  std::ostringstream text;
+  text << in.rdbuf();
+  return parseNyuTestIndices(text.str(), path);
+}
+
+std::vector<std::string> nyuSplitRunScenes(const std::vector<long>& nyu_indices,
+                                           const std::vector<long>& test_indices) {
+  long last = 0;
+  for (long i : nyu_indices) {
+    if (i < 1) throw Error("NYU index " + std::to_string(i) + ": must be >= 1");
+    last = std::max(last, i);
+  }
+  std::vector<bool> is_test(static_cast<std::size_t>(last) + 1, false);
+  for (long t : test_indices) {
+    if (t >= 1 && t <= last) is_test[static_cast<std::size_t>(t)] = true;
+  }
+  // run_start[i]: first index of the same-side run holding i.
+  std::vector<long> run_start(static_cast<std::size_t>(last) + 1, 1);
+  for (long i = 2; i <= last; ++i) {
+    const auto k = static_cast<std::size_t>(i);
+    run_start[k] = is_test[k] == is_test[k - 1] ? run_start[k - 1] : i;
+  }
+  std::vector<std::string> scenes;
+  for (long i : nyu_indices) {
+    scenes.push_back("nyu" + std::to_string(run_start[static_cast<std::size_t>(i)]));
+  }
+  return scenes;
+}
+
 std::vector<int> blockFolds(std::size_t frames, int folds) {
   if (folds < 1) throw Error("folds " + std::to_string(folds) + ": must be >= 1");
   std::vector<int> fold(frames);

@@ -61,14 +61,16 @@ constexpr const char* kDescription =
     "Folds (--folds-by auto): whole scenes when every frame's scene is known, else contiguous\n"
     "blocks of frames in input order (folders in the order given, frames by name). A frame's\n"
     "scene is the `scene` column of its folder's frames.csv; else, for NYU frames (frames.csv\n"
-    "with `nyu_index`, or --mat), frames sorted by NYU index form one scene while each index is\n"
-    "at most --scene-gap (2) above the previous one (NYU stores its labelled frames scene by\n"
-    "scene). Scenes go to folds largest first, each into the fold with the fewest frames so far\n"
-    "(ties: the lower fold). The JSON report lists every fold's test frames and scenes.";
+    "with `nyu_index`, or --mat): with --nyu-split, a run of consecutive NYU indices on one side\n"
+    "of NYU's scene-disjoint train/test split; without it, frames sorted by NYU index form one\n"
+    "scene while each index is at most --scene-gap (2) above the previous one (NYU stores its\n"
+    "labelled frames scene by scene; with frames missing this can split a room). Scenes go to\n"
+    "folds largest first, each into the fold with the fewest frames so far (ties: the lower\n"
+    "fold). The text and JSON reports list every fold's test frames and scenes.";
 
 struct EvalFlags {
   DatasetFlags dataset;
-  std::string model, json, out, table_report, folds_by = "auto", curve_dir;
+  std::string model, json, out, table_report, folds_by = "auto", curve_dir, nyu_split;
   std::string curve_sizes = "5,10,20,30,all";
   int folds = 5, scene_gap = 2, train_frames = 0, curve_seeds = 3;
   std::uint64_t subset_seed = 0;
@@ -115,6 +117,10 @@ std::unique_ptr<CLI::App> makeEvalApp(EvalFlags& f) {
                        "NYU frames whose indices are at most this far apart are one scene")
            ->type_name("N")
            ->check(CLI::Range(0, 1449)));
+  last(app->add_option("--nyu-split", f.nyu_split,
+                       "NYU's official test indices (nyuv2_meta/split_test_indices.txt): NYU "
+                       "frames' scenes are runs of the split (see above)")
+           ->type_name("FILE"));
   last(app->add_option("--train-frames", f.train_frames,
                        "train each fold on only N of its training frames (whole scenes where "
                        "possible; 0 = all)")
@@ -399,7 +405,10 @@ void writeOverlays(const LabeledFrames& frames, const std::vector<FrameSample>& 
 // Each sample's fold and scene for the --folds-by rule.
 FoldPlan planFolds(const EvalFlags& f, const LabeledInputs& input,
                    const std::vector<FrameSample>& samples) {
-  const std::vector<std::string> scenes = input.scenes(f.scene_gap);
+  std::optional<std::vector<long>> test_indices;
+  if (!f.nyu_split.empty()) test_indices = loadNyuTestIndices(f.nyu_split);
+  const std::vector<std::string> scenes =
+      input.scenes(f.scene_gap, test_indices ? &*test_indices : nullptr);
   FoldPlan plan;
   plan.folds = f.folds;
   std::vector<std::string> missing;
@@ -419,17 +428,23 @@ FoldPlan planFolds(const EvalFlags& f, const LabeledInputs& input,
   return plan;
 }
 
-std::string describeFolds(const FoldPlan& plan, int scene_gap, const TrainSubset& subset) {
+std::string describeFolds(const FoldPlan& plan, const std::string& nyu_rule,
+                          const TrainSubset& subset) {
   std::string text = std::to_string(plan.folds) + "-fold cross-validation by frame, ";
-  text += plan.rule == "scenes"
-              ? "folds of whole scenes (frames.csv scene, else NYU index runs with gap " +
-                    std::to_string(scene_gap) + "; largest scene first into the smallest fold)"
-              : "contiguous blocks of frames in input order";
+  text += plan.rule == "scenes" ? "folds of whole scenes (frames.csv scene, else " + nyu_rule +
+                                      "; largest scene first into the smallest fold)"
+                                : "contiguous blocks of frames in input order";
   if (subset.frames > 0) {
     text += "; each fold trained on " + std::to_string(subset.frames) +
             " of its training frames (subset seed " + std::to_string(subset.seed) + " + fold)";
   }
   return text;
+}
+
+// How NYU frames' scenes are formed, for the reports.
+std::string nyuSceneRule(const EvalFlags& f) {
+  return f.nyu_split.empty() ? "NYU index runs with gap " + std::to_string(f.scene_gap)
+                             : "runs of NYU's train/test split (" + f.nyu_split + ")";
 }
 
 std::vector<EvalReport::Fold> foldRecords(const Evaluation& eval, const FoldPlan& plan,
@@ -523,7 +538,7 @@ void runLearningCurve(const EvalFlags& f, const LabeledInputs& input,
       points.push_back(p);
     }
   }
-  const std::string protocol = describeFolds(plan, f.scene_gap, {});
+  const std::string protocol = describeFolds(plan, nyuSceneRule(f), {});
   writeLearningCurve(dir, points, protocol);
   std::cout << formatLearningCurveTrends(points) << "learning curve in " << dir.string() << "\n";
 }
@@ -600,9 +615,9 @@ int run(int argc, char** argv) {
     for (std::size_t i = 0; i < all.size(); ++i) all[i] = i;
     labelFrames(forest, config.segmenter, samples, all, regions, eval, true);
   } else {
-    report.protocol = describeFolds(plan, f.scene_gap, subset);
+    report.protocol = describeFolds(plan, nyuSceneRule(f), subset);
     report.fold_rule = plan.rule;
-    report.scene_gap = f.scene_gap;
+    report.scene_rule = nyuSceneRule(f);
     eval = crossValidate(samples, extra_training, plan, config.segmenter, regions, true, subset);
     report.folds = foldRecords(eval, plan, samples);
   }

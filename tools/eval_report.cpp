@@ -173,19 +173,17 @@ std::string formatTable(const EvalReport& r) {
   }
   {
     const SearchableMetrics& s = r.searchable;
-    std::snprintf(line, sizeof line,
-                  "\n  searchable tables (true top >= table_metrics.searchable_min_top_area_m2, "
-                  "matched by top overlap): %d true, %d matched, %d detected (%d on smaller "
-                  "true tables)\n",
-                  s.searchable(), s.matched(), s.detected(), s.detectedSmall());
-    out << line;
+    out << "\n  searchable tables (true top >= table_metrics.searchable_min_top_area_m2, matched "
+           "by top overlap): "
+        << s.searchable() << " true, " << s.matched() << " matched, " << s.detected()
+        << " detected (" << s.detectedSmall() << " on smaller true tables)\n";
     std::snprintf(line, sizeof line, "  %-10s %s\n  %-10s %s\n", "precision",
                   percent(s.precision()).c_str(), "recall", percent(s.recall()).c_str());
     out << line;
     std::snprintf(line, sizeof line,
-                  "  false tables (matching no true table): %d, in %d of %d frames (%s %%)\n",
+                  "  false tables (on no true table): %d, in %d of %d frames (%.1f %%)\n",
                   s.falseTables(), s.framesWithFalseTable(), s.frames(),
-                  percent(s.falseTableFrameShare()).c_str());
+                  100 * s.falseTableFrameShare());
     out << line;
   }
   if (r.has_search_truth) {
@@ -234,7 +232,7 @@ std::string formatJson(const EvalReport& r) {
         << ", \"method\": " << jsonString(r.ground_methods[i].second) << "}";
   }
   out << "],\n  \"folds\": {\"rule\": " << jsonString(r.fold_rule)
-      << ", \"scene_gap\": " << r.scene_gap << ", \"folds\": [";
+      << ", \"nyu_scenes\": " << jsonString(r.scene_rule) << ", \"folds\": [";
   for (std::size_t i = 0; i < r.folds.size(); ++i) {
     const auto& f = r.folds[i];
     out << (i ? ",\n    " : "\n    ") << "{\"fold\": " << f.fold

@@ -36,7 +36,7 @@ struct EvalReport {
     std::vector<std::string> test_frames, test_scenes, train_frame_names;
   };
   std::string fold_rule;
-  int scene_gap = 0;
+  std::string scene_rule;  // how NYU frames' scenes were formed
   std::vector<Fold> folds;
   std::vector<std::string> train_extra;  // data sets added to every fold's training
   int frames_total = 0;

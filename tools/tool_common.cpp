@@ -143,7 +143,8 @@ std::unique_ptr<LabeledInputs> LabeledInputs::open(const DatasetFlags& f,
   return all;
 }
 
-std::vector<std::string> LabeledInputs::scenes(int gap) const {
+std::vector<std::string> LabeledInputs::scenes(int gap,
+                                               const std::vector<long>* nyu_test_indices) const {
   std::vector<std::string> out(names_.size());
   std::vector<std::size_t> nyu_frames;
   std::vector<long> nyu_indices;
@@ -156,7 +157,9 @@ std::vector<std::string> LabeledInputs::scenes(int gap) const {
                                                    : static_cast<long>(index_in_input_[i]) + 1);
     }
   }
-  const std::vector<std::string> runs = nyuIndexRunScenes(nyu_indices, gap);
+  const std::vector<std::string> runs = nyu_test_indices
+                                            ? nyuSplitRunScenes(nyu_indices, *nyu_test_indices)
+                                            : nyuIndexRunScenes(nyu_indices, gap);
   for (std::size_t k = 0; k < nyu_frames.size(); ++k) out[nyu_frames[k]] = runs[k];
   return out;
 }

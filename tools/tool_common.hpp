@@ -71,8 +71,9 @@ class LabeledInputs {
   const std::string& sourceOf(std::size_t frame) const { return sources_[input_of_[frame]]; }
   // Each frame's scene (cv_folds.hpp): the `scene` column of its folder's
   // frames.csv; else, for NYU frames (a frames.csv with `nyu_index`, or a
-  // --mat file), NYU index runs with `gap`; "" when neither is known.
-  std::vector<std::string> scenes(int gap) const;
+  // --mat file), runs of NYU's split when `nyu_test_indices` is given, else
+  // NYU index runs with `gap`; "" when neither is known.
+  std::vector<std::string> scenes(int gap, const std::vector<long>* nyu_test_indices) const;
 
  private:
   std::vector<std::unique_ptr<LabeledInput>> inputs_;

@@ -4,13 +4,17 @@
 //
 // A frame's scene comes from the `scene` column of its folder's frames.csv
 // when there is one. Otherwise, for NYU Depth V2 frames, from their NYU index
-// (the `nyu_index` column, else the frame name as a number): sorted by index,
-// a frame whose index is more than `gap` above the previous frame's starts a
-// new scene. NYU's labelled set is stored scene after scene, and its official
-// train/test split is by scene, so test frames with a train index between
-// them never share a scene; on the 46 shared test frames every gap above 2
-// has one, and gap 2 keeps each room of the images together
-// (docs/results-h-evalproto.md lists the check).
+// (the `nyu_index` column, or the .mat file's order). NYU's labelled set is
+// stored scene after scene, and its official train/test split is by scene:
+// - with the split (the test indices, nyuv2_meta/split_test_indices.txt), a
+//   scene is a run of consecutive NYU indices on one side of the split; this
+//   never splits a scene, whichever frames are present (it may join
+//   neighbouring scenes of one side);
+// - without it, sorted by index, a frame whose index is more than `gap` above
+//   the previous frame's starts a new scene; on the 46 shared test frames
+//   together every gap above 2 has a train index in it and gap 2 keeps each
+//   room of the images together, but with frames missing (one folder alone)
+//   a room can be split (docs/results-h-evalproto.md lists the check).
 #pragma once
 
 #include <cstddef>
@@ -39,6 +43,16 @@ std::map<std::string, FrameListing> parseFrameListing(const std::string& csv_tex
 // Scene keys for NYU indices by the index-run rule above (one key per input,
 // in input order): "nyu<first index of the run>". Throws for gap < 0.
 std::vector<std::string> nyuIndexRunScenes(const std::vector<long>& nyu_indices, int gap);
+
+// The official test indices from a file of whitespace-separated NYU indices
+// (split_test_indices.txt); errors name the file and the bad entry.
+std::vector<long> loadNyuTestIndices(const std::string& path);
+std::vector<long> parseNyuTestIndices(const std::string& text, const std::string& source);
+
+// Scene keys for NYU indices by runs of the official split (see above): one
+// key per input, "nyu<first index of the run>". Throws for an index < 1.
+std::vector<std::string> nyuSplitRunScenes(const std::vector<long>& nyu_indices,
+                                           const std::vector<long>& test_indices);
 
 // Fold (0..folds-1) of each frame, contiguous blocks in the given order:
 // frame i goes to fold i * folds / n.

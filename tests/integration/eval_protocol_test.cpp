@@ -68,18 +68,21 @@ TEST(EvalProtocol, SceneFoldsOverBothSharedFoldersBeatTheBaselineWidely) {
   FINDMUG_REQUIRE_DATA(labeled, "nyuv2_labeled");
   FINDMUG_REQUIRE_DATA(extra, "nyuv2_labeled_extra");
   FINDMUG_REQUIRE_DATA(rotations, "nyuv2_meta/camera_rotations_NYU.txt");
+  FINDMUG_REQUIRE_DATA(split, "nyuv2_meta/split_test_indices.txt");
   test::TempDir tmp;
   const auto result = run(
       std::string(FINDMUG_EVAL_EXE) + " --data " + labeled.string() + " --data " +
       extra.string() + " --folds 5 --set ground.source=gravity --nyu-rotations " +
-      rotations.string() + " --set features.regions=true --set features.scene=true --json " +
+      rotations.string() + " --nyu-split " + split.string() +
+      " --set features.regions=true --set features.scene=true --json " +
       tmp.str("eval.json") + " --learning-curve " + tmp.str("curve") +
       " --curve-sizes 5,10 --curve-seeds 1");
   ASSERT_EQ(result.exit_code, 0) << result.output;
   EXPECT_THAT(result.output, HasSubstr("searchable tables"));
   const std::string json = readFile(tmp.path() / "eval.json");
   EXPECT_EQ(number(json, "frames_used"), 46.0);
-  EXPECT_THAT(json, HasSubstr("\"folds\": {\"rule\": \"scenes\", \"scene_gap\": 2"));
+  EXPECT_THAT(json, HasSubstr("\"folds\": {\"rule\": \"scenes\", \"nyu_scenes\": \"runs of NYU's "
+                              "train/test split"));
 
   // Every test frame once, every scene in exactly one fold.
   const std::regex fold_re(R"re(\{"fold": (\d+), "train_frames": (\d+), "test": \[([^\]]*)\])re");
@@ -112,6 +115,9 @@ TEST(EvalProtocol, SceneFoldsOverBothSharedFoldersBeatTheBaselineWidely) {
   EXPECT_EQ(fold_of["0028"], fold_of["0029"]);
   EXPECT_EQ(scene_of["0001"], scene_of["0002"]);
   EXPECT_NE(scene_of["0433"], scene_of["0125"]);
+  // 58 is an NYU train index: 56-57 and 59-63 are two rooms; 60 and 63 one.
+  EXPECT_NE(scene_of["0057"], scene_of["0059"]);
+  EXPECT_EQ(scene_of["0060"], scene_of["0063"]);
 
   // Accuracy against the majority baseline from the confusion's rows.
   const auto mrf_at = json.find("\"mrf\": {");

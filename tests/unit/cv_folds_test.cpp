@@ -60,6 +60,43 @@ TEST(CvFolds, IndexRunsFormScenesWithinTheGap) {
   EXPECT_EQ(sizes.at("nyu433"), 1);
 }
 
+// Official test indices around the shared frames (split_test_indices.txt, 1..130).
+const std::vector<long> kTestIndicesTo130 = {
+    1,  2,  9,  14, 15, 16, 17, 18, 21, 28, 29, 30, 31, 32, 33, 34, 35, 36, 37, 38, 39, 40,
+    41, 42, 43, 46, 47, 56, 57, 59, 60, 61, 62, 63, 76, 77, 78, 79, 84, 85, 86, 87, 88, 89,
+    90, 91, 117, 118, 119, 125, 126, 127, 128, 129};
+
+TEST(CvFolds, SplitRunsNeverSplitARoomWhateverFramesArePresent) {
+  // The 46 shared frames: 13 scenes; 56-57 and 59-63 apart (58 is a train index).
+  std::vector<long> tests = kTestIndicesTo130;
+  tests.push_back(433);
+  const auto shared = nyuSplitRunScenes(kShared46, tests);
+  std::map<std::string, int> sizes;
+  for (const auto& s : shared) ++sizes[s];
+  EXPECT_EQ(sizes.size(), 13u);
+  EXPECT_EQ(sizes.at("nyu28"), 14);
+  EXPECT_EQ(sizes.at("nyu56"), 2);
+  EXPECT_EQ(sizes.at("nyu59"), 4);
+  EXPECT_EQ(sizes.at("nyu433"), 1);
+  // One folder alone: 60 and 63 (one bedroom) stay together, which gap 2 splits.
+  const std::vector<long> alone = {57, 60, 63, 29, 33};
+  const auto runs = nyuSplitRunScenes(alone, tests);
+  EXPECT_EQ(runs[1], runs[2]);
+  EXPECT_NE(runs[0], runs[1]);
+  EXPECT_EQ(runs[3], runs[4]);
+  const auto gaps = nyuIndexRunScenes(alone, 2);
+  EXPECT_NE(gaps[1], gaps[2]);
+  // Train frames (3..8) form their own run between test runs.
+  const auto train = nyuSplitRunScenes({3, 8, 2, 9}, tests);
+  EXPECT_EQ(train[0], train[1]);
+  EXPECT_NE(train[0], train[2]);
+  EXPECT_NE(train[1], train[3]);
+  EXPECT_THROW(nyuSplitRunScenes({0}, tests), Error);
+  EXPECT_EQ(parseNyuTestIndices("1\n2\n 9\n", "t.txt"), (std::vector<long>{1, 2, 9}));
+  EXPECT_THROW(parseNyuTestIndices("1\nx2\n", "t.txt"), Error);
+  EXPECT_THROW(parseNyuTestIndices("", "t.txt"), Error);
+}
+
 // Every scene's frames are in one fold, so no fold's training set (the
 // other folds) holds a frame of a scene in its test set.
 void expectNoSceneSplit(const std::vector<std::string>& scenes, const std::vector<int>& fold,
