@@ -7,6 +7,7 @@
 #include <string>
 
 #include "findmug/error.hpp"
+#include "findmug/table_map.hpp"
 
 namespace findmug {
 
@@ -35,6 +36,18 @@ void validateTableMetricsConfig(const TableMetricsConfig& config) {
   if (!(config.min_iou > 0.0f && config.min_iou <= 1.0f)) {
     throw Error("table_metrics.min_iou = " + std::to_string(config.min_iou) +
                 ": must be in (0, 1]");
+  }
+  if (!(config.searchable_min_top_area_m2 >= 0.0f)) {
+    throw Error("table_metrics.searchable_min_top_area_m2 = " +
+                std::to_string(config.searchable_min_top_area_m2) + ": must be >= 0");
+  }
+  if (!(config.searchable_min_overlap > 0.0f && config.searchable_min_overlap <= 1.0f)) {
+    throw Error("table_metrics.searchable_min_overlap = " +
+                std::to_string(config.searchable_min_overlap) + ": must be in (0, 1]");
+  }
+  if (!(config.searchable_max_height_error_m >= 0.0f)) {
+    throw Error("table_metrics.searchable_max_height_error_m = " +
+                std::to_string(config.searchable_max_height_error_m) + ": must be >= 0");
   }
 }
 
@@ -134,6 +147,126 @@ double TableMetrics::recall() const { return ratio(matched(), truth_); }
 double TableMetrics::medianHeightError() const { return median(height_errors_); }
 double TableMetrics::medianCentroidError() const { return median(centroid_errors_); }
 double TableMetrics::medianAxisErrorDeg() const { return median(axis_errors_); }
+
+namespace {
+
+// Signed area of a polygon's vertex order: > 0 counter-clockwise.
+double orientation(const std::vector<Eigen::Vector2d>& polygon) {
+  double twice = 0.0;
+  for (std::size_t i = 0; i < polygon.size(); ++i) {
+    const Eigen::Vector2d& p = polygon[i];
+    const Eigen::Vector2d& q = polygon[(i + 1) % polygon.size()];
+    twice += p.x() * q.y() - q.x() * p.y();
+  }
+  return twice;
+}
+
+std::vector<Eigen::Vector2d> counterClockwise(const std::vector<Eigen::Vector2f>& polygon) {
+  std::vector<Eigen::Vector2d> out;
+  for (const auto& p : polygon) out.push_back(p.cast<double>());
+  if (orientation(out) < 0.0) std::reverse(out.begin(), out.end());
+  return out;
+}
+
+double cross(const Eigen::Vector2d& a, const Eigen::Vector2d& b, const Eigen::Vector2d& p) {
+  return (b.x() - a.x()) * (p.y() - a.y()) - (b.y() - a.y()) * (p.x() - a.x());
+}
+
+}  // namespace
+
+double convexOverlapArea(const std::vector<Eigen::Vector2f>& a,
+                         const std::vector<Eigen::Vector2f>& b) {
+  if (a.size() < 3 || b.size() < 3) return 0.0;
+  // Sutherland-Hodgman: clip `a` by each edge of the convex `b` (both CCW).
+  std::vector<Eigen::Vector2d> subject = counterClockwise(a);
+  const std::vector<Eigen::Vector2d> clip = counterClockwise(b);
+  for (std::size_t e = 0; e < clip.size() && !subject.empty(); ++e) {
+    const Eigen::Vector2d& c0 = clip[e];
+    const Eigen::Vector2d& c1 = clip[(e + 1) % clip.size()];
+    std::vector<Eigen::Vector2d> kept;
+    for (std::size_t i = 0; i < subject.size(); ++i) {
+      const Eigen::Vector2d& p = subject[i];
+      const Eigen::Vector2d& q = subject[(i + 1) % subject.size()];
+      const double sp = cross(c0, c1, p), sq = cross(c0, c1, q);
+      if (sp >= 0.0) kept.push_back(p);
+      if ((sp >= 0.0) != (sq >= 0.0)) kept.push_back(p + (q - p) * (sp / (sp - sq)));
+    }
+    subject = std::move(kept);
+  }
+  if (subject.size() < 3) return 0.0;
+  return 0.5 * std::abs(orientation(subject));
+}
+
+double topOverlap(const TableCluster& a, const TableCluster& b) {
+  const double smaller =
+      std::min<double>(std::abs(polygonArea(a.hull)), std::abs(polygonArea(b.hull)));
+  if (!(smaller > 0.0)) return 0.0;
+  return convexOverlapArea(a.hull, b.hull) / smaller;
+}
+
+SearchableFrame measureSearchableTables(const std::vector<TableCluster>& truth,
+                                        const std::vector<TableCluster>& detected,
+                                        const TableMetricsConfig& config) {
+  validateTableMetricsConfig(config);
+  struct Pair {
+    double overlap;
+    std::size_t t, d;
+  };
+  std::vector<Pair> pairs;
+  for (std::size_t t = 0; t < truth.size(); ++t) {
+    for (std::size_t d = 0; d < detected.size(); ++d) {
+      if (std::abs(truth[t].top_height - detected[d].top_height) >
+          config.searchable_max_height_error_m) {
+        continue;
+      }
+      const double overlap = topOverlap(truth[t], detected[d]);
+      if (overlap >= config.searchable_min_overlap && overlap > 0.0) pairs.push_back({overlap, t, d});
+    }
+  }
+  std::sort(pairs.begin(), pairs.end(), [](const Pair& a, const Pair& b) {
+    if (a.overlap != b.overlap) return a.overlap > b.overlap;
+    if (a.t != b.t) return a.t < b.t;
+    return a.d < b.d;
+  });
+  std::vector<int> match_of_detected(detected.size(), -1);
+  std::vector<bool> truth_used(truth.size(), false);
+  for (const Pair& p : pairs) {
+    if (truth_used[p.t] || match_of_detected[p.d] >= 0) continue;
+    truth_used[p.t] = true;
+    match_of_detected[p.d] = static_cast<int>(p.t);
+  }
+  auto searchable = [&](std::size_t t) {
+    return truth[t].top_area_m2 >= config.searchable_min_top_area_m2;
+  };
+  SearchableFrame out;
+  out.detected = static_cast<int>(detected.size());
+  for (std::size_t t = 0; t < truth.size(); ++t) out.searchable += searchable(t) ? 1 : 0;
+  for (std::size_t d = 0; d < detected.size(); ++d) {
+    const int t = match_of_detected[d];
+    if (t < 0) {
+      ++out.false_tables;
+    } else if (searchable(static_cast<std::size_t>(t))) {
+      ++out.searchable_matched;
+    } else {
+      ++out.detected_small;
+    }
+  }
+  return out;
+}
+
+void SearchableMetrics::add(const SearchableFrame& f) {
+  ++frames_;
+  searchable_ += f.searchable;
+  matched_ += f.searchable_matched;
+  detected_ += f.detected;
+  detected_small_ += f.detected_small;
+  false_tables_ += f.false_tables;
+  frames_with_false_ += f.false_tables > 0 ? 1 : 0;
+}
+
+double SearchableMetrics::precision() const { return ratio(matched_, detected_ - detected_small_); }
+double SearchableMetrics::recall() const { return ratio(matched_, searchable_); }
+double SearchableMetrics::falseTableFrameShare() const { return ratio(frames_with_false_, frames_); }
 
 std::vector<PrecisionRecallPoint> precisionRecallCurve(std::vector<ScoredDetection> detections,
                                                        int truth) {

@@ -1,11 +1,17 @@
 // findmug-eval: accuracy of the forest and forest+MRF on a labelled dataset.
 //
-//   findmug-eval (--data DIR | --mat FILE) [--folds 5] [--model MODEL] [--json FILE]
-//                [--out DIR] [--sweep] [--train-extra DIR ...] [--config FILE] [--set key=value
-//                ...]
+//   findmug-eval (--data DIR | --mat FILE)... [--folds 5] [--folds-by auto|scenes|blocks]
+//                [--model MODEL] [--json FILE] [--out DIR] [--sweep] [--train-extra DIR ...]
+//                [--train-frames N --subset-seed S] [--learning-curve DIR]
+//                [--config FILE] [--set key=value ...]
 //
-// Without --model: k-fold cross-validation by frame (contiguous blocks of
-// frames, so neighbouring frames of one scene stay in one fold). With
+// Without --model: k-fold cross-validation by frame, over the frames of every
+// --data folder and --mat file together. Folds hold whole scenes
+// (cv_folds.hpp: a frames.csv `scene` column, else NYU index runs) where every
+// frame's scene is known, else contiguous blocks of frames (--folds-by).
+// --train-frames trains each fold on N of its training frames (whole scenes
+// where possible), --learning-curve repeats the CV over several N and seeds
+// and writes a CSV and an SVG with a fitted a + b ln N trend. With
 // --model: that model on every frame. Reports per-class, class-average and
 // global accuracy (void excluded) for the forest alone and with the MRF, a
 // confusion-matrix heatmap, optional sweeps over trees and depth (the
@@ -31,6 +37,7 @@
 
 #include "eval_report.hpp"
 #include "eval_tables.hpp"
+#include "findmug/cv_folds.hpp"
 #include "findmug/error.hpp"
 #include "findmug/image_io.hpp"
 #include "findmug/label_image.hpp"
@@ -48,14 +55,26 @@ namespace {
 
 // Shown by --help above the flag list.
 constexpr const char* kDescription =
-    "Cross-validates (default 5 folds by frame) or evaluates --model on a labelled dataset\n"
-    "(--data DIR or --mat nyu_depth_v2_labeled.mat). --nyu-rotations gives NYU frames their\n"
-    "gravity (for --set ground.source=gravity).";
+    "Cross-validates (default 5 folds) or evaluates --model on labelled frames: every --data\n"
+    "DIR and --mat nyu_depth_v2_labeled.mat given, together. --nyu-rotations gives NYU frames\n"
+    "their gravity (for --set ground.source=gravity).\n"
+    "Folds (--folds-by auto): whole scenes when every frame's scene is known, else contiguous\n"
+    "blocks of frames in input order (folders in the order given, frames by name). A frame's\n"
+    "scene is the `scene` column of its folder's frames.csv; else, for NYU frames (frames.csv\n"
+    "with `nyu_index`, or --mat): with --nyu-split, a run of consecutive NYU indices on one side\n"
+    "of NYU's scene-disjoint train/test split; without it, frames sorted by NYU index form one\n"
+    "scene while each index is at most --scene-gap (2) above the previous one (NYU stores its\n"
+    "labelled frames scene by scene; with frames missing this can split a room). Scenes go to\n"
+    "folds largest first, each into the fold with the fewest frames so far (ties: the lower\n"
+    "fold). The text and JSON reports list every fold's test frames and scenes.";
 
 struct EvalFlags {
-  std::string data, mat, nyu894_csv, nyu_rotations, model, json, out, table_report;
-  int folds = 5;
-  bool sweep = false, no_nyu_border = false;
+  DatasetFlags dataset;
+  std::string model, json, out, table_report, folds_by = "auto", curve_dir, nyu_split;
+  std::string curve_sizes = "5,10,20,30,all";
+  int folds = 5, scene_gap = 2, train_frames = 0, curve_seeds = 3;
+  std::uint64_t subset_seed = 0;
+  bool sweep = false;
   std::vector<std::string> train_extra;
   cli::ConfigFlags config;
 };
@@ -66,10 +85,8 @@ std::unique_ptr<CLI::App> makeEvalApp(EvalFlags& f) {
   auto last = [](CLI::Option* o) {
     return o->multi_option_policy(CLI::MultiOptionPolicy::TakeLast);
   };
-  auto* data = last(app->add_option("--data", f.data, "labelled dataset folder")->type_name("DIR"));
-  last(app->add_option("--mat", f.mat, "the NYU Depth V2 labelled .mat file")->type_name("FILE"))
-      ->excludes(data);
-  last(app->add_option("--folds", f.folds, "cross-validation folds (contiguous blocks of frames)")
+  addDatasetFlags(*app, f.dataset);
+  last(app->add_option("--folds", f.folds, "cross-validation folds (see --folds-by)")
            ->type_name("K")
            ->check(CLI::Validator(
                [](std::string& text) -> std::string {
@@ -91,14 +108,40 @@ std::unique_ptr<CLI::App> makeEvalApp(EvalFlags& f) {
       ->type_name("DIR")
       ->allow_extra_args(false);
   cli::addConfigFlags(*app, f.config, "YAML config (segmenter settings)");
-  last(app->add_option("--nyu894-csv", f.nyu894_csv,
-                       "NYU 894-to-40 class map (CSV) for --mat (default: the installed one)")
+  last(app->add_option("--folds-by", f.folds_by,
+                       "scenes: whole scenes per fold; blocks: contiguous blocks of frames; "
+                       "auto (default): scenes when every frame's scene is known")
+           ->type_name("RULE")
+           ->check(CLI::IsMember({"auto", "scenes", "blocks"})));
+  last(app->add_option("--scene-gap", f.scene_gap,
+                       "NYU frames whose indices are at most this far apart are one scene")
+           ->type_name("N")
+           ->check(CLI::Range(0, 1449)));
+  last(app->add_option("--nyu-split", f.nyu_split,
+                       "NYU's official test indices (nyuv2_meta/split_test_indices.txt): NYU "
+                       "frames' scenes are runs of the split (see above)")
            ->type_name("FILE"));
-  app->add_flag("--no-nyu-border", f.no_nyu_border,
-                "keep the white border of NYU frames (masked as void by default)");
-  last(app->add_option("--nyu-rotations", f.nyu_rotations,
-                       "NYU's camera_rotations_NYU.txt: every NYU frame's gravity")
-           ->type_name("FILE"));
+  last(app->add_option("--train-frames", f.train_frames,
+                       "train each fold on only N of its training frames (whole scenes where "
+                       "possible; 0 = all)")
+           ->type_name("N")
+           ->check(CLI::Range(0, 1000000)));
+  last(app->add_option("--subset-seed", f.subset_seed,
+                       "seed choosing the --train-frames subset (fold k uses S + k)")
+           ->type_name("S"));
+  last(app->add_option("--learning-curve", f.curve_dir,
+                       "also cross-validate with --curve-sizes training frames x --curve-seeds "
+                       "seeds; write learning_curve.csv, learning_curve_trend.csv and "
+                       "learning_curve.svg to DIR")
+           ->type_name("DIR"));
+  last(app->add_option("--curve-sizes", f.curve_sizes,
+                       "training frames per fold for --learning-curve (comma-separated; 'all')")
+           ->type_name("LIST"));
+  last(app->add_option("--curve-seeds", f.curve_seeds,
+                       "seeds per size for --learning-curve: seed s uses subset seed s and "
+                       "forest.seed + 1000 s")
+           ->type_name("K")
+           ->check(CLI::Range(1, 100)));
   last(app->add_option("--table-report", f.table_report,
                        "write a per-frame diagnosis of table instances and detections "
                        "(why each unmatched one failed) to FILE")
@@ -113,6 +156,12 @@ struct Evaluation {
   // MRF's labels and confidence, for the table stage and its diagnosis.
   std::vector<std::vector<ClassProbabilities>> probabilities;
   std::vector<MrfResult> mrf_results;
+  // Cross-validation only: each fold's training and test samples.
+  struct Fold {
+    int fold = 0;
+    std::vector<std::size_t> train, test;
+  };
+  std::vector<Fold> folds;
 };
 
 std::uint8_t argmax(const ClassProbabilities& p) {
@@ -183,21 +232,37 @@ void labelFrames(const RandomForest& forest, const SegmenterConfig& config,
   }
 }
 
+// How the frames are split: each sample's fold and scene (cv_folds.hpp).
+struct FoldPlan {
+  std::string rule;  // "scenes" or "blocks"
+  int folds = 0;
+  std::vector<int> fold_of_sample;
+  std::vector<std::string> scene_of_sample;  // "frame:NAME" where no scene is known
+};
+
+// Training on N frames of each fold (0 = all), chosen by `seed` + fold.
+struct TrainSubset {
+  int frames = 0;
+  std::uint64_t seed = 0;
+};
+
 Evaluation crossValidate(const std::vector<FrameSample>& samples,
-                         const std::vector<FrameSample>& extra_training, int folds,
+                         const std::vector<FrameSample>& extra_training, const FoldPlan& plan,
                          const SegmenterConfig& config, const std::vector<RegionFeatures>& regions,
-                         bool keep_pixels) {
+                         bool keep_pixels, const TrainSubset& subset = {}) {
   Evaluation eval;
   eval.mrf_pixels.resize(samples.size());
   eval.probabilities.resize(samples.size());
   eval.mrf_results.resize(samples.size());
   const std::size_t n = samples.size();
-  for (int fold = 0; fold < folds; ++fold) {
+  for (int fold = 0; fold < plan.folds; ++fold) {
     std::vector<std::size_t> train, test;
-    for (std::size_t i = 0; i < n; ++i) {
-      (static_cast<int>(i * folds / n) == fold ? test : train).push_back(i);
-    }
+    for (std::size_t i = 0; i < n; ++i) (plan.fold_of_sample[i] == fold ? test : train).push_back(i);
     if (test.empty() || train.empty()) continue;
+    if (subset.frames > 0) {
+      train = chooseTrainingSubset(train, plan.scene_of_sample, subset.frames,
+                                   subset.seed + static_cast<std::uint64_t>(fold));
+    }
     std::vector<const FrameSample*> frames;
     for (std::size_t i : train) frames.push_back(&samples[i]);
     for (const auto& s : extra_training) frames.push_back(&s);
@@ -206,6 +271,7 @@ Evaluation crossValidate(const std::vector<FrameSample>& samples,
     fold_config.forest.seed += static_cast<std::uint64_t>(fold);
     const RandomForest forest = trainModel(frames, fold_config);
     labelFrames(forest, config, samples, test, regions, eval, keep_pixels);
+    eval.folds.push_back({fold, train, test});
   }
   return eval;
 }
@@ -258,6 +324,7 @@ void measureTables(const LabeledFrames& frames, const std::vector<FrameSample>& 
       *diagnosis << diagnoseFrameTables(evidence, truth, detected, matches, report.diagnosis);
     }
     report.tables.add(static_cast<int>(truth.size()), static_cast<int>(detected.size()), matches);
+    report.searchable.add(measureSearchableTables(truth, detected, config.table_metrics));
     {
       std::vector<bool> matched(detected.size(), false);
       for (const auto& m : matches) matched[static_cast<std::size_t>(m.detected)] = true;
@@ -335,34 +402,168 @@ void writeOverlays(const LabeledFrames& frames, const std::vector<FrameSample>& 
   }
 }
 
+// Each sample's fold and scene for the --folds-by rule.
+FoldPlan planFolds(const EvalFlags& f, const LabeledInputs& input,
+                   const std::vector<FrameSample>& samples) {
+  std::optional<std::vector<long>> test_indices;
+  if (!f.nyu_split.empty()) test_indices = loadNyuTestIndices(f.nyu_split);
+  const std::vector<std::string> scenes =
+      input.scenes(f.scene_gap, test_indices ? &*test_indices : nullptr);
+  FoldPlan plan;
+  plan.folds = f.folds;
+  std::vector<std::string> missing;
+  for (const FrameSample& s : samples) {
+    const std::string& scene = scenes[s.source_index];
+    if (scene.empty()) missing.push_back(s.name);
+    plan.scene_of_sample.push_back(scene.empty() ? "frame:" + s.name : scene);
+  }
+  plan.rule = f.folds_by == "auto" ? (missing.empty() ? "scenes" : "blocks") : f.folds_by;
+  if (plan.rule == "scenes" && !missing.empty()) {
+    throw Error("--folds-by scenes: no scene for frame " + missing.front() + " (and " +
+                std::to_string(missing.size() - 1) +
+                " more): give its folder a frames.csv with a scene or nyu_index column");
+  }
+  plan.fold_of_sample = plan.rule == "scenes" ? sceneFolds(plan.scene_of_sample, f.folds)
+                                              : blockFolds(samples.size(), f.folds);
+  return plan;
+}
+
+std::string describeFolds(const FoldPlan& plan, const std::string& nyu_rule,
+                          const TrainSubset& subset) {
+  std::string text = std::to_string(plan.folds) + "-fold cross-validation by frame, ";
+  text += plan.rule == "scenes" ? "folds of whole scenes (frames.csv scene, else " + nyu_rule +
+                                      "; largest scene first into the smallest fold)"
+                                : "contiguous blocks of frames in input order";
+  if (subset.frames > 0) {
+    text += "; each fold trained on " + std::to_string(subset.frames) +
+            " of its training frames (subset seed " + std::to_string(subset.seed) + " + fold)";
+  }
+  return text;
+}
+
+// How NYU frames' scenes are formed, for the reports.
+std::string nyuSceneRule(const EvalFlags& f) {
+  return f.nyu_split.empty() ? "NYU index runs with gap " + std::to_string(f.scene_gap)
+                             : "runs of NYU's train/test split (" + f.nyu_split + ")";
+}
+
+std::vector<EvalReport::Fold> foldRecords(const Evaluation& eval, const FoldPlan& plan,
+                                          const std::vector<FrameSample>& samples) {
+  std::vector<EvalReport::Fold> out;
+  for (const auto& fold : eval.folds) {
+    EvalReport::Fold r;
+    r.fold = fold.fold;
+    r.train_frames = static_cast<int>(fold.train.size());
+    for (std::size_t i : fold.test) {
+      r.test_frames.push_back(samples[i].name);
+      r.test_scenes.push_back(plan.scene_of_sample[i]);
+    }
+    for (std::size_t i : fold.train) r.train_frame_names.push_back(samples[i].name);
+    out.push_back(std::move(r));
+  }
+  return out;
+}
+
+// The training-frame counts of --curve-sizes ("all" = 0).
+std::vector<int> curveSizes(const std::string& text) {
+  std::vector<int> out;
+  std::stringstream in(text);
+  std::string item;
+  while (std::getline(in, item, ',')) {
+    if (item == "all") {
+      out.push_back(0);
+      continue;
+    }
+    const auto n = parseInteger(item);
+    if (!n || *n < 1 || *n > 1000000) {
+      throw Error("--curve-sizes: '" + item + "' is neither 'all' nor an integer >= 1");
+    }
+    out.push_back(static_cast<int>(*n));
+  }
+  if (out.empty()) throw Error("--curve-sizes: empty");
+  return out;
+}
+
+// Table IoU of a confusion matrix: table pixels right over truth or prediction table.
+double tableIoU(const ConfusionMatrix& m) {
+  const int t = static_cast<int>(Label::Table);
+  const double hit = static_cast<double>(m.count(t, t));
+  double predicted = 0.0;
+  for (int c = 0; c < kNumLabels; ++c) predicted += static_cast<double>(m.count(c, t));
+  const double denominator = static_cast<double>(m.rowTotal(t)) + predicted - hit;
+  return denominator > 0 ? hit / denominator : std::nan("");
+}
+
+// --learning-curve: the CV repeated for every size and seed; one CSV row each.
+void runLearningCurve(const EvalFlags& f, const LabeledInputs& input,
+                      const std::vector<FrameSample>& samples,
+                      const std::vector<FrameSample>& extra_training, const FoldPlan& plan,
+                      const Segmenter& segmenter, const std::vector<RegionFeatures>& regions) {
+  const std::filesystem::path dir = f.curve_dir;
+  std::filesystem::create_directories(dir);
+  std::vector<LearningCurvePoint> points;
+  for (int size : curveSizes(f.curve_sizes)) {
+    for (int seed = 0; seed < f.curve_seeds; ++seed) {
+      const auto start = std::chrono::steady_clock::now();
+      SegmenterConfig config = segmenter.config();
+      config.forest.seed += 1000u * static_cast<std::uint64_t>(seed);
+      const TrainSubset subset{size, static_cast<std::uint64_t>(seed)};
+      const Evaluation eval =
+          crossValidate(samples, extra_training, plan, config, regions, true, subset);
+      EvalReport tables;
+      measureTables(input.frames(), samples, eval, segmenter, nullptr, tables, nullptr);
+      LearningCurvePoint p;
+      p.requested = size;
+      p.seed = seed;
+      p.forest_seed = config.forest.seed;
+      double frames = 0;
+      for (const auto& fold : eval.folds) frames += static_cast<double>(fold.train.size());
+      p.train_frames = eval.folds.empty() ? 0.0 : frames / static_cast<double>(eval.folds.size());
+      p.class_average = eval.mrf.classAverageAccuracy();
+      p.global = eval.mrf.globalAccuracy();
+      p.table_accuracy = eval.mrf.perClassAccuracy()[static_cast<int>(Label::Table)];
+      p.table_iou = tableIoU(eval.mrf);
+      p.instance_precision = tables.tables.precision();
+      p.instance_recall = tables.tables.recall();
+      p.searchable_precision = tables.searchable.precision();
+      p.searchable_recall = tables.searchable.recall();
+      p.false_table_frame_share = tables.searchable.falseTableFrameShare();
+      p.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+      std::fprintf(stderr,
+                   "learning curve: %s frames (%.1f per fold), seed %d: class avg %.1f, global "
+                   "%.1f, table %.1f, searchable P/R %.1f/%.1f (%.0f s)\n",
+                   size ? std::to_string(size).c_str() : "all", p.train_frames, seed,
+                   100 * p.class_average, 100 * p.global, 100 * p.table_accuracy,
+                   100 * p.searchable_precision, 100 * p.searchable_recall, p.seconds);
+      points.push_back(p);
+    }
+  }
+  const std::string protocol = describeFolds(plan, nyuSceneRule(f), {});
+  writeLearningCurve(dir, points, protocol);
+  std::cout << formatLearningCurveTrends(points) << "learning curve in " << dir.string() << "\n";
+}
+
 int run(int argc, char** argv) {
   EvalFlags f;
   const auto app = makeEvalApp(f);
   if (auto code = cli::parse(*app, argc, argv)) return *code;
-  if (f.data.empty() == f.mat.empty()) {
-    std::cerr << "findmug-eval: give one of --data DIR or --mat FILE (see --help)\n";
+  if (f.dataset.data.empty() && f.dataset.mats.empty()) {
+    std::cerr << "findmug-eval: give --data DIR or --mat FILE (repeatable; see --help)\n";
     return 2;
   }
   const Config config = cli::configFrom(f.config);
   const int folds = f.folds;
 
-  DatasetOptions options;
-  options.mask_nyu_border = !f.no_nyu_border;
-  // Split labels need each patch's finer class (label40/ or label13/ beside label8/).
-  options.fine_labels_folder = fineLabelsFolder(config.segmenter.training.split_labels);
-  if (config.segmenter.training.split_labels == SplitLabels::Nyu13 && !f.mat.empty())
-    throw Error("training.split_labels = nyu13: --mat gives NYU-40 classes only (use nyu40, or a "
-                "dataset folder with label13/)");
-  if (!f.nyu_rotations.empty()) options.nyu_rotations_file = f.nyu_rotations;
-  const auto input = !f.data.empty()
-                         ? LabeledInput::folder(f.data, options)
-                         : LabeledInput::mat(f.mat, f.nyu894_csv, options.nyu_rotations_file);
+  const DatasetOptions options = datasetOptions(f.dataset, config.segmenter);
+  const auto input = LabeledInputs::open(f.dataset, options);
   const Segmenter segmenter(config.segmenter, nullptr);
   // Load the model first: a bad file is refused before minutes of feature extraction.
   std::optional<RandomForest> model;
   if (!f.model.empty()) {
     model = RandomForest::load(f.model);
     checkModelMatchesConfig(*model, config.segmenter);
+    if (f.train_frames > 0 || !f.curve_dir.empty())
+      throw Error("--train-frames and --learning-curve train forests; not with --model");
   }
 
   const auto start = std::chrono::steady_clock::now();
@@ -390,6 +591,8 @@ int run(int argc, char** argv) {
     throw Error("only " + std::to_string(samples.size()) + " usable frames for " +
                 std::to_string(folds) + " folds");
   }
+  const FoldPlan plan = planFolds(f, *input, samples);
+  const TrainSubset subset{f.train_frames, f.subset_seed};
 
   EvalReport report;
   report.data = input->frames().description;
@@ -412,15 +615,18 @@ int run(int argc, char** argv) {
     for (std::size_t i = 0; i < all.size(); ++i) all[i] = i;
     labelFrames(forest, config.segmenter, samples, all, regions, eval, true);
   } else {
-    report.protocol = std::to_string(folds) + "-fold cross-validation by frame";
-    eval = crossValidate(samples, extra_training, folds, config.segmenter, regions, true);
+    report.protocol = describeFolds(plan, nyuSceneRule(f), subset);
+    report.fold_rule = plan.rule;
+    report.scene_rule = nyuSceneRule(f);
+    eval = crossValidate(samples, extra_training, plan, config.segmenter, regions, true, subset);
+    report.folds = foldRecords(eval, plan, samples);
   }
   for (const FrameSample& s : samples) report.oracle.add(s.ground_truth, pixelLabels(s, s.segment_labels));
   report.forest = eval.forest;
   report.mrf = eval.mrf;
   std::optional<synth::SequenceGroundTruth> synth_truth;
-  if (!f.data.empty()) {
-    const auto truth_path = std::filesystem::path(f.data) / "ground_truth.yaml";
+  if (f.dataset.data.size() == 1 && f.dataset.mats.empty()) {
+    const auto truth_path = std::filesystem::path(f.dataset.data.front()) / "ground_truth.yaml";
     if (std::filesystem::exists(truth_path))
       synth_truth = synth::readGroundTruth(truth_path.string());
   }
@@ -443,7 +649,7 @@ int run(int argc, char** argv) {
     for (int trees : {1, 2, 4, 6, 8, 10, 12, 14, 16}) {
       SegmenterConfig c = config.segmenter;
       c.forest.num_trees = trees;
-      const Evaluation e = crossValidate(samples, extra_training, folds, c, regions, false);
+      const Evaluation e = crossValidate(samples, extra_training, plan, c, regions, false, subset);
       report.sweep_trees.push_back({trees, c.forest.max_depth, e.forest, e.mrf});
       std::fprintf(stderr, "sweep trees=%d: forest %.1f/%.1f mrf %.1f/%.1f\n", trees,
                    100 * e.forest.classAverageAccuracy(), 100 * e.forest.globalAccuracy(),
@@ -452,7 +658,7 @@ int run(int argc, char** argv) {
     for (int depth : {2, 4, 6, 8, 10, 12, 14, 16}) {
       SegmenterConfig c = config.segmenter;
       c.forest.max_depth = depth;
-      const Evaluation e = crossValidate(samples, extra_training, folds, c, regions, false);
+      const Evaluation e = crossValidate(samples, extra_training, plan, c, regions, false, subset);
       report.sweep_depth.push_back({c.forest.num_trees, depth, e.forest, e.mrf});
       std::fprintf(stderr, "sweep depth=%d: forest %.1f/%.1f mrf %.1f/%.1f\n", depth,
                    100 * e.forest.classAverageAccuracy(), 100 * e.forest.globalAccuracy(),
@@ -460,6 +666,9 @@ int run(int argc, char** argv) {
     }
   }
   report.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  if (!f.curve_dir.empty()) {
+    runLearningCurve(f, *input, samples, extra_training, plan, segmenter, regions);
+  }
 
   std::cout << formatTable(report);
   if (!f.json.empty()) {

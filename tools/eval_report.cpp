@@ -70,6 +70,15 @@ std::string formatTable(const EvalReport& r) {
       << "protocol: " << r.protocol << "; frames used " << r.frames_used << " of "
       << r.frames_total << "\n";
   for (const auto& d : r.dropped) out << "  dropped " << d << "\n";
+  for (const auto& fold : r.folds) {
+    std::vector<std::string> scenes;
+    for (const auto& s : fold.test_scenes)
+      if (std::find(scenes.begin(), scenes.end(), s) == scenes.end()) scenes.push_back(s);
+    out << "  fold " << fold.fold << ": " << fold.test_frames.size() << " test frames in "
+        << scenes.size() << " scene(s), trained on " << fold.train_frames << ":";
+    for (const auto& name : fold.test_frames) out << " " << name;
+    out << "\n";
+  }
   if (!r.ground_methods.empty()) {
     // One line per way the ground was obtained, with the frames that got it.
     std::vector<std::pair<std::string, std::string>> groups;  // method, frames
@@ -162,6 +171,21 @@ std::string formatTable(const EvalReport& r) {
       out << line;
     }
   }
+  {
+    const SearchableMetrics& s = r.searchable;
+    out << "\n  searchable tables (true top >= table_metrics.searchable_min_top_area_m2, matched "
+           "by top overlap): "
+        << s.searchable() << " true, " << s.matched() << " matched, " << s.detected()
+        << " detected (" << s.detectedSmall() << " on smaller true tables)\n";
+    std::snprintf(line, sizeof line, "  %-10s %s\n  %-10s %s\n", "precision",
+                  percent(s.precision()).c_str(), "recall", percent(s.recall()).c_str());
+    out << line;
+    std::snprintf(line, sizeof line,
+                  "  false tables (on no true table): %d, in %d of %d frames (%.1f %%)\n",
+                  s.falseTables(), s.framesWithFalseTable(), s.frames(),
+                  100 * s.falseTableFrameShare());
+    out << line;
+  }
   if (r.has_search_truth) {
     const SearchPositionMetrics& p = r.search;
     std::snprintf(line, sizeof line,
@@ -207,7 +231,24 @@ std::string formatJson(const EvalReport& r) {
     out << (i ? ",\n    " : "\n    ") << "{\"frame\": " << jsonString(r.ground_methods[i].first)
         << ", \"method\": " << jsonString(r.ground_methods[i].second) << "}";
   }
-  out << "],\n  \"train_extra\": [";
+  out << "],\n  \"folds\": {\"rule\": " << jsonString(r.fold_rule)
+      << ", \"nyu_scenes\": " << jsonString(r.scene_rule) << ", \"folds\": [";
+  for (std::size_t i = 0; i < r.folds.size(); ++i) {
+    const auto& f = r.folds[i];
+    out << (i ? ",\n    " : "\n    ") << "{\"fold\": " << f.fold
+        << ", \"train_frames\": " << f.train_frames << ", \"test\": [";
+    for (std::size_t k = 0; k < f.test_frames.size(); ++k) {
+      out << (k ? ", " : "") << "{\"frame\": " << jsonString(f.test_frames[k])
+          << ", \"scene\": " << jsonString(f.test_scenes[k]) << "}";
+    }
+    out << "], \"train\": [";
+    for (std::size_t k = 0; k < f.train_frame_names.size(); ++k) {
+      out << (k ? ", " : "") << jsonString(f.train_frame_names[k]);
+    }
+    out << "]}";
+  }
+  out << "]}";
+  out << ",\n  \"train_extra\": [";
   for (std::size_t i = 0; i < r.train_extra.size(); ++i) {
     out << (i ? ", " : "") << jsonString(r.train_extra[i]);
   }
@@ -255,6 +296,18 @@ std::string formatJson(const EvalReport& r) {
           << ", \"matched\": " << f.matched << "}";
     }
     out << "]}";
+  }
+  {
+    const SearchableMetrics& s = r.searchable;
+    out << ",\n  \"searchable_tables\": {\"labels\": \"forest+mrf\", \"frames\": " << s.frames()
+        << ", \"truth\": " << s.searchable() << ", \"matched\": " << s.matched()
+        << ", \"detected\": " << s.detected()
+        << ", \"detected_on_small_tables\": " << s.detectedSmall()
+        << ", \"false_tables\": " << s.falseTables()
+        << ", \"frames_with_false_table\": " << s.framesWithFalseTable()
+        << ", \"precision\": " << jsonNumber(s.precision())
+        << ", \"recall\": " << jsonNumber(s.recall())
+        << ", \"false_table_frame_share\": " << jsonNumber(s.falseTableFrameShare()) << "}";
   }
   if (r.has_search_truth) {
     const SearchPositionMetrics& p = r.search;

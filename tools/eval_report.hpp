@@ -1,6 +1,8 @@
 // findmug-eval's report: terminal table, JSON, and SVG pictures.
 #pragma once
 
+#include <cstdint>
+#include <filesystem>
 #include <string>
 #include <utility>
 #include <vector>
@@ -26,6 +28,16 @@ struct FrameTables {
 struct EvalReport {
   std::string data;
   std::string protocol;
+  // Cross-validation: how folds were formed ("scenes" or "blocks") and each
+  // fold's test frames with their scenes (cv_folds.hpp).
+  struct Fold {
+    int fold = 0;
+    int train_frames = 0;
+    std::vector<std::string> test_frames, test_scenes, train_frame_names;
+  };
+  std::string fold_rule;
+  std::string scene_rule;  // how NYU frames' scenes were formed
+  std::vector<Fold> folds;
   std::vector<std::string> train_extra;  // data sets added to every fold's training
   int frames_total = 0;
   int frames_used = 0;
@@ -41,6 +53,8 @@ struct EvalReport {
   // Tables detected on the forest+MRF labels against ground-truth instances.
   TableMetrics tables;
   std::vector<FrameTables> frame_tables;
+  // Tables a robot can search (table_metrics.hpp: searchable P/R, false tables).
+  SearchableMetrics searchable;
   // Every detection's score (mean label confidence) and whether it matched,
   // for the precision/recall curve over a score threshold.
   std::vector<ScoredDetection> scored_tables;
@@ -59,6 +73,25 @@ std::string formatTable(const EvalReport& report);
 std::string formatJson(const EvalReport& report);
 void writeConfusionSvg(const std::string& path, const ConfusionMatrix& matrix,
                        const std::string& title);
+// One cross-validation of a learning curve (--learning-curve).
+struct LearningCurvePoint {
+  int requested = 0;          // training frames asked for per fold; 0 = all
+  double train_frames = 0.0;  // mean over folds of the frames really used
+  int seed = 0;
+  std::uint64_t forest_seed = 0;
+  double class_average = 0, global = 0, table_accuracy = 0, table_iou = 0;
+  double instance_precision = 0, instance_recall = 0;
+  double searchable_precision = 0, searchable_recall = 0, false_table_frame_share = 0;
+  double seconds = 0;
+};
+// learning_curve.csv (one row per point), learning_curve_trend.csv (a + b ln N
+// per figure) and learning_curve.svg (figures against N with their trends and
+// formulas) in `dir`; `protocol` is written into the SVG's caption.
+void writeLearningCurve(const std::filesystem::path& dir,
+                        const std::vector<LearningCurvePoint>& points, const std::string& protocol);
+// The fitted trends as text, one line per figure.
+std::string formatLearningCurveTrends(const std::vector<LearningCurvePoint>& points);
+
 // Accuracy against number of trees (`by_trees`) or against maximum depth.
 void writeSweepSvg(const std::string& path, const std::vector<SweepPoint>& points, bool by_trees);
 

@@ -3,9 +3,11 @@
 #include <unistd.h>
 
 #include <cstdio>
+#include <map>
 
 #include "findmug/error.hpp"
 #include "findmug/numbers.hpp"
+#include "findmug_cli.hpp"
 
 namespace findmug::tools {
 
@@ -41,6 +43,125 @@ std::unique_ptr<LabeledInput> LabeledInput::mat(const std::string& path,
     };
   }
   return input;
+}
+
+std::vector<std::string> LabeledInput::names() const {
+  if (folder_) return folder_->names();
+  std::vector<std::string> out;
+  for (std::size_t i = 0; i < frames_.count; ++i) {
+    char name[32];
+    std::snprintf(name, sizeof name, "%04zu", i + 1);
+    out.push_back(name);
+  }
+  return out;
+}
+
+void addDatasetFlags(CLI::App& app, DatasetFlags& f) {
+  app.add_option("--data", f.data, "labelled dataset folder (repeatable: the folders' frames "
+                                   "together; frame names must be unique across them)")
+      ->type_name("DIR")
+      ->allow_extra_args(false);
+  app.add_option("--mat", f.mats, "the NYU Depth V2 labelled .mat file (repeatable)")
+      ->type_name("FILE")
+      ->allow_extra_args(false);
+  app.add_option("--nyu894-csv", f.nyu894_csv,
+                 "NYU 894-to-40 class map (CSV) for --mat (default: the installed one)")
+      ->type_name("FILE")
+      ->multi_option_policy(CLI::MultiOptionPolicy::TakeLast);
+  app.add_flag("--no-nyu-border", f.no_nyu_border,
+               "keep the white border of NYU frames (masked as void by default)");
+  app.add_option("--nyu-rotations", f.nyu_rotations,
+                 "NYU's camera_rotations_NYU.txt: every NYU frame's gravity (frames of every "
+                 "--data folder named by NYU index, and --mat frames)")
+      ->type_name("FILE")
+      ->multi_option_policy(CLI::MultiOptionPolicy::TakeLast);
+}
+
+DatasetOptions datasetOptions(const DatasetFlags& f, const SegmenterConfig& config) {
+  DatasetOptions options;
+  options.mask_nyu_border = !f.no_nyu_border;
+  // Split labels need each patch's finer class (label40/ or label13/ beside label8/).
+  options.fine_labels_folder = fineLabelsFolder(config.training.split_labels);
+  if (config.training.split_labels == SplitLabels::Nyu13 && !f.mats.empty())
+    throw Error("training.split_labels = nyu13: --mat gives NYU-40 classes only (use nyu40, or a "
+                "dataset folder with label13/)");
+  if (!f.nyu_rotations.empty()) options.nyu_rotations_file = f.nyu_rotations;
+  return options;
+}
+
+std::unique_ptr<LabeledInputs> LabeledInputs::open(const DatasetFlags& f,
+                                                   const DatasetOptions& options) {
+  auto all = std::unique_ptr<LabeledInputs>(new LabeledInputs);
+  std::vector<std::map<std::string, FrameListing>> listings;
+  for (const auto& dir : f.data) {
+    all->inputs_.push_back(LabeledInput::folder(dir, options));
+    all->sources_.push_back(dir);
+    all->from_mat_.push_back(false);
+    listings.push_back(loadFrameListing(dir));
+  }
+  for (const auto& mat : f.mats) {
+    all->inputs_.push_back(LabeledInput::mat(mat, f.nyu894_csv, options.nyu_rotations_file));
+    all->sources_.push_back(mat);
+    all->from_mat_.push_back(true);
+    listings.emplace_back();
+  }
+  std::map<std::string, std::size_t> input_of_name;
+  std::vector<std::string> collisions;
+  std::string description;
+  for (std::size_t k = 0; k < all->inputs_.size(); ++k) {
+    const std::vector<std::string> names = all->inputs_[k]->names();
+    for (std::size_t i = 0; i < names.size(); ++i) {
+      const auto [it, added] = input_of_name.emplace(names[i], k);
+      if (!added) {
+        collisions.push_back(names[i] + " (" + all->sources_[it->second] + " and " +
+                             all->sources_[k] + ")");
+      }
+      all->input_of_.push_back(k);
+      all->index_in_input_.push_back(i);
+      all->names_.push_back(names[i]);
+      const auto listed = listings[k].find(names[i]);
+      all->listings_.push_back(listed != listings[k].end() ? listed->second : FrameListing{});
+    }
+    description += (k ? " + " : "") + all->inputs_[k]->frames().description;
+  }
+  if (!collisions.empty()) {
+    std::string list;
+    for (std::size_t i = 0; i < collisions.size() && i < 10; ++i) list += (i ? ", " : "") + collisions[i];
+    if (collisions.size() > 10) list += ", ...";
+    throw Error(std::to_string(collisions.size()) +
+                " frame name(s) in more than one input (frames must be unique): " + list);
+  }
+  all->frames_.description = description;
+  all->frames_.count = all->names_.size();
+  all->frames_.load = [raw = all.get()](std::size_t i) {
+    if (i >= raw->names_.size()) {
+      throw Error(raw->frames_.description + ": frame " + std::to_string(i) + " of " +
+                  std::to_string(raw->names_.size()));
+    }
+    return raw->inputs_[raw->input_of_[i]]->frames().load(raw->index_in_input_[i]);
+  };
+  return all;
+}
+
+std::vector<std::string> LabeledInputs::scenes(int gap,
+                                               const std::vector<long>* nyu_test_indices) const {
+  std::vector<std::string> out(names_.size());
+  std::vector<std::size_t> nyu_frames;
+  std::vector<long> nyu_indices;
+  for (std::size_t i = 0; i < names_.size(); ++i) {
+    if (!listings_[i].scene.empty()) {
+      out[i] = "scene:" + listings_[i].scene;
+    } else if (listings_[i].nyu_index || from_mat_[input_of_[i]]) {
+      nyu_frames.push_back(i);
+      nyu_indices.push_back(listings_[i].nyu_index ? *listings_[i].nyu_index
+                                                   : static_cast<long>(index_in_input_[i]) + 1);
+    }
+  }
+  const std::vector<std::string> runs = nyu_test_indices
+                                            ? nyuSplitRunScenes(nyu_indices, *nyu_test_indices)
+                                            : nyuIndexRunScenes(nyu_indices, gap);
+  for (std::size_t k = 0; k < nyu_frames.size(); ++k) out[nyu_frames[k]] = runs[k];
+  return out;
 }
 
 ProgressBar::ProgressBar(std::string label) : label_(std::move(label)), tty_(isatty(2) != 0) {}

@@ -1,15 +1,23 @@
-// Shared plumbing of the findmug tools: number flags, labelled inputs, progress.
+// Shared plumbing of the findmug tools: number flags, labelled inputs (the
+// dataset flags --data/--mat/--nyu-rotations/... of findmug-train and
+// findmug-eval, several inputs as one), progress.
 // (Flags themselves are parsed by the CLI11 layer in cli/findmug_cli.hpp.)
 #pragma once
 
+#include <map>
 #include <memory>
 #include <optional>
 #include <string>
 #include <vector>
 
 #include "findmug/config.hpp"
+#include "findmug/cv_folds.hpp"
 #include "findmug/dataset.hpp"
 #include "findmug/training.hpp"
+
+namespace CLI {
+class App;
+}
 
 namespace findmug::tools {
 
@@ -27,11 +35,53 @@ class LabeledInput {
   static std::unique_ptr<LabeledInput> mat(const std::string& path, const std::string& nyu894_csv,
                                            const std::optional<std::string>& nyu_rotations = {});
   const LabeledFrames& frames() const { return frames_; }
+  // Frame names in index order ("0001".. for the .mat file).
+  std::vector<std::string> names() const;
 
  private:
   std::unique_ptr<DatasetFolder> folder_;
   std::unique_ptr<NyuMatFile> mat_;
   std::shared_ptr<const NyuRotations> rotations_;
+  LabeledFrames frames_;
+};
+
+// The flags naming labelled frames, the same in every tool that reads them.
+struct DatasetFlags {
+  std::vector<std::string> data;  // --data DIR (repeatable)
+  std::vector<std::string> mats;  // --mat FILE (repeatable)
+  std::string nyu894_csv, nyu_rotations;
+  bool no_nyu_border = false;
+};
+void addDatasetFlags(CLI::App& app, DatasetFlags& flags);
+// The folder-reading options those flags and the config ask for; throws
+// findmug::Error for a combination that cannot work (split labels nyu13 with --mat).
+DatasetOptions datasetOptions(const DatasetFlags& flags, const SegmenterConfig& config);
+
+// Every --data folder, then every --mat file, as one indexed collection of
+// frames (frames() numbers them in that order). Frame names must be unique
+// across the inputs: a name in two of them is refused with an error naming
+// the name and both inputs.
+class LabeledInputs {
+ public:
+  static std::unique_ptr<LabeledInputs> open(const DatasetFlags& flags,
+                                             const DatasetOptions& options);
+  const LabeledFrames& frames() const { return frames_; }
+  const std::string& nameOf(std::size_t frame) const { return names_[frame]; }
+  // The --data folder or --mat file frame i comes from.
+  const std::string& sourceOf(std::size_t frame) const { return sources_[input_of_[frame]]; }
+  // Each frame's scene (cv_folds.hpp): the `scene` column of its folder's
+  // frames.csv; else, for NYU frames (a frames.csv with `nyu_index`, or a
+  // --mat file), runs of NYU's split when `nyu_test_indices` is given, else
+  // NYU index runs with `gap`; "" when neither is known.
+  std::vector<std::string> scenes(int gap, const std::vector<long>* nyu_test_indices) const;
+
+ private:
+  std::vector<std::unique_ptr<LabeledInput>> inputs_;
+  std::vector<std::string> sources_;
+  std::vector<std::size_t> input_of_, index_in_input_;
+  std::vector<std::string> names_;
+  std::vector<FrameListing> listings_;  // per frame; empty when the folder lists nothing
+  std::vector<bool> from_mat_;
   LabeledFrames frames_;
 };
 

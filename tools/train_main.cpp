@@ -23,9 +23,8 @@ constexpr const char* kDescription =
     "to use every NYU frame, --set ground.source=gravity --nyu-rotations FILE.";
 
 struct TrainFlags {
-  std::vector<std::string> data, mats;
-  std::string out, nyu894_csv, nyu_rotations;
-  bool no_nyu_border = false;
+  findmug::tools::DatasetFlags dataset;
+  std::string out;
   findmug::cli::ConfigFlags config;
 };
 
@@ -33,65 +32,32 @@ int run(int argc, char** argv) {
   using namespace findmug;
   TrainFlags f;
   auto app = cli::makeApp("findmug-train", kDescription);
-  app->add_option("--data", f.data, "labelled dataset folder (repeatable)")
-      ->type_name("DIR")
-      ->allow_extra_args(false);
-  app->add_option("--mat", f.mats, "the NYU Depth V2 labelled .mat file (repeatable)")
-      ->type_name("FILE")
-      ->allow_extra_args(false);
+  tools::addDatasetFlags(*app, f.dataset);
   app->add_option("--out", f.out, "model file to write")
       ->required()
       ->type_name("MODEL")
       ->multi_option_policy(CLI::MultiOptionPolicy::TakeLast);
   cli::addConfigFlags(*app, f.config, "YAML config (segmenter settings)");
-  app->add_option("--nyu894-csv", f.nyu894_csv,
-                  "NYU 894-to-40 class map (CSV) for --mat (default: the installed one)")
-      ->type_name("FILE")
-      ->multi_option_policy(CLI::MultiOptionPolicy::TakeLast);
-  app->add_flag("--no-nyu-border", f.no_nyu_border,
-                "keep the white border of NYU frames (masked as void by default)");
-  app->add_option("--nyu-rotations", f.nyu_rotations,
-                  "NYU's camera_rotations_NYU.txt: every NYU frame's gravity")
-      ->type_name("FILE")
-      ->multi_option_policy(CLI::MultiOptionPolicy::TakeLast);
   if (auto code = cli::parse(*app, argc, argv)) return *code;
-  if (f.data.empty() && f.mats.empty()) {
+  if (f.dataset.data.empty() && f.dataset.mats.empty()) {
     std::cerr << "findmug-train: give at least one --data DIR or --mat FILE (see --help)\n";
     return 2;
   }
   const Config config = cli::configFrom(f.config);
   const Segmenter segmenter(config.segmenter, nullptr);
-  DatasetOptions options;
-  options.mask_nyu_border = !f.no_nyu_border;
-  // Split labels need each patch's finer class (label40/ or label13/ beside label8/).
-  options.fine_labels_folder = fineLabelsFolder(config.segmenter.training.split_labels);
-  if (config.segmenter.training.split_labels == SplitLabels::Nyu13 && !f.mats.empty())
-    throw Error("training.split_labels = nyu13: --mat gives NYU-40 classes only (use nyu40, or a "
-                "dataset folder with label13/)");
-  if (!f.nyu_rotations.empty()) options.nyu_rotations_file = f.nyu_rotations;
+  const DatasetOptions options = tools::datasetOptions(f.dataset, config.segmenter);
+  const auto input = tools::LabeledInputs::open(f.dataset, options);
 
   const auto start = std::chrono::steady_clock::now();
-  std::vector<FrameSample> samples;
-  int frames_total = 0;
-  std::vector<std::string> dropped;
-  std::vector<std::pair<std::string, std::string>> ground_methods;
-  std::vector<std::unique_ptr<tools::LabeledInput>> inputs;
-  for (const auto& dir : f.data) inputs.push_back(tools::LabeledInput::folder(dir, options));
-  for (const auto& mat : f.mats) {
-    inputs.push_back(tools::LabeledInput::mat(mat, f.nyu894_csv, options.nyu_rotations_file));
-  }
-  for (const auto& input : inputs) {
-    tools::ProgressBar bar("features " + input->frames().description);
-    ExtractionReport report;
-    auto part = extractSamples(input->frames(), segmenter, report,
-                               [&](int done, int total) { bar.update(done, total); });
-    bar.finish();
-    frames_total += report.frames_total;
-    dropped.insert(dropped.end(), report.dropped.begin(), report.dropped.end());
-    ground_methods.insert(ground_methods.end(), report.ground_methods.begin(),
-                          report.ground_methods.end());
-    for (auto& s : part) samples.push_back(std::move(s));
-  }
+  tools::ProgressBar bar_features("features " + input->frames().description);
+  ExtractionReport report;
+  std::vector<FrameSample> samples =
+      extractSamples(input->frames(), segmenter, report,
+                     [&](int done, int total) { bar_features.update(done, total); });
+  bar_features.finish();
+  const int frames_total = report.frames_total;
+  const std::vector<std::string>& dropped = report.dropped;
+  const auto& ground_methods = report.ground_methods;
   if (samples.empty()) throw Error("no usable frame in the given --data/--mat inputs");
 
   std::vector<std::size_t> all(samples.size());

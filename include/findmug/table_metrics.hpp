@@ -29,6 +29,10 @@ namespace findmug {
 struct TableMetricsConfig {
   int min_instance_points = 1000;  // smaller ground-truth table components are not instances
   float min_iou = 0.5f;            // image-mask IoU for a detection to match an instance
+  // "Searchable" tables (see searchableTables below).
+  float searchable_min_top_area_m2 = 0.15f;  // a true table's visible top at least this
+  float searchable_min_overlap = 0.5f;       // top overlap for a detection to match a table
+  float searchable_max_height_error_m = 0.15f;  // and their top heights at most this apart
 };
 
 // Throws findmug::Error naming `table_metrics.KEY` when a setting is out of range.
@@ -78,6 +82,57 @@ class TableMetrics {
  private:
   int truth_ = 0, detected_ = 0;
   std::vector<float> height_errors_, centroid_errors_, axis_errors_;
+};
+
+// ---------------------------------------------------------------------------
+// Tables a robot can search: the true instances whose visible top
+// (TableCluster::top_area_m2 of the ground-truth points, in the ground frame)
+// is at least `searchable_min_top_area_m2`. A detection matches a true table
+// (any instance, searchable or not) by top overlap: the area common to the two
+// tops' convex hulls on the floor, over the smaller hull's area, at least
+// `searchable_min_overlap`, with top heights within
+// `searchable_max_height_error_m`; one-to-one, greedily by decreasing
+// overlap. Recall = searchable tables matched / searchable tables. Precision
+// = detections matching a searchable table / detections, leaving out those
+// that match a true table too small to be searchable (neither right nor
+// wrong). A detection matching no true table is a false table.
+
+// Area common to two convex polygons (CCW or CW), by clipping one with the other.
+double convexOverlapArea(const std::vector<Eigen::Vector2f>& a,
+                         const std::vector<Eigen::Vector2f>& b);
+// Common area over the smaller top's hull area (polygonArea of table_map.hpp) (0 when either is degenerate).
+double topOverlap(const TableCluster& a, const TableCluster& b);
+
+// One frame's searchable-table figures (see above).
+struct SearchableFrame {
+  int searchable = 0;          // true tables with a large enough top
+  int searchable_matched = 0;  // of them, matched by a detection
+  int detected = 0;            // all detections
+  int detected_small = 0;      // detections matching a true table that is not searchable
+  int false_tables = 0;        // detections matching no true table
+};
+SearchableFrame measureSearchableTables(const std::vector<TableCluster>& truth,
+                                        const std::vector<TableCluster>& detected,
+                                        const TableMetricsConfig& config);
+
+// Sums over frames.
+class SearchableMetrics {
+ public:
+  void add(const SearchableFrame& frame);
+  int frames() const { return frames_; }
+  int searchable() const { return searchable_; }
+  int matched() const { return matched_; }
+  int detected() const { return detected_; }
+  int detectedSmall() const { return detected_small_; }
+  int falseTables() const { return false_tables_; }
+  int framesWithFalseTable() const { return frames_with_false_; }
+  double precision() const;             // NaN when no detection counts
+  double recall() const;                // NaN without searchable tables
+  double falseTableFrameShare() const;  // NaN without frames
+
+ private:
+  int frames_ = 0, searchable_ = 0, matched_ = 0, detected_ = 0, detected_small_ = 0,
+      false_tables_ = 0, frames_with_false_ = 0;
 };
 
 // ---------------------------------------------------------------------------

@@ -138,8 +138,8 @@ TEST(Cli, TrainAndEvalRejectBadFlagsWithCode2NamingThem) {
       {eval + " --data /tmp --folds 1", "--folds: must be an integer >= 2, got '1'"},
       {eval + " --data /tmp --folds five", "--folds: must be an integer >= 2, got 'five'"},
       {eval + " --data /tmp --folds 2.5", "--folds: must be an integer >= 2, got '2.5'"},
-      {eval + " --data /tmp --mat x.mat", "--data excludes --mat"},
-      {eval + " --folds 3", "give one of --data DIR or --mat FILE"},
+      {eval + " --folds 3", "give --data DIR or --mat FILE"},
+      {eval + " --data /tmp --folds-by rooms", "--folds-by"},
   };
   for (const auto& c : cases) {
     const ProgramRun r = runProgram(c.command);
@@ -150,14 +150,14 @@ TEST(Cli, TrainAndEvalRejectBadFlagsWithCode2NamingThem) {
 }
 
 TEST(Cli, TrainAndEvalReadBothFlagFormsAndLastValueWins) {
-  // --name=value works like --name value, and a value given twice takes the last one (as the
-  // hand-written parser did); the run then fails on the dataset folder that is really used.
+  // --name=value works like --name value. --data is repeatable (all folders are read, in
+  // order): the run fails on the first folder, which does not exist.
   const ProgramRun r =
       runProgram(std::string(FINDMUG_EVAL_EXE) +
                  " --data /nonexistent/first --data=/nonexistent/second --folds=3");
   EXPECT_EQ(r.exit_code, 1) << r.err;
-  EXPECT_TRUE(has(r.err, "/nonexistent/second")) << r.err;
-  EXPECT_FALSE(has(r.err, "/nonexistent/first")) << r.err;
+  EXPECT_TRUE(has(r.err, "/nonexistent/first")) << r.err;
+  EXPECT_FALSE(has(r.err, "/nonexistent/second")) << r.err;
 }
 
 // findmug-eval reads findmugd's file without knowing the daemon's keys: the

@@ -85,7 +85,7 @@ TEST(ToolsEval, CrossValidationBeatsMajorityBaselineWidely) {
   test::TempDir tmp;
   const auto result =
       run(std::string(FINDMUG_EVAL_EXE) + " --data " + nyu.string() +
-          " --folds 5 --set ground.source=floor_labels --json " + tmp.str("eval.json") +
+          " --folds 5 --folds-by blocks --set ground.source=floor_labels --json " + tmp.str("eval.json") +
           " --out " + tmp.str("pictures"));
   ASSERT_EQ(result.exit_code, 0) << result.output;
   EXPECT_THAT(result.output, HasSubstr("class avg"));
@@ -147,7 +147,7 @@ TEST(ToolsEval, RegionFeaturesBeatTheFourteenDimensionalPipelineOnAllFrames) {
   // (tables.table_weight=1): the table weight (perf-log §1f) lifts the
   // 14-D pipeline's class average by a point and the regions' by none.
   const std::string common = std::string(FINDMUG_EVAL_EXE) + " --data " + nyu.string() +
-                             " --folds 5 --set ground.source=gravity --set tables.table_weight=1" +
+                             " --folds 5 --folds-by blocks --set ground.source=gravity --set tables.table_weight=1" +
                              " --nyu-rotations " + (meta / "camera_rotations_NYU.txt").string();
   const auto base = run(common + " --set features.regions=false --json " + tmp.str("base.json"));
   ASSERT_EQ(base.exit_code, 0) << base.output;
@@ -182,7 +182,7 @@ TEST(ToolsEval, SceneFeaturesBeatRegionFeaturesOnAllFrames) {
   FINDMUG_REQUIRE_DATA(meta, "nyuv2_meta");
   test::TempDir tmp;
   const std::string common = std::string(FINDMUG_EVAL_EXE) + " --data " + nyu.string() +
-                             " --folds 5 --set ground.source=gravity --nyu-rotations " +
+                             " --folds 5 --folds-by blocks --set ground.source=gravity --nyu-rotations " +
                              (meta / "camera_rotations_NYU.txt").string() +
                              " --set features.regions=true";
   const auto regions =
@@ -240,7 +240,7 @@ TEST(ToolsEval, GravityGroundUsesEveryFrameAndTablesAreMeasured) {
   FINDMUG_REQUIRE_DATA(rotations, "nyuv2_meta/camera_rotations_NYU.txt");
   test::TempDir tmp;
   const auto result = run(std::string(FINDMUG_EVAL_EXE) + " --data " + nyu.string() +
-                          " --folds 5 --set ground.source=gravity --nyu-rotations " +
+                          " --folds 5 --folds-by blocks --set ground.source=gravity --nyu-rotations " +
                           rotations.string() + " --json " + tmp.str("eval.json"));
   ASSERT_EQ(result.exit_code, 0) << result.output;
   EXPECT_THAT(result.output, HasSubstr("frames used 31 of 31"));
@@ -286,7 +286,7 @@ TEST(ToolsEval, TableDecisionsBeatArgmaxTablesOnAllFrames) {
   FINDMUG_REQUIRE_DATA(meta, "nyuv2_meta");
   test::TempDir tmp;
   const std::string common = std::string(FINDMUG_EVAL_EXE) + " --data " + nyu.string() +
-                             " --folds 5 --set ground.source=gravity --set features.regions=true" +
+                             " --folds 5 --folds-by blocks --set ground.source=gravity --set features.regions=true" +
                              " --nyu-rotations " + (meta / "camera_rotations_NYU.txt").string();
   const auto before = run(common + " --set tables.table_weight=1 --set tables.min_top_area_m2=0" +
                           " --set tables.min_horizontal_share=0 --json " + tmp.str("before.json"));

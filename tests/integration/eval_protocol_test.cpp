@@ -1,0 +1,187 @@
+// findmug-eval's evaluation protocol on the 46 shared NYU frames
+// (nyuv2_labeled + nyuv2_labeled_extra, two --data folders): scene folds that
+// never split a scene, the shipped configuration well above the majority
+// baseline, searchable tables reported, and a small learning curve written.
+//
+// Bars (docs/results-h-evalproto.md, 5-fold scene CV, forest seeds 42 / 1042 /
+// 2042; this test runs the default seed 42): see kClassAverageMargin and kGlobalMargin.
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <array>
+#include <cstdio>
+#include <fstream>
+#include <map>
+#include <regex>
+#include <set>
+#include <sstream>
+
+#include "test_data.hpp"
+
+namespace findmug {
+namespace {
+
+using ::testing::HasSubstr;
+
+// Measured with scene folds from NYU's split (docs/results-h-evalproto.md):
+// forest+MRF class average 0.487 / 0.487 / 0.492 for forest seeds 42 / 1042 /
+// 2042 against the majority baseline's 0.125 (8 classes present), global
+// 0.578 / 0.580 / 0.582 against 0.447 (every pixel "wall"). The bars ask for
+// baseline + 0.30 and + 0.08: about 0.05 below the figures, ten times their
+// spread over seeds, so a change that loses 0.05 (a broken feature, forest or
+// training split) fails, not a seed.
+constexpr double kClassAverageMargin = 0.30;
+constexpr double kGlobalMargin = 0.08;
+
+struct RunResult {
+  int exit_code = -1;
+  std::string output;
+};
+
+RunResult run(const std::string& command) {
+  RunResult r;
+  FILE* pipe = popen((command + " 2>&1").c_str(), "r");
+  if (!pipe) return r;
+  std::array<char, 4096> buf;
+  while (std::fgets(buf.data(), buf.size(), pipe)) r.output += buf.data();
+  const int status = pclose(pipe);
+  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+  return r;
+}
+
+std::string readFile(const std::filesystem::path& p) {
+  std::ifstream in(p);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+double number(const std::string& text, const std::string& key, std::size_t from = 0) {
+  std::smatch m;
+  const std::regex re("\"" + key + "\": ([0-9.eE+-]+|null)");
+  const std::string rest = text.substr(from);
+  if (!std::regex_search(rest, m, re) || m[1] == "null") return -1.0;
+  return std::stod(m[1]);
+}
+
+TEST(EvalProtocol, SceneFoldsOverBothSharedFoldersBeatTheBaselineWidely) {
+  FINDMUG_REQUIRE_DATA(labeled, "nyuv2_labeled");
+  FINDMUG_REQUIRE_DATA(extra, "nyuv2_labeled_extra");
+  FINDMUG_REQUIRE_DATA(rotations, "nyuv2_meta/camera_rotations_NYU.txt");
+  FINDMUG_REQUIRE_DATA(split, "nyuv2_meta/split_test_indices.txt");
+  test::TempDir tmp;
+  const auto result = run(
+      std::string(FINDMUG_EVAL_EXE) + " --data " + labeled.string() + " --data " +
+      extra.string() + " --folds 5 --set ground.source=gravity --nyu-rotations " +
+      rotations.string() + " --nyu-split " + split.string() +
+      " --set features.regions=true --set features.scene=true --json " +
+      tmp.str("eval.json") + " --learning-curve " + tmp.str("curve") +
+      " --curve-sizes 5,10 --curve-seeds 1");
+  ASSERT_EQ(result.exit_code, 0) << result.output;
+  EXPECT_THAT(result.output, HasSubstr("searchable tables"));
+  const std::string json = readFile(tmp.path() / "eval.json");
+  EXPECT_EQ(number(json, "frames_used"), 46.0);
+  EXPECT_THAT(json, HasSubstr("\"folds\": {\"rule\": \"scenes\", \"nyu_scenes\": \"runs of NYU's "
+                              "train/test split"));
+
+  // Every test frame once, every scene in exactly one fold.
+  const std::regex fold_re(R"re(\{"fold": (\d+), "train_frames": (\d+), "test": \[([^\]]*)\])re");
+  const std::regex entry_re(R"re(\{"frame": "([^"]+)", "scene": "([^"]+)"\})re");
+  std::map<std::string, std::set<int>> folds_of_scene;
+  std::map<std::string, std::string> scene_of;
+  std::map<std::string, int> fold_of;
+  int folds = 0;
+  for (std::sregex_iterator f(json.begin(), json.end(), fold_re), end; f != end; ++f) {
+    ++folds;
+    const int fold = std::stoi((*f)[1]);
+    const int train = std::stoi((*f)[2]);
+    const std::string tests = (*f)[3];
+    int test_count = 0;
+    for (std::sregex_iterator e(tests.begin(), tests.end(), entry_re); e != end; ++e) {
+      ++test_count;
+      EXPECT_EQ(fold_of.count((*e)[1]), 0u) << (*e)[1] << " tested twice";
+      fold_of[(*e)[1]] = fold;
+      scene_of[(*e)[1]] = (*e)[2];
+      folds_of_scene[(*e)[2]].insert(fold);
+    }
+    EXPECT_EQ(train + test_count, 46) << "fold " << fold;
+  }
+  EXPECT_EQ(folds, 5);
+  EXPECT_EQ(fold_of.size(), 46u);
+  for (const auto& [scene, in] : folds_of_scene) EXPECT_EQ(in.size(), 1u) << "scene " << scene;
+  // NYU 28 (nyuv2_labeled) and 29 (nyuv2_labeled_extra) are one scene across the folders;
+  // 1 and 2 one scene; 433 its own.
+  EXPECT_EQ(scene_of["0028"], scene_of["0029"]);
+  EXPECT_EQ(fold_of["0028"], fold_of["0029"]);
+  EXPECT_EQ(scene_of["0001"], scene_of["0002"]);
+  EXPECT_NE(scene_of["0433"], scene_of["0125"]);
+  // 58 is an NYU train index: 56-57 and 59-63 are two rooms; 60 and 63 one.
+  EXPECT_NE(scene_of["0057"], scene_of["0059"]);
+  EXPECT_EQ(scene_of["0060"], scene_of["0063"]);
+
+  // Accuracy against the majority baseline from the confusion's rows.
+  const auto mrf_at = json.find("\"mrf\": {");
+  ASSERT_NE(mrf_at, std::string::npos);
+  const double class_average = number(json, "class_average", mrf_at);
+  const double global = number(json, "global", mrf_at);
+  const auto confusion_at = json.find("\"confusion\": [", mrf_at);
+  std::string rest = json.substr(confusion_at + 14);
+  const std::regex row(R"(\[([0-9, ]+)\])");
+  std::vector<double> totals;
+  for (std::sregex_iterator it(rest.begin(), rest.end(), row), end; it != end && totals.size() < 8;
+       ++it) {
+    double sum = 0;
+    std::stringstream cells((*it)[1].str());
+    std::string cell;
+    while (std::getline(cells, cell, ',')) sum += std::stod(cell);
+    totals.push_back(sum);
+  }
+  ASSERT_EQ(totals.size(), 8u);
+  double all = 0, largest = 0;
+  int present = 0;
+  for (double t : totals) {
+    all += t;
+    largest = std::max(largest, t);
+    present += t > 0;
+  }
+  std::printf("scene CV: class avg %.3f (baseline %.3f), global %.3f (baseline %.3f)\n",
+              class_average, 1.0 / present, global, largest / all);
+  EXPECT_GT(class_average, 1.0 / present + kClassAverageMargin);
+  EXPECT_GT(global, largest / all + kGlobalMargin);
+
+  // Searchable tables: the 46 frames hold some; the figures are reported.
+  const auto searchable_at = json.find("\"searchable_tables\": {");
+  ASSERT_NE(searchable_at, std::string::npos);
+  EXPECT_EQ(number(json, "frames", searchable_at), 46.0);
+  EXPECT_GT(number(json, "truth", searchable_at), 5.0);
+  EXPECT_GE(number(json, "false_table_frame_share", searchable_at), 0.0);
+
+  // The learning curve: one row per size, N as asked, a trend per figure, the plot.
+  const std::string csv = readFile(tmp.path() / "curve" / "learning_curve.csv");
+  std::vector<std::string> lines;
+  std::stringstream in(csv);
+  for (std::string line; std::getline(in, line);) lines.push_back(line);
+  ASSERT_EQ(lines.size(), 3u) << csv;
+  EXPECT_EQ(lines[1].rfind("5,5.000000,0,42,", 0), 0u) << lines[1];
+  EXPECT_EQ(lines[2].rfind("10,10.000000,0,42,", 0), 0u) << lines[2];
+  const std::string trend = readFile(tmp.path() / "curve" / "learning_curve_trend.csv");
+  EXPECT_THAT(trend, HasSubstr("class_average,"));
+  const std::string svg = readFile(tmp.path() / "curve" / "learning_curve.svg");
+  EXPECT_THAT(svg, HasSubstr("ln N"));
+}
+
+TEST(EvalProtocol, AFrameNameInTwoFoldersIsRefusedNamingIt) {
+  FINDMUG_REQUIRE_DATA(labeled, "nyuv2_labeled");
+  const auto result = run(std::string(FINDMUG_EVAL_EXE) + " --data " + labeled.string() +
+                          " --data " + labeled.string() + " --folds 5");
+  EXPECT_EQ(result.exit_code, 1) << result.output;
+  EXPECT_THAT(result.output, HasSubstr("frame name(s) in more than one input"));
+  EXPECT_THAT(result.output, HasSubstr("0001 (" + labeled.string()));
+  const auto train = run(std::string(FINDMUG_TRAIN_EXE) + " --data " + labeled.string() +
+                         " --data " + labeled.string() + " --out /dev/null");
+  EXPECT_EQ(train.exit_code, 1) << train.output;
+  EXPECT_THAT(train.output, HasSubstr("0028 (" + labeled.string()));
+}
+
+}  // namespace
+}  // namespace findmug
