@@ -63,8 +63,12 @@ int run(int argc, char** argv) {
   const Segmenter segmenter(config.segmenter, nullptr);
   DatasetOptions options;
   options.mask_nyu_border = !f.no_nyu_border;
-  // Split labels need each patch's finer class (label40/ or label13/ beside label8/).
-  options.fine_labels_folder = fineLabelsFolder(config.segmenter.training.split_labels);
+  // Split labels and internal classes need each patch's finer class (label40/ or
+  // label13/ beside label8/).
+  options.fine_labels_folder = fineLabelsFolder(config.segmenter);
+  if (config.segmenter.learner.classes == ClassScheme::Nyu13 && !f.mats.empty())
+    throw Error("learner.classes = nyu13: --mat gives NYU-40 classes only (use nyu40, or a "
+                "dataset folder with label13/)");
   if (config.segmenter.training.split_labels == SplitLabels::Nyu13 && !f.mats.empty())
     throw Error("training.split_labels = nyu13: --mat gives NYU-40 classes only (use nyu40, or a "
                 "dataset folder with label13/)");
@@ -125,8 +129,16 @@ int run(int argc, char** argv) {
     std::printf("    %-8s %7d\n", std::string(kLabelNames[c]).c_str(), per_class[c]);
   }
   const auto& p = config.segmenter.forest;
-  std::printf("  forest           %d trees, max depth %d, seed %llu\n", p.num_trees, p.max_depth,
-              static_cast<unsigned long long>(p.seed));
+  if (forest.learnerKind() == LearnerKind::XGBoost) {
+    const auto& x = forest.xgboostParams();
+    std::printf("  xgboost          %d rounds, max depth %d, eta %g, seed %d\n", x.rounds,
+                x.max_depth, x.eta, x.seed);
+  } else {
+    std::printf("  forest           %d trees, max depth %d, seed %llu\n", p.num_trees, p.max_depth,
+                static_cast<unsigned long long>(p.seed));
+  }
+  std::printf("  classes          %s (%d internal classes)\n",
+              forest.internalClasses().scheme.c_str(), forest.internalClasses().count());
   std::printf("  features         %d columns%s%s%s\n", forest.dim(),
               config.segmenter.regions.enabled ? " (with region features)" : "",
               config.segmenter.scene.enabled ? " (with scene features)" : "",
