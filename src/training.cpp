@@ -273,8 +273,9 @@ InternalMap internalMapOf(const TrainingSet& set, ClassScheme scheme) {
   return map;
 }
 
-// Replaces a set's fine split labels with internal class ids.
-void applyInternalMap(TrainingSet& set, const InternalMap& map) {
+// Replaces a set's fine split labels with internal class ids; class weighting
+// then balances the internal classes or the labels (learner.class_weight).
+void applyInternalMap(TrainingSet& set, const InternalMap& map, ClassWeight weight) {
   for (std::size_t i = 0; i < set.labels.size(); ++i) {
     const int id = map.id_of_pair[static_cast<std::size_t>(pairKey(set.labels[i], set.split_labels[i]))];
     if (id < 0)
@@ -283,7 +284,7 @@ void applyInternalMap(TrainingSet& set, const InternalMap& map) {
     set.split_labels[i] = static_cast<std::uint8_t>(id);
   }
   set.split_classes = map.classes.count();
-  set.weight_by_split_labels = true;
+  set.weight_by_split_labels = weight == ClassWeight::Classes;
 }
 
 SplitLabels fineKindOf(ClassScheme scheme) {
@@ -366,7 +367,7 @@ RandomForest trainModel(const std::vector<const FrameSample*>& frames,
   InternalMap map;
   if (internal) {
     map = internalMapOf(first_set, config.learner.classes);
-    applyInternalMap(first_set, map);
+    applyInternalMap(first_set, map, config.learner.class_weight);
   }
   auto trainFirst = [&](const TrainingSet& set, const ForestParams& params) {
     if (boosted)
@@ -405,7 +406,7 @@ RandomForest trainModel(const std::vector<const FrameSample*>& frames,
       TrainingSet set = makeTrainingSet(train, weighting, split);
       if (set.labels.empty()) throw Error("trainModel: cross-fitting group " + std::to_string(g) +
                                           " leaves no labelled segment to train on");
-      if (internal) applyInternalMap(set, map);
+      if (internal) applyInternalMap(set, map, config.learner.class_weight);
       const RandomForest forest = trainFirst(set, params);
       for (std::size_t k = 0; k < held_out.size(); ++k)
         probs[held_index[k]] = predictSample(forest, *held_out[k], first_only);
@@ -439,7 +440,7 @@ RandomForest trainModel(const std::vector<const FrameSample*>& frames,
     }
   }
   if (split != SplitLabels::Labels) set.split_classes = splitClasses(split);
-  if (internal) applyInternalMap(set, map);
+  if (internal) applyInternalMap(set, map, config.learner.class_weight);
   ForestParams params = config.forest;
   params.seed += 500;
   RandomForest second = RandomForest::train(set, params);

@@ -196,7 +196,14 @@ RandomForest RandomForest::trainBoosted(const TrainingSet& data, const InternalC
                     " is not finite");
     labels[i] = static_cast<float>(ids[i]);
     weights[i] = data.weights.empty() ? 1.0f : data.weights[i];
-    class_total[ids[i]] += weights[i];
+  }
+  // The classes weighting balances: the internal ones (weight_by_split_labels)
+  // or the labels, as the forest does.
+  const std::vector<std::uint8_t>& balanced =
+      internal && data.weight_by_split_labels ? data.split_labels : data.labels;
+  for (std::size_t i = 0; i < n; ++i) {
+    if (balanced[i] >= class_total.size()) class_total.resize(balanced[i] + 1u, 0.0);
+    class_total[balanced[i]] += weights[i];
   }
   if (class_weighting) {
     // The forest's inverse class frequency: every present class carries the same total weight.
@@ -207,7 +214,7 @@ RandomForest RandomForest::trainBoosted(const TrainingSet& data, const InternalC
       present += c > 0.0;
     }
     for (std::size_t i = 0; i < n; ++i)
-      weights[i] = static_cast<float>(weights[i] * (total / (present * class_total[ids[i]])));
+      weights[i] = static_cast<float>(weights[i] * (total / (present * class_total[balanced[i]])));
   }
 
   DMatrixGuard dtrain;

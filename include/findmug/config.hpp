@@ -68,9 +68,19 @@ enum class ClassScheme {
 };
 const char* classSchemeName(ClassScheme scheme);  // "labels", "nyu13", "nyu40"
 
+// What forest.class_weighting balances when the model has internal classes
+// (learner.class_weight; training only, not recorded in the model).
+enum class ClassWeight {
+  Labels,   // every label carries the same total weight, its internal classes
+            // in proportion to their frequency (the 8-class model's balance)
+  Classes,  // every internal class carries the same total weight (a label made
+            // of many internal classes, e.g. unknown, then weighs more)
+};
+
 struct LearnerOptions {
-  LearnerKind kind = LearnerKind::Forest;  // learner.kind
+  LearnerKind kind = LearnerKind::Forest;     // learner.kind
   ClassScheme classes = ClassScheme::Labels;  // learner.classes
+  ClassWeight class_weight = ClassWeight::Labels;  // learner.class_weight
 };
 
 struct SegmenterConfig {

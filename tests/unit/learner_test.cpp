@@ -278,6 +278,36 @@ TEST(LearnerXGBoost, InternalClassesMergeIntoLabelsAndRoundTrip) {
   expectSamePredictions(model, loaded, probe.features);
 }
 
+// Class weighting balances the internal classes or the labels: on a set whose
+// internal classes differ in size the two give different boosters.
+TEST(LearnerXGBoost, ClassWeightingByInternalClassesOrLabels) {
+  FineSet fine = makeFineBlobs(2, 12, 1, "nyu13");
+  TrainingSet& set = fine.set;
+  // Keep a third of internal class 0's samples (label 0 keeps all of class 8's).
+  TrainingSet uneven = set;
+  uneven.features.clear();
+  uneven.labels.clear();
+  uneven.split_labels.clear();
+  int seen = 0;
+  for (std::size_t i = 0; i < set.features.size(); ++i) {
+    if (set.split_labels[i] == 0 && seen++ % 3 != 0) continue;
+    uneven.features.push_back(set.features[i]);
+    uneven.labels.push_back(set.labels[i]);
+    uneven.split_labels.push_back(set.split_labels[i]);
+  }
+  uneven.weight_by_split_labels = true;
+  const auto by_classes =
+      RandomForest::trainBoosted(uneven, fine.classes, smallBooster(), true, 1);
+  uneven.weight_by_split_labels = false;
+  const auto by_labels = RandomForest::trainBoosted(uneven, fine.classes, smallBooster(), true, 1);
+  EXPECT_NE(by_classes.id(), by_labels.id());
+  // Without class weighting the flag changes nothing.
+  const auto plain_a = RandomForest::trainBoosted(uneven, fine.classes, smallBooster(), false, 1);
+  uneven.weight_by_split_labels = true;
+  const auto plain_b = RandomForest::trainBoosted(uneven, fine.classes, smallBooster(), false, 1);
+  EXPECT_EQ(plain_a.id(), plain_b.id());
+}
+
 TEST(LearnerXGBoost, RefusesBadParameters) {
   const TrainingSet set = labelsOnly(makeFineBlobs(1, 5, 1, "labels").set);
   XGBoostParams p = smallBooster();
@@ -442,6 +472,9 @@ TEST(LearnerConfig, SettingsParseAndUnsupportedCombinationsAreRefused) {
   EXPECT_EQ(c.segmenter.xgboost.seed, 9);
   EXPECT_EQ(SegmenterConfig{}.learner.kind, LearnerKind::Forest);
   EXPECT_EQ(SegmenterConfig{}.learner.classes, ClassScheme::Labels);
+  EXPECT_EQ(SegmenterConfig{}.learner.class_weight, ClassWeight::Labels);
+  EXPECT_EQ(parseConfig("learner:\n  class_weight: classes\n", "a.yaml").segmenter.learner.class_weight,
+            ClassWeight::Classes);
   auto error = [](const std::string& yaml) {
     try {
       parseConfig(yaml, "a.yaml");
@@ -452,6 +485,7 @@ TEST(LearnerConfig, SettingsParseAndUnsupportedCombinationsAreRefused) {
   };
   EXPECT_THAT(error("learner:\n  kind: svm\n"), HasSubstr("learner.kind"));
   EXPECT_THAT(error("learner:\n  classes: nyu894\n"), HasSubstr("learner.classes"));
+  EXPECT_THAT(error("learner:\n  class_weight: pixels\n"), HasSubstr("learner.class_weight"));
   EXPECT_THAT(error("xgboost:\n  eta: 0\n"), HasSubstr("xgboost.eta"));
   EXPECT_THAT(error("xgboost:\n  rounds: 0\n"), HasSubstr("xgboost.rounds"));
   EXPECT_THAT(error("learner:\n  kind: xgboost\nfeatures:\n  context: true\n"),
