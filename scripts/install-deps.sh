@@ -14,6 +14,8 @@ packages=(
   libspdlog-dev libfmt-dev libyaml-cpp-dev libsystemd-dev systemd
   # image and data formats
   libpng-dev libjpeg-dev zlib1g-dev libdeflate-dev libhdf5-dev libtiff-dev
+  # the gradient-boosted learner (learner.kind = xgboost)
+  libxgboost-dev
   # tests and benchmarks
   libgtest-dev libgmock-dev libbenchmark-dev
   # command-line flags of the programs

@@ -16,6 +16,18 @@
 
 namespace findmug {
 
+const char* classSchemeName(ClassScheme scheme) {
+  switch (scheme) {
+    case ClassScheme::Nyu13:
+      return "nyu13";
+    case ClassScheme::Nyu40:
+      return "nyu40";
+    case ClassScheme::Labels:
+      break;
+  }
+  return "labels";
+}
+
 namespace {
 
 // One named setting of the segmenter (the shared mechanism, settings.hpp).
@@ -57,6 +69,11 @@ CoreSetting floatSetting(std::string key, std::function<float&(SegmenterConfig&)
 CoreSetting intSetting(std::string key, std::function<int&(SegmenterConfig&)> field, long long lo,
                        long long hi) {
   return integerSetting<SegmenterConfig, int>(std::move(key), std::move(field), lo, hi);
+}
+
+CoreSetting doubleSetting(std::string key, std::function<double&(SegmenterConfig&)> field,
+                          double lo, double hi) {
+  return numberSetting<SegmenterConfig, double>(std::move(key), std::move(field), lo, hi);
 }
 
 CoreSetting boolSetting(std::string key, std::function<bool&(SegmenterConfig&)> field) {
@@ -163,6 +180,27 @@ const std::vector<CoreSetting>& settings() {
       boolSetting("forest.class_weighting",
                   [](C& c) -> bool& { return c.forest.class_weighting; }),
       intSetting("forest.num_threads", [](C& c) -> int& { return c.forest.num_threads; }, 0, 256),
+      enumSetting<LearnerKind>("learner.kind", [](C& c) -> LearnerKind& { return c.learner.kind; },
+                               {{"forest", LearnerKind::Forest}, {"xgboost", LearnerKind::XGBoost}}),
+      enumSetting<ClassScheme>("learner.classes",
+                               [](C& c) -> ClassScheme& { return c.learner.classes; },
+                               {{"labels", ClassScheme::Labels},
+                                {"nyu13", ClassScheme::Nyu13},
+                                {"nyu40", ClassScheme::Nyu40}}),
+      enumSetting<ClassWeight>("learner.class_weight",
+                               [](C& c) -> ClassWeight& { return c.learner.class_weight; },
+                               {{"labels", ClassWeight::Labels}, {"classes", ClassWeight::Classes}}),
+      intSetting("xgboost.rounds", [](C& c) -> int& { return c.xgboost.rounds; }, 1, 10000),
+      intSetting("xgboost.max_depth", [](C& c) -> int& { return c.xgboost.max_depth; }, 1, 30),
+      doubleSetting("xgboost.eta", [](C& c) -> double& { return c.xgboost.eta; }, 1e-6, 1),
+      doubleSetting("xgboost.subsample", [](C& c) -> double& { return c.xgboost.subsample; },
+                    1e-3, 1),
+      doubleSetting("xgboost.colsample", [](C& c) -> double& { return c.xgboost.colsample; },
+                    1e-3, 1),
+      doubleSetting("xgboost.min_child_weight",
+                    [](C& c) -> double& { return c.xgboost.min_child_weight; }, 0, 1e6),
+      doubleSetting("xgboost.lambda", [](C& c) -> double& { return c.xgboost.lambda; }, 0, 1e6),
+      intSetting("xgboost.seed", [](C& c) -> int& { return c.xgboost.seed; }, 0, 2147483647),
       enumSetting<SampleWeighting>(
           "training.sample_weight", [](C& c) -> SampleWeighting& { return c.training.sample_weight; },
           {{"patches", SampleWeighting::Patches},
@@ -316,6 +354,15 @@ void validateConsistency(const Config& config, const std::string& origin) {
                 ") must exceed tables.safety_distance_m (" +
                 formatDouble(c.tables.safety_distance_m) +
                 "): from a search position the arm must reach past the table edge");
+  }
+  if (c.learner.classes != ClassScheme::Labels && c.training.split_labels != SplitLabels::Labels) {
+    throw Error(origin + ": learner.classes = " + classSchemeName(c.learner.classes) +
+                " cannot be combined with training.split_labels (the internal classes already "
+                "choose the splits); set training.split_labels = labels");
+  }
+  if (c.learner.kind == LearnerKind::XGBoost && c.context.enabled) {
+    throw Error(origin + ": learner.kind = xgboost has no auto-context stage; set "
+                "features.context = false or learner.kind = forest");
   }
   if (c.tables.min_cluster_points > c.tables.max_cluster_points) {
     throw Error(origin + ": tables.min_cluster_points must not exceed tables.max_cluster_points");

@@ -8,6 +8,7 @@
 
 #include "findmug/error.hpp"
 #include "forest_format.hpp"
+#include "xgboost_learner.hpp"
 
 namespace findmug {
 
@@ -32,6 +33,58 @@ void forest_format::validateParams(const ForestParams& p, const std::string& whe
   if (!(p.bagging_fraction > 0.0 && p.bagging_fraction <= 1.0))
     fail("bagging_fraction", std::to_string(p.bagging_fraction), "expected in (0, 1]");
   if (p.num_threads < 0) fail("num_threads", std::to_string(p.num_threads), "expected >= 0");
+}
+
+const char* learnerKindName(LearnerKind kind) {
+  return kind == LearnerKind::XGBoost ? "xgboost" : "forest";
+}
+
+InternalClasses labelClasses() {
+  InternalClasses out;
+  out.scheme = "labels";
+  for (int c = 0; c < kNumLabels; ++c) {
+    out.names.emplace_back(kLabelNames[c]);
+    out.to_label.push_back(static_cast<std::uint8_t>(c));
+  }
+  return out;
+}
+
+void forest_format::validateInternalClasses(const InternalClasses& classes,
+                                            const std::string& where) {
+  const std::string what = where + ": bad class map (learner.classes '" + classes.scheme + "'): ";
+  if (classes.scheme != "labels" && classes.scheme != "nyu13" && classes.scheme != "nyu40")
+    throw Error(what + "unknown scheme (expected labels, nyu13 or nyu40)");
+  const int k = classes.count();
+  if (k < 1 || k > kMaxInternalClasses)
+    throw Error(what + std::to_string(k) + " internal classes (expected 1.." +
+                std::to_string(kMaxInternalClasses) + ")");
+  if (classes.to_label.size() != classes.names.size())
+    throw Error(what + std::to_string(k) + " class names but " +
+                std::to_string(classes.to_label.size()) + " merge entries (class count mismatch)");
+  if (classes.scheme == "labels" && !(classes == labelClasses()))
+    throw Error(what + "the scheme 'labels' must be the " + std::to_string(kNumLabels) +
+                " labels in order, each merged into itself");
+  for (int c = 0; c < k; ++c) {
+    const auto& name = classes.names[static_cast<std::size_t>(c)];
+    if (name.empty() || name.size() > kMaxNameLength)
+      throw Error(what + "internal class " + std::to_string(c) + " has an empty or too long name");
+    if (classes.to_label[static_cast<std::size_t>(c)] >= kNumLabels)
+      throw Error(what + "internal class " + std::to_string(c) + " '" + name +
+                  "' merges into label " +
+                  std::to_string(classes.to_label[static_cast<std::size_t>(c)]) +
+                  " (expected 0.." + std::to_string(kNumLabels - 1) + ")");
+    for (int d = 0; d < c; ++d)
+      if (classes.names[static_cast<std::size_t>(d)] == name)
+        throw Error(what + "internal class name '" + name + "' appears twice");
+  }
+}
+
+void RandomForest::setInternalClasses(InternalClasses classes) {
+  if (booster_)
+    throw Error("RandomForest: a booster's internal classes are fixed when it is trained");
+  validateInternalClasses(classes, "RandomForest");
+  internal_classes_ = std::move(classes);
+  updateId();
 }
 
 void RandomForest::setExtractionSettings(Settings settings) {
@@ -69,7 +122,39 @@ void RandomForest::updateId() {
   id_ = idFromChecksum(checksum);
 }
 
+void RandomForest::predictRows(std::span<const float> rows, std::size_t n,
+                               std::span<ClassProbabilities> out) const {
+  const auto dim = feature_names_.size();
+  if (rows.size() != n * dim || out.size() < n)
+    throw Error("RandomForest::predictRows: " + std::to_string(rows.size()) + " values for " +
+                std::to_string(n) + " rows of " + std::to_string(dim) + " features");
+  if (!booster_) {
+    for (std::size_t i = 0; i < n; ++i) out[i] = predict(rows.subspan(i * dim, dim));
+    return;
+  }
+  // The booster answers per internal class; each adds into its label.
+  thread_local std::vector<float> fine;
+  const auto k = static_cast<std::size_t>(booster_->num_classes);
+  fine.resize(n * k);
+  booster_->predict(rows.data(), n, fine.data());
+  const auto& to_label = internal_classes_.to_label;
+  for (std::size_t i = 0; i < n; ++i) {
+    ClassProbabilities p{};
+    const float* row = fine.data() + i * k;
+    for (std::size_t c = 0; c < k; ++c) p[to_label[c]] += row[c];
+    out[i] = p;
+  }
+}
+
 ClassProbabilities RandomForest::predict(std::span<const float> x) const {
+  if (booster_) {
+    if (x.size() != feature_names_.size())
+      throw Error("RandomForest::predict: a row of " + std::to_string(x.size()) +
+                  " features for a model of " + std::to_string(feature_names_.size()));
+    ClassProbabilities out{};
+    predictRows(x, 1, {&out, 1});
+    return out;
+  }
   if (trees_.empty())
     throw Error("RandomForest::predict: the forest is empty (not trained/loaded)");
   if (x.size() != feature_names_.size())

@@ -13,6 +13,7 @@
 #include <sstream>
 
 #include "findmug/error.hpp"
+#include "xgboost_learner.hpp"
 
 namespace findmug {
 
@@ -158,15 +159,42 @@ std::vector<std::uint8_t> forest_format::serialize(const RandomForest& forest) {
   w.u32(kFormatVersion);
   w.u32(kNumLabels);
   for (auto name : kLabelNames) w.str(name);
+  const RandomForest::Booster* booster = forest.booster();
+  w.u8(static_cast<std::uint8_t>(forest.learnerKind()));
+  const InternalClasses& classes = forest.internalClasses();
+  w.str(classes.scheme);
+  w.u32(static_cast<std::uint32_t>(classes.names.size()));
+  for (std::size_t c = 0; c < classes.names.size(); ++c) {
+    w.str(classes.names[c]);
+    w.u8(classes.to_label[c]);
+  }
   writeFeatureNames(w, forest.featureNames());
-  writeParams(w, forest.params());
+  if (booster) {
+    const XGBoostParams& p = forest.xgboostParams();
+    w.i32(p.rounds);
+    w.i32(p.max_depth);
+    w.f64(p.eta);
+    w.f64(p.subsample);
+    w.f64(p.colsample);
+    w.f64(p.min_child_weight);
+    w.f64(p.lambda);
+    w.i32(p.seed);
+    w.u8(forest.params().class_weighting ? 1 : 0);
+  } else {
+    writeParams(w, forest.params());
+  }
   const auto& settings = forest.extractionSettings();
   w.u32(static_cast<std::uint32_t>(settings.size()));
   for (const auto& [key, value] : settings) {
     w.str(key);
     w.str(value);
   }
-  writeTrees(w, forest.trees());
+  if (booster) {
+    w.u64(booster->blob.size());
+    w.bytes(booster->blob.data(), booster->blob.size());
+  } else {
+    writeTrees(w, forest.trees());
+  }
   const RandomForest* stage = forest.contextStage();
   w.u8(stage ? 1 : 0);
   if (stage) {
@@ -228,7 +256,7 @@ void validateTree(const RandomForest::Tree& tree, std::size_t t, int dim, const 
 }  // namespace
 
 void RandomForest::save(const std::string& path) const {
-  if (trees_.empty()) throw Error(path + ": refusing to save an empty forest");
+  if (empty()) throw Error(path + ": refusing to save an empty model");
   const auto bytes = serialize(*this);
   // Write to a temporary file and rename, so a crash never leaves a half model.
   const std::string tmp = path + ".tmp";
@@ -298,6 +326,28 @@ RandomForest RandomForest::load(const std::string& path) {
         throw Error(path + ": forest model label " + std::to_string(c) + " is '" + name +
                     "', this build expects '" + std::string(kLabelNames[c]) +
                     "' (label names differ)");
+    }
+    // Format 4: the learner and the internal classes.
+    bool boosted = false;
+    if (version >= 4) {
+      const std::uint8_t kind = r.u8("learner");
+      if (kind > 1)
+        throw Error(path + ": forest model learner = " + std::to_string(kind) +
+                    " (expected 0 forest or 1 xgboost)");
+      boosted = kind == 1;
+      InternalClasses classes;
+      classes.names.clear();
+      classes.scheme = r.str("internal class scheme");
+      const std::uint32_t count = r.u32("internal class count");
+      if (count < 1 || count > kMaxInternalClasses)
+        throw Error(path + ": bad class map: " + std::to_string(count) +
+                    " internal classes (expected 1.." + std::to_string(kMaxInternalClasses) + ")");
+      for (std::uint32_t c = 0; c < count; ++c) {
+        classes.names.push_back(r.str("internal class name"));
+        classes.to_label.push_back(r.u8("internal class label"));
+      }
+      validateInternalClasses(classes, path);
+      forest.internal_classes_ = std::move(classes);
     }
     // Column names: the 14 base features first; format 3 may add extras.
     auto readFeatureNames = [&](const std::string& stage) {
@@ -375,7 +425,25 @@ RandomForest RandomForest::load(const std::string& path) {
     };
 
     forest.feature_names_ = readFeatureNames("");
-    readParams(forest.params_, "");
+    if (boosted) {
+      XGBoostParams& p = forest.xgboost_params_;
+      p.rounds = r.i32("xgboost.rounds");
+      p.max_depth = r.i32("xgboost.max_depth");
+      p.eta = r.f64("xgboost.eta");
+      p.subsample = r.f64("xgboost.subsample");
+      p.colsample = r.f64("xgboost.colsample");
+      p.min_child_weight = r.f64("xgboost.min_child_weight");
+      p.lambda = r.f64("xgboost.lambda");
+      p.seed = r.i32("xgboost.seed");
+      const std::uint8_t weighting = r.u8("xgboost class_weighting");
+      if (weighting > 1)
+        throw Error(path + ": forest model xgboost class_weighting = " +
+                    std::to_string(weighting) + " (expected 0 or 1)");
+      forest.params_.class_weighting = weighting == 1;
+      xgboost_learner::validateParams(p, path);
+    } else {
+      readParams(forest.params_, "");
+    }
 
     const std::uint32_t num_settings = r.u32("extraction setting count");
     if (num_settings > kMaxSettings)
@@ -389,12 +457,30 @@ RandomForest RandomForest::load(const std::string& path) {
       forest.extraction_settings_.emplace_back(std::move(key), std::move(value));
     }
 
-    readTrees(forest, "");
+    if (boosted) {
+      const std::uint64_t length = r.u64("booster length");
+      if (length == 0 || length > r.remaining())
+        throw Error(path + ": xgboost booster blob of " + std::to_string(length) +
+                    " bytes but only " + std::to_string(r.remaining()) +
+                    " remain (booster blob truncated)");
+      // XGBoost's own parser gets only bytes the checksum vouches for.
+      if (!checksum_ok)
+        throw Error(path + ": forest model checksum mismatch (file corrupt; the xgboost booster "
+                    "was not read)");
+      std::vector<std::uint8_t> blob(length);
+      for (auto& b : blob) b = r.u8("booster");
+      forest.booster_ = Booster::fromBlob(std::move(blob), forest.internal_classes_.count(),
+                                          forest.dim(), path);
+    } else {
+      readTrees(forest, "");
+    }
     if (version >= 3) {
       const std::uint8_t has_stage = r.u8("context stage flag");
       if (has_stage > 1)
         throw Error(path + ": forest model context stage flag = " + std::to_string(has_stage) +
                     " (expected 0 or 1)");
+      if (has_stage == 1 && boosted)
+        throw Error(path + ": an xgboost model cannot have an auto-context stage");
       if (has_stage == 1) {
         RandomForest stage;
         stage.feature_names_ = readFeatureNames("context stage ");

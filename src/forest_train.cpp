@@ -64,6 +64,8 @@ void validateTrainingSet(const TrainingSet& data) {
                 std::to_string(extra_dim) + " extra features need " +
                 std::to_string(n * extra_dim) + " extra values, got " +
                 std::to_string(data.extra.size()));
+  if (data.weight_by_split_labels && data.split_labels.empty())
+    throw Error("forest training: weighting by split labels without split labels");
   if (!data.split_labels.empty()) {
     if (data.split_labels.size() != n)
       throw Error("forest training: " + std::to_string(n) + " feature vectors but " +
@@ -381,19 +383,24 @@ RandomForest RandomForest::train(const TrainingSet& data, const ForestParams& pa
   if (params.class_weighting) {
     // Inverse class frequency (by weight): every present class then carries
     // the same total weight, so rare classes such as chairs still drive splits.
-    Histogram class_total{};
+    // With weight_by_split_labels the classes are the internal ones
+    // (learner.classes): each fine class then carries the same total weight.
+    const bool by_split = data.weight_by_split_labels;
+    const std::vector<std::uint8_t>& classes = by_split ? data.split_labels : data.labels;
+    const auto num_classes = static_cast<std::size_t>(by_split ? data.split_classes : kNumLabels);
+    std::vector<double> class_total(num_classes, 0.0);
     for (std::size_t i = 0; i < view.weights.size(); ++i)
-      class_total[data.labels[i]] += view.weights[i];
+      class_total[classes[i]] += view.weights[i];
     double total = 0.0;
     int present = 0;
     for (double c : class_total) {
       total += c;
       present += c > 0.0;
     }
-    Histogram factor{};
-    for (int c = 0; c < kNumLabels; ++c)
+    std::vector<double> factor(num_classes, 0.0);
+    for (std::size_t c = 0; c < num_classes; ++c)
       factor[c] = class_total[c] > 0.0 ? total / (present * class_total[c]) : 0.0;
-    for (std::size_t i = 0; i < view.weights.size(); ++i) view.weights[i] *= factor[data.labels[i]];
+    for (std::size_t i = 0; i < view.weights.size(); ++i) view.weights[i] *= factor[classes[i]];
   }
 
   RandomForest forest;

@@ -135,7 +135,7 @@ void predictSegmentsInto(const RandomForest& model, const SegmentFeatures& featu
   // Without a context stage the first stage's answers are the output.
   std::vector<ClassProbabilities>& probs = stage ? first_stage : out;
   probs.resize(n);
-  for (std::size_t i = 0; i < n; ++i) probs[i] = model.predict({rows.data() + i * dim, dim});
+  model.predictRows(rows, n, probs);
   if (!stage) {
     first_stage.clear();
     return;
@@ -183,6 +183,21 @@ std::vector<ClassProbabilities> predictSegments(const RandomForest& model,
 void checkModelMatchesConfig(const RandomForest& forest, const SegmenterConfig& config) {
   const std::string name = forest.source().empty() ? "forest " + forest.id()
                                                     : forest.source() + " (" + forest.id() + ")";
+  // The learner and its classes: a model answers only what it was trained as.
+  if (forest.learnerKind() != config.learner.kind) {
+    throw Error("model " + name + " is a " + learnerKindName(forest.learnerKind()) +
+                " model but the config has learner.kind = " +
+                learnerKindName(config.learner.kind) + "; set learner.kind = " +
+                learnerKindName(forest.learnerKind()) + " or retrain");
+  }
+  if (forest.internalClasses().scheme != classSchemeName(config.learner.classes)) {
+    throw Error("model " + name + " was trained on internal classes '" +
+                forest.internalClasses().scheme + "' (" +
+                std::to_string(forest.internalClasses().count()) +
+                " classes) but the config has learner.classes = " +
+                classSchemeName(config.learner.classes) + "; set learner.classes = " +
+                forest.internalClasses().scheme + " or retrain");
+  }
   // Columns and stages first: they say in one line what is wrong.
   const auto expected = firstStageFeatureNames(config);
   if (forest.featureNames() != expected) {

@@ -162,6 +162,18 @@ std::vector<FrameSample> extractSamples(const LabeledFrames& frames, const Segme
   return samples;
 }
 
+std::string fineLabelsFolder(const SegmenterConfig& config) {
+  switch (config.learner.classes) {
+    case ClassScheme::Nyu13:
+      return "label13";
+    case ClassScheme::Nyu40:
+      return "label40";
+    case ClassScheme::Labels:
+      break;
+  }
+  return fineLabelsFolder(config.training.split_labels);
+}
+
 std::string fineLabelsFolder(SplitLabels split) {
   switch (split) {
     case SplitLabels::Labels:
@@ -214,6 +226,69 @@ std::uint8_t splitLabelOf(const FrameSample& s, std::size_t k, SplitLabels split
                 " is labelled " + std::string(labelName(s.segment_labels[k])) + " but has no " +
                 splitName(split) + " class (id " + std::to_string(fine) + ")");
   return fine;
+}
+
+// Names of the fine classes (index = id; 0 unlabelled).
+constexpr std::array<const char*, kNyu13Classes + 1> kNyu13Names = {
+    "unlabelled", "bed", "books", "ceiling", "chair", "floor", "furniture", "objects",
+    "picture", "sofa", "table", "tv", "wall", "window"};
+constexpr std::array<const char*, kNyu40Classes + 1> kNyu40Names = {
+    "unlabelled", "wall", "floor", "cabinet", "bed", "chair", "sofa", "table", "door", "window", "bookshelf", "picture", "counter", "blinds", "desk", "shelves", "curtain", "dresser", "pillow", "mirror", "floor mat", "clothes", "ceiling", "books", "refridgerator", "television", "paper", "towel", "shower curtain", "box", "whiteboard", "person", "night stand", "toilet", "sink", "lamp", "bathtub", "bag", "otherstructure", "otherfurniture", "otherprop"};
+
+// Internal classes (learner.classes): one per (label, fine class) pair of
+// the training set, so that each is pure in both: NYU-13 "furniture" becomes
+// cabinet/furniture, table/furniture (counters) and unknown/furniture (other
+// furniture); NYU-40 ids each fall in one label. Ordered by label, then id.
+struct InternalMap {
+  InternalClasses classes;
+  static constexpr int kKeys = kNumLabels * (kNyu40Classes + 1);
+  std::array<int, kKeys> id_of_pair{};  // label * 41 + fine -> internal id, -1 if absent
+};
+
+int pairKey(std::uint8_t label, std::uint8_t fine) { return label * (kNyu40Classes + 1) + fine; }
+
+InternalMap internalMapOf(const TrainingSet& set, ClassScheme scheme) {
+  std::array<bool, InternalMap::kKeys> present{};
+  for (std::size_t i = 0; i < set.labels.size(); ++i)
+    present[static_cast<std::size_t>(pairKey(set.labels[i], set.split_labels[i]))] = true;
+  InternalMap map;
+  map.id_of_pair.fill(-1);
+  map.classes.scheme = classSchemeName(scheme);
+  map.classes.names.clear();
+  map.classes.to_label.clear();
+  for (int key = 0; key < InternalMap::kKeys; ++key) {
+    if (!present[static_cast<std::size_t>(key)]) continue;
+    const int label = key / (kNyu40Classes + 1);
+    const int fine = key % (kNyu40Classes + 1);
+    map.id_of_pair[static_cast<std::size_t>(key)] = map.classes.count();
+    map.classes.names.push_back(std::string(kLabelNames[label]) + "/" +
+                                (scheme == ClassScheme::Nyu13 ? kNyu13Names[fine]
+                                                              : kNyu40Names[fine]));
+    map.classes.to_label.push_back(static_cast<std::uint8_t>(label));
+  }
+  if (map.classes.count() > kMaxInternalClasses)
+    throw Error(std::string("learner.classes = ") + classSchemeName(scheme) + ": " +
+                std::to_string(map.classes.count()) + " internal classes exceed the limit of " +
+                std::to_string(kMaxInternalClasses));
+  return map;
+}
+
+// Replaces a set's fine split labels with internal class ids; class weighting
+// then balances the internal classes or the labels (learner.class_weight).
+void applyInternalMap(TrainingSet& set, const InternalMap& map, ClassWeight weight) {
+  for (std::size_t i = 0; i < set.labels.size(); ++i) {
+    const int id = map.id_of_pair[static_cast<std::size_t>(pairKey(set.labels[i], set.split_labels[i]))];
+    if (id < 0)
+      throw Error("learner.classes = " + map.classes.scheme + ": training sample " +
+                  std::to_string(i) + " has a class pair absent from the model's classes");
+    set.split_labels[i] = static_cast<std::uint8_t>(id);
+  }
+  set.split_classes = map.classes.count();
+  set.weight_by_split_labels = weight == ClassWeight::Classes;
+}
+
+SplitLabels fineKindOf(ClassScheme scheme) {
+  return scheme == ClassScheme::Nyu13 ? SplitLabels::Nyu13 : SplitLabels::Nyu40;
 }
 
 }  // namespace
@@ -269,6 +344,13 @@ std::vector<ClassProbabilities> predictSample(const RandomForest& model, const F
 RandomForest trainModel(const std::vector<const FrameSample*>& frames,
                         const SegmenterConfig& config,
                         const std::function<void(int, int)>& progress) {
+  const bool boosted = config.learner.kind == LearnerKind::XGBoost;
+  const bool internal = config.learner.classes != ClassScheme::Labels;
+  if (boosted && config.context.enabled)
+    throw Error("learner.kind = xgboost has no auto-context stage; set features.context = false");
+  if (internal && config.training.split_labels != SplitLabels::Labels)
+    throw Error(std::string("learner.classes = ") + classSchemeName(config.learner.classes) +
+                " cannot be combined with training.split_labels");
   const int folds = config.context.enabled && config.context.cross_fit_folds >= 2
                         ? std::min<int>(config.context.cross_fit_folds,
                                         static_cast<int>(frames.size()))
@@ -279,9 +361,24 @@ RandomForest trainModel(const std::vector<const FrameSample*>& frames,
     if (progress) progress(++done, total);
   };
   const SampleWeighting weighting = config.training.sample_weight;
-  const SplitLabels split = config.training.split_labels;
-  RandomForest first =
-      RandomForest::train(makeTrainingSet(frames, weighting, split), config.forest);
+  const SplitLabels split =
+      internal ? fineKindOf(config.learner.classes) : config.training.split_labels;
+  TrainingSet first_set = makeTrainingSet(frames, weighting, split);
+  InternalMap map;
+  if (internal) {
+    map = internalMapOf(first_set, config.learner.classes);
+    applyInternalMap(first_set, map, config.learner.class_weight);
+  }
+  auto trainFirst = [&](const TrainingSet& set, const ForestParams& params) {
+    if (boosted)
+      return RandomForest::trainBoosted(set, internal ? map.classes : labelClasses(),
+                                        config.xgboost, params.class_weighting,
+                                        params.num_threads);
+    RandomForest forest = RandomForest::train(set, params);
+    if (internal) forest.setInternalClasses(map.classes);
+    return forest;
+  };
+  RandomForest first = trainFirst(first_set, config.forest);
   tick();
   if (!config.context.enabled) return first;
 
@@ -306,10 +403,11 @@ RandomForest trainModel(const std::vector<const FrameSample*>& frames,
       if (held_out.empty()) continue;
       ForestParams params = config.forest;
       params.seed += 1000 + static_cast<std::uint64_t>(g);
-      const TrainingSet set = makeTrainingSet(train, weighting, split);
+      TrainingSet set = makeTrainingSet(train, weighting, split);
       if (set.labels.empty()) throw Error("trainModel: cross-fitting group " + std::to_string(g) +
                                           " leaves no labelled segment to train on");
-      const RandomForest forest = RandomForest::train(set, params);
+      if (internal) applyInternalMap(set, map, config.learner.class_weight);
+      const RandomForest forest = trainFirst(set, params);
       for (std::size_t k = 0; k < held_out.size(); ++k)
         probs[held_index[k]] = predictSample(forest, *held_out[k], first_only);
       tick();
@@ -342,6 +440,7 @@ RandomForest trainModel(const std::vector<const FrameSample*>& frames,
     }
   }
   if (split != SplitLabels::Labels) set.split_classes = splitClasses(split);
+  if (internal) applyInternalMap(set, map, config.learner.class_weight);
   ForestParams params = config.forest;
   params.seed += 500;
   RandomForest second = RandomForest::train(set, params);

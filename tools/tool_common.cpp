@@ -80,8 +80,12 @@ void addDatasetFlags(CLI::App& app, DatasetFlags& f) {
 DatasetOptions datasetOptions(const DatasetFlags& f, const SegmenterConfig& config) {
   DatasetOptions options;
   options.mask_nyu_border = !f.no_nyu_border;
-  // Split labels need each patch's finer class (label40/ or label13/ beside label8/).
-  options.fine_labels_folder = fineLabelsFolder(config.training.split_labels);
+  // Split labels and internal classes need each patch's finer class (label40/ or
+  // label13/ beside label8/).
+  options.fine_labels_folder = fineLabelsFolder(config);
+  if (config.learner.classes == ClassScheme::Nyu13 && !f.mats.empty())
+    throw Error("learner.classes = nyu13: --mat gives NYU-40 classes only (use nyu40, or a "
+                "dataset folder with label13/)");
   if (config.training.split_labels == SplitLabels::Nyu13 && !f.mats.empty())
     throw Error("training.split_labels = nyu13: --mat gives NYU-40 classes only (use nyu40, or a "
                 "dataset folder with label13/)");

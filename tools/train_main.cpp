@@ -91,8 +91,16 @@ int run(int argc, char** argv) {
     std::printf("    %-8s %7d\n", std::string(kLabelNames[c]).c_str(), per_class[c]);
   }
   const auto& p = config.segmenter.forest;
-  std::printf("  forest           %d trees, max depth %d, seed %llu\n", p.num_trees, p.max_depth,
-              static_cast<unsigned long long>(p.seed));
+  if (forest.learnerKind() == LearnerKind::XGBoost) {
+    const auto& x = forest.xgboostParams();
+    std::printf("  xgboost          %d rounds, max depth %d, eta %g, seed %d\n", x.rounds,
+                x.max_depth, x.eta, x.seed);
+  } else {
+    std::printf("  forest           %d trees, max depth %d, seed %llu\n", p.num_trees, p.max_depth,
+                static_cast<unsigned long long>(p.seed));
+  }
+  std::printf("  classes          %s (%d internal classes)\n",
+              forest.internalClasses().scheme.c_str(), forest.internalClasses().count());
   std::printf("  features         %d columns%s%s%s\n", forest.dim(),
               config.segmenter.regions.enabled ? " (with region features)" : "",
               config.segmenter.scene.enabled ? " (with scene features)" : "",

@@ -56,6 +56,33 @@ struct TrainingOptions {
   float extra_seed_scale = 0.8f;
 };
 
+// The classes the model learns (learner.classes); the model merges them into
+// the 8 labels. Recorded in the model: the Segmenter refuses a model trained
+// on other classes. Supersedes nothing: training.split_labels (finer classes
+// for the forest's splits only, weighting by label) stays as it was, and the
+// two cannot be combined.
+enum class ClassScheme {
+  Labels,  // the 8 findmug labels (the paper's)
+  Nyu13,   // NYU-13 class x findmug label pairs (needs label13/)
+  Nyu40,   // NYU-40 classes (needs label40/ or the .mat file)
+};
+const char* classSchemeName(ClassScheme scheme);  // "labels", "nyu13", "nyu40"
+
+// What forest.class_weighting balances when the model has internal classes
+// (learner.class_weight; training only, not recorded in the model).
+enum class ClassWeight {
+  Labels,   // every label carries the same total weight, its internal classes
+            // in proportion to their frequency (the 8-class model's balance)
+  Classes,  // every internal class carries the same total weight (a label made
+            // of many internal classes, e.g. unknown, then weighs more)
+};
+
+struct LearnerOptions {
+  LearnerKind kind = LearnerKind::Forest;     // learner.kind
+  ClassScheme classes = ClassScheme::Labels;  // learner.classes
+  ClassWeight class_weight = ClassWeight::Labels;  // learner.class_weight
+};
+
 struct SegmenterConfig {
   float max_depth_m = 10.0f;
   NormalConfig normals;
@@ -65,6 +92,8 @@ struct SegmenterConfig {
   SceneConfig scene;       // features.scene, features.scene_*
   ContextConfig context;   // features.context, features.context_*
   ForestParams forest;
+  LearnerOptions learner;  // learner.*
+  XGBoostParams xgboost;   // xgboost.* (learner.kind = xgboost)
   MrfParams mrf;
   bool use_mrf = true;
   TableConfig tables;

@@ -12,6 +12,14 @@
 // carry a second, auto-context stage: a forest whose rows are the first
 // stage's rows followed by the first stage's class distributions aggregated
 // over 3-D neighbourhoods.
+//
+// Learners (learner.kind): the model is this forest (the paper's, the
+// default) or gradient-boosted trees (XGBoost, src/xgboost_learner.*), behind
+// the same type, file and prediction calls. Classes (learner.classes): a model
+// may be trained on finer internal classes (NYU-13 or NYU-40 classes, each
+// split by the findmug label its pixels carry, so every internal class is
+// pure) and merges its posterior into the 8 labels; the internal class names
+// and their merge map are part of the model (format 4).
 #pragma once
 
 #include <cstdint>
@@ -41,6 +49,37 @@ struct ForestParams {
                                   // (not saved: the model does not depend on it)
 };
 
+// The learner behind a model (learner.kind).
+enum class LearnerKind : std::uint8_t { Forest = 0, XGBoost = 1 };
+const char* learnerKindName(LearnerKind kind);  // "forest", "xgboost"
+
+// Gradient-boosted trees (learner.kind = xgboost; xgboost.* settings).
+struct XGBoostParams {
+  int rounds = 60;               // boosting rounds (trees per class)
+  int max_depth = 6;
+  double eta = 0.3;              // learning rate
+  double subsample = 1.0;        // share of rows per round
+  double colsample = 1.0;        // share of columns per tree
+  double min_child_weight = 1.0;
+  double lambda = 1.0;           // L2 regularisation of leaf weights
+  int seed = 42;
+};
+
+// The classes a model is trained on and how they merge into the 8 labels.
+// scheme "labels": the 8 labels themselves (names = kLabelNames, identity
+// map). "nyu13" / "nyu40": each internal class is a (fine class, label) pair
+// present in the training set, named "label/fine" (e.g. "unknown/furniture").
+struct InternalClasses {
+  std::string scheme = "labels";
+  std::vector<std::string> names;
+  std::vector<std::uint8_t> to_label;  // per internal class, its findmug label
+  int count() const { return static_cast<int>(names.size()); }
+  bool operator==(const InternalClasses&) const = default;
+};
+InternalClasses labelClasses();  // scheme "labels"
+// The most internal classes a model may have (NYU-40 pairs plus headroom).
+inline constexpr int kMaxInternalClasses = 64;
+
 struct TrainingSet {
   std::vector<FeatureVector> features;  // the 14 base features per sample
   // Optional extra columns after the base features: their names, and the
@@ -55,6 +94,13 @@ struct TrainingSet {
   // Empty = split on `labels`.
   std::vector<std::uint8_t> split_labels;
   int split_classes = 0;
+  // Internal classes (learner.classes): split_labels then hold the internal
+  // class of each sample, and class weighting (forest.class_weighting) is by
+  // internal class frequency rather than label frequency. The forest stores
+  // its leaves merged into the 8 labels (for an averaging forest the same
+  // answer as merging the averaged fine posterior); the booster learns the
+  // internal classes and merges its posterior at prediction.
+  bool weight_by_split_labels = false;
 };
 
 // The most split classes a training set may have (NYU-40 plus headroom).
@@ -85,6 +131,26 @@ class RandomForest {
   ClassProbabilities predict(const FeatureVector& x) const {
     return predict(std::span<const float>(x.data(), x.size()));
   }
+  // `n` rows of dim() values each, row-major, into out[0..n): the same
+  // answers as predict() row by row (a booster predicts them in one call).
+  void predictRows(std::span<const float> rows, std::size_t n,
+                   std::span<ClassProbabilities> out) const;
+
+  // The learner and the classes the model was trained on. A booster model
+  // holds no trees of its own (trees() is empty).
+  LearnerKind learnerKind() const { return booster_ ? LearnerKind::XGBoost : LearnerKind::Forest; }
+  const InternalClasses& internalClasses() const { return internal_classes_; }
+  // Records the internal classes a forest was trained on (checked: names,
+  // labels, count); changes id().
+  void setInternalClasses(InternalClasses classes);
+  // The booster's parameters (meaningful when learnerKind() is XGBoost).
+  const XGBoostParams& xgboostParams() const { return xgboost_params_; }
+  // A model of gradient-boosted trees trained on `data` (its split_labels are
+  // the internal classes when `classes` is not the 8 labels), weighted like
+  // the forest (`class_weighting`). Refuses a set the booster cannot learn.
+  static RandomForest trainBoosted(const TrainingSet& data, const InternalClasses& classes,
+                                   const XGBoostParams& params, bool class_weighting,
+                                   int num_threads);
 
   // Column names of the rows this forest reads (kFeatureNames, then extras).
   const std::vector<std::string>& featureNames() const { return feature_names_; }
@@ -97,10 +163,12 @@ class RandomForest {
   // Model file format the forest was loaded from (0 when trained in-process).
   std::uint32_t formatVersion() const { return format_version_; }
 
-  // Versioned binary model: magic, format version, label names, feature
-  // layout, parameters, trees, optional context stage, checksum. Format 3 is
-  // written; format 2 (14 base features, no context stage) is still read. `load` refuses a truncated,
-  // corrupt or wrong-version file with a findmug::Error naming the file.
+  // Versioned binary model: magic, format version, label names, learner and
+  // internal classes (format 4), feature layout, parameters, trees or booster,
+  // optional context stage, checksum. Format 4 is written; formats 3 (a forest
+  // on the 8 labels) and 2 (also: 14 base features, no context stage) are
+  // still read. `load` refuses a truncated, corrupt or wrong-version file with
+  // a findmug::Error naming the file and the problem.
   void save(const std::string& path) const;
   static RandomForest load(const std::string& path);
 
@@ -118,7 +186,11 @@ class RandomForest {
   const std::vector<Tree>& trees() const { return trees_; }
   // Short stable id of the model (derived from the checksum), for status messages.
   std::string id() const { return id_; }
-  bool empty() const { return trees_.empty(); }
+  bool empty() const { return trees_.empty() && !booster_; }
+
+  // The XGBoost model (src/xgboost_learner.hpp); null for a forest.
+  struct Booster;
+  const Booster* booster() const { return booster_.get(); }
 
  private:
   void updateId();
@@ -131,6 +203,9 @@ class RandomForest {
   Settings extraction_settings_;
   std::string id_;
   std::string source_;
+  InternalClasses internal_classes_ = labelClasses();
+  XGBoostParams xgboost_params_;
+  std::shared_ptr<const Booster> booster_;
 };
 
 }  // namespace findmug

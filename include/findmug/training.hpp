@@ -84,9 +84,14 @@ TrainingSet makeTrainingSet(const std::vector<const FrameSample*>& frames,
 
 // The dataset folder training.split_labels reads ("" for Labels).
 std::string fineLabelsFolder(SplitLabels split);
+// The dataset folder a config's training reads fine labels from: learner.classes
+// (label13/, label40/) or else training.split_labels ("" when neither needs one).
+std::string fineLabelsFolder(const SegmenterConfig& config);
 
 // Trains the model `config` asks for on the given frames: the first-stage
-// forest (config.forest), and with features.context an auto-context stage
+// forest (config.forest) or booster (learner.kind = xgboost, config.xgboost),
+// on the 8 labels or on internal classes (learner.classes: (label, NYU class)
+// pairs present in the frames, recorded in the model), and with features.context an auto-context stage
 // trained on first-stage distributions that are cross-fitted over
 // features.context_cross_fit_folds contiguous groups of the frames (each
 // group's distributions come from a forest trained on the other groups), so

@@ -512,7 +512,7 @@ TEST(ForestFile, ExtraColumnsAndContextStageRoundTrip) {
   forest.save(dir.str("two-stage.fmf"));
   const RandomForest loaded = RandomForest::load(dir.str("two-stage.fmf"));
   EXPECT_EQ(loaded.id(), forest.id());
-  EXPECT_EQ(loaded.formatVersion(), 3u);
+  EXPECT_EQ(loaded.formatVersion(), 4u);
   EXPECT_EQ(loaded.featureNames(), forest.featureNames());
   ASSERT_NE(loaded.contextStage(), nullptr);
   EXPECT_EQ(loaded.contextStage()->featureNames(), forest.contextStage()->featureNames());
@@ -593,11 +593,19 @@ constexpr std::size_t kVersionOffset = 8;
 constexpr std::size_t kLabelCountOffset = 12;
 constexpr std::size_t kParamsSize = 5 * 4 + 1 + 8 + 8;
 
-std::size_t featureSectionOffset() {
+std::size_t labelsEndOffset() {
   std::size_t offset = kLabelCountOffset + 4;
   for (auto name : kLabelNames) offset += 4 + name.size();
   return offset;
 }
+// Format 4's learner byte and class map of a forest on the 8 labels: uint8
+// learner, scheme "labels", uint32 count, per class name + uint8 label.
+std::size_t learnerBlockSize() {
+  std::size_t size = 1 + 4 + std::string("labels").size() + 4;
+  for (auto name : kLabelNames) size += 4 + name.size() + 1;
+  return size;
+}
+std::size_t featureSectionOffset() { return labelsEndOffset() + learnerBlockSize(); }
 std::size_t paramsOffset() {
   std::size_t offset = featureSectionOffset() + 4;
   for (auto name : kFeatureNames) offset += 4 + name.size();
@@ -730,10 +738,10 @@ TEST_F(ForestFileCorruption, WrongVersion) {
   auto bytes = good_;
   putU32(bytes, kVersionOffset, 1);  // the format before extraction settings were stored
   expectRefused(bytes, "version 1");
-  putU32(bytes, kVersionOffset, 4);
-  expectRefused(bytes, "version 4");
+  putU32(bytes, kVersionOffset, 5);
+  expectRefused(bytes, "version 5");
   fixChecksum(bytes);
-  expectRefused(bytes, "version 4");
+  expectRefused(bytes, "version 5");
 }
 
 // Format 2 (before extra columns and context stages): the same layout
@@ -741,9 +749,12 @@ TEST_F(ForestFileCorruption, WrongVersion) {
 // forests without a context stage.
 TEST_F(ForestFileCorruption, Format2FileLoadsAsFourteenColumnsWithoutContextStage) {
   auto bytes = good_;
-  ASSERT_EQ(getU32(bytes, kVersionOffset), 3u);
+  ASSERT_EQ(getU32(bytes, kVersionOffset), 4u);
   ASSERT_EQ(bytes[bytes.size() - 9], 0u);  // the context-stage flag: none
   bytes.erase(bytes.end() - 9);
+  // Format 4's learner and class map, which format 2 does not have.
+  bytes.erase(bytes.begin() + static_cast<std::ptrdiff_t>(labelsEndOffset()),
+              bytes.begin() + static_cast<std::ptrdiff_t>(featureSectionOffset()));
   putU32(bytes, kVersionOffset, 2);
   fixChecksum(bytes);
   const std::string old = dir_.str("format2.fmf");
@@ -760,7 +771,7 @@ TEST_F(ForestFileCorruption, Format2FileLoadsAsFourteenColumnsWithoutContextStag
   }
   // A format-2 file cannot carry extra columns.
   auto more = bytes;
-  putU32(more, featureSectionOffset(), kFeatureDim + 1);
+  putU32(more, labelsEndOffset(), kFeatureDim + 1);
   fixChecksum(more);
   expectRefused(more, "15 features");
 }
