@@ -233,5 +233,46 @@ TEST(DepthDegradation, PipelineOnADegradedRealFrame) {
   for (float c : out.labels.confidence) ASSERT_TRUE(std::isfinite(c));
 }
 
+// training.degraded_copies: each training frame brings raw-like copies of
+// itself (as variants, which join every training set it is in), each
+// through the whole geometry, with its own seed.
+TEST(DepthDegradation, TrainingCopiesJoinTheTrainingSet) {
+  FINDMUG_REQUIRE_DATA(nyu, "nyuv2_labeled");
+  FINDMUG_REQUIRE_DATA(rotations, "nyuv2_meta/camera_rotations_NYU.txt");
+  DatasetOptions options;
+  options.nyu_rotations_file = rotations.string();
+  const DatasetFolder folder(nyu.string(), options);
+  const LabeledFrame clean = folder.load(1);  // 0002
+  const LabeledFrames one{"0002", 1, [&](std::size_t) { return clean; }};
+  Config config;
+  applyOverride(config, "overseg.method=organized");
+  applyOverride(config, "ground.source=gravity");
+  applyOverride(config, "training.degraded_copies=2");
+  applyOverride(config, "training.degraded_seed=9");
+  EXPECT_EQ(config.segmenter.training.degraded_seed, 9u);
+  EXPECT_THROW(applyOverride(config, "degrade.edge_hole_probability=1.5"), Error);
+  EXPECT_THROW(applyOverride(config, "training.degraded_copies=9"), Error);
+  ExtractionReport report;
+  const auto samples = extractSamples(one, Segmenter(config.segmenter, nullptr), report);
+  ASSERT_EQ(samples.size(), 1u);
+  ASSERT_EQ(samples[0].variants.size(), 2u);
+  std::size_t clean_pixels = 0;
+  for (auto p : samples[0].segment_pixels) clean_pixels += p;
+  for (const FrameSample& copy : samples[0].variants) {
+    EXPECT_EQ(copy.source_index, 0u);
+    EXPECT_NE(copy.name.find("~raw"), std::string::npos);
+    std::size_t pixels = 0;
+    for (auto p : copy.segment_pixels) pixels += p;
+    EXPECT_LT(pixels, clean_pixels * 0.97);  // the holes are in no segment
+    EXPECT_GT(pixels, clean_pixels * 0.4);
+  }
+  EXPECT_NE(samples[0].variants[0].pixel_segment, samples[0].variants[1].pixel_segment);
+  const TrainingSet set = makeTrainingSet({&samples[0]});
+  std::size_t rows = 0;
+  for (const FrameSample* s : {&samples[0], &samples[0].variants[0], &samples[0].variants[1]})
+    for (auto y : s->segment_labels) rows += y < kNumLabels;
+  EXPECT_EQ(set.labels.size(), rows);
+}
+
 }  // namespace
 }  // namespace findmug
