@@ -211,6 +211,8 @@ const std::vector<CoreSetting>& settings() {
       floatSetting("degrade.max_input_hole_fraction",
                    [](C& c) -> float& { return c.degrade.max_input_hole_fraction; }, 0, 1),
       boolSetting("mrf.enabled", [](C& c) -> bool& { return c.use_mrf; }),
+      enumSetting<MrfPairwise>("mrf.pairwise", [](C& c) -> MrfPairwise& { return c.mrf.pairwise; },
+                               {{"potts", MrfPairwise::Potts}, {"context", MrfPairwise::Context}}),
       floatSetting("mrf.lambda", [](C& c) -> float& { return c.mrf.lambda; }, 0, 1000),
       floatSetting("mrf.sigma", [](C& c) -> float& { return c.mrf.sigma; }, 1e-4, 100),
       intSetting("mrf.max_iterations", [](C& c) -> int& { return c.mrf.max_iterations; }, 1,

@@ -39,6 +39,7 @@
 #include "findmug/image_io.hpp"
 #include "findmug/label_image.hpp"
 #include "findmug/metrics.hpp"
+#include "findmug/mrf_context.hpp"
 #include "findmug/numbers.hpp"
 #include "findmug/synth.hpp"
 #include "findmug/table_regions.hpp"
@@ -166,9 +167,12 @@ std::vector<RegionFeatures> sampleRegions(const std::vector<FrameSample>& sample
 // Labels the test frames with `forest` and accumulates both confusions. The
 // "+MRF" labels are the pipeline's final ones: with `regions`, after the
 // table region vote, as in Segmenter::classify.
+// With mrf.pairwise = context, `pairwise` is the term learned on the
+// training frames (mrf_context.hpp).
 void labelFrames(const RandomForest& forest, const SegmenterConfig& config,
                  const std::vector<FrameSample>& samples, const std::vector<std::size_t>& frames,
-                 const std::vector<RegionFeatures>& regions, Evaluation& eval, bool keep_pixels) {
+                 const std::vector<RegionFeatures>& regions, Evaluation& eval, bool keep_pixels,
+                 const PairwiseContext* pairwise = nullptr) {
   for (std::size_t f : frames) {
     const FrameSample& s = samples[f];
     const std::size_t n = s.features.features.size();
@@ -177,7 +181,11 @@ void labelFrames(const RandomForest& forest, const SegmenterConfig& config,
     for (std::size_t k = 0; k < n; ++k) forest_labels[k] = argmax(probs[k]);
     const std::vector<ClassProbabilities> unaries =
         weightTableProbability(probs, config.tables.table_weight);
-    MrfResult mrf = solveMrf(unaries, s.features.centroids, s.edges, config.mrf);
+    MrfResult mrf =
+        pairwise ? solveMrfScaled(unaries, s.features.centroids, s.edges,
+                                  pairwiseContextScales(*pairwise, s.features.features, s.edges),
+                                  config.mrf)
+                 : solveMrf(unaries, s.features.centroids, s.edges, config.mrf);
     if (!regions.empty()) {
       const std::vector<float> weights(s.segment_pixels.begin(), s.segment_pixels.end());
       RegionVoteResult vote = voteTableRegions(mrf.labels, mrf.confidence, unaries, weights,
@@ -221,7 +229,15 @@ Evaluation crossValidate(const std::vector<FrameSample>& samples,
     SegmenterConfig fold_config = config;
     fold_config.forest.seed += static_cast<std::uint64_t>(fold);
     const RandomForest forest = trainModel(frames, fold_config);
-    labelFrames(forest, config, test_samples, test, regions, eval, keep_pixels);
+    std::optional<PairwiseContext> pairwise;
+    if (config.use_mrf && config.mrf.pairwise == MrfPairwise::Context) {
+      std::vector<LabelledGraph> graphs;
+      for (const FrameSample* s : frames)
+        graphs.push_back({&s->features.features, &s->edges, &s->segment_labels});
+      pairwise = learnPairwiseContext(graphs);
+    }
+    labelFrames(forest, config, test_samples, test, regions, eval, keep_pixels,
+                pairwise ? &*pairwise : nullptr);
   }
   return eval;
 }
@@ -467,6 +483,9 @@ int run(int argc, char** argv) {
   const std::vector<RegionFeatures> regions = sampleRegions(test_samples, segmenter.config());
   Evaluation eval;
   if (model) {
+    if (config.segmenter.use_mrf && config.segmenter.mrf.pairwise == MrfPairwise::Context)
+      throw Error("mrf.pairwise = context is learned from the training frames: it needs "
+                  "cross-validation, not --model");
     const RandomForest& forest = *model;
     report.protocol = "model " + f.model + " (id " + forest.id() + ") on all frames";
     eval.mrf_pixels.resize(samples.size());
