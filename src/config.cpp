@@ -215,7 +215,42 @@ const std::vector<CoreSetting>& settings() {
                  [](C& c) -> int& { return c.training.extra_oversegmentations; }, 0, 8),
       floatSetting("training.extra_seed_scale",
                    [](C& c) -> float& { return c.training.extra_seed_scale; }, 0.3, 0.99),
+      intSetting("training.degraded_copies",
+                 [](C& c) -> int& { return c.training.degraded_copies; }, 0, 8),
+      floatSetting("degrade.shadow_baseline_m",
+                   [](C& c) -> float& { return c.degrade.shadow_baseline_m; }, -0.5, 0.5),
+      floatSetting("degrade.shadow_focal_px",
+                   [](C& c) -> float& { return c.degrade.shadow_focal_px; }, 1, 5000),
+      floatSetting("degrade.edge_relative_jump",
+                   [](C& c) -> float& { return c.degrade.edge_relative_jump; }, 0.001, 10),
+      intSetting("degrade.edge_band_px", [](C& c) -> int& { return c.degrade.edge_band_px; }, 0,
+                 32),
+      floatSetting("degrade.edge_hole_probability",
+                   [](C& c) -> float& { return c.degrade.edge_hole_probability; }, 0, 1),
+      floatSetting("degrade.base_hole_probability",
+                   [](C& c) -> float& { return c.degrade.base_hole_probability; }, 0, 1),
+      floatSetting("degrade.dark_level", [](C& c) -> float& { return c.degrade.dark_level; }, 0,
+                   255),
+      floatSetting("degrade.dark_hole_probability",
+                   [](C& c) -> float& { return c.degrade.dark_hole_probability; }, 0, 1),
+      floatSetting("degrade.bright_level", [](C& c) -> float& { return c.degrade.bright_level; },
+                   0, 254),
+      floatSetting("degrade.bright_hole_probability",
+                   [](C& c) -> float& { return c.degrade.bright_hole_probability; }, 0, 1),
+      floatSetting("degrade.far_start_m", [](C& c) -> float& { return c.degrade.far_start_m; }, 0,
+                   20),
+      floatSetting("degrade.far_hole_per_m",
+                   [](C& c) -> float& { return c.degrade.far_hole_per_m; }, 0, 10),
+      floatSetting("degrade.blob_size_px", [](C& c) -> float& { return c.degrade.blob_size_px; },
+                   0, 200),
+      boolSetting("degrade.quantise", [](C& c) -> bool& { return c.degrade.quantise; }),
+      floatSetting("degrade.disparity_noise",
+                   [](C& c) -> float& { return c.degrade.disparity_noise; }, 0, 20),
+      floatSetting("degrade.max_input_hole_fraction",
+                   [](C& c) -> float& { return c.degrade.max_input_hole_fraction; }, 0, 1),
       boolSetting("mrf.enabled", [](C& c) -> bool& { return c.use_mrf; }),
+      enumSetting<MrfPairwise>("mrf.pairwise", [](C& c) -> MrfPairwise& { return c.mrf.pairwise; },
+                               {{"potts", MrfPairwise::Potts}, {"context", MrfPairwise::Context}}),
       floatSetting("mrf.lambda", [](C& c) -> float& { return c.mrf.lambda; }, 0, 1000),
       floatSetting("mrf.sigma", [](C& c) -> float& { return c.mrf.sigma; }, 1e-4, 100),
       intSetting("mrf.max_iterations", [](C& c) -> int& { return c.mrf.max_iterations; }, 1,
@@ -291,10 +326,12 @@ const std::vector<CoreSetting>& settings() {
 // the table above so that no precision is lost.
 bool setSpecial(SegmenterConfig& c, const std::string& key, const std::string& value,
                 const std::string& origin) {
-  if (key == "forest.seed" || key == "ground.seed") {
+  if (key == "forest.seed" || key == "ground.seed" || key == "training.degraded_seed") {
     const long long x = parseInt(origin, key, value);
     if (x < 0) badValue(origin, key, value, "a non-negative integer");
-    (key == "forest.seed" ? c.forest.seed : c.ground.seed) = static_cast<std::uint64_t>(x);
+    (key == "forest.seed"   ? c.forest.seed
+     : key == "ground.seed" ? c.ground.seed
+                            : c.training.degraded_seed) = static_cast<std::uint64_t>(x);
     return true;
   }
   if (key == "forest.bagging_fraction") {
@@ -438,6 +475,7 @@ std::string dumpConfig(const Config& config) {
   add("forest.seed", std::to_string(config.segmenter.forest.seed));
   add("forest.bagging_fraction", formatDouble(config.segmenter.forest.bagging_fraction));
   add("ground.seed", std::to_string(config.segmenter.ground.seed));
+  add("training.degraded_seed", std::to_string(config.segmenter.training.degraded_seed));
   for (const auto& [key, value] : config.extra) add(key, value);
 
   std::ostringstream out;

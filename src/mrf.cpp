@@ -162,12 +162,31 @@ void solveMrfInto(const std::vector<ClassProbabilities>& unaries,
   detail::solveMrfInto(unaries, centroids, edges, params, result, detail::MrfSimd::Auto);
 }
 
+MrfResult solveMrfScaled(const std::vector<ClassProbabilities>& unaries,
+                         const std::vector<Eigen::Vector3f>& centroids,
+                         const std::vector<std::pair<int, int>>& edges,
+                         const std::vector<float>& edge_scale, const MrfParams& params) {
+  MrfResult result;
+  detail::solveMrfInto(unaries, centroids, edges, params, result, detail::MrfSimd::Auto,
+                       &edge_scale);
+  return result;
+}
+
 void detail::solveMrfInto(const std::vector<ClassProbabilities>& unaries,
                           const std::vector<Eigen::Vector3f>& centroids,
                           const std::vector<std::pair<int, int>>& edges, const MrfParams& params,
-                          MrfResult& result, MrfSimd simd) {
+                          MrfResult& result, MrfSimd simd, const std::vector<float>* edge_scale) {
   validateParams(params);
   validateGraph(unaries, centroids, edges);
+  if (edge_scale) {
+    if (edge_scale->size() != edges.size())
+      throw Error("MRF: " + std::to_string(edge_scale->size()) + " edge scales for " +
+                  std::to_string(edges.size()) + " edges");
+    for (std::size_t k = 0; k < edge_scale->size(); ++k)
+      if (!(std::isfinite((*edge_scale)[k]) && (*edge_scale)[k] >= 0.0f))
+        throw Error("MRF: scale of edge " + std::to_string(k) + " is " +
+                    std::to_string((*edge_scale)[k]) + " (expected a finite number >= 0)");
+  }
 
   const std::size_t num_nodes = unaries.size();
   const std::size_t num_directed = 2 * edges.size();
@@ -209,6 +228,7 @@ void detail::solveMrfInto(const std::vector<ClassProbabilities>& unaries,
     source[2 * k + 1] = b;
     target[2 * k + 1] = a;
     weight[k] = pairwiseWeight(centroids[a], centroids[b], params.sigma);
+    if (edge_scale) weight[k] *= (*edge_scale)[k];
     ++in_begin[a + 1];
     ++in_begin[b + 1];
   }

@@ -15,6 +15,7 @@ enum class MrfSimd {
 void solveMrfInto(const std::vector<ClassProbabilities>& unaries,
                   const std::vector<Eigen::Vector3f>& centroids,
                   const std::vector<std::pair<int, int>>& edges, const MrfParams& params,
-                  MrfResult& result, MrfSimd simd);
+                  MrfResult& result, MrfSimd simd,
+                  const std::vector<float>* edge_scale = nullptr);
 
 }  // namespace findmug::detail

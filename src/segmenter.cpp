@@ -65,6 +65,9 @@ Segmenter::Segmenter(SegmenterConfig config, std::shared_ptr<const RandomForest>
       forest_(std::move(forest)),
       oversegmenter_(makeOversegmenter(config_.overseg)) {
   if (forest_) checkModelMatchesConfig(*forest_, config_);
+  if (forest_ && config_.use_mrf && config_.mrf.pairwise != MrfPairwise::Potts)
+    throw Error("mrf.pairwise = context is measured by findmug-eval only: the model file does "
+                "not carry the learned pairwise term yet (use mrf.pairwise = potts)");
 }
 
 std::vector<std::string> firstStageFeatureNames(const SegmenterConfig& config) {

@@ -15,6 +15,20 @@ LabeledFrames framesOf(const NyuMatFile& mat, const std::string& path) {
   return {path, mat.size(), [&mat](std::size_t i) { return mat.load(i); }};
 }
 
+std::uint64_t degradationSeed(std::uint64_t seed, std::size_t frame_index) {
+  return seed * 1000003u + frame_index;
+}
+
+LabeledFrames degradedFrames(const LabeledFrames& frames, const DepthDegradationConfig& config,
+                             std::uint64_t seed) {
+  return {frames.description + " (raw-like depth, seed " + std::to_string(seed) + ")",
+          frames.count, [frames, config, seed](std::size_t i) {
+            LabeledFrame out = frames.load(i);
+            out.frame = degradeDepth(out.frame, config, degradationSeed(seed, i));
+            return out;
+          }};
+}
+
 std::vector<FrameSample> extractSamples(const DatasetFolder& dataset, const Segmenter& segmenter,
                                         ExtractionReport& report,
                                         const std::function<void(int, int)>& progress) {
@@ -132,8 +146,23 @@ std::vector<FrameSample> extractSamples(const LabeledFrames& frames, const Segme
   report = {};
   report.frames_total = static_cast<int>(frames.count);
   const std::vector<Segmenter> variants = variantSegmenters(segmenter.config());
+  const TrainingOptions& training = segmenter.config().training;
   for (std::size_t i = 0; i < frames.count; ++i) {
     LabeledFrame labelled = frames.load(i);
+    // Raw-like copies (training.degraded_copies), each through the whole
+    // geometry; a copy whose ground is lost is left out.
+    std::vector<FrameSample> degraded;
+    for (int k = 0; k < training.degraded_copies; ++k) {
+      RgbdFrame copy = degradeDepth(
+          labelled.frame, segmenter.config().degrade,
+          degradationSeed(training.degraded_seed + static_cast<std::uint64_t>(k), i));
+      PreparedFrame prepared_copy = segmenter.prepare(std::move(copy), &labelled.labels);
+      if (!prepared_copy.ground) continue;
+      degraded.push_back(sampleOf(segmenter, std::move(prepared_copy), labelled.labels,
+                                  labelled.fine_labels));
+      degraded.back().name = labelled.name + "~raw" + std::to_string(k);
+      degraded.back().source_index = i;
+    }
     PreparedFrame prepared = segmenter.prepare(std::move(labelled.frame), &labelled.labels);
     if (!prepared.ground) {
       report.dropped.push_back(labelled.name + ": no ground plane found");
@@ -153,6 +182,10 @@ std::vector<FrameSample> extractSamples(const LabeledFrames& frames, const Segme
       sample.ground_truth = std::move(labelled.labels);
       sample.ground_method = method;
       sample.variants = std::move(views);
+      for (auto& d : degraded) {
+        d.ground_method = method;
+        sample.variants.push_back(std::move(d));
+      }
       report.ground_methods.emplace_back(sample.name, groundMethodName(method));
       samples.push_back(std::move(sample));
       ++report.frames_used;

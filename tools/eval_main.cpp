@@ -24,6 +24,10 @@
 // share of predicted positions where the robot fits in the true scene.
 // --train-extra adds a data set (e.g. synthetic scenes) to the training set
 // of every fold; it is never evaluated, so figures stay comparable.
+// --degrade evaluates on raw-like copies of the frames (depth_degradation.hpp,
+// degrade.* settings) while training stays on the frames as they are;
+// --score-labelled-only leaves pixels the pipeline gave no label (depth
+// holes) out of the figures instead of counting them as wrong.
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -42,6 +46,7 @@
 #include "findmug/image_io.hpp"
 #include "findmug/label_image.hpp"
 #include "findmug/metrics.hpp"
+#include "findmug/mrf_context.hpp"
 #include "findmug/numbers.hpp"
 #include "findmug/synth.hpp"
 #include "findmug/table_regions.hpp"
@@ -75,6 +80,8 @@ struct EvalFlags {
   int folds = 5, scene_gap = 2, train_frames = 0, curve_seeds = 3;
   std::uint64_t subset_seed = 0;
   bool sweep = false;
+  bool degrade = false, score_labelled_only = false;
+  std::uint64_t degrade_seed = 1;
   std::vector<std::string> train_extra;
   cli::ConfigFlags config;
 };
@@ -146,6 +153,13 @@ std::unique_ptr<CLI::App> makeEvalApp(EvalFlags& f) {
                        "write a per-frame diagnosis of table instances and detections "
                        "(why each unmatched one failed) to FILE")
            ->type_name("FILE"));
+  app->add_flag("--degrade", f.degrade,
+                "evaluate on raw-like copies of the frames (degrade.* settings); training "
+                "uses the frames as they are");
+  last(app->add_option("--degrade-seed", f.degrade_seed, "seed of the --degrade copies")
+           ->type_name("N"));
+  app->add_flag("--score-labelled-only", f.score_labelled_only,
+                "score only pixels the pipeline labelled (leave depth holes out)");
   return app;
 }
 
@@ -202,9 +216,12 @@ std::vector<RegionFeatures> sampleRegions(const std::vector<FrameSample>& sample
 // Labels the test frames with `forest` and accumulates both confusions. The
 // "+MRF" labels are the pipeline's final ones: with `regions`, after the
 // table region vote, as in Segmenter::classify.
+// With mrf.pairwise = context, `pairwise` is the term learned on the
+// training frames (mrf_context.hpp).
 void labelFrames(const RandomForest& forest, const SegmenterConfig& config,
                  const std::vector<FrameSample>& samples, const std::vector<std::size_t>& frames,
-                 const std::vector<RegionFeatures>& regions, Evaluation& eval, bool keep_pixels) {
+                 const std::vector<RegionFeatures>& regions, Evaluation& eval, bool keep_pixels,
+                 const PairwiseContext* pairwise = nullptr) {
   for (std::size_t f : frames) {
     const FrameSample& s = samples[f];
     const std::size_t n = s.features.features.size();
@@ -213,7 +230,11 @@ void labelFrames(const RandomForest& forest, const SegmenterConfig& config,
     for (std::size_t k = 0; k < n; ++k) forest_labels[k] = argmax(probs[k]);
     const std::vector<ClassProbabilities> unaries =
         weightTableProbability(probs, config.tables.table_weight);
-    MrfResult mrf = solveMrf(unaries, s.features.centroids, s.edges, config.mrf);
+    MrfResult mrf =
+        pairwise ? solveMrfScaled(unaries, s.features.centroids, s.edges,
+                                  pairwiseContextScales(*pairwise, s.features.features, s.edges),
+                                  config.mrf)
+                 : solveMrf(unaries, s.features.centroids, s.edges, config.mrf);
     if (!regions.empty()) {
       const std::vector<float> weights(s.segment_pixels.begin(), s.segment_pixels.end());
       RegionVoteResult vote = voteTableRegions(mrf.labels, mrf.confidence, unaries, weights,
@@ -246,7 +267,10 @@ struct TrainSubset {
   std::uint64_t seed = 0;
 };
 
+// Frame i of `samples` is tested as test_samples[i] (the same frame, or its
+// raw-like copy with --degrade).
 Evaluation crossValidate(const std::vector<FrameSample>& samples,
+                         const std::vector<FrameSample>& test_samples,
                          const std::vector<FrameSample>& extra_training, const FoldPlan& plan,
                          const SegmenterConfig& config, const std::vector<RegionFeatures>& regions,
                          bool keep_pixels, const TrainSubset& subset = {}) {
@@ -270,7 +294,15 @@ Evaluation crossValidate(const std::vector<FrameSample>& samples,
     SegmenterConfig fold_config = config;
     fold_config.forest.seed += static_cast<std::uint64_t>(fold);
     const RandomForest forest = trainModel(frames, fold_config);
-    labelFrames(forest, config, samples, test, regions, eval, keep_pixels);
+    std::optional<PairwiseContext> pairwise;
+    if (config.use_mrf && config.mrf.pairwise == MrfPairwise::Context) {
+      std::vector<LabelledGraph> graphs;
+      for (const FrameSample* s : frames)
+        graphs.push_back({&s->features.features, &s->edges, &s->segment_labels});
+      pairwise = learnPairwiseContext(graphs);
+    }
+    labelFrames(forest, config, test_samples, test, regions, eval, keep_pixels,
+                pairwise ? &*pairwise : nullptr);
     eval.folds.push_back({fold, train, test});
   }
   return eval;
@@ -495,8 +527,8 @@ double tableIoU(const ConfusionMatrix& m) {
 }
 
 // --learning-curve: the CV repeated for every size and seed; one CSV row each.
-void runLearningCurve(const EvalFlags& f, const LabeledInputs& input,
-                      const std::vector<FrameSample>& samples,
+void runLearningCurve(const EvalFlags& f, const LabeledFrames& test_frames, const std::vector<FrameSample>& samples,
+                      const std::vector<FrameSample>& test_samples,
                       const std::vector<FrameSample>& extra_training, const FoldPlan& plan,
                       const Segmenter& segmenter, const std::vector<RegionFeatures>& regions) {
   const std::filesystem::path dir = f.curve_dir;
@@ -509,9 +541,9 @@ void runLearningCurve(const EvalFlags& f, const LabeledInputs& input,
       config.forest.seed += 1000u * static_cast<std::uint64_t>(seed);
       const TrainSubset subset{size, static_cast<std::uint64_t>(seed)};
       const Evaluation eval =
-          crossValidate(samples, extra_training, plan, config, regions, true, subset);
+          crossValidate(samples, test_samples, extra_training, plan, config, regions, true, subset);
       EvalReport tables;
-      measureTables(input.frames(), samples, eval, segmenter, nullptr, tables, nullptr);
+      measureTables(test_frames, test_samples, eval, segmenter, nullptr, tables, nullptr);
       LearningCurvePoint p;
       p.requested = size;
       p.seed = seed;
@@ -543,6 +575,29 @@ void runLearningCurve(const EvalFlags& f, const LabeledInputs& input,
   std::cout << formatLearningCurveTrends(points) << "learning curve in " << dir.string() << "\n";
 }
 
+// Keeps the frames that both the clean and the raw-like extraction could use
+// (a raw-like copy may lose its ground plane), in the same order, so that
+// test_samples[i] is the copy of samples[i]; a frame left out is listed as
+// dropped in the report.
+void pairDegradedSamples(std::vector<FrameSample>& samples, std::vector<FrameSample>& degraded,
+                         ExtractionReport& report) {
+  std::map<std::size_t, std::size_t> degraded_of;
+  for (std::size_t i = 0; i < degraded.size(); ++i) degraded_of[degraded[i].source_index] = i;
+  std::vector<FrameSample> kept, kept_degraded;
+  for (FrameSample& s : samples) {
+    const auto it = degraded_of.find(s.source_index);
+    if (it == degraded_of.end()) {
+      report.dropped.push_back(s.name + ": no ground plane found on its raw-like copy");
+      --report.frames_used;
+      continue;
+    }
+    kept_degraded.push_back(std::move(degraded[it->second]));
+    kept.push_back(std::move(s));
+  }
+  samples = std::move(kept);
+  degraded = std::move(kept_degraded);
+}
+
 int run(int argc, char** argv) {
   EvalFlags f;
   const auto app = makeEvalApp(f);
@@ -569,9 +624,34 @@ int run(int argc, char** argv) {
   const auto start = std::chrono::steady_clock::now();
   ProgressBar bar("features");
   ExtractionReport extraction;
-  const auto samples = extractSamples(input->frames(), segmenter, extraction,
-                                      [&](int done, int total) { bar.update(done, total); });
+  auto samples = extractSamples(input->frames(), segmenter, extraction,
+                                [&](int done, int total) { bar.update(done, total); });
   bar.finish();
+  // The frames evaluated: the same, or raw-like copies (--degrade) of them.
+  const LabeledFrames test_frames =
+      f.degrade ? degradedFrames(input->frames(), config.segmenter.degrade, f.degrade_seed)
+                : input->frames();
+  std::vector<FrameSample> test_samples;
+  if (f.degrade) {
+    ProgressBar degraded_bar("features (raw-like)");
+    ExtractionReport degraded_report;
+    SegmenterConfig test_config = config.segmenter;
+    test_config.training.degraded_copies = 0;  // training-only views are not evaluated
+    test_config.training.extra_oversegmentations = 0;
+    const Segmenter test_segmenter(test_config, nullptr);
+    test_samples = extractSamples(test_frames, test_segmenter, degraded_report,
+                                  [&](int done, int total) { degraded_bar.update(done, total); });
+    degraded_bar.finish();
+    pairDegradedSamples(samples, test_samples, extraction);
+  } else {
+    test_samples = samples;
+  }
+  if (f.score_labelled_only) {
+    for (FrameSample& s : test_samples) {
+      for (std::size_t p = 0; p < s.ground_truth.size(); ++p)
+        if (s.pixel_segment[p] < 0) s.ground_truth[p] = kVoidLabel;
+    }
+  }
   if (samples.empty()) throw Error(input->frames().description + ": no frame could be used");
   std::vector<FrameSample> extra_training;
   for (const auto& dir : f.train_extra) {
@@ -595,7 +675,7 @@ int run(int argc, char** argv) {
   const TrainSubset subset{f.train_frames, f.subset_seed};
 
   EvalReport report;
-  report.data = input->frames().description;
+  report.data = test_frames.description;
   for (const auto& dir : f.train_extra) report.train_extra.push_back(dir);
   report.frames_total = extraction.frames_total;
   report.frames_used = extraction.frames_used;
@@ -603,9 +683,12 @@ int run(int argc, char** argv) {
   report.ground_methods = extraction.ground_methods;
   report.config_yaml = dumpConfig(config);
 
-  const std::vector<RegionFeatures> regions = sampleRegions(samples, segmenter.config());
+  const std::vector<RegionFeatures> regions = sampleRegions(test_samples, segmenter.config());
   Evaluation eval;
   if (model) {
+    if (config.segmenter.use_mrf && config.segmenter.mrf.pairwise == MrfPairwise::Context)
+      throw Error("mrf.pairwise = context is learned from the training frames: it needs "
+                  "cross-validation, not --model");
     const RandomForest& forest = *model;
     report.protocol = "model " + f.model + " (id " + forest.id() + ") on all frames";
     eval.mrf_pixels.resize(samples.size());
@@ -613,15 +696,17 @@ int run(int argc, char** argv) {
     eval.mrf_results.resize(samples.size());
     std::vector<std::size_t> all(samples.size());
     for (std::size_t i = 0; i < all.size(); ++i) all[i] = i;
-    labelFrames(forest, config.segmenter, samples, all, regions, eval, true);
+    labelFrames(forest, config.segmenter, test_samples, all, regions, eval, true);
   } else {
     report.protocol = describeFolds(plan, nyuSceneRule(f), subset);
     report.fold_rule = plan.rule;
     report.scene_rule = nyuSceneRule(f);
-    eval = crossValidate(samples, extra_training, plan, config.segmenter, regions, true, subset);
+    eval = crossValidate(samples, test_samples, extra_training, plan, config.segmenter, regions,
+                         true, subset);
     report.folds = foldRecords(eval, plan, samples);
   }
-  for (const FrameSample& s : samples) report.oracle.add(s.ground_truth, pixelLabels(s, s.segment_labels));
+  for (const FrameSample& s : test_samples)
+    report.oracle.add(s.ground_truth, pixelLabels(s, s.segment_labels));
   report.forest = eval.forest;
   report.mrf = eval.mrf;
   std::optional<synth::SequenceGroundTruth> synth_truth;
@@ -636,7 +721,7 @@ int run(int argc, char** argv) {
       diagnosis.open(f.table_report);
       if (!diagnosis) throw Error(f.table_report + ": cannot write the table report");
     }
-    measureTables(input->frames(), samples, eval, segmenter,
+    measureTables(test_frames, test_samples, eval, segmenter,
                   synth_truth ? &*synth_truth : nullptr, report,
                   f.table_report.empty() ? nullptr : &diagnosis);
     if (diagnosis.is_open()) {
@@ -649,7 +734,8 @@ int run(int argc, char** argv) {
     for (int trees : {1, 2, 4, 6, 8, 10, 12, 14, 16}) {
       SegmenterConfig c = config.segmenter;
       c.forest.num_trees = trees;
-      const Evaluation e = crossValidate(samples, extra_training, plan, c, regions, false, subset);
+      const Evaluation e = crossValidate(samples, test_samples, extra_training, plan, c, regions, false,
+                                             subset);
       report.sweep_trees.push_back({trees, c.forest.max_depth, e.forest, e.mrf});
       std::fprintf(stderr, "sweep trees=%d: forest %.1f/%.1f mrf %.1f/%.1f\n", trees,
                    100 * e.forest.classAverageAccuracy(), 100 * e.forest.globalAccuracy(),
@@ -658,7 +744,8 @@ int run(int argc, char** argv) {
     for (int depth : {2, 4, 6, 8, 10, 12, 14, 16}) {
       SegmenterConfig c = config.segmenter;
       c.forest.max_depth = depth;
-      const Evaluation e = crossValidate(samples, extra_training, plan, c, regions, false, subset);
+      const Evaluation e = crossValidate(samples, test_samples, extra_training, plan, c, regions, false,
+                                             subset);
       report.sweep_depth.push_back({c.forest.num_trees, depth, e.forest, e.mrf});
       std::fprintf(stderr, "sweep depth=%d: forest %.1f/%.1f mrf %.1f/%.1f\n", depth,
                    100 * e.forest.classAverageAccuracy(), 100 * e.forest.globalAccuracy(),
@@ -667,7 +754,8 @@ int run(int argc, char** argv) {
   }
   report.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   if (!f.curve_dir.empty()) {
-    runLearningCurve(f, *input, samples, extra_training, plan, segmenter, regions);
+    runLearningCurve(f, test_frames, samples, test_samples, extra_training, plan, segmenter,
+                     regions);
   }
 
   std::cout << formatTable(report);
@@ -687,7 +775,7 @@ int run(int argc, char** argv) {
       writeSweepSvg((dir / "sweep_trees.svg").string(), report.sweep_trees, true);
       writeSweepSvg((dir / "sweep_depth.svg").string(), report.sweep_depth, false);
     }
-    writeOverlays(input->frames(), samples, eval, dir / "overlays");
+    writeOverlays(test_frames, test_samples, eval, dir / "overlays");
     std::cout << "pictures in " << dir.string() << "\n";
   }
   return 0;

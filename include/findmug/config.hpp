@@ -14,6 +14,7 @@
 
 #include "findmug/cloud.hpp"
 #include "findmug/context_features.hpp"
+#include "findmug/depth_degradation.hpp"
 #include "findmug/forest.hpp"
 #include "findmug/ground.hpp"
 #include "findmug/mrf.hpp"
@@ -54,6 +55,11 @@ struct TrainingOptions {
   // frame. Evaluation and the daemon still use the configured one only.
   int extra_oversegmentations = 0;
   float extra_seed_scale = 0.8f;
+  // Augmentation: each training frame also contributes the patches of this
+  // many raw-like copies of it (degradeDepth with degrade.*, copy k with seed
+  // degraded_seed + k; training.degraded_copies, training.degraded_seed).
+  int degraded_copies = 0;
+  std::uint64_t degraded_seed = 7;
 };
 
 // The classes the model learns (learner.classes); the model merges them into
@@ -99,6 +105,7 @@ struct SegmenterConfig {
   TableConfig tables;
   TableMetricsConfig table_metrics;  // findmug-eval only: table instances and their matching
   TrainingOptions training;          // training.*
+  DepthDegradationConfig degrade;    // degrade.*: the raw-depth model (training, evaluation)
 };
 
 struct Config {

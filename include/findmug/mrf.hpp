@@ -14,7 +14,14 @@
 
 namespace findmug {
 
+// The pairwise term (mrf.pairwise): the paper's Potts, or Potts scaled per
+// edge by how alike the two patches look, learned from the training frames
+// (mrf_context.hpp; findmug-eval only so far: the model file does not carry
+// the learned term, and the Segmenter refuses it).
+enum class MrfPairwise { Potts, Context };
+
 struct MrfParams {
+  MrfPairwise pairwise = MrfPairwise::Potts;
   float lambda = 1.0f;        // unary weight
   float sigma = 0.1f;         // metres; pairwise decay with centroid distance
   int max_iterations = 30;
@@ -41,6 +48,14 @@ void solveMrfInto(const std::vector<ClassProbabilities>& unaries,
                   const std::vector<Eigen::Vector3f>& centroids,
                   const std::vector<std::pair<int, int>>& edges, const MrfParams& params,
                   MrfResult& out);
+
+// The same with each edge k's Potts weight multiplied by edge_scale[k]
+// (finite, >= 0; one per edge): a pairwise term that also knows how alike
+// the two patches look (mrf_context.hpp).
+MrfResult solveMrfScaled(const std::vector<ClassProbabilities>& unaries,
+                         const std::vector<Eigen::Vector3f>& centroids,
+                         const std::vector<std::pair<int, int>>& edges,
+                         const std::vector<float>& edge_scale, const MrfParams& params);
 
 // The energy above for a labelling, for tests and diagnostics.
 double mrfEnergy(const std::vector<ClassProbabilities>& unaries,

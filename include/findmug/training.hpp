@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "findmug/dataset.hpp"
+#include "findmug/depth_degradation.hpp"
 #include "findmug/forest.hpp"
 #include "findmug/segmenter.hpp"
 
@@ -47,6 +48,13 @@ struct LabeledFrames {
 };
 LabeledFrames framesOf(const DatasetFolder& dataset);
 LabeledFrames framesOf(const NyuMatFile& mat, const std::string& path);
+// The same frames with raw-like depth (degradeDepth; frame i with
+// degradationSeed(seed, i)), for evaluation on what a live camera gives.
+// `frames` is copied: what its load() refers to must outlive the result.
+LabeledFrames degradedFrames(const LabeledFrames& frames, const DepthDegradationConfig& config,
+                             std::uint64_t seed);
+// The seed frame `frame_index` of a set is degraded with, from a set's seed.
+std::uint64_t degradationSeed(std::uint64_t seed, std::size_t frame_index);
 
 struct ExtractionReport {
   int frames_total = 0;
@@ -59,7 +67,8 @@ struct ExtractionReport {
 // Runs the segmenter's geometric stages on every frame. Frames for which no
 // ground plane is found are dropped (the paper drops frames with too few floor
 // points) and listed in the report. With training.extra_oversegmentations each
-// sample also gets its variants. `progress(done, total)` after each frame.
+// sample also gets its variants, and with training.degraded_copies raw-like
+// copies (degradeDepth) among them. `progress(done, total)` after each frame.
 std::vector<FrameSample> extractSamples(const LabeledFrames& frames, const Segmenter& segmenter,
                                         ExtractionReport& report,
                                         const std::function<void(int, int)>& progress = {});

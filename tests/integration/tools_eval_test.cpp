@@ -384,3 +384,55 @@ TEST(ToolsEval, BadInputIsNamed) {
 
 }  // namespace
 }  // namespace findmug
+
+namespace findmug {
+namespace {
+
+// findmug-eval --degrade (issue 35, item 9): a model evaluated on raw-like
+// copies of five NYU frames. The same ground-truth pixels are scored, the
+// holes count as unlabelled, so global accuracy drops; with
+// --score-labelled-only the holes leave the count instead.
+TEST(ToolsEval, DegradeEvaluatesRawLikeCopies) {
+  FINDMUG_REQUIRE_DATA(nyu, "nyuv2_labeled");
+  FINDMUG_REQUIRE_DATA(rotations, "nyuv2_meta/camera_rotations_NYU.txt");
+  test::TempDir tmp;
+  for (const char* sub : {"rgb", "depth", "label8"}) {
+    std::filesystem::create_directories(tmp.path() / "data" / sub);
+    for (const char* frame : {"0001", "0002", "0009", "0014", "0015"})
+      std::filesystem::create_symlink(nyu / sub / (std::string(frame) + ".png"),
+                                      tmp.path() / "data" / sub / (std::string(frame) + ".png"));
+  }
+  const std::string common = " --data " + tmp.str("data") +
+                             " --set ground.source=gravity --nyu-rotations " +
+                             rotations.string();
+  const auto model = tmp.str("five.fmf");
+  const auto trained = run(std::string(FINDMUG_TRAIN_EXE) + common + " --out " + model);
+  ASSERT_EQ(trained.exit_code, 0) << trained.output;
+  auto evaluate = [&](const std::string& flags, const std::string& json) {
+    const auto r = run(std::string(FINDMUG_EVAL_EXE) + common + " --model " + model + flags +
+                       " --json " + tmp.str(json));
+    EXPECT_EQ(r.exit_code, 0) << r.output;
+    return readFile(tmp.path() / json);
+  };
+  auto scored = [](const std::string& json) {
+    double all = 0;
+    for (double t : classTotals(json)) all += t;
+    return all;
+  };
+  const std::string clean = evaluate("", "clean.json");
+  const std::string raw = evaluate(" --degrade", "raw.json");
+  const std::string raw_again = evaluate(" --degrade", "raw_again.json");
+  const std::string measured = evaluate(" --degrade --score-labelled-only", "measured.json");
+  const std::string other_seed = evaluate(" --degrade --degrade-seed 2", "other_seed.json");
+  EXPECT_THAT(raw, HasSubstr("raw-like depth, seed 1"));
+  EXPECT_EQ(number(raw, "frames_used"), 5);
+  EXPECT_EQ(scored(raw), scored(clean));
+  EXPECT_LT(number(section(raw, "mrf"), "global"), number(section(clean, "mrf"), "global") - 0.02);
+  EXPECT_EQ(section(raw, "mrf"), section(raw_again, "mrf"));  // deterministic for a seed
+  EXPECT_NE(section(raw, "mrf"), section(other_seed, "mrf"));
+  EXPECT_LT(scored(measured), 0.97 * scored(raw));
+  EXPECT_GT(number(section(measured, "mrf"), "global"), number(section(raw, "mrf"), "global"));
+}
+
+}  // namespace
+}  // namespace findmug
