@@ -119,7 +119,12 @@ void SemanticMapStage::publishIfDue(bool force) {
     if (!changed_ || (!due && !force)) return;
     last_publish_ = now;
     changed_ = false;
-    tables_ = map_.tables();
+    try {
+      tables_ = map_.tables();
+    } catch (const std::exception& e) {
+      // Keep the last tables; the map itself is still published.
+      if (on_error_) on_error_(std::string("semantic map: no tables: ") + e.what());
+    }
     tables_message.utime = last_utime_;
     tables_message.seq = last_seq_;
     tables_message.content = io::TablesContent::Map;

@@ -547,16 +547,39 @@ SemanticMapStats SemanticMap::stats() const {
 std::vector<FusedTable> SemanticMap::tables(std::vector<std::string>* diagnostics) {
   // Every voxel with enough evidence as one point of an unorganized cloud (width n,
   // height 1), labelled with its most voted label.
+  // The table stage works near its origin (it refuses points 100 m away, and floats lose
+  // millimetres far out): the voxels go in relative to their mean position on the floor,
+  // those more than kTableRadiusM from it are left out, and the tables are moved back.
+  constexpr double kTableRadiusM = 90.0;
   OrganizedCloud cloud;
   LabelImage labels;
+  std::vector<Eigen::Vector3d> centres;
+  Eigen::Vector2d mean = Eigen::Vector2d::Zero();
   for (const auto& [key, v] : voxels_) {
     if (!occupied(v) || v.frames < map_config_.min_voxel_frames) continue;
     float confidence = 0.0f;
     const std::uint8_t label = labelOf(v, &confidence);
     if (label == kVoidLabel) continue;
-    cloud.points.push_back(centreOf(key).cast<float>());
+    centres.push_back(centreOf(key));
+    mean += centres.back().head<2>();
     labels.labels.push_back(label);
     labels.confidence.push_back(confidence);
+  }
+  if (!centres.empty()) mean /= static_cast<double>(centres.size());
+  // Whole voxels: the shift moves no centre off the grid.
+  const double voxel_m = map_config_.voxel_size_m;
+  const Eigen::Vector2d shift = (mean / voxel_m).array().round().matrix() * voxel_m;
+  {
+    LabelImage near;
+    for (std::size_t i = 0; i < centres.size(); ++i) {
+      const Eigen::Vector2d xy = centres[i].head<2>() - shift;
+      if (xy.norm() > kTableRadiusM) continue;
+      cloud.points.emplace_back(static_cast<float>(xy.x()), static_cast<float>(xy.y()),
+                                static_cast<float>(centres[i].z()));
+      near.labels.push_back(labels.labels[i]);
+      near.confidence.push_back(labels.confidence[i]);
+    }
+    labels = std::move(near);
   }
   // Deterministic order whatever the hash table's (ties in the clustering and geometry).
   {
@@ -600,10 +623,11 @@ std::vector<FusedTable> SemanticMap::tables(std::vector<std::string>* diagnostic
 
   std::vector<bool> used(previous_tables_.size(), false);
   std::vector<MappedId> now;
-  for (TableCluster& table : detection.tables) {
+  for (TableCluster& detected : detection.tables) {
     FusedTable fused;
-    fused.voxels = table.point_count;
-    table.pixels.clear();
+    fused.voxels = detected.point_count;
+    detected.pixels.clear();
+    TableCluster table = transformTable(detected, Pose2D{shift.x(), shift.y(), 0.0});
     // The earlier table it overlaps most, or failing that the nearest within the gap.
     int best = -1;
     float best_overlap = 0.0f, best_gap = map_config_.table_match_gap_m;
@@ -713,7 +737,7 @@ LabelImage SemanticMap::projectLabels(const OrganizedCloud& cloud, const LabelIm
 
 // ---- save and load ----------------------------------------------------------------------------
 
-std::vector<std::uint8_t> SemanticMap::serialise() const {
+std::vector<std::uint8_t> SemanticMap::toBytes() const {
   Writer w;
   for (char c : kMagic) w.put(c);
   w.put(kFileVersion);
@@ -762,7 +786,7 @@ std::vector<std::uint8_t> SemanticMap::serialise() const {
 }
 
 void SemanticMap::save(const std::string& path) const {
-  const std::vector<std::uint8_t> bytes = serialise();
+  const std::vector<std::uint8_t> bytes = toBytes();
   const std::string temporary = path + ".tmp";
   {
     std::ofstream out(temporary, std::ios::binary | std::ios::trunc);
@@ -787,8 +811,12 @@ void SemanticMap::load(const std::string& path) {
   std::vector<std::uint8_t> bytes((std::istreambuf_iterator<char>(in)),
                                   std::istreambuf_iterator<char>());
   if (in.bad()) throw Error("semantic map " + path + ": read error");
+  loadBytes(bytes, path);
+}
+
+void SemanticMap::loadBytes(const std::vector<std::uint8_t>& bytes, const std::string& name) {
   SemanticMap loaded(map_config_, table_config_);
-  loaded.deserialise(bytes, path);
+  loaded.deserialise(bytes, name);
   *this = std::move(loaded);
 }
 
@@ -847,6 +875,10 @@ void SemanticMap::deserialise(const std::vector<std::uint8_t>& bytes, const std:
     v.occupancy = r.get<std::int16_t>("a voxel's occupancy");
     v.frames = r.get<std::uint16_t>("a voxel's frame count");
     v.last_hit = r.get<std::uint32_t>("a voxel's last hit");
+    if (unpackIndices(key).cast<double>().abs().maxCoeff() * voxel_size >
+        kMaxPoseDistanceM + 100.0) {
+      r.fail("voxel " + std::to_string(i) + ": more than 10 km from the map's origin");
+    }
     if (v.occupancy <= 0 || v.occupancy > max_occupancy) {
       r.fail("voxel " + std::to_string(i) + ": occupancy " + std::to_string(v.occupancy) +
              " outside (0, " + std::to_string(max_occupancy) + "]");

@@ -185,6 +185,10 @@ class SemanticMap {
   // problem (missing, truncated, bad magic, other version, checksum, another voxel size,
   // values out of range); the map is unchanged then.
   void load(const std::string& path);
+  // The same from bytes in memory (`name` stands for the file in messages), and the bytes
+  // save() writes.
+  void loadBytes(const std::vector<std::uint8_t>& bytes, const std::string& name);
+  std::vector<std::uint8_t> toBytes() const;
 
   // The voxel key of a point (exposed for tests): three 21-bit voxel indices.
   std::uint64_t keyOf(const Eigen::Vector3d& point_in_map) const;
@@ -207,7 +211,6 @@ class SemanticMap {
   int enforceBound(const Eigen::Vector3d& camera);
   std::uint64_t viewpointOf(const Eigen::Isometry3d& camera_in_map) const;
   void countSupport(FusedTable& table) const;
-  std::vector<std::uint8_t> serialise() const;
   void deserialise(const std::vector<std::uint8_t>& bytes, const std::string& path);
 
   SemanticMapConfig map_config_;
