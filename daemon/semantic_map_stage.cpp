@@ -92,6 +92,7 @@ void SemanticMapStage::run() {
 }
 
 void SemanticMapStage::fuse(Job& job) {
+  if (options_.before_fuse) options_.before_fuse();
   std::lock_guard lock(map_mutex_);
   try {
     map_.integrate(job.cloud_camera, job.labels, job.camera_in_map, job.utime);

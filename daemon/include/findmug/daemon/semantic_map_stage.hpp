@@ -25,6 +25,7 @@
 #include <atomic>
 #include <chrono>
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <mutex>
 #include <string>
@@ -53,6 +54,8 @@ class SemanticMapStage final : public ResultSink {
     double save_period_s = 60.0;
     std::string map_channel;        // FINDMUG_SEMANTIC_MAP[_suffix]
     std::string table_map_channel;  // FINDMUG_TABLE_MAP[_suffix]
+    // Runs before each frame is fused, on the map thread (tests: hold it).
+    std::function<void()> before_fuse;
   };
 
   struct Counters {
