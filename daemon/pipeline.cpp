@@ -405,6 +405,9 @@ StatusSnapshot Pipeline::statusSnapshot() const {
   if (semantic_map_) {
     const SemanticMapStage::Counters c = semantic_map_->counters();
     s.queues.push_back({"semantic_map", c.queue_depth, c.queue_capacity});
+    s.semantic_map_frames = c.integrated;
+    s.semantic_map_skipped = c.skipped;
+    s.semantic_map_voxels = c.voxels;
   }
 
   if (const io::FrameSource* source = source_.load()) {

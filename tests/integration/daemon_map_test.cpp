@@ -615,6 +615,9 @@ TEST(DaemonSemanticMap, TablesFromTheFusedMapAreTheGeneratorsTables) {
   ASSERT_FALSE(run.statuses.empty());
   const auto& names = run.statuses.back().queue_names;
   EXPECT_NE(std::find(names.begin(), names.end(), "semantic_map"), names.end());
+  EXPECT_EQ(run.statuses.back().semantic_map_frames, static_cast<std::int64_t>(with_pose));
+  EXPECT_EQ(run.statuses.back().semantic_map_skipped, 0);
+  EXPECT_EQ(run.statuses.back().semantic_map_voxels, static_cast<std::int64_t>(c.voxels));
 
   // The final map's tables: each true table exactly once, where it is, with the frames
   // that saw it; and no other table.

@@ -252,6 +252,9 @@ StatusSnapshot sampleSnapshot() {
   s.last_error_utime = 100;
   s.publish_failures = 7;
   s.heap_in_use_bytes = 123456789;
+  s.semantic_map_frames = 40;
+  s.semantic_map_skipped = 3;
+  s.semantic_map_voxels = 250000;
   return s;
 }
 
@@ -290,6 +293,9 @@ TEST(StatusBuilder, FillsEveryFieldFromTheSnapshot) {
   EXPECT_EQ(s.last_error_utime, 100);
   EXPECT_EQ(s.publish_failures, 7);
   EXPECT_EQ(s.heap_in_use_bytes, 123456789);
+  EXPECT_EQ(s.semantic_map_frames, 40);
+  EXPECT_EQ(s.semantic_map_skipped, 3);
+  EXPECT_EQ(s.semantic_map_voxels, 250000);
   EXPECT_EQ(s.frames_lost_in_transit, 0);
 }
 
