@@ -133,6 +133,25 @@ const SettingsTable<DaemonConfig>& daemonSettings() {
     t.add(boolSetting<D>(
         "daemon.publish_table_map", [](D& d) -> bool& { return d.publish_table_map; },
         "publish FINDMUG_TABLE_MAP after each map update"));
+    t.add(boolSetting<D>(
+        "daemon.semantic_map", [](D& d) -> bool& { return d.semantic_map; },
+        "fuse labelled frames with poses into the 3-D semantic map (semantic_map:)"));
+    t.add(integerSetting<D, int>(
+        "daemon.semantic_map_queue", [](D& d) -> int& { return d.semantic_map_queue; }, 1, 64,
+        "frames waiting for the map stage (drop-oldest)"));
+    t.add(numberSetting<D, double>(
+        "daemon.semantic_map_publish_s", [](D& d) -> double& { return d.semantic_map_publish_s; },
+        0, 3600, "FINDMUG_SEMANTIC_MAP and the map's tables at most this often, when changed"));
+    t.add(boolSetting<D>(
+        "daemon.semantic_map_fused_labels",
+        [](D& d) -> bool& { return d.semantic_map_fused_labels; },
+        "publish the map's labels projected into each frame on FINDMUG_LABELS"));
+    t.add(textSetting<D>(
+        "daemon.semantic_map_file", [](D& d) -> std::string& { return d.semantic_map_file; },
+        nullptr, "the map is loaded from and saved to this file; empty = not kept"));
+    t.add(numberSetting<D, double>(
+        "daemon.semantic_map_save_s", [](D& d) -> double& { return d.semantic_map_save_s; }, 1,
+        86400, "save the map this often (and at stop)"));
     return t;
   }();
   return table;
@@ -185,6 +204,7 @@ DaemonConfig resolveDaemonConfig(Config& config) {
   // The core's table_map section: its keys, then consistency across them
   // (validateTableMapConfig names the key as table_map.KEY).
   daemon.table_map = resolveTableMapConfig(config);
+  daemon.semantic_map_config = resolveSemanticMapConfig(config);
   for (const auto& [key, value] : daemonSettings().values(daemon)) config.extra[key] = value;
   for (const auto& [key, value] : checkSettings().values(daemon.check)) config.extra[key] = value;
   return daemon;

@@ -45,7 +45,7 @@ std::int64_t PublishStep::operator()(const ResultJob& job, StepClock::time_point
       spdlog::debug("{}: tables: {}", frameName(frame), line);
     }
   }
-  FrameResult result{labelled, latency_us, std::nullopt, {}, std::nullopt};
+  FrameResult result{labelled, latency_us, std::nullopt, {}, std::nullopt, std::nullopt};
   // The robot's pose for this frame, if one close enough in time has arrived.
   if (poses_) result.pose = poses_->history().closest(frame.utime, pose_max_age_us_);
   for (const auto& sink : sinks_) sink->consume(result);

@@ -84,9 +84,26 @@ Pipeline::Pipeline(const SegmenterConfig& segmenter_config, const DaemonConfig& 
   const std::string& suffix = daemon_config_.channel_suffix;
   // The sinks, in the order they see a result: the map first, as the frame's
   // tables_t carries what the map made of it.
+  // With the semantic map on, FINDMUG_TABLE_MAP carries the map's tables instead.
   table_map_sink_ = std::make_shared<TableMapSink>(
-      daemon_config_.table_map, segmenter_config.tables, daemon_config_.publish_table_map,
+      daemon_config_.table_map, segmenter_config.tables,
+      daemon_config_.publish_table_map && !daemon_config_.semantic_map,
       [this](const std::string& what) { recordError(what); });
+  if (daemon_config_.semantic_map) {
+    SemanticMapStage::Options options;
+    options.map = daemon_config_.semantic_map_config;
+    options.tables = segmenter_config.tables;
+    options.threaded = mode_ == ExecutionMode::Threaded;
+    options.queue_capacity = daemon_config_.semantic_map_queue;
+    options.publish_period_s = daemon_config_.semantic_map_publish_s;
+    options.fused_labels = daemon_config_.semantic_map_fused_labels;
+    options.file = daemon_config_.semantic_map_file;
+    options.save_period_s = daemon_config_.semantic_map_save_s;
+    options.map_channel = io::channelName(io::kSemanticMapChannel, suffix);
+    options.table_map_channel = io::channelName(io::kTableMapChannel, suffix);
+    semantic_map_ = std::make_shared<SemanticMapStage>(
+        std::move(options), bus, [this](const std::string& what) { recordError(what); });
+  }
   publisher_ = std::make_shared<LcmPublisherSink>(
       std::move(bus),
       LcmPublisherSink::Channels{io::channelName(io::kLabelsChannel, suffix),
@@ -95,6 +112,7 @@ Pipeline::Pipeline(const SegmenterConfig& segmenter_config, const DaemonConfig& 
                                  io::channelName(io::kStatusChannel, suffix)},
       daemon_config_.publish_confidence, daemon_config_.publish_tables);
   publish_step_.addSink(table_map_sink_);
+  if (semantic_map_) publish_step_.addSink(semantic_map_);  // may set the published labels
   publish_step_.addSink(publisher_);
   const auto window = std::chrono::duration_cast<Clock::duration>(
       std::chrono::duration<double>(daemon_config_.stats_window_s));
@@ -193,6 +211,7 @@ void Pipeline::attachSource(const io::FrameSource* source) { source_.store(sourc
 void Pipeline::addSink(std::shared_ptr<ResultSink> sink) { publish_step_.addSink(std::move(sink)); }
 
 void Pipeline::start() {
+  if (semantic_map_) semantic_map_->start();
   publish_->start();
   segment_->start();
   prepare_->start();
@@ -262,6 +281,8 @@ void Pipeline::stop(StopMode mode) {
     if (segment_->stats().in_flight == 0) segment_->join();
   }
   publish_->stop(StopMode::Drain);  // finished results are always published
+  // Nothing feeds the map any more: its last frames (Drain), last publish and save.
+  if (semantic_map_) semantic_map_->stop(mode == StopMode::Drain);
   // Nobody looks poses up any more: stop the pose thread, close its handle.
   if (pose_input_) pose_input_->stop();
   finalized_.store(true);
@@ -295,6 +316,15 @@ void Pipeline::publishResult(ResultJob& job) {
   // The sinks are done with it: its buffers serve the next frames (no
   // per-frame allocation of clouds, normals and segment lists once warm).
   segmenter_.recycle(std::move(job.labelled));
+}
+
+std::optional<SemanticMapStage::Counters> Pipeline::semanticMapCounters() const {
+  if (!semantic_map_) return std::nullopt;
+  return semantic_map_->counters();
+}
+
+std::vector<FusedTable> Pipeline::semanticMapTables() const {
+  return semantic_map_ ? semantic_map_->tables() : std::vector<FusedTable>{};
 }
 
 std::vector<MappedTable> Pipeline::mappedTables() const { return table_map_sink_->tables(); }
@@ -372,6 +402,13 @@ StatusSnapshot Pipeline::statusSnapshot() const {
     s.cpu_used_cores = cpu_used_cores_;
   }
   for (const auto& st : stages) s.queues.push_back({st.name, st.queue_depth, st.queue_capacity});
+  if (semantic_map_) {
+    const SemanticMapStage::Counters c = semantic_map_->counters();
+    s.queues.push_back({"semantic_map", c.queue_depth, c.queue_capacity});
+    s.semantic_map_frames = c.integrated;
+    s.semantic_map_skipped = c.skipped;
+    s.semantic_map_voxels = c.voxels;
+  }
 
   if (const io::FrameSource* source = source_.load()) {
     const io::SourceStats stats = source->stats();

@@ -131,8 +131,10 @@ void LcmPublisherSink::consume(FrameResult& result) {
   // Encoded from the frame's own label image and tables: copying them into
   // message structs first cost a copy of 1.5 MB and of every table's pixel
   // list per frame.
+  const LabelImage& labels =
+      result.published_labels ? *result.published_labels : result.labelled.labels;
   if (!send(channels_.labels,
-            io::encodeLabelImage(result.labelled.labels, frame.utime, frame.seq,
+            io::encodeLabelImage(labels, frame.utime, frame.seq,
                                  result.latency_us, publish_confidence_))) {
     throw Error("LCM publish on " + channels_.labels + " failed for " + frameName(frame));
   }

@@ -38,6 +38,9 @@ findmug_lcm::status_t StatusBuilder::build(const StatusSnapshot& in) {
   s.model_id = in.model_id;
   s.publish_failures = static_cast<std::int64_t>(in.publish_failures);
   s.heap_in_use_bytes = in.heap_in_use_bytes;
+  s.semantic_map_frames = static_cast<std::int64_t>(in.semantic_map_frames);
+  s.semantic_map_skipped = static_cast<std::int64_t>(in.semantic_map_skipped);
+  s.semantic_map_voxels = static_cast<std::int64_t>(in.semantic_map_voxels);
 
   std::string last_error = in.last_error;
   std::uint64_t last_error_utime = in.last_error_utime;

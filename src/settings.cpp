@@ -5,6 +5,7 @@
 #include <sstream>
 
 #include "findmug/config.hpp"
+#include "findmug/semantic_map.hpp"
 
 namespace findmug {
 
@@ -62,6 +63,10 @@ ConfigSections& configSections() {
     // The core's own section outside SegmenterConfig (resolveTableMapConfig).
     s.addSection("table_map", [](const std::string& key, const std::string& value) {
       tableMapSettings().check(key, value);
+    });
+    // The fused 3-D map's (resolveSemanticMapConfig).
+    s.addSection("semantic_map", [](const std::string& key, const std::string& value) {
+      semanticMapSettings().check(key, value);
     });
     return s;
   }();

@@ -257,6 +257,7 @@ findmug_lcm::status_t decodeMessage<findmug_lcm::status_t>(const void* data, std
     w.skip(2 * kF32 + kI32, "cpu_budget_cores/cpu_used_cores/processing_threads");
     w.skip(kI64, "source_reconnects");
     w.skip(3 * kI64, "frames_lost_in_transit/publish_failures/heap_in_use_bytes");
+    w.skip(3 * kI64, "semantic_map_frames/skipped/voxels");
   });
 }
 

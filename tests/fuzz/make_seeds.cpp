@@ -27,6 +27,8 @@
 #include "findmug/forest.hpp"
 #include "findmug/image_io.hpp"
 #include "findmug/io/lcm_codec.hpp"
+#include "findmug/io/semantic_map_codec.hpp"
+#include "findmug/semantic_map.hpp"
 #include "findmug/io/pcl_frames.hpp"
 #include "findmug_cli.hpp"
 #include "fuzz_support.hpp"
@@ -164,6 +166,44 @@ void lcmSeeds(SeedWriter& w) {
   const auto pose = asString(io::encodeMessage(io::encodeRobotPose(io::RobotPose{frame.utime, {2.0, -1.0, 0.3}})));
   w.write("robot_pose", "pose", pose,
           [](const std::string& b) { (void)io::decodeRobotPose(b.data(), b.size(), "seed"); });
+
+  // A small fused map: a 20 x 20 patch of floor and a table top seen from above.
+  {
+    SemanticMap map;
+    OrganizedCloud cloud;
+    LabelImage labels;
+    cloud.width = labels.width = 20;
+    cloud.height = labels.height = 20;
+    for (int y = 0; y < 20; ++y) {
+      for (int x = 0; x < 20; ++x) {
+        const bool top = x >= 5 && x < 15 && y >= 5 && y < 15;
+        // Camera frame: looking straight down from 1.5 m (z forward = down in the map).
+        cloud.points.emplace_back(0.05f * static_cast<float>(x - 10),
+                                  0.05f * static_cast<float>(y - 10), top ? 0.75f : 1.5f);
+        cloud.colors.push_back(Rgb8{});
+        labels.labels.push_back(static_cast<std::uint8_t>(top ? Label::Table : Label::Floor));
+        labels.confidence.push_back(0.8f);
+      }
+    }
+    Eigen::Isometry3d camera = Eigen::Isometry3d::Identity();
+    camera.linear() << 1, 0, 0, 0, -1, 0, 0, 0, -1;  // z down, x along the map's x
+    camera.translation() = Eigen::Vector3d(1.0, 2.0, 1.5);
+    map.integrate(cloud, labels, camera, frame.utime);
+    map.integrate(cloud, labels, camera, frame.utime + 100000);
+    (void)map.tables();
+    const auto message = io::semanticMapMessage(map, frame.utime, frame.seq);
+    auto decodeMap = [](const std::string& b) {
+      (void)io::decodeSemanticMap(b.data(), b.size(), "seed");
+    };
+    w.write("semantic_map", "zlib", asString(io::encodeMessage(io::encodeSemanticMap(message))),
+            decodeMap);
+    w.write("semantic_map", "raw",
+            asString(io::encodeMessage(io::encodeSemanticMap(message, false))), decodeMap);
+    w.write("semantic_map_file", "map", asString(map.toBytes()), [](const std::string& b) {
+      SemanticMap m;
+      m.loadBytes(std::vector<std::uint8_t>(b.begin(), b.end()), "seed");
+    });
+  }
 
   findmug_lcm::status_t s = findmug::test::sampleStatus();
   s.utime = frame.utime;

@@ -18,6 +18,8 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
+#include <filesystem>
+#include <fstream>
 #include <map>
 #include <set>
 #include <thread>
@@ -31,6 +33,7 @@
 #include "findmug/io/bus.hpp"
 #include "findmug/io/channels.hpp"
 #include "findmug/io/lcm_codec.hpp"
+#include "findmug/io/semantic_map_codec.hpp"
 #include "findmug/io/subscriber.hpp"
 #include "findmug/segmenter.hpp"
 #include "findmug/synth.hpp"
@@ -314,6 +317,9 @@ struct MapRun {
   std::vector<findmug_lcm::status_t> statuses;
   PipelineCounters counters;
   std::vector<MappedTable> mapped;  // the map at the end, tentative tables included
+  std::vector<io::SemanticMapMessage> semantic_maps;  // FINDMUG_SEMANTIC_MAP
+  std::optional<SemanticMapStage::Counters> semantic_map_counters;
+  std::vector<FusedTable> semantic_map_tables;
 };
 
 // Runs the frames through the pipeline (sequential: deterministic, nothing
@@ -342,12 +348,16 @@ MapRun runPipeline(const Sequence& seq, const std::string& pose_log,
     pipeline.stop(StopMode::Drain);
     run.counters = pipeline.counters();
     run.mapped = pipeline.mappedTables();
+    run.semantic_map_counters = pipeline.semanticMapCounters();
+    run.semantic_map_tables = pipeline.semanticMapTables();
   }
   for (const auto& m : test::readLcmLog(tmp.str("out.lcmlog"))) {
     if (m.channel == io::kTablesChannel) {
       run.tables.push_back(io::decodeTables(m.data.data(), m.data.size(), m.channel));
     } else if (m.channel == io::kTableMapChannel) {
       run.table_map.push_back(io::decodeTables(m.data.data(), m.data.size(), m.channel));
+    } else if (m.channel == io::kSemanticMapChannel) {
+      run.semantic_maps.push_back(io::decodeSemanticMap(m.data.data(), m.data.size(), m.channel));
     } else if (m.channel == io::kStatusChannel) {
       run.statuses.push_back(
           io::decodeMessage<findmug_lcm::status_t>(m.data.data(), m.data.size(), m.channel));
@@ -577,6 +587,126 @@ namespace findmug::daemon {
 namespace {
 
 // Everything published on the output bus, decoded, in arrival order.
+// ---- the fused semantic map (daemon.semantic_map) -------------------------------------------
+
+TEST(DaemonSemanticMap, TablesFromTheFusedMapAreTheGeneratorsTables) {
+  const Sequence& seq = sequence();
+  TempDir tmp;
+  const std::string map_file = tmp.str("semantic.map");
+  const MapRun run = runPipeline(seq, writePoseLog(seq, tmp),
+                                 {"daemon.semantic_map=true", "daemon.semantic_map_publish_s=0",
+                                  "daemon.semantic_map_file=" + map_file});
+  EXPECT_EQ(run.counters.processed, seq.submitted.size());  // the label stream is whole
+
+  // Every labelled frame with a pose went into the map (sequential: nothing skipped).
+  ASSERT_TRUE(run.semantic_map_counters.has_value());
+  const SemanticMapStage::Counters& c = *run.semantic_map_counters;
+  std::size_t with_pose = 0;
+  for (const Submitted& s : seq.submitted) with_pose += s.index >= 0 && !inPoseGap(s.index);
+  EXPECT_EQ(c.integrated, with_pose);
+  EXPECT_EQ(c.skipped, 0u);
+  EXPECT_EQ(c.failed, 0u);
+  EXPECT_GT(c.voxels, 10000u);
+  ASSERT_FALSE(run.semantic_maps.empty());
+  ASSERT_FALSE(run.table_map.empty());
+  EXPECT_EQ(run.semantic_maps.size(), run.table_map.size());
+  EXPECT_EQ(run.semantic_maps.back().frames, static_cast<std::int64_t>(with_pose));
+  // Its queue is in the status.
+  ASSERT_FALSE(run.statuses.empty());
+  const auto& names = run.statuses.back().queue_names;
+  EXPECT_NE(std::find(names.begin(), names.end(), "semantic_map"), names.end());
+  EXPECT_EQ(run.statuses.back().semantic_map_frames, static_cast<std::int64_t>(with_pose));
+  EXPECT_EQ(run.statuses.back().semantic_map_skipped, 0);
+  EXPECT_EQ(run.statuses.back().semantic_map_voxels, static_cast<std::int64_t>(c.voxels));
+
+  // The final map's tables: each true table exactly once, where it is, with the frames
+  // that saw it; and no other table.
+  const io::TablesMessage& final_map = run.table_map.back();
+  EXPECT_EQ(final_map.content, io::TablesContent::Map);
+  std::set<std::size_t> matched;
+  std::map<int, int> id_of_truth;
+  for (const synth::TableTruth& truth : seq.scene.tables) {
+    std::size_t k = 0;
+    const io::MapFrameTable* found = nearest(final_map, truth.center_xy, &k);
+    ASSERT_NE(found, nullptr) << "table " << truth.id << " not in the fused map";
+    const double error = (found->center - truth.center_xy).norm();
+    const double height_error = std::abs(final_map.tables[k].top_height - truth.height);
+    std::printf("truth table %d (%.2f x %.2f m, h %.2f) at (%.3f, %.3f): fused id %d at "
+                "(%.3f, %.3f), %.2f x %.2f m, error %.3f m, height error %.3f m, %d frames\n",
+                truth.id, truth.size.x(), truth.size.y(), truth.height, truth.center_xy.x(),
+                truth.center_xy.y(), final_map.tables[k].id, found->center.x(), found->center.y(),
+                2 * final_map.tables[k].extents.x(), 2 * final_map.tables[k].extents.y(), error,
+                height_error, final_map.map_info[k].sightings);
+    EXPECT_LT(error, 0.10) << "table " << truth.id;
+    // Voxel centres are 5 cm apart in height: the top is placed within half a voxel.
+    EXPECT_LT(height_error, 0.035) << "table " << truth.id;
+    EXPECT_GE(final_map.map_info[k].sightings, 3) << "table " << truth.id;
+    EXPECT_TRUE(matched.insert(k).second) << "two true tables share fused table " << k;
+    id_of_truth[truth.id] = final_map.tables[k].id;
+  }
+  EXPECT_EQ(final_map.tables.size(), seq.scene.tables.size()) << "extra tables in the map";
+  ASSERT_EQ(run.semantic_map_tables.size(), final_map.tables.size());
+  for (const FusedTable& t : run.semantic_map_tables) EXPECT_GE(t.viewpoints, 2);
+
+  // Stable ids across the walk.
+  for (const io::TablesMessage& m : run.table_map) {
+    for (const synth::TableTruth& truth : seq.scene.tables) {
+      std::size_t k = 0;
+      const io::MapFrameTable* found = nearest(m, truth.center_xy, &k);
+      if (found && (found->center - truth.center_xy).norm() < 0.3) {
+        EXPECT_EQ(m.tables[k].id, id_of_truth[truth.id])
+            << "frame " << m.seq << ": table " << truth.id << " changed its id";
+      }
+    }
+  }
+
+  // The map message: table voxels on every true table top.
+  const io::SemanticMapMessage& map = run.semantic_maps.back();
+  for (const synth::TableTruth& truth : seq.scene.tables) {
+    int on_top = 0;
+    for (const io::SemanticMapVoxel& v : map.voxels) {
+      const Eigen::Vector2d xy(v.i * map.voxel_size_m, v.j * map.voxel_size_m);
+      on_top += v.label == static_cast<std::uint8_t>(Label::Table) &&
+                synth::signedDistanceToTop(truth, xy) < 0.0 &&
+                std::abs(v.k * map.voxel_size_m - truth.height) < 0.06;
+    }
+    EXPECT_GT(on_top, 50) << "table " << truth.id;
+  }
+
+  // The map was saved at stop and survives a restart: a second run starts from it.
+  SemanticMap reloaded(SemanticMapConfig{}, mapSegmenterConfig().tables);
+  reloaded.load(map_file);
+  EXPECT_EQ(reloaded.stats().frames, with_pose);
+  const MapRun again = runPipeline(seq, writePoseLog(seq, tmp),
+                                   {"daemon.semantic_map=true", "daemon.semantic_map_publish_s=0",
+                                    "daemon.semantic_map_file=" + map_file});
+  ASSERT_FALSE(again.semantic_maps.empty());
+  EXPECT_EQ(again.semantic_maps.back().frames, static_cast<std::int64_t>(2 * with_pose));
+  ASSERT_FALSE(again.table_map.empty());
+  for (std::size_t k = 0; k < again.table_map.front().tables.size(); ++k) {
+    EXPECT_GT(again.table_map.front().tables[k].id, 0);
+  }
+}
+
+TEST(DaemonSemanticMap, AnUnreadableMapFileIsSetAsideAndTheDaemonRuns) {
+  const Sequence& seq = sequence();
+  TempDir tmp;
+  const std::string map_file = tmp.str("semantic.map");
+  {
+    std::ofstream out(map_file, std::ios::binary);
+    out << "FINDMUG-SEMMAP but not really";
+  }
+  const MapRun run = runPipeline(seq, writePoseLog(seq, tmp),
+                                 {"daemon.semantic_map=true", "daemon.semantic_map_file=" + map_file});
+  EXPECT_EQ(run.counters.processed, seq.submitted.size());
+  ASSERT_TRUE(run.semantic_map_counters.has_value());
+  EXPECT_GT(run.semantic_map_counters->integrated, 0u);
+  EXPECT_TRUE(std::filesystem::exists(map_file + ".refused"));
+  SemanticMap saved;
+  saved.load(map_file);  // the new map, saved at stop
+  EXPECT_GT(saved.size(), 0u);
+}
+
 struct Collected {
   std::vector<io::LabelImageMessage> labels;
   std::vector<io::TablesMessage> tables, table_map;

@@ -4,11 +4,15 @@
 // snapshot. No data, no LCM traffic.
 #include <gtest/gtest.h>
 
+#include <atomic>
 #include <chrono>
+#include <future>
+#include <thread>
 #include <string>
 #include <vector>
 
 #include "findmug/daemon/result_sinks.hpp"
+#include "findmug/daemon/semantic_map_stage.hpp"
 #include "findmug/daemon/status_builder.hpp"
 #include "findmug/error.hpp"
 #include "findmug/io/bus.hpp"
@@ -248,6 +252,9 @@ StatusSnapshot sampleSnapshot() {
   s.last_error_utime = 100;
   s.publish_failures = 7;
   s.heap_in_use_bytes = 123456789;
+  s.semantic_map_frames = 40;
+  s.semantic_map_skipped = 3;
+  s.semantic_map_voxels = 250000;
   return s;
 }
 
@@ -286,6 +293,9 @@ TEST(StatusBuilder, FillsEveryFieldFromTheSnapshot) {
   EXPECT_EQ(s.last_error_utime, 100);
   EXPECT_EQ(s.publish_failures, 7);
   EXPECT_EQ(s.heap_in_use_bytes, 123456789);
+  EXPECT_EQ(s.semantic_map_frames, 40);
+  EXPECT_EQ(s.semantic_map_skipped, 3);
+  EXPECT_EQ(s.semantic_map_voxels, 250000);
   EXPECT_EQ(s.frames_lost_in_transit, 0);
 }
 
@@ -305,6 +315,142 @@ TEST(StatusBuilder, TheSourceStateAndTheNewerErrorWin) {
   s = StatusBuilder::build(snap);
   EXPECT_EQ(s.last_error, "pipeline error");
   EXPECT_EQ(s.last_error_utime, 100);
+}
+
+// ---- the semantic map stage ----------------------------------------------------------------
+
+// A frame of a 40 x 40 camera looking straight down from 1.5 m at a floor with a table top:
+// labelled, with a ground plane whose camera_to_ground is that mount.
+LabelledFrame topDownFrame(std::int64_t seq, Label top_label = Label::Table) {
+  LabelledFrame l;
+  RgbdFrame& f = l.segmented.prepared.frame;
+  f.width = f.height = 40;
+  f.seq = seq;
+  f.utime = 1000000 + static_cast<std::uint64_t>(seq) * 100000;
+  f.source = "test";
+  GroundPlane ground;
+  ground.camera_to_ground.linear() << 1, 0, 0, 0, -1, 0, 0, 0, -1;
+  ground.camera_to_ground.translation() = Eigen::Vector3f(0.0f, 0.0f, 1.5f);
+  l.segmented.prepared.ground = ground;
+  OrganizedCloud& cloud = l.segmented.prepared.cloud_camera;
+  cloud.width = l.labels.width = 40;
+  cloud.height = l.labels.height = 40;
+  for (int y = 0; y < 40; ++y) {
+    for (int x = 0; x < 40; ++x) {
+      const bool top = x >= 10 && x < 30 && y >= 10 && y < 30;
+      // Pixels 2.5 cm apart, each pair (2k, 2k + 1) in one 5 cm voxel: the unsampled
+      // pixels (pixel_stride 2) share the voxels of the sampled ones.
+      cloud.points.emplace_back(0.025f * static_cast<float>(x - 20) - 0.0125f,
+                                0.025f * static_cast<float>(y - 20) - 0.0125f, top ? 0.75f : 1.5f);
+      cloud.colors.push_back(Rgb8{});
+      l.labels.labels.push_back(static_cast<std::uint8_t>(top ? top_label : Label::Floor));
+      l.labels.confidence.push_back(0.9f);
+    }
+  }
+  return l;
+}
+
+SemanticMapStage::Options stageOptions(bool threaded) {
+  SemanticMapStage::Options o;
+  o.threaded = threaded;
+  o.queue_capacity = 2;
+  o.publish_period_s = 0.0;
+  o.map_channel = "SM";
+  o.table_map_channel = "TM";
+  o.map.min_voxel_frames = 1;
+  o.map.min_table_voxels = 20;
+  return o;
+}
+
+TEST(SemanticMapStage, AFullQueueDropsTheOldestFrameAndNeverHoldsThePublishThread) {
+  auto bus = std::make_shared<io::MemoryBus>();
+  std::promise<void> entered, release;
+  std::shared_future<void> released = release.get_future().share();
+  std::atomic<int> fused{0};
+  SemanticMapStage::Options options = stageOptions(true);
+  options.before_fuse = [&] {
+    if (fused.fetch_add(1) == 0) {
+      entered.set_value();
+      released.wait();  // the map thread is busy with the first frame
+    }
+  };
+  SemanticMapStage stage(options, bus, nullptr);
+  stage.start();
+  std::vector<LabelledFrame> frames;
+  for (int i = 1; i <= 5; ++i) frames.push_back(topDownFrame(i));
+  auto consume = [&](const LabelledFrame& l) {
+    FrameResult r{l, 0, poseAt(l.segmented.prepared.frame.utime), {}, std::nullopt, std::nullopt};
+    stage.consume(r);
+  };
+  consume(frames[0]);
+  entered.get_future().wait();
+  // While the map is busy, four more frames arrive: two wait, two are dropped (the oldest).
+  for (int i = 1; i < 5; ++i) consume(frames[static_cast<std::size_t>(i)]);
+  SemanticMapStage::Counters c = stage.counters();
+  EXPECT_EQ(c.queued, 5u);
+  EXPECT_EQ(c.skipped, 2u);
+  EXPECT_EQ(c.queue_depth, 2u);
+  EXPECT_EQ(c.integrated, 0u);
+  release.set_value();
+  stage.stop(true);
+  c = stage.counters();
+  EXPECT_EQ(c.integrated, 3u);
+  EXPECT_EQ(c.failed, 0u);
+  EXPECT_GE(c.publishes, 1u);
+  // The tables of the map went out on the map channels.
+  std::vector<io::TablesMessage> tables;
+  bus->subscribe("TM", [&](const std::string& ch, const std::uint8_t* d, std::size_t n) {
+    tables.push_back(io::decodeTables(d, n, ch));
+  });
+  int maps = 0;
+  bus->subscribe("SM", [&](const std::string&, const std::uint8_t*, std::size_t) { ++maps; });
+  bus->end();
+  while (bus->handle(0ms) != io::HandleResult::EndOfLog) {
+  }
+  ASSERT_FALSE(tables.empty());
+  EXPECT_GE(maps, 1);
+  ASSERT_EQ(tables.back().tables.size(), 1u);
+  EXPECT_EQ(tables.back().content, io::TablesContent::Map);
+  EXPECT_EQ(tables.back().map_info[0].sightings, 3);  // the three frames fused
+  // Map frame: the robot at (1, 2), the top 0.5 m square under the camera.
+  ASSERT_EQ(tables.back().map_tables.size(), 1u);
+  EXPECT_NEAR(tables.back().map_tables[0].center.x(), 1.0, 0.05);
+  EXPECT_NEAR(tables.back().map_tables[0].center.y(), 2.0, 0.05);
+}
+
+TEST(SemanticMapStage, FusedLabelsReplaceAWrongFramesLabels) {
+  auto bus = std::make_shared<io::MemoryBus>();
+  SemanticMapStage::Options options = stageOptions(false);
+  options.fused_labels = true;
+  SemanticMapStage stage(options, bus, nullptr);
+  stage.start();
+  for (int i = 1; i <= 3; ++i) {
+    const LabelledFrame l = topDownFrame(i);
+    FrameResult r{l, 0, poseAt(l.segmented.prepared.frame.utime), {}, std::nullopt, std::nullopt};
+    stage.consume(r);
+  }
+  // A frame calling the top a chair is published with the map's labels: table.
+  const LabelledFrame wrong = topDownFrame(4, Label::Chair);
+  FrameResult r{wrong, 0, poseAt(wrong.segmented.prepared.frame.utime), {}, std::nullopt,
+                std::nullopt};
+  stage.consume(r);
+  ASSERT_TRUE(r.published_labels.has_value());
+  int chair = 0, table = 0;
+  for (std::size_t i = 0; i < wrong.labels.labels.size(); ++i) {
+    if (wrong.labels.labels[i] != static_cast<std::uint8_t>(Label::Chair)) continue;
+    chair += r.published_labels->labels[i] == static_cast<std::uint8_t>(Label::Chair);
+    table += r.published_labels->labels[i] == static_cast<std::uint8_t>(Label::Table);
+  }
+  EXPECT_EQ(chair, 0);
+  EXPECT_EQ(table, 400);
+
+  EXPECT_EQ(stage.counters().fused_frames, 4u);
+  // A frame without a pose is neither fused nor relabelled.
+  FrameResult no_pose{wrong, 0, std::nullopt, {}, std::nullopt, std::nullopt};
+  stage.consume(no_pose);
+  EXPECT_FALSE(no_pose.published_labels.has_value());
+  EXPECT_EQ(stage.counters().integrated, 4u);
+  stage.stop(true);
 }
 
 }  // namespace

@@ -115,8 +115,9 @@ void walkStatus(Walk& w) {
   w.string("last_error");
   w.fixed(8);
   // frames_dropped_{at_door,in_pipeline,at_shutdown}, cpu_{budget,used}_cores, processing_threads,
-  // source_reconnects, frames_lost_in_transit, publish_failures, heap_in_use_bytes
-  w.fixed(3 * 8 + 2 * 4 + 4 + 8 + 3 * 8);
+  // source_reconnects, frames_lost_in_transit, publish_failures, heap_in_use_bytes,
+  // semantic_map_{frames,skipped,voxels}
+  w.fixed(3 * 8 + 2 * 4 + 4 + 8 + 3 * 8 + 3 * 8);
 }
 
 RgbdFrame frame() {

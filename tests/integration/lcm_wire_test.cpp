@@ -227,6 +227,9 @@ findmug_lcm::status_t makeStatus(Random& r, const Scale& s) {
   m.frames_lost_in_transit = r.i64();
   m.publish_failures = r.i64();
   m.heap_in_use_bytes = r.i64();
+  m.semantic_map_frames = r.i64();
+  m.semantic_map_skipped = r.i64();
+  m.semantic_map_voxels = r.i64();
   return m;
 }
 
@@ -323,6 +326,9 @@ TEST(LcmWire, StatusWalkMatchesGeneratedCode) {
     EXPECT_EQ(d.frames_lost_in_transit, m.frames_lost_in_transit);
     EXPECT_EQ(d.publish_failures, m.publish_failures);
     EXPECT_EQ(d.heap_in_use_bytes, m.heap_in_use_bytes);
+    EXPECT_EQ(d.semantic_map_frames, m.semantic_map_frames);
+    EXPECT_EQ(d.semantic_map_skipped, m.semantic_map_skipped);
+    EXPECT_EQ(d.semantic_map_voxels, m.semantic_map_voxels);
   });
 }
 

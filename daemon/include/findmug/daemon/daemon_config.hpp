@@ -22,6 +22,7 @@
 #include <vector>
 
 #include "findmug/config.hpp"
+#include "findmug/semantic_map.hpp"
 #include "findmug/table_map.hpp"
 
 namespace findmug::daemon {
@@ -71,6 +72,14 @@ struct DaemonConfig {
   double pose_history_s = 5.0;     // poses kept for the lookup (must cover the latency)
   bool publish_table_map = true;   // publish FINDMUG_TABLE_MAP after each map update
   TableMapConfig table_map;        // the `table_map:` section
+  // The fused 3-D semantic map (semantic_map_stage.hpp): off by default; needs poses.
+  bool semantic_map = false;
+  int semantic_map_queue = 2;              // frames waiting for the map thread (drop-oldest)
+  double semantic_map_publish_s = 2.0;     // map message and map tables at most this often
+  bool semantic_map_fused_labels = false;  // FINDMUG_LABELS carries the map's labels
+  std::string semantic_map_file;           // load at start, save periodically and at stop
+  double semantic_map_save_s = 60.0;
+  SemanticMapConfig semantic_map_config;   // the `semantic_map:` section
   CheckConfig check;               // the `check:` section (findmugd --check only)
 
   // Channel names with the suffix applied.

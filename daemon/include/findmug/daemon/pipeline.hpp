@@ -63,6 +63,7 @@
 #include <map>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <string>
 
 #include "findmug/config.hpp"
@@ -70,6 +71,7 @@
 #include "findmug/daemon/frame_steps.hpp"
 #include "findmug/daemon/pose_input.hpp"
 #include "findmug/daemon/result_sinks.hpp"
+#include "findmug/daemon/semantic_map_stage.hpp"
 #include "findmug/daemon/service.hpp"
 #include "findmug/daemon/stage.hpp"
 #include "findmug/daemon/status_snapshot.hpp"
@@ -154,6 +156,10 @@ class Pipeline {
   const PoseInput* poseInput() const { return pose_input_.get(); }
   // Tables in the map now, tentative ones included (thread-safe copy).
   std::vector<MappedTable> mappedTables() const;
+  // The semantic map stage's counters (daemon.semantic_map), or nullopt when it is off.
+  std::optional<SemanticMapStage::Counters> semanticMapCounters() const;
+  // The semantic map's tables at its last publish (empty when it is off).
+  std::vector<FusedTable> semanticMapTables() const;
   // Publishes refused by the output bus (frames' messages and status).
   std::uint64_t publishFailures() const { return publisher_->publishFailures(); }
 
@@ -172,6 +178,7 @@ class Pipeline {
   PipelineHooks hooks_;
   int workers_;
   std::shared_ptr<TableMapSink> table_map_sink_;
+  std::shared_ptr<SemanticMapStage> semantic_map_;  // nullptr unless daemon.semantic_map
   std::shared_ptr<LcmPublisherSink> publisher_;
   std::unique_ptr<PoseInput> pose_input_;  // nullptr: no pose input
   std::uint64_t pose_max_age_us_ = 0;

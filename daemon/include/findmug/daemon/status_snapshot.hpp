@@ -53,6 +53,8 @@ struct StatusSnapshot {
   int processing_threads = 0;
   std::uint64_t publish_failures = 0;  // refused publishes, every channel (status included)
   std::int64_t heap_in_use_bytes = -1;  // allocated and not freed (-1: unknown)
+  // The semantic map stage (all 0 when daemon.semantic_map is off).
+  std::uint64_t semantic_map_frames = 0, semantic_map_skipped = 0, semantic_map_voxels = 0;
   std::string last_error;  // the pipeline's own
   std::uint64_t last_error_utime = 0;
   std::optional<Source> source;  // nullopt: frames submitted in-process

@@ -12,6 +12,8 @@
 //                                               after each map update (needs robot poses)
 //   FINDMUG_STATUS      findmug_lcm::status_t       daemon health, about 1 Hz
 //   FINDMUG_ROBOT_POSE  findmug_lcm::robot_pose_t   robot pose in the map (input, optional)
+//   FINDMUG_SEMANTIC_MAP findmug_lcm::semantic_map_t the fused 3-D semantic map, out at a low
+//                                               rate when it changed (daemon.semantic_map)
 #pragma once
 
 #include <string>
@@ -25,6 +27,7 @@ inline constexpr std::string_view kTablesChannel = "FINDMUG_TABLES";
 inline constexpr std::string_view kTableMapChannel = "FINDMUG_TABLE_MAP";
 inline constexpr std::string_view kStatusChannel = "FINDMUG_STATUS";
 inline constexpr std::string_view kRobotPoseChannel = "FINDMUG_ROBOT_POSE";
+inline constexpr std::string_view kSemanticMapChannel = "FINDMUG_SEMANTIC_MAP";
 
 // `base` + "_" + `suffix`, or `base` when the suffix is empty. The suffix may
 // hold only letters, digits and '_' (and may not start with '_'); anything
