@@ -671,7 +671,8 @@ int run(int argc, char** argv) {
     throw Error("only " + std::to_string(samples.size()) + " usable frames for " +
                 std::to_string(folds) + " folds");
   }
-  const FoldPlan plan = planFolds(f, *input, samples);
+  // Folds only for cross-validation: a --model run reads no frames.csv.
+  const FoldPlan plan = f.model.empty() ? planFolds(f, *input, samples) : FoldPlan{};
   const TrainSubset subset{f.train_frames, f.subset_seed};
 
   EvalReport report;

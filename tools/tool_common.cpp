@@ -96,18 +96,15 @@ DatasetOptions datasetOptions(const DatasetFlags& f, const SegmenterConfig& conf
 std::unique_ptr<LabeledInputs> LabeledInputs::open(const DatasetFlags& f,
                                                    const DatasetOptions& options) {
   auto all = std::unique_ptr<LabeledInputs>(new LabeledInputs);
-  std::vector<std::map<std::string, FrameListing>> listings;
   for (const auto& dir : f.data) {
     all->inputs_.push_back(LabeledInput::folder(dir, options));
     all->sources_.push_back(dir);
     all->from_mat_.push_back(false);
-    listings.push_back(loadFrameListing(dir));
   }
   for (const auto& mat : f.mats) {
     all->inputs_.push_back(LabeledInput::mat(mat, f.nyu894_csv, options.nyu_rotations_file));
     all->sources_.push_back(mat);
     all->from_mat_.push_back(true);
-    listings.emplace_back();
   }
   std::map<std::string, std::size_t> input_of_name;
   std::vector<std::string> collisions;
@@ -123,8 +120,6 @@ std::unique_ptr<LabeledInputs> LabeledInputs::open(const DatasetFlags& f,
       all->input_of_.push_back(k);
       all->index_in_input_.push_back(i);
       all->names_.push_back(names[i]);
-      const auto listed = listings[k].find(names[i]);
-      all->listings_.push_back(listed != listings[k].end() ? listed->second : FrameListing{});
     }
     description += (k ? " + " : "") + all->inputs_[k]->frames().description;
   }
@@ -149,16 +144,25 @@ std::unique_ptr<LabeledInputs> LabeledInputs::open(const DatasetFlags& f,
 
 std::vector<std::string> LabeledInputs::scenes(int gap,
                                                const std::vector<long>* nyu_test_indices) const {
+  // Read only here: training needs no frames.csv.
+  std::vector<std::map<std::string, FrameListing>> listings;
+  for (std::size_t k = 0; k < inputs_.size(); ++k) {
+    listings.push_back(from_mat_[k] ? std::map<std::string, FrameListing>{}
+                                    : loadFrameListing(sources_[k]));
+  }
   std::vector<std::string> out(names_.size());
   std::vector<std::size_t> nyu_frames;
   std::vector<long> nyu_indices;
   for (std::size_t i = 0; i < names_.size(); ++i) {
-    if (!listings_[i].scene.empty()) {
-      out[i] = "scene:" + listings_[i].scene;
-    } else if (listings_[i].nyu_index || from_mat_[input_of_[i]]) {
+    const auto& listing = listings[input_of_[i]];
+    const auto listed = listing.find(names_[i]);
+    const FrameListing frame = listed != listing.end() ? listed->second : FrameListing{};
+    if (!frame.scene.empty()) {
+      out[i] = "scene:" + frame.scene;
+    } else if (frame.nyu_index || from_mat_[input_of_[i]]) {
       nyu_frames.push_back(i);
-      nyu_indices.push_back(listings_[i].nyu_index ? *listings_[i].nyu_index
-                                                   : static_cast<long>(index_in_input_[i]) + 1);
+      nyu_indices.push_back(frame.nyu_index ? *frame.nyu_index
+                                            : static_cast<long>(index_in_input_[i]) + 1);
     }
   }
   const std::vector<std::string> runs = nyu_test_indices

@@ -80,7 +80,6 @@ class LabeledInputs {
   std::vector<std::string> sources_;
   std::vector<std::size_t> input_of_, index_in_input_;
   std::vector<std::string> names_;
-  std::vector<FrameListing> listings_;  // per frame; empty when the folder lists nothing
   std::vector<bool> from_mat_;
   LabeledFrames frames_;
 };
