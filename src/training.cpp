@@ -23,15 +23,16 @@ std::vector<FrameSample> extractSamples(const DatasetFolder& dataset, const Segm
 
 namespace {
 
-// Names of the first stage's extra columns: region, then scene features.
-std::vector<std::string> extraColumnNames(bool regions, bool scene) {
+// Names of the first stage's extra columns: region, scene, then object features.
+std::vector<std::string> extraColumnNames(bool regions, bool scene, bool objects) {
   std::vector<std::string> names;
   if (regions) names.assign(kRegionFeatureNames.begin(), kRegionFeatureNames.end());
   if (scene) names.insert(names.end(), kSceneFeatureNames.begin(), kSceneFeatureNames.end());
+  if (objects) names.insert(names.end(), kObjectFeatureNames.begin(), kObjectFeatureNames.end());
   return names;
 }
 
-// Segment k's extra columns (region, then scene features, as present).
+// Segment k's extra columns (region, scene, then object features, as present).
 void appendExtraColumns(const SegmentFeatures& f, std::size_t k, std::vector<float>& out) {
   if (!f.regions.empty()) {
     const auto begin = f.regions.begin() + static_cast<std::ptrdiff_t>(k * kRegionFeatureDim);
@@ -40,6 +41,10 @@ void appendExtraColumns(const SegmentFeatures& f, std::size_t k, std::vector<flo
   if (!f.scene.empty()) {
     const auto begin = f.scene.begin() + static_cast<std::ptrdiff_t>(k * kSceneFeatureDim);
     out.insert(out.end(), begin, begin + kSceneFeatureDim);
+  }
+  if (!f.objects.empty()) {
+    const auto begin = f.objects.begin() + static_cast<std::ptrdiff_t>(k * kObjectFeatureDim);
+    out.insert(out.end(), begin, begin + kObjectFeatureDim);
   }
 }
 
@@ -228,7 +233,8 @@ TrainingSet makeTrainingSet(const std::vector<const FrameSample*>& given,
   }
   const bool regions = !frames.empty() && !frames.front()->features.regions.empty();
   const bool scene = !frames.empty() && !frames.front()->features.scene.empty();
-  set.extra_names = extraColumnNames(regions, scene);
+  const bool objects = !frames.empty() && !frames.front()->features.objects.empty();
+  set.extra_names = extraColumnNames(regions, scene, objects);
   for (const FrameSample* s : frames) {
     if (s->features.regions.empty() == regions && !s->features.features.empty()) {
       throw Error("makeTrainingSet: frame " + s->name + (regions ? " lacks" : " has") +
@@ -237,6 +243,10 @@ TrainingSet makeTrainingSet(const std::vector<const FrameSample*>& given,
     if (s->features.scene.empty() == scene && !s->features.features.empty()) {
       throw Error("makeTrainingSet: frame " + s->name + (scene ? " lacks" : " has") +
                   " scene features unlike the first frame");
+    }
+    if (s->features.objects.empty() == objects && !s->features.features.empty()) {
+      throw Error("makeTrainingSet: frame " + s->name + (objects ? " lacks" : " has") +
+                  " object features unlike the first frame");
     }
     for (std::size_t k = 0; k < s->segment_labels.size(); ++k) {
       if (s->segment_labels[k] >= kNumLabels) continue;
@@ -322,7 +332,8 @@ RandomForest trainModel(const std::vector<const FrameSample*>& frames,
   TrainingSet set;
   if (!frames.empty())
     set.extra_names = extraColumnNames(!frames.front()->features.regions.empty(),
-                                       !frames.front()->features.scene.empty());
+                                       !frames.front()->features.scene.empty(),
+                                       !frames.front()->features.objects.empty());
   for (const auto& name : contextFeatureNames()) set.extra_names.push_back(name);
   for (std::size_t i = 0; i < n; ++i) {
     const FrameSample& s = *frames[i];
