@@ -188,6 +188,13 @@ GroupKind surfaceKind(const SegmentMoments& m, double span, const ObjectConfig& 
 
 }  // namespace
 
+std::vector<std::string_view> objectFeatureNames(ObjectColumns columns) {
+  if (columns == ObjectColumns::All) return {kObjectFeatureNames.begin(), kObjectFeatureNames.end()};
+  std::vector<std::string_view> names;
+  for (const int k : kObjectContextColumns) names.push_back(kObjectFeatureNames[static_cast<std::size_t>(k)]);
+  return names;
+}
+
 void validateObjectConfig(const ObjectConfig& config) {
   auto check = [](float value, double lo, double hi, const char* key) {
     if (!(value >= lo && value <= hi)) {
@@ -408,14 +415,17 @@ void computeObjectFeaturesInto(const SegmentFeatures& features,
     }
   }
 
-  out.values.resize(n * kObjectFeatureDim);
+  const bool all = config.columns == ObjectColumns::All;
+  const std::size_t dim = all ? kObjectFeatureDim : kObjectContextColumns.size();
+  out.values.resize(n * dim);
   for (std::size_t s = 0; s < n; ++s) {
     const ObjectGroup& g = out.groups[static_cast<std::size_t>(out.segment_group[s])];
     const float span = g.max_height - g.min_height;
     const float relative = std::clamp(
         (static_cast<float>(patches[s].centroid.z()) - g.min_height) / std::max(span, 0.01f),
         0.0f, 1.0f);
-    float* row = out.values.data() + s * kObjectFeatureDim;
+    std::array<float, kObjectFeatureDim> row_values;
+    float* row = row_values.data();
     row[0] = span;
     row[1] = g.min_height;
     row[2] = g.footprint_area;
@@ -427,6 +437,13 @@ void computeObjectFeaturesInto(const SegmentFeatures& features,
     row[8] = g.wall_distance;
     row[9] = static_cast<float>(static_cast<int>(g.kind));
     row[10] = relative;
+    float* out_row = out.values.data() + s * dim;
+    if (all) {
+      std::copy(row_values.begin(), row_values.end(), out_row);
+    } else {
+      for (std::size_t k = 0; k < dim; ++k)
+        out_row[k] = row_values[static_cast<std::size_t>(kObjectContextColumns[k])];
+    }
   }
 }
 

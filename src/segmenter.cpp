@@ -72,8 +72,9 @@ std::vector<std::string> firstStageFeatureNames(const SegmenterConfig& config) {
   std::vector<std::string> names(kFeatureNames.begin(), kFeatureNames.end());
   if (config.regions.enabled) names.insert(names.end(), kRegionFeatureNames.begin(), kRegionFeatureNames.end());
   if (config.scene.enabled) names.insert(names.end(), kSceneFeatureNames.begin(), kSceneFeatureNames.end());
-  if (config.objects.enabled)
-    names.insert(names.end(), kObjectFeatureNames.begin(), kObjectFeatureNames.end());
+  if (config.objects.enabled) {
+    for (const auto name : objectFeatureNames(config.objects.columns)) names.emplace_back(name);
+  }
   return names;
 }
 
@@ -100,14 +101,15 @@ void firstStageRowsInto(const SegmentFeatures& features, std::vector<float>& row
                 std::to_string(features.scene.size()) + " scene feature values");
   }
   const bool objects = !features.objects.empty();
-  if (objects && features.objects.size() != n * kObjectFeatureDim) {
+  const std::size_t object_dim = objects && n > 0 ? features.objects.size() / n : 0;
+  if (objects && (object_dim * n != features.objects.size() ||
+                  (object_dim != kObjectFeatureDim && object_dim != kObjectContextColumns.size()))) {
     throw Error("firstStageRows: " + std::to_string(n) + " segments but " +
                 std::to_string(features.objects.size()) + " object feature values");
   }
   const std::size_t region_dim = regions ? kRegionFeatureDim : 0;
   const std::size_t scene_dim = scene ? kSceneFeatureDim : 0;
-  const std::size_t dim =
-      kFeatureDim + region_dim + scene_dim + (objects ? kObjectFeatureDim : 0);
+  const std::size_t dim = kFeatureDim + region_dim + scene_dim + object_dim;
   rows.resize(n * dim);
   for (std::size_t i = 0; i < n; ++i) {
     float* row = rows.data() + i * dim;
@@ -121,8 +123,8 @@ void firstStageRowsInto(const SegmentFeatures& features, std::vector<float>& row
                   kSceneFeatureDim, row + kFeatureDim + region_dim);
     }
     if (objects) {
-      std::copy_n(features.objects.begin() + static_cast<std::ptrdiff_t>(i * kObjectFeatureDim),
-                  kObjectFeatureDim, row + kFeatureDim + region_dim + scene_dim);
+      std::copy_n(features.objects.begin() + static_cast<std::ptrdiff_t>(i * object_dim),
+                  object_dim, row + kFeatureDim + region_dim + scene_dim);
     }
   }
 }

@@ -56,8 +56,8 @@ struct SegmentFeatures {
   // segment; empty unless features.scene is on. They follow the region
   // features in a model's rows.
   std::vector<float> scene;
-  // Object features (object_features.hpp), row-major, kObjectFeatureDim per
-  // segment; empty unless features.objects is on. They follow the scene
+  // Object features (object_features.hpp), row-major, as many per segment
+  // as features.objects_columns selects; empty unless features.objects is on. They follow the scene
   // features in a model's rows.
   std::vector<float> objects;
 };

@@ -54,6 +54,7 @@
 
 #include <array>
 #include <string_view>
+#include <string_view>
 #include <vector>
 
 #include "findmug/features.hpp"
@@ -62,8 +63,16 @@
 
 namespace findmug {
 
+// Which of the object features a patch's row gets (features.objects_columns).
+enum class ObjectColumns {
+  All,      // all kObjectFeatureDim
+  Context,  // the three that say where the patch sits in its object and the room:
+            // object_back_rise, object_wall_distance, patch_height_in_object
+};
+
 struct ObjectConfig {
   bool enabled = false;                     // features.objects
+  ObjectColumns columns = ObjectColumns::All;  // features.objects_columns
   float concave_tolerance_deg = 15.0f;      // features.objects_concave_tolerance_deg
   float link_gap_m = 0.05f;                 // features.objects_link_gap_m
   float step_m = 0.1f;                      // features.objects_step_m
@@ -79,6 +88,12 @@ inline constexpr std::array<std::string_view, kObjectFeatureDim> kObjectFeatureN
     "object_extent_major", "object_extent_minor", "object_top_height",
     "object_top_area",     "object_back_rise",    "object_wall_distance",
     "object_kind",         "patch_height_in_object"};
+
+// The columns of ObjectColumns::Context, as indices into kObjectFeatureNames.
+inline constexpr std::array<int, 3> kObjectContextColumns = {7, 8, 10};
+
+// The names of the columns `columns` selects, in row order.
+std::vector<std::string_view> objectFeatureNames(ObjectColumns columns);
 
 // object_wall_distance when the frame has no wall (m).
 inline constexpr float kNoWallDistance = 10.0f;
@@ -99,7 +114,8 @@ struct ObjectGroup {
 struct ObjectFeatures {
   std::vector<int> segment_group;  // segment -> index into groups
   std::vector<ObjectGroup> groups;  // object candidates and the large planes (kind)
-  std::vector<float> values;        // row-major, kObjectFeatureDim per segment
+  // Row-major, objectFeatureNames(config.columns).size() per segment.
+  std::vector<float> values;
 };
 
 // Throws findmug::Error naming the setting when a value is out of range.

@@ -306,6 +306,30 @@ TEST(ObjectFeatures, NoSegmentsGiveEmptyOutputAndNoWallTheCap) {
   for (float v : single.values) EXPECT_TRUE(std::isfinite(v));
 }
 
+// features.objects_columns = context: three of the columns, the same values.
+TEST(ObjectFeatures, ContextColumnsAreTheirColumnsOfAll) {
+  const TableScene scene;
+  const auto& built = scene.built;
+  const ObjectFeatures all = computeObjectFeatures(built.features, built.seg, built.regions, {});
+  ObjectConfig config;
+  config.columns = ObjectColumns::Context;
+  const ObjectFeatures context =
+      computeObjectFeatures(built.features, built.seg, built.regions, config);
+  const auto names = objectFeatureNames(ObjectColumns::Context);
+  ASSERT_EQ(names.size(), kObjectContextColumns.size());
+  EXPECT_EQ(names[0], "object_back_rise");
+  EXPECT_EQ(names[1], "object_wall_distance");
+  EXPECT_EQ(names[2], "patch_height_in_object");
+  EXPECT_EQ(objectFeatureNames(ObjectColumns::All).size(), static_cast<std::size_t>(kObjectFeatureDim));
+  const std::size_t n = built.seg.segments.size();
+  ASSERT_EQ(context.values.size(), n * names.size());
+  for (std::size_t s = 0; s < n; ++s)
+    for (std::size_t k = 0; k < names.size(); ++k)
+      EXPECT_EQ(context.values[s * names.size() + k],
+                value(all, static_cast<int>(s), kObjectContextColumns[k]));
+  EXPECT_EQ(context.segment_group, all.segment_group);
+}
+
 TEST(ObjectFeatures, RefusesBadInputNamingIt) {
   const TableScene scene;
   const auto& built = scene.built;

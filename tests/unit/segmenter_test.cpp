@@ -372,6 +372,18 @@ TEST(Segmenter, RunsTheObjectFeaturesOfTheModel) {
     EXPECT_THAT(e.what(), HasSubstr("features.objects = false"));
     EXPECT_THAT(e.what(), HasSubstr("with object features"));
   }
+  // The context columns: a model of 3 object columns, refused by a config of all 11.
+  SegmenterConfig context = config;
+  context.objects.columns = ObjectColumns::Context;
+  const auto context_samples = extractScene(Segmenter(context, nullptr), scene);
+  ASSERT_EQ(context_samples[0].features.objects.size(), n * kObjectContextColumns.size());
+  RandomForest context_model = trainModel({&context_samples[0]}, context);
+  EXPECT_EQ(context_model.featureNames(), firstStageFeatureNames(context));
+  EXPECT_EQ(context_model.featureNames().back(), "patch_height_in_object");
+  context_model.setExtractionSettings(extractionSettings(context));
+  const auto context_shared = std::make_shared<const RandomForest>(context_model);
+  EXPECT_NO_THROW(Segmenter(context, context_shared).process(scene.frame));
+  EXPECT_THROW(Segmenter(config, context_shared), Error);
   // Objects on and regions off: the regions are still formed for the objects.
   SegmenterConfig objects_only = config;
   objects_only.regions.enabled = false;
