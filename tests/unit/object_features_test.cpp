@@ -14,9 +14,14 @@
 #include <utility>
 #include <vector>
 
+#include "findmug/config.hpp"
+#include "findmug/dataset.hpp"
 #include "findmug/error.hpp"
 #include "findmug/features.hpp"
+#include "findmug/labels.hpp"
 #include "findmug/region_features.hpp"
+#include "findmug/segmenter.hpp"
+#include "test_data.hpp"
 
 namespace findmug {
 namespace {
@@ -365,6 +370,62 @@ TEST(ObjectFeatures, RefusesBadInputNamingIt) {
   bad.orientation_tolerance_deg = 60;
   expectError([&] { computeObjectFeatures(built.features, built.seg, built.regions, bad); },
               "features.objects_orientation_tolerance_deg");
+}
+
+// A real NYU frame (0001: a living room with a sofa, chairs, cabinets),
+// the ground from its labelled floor: every value finite; most floor
+// patches in floor groups and most wall patches in wall groups, none of
+// either in the other's; chairs more often than cabinets have something
+// rising above their top. The shares were 83 %, 69 %, 43 % and 0 % when
+// written; the bounds leave room, but a grouping that lost the planes or
+// the seats fails them.
+TEST(ObjectFeatures, RealFrameKeepsFloorAndWallsOutAndFindsSeats) {
+  FINDMUG_REQUIRE_DATA(dir, "nyuv2_labeled");
+  const DatasetFolder dataset(dir.string());
+  const LabeledFrame frame = dataset.load(0);
+  ASSERT_EQ(frame.name, "0001");
+  SegmenterConfig config;
+  config.ground.source = GroundSource::FloorLabels;
+  config.objects.enabled = true;
+  const Segmenter segmenter(config, nullptr);
+  const SegmentedFrame segmented = segmenter.oversegment(segmenter.prepare(frame.frame, &frame.labels));
+  ASSERT_TRUE(segmented.prepared.ground);
+  const SegmentFeatures features = segmenter.features(segmented);
+  const RegionFeatures regions = computeRegionFeatures(features, segmented.segmentation, config.regions);
+  const ObjectFeatures o = computeObjectFeatures(features, segmented.segmentation, regions, config.objects);
+  ASSERT_EQ(o.values, features.objects);  // what the segmenter computed
+  for (const float v : o.values) ASSERT_TRUE(std::isfinite(v));
+  const auto labels = segmentMajorityLabels(segmented.segmentation, frame.labels);
+  int floor = 0, floor_in_floor = 0, wall = 0, wall_in_wall = 0, crossed = 0;
+  int chair = 0, chair_rise = 0, cabinet = 0, cabinet_rise = 0;
+  for (std::size_t s = 0; s < labels.size(); ++s) {
+    const ObjectGroup& g = groupOf(o, static_cast<int>(s));
+    if (labels[s] == static_cast<std::uint8_t>(Label::Floor)) {
+      ++floor;
+      floor_in_floor += g.kind == GroupKind::Floor;
+      crossed += g.kind == GroupKind::Wall;
+    } else if (labels[s] == static_cast<std::uint8_t>(Label::Wall)) {
+      ++wall;
+      wall_in_wall += g.kind == GroupKind::Wall;
+      crossed += g.kind == GroupKind::Floor;
+    } else if (labels[s] == static_cast<std::uint8_t>(Label::Chair)) {
+      ++chair;
+      chair_rise += g.back_rise > 0.1f;
+    } else if (labels[s] == static_cast<std::uint8_t>(Label::Cabinet)) {
+      ++cabinet;
+      cabinet_rise += g.back_rise > 0.1f;
+    }
+  }
+  ASSERT_GT(floor, 10);
+  ASSERT_GT(wall, 100);
+  ASSERT_GT(chair, 50);
+  ASSERT_GT(cabinet, 50);
+  EXPECT_GE(floor_in_floor, floor * 7 / 10) << floor_in_floor << " of " << floor;
+  EXPECT_GE(wall_in_wall, wall / 2) << wall_in_wall << " of " << wall;
+  EXPECT_EQ(crossed, 0);
+  EXPECT_GT(chair_rise * cabinet, 2 * cabinet_rise * chair)
+      << "chairs " << chair_rise << " of " << chair << ", cabinets " << cabinet_rise << " of "
+      << cabinet;
 }
 
 }  // namespace
