@@ -207,8 +207,10 @@ void checkModelMatchesConfig(const RandomForest& forest, const SegmenterConfig& 
     const auto& names = forest.featureNames();
     const bool model_scene =
         std::find(names.begin(), names.end(), std::string(kSceneFeatureNames[0])) != names.end();
-    const bool model_objects =
-        std::find(names.begin(), names.end(), std::string(kObjectFeatureNames[0])) != names.end();
+    const bool model_objects = std::any_of(names.begin(), names.end(), [](const std::string& n) {
+      return std::find(kObjectFeatureNames.begin(), kObjectFeatureNames.end(), n) !=
+             kObjectFeatureNames.end();
+    });
     throw Error("model " + name + " reads " + std::to_string(forest.dim()) +
                 " feature columns" + (model_regions ? " (with region features)" : "") +
                 (model_scene ? " (with scene features)" : "") +

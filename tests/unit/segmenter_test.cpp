@@ -383,7 +383,12 @@ TEST(Segmenter, RunsTheObjectFeaturesOfTheModel) {
   context_model.setExtractionSettings(extractionSettings(context));
   const auto context_shared = std::make_shared<const RandomForest>(context_model);
   EXPECT_NO_THROW(Segmenter(context, context_shared).process(scene.frame));
-  EXPECT_THROW(Segmenter(config, context_shared), Error);
+  try {
+    Segmenter segmenter(config, context_shared);
+    FAIL() << "expected the context-column model to be refused by an all-column config";
+  } catch (const Error& e) {
+    EXPECT_THAT(e.what(), HasSubstr("with object features"));
+  }
   // Objects on and regions off: the regions are still formed for the objects.
   SegmenterConfig objects_only = config;
   objects_only.regions.enabled = false;
