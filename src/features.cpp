@@ -614,6 +614,7 @@ void detail::computeFeaturesInto(const OrganizedCloud& cloud_ground,
   out.moments.resize(segment_count);
   out.regions.clear();
   out.scene.clear();
+  out.objects.clear();
   for (std::size_t s = 0; s < segment_count; ++s) {
     if (acc[s].count == 0) {
       throw Error("computeFeatures: segment " + std::to_string(s) + " (" +

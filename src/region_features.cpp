@@ -12,29 +12,12 @@
 #include <string>
 
 #include "findmug/error.hpp"
+#include "moments_internal.hpp"
 #include "scratch.hpp"
 
 namespace findmug {
 
 namespace {
-
-// Pools b into a (Chan et al.'s pairwise update): the mean and the scatter
-// about the mean of the union, with no raw second moments, so no
-// cancellation however far the points are from the origin.
-void pool(SegmentMoments& a, const SegmentMoments& b) {
-  if (b.count == 0) return;
-  if (a.count == 0) {
-    a = b;
-    return;
-  }
-  const double n = a.count + b.count;
-  const Eigen::Vector3d delta = b.mean - a.mean;
-  a.scatter += b.scatter + (a.count * b.count / n) * (delta * delta.transpose());
-  a.mean += delta * (b.count / n);
-  a.count = n;
-  a.normal_sum += b.normal_sum;
-  a.max_z = std::max(a.max_z, b.max_z);
-}
 
 int findRoot(std::vector<int>& parent, int i) {
   while (parent[i] != i) {
@@ -92,7 +75,7 @@ void regionsFromMoments(const std::vector<SegmentMoments>& patch,
       region.emplace_back();
     }
     out.segment_region[s] = root_region[root];
-    pool(region[static_cast<std::size_t>(root_region[root])], patch[s]);
+    detail::poolMoments(region[static_cast<std::size_t>(root_region[root])], patch[s]);
   }
   out.region_count = static_cast<int>(region.size());
 

@@ -6,6 +6,7 @@
 #include <ctime>
 
 #include "findmug/error.hpp"
+#include "findmug/object_features.hpp"
 #include "findmug/scene_features.hpp"
 #include "findmug/table_regions.hpp"
 #include "scratch.hpp"
@@ -74,6 +75,9 @@ std::vector<std::string> firstStageFeatureNames(const SegmenterConfig& config) {
   std::vector<std::string> names(kFeatureNames.begin(), kFeatureNames.end());
   if (config.regions.enabled) names.insert(names.end(), kRegionFeatureNames.begin(), kRegionFeatureNames.end());
   if (config.scene.enabled) names.insert(names.end(), kSceneFeatureNames.begin(), kSceneFeatureNames.end());
+  if (config.objects.enabled) {
+    for (const auto name : objectFeatureNames(config.objects.columns)) names.emplace_back(name);
+  }
   return names;
 }
 
@@ -99,8 +103,16 @@ void firstStageRowsInto(const SegmentFeatures& features, std::vector<float>& row
     throw Error("firstStageRows: " + std::to_string(n) + " segments but " +
                 std::to_string(features.scene.size()) + " scene feature values");
   }
+  const bool objects = !features.objects.empty();
+  const std::size_t object_dim = objects && n > 0 ? features.objects.size() / n : 0;
+  if (objects && (object_dim * n != features.objects.size() ||
+                  (object_dim != kObjectFeatureDim && object_dim != kObjectContextColumns.size()))) {
+    throw Error("firstStageRows: " + std::to_string(n) + " segments but " +
+                std::to_string(features.objects.size()) + " object feature values");
+  }
   const std::size_t region_dim = regions ? kRegionFeatureDim : 0;
-  const std::size_t dim = kFeatureDim + region_dim + (scene ? kSceneFeatureDim : 0);
+  const std::size_t scene_dim = scene ? kSceneFeatureDim : 0;
+  const std::size_t dim = kFeatureDim + region_dim + scene_dim + object_dim;
   rows.resize(n * dim);
   for (std::size_t i = 0; i < n; ++i) {
     float* row = rows.data() + i * dim;
@@ -112,6 +124,10 @@ void firstStageRowsInto(const SegmentFeatures& features, std::vector<float>& row
     if (scene) {
       std::copy_n(features.scene.begin() + static_cast<std::ptrdiff_t>(i * kSceneFeatureDim),
                   kSceneFeatureDim, row + kFeatureDim + region_dim);
+    }
+    if (objects) {
+      std::copy_n(features.objects.begin() + static_cast<std::ptrdiff_t>(i * object_dim),
+                  object_dim, row + kFeatureDim + region_dim + scene_dim);
     }
   }
 }
@@ -132,7 +148,8 @@ void predictSegmentsInto(const RandomForest& model, const SegmentFeatures& featu
     throw Error("predictSegments: the model reads " + std::to_string(dim) +
                 " columns per segment, the features give " +
                 std::to_string(n == 0 ? 0 : rows.size() / n) +
-                " (features.regions or features.scene differs from the model's)");
+                " (features.regions, features.scene or features.objects differs from the "
+                "model's)");
   }
   const RandomForest* stage = model.contextStage();
   // Without a context stage the first stage's answers are the output.
@@ -208,13 +225,20 @@ void checkModelMatchesConfig(const RandomForest& forest, const SegmenterConfig& 
     const auto& names = forest.featureNames();
     const bool model_scene =
         std::find(names.begin(), names.end(), std::string(kSceneFeatureNames[0])) != names.end();
+    const bool model_objects = std::any_of(names.begin(), names.end(), [](const std::string& n) {
+      return std::find(kObjectFeatureNames.begin(), kObjectFeatureNames.end(), n) !=
+             kObjectFeatureNames.end();
+    });
     throw Error("model " + name + " reads " + std::to_string(forest.dim()) +
                 " feature columns" + (model_regions ? " (with region features)" : "") +
                 (model_scene ? " (with scene features)" : "") +
+                (model_objects ? " (with object features)" : "") +
                 " but the config computes " + std::to_string(expected.size()) +
                 " (features.regions = " + (config.regions.enabled ? "true" : "false") +
                 ", features.scene = " + (config.scene.enabled ? "true" : "false") +
-                "); set features.regions and features.scene to match the model or retrain" +
+                ", features.objects = " + (config.objects.enabled ? "true" : "false") +
+                "); set features.regions, features.scene and features.objects to match the "
+                "model or retrain" +
                 (forest.formatVersion() == 2 ? " (a format-2 model has no region features)" : ""));
   }
   if (config.context.enabled != (forest.contextStage() != nullptr)) {
@@ -400,13 +424,18 @@ SegmentFeatures Segmenter::features(const SegmentedFrame& segmented) const {
   if (!segmented.prepared.ground) return {};
   SegmentFeatures out = computeFeatures(segmented.prepared.cloud_ground,
                                         segmented.prepared.normals_ground, segmented.segmentation);
-  if (config_.regions.enabled) {
-    out.regions = computeRegionFeatures(out, segmented.segmentation, config_.regions).values;
-  }
+  RegionFeatures regions;
+  if (config_.regions.enabled || config_.objects.enabled)
+    regions = computeRegionFeatures(out, segmented.segmentation, config_.regions);
+  if (config_.regions.enabled) out.regions = regions.values;
   if (config_.scene.enabled) {
     out.scene = computeSceneFeatures(segmented.prepared.cloud_ground, segmented.segmentation, out,
                                      segmented.prepared.ground->camera_to_ground.translation(),
                                      config_.scene);
+  }
+  if (config_.objects.enabled) {
+    out.objects =
+        computeObjectFeatures(out, segmented.segmentation, regions, config_.objects).values;
   }
   return out;
 }
@@ -433,7 +462,7 @@ LabelledFrame Segmenter::classify(SegmentedFrame segmented) const {
     // for the frames after this one (a stream with frames lacking a ground
     // plane otherwise reallocated them all on the next frame with one).
     // (A new member of either struct must be emptied here too.)
-    static_assert(sizeof(SegmentFeatures) == 5 * sizeof(std::vector<float>));
+    static_assert(sizeof(SegmentFeatures) == 6 * sizeof(std::vector<float>));
     static_assert(sizeof(MrfResult) ==
                   2 * sizeof(std::vector<float>) + sizeof(std::int64_t));
     out.features.features.clear();
@@ -441,6 +470,7 @@ LabelledFrame Segmenter::classify(SegmentedFrame segmented) const {
     out.features.moments.clear();
     out.features.regions.clear();
     out.features.scene.clear();
+    out.features.objects.clear();
     out.forest_probabilities.clear();
     out.first_stage_probabilities.clear();
     out.forest_labels.clear();
@@ -458,11 +488,13 @@ LabelledFrame Segmenter::classify(SegmentedFrame segmented) const {
   // Per-thread working memory (scratch.hpp).
   struct Buffers {
     RegionFeatures regions;
+    ObjectFeatures objects;
     std::vector<float> weights, confidence;
     std::vector<ClassProbabilities> weighted;
   };
   thread_local Buffers buffers;
   detail::Borrowed regions_buffer(buffers.regions);
+  detail::Borrowed objects_buffer(buffers.objects);
   detail::Borrowed weights_buffer(buffers.weights), confidence_buffer(buffers.confidence);
   detail::Borrowed weighted_buffer(buffers.weighted);
 
@@ -471,10 +503,9 @@ LabelledFrame Segmenter::classify(SegmentedFrame segmented) const {
                       segmented.segmentation, out.features);
   watch.lap(out.timings, out.cpu_timings, &StageTimings::features_ms);
   RegionFeatures& regions = *regions_buffer;  // kept for the table region vote after the MRF
-  if (config_.regions.enabled) {
+  if (config_.regions.enabled || config_.objects.enabled)
     computeRegionFeaturesInto(out.features, segmented.segmentation, config_.regions, regions);
-    out.features.regions = regions.values;
-  }
+  if (config_.regions.enabled) out.features.regions = regions.values;
   if (config_.scene.enabled) {
     std::vector<float> scene = std::move(out.features.scene);
     computeSceneFeaturesInto(segmented.prepared.cloud_ground, segmented.segmentation,
@@ -483,7 +514,14 @@ LabelledFrame Segmenter::classify(SegmentedFrame segmented) const {
                              config_.scene, scene);
     out.features.scene = std::move(scene);
   }
-  // Region and scene features share this stage's time.
+  if (config_.objects.enabled) {
+    computeObjectFeaturesInto(out.features, segmented.segmentation, regions, config_.objects,
+                              *objects_buffer);
+    out.features.objects = objects_buffer->values;
+  } else {
+    out.features.objects.clear();
+  }
+  // Region, scene and object features share this stage's time.
   watch.lap(out.timings, out.cpu_timings, &StageTimings::regions_ms);
 
   const std::size_t n = out.features.features.size();

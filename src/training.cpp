@@ -37,15 +37,26 @@ std::vector<FrameSample> extractSamples(const DatasetFolder& dataset, const Segm
 
 namespace {
 
-// Names of the first stage's extra columns: region, then scene features.
-std::vector<std::string> extraColumnNames(bool regions, bool scene) {
+// Object feature columns per segment of a frame's features (0 without them).
+std::size_t objectColumnsOf(const SegmentFeatures& f) {
+  return f.features.empty() ? 0 : f.objects.size() / f.features.size();
+}
+
+// Names of the first stage's extra columns: region, scene, then object
+// features (`object_columns` of them: all or the context set).
+std::vector<std::string> extraColumnNames(bool regions, bool scene, std::size_t object_columns) {
   std::vector<std::string> names;
   if (regions) names.assign(kRegionFeatureNames.begin(), kRegionFeatureNames.end());
   if (scene) names.insert(names.end(), kSceneFeatureNames.begin(), kSceneFeatureNames.end());
+  if (object_columns > 0) {
+    const auto columns = object_columns == kObjectFeatureDim ? ObjectColumns::All
+                                                             : ObjectColumns::Context;
+    for (const auto name : objectFeatureNames(columns)) names.emplace_back(name);
+  }
   return names;
 }
 
-// Segment k's extra columns (region, then scene features, as present).
+// Segment k's extra columns (region, scene, then object features, as present).
 void appendExtraColumns(const SegmentFeatures& f, std::size_t k, std::vector<float>& out) {
   if (!f.regions.empty()) {
     const auto begin = f.regions.begin() + static_cast<std::ptrdiff_t>(k * kRegionFeatureDim);
@@ -54,6 +65,11 @@ void appendExtraColumns(const SegmentFeatures& f, std::size_t k, std::vector<flo
   if (!f.scene.empty()) {
     const auto begin = f.scene.begin() + static_cast<std::ptrdiff_t>(k * kSceneFeatureDim);
     out.insert(out.end(), begin, begin + kSceneFeatureDim);
+  }
+  if (!f.objects.empty()) {
+    const std::size_t dim = objectColumnsOf(f);
+    const auto begin = f.objects.begin() + static_cast<std::ptrdiff_t>(k * dim);
+    out.insert(out.end(), begin, begin + static_cast<std::ptrdiff_t>(dim));
   }
 }
 
@@ -336,7 +352,9 @@ TrainingSet makeTrainingSet(const std::vector<const FrameSample*>& given,
   }
   const bool regions = !frames.empty() && !frames.front()->features.regions.empty();
   const bool scene = !frames.empty() && !frames.front()->features.scene.empty();
-  set.extra_names = extraColumnNames(regions, scene);
+  const std::size_t object_columns = frames.empty() ? 0 : objectColumnsOf(frames.front()->features);
+  const bool objects = object_columns > 0;
+  set.extra_names = extraColumnNames(regions, scene, object_columns);
   for (const FrameSample* s : frames) {
     if (s->features.regions.empty() == regions && !s->features.features.empty()) {
       throw Error("makeTrainingSet: frame " + s->name + (regions ? " lacks" : " has") +
@@ -345,6 +363,12 @@ TrainingSet makeTrainingSet(const std::vector<const FrameSample*>& given,
     if (s->features.scene.empty() == scene && !s->features.features.empty()) {
       throw Error("makeTrainingSet: frame " + s->name + (scene ? " lacks" : " has") +
                   " scene features unlike the first frame");
+    }
+    if ((s->features.objects.empty() == objects ||
+         (objects && objectColumnsOf(s->features) != object_columns)) &&
+        !s->features.features.empty()) {
+      throw Error("makeTrainingSet: frame " + s->name + (objects ? " lacks" : " has") +
+                  " object features, or other object columns, unlike the first frame");
     }
     for (std::size_t k = 0; k < s->segment_labels.size(); ++k) {
       if (s->segment_labels[k] >= kNumLabels) continue;
@@ -453,7 +477,8 @@ RandomForest trainModel(const std::vector<const FrameSample*>& frames,
   TrainingSet set;
   if (!frames.empty())
     set.extra_names = extraColumnNames(!frames.front()->features.regions.empty(),
-                                       !frames.front()->features.scene.empty());
+                                       !frames.front()->features.scene.empty(),
+                                       objectColumnsOf(frames.front()->features));
   for (const auto& name : contextFeatureNames()) set.extra_names.push_back(name);
   for (std::size_t i = 0; i < n; ++i) {
     const FrameSample& s = *frames[i];

@@ -18,6 +18,7 @@
 #include "findmug/forest.hpp"
 #include "findmug/ground.hpp"
 #include "findmug/mrf.hpp"
+#include "findmug/object_features.hpp"
 #include "findmug/oversegmentation.hpp"
 #include "findmug/region_features.hpp"
 #include "findmug/scene_features.hpp"
@@ -96,6 +97,7 @@ struct SegmenterConfig {
   OversegmentationConfig overseg;
   RegionConfig regions;    // features.regions, features.region_*
   SceneConfig scene;       // features.scene, features.scene_*
+  ObjectConfig objects;    // features.objects, features.objects_*
   ContextConfig context;   // features.context, features.context_*
   ForestParams forest;
   LearnerOptions learner;  // learner.*

@@ -56,6 +56,10 @@ struct SegmentFeatures {
   // segment; empty unless features.scene is on. They follow the region
   // features in a model's rows.
   std::vector<float> scene;
+  // Object features (object_features.hpp), row-major, as many per segment
+  // as features.objects_columns selects; empty unless features.objects is on. They follow the scene
+  // features in a model's rows.
+  std::vector<float> objects;
 };
 
 // sRGB (0..255) to CIELAB (D65).
@@ -71,8 +75,8 @@ FeatureVector computePatchFeatures(const std::vector<Eigen::Vector3f>& points_gr
 SegmentFeatures computeFeatures(const OrganizedCloud& cloud_ground,
                                 const NormalImage& normals_ground,
                                 const Oversegmentation& segmentation);
-// The same into `out` (features, centroids and moments; regions and scene are
-// emptied), reusing the memory it holds: a stream of frames then allocates
+// The same into `out` (features, centroids and moments; regions, scene and
+// objects are emptied), reusing the memory it holds: a stream of frames then allocates
 // nothing here (Segmenter::recycle).
 void computeFeaturesInto(const OrganizedCloud& cloud_ground, const NormalImage& normals_ground,
                          const Oversegmentation& segmentation, SegmentFeatures& out);

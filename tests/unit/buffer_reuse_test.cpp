@@ -124,6 +124,7 @@ void expectSameFrame(const LabelledFrame& got, const LabelledFrame& want) {
   EXPECT_TRUE(sameBytes(got.features.centroids, want.features.centroids));
   EXPECT_TRUE(sameBytes(got.features.regions, want.features.regions));
   EXPECT_TRUE(sameBytes(got.features.scene, want.features.scene));
+  EXPECT_TRUE(sameBytes(got.features.objects, want.features.objects));
   EXPECT_TRUE(sameBytes(got.forest_probabilities, want.forest_probabilities));
   EXPECT_TRUE(sameBytes(got.first_stage_probabilities, want.first_stage_probabilities));
   EXPECT_EQ(got.mrf.labels, want.mrf.labels);
@@ -136,12 +137,13 @@ void expectSameFrame(const LabelledFrame& got, const LabelledFrame& want) {
   EXPECT_EQ(got.tables.size(), want.tables.size());
 }
 
-// Every optional stage on (region and scene features, the auto-context
-// stage), with a model trained for them on `scene`.
+// Every optional stage on (region, scene and object features, the
+// auto-context stage), with a model trained for them on `scene`.
 SegmenterConfig allStagesConfig() {
   SegmenterConfig c = config();
   c.regions.enabled = true;
   c.scene.enabled = true;
+  c.objects.enabled = true;
   c.context.enabled = true;
   c.context.cross_fit_folds = 0;  // one frame: nothing to cross-fit over
   c.forest.num_trees = 4;
@@ -269,6 +271,7 @@ TEST(BufferReuse, RecycledFramesGiveTheResultsOfFreshOnesWithEveryStage) {
   const LabelledFrame want_b = fresh.process(b.frame);
   const LabelledFrame want_empty = fresh.process(emptyFrame());
   ASSERT_FALSE(want_a.features.scene.empty());
+  ASSERT_FALSE(want_a.features.objects.empty());
   ASSERT_FALSE(want_a.first_stage_probabilities.empty());
 
   const Segmenter reusing(allStagesConfig(), forest);

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <cstring>
 #include <set>
 
 #include "findmug/error.hpp"
@@ -310,6 +311,80 @@ TEST(Segmenter, RunsTheSceneFeaturesOfTheModel) {
     EXPECT_THAT(e.what(), HasSubstr("features.scene = false"));
     EXPECT_THAT(e.what(), HasSubstr("with scene features"));
   }
+}
+
+// features.objects adds its columns after the scene features, computed by
+// the same code in training (Segmenter::features) and in the daemon's path
+// (classify): the same values to the bit and the same forest answers; a
+// model trained without them is refused with a message naming the setting.
+TEST(Segmenter, RunsTheObjectFeaturesOfTheModel) {
+  const Scene scene = floorAndWall(true);
+  SegmenterConfig config = fastConfig();
+  config.regions.enabled = true;
+  config.scene.enabled = true;
+  config.objects.enabled = true;
+  config.forest.num_trees = 4;
+  config.forest.max_depth = 6;
+  const auto samples = extractScene(Segmenter(config, nullptr), scene);
+  ASSERT_EQ(samples.size(), 1u);
+  const std::size_t n = samples[0].features.features.size();
+  ASSERT_EQ(samples[0].features.objects.size(), n * kObjectFeatureDim);
+  RandomForest trained = trainModel({&samples[0]}, config);
+  EXPECT_EQ(trained.dim(), kFeatureDim + kRegionFeatureDim + kSceneFeatureDim + kObjectFeatureDim);
+  EXPECT_EQ(trained.featureNames(), firstStageFeatureNames(config));
+  EXPECT_EQ(trained.featureNames().back(), std::string(kObjectFeatureNames.back()));
+  trained.setExtractionSettings(extractionSettings(config));
+  const auto model = std::make_shared<const RandomForest>(trained);
+  const LabelledFrame out = Segmenter(config, model).process(scene.frame);
+  ASSERT_EQ(out.features.objects.size(), n * kObjectFeatureDim);
+  EXPECT_EQ(0, std::memcmp(out.features.objects.data(), samples[0].features.objects.data(),
+                           n * kObjectFeatureDim * sizeof(float)));
+  // The scene's floor is floor and its wall is wall, never an object.
+  std::size_t floor = 0, wall = 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    const float kind = out.features.objects[i * kObjectFeatureDim + 9];
+    floor += kind == 1.0f;
+    wall += kind == 2.0f;
+  }
+  EXPECT_GT(floor, 0u);
+  EXPECT_GT(wall, 0u);
+  const auto expected = predictSample(*model, samples[0], config);
+  ASSERT_EQ(out.forest_probabilities.size(), n);
+  for (std::size_t i = 0; i < n; ++i) ASSERT_EQ(out.forest_probabilities[i], expected[i]) << i;
+
+  SegmenterConfig no_objects = config;
+  no_objects.objects.enabled = false;
+  try {
+    Segmenter segmenter(no_objects, model);
+    FAIL() << "expected the model to be refused";
+  } catch (const Error& e) {
+    EXPECT_THAT(e.what(), HasSubstr("features.objects = false"));
+    EXPECT_THAT(e.what(), HasSubstr("with object features"));
+  }
+  // The context columns: a model of 3 object columns, refused by a config of all 11.
+  SegmenterConfig context = config;
+  context.objects.columns = ObjectColumns::Context;
+  const auto context_samples = extractScene(Segmenter(context, nullptr), scene);
+  ASSERT_EQ(context_samples[0].features.objects.size(), n * kObjectContextColumns.size());
+  RandomForest context_model = trainModel({&context_samples[0]}, context);
+  EXPECT_EQ(context_model.featureNames(), firstStageFeatureNames(context));
+  EXPECT_EQ(context_model.featureNames().back(), "patch_height_in_object");
+  context_model.setExtractionSettings(extractionSettings(context));
+  const auto context_shared = std::make_shared<const RandomForest>(context_model);
+  EXPECT_NO_THROW(Segmenter(context, context_shared).process(scene.frame));
+  try {
+    Segmenter segmenter(config, context_shared);
+    FAIL() << "expected the context-column model to be refused by an all-column config";
+  } catch (const Error& e) {
+    EXPECT_THAT(e.what(), HasSubstr("with object features"));
+  }
+  // Objects on and regions off: the regions are still formed for the objects.
+  SegmenterConfig objects_only = config;
+  objects_only.regions.enabled = false;
+  const auto only = extractScene(Segmenter(objects_only, nullptr), scene);
+  ASSERT_EQ(only.size(), 1u);
+  EXPECT_TRUE(only[0].features.regions.empty());
+  EXPECT_EQ(only[0].features.objects, samples[0].features.objects);
 }
 
 // training.extra_oversegmentations: each frame gets training-only views
