@@ -13,7 +13,9 @@
 //     (TableMap, FINDMUG_TABLE_MAP today) and the tables from the fused map; a table
 //     matches a true one when its box centre lies on the true top (one to one);
 //   * the map stage's CPU per frame (integrate, thread CPU time, median), tables() CPU,
-//     voxels and memory after the walk, and the map message's size (zlib).
+//     voxels and memory after the walk, and the map message's size (zlib);
+//   * then, per quarter of each walk, how it grows: frame and causal fused accuracy over the
+//     quarter's frames, and the tables of both maps against the truth at its end.
 //
 //   semantic_map_walk [--config daemon/findmugd.yaml] [--model models/findmug.fmf]
 //                     [--seeds 1,2,3] [--frames 60] [--fps 2]
@@ -144,6 +146,7 @@ int main(int argc, char** argv) {
     const TableMapConfig table_map_config = resolveTableMapConfig(config);
     auto forest = std::make_shared<const RandomForest>(RandomForest::load(model_path));
     const Segmenter segmenter(config.segmenter, forest);
+    std::string growth_rows;
     std::printf("model %s, %d frames at %.1f fps per walk, pose noise %.3f m / %.2f deg\n\n",
                 model_path.c_str(), frames, fps, noise_m, noise_deg);
     std::printf(
@@ -167,6 +170,9 @@ int main(int argc, char** argv) {
         Eigen::Isometry3d camera;
       };
       std::vector<Kept> kept;
+      std::string growth;
+      Accuracy quarter_frame, quarter_fused;
+      const std::size_t quarter = std::max<std::size_t>(1, path.size() / 4);
       for (std::size_t i = 0; i < path.size(); ++i) {
         synth::RenderedFrame rendered =
             synth::render(scene, path[i], synth::RenderOptions{}, seed * 100000 + i);
@@ -188,6 +194,23 @@ int main(int argc, char** argv) {
         frame_acc.add(labelled.labels, truth);
         causal_acc.add(map.projectLabels(prepared.cloud_camera, labelled.labels, camera), truth);
         kept.push_back({prepared.cloud_camera, labelled.labels, truth, camera});
+        quarter_frame.add(labelled.labels, truth);
+        quarter_fused.add(map.projectLabels(prepared.cloud_camera, labelled.labels, camera), truth);
+        if ((i + 1) % quarter == 0 || i + 1 == path.size()) {
+          std::vector<Eigen::Vector2d> fused_now, map_now;
+          for (const FusedTable& t : map.tables()) fused_now.push_back(t.table.center.cast<double>());
+          for (const TableCluster& t : table_map.confirmedTables()) {
+            map_now.push_back(t.center.cast<double>());
+          }
+          char row[256];
+          std::snprintf(row, sizeof(row), "| %llu | %zu | %.3f | %.3f | %s | %s |\n",
+                        static_cast<unsigned long long>(seed), i + 1, quarter_frame.value(),
+                        quarter_fused.value(), pr(score(map_now, scene)).c_str(),
+                        pr(score(fused_now, scene)).c_str());
+          growth += row;
+          quarter_frame = Accuracy{};
+          quarter_fused = Accuracy{};
+        }
       }
       for (const Kept& k : kept) final_acc.add(map.projectLabels(k.cloud, k.labels, k.camera), k.truth);
       const double t0 = threadCpuMs();
@@ -216,7 +239,12 @@ int main(int argc, char** argv) {
                   static_cast<double>(stats.memory_bytes) / (1 << 20),
                   static_cast<double>(message.data.size()) / 1024.0);
       std::fflush(stdout);
+      growth_rows += growth;
     }
+    std::printf("\n| seed | frames seen | frame acc (this quarter) | fused acc causal (this quarter) "
+                "| table map: P, R, centre err m | fused map: P, R, centre err m |\n"
+                "|---|---|---|---|---|---|\n%s",
+                growth_rows.c_str());
   } catch (const std::exception& e) {
     std::fprintf(stderr, "semantic_map_walk: %s\n", e.what());
     return 1;
