@@ -19,7 +19,8 @@
 //
 //   semantic_map_walk [--config daemon/findmugd.yaml] [--model models/findmug.fmf]
 //                     [--seeds 1,2,3] [--frames 60] [--fps 2]
-//                     [--pose-noise-m 0] [--pose-noise-deg 0]
+//                     [--pose-noise-m 0] [--pose-noise-deg 0] [--verbose 1]
+// --verbose 1 also lists every true table and every table of both maps at the end (stderr).
 #include <time.h>
 
 #include <algorithm>
@@ -112,6 +113,7 @@ int main(int argc, char** argv) {
   std::vector<std::uint64_t> seeds = {1, 2, 3};
   int frames = 60;
   double fps = 2.0, noise_m = 0.0, noise_deg = 0.0;
+  bool verbose = false;
   for (int i = 1; i + 1 < argc; i += 2) {
     const std::string flag = argv[i], value = argv[i + 1];
     if (flag == "--config") {
@@ -129,6 +131,8 @@ int main(int argc, char** argv) {
       fps = std::stod(value);
     } else if (flag == "--pose-noise-m") {
       noise_m = std::stod(value);
+    } else if (flag == "--verbose") {
+      verbose = value == "1";
     } else if (flag == "--pose-noise-deg") {
       noise_deg = std::stod(value);
     } else {
@@ -227,6 +231,24 @@ int main(int argc, char** argv) {
       }
       for (const TableCluster& t : table_map.confirmedTables()) {
         map_centres.push_back(t.center.cast<double>());
+      }
+      if (verbose) {
+        for (const synth::TableTruth& t : scene.tables) {
+          std::fprintf(stderr, "seed %llu truth %d %s: (%.2f, %.2f) %.2f x %.2f m, h %.2f\n",
+                       static_cast<unsigned long long>(seed), t.id, t.kind.c_str(),
+                       t.center_xy.x(), t.center_xy.y(), t.size.x(), t.size.y(), t.height);
+        }
+        for (const FusedTable& f : fused) {
+          std::fprintf(stderr, "seed %llu fused %d: (%.2f, %.2f) %.2f x %.2f m, h %.2f, %d voxels\n",
+                       static_cast<unsigned long long>(seed), f.table.id, f.table.center.x(),
+                       f.table.center.y(), 2 * f.table.extents.x(), 2 * f.table.extents.y(),
+                       f.table.top_height, f.voxels);
+        }
+        for (const TableCluster& t : table_map.confirmedTables()) {
+          std::fprintf(stderr, "seed %llu table map %d: (%.2f, %.2f) %.2f x %.2f m, h %.2f\n",
+                       static_cast<unsigned long long>(seed), t.id, t.center.x(), t.center.y(),
+                       2 * t.extents.x(), 2 * t.extents.y(), t.top_height);
+        }
       }
       const auto message = io::encodeSemanticMap(io::semanticMapMessage(map, 0, 0));
       const SemanticMapStats stats = map.stats();
