@@ -558,8 +558,17 @@ std::vector<FusedTable> SemanticMap::tables(std::vector<std::string>* diagnostic
   for (const auto& [key, v] : voxels_) {
     if (!occupied(v) || v.frames < map_config_.min_voxel_frames) continue;
     float confidence = 0.0f;
-    const std::uint8_t label = labelOf(v, &confidence);
+    std::uint8_t label = labelOf(v, &confidence);
     if (label == kVoidLabel) continue;
+    // As per frame (tables.table_weight, weightTableProbability): the table votes count
+    // table_weight times when the voxel's label is decided for the table stage.
+    const int table = static_cast<int>(Label::Table);
+    if (label != table && v.votes[table] * table_config_.table_weight > v.votes[label]) {
+      std::uint32_t total = 0;
+      for (std::uint16_t n : v.votes) total += n;
+      label = static_cast<std::uint8_t>(table);
+      confidence = static_cast<float>(v.votes[table]) / static_cast<float>(total);
+    }
     centres.push_back(centreOf(key));
     mean += centres.back().head<2>();
     labels.labels.push_back(label);

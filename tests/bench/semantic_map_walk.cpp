@@ -13,11 +13,14 @@
 //     (TableMap, FINDMUG_TABLE_MAP today) and the tables from the fused map; a table
 //     matches a true one when its box centre lies on the true top (one to one);
 //   * the map stage's CPU per frame (integrate, thread CPU time, median), tables() CPU,
-//     voxels and memory after the walk, and the map message's size (zlib).
+//     voxels and memory after the walk, and the map message's size (zlib);
+//   * then, per quarter of each walk, how it grows: frame and causal fused accuracy over the
+//     quarter's frames, and the tables of both maps against the truth at its end.
 //
 //   semantic_map_walk [--config daemon/findmugd.yaml] [--model models/findmug.fmf]
 //                     [--seeds 1,2,3] [--frames 60] [--fps 2]
-//                     [--pose-noise-m 0] [--pose-noise-deg 0]
+//                     [--pose-noise-m 0] [--pose-noise-deg 0] [--verbose 1]
+// --verbose 1 also lists every true table and every table of both maps at the end (stderr).
 #include <time.h>
 
 #include <algorithm>
@@ -110,6 +113,7 @@ int main(int argc, char** argv) {
   std::vector<std::uint64_t> seeds = {1, 2, 3};
   int frames = 60;
   double fps = 2.0, noise_m = 0.0, noise_deg = 0.0;
+  bool verbose = false;
   for (int i = 1; i + 1 < argc; i += 2) {
     const std::string flag = argv[i], value = argv[i + 1];
     if (flag == "--config") {
@@ -127,6 +131,8 @@ int main(int argc, char** argv) {
       fps = std::stod(value);
     } else if (flag == "--pose-noise-m") {
       noise_m = std::stod(value);
+    } else if (flag == "--verbose") {
+      verbose = value == "1";
     } else if (flag == "--pose-noise-deg") {
       noise_deg = std::stod(value);
     } else {
@@ -144,6 +150,7 @@ int main(int argc, char** argv) {
     const TableMapConfig table_map_config = resolveTableMapConfig(config);
     auto forest = std::make_shared<const RandomForest>(RandomForest::load(model_path));
     const Segmenter segmenter(config.segmenter, forest);
+    std::string growth_rows;
     std::printf("model %s, %d frames at %.1f fps per walk, pose noise %.3f m / %.2f deg\n\n",
                 model_path.c_str(), frames, fps, noise_m, noise_deg);
     std::printf(
@@ -167,6 +174,9 @@ int main(int argc, char** argv) {
         Eigen::Isometry3d camera;
       };
       std::vector<Kept> kept;
+      std::string growth;
+      Accuracy quarter_frame, quarter_fused;
+      const std::size_t quarter = std::max<std::size_t>(1, path.size() / 4);
       for (std::size_t i = 0; i < path.size(); ++i) {
         synth::RenderedFrame rendered =
             synth::render(scene, path[i], synth::RenderOptions{}, seed * 100000 + i);
@@ -188,6 +198,23 @@ int main(int argc, char** argv) {
         frame_acc.add(labelled.labels, truth);
         causal_acc.add(map.projectLabels(prepared.cloud_camera, labelled.labels, camera), truth);
         kept.push_back({prepared.cloud_camera, labelled.labels, truth, camera});
+        quarter_frame.add(labelled.labels, truth);
+        quarter_fused.add(map.projectLabels(prepared.cloud_camera, labelled.labels, camera), truth);
+        if ((i + 1) % quarter == 0 || i + 1 == path.size()) {
+          std::vector<Eigen::Vector2d> fused_now, map_now;
+          for (const FusedTable& t : map.tables()) fused_now.push_back(t.table.center.cast<double>());
+          for (const TableCluster& t : table_map.confirmedTables()) {
+            map_now.push_back(t.center.cast<double>());
+          }
+          char row[256];
+          std::snprintf(row, sizeof(row), "| %llu | %zu | %.3f | %.3f | %s | %s |\n",
+                        static_cast<unsigned long long>(seed), i + 1, quarter_frame.value(),
+                        quarter_fused.value(), pr(score(map_now, scene)).c_str(),
+                        pr(score(fused_now, scene)).c_str());
+          growth += row;
+          quarter_frame = Accuracy{};
+          quarter_fused = Accuracy{};
+        }
       }
       for (const Kept& k : kept) final_acc.add(map.projectLabels(k.cloud, k.labels, k.camera), k.truth);
       const double t0 = threadCpuMs();
@@ -205,6 +232,24 @@ int main(int argc, char** argv) {
       for (const TableCluster& t : table_map.confirmedTables()) {
         map_centres.push_back(t.center.cast<double>());
       }
+      if (verbose) {
+        for (const synth::TableTruth& t : scene.tables) {
+          std::fprintf(stderr, "seed %llu truth %d %s: (%.2f, %.2f) %.2f x %.2f m, h %.2f\n",
+                       static_cast<unsigned long long>(seed), t.id, t.kind.c_str(),
+                       t.center_xy.x(), t.center_xy.y(), t.size.x(), t.size.y(), t.height);
+        }
+        for (const FusedTable& f : fused) {
+          std::fprintf(stderr, "seed %llu fused %d: (%.2f, %.2f) %.2f x %.2f m, h %.2f, %d voxels\n",
+                       static_cast<unsigned long long>(seed), f.table.id, f.table.center.x(),
+                       f.table.center.y(), 2 * f.table.extents.x(), 2 * f.table.extents.y(),
+                       f.table.top_height, f.voxels);
+        }
+        for (const TableCluster& t : table_map.confirmedTables()) {
+          std::fprintf(stderr, "seed %llu table map %d: (%.2f, %.2f) %.2f x %.2f m, h %.2f\n",
+                       static_cast<unsigned long long>(seed), t.id, t.center.x(), t.center.y(),
+                       2 * t.extents.x(), 2 * t.extents.y(), t.top_height);
+        }
+      }
       const auto message = io::encodeSemanticMap(io::semanticMapMessage(map, 0, 0));
       const SemanticMapStats stats = map.stats();
       std::printf("| %llu | %zu | %ld | %.3f | %.3f | %.3f | %s | %s | %s | %.1f | %.1f | %zu | "
@@ -216,7 +261,12 @@ int main(int argc, char** argv) {
                   static_cast<double>(stats.memory_bytes) / (1 << 20),
                   static_cast<double>(message.data.size()) / 1024.0);
       std::fflush(stdout);
+      growth_rows += growth;
     }
+    std::printf("\n| seed | frames seen | frame acc (this quarter) | fused acc causal (this quarter) "
+                "| table map: P, R, centre err m | fused map: P, R, centre err m |\n"
+                "|---|---|---|---|---|---|\n%s",
+                growth_rows.c_str());
   } catch (const std::exception& e) {
     std::fprintf(stderr, "semantic_map_walk: %s\n", e.what());
     return 1;

@@ -1,6 +1,6 @@
 // findmug-test-spy-log LOG — writes an LCM log with one message of every findmug type on its
 // channel (rgbd_frame_t, label_image_t, tables_t on FINDMUG_TABLES and FINDMUG_TABLE_MAP,
-// status_t, robot_pose_t; table_t and search_position_t inside the tables), encoded by
+// status_t, robot_pose_t, semantic_map_t; table_t and search_position_t inside the tables), encoded by
 // findmug_io's codecs, for spy_test.sh to replay into findmug-spy.
 #include <cstdio>
 #include <lcm/lcm-cpp.hpp>
@@ -9,6 +9,7 @@
 
 #include "findmug/io/channels.hpp"
 #include "findmug/io/lcm_codec.hpp"
+#include "findmug/io/semantic_map_codec.hpp"
 #include "findmug_lcm/status_t.hpp"
 
 using namespace findmug;
@@ -87,6 +88,12 @@ int main(int argc, char** argv) {
     status.source_state_name = "running";
     status.source_state = findmug_lcm::status_t::SOURCE_RUNNING;
     write(log, io::kStatusChannel, io::encodeMessage(status), t + 5);
+
+    io::SemanticMapMessage semantic;
+    semantic.utime = static_cast<std::uint64_t>(t);
+    semantic.frames = 3;
+    semantic.voxels = {{0, 0, 0, 1, 200}, {10, 4, 15, 4, 180}, {11, 4, 15, 4, 170}};
+    write(log, io::kSemanticMapChannel, io::encodeMessage(io::encodeSemanticMap(semantic)), t + 6);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "findmug-test-spy-log: %s\n", e.what());
     return 1;

@@ -226,6 +226,32 @@ TEST(SemanticMap, OneWrongFrameIsOutvoted) {
   EXPECT_GT(outvoted(map, Label::Table), 0);
 }
 
+TEST(SemanticMap, TableVotesWeighTablesTableWeightForTheTables) {
+  // The top seen from each view as a table twice (confidence 0.8) and as a chair three
+  // times (0.6): the chair has more votes (3 x 38 against 2 x 51), but not 1.5 times as many.
+  const Scene scene{{tableAt(2.5, 0.0)}};
+  auto fuse = [&](float table_weight) {
+    TableConfig tables;
+    tables.table_weight = table_weight;
+    SemanticMap map(testConfig(), tables);
+    for (int i = 0; i < 2; ++i) {
+      integrate(map, scene, kFrontView, 1);
+      integrate(map, scene, kSideView, 2);
+    }
+    for (int i = 0; i < 3; ++i) {
+      for (const auto& camera : {kFrontView, kSideView}) {
+        const View chair = render(scene, camera, 0.6f, Label::Table, Label::Chair);
+        map.integrate(chair.cloud, chair.labels, camera, static_cast<std::uint64_t>(3 + i));
+      }
+    }
+    return map.tables();
+  };
+  const auto weighted = fuse(1.5f), plain = fuse(1.0f);
+  ASSERT_EQ(weighted.size(), 1u);
+  EXPECT_NEAR(weighted[0].table.center.x(), 2.5, 0.05);
+  EXPECT_TRUE(plain.empty());  // without the weight the chair votes win
+}
+
 TEST(SemanticMap, RepeatedViewsDoNotCarveWhatTheySee) {
   const Scene scene{{tableAt(2.5, 0.0)}};
   SemanticMap map(testConfig());
