@@ -125,8 +125,8 @@ std::vector<float> pairwiseContextScales(const PairwiseContext& model,
     if (a < 0 || b < 0 || a >= n || b >= n)
       throw Error("pairwiseContextScales: edge " + std::to_string(k) + " (" + std::to_string(a) +
                   ", " + std::to_string(b) + ") outside " + std::to_string(n) + " patches");
-    const auto x = pairFeatures(features[static_cast<std::size_t>(a)],
-                                features[static_cast<std::size_t>(b)]);
+    const auto x =
+        pairFeatures(features[static_cast<std::size_t>(a)], features[static_cast<std::size_t>(b)]);
     bool finite = true;
     for (float v : x) finite = finite && std::isfinite(v);
     // A patch without a finite feature keeps the paper's weight.

@@ -65,7 +65,8 @@ TEST(MrfContext, LearnsThatAColourStepMeansALabelChange) {
   EXPECT_LT(unlike, 0.1);
   // 48 of 57 edges per graph join one label: the scales average about 1.
   EXPECT_NEAR(model.mean_same, 48.0 / 57.0, 0.05);
-  const auto scales = pairwiseContextScales(model, {patch(50), patch(51), patch(82)}, {{0, 1}, {1, 2}});
+  const auto scales =
+      pairwiseContextScales(model, {patch(50), patch(51), patch(82)}, {{0, 1}, {1, 2}});
   ASSERT_EQ(scales.size(), 2u);
   EXPECT_GT(scales[0], 1.0f);
   EXPECT_LT(scales[1], 0.2f);
@@ -91,14 +92,13 @@ TEST(MrfContext, WeakPatchFollowsItsLookAlikeNeighbour) {
     p[static_cast<int>(Label::Cabinet)] = cabinet;
     return p;
   };
-  const std::vector<ClassProbabilities> unaries = {probabilities(0.9f, 0.05f),
-                                                   probabilities(0.4f, 0.45f),
-                                                   probabilities(0.05f, 0.9f)};
+  const std::vector<ClassProbabilities> unaries = {
+      probabilities(0.9f, 0.05f), probabilities(0.4f, 0.45f), probabilities(0.05f, 0.9f)};
   MrfParams params;
   const MrfResult potts = solveMrf(unaries, centroids, edges, params);
   EXPECT_EQ(potts.labels[1], static_cast<std::uint8_t>(Label::Cabinet));
-  const MrfResult context = solveMrfScaled(
-      unaries, centroids, edges, pairwiseContextScales(model, features, edges), params);
+  const MrfResult context = solveMrfScaled(unaries, centroids, edges,
+                                           pairwiseContextScales(model, features, edges), params);
   EXPECT_EQ(context.labels[0], static_cast<std::uint8_t>(Label::Wall));
   EXPECT_EQ(context.labels[1], static_cast<std::uint8_t>(Label::Wall));
   EXPECT_EQ(context.labels[2], static_cast<std::uint8_t>(Label::Cabinet));
