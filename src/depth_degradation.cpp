@@ -60,8 +60,8 @@ std::vector<std::uint8_t> shadowMask(const std::vector<double>& z, int w, int h,
     const std::size_t row = static_cast<std::size_t>(y) * w;
     // Each pixel's column in the projector image; a pixel is hidden when a
     // pixel on the projector's side of it lands further towards that side.
-    double extreme = left ? std::numeric_limits<double>::infinity()
-                          : -std::numeric_limits<double>::infinity();
+    double extreme =
+        left ? std::numeric_limits<double>::infinity() : -std::numeric_limits<double>::infinity();
     for (int k = 0; k < w; ++k) {
       const int x = left ? w - 1 - k : k;
       const double d = z[row + x];
@@ -156,8 +156,7 @@ double blobNoise(std::uint64_t seed, int x, int y, int grid_w, double size) {
     auto node = [&](int cx, int cy) {
       return normal(seed, kBlobStream, static_cast<std::uint64_t>(cy) * grid_w + cx);
     };
-    const double w00 = (1 - fx) * (1 - fy), w10 = fx * (1 - fy), w01 = (1 - fx) * fy,
-                 w11 = fx * fy;
+    const double w00 = (1 - fx) * (1 - fy), w10 = fx * (1 - fy), w01 = (1 - fx) * fy, w11 = fx * fy;
     const double smooth = (w00 * node(ix, iy) + w10 * node(ix + 1, iy) + w01 * node(ix, iy + 1) +
                            w11 * node(ix + 1, iy + 1)) /
                           std::sqrt(w00 * w00 + w10 * w10 + w01 * w01 + w11 * w11);
@@ -183,14 +182,15 @@ double innerHoleFraction(const RgbdFrame& f) {
   if (x1 < 0) return 1.0;
   std::size_t holes = 0;
   for (int y = y0; y <= y1; ++y)
-    for (int x = x0; x <= x1; ++x) holes += f.depth_mm[static_cast<std::size_t>(y) * f.width + x] == 0;
+    for (int x = x0; x <= x1; ++x)
+      holes += f.depth_mm[static_cast<std::size_t>(y) * f.width + x] == 0;
   return static_cast<double>(holes) / (static_cast<double>(x1 - x0 + 1) * (y1 - y0 + 1));
 }
 
 }  // namespace
 
-RgbdFrame degradeDepth(const RgbdFrame& frame, const DepthDegradationConfig& c,
-                       std::uint64_t seed, DegradationReport* report) {
+RgbdFrame degradeDepth(const RgbdFrame& frame, const DepthDegradationConfig& c, std::uint64_t seed,
+                       DegradationReport* report) {
   validateFrame(frame);
   DegradationReport r;
   RgbdFrame out = frame;
@@ -230,10 +230,10 @@ RgbdFrame degradeDepth(const RgbdFrame& frame, const DepthDegradationConfig& c,
       } else {
         const double g = grey_level[i];
         const double dark = c.dark_hole_probability * clamp01((dark_level - g) / dark_level);
-        const double bright = c.bright_hole_probability * clamp01((g - c.bright_level) / bright_span);
+        const double bright =
+            c.bright_hole_probability * clamp01((g - c.bright_level) / bright_span);
         const double far = clamp01(c.far_hole_per_m * (z[i] - c.far_start_m));
-        const double keep =
-            (1 - c.base_hole_probability) * (1 - dark) * (1 - bright) * (1 - far);
+        const double keep = (1 - c.base_hole_probability) * (1 - dark) * (1 - bright) * (1 - far);
         if (blobNoise(seed, x, y, grid_w, c.blob_size_px) < 1 - keep) {
           hole = true;
           ++r.dropout;
@@ -248,12 +248,15 @@ RgbdFrame degradeDepth(const RgbdFrame& frame, const DepthDegradationConfig& c,
       double d = kDisparityOffset - kDepthNumerator / z[i];
       d += c.disparity_noise * normal(seed, kNoiseStream, i);
       if (c.quantise) d = std::round(d);
-      const double depth_mm = d < kDisparityOffset ? 1000.0 * kDepthNumerator / (kDisparityOffset - d)
-                                                   : 0.0;
+      const double depth_mm =
+          d < kDisparityOffset ? 1000.0 * kDepthNumerator / (kDisparityOffset - d) : 0.0;
       // Out of the sensor's range after the noise: no measurement.
       const bool in_range = depth_mm >= 0.5 && depth_mm <= 65535.0;
       out.depth_mm[i] = in_range ? static_cast<std::uint16_t>(std::lround(depth_mm)) : 0;
-      if (!in_range) ++r.holes_added, ++r.dropout;
+      if (!in_range) {
+        ++r.holes_added;
+        ++r.dropout;
+      }
     }
   }
   if (report) *report = r;

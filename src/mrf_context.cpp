@@ -18,6 +18,10 @@ constexpr int kNewtonSteps = 25;
 
 double logistic(double t) { return 1.0 / (1.0 + std::exp(-t)); }
 
+// The cost of parting two neighbours: -log P(different label), i.e. the
+// negative log-likelihood of "they differ"; P capped below 1 so that it stays finite.
+double partingCost(double p_same) { return -std::log1p(-std::min(p_same, 1.0 - 1e-6)); }
+
 double logit(const PairwiseContext& m, const std::array<float, kPairFeatureDim>& x) {
   double t = m.bias;
   for (int k = 0; k < kPairFeatureDim; ++k) t += m.weights[k] * (x[k] - m.mean[k]) / m.scale[k];
@@ -104,9 +108,9 @@ PairwiseContext learnPairwiseContext(const std::vector<LabelledGraph>& graphs) {
   }
   m.bias = theta[0];
   for (int k = 0; k < kPairFeatureDim; ++k) m.weights[k] = theta[k + 1];
-  double mean_same = 0;
-  for (const auto& x : xs) mean_same += sameLabelProbability(m, x);
-  m.mean_same = mean_same / count;
+  double mean_cost = 0;
+  for (const auto& x : xs) mean_cost += partingCost(sameLabelProbability(m, x));
+  m.mean_cost = mean_cost / count;
   return m;
 }
 
@@ -125,12 +129,13 @@ std::vector<float> pairwiseContextScales(const PairwiseContext& model,
     if (a < 0 || b < 0 || a >= n || b >= n)
       throw Error("pairwiseContextScales: edge " + std::to_string(k) + " (" + std::to_string(a) +
                   ", " + std::to_string(b) + ") outside " + std::to_string(n) + " patches");
-    const auto x = pairFeatures(features[static_cast<std::size_t>(a)],
-                                features[static_cast<std::size_t>(b)]);
+    const auto x =
+        pairFeatures(features[static_cast<std::size_t>(a)], features[static_cast<std::size_t>(b)]);
     bool finite = true;
     for (float v : x) finite = finite && std::isfinite(v);
     // A patch without a finite feature keeps the paper's weight.
-    if (finite) out[k] = static_cast<float>(sameLabelProbability(model, x) / model.mean_same);
+    if (finite)
+      out[k] = static_cast<float>(partingCost(sameLabelProbability(model, x)) / model.mean_cost);
   }
   return out;
 }

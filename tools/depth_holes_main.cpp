@@ -119,10 +119,10 @@ int run(int argc, char** argv) {
           if (report.skipped) std::cerr << frame.name << ": raw already, left as it is\n";
           if (!f.out.empty()) {
             std::filesystem::create_directories(f.out);
-            const std::string stem = (std::filesystem::path(f.out) /
-                                      (std::filesystem::path(dir).filename().string() + "_" +
-                                       frame.name + "_" + std::to_string(k)))
-                                         .string();
+            const std::string stem =
+                (std::filesystem::path(f.out) / (std::filesystem::path(dir).filename().string() +
+                                                 "_" + frame.name + "_" + std::to_string(k)))
+                    .string();
             writePng16(stem + "_depth.png", {640, 480, measured.depth_mm});
           }
         }

@@ -84,8 +84,8 @@ RgbdFrame degradeDepth(const RgbdFrame& frame, const DepthDegradationConfig& con
 // degraded frames are measured alike).
 struct HoleStatistics {
   static constexpr int kBrightnessBins = 5;  // grey 0-40, 40-80, 80-140, 140-220, 220-255
-  static constexpr int kSpreadBins = 4;      // local relative depth spread <2 %, 2-10, 10-30, >=30 %
-  static constexpr int kRangeBins = 4;       // local depth <2, 2-3, 3-4.5, >=4.5 m
+  static constexpr int kSpreadBins = 4;  // local relative depth spread <2 %, 2-10, 10-30, >=30 %
+  static constexpr int kRangeBins = 4;   // local depth <2, 2-3, 3-4.5, >=4.5 m
   std::size_t pixels = 0, holes = 0;
   // Per bin: pixels, holes. Spread and range bins count only pixels with a
   // measured neighbour within the window; `isolated` counts the rest.

@@ -6,9 +6,10 @@
 // such as wall and cabinet"). Here a logistic regression, learned from the
 // training frames' labelled neighbours, gives P(same label | colour, height
 // and normal-angle differences), and each edge's Potts weight is scaled by
-// that probability over its mean on the training edges (mrf.pairwise =
-// context): neighbours that look alike are held together harder, a colour,
-// height or orientation step lets the labels part. Solved by solveMrfScaled.
+// the cost of parting the two, -log(1 - P), over its mean on the training
+// edges (mrf.pairwise = context): neighbours that look alike are held
+// together harder, a colour, height or orientation step lets the labels
+// part. Solved by solveMrfScaled.
 #pragma once
 
 #include <array>
@@ -34,7 +35,7 @@ std::array<float, kPairFeatureDim> pairFeatures(const FeatureVector& a, const Fe
 struct PairwiseContext {
   double bias = 0.0;
   std::array<double, kPairFeatureDim> weights{}, mean{}, scale{1.0, 1.0, 1.0, 1.0};
-  double mean_same = 1.0;  // mean P(same) over the training edges; the scales divide by it
+  double mean_cost = 1.0;  // mean -log(1 - P(same)) over the training edges; scales divide by it
   std::size_t training_edges = 0;
 };
 
@@ -53,7 +54,7 @@ PairwiseContext learnPairwiseContext(const std::vector<LabelledGraph>& graphs);
 double sameLabelProbability(const PairwiseContext& model,
                             const std::array<float, kPairFeatureDim>& x);
 
-// Per edge: P(same | its differences) / model.mean_same, for solveMrfScaled.
+// Per edge: -log(1 - P(same | its differences)) / model.mean_cost, for solveMrfScaled.
 std::vector<float> pairwiseContextScales(const PairwiseContext& model,
                                          const std::vector<FeatureVector>& features,
                                          const std::vector<std::pair<int, int>>& edges);

@@ -100,8 +100,8 @@ TEST(DepthDegradation, DarkSurfacesDropOutInBlobs) {
   const HoleStatistics s = holeStatistics(patch, {225, 25, 275, 75, 5});
   EXPECT_GT(s.mean_run_px, 4.0);
   c.blob_size_px = 0.0f;  // independent pixels
-  const HoleStatistics speckle = holeStatistics(degradeDepth(wallAndBox(true), c, 5),
-                                                {225, 25, 275, 75, 5});
+  const HoleStatistics speckle =
+      holeStatistics(degradeDepth(wallAndBox(true), c, 5), {225, 25, 275, 75, 5});
   EXPECT_LT(speckle.mean_run_px, s.mean_run_px / 2);
 }
 

@@ -3,10 +3,13 @@
 // follow its look-alike neighbour where the paper's Potts term does not.
 #include "findmug/mrf_context.hpp"
 
+#include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
+#include "findmug/config.hpp"
 #include "findmug/error.hpp"
 #include "findmug/mrf.hpp"
+#include "findmug/segmenter.hpp"
 
 namespace findmug {
 namespace {
@@ -63,9 +66,21 @@ TEST(MrfContext, LearnsThatAColourStepMeansALabelChange) {
   const double unlike = sameLabelProbability(model, pairFeatures(patch(50), patch(82)));
   EXPECT_GT(alike, 0.9);
   EXPECT_LT(unlike, 0.1);
-  // 48 of 57 edges per graph join one label: the scales average about 1.
-  EXPECT_NEAR(model.mean_same, 48.0 / 57.0, 0.05);
-  const auto scales = pairwiseContextScales(model, {patch(50), patch(51), patch(82)}, {{0, 1}, {1, 2}});
+  // The scales average 1 over the training edges.
+  double scale_sum = 0;
+  std::size_t scale_count = 0;
+  for (std::size_t g = 0; g < f.size(); ++g) {
+    std::vector<std::pair<int, int>> labelled;
+    for (const auto& [a, b] : e[g])
+      if (l[g][a] < kNumLabels && l[g][b] < kNumLabels) labelled.emplace_back(a, b);
+    for (float v : pairwiseContextScales(model, f[g], labelled)) {
+      scale_sum += v;
+      ++scale_count;
+    }
+  }
+  EXPECT_NEAR(scale_sum / scale_count, 1.0, 1e-4);
+  const auto scales =
+      pairwiseContextScales(model, {patch(50), patch(51), patch(82)}, {{0, 1}, {1, 2}});
   ASSERT_EQ(scales.size(), 2u);
   EXPECT_GT(scales[0], 1.0f);
   EXPECT_LT(scales[1], 0.2f);
@@ -91,14 +106,13 @@ TEST(MrfContext, WeakPatchFollowsItsLookAlikeNeighbour) {
     p[static_cast<int>(Label::Cabinet)] = cabinet;
     return p;
   };
-  const std::vector<ClassProbabilities> unaries = {probabilities(0.9f, 0.05f),
-                                                   probabilities(0.4f, 0.45f),
-                                                   probabilities(0.05f, 0.9f)};
+  const std::vector<ClassProbabilities> unaries = {
+      probabilities(0.9f, 0.05f), probabilities(0.4f, 0.45f), probabilities(0.05f, 0.9f)};
   MrfParams params;
   const MrfResult potts = solveMrf(unaries, centroids, edges, params);
   EXPECT_EQ(potts.labels[1], static_cast<std::uint8_t>(Label::Cabinet));
-  const MrfResult context = solveMrfScaled(
-      unaries, centroids, edges, pairwiseContextScales(model, features, edges), params);
+  const MrfResult context = solveMrfScaled(unaries, centroids, edges,
+                                           pairwiseContextScales(model, features, edges), params);
   EXPECT_EQ(context.labels[0], static_cast<std::uint8_t>(Label::Wall));
   EXPECT_EQ(context.labels[1], static_cast<std::uint8_t>(Label::Wall));
   EXPECT_EQ(context.labels[2], static_cast<std::uint8_t>(Label::Cabinet));
@@ -119,6 +133,34 @@ TEST(MrfContext, BadGraphsAreNamed) {
   const std::vector<std::uint8_t> void_labels = {kVoidLabel, 1};
   EXPECT_THROW(learnPairwiseContext({{&features, &fine, &void_labels}}), Error);
   EXPECT_THROW(pairwiseContextScales(PairwiseContext{}, features, edges), Error);
+}
+
+// The model file does not carry the learned term: a Segmenter that would
+// classify with it refuses, naming the setting; one that only extracts
+// features (training) does not care.
+TEST(MrfContext, SegmenterRefusesTheTermWithoutItsWeights) {
+  TrainingSet set;
+  for (int i = 0; i < 20; ++i) {
+    set.features.push_back(patch(static_cast<float>(i)));
+    set.labels.push_back(static_cast<std::uint8_t>(i % 2 ? Label::Wall : Label::Floor));
+  }
+  ForestParams params;
+  params.num_trees = 1;
+  params.max_depth = 2;
+  Config config;
+  applyOverride(config, "mrf.pairwise=context");
+  auto forest = std::make_shared<RandomForest>(RandomForest::train(set, params));
+  forest->setExtractionSettings(extractionSettings(config.segmenter));
+  try {
+    Segmenter segmenter(config.segmenter, forest);
+    FAIL() << "mrf.pairwise=context was accepted without learned weights";
+  } catch (const Error& e) {
+    EXPECT_THAT(e.what(), ::testing::HasSubstr("mrf.pairwise = context"));
+  }
+  EXPECT_NO_THROW(Segmenter(config.segmenter, nullptr));
+  applyOverride(config, "mrf.pairwise=potts");
+  EXPECT_NO_THROW(Segmenter(config.segmenter, forest));
+  EXPECT_THROW(applyOverride(config, "mrf.pairwise=crf"), Error);
 }
 
 }  // namespace
