@@ -63,7 +63,7 @@ int runSelfCheck(const LoadedConfig& loaded, std::ostream& out) {
     auto forest = loadModel(d.model_path, &model_id);
     segmenter = std::make_unique<Segmenter>(loaded.config.segmenter, forest);
     say(Verdict::Ok, "model",
-        d.model_path + ": " + std::to_string(forest->trees().size()) + " trees (" + model_id +
+        d.model_path + ": " + forest->summary() + " (" + model_id +
             "), settings match the config");
   } catch (const std::exception& e) {
     say(Verdict::Fail, "model", e.what(),

@@ -49,8 +49,8 @@ Daemon::Daemon(const Config& config, const DaemonConfig& daemon_config,
   }
   std::string model_id;
   auto forest = loadModel(daemon_config_.model_path, &model_id);
-  spdlog::info("model {} loaded from {} ({} trees)", model_id, daemon_config_.model_path,
-               forest->trees().size());
+  spdlog::info("model {} loaded from {} ({})", model_id, daemon_config_.model_path,
+               forest->summary());
   double rate_hz = 0.0;
   if (!source_) {
     try {

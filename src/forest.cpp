@@ -87,6 +87,14 @@ void RandomForest::setInternalClasses(InternalClasses classes) {
   updateId();
 }
 
+std::string RandomForest::summary() const {
+  const std::string classes = std::to_string(internal_classes_.count()) +
+                              (internal_classes_.scheme == "labels" ? " classes (" : " internal classes (") +
+                              internal_classes_.scheme + ")";
+  if (booster_) return "xgboost of " + std::to_string(xgboost_params_.rounds) + " rounds, " + classes;
+  return "forest of " + std::to_string(trees_.size()) + " trees, " + classes;
+}
+
 void RandomForest::setExtractionSettings(Settings settings) {
   if (settings.size() > kMaxSettings)
     throw Error("RandomForest: " + std::to_string(settings.size()) +

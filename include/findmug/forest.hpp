@@ -143,6 +143,9 @@ class RandomForest {
   // Records the internal classes a forest was trained on (checked: names,
   // labels, count); changes id().
   void setInternalClasses(InternalClasses classes);
+  // One line for logs: "forest of 8 trees, 8 classes (labels)", "xgboost of
+  // 100 rounds, 17 internal classes (nyu13)".
+  std::string summary() const;
   // The booster's parameters (meaningful when learnerKind() is XGBoost).
   const XGBoostParams& xgboostParams() const { return xgboost_params_; }
   // A model of gradient-boosted trees trained on `data` (its split_labels are

@@ -241,6 +241,14 @@ void modelSeeds(SeedWriter& w, const fs::path& scratch) {
   const auto with_settings = scratch / "settings.fmf";
   forest.save(with_settings.string());
   w.write("model", "with-settings", readFile(with_settings), check);
+  // Format 4 with gradient-boosted trees: the booster's bytes behind the checksum.
+  XGBoostParams boosted_params;
+  boosted_params.rounds = 2;
+  boosted_params.max_depth = 2;
+  const auto boosted_model = RandomForest::trainBoosted(data, labelClasses(), boosted_params, true, 1);
+  const auto boosted = scratch / "boosted.fmf";
+  boosted_model.save(boosted.string());
+  w.write("model", "boosted", readFile(boosted), check);
 }
 
 void configSeeds(SeedWriter& w, const fs::path& source_dir) {

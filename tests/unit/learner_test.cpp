@@ -147,6 +147,8 @@ TEST(LearnerForest, ThirteenAndFortyInternalClassesRoundTripAndPredictTheSame) {
     EXPECT_EQ(loaded.learnerKind(), LearnerKind::Forest);
     EXPECT_EQ(loaded.internalClasses(), fine.classes);
     EXPECT_EQ(loaded.id(), forest.id());
+    EXPECT_EQ(loaded.summary(), "forest of 4 trees, " + std::to_string(per_label * kNumLabels) +
+                                    " internal classes (" + scheme + ")");
     expectSamePredictions(forest, loaded, makeFineBlobs(per_label, 3, 9, scheme).set.features);
   }
 }
@@ -247,6 +249,7 @@ TEST(LearnerXGBoost, LearnsAndRoundTripsBitIdentically) {
   EXPECT_EQ(loaded.xgboostParams().rounds, 8);
   EXPECT_EQ(loaded.xgboostParams().max_depth, 3);
   EXPECT_EQ(loaded.xgboostParams().seed, 7);
+  EXPECT_EQ(loaded.summary(), "xgboost of 8 rounds, 8 classes (labels)");
   expectSamePredictions(model, loaded, probe.features);
   // Saving the loaded model gives the same bytes.
   loaded.save(dir.str("again.fmf"));
