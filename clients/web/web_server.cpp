@@ -26,8 +26,16 @@ namespace {
 
 constexpr const char* kTokenCookie = "findmug_token";
 
+// The reason also goes into a header for the log: the body may be compressed by then.
+constexpr const char* kErrorHeader = "X-Findmug-Error";
+
 void fail(httplib::Response& res, int status, const std::string& message) {
   res.status = status;
+  std::string header = message.substr(0, 300);  // printable only: it may echo the request
+  for (char& c : header) {
+    if (static_cast<unsigned char>(c) < 0x20 || static_cast<unsigned char>(c) >= 0x7F) c = '?';
+  }
+  res.set_header(kErrorHeader, header);
   res.set_content(nlohmann::json{{"error", message}}.dump(), "application/json");
 }
 
@@ -258,7 +266,7 @@ void WebServer::routes() {
 
   s.set_logger([](const httplib::Request& req, const httplib::Response& res) {
     if (res.status < 400) return;
-    std::string why = res.body.substr(0, 300);
+    const std::string why = res.get_header_value(kErrorHeader);
     std::fprintf(stderr, "findmug-web: %d for %s %s from %s: %s\n", res.status,
                  req.method.c_str(), req.path.c_str(), req.remote_addr.c_str(), why.c_str());
   });

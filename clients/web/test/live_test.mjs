@@ -78,7 +78,7 @@ try {
   if (hulls.map < 1) fail('no table hull on the map');
   if (hulls.legend < 9) fail(`legend has ${hulls.legend} entries`);
   if (!/frames per second/.test(hulls.status)) fail('no status shown: ' + hulls.status);
-  await page.screenshot({ path: path.join(out, 'live.png') });
+  await page.screenshot({ path: path.join(out, 'live.png'), fullPage: true });
 
   // 3. Measured: updates per second and delays over measureS seconds.
   const before = await page.evaluate(() => ({ draws: window.findmugLive.draws, t: Date.now() }));
