@@ -81,6 +81,7 @@ int main(int argc, char** argv) {
     options.max_body_bytes = static_cast<std::size_t>(config.max_body_bytes);
     options.static_dir = config.static_dir.empty() ? FINDMUG_WEB_STATIC_DIR : config.static_dir;
     for (const auto& d : data_dirs) options.data_dirs.emplace_back(d);
+    options.segmenter = loaded.segmenter;
     if (!config.token_file.empty()) {
       options.token = web::readTokenFile(config.token_file);
     } else if (!web::isDefaultLoopback(config.bind)) {

@@ -13,7 +13,10 @@
 #include <sstream>
 #include <system_error>
 
+#include "findmug/dataset.hpp"
 #include "findmug/error.hpp"
+#include "findmug/oversegmentation.hpp"
+#include "findmug/segmenter.hpp"
 #include "findmug/image_io.hpp"
 #include "findmug/labels.hpp"
 #include "web_config.hpp"
@@ -305,6 +308,9 @@ void WebServer::routes() {
   s.Get("/", [serveStatic](const httplib::Request&, httplib::Response& res) {
     serveStatic("index.html", res);
   });
+  s.Get("/label", [serveStatic](const httplib::Request&, httplib::Response& res) {
+    serveStatic("label.html", res);
+  });
   s.Get(R"(/static/([^/]+))", [serveStatic](const httplib::Request& req, httplib::Response& res) {
     serveStatic(req.matches[1], res);
   });
@@ -383,6 +389,88 @@ void WebServer::routes() {
     res.set_content(readWholeFile(file.path), contentType(file.path.filename().string()));
   });
 
+  // --- the Label page: a dataset folder's frames, their oversegmentation, their labels ---
+  auto frameOf = [this, rootOf](const httplib::Request& req, httplib::Response& res,
+                                std::size_t& root_index) -> std::optional<std::string> {
+    const fs::path* root = rootOf(req, res);
+    if (!root) return std::nullopt;
+    root_index = static_cast<std::size_t>(root - roots_.data());
+    const std::string frame = req.get_param_value("frame");
+    if (!validFrameName(frame)) {
+      fail(res, 400, "frame '" + frame + "' is not a frame name (letters, digits, _ - .)");
+      return std::nullopt;
+    }
+    const ResolvedPath rgb = resolveInside(*root, "rgb/" + frame + ".png");
+    if (rgb.status != 200) {
+      fail(res, rgb.status, rgb.error);
+      return std::nullopt;
+    }
+    return frame;
+  };
+  // Frames of a dataset folder: rgb/NAME.png with depth/NAME.png (labelled or not yet).
+  s.Get("/api/label/frames", [rootOf](const httplib::Request& req, httplib::Response& res) {
+    const fs::path* root = rootOf(req, res);
+    if (!root) return;
+    const ResolvedPath rgb = resolveInside(*root, "rgb");
+    if (rgb.status != 200) return fail(res, rgb.status, "not a dataset folder: " + rgb.error);
+    std::vector<std::string> names;
+    for (const auto& e : fs::directory_iterator(rgb.path)) {
+      const fs::path name = e.path().filename();
+      if (name.extension() != ".png" || !validFrameName(name.stem().string())) continue;
+      if (fs::exists(*root / "depth" / name)) names.push_back(name.stem().string());
+    }
+    std::sort(names.begin(), names.end());
+    nlohmann::json frames = nlohmann::json::array();
+    for (const auto& name : names) {
+      frames.push_back({{"name", name},
+                        {"labelled", fs::exists(*root / "label8" / (name + ".png"))}});
+    }
+    sendJson(res, {{"frames", frames}});
+  });
+  s.Get("/api/label/frame", [this, frameOf](const httplib::Request& req, httplib::Response& res) {
+    std::size_t root = 0;
+    const auto frame = frameOf(req, res, root);
+    if (!frame) return;
+    const auto patches = patchesOf(root, *frame);
+    const fs::path label = roots_[root] / "label8" / (*frame + ".png");
+    nlohmann::json body = {{"frame", *frame},
+                           {"width", patches->width},
+                           {"height", patches->height},
+                           {"patches", patches->segments},
+                           {"label_mtime_ns", nullptr}};
+    if (fs::exists(label)) body["label_mtime_ns"] = mtimeNs(label);
+    sendJson(res, body);
+  });
+  // The patch of every pixel, uint16 little-endian, 65535 = in no patch.
+  s.Get("/api/label/patches.bin",
+        [this, frameOf](const httplib::Request& req, httplib::Response& res) {
+          std::size_t root = 0;
+          const auto frame = frameOf(req, res, root);
+          if (!frame) return;
+          const auto patches = patchesOf(root, *frame);
+          std::string bytes(patches->patch.size() * 2, '\0');
+          for (std::size_t i = 0; i < patches->patch.size(); ++i) {
+            bytes[2 * i] = static_cast<char>(patches->patch[i] & 0xFF);
+            bytes[2 * i + 1] = static_cast<char>(patches->patch[i] >> 8);
+          }
+          res.set_header("Cache-Control", "no-store");
+          res.set_content(bytes, "application/octet-stream");
+        });
+  // The frame's label8/ file as one byte per pixel (404 when it has none yet).
+  s.Get("/api/label/labels.bin",
+        [this, frameOf](const httplib::Request& req, httplib::Response& res) {
+          std::size_t root = 0;
+          const auto frame = frameOf(req, res, root);
+          if (!frame) return;
+          const ResolvedPath label = resolveInside(roots_[root], "label8/" + *frame + ".png");
+          if (label.status != 200) return fail(res, label.status, label.error);
+          const Image<std::uint8_t> image = readPng8(label.path.string());
+          res.set_header("Cache-Control", "no-store");
+          res.set_header("X-Findmug-Mtime-Ns", std::to_string(mtimeNs(label.path)));
+          res.set_content(reinterpret_cast<const char*>(image.pixels.data()), image.pixels.size(),
+                          "application/octet-stream");
+        });
+
   // POST /api/label: {"root": K, "frame": NAME, "width": W, "height": H,
   //   "runs": [[id, count], ...] (row-major, ids 0..7 or 255), "author": "...",
   //   "base_mtime_ns": N or null} -> DATA/label8/NAME.png (+ NAME.json: who, when).
@@ -453,6 +541,8 @@ void WebServer::routes() {
     }
     const std::string author = body["author"].get<std::string>();
     if (author.size() > 200) return fail(res, 400, "author longer than 200 characters");
+    // label8/ is made on the first save (resolveInside then checks it stays inside).
+    if (!fs::exists(fs::symlink_status(*root / "label8"))) fs::create_directory(*root / "label8");
     const ResolvedPath out = resolveInside(*root, "label8/" + frame + ".png", true);
     if (out.status != 200) return fail(res, out.status, out.error);
     if (fs::exists(out.path)) {
@@ -481,6 +571,65 @@ void WebServer::routes() {
     fs::rename(out.path.parent_path() / ("." + frame + ".json.tmp"), sidecar_path);
     sendJson(res, {{"saved", "label8/" + frame + ".png"}, {"mtime_ns", mtimeNs(out.path)}});
   });
+}
+
+std::shared_ptr<const WebServer::FramePatches> WebServer::patchesOf(std::size_t root,
+                                                                  const std::string& frame) {
+  const std::string key = std::to_string(root) + "/" + frame;
+  // One frame at a time: a second request for it waits and takes the cached result.
+  std::lock_guard lock(patches_mutex_);
+  for (const auto& p : patches_cache_) {
+    if (p->key == key) return p;
+  }
+  // The frame as findmug-train reads it, and the oversegmentation the daemon would make.
+  // The folder lists only labelled frames once it has label8/: a frame not labelled yet
+  // is read from a view of the folder without labels.
+  DatasetOptions options;
+  options.require_labels = false;
+  LabeledFrame loaded;
+  const fs::path dir = roots_[root];
+  const fs::path unlabelled_view = fs::temp_directory_path() / ("findmug-web-" +
+                                   std::to_string(::getpid()) + "-" + std::to_string(root));
+  auto loadFrom = [&](const fs::path& folder_dir) {
+    const DatasetFolder folder(folder_dir.string(), options);
+    const auto& names = folder.names();
+    const auto it = std::find(names.begin(), names.end(), frame);
+    if (it == names.end()) return false;
+    loaded = folder.load(static_cast<std::size_t>(it - names.begin()));
+    return true;
+  };
+  if (!fs::exists(dir / "label8") || !loadFrom(dir)) {
+    // rgb/, depth/ and the calibration files, linked into a folder without labels.
+    fs::remove_all(unlabelled_view);
+    fs::create_directories(unlabelled_view);
+    for (const char* part : {"rgb", "depth", "intrinsics.yaml", "extrinsics.csv", "gravity.csv"}) {
+      if (fs::exists(dir / part)) fs::create_symlink(dir / part, unlabelled_view / part);
+    }
+    const bool found = loadFrom(unlabelled_view);
+    fs::remove_all(unlabelled_view);
+    if (!found) throw Error("frame " + frame + " is not in " + dir.string());
+  }
+  // The cloud and normals as the Segmenter makes them; the oversegmenter is run even when
+  // no floor was found (the daemon would skip such a frame, a person can still label it).
+  const Segmenter segmenter(options_.segmenter, nullptr);
+  const PreparedFrame prepared = segmenter.prepare(std::move(loaded.frame));
+  const Oversegmentation segmentation =
+      makeOversegmenter(options_.segmenter.overseg)
+          ->segment(prepared.cloud_camera, prepared.normals_camera);
+  auto patches = std::make_shared<FramePatches>();
+  patches->key = key;
+  patches->width = segmentation.width;
+  patches->height = segmentation.height;
+  patches->segments = static_cast<int>(segmentation.segments.size());
+  if (patches->segments >= 0xFFFF) throw Error(key + ": too many patches for the page");
+  patches->patch.resize(segmentation.pixel_segment.size());
+  for (std::size_t i = 0; i < patches->patch.size(); ++i) {
+    const int s = segmentation.pixel_segment[i];
+    patches->patch[i] = s < 0 ? 0xFFFF : static_cast<std::uint16_t>(s);
+  }
+  patches_cache_.push_back(patches);
+  if (patches_cache_.size() > 4) patches_cache_.erase(patches_cache_.begin());
+  return patches;
 }
 
 void WebServer::bind() {

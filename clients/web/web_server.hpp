@@ -18,10 +18,12 @@
 #include <filesystem>
 #include <map>
 #include <memory>
+#include <mutex>
 #include <optional>
 #include <string>
 #include <vector>
 
+#include "findmug/config.hpp"
 #include "live_state.hpp"
 
 namespace httplib {
@@ -37,6 +39,9 @@ struct ServerOptions {
   std::size_t max_body_bytes = 4u << 20;
   std::filesystem::path static_dir;   // index.html, *.js, *.css
   std::vector<std::filesystem::path> data_dirs;
+  // The oversegmentation the Label page shows is made with these settings (cloud,
+  // normals, overseg.*: the ones the model is trained with).
+  SegmenterConfig segmenter;
 };
 
 // A path inside one of the data folders, or why not (HTTP status and message).
@@ -71,7 +76,17 @@ class WebServer {
   void routes();
   void loadStaticFiles();
 
+  // The oversegmentation of a dataset frame for the Label page (cached, last few).
+  struct FramePatches {
+    std::string key;  // root/frame
+    int width = 0, height = 0, segments = 0;
+    std::vector<std::uint16_t> patch;  // per pixel, 0xFFFF = in no patch
+  };
+  std::shared_ptr<const FramePatches> patchesOf(std::size_t root, const std::string& frame);
+
   ServerOptions options_;
+  std::mutex patches_mutex_;
+  std::vector<std::shared_ptr<const FramePatches>> patches_cache_;
   LiveState& live_;
   std::vector<std::filesystem::path> roots_;          // canonical data folders
   std::map<std::string, std::string> static_files_;  // name -> content

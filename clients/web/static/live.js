@@ -250,7 +250,8 @@ function drawPlots(state) {
   const h = state.history || [];
   if (!h.length) return;
   const tEnd = h[h.length - 1][0];
-  const span = state.history_s || 300;
+  // The window the data fills, at least a minute, at most the history kept.
+  const span = Math.min(state.history_s || 300, Math.max(60, tEnd - h[0][0]));
   // fields: t, input_fps, output_fps, cpu_used, cpu_budget, latency_p50_ms, latency_p95_ms, dropped, rejected
   plot('plot-fps', h, tEnd, span, [{ index: 1, color: '#999' }, { index: 2, color: '#1565c0' }]);
   plot('plot-latency', h, tEnd, span, [{ index: 5, color: '#1565c0' }, { index: 6, color: '#ef6c00' }]);
