@@ -271,6 +271,9 @@ nlohmann::json LiveState::liveJson() const {
   nlohmann::json bad = nlohmann::json::object();
   for (const auto& [channel, n] : bad_messages_) bad[channel] = n;
   out["bad_messages"] = std::move(bad);
+  std::uint64_t bad_total = 0;
+  for (const auto& [channel, n] : bad_messages_) bad_total += n;
+  out["bad_messages_count"] = bad_total;
   out["last_bad_message"] = last_bad_message_;
   return out;
 }

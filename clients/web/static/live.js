@@ -25,6 +25,7 @@ let palette = null;
 let legendDone = false;
 let lastLive = null;
 let lastDrawMs = 0;
+let lastStatusStamp, lastBadCount;
 
 function svg(tag, attrs, parent) {
   const node = document.createElementNS(SVG_NS, tag);
@@ -158,17 +159,12 @@ async function drawLabels(state) {
   labelCanvas.height = h;
   const lctx = labelCanvas.getContext('2d');
   const data = lctx.createImageData(w, h);
-  const px = data.data;
-  // Over a camera image, void pixels let the image through; without one they are black.
-  const voidAlpha = image ? 0 : 255;
-  for (let i = 0, j = 0; i < ids.length; ++i, j += 4) {
-    const c = palette[ids[i]];
-    if (c) {
-      px[j] = c[0]; px[j + 1] = c[1]; px[j + 2] = c[2]; px[j + 3] = 255;
-    } else {
-      px[j] = 0; px[j + 1] = 0; px[j + 2] = 0; px[j + 3] = voidAlpha;
-    }
-  }
+  // One 32-bit RGBA word per id (little-endian byte order, as every browser host has):
+  // over a camera image, void pixels let the image through; without one they are black.
+  const pal32 = new Uint32Array(256).fill(image ? 0 : 0xff000000);
+  palette.forEach((c, id) => { pal32[id] = (0xff000000 | (c[2] << 16) | (c[1] << 8) | c[0]) >>> 0; });
+  const out32 = new Uint32Array(data.data.buffer);
+  for (let i = 0; i < ids.length; ++i) out32[i] = pal32[ids[i]];
   lctx.putImageData(data, 0, 0);
   viewCtx.globalAlpha = 1;
   viewCtx.fillStyle = '#000';
@@ -310,6 +306,7 @@ function setConnection(text, cls) {
 }
 
 async function poll() {
+  let drew = false;
   try {
     const res = await fetch('/api/live', { cache: 'no-store' });
     if (!res.ok) throw new Error('HTTP ' + res.status);
@@ -319,6 +316,7 @@ async function poll() {
     if (!legendDone) drawLegend(state.label_names, state.label_colors);
     if (state.labels && state.labels.seq !== live.lastSeq) {
       const seq = await drawLabels(state);
+      drew = true;
       const now = Date.now();
       live.lastSeq = seq;
       live.draws += 1;
@@ -334,7 +332,13 @@ async function poll() {
       drawCameraTables(state);  // the tables came after their labels
       drawMap(state);
     }
-    drawStatus(state);
+    // The status comes twice a second at most: redraw its table and plots only then.
+    const statusStamp = state.status ? state.status.utime : null;
+    if (statusStamp !== lastStatusStamp || state.bad_messages_count !== lastBadCount) {
+      drawStatus(state);
+      lastStatusStamp = statusStamp;
+      lastBadCount = state.bad_messages_count;
+    }
     const stale = Date.now() - lastDrawMs > STALE_MS;
     if (state.bus === 'failed') setConnection('bus failed', 'down');
     else if (!state.labels) setConnection('waiting for findmugd', 'stale');
@@ -343,7 +347,8 @@ async function poll() {
     live.errors += 1;
     setConnection('no connection: ' + e.message, 'down');
   }
-  setTimeout(poll, POLL_MS);
+  // After a new frame, ask again at once (the next one may be waiting); else in a while.
+  setTimeout(poll, drew ? 0 : POLL_MS);
 }
 
 el('map-frame').addEventListener('change', () => lastLive && drawMap(lastLive));
