@@ -19,7 +19,9 @@
 #include <filesystem>
 #include <fstream>
 #include <nlohmann/json.hpp>
+#include <sstream>
 #include <thread>
+#include <tuple>
 
 namespace fs = std::filesystem;
 using namespace findmug;
@@ -340,4 +342,32 @@ TEST(WebConfig, ShippedFileIsValidAndDocumentsEveryKey) {
   for (const auto& setting : web::webSettings().settings()) {
     EXPECT_TRUE(config.extra.count(setting.key)) << setting.key << " not in " << shipped;
   }
+}
+
+// The program refuses to serve another address than the default loopback one without a
+// token, and a token file others may read.
+TEST(WebProgram, AnotherAddressWithoutATokenIsRefusedAtStart) {
+  test::TempDir dir;
+  const std::string exe = FINDMUG_WEB_EXE;
+  const std::string common = " --lcm-url memq:// --static-dir " +
+                             (test::sourceDir() / "clients/web/static").string() + " > " +
+                             dir.str("out.txt") + " 2>&1";
+  auto run = [&](const std::string& flags) {
+    const int status = std::system((exe + " " + flags + common).c_str());
+    std::ifstream in(dir.path() / "out.txt");
+    std::stringstream text;
+    text << in.rdbuf();
+    return std::make_pair(WEXITSTATUS(status), text.str());
+  };
+  auto [code, out] = run("--bind 127.0.0.2 --port 18097");
+  EXPECT_EQ(code, 2) << out;
+  EXPECT_NE(out.find("needs an access token"), std::string::npos) << out;
+  std::ofstream(dir.path() / "token") << kToken << "\n";
+  ::chmod((dir.path() / "token").c_str(), 0644);
+  std::tie(code, out) = run("--bind 127.0.0.2 --port 18097 --token-file " + dir.str("token"));
+  EXPECT_EQ(code, 2) << out;
+  EXPECT_NE(out.find("readable by its owner only"), std::string::npos) << out;
+  std::tie(code, out) = run("--data " + dir.str("no-such-folder") + " --port 18097");
+  EXPECT_EQ(code, 1) << out;
+  EXPECT_NE(out.find("no-such-folder: not a folder"), std::string::npos) << out;
 }
