@@ -211,8 +211,10 @@ class LabelViewer {
       // the colour frame carried (older daemons).
       const bool frame_mount = match != nullptr && match->extrinsics.has_value();
       if (!message.camera && !frame_mount) {
-        tables_note = " (" + std::to_string(tables.tables.size()) +
-                      " tables not drawn: the daemon found no floor for this frame)";
+        if (!tables.tables.empty()) {
+          tables_note = " (" + std::to_string(tables.tables.size()) +
+                        " tables not drawn: the daemon found no floor for this frame)";
+        }
         break;
       }
       clients::Canvas canvas(std::move(overlay));
