@@ -438,7 +438,8 @@ void WebServer::routes() {
                            {"height", patches->height},
                            {"patches", patches->segments},
                            {"label_mtime_ns", nullptr}};
-    if (fs::exists(label)) body["label_mtime_ns"] = mtimeNs(label);
+    // Nanoseconds as text: a JavaScript number keeps only 53 bits.
+    if (fs::exists(label)) body["label_mtime_ns"] = std::to_string(mtimeNs(label));
     sendJson(res, body);
   });
   // The patch of every pixel, uint16 little-endian, 65535 = in no patch.
@@ -473,7 +474,8 @@ void WebServer::routes() {
 
   // POST /api/label: {"root": K, "frame": NAME, "width": W, "height": H,
   //   "runs": [[id, count], ...] (row-major, ids 0..7 or 255), "author": "...",
-  //   "base_mtime_ns": N or null} -> DATA/label8/NAME.png (+ NAME.json: who, when).
+  //   "base_mtime_ns": "N" (text, as /api/label/frame gives it) or null}
+  //   -> DATA/label8/NAME.png (+ NAME.json: who, when).
   // An existing label file whose mtime is not base_mtime_ns (newer work) is not
   // overwritten: 409.
   s.Post("/api/label", [rootOf](const httplib::Request& req, httplib::Response& res) {
@@ -547,8 +549,13 @@ void WebServer::routes() {
     if (out.status != 200) return fail(res, out.status, out.error);
     if (fs::exists(out.path)) {
       const std::int64_t on_disk = mtimeNs(out.path);
-      const bool same = body.contains("base_mtime_ns") && body["base_mtime_ns"].is_number() &&
-                        body["base_mtime_ns"].get<std::int64_t>() == on_disk;
+      // base_mtime_ns: what /api/label/frame or the last save said, as text (or a number).
+      bool same = false;
+      if (body.contains("base_mtime_ns")) {
+        const auto& base = body["base_mtime_ns"];
+        same = (base.is_string() && base.get<std::string>() == std::to_string(on_disk)) ||
+               (base.is_number_integer() && base.get<std::int64_t>() == on_disk);
+      }
       if (!same) {
         return fail(res, 409, "label8/" + frame + ".png was written since this page read it "
                                   "(mtime " + std::to_string(on_disk) + "): not overwritten");
@@ -569,7 +576,8 @@ void WebServer::routes() {
       if (!side) throw Error(sidecar_path.string() + ": cannot write");
     }
     fs::rename(out.path.parent_path() / ("." + frame + ".json.tmp"), sidecar_path);
-    sendJson(res, {{"saved", "label8/" + frame + ".png"}, {"mtime_ns", mtimeNs(out.path)}});
+    sendJson(res, {{"saved", "label8/" + frame + ".png"},
+                   {"mtime_ns", std::to_string(mtimeNs(out.path))}});
   });
 }
 

@@ -237,7 +237,7 @@ TEST_F(WebAccess, SavesLabelsAndRefusesToOverwriteNewerOnes) {
   const auto who = nlohmann::json::parse(sidecar);
   EXPECT_EQ(who["author"], "tester");
   EXPECT_EQ(who["saved_utc"].get<std::string>().size(), 20u);
-  const auto mtime = nlohmann::json::parse(r->body)["mtime_ns"].get<std::int64_t>();
+  const auto mtime = std::stoll(nlohmann::json::parse(r->body)["mtime_ns"].get<std::string>());
 
   // Without the mtime it was read at, or with an older one: someone saved since.
   body["runs"] = {{2, 12}};
@@ -249,12 +249,24 @@ TEST_F(WebAccess, SavesLabelsAndRefusesToOverwriteNewerOnes) {
   ASSERT_TRUE(again);
   EXPECT_EQ(again->status, 409);
   EXPECT_EQ(readPng8((data_.path() / "label8/0001.png").string()).pixels, written.pixels);
-  body["base_mtime_ns"] = mtime;
+  body["base_mtime_ns"] = std::to_string(mtime);  // as the page sends it: text
   again = s.client->Post("/api/label", body.dump(), "application/json");
   ASSERT_TRUE(again);
   EXPECT_EQ(again->status, 200) << again->body;
   EXPECT_EQ(readPng8((data_.path() / "label8/0001.png").string()).pixels,
             std::vector<std::uint8_t>(12, 2));
+  // And again from the answer of that save (a page saving twice).
+  body["base_mtime_ns"] = nlohmann::json::parse(again->body)["mtime_ns"];
+  body["runs"] = {{3, 12}};
+  again = s.client->Post("/api/label", body.dump(), "application/json");
+  ASSERT_TRUE(again);
+  EXPECT_EQ(again->status, 200) << again->body;
+  // Nanoseconds through a double (what a page using a JSON number would send) are refused.
+  body["base_mtime_ns"] = static_cast<double>(
+      std::stoll(nlohmann::json::parse(again->body)["mtime_ns"].get<std::string>()) + 1);
+  again = s.client->Post("/api/label", body.dump(), "application/json");
+  ASSERT_TRUE(again);
+  EXPECT_EQ(again->status, 409);
 }
 
 TEST_F(WebAccess, AnotherAddressNeedsTheToken) {

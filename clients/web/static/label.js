@@ -143,9 +143,14 @@ async function load() {
   labels = new Uint8Array(info.width * info.height).fill(VOID);
   baseMtime = null;
   if (labelRes.ok) {
-    labels.set(new Uint8Array(await labelRes.arrayBuffer()));
-    baseMtime = Number(labelRes.headers.get('X-Findmug-Mtime-Ns'));
-    baseMtime = info.label_mtime_ns;  // exact (a double loses nanoseconds)
+    const saved = new Uint8Array(await labelRes.arrayBuffer());
+    if (saved.length !== labels.length) {
+      throw new Error(`label8/${frame}.png has ${saved.length} pixels, the frame ${labels.length}`);
+    }
+    labels.set(saved);
+    // The mtime it was read at (text: nanoseconds do not fit a JavaScript number), so
+    // that a save never overwrites a newer file.
+    baseMtime = info.label_mtime_ns;
   }
   patchPixels = Array.from({ length: info.patches }, () => []);
   patches.forEach((p, i) => { if (p !== 0xFFFF) patchPixels[p].push(i); });

@@ -4,7 +4,8 @@
 //
 //   node label_test.mjs --url http://127.0.0.1:PORT/ --data DIR --frame NAME --out DIR
 //
-// Labels the frame by clicks (keys pick the class, one click undone), saves, and checks
+// Labels the frame by clicks (keys pick the class, one click undone), saves, labels one
+// more patch and saves again, and checks
 // DIR/label8/NAME.png pixel for pixel against what the clicks must give: each clicked
 // patch (from the server's oversegmentation) in its class, everything else void. The
 // PNG is decoded here (zlib + PNG filters), not by findmug's own reader. Exit 0 pass.
@@ -112,13 +113,22 @@ try {
   await page.keyboard.press('s');
   await page.waitForFunction(() => window.findmugLabel.saves === 1 || window.findmugLabel.error,
                              { timeout: 30000 });
-  const error = await page.evaluate(() => window.findmugLabel.error);
+  let error = await page.evaluate(() => window.findmugLabel.error);
   if (error) throw new Error('save: ' + error);
+  // A second stroke and save from the same page: the file it wrote itself is not "newer".
+  await page.keyboard.press('3');
+  await clickAt(clicks[3]);
+  await page.keyboard.press('s');
+  await page.waitForFunction(() => window.findmugLabel.saves === 2 || window.findmugLabel.error,
+                             { timeout: 30000 });
+  error = await page.evaluate(() => window.findmugLabel.error);
+  if (error) throw new Error('second save: ' + error);
   await page.screenshot({ path: path.join(args.out, 'label.png') });
 
   const expected = new Uint8Array(width * height).fill(VOID);
-  for (let i = 0; i < 3; ++i) {
-    for (let k = 0; k < patches.length; ++k) if (patches[k] === clicks[i].patch) expected[k] = Number(classes[i]);
+  const final = [...classes.slice(0, 3), '3'];
+  for (let i = 0; i < 4; ++i) {
+    for (let k = 0; k < patches.length; ++k) if (patches[k] === clicks[i].patch) expected[k] = Number(final[i]);
   }
   const file = path.join(args.data, 'label8', args.frame + '.png');
   const written = decodeGrey8(file);
