@@ -382,7 +382,11 @@ std::optional<CameraView> decodeCameraView(const findmug_lcm::label_image_t& msg
         throw Error(field(channel, type, "camera_to_base") + ": element [" + std::to_string(i) +
                     "][" + std::to_string(j) + "] is not finite");
       }
-      if (j < 3) r(i, j) = v; else t(i) = v;
+      if (j < 3) {
+        r(i, j) = v;
+      } else {
+        t(i) = v;
+      }
     }
   }
   const double off = (r * r.transpose() - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff();
