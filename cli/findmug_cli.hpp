@@ -29,10 +29,11 @@ std::unique_ptr<CLI::App> makeApp(const std::string& program, const std::string&
 // The config file is shared by the project's programs. These are the sections
 // that belong to one program and that every other one must accept unread
 // (findmug-train reads findmugd.yaml): the daemon's `daemon:` and `check:`,
-// the clients' `clients:`. The owner registers its section with its keys
+// the clients' `clients:`, findmug-web's `web:`. The owner registers its section with its keys
 // (findmugd: daemon/daemon_config.cpp); others know only the name. The core's
 // own sections (SegmenterConfig and `table_map:`) are not listed here.
-inline constexpr std::array<const char*, 3> kProjectSections = {"daemon", "check", "clients"};
+inline constexpr std::array<const char*, 4> kProjectSections = {"daemon", "check", "clients",
+                                                                 "web"};
 // Registers kProjectSections by name in findmug::configSections(). Idempotent.
 void declareProjectSections();
 

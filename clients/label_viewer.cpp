@@ -9,9 +9,12 @@
 // one was received, or the plain palette image otherwise.
 //
 // Pictures for people: every overlay has a legend panel; when FINDMUG_TABLES[_suffix]
-// brings the tables of the same frame and the colour frame carries its camera mount
-// (extrinsics), the table hulls and the search positions (numbered in visiting order,
-// unreachable ones crossed) are drawn over the image. table_map.png and table_map.svg
+// brings the tables of the same frame, the table hulls and the search positions (numbered
+// in visiting order, unreachable ones crossed) are drawn over the image with the camera
+// the daemon used for the frame (label_image_t.camera_to_base: every source, replays,
+// datasets and PCD included), or, from an older daemon, the colour frame's mount. A label
+// image that carries the frame's colour image (findmugd daemon.publish_color) is drawn
+// over it when FINDMUG_RGBD is not published. table_map.png and table_map.svg
 // show the tables top-down: the table map with the robot's pose from
 // FINDMUG_TABLE_MAP[_suffix], or, until a map arrives, the latest frame's tables around
 // the robot. --source SPEC takes the colour frames from a frame source (e.g. the dataset
@@ -189,8 +192,13 @@ class LabelViewer {
     Image<Rgb8> overlay;
     overlay.width = image.width;
     overlay.height = image.height;
+    // The daemon's own colour image (daemon.publish_color) when no frame matched.
+    std::vector<Rgb8> carried;
+    if (match == nullptr) carried = io::decodeLabelImageColor(message, "FINDMUG_LABELS");
     if (match != nullptr) {
       overlay.pixels = colorizeLabels(image, match->rgb, alpha_);
+    } else if (!carried.empty()) {
+      overlay.pixels = colorizeLabels(image, carried, alpha_);
     } else {
       // No colour frame for this utime (not published, or dropped): the palette alone.
       const std::vector<Rgb8> black(image.labels.size());
@@ -199,14 +207,24 @@ class LabelViewer {
     std::string tables_note;
     for (const auto& tables : tables_) {
       if (tables.utime != message.utime) continue;
-      if (match == nullptr || !match->extrinsics) {
-        tables_note = " (" + std::to_string(tables.tables.size()) +
-                      " tables not drawn: no camera extrinsics with the colour frame)";
+      // The camera as the daemon used it for this frame (every source), else the mount
+      // the colour frame carried (older daemons).
+      const bool frame_mount = match != nullptr && match->extrinsics.has_value();
+      if (!message.camera && !frame_mount) {
+        if (!tables.tables.empty()) {
+          tables_note = " (" + std::to_string(tables.tables.size()) +
+                        " tables not drawn: the daemon found no floor for this frame)";
+        }
         break;
       }
       clients::Canvas canvas(std::move(overlay));
-      const int drawn = clients::drawTablesInImage(canvas, tables, match->intrinsics,
-                                                   *match->extrinsics, &match->depth_mm);
+      const std::vector<std::uint16_t>* depth = match ? &match->depth_mm : nullptr;
+      const int drawn =
+          message.camera
+              ? clients::drawTablesInImage(canvas, tables, message.camera->intrinsics,
+                                           message.camera->camera_to_base, depth)
+              : clients::drawTablesInImage(canvas, tables, match->intrinsics,
+                                           *match->extrinsics, depth);
       overlay = canvas.image();
       tables_note = " with " + std::to_string(drawn) + " of " +
                     std::to_string(tables.tables.size()) + " tables in view";
@@ -216,7 +234,8 @@ class LabelViewer {
     std::snprintf(name, sizeof(name), "labels_%08lld.png", static_cast<long long>(message.seq));
     const std::filesystem::path path = out_dir_ / name;
     writePngRgb(path.string(), clients::withLegend(overlay));
-    return std::string(match ? "overlay " : "palette (no colour frame) ") + path.string() +
+    return std::string(match || !carried.empty() ? "overlay " : "palette (no colour frame) ") +
+           path.string() +
            tables_note;
   }
 

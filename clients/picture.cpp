@@ -254,8 +254,15 @@ std::vector<NumberedPosition> numberedPositions(const io::TablesMessage& message
 int drawTablesInImage(Canvas& canvas, const io::TablesMessage& tables, const CameraIntrinsics& k,
                       const CameraExtrinsics& extrinsics,
                       const std::vector<std::uint16_t>* depth_mm) {
-  const Eigen::Isometry3f ground_to_camera =
-      groundFromExtrinsics(extrinsics).camera_to_ground.inverse();
+  return drawTablesInImage(canvas, tables, k,
+                           groundFromExtrinsics(extrinsics).camera_to_ground.cast<double>(),
+                           depth_mm);
+}
+
+int drawTablesInImage(Canvas& canvas, const io::TablesMessage& tables, const CameraIntrinsics& k,
+                      const Eigen::Isometry3d& camera_to_base,
+                      const std::vector<std::uint16_t>* depth_mm) {
+  const Eigen::Isometry3f ground_to_camera = camera_to_base.cast<float>().inverse();
   auto project = [&](float x, float y, float z, Eigen::Vector2d& pixel) {
     const Eigen::Vector3f c = ground_to_camera * Eigen::Vector3f(x, y, z);
     if (c.z() < 0.1f) return false;  // behind or at the camera

@@ -4,6 +4,7 @@
 // (no font library on a robot PC).
 #pragma once
 
+#include <Eigen/Geometry>
 #include <optional>
 #include <string>
 #include <vector>
@@ -62,6 +63,11 @@ std::vector<NumberedPosition> numberedPositions(const io::TablesMessage& message
 // ring only, so that it is not mistaken for a spot on the surface in front of it.
 int drawTablesInImage(Canvas& canvas, const io::TablesMessage& tables,
                       const CameraIntrinsics& intrinsics, const CameraExtrinsics& extrinsics,
+                      const std::vector<std::uint16_t>* depth_mm = nullptr);
+// The same for a camera at `camera_to_base` (p_base = camera_to_base * p_camera), as the
+// daemon reports it with each label image (label_image_t.camera_to_base).
+int drawTablesInImage(Canvas& canvas, const io::TablesMessage& tables,
+                      const CameraIntrinsics& intrinsics, const Eigen::Isometry3d& camera_to_base,
                       const std::vector<std::uint16_t>* depth_mm = nullptr);
 
 // Top-down view of a tables message: the map frame with the robot at map_pose when the

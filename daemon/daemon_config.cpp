@@ -101,6 +101,12 @@ const SettingsTable<DaemonConfig>& daemonSettings() {
         "daemon.publish_tables", [](D& d) -> bool& { return d.publish_tables; },
         "publish FINDMUG_TABLES"));
     t.add(boolSetting<D>(
+        "daemon.publish_color", [](D& d) -> bool& { return d.publish_color; },
+        "the frame's colour image (JPEG) in each label image, for viewers"));
+    t.add(integerSetting<D, int>(
+        "daemon.color_jpeg_quality", [](D& d) -> int& { return d.color_jpeg_quality; }, 1, 100,
+        "JPEG quality of daemon.publish_color"));
+    t.add(boolSetting<D>(
         "daemon.exit_at_end_of_stream", [](D& d) -> bool& { return d.exit_at_end_of_stream; },
         "finite source exhausted: drain, publish, exit 0"));
     t.add(numberSetting<D, double>(

@@ -111,6 +111,7 @@ Pipeline::Pipeline(const SegmenterConfig& segmenter_config, const DaemonConfig& 
                                  io::channelName(io::kTableMapChannel, suffix),
                                  io::channelName(io::kStatusChannel, suffix)},
       daemon_config_.publish_confidence, daemon_config_.publish_tables);
+  if (daemon_config_.publish_color) publisher_->publishColor(daemon_config_.color_jpeg_quality);
   publish_step_.addSink(table_map_sink_);
   if (semantic_map_) publish_step_.addSink(semantic_map_);  // may set the published labels
   publish_step_.addSink(publisher_);

@@ -131,11 +131,20 @@ void LcmPublisherSink::consume(FrameResult& result) {
   // Encoded from the frame's own label image and tables: copying them into
   // message structs first cost a copy of 1.5 MB and of every table's pixel
   // list per frame.
-  const LabelImage& labels =
+  // The map's labels when the semantic map stage replaced them (daemon.semantic_map_fused_labels).
+  const LabelImage& published =
       result.published_labels ? *result.published_labels : result.labelled.labels;
-  if (!send(channels_.labels,
-            io::encodeLabelImage(labels, frame.utime, frame.seq,
-                                 result.latency_us, publish_confidence_))) {
+  findmug_lcm::label_image_t labels = io::encodeLabelImage(
+      published, frame.utime, frame.seq, result.latency_us, publish_confidence_);
+  // The camera as this frame used it (mount or estimated floor), so that viewers can
+  // draw the tables over the image for every source.
+  if (const auto& ground = result.labelled.segmented.prepared.ground) {
+    io::setCameraView(labels, frame.intrinsics, ground->camera_to_ground.cast<double>());
+  }
+  if (color_jpeg_quality_ > 0 && frame.rgb.size() == published.labels.size()) {
+    io::setColorJpeg(labels, frame.rgb, color_jpeg_quality_);
+  }
+  if (!send(channels_.labels, labels)) {
     throw Error("LCM publish on " + channels_.labels + " failed for " + frameName(frame));
   }
   if (publish_tables_) {

@@ -28,7 +28,23 @@ packages=(
   clang-14 libfuzzer-14-dev ccache
   # Debian packages (scripts/package.sh) and their checks (label package)
   dpkg-dev lintian adduser
+  # findmug-web: HTTP server and JSON; its browser test drives Debian's chromium with
+  # puppeteer-core from npm (clients/web/test: npm ci, never a downloaded browser)
+  libcpp-httplib-dev nlohmann-json3-dev chromium nodejs npm
 )
+
+# findmug-web's browser test drives /usr/bin/chromium with puppeteer-core (npm), exactly as
+# clients/web/test/package-lock.json pins it; puppeteer-core never downloads a browser.
+install_web_test_modules() {
+  local dir
+  dir="$(cd "$(dirname "$0")/.." && pwd)/clients/web/test"
+  [[ -f "$dir/package-lock.json" ]] || return 0
+  if [[ ! -d "$dir/node_modules/puppeteer-core" ||
+        "$dir/package-lock.json" -nt "$dir/node_modules/.package-lock.json" ]]; then
+    echo "install-deps: npm ci in clients/web/test (puppeteer-core)"
+    (cd "$dir" && npm ci --no-audit --no-fund --loglevel=error)
+  fi
+}
 
 missing=()
 for p in "${packages[@]}"; do
@@ -39,6 +55,7 @@ done
 
 if [ ${#missing[@]} -eq 0 ]; then
   echo "install-deps: all ${#packages[@]} packages present"
+  install_web_test_modules
   exit 0
 fi
 
@@ -48,3 +65,4 @@ if [ "$(id -u)" -ne 0 ]; then SUDO="sudo"; fi
 export DEBIAN_FRONTEND=noninteractive
 $SUDO apt-get -o DPkg::Lock::Timeout=600 update -q
 $SUDO apt-get -o DPkg::Lock::Timeout=600 install -y -q --no-install-recommends "${missing[@]}"
+install_web_test_modules

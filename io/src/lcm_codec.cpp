@@ -235,7 +235,15 @@ RgbdFrame decodeRgbdFrame(const void* data, std::size_t size, std::string_view c
 // ---- label images -------------------------------------------------------------------------
 
 findmug_lcm::label_image_t encodeLabelImage(const LabelImageMessage& in, bool with_confidence) {
-  return encodeLabelImage(in.image, in.utime, in.seq, in.latency_us, with_confidence);
+  findmug_lcm::label_image_t msg =
+      encodeLabelImage(in.image, in.utime, in.seq, in.latency_us, with_confidence);
+  if (in.camera) setCameraView(msg, in.camera->intrinsics, in.camera->camera_to_base);
+  if (!in.color_jpeg.empty()) {
+    msg.color_format = findmug_lcm::label_image_t::COLOR_JPEG;
+    msg.color_data = in.color_jpeg;
+    msg.color_size = static_cast<std::int32_t>(msg.color_data.size());
+  }
+  return msg;
 }
 
 findmug_lcm::label_image_t encodeLabelImage(const LabelImage& image, std::uint64_t utime,
@@ -263,6 +271,12 @@ findmug_lcm::label_image_t encodeLabelImage(const LabelImage& image, std::uint64
                 std::to_string(image.labels[i]));
   }
   findmug_lcm::label_image_t msg;
+  // The generated struct leaves its scalars uninitialised: no camera, no colour.
+  msg.has_camera = false;
+  msg.fx = msg.fy = msg.cx = msg.cy = 0.0;
+  for (auto& row : msg.camera_to_base) std::fill(std::begin(row), std::end(row), 0.0);
+  msg.color_format = findmug_lcm::label_image_t::COLOR_ABSENT;
+  msg.color_size = 0;
   msg.utime = static_cast<std::int64_t>(utime);
   msg.seq = seq;
   msg.width = image.width;
@@ -340,6 +354,118 @@ findmug_lcm::label_image_t encodeLabelImage(const LabelImage& image, std::uint64
   return msg;
 }
 
+namespace {
+
+// label_image_t.has_camera and its fields: finite positive intrinsics, a rotation
+// (orthonormal, determinant +1) and a finite translation; nullopt without a camera.
+std::optional<CameraView> decodeCameraView(const findmug_lcm::label_image_t& msg,
+                                           std::string_view channel) {
+  constexpr std::string_view type = "label_image_t";
+  if (!msg.has_camera) return std::nullopt;
+  for (double v : {msg.fx, msg.fy}) {
+    if (!(std::isfinite(v) && v > 0.0)) {
+      throw Error(field(channel, type, "fx/fy") + ": focal length " + std::to_string(v) +
+                  " is not a positive finite number");
+    }
+  }
+  if (!std::isfinite(msg.cx) || !std::isfinite(msg.cy)) {
+    throw Error(field(channel, type, "cx/cy") + ": principal point is not finite");
+  }
+  CameraView view;
+  view.intrinsics = {msg.fx, msg.fy, msg.cx, msg.cy};
+  Eigen::Matrix3d r;
+  Eigen::Vector3d t;
+  for (int i = 0; i < 3; ++i) {
+    for (int j = 0; j < 4; ++j) {
+      const double v = msg.camera_to_base[i][j];
+      if (!std::isfinite(v)) {
+        throw Error(field(channel, type, "camera_to_base") + ": element [" + std::to_string(i) +
+                    "][" + std::to_string(j) + "] is not finite");
+      }
+      if (j < 3) {
+        r(i, j) = v;
+      } else {
+        t(i) = v;
+      }
+    }
+  }
+  const double off = (r * r.transpose() - Eigen::Matrix3d::Identity()).cwiseAbs().maxCoeff();
+  if (off > 1e-3 || r.determinant() < 0.0) {
+    throw Error(field(channel, type, "camera_to_base") +
+                ": the 3x3 part is not a rotation (R R^T differs from I by " +
+                std::to_string(off) + ")");
+  }
+  view.camera_to_base.linear() = r;
+  view.camera_to_base.translation() = t;
+  return view;
+}
+
+// label_image_t.color_format and color_data: the JPEG's bytes, checked for the
+// markers that open and close one (the full decode is decodeLabelImageColor's).
+std::vector<std::uint8_t> checkedColorJpeg(const findmug_lcm::label_image_t& msg,
+                                           std::string_view channel) {
+  constexpr std::string_view type = "label_image_t";
+  checkArraySize(msg.color_size, msg.color_data.size(), channel, type, "color_size");
+  switch (msg.color_format) {
+    case findmug_lcm::label_image_t::COLOR_ABSENT:
+      if (msg.color_size != 0) {
+        throw Error(field(channel, type, "color_size") + ": " + std::to_string(msg.color_size) +
+                    " bytes but color_format is COLOR_ABSENT");
+      }
+      return {};
+    case findmug_lcm::label_image_t::COLOR_JPEG: {
+      const auto& d = msg.color_data;
+      if (d.size() < 4 || d[0] != 0xFF || d[1] != 0xD8 || d[d.size() - 2] != 0xFF ||
+          d[d.size() - 1] != 0xD9) {
+        throw Error(field(channel, type, "color_data") +
+                    ": not a JPEG (no start and end of image markers)");
+      }
+      return d;
+    }
+    default:
+      throw Error(field(channel, type, "color_format") + ": unknown colour format id " +
+                  std::to_string(msg.color_format) + " (expected 0 absent or 1 jpeg)");
+  }
+}
+
+}  // namespace
+
+void setCameraView(findmug_lcm::label_image_t& message, const CameraIntrinsics& intrinsics,
+                   const Eigen::Isometry3d& camera_to_base) {
+  message.has_camera = true;
+  message.fx = intrinsics.fx;
+  message.fy = intrinsics.fy;
+  message.cx = intrinsics.cx;
+  message.cy = intrinsics.cy;
+  const Eigen::Matrix<double, 3, 4> m = camera_to_base.matrix().topRows<3>();
+  for (int i = 0; i < 3; ++i) {
+    for (int j = 0; j < 4; ++j) message.camera_to_base[i][j] = m(i, j);
+  }
+}
+
+void setColorJpeg(findmug_lcm::label_image_t& message, const std::vector<Rgb8>& rgb, int quality) {
+  const std::size_t pixels = static_cast<std::size_t>(message.width) * message.height;
+  if (rgb.size() != pixels) {
+    throw Error("label image encode: " + std::to_string(rgb.size()) + " colour pixels for " +
+                std::to_string(message.width) + "x" + std::to_string(message.height));
+  }
+  if (quality < 1 || quality > 100) {
+    throw Error("label image encode: JPEG quality " + std::to_string(quality) +
+                " outside 1..100");
+  }
+  message.color_data = detail::jpegCompressRgb(rgb, message.width, message.height, quality);
+  message.color_size = static_cast<std::int32_t>(message.color_data.size());
+  message.color_format = findmug_lcm::label_image_t::COLOR_JPEG;
+}
+
+std::vector<Rgb8> decodeLabelImageColor(const LabelImageMessage& message,
+                                        std::string_view channel) {
+  if (message.color_jpeg.empty()) return {};
+  return detail::jpegDecompressRgb(message.color_jpeg.data(), message.color_jpeg.size(),
+                                   message.image.width, message.image.height,
+                                   std::string(channel) + " label_image_t.color_data");
+}
+
 LabelImageMessage decodeLabelImage(const findmug_lcm::label_image_t& msg,
                                    std::string_view channel) {
   constexpr std::string_view type = "label_image_t";
@@ -408,6 +534,8 @@ LabelImageMessage decodeLabelImage(const findmug_lcm::label_image_t& msg,
     throw Error(field(channel, type, "confidence_size") + ": " +
                 std::to_string(msg.confidence_size) + " bytes but has_confidence is false");
   }
+  out.camera = decodeCameraView(msg, channel);
+  out.color_jpeg = checkedColorJpeg(msg, channel);
   return out;
 }
 

@@ -213,6 +213,9 @@ findmug_lcm::label_image_t decodeMessage<findmug_lcm::label_image_t>(const void*
     w.skip(kBool, "has_confidence");
     w.array(w.count("confidence_size", 1), 1, "confidence_data");
     w.skip(kI64, "latency_us");
+    w.skip(kBool + 4 * kF64 + 12 * kF64, "has_camera/fx/fy/cx/cy/camera_to_base");
+    w.skip(kI8, "color_format");
+    w.array(w.count("color_size", 1), 1, "color_data");
   });
 }
 

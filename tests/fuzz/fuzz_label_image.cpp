@@ -1,5 +1,6 @@
 // Fuzz target label_image: label_image_t bytes (FINDMUG_LABELS) -> decodeLabelImage,
-// as the label viewer and navigation client decode them.
+// as the label viewer, findmug-web and the navigation client decode them, then the colour
+// image it may carry (decodeLabelImageColor, as the label viewer does).
 #include <cstddef>
 #include <cstdint>
 #include "findmug/io/lcm_codec.hpp"
@@ -8,7 +9,8 @@
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   try {
-    (void)findmug::io::decodeLabelImage(data, size, "FUZZ_LABELS");
+    const auto message = findmug::io::decodeLabelImage(data, size, "FUZZ_LABELS");
+    (void)findmug::io::decodeLabelImageColor(message, "FUZZ_LABELS");
   } catch (const findmug::Error&) {
     // The expected answer to a bad input.
   }

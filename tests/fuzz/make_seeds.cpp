@@ -126,6 +126,20 @@ void lcmSeeds(SeedWriter& w) {
     w.write("label_image", confidence ? "with-confidence" : "labels-only", bytes,
             [](const std::string& b) { (void)io::decodeLabelImage(b.data(), b.size(), "seed"); });
   }
+  {
+    // With the camera the daemon used and its colour image (daemon.publish_color).
+    auto message = io::encodeLabelImage(labels);
+    Eigen::Isometry3d camera_to_base = Eigen::Isometry3d::Identity();
+    camera_to_base.linear() << 0, 0, 1, -1, 0, 0, 0, -1, 0;
+    camera_to_base.translation() = Eigen::Vector3d(0, 0, 1.2);
+    io::setCameraView(message, frame.intrinsics, camera_to_base);
+    io::setColorJpeg(message, frame.rgb, 80);
+    w.write("label_image", "camera-and-colour", asString(io::encodeMessage(message)),
+            [](const std::string& b) {
+              const auto m = io::decodeLabelImage(b.data(), b.size(), "seed");
+              (void)io::decodeLabelImageColor(m, "seed");
+            });
+  }
   // label_deflate takes any bytes: the raw label bytes above, and runs of
   // every length up to past two maximal deflate matches.
   w.write("label_deflate", "labels", asString(labels.image.labels), [](const std::string&) {});

@@ -716,5 +716,43 @@ TEST(LabelViewer, NoPngWritesNothingAndBadFlagsExitWithCode2) {
   }
 }
 
+
+// A replay without FINDMUG_RGBD: the label image carries the camera the daemon used and
+// the frame's colour image (daemon.publish_color), so the viewer draws the tables over
+// that image (it used to say "no camera extrinsics with the colour frame").
+TEST(LabelViewer, DrawsTablesWithTheDaemonsCameraOverTheCarriedImage) {
+  TempDir tmp;
+  std::filesystem::create_directories(tmp.path() / "png");
+  io::TablesMessage tables = baseFrameTables();
+  tables.utime = 5'000'000;
+  tables.seq = 5;
+  io::LabelImageMessage labels;
+  labels.image = labelBlocks(64, 48);
+  labels.utime = 5'000'000;
+  labels.seq = 5;
+  auto message = io::encodeLabelImage(labels);
+  // A level camera 1.2 m above the floor looking along the base frame's x axis.
+  Eigen::Isometry3d camera_to_base = Eigen::Isometry3d::Identity();
+  camera_to_base.linear() << 0, 0, 1, -1, 0, 0, 0, -1, 0;
+  camera_to_base.translation() = Eigen::Vector3d(0, 0, 1.2);
+  io::setCameraView(message, CameraIntrinsics{40, 40, 31.5, 23.5}, camera_to_base);
+  io::setColorJpeg(message, std::vector<Rgb8>(64 * 48, Rgb8{90, 90, 90}), 90);
+  const std::string log = tmp.str("camera.lcmlog");
+  daemon::test::writeLcmLog(log, {{std::string(io::kLabelsChannel), io::encodeMessage(message)},
+                                  {std::string(io::kTablesChannel),
+                                   io::encodeMessage(io::encodeTables(tables))}});
+  const ProcessResult r =
+      run(FINDMUG_LABEL_VIEWER_EXE, {"--lcm-url", replayUrl(log), "--out", tmp.str("png")}, tmp);
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("overlay "), std::string::npos) << r.out;  // over the carried image
+  EXPECT_EQ(r.out.find("no colour frame"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("with 2 of 2 tables in view"), std::string::npos) << r.out;
+  // The hulls are drawn in white (the carried image is grey, the labels blend with it).
+  const Image<Rgb8> overlay = cropped(readPngRgb(tmp.str("png/labels_00000005.png")), 64, 48);
+  int white = 0;
+  for (const Rgb8& p : overlay.pixels) white += (p.r == 255 && p.g == 255 && p.b == 255) ? 1 : 0;
+  EXPECT_GT(white, 10);
+}
+
 }  // namespace
 }  // namespace findmug

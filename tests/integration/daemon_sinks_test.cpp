@@ -199,6 +199,42 @@ TEST(LcmPublisherSink, TablesCanBeSwitchedOff) {
   EXPECT_TRUE(p.labels[0].image.confidence.empty());  // daemon.publish_confidence off
 }
 
+// Every label image carries the camera the frame was processed with (its ground plane's
+// camera-to-ground transform and the frame's intrinsics); the colour image only with
+// daemon.publish_color.
+TEST(LcmPublisherSink, LabelImagesCarryTheCameraAndOptionallyTheColourImage) {
+  auto bus = std::make_shared<io::MemoryBus>();
+  LcmPublisherSink sink(bus, kChannels, true, false);
+  LabelledFrame l = labelledFrame(4, true, true, {});
+  RgbdFrame& f = l.segmented.prepared.frame;
+  f.intrinsics = CameraIntrinsics{400, 401, 1, 0.5};
+  f.rgb.assign(4, Rgb8{200, 100, 50});
+  GroundPlane ground;
+  ground.camera_to_ground.linear() =
+      Eigen::AngleAxisf(0.4f, Eigen::Vector3f::UnitX()).toRotationMatrix();
+  ground.camera_to_ground.translation() = Eigen::Vector3f(0, 0, 1.25f);
+  l.segmented.prepared.ground = ground;
+  const LabelledFrame no_ground = labelledFrame(5, false, true, {});
+  Collector p(*bus, kChannels);
+  FrameResult r{l, 0, std::nullopt, {}, std::nullopt};
+  sink.consume(r);
+  sink.publishColor(90);
+  sink.consume(r);
+  FrameResult r2{no_ground, 0, std::nullopt, {}, std::nullopt};
+  sink.consume(r2);
+  p.drain();
+  ASSERT_EQ(p.labels.size(), 3u);
+  ASSERT_TRUE(p.labels[0].camera.has_value());
+  EXPECT_EQ(p.labels[0].camera->intrinsics.fy, 401);
+  EXPECT_TRUE(p.labels[0].camera->camera_to_base.isApprox(ground.camera_to_ground.cast<double>()));
+  EXPECT_TRUE(p.labels[0].color_jpeg.empty());
+  const std::vector<Rgb8> colour = io::decodeLabelImageColor(p.labels[1], "L");
+  ASSERT_EQ(colour.size(), 4u);
+  EXPECT_NEAR(colour[0].r, 200, 8);
+  EXPECT_NEAR(colour[3].b, 50, 8);
+  EXPECT_FALSE(p.labels[2].camera.has_value());  // no floor: no camera to draw with
+}
+
 TEST(LcmPublisherSink, ARefusedPublishNamesTheChannelAndFrameAndIsCounted) {
   auto memory = std::make_shared<io::MemoryBus>();
   auto faulty = std::make_shared<io::FaultyBus>(memory);

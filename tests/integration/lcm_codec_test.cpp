@@ -685,6 +685,87 @@ TEST(LabelCorrupt, EveryClass) {
   expectError([&] { decodeLabelImage(bad, "C"); }, "pixel 17 has label id 42");
 }
 
+// The camera the daemon used and its colour image (label_image_t's camera and colour
+// fields, added for findmug-web): round trip, absent by default, every bad value refused.
+TEST(LabelCodec, CameraAndColourRoundTrip) {
+  LabelImageMessage in = makeLabels();
+  {
+    const Bytes plain = encodeMessage(encodeLabelImage(in));
+    const LabelImageMessage out = decodeLabelImage(plain.data(), plain.size(), "FINDMUG_LABELS");
+    EXPECT_FALSE(out.camera.has_value());
+    EXPECT_TRUE(out.color_jpeg.empty());
+    EXPECT_TRUE(decodeLabelImageColor(out, "FINDMUG_LABELS").empty());
+  }
+  CameraView camera;
+  camera.intrinsics = CameraIntrinsics{518.9, 519.5, 325.6, 253.7};
+  camera.camera_to_base.linear() =
+      Eigen::AngleAxisd(0.3, Eigen::Vector3d(0.2, -0.5, 0.8).normalized()).toRotationMatrix();
+  camera.camera_to_base.translation() = Eigen::Vector3d(0.05, -0.02, 1.31);
+  findmug_lcm::label_image_t msg = encodeLabelImage(in);
+  setCameraView(msg, camera.intrinsics, camera.camera_to_base);
+  std::vector<Rgb8> rgb(static_cast<std::size_t>(in.image.width) * in.image.height);
+  const auto width = static_cast<std::size_t>(in.image.width);
+  for (std::size_t i = 0; i < rgb.size(); ++i) {  // a smooth gradient, as camera images are
+    rgb[i] = Rgb8{static_cast<std::uint8_t>(40 + 8 * (i % width)),
+                  static_cast<std::uint8_t>(60 + 10 * (i / width)), 128};
+  }
+  setColorJpeg(msg, rgb, 95);
+  EXPECT_EQ(msg.color_format, findmug_lcm::label_image_t::COLOR_JPEG);
+  const Bytes b = encodeMessage(msg);
+  const LabelImageMessage out = decodeLabelImage(b.data(), b.size(), "FINDMUG_LABELS");
+  ASSERT_TRUE(out.camera.has_value());
+  EXPECT_EQ(out.camera->intrinsics.fy, 519.5);
+  EXPECT_TRUE(out.camera->camera_to_base.isApprox(camera.camera_to_base, 1e-15));
+  EXPECT_EQ(out.image.labels, in.image.labels);
+  const std::vector<Rgb8> decoded = decodeLabelImageColor(out, "FINDMUG_LABELS");
+  ASSERT_EQ(decoded.size(), rgb.size());
+  int worst = 0;
+  for (std::size_t i = 0; i < rgb.size(); ++i) {
+    worst = std::max({worst, std::abs(decoded[i].r - rgb[i].r), std::abs(decoded[i].g - rgb[i].g),
+                      std::abs(decoded[i].b - rgb[i].b)});
+  }
+  EXPECT_LT(worst, 24);  // JPEG at quality 95 on a small gradient
+  // Re-encoding the decoded message keeps both.
+  const Bytes again = encodeMessage(encodeLabelImage(out));
+  EXPECT_EQ(again, b);
+
+  findmug_lcm::label_image_t bad = msg;
+  bad.fx = 0;
+  expectError([&] { decodeLabelImage(bad, "C"); }, "fx/fy");
+  bad = msg;
+  bad.cy = std::numeric_limits<double>::quiet_NaN();
+  expectError([&] { decodeLabelImage(bad, "C"); }, "cx/cy");
+  bad = msg;
+  bad.camera_to_base[1][3] = std::numeric_limits<double>::infinity();
+  expectError([&] { decodeLabelImage(bad, "C"); }, "element [1][3] is not finite");
+  bad = msg;
+  bad.camera_to_base[0][0] *= 2;
+  expectError([&] { decodeLabelImage(bad, "C"); }, "not a rotation");
+  bad = msg;
+  for (int i = 0; i < 3; ++i) bad.camera_to_base[i][0] = -bad.camera_to_base[i][0];  // a mirror
+  expectError([&] { decodeLabelImage(bad, "C"); }, "not a rotation");
+  bad = msg;
+  bad.color_format = 7;
+  expectError([&] { decodeLabelImage(bad, "C"); }, "unknown colour format id 7");
+  bad = msg;
+  bad.color_format = findmug_lcm::label_image_t::COLOR_ABSENT;
+  expectError([&] { decodeLabelImage(bad, "C"); }, "color_format is COLOR_ABSENT");
+  bad = msg;
+  bad.color_data[0] = 0;
+  expectError([&] { decodeLabelImage(bad, "C"); }, "not a JPEG");
+  bad = msg;
+  bad.color_size += 1;
+  expectError([&] { decodeLabelImage(bad, "C"); }, "color_size");
+  // Markers right, content broken: the message decodes, the full decode refuses it.
+  bad = msg;
+  std::fill(bad.color_data.begin() + 2, bad.color_data.end() - 2, 0x11);
+  const LabelImageMessage broken = decodeLabelImage(bad, "C");
+  expectError([&] { (void)decodeLabelImageColor(broken, "FINDMUG_LABELS"); },
+              "FINDMUG_LABELS label_image_t.color_data");
+  EXPECT_THROW(setColorJpeg(msg, std::vector<Rgb8>(3), 80), Error);
+  EXPECT_THROW(setColorJpeg(msg, rgb, 0), Error);
+}
+
 // ---- tables
 // --------------------------------------------------------------------------------------
 

@@ -76,6 +76,8 @@ void walkLabels(Walk& w) {
   w.fixed(1);
   w.fixed(static_cast<std::size_t>(w.field("confidence_size")));
   w.fixed(8);
+  w.fixed(1 + 4 * 8 + 12 * 8 + 1);  // has_camera, fx..cy, camera_to_base, color_format
+  w.fixed(static_cast<std::size_t>(w.field("color_size")));
 }
 
 void walkSearchPosition(Walk& w, const std::string& name) {
@@ -161,6 +163,16 @@ std::vector<Case> cases() {
   out.push_back({"label_image", encodeMessage(encodeLabelImage(labels)), walkLabels,
                  [](const Bytes& b) { (void)decodeLabelImage(b.data(), b.size(), "CH"); },
                  "label_image_t"});
+  // With the camera and its colour image (daemon.publish_color).
+  labels.camera = CameraView{};
+  labels.camera->intrinsics = CameraIntrinsics{50, 50, 2, 1.5};
+  {
+    auto with_color = encodeLabelImage(labels);
+    setColorJpeg(with_color, std::vector<Rgb8>(12, Rgb8{90, 60, 30}), 80);
+    out.push_back({"label_image_camera_color", encodeMessage(with_color), walkLabels,
+                   [](const Bytes& b) { (void)decodeLabelImage(b.data(), b.size(), "CH"); },
+                   "label_image_t"});
+  }
   TablesMessage tables;
   TableCluster t;
   t.extents = Eigen::Vector2f(0.5f, 0.3f);

@@ -131,6 +131,17 @@ findmug_lcm::label_image_t makeLabels(Random& r, const Scale& s) {
   m.confidence_data = r.bytes(s.blob);
   m.confidence_size = static_cast<std::int32_t>(m.confidence_data.size());
   m.latency_us = r.i64();
+  m.has_camera = r.boolean();
+  m.fx = r.f64();
+  m.fy = r.f64();
+  m.cx = r.f64();
+  m.cy = r.f64();
+  for (auto& row : m.camera_to_base) {
+    for (double& v : row) v = r.f64();
+  }
+  m.color_format = r.i8();
+  m.color_data = r.bytes(s.blob);
+  m.color_size = static_cast<std::int32_t>(m.color_data.size());
   return m;
 }
 

@@ -20,6 +20,18 @@ fi
 dpkg-query -W -f='${Conffiles}\n' findmug | grep -q '/etc/findmug/findmugd.yaml' ||
   fail "/etc/findmug/findmugd.yaml is not a conffile"
 grep -q '^User=findmug' /lib/systemd/system/findmugd.service || fail "unit does not run as findmug"
+[[ -f /lib/systemd/system/findmug-web.service ]] || fail "findmug-web unit not installed"
+if find /etc/systemd/system -name 'findmug-web.service' | grep -q .; then
+  fail "findmug-web.service was enabled by the package"
+fi
+[[ "$(stat -c '%U:%G %a' /etc/findmug/web-token)" == "root:root 600" ]] ||
+  fail "web token is not a root-only file: $(stat -c '%U:%G %a' /etc/findmug/web-token)"
+[[ $(head -n 1 /etc/findmug/web-token | tr -d '\n' | wc -c) -eq 64 ]] || fail "web token is not 64 hex digits"
+dpkg-query -W -f='${Conffiles}\n' findmug | grep -q '/etc/findmug/findmug-web.yaml' ||
+  fail "/etc/findmug/findmug-web.yaml is not a conffile"
+[[ -f /usr/share/findmug/web/index.html && -f /usr/share/findmug/web/live.js ]] ||
+  fail "findmug-web's page is not installed"
+[[ "$(findmug-web --version)" == "findmug-web $VERSION" ]] || fail "findmug-web --version"
 [[ -f /usr/share/java/findmug_lcmtypes.jar ]] || fail "LCM types jar missing"
 [[ -f /lib/sysctl.d/60-findmug-lcm.conf ]] || fail "sysctl snippet missing"
 

@@ -55,7 +55,13 @@ int main(int argc, char** argv) {
     labels.image.labels.assign(w * h, 1);
     labels.image.confidence.assign(w * h, 0.8f);
     labels.utime = t;
-    write(log, io::kLabelsChannel, io::encodeMessage(io::encodeLabelImage(labels)), t + 1);
+    // With the camera and colour fields filled in, so that lcm-spy decodes them too.
+    auto label_message = io::encodeLabelImage(labels);
+    Eigen::Isometry3d camera_to_base = Eigen::Isometry3d::Identity();
+    camera_to_base.translation() = Eigen::Vector3d(0, 0, 1.2);
+    io::setCameraView(label_message, frame.intrinsics, camera_to_base);
+    io::setColorJpeg(label_message, frame.rgb, 80);
+    write(log, io::kLabelsChannel, io::encodeMessage(label_message), t + 1);
 
     io::TablesMessage tables;
     tables.utime = t;

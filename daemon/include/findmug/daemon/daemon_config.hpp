@@ -57,6 +57,10 @@ struct DaemonConfig {
   double stats_window_s = 10.0;       // window of the status rates and latency percentiles
   bool publish_confidence = true;     // include per-pixel confidence in label images
   bool publish_tables = true;         // publish FINDMUG_TABLES
+  // The frame's colour image (JPEG) in each label image, for viewers (findmug-web)
+  // on sources that do not publish FINDMUG_RGBD (datasets, logs, PCD, devices).
+  bool publish_color = false;
+  int color_jpeg_quality = 80;        // 1..100
   bool exit_at_end_of_stream = true;  // finite source exhausted: drain, publish, exit 0
   double shutdown_grace_s = 1.0;      // on SIGTERM, wait this long for frames in flight
   // A source that stays inside next() this long while it reports "running"

@@ -105,6 +105,9 @@ class LcmPublisherSink final : public ResultSink {
                    bool publish_tables);
 
   void consume(FrameResult& result) override;
+  // Puts each frame's colour image, as a JPEG of `quality` (1..100), into its label
+  // image (daemon.publish_color). Call before the first frame.
+  void publishColor(int jpeg_quality) { color_jpeg_quality_ = jpeg_quality; }
   // Builds status_t (StatusBuilder) and publishes it; false (counted, logged)
   // when the bus refused it or the sink is closed.
   bool publishStatus(const StatusSnapshot& snapshot);
@@ -125,6 +128,7 @@ class LcmPublisherSink final : public ResultSink {
   std::shared_ptr<io::Bus> bus_;
   Channels channels_;
   bool publish_confidence_, publish_tables_;
+  int color_jpeg_quality_ = 0;  // 0: no colour image in the label images
   std::atomic<std::uint64_t> failures_{0};
 };
 

@@ -104,6 +104,17 @@ findmug_lcm::label_image_t encodeLabelImage(const LabelImage& image, std::uint64
 LabelImageMessage decodeLabelImage(const findmug_lcm::label_image_t& message,
                                    std::string_view channel);
 LabelImageMessage decodeLabelImage(const void* data, std::size_t size, std::string_view channel);
+// The camera fields of a label image (label_image_t.has_camera): the frame's intrinsics
+// and the camera-to-base transform the daemon used for it.
+void setCameraView(findmug_lcm::label_image_t& message, const CameraIntrinsics& intrinsics,
+                   const Eigen::Isometry3d& camera_to_base);
+// The frame's colour image as a JPEG of `quality` (1..100) in the label image
+// (COLOR_JPEG); `rgb` must be width x height of the message. Throws findmug::Error.
+void setColorJpeg(findmug_lcm::label_image_t& message, const std::vector<Rgb8>& rgb, int quality);
+// The colour image a decoded label image carries (empty when it has none), decoded in
+// full; a corrupt JPEG or one of another size throws findmug::Error naming the channel.
+std::vector<Rgb8> decodeLabelImageColor(const LabelImageMessage& message,
+                                        std::string_view channel);
 
 // ---- tables ---------------------------------------------------------------------
 // (RobotPose, TablesMessage & co.: messages.hpp)

@@ -7,21 +7,32 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <Eigen/Geometry>
 #include <cstdint>
 #include <optional>
 #include <vector>
 
+#include "findmug/frame.hpp"
 #include "findmug/label_image.hpp"
 #include "findmug/pose2d.hpp"
 #include "findmug/tables.hpp"
 
 namespace findmug::io {
 
+// The camera of a labelled frame as the daemon used it (label_image_t.has_camera):
+// intrinsics and the camera-to-base transform (p_base = camera_to_base * p_camera).
+struct CameraView {
+  CameraIntrinsics intrinsics;
+  Eigen::Isometry3d camera_to_base = Eigen::Isometry3d::Identity();
+};
+
 struct LabelImageMessage {
   LabelImage image;         // confidence empty when the message had none
   std::uint64_t utime = 0;  // source frame's utime
   std::int64_t seq = 0;     // source frame's seq
   std::int64_t latency_us = 0;
+  std::optional<CameraView> camera;     // label_image_t.has_camera
+  std::vector<std::uint8_t> color_jpeg;  // label_image_t.color_data when COLOR_JPEG, else empty
 };
 
 // The robot base's pose in the map at a time (robot_pose_t): a time-stamped Pose2D.

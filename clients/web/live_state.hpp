@@ -1,0 +1,79 @@
+// live_state.hpp — what findmug-web knows of a running findmugd: the latest label image
+// (with the camera and the colour image the daemon sent with it), the latest frame's
+// tables, the persistent table map, the latest status and a few minutes of status history.
+//
+// Fed by the bus thread (io::Subscriber callbacks), read by the HTTP threads: every
+// member is behind one mutex, and readers get copies (JSON or bytes).
+#pragma once
+
+#include <chrono>
+#include <cstdint>
+#include <deque>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <nlohmann/json.hpp>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "findmug/io/messages.hpp"
+#include "findmug_lcm/status_t.hpp"
+
+namespace findmug::web {
+
+// A label image for the page: one byte per pixel (findmug ids, 255 void).
+struct LabelPixels {
+  std::int64_t seq = 0;
+  int width = 0, height = 0;
+  std::shared_ptr<const std::vector<std::uint8_t>> labels;
+};
+
+class LiveState {
+ public:
+  explicit LiveState(double history_s) : history_s_(history_s) {}
+
+  // From the bus thread.
+  void onLabels(const io::LabelImageMessage& message);
+  void onTables(const io::TablesMessage& message);  // FINDMUG_TABLES or FINDMUG_TABLE_MAP
+  void onStatus(const findmug_lcm::status_t& status);
+  void onBadMessage(const std::string& channel, const std::string& what);
+  void onBusEnded(const std::string& how);
+
+  // For the page: everything but the pixels (GET /api/live).
+  nlohmann::json liveJson() const;
+  std::optional<LabelPixels> labels() const;
+  // The colour JPEG of the latest label image, and its seq; nullopt when it had none.
+  std::optional<std::pair<std::int64_t, std::shared_ptr<const std::vector<std::uint8_t>>>>
+  colorJpeg() const;
+
+  // Label images taken so far (for tests and the log).
+  std::uint64_t labelImages() const;
+
+ private:
+  struct StatusSample {
+    double t = 0;  // seconds, status utime
+    double input_fps = 0, output_fps = 0, cpu_used = 0, cpu_budget = 0;
+    double latency_p50_ms = 0, latency_p95_ms = 0;  // the "total" stage
+    std::int64_t dropped_at_door = 0, dropped_in_pipeline = 0, dropped_at_shutdown = 0;
+    std::int64_t rejected = 0;
+  };
+
+  mutable std::mutex mutex_;
+  double history_s_;
+  std::uint64_t label_count_ = 0;
+  std::int64_t labels_received_us_ = 0;  // host clock when the latest label image arrived
+  std::optional<io::LabelImageMessage> labels_meta_;  // pixels moved to labels_bytes_
+  std::shared_ptr<const std::vector<std::uint8_t>> labels_bytes_, color_jpeg_;
+  std::optional<io::TablesMessage> frame_tables_, table_map_;
+  std::optional<findmug_lcm::status_t> status_;
+  std::deque<StatusSample> history_;
+  std::map<std::string, std::uint64_t> bad_messages_;
+  std::string last_bad_message_, bus_state_ = "listening";
+};
+
+// JSON of a tables message for the drawing: hulls, ids, numbered search positions, in the
+// base frame and, when the message has the robot's map pose, the map frame.
+nlohmann::json tablesJson(const io::TablesMessage& message);
+
+}  // namespace findmug::web

@@ -1,0 +1,97 @@
+// web_server.hpp — findmug-web's HTTP server: the page's files, the live state as JSON
+// and pixels, the data folders, and the access rules every request goes through.
+//
+// Access rules (checked before any handler runs, every request):
+//   * a token, when one is configured (required by findmug-web off the default loopback
+//     address): "Authorization: Bearer TOKEN", the cookie findmug_token, or ?token=
+//     (which also sets the cookie, so that the page's own files load); missing 401,
+//     wrong 403;
+//   * without a token, only loopback peers (127.0.0.0/8, ::1) are served (403);
+//   * a body over max_body_bytes: 413, on every endpoint and method;
+//   * paths name a file inside one of the data folders (--data): relative, no "..",
+//     and still inside after symlinks are resolved (403 otherwise);
+//   * a JSON body that does not parse or lacks a field: 400.
+// Every answer of 400 or above is logged on stderr with the peer, request and reason.
+#pragma once
+
+#include <cstddef>
+#include <filesystem>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "findmug/config.hpp"
+#include "live_state.hpp"
+
+namespace httplib {
+class Server;
+}
+
+namespace findmug::web {
+
+struct ServerOptions {
+  std::string bind = "127.0.0.1";
+  int port = 8088;                    // 0: any free port (see WebServer::port())
+  std::optional<std::string> token;   // required on every request when set
+  std::size_t max_body_bytes = 4u << 20;
+  std::filesystem::path static_dir;   // index.html, *.js, *.css
+  std::vector<std::filesystem::path> data_dirs;
+  // The oversegmentation the Label page shows is made with these settings (cloud,
+  // normals, overseg.*: the ones the model is trained with).
+  SegmenterConfig segmenter;
+};
+
+// A path inside one of the data folders, or why not (HTTP status and message).
+struct ResolvedPath {
+  std::filesystem::path path;  // canonical, when status == 200
+  int status = 200;
+  std::string error;
+};
+// `relative` inside data folder `root` (canonical). Refused: absolute paths, "..", ".",
+// empty components, backslashes, control characters (400); a path that leaves the folder
+// through a symlink (403); a missing file (404) unless `may_be_missing` (then its parent
+// must exist inside the folder).
+ResolvedPath resolveInside(const std::filesystem::path& root, const std::string& relative,
+                           bool may_be_missing = false);
+
+class WebServer {
+ public:
+  // Throws findmug::Error when the static folder or a data folder is unusable.
+  WebServer(ServerOptions options, LiveState& live);
+  ~WebServer();
+  WebServer(const WebServer&) = delete;
+  WebServer& operator=(const WebServer&) = delete;
+
+  // Binds (throws findmug::Error naming the address when it cannot), then serves on the
+  // calling thread until stop().
+  void bind();
+  void serve();
+  void stop();
+  int port() const { return port_; }
+
+ private:
+  void routes();
+  void loadStaticFiles();
+
+  // The oversegmentation of a dataset frame for the Label page (cached, last few).
+  struct FramePatches {
+    std::string key;  // root/frame
+    int width = 0, height = 0, segments = 0;
+    std::vector<std::uint16_t> patch;  // per pixel, 0xFFFF = in no patch
+  };
+  std::shared_ptr<const FramePatches> patchesOf(std::size_t root, const std::string& frame);
+
+  ServerOptions options_;
+  std::mutex patches_mutex_;
+  std::vector<std::shared_ptr<const FramePatches>> patches_cache_;
+  LiveState& live_;
+  std::vector<std::filesystem::path> roots_;          // canonical data folders
+  std::map<std::string, std::string> static_files_;  // name -> content
+  std::unique_ptr<httplib::Server> server_;
+  int port_ = 0;
+};
+
+}  // namespace findmug::web
