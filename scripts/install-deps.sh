@@ -30,8 +30,12 @@ packages=(
   dpkg-dev lintian adduser
   # findmug-web: HTTP server and JSON; its browser test drives Debian's chromium with
   # puppeteer-core from npm (clients/web/test: npm ci, never a downloaded browser)
-  libcpp-httplib-dev nlohmann-json3-dev chromium nodejs npm
+  libcpp-httplib-dev nlohmann-json3-dev chromium
 )
+# Node.js and npm for that test: Debian's, unless the machine has them already (a
+# NodeSource nodejs ships npm itself and conflicts with Debian's npm package).
+command -v node >/dev/null || packages+=(nodejs)
+command -v npm >/dev/null || packages+=(npm)
 
 # findmug-web's browser test drives /usr/bin/chromium with puppeteer-core (npm), exactly as
 # clients/web/test/package-lock.json pins it; puppeteer-core never downloads a browser.
