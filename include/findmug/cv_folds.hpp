@@ -14,7 +14,7 @@
 //   the previous frame's starts a new scene; on the 46 shared test frames
 //   together every gap above 2 has a train index in it and gap 2 keeps each
 //   room of the images together, but with frames missing (one folder alone)
-//   a room can be split (docs/results-h-evalproto.md lists the check).
+//   a room can be split (docs/measurements/eval-protocol.md lists the check).
 #pragma once
 
 #include <cstddef>

@@ -23,7 +23,7 @@ namespace findmug {
 
 // The model's parameters (settings degrade.*). Defaults are calibrated on
 // NYU frame 0433's raw depth, nyuv2_raw_basement3 and the Bonn Kinect
-// frames (docs/results-h-depthctx.md).
+// frames (docs/measurements/raw-depth-and-context.md).
 struct DepthDegradationConfig {
   // Projector-camera baseline (m) and focal length (px) of the shadow model:
   // a background pixel is shadowed when a nearer surface hides it from the

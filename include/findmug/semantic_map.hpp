@@ -28,7 +28,7 @@
 //     support records (below) add at most `support_frames` small records.
 //   * Tables from the map (tables()): the voxels whose most voted label is Table, the
 //     table votes counting tables.table_weight times as per frame (1.5: the fused tops
-//     grow to the true ones, seed 1 of docs/results-h-semmap.md), at table height, go
+//     grow to the true ones, seed 1 of docs/measurements/semantic-map.md), at table height, go
 //     through the per-frame table stage (detectTables, the same
 //     `tables.*` rules: clustering, geometry, search positions, reachability against the
 //     map's floor and obstacle voxels), with each voxel centre as one point. Point counts

@@ -3,7 +3,7 @@
 // never split a scene, the shipped configuration well above the majority
 // baseline, searchable tables reported, and a small learning curve written.
 //
-// Bars (docs/results-h-evalproto.md, 5-fold scene CV, forest seeds 42 / 1042 /
+// Bars (docs/measurements/eval-protocol.md, 5-fold scene CV, forest seeds 42 / 1042 /
 // 2042; this test runs the default seed 42): see kClassAverageMargin and kGlobalMargin.
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
@@ -23,7 +23,7 @@ namespace {
 
 using ::testing::HasSubstr;
 
-// Measured with scene folds from NYU's split (docs/results-h-evalproto.md):
+// Measured with scene folds from NYU's split (docs/measurements/eval-protocol.md):
 // forest+MRF class average 0.487 / 0.487 / 0.492 for forest seeds 42 / 1042 /
 // 2042 against the majority baseline's 0.125 (8 classes present), global
 // 0.578 / 0.580 / 0.582 against 0.447 (every pixel "wall"). The bars ask for

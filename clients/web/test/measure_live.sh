@@ -1,6 +1,6 @@
 #!/usr/bin/env bash
 # measure_live.sh — findmug-web's live view at a given label-image rate: updates per
-# second on the page, publish-to-page delay, and findmug-web's CPU (docs/results-h-web.md).
+# second on the page, publish-to-page delay, and findmug-web's CPU (docs/measurements/web.md).
 #
 #   measure_live.sh --findmugd B --web B [--fps 30] [--record-s 45] [--measure-s 6]
 #
