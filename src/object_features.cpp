@@ -13,23 +13,14 @@
 #include "findmug/error.hpp"
 #include "moments_internal.hpp"
 #include "scratch.hpp"
+#include "union_find.hpp"
 
 namespace findmug {
 
 namespace {
 
-int findRoot(std::vector<int>& parent, int i) {
-  while (parent[i] != i) {
-    parent[i] = parent[parent[i]];
-    i = parent[i];
-  }
-  return i;
-}
-
-void unite(std::vector<int>& parent, int a, int b) {
-  const int ra = findRoot(parent, a), rb = findRoot(parent, b);
-  if (ra != rb) parent[std::max(ra, rb)] = std::min(ra, rb);
-}
+using detail::unionFindJoin;
+using detail::unionFindRoot;
 
 // What the grouping needs of one patch.
 struct Patch {
@@ -256,7 +247,7 @@ void computeObjectFeaturesInto(const SegmentFeatures& features,
     const auto ua = static_cast<std::size_t>(a), ub = static_cast<std::size_t>(b);
     if (touching(patches[ua], patches[ub], config.link_gap_m) &&
         smooth(patches[ua], patches[ub], cos_smooth, config.step_m))
-      unite(parent, a, b);
+      unionFindJoin(parent, a, b);
   }
   std::vector<SegmentMoments>& pooled = *pooled_buffer;
   std::vector<float>& low = *low_buffer;
@@ -265,14 +256,14 @@ void computeObjectFeaturesInto(const SegmentFeatures& features,
   low.assign(n, std::numeric_limits<float>::infinity());
   high.assign(n, -std::numeric_limits<float>::infinity());
   for (std::size_t s = 0; s < n; ++s) {
-    const auto root = static_cast<std::size_t>(findRoot(parent, static_cast<int>(s)));
+    const auto root = static_cast<std::size_t>(unionFindRoot(parent, static_cast<int>(s)));
     detail::poolMoments(pooled[root], features.moments[s]);
     low[root] = std::min(low[root], features.features[s][4]);
     high[root] = std::max(high[root], features.features[s][5]);
   }
   kind.resize(n);
   for (std::size_t s = 0; s < n; ++s) {
-    const auto root = static_cast<std::size_t>(findRoot(parent, static_cast<int>(s)));
+    const auto root = static_cast<std::size_t>(unionFindRoot(parent, static_cast<int>(s)));
     kind[s] = surfaceKind(pooled[root], high[root] - low[root], config, tolerance);
     if (kind[s] == GroupKind::Object)
       kind[s] = regionKind(regions.values.data() + s * kRegionFeatureDim, config, tolerance);
@@ -291,7 +282,7 @@ void computeObjectFeaturesInto(const SegmentFeatures& features,
     if (rep < 0)
       rep = static_cast<int>(s);
     else if (kind[static_cast<std::size_t>(rep)] == kind[s])
-      unite(parent, rep, static_cast<int>(s));
+      unionFindJoin(parent, rep, static_cast<int>(s));
   }
   for (const auto& [a, b] : segmentation.edges) {
     const auto ua = static_cast<std::size_t>(a), ub = static_cast<std::size_t>(b);
@@ -299,7 +290,7 @@ void computeObjectFeaturesInto(const SegmentFeatures& features,
     if (smooth(patches[ua], patches[ub], cos_smooth, config.step_m) ||
         (kind[ua] == GroupKind::Object &&
          convex(patches[ua], patches[ub], config.convex_margin)))
-      unite(parent, a, b);
+      unionFindJoin(parent, a, b);
   }
 
   // Dense group ids in order of first patch, pooled moments and heights.
@@ -309,7 +300,7 @@ void computeObjectFeaturesInto(const SegmentFeatures& features,
   root_group.assign(n, -1);
   pooled.clear();
   for (std::size_t s = 0; s < n; ++s) {
-    const int root = findRoot(parent, static_cast<int>(s));
+    const int root = unionFindRoot(parent, static_cast<int>(s));
     if (root_group[static_cast<std::size_t>(root)] < 0) {
       root_group[static_cast<std::size_t>(root)] = static_cast<int>(out.groups.size());
       ObjectGroup group;

@@ -14,18 +14,11 @@
 #include "findmug/error.hpp"
 #include "moments_internal.hpp"
 #include "scratch.hpp"
+#include "union_find.hpp"
 
 namespace findmug {
 
 namespace {
-
-int findRoot(std::vector<int>& parent, int i) {
-  while (parent[i] != i) {
-    parent[i] = parent[parent[i]];
-    i = parent[i];
-  }
-  return i;
-}
 
 // Regions and their features from per-segment moments (every count > 0).
 void regionsFromMoments(const std::vector<SegmentMoments>& patch,
@@ -59,8 +52,7 @@ void regionsFromMoments(const std::vector<SegmentMoments>& patch,
     if (na.dot(nb) < cos_limit) continue;
     const Eigen::Vector3d d = pb.mean - pa.mean;
     if (std::abs(na.dot(d)) > max_offset || std::abs(nb.dot(d)) > max_offset) continue;
-    const int ra = findRoot(parent, a), rb = findRoot(parent, b);
-    if (ra != rb) parent[std::max(ra, rb)] = std::min(ra, rb);
+    detail::unionFindJoin(parent, a, b);
   }
 
   out.segment_region.assign(n, -1);
@@ -69,7 +61,7 @@ void regionsFromMoments(const std::vector<SegmentMoments>& patch,
   std::vector<SegmentMoments>& region = *region_buffer;
   region.clear();
   for (std::size_t s = 0; s < n; ++s) {
-    const int root = findRoot(parent, static_cast<int>(s));
+    const int root = detail::unionFindRoot(parent, static_cast<int>(s));
     if (root_region[root] < 0) {
       root_region[root] = static_cast<int>(region.size());
       region.emplace_back();

@@ -16,6 +16,7 @@
 #include <set>
 #include <sstream>
 
+#include "run_command.hpp"
 #include "test_data.hpp"
 
 namespace findmug {
@@ -33,28 +34,10 @@ using ::testing::HasSubstr;
 constexpr double kClassAverageMargin = 0.30;
 constexpr double kGlobalMargin = 0.08;
 
-struct RunResult {
-  int exit_code = -1;
-  std::string output;
-};
+using test::readFile;
+using test::RunResult;
 
-RunResult run(const std::string& command) {
-  RunResult r;
-  FILE* pipe = popen((command + " 2>&1").c_str(), "r");
-  if (!pipe) return r;
-  std::array<char, 4096> buf;
-  while (std::fgets(buf.data(), buf.size(), pipe)) r.output += buf.data();
-  const int status = pclose(pipe);
-  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return r;
-}
-
-std::string readFile(const std::filesystem::path& p) {
-  std::ifstream in(p);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
+RunResult run(const std::string& command) { return test::runCommand(command); }
 
 double number(const std::string& text, const std::string& key, std::size_t from = 0) {
   std::smatch m;

@@ -18,6 +18,7 @@
 #include <regex>
 #include <sstream>
 
+#include "run_command.hpp"
 #include "test_data.hpp"
 
 namespace findmug {
@@ -25,28 +26,10 @@ namespace {
 
 using ::testing::HasSubstr;
 
-struct RunResult {
-  int exit_code = -1;
-  std::string output;
-};
+using test::readFile;
+using test::RunResult;
 
-RunResult run(const std::string& command) {
-  RunResult r;
-  FILE* pipe = popen((command + " 2>&1").c_str(), "r");
-  if (!pipe) return r;
-  std::array<char, 4096> buf;
-  while (std::fgets(buf.data(), buf.size(), pipe)) r.output += buf.data();
-  const int status = pclose(pipe);
-  r.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return r;
-}
-
-std::string readFile(const std::filesystem::path& p) {
-  std::ifstream in(p);
-  std::stringstream s;
-  s << in.rdbuf();
-  return s.str();
-}
+RunResult run(const std::string& command) { return test::runCommand(command); }
 
 // The object `"name": {...}` of the report, as text (objects are not nested
 // beyond per_class/confusion, which come after the numbers we read).

@@ -15,6 +15,7 @@
 #include "findmug/error.hpp"
 #include "forest_format.hpp"  // internal: file layout and checksum (src/)
 #include "test_data.hpp"
+#include "file_bytes.hpp"
 
 namespace findmug {
 namespace {
@@ -53,16 +54,8 @@ double accuracy(const RandomForest& forest, const TrainingSet& set) {
   return static_cast<double>(correct) / static_cast<double>(set.features.size());
 }
 
-std::vector<std::uint8_t> readBytes(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
-}
-
-void writeBytes(const std::string& path, const std::vector<std::uint8_t>& bytes) {
-  std::ofstream out(path, std::ios::binary | std::ios::trunc);
-  out.write(reinterpret_cast<const char*>(bytes.data()),
-            static_cast<std::streamsize>(bytes.size()));
-}
+using test::readBytes;
+using test::writeBytes;
 
 // ---------------------------------------------------------------------------
 // Learning

@@ -20,6 +20,7 @@
 #include "findmug/training.hpp"
 #include "forest_format.hpp"    // internal: file layout and checksum (src/)
 #include "test_data.hpp"
+#include "file_bytes.hpp"
 #include "xgboost_learner.hpp"  // internal: the booster's stored bytes (src/)
 
 namespace findmug {
@@ -73,16 +74,8 @@ TrainingSet labelsOnly(TrainingSet set) {
   return set;
 }
 
-std::vector<std::uint8_t> readBytes(const std::string& path) {
-  std::ifstream in(path, std::ios::binary);
-  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
-}
-
-void writeBytes(const std::string& path, const std::vector<std::uint8_t>& bytes) {
-  std::ofstream out(path, std::ios::binary | std::ios::trunc);
-  out.write(reinterpret_cast<const char*>(bytes.data()),
-            static_cast<std::streamsize>(bytes.size()));
-}
+using test::readBytes;
+using test::writeBytes;
 
 void fixChecksum(std::vector<std::uint8_t>& bytes) {
   const std::size_t body = bytes.size() - forest_format::kChecksumSize;

@@ -10,14 +10,11 @@
 // patch (from the server's oversegmentation) in its class, everything else void. The
 // PNG is decoded here (zlib + PNG filters), not by findmug's own reader. Exit 0 pass.
 import fs from 'node:fs';
-import os from 'node:os';
 import path from 'node:path';
 import zlib from 'node:zlib';
-import puppeteer from 'puppeteer-core';
+import { openPage, parseArgs } from './browser.mjs';
 
-const args = Object.fromEntries(
-  process.argv.slice(2).reduce((pairs, a, i, all) => (a.startsWith('--') ? [...pairs, [a.slice(2), all[i + 1]]] : pairs), []));
-const chromium = process.env.FINDMUG_CHROMIUM || '/usr/bin/chromium';
+const args = parseArgs(process.argv.slice(2));
 const VOID = 255;
 
 function fail(message) {
@@ -63,19 +60,8 @@ function decodeGrey8(file) {
   return { width, height, pixels: out };
 }
 
-const profile = fs.mkdtempSync(path.join(os.tmpdir(), 'findmug-chromium-'));
-const browser = await puppeteer.launch({
-  executablePath: chromium,
-  headless: true,
-  args: ['--headless', '--no-sandbox', '--disable-gpu', '--disable-quic', '--no-first-run',
-         '--disable-background-networking', '--disable-component-update', '--disable-sync',
-         `--user-data-dir=${profile}`, '--window-size=1000,900'],
-});
+const { page, pageErrors, close } = await openPage(1000, 900);
 try {
-  const page = await browser.newPage();
-  await page.setViewport({ width: 1000, height: 900 });
-  const pageErrors = [];
-  page.on('pageerror', (e) => pageErrors.push(String(e)));
   await page.goto(`${args.url}label?root=0&frame=${args.frame}`, { waitUntil: 'load' });
   await page.waitForFunction(() => window.findmugLabel && window.findmugLabel.ready, { timeout: 60000 });
   const q = `root=0&frame=${args.frame}`;
@@ -151,6 +137,5 @@ try {
 } catch (e) {
   fail(e.stack || String(e));
 } finally {
-  await browser.close();
-  fs.rmSync(profile, { recursive: true, force: true });
+  await close();
 }

@@ -8,17 +8,13 @@
 // the label palette), a table hull is drawn over the camera image (an SVG polygon with
 // finite points) and on the map; saves DIR/live.png (the README's picture) and prints
 // the measured updates per second and delays as JSON on stdout. Exit 0 pass, 1 fail.
-import fs from 'node:fs';
-import os from 'node:os';
 import path from 'node:path';
-import puppeteer from 'puppeteer-core';
+import { openPage, parseArgs } from './browser.mjs';
 
-const args = Object.fromEntries(
-  process.argv.slice(2).reduce((pairs, a, i, all) => (a.startsWith('--') ? [...pairs, [a.slice(2), all[i + 1]]] : pairs), []));
+const args = parseArgs(process.argv.slice(2));
 const url = args.url;
 const out = args.out || '.';
 const measureS = Number(args['measure-s'] || 10);
-const chromium = process.env.FINDMUG_CHROMIUM || '/usr/bin/chromium';
 if (!url) {
   console.error('live_test: --url is required');
   process.exit(2);
@@ -29,19 +25,8 @@ function fail(message) {
   process.exitCode = 1;
 }
 
-const profile = fs.mkdtempSync(path.join(os.tmpdir(), 'findmug-chromium-'));
-const browser = await puppeteer.launch({
-  executablePath: chromium,
-  headless: true,
-  args: ['--headless', '--no-sandbox', '--disable-gpu', '--disable-quic', '--no-first-run',
-         '--disable-background-networking', '--disable-component-update', '--disable-sync',
-         `--user-data-dir=${profile}`, '--window-size=1400,1000'],
-});
+const { page, pageErrors, close } = await openPage(1400, 1000);
 try {
-  const page = await browser.newPage();
-  await page.setViewport({ width: 1400, height: 1000 });
-  const pageErrors = [];
-  page.on('pageerror', (e) => pageErrors.push(String(e)));
   page.on('console', (m) => { if (m.type() === 'error') pageErrors.push(m.text()); });
   await page.goto(url, { waitUntil: 'load', timeout: 30000 });
 
@@ -103,6 +88,5 @@ try {
 } catch (e) {
   fail(e.stack || String(e));
 } finally {
-  await browser.close();
-  fs.rmSync(profile, { recursive: true, force: true });
+  await close();
 }
