@@ -16,6 +16,7 @@
 #include <set>
 #include <sstream>
 
+#include "eval_json.hpp"
 #include "run_command.hpp"
 #include "test_data.hpp"
 
@@ -107,18 +108,7 @@ TEST(EvalProtocol, SceneFoldsOverBothSharedFoldersBeatTheBaselineWidely) {
   ASSERT_NE(mrf_at, std::string::npos);
   const double class_average = number(json, "class_average", mrf_at);
   const double global = number(json, "global", mrf_at);
-  const auto confusion_at = json.find("\"confusion\": [", mrf_at);
-  std::string rest = json.substr(confusion_at + 14);
-  const std::regex row(R"(\[([0-9, ]+)\])");
-  std::vector<double> totals;
-  for (std::sregex_iterator it(rest.begin(), rest.end(), row), end; it != end && totals.size() < 8;
-       ++it) {
-    double sum = 0;
-    std::stringstream cells((*it)[1].str());
-    std::string cell;
-    while (std::getline(cells, cell, ',')) sum += std::stod(cell);
-    totals.push_back(sum);
-  }
+  const std::vector<double> totals = test::mrfClassTotals(json);
   ASSERT_EQ(totals.size(), 8u);
   double all = 0, largest = 0;
   int present = 0;

@@ -18,6 +18,7 @@
 #include <regex>
 #include <sstream>
 
+#include "eval_json.hpp"
 #include "run_command.hpp"
 #include "test_data.hpp"
 
@@ -46,22 +47,7 @@ double number(const std::string& text, const std::string& key) {
   return std::stod(m[1]);
 }
 
-// Pixel counts per ground-truth class from the confusion matrix rows.
-std::vector<double> classTotals(const std::string& json) {
-  const auto at = json.find("\"confusion\": [", json.find("\"mrf\": {"));
-  std::vector<double> totals;
-  std::string rest = json.substr(at + 14);
-  const std::regex row(R"(\[([0-9, ]+)\])");
-  for (std::sregex_iterator it(rest.begin(), rest.end(), row), end; it != end && totals.size() < 8;
-       ++it) {
-    double sum = 0;
-    std::stringstream cells((*it)[1].str());
-    std::string cell;
-    while (std::getline(cells, cell, ',')) sum += std::stod(cell);
-    totals.push_back(sum);
-  }
-  return totals;
-}
+std::vector<double> classTotals(const std::string& json) { return test::mrfClassTotals(json); }
 
 TEST(ToolsEval, CrossValidationBeatsMajorityBaselineWidely) {
   FINDMUG_REQUIRE_DATA(nyu, "nyuv2_labeled");

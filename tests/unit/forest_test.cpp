@@ -16,6 +16,7 @@
 #include "forest_format.hpp"  // internal: file layout and checksum (src/)
 #include "test_data.hpp"
 #include "file_bytes.hpp"
+#include "model_bytes.hpp"
 
 namespace findmug {
 namespace {
@@ -55,6 +56,8 @@ double accuracy(const RandomForest& forest, const TrainingSet& set) {
 }
 
 using test::readBytes;
+using test::fixChecksum;
+using test::putU32;
 using test::writeBytes;
 
 // ---------------------------------------------------------------------------
@@ -564,18 +567,8 @@ TEST(ForestFile, SaveToUnwritablePlaceFails) {
   EXPECT_THROW(RandomForest().save("/tmp/findmug-empty.fmf"), Error);
 }
 
-// Helpers that know the documented file layout (src/forest_format.hpp), to
-// build files that are intact (valid checksum) but wrong in one field.
-void fixChecksum(std::vector<std::uint8_t>& bytes) {
-  const std::size_t body = bytes.size() - forest_format::kChecksumSize;
-  const std::uint64_t h = forest_format::fnv1a64(bytes.data(), body);
-  for (int i = 0; i < 8; ++i) bytes[body + i] = static_cast<std::uint8_t>(h >> (8 * i));
-}
-
-void putU32(std::vector<std::uint8_t>& bytes, std::size_t offset, std::uint32_t v) {
-  for (int i = 0; i < 4; ++i) bytes[offset + i] = static_cast<std::uint8_t>(v >> (8 * i));
-}
-
+// Reading a field by the documented file layout (src/forest_format.hpp); the
+// writing helpers are in tests/support/model_bytes.hpp.
 std::uint32_t getU32(const std::vector<std::uint8_t>& bytes, std::size_t offset) {
   std::uint32_t v = 0;
   for (int i = 0; i < 4; ++i) v |= static_cast<std::uint32_t>(bytes[offset + i]) << (8 * i);

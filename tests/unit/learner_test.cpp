@@ -21,6 +21,7 @@
 #include "forest_format.hpp"    // internal: file layout and checksum (src/)
 #include "test_data.hpp"
 #include "file_bytes.hpp"
+#include "model_bytes.hpp"
 #include "xgboost_learner.hpp"  // internal: the booster's stored bytes (src/)
 
 namespace findmug {
@@ -75,20 +76,11 @@ TrainingSet labelsOnly(TrainingSet set) {
 }
 
 using test::readBytes;
+using test::fixChecksum;
+using test::putU32;
+using test::putU64;
 using test::writeBytes;
 
-void fixChecksum(std::vector<std::uint8_t>& bytes) {
-  const std::size_t body = bytes.size() - forest_format::kChecksumSize;
-  const std::uint64_t h = forest_format::fnv1a64(bytes.data(), body);
-  for (int i = 0; i < 8; ++i) bytes[body + i] = static_cast<std::uint8_t>(h >> (8 * i));
-}
-
-void putU32(std::vector<std::uint8_t>& bytes, std::size_t offset, std::uint32_t v) {
-  for (int i = 0; i < 4; ++i) bytes[offset + i] = static_cast<std::uint8_t>(v >> (8 * i));
-}
-void putU64(std::vector<std::uint8_t>& bytes, std::size_t offset, std::uint64_t v) {
-  for (int i = 0; i < 8; ++i) bytes[offset + i] = static_cast<std::uint8_t>(v >> (8 * i));
-}
 
 // Predictions of two models on the same rows are the same bits.
 void expectSamePredictions(const RandomForest& a, const RandomForest& b,

@@ -1,0 +1,29 @@
+// Test support: editing a model file's bytes by its documented layout
+// (src/forest_format.hpp), to build files that are intact (valid checksum)
+// but wrong in one field. For unit tests, which see the core's internal headers.
+#pragma once
+
+#include <cstddef>
+#include <cstdint>
+#include <vector>
+
+#include "forest_format.hpp"
+
+namespace findmug::test {
+
+// Rewrites the trailing FNV-1a checksum over everything before it.
+inline void fixChecksum(std::vector<std::uint8_t>& bytes) {
+  const std::size_t body = bytes.size() - forest_format::kChecksumSize;
+  const std::uint64_t h = forest_format::fnv1a64(bytes.data(), body);
+  for (int i = 0; i < 8; ++i) bytes[body + i] = static_cast<std::uint8_t>(h >> (8 * i));
+}
+
+// Little-endian fields, as the format stores them.
+inline void putU32(std::vector<std::uint8_t>& bytes, std::size_t offset, std::uint32_t v) {
+  for (int i = 0; i < 4; ++i) bytes[offset + i] = static_cast<std::uint8_t>(v >> (8 * i));
+}
+inline void putU64(std::vector<std::uint8_t>& bytes, std::size_t offset, std::uint64_t v) {
+  for (int i = 0; i < 8; ++i) bytes[offset + i] = static_cast<std::uint8_t>(v >> (8 * i));
+}
+
+}  // namespace findmug::test
