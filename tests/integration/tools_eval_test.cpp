@@ -70,15 +70,9 @@ TEST(ToolsEval, CrossValidationBeatsMajorityBaselineWidely) {
 
   const auto totals = classTotals(json);
   ASSERT_EQ(totals.size(), 8u);
-  double all = 0, largest = 0;
-  int present = 0;
-  for (double t : totals) {
-    all += t;
-    largest = std::max(largest, t);
-    present += t > 0;
-  }
-  const double baseline_global = largest / all;          // everything labelled "wall"
-  const double baseline_class_avg = 1.0 / present;       // one class right, the rest wrong
+  const test::MajorityBaseline baseline = test::majorityBaseline(totals);
+  const double baseline_global = baseline.global;            // everything labelled "wall"
+  const double baseline_class_avg = baseline.class_average;  // one class right, the rest wrong
   RecordProperty("mrf_class_average", std::to_string(mrf_class_avg));
   RecordProperty("mrf_global", std::to_string(mrf_global));
   std::printf("baseline: class avg %.3f global %.3f; forest class avg %.3f; mrf %.3f / %.3f\n",

@@ -29,4 +29,23 @@ inline std::vector<double> mrfClassTotals(const std::string& json) {
   return totals;
 }
 
+// The majority baseline of those totals: labelling every pixel with the commonest
+// class gives global = largest / all and class average = 1 / (classes present).
+struct MajorityBaseline {
+  double global = 0, class_average = 0;
+};
+inline MajorityBaseline majorityBaseline(const std::vector<double>& totals) {
+  double all = 0, largest = 0;
+  int present = 0;
+  for (double t : totals) {
+    all += t;
+    largest = t > largest ? t : largest;
+    present += t > 0;
+  }
+  MajorityBaseline b;
+  if (all > 0) b.global = largest / all;
+  if (present > 0) b.class_average = 1.0 / present;
+  return b;
+}
+
 }  // namespace findmug::test

@@ -3,10 +3,16 @@
 // but wrong in one field. For unit tests, which see the core's internal headers.
 #pragma once
 
+#include <gtest/gtest.h>
+
 #include <cstddef>
 #include <cstdint>
+#include <string>
 #include <vector>
 
+#include "file_bytes.hpp"
+#include "findmug/error.hpp"
+#include "findmug/forest.hpp"
 #include "forest_format.hpp"
 
 namespace findmug::test {
@@ -24,6 +30,21 @@ inline void putU32(std::vector<std::uint8_t>& bytes, std::size_t offset, std::ui
 }
 inline void putU64(std::vector<std::uint8_t>& bytes, std::size_t offset, std::uint64_t v) {
   for (int i = 0; i < 8; ++i) bytes[offset + i] = static_cast<std::uint8_t>(v >> (8 * i));
+}
+
+// Writes `bytes` to `path` and expects RandomForest::load to refuse it with a
+// message naming the file and containing `word`.
+inline void expectModelRefused(const std::string& path, const std::vector<std::uint8_t>& bytes,
+                               const std::string& word) {
+  writeBytes(path, bytes);
+  try {
+    RandomForest::load(path);
+    ADD_FAILURE() << "load accepted a bad file; expected an error mentioning '" << word << "'";
+  } catch (const Error& e) {
+    const std::string msg = e.what();
+    EXPECT_NE(msg.find(path), std::string::npos) << msg;
+    EXPECT_NE(msg.find(word), std::string::npos) << msg;
+  }
 }
 
 }  // namespace findmug::test

@@ -348,15 +348,7 @@ class BoostedFileCorruption : public ::testing::Test {
   }
 
   void expectRefused(const std::vector<std::uint8_t>& bytes, const std::string& word) {
-    const std::string bad = dir_.str("bad.fmf");
-    writeBytes(bad, bytes);
-    try {
-      RandomForest::load(bad);
-      ADD_FAILURE() << "load accepted a bad file; expected an error mentioning '" << word << "'";
-    } catch (const Error& e) {
-      EXPECT_THAT(e.what(), HasSubstr(bad));
-      EXPECT_THAT(e.what(), HasSubstr(word));
-    }
+    test::expectModelRefused(dir_.str("bad.fmf"), bytes, word);
   }
 
   // Offset of internal class `c`'s label byte (after its name).
