@@ -15,22 +15,6 @@ namespace {
 // Normals within this angle of vertical count as horizontal surface.
 constexpr float kHorizontalDeg = 20.0f;
 
-// Pixels of `a` that are also in `b` (both sorted).
-int intersection(const std::vector<int>& a, const std::vector<int>& b) {
-  std::size_t i = 0, j = 0;
-  int common = 0;
-  while (i < a.size() && j < b.size()) {
-    if (a[i] < b[j]) {
-      ++i;
-    } else if (b[j] < a[i]) {
-      ++j;
-    } else {
-      ++common, ++i, ++j;
-    }
-  }
-  return common;
-}
-
 // Label histogram of `labels` over the pixels of `mask` that are not in `except`.
 std::array<int, kNumLabels + 1> histogram(const std::vector<std::uint8_t>& labels,
                                           const std::vector<int>& mask,
@@ -144,7 +128,7 @@ std::string diagnoseFrameTables(const FrameTableEvidence& f, const std::vector<T
   std::vector<std::vector<int>> inter(truth.size(), std::vector<int>(detected.size(), 0));
   for (std::size_t t = 0; t < truth.size(); ++t) {
     for (std::size_t d = 0; d < detected.size(); ++d) {
-      inter[t][d] = intersection(truth[t].pixels, detected[d].pixels);
+      inter[t][d] = static_cast<int>(sortedIntersectionSize(truth[t].pixels, detected[d].pixels));
     }
   }
   auto iou = [&](std::size_t t, std::size_t d) {

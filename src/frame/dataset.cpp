@@ -19,6 +19,7 @@
 #include <set>
 #include <sstream>
 
+#include "common/csv_rows.hpp"
 #include "findmug/common/error.hpp"
 #include "findmug/common/numbers.hpp"
 #include "findmug/frame/image_io.hpp"
@@ -41,25 +42,6 @@ namespace {
 // integers, above 20000 a different unit (e.g. 1/5000 m as in TUM/ICL).
 constexpr std::uint16_t kMinPlausibleMedianMm = 100;
 constexpr std::uint16_t kMaxPlausibleMedianMm = 20000;
-
-std::string trim(std::string_view s) {
-  const auto first = s.find_first_not_of(" \t\r\n");
-  if (first == std::string_view::npos) return {};
-  const auto last = s.find_last_not_of(" \t\r\n");
-  return std::string(s.substr(first, last - first + 1));
-}
-
-std::vector<std::string> splitCommas(const std::string& line) {
-  std::vector<std::string> fields;
-  std::size_t start = 0;
-  while (true) {
-    const auto comma = line.find(',', start);
-    fields.push_back(trim(std::string_view(line).substr(start, comma - start)));
-    if (comma == std::string::npos) break;
-    start = comma + 1;
-  }
-  return fields;
-}
 
 // Strict integer parse: the whole field must be a number.
 bool parseInt(const std::string& text, long& value) {
@@ -148,43 +130,25 @@ struct NamedTriple {
 };
 
 std::vector<NamedTriple> readPerFrameCsv(const std::string& path, const std::string& header) {
-  const auto columns = splitCommas(header);
-  std::istringstream in(readTextFile(path));
+  const auto columns = detail::splitCsvFields(header);
   std::vector<NamedTriple> rows;
   std::set<std::string> seen;
-  std::string line;
-  int line_number = 0;
-  bool header_seen = false;
-  while (std::getline(in, line)) {
-    ++line_number;
-    const std::string text = trim(line);
-    if (text.empty() || text[0] == '#') continue;
-    const std::string where = path + ":" + std::to_string(line_number);
-    if (!header_seen) {
-      if (text != header) {
-        throw Error(where + ": expected header '" + header + "', found '" + text + "'");
-      }
-      header_seen = true;
-      continue;
-    }
-    const auto fields = splitCommas(text);
-    if (fields.size() != 4) {
-      throw Error(where + ": expected 4 fields, found " + std::to_string(fields.size()));
-    }
+  for (detail::CsvRow& csv : detail::readCsvRows(readTextFile(path), path, header)) {
     NamedTriple row;
-    row.name = fields[0];
-    row.where = where;
-    if (row.name.empty()) throw Error(where + ": empty frame name");
+    row.name = csv.fields[0];
+    row.where = std::move(csv.where);
+    if (row.name.empty()) throw Error(row.where + ": empty frame name");
     for (std::size_t c = 0; c < 3; ++c) {
-      if (!parseDouble(fields[c + 1], row.values[c])) {
-        throw Error(where + ": " + columns[c + 1] + " '" + fields[c + 1] +
+      if (!parseDouble(csv.fields[c + 1], row.values[c])) {
+        throw Error(row.where + ": " + columns[c + 1] + " '" + csv.fields[c + 1] +
                     "' is not a finite number");
       }
     }
-    if (!seen.insert(row.name).second) throw Error(where + ": duplicate frame '" + row.name + "'");
+    if (!seen.insert(row.name).second) {
+      throw Error(row.where + ": duplicate frame '" + row.name + "'");
+    }
     rows.push_back(std::move(row));
   }
-  if (!header_seen) throw Error(path + ": empty (expected header '" + header + "')");
   return rows;
 }
 
@@ -393,43 +357,24 @@ std::vector<std::pair<std::string, std::array<double, 3>>> loadGravityCsv(const 
 LabelMapping parseLabelMapping(const std::string& csv_text, const std::string& source) {
   LabelMapping mapping;
   mapping.source = source;
-  std::istringstream in(csv_text);
-  std::string line;
-  int line_number = 0;
-  bool header_seen = false;
   int entries = 0;
-  while (std::getline(in, line)) {
-    ++line_number;
-    const std::string text = trim(line);
-    if (text.empty() || text[0] == '#') continue;
-    const std::string where = source + ":" + std::to_string(line_number);
-    if (!header_seen) {
-      if (text != "source_id,findmug_label") {
-        throw Error(where + ": expected header 'source_id,findmug_label', found '" + text + "'");
-      }
-      header_seen = true;
-      continue;
-    }
-    const auto fields = splitCommas(text);
-    if (fields.size() != 2) {
-      throw Error(where + ": expected 2 fields, found " + std::to_string(fields.size()));
-    }
+  for (const detail::CsvRow& row :
+       detail::readCsvRows(csv_text, source, "source_id,findmug_label")) {
     long id = 0;
-    if (!parseInt(fields[0], id) || id < 0 || id > 255) {
-      throw Error(where + ": source_id '" + fields[0] + "' is not an integer in 0..255");
+    if (!parseInt(row.fields[0], id) || id < 0 || id > 255) {
+      throw Error(row.where + ": source_id '" + row.fields[0] + "' is not an integer in 0..255");
     }
-    const int label = labelIdFromName(fields[1]);
+    const int label = labelIdFromName(row.fields[1]);
     if (label < 0) {
-      throw Error(where + ": unknown findmug_label '" + fields[1] +
+      throw Error(row.where + ": unknown findmug_label '" + row.fields[1] +
                   "' (expected one of unknown, floor, wall, ceiling, table, chair, cabinet, "
                   "object, void)");
     }
     auto& slot = mapping.to_findmug[static_cast<std::size_t>(id)];
-    if (slot >= 0) throw Error(where + ": duplicate source_id " + std::to_string(id));
+    if (slot >= 0) throw Error(row.where + ": duplicate source_id " + std::to_string(id));
     slot = label;
     ++entries;
   }
-  if (!header_seen) throw Error(source + ": empty mapping (no header 'source_id,findmug_label')");
   if (entries == 0) throw Error(source + ": mapping has no entries");
   return mapping;
 }

@@ -6,6 +6,8 @@
 // y varying fastest. Every frame read here is transposed into our row-major
 // (y * width + x) layout; getting that wrong gives a mirrored, rotated image
 // that still "looks like" data, so the tests check exact pixel positions.
+#include "findmug/offline/nyu_mat.hpp"
+
 #include <hdf5.h>
 #include <sys/resource.h>
 #include <sys/wait.h>
@@ -22,10 +24,10 @@
 #include <string>
 #include <vector>
 
+#include "common/csv_rows.hpp"
 #include "findmug/common/error.hpp"
 #include "findmug/common/numbers.hpp"
 #include "findmug/frame/dataset.hpp"
-#include "findmug/offline/nyu_mat.hpp"
 
 namespace findmug {
 
@@ -195,44 +197,26 @@ void readFrameSlab(const std::string& path, const char* name, const DatasetInfo&
   }
 }
 
-// nyu894_id,name,nyu40_id,nyu40_name -> table indexed by the 894 id
+// nyu894_id,NAME,nyu40_id,NAME -> table indexed by the 894 id
 // (-1 = not listed). Id 0 (unlabelled) maps to NYU-40's 0 (void).
 std::vector<int> loadNyu894To40(const std::string& csv_path) {
   std::ifstream in(csv_path);
   if (!in) throw Error(csv_path + ": cannot open the NYU-894 -> 40 mapping");
+  std::stringstream text;
+  text << in.rdbuf();
   std::vector<int> table(kMaxNyu894Id + 1, -1);
   table[0] = 0;
-  std::string line;
-  int line_number = 0;
-  bool header_seen = false;
   int entries = 0;
-  while (std::getline(in, line)) {
-    ++line_number;
-    if (!line.empty() && line.back() == '\r') line.pop_back();
-    if (line.empty() || line[0] == '#') continue;
-    const std::string where = csv_path + ":" + std::to_string(line_number);
-    std::vector<std::string> fields;
-    std::stringstream fields_in(line);
-    for (std::string f; std::getline(fields_in, f, ',');) fields.push_back(f);
-    if (!header_seen) {
-      if (fields.size() < 3 || fields[0] != "nyu894_id" || fields[2] != "nyu40_id") {
-        throw Error(where + ": expected header 'nyu894_id,name,nyu40_id,nyu40_name', found '" +
-                    line + "'");
-      }
-      header_seen = true;
-      continue;
-    }
-    if (fields.size() != 4) {
-      throw Error(where + ": expected 4 fields, found " + std::to_string(fields.size()));
-    }
-    const long long id894 = parseInteger(fields[0]).value_or(-1);
+  for (const detail::CsvRow& row :
+       detail::readCsvRows(text.str(), csv_path, "nyu894_id,*,nyu40_id,*")) {
+    const long long id894 = parseInteger(row.fields[0]).value_or(-1);
     const bool id894_ok = id894 >= 1 && id894 <= kMaxNyu894Id;
-    const long long id40 = parseInteger(fields[2]).value_or(-1);
+    const long long id40 = parseInteger(row.fields[2]).value_or(-1);
     const bool id40_ok = id40 >= 1 && id40 <= 255;
-    if (!id894_ok) throw Error(where + ": bad nyu894_id '" + fields[0] + "'");
-    if (!id40_ok) throw Error(where + ": bad nyu40_id '" + fields[2] + "'");
+    if (!id894_ok) throw Error(row.where + ": bad nyu894_id '" + row.fields[0] + "'");
+    if (!id40_ok) throw Error(row.where + ": bad nyu40_id '" + row.fields[2] + "'");
     if (table[static_cast<std::size_t>(id894)] >= 0) {
-      throw Error(where + ": duplicate nyu894_id " + std::to_string(id894));
+      throw Error(row.where + ": duplicate nyu894_id " + std::to_string(id894));
     }
     table[static_cast<std::size_t>(id894)] = static_cast<int>(id40);
     ++entries;

@@ -74,8 +74,7 @@ std::vector<TableCluster> groundTruthTables(const OrganizedCloud& cloud_ground,
   return detectTables(cloud_ground, labels, truth_config).tables;
 }
 
-double maskIoU(const std::vector<int>& a, const std::vector<int>& b) {
-  if (a.empty() && b.empty()) return 0.0;
+std::size_t sortedIntersectionSize(const std::vector<int>& a, const std::vector<int>& b) {
   std::size_t i = 0, j = 0, common = 0;
   while (i < a.size() && j < b.size()) {
     if (a[i] < b[j]) {
@@ -86,6 +85,12 @@ double maskIoU(const std::vector<int>& a, const std::vector<int>& b) {
       ++common, ++i, ++j;
     }
   }
+  return common;
+}
+
+double maskIoU(const std::vector<int>& a, const std::vector<int>& b) {
+  if (a.empty() && b.empty()) return 0.0;
+  const std::size_t common = sortedIntersectionSize(a, b);
   return static_cast<double>(common) / static_cast<double>(a.size() + b.size() - common);
 }
 

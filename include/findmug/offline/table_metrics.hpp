@@ -18,6 +18,7 @@
 // axes modulo 180 degrees (0..90).
 #pragma once
 
+#include <cstddef>
 #include <cstdint>
 #include <vector>
 
@@ -38,6 +39,9 @@ std::vector<TableCluster> groundTruthTables(const OrganizedCloud& cloud_ground,
                                             const std::vector<std::uint8_t>& gt_labels,
                                             const TableConfig& tables,
                                             const TableMetricsConfig& config);
+
+// How many values two sorted pixel lists share (masks as TableCluster::pixels).
+std::size_t sortedIntersectionSize(const std::vector<int>& a, const std::vector<int>& b);
 
 // IoU of two image masks given as sorted pixel indices (0 when both empty).
 double maskIoU(const std::vector<int>& a, const std::vector<int>& b);

@@ -173,7 +173,7 @@ TEST(LabelMapping, RejectsBadFilesWithLineNumbers) {
   msg = errorOf([&] { parseLabelMapping("id,label\n1,wall\n", "m.csv"); });
   EXPECT_CONTAINS(msg, "m.csv:1: expected header");
   msg = errorOf([&] { parseLabelMapping("# only comments\n", "m.csv"); });
-  EXPECT_CONTAINS(msg, "m.csv: empty mapping");
+  EXPECT_CONTAINS(msg, "m.csv: empty (expected header 'source_id,findmug_label')");
   msg = errorOf([&] { parseLabelMapping(h, "m.csv"); });
   EXPECT_CONTAINS(msg, "no entries");
   msg = errorOf([&] { loadLabelMapping("/nonexistent/m.csv"); });

@@ -428,7 +428,7 @@ TEST_F(NyuMat, The894To40CsvIsReadAtRunTimeAndChecked) {
     out << "id,name\n1,book\n";
   }
   msg = errorOf([&] { NyuMatFile(path, dir_.str("bad.csv")); });
-  EXPECT_CONTAINS(msg, "expected header 'nyu894_id,name,nyu40_id,nyu40_name'");
+  EXPECT_CONTAINS(msg, "expected header 'nyu894_id,*,nyu40_id,*'");
   {
     std::ofstream out(dir_.str("forty_one.csv"));
     out << "nyu894_id,nyu894_name,nyu40_id,nyu40_name\n1,book,41,nothing\n";

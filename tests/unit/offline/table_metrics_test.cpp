@@ -67,6 +67,13 @@ Scene twoTables() {
   return s;
 }
 
+TEST(TableMetrics, SortedIntersectionCountsSharedPixelsOnce) {
+  EXPECT_EQ(sortedIntersectionSize({1, 3, 5, 7}, {2, 3, 4, 7, 9}), 2u);
+  EXPECT_EQ(sortedIntersectionSize({}, {1, 2}), 0u);
+  EXPECT_EQ(sortedIntersectionSize({4, 5, 6}, {4, 5, 6}), 3u);
+  EXPECT_DOUBLE_EQ(maskIoU({1, 3, 5, 7}, {2, 3, 4, 7, 9}), 2.0 / 7.0);
+}
+
 TEST(TableMetrics, GroundTruthInstancesAreSizedComponents) {
   const Scene s = twoTables();
   const TableConfig tables;
