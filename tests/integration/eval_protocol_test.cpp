@@ -19,8 +19,8 @@
 #include <sstream>
 
 #include "eval_json.hpp"
-#include "findmug/config.hpp"
-#include "findmug/settings.hpp"
+#include "findmug/settings/config.hpp"
+#include "findmug/settings/settings.hpp"
 #include "run_command.hpp"
 #include "test_data.hpp"
 
