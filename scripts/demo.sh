@@ -40,8 +40,11 @@ echo "== 1. Rendering a synthetic apartment: $FRAMES frames, robot head camera, 
 echo
 echo "== 2. findmugd: replaying the frames at $RATE_HZ fps through the threaded pipeline"
 echo "      (organized oversegmenter, committed model models/findmug-nyu-synth.fmf; LCM -> $LOG)"
+# The synthetic-scene model learns the 8 labels without object features
+# (models/README.md): the rendered frames have no NYU-13 classes to learn.
 "$BUILD_DIR"/daemon/findmugd --config daemon/findmugd.yaml \
   --model models/findmug-nyu-synth.fmf \
+  --set learner.classes=labels --set features.objects=false \
   --source "dataset:$OUT_ABS/apartment?rate_hz=$RATE_HZ" \
   --lcm-url "file://$LOG?mode=w"
 

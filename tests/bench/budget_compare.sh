@@ -9,8 +9,8 @@
 #       [--synth-model FMF] [--set KEY=VALUE]...
 #
 # --model: the forest every row runs. Without it, daemon_bench.sh's default:
-# the committed models/findmug.fmf with features.regions=true (the settings it
-# was trained with). An older base build may not read the current model
+# the committed models/findmug.fmf with the settings it was trained with
+# (models/README.md). An older base build may not read the current model
 # format; give it a model it reads (e.g. that commit's models/findmug.fmf, a
 # format-2 forest without region features), and every row runs that model.
 # --synth-model: the forest of the synthetic rows instead, trained with region
@@ -54,7 +54,8 @@ BENCH="$ROOT/tests/bench/daemon_bench.sh"
 host_ref() {
   local ms
   ms=$(taskset -c 0 "$ROOT/build/tests/bench/frame_cpu" --model "$ROOT/models/findmug.fmf" \
-         --passes 1 --set features.regions=true --set features.scene=true --heap-keep-mb 256 \
+         --passes 1 --set features.regions=true --set features.scene=true --set learner.classes=nyu13 \
+         --set features.objects=true --set features.objects_columns=context --heap-keep-mb 256 \
          2>/dev/null | awk -F'|' '/\*\*total\*\*/ { gsub(/[* ]/, "", $3); print $3 }') || true
   echo "${ms:--}" > "$1"
 }

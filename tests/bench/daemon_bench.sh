@@ -151,12 +151,12 @@ done
 
 MODEL_SETS=()
 if [[ -z "$MODEL" ]]; then
-  for candidate in "$ROOT/models/findmug.fmf" "$ROOT"/models/*.fmf; do
-    [[ -f "$candidate" ]] && { MODEL=$candidate; break; }
-  done
-  # The committed models are trained with region and scene features (models/README.md);
-  # findmugd refuses a model whose stages differ from its config.
-  [[ -n "$MODEL" ]] && MODEL_SETS=(--set features.regions=true --set features.scene=true)
+  [[ -f "$ROOT/models/findmug.fmf" ]] && MODEL="$ROOT/models/findmug.fmf"
+  # The shipped model's settings (models/README.md: region, scene and object features,
+  # NYU-13 classes); findmugd refuses a model whose stages differ from its config.
+  [[ -n "$MODEL" ]] && MODEL_SETS=(--set features.regions=true --set features.scene=true
+                                   --set learner.classes=nyu13 --set features.objects=true
+                                   --set features.objects_columns=context)
 fi
 if [[ -z "$MODEL" && $TABLES_ONLY == 0 ]]; then
   MODEL="$RESULTS/nyu31.fmf"

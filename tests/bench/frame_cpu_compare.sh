@@ -41,7 +41,9 @@ for round in $(seq "$rounds"); do
       [[ $variant == new-stride2 ]] && extra=(--set tables.point_stride=2)
       [[ $data == synthetic ]] && extra+=(--data "$synth")
       report=$(taskset -c 0 "$exe" --model models/findmug.fmf --passes 1 \
-        --set features.regions=true --set features.scene=true --heap-keep-mb 256 "${extra[@]}")
+        --set features.regions=true --set features.scene=true --set learner.classes=nyu13 \
+        --set features.objects=true --set features.objects_columns=context \
+        --heap-keep-mb 256 "${extra[@]}")
       [[ -n ${REPORTS:-} ]] && mkdir -p "$REPORTS" && echo "$report" >"$REPORTS/$data-$variant-$round.md"
       tables=$(awk -F'|' -v s=" $stage " '$2 == s {print $3 + 0}' <<<"$report")
       total=$(awk -F'|' '$2 ~ /total/ {gsub(/\*/, "", $3); print $3 + 0}' <<<"$report")

@@ -57,7 +57,9 @@ expect_same() {
     echo "$name: $count $what, the same from both builds"
   fi
 }
-FRAME_ARGS=(--model "$MODEL" --passes 1 --set features.regions=true --set features.scene=true)
+# The shipped model's settings (models/README.md).
+FRAME_ARGS=(--model "$MODEL" --passes 1 --set features.regions=true --set features.scene=true
+            --set learner.classes=nyu13 --set features.objects=true --set features.objects_columns=context)
 for data in nyu synth; do
   data_args=()
   [[ $data == synth ]] && data_args=(--data "$WORK/synth")

@@ -130,7 +130,7 @@ TEST(ToolsEval, RegionFeaturesBeatTheFourteenDimensionalPipelineOnAllFrames) {
   EXPECT_GT(global, base_global + 0.005);
 }
 
-// Issue 10, the shipped configuration (daemon/findmugd.yaml: regions and
+// Issue 10, the configuration it shipped (daemon/findmugd.yaml then: regions and
 // scene features): on all 31 frames it must beat region features alone on
 // the same folds, and the oversegmentation's oracle must stay far above both.
 // Measured (perf-log §1g, commit of this test), forest+MRF at the default

@@ -74,9 +74,12 @@ fail() {
 
 MODEL="$SOURCE_DIR/models/findmug.fmf"
 [[ -f "$MODEL" ]] || fail "no model at $MODEL"
-# The committed model is trained with region and scene features (models/README.md).
+# The committed model's settings: region, scene and object features, NYU-13 classes
+# (models/README.md).
 "$FINDMUGD" --source "dataset:$NYU?rate_hz=$RATE&loop=1" --lcm-url "$URL" --model "$MODEL" \
-  --set features.regions=true --set features.scene=true --set daemon.publish_color=true \
+  --set features.regions=true --set features.scene=true --set learner.classes=nyu13 \
+  --set features.objects=true --set features.objects_columns=context \
+  --set daemon.publish_color=true \
   --set daemon.status_period_s=0.5 --log-level warn > "$WORK/findmugd.log" 2>&1 &
 pids+=($!)
 "$WEB" --lcm-url "$URL" --port "$PORT" --static-dir "$SOURCE_DIR/clients/web/static" \

@@ -117,12 +117,12 @@ wait_for() {
 
 MODEL_SETS=()
 if [[ -z "$MODEL" ]]; then
-  for candidate in "$SOURCE_DIR/models/findmug.fmf" "$SOURCE_DIR"/models/*.fmf; do
-    if [[ -f "$candidate" ]]; then MODEL=$candidate; break; fi
-  done
-  # The committed models are trained with region and scene features (models/README.md);
-  # findmugd refuses a model whose stages differ from its config.
-  [[ -n "$MODEL" ]] && MODEL_SETS=(--set features.regions=true --set features.scene=true)
+  [[ -f "$SOURCE_DIR/models/findmug.fmf" ]] && MODEL="$SOURCE_DIR/models/findmug.fmf"
+  # The shipped model's settings (models/README.md: region, scene and object features,
+  # NYU-13 classes); findmugd refuses a model whose stages differ from its config.
+  [[ -n "$MODEL" ]] && MODEL_SETS=(--set features.regions=true --set features.scene=true
+                                   --set learner.classes=nyu13 --set features.objects=true
+                                   --set features.objects_columns=context)
 fi
 if [[ -z "$MODEL" ]]; then
   # No committed model: train a small one (the replay test checks plumbing
