@@ -9,6 +9,7 @@
 #include <algorithm>
 
 #include "findmug/config.hpp"
+#include "findmug/error.hpp"
 #include "findmug/pseudo_labels.hpp"
 #include "test_data.hpp"
 
@@ -189,6 +190,31 @@ TEST(PseudoLabels, ARoundChangesTheModel) {
     ASSERT_EQ(p.segment_fine_labels.size(), p.segment_labels.size());
     for (std::size_t k = 0; k < p.segment_labels.size(); ++k)
       EXPECT_EQ(p.segment_fine_labels[k] != 0, p.segment_labels[k] != kVoidLabel) << k;
+  }
+}
+
+// The settings: named, range-checked, defaults off.
+TEST(PseudoLabels, SettingsAreNamedAndRangeChecked) {
+  Config c;
+  EXPECT_EQ(c.segmenter.training.pseudo_rounds, 0);
+  applyOverride(c, "training.pseudo_rounds=2");
+  applyOverride(c, "training.pseudo_min_confidence=0.7");
+  applyOverride(c, "training.pseudo_weight=0.5");
+  applyOverride(c, "training.pseudo_class_cap=0.25");
+  EXPECT_EQ(c.segmenter.training.pseudo_rounds, 2);
+  EXPECT_FLOAT_EQ(c.segmenter.training.pseudo_min_confidence, 0.7f);
+  EXPECT_FLOAT_EQ(c.segmenter.training.pseudo_weight, 0.5f);
+  EXPECT_FLOAT_EQ(c.segmenter.training.pseudo_class_cap, 0.25f);
+  for (const char* bad : {"training.pseudo_rounds=-1", "training.pseudo_min_confidence=1.5",
+                          "training.pseudo_weight=0", "training.pseudo_weight=2",
+                          "training.pseudo_class_cap=-1"}) {
+    try {
+      applyOverride(c, bad);
+      ADD_FAILURE() << bad << " accepted";
+    } catch (const Error& e) {
+      const std::string key = std::string(bad).substr(0, std::string(bad).find('='));
+      EXPECT_NE(std::string(e.what()).find(key), std::string::npos) << e.what();
+    }
   }
 }
 
