@@ -6,9 +6,9 @@
 #include <cstdio>
 #include <map>
 
-#include "findmug/error.hpp"
-#include "findmug/numbers.hpp"
-#include "findmug/pseudo_labels.hpp"
+#include "findmug/common/error.hpp"
+#include "findmug/common/numbers.hpp"
+#include "findmug/offline/pseudo_labels.hpp"
 #include "findmug_cli.hpp"
 
 namespace findmug::tools {

@@ -12,9 +12,9 @@
 #include <iostream>
 #include <sstream>
 
-#include "findmug/error.hpp"
-#include "findmug/pseudo_labels.hpp"
-#include "findmug/training.hpp"
+#include "findmug/common/error.hpp"
+#include "findmug/offline/pseudo_labels.hpp"
+#include "findmug/offline/training.hpp"
 #include "findmug_cli.hpp"
 #include "tool_common.hpp"
 
