@@ -68,7 +68,7 @@ struct TrainingOptions {
   // of the same label per label (the most confident first), retrain; this
   // many times (training.pseudo_rounds, 0 = off).
   int pseudo_rounds = 0;
-  float pseudo_min_confidence = 0.9f;
+  float pseudo_min_confidence = 0.8f;
   float pseudo_weight = 1.0f;
   float pseudo_class_cap = 1.0f;
 };
