@@ -48,6 +48,7 @@
 #include "findmug/offline/cv_folds.hpp"
 #include "findmug/offline/metrics.hpp"
 #include "findmug/offline/mrf_context.hpp"
+#include "findmug/offline/pseudo_labels.hpp"
 #include "findmug/offline/table_metrics.hpp"
 #include "findmug/offline/training.hpp"
 #include "findmug/synth/synth.hpp"
@@ -83,6 +84,7 @@ struct EvalFlags {
   bool degrade = false, score_labelled_only = false;
   std::uint64_t degrade_seed = 1;
   std::vector<std::string> train_extra;
+  std::vector<std::string> unlabelled;
   cli::ConfigFlags config;
 };
 
@@ -114,6 +116,7 @@ std::unique_ptr<CLI::App> makeEvalApp(EvalFlags& f) {
                   "dataset folder added to every fold's training set, never evaluated (repeatable)")
       ->type_name("DIR")
       ->allow_extra_args(false);
+  addUnlabelledFlag(*app, f.unlabelled);
   cli::addConfigFlags(*app, f.config, "YAML config (segmenter settings)");
   last(app->add_option("--folds-by", f.folds_by,
                        "scenes: whole scenes per fold; blocks: contiguous blocks of frames; "
@@ -174,6 +177,7 @@ struct Evaluation {
   struct Fold {
     int fold = 0;
     std::vector<std::size_t> train, test;
+    PseudoLabelReport pseudo;  // semi-supervised rounds (--unlabelled)
   };
   std::vector<Fold> folds;
 };
@@ -191,25 +195,7 @@ std::vector<RegionFeatures> sampleRegions(const std::vector<FrameSample>& sample
   if (!config.regions.enabled || !config.tables.region_vote) return {};
   std::vector<RegionFeatures> out;
   out.reserve(samples.size());
-  for (const FrameSample& s : samples) {
-    Oversegmentation segmentation;
-    segmentation.width = s.width;
-    segmentation.height = s.height;
-    segmentation.pixel_segment = s.pixel_segment;
-    segmentation.segments.resize(s.features.features.size());
-    for (std::size_t i = 0; i < s.pixel_segment.size(); ++i) {
-      const int segment = s.pixel_segment[i];
-      if (segment < 0) continue;
-      if (static_cast<std::size_t>(segment) >= segmentation.segments.size()) {
-        throw Error(s.name + ": pixel " + std::to_string(i) + " is in segment " +
-                    std::to_string(segment) + " of " +
-                    std::to_string(segmentation.segments.size()));
-      }
-      segmentation.segments[static_cast<std::size_t>(segment)].push_back(static_cast<int>(i));
-    }
-    segmentation.edges = s.edges;
-    out.push_back(computeRegionFeatures(s.features, segmentation, config.regions));
-  }
+  for (const FrameSample& s : samples) out.push_back(sampleRegionFeatures(s, config.regions));
   return out;
 }
 
@@ -222,33 +208,22 @@ void labelFrames(const RandomForest& forest, const SegmenterConfig& config,
                  const std::vector<FrameSample>& samples, const std::vector<std::size_t>& frames,
                  const std::vector<RegionFeatures>& regions, Evaluation& eval, bool keep_pixels,
                  const PairwiseContext* pairwise = nullptr) {
+  SegmenterConfig with_mrf = config;
+  with_mrf.use_mrf = true;  // the "+MRF" figures, whatever use_mrf says
   for (std::size_t f : frames) {
     const FrameSample& s = samples[f];
     const std::size_t n = s.features.features.size();
-    const std::vector<ClassProbabilities> probs = predictSample(forest, s, config);
+    SampleLabelling labelling =
+        labelSample(forest, s, with_mrf, regions.empty() ? nullptr : &regions[f], pairwise);
     std::vector<std::uint8_t> forest_labels(n);
-    for (std::size_t k = 0; k < n; ++k) forest_labels[k] = argmax(probs[k]);
-    const std::vector<ClassProbabilities> unaries =
-        weightTableProbability(probs, config.tables.table_weight);
-    MrfResult mrf =
-        pairwise ? solveMrfScaled(unaries, s.features.centroids, s.edges,
-                                  pairwiseContextScales(*pairwise, s.features.features, s.edges),
-                                  config.mrf)
-                 : solveMrf(unaries, s.features.centroids, s.edges, config.mrf);
-    if (!regions.empty()) {
-      const std::vector<float> weights(s.segment_pixels.begin(), s.segment_pixels.end());
-      RegionVoteResult vote = voteTableRegions(mrf.labels, mrf.confidence, unaries, weights,
-                                               regions[f], config.tables);
-      mrf.labels = std::move(vote.labels);
-      mrf.confidence = std::move(vote.confidence);
-    }
+    for (std::size_t k = 0; k < n; ++k) forest_labels[k] = argmax(labelling.probabilities[k]);
     eval.forest.add(s.ground_truth, pixelLabels(s, forest_labels));
-    auto mrf_pixels = pixelLabels(s, mrf.labels);
+    auto mrf_pixels = pixelLabels(s, labelling.mrf.labels);
     eval.mrf.add(s.ground_truth, mrf_pixels);
     if (keep_pixels) {
       eval.mrf_pixels[f] = std::move(mrf_pixels);
-      eval.probabilities[f] = probs;
-      eval.mrf_results[f] = mrf;
+      eval.probabilities[f] = std::move(labelling.probabilities);
+      eval.mrf_results[f] = std::move(labelling.mrf);
     }
   }
 }
@@ -269,15 +244,30 @@ struct TrainSubset {
 
 // Frame i of `samples` is tested as test_samples[i] (the same frame, or its
 // raw-like copy with --degrade).
+// With `unlabelled` frames and training.pseudo_rounds, each fold's model
+// comes from trainModelWithPseudoLabels on that fold's training frames: the
+// unlabelled frames are labelled by the fold's own models only, and the fold's
+// test frames are never among them. `per_round`, when given, gets the figures
+// of every round's models side by side (0 = labelled frames only).
 Evaluation crossValidate(const std::vector<FrameSample>& samples,
                          const std::vector<FrameSample>& test_samples,
                          const std::vector<FrameSample>& extra_training, const FoldPlan& plan,
                          const SegmenterConfig& config, const std::vector<RegionFeatures>& regions,
-                         bool keep_pixels, const TrainSubset& subset = {}) {
+                         bool keep_pixels, const TrainSubset& subset = {},
+                         const std::vector<FrameSample>& unlabelled = {},
+                         std::vector<Evaluation>* per_round = nullptr) {
   Evaluation eval;
-  eval.mrf_pixels.resize(samples.size());
-  eval.probabilities.resize(samples.size());
-  eval.mrf_results.resize(samples.size());
+  auto sized = [&](Evaluation& e) {
+    e.mrf_pixels.resize(samples.size());
+    e.probabilities.resize(samples.size());
+    e.mrf_results.resize(samples.size());
+  };
+  sized(eval);
+  const int rounds = unlabelled.empty() ? 0 : config.training.pseudo_rounds;
+  if (per_round) {
+    per_round->assign(static_cast<std::size_t>(rounds) + 1, Evaluation{});
+    for (auto& e : *per_round) sized(e);
+  }
   const std::size_t n = samples.size();
   for (int fold = 0; fold < plan.folds; ++fold) {
     std::vector<std::size_t> train, test;
@@ -293,7 +283,6 @@ Evaluation crossValidate(const std::vector<FrameSample>& samples,
     if (makeTrainingSet(frames).labels.empty()) continue;
     SegmenterConfig fold_config = config;
     fold_config.forest.seed += static_cast<std::uint64_t>(fold);
-    const RandomForest forest = trainModel(frames, fold_config);
     std::optional<PairwiseContext> pairwise;
     if (config.use_mrf && config.mrf.pairwise == MrfPairwise::Context) {
       std::vector<LabelledGraph> graphs;
@@ -301,9 +290,34 @@ Evaluation crossValidate(const std::vector<FrameSample>& samples,
         graphs.push_back({&s->features.features, &s->edges, &s->segment_labels});
       pairwise = learnPairwiseContext(graphs);
     }
-    labelFrames(forest, config, test_samples, test, regions, eval, keep_pixels,
-                pairwise ? &*pairwise : nullptr);
-    eval.folds.push_back({fold, train, test});
+    const PairwiseContext* context = pairwise ? &*pairwise : nullptr;
+    PseudoLabelReport pseudo;
+    if (rounds > 0) {
+      // The pool: unlabelled frames only. A frame also among the labelled
+      // inputs was refused when the inputs were read (extractUnlabelled);
+      // checked again here, per fold, against this fold's test frames.
+      for (const FrameSample& u : unlabelled)
+        for (std::size_t t : test)
+          if (u.name == samples[t].name)
+            throw Error("fold " + std::to_string(fold) + ": test frame " + u.name +
+                        " is among the unlabelled frames");
+      const RandomForest forest = trainModelWithPseudoLabels(
+          frames, unlabelled, fold_config, context, &pseudo,
+          [&](int r, const RandomForest& model) {
+            if (per_round && r < rounds)
+              labelFrames(model, config, test_samples, test, regions,
+                          (*per_round)[static_cast<std::size_t>(r)], keep_pixels, context);
+          });
+      labelFrames(forest, config, test_samples, test, regions, eval, keep_pixels, context);
+    } else {
+      const RandomForest forest = trainModel(frames, fold_config);
+      labelFrames(forest, config, test_samples, test, regions, eval, keep_pixels, context);
+    }
+    eval.folds.push_back({fold, train, test, std::move(pseudo)});
+  }
+  if (per_round) {
+    per_round->back() = eval;
+    for (auto& e : *per_round) e.folds = eval.folds;
   }
   return eval;
 }
@@ -491,6 +505,11 @@ std::vector<EvalReport::Fold> foldRecords(const Evaluation& eval, const FoldPlan
       r.test_scenes.push_back(plan.scene_of_sample[i]);
     }
     for (std::size_t i : fold.train) r.train_frame_names.push_back(samples[i].name);
+    r.pseudo_pool = fold.pseudo.pool;
+    for (const auto& round : fold.pseudo.rounds) {
+      r.pseudo_frames.push_back(round.frames);
+      r.pseudo_patches.push_back(round.keptTotal());
+    }
     out.push_back(std::move(r));
   }
   return out;
@@ -573,6 +592,36 @@ void runLearningCurve(const EvalFlags& f, const LabeledFrames& test_frames, cons
   const std::string protocol = describeFolds(plan, nyuSceneRule(f), {});
   writeLearningCurve(dir, points, protocol);
   std::cout << formatLearningCurveTrends(points) << "learning curve in " << dir.string() << "\n";
+}
+
+// The semi-supervised rounds side by side (forest+MRF), with what each
+// fold's rounds added and how the unlabelled frames got their ground.
+std::string formatPseudoRounds(const EvalReport& r, const Evaluation& eval) {
+  std::ostringstream out;
+  out << "\nsemi-supervised rounds (forest+MRF; round 0 = labelled frames only, same folds)\n";
+  for (const auto& [frame, method] : r.unlabelled_ground_methods)
+    out << "  unlabelled " << frame << " ground " << method << "\n";
+  for (const auto& fold : eval.folds) {
+    out << "  fold " << fold.fold << ":\n";
+    std::istringstream lines(formatPseudoLabelReport(fold.pseudo));
+    for (std::string line; std::getline(lines, line);) out << "    " << line << "\n";
+  }
+  out << "  round  class avg  global  table  chair  cabinet  search P  search R  false-table "
+         "frames  inst P  inst R\n";
+  for (const auto& p : r.pseudo_rounds) {
+    const auto acc = p.mrf.perClassAccuracy();
+    char line[256];
+    std::snprintf(line, sizeof line,
+                  "  %5d  %9.1f  %6.1f  %5.1f  %5.1f  %7.1f  %8.1f  %8.1f  %11d/%-6d  %6.1f  "
+                  "%6.1f\n",
+                  p.round, 100 * p.mrf.classAverageAccuracy(), 100 * p.mrf.globalAccuracy(),
+                  100 * acc[static_cast<int>(Label::Table)], 100 * acc[static_cast<int>(Label::Chair)],
+                  100 * acc[static_cast<int>(Label::Cabinet)], 100 * p.searchable.precision(),
+                  100 * p.searchable.recall(), p.searchable.framesWithFalseTable(),
+                  p.searchable.frames(), 100 * p.tables.precision(), 100 * p.tables.recall());
+    out << line;
+  }
+  return out.str();
 }
 
 // Keeps the frames that both the clean and the raw-like extraction could use
@@ -671,6 +720,18 @@ int run(int argc, char** argv) {
     throw Error("only " + std::to_string(samples.size()) + " usable frames for " +
                 std::to_string(folds) + " folds");
   }
+  ExtractionReport unlabelled_report;
+  std::vector<FrameSample> unlabelled;
+  if (!f.unlabelled.empty()) {
+    if (!f.model.empty())
+      throw Error("--unlabelled trains forests (training.pseudo_rounds); not with --model");
+    if (config.segmenter.training.pseudo_rounds == 0)
+      std::cerr << "findmug-eval: --unlabelled without training.pseudo_rounds > 0 does nothing\n";
+    unlabelled = extractUnlabelled(f.unlabelled, f.dataset, config.segmenter, *input,
+                                   unlabelled_report);
+    if (unlabelled.empty())
+      throw Error("--unlabelled: no frame could be used (no ground plane found in any)");
+  }
   // Folds only for cross-validation: a --model run reads no frames.csv.
   const FoldPlan plan = f.model.empty() ? planFolds(f, *input, samples) : FoldPlan{};
   const TrainSubset subset{f.train_frames, f.subset_seed};
@@ -702,9 +763,20 @@ int run(int argc, char** argv) {
     report.protocol = describeFolds(plan, nyuSceneRule(f), subset);
     report.fold_rule = plan.rule;
     report.scene_rule = nyuSceneRule(f);
+    std::vector<Evaluation> per_round;
     eval = crossValidate(samples, test_samples, extra_training, plan, config.segmenter, regions,
-                         true, subset);
+                         true, subset, unlabelled, unlabelled.empty() ? nullptr : &per_round);
     report.folds = foldRecords(eval, plan, samples);
+    report.unlabelled_ground_methods = unlabelled_report.ground_methods;
+    for (const auto& d : unlabelled_report.dropped)
+      report.dropped.push_back("unlabelled " + d);
+    for (std::size_t r = 0; r < per_round.size(); ++r) {
+      EvalReport round_tables;
+      measureTables(test_frames, test_samples, per_round[r], segmenter, nullptr, round_tables,
+                    nullptr);
+      report.pseudo_rounds.push_back({static_cast<int>(r), per_round[r].mrf,
+                                      round_tables.searchable, round_tables.tables});
+    }
   }
   for (const FrameSample& s : test_samples)
     report.oracle.add(s.ground_truth, pixelLabels(s, s.segment_labels));
@@ -760,6 +832,7 @@ int run(int argc, char** argv) {
   }
 
   std::cout << formatTable(report);
+  if (!report.pseudo_rounds.empty()) std::cout << formatPseudoRounds(report, eval);
   if (!f.json.empty()) {
     std::ofstream out(f.json);
     if (!out) throw Error(f.json + ": cannot write JSON report");

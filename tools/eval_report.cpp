@@ -245,9 +245,47 @@ std::string formatJson(const EvalReport& r) {
     for (std::size_t k = 0; k < f.train_frame_names.size(); ++k) {
       out << (k ? ", " : "") << jsonString(f.train_frame_names[k]);
     }
-    out << "]}";
+    out << "]";
+    if (!f.pseudo_pool.empty()) {
+      out << ", \"pseudo_pool\": [";
+      for (std::size_t k = 0; k < f.pseudo_pool.size(); ++k)
+        out << (k ? ", " : "") << jsonString(f.pseudo_pool[k]);
+      out << "], \"pseudo_rounds\": [";
+      for (std::size_t k = 0; k < f.pseudo_frames.size(); ++k) {
+        out << (k ? ", " : "") << "{\"round\": " << k + 1
+            << ", \"patches\": " << f.pseudo_patches[k] << ", \"frames\": [";
+        for (std::size_t j = 0; j < f.pseudo_frames[k].size(); ++j)
+          out << (j ? ", " : "") << jsonString(f.pseudo_frames[k][j]);
+        out << "]}";
+      }
+      out << "]";
+    }
+    out << "}";
   }
   out << "]}";
+  if (!r.pseudo_rounds.empty()) {
+    out << ",\n  \"pseudo_rounds\": [";
+    for (std::size_t i = 0; i < r.pseudo_rounds.size(); ++i) {
+      const auto& p = r.pseudo_rounds[i];
+      const auto acc = p.mrf.perClassAccuracy();
+      out << (i ? ",\n    " : "\n    ") << "{\"round\": " << p.round
+          << ", \"class_average\": " << jsonNumber(p.mrf.classAverageAccuracy())
+          << ", \"global\": " << jsonNumber(p.mrf.globalAccuracy()) << ", \"per_class\": {";
+      for (int c = 0; c < kNumLabels; ++c)
+        out << (c ? ", " : "") << "\"" << kLabelNames[c] << "\": " << jsonNumber(acc[c]);
+      out << "}, \"table_instance_precision\": " << jsonNumber(p.tables.precision())
+          << ", \"table_instance_recall\": " << jsonNumber(p.tables.recall())
+          << ", \"searchable_precision\": " << jsonNumber(p.searchable.precision())
+          << ", \"searchable_recall\": " << jsonNumber(p.searchable.recall())
+          << ", \"false_table_frame_share\": " << jsonNumber(p.searchable.falseTableFrameShare())
+          << "}";
+    }
+    out << "],\n  \"unlabelled_ground\": [";
+    for (std::size_t i = 0; i < r.unlabelled_ground_methods.size(); ++i)
+      out << (i ? ", " : "") << "{\"frame\": " << jsonString(r.unlabelled_ground_methods[i].first)
+          << ", \"method\": " << jsonString(r.unlabelled_ground_methods[i].second) << "}";
+    out << "]";
+  }
   out << ",\n  \"train_extra\": [";
   for (std::size_t i = 0; i < r.train_extra.size(); ++i) {
     out << (i ? ", " : "") << jsonString(r.train_extra[i]);

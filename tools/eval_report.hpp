@@ -34,7 +34,22 @@ struct EvalReport {
     int fold = 0;
     int train_frames = 0;
     std::vector<std::string> test_frames, test_scenes, train_frame_names;
+    // Semi-supervised rounds (--unlabelled): the unlabelled frames offered to
+    // this fold, and per round the frames that gave patches and how many.
+    std::vector<std::string> pseudo_pool;
+    std::vector<std::vector<std::string>> pseudo_frames;
+    std::vector<int> pseudo_patches;
   };
+  // Semi-supervised rounds: the figures after each round (0 = labelled frames
+  // only), every fold's model of that round on its test frames.
+  struct PseudoRound {
+    int round = 0;
+    ConfusionMatrix mrf;
+    SearchableMetrics searchable;
+    TableMetrics tables;
+  };
+  std::vector<PseudoRound> pseudo_rounds;
+  std::vector<std::pair<std::string, std::string>> unlabelled_ground_methods;
   std::string fold_rule;
   std::string scene_rule;  // how NYU frames' scenes were formed
   std::vector<Fold> folds;

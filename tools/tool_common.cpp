@@ -2,11 +2,13 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <map>
 
 #include "findmug/common/error.hpp"
 #include "findmug/common/numbers.hpp"
+#include "findmug/offline/pseudo_labels.hpp"
 #include "findmug_cli.hpp"
 
 namespace findmug::tools {
@@ -169,6 +171,79 @@ std::vector<std::string> LabeledInputs::scenes(int gap,
                                             ? nyuSplitRunScenes(nyu_indices, *nyu_test_indices)
                                             : nyuIndexRunScenes(nyu_indices, gap);
   for (std::size_t k = 0; k < nyu_frames.size(); ++k) out[nyu_frames[k]] = runs[k];
+  return out;
+}
+
+void addUnlabelledFlag(CLI::App& app, std::vector<std::string>& dirs) {
+  app.add_option("--unlabelled", dirs,
+                 "folder of unlabelled frames (rgb/, depth/) for the semi-supervised rounds "
+                 "(training.pseudo_rounds; repeatable)")
+      ->type_name("DIR")
+      ->allow_extra_args(false);
+}
+
+namespace {
+
+// Whether every frame of `dir` is listed with an NYU index in its frames.csv.
+bool allFramesNyuIndexed(const std::string& dir, const std::vector<std::string>& names) {
+  const auto listing = loadFrameListing(dir);
+  for (const auto& name : names) {
+    const auto it = listing.find(name);
+    if (it == listing.end() || !it->second.nyu_index) return false;
+  }
+  return !names.empty();
+}
+
+}  // namespace
+
+std::vector<FrameSample> extractUnlabelled(const std::vector<std::string>& dirs,
+                                           const DatasetFlags& flags,
+                                           const SegmenterConfig& config,
+                                           const LabeledInputs& labelled,
+                                           ExtractionReport& report) {
+  report = {};
+  std::vector<FrameSample> out;
+  if (dirs.empty()) return out;
+  std::map<std::string, std::string> source_of;
+  for (std::size_t i = 0; i < labelled.frames().count; ++i)
+    source_of.emplace(labelled.nameOf(i), labelled.sourceOf(i));
+  const Segmenter segmenter(unlabelledExtractionConfig(config), nullptr);
+  for (const auto& dir : dirs) {
+    DatasetOptions options;
+    options.mask_nyu_border = !flags.no_nyu_border;
+    options.require_labels = false;
+    const DatasetFolder listing(dir, options);
+    for (const auto& name : listing.names()) {
+      const auto [it, added] = source_of.emplace(name, dir);
+      if (!added)
+        throw Error("--unlabelled " + dir + ": frame " + name + " is also in " + it->second +
+                    " (a frame is either labelled or unlabelled, and evaluated frames are never "
+                    "pseudo-labelled)");
+    }
+    if (config.ground.source == GroundSource::Gravity && !flags.nyu_rotations.empty() &&
+        allFramesNyuIndexed(dir, listing.names()))
+      options.nyu_rotations_file = flags.nyu_rotations;
+    const auto folder = LabeledInput::folder(dir, options);
+    // Labels, if the folder has any, are not used: the frames stand for frames nobody labelled.
+    LabeledFrames frames = folder->frames();
+    const auto load = frames.load;
+    frames.load = [load](std::size_t i) {
+      LabeledFrame frame = load(i);
+      std::fill(frame.labels.begin(), frame.labels.end(), kVoidLabel);
+      frame.fine_labels.clear();
+      return frame;
+    };
+    ExtractionReport part;
+    ProgressBar bar("features " + dir);
+    auto samples = extractSamples(frames, segmenter, part,
+                                  [&](int done, int total) { bar.update(done, total); });
+    bar.finish();
+    report.frames_total += part.frames_total;
+    report.frames_used += part.frames_used;
+    for (auto& d : part.dropped) report.dropped.push_back(dir + ": " + d);
+    for (auto& g : part.ground_methods) report.ground_methods.push_back(g);
+    for (auto& s : samples) out.push_back(std::move(s));
+  }
   return out;
 }
 

@@ -85,6 +85,21 @@ class LabeledInputs {
   LabeledFrames frames_;
 };
 
+// Unlabelled frames for the semi-supervised rounds (--unlabelled DIR,
+// repeatable; pseudo_labels.hpp): rgb/ and depth/ (any label folder is
+// ignored). A frame gets NYU's gravity from --nyu-rotations when the folder's
+// frames.csv gives every frame an nyu_index and ground.source = gravity;
+// otherwise its ground is fitted in the frame (report.ground_methods says
+// which). A frame name also among the labelled inputs, or in two unlabelled
+// folders, is refused with an error naming it, so that no evaluated frame is
+// ever pseudo-labelled; so is a frame that cannot be read (the file is named).
+void addUnlabelledFlag(CLI::App& app, std::vector<std::string>& dirs);
+std::vector<FrameSample> extractUnlabelled(const std::vector<std::string>& dirs,
+                                           const DatasetFlags& flags,
+                                           const SegmenterConfig& config,
+                                           const LabeledInputs& labelled,
+                                           ExtractionReport& report);
+
 // A one-line progress bar on stderr when it is a terminal; silent otherwise.
 class ProgressBar {
  public:

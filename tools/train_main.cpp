@@ -1,14 +1,19 @@
 // findmug-train: trains the randomized forest on a labelled dataset folder.
 //
-//   findmug-train --data DIR [--data DIR2 ...] --out MODEL [--config FILE] [--set key=value ...]
+//   findmug-train --data DIR [--data DIR2 ...] --out MODEL [--unlabelled DIR ...]
+//                 [--config FILE] [--set key=value ...]
 //
+// With --unlabelled and training.pseudo_rounds > 0 the model is retrained
+// with pseudo-labelled patches of the unlabelled frames (pseudo_labels.hpp).
 // Each --data folder is read with its own ground-truth labels; every
 // supervoxel with a non-void plurality label becomes one training sample.
 #include <chrono>
 #include <cstdio>
 #include <iostream>
+#include <sstream>
 
 #include "findmug/common/error.hpp"
+#include "findmug/offline/pseudo_labels.hpp"
 #include "findmug/offline/training.hpp"
 #include "findmug_cli.hpp"
 #include "tool_common.hpp"
@@ -24,6 +29,7 @@ constexpr const char* kDescription =
 
 struct TrainFlags {
   findmug::tools::DatasetFlags dataset;
+  std::vector<std::string> unlabelled;
   std::string out;
   findmug::cli::ConfigFlags config;
 };
@@ -37,6 +43,7 @@ int run(int argc, char** argv) {
       ->required()
       ->type_name("MODEL")
       ->multi_option_policy(CLI::MultiOptionPolicy::TakeLast);
+  tools::addUnlabelledFlag(*app, f.unlabelled);
   cli::addConfigFlags(*app, f.config, "YAML config (segmenter settings)");
   if (auto code = cli::parse(*app, argc, argv)) return *code;
   if (f.dataset.data.empty() && f.dataset.mats.empty()) {
@@ -66,11 +73,21 @@ int run(int argc, char** argv) {
                                                config.segmenter.training.split_labels);
   if (training.labels.empty()) throw Error("no labelled supervoxel to train on");
 
+  ExtractionReport unlabelled_report;
+  const std::vector<FrameSample> unlabelled = tools::extractUnlabelled(
+      f.unlabelled, f.dataset, config.segmenter, *input, unlabelled_report);
+  if (!f.unlabelled.empty() && config.segmenter.training.pseudo_rounds == 0)
+    std::cerr << "findmug-train: --unlabelled without training.pseudo_rounds > 0 does nothing\n";
+
   tools::ProgressBar bar("forests");
   std::vector<const FrameSample*> frames;
   for (const auto& s : samples) frames.push_back(&s);
+  PseudoLabelReport pseudo;
   RandomForest forest =
-      trainModel(frames, config.segmenter, [&](int done, int total) { bar.update(done, total); });
+      unlabelled.empty() || config.segmenter.training.pseudo_rounds == 0
+          ? trainModel(frames, config.segmenter,
+                       [&](int done, int total) { bar.update(done, total); })
+          : trainModelWithPseudoLabels(frames, unlabelled, config.segmenter, nullptr, &pseudo);
   bar.finish();
   // Recorded so that the model is only ever run on features computed alike.
   forest.setExtractionSettings(extractionSettings(config.segmenter));
@@ -86,9 +103,22 @@ int run(int argc, char** argv) {
   for (const auto& [name, method] : ground_methods) {
     std::printf("  ground           %-12s %s\n", name.c_str(), method.c_str());
   }
+  for (const auto& d : unlabelled_report.dropped)
+    std::printf("  dropped          unlabelled %s\n", d.c_str());
+  for (const auto& [name, method] : unlabelled_report.ground_methods)
+    std::printf("  ground           %-12s %s (unlabelled)\n", name.c_str(), method.c_str());
   std::printf("  training patches %zu\n", training.labels.size());
   for (int c = 0; c < kNumLabels; ++c) {
     std::printf("    %-8s %7d\n", std::string(kLabelNames[c]).c_str(), per_class[c]);
+  }
+  if (!pseudo.rounds.empty()) {
+    std::printf("  pseudo-labelled  (training.pseudo_min_confidence %g, pseudo_weight %g, "
+                "pseudo_class_cap %g)\n",
+                config.segmenter.training.pseudo_min_confidence,
+                config.segmenter.training.pseudo_weight,
+                config.segmenter.training.pseudo_class_cap);
+    std::istringstream lines(formatPseudoLabelReport(pseudo));
+    for (std::string line; std::getline(lines, line);) std::printf("    %s\n", line.c_str());
   }
   const auto& p = config.segmenter.forest;
   if (forest.learnerKind() == LearnerKind::XGBoost) {

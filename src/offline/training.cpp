@@ -37,6 +37,31 @@ std::vector<FrameSample> extractSamples(const DatasetFolder& dataset, const Segm
 
 namespace {
 
+// The training weight of a patch of `pixels` pixels in a frame of weight
+// `frame_weight` (FrameSample::training_weight).
+float patchWeight(SampleWeighting weighting, std::uint32_t pixels, float frame_weight) {
+  const auto p = static_cast<float>(pixels);
+  switch (weighting) {
+    case SampleWeighting::Pixels:
+      return p * frame_weight;
+    case SampleWeighting::SqrtPixels:
+      return std::sqrt(p) * frame_weight;
+    case SampleWeighting::Patches:
+      break;
+  }
+  return frame_weight;
+}
+
+// Whether a training set from these frames needs per-sample weights: pixel
+// weighting, or a frame whose patches weigh other than 1 (pseudo labels).
+// Otherwise the weights stay empty (one vote per patch), as they always were.
+bool needsWeights(SampleWeighting weighting, const std::vector<const FrameSample*>& frames) {
+  if (weighting != SampleWeighting::Patches) return true;
+  for (const FrameSample* s : frames)
+    if (s->training_weight != 1.0f) return true;
+  return false;
+}
+
 // Object feature columns per segment of a frame's features (0 without them).
 std::size_t objectColumnsOf(const SegmentFeatures& f) {
   return f.features.empty() ? 0 : f.objects.size() / f.features.size();
@@ -355,6 +380,7 @@ TrainingSet makeTrainingSet(const std::vector<const FrameSample*>& given,
   const std::size_t object_columns = frames.empty() ? 0 : objectColumnsOf(frames.front()->features);
   const bool objects = object_columns > 0;
   set.extra_names = extraColumnNames(regions, scene, object_columns);
+  const bool weighted = needsWeights(weighting, frames);
   for (const FrameSample* s : frames) {
     if (s->features.regions.empty() == regions && !s->features.features.empty()) {
       throw Error("makeTrainingSet: frame " + s->name + (regions ? " lacks" : " has") +
@@ -376,9 +402,8 @@ TrainingSet makeTrainingSet(const std::vector<const FrameSample*>& given,
       appendExtraColumns(s->features, k, set.extra);
       set.labels.push_back(s->segment_labels[k]);
       if (split != SplitLabels::Labels) set.split_labels.push_back(splitLabelOf(*s, k, split));
-      const auto pixels = static_cast<float>(s->segment_pixels[k]);
-      if (weighting == SampleWeighting::Pixels) set.weights.push_back(pixels);
-      if (weighting == SampleWeighting::SqrtPixels) set.weights.push_back(std::sqrt(pixels));
+      if (weighted)
+        set.weights.push_back(patchWeight(weighting, s->segment_pixels[k], s->training_weight));
     }
   }
   if (split != SplitLabels::Labels) set.split_classes = splitClasses(split);
@@ -480,6 +505,7 @@ RandomForest trainModel(const std::vector<const FrameSample*>& frames,
                                        !frames.front()->features.scene.empty(),
                                        objectColumnsOf(frames.front()->features));
   for (const auto& name : contextFeatureNames()) set.extra_names.push_back(name);
+  const bool weighted = needsWeights(weighting, frames);
   for (std::size_t i = 0; i < n; ++i) {
     const FrameSample& s = *frames[i];
     const std::vector<float> ctx =
@@ -492,9 +518,8 @@ RandomForest trainModel(const std::vector<const FrameSample*>& frames,
       set.extra.insert(set.extra.end(), begin, begin + kContextFeatureDim);
       set.labels.push_back(s.segment_labels[k]);
       if (split != SplitLabels::Labels) set.split_labels.push_back(splitLabelOf(s, k, split));
-      const auto pixels = static_cast<float>(s.segment_pixels[k]);
-      if (weighting == SampleWeighting::Pixels) set.weights.push_back(pixels);
-      if (weighting == SampleWeighting::SqrtPixels) set.weights.push_back(std::sqrt(pixels));
+      if (weighted)
+        set.weights.push_back(patchWeight(weighting, s.segment_pixels[k], s.training_weight));
     }
   }
   if (split != SplitLabels::Labels) set.split_classes = splitClasses(split);
@@ -505,6 +530,25 @@ RandomForest trainModel(const std::vector<const FrameSample*>& frames,
   tick();
   first.setContextStage(std::move(second));
   return first;
+}
+
+RegionFeatures sampleRegionFeatures(const FrameSample& s, const RegionConfig& config) {
+  Oversegmentation segmentation;
+  segmentation.width = s.width;
+  segmentation.height = s.height;
+  segmentation.pixel_segment = s.pixel_segment;
+  segmentation.segments.resize(s.features.features.size());
+  for (std::size_t i = 0; i < s.pixel_segment.size(); ++i) {
+    const int segment = s.pixel_segment[i];
+    if (segment < 0) continue;
+    if (static_cast<std::size_t>(segment) >= segmentation.segments.size()) {
+      throw Error(s.name + ": pixel " + std::to_string(i) + " is in segment " +
+                  std::to_string(segment) + " of " + std::to_string(segmentation.segments.size()));
+    }
+    segmentation.segments[static_cast<std::size_t>(segment)].push_back(static_cast<int>(i));
+  }
+  segmentation.edges = s.edges;
+  return computeRegionFeatures(s.features, segmentation, config);
 }
 
 std::vector<std::uint8_t> pixelLabels(const FrameSample& sample,

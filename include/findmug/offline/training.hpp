@@ -34,6 +34,10 @@ struct FrameSample {
   std::vector<std::uint32_t> segment_pixels;     // pixel count per segment
   std::vector<std::uint8_t> ground_truth;        // per pixel, 255 = void
   GroundMethod ground_method = GroundMethod::Given;  // how its ground frame was obtained
+  // Training weight of each of its patches, times the pixel weighting
+  // (training.sample_weight): 1 for labelled frames, training.pseudo_weight
+  // for pseudo-labelled ones (pseudo_labels.hpp).
+  float training_weight = 1.0f;
   // Training-only views of the same frame through other oversegmentations
   // (training.extra_oversegmentations): their patches join every training
   // set this frame is part of; predictions use this sample's own patches.
@@ -115,6 +119,12 @@ RandomForest trainModel(const std::vector<const FrameSample*>& frames,
 // The model's per-segment class distributions for one extracted frame.
 std::vector<ClassProbabilities> predictSample(const RandomForest& model, const FrameSample& sample,
                                               const SegmenterConfig& config);
+
+// The regions of a sample's segmentation (region_features.hpp), rebuilt from
+// what the sample kept (its segments' moments and its adjacency), for the
+// table region vote that follows the MRF. Throws findmug::Error naming the
+// frame when a pixel's segment is out of range.
+RegionFeatures sampleRegionFeatures(const FrameSample& sample, const RegionConfig& config);
 
 // Per-pixel labels of a frame from per-segment labels (255 where no segment).
 std::vector<std::uint8_t> pixelLabels(const FrameSample& sample,

@@ -60,6 +60,17 @@ struct TrainingOptions {
   // degraded_seed + k; training.degraded_copies, training.degraded_seed).
   int degraded_copies = 0;
   std::uint64_t degraded_seed = 7;
+  // Semi-supervised rounds (findmug/pseudo_labels.hpp; findmug-train and
+  // findmug-eval --unlabelled DIR): train, label the unlabelled frames with
+  // the whole pipeline (forest + MRF + table region vote), keep the patches
+  // whose confidence exceeds pseudo_min_confidence as training patches of
+  // weight pseudo_weight, at most pseudo_class_cap times the labelled patches
+  // of the same label per label (the most confident first), retrain; this
+  // many times (training.pseudo_rounds, 0 = off).
+  int pseudo_rounds = 0;
+  float pseudo_min_confidence = 0.8f;
+  float pseudo_weight = 1.0f;
+  float pseudo_class_cap = 1.0f;
 };
 
 // The classes the model learns (learner.classes); the model merges them into
