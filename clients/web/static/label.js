@@ -388,8 +388,10 @@ async function load() {
   state.ready = true;
   setStatus('ready', 'live');
 }
-// The labels on the page (for the tests and the effort benchmark).
+// The labels on the page, and whether every change is in the draft on the server (for
+// the tests and the effort benchmark).
 state.labels = () => Array.from(labels);
+state.draftIdle = () => !draftBusy;
 
 async function start() {
   const params = new URLSearchParams(location.search);
