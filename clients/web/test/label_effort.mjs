@@ -11,6 +11,11 @@
 // --set defaults to the shipped model's settings (models/README.md):
 // ground.source=gravity,features.regions=true,features.scene=true.
 //
+//   node clients/web/test/label_effort.mjs --merge A.json,B.json,... [--json OUT.json]
+//
+// joins the frames of several runs (e.g. one per cross-validation fold, each with the
+// model that did not see its frames) and prints their table and means.
+//
 // The frames' rgb/ and depth/ are copied to a scratch dataset folder (no labels, so the
 // page starts blank and nothing is written to the data); findmug-web serves it on
 // 127.0.0.1. At every step the user takes the page action that fixes the most labelled
@@ -49,6 +54,13 @@ const BORDER = { top: 44, bottom: 470, left: 40, right: 600 };
 function usage(message) {
   console.error('label_effort: ' + message);
   process.exit(2);
+}
+if (args.merge) {
+  const parts = args.merge.split(',').map((f) => JSON.parse(fs.readFileSync(f, 'utf8')));
+  const r = report(parts.flatMap((p) => p.frames), parts.flatMap((p) => p.commands));
+  printReport(r);
+  if (args.json) fs.writeFileSync(args.json, JSON.stringify(r, null, 1) + '\n');
+  process.exit(0);
 }
 for (const key of ['web', 'nyu', 'model']) if (!args[key]) usage(`--${key} is required`);
 const settings = (args.set || 'ground.source=gravity,features.regions=true,features.scene=true').split(',');
@@ -242,29 +254,59 @@ try {
 
 // Means over frames; a frame that never reached a threshold counts with the actions it
 // took (a lower bound) and is listed.
-function summary(key, t) {
+function summary(results, key, t) {
   const rows = results.map((r) => r[key][t]);
   const reachedRows = rows.filter(Boolean);
   const mean = (xs) => xs.reduce((a, b) => a + b, 0) / Math.max(1, xs.length);
+  const sorted = reachedRows.map((x) => x.actions).sort((a, b) => a - b);
   return {
     reached: reachedRows.length, of: rows.length,
     mean_actions: mean(results.map((r) => (r[key][t] ? r[key][t].actions : r[key].actions))),
     mean_seconds: mean(results.map((r) => (r[key][t] ? r[key][t].seconds : r[key].seconds))),
-    median_actions: reachedRows.length ? reachedRows.map((x) => x.actions).sort((a, b) => a - b)[Math.floor(reachedRows.length / 2)] : null,
+    median_actions: sorted.length ? sorted[Math.floor(sorted.length / 2)] : null,
   };
 }
-const report = {
-  command: process.argv.slice(1).join(' '),
-  frames: results,
-  summary: {
-    blank: { at90: summary('blank', 'at90'), at95: summary('blank', 'at95') },
-    prediction: { at90: summary('predicted', 'at90'), at95: summary('predicted', 'at95') },
-    mean_prediction_start: results.reduce((a, r) => a + r.predicted.start, 0) / Math.max(1, results.length),
-  },
-  page_errors: pageErrors,
-};
-console.log(JSON.stringify(report.summary, null, 1));
-if (args.json) fs.writeFileSync(args.json, JSON.stringify(report, null, 1) + '\n');
+
+function report(results, commands) {
+  return {
+    commands,
+    frames: results,
+    summary: {
+      blank: { at90: summary(results, 'blank', 'at90'), at95: summary(results, 'blank', 'at95') },
+      prediction: { at90: summary(results, 'predicted', 'at90'), at95: summary(results, 'predicted', 'at95') },
+      mean_prediction_start: results.reduce((a, r) => a + r.predicted.start, 0) / Math.max(1, results.length),
+    },
+  };
+}
+
+// The per-frame table (Markdown) and the means.
+function printReport(r) {
+  const cell = (x) => (x ? `${x.actions} / ${x.seconds.toFixed(1)} s` : 'not reached');
+  console.log('| frame | patches | oracle | blank: 90 % | blank: 95 % | prediction alone | ' +
+              'prediction: 90 % | prediction: 95 % | from prediction: click/region/drag |');
+  console.log('|---|---|---|---|---|---|---|---|---|');
+  for (const f of r.frames) {
+    const k = f.predicted.kinds;
+    console.log(`| ${f.frame} | ${f.patches} | ${(100 * f.oracle).toFixed(1)} % | ${cell(f.blank.at90)} | ` +
+                `${cell(f.blank.at95)} | ${(100 * f.predicted.start).toFixed(1)} % | ${cell(f.predicted.at90)} | ` +
+                `${cell(f.predicted.at95)} | ${k.click}/${k.region}/${k.drag} |`);
+  }
+  const s = r.summary;
+  for (const [name, key] of [['blank', 'blank'], ['prediction', 'prediction']]) {
+    for (const t of ['at90', 'at95']) {
+      const x = s[key][t];
+      console.log(`- from ${name} to ${t.slice(2)} %: reached in ${x.reached} of ${x.of} frames; mean ` +
+                  `${x.mean_actions.toFixed(1)} actions, ${x.mean_seconds.toFixed(2)} s of page time; median ` +
+                  `${x.median_actions} actions over the frames that reached it`);
+    }
+  }
+  console.log(`- the prediction alone: ${(100 * s.mean_prediction_start).toFixed(1)} % of the labelled pixels (mean)`);
+}
+
+const r = report(results, [process.argv.slice(1).join(' ')]);
+r.page_errors = pageErrors;
+printReport(r);
+if (args.json) fs.writeFileSync(args.json, JSON.stringify(r, null, 1) + '\n');
 fs.rmSync(work, { recursive: true, force: true });
 if (failed || pageErrors.length) {
   console.error('label_effort: the page and this side disagree, or the page failed: ' + pageErrors.join('; '));
