@@ -10,10 +10,10 @@
 #include <fstream>
 #include <sstream>
 
-#include "findmug/dataset.hpp"
-#include "findmug/error.hpp"
-#include "findmug/labels.hpp"
-#include "findmug/oversegmentation.hpp"
+#include "findmug/frame/dataset.hpp"
+#include "findmug/common/error.hpp"
+#include "findmug/labels/labels.hpp"
+#include "findmug/supervoxels/oversegmentation.hpp"
 #include "web_http.hpp"
 #include "web_server.hpp"
 

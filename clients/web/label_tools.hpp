@@ -30,9 +30,9 @@
 
 #include <nlohmann/json.hpp>
 
-#include "findmug/config.hpp"
-#include "findmug/forest.hpp"
-#include "findmug/segmenter.hpp"
+#include "findmug/settings/config.hpp"
+#include "findmug/learner/forest.hpp"
+#include "findmug/pipeline/segmenter.hpp"
 
 namespace httplib {
 class Server;

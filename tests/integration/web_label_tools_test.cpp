@@ -7,8 +7,8 @@
 #include <fstream>
 #include <string>
 
-#include "findmug/error.hpp"
-#include "findmug/forest.hpp"
+#include "findmug/common/error.hpp"
+#include "findmug/learner/forest.hpp"
 #include "label_tools.hpp"
 #include "test_data.hpp"
 
