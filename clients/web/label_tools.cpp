@@ -10,8 +10,8 @@
 #include <fstream>
 #include <sstream>
 
-#include "findmug/frame/dataset.hpp"
 #include "findmug/common/error.hpp"
+#include "findmug/frame/dataset.hpp"
 #include "findmug/labels/labels.hpp"
 #include "findmug/supervoxels/oversegmentation.hpp"
 #include "web_http.hpp"

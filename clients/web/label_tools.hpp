@@ -30,9 +30,9 @@
 
 #include <nlohmann/json.hpp>
 
-#include "findmug/settings/config.hpp"
 #include "findmug/learner/forest.hpp"
 #include "findmug/pipeline/segmenter.hpp"
+#include "findmug/settings/config.hpp"
 
 namespace httplib {
 class Server;

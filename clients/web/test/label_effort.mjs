@@ -57,7 +57,8 @@ function usage(message) {
 }
 if (args.merge) {
   const parts = args.merge.split(',').map((f) => JSON.parse(fs.readFileSync(f, 'utf8')));
-  const r = report(parts.flatMap((p) => p.frames), parts.flatMap((p) => p.commands));
+  const frames = parts.flatMap((p) => p.frames).sort((a, b) => a.frame.localeCompare(b.frame));
+  const r = report(frames, parts.flatMap((p) => p.commands));
   printReport(r);
   if (args.json) fs.writeFileSync(args.json, JSON.stringify(r, null, 1) + '\n');
   process.exit(0);
