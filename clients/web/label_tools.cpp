@@ -8,7 +8,6 @@
 #include <algorithm>
 #include <cmath>
 #include <fstream>
-#include <sstream>
 
 #include "findmug/common/error.hpp"
 #include "findmug/frame/dataset.hpp"
