@@ -36,6 +36,12 @@ const SettingsTable<WebConfig>& webSettings() {
     t.add(textSetting<W>(
         "web.static_dir", [](W& w) -> std::string& { return w.static_dir; }, {},
         "folder of the page's HTML/JS/CSS; empty = the installed one"));
+    t.add(textSetting<W>(
+        "web.model_path", [](W& w) -> std::string& { return w.model_path; }, {},
+        "model the Label page's prediction comes from; empty = none"));
+    t.add(textSetting<W>(
+        "web.nyu_rotations", [](W& w) -> std::string& { return w.nyu_rotations; }, {},
+        "NYU's camera_rotations_NYU.txt for frames named by NYU index; empty = none"));
     return t;
   }();
   return table;

@@ -34,7 +34,7 @@ constexpr const char* kProgram = "findmug-web";
 
 int main(int argc, char** argv) {
   using namespace findmug;
-  std::string url, suffix, bind, token_file, static_dir;
+  std::string url, suffix, bind, token_file, static_dir, model_path, nyu_rotations;
   std::vector<std::string> data_dirs;
   int port = 0;
   cli::ConfigFlags config_flags;
@@ -59,6 +59,12 @@ int main(int argc, char** argv) {
   app->add_option("--static-dir", static_dir, "the page's files (default web.static_dir, or "
                                               FINDMUG_WEB_STATIC_DIR ")")
       ->type_name("DIR");
+  app->add_option("--model", model_path,
+                  "model the Label page's prediction comes from (default web.model_path)")
+      ->type_name("FILE");
+  app->add_option("--nyu-rotations", nyu_rotations,
+                  "NYU's camera_rotations_NYU.txt (default web.nyu_rotations)")
+      ->type_name("FILE");
   if (auto code = cli::parse(*app, argc, argv)) return *code;
 
   web::WebConfig config;
@@ -72,6 +78,8 @@ int main(int argc, char** argv) {
     if (port != 0) config.port = port;
     if (!token_file.empty()) config.token_file = token_file;
     if (!static_dir.empty()) config.static_dir = static_dir;
+    if (!model_path.empty()) config.model_path = model_path;
+    if (!nyu_rotations.empty()) config.nyu_rotations = nyu_rotations;
     labels_channel = io::channelName(io::kLabelsChannel, suffix);
     tables_channel = io::channelName(io::kTablesChannel, suffix);
     map_channel = io::channelName(io::kTableMapChannel, suffix);
@@ -82,6 +90,12 @@ int main(int argc, char** argv) {
     options.static_dir = config.static_dir.empty() ? FINDMUG_WEB_STATIC_DIR : config.static_dir;
     for (const auto& d : data_dirs) options.data_dirs.emplace_back(d);
     options.segmenter = loaded.segmenter;
+    if (!config.model_path.empty()) {
+      options.model = std::make_shared<const RandomForest>(RandomForest::load(config.model_path));
+      options.model_name =
+          std::filesystem::path(config.model_path).filename().string() + ":" + options.model->id();
+    }
+    if (!config.nyu_rotations.empty()) options.nyu_rotations = config.nyu_rotations;
     if (!config.token_file.empty()) {
       options.token = web::readTokenFile(config.token_file);
     } else if (!web::isDefaultLoopback(config.bind)) {

@@ -20,6 +20,7 @@
 #include "findmug/pipeline/segmenter.hpp"
 #include "findmug/supervoxels/oversegmentation.hpp"
 #include "web_config.hpp"
+#include "web_http.hpp"
 
 namespace findmug::web {
 
@@ -31,21 +32,6 @@ constexpr const char* kTokenCookie = "findmug_token";
 
 // The reason also goes into a header for the log: the body may be compressed by then.
 constexpr const char* kErrorHeader = "X-Findmug-Error";
-
-void fail(httplib::Response& res, int status, const std::string& message) {
-  res.status = status;
-  std::string header = message.substr(0, 300);  // printable only: it may echo the request
-  for (char& c : header) {
-    if (static_cast<unsigned char>(c) < 0x20 || static_cast<unsigned char>(c) >= 0x7F) c = '?';
-  }
-  res.set_header(kErrorHeader, header);
-  res.set_content(nlohmann::json{{"error", message}}.dump(), "application/json");
-}
-
-void sendJson(httplib::Response& res, const nlohmann::json& body) {
-  res.set_header("Cache-Control", "no-store");
-  res.set_content(body.dump(), "application/json");
-}
 
 // Compares without an early exit, so that the time taken does not tell how much matched
 // (the length may show; the token's length is not the secret).
@@ -95,12 +81,6 @@ std::string readWholeFile(const fs::path& path) {
   return text.str();
 }
 
-std::int64_t mtimeNs(const fs::path& path) {
-  struct stat st {};
-  if (::stat(path.c_str(), &st) != 0) return 0;
-  return static_cast<std::int64_t>(st.st_mtim.tv_sec) * 1000000000LL + st.st_mtim.tv_nsec;
-}
-
 bool insideRoot(const fs::path& root, const fs::path& path) {
   auto r = root.begin();
   auto p = path.begin();
@@ -110,7 +90,23 @@ bool insideRoot(const fs::path& root, const fs::path& path) {
   return true;
 }
 
-// A frame name of a dataset folder: the file stem of rgb/NAME.png.
+}  // namespace
+
+void fail(httplib::Response& res, int status, const std::string& message) {
+  res.status = status;
+  std::string header = message.substr(0, 300);  // printable only: it may echo the request
+  for (char& c : header) {
+    if (static_cast<unsigned char>(c) < 0x20 || static_cast<unsigned char>(c) >= 0x7F) c = '?';
+  }
+  res.set_header(kErrorHeader, header);
+  res.set_content(nlohmann::json{{"error", message}}.dump(), "application/json");
+}
+
+void sendJson(httplib::Response& res, const nlohmann::json& body) {
+  res.set_header("Cache-Control", "no-store");
+  res.set_content(body.dump(), "application/json");
+}
+
 bool validFrameName(const std::string& name) {
   if (name.empty() || name.size() > 200 || name == "." || name == "..") return false;
   for (char c : name) {
@@ -121,6 +117,12 @@ bool validFrameName(const std::string& name) {
   return name.find("..") == std::string::npos;
 }
 
+std::int64_t mtimeNs(const fs::path& path) {
+  struct stat st {};
+  if (::stat(path.c_str(), &st) != 0) return 0;
+  return static_cast<std::int64_t>(st.st_mtim.tv_sec) * 1000000000LL + st.st_mtim.tv_nsec;
+}
+
 std::string utcNow() {
   const std::time_t now = std::time(nullptr);
   std::tm tm{};
@@ -129,8 +131,6 @@ std::string utcNow() {
   std::strftime(buf, sizeof(buf), "%Y-%m-%dT%H:%M:%SZ", &tm);
   return buf;
 }
-
-}  // namespace
 
 ResolvedPath resolveInside(const fs::path& root, const std::string& relative,
                            bool may_be_missing) {
@@ -182,7 +182,11 @@ ResolvedPath resolveInside(const fs::path& root, const std::string& relative,
 }
 
 WebServer::WebServer(ServerOptions options, LiveState& live)
-    : options_(std::move(options)), live_(live), server_(std::make_unique<httplib::Server>()) {
+    : options_(std::move(options)),
+      label_frames_(std::make_unique<LabelFrames>(options_.segmenter, options_.model,
+                                                  options_.model_name, options_.nyu_rotations)),
+      live_(live),
+      server_(std::make_unique<httplib::Server>()) {
   for (const auto& dir : options_.data_dirs) {
     std::error_code ec;
     const fs::path canonical = fs::canonical(dir, ec);
@@ -520,26 +524,10 @@ void WebServer::routes() {
     Image<std::uint8_t> labels;
     labels.width = image.width;
     labels.height = image.height;
-    labels.pixels.reserve(width * height);
-    for (const auto& run : body["runs"]) {
-      if (!run.is_array() || run.size() != 2 || !run[0].is_number_unsigned() ||
-          !run[1].is_number_unsigned()) {
-        return fail(res, 400, "each run must be [label id, count]");
-      }
-      const std::uint64_t id = run[0].get<std::uint64_t>();
-      const std::uint64_t count = run[1].get<std::uint64_t>();
-      if (id >= static_cast<std::uint64_t>(kNumLabels) && id != kVoidLabel) {
-        return fail(res, 400, "label id " + std::to_string(id) + " is not 0.." +
-                                  std::to_string(kNumLabels - 1) + " or 255");
-      }
-      if (count > width * height - labels.pixels.size()) {
-        return fail(res, 400, "runs cover more than width x height pixels");
-      }
-      labels.pixels.insert(labels.pixels.end(), count, static_cast<std::uint8_t>(id));
-    }
-    if (labels.pixels.size() != width * height) {
-      return fail(res, 400, "runs cover " + std::to_string(labels.pixels.size()) + " of " +
-                                std::to_string(width * height) + " pixels");
+    try {
+      labels.pixels = labelsFromRuns(body["runs"], width * height);
+    } catch (const Error& e) {
+      return fail(res, 400, e.what());
     }
     const std::string author = body["author"].get<std::string>();
     if (author.size() > 200) return fail(res, 400, "author longer than 200 characters");
@@ -576,68 +564,16 @@ void WebServer::routes() {
       if (!side) throw Error(sidecar_path.string() + ": cannot write");
     }
     fs::rename(out.path.parent_path() / ("." + frame + ".json.tmp"), sidecar_path);
+    fs::remove(draftPath(*root, frame));  // saved: the draft's work is in the file
     sendJson(res, {{"saved", "label8/" + frame + ".png"},
                    {"mtime_ns", std::to_string(mtimeNs(out.path))}});
   });
+  addLabelToolRoutes(s, *label_frames_, roots_, frameOf);
 }
 
-std::shared_ptr<const WebServer::FramePatches> WebServer::patchesOf(std::size_t root,
-                                                                  const std::string& frame) {
-  const std::string key = std::to_string(root) + "/" + frame;
-  // One frame at a time: a second request for it waits and takes the cached result.
-  std::lock_guard lock(patches_mutex_);
-  for (const auto& p : patches_cache_) {
-    if (p->key == key) return p;
-  }
-  // The frame as findmug-train reads it, and the oversegmentation the daemon would make.
-  // The folder lists only labelled frames once it has label8/: a frame not labelled yet
-  // is read from a view of the folder without labels.
-  DatasetOptions options;
-  options.require_labels = false;
-  LabeledFrame loaded;
-  const fs::path dir = roots_[root];
-  const fs::path unlabelled_view = fs::temp_directory_path() / ("findmug-web-" +
-                                   std::to_string(::getpid()) + "-" + std::to_string(root));
-  auto loadFrom = [&](const fs::path& folder_dir) {
-    const DatasetFolder folder(folder_dir.string(), options);
-    const auto& names = folder.names();
-    const auto it = std::find(names.begin(), names.end(), frame);
-    if (it == names.end()) return false;
-    loaded = folder.load(static_cast<std::size_t>(it - names.begin()));
-    return true;
-  };
-  if (!fs::exists(dir / "label8") || !loadFrom(dir)) {
-    // rgb/, depth/ and the calibration files, linked into a folder without labels.
-    fs::remove_all(unlabelled_view);
-    fs::create_directories(unlabelled_view);
-    for (const char* part : {"rgb", "depth", "intrinsics.yaml", "extrinsics.csv", "gravity.csv"}) {
-      if (fs::exists(dir / part)) fs::create_symlink(dir / part, unlabelled_view / part);
-    }
-    const bool found = loadFrom(unlabelled_view);
-    fs::remove_all(unlabelled_view);
-    if (!found) throw Error("frame " + frame + " is not in " + dir.string());
-  }
-  // The cloud and normals as the Segmenter makes them; the oversegmenter is run even when
-  // no floor was found (the daemon would skip such a frame, a person can still label it).
-  const Segmenter segmenter(options_.segmenter, nullptr);
-  const PreparedFrame prepared = segmenter.prepare(std::move(loaded.frame));
-  const Oversegmentation segmentation =
-      makeOversegmenter(options_.segmenter.overseg)
-          ->segment(prepared.cloud_camera, prepared.normals_camera);
-  auto patches = std::make_shared<FramePatches>();
-  patches->key = key;
-  patches->width = segmentation.width;
-  patches->height = segmentation.height;
-  patches->segments = static_cast<int>(segmentation.segments.size());
-  if (patches->segments >= 0xFFFF) throw Error(key + ": too many patches for the page");
-  patches->patch.resize(segmentation.pixel_segment.size());
-  for (std::size_t i = 0; i < patches->patch.size(); ++i) {
-    const int s = segmentation.pixel_segment[i];
-    patches->patch[i] = s < 0 ? 0xFFFF : static_cast<std::uint16_t>(s);
-  }
-  patches_cache_.push_back(patches);
-  if (patches_cache_.size() > 4) patches_cache_.erase(patches_cache_.begin());
-  return patches;
+std::shared_ptr<const LabelFrame> WebServer::patchesOf(std::size_t root,
+                                                     const std::string& frame) {
+  return label_frames_->of(roots_[root], root, frame);
 }
 
 void WebServer::bind() {

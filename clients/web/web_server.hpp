@@ -24,6 +24,7 @@
 #include <vector>
 
 #include "findmug/settings/config.hpp"
+#include "label_tools.hpp"
 #include "live_state.hpp"
 
 namespace httplib {
@@ -42,6 +43,11 @@ struct ServerOptions {
   // The oversegmentation the Label page shows is made with these settings (cloud,
   // normals, overseg.*: the ones the model is trained with).
   SegmenterConfig segmenter;
+  // The model whose prediction the Label page starts from (null: none), its name for
+  // the page, and NYU's gravity rotations for frames named by their NYU index.
+  std::shared_ptr<const RandomForest> model;
+  std::string model_name;
+  std::optional<std::string> nyu_rotations;
 };
 
 // A path inside one of the data folders, or why not (HTTP status and message).
@@ -77,16 +83,10 @@ class WebServer {
   void loadStaticFiles();
 
   // The oversegmentation of a dataset frame for the Label page (cached, last few).
-  struct FramePatches {
-    std::string key;  // root/frame
-    int width = 0, height = 0, segments = 0;
-    std::vector<std::uint16_t> patch;  // per pixel, 0xFFFF = in no patch
-  };
-  std::shared_ptr<const FramePatches> patchesOf(std::size_t root, const std::string& frame);
+  std::shared_ptr<const LabelFrame> patchesOf(std::size_t root, const std::string& frame);
 
   ServerOptions options_;
-  std::mutex patches_mutex_;
-  std::vector<std::shared_ptr<const FramePatches>> patches_cache_;
+  std::unique_ptr<LabelFrames> label_frames_;
   LiveState& live_;
   std::vector<std::filesystem::path> roots_;          // canonical data folders
   std::map<std::string, std::string> static_files_;  // name -> content
