@@ -83,8 +83,9 @@ std::string formatTable(const EvalReport& r) {
     // One line per way the ground was obtained, with the frames that got it.
     std::vector<std::pair<std::string, std::string>> groups;  // method, frames
     for (const auto& [frame, method] : r.ground_methods) {
+      const std::string& frame_method = method;  // clang 14 cannot capture a structured binding
       auto it = std::find_if(groups.begin(), groups.end(),
-                             [&](const auto& g) { return g.first == method; });
+                             [&](const auto& g) { return g.first == frame_method; });
       if (it == groups.end()) {
         groups.emplace_back(method, frame);
       } else {
