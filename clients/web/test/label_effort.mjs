@@ -9,7 +9,8 @@
 //     [--max-actions 300] [--port 18291] [--json OUT.json]
 //
 // --set defaults to the shipped model's settings (models/README.md):
-// ground.source=gravity,features.regions=true,features.scene=true.
+// ground.source=gravity,features.regions=true,features.scene=true,learner.classes=nyu13,
+// features.objects=true,features.objects_columns=context.
 //
 //   node clients/web/test/label_effort.mjs --merge A.json,B.json,... [--json OUT.json]
 //
@@ -64,7 +65,8 @@ if (args.merge) {
   process.exit(0);
 }
 for (const key of ['web', 'nyu', 'model']) if (!args[key]) usage(`--${key} is required`);
-const settings = (args.set || 'ground.source=gravity,features.regions=true,features.scene=true').split(',');
+const settings = (args.set || 'ground.source=gravity,features.regions=true,features.scene=true,' +
+  'learner.classes=nyu13,features.objects=true,features.objects_columns=context').split(',');
 let frames = fs.readdirSync(path.join(args.nyu, 'label8')).filter((n) => n.endsWith('.png'))
   .map((n) => n.slice(0, -4)).sort();
 if (args.frames) frames = args.frames.split(',');
