@@ -156,7 +156,7 @@ TEST(EvalProtocol, AFrameNameInTwoFoldersIsRefusedNamingIt) {
 
 // Issue 35: the settings daemon/findmugd.yaml ships (what models/findmug.fmf is
 // trained with) beat the configuration shipped before them (regions + scene on
-// the 8 labels) on the same scene folds. Measured (docs/results-h-ship35.md,
+// the 8 labels) on the same scene folds. Measured (docs/measurements/shipped-nyu13-objects.md,
 // forest seeds 42 / 1042 / 2042, forest+MRF):
 //   before: class average 0.487 / 0.487 / 0.492 (mean 0.489), chair 0.109 /
 //           0.132 / 0.198 (mean 0.146), global 0.578 / 0.580 / 0.582;
