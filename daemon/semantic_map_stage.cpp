@@ -134,7 +134,7 @@ void SemanticMapStage::publishIfDue(bool force) {
     const Pose2D map_to_base = inversePose(last_pose_.pose);
     for (const FusedTable& t : tables_) {
       tables_message.tables.push_back(transformTable(t.table, map_to_base));
-      tables_message.map_info.push_back({t.table.id, true, t.frames});
+      tables_message.map_info.push_back({t.table.id, true, t.frames, t.viewpoints});
     }
     map_message = io::encodeSemanticMap(io::semanticMapMessage(map_, last_utime_, last_seq_));
   }

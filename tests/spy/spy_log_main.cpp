@@ -81,7 +81,7 @@ int main(int argc, char** argv) {
     io::TablesMessage map = tables;
     map.content = io::TablesContent::Map;
     map.map_pose = io::RobotPose{static_cast<std::uint64_t>(t), {2.0, 1.0, 0.3}};
-    map.map_info = {io::TableMapInfo{1, true, 3}};
+    map.map_info = {io::TableMapInfo{1, true, 3, 2}};
     map.tables[0].id = 1;
     write(log, io::kTableMapChannel, io::encodeMessage(io::encodeTables(map)), t + 3);
 
