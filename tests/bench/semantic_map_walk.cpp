@@ -15,7 +15,7 @@
 //   * the map stage's CPU per frame (integrate, thread CPU time, median), tables() CPU,
 //     voxels and memory after the walk, and the map message's size (zlib);
 //   * the search positions' error: for the tables matched to a true one, the mean over
-//     their reachable search positions of |distance to the true top's edge - the
+//     their search positions (reachable or not) of |distance to the true top's edge - the
 //     tables.safety_distance_m the stage aims for|;
 //   * each frame's own tables (FINDMUG_TABLES, moved into the map by the frame's pose):
 //     precision (detections on a true top), recall (of the tables visible in the frame:
@@ -116,7 +116,6 @@ TableScore score(const std::vector<TableCluster>& tables,
     ++s.matched;
     s.error_sum += best_d;
     for (const SearchPosition& p : tables[static_cast<std::size_t>(best)].search_positions) {
-      if (!p.reachable) continue;
       s.search_error_sum +=
           std::abs(synth::signedDistanceToTop(*t, p.xy.cast<double>()) - safety_distance_m);
       ++s.search_positions;
