@@ -25,8 +25,10 @@
 // --move-table K: half-way through the walk table K (modulo the scene's tables) is carried
 // to the free spot farthest from it (synth::freeSpotForTable, synth::moveTable, with what
 // stands on it), and the second half of the path is planned in the changed room. The truth
-// is the room as it is at each frame; a further table prints, per map, after how many
-// frames since the move the old place held no table any more and the new one held one.
+// is the room as it is at each frame; a further table prints how many frames after the move
+// saw the old place (its top's centre in the image within semantic_map.max_range_m) and,
+// per map, after how many frames since the move the old place held no table any more and
+// the new one held one.
 //
 //   semantic_map_walk [--config daemon/findmugd.yaml] [--model models/findmug.fmf]
 //                     [--seeds 1,2,3] [--frames 60] [--fps 2] [--move-table -1]
@@ -158,6 +160,17 @@ bool anyOn(const std::vector<TableCluster>& tables, const synth::TableTruth& tru
   return false;
 }
 
+// Whether the camera saw the table's place: its top's centre in the image, in front of
+// the camera and within `range_m` (the map's max_range_m: farther points are not fused).
+bool placeInView(const synth::TableTruth& table, const synth::CameraPose& pose,
+                 const CameraIntrinsics& k, int width, int height, double range_m) {
+  const Eigen::Vector3d world(table.center_xy.x(), table.center_xy.y(), table.height);
+  const Eigen::Vector3d c = synth::cameraToWorld(pose).inverse() * world;
+  if (c.z() < 0.3 || c.norm() > range_m) return false;
+  const double u = k.fx * c.x() / c.z() + k.cx, v = k.fy * c.y() / c.z() + k.cy;
+  return u >= 0 && v >= 0 && u < width && v < height;
+}
+
 std::vector<TableCluster> fusedClusters(SemanticMap& map) {
   std::vector<TableCluster> out;
   for (const FusedTable& t : map.tables()) out.push_back(t.table);
@@ -168,6 +181,7 @@ std::vector<TableCluster> fusedClusters(SemanticMap& map) {
 // when the old place holds no table, and when the new place holds one; 0 = not yet.
 struct MoveEvents {
   int old_gone = 0, new_found = 0;
+  int old_in_view = 0;  // frames after the move that saw the old place (placeInView)
   void update(const std::vector<TableCluster>& tables, const synth::TableTruth& before,
               const synth::TableTruth& after, int frames_since_move) {
     if (old_gone == 0 && !anyOn(tables, before)) old_gone = frames_since_move;
@@ -300,6 +314,12 @@ int main(int argc, char** argv) {
           const auto pixels = std::count(rendered.object.begin(), rendered.object.end(), t.object);
           if (pixels * 100 >= static_cast<long>(rendered.object.size())) visible.push_back(&t);
         }
+        if (moved >= 0 && static_cast<int>(i) >= half &&
+            placeInView(scene_before.tables[static_cast<std::size_t>(moved)], path[i],
+                        rendered.labeled.frame.intrinsics, rendered.labeled.frame.width,
+                        rendered.labeled.frame.height, map_config.max_range_m)) {
+          ++fused_events.old_in_view;
+        }
         LabelledFrame labelled = segmenter.process(std::move(rendered.labeled.frame));
         const PreparedFrame& prepared = labelled.segmented.prepared;
         if (!prepared.ground) continue;
@@ -410,9 +430,9 @@ int main(int argc, char** argv) {
         const synth::TableTruth& before = scene_before.tables[static_cast<std::size_t>(moved)];
         const synth::TableTruth& after = scene_after.tables[static_cast<std::size_t>(moved)];
         char head[160];
-        std::snprintf(head, sizeof(head), "| %llu | %d %s, %.2f m | %d | ",
+        std::snprintf(head, sizeof(head), "| %llu | %d %s, %.2f m | %d | %d | ",
                       static_cast<unsigned long long>(seed), moved, before.kind.c_str(),
-                      offset.norm(), frames - half);
+                      offset.norm(), frames - half, fused_events.old_in_view);
         move_rows += head +
                      fused_events.text(!anyOn(fused_tables, before), anyOn(fused_tables, after)) +
                      " | " +
@@ -427,9 +447,9 @@ int main(int argc, char** argv) {
     if (move_table >= 0) {
       std::printf("\nThe moved table: frames after the move until the old place held no table "
                   "and until the new place held one (\"never\": not within the walk):\n\n"
-                  "| seed | table moved, distance | frames after the move | fused map: old gone "
-                  "| fused map: new found | table map: old gone | table map: new found |\n"
-                  "|---|---|---|---|---|---|---|\n%s",
+                  "| seed | table moved, distance | frames after the move | of them seeing the "
+                  "old place | fused map: old gone | fused map: new found | table map: old gone "
+                  "| table map: new found |\n|---|---|---|---|---|---|---|---|\n%s",
                   move_rows.c_str());
     }
     std::printf("\n| seed | frames seen | frame acc (this quarter) | fused acc causal (this quarter) "
