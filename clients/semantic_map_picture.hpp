@@ -14,10 +14,10 @@
 #include <cstdint>
 #include <vector>
 
-#include "findmug/image_io.hpp"
+#include "findmug/frame/image_io.hpp"
 #include "findmug/io/lcm_codec.hpp"
 #include "findmug/io/semantic_map_codec.hpp"
-#include "findmug/labels.hpp"
+#include "findmug/labels/labels.hpp"
 
 namespace findmug::clients {
 

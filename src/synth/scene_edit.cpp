@@ -3,8 +3,8 @@
 #include <cmath>
 #include <string>
 
-#include "findmug/error.hpp"
-#include "findmug/synth.hpp"
+#include "findmug/common/error.hpp"
+#include "findmug/synth/synth.hpp"
 #include "synth_internal.hpp"
 
 namespace findmug::synth {

@@ -66,7 +66,6 @@
 #include <optional>
 #include <string>
 
-#include "findmug/config.hpp"
 #include "findmug/daemon/daemon_config.hpp"
 #include "findmug/daemon/frame_steps.hpp"
 #include "findmug/daemon/pose_input.hpp"
@@ -75,11 +74,12 @@
 #include "findmug/daemon/service.hpp"
 #include "findmug/daemon/stage.hpp"
 #include "findmug/daemon/status_snapshot.hpp"
-#include "findmug/forest.hpp"
-#include "findmug/frame.hpp"
+#include "findmug/frame/frame.hpp"
 #include "findmug/io/bus.hpp"
-#include "findmug/segmenter.hpp"
-#include "findmug/table_map.hpp"
+#include "findmug/learner/forest.hpp"
+#include "findmug/map/table_map.hpp"
+#include "findmug/pipeline/segmenter.hpp"
+#include "findmug/settings/config.hpp"
 
 namespace findmug::io {
 class FrameSource;
