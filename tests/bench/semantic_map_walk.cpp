@@ -22,8 +22,9 @@
 //     1 % of its pixels show the table) and search-position error, over the walk;
 //   * then, per quarter of each walk, how it grows: frame and causal fused accuracy over the
 //     quarter's frames, and the tables of both maps against the truth at its end.
-// --move-table K: half-way through the walk table K (modulo the scene's tables) is carried
-// to the free spot farthest from it (synth::freeSpotForTable, synth::moveTable, with what
+// --move-table K: half-way through the walk table K (modulo the scene's tables; or the next
+// one that has a free spot: 0.7 m from walls and furniture) is carried to the free spot
+// farthest from it (synth::freeSpotForTable, synth::moveTable, with what
 // stands on it), and the second half of the path is planned in the changed room. The truth
 // is the room as it is at each frame; a further table prints how many frames after the move
 // saw the old place (its top's centre in the image within semantic_map.max_range_m) and,
@@ -40,6 +41,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <optional>
 #include <random>
 #include <sstream>
 #include <string>
@@ -261,11 +263,16 @@ int main(int argc, char** argv) {
       int moved = -1;
       Eigen::Vector2d offset = Eigen::Vector2d::Zero();
       if (move_table >= 0) {
-        moved = move_table % static_cast<int>(scene_before.tables.size());
-        const auto spot = synth::freeSpotForTable(scene_before, moved);
+        // Table K, or the next one (cyclically) that has a free spot to go to.
+        const int n = static_cast<int>(scene_before.tables.size());
+        std::optional<Eigen::Vector2d> spot;
+        for (int k = 0; k < n && !spot; ++k) {
+          moved = (move_table + k) % n;
+          spot = synth::freeSpotForTable(scene_before, moved);
+        }
         if (!spot) {
-          std::printf("| %llu | no free spot to move table %d to: seed skipped |\n",
-                      static_cast<unsigned long long>(seed), moved);
+          std::printf("| %llu | no free spot to move any table to: seed skipped |\n",
+                      static_cast<unsigned long long>(seed));
           continue;
         }
         offset = *spot;
