@@ -25,14 +25,15 @@
 // --move-table K: half-way through the walk table K (modulo the scene's tables; or the next
 // one that has a free spot: 0.7 m from walls and furniture) is carried to the free spot
 // farthest from it (synth::freeSpotForTable, synth::moveTable, with what
-// stands on it), and the second half of the path is planned in the changed room. The truth
+// stands on it), and the second half of the path is planned in the changed room, visiting
+// the old place as if a table still stood there (--revisit 0: the tables only). The truth
 // is the room as it is at each frame; a further table prints how many frames after the move
 // saw the old place (its top's centre in the image within semantic_map.max_range_m) and,
 // per map, after how many frames since the move the old place held no table any more and
 // the new one held one.
 //
 //   semantic_map_walk [--config daemon/findmugd.yaml] [--model models/findmug.fmf]
-//                     [--seeds 1,2,3] [--frames 60] [--fps 2] [--move-table -1]
+//                     [--seeds 1,2,3] [--frames 60] [--fps 2] [--move-table -1] [--revisit 1]
 //                     [--pose-noise-m 0] [--pose-noise-deg 0] [--verbose 1]
 // --verbose 1 also lists every true table and every table of both maps at the end (stderr).
 #include <time.h>
@@ -207,6 +208,7 @@ int main(int argc, char** argv) {
   double fps = 2.0, noise_m = 0.0, noise_deg = 0.0;
   bool verbose = false;
   int move_table = -1;
+  bool revisit = true;
   for (int i = 1; i + 1 < argc; i += 2) {
     const std::string flag = argv[i], value = argv[i + 1];
     if (flag == "--config") {
@@ -224,6 +226,8 @@ int main(int argc, char** argv) {
       fps = std::stod(value);
     } else if (flag == "--pose-noise-m") {
       noise_m = std::stod(value);
+    } else if (flag == "--revisit") {
+      revisit = value == "1";
     } else if (flag == "--move-table") {
       move_table = std::stoi(value);
     } else if (flag == "--verbose") {
@@ -282,7 +286,14 @@ int main(int argc, char** argv) {
       const int half = moved >= 0 ? frames / 2 : frames;
       std::vector<synth::CameraPose> path = synth::cameraPath(scene_before, half, fps);
       if (moved >= 0) {
-        for (synth::CameraPose pose : synth::cameraPath(scene_after, frames - half, fps)) {
+        // The robot also comes back to look where the table stood: the second half is
+        // planned with a stand-in for the old table (its truth only: nothing is rendered
+        // there, and it blocks nothing).
+        synth::SynthScene plan = scene_after;
+        synth::TableTruth old_place = scene_before.tables[static_cast<std::size_t>(moved)];
+        old_place.id = static_cast<int>(plan.tables.size());
+        if (revisit) plan.tables.push_back(old_place);
+        for (synth::CameraPose pose : synth::cameraPath(plan, frames - half, fps)) {
           pose.time_s += half / fps;
           path.push_back(pose);
         }
