@@ -13,8 +13,7 @@ namespace findmug::clients {
 
 namespace {
 
-constexpr Rgb8 kWhite{255, 255, 255}, kBlack{0, 0, 0}, kGrid{225, 225, 225},
-    kRobot{30, 110, 255};
+constexpr Rgb8 kWhite{255, 255, 255}, kBlack{0, 0, 0}, kGrid{225, 225, 225}, kRobot{30, 110, 255};
 
 bool shown(const io::SemanticMapVoxel& v, float voxel_size_m) {
   return v.label < kNumLabels && v.label != static_cast<std::uint8_t>(Label::Ceiling) &&
@@ -106,14 +105,14 @@ Image<Rgb8> semanticMapPng(const io::SemanticMapMessage& map, const io::TablesMe
   const double span = (size_px - 2 * v.margin) / v.scale;
 
   Canvas canvas(size_px, size_px, kWhite);
-  for (int g = static_cast<int>(std::floor(v.min_x)); g <= static_cast<int>(std::ceil(v.min_x + span));
-       ++g) {
+  for (int g = static_cast<int>(std::floor(v.min_x));
+       g <= static_cast<int>(std::ceil(v.min_x + span)); ++g) {
     const double x = v.px(g, 0).x();
     if (x >= v.margin && x <= size_px - v.margin)
       canvas.line(x, v.margin, x, size_px - v.margin, kGrid);
   }
-  for (int g = static_cast<int>(std::floor(v.max_y - span)); g <= static_cast<int>(std::ceil(v.max_y));
-       ++g) {
+  for (int g = static_cast<int>(std::floor(v.max_y - span));
+       g <= static_cast<int>(std::ceil(v.max_y)); ++g) {
     const double y = v.px(0, g).y();
     if (y >= v.margin && y <= size_px - v.margin)
       canvas.line(v.margin, y, size_px - v.margin, y, kGrid);
@@ -126,8 +125,10 @@ Image<Rgb8> semanticMapPng(const io::SemanticMapMessage& map, const io::TablesMe
       const int i = cells.min_i + col, j = cells.max_j - row;
       const Eigen::Vector2d a = v.px((i - 0.5) * voxel, (j + 0.5) * voxel);
       const Eigen::Vector2d b = v.px((i + 0.5) * voxel, (j - 0.5) * voxel);
-      const int xa = static_cast<int>(std::lround(a.x())), ya = static_cast<int>(std::lround(a.y()));
-      const int xb = static_cast<int>(std::lround(b.x())), yb = static_cast<int>(std::lround(b.y()));
+      const int xa = static_cast<int>(std::lround(a.x())),
+                ya = static_cast<int>(std::lround(a.y()));
+      const int xb = static_cast<int>(std::lround(b.x())),
+                yb = static_cast<int>(std::lround(b.y()));
       canvas.fillRect(xa, ya, std::max(1, xb - xa), std::max(1, yb - ya),
                       shadedLabelColor(cells.label[cell], cells.confidence[cell]));
     }
