@@ -14,6 +14,7 @@
 //                 top-down (each floor cell the label on top, faded by
 //                 confidence, ceiling and voxels above 2 m left out, the table
 //                 map's hulls and the robot over it).
+//   replay        findmug-replay --robot-pose: the pose with each frame's utime.
 #include <fcntl.h>
 #include <gtest/gtest.h>
 #include <spawn.h>
@@ -869,6 +870,40 @@ TEST(LabelViewer, DrawsTheSemanticMapTopDownWithTheTableMap) {
     }
   }
   EXPECT_GT(black, 40);
+}
+
+// findmug-replay --robot-pose: before each replayed frame, the fixed robot pose with that
+// frame's utime on FINDMUG_ROBOT_POSE (what daemon_bench.sh gives findmugd's semantic map).
+TEST(Replay, RobotPoseGoesOutWithEveryFrame) {
+  FINDMUG_REQUIRE_DATA(nyu, "nyuv2_labeled");
+  TempDir tmp;
+  const std::string log = tmp.str("replay.lcmlog");
+  const ProcessResult r =
+      run(FINDMUG_REPLAY_EXE,
+          {"--source", "dataset:" + nyu.string(), "--max-frames", "2", "--count", "3", "--rate",
+           "20", "--robot-pose", "1.5,-2,0.25", "--url", "file://" + log + "?mode=w"},
+          tmp);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto messages = daemon::test::readLcmLog(log);
+  ASSERT_EQ(messages.size(), 6u);
+  for (std::size_t k = 0; k < 6; k += 2) {
+    ASSERT_EQ(messages[k].channel, io::kRobotPoseChannel) << k;
+    ASSERT_EQ(messages[k + 1].channel, io::kRgbdChannel) << k;
+    const io::RobotPose pose =
+        io::decodeRobotPose(messages[k].data.data(), messages[k].data.size(), "P");
+    const RgbdFrame frame =
+        io::decodeRgbdFrame(messages[k + 1].data.data(), messages[k + 1].data.size(), "F");
+    EXPECT_EQ(pose.utime, frame.utime) << k;
+    EXPECT_DOUBLE_EQ(pose.pose.x, 1.5);
+    EXPECT_DOUBLE_EQ(pose.pose.y, -2.0);
+    EXPECT_DOUBLE_EQ(pose.pose.yaw, 0.25);
+  }
+  // A pose needs all three numbers.
+  const ProcessResult bad = run(FINDMUG_REPLAY_EXE,
+                                {"--source", "dataset:" + nyu.string(), "--count", "1", "--rate",
+                                 "20", "--robot-pose", "1,2", "--url", "file://" + log + "?mode=w"},
+                                tmp);
+  EXPECT_EQ(bad.exit_code, 2) << bad.err;
 }
 
 }  // namespace
