@@ -17,7 +17,11 @@
 // over it when FINDMUG_RGBD is not published. table_map.png and table_map.svg
 // show the tables top-down: the table map with the robot's pose from
 // FINDMUG_TABLE_MAP[_suffix], or, until a map arrives, the latest frame's tables around
-// the robot. --source SPEC takes the colour frames from a frame source (e.g. the dataset
+// the robot. When findmugd publishes its fused semantic map (daemon.semantic_map),
+// semantic_map.png shows FINDMUG_SEMANTIC_MAP[_suffix] top-down: each floor cell in the
+// colour of the label on top there, faded by how sure the map is, with the tables of
+// FINDMUG_TABLE_MAP (ids, supporting frames and viewpoints) and the robot's pose
+// (semantic_map_picture.hpp). --source SPEC takes the colour frames from a frame source (e.g. the dataset
 // folder the daemon replayed), matched by sequence number, for logs without frames.
 //
 // Exits cleanly on SIGINT/SIGTERM, after --count label images, or at the end
@@ -41,11 +45,13 @@
 #include "findmug/io/channels.hpp"
 #include "findmug/io/frame_source.hpp"
 #include "findmug/io/lcm_codec.hpp"
+#include "findmug/io/semantic_map_codec.hpp"
 #include "findmug/io/subscriber.hpp"
 #include "findmug/labels/label_image.hpp"
 #include "findmug/labels/labels.hpp"
 #include "findmug_cli.hpp"
 #include "picture.hpp"
+#include "semantic_map_picture.hpp"
 
 namespace {
 
@@ -86,7 +92,11 @@ class LabelViewer {
       have_map_ = have_map_ || is_map;
       writeTableMap(message);
     }
-    if (is_map) return;
+    if (is_map) {
+      table_map_ = message;
+      if (semantic_map_) writeSemanticMap();
+      return;
+    }
     tables_.push_back(message);
     while (tables_.size() > kKeptLabelImages) tables_.pop_front();
     // Labels of this frame already written: draw them again, now with the tables.
@@ -102,6 +112,15 @@ class LabelViewer {
         }
       }
     }
+  }
+
+  void onSemanticMap(const io::SemanticMapMessage& message) {
+    semantic_map_ = message;
+    std::printf("semantic map seq %lld: %zu voxels, %lld frames\n",
+                static_cast<long long>(message.seq), message.voxels.size(),
+                static_cast<long long>(message.frames));
+    std::fflush(stdout);
+    if (write_png_) writeSemanticMap();
   }
 
   // A bad label image counts as received (for --count and --every) and is skipped.
@@ -250,6 +269,15 @@ class LabelViewer {
     }
   }
 
+  void writeSemanticMap() const {
+    try {
+      writePngRgb((out_dir_ / "semantic_map.png").string(),
+                  clients::semanticMapPng(*semantic_map_, table_map_ ? &*table_map_ : nullptr));
+    } catch (const std::exception& e) {
+      std::fprintf(stderr, "%s: semantic map not written: %s\n", kProgram, e.what());
+    }
+  }
+
   std::filesystem::path out_dir_;
   float alpha_;
   long every_;
@@ -257,6 +285,8 @@ class LabelViewer {
   std::unique_ptr<io::FrameSource> source_;  // colour frames by seq (--source), or null
   long received_ = 0;
   bool have_map_ = false;  // a FINDMUG_TABLE_MAP message arrived: table_map.* shows the map
+  std::optional<io::TablesMessage> table_map_;            // the latest FINDMUG_TABLE_MAP
+  std::optional<io::SemanticMapMessage> semantic_map_;  // the latest FINDMUG_SEMANTIC_MAP
   std::deque<ColorFrame> colors_;
   std::deque<io::LabelImageMessage> labels_;
   std::deque<io::TablesMessage> tables_;
@@ -273,7 +303,8 @@ int main(int argc, char** argv) {
   auto app = cli::makeApp(kProgram,
                           "Prints a summary of each label image findmugd publishes and writes "
                           "overlays with a legend, tables and search positions, and a top-down "
-                          "table map (table_map.png, table_map.svg)");
+                          "table map (table_map.png, table_map.svg) and, when published, the "
+                          "semantic map (semantic_map.png)");
   cli::addLcmUrlFlag(*app, url,
                      "LCM provider (default: LCM_DEFAULT_URL or udpm default); "
                      "file://LOG?speed=0 replays a log and exits at its end");
@@ -300,12 +331,13 @@ int main(int argc, char** argv) {
                  out_dir.string().c_str());
     return 2;
   }
-  std::string labels_channel, frames_channel, tables_channel, map_channel;
+  std::string labels_channel, frames_channel, tables_channel, map_channel, semantic_channel;
   try {
     labels_channel = io::channelName(io::kLabelsChannel, suffix);
     frames_channel = io::channelName(io::kRgbdChannel, suffix);
     tables_channel = io::channelName(io::kTablesChannel, suffix);
     map_channel = io::channelName(io::kTableMapChannel, suffix);
+    semantic_channel = io::channelName(io::kSemanticMapChannel, suffix);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "%s: --channel-suffix: %s (see --help)\n", kProgram, e.what());
     return 2;
@@ -354,8 +386,16 @@ int main(int argc, char** argv) {
       *bus, map_channel, decode_tables,
       [&](const io::TablesMessage& m, const std::string&) { viewer.onTables(m); },
       report("tables message"));
-  std::fprintf(stderr, "%s: listening on %s, %s, %s and %s\n", kProgram, labels_channel.c_str(),
-               frames_channel.c_str(), tables_channel.c_str(), map_channel.c_str());
+  io::Subscriber<io::SemanticMapMessage> semantic_map(
+      *bus, semantic_channel,
+      [](const std::uint8_t* d, std::size_t n, const std::string& c) {
+        return io::decodeSemanticMap(d, n, c);
+      },
+      [&](const io::SemanticMapMessage& m, const std::string&) { viewer.onSemanticMap(m); },
+      report("semantic map"));
+  std::fprintf(stderr, "%s: listening on %s, %s, %s, %s and %s\n", kProgram,
+               labels_channel.c_str(), frames_channel.c_str(), tables_channel.c_str(),
+               map_channel.c_str(), semantic_channel.c_str());
   return clients::receiveLoop(*bus, kProgram,
                               [&] { return count > 0 && viewer.received() >= count; });
 }

@@ -73,7 +73,7 @@ bool TableMapSink::update(const LabelledFrame& labelled, const io::RobotPose& po
   for (int id : update.assigned_ids) {
     io::TableMapInfo info;
     for (const MappedTable& t : map_.tables()) {
-      if (t.table.id == id) info = {id, t.confirmed, t.sightings};
+      if (t.table.id == id) info = {id, t.confirmed, t.sightings, 0};
     }
     map_info->push_back(info);
   }
@@ -94,7 +94,7 @@ io::TablesMessage TableMapSink::mapMessage(const RgbdFrame& frame,
   for (const MappedTable& t : map_.tables()) {
     if (!t.confirmed) continue;
     message.tables.push_back(transformTable(t.table, map_to_base));
-    message.map_info.push_back({t.table.id, true, t.sightings});
+    message.map_info.push_back({t.table.id, true, t.sightings, 0});  // no viewpoints counted
   }
   return message;
 }

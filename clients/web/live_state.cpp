@@ -6,6 +6,7 @@
 
 #include "findmug/labels/labels.hpp"
 #include "picture.hpp"
+#include "semantic_map_picture.hpp"
 
 namespace findmug::web {
 
@@ -64,6 +65,7 @@ nlohmann::json tablesJson(const io::TablesMessage& message) {
       table["map_id"] = message.map_info[i].map_id;
       table["confirmed"] = message.map_info[i].confirmed;
       table["sightings"] = message.map_info[i].sightings;
+      table["viewpoints"] = message.map_info[i].viewpoints;
     }
     nlohmann::json positions = nlohmann::json::array();
     for (const auto& p : base_positions) {
@@ -116,6 +118,32 @@ void LiveState::onTables(const io::TablesMessage& message) {
   } else {
     frame_tables_ = message;
   }
+}
+
+void LiveState::onSemanticMap(const io::SemanticMapMessage& message) {
+  const clients::TopDownCells cells = clients::topDownCells(message);
+  auto bytes = std::make_shared<std::vector<std::uint8_t>>(cells.label);
+  bytes->insert(bytes->end(), cells.confidence.begin(), cells.confidence.end());
+  nlohmann::json meta = {{"seq", message.seq},
+                         {"utime", message.utime},
+                         {"frames", message.frames},
+                         {"voxels", message.voxels.size()},
+                         {"voxel_size_m", cells.voxel_size_m},
+                         {"cells", cells.cells},
+                         {"min_i", cells.min_i},
+                         {"max_j", cells.max_j},
+                         {"width", cells.width},
+                         {"height", cells.height},
+                         {"max_height_m", clients::kTopDownMaxHeightM}};
+  std::lock_guard lock(mutex_);
+  semantic_map_meta_ = std::move(meta);
+  semantic_map_ = {message.seq, cells.width, cells.height, std::move(bytes)};
+}
+
+std::optional<SemanticMapRaster> LiveState::semanticMap() const {
+  std::lock_guard lock(mutex_);
+  if (!semantic_map_.bytes) return std::nullopt;
+  return semantic_map_;
 }
 
 void LiveState::onStatus(const findmug_lcm::status_t& status) {
@@ -212,6 +240,7 @@ nlohmann::json LiveState::liveJson() const {
   }
   out["tables"] = frame_tables_ ? tablesJson(*frame_tables_) : nlohmann::json(nullptr);
   out["table_map"] = table_map_ ? tablesJson(*table_map_) : nlohmann::json(nullptr);
+  out["semantic_map"] = semantic_map_meta_;
   if (status_) {
     const auto& s = *status_;
     nlohmann::json stages = nlohmann::json::array();

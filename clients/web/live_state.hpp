@@ -1,6 +1,7 @@
 // live_state.hpp — what findmug-web knows of a running findmugd: the latest label image
 // (with the camera and the colour image the daemon sent with it), the latest frame's
-// tables, the persistent table map, the latest status and a few minutes of status history.
+// tables, the persistent table map, the fused semantic map seen from above (when findmugd
+// publishes it: daemon.semantic_map), the latest status and a few minutes of status history.
 //
 // Fed by the bus thread (io::Subscriber callbacks), read by the HTTP threads: every
 // member is behind one mutex, and readers get copies (JSON or bytes).
@@ -18,6 +19,7 @@
 #include <vector>
 
 #include "findmug/io/messages.hpp"
+#include "findmug/io/semantic_map_codec.hpp"
 #include "findmug_lcm/status_t.hpp"
 
 namespace findmug::web {
@@ -29,6 +31,15 @@ struct LabelPixels {
   std::shared_ptr<const std::vector<std::uint8_t>> labels;
 };
 
+// The semantic map from above for the page (clients/semantic_map_picture.hpp,
+// topDownCells): a raster of width x height floor cells, row 0 the highest j; the bytes
+// are the label plane (findmug ids, 255 none) then the confidence plane (0..255).
+struct SemanticMapRaster {
+  std::int64_t seq = 0;
+  int width = 0, height = 0;
+  std::shared_ptr<const std::vector<std::uint8_t>> bytes;
+};
+
 class LiveState {
  public:
   explicit LiveState(double history_s) : history_s_(history_s) {}
@@ -36,6 +47,7 @@ class LiveState {
   // From the bus thread.
   void onLabels(const io::LabelImageMessage& message);
   void onTables(const io::TablesMessage& message);  // FINDMUG_TABLES or FINDMUG_TABLE_MAP
+  void onSemanticMap(const io::SemanticMapMessage& message);  // FINDMUG_SEMANTIC_MAP
   void onStatus(const findmug_lcm::status_t& status);
   void onBadMessage(const std::string& channel, const std::string& what);
   void onBusEnded(const std::string& how);
@@ -46,6 +58,9 @@ class LiveState {
   // The colour JPEG of the latest label image, and its seq; nullopt when it had none.
   std::optional<std::pair<std::int64_t, std::shared_ptr<const std::vector<std::uint8_t>>>>
   colorJpeg() const;
+
+  // The latest semantic map's raster (GET /api/semantic_map.bin); nullopt before one came.
+  std::optional<SemanticMapRaster> semanticMap() const;
 
   // Label images taken so far (for tests and the log).
   std::uint64_t labelImages() const;
@@ -66,6 +81,8 @@ class LiveState {
   std::optional<io::LabelImageMessage> labels_meta_;  // pixels moved to labels_bytes_
   std::shared_ptr<const std::vector<std::uint8_t>> labels_bytes_, color_jpeg_;
   std::optional<io::TablesMessage> frame_tables_, table_map_;
+  nlohmann::json semantic_map_meta_;  // null until a semantic map came
+  SemanticMapRaster semantic_map_;
   std::optional<findmug_lcm::status_t> status_;
   std::deque<StatusSample> history_;
   std::map<std::string, std::uint64_t> bad_messages_;

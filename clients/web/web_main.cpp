@@ -1,12 +1,12 @@
 // findmug-web — watch findmugd live in a browser (and, through the same server, its data
 // folders).
 //
-// Subscribes to FINDMUG_LABELS, FINDMUG_TABLES, FINDMUG_TABLE_MAP and FINDMUG_STATUS
-// (with --channel-suffix) through findmug's own bus and hardened decoders, keeps the
-// latest of each (live_state.hpp) and serves a page that draws them several times a
-// second (static/: HTML, JS and CSS, no network needed). Listens on 127.0.0.1 unless the
-// config (web.bind) or --bind names another address; then the token of --token-file is
-// required on every request (web_server.hpp has the access rules).
+// Subscribes to FINDMUG_LABELS, FINDMUG_TABLES, FINDMUG_TABLE_MAP, FINDMUG_SEMANTIC_MAP
+// and FINDMUG_STATUS (with --channel-suffix) through findmug's own bus and hardened
+// decoders, keeps the latest of each (live_state.hpp) and serves a page that draws them
+// several times a second (static/: HTML, JS and CSS, no network needed). Listens on
+// 127.0.0.1 unless the config (web.bind) or --bind names another address; then the token
+// of --token-file is required on every request (web_server.hpp has the access rules).
 #include <cstdio>
 #include <filesystem>
 #include <memory>
@@ -18,6 +18,7 @@
 #include "findmug/common/error.hpp"
 #include "findmug/io/channels.hpp"
 #include "findmug/io/lcm_codec.hpp"
+#include "findmug/io/semantic_map_codec.hpp"
 #include "findmug/io/subscriber.hpp"
 #include "findmug_cli.hpp"
 #include "live_state.hpp"
@@ -68,7 +69,7 @@ int main(int argc, char** argv) {
   if (auto code = cli::parse(*app, argc, argv)) return *code;
 
   web::WebConfig config;
-  std::string labels_channel, tables_channel, map_channel, status_channel;
+  std::string labels_channel, tables_channel, map_channel, semantic_channel, status_channel;
   web::ServerOptions options;
   try {
     web::registerWebSection();
@@ -83,6 +84,7 @@ int main(int argc, char** argv) {
     labels_channel = io::channelName(io::kLabelsChannel, suffix);
     tables_channel = io::channelName(io::kTablesChannel, suffix);
     map_channel = io::channelName(io::kTableMapChannel, suffix);
+    semantic_channel = io::channelName(io::kSemanticMapChannel, suffix);
     status_channel = io::channelName(io::kStatusChannel, suffix);
     options.bind = config.bind;
     options.port = config.port;
@@ -141,6 +143,13 @@ int main(int argc, char** argv) {
       *bus, map_channel, decode_tables,
       [&](const io::TablesMessage& m, const std::string&) { live.onTables(m); },
       bad(map_channel));
+  io::Subscriber<io::SemanticMapMessage> semantic_map(
+      *bus, semantic_channel,
+      [](const std::uint8_t* d, std::size_t n, const std::string& c) {
+        return io::decodeSemanticMap(d, n, c);
+      },
+      [&](const io::SemanticMapMessage& m, const std::string&) { live.onSemanticMap(m); },
+      bad(semantic_channel));
   io::Subscriber<findmug_lcm::status_t> status(
       *bus, status_channel,
       [](const std::uint8_t* d, std::size_t n, const std::string& c) {
@@ -151,10 +160,10 @@ int main(int argc, char** argv) {
 
   std::thread http([&] { server->serve(); });
   const auto stop_server = clients::stopSignals().onStop([&] { server->stop(); });
-  std::fprintf(stderr, "%s: serving http://%s:%d/ ; listening on %s, %s, %s and %s (%s)\n",
+  std::fprintf(stderr, "%s: serving http://%s:%d/ ; listening on %s, %s, %s, %s and %s (%s)\n",
                kProgram, config.bind.c_str(), server->port(), labels_channel.c_str(),
-               tables_channel.c_str(), map_channel.c_str(), status_channel.c_str(),
-               bus->describe().c_str());
+               tables_channel.c_str(), map_channel.c_str(), semantic_channel.c_str(),
+               status_channel.c_str(), bus->describe().c_str());
   // This thread owns the bus. At the end of a replayed log the page stays up, showing
   // the last state, until a stop signal.
   int code = clients::receiveLoop(*bus, kProgram, [] { return false; });

@@ -333,6 +333,17 @@ void WebServer::routes() {
     res.set_content(reinterpret_cast<const char*>(labels->labels->data()), labels->labels->size(),
                     "application/octet-stream");
   });
+  // The semantic map from above: label plane then confidence plane (live_state.hpp).
+  s.Get("/api/semantic_map.bin", [this](const httplib::Request&, httplib::Response& res) {
+    const auto map = live_.semanticMap();
+    if (!map) return fail(res, 404, "no semantic map received yet (findmugd: daemon.semantic_map)");
+    res.set_header("Cache-Control", "no-store");
+    res.set_header("X-Findmug-Seq", std::to_string(map->seq));
+    res.set_header("X-Findmug-Width", std::to_string(map->width));
+    res.set_header("X-Findmug-Height", std::to_string(map->height));
+    res.set_content(reinterpret_cast<const char*>(map->bytes->data()), map->bytes->size(),
+                    "application/octet-stream");
+  });
   s.Get("/api/color.jpg", [this](const httplib::Request&, httplib::Response& res) {
     const auto color = live_.colorJpeg();
     if (!color) {

@@ -626,6 +626,7 @@ findmug_lcm::tables_t encodeTables(std::uint64_t utime, std::int64_t seq, Tables
     out.map_id = info.map_id;
     out.confirmed = info.confirmed;
     out.sightings = info.sightings;
+    out.viewpoints = info.viewpoints;
     out.center[0] = t.center.x();
     out.center[1] = t.center.y();
     for (int i = 0; i < 3; ++i) out.centroid[i] = t.centroid[i];
@@ -733,6 +734,10 @@ TablesMessage decodeTables(const findmug_lcm::tables_t& msg, std::string_view ch
       throw Error(where + ".map_id/sightings: negative (" + std::to_string(t.map_id) + ", " +
                   std::to_string(t.sightings) + ")");
     }
+    if (t.viewpoints < 0 || t.viewpoints > t.sightings) {
+      throw Error(where + ".viewpoints: " + std::to_string(t.viewpoints) + " outside [0, sightings " +
+                  std::to_string(t.sightings) + "]");
+    }
     if (t.confirmed && t.map_id == 0) {
       throw Error(where + ".confirmed: set for a table that is not in the map (map_id 0)");
     }
@@ -740,7 +745,7 @@ TablesMessage decodeTables(const findmug_lcm::tables_t& msg, std::string_view ch
       throw Error(where + ".map_id: a table map entry needs id == map_id > 0 (id " +
                   std::to_string(t.id) + ", map_id " + std::to_string(t.map_id) + ")");
     }
-    out.map_info.push_back({t.map_id, t.confirmed != 0, t.sightings});
+    out.map_info.push_back({t.map_id, t.confirmed != 0, t.sightings, t.viewpoints});
     TableCluster c;
     c.id = t.id;
     c.center = Eigen::Vector2f(static_cast<float>(t.center[0]), static_cast<float>(t.center[1]));

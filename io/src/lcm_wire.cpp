@@ -142,7 +142,7 @@ void walkTable(WireWalker& w) {
   w.array(hull, 2 * kF64, "tables.map_hull");
   for (std::int32_t i = 0; i < positions; ++i) walkSearchPosition(w, "tables.map_search_positions");
   w.skip(4 * kF64, "tables.center/map_center");
-  w.skip(kI32 + kBool + kI32, "tables.map_id/confirmed/sightings");
+  w.skip(kI32 + kBool + 2 * kI32, "tables.map_id/confirmed/sightings/viewpoints");
 }
 
 template <typename Msg>
@@ -227,9 +227,9 @@ findmug_lcm::tables_t decodeMessage<findmug_lcm::tables_t>(const void* data, std
     walkRobotPose(w);
     // A table is at least its fixed fields: id, centroid, top height, axes,
     // extents, hull_size, point_count, mean_confidence, num_search_positions,
-    // map centroid, centres, map_id, confirmed, sightings.
+    // map centroid, centres, map_id, confirmed, sightings, viewpoints.
     const std::int32_t tables = w.count("num_tables", kI32 + 10 * kF64 + 2 * kI32 + kF32 + kI32 +
-                                                          3 * kF64 + 4 * kF64 + 2 * kI32 + kBool);
+                                                          3 * kF64 + 4 * kF64 + 3 * kI32 + kBool);
     for (std::int32_t i = 0; i < tables; ++i) walkTable(w);
     w.skip(kI8, "content");
   });

@@ -6,6 +6,8 @@
 #       [--datasets "nyu pcl synth"] [--modes "threaded sequential"] [--no-search]
 #       [--model FILE] [--out BENCHMARKS-replay.md] [--results DIR] [--tables-only]
 #       [--set KEY=VALUE]...   (extra daemon settings, e.g. --set daemon.max_cpu_cores=1)
+#       [--robot-pose X,Y,YAW] (findmug-replay also publishes this fixed robot pose with
+#                               every frame: what daemon.semantic_map / the table map need)
 #   (scripts/bench.sh runs this with the defaults.)
 #
 # For each data set, input rate and mode, inside a private network namespace:
@@ -43,6 +45,7 @@ MODEL="${FINDMUG_MODEL:-}"
 OUT="$ROOT/BENCHMARKS-replay.md"
 RESULTS=""
 EXTRA_SETS=()
+REPLAY_POSE=()
 COMMAND_LINE="tests/bench/daemon_bench.sh $*"
 ARGS=("$@")
 while [[ $# -gt 0 ]]; do
@@ -58,7 +61,8 @@ while [[ $# -gt 0 ]]; do
     --out) OUT=$2; shift 2 ;;
     --results) RESULTS=$2; shift 2 ;;
     --set) EXTRA_SETS+=(--set "$2"); shift 2 ;;
-    -h|--help) sed -n '2,32p' "$0"; exit 0 ;;
+    --robot-pose) REPLAY_POSE=(--robot-pose "$2"); shift 2 ;;
+    -h|--help) sed -n '2,34p' "$0"; exit 0 ;;
     *) echo "daemon_bench: unknown argument '$1'" >&2; exit 2 ;;
   esac
 done
@@ -118,16 +122,23 @@ wait_for() {  # FILE SECONDS PID
   done
 }
 
-# monitor PID FILE: "epoch_ms cpu_ticks vmhwm_kb" every 0.2 s while PID lives.
+# monitor PID FILE: "epoch_ms cpu_ticks vmhwm_kb map_ticks" every 0.2 s while PID lives;
+# map_ticks = CPU ticks of the semantic map thread ("findmug-semmap"; 0 without it).
 monitor() {
-  local pid=$1 file=$2 stat ticks hwm
+  local pid=$1 file=$2 stat ticks hwm map task
   : > "$file"
   while [[ -r /proc/$pid/stat ]]; do
     stat=$(cat "/proc/$pid/stat" 2>/dev/null) || break
     # Fields after the command name (which may hold spaces): utime is 14th, stime 15th.
     ticks=$(echo "${stat##*) }" | awk '{print $12 + $13}')
     hwm=$(awk '/^VmHWM:/ {print $2}' "/proc/$pid/status" 2>/dev/null || echo 0)
-    [[ -n "$hwm" ]] && echo "$(date +%s%3N) $ticks $hwm" >> "$file"
+    map=0
+    for task in /proc/$pid/task/*; do
+      [[ "$(cat "$task/comm" 2>/dev/null)" == findmug-semmap ]] || continue
+      stat=$(cat "$task/stat" 2>/dev/null) || continue
+      map=$(echo "${stat##*) }" | awk '{print $12 + $13}')
+    done
+    [[ -n "$hwm" ]] && echo "$(date +%s%3N) $ticks $hwm $map" >> "$file"
     sleep 0.2
   done
 }
@@ -206,7 +217,7 @@ run_one() {
   fi
   date +%s%3N > "$dir/start_ms"
   "$REPLAY" --source "${SPEC[$ds]}" --rate "$rate" --duration "$DURATION" --url "$URL" \
-    --count-file "$dir/count" > "$dir/replay.log" 2>&1 || { cat "$dir/replay.log" >&2; exit 1; }
+    "${REPLAY_POSE[@]+"${REPLAY_POSE[@]}"}" --count-file "$dir/count" > "$dir/replay.log" 2>&1 || { cat "$dir/replay.log" >&2; exit 1; }
   # Let queued frames finish (a slow mode may need a while), then stop.
   wait_for "$dir/drained" 120 "$daemon" || log "$tag: not drained after 120 s, stopping"
   date +%s%3N > "$dir/end_ms"
@@ -230,10 +241,14 @@ figures() {
   local tck; tck=$(getconf CLK_TCK)
   local usage
   usage=$(awk -v s="$(cat "$dir/start_ms")" -v e="$(cat "$dir/end_ms")" -v tck="$tck" '
-    { if ($1 <= s) { t0 = $1; c0 = $2 } if ($1 <= e) { t1 = $1; c1 = $2 } if ($3 > hwm) hwm = $3 }
-    END { if (t1 > t0) printf "%.0f %.0f", 100 * (c1 - c0) / tck / ((t1 - t0) / 1000), hwm / 1024;
-          else printf "? %.0f", hwm / 1024 }' "$dir/usage")
-  echo "input_fps=$(get input_fps) output_fps=$(get output_fps) frames_in=$frames_in published=$published dropped=$dropped labelled=$((published - void)) p50=$(lat p50) p99=$(lat p99) max=$(lat max) cpu=${usage% *} rss=${usage#* }"
+    { if ($1 <= s) { t0 = $1; c0 = $2; m0 = $4 } if ($1 <= e) { t1 = $1; c1 = $2; m1 = $4 }
+      if ($3 > hwm) hwm = $3 }
+    END { if (t1 > t0) printf "%.0f %.0f %.1f", 100 * (c1 - c0) / tck / ((t1 - t0) / 1000), hwm / 1024,
+                              100 * (m1 - m0) / tck / ((t1 - t0) / 1000);
+          else printf "? %.0f ?", hwm / 1024 }' "$dir/usage")
+  local span; span=$(awk -v s="$(cat "$dir/start_ms")" -v e="$(cat "$dir/end_ms")" 'BEGIN { printf "%.1f", (e - s) / 1000 }')
+  local rest=${usage#* }
+  echo "input_fps=$(get input_fps) output_fps=$(get output_fps) frames_in=$frames_in published=$published dropped=$dropped labelled=$((published - void)) p50=$(lat p50) p99=$(lat p99) max=$(lat max) cpu=${usage%% *} rss=${rest% *} map_cpu=${usage##* } map_frames=$(get semantic_map_frames) map_skipped=$(get semantic_map_skipped) map_voxels=$(get semantic_map_voxels) span_s=$span"
 }
 val() { sed -n "s/.*\b$2=\([^ ]*\).*/\1/p" <<< "$1"; }
 fmt1() { awk -v v="$1" 'BEGIN { if (v == "") print "-"; else printf "%.1f", v }'; }
@@ -346,6 +361,29 @@ mem_gb=$(awk '/MemTotal/ {printf "%.0f", $2 / 1048576}' /proc/meminfo)
       done
     done
   done
+  map_rows=""
+  for ds in $DATASETS; do
+    for rate in $RATES $([[ $ds == nyu ]] && echo "$SEARCHED"); do
+      for mode in $MODES; do
+        f=$(figures "$RESULTS/$ds-${rate}fps-$mode")
+        [[ -n "$f" && "$(val "$f" map_frames)" != "" && "$(val "$f" map_frames)" != 0 ]] || continue
+        per_s=$(awk -v n="$(val "$f" map_frames)" -v t="$(val "$f" span_s)" 'BEGIN { if (t > 0) printf "%.1f", n / t; else print "-" }')
+        map_rows+="| $ds | $rate | $mode | $(val "$f" map_frames) | $per_s | $(val "$f" map_skipped) | $(val "$f" map_cpu) | $(val "$f" map_voxels) |"$'\n'
+      done
+    done
+  done
+  if [[ -n "$map_rows" ]]; then
+    echo
+    echo "### Semantic map stage (daemon.semantic_map)"
+    echo
+    echo "Frames fused into the map (those with a ground plane and a robot pose), per second of the run,"
+    echo "frames its queue dropped (the map fell behind; their labels went out all the same), the map"
+    echo "thread's CPU (findmug-semmap, % of one core over the run) and the map's voxels at the end."
+    echo
+    echo "| data | input fps | mode | fused | fused per s | skipped | map thread CPU % | voxels |"
+    echo "|---|---|---|---|---|---|---|---|"
+    printf "%s" "$map_rows"
+  fi
   if [[ " $MODES " == *" threaded "* && " $MODES " == *" sequential "* ]]; then
     echo
     echo "### Gain from pipelining (same library, same input)"

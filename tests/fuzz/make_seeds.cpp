@@ -175,7 +175,7 @@ void lcmSeeds(SeedWriter& w) {
   w.write("tables", "frame", frame_tables, decodeTables);
   tables.content = io::TablesContent::Map;
   tables.map_pose = io::RobotPose{frame.utime, {2.0, -1.0, 0.3}};
-  tables.map_info = {io::TableMapInfo{1, true, 5}};
+  tables.map_info = {io::TableMapInfo{1, true, 5, 3}};
   w.write("tables", "map", asString(io::encodeMessage(io::encodeTables(tables))), decodeTables);
 
   const auto pose = asString(io::encodeMessage(io::encodeRobotPose(io::RobotPose{frame.utime, {2.0, -1.0, 0.3}})));

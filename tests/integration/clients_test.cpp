@@ -10,7 +10,11 @@
 //   label-viewer  overlay PNGs in the paper's palette (pixel colours against
 //                 kLabelColors, blended with the colour frame of the same
 //                 utime), the console summary, the corrupt message skipped
-//                 with its reason, exit 2 on bad flags.
+//                 with its reason, exit 2 on bad flags; the semantic map drawn
+//                 top-down (each floor cell the label on top, faded by
+//                 confidence, ceiling and voxels above 2 m left out, the table
+//                 map's hulls and the robot over it).
+//   replay        findmug-replay --robot-pose: the pose with each frame's utime.
 #include <fcntl.h>
 #include <gtest/gtest.h>
 #include <spawn.h>
@@ -34,9 +38,11 @@
 #include "findmug/frame/image_io.hpp"
 #include "findmug/io/channels.hpp"
 #include "findmug/io/lcm_codec.hpp"
+#include "findmug/io/semantic_map_codec.hpp"
 #include "findmug/labels/labels.hpp"
 #include "findmug/tables/tables.hpp"
 #include "test_data.hpp"
+#include "semantic_map_picture.hpp"
 #include "visiting_order.hpp"
 
 extern char** environ;
@@ -752,6 +758,152 @@ TEST(LabelViewer, DrawsTablesWithTheDaemonsCameraOverTheCarriedImage) {
   int white = 0;
   for (const Rgb8& p : overlay.pixels) white += (p.r == 255 && p.g == 255 && p.b == 255) ? 1 : 0;
   EXPECT_GT(white, 10);
+}
+
+// A known semantic map at 10 cm: a 2 x 1 m floor, a table top (0.7 m) over part of it, a
+// chair seat the map is unsure of, a ceiling over all of it, a wall voxel above 2 m and a
+// cell with only ceiling; the table map holds the table with the robot beside it.
+// semantic_map.png must show each cell in the colour of what is on top there, faded by
+// confidence, and nothing where only ceiling is; the hull and the robot over it.
+TEST(LabelViewer, DrawsTheSemanticMapTopDownWithTheTableMap) {
+  TempDir tmp;
+  std::filesystem::create_directories(tmp.path() / "png");
+  io::SemanticMapMessage map;
+  map.utime = 7'000'000;
+  map.seq = 70;
+  map.frames = 12;
+  map.voxel_size_m = 0.1f;
+  auto voxel = [&](int i, int j, int k, Label label, int confidence) {
+    map.voxels.push_back({static_cast<std::int16_t>(i), static_cast<std::int16_t>(j),
+                          static_cast<std::int16_t>(k), static_cast<std::uint8_t>(label),
+                          static_cast<std::uint8_t>(confidence)});
+  };
+  for (int i = 0; i < 20; ++i) {
+    for (int j = 0; j < 10; ++j) {
+      voxel(i, j, 0, Label::Floor, 255);
+      if (i >= 5 && i <= 9 && j >= 2 && j <= 5) voxel(i, j, 7, Label::Table, 255);
+      if (i >= 14 && i <= 15 && j >= 2 && j <= 3) voxel(i, j, 4, Label::Chair, 64);
+      if (i == 0) voxel(i, j, 22, Label::Wall, 255);  // above 2 m: not drawn
+      voxel(i, j, 25, Label::Ceiling, 255);
+    }
+  }
+  voxel(22, 5, 25, Label::Ceiling, 255);  // only ceiling there
+  std::sort(map.voxels.begin(), map.voxels.end(), [](const auto& a, const auto& b) {
+    return std::tie(a.i, a.j, a.k) < std::tie(b.i, b.j, b.k);
+  });
+  io::TablesMessage table_map;
+  table_map.utime = map.utime;
+  table_map.seq = map.seq;
+  table_map.content = io::TablesContent::Map;
+  table_map.map_pose = io::RobotPose{map.utime, {1.5, 0.8, 0.0}};
+  TableCluster table;  // base frame: the robot at (1.5, 0.8), yaw 0
+  table.id = 4;
+  table.top_height = 0.7f;
+  table.hull = {{0.45f - 1.5f, 0.15f - 0.8f}, {0.95f - 1.5f, 0.15f - 0.8f},
+                {0.95f - 1.5f, 0.55f - 0.8f}, {0.45f - 1.5f, 0.55f - 0.8f}};
+  table.center = {0.7f - 1.5f, 0.35f - 0.8f};
+  table.centroid = {table.center.x(), table.center.y(), 0.7f};
+  table.major_axis = {1.0f, 0.0f};
+  table.minor_axis = {0.0f, 1.0f};
+  table.extents = {0.25f, 0.2f};
+  table_map.tables = {table};
+  table_map.map_info = {io::TableMapInfo{4, true, 9, 5}};
+  const std::string log = tmp.str("semantic.lcmlog");
+  daemon::test::writeLcmLog(
+      log, {{std::string(io::kTableMapChannel), io::encodeMessage(io::encodeTables(table_map))},
+            {std::string(io::kSemanticMapChannel),
+             io::encodeMessage(io::encodeSemanticMap(map))}});
+  const ProcessResult r =
+      run(FINDMUG_LABEL_VIEWER_EXE, {"--lcm-url", replayUrl(log), "--out", tmp.str("png")}, tmp);
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("semantic map seq 70: " + std::to_string(map.voxels.size()) +
+                       " voxels, 12 frames"),
+            std::string::npos)
+      << r.out;
+  const Image<Rgb8> png = readPngRgb(tmp.str("png/semantic_map.png"));
+  ASSERT_EQ(png.width, 600);
+  ASSERT_EQ(png.height, 600);
+  // Where the picture put the map frame (from the decoded messages, as the viewer has them).
+  const auto decoded_map = io::decodeTables(io::encodeMessage(io::encodeTables(table_map)).data(),
+                                            io::encodeMessage(io::encodeTables(table_map)).size(),
+                                            "T");
+  const clients::TopDownView view = clients::semanticMapView(
+      clients::topDownCells(map), &decoded_map, png.width);
+  // The whole map and the robot are inside the picture.
+  for (auto [x, y] : {std::pair{-0.05, -0.05}, {1.95, 0.95}, {2.25, 0.55}, {1.5, 0.8}}) {
+    const Eigen::Vector2d p = view.px(x, y);
+    EXPECT_TRUE(p.x() >= view.margin && p.x() <= png.width - view.margin && p.y() >= view.margin &&
+                p.y() <= png.height - view.margin)
+        << x << ", " << y;
+  }
+  auto at = [&](double x, double y) {
+    const Eigen::Vector2d p = view.px(x, y);
+    return png.pixels[static_cast<std::size_t>(std::lround(p.y())) * png.width +
+                      static_cast<std::size_t>(std::lround(p.x()))];
+  };
+  auto expectColor = [&](double x, double y, Rgb8 want, const char* what) {
+    const Rgb8 got = at(x, y);
+    EXPECT_TRUE(got == want) << what << " at (" << x << ", " << y << "): got " << int(got.r)
+                             << "," << int(got.g) << "," << int(got.b) << ", want " << int(want.r)
+                             << "," << int(want.g) << "," << int(want.b);
+  };
+  const Rgb8 floor = kLabelColors[static_cast<int>(Label::Floor)];
+  expectColor(1.2, 0.8, floor, "floor under the ceiling");
+  expectColor(0.02, 0.42, floor, "floor under a wall voxel above 2 m");
+  expectColor(0.52, 0.22, kLabelColors[static_cast<int>(Label::Table)], "table top over the floor");
+  // The chair: 64/255 sure, faded to a quarter plus three quarters of 64/255 of its colour.
+  const Rgb8 chair = kLabelColors[static_cast<int>(Label::Chair)];
+  const double keep = 0.25 + 0.75 * 64.0 / 255.0;
+  auto fade = [&](int c) { return static_cast<std::uint8_t>(std::lround(255 - keep * (255 - c))); };
+  expectColor(1.45, 0.25, Rgb8{fade(chair.r), fade(chair.g), fade(chair.b)}, "unsure chair");
+  EXPECT_FALSE(at(1.45, 0.25) == chair);
+  expectColor(2.22, 0.52, Rgb8{255, 255, 255}, "a cell with only ceiling");
+  expectColor(2.3, 0.2, Rgb8{255, 255, 255}, "outside the map");
+  expectColor(1.5, 0.8, Rgb8{30, 110, 255}, "the robot");
+  expectColor(0.6, 0.55, Rgb8{0, 0, 0}, "the table's hull (its far edge)");
+  // The id and "9F 5V" beside the table's centre: black text on a white box.
+  int black = 0;
+  const Eigen::Vector2d c = view.px(0.7, 0.35);
+  for (int y = static_cast<int>(c.y()) - 8; y < static_cast<int>(c.y()) + 20; ++y) {
+    for (int x = static_cast<int>(c.x()); x < static_cast<int>(c.x()) + 30; ++x) {
+      black += png.pixels[static_cast<std::size_t>(y) * png.width + x] == Rgb8{0, 0, 0} ? 1 : 0;
+    }
+  }
+  EXPECT_GT(black, 40);
+}
+
+// findmug-replay --robot-pose: before each replayed frame, the fixed robot pose with that
+// frame's utime on FINDMUG_ROBOT_POSE (what daemon_bench.sh gives findmugd's semantic map).
+TEST(Replay, RobotPoseGoesOutWithEveryFrame) {
+  FINDMUG_REQUIRE_DATA(nyu, "nyuv2_labeled");
+  TempDir tmp;
+  const std::string log = tmp.str("replay.lcmlog");
+  const ProcessResult r =
+      run(FINDMUG_REPLAY_EXE,
+          {"--source", "dataset:" + nyu.string(), "--max-frames", "2", "--count", "3", "--rate",
+           "20", "--robot-pose", "1.5,-2,0.25", "--url", "file://" + log + "?mode=w"},
+          tmp);
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto messages = daemon::test::readLcmLog(log);
+  ASSERT_EQ(messages.size(), 6u);
+  for (std::size_t k = 0; k < 6; k += 2) {
+    ASSERT_EQ(messages[k].channel, io::kRobotPoseChannel) << k;
+    ASSERT_EQ(messages[k + 1].channel, io::kRgbdChannel) << k;
+    const io::RobotPose pose =
+        io::decodeRobotPose(messages[k].data.data(), messages[k].data.size(), "P");
+    const RgbdFrame frame =
+        io::decodeRgbdFrame(messages[k + 1].data.data(), messages[k + 1].data.size(), "F");
+    EXPECT_EQ(pose.utime, frame.utime) << k;
+    EXPECT_DOUBLE_EQ(pose.pose.x, 1.5);
+    EXPECT_DOUBLE_EQ(pose.pose.y, -2.0);
+    EXPECT_DOUBLE_EQ(pose.pose.yaw, 0.25);
+  }
+  // A pose needs all three numbers.
+  const ProcessResult bad = run(FINDMUG_REPLAY_EXE,
+                                {"--source", "dataset:" + nyu.string(), "--count", "1", "--rate",
+                                 "20", "--robot-pose", "1,2", "--url", "file://" + log + "?mode=w"},
+                                tmp);
+  EXPECT_EQ(bad.exit_code, 2) << bad.err;
 }
 
 }  // namespace

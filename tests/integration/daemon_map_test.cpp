@@ -649,12 +649,23 @@ TEST(DaemonSemanticMap, TablesFromTheFusedMapAreTheGeneratorsTables) {
     // Voxel centres are 5 cm apart in height: the top is placed within half a voxel.
     EXPECT_LT(height_error, 0.035) << "table " << truth.id;
     EXPECT_GE(final_map.map_info[k].sightings, 3) << "table " << truth.id;
+    // The walk looks at each table from two sides: at least two viewpoints, over LCM.
+    EXPECT_GE(final_map.map_info[k].viewpoints, 2) << "table " << truth.id;
+    EXPECT_LE(final_map.map_info[k].viewpoints, final_map.map_info[k].sightings);
     EXPECT_TRUE(matched.insert(k).second) << "two true tables share fused table " << k;
     id_of_truth[truth.id] = final_map.tables[k].id;
   }
   EXPECT_EQ(final_map.tables.size(), seq.scene.tables.size()) << "extra tables in the map";
   ASSERT_EQ(run.semantic_map_tables.size(), final_map.tables.size());
-  for (const FusedTable& t : run.semantic_map_tables) EXPECT_GE(t.viewpoints, 2);
+  for (const FusedTable& t : run.semantic_map_tables) {
+    EXPECT_GE(t.viewpoints, 2);
+    // What went out on FINDMUG_TABLE_MAP is what the map counted.
+    for (std::size_t k = 0; k < final_map.tables.size(); ++k) {
+      if (final_map.tables[k].id != t.table.id) continue;
+      EXPECT_EQ(final_map.map_info[k].sightings, t.frames);
+      EXPECT_EQ(final_map.map_info[k].viewpoints, t.viewpoints);
+    }
+  }
 
   // Stable ids across the walk.
   expectStableIds(run.table_map, seq, id_of_truth);

@@ -448,6 +448,10 @@ TEST(SemanticMapStage, AFullQueueDropsTheOldestFrameAndNeverHoldsThePublishThrea
   ASSERT_EQ(tables.back().tables.size(), 1u);
   EXPECT_EQ(tables.back().content, io::TablesContent::Map);
   EXPECT_EQ(tables.back().map_info[0].sightings, 3);  // the three frames fused
+  // ... all from one pose: one viewpoint, as the map counted it.
+  EXPECT_EQ(tables.back().map_info[0].viewpoints, 1);
+  ASSERT_EQ(stage.tables().size(), 1u);
+  EXPECT_EQ(stage.tables()[0].viewpoints, 1);
   // Map frame: the robot at (1, 2), the top 0.5 m square under the camera.
   ASSERT_EQ(tables.back().map_tables.size(), 1u);
   EXPECT_NEAR(tables.back().map_tables[0].center.x(), 1.0, 0.05);

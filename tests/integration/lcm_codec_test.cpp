@@ -853,12 +853,12 @@ TEST(TablesCodec, MapFrameCopiesFollowThePose) {
 }
 
 // The table map's additions: box centres, map entries (stable id,
-// confirmation, sightings) and the content id survive the round trip; the
+// confirmation, sightings, viewpoints) and the content id survive the round trip; the
 // map-frame centre follows the pose like the centroid.
 TEST(TablesCodec, MapEntriesCentresAndContentRoundTrip) {
   TablesMessage in = makeTables();
   in.tables[0].center = Eigen::Vector2f(1.55f, 0.2f);
-  in.map_info = {{7, true, 4}, {0, false, 0}};
+  in.map_info = {{7, true, 4, 3}, {0, false, 0, 0}};
   Bytes b = encodeMessage(encodeTables(in));
   TablesMessage out = decodeTables(b.data(), b.size(), "C");
   EXPECT_EQ(out.content, TablesContent::Frame);
@@ -867,6 +867,7 @@ TEST(TablesCodec, MapEntriesCentresAndContentRoundTrip) {
   EXPECT_EQ(out.map_info[0].map_id, 7);
   EXPECT_TRUE(out.map_info[0].confirmed);
   EXPECT_EQ(out.map_info[0].sightings, 4);
+  EXPECT_EQ(out.map_info[0].viewpoints, 3);
   EXPECT_EQ(out.map_info[1].map_id, 0);
   EXPECT_FALSE(out.map_info[1].confirmed);
 
@@ -885,7 +886,7 @@ TEST(TablesCodec, MapEntriesCentresAndContentRoundTrip) {
   map.tables[0].id = 3;
   map.tables[0].center = Eigen::Vector2f(1.5f, 0.25f);
   map.tables[1].id = 5;
-  map.map_info = {{3, true, 3}, {5, true, 12}};
+  map.map_info = {{3, true, 3, 0}, {5, true, 12, 0}};
   b = encodeMessage(encodeTables(map));
   out = decodeTables(b.data(), b.size(), "FINDMUG_TABLE_MAP");
   EXPECT_EQ(out.content, TablesContent::Map);
@@ -902,14 +903,14 @@ TEST(TablesCodec, MapEntriesCentresAndContentRoundTrip) {
   wrong.map_info[1].map_id = 6;  // id 5 != map_id 6
   EXPECT_THROW(encodeTables(wrong), Error);
   wrong = makeTables();
-  wrong.map_info = {{1, false, 1}};  // one entry for two tables
+  wrong.map_info = {{1, false, 1, 0}};  // one entry for two tables
   EXPECT_THROW(encodeTables(wrong), Error);
 }
 
 TEST(TablesCorrupt, BadMapEntriesAndContentAreNamed) {
   TablesMessage in = makeTables();
   in.map_pose = RobotPose{1, {1.0, 2.0, 0.3}};
-  in.map_info = {{2, true, 3}, {0, false, 0}};
+  in.map_info = {{2, true, 3, 0}, {0, false, 0, 0}};
   const findmug_lcm::tables_t good = encodeTables(in);
   findmug_lcm::tables_t bad = good;
   bad.content = 7;
@@ -929,6 +930,12 @@ TEST(TablesCorrupt, BadMapEntriesAndContentAreNamed) {
   bad.tables[0].sightings = -1;
   expectError([&] { decodeTables(bad, "C"); }, "tables[0].map_id/sightings");
   bad = good;
+  bad.tables[0].viewpoints = 4;  // more viewpoints than its 3 sightings
+  expectError([&] { decodeTables(bad, "C"); }, "tables[0].viewpoints: 4 outside [0, sightings 3]");
+  bad = good;
+  bad.tables[0].viewpoints = -1;
+  expectError([&] { decodeTables(bad, "C"); }, "tables[0].viewpoints");
+  bad = good;
   bad.tables[0].center[0] = INFINITY;
   expectError([&] { decodeTables(bad, "C"); }, "tables[0].center");
   bad = good;
@@ -939,7 +946,7 @@ TEST(TablesCorrupt, BadMapEntriesAndContentAreNamed) {
 TEST(TablesCorrupt, EveryClass) {
   TablesMessage in = makeTables();
   in.map_pose = RobotPose{1, {1.0, 2.0, 0.3}};
-  in.map_info = {{2, true, 3}, {0, false, 0}};
+  in.map_info = {{2, true, 3, 0}, {0, false, 0, 0}};
   const findmug_lcm::tables_t good = encodeTables(in);
   const Bytes full = encodeMessage(good);
   for (std::size_t len = 0; len < full.size(); ++len) {

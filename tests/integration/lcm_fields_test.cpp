@@ -97,7 +97,8 @@ void walkTables(Walk& w) {
     for (int i = 0; i < sp; ++i) walkSearchPosition(w, table + ".search_positions");
     w.fixed(3 * 8 + static_cast<std::size_t>(hull) * 16);  // map_centroid, map_hull
     for (int i = 0; i < sp; ++i) walkSearchPosition(w, table + ".map_search_positions");
-    w.fixed(2 * 8 + 2 * 8 + 4 + 1 + 4);  // center, map_center, map_id, confirmed, sightings
+    w.fixed(2 * 8 + 2 * 8 + 4 + 1 + 4 + 4);  // center, map_center, map_id, confirmed, sightings,
+                                             // viewpoints
   }
   w.fixed(1);
 }

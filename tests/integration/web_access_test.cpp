@@ -153,6 +153,50 @@ TEST_F(WebAccess, ServesThePageAndTheLiveState) {
   EXPECT_EQ(state["label_colors"].size(), static_cast<std::size_t>(kNumLabels));
 }
 
+// The semantic map from above: nothing before one came (404, null in /api/live); then the
+// raster of floor cells (label plane, confidence plane; row 0 the highest y) with the label
+// on top of each column below 2 m, not the ceiling, and its corner and size in /api/live.
+TEST_F(WebAccess, ServesTheSemanticMapFromAbove) {
+  RunningServer s(data_.path(), "127.0.0.1");
+  auto none = s.client->Get("/api/semantic_map.bin");
+  ASSERT_TRUE(none);
+  EXPECT_EQ(none->status, 404);
+  EXPECT_TRUE(nlohmann::json::parse(s.client->Get("/api/live")->body)["semantic_map"].is_null());
+
+  io::SemanticMapMessage map;
+  map.seq = 77;
+  map.frames = 9;
+  map.voxel_size_m = 0.1f;
+  // Cells i 3..4, j 7..8: floor everywhere, a table top (k 7) over (4, 8), ceiling (k 25)
+  // over all, a wall voxel at 2.2 m over (3, 7).
+  for (std::int16_t i = 3; i <= 4; ++i) {
+    for (std::int16_t j = 7; j <= 8; ++j) {
+      map.voxels.push_back({i, j, 0, 1, 255});
+      if (i == 4 && j == 8) map.voxels.push_back({i, j, 7, 4, 128});
+      if (i == 3 && j == 7) map.voxels.push_back({i, j, 22, 2, 255});
+      map.voxels.push_back({i, j, 25, 3, 255});
+    }
+  }
+  s.live.onSemanticMap(map);
+  const auto state = nlohmann::json::parse(s.client->Get("/api/live")->body)["semantic_map"];
+  EXPECT_EQ(state["seq"], 77);
+  EXPECT_EQ(state["frames"], 9);
+  EXPECT_EQ(state["voxels"], map.voxels.size());
+  EXPECT_EQ(state["min_i"], 3);
+  EXPECT_EQ(state["max_j"], 8);
+  EXPECT_EQ(state["width"], 2);
+  EXPECT_EQ(state["height"], 2);
+  EXPECT_EQ(state["cells"], 4);
+  auto raster = s.client->Get("/api/semantic_map.bin");
+  ASSERT_TRUE(raster);
+  EXPECT_EQ(raster->status, 200);
+  EXPECT_EQ(raster->get_header_value("X-Findmug-Seq"), "77");
+  EXPECT_EQ(raster->get_header_value("X-Findmug-Width"), "2");
+  // Row 0 = j 8: (3, 8) floor, (4, 8) table; row 1 = j 7: floor, floor (the wall is above 2 m).
+  const std::vector<std::uint8_t> want = {1, 4, 1, 1, 255, 128, 255, 255};
+  EXPECT_EQ(std::vector<std::uint8_t>(raster->body.begin(), raster->body.end()), want);
+}
+
 TEST_F(WebAccess, PathsStayInsideTheDataFolders) {
   RunningServer s(data_.path(), "127.0.0.1");
   auto ok = s.client->Get("/api/data/file?root=0&path=rgb/0001.png");

@@ -2,7 +2,8 @@
 # web_browser_test.sh — findmug-web's live page in headless chromium, over a running
 # findmugd that replays real NYU frames.
 #
-#   web_browser_test.sh --findmugd B --web B [--out DIR] [--rate HZ] [--measure-s N]
+#   web_browser_test.sh --findmugd B --web B [--spy-log B] [--out DIR] [--rate HZ]
+#                       [--measure-s N]
 #
 # In a private network namespace (only loopback; udpm multicast routed on it):
 # findmugd reads dataset:nyuv2_labeled (looping, RATE frames/s) and publishes labels
@@ -10,23 +11,27 @@
 # same bus and serves 127.0.0.1:PORT; clients/web/test/live_test.mjs (puppeteer-core
 # driving /usr/bin/chromium) checks that the label overlay updates and a table hull is
 # drawn, saves OUT/live.png, and reports updates per second and delays. The CPU time
-# findmug-web took during the measurement is read from /proc.
+# findmug-web took during the measurement is read from /proc. With --spy-log (the
+# findmug-test-spy-log program), live_test.mjs then replays that log's FINDMUG_SEMANTIC_MAP
+# and FINDMUG_TABLE_MAP messages into the bus (lcm-logplayer) and checks the map panel
+# draws the semantic map under the table (OUT/live-map.png).
 #
 # Exit: 0 pass, 1 fail, 77 skipped (chromium, node, puppeteer-core or data missing;
 # under CI=true those fail instead).
 set -euo pipefail
 
-FINDMUGD="" WEB="" OUT="" RATE=5 MEASURE_S=10
+FINDMUGD="" WEB="" SPY_LOG="" OUT="" RATE=5 MEASURE_S=10
 SOURCE_DIR="$(cd "$(dirname "$0")/../.." && pwd)"
 ARGS=("$@")
 while [[ $# -gt 0 ]]; do
   case "$1" in
     --findmugd) FINDMUGD=$2; shift 2 ;;
     --web) WEB=$2; shift 2 ;;
+    --spy-log) SPY_LOG=$2; shift 2 ;;
     --out) OUT=$2; shift 2 ;;
     --rate) RATE=$2; shift 2 ;;
     --measure-s) MEASURE_S=$2; shift 2 ;;
-    -h|--help) sed -n '2,19p' "$0"; exit 0 ;;
+    -h|--help) sed -n '2,24p' "$0"; exit 0 ;;
     *) echo "web_browser_test: unknown argument '$1'" >&2; exit 2 ;;
   esac
 done
@@ -92,11 +97,19 @@ for _ in $(seq 100); do
   sleep 0.1
 done
 
+map_args=()
+if [[ -n "$SPY_LOG" ]]; then
+  need_tools lcm-logplayer
+  "$SPY_LOG" "$WORK/map.lcm" || fail "findmug-test-spy-log failed"
+  # Replayed every second until the page has drawn it (live_test.mjs ends the loop).
+  map_args=(--map-log-cmd "while true; do lcm-logplayer -e '^FINDMUG_(SEMANTIC_MAP|TABLE_MAP)\$' -l '$URL' '$WORK/map.lcm'; sleep 1; done")
+fi
+
 cpu_ticks() { awk '{print $14 + $15}' "/proc/$web_pid/stat"; }
 ticks_before=$(cpu_ticks)
 t_before=$(date +%s.%N)
 result=$(node "$TEST_DIR/live_test.mjs" --url "http://127.0.0.1:$PORT/" --out "$OUT" \
-         --measure-s "$MEASURE_S") || fail "the page check failed"
+         --measure-s "$MEASURE_S" "${map_args[@]+"${map_args[@]}"}") || fail "the page check failed"
 ticks_after=$(cpu_ticks)
 t_after=$(date +%s.%N)
 kill -0 "$web_pid" 2>/dev/null || fail "findmug-web died"

@@ -2,6 +2,7 @@
 // channel (rgbd_frame_t, label_image_t, tables_t on FINDMUG_TABLES and FINDMUG_TABLE_MAP,
 // status_t, robot_pose_t, semantic_map_t; table_t and search_position_t inside the tables), encoded by
 // findmug_io's codecs, for spy_test.sh to replay into findmug-spy.
+#include <cmath>
 #include <cstdio>
 #include <lcm/lcm-cpp.hpp>
 #include <string>
@@ -81,7 +82,7 @@ int main(int argc, char** argv) {
     io::TablesMessage map = tables;
     map.content = io::TablesContent::Map;
     map.map_pose = io::RobotPose{static_cast<std::uint64_t>(t), {2.0, 1.0, 0.3}};
-    map.map_info = {io::TableMapInfo{1, true, 3}};
+    map.map_info = {io::TableMapInfo{1, true, 3, 2}};
     map.tables[0].id = 1;
     write(log, io::kTableMapChannel, io::encodeMessage(io::encodeTables(map)), t + 3);
 
@@ -98,7 +99,23 @@ int main(int argc, char** argv) {
     io::SemanticMapMessage semantic;
     semantic.utime = static_cast<std::uint64_t>(t);
     semantic.frames = 3;
-    semantic.voxels = {{0, 0, 0, 1, 200}, {10, 4, 15, 4, 180}, {11, 4, 15, 4, 170}};
+    // A 3 x 2.5 m floor with the table map's table standing on it (its top at 0.75 m, the
+    // same place as map.tables[0] in the map frame): web_browser_test.sh replays these two
+    // channels into findmug-web and checks the live page's map panel draws them.
+    const double yaw = map.map_pose->pose.yaw;
+    const Eigen::Vector2d robot(map.map_pose->pose.x, map.map_pose->pose.y);
+    for (std::int16_t i = 30; i < 90; ++i) {
+      for (std::int16_t j = 0; j < 50; ++j) {
+        semantic.voxels.push_back({i, j, 0, 1, 230});
+        // Into the base frame of the table's hull: inside its 1..2 x -0.5..0.5 m.
+        const Eigen::Vector2d d = Eigen::Vector2d(i * 0.05, j * 0.05) - robot;
+        const double bx = std::cos(yaw) * d.x() + std::sin(yaw) * d.y();
+        const double by = -std::sin(yaw) * d.x() + std::cos(yaw) * d.y();
+        if (bx > 1.0 && bx < 2.0 && by > -0.5 && by < 0.5) {
+          semantic.voxels.push_back({i, j, 15, 4, 200});
+        }
+      }
+    }
     write(log, io::kSemanticMapChannel, io::encodeMessage(io::encodeSemanticMap(semantic)), t + 6);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "findmug-test-spy-log: %s\n", e.what());

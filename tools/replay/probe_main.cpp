@@ -287,6 +287,9 @@ class Probe {
       info.frames_dropped = s.frames_dropped;
       info.frames_rejected = s.frames_rejected;
       info.source_state = s.source_state;
+      info.semantic_map_frames = s.semantic_map_frames;
+      info.semantic_map_skipped = s.semantic_map_skipped;
+      info.semantic_map_voxels = s.semantic_map_voxels;
       for (int i = 0; i < s.num_stages; ++i) {
         info.stages.push_back({s.stage_names[i], s.latency_p50_us[i] / 1000.0,
                                s.latency_p95_us[i] / 1000.0, s.latency_max_us[i] / 1000.0});

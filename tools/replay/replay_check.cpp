@@ -241,6 +241,10 @@ void printReport(std::ostream& out, const std::string& name, const Report& r) {
     out << "   daemon status: received " << s.frames_received << ", published "
         << s.frames_processed << ", dropped " << s.frames_dropped << ", rejected "
         << s.frames_rejected << ", source_state " << s.source_state << "\n";
+    if (s.semantic_map_frames > 0 || s.semantic_map_skipped > 0) {
+      out << "   semantic map: fused " << s.semantic_map_frames << ", skipped "
+          << s.semantic_map_skipped << ", voxels " << s.semantic_map_voxels << "\n";
+    }
   }
   out << "   input " << fixed(r.input_fps, 2) << " fps, output " << fixed(r.output_fps, 2)
       << " fps\n";
@@ -274,7 +278,10 @@ void writeJson(std::ostream& out, const std::string& name, const Report& r) {
         << ", \"frames_processed\": " << s.frames_processed
         << ", \"frames_dropped\": " << s.frames_dropped
         << ", \"frames_rejected\": " << s.frames_rejected
-        << ", \"source_state\": " << s.source_state << ", \"stages\": [";
+        << ", \"source_state\": " << s.source_state
+        << ", \"semantic_map_frames\": " << s.semantic_map_frames
+        << ", \"semantic_map_skipped\": " << s.semantic_map_skipped
+        << ", \"semantic_map_voxels\": " << s.semantic_map_voxels << ", \"stages\": [";
     for (std::size_t i = 0; i < s.stages.size(); ++i) {
       const auto& st = s.stages[i];
       out << (i ? ", " : "") << "{\"name\": " << jsonString(st.name)

@@ -61,6 +61,9 @@ struct StatusInfo {
   std::int64_t frames_dropped = 0;
   std::int64_t frames_rejected = 0;
   int source_state = -1;  // status_t::SOURCE_*
+  // The semantic map stage (daemon.semantic_map; 0 when off): frames fused, frames it
+  // skipped (fell behind), voxels.
+  std::int64_t semantic_map_frames = 0, semantic_map_skipped = 0, semantic_map_voxels = 0;
   struct Stage {
     std::string name;
     double p50_ms = 0, p95_ms = 0, max_ms = 0;

@@ -16,6 +16,10 @@
 // it); this tool is for fixed input rates and long looped runs (benchmarks).
 // At the end it writes the number of frames published to --count-file (for
 // findmug-replay-probe --expect-file) and reports frames sent late.
+// --robot-pose X,Y,YAW also publishes that robot pose on FINDMUG_ROBOT_POSE[_suffix]
+// just before each frame, with the frame's utime: a robot standing still, which is
+// what findmugd's table map and semantic map need to take the frames in
+// (benchmarks of daemon.semantic_map on recorded frames without poses).
 #include <spdlog/spdlog.h>
 
 #include <atomic>
@@ -63,6 +67,7 @@ int run(int argc, char** argv) {
   long long count = 0, max_frames = 1000;
   io::RgbdEncodeOptions encode;
   std::string depth_compression = "zlib", color_compression = "jpeg";
+  std::vector<double> robot_pose;
   auto app = cli::makeApp("findmug-replay",
                           "Replays the frames of a finite source on LCM at a fixed rate, as a "
                           "camera would (fresh seq and host utime per frame)");
@@ -89,6 +94,12 @@ int run(int argc, char** argv) {
   app->add_option("--warmup", warmup, "wait S seconds before the first frame")
       ->type_name("S")
       ->check(CLI::Range(0.0, 3600.0));
+  app->add_option("--robot-pose", robot_pose,
+                  "also publish this robot pose (map frame: x, y in metres, yaw in radians) "
+                  "before each frame, with its utime")
+      ->type_name("X,Y,YAW")
+      ->delimiter(',')
+      ->expected(3);
   if (auto code = cli::parse(*app, argc, argv)) return *code;
   encode.depth = io::parseDepthCompression(depth_compression);
   encode.color = io::parseColorCompression(color_compression);
@@ -113,6 +124,7 @@ int run(int argc, char** argv) {
 
   io::LcmBus bus(url, "--lcm-url");
   const std::string channel = io::channelName(io::kRgbdChannel, suffix);
+  const std::string pose_channel = io::channelName(io::kRobotPoseChannel, suffix);
   spdlog::info("findmug-replay: {} frames from {}, {} Hz on {} ({})", frames.size(), described,
                rate, channel, url.empty() ? std::string("default URL") : url);
 
@@ -134,6 +146,14 @@ int run(int argc, char** argv) {
     findmug_lcm::rgbd_frame_t& msg = frames[static_cast<std::size_t>(published) % frames.size()];
     msg.seq = published;
     msg.utime = static_cast<std::int64_t>(io::hostUtimeNow());
+    if (robot_pose.size() == 3) {
+      const io::RobotPose pose{static_cast<std::uint64_t>(msg.utime),
+                               {robot_pose[0], robot_pose[1], robot_pose[2]}};
+      bytes = io::encodeMessage(io::encodeRobotPose(pose));
+      if (!bus.publish(pose_channel, bytes.data(), bytes.size())) {
+        throw Error("publishing on " + pose_channel + " failed");
+      }
+    }
     bytes = io::encodeMessage(msg);
     if (!bus.publish(channel, bytes.data(), bytes.size())) {
       throw Error("publishing on " + channel + " failed");

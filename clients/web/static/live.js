@@ -1,5 +1,6 @@
 // findmug-web live page: polls /api/live, draws the label image over the camera image,
-// the tables (hulls, numbered search positions) over it and from above, and the status.
+// the tables (hulls, numbered search positions) over it and from above, the fused semantic
+// map from above under the table map (when findmugd publishes it), and the status.
 // Plain browser JavaScript, no libraries. window.findmugLive holds what the tests read.
 'use strict';
 
@@ -14,6 +15,9 @@ const live = window.findmugLive = {
   publishToPageMs: [], // page time of a draw minus the daemon's publish time (utime + latency)
   receiveToPageMs: [], // page time of a draw minus findmug-web's receive time
   hullsDrawn: 0,       // table hulls on the camera view in the last drawing
+  semanticMapSeq: null,     // the semantic map drawn under the map panel (its seq)
+  semanticMapCells: 0,      // its floor cells with a label
+  semanticMapCanvas: null,  // its raster, one pixel per cell (row 0 = highest y)
   errors: 0,
 };
 
@@ -25,7 +29,7 @@ let palette = null;
 let legendDone = false;
 let lastLive = null;
 let lastDrawMs = 0;
-let lastStatusStamp, lastBadCount;
+let lastStatusStamp, lastBadCount, lastTableMapSeq;
 
 function svg(tag, attrs, parent) {
   const node = document.createElementNS(SVG_NS, tag);
@@ -255,6 +259,38 @@ function drawPlots(state) {
   plot('plot-drops', h, tEnd, span, [{ index: 7, color: '#c62828' }, { index: 8, color: '#6a1b9a' }]);
 }
 
+// The semantic map from above (GET /api/semantic_map.bin: label plane, confidence plane;
+// clients/semantic_map_picture.hpp): one pixel per floor cell in its label's colour, faded
+// towards white by how little the map is sure of it, as findmug-label-viewer draws it.
+async function fetchSemanticMap(meta) {
+  const res = await fetch('/api/semantic_map.bin', { cache: 'no-store' });
+  if (!res.ok) throw new Error('semantic map: HTTP ' + res.status);
+  const bytes = new Uint8Array(await res.arrayBuffer());
+  const w = Number(res.headers.get('X-Findmug-Width')), h = Number(res.headers.get('X-Findmug-Height'));
+  if (bytes.length !== 2 * w * h) throw new Error('semantic map: ' + bytes.length + ' bytes for ' + w + 'x' + h);
+  const canvas = document.createElement('canvas');
+  canvas.width = Math.max(1, w);
+  canvas.height = Math.max(1, h);
+  const ctx = canvas.getContext('2d');
+  const image = ctx.createImageData(canvas.width, canvas.height);
+  let cells = 0;
+  for (let i = 0; i < w * h; ++i) {
+    const label = bytes[i];
+    if (label >= palette.length) continue;
+    const keep = 0.25 + 0.75 * bytes[w * h + i] / 255;
+    const c = palette[label];
+    for (let k = 0; k < 3; ++k) image.data[4 * i + k] = Math.round(255 - keep * (255 - c[k]));
+    image.data[4 * i + 3] = 255;
+    ++cells;
+  }
+  ctx.putImageData(image, 0, 0);
+  live.semanticMapCanvas = canvas;
+  live.semanticMapCells = cells;
+  live.semanticMapSeq = Number(res.headers.get('X-Findmug-Seq'));
+  live.semanticMapUrl = canvas.toDataURL();
+  live.semanticMapMeta = { ...meta, width: w, height: h };
+}
+
 function drawMap(state) {
   const map = el('map');
   map.textContent = '';
@@ -265,13 +301,25 @@ function drawMap(state) {
     el('map-note').textContent = 'no tables received yet';
     return;
   }
+  const semantic = useMap && live.semanticMapUrl && live.semanticMapMeta.width > 0 ? live.semanticMapMeta : null;
   el('map-note').textContent = useMap
-    ? `persistent table map: ${message.tables.length} confirmed tables (map frame)`
+    ? `persistent table map: ${message.tables.length} confirmed tables (map frame)` +
+      (semantic ? `; semantic map of ${semantic.frames} frames, ${semantic.voxels} voxels: ` +
+                  'the label on top in each floor cell, faded where the map is unsure' : '')
     : `tables of frame ${message.seq} around the robot (base frame: x forward, y left)`;
-  const tables = message.tables.map((t) => (useMap && t.map ? { id: t.id, ...t.map } : t));
+  const tables = message.tables.map((t) => (useMap && t.map ? { id: t.id, ...t.map, viewpoints: t.viewpoints, sightings: t.sightings } : t));
   const robot = useMap ? message.map_pose : { x: 0, y: 0, yaw: 0 };
   let xs = [robot.x], ys = [robot.y];
   for (const t of tables) for (const [x, y] of t.hull) { xs.push(x); ys.push(y); }
+  let raster = null;
+  if (semantic) {
+    // Cell (i, j) covers [(i - 0.5) v, (i + 0.5) v] x [(j - 0.5) v, (j + 0.5) v].
+    const v = semantic.voxel_size_m;
+    raster = { x0: (semantic.min_i - 0.5) * v, y1: (semantic.max_j + 0.5) * v,
+               w: semantic.width * v, h: semantic.height * v };
+    xs.push(raster.x0, raster.x0 + raster.w);
+    ys.push(raster.y1 - raster.h, raster.y1);
+  }
   const minX = Math.min(...xs) - 1, maxX = Math.max(...xs) + 1;
   const minY = Math.min(...ys) - 1, maxY = Math.max(...ys) + 1;
   const size = Math.max(4, maxX - minX, maxY - minY);
@@ -284,11 +332,20 @@ function drawMap(state) {
   for (let g = Math.floor(cy - size / 2); g <= cy + size / 2; ++g) {
     svg('line', { class: g === 0 ? 'axis' : 'grid', y1: -g, y2: -g, x1: cx - size / 2, x2: cx + size / 2 }, map);
   }
+  if (raster) {
+    svg('image', { class: 'semantic-map', href: live.semanticMapUrl, x: raster.x0, y: -raster.y1,
+                   width: raster.w, height: raster.h, preserveAspectRatio: 'none' }, map);
+  }
   for (const t of tables) {
     const pts = t.hull.map(([x, y]) => `${x.toFixed(3)},${(-y).toFixed(3)}`).join(' ');
-    svg('polygon', { class: 'hull', points: pts, 'data-table': t.id }, map);
+    svg('polygon', { class: raster ? 'hull over-map' : 'hull', points: pts, 'data-table': t.id }, map);
     const label = svg('text', { class: 'table-id', x: t.center[0], y: -t.center[1] }, map);
     label.textContent = 'T' + t.id;
+    if (t.viewpoints > 0) {
+      // From the semantic map: how many frames and viewpoints saw this table.
+      const support = svg('text', { class: 'table-support', x: t.center[0], y: -t.center[1] + 0.3 }, map);
+      support.textContent = `${t.sightings} frames, ${t.viewpoints} views`;
+    }
     for (const p of t.search_positions) drawPosition(map, p.x, -p.y, p, 0.12);
   }
   // The robot: a triangle pointing along its heading.
@@ -332,6 +389,14 @@ async function poll() {
       drawCameraTables(state);  // the tables came after their labels
       drawMap(state);
     }
+    // A new semantic map (a few seconds apart at most): fetch its raster, draw the map panel.
+    if (state.semantic_map && state.semantic_map.seq !== live.semanticMapSeq && palette) {
+      await fetchSemanticMap(state.semantic_map);
+      drawMap(state);
+    } else if (state.table_map && state.table_map.seq !== lastTableMapSeq) {
+      drawMap(state);  // the table map changed while the labels did not
+    }
+    lastTableMapSeq = state.table_map ? state.table_map.seq : null;
     // The status comes twice a second at most: redraw its table and plots only then.
     const statusStamp = state.status ? state.status.utime : null;
     if (statusStamp !== lastStatusStamp || state.bad_messages_count !== lastBadCount) {

@@ -58,6 +58,7 @@
 #include <Eigen/Geometry>
 #include <cstdint>
 #include <functional>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -171,6 +172,25 @@ SynthScene makeEmptyRoom(const Eigen::Vector3d& room_size);
 // returns its index.
 int addObject(SynthScene& scene, const std::string& kind, Label label,
               std::vector<Primitive> parts);
+
+// ---------------------------------------------------------------- edits ----
+// A changed room for walks that test maps against change (e.g. a table carried elsewhere
+// half-way through; tests/bench/semantic_map_walk --move-table).
+
+// Moves table `table` (index into scene.tables) by `offset` (world x, y, metres) with
+// what stands on its top (the Object-labelled parts above its top and inside its
+// outline): their primitives, the table's truth (centre, top outline) and its obstacle
+// footprint. Its chairs stay where they are. Throws findmug::Error when the index is out of
+// range.
+void moveTable(SynthScene& scene, int table, const Eigen::Vector2d& offset);
+
+// Where table `table` could be carried to: the offset (on a 0.1 m grid) that puts its
+// footprint inside the room at least `clearance_m` from the walls and from every other
+// obstacle, farthest from where it stands and at least `min_move_m` away; nullopt when no
+// such place exists. Throws findmug::Error when the index is out of range.
+std::optional<Eigen::Vector2d> freeSpotForTable(const SynthScene& scene, int table,
+                                                double clearance_m = 0.7,
+                                                double min_move_m = 1.0);
 
 // ---------------------------------------------------------------- camera ----
 

@@ -18,6 +18,9 @@
 // frame's own; when the map thread holds the map at that moment the frame keeps its own
 // labels (counted as fused_busy), so that the label stream never waits.
 //
+// The map thread is named "findmug-semmap" (top -H; tests/bench/daemon_bench.sh reads
+// its CPU time from /proc/PID/task/*/stat).
+//
 // In sequential mode (daemon.max_cpu_cores < 2) there is no thread: consume() fuses the
 // frame itself, and publishes when due.
 #pragma once

@@ -131,9 +131,9 @@ findmug_lcm::tables_t encodeTables(std::uint64_t utime, std::int64_t seq, Tables
                                    const std::optional<RobotPose>& map_pose,
                                    std::span<const TableMapInfo> map_info);
 // Checks finiteness, counts, unit axes, the content id and the map entries
-// (map_id >= 0, sightings >= 0, confirmed only with a map_id; a Map message
-// needs has_map_pose and id == map_id > 0 for every table); fills map_tables
-// when has_map_pose, and map_info always.
+// (map_id >= 0, sightings >= 0, 0 <= viewpoints <= sightings, confirmed only with
+// a map_id; a Map message needs has_map_pose and id == map_id > 0 for every
+// table); fills map_tables when has_map_pose, and map_info always.
 TablesMessage decodeTables(const findmug_lcm::tables_t& message, std::string_view channel);
 TablesMessage decodeTables(const void* data, std::size_t size, std::string_view channel);
 

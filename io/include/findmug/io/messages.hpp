@@ -54,11 +54,12 @@ struct MapFrameTable {
 // (FINDMUG_TABLE_MAP).
 enum class TablesContent : std::int8_t { Frame = 0, Map = 1 };
 
-// A table's entry in the daemon's table map (table_t.map_id/confirmed/sightings).
+// A table's entry in the daemon's table map (table_t.map_id/confirmed/sightings/viewpoints).
 struct TableMapInfo {
   int map_id = 0;  // stable id, 1, 2, ...; 0 = not in the map
   bool confirmed = false;
-  int sightings = 0;
+  int sightings = 0;   // frames that saw it
+  int viewpoints = 0;  // distinct viewpoints among them (semantic map only; else 0)
 };
 
 struct TablesMessage {
