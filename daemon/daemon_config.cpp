@@ -125,6 +125,12 @@ const SettingsTable<DaemonConfig>& daemonSettings() {
         },
         "trace, debug, info, warn, error"));
     t.add(boolSetting<D>(
+        "daemon.command_input", [](D& d) -> bool& { return d.command_input; },
+        "listen for command_t (reload_model) on FINDMUG_COMMAND"));
+    t.add(textSetting<D>(
+        "daemon.command_url", [](D& d) -> std::string& { return d.command_url; }, lcmUrlRule,
+        "command LCM provider; empty = the output provider"));
+    t.add(boolSetting<D>(
         "daemon.pose_input", [](D& d) -> bool& { return d.pose_input; },
         "listen for robot_pose_t"));
     t.add(textSetting<D>(
@@ -225,6 +231,14 @@ std::string effectiveLcmUrl(const DaemonConfig& config) {
 std::optional<std::string> effectivePoseUrl(const DaemonConfig& config) {
   if (!config.pose_input) return std::nullopt;
   if (!config.pose_url.empty()) return config.pose_url;
+  const std::string output = effectiveLcmUrl(config);
+  if (output.rfind("file://", 0) == 0) return std::nullopt;
+  return output;
+}
+
+std::optional<std::string> effectiveCommandUrl(const DaemonConfig& config) {
+  if (!config.command_input) return std::nullopt;
+  if (!config.command_url.empty()) return config.command_url;
   const std::string output = effectiveLcmUrl(config);
   if (output.rfind("file://", 0) == 0) return std::nullopt;
   return output;

@@ -69,6 +69,10 @@ struct DaemonConfig {
   double source_timeout_s = 10.0;
   std::string log_level = "info";     // trace, debug, info, warn, error
 
+  // Commands (command_t on FINDMUG_COMMAND: reload_model), command_input.hpp.
+  bool command_input = true;       // listen for command_t
+  std::string command_url;         // "" = the output provider (see effectiveCommandUrl)
+
   // Robot pose input (FINDMUG_ROBOT_POSE) and the table map (FINDMUG_TABLE_MAP).
   bool pose_input = true;          // listen for robot_pose_t
   std::string pose_url;            // "" = the output provider (see effectivePoseUrl)
@@ -112,6 +116,10 @@ std::string effectiveLcmUrl(const DaemonConfig& config);
 // otherwise means the output provider (effectiveLcmUrl), where the robot's
 // localisation publishes on the same LCM network.
 std::optional<std::string> effectivePoseUrl(const DaemonConfig& config);
+
+// Where commands are read from, or nullopt when there is no command input: the
+// same rule as effectivePoseUrl with daemon.command_input and daemon.command_url.
+std::optional<std::string> effectiveCommandUrl(const DaemonConfig& config);
 
 // Parsed command line of findmugd.
 struct CommandLine {
