@@ -114,6 +114,12 @@ Pipeline::Pipeline(const SegmenterConfig& segmenter_config, const DaemonConfig& 
   publish_step_.addSink(table_map_sink_);
   if (semantic_map_) publish_step_.addSink(semantic_map_);  // may set the published labels
   publish_step_.addSink(publisher_);
+  if (!daemon_config_.collect_dir.empty()) {
+    collector_ = std::make_shared<FrameCollector>(
+        FrameCollector::fromConfig(daemon_config_), [this] { return model_.modelId(); },
+        [this](const std::string& what) { recordError(what); });
+    publish_step_.addSink(collector_);
+  }
   const auto window = std::chrono::duration_cast<Clock::duration>(
       std::chrono::duration<double>(daemon_config_.stats_window_s));
   input_rate_ = RateMeter(1000, window);
@@ -193,6 +199,9 @@ Pipeline::Pipeline(const SegmenterConfig& segmenter_config, const DaemonConfig& 
       }
       requestModelReload(c.request_id, "command request " + std::to_string(c.request_id));
     });
+    handlers.emplace("save_frame", [this](const io::CommandMessage& c) {
+      requestFrameSave(c.request_id, c.argument);
+    });
     auto on_command_error = [this](const std::string& what) { recordError(what); };
     if (hooks_.command_bus) {
       command_input_ = std::make_unique<CommandInput>(hooks_.command_bus, channel,
@@ -237,6 +246,11 @@ Pipeline::~Pipeline() { stop(StopMode::Discard); }
 
 void Pipeline::requestModelReload(std::int64_t request_id, const std::string& origin) {
   reloader_->request(request_id, origin);
+}
+
+void Pipeline::requestFrameSave(std::int64_t request_id, const std::string& note) {
+  if (!collector_) throw Error("save_frame: collection is off (daemon.collect_dir is empty)");
+  collector_->requestSave(request_id, note);
 }
 
 void Pipeline::attachSource(const io::FrameSource* source) { source_.store(source); }
@@ -314,6 +328,7 @@ void Pipeline::stop(StopMode mode) {
     if (segment_->stats().in_flight == 0) segment_->join();
   }
   publish_->stop(StopMode::Drain);  // finished results are always published
+  if (collector_) collector_->stop();  // writes what it has queued
   // Nothing feeds the map any more: its last frames (Drain), last publish and save.
   if (semantic_map_) semantic_map_->stop(mode == StopMode::Drain);
   // Nobody looks poses up any more: stop the pose thread, close its handle.
@@ -426,6 +441,12 @@ StatusSnapshot Pipeline::statusSnapshot() const {
   s.window_s = daemon_config_.stats_window_s;
   s.model_id = model_.modelId();
   s.reload = reloader_->status();
+  if (collector_) {
+    const FrameCollector::Counters c = collector_->counters();
+    s.frames_collected = c.saved;
+    s.frames_collect_refused = c.refused;
+    s.last_collected_frame = c.last_saved;
+  }
   if (command_input_) {
     s.commands_accepted = command_input_->accepted();
     s.commands_rejected = command_input_->rejected();

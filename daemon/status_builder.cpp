@@ -49,6 +49,9 @@ findmug_lcm::status_t StatusBuilder::build(const StatusSnapshot& in) {
   s.last_reload_request_id = in.reload.last_request_id;
   s.commands_accepted = static_cast<std::int64_t>(in.commands_accepted);
   s.commands_rejected = static_cast<std::int64_t>(in.commands_rejected);
+  s.frames_collected = static_cast<std::int64_t>(in.frames_collected);
+  s.frames_collect_refused = static_cast<std::int64_t>(in.frames_collect_refused);
+  s.last_collected_frame = in.last_collected_frame;
 
   std::string last_error = in.last_error;
   std::uint64_t last_error_utime = in.last_error_utime;

@@ -265,6 +265,8 @@ findmug_lcm::status_t decodeMessage<findmug_lcm::status_t>(const void* data, std
     w.string("last_reload_result");
     w.skip(2 * kI64, "last_reload_utime/last_reload_request_id");
     w.skip(2 * kI64, "commands_accepted/commands_rejected");
+    w.skip(2 * kI64, "frames_collected/frames_collect_refused");
+    w.string("last_collected_frame");
   });
 }
 

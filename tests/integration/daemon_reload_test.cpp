@@ -40,48 +40,12 @@ using namespace std::chrono_literals;
 using Clock = std::chrono::steady_clock;
 using findmug::test::TempDir;
 
-// Every 2nd pixel of every 2nd row (320x240 from NYU's 640x480): frames cheap
-// enough for a loaded 2-core machine to keep up with 30 fps.
+// Frames at half size (320x240 from NYU's 640x480): cheap enough for a loaded
+// 2-core machine to keep up with 30 fps.
 constexpr int kStep = 2;
-RgbdFrame quarter(const RgbdFrame& in) {
-  RgbdFrame out = in;
-  out.width = in.width / kStep;
-  out.height = in.height / kStep;
-  out.depth_mm.assign(static_cast<std::size_t>(out.width) * out.height, 0);
-  out.rgb.assign(out.depth_mm.size(), Rgb8{});
-  for (int y = 0; y < out.height; ++y) {
-    for (int x = 0; x < out.width; ++x) {
-      const std::size_t from = static_cast<std::size_t>(kStep * y) * in.width + kStep * x;
-      out.depth_mm[static_cast<std::size_t>(y) * out.width + x] = in.depth_mm[from];
-      out.rgb[static_cast<std::size_t>(y) * out.width + x] = in.rgb[from];
-    }
-  }
-  out.intrinsics = {in.intrinsics.fx / kStep, in.intrinsics.fy / kStep,
-                    in.intrinsics.cx / kStep, in.intrinsics.cy / kStep};
-  return out;
-}
 
-LabeledFrame quarter(const LabeledFrame& in) {
-  LabeledFrame out;
-  out.name = in.name;
-  out.frame = quarter(in.frame);
-  out.labels.resize(static_cast<std::size_t>(out.frame.width) * out.frame.height);
-  for (int y = 0; y < out.frame.height; ++y) {
-    for (int x = 0; x < out.frame.width; ++x) {
-      out.labels[static_cast<std::size_t>(y) * out.frame.width + x] =
-          in.labels[static_cast<std::size_t>(kStep * y) * in.frame.width + kStep * x];
-    }
-  }
-  return out;
-}
-
-// The daemon tests' fast settings, with the floor's minimum support scaled to
-// the quarter-size frames.
-SegmenterConfig reloadConfig() {
-  SegmenterConfig config = test::fastSegmenterConfig();
-  config.ground.min_floor_points = 2000 / (kStep * kStep);
-  return config;
-}
+LabeledFrame halfSize(const LabeledFrame& in) { return test::subsampled(in, kStep); }
+SegmenterConfig reloadConfig() { return test::fastSegmenterConfig(kStep); }
 
 // A tiny model trained with `config` on `frames`, recording `config`'s
 // feature-extraction settings as findmug-train does.
@@ -114,7 +78,7 @@ const Models* models() {
     if (nyu.empty()) return nullptr;
     auto* out = new Models;
     for (const LabeledFrame& f : test::framesWithGround(nyu.string(), 6)) {
-      out->frames.push_back(quarter(f));
+      out->frames.push_back(halfSize(f));
     }
     const SegmenterConfig config = reloadConfig();
     out->a = out->dir.str("a.fmf");

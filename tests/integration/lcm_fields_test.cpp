@@ -124,6 +124,8 @@ void walkStatus(Walk& w) {
   w.string("last_reload_result");
   // last_reload_utime, last_reload_request_id, commands_accepted, commands_rejected
   w.fixed(4 * 8);
+  w.fixed(2 * 8);  // frames_collected, frames_collect_refused
+  w.string("last_collected_frame");
 }
 
 RgbdFrame frame() {

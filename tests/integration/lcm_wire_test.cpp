@@ -250,6 +250,9 @@ findmug_lcm::status_t makeStatus(Random& r, const Scale& s) {
   m.last_reload_request_id = r.i64();
   m.commands_accepted = r.i64();
   m.commands_rejected = r.i64();
+  m.frames_collected = r.i64();
+  m.frames_collect_refused = r.i64();
+  m.last_collected_frame = r.text(s.text);
   return m;
 }
 
@@ -363,6 +366,8 @@ TEST(LcmWire, StatusWalkMatchesGeneratedCode) {
     EXPECT_EQ(d.last_reload_result, m.last_reload_result);
     EXPECT_EQ(d.last_reload_request_id, m.last_reload_request_id);
     EXPECT_EQ(d.commands_rejected, m.commands_rejected);
+    EXPECT_EQ(d.frames_collect_refused, m.frames_collect_refused);
+    EXPECT_EQ(d.last_collected_frame, m.last_collected_frame);
   });
 }
 

@@ -40,6 +40,9 @@ inline findmug_lcm::status_t sampleStatus() {
   s.last_reload_request_id = 7;
   s.commands_accepted = 2;
   s.commands_rejected = 1;
+  s.frames_collected = 3;
+  s.frames_collect_refused = 1;
+  s.last_collected_frame = "1700000000000000_42";
   return s;
 }
 

@@ -43,6 +43,7 @@ class CommandInput {
   // Stops the thread and closes the handle. Idempotent; the counters stay readable.
   void stop();
 
+  std::uint64_t received() const { return subscriber_->received(); }  // messages, all of them
   std::uint64_t accepted() const;  // commands handed to their handler and taken
   std::uint64_t rejected() const;  // undecodable, unknown command, argument refused
   const std::string& channel() const { return channel_; }

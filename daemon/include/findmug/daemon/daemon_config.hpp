@@ -88,6 +88,16 @@ struct DaemonConfig {
   std::string semantic_map_file;           // load at start, save periodically and at stop
   double semantic_map_save_s = 60.0;
   SemanticMapConfig semantic_map_config;   // the `semantic_map:` section
+  // Frames worth labelling saved into a dataset folder (frame_collector.hpp); off
+  // while collect_dir is empty.
+  std::string collect_dir;
+  int collect_max_frames = 500;           // the folder's bound, frames ...
+  double collect_max_mb = 2000.0;         // ... and megabytes (its rgb/ and depth/ PNGs)
+  double collect_min_interval_s = 10.0;   // automatic saves at most this often (capture time)
+  double collect_low_confidence = 0.0;    // save when a frame's mean confidence is below (0: off)
+  int collect_flicker_changes = 0;        // save when the table count changes this often ...
+  double collect_flicker_window_s = 5.0;  // ... within this many seconds (0 changes: off)
+  int collect_queue = 2;                  // frames waiting for the writer thread
   CheckConfig check;               // the `check:` section (findmugd --check only)
 
   // Channel names with the suffix applied.

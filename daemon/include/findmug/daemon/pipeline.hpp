@@ -54,6 +54,10 @@
 // it in between frames; no frame waits and none is dropped for it. A refused
 // model leaves the running one; status_t reports the outcome (last_reload_*).
 //
+// Collection (daemon.collect_dir, frame_collector.hpp): a FrameCollector sink
+// after the publisher saves frames worth labelling (save_frame command, low
+// confidence, table flicker) on a writer thread of its own.
+//
 // In ExecutionMode::Sequential every submit() runs all stages on the
 // caller's thread and returns after publishing, deterministically.
 //
@@ -76,6 +80,7 @@
 #include "findmug/config.hpp"
 #include "findmug/daemon/command_input.hpp"
 #include "findmug/daemon/daemon_config.hpp"
+#include "findmug/daemon/frame_collector.hpp"
 #include "findmug/daemon/frame_steps.hpp"
 #include "findmug/daemon/model_reload.hpp"
 #include "findmug/daemon/pose_input.hpp"
@@ -167,6 +172,9 @@ class Pipeline {
   // the load; thread-safe. `request_id`: the command's, -1 for SIGHUP.
   void requestModelReload(std::int64_t request_id, const std::string& origin);
   ReloadStatus reloadStatus() const { return reloader_->status(); }
+  // Saves the next published frame for labelling (daemon.collect_dir); throws
+  // findmug::Error when collection is off or the note is not fit for frames.csv.
+  void requestFrameSave(std::int64_t request_id, const std::string& note);
   // The command input, or nullptr when there is none (see effectiveCommandUrl).
   const CommandInput* commandInput() const { return command_input_.get(); }
   int workers() const { return workers_; }
@@ -201,6 +209,7 @@ class Pipeline {
   std::unique_ptr<PoseInput> pose_input_;  // nullptr: no pose input
   std::unique_ptr<ModelReloader> reloader_;
   std::unique_ptr<CommandInput> command_input_;  // nullptr: no command input
+  std::shared_ptr<FrameCollector> collector_;    // nullptr unless daemon.collect_dir
   std::uint64_t pose_max_age_us_ = 0;
   // The three steps (frame_steps.hpp), each run by its Stage below.
   PrepareStep prepare_step_;

@@ -67,6 +67,9 @@ struct StatusSnapshot {
   std::uint64_t semantic_map_frames = 0, semantic_map_skipped = 0, semantic_map_voxels = 0;
   ReloadStatus reload;
   std::uint64_t commands_accepted = 0, commands_rejected = 0;
+  // Frames saved for labelling (frame_collector.hpp; 0 / "" when off).
+  std::uint64_t frames_collected = 0, frames_collect_refused = 0;
+  std::string last_collected_frame;
   std::string last_error;  // the pipeline's own
   std::uint64_t last_error_utime = 0;
   std::optional<Source> source;  // nullopt: frames submitted in-process
