@@ -2,9 +2,9 @@
 
 #include <iostream>
 
+#include "findmug/common/numbers.hpp"
+#include "findmug/settings/settings.hpp"
 #include "findmug/version.hpp"
-#include "findmug/numbers.hpp"
-#include "findmug/settings.hpp"
 
 namespace findmug::cli {
 

@@ -19,7 +19,7 @@
 #include <string>
 #include <vector>
 
-#include "findmug/config.hpp"
+#include "findmug/settings/config.hpp"
 
 namespace findmug::cli {
 

@@ -6,7 +6,7 @@
 #include <string>
 #include <vector>
 
-#include "findmug/error.hpp"
+#include "findmug/common/error.hpp"
 
 namespace findmug::cli {
 

@@ -35,15 +35,15 @@
 #include <vector>
 
 #include "client_common.hpp"
-#include "findmug/error.hpp"
-#include "findmug/image_io.hpp"
+#include "findmug/common/error.hpp"
+#include "findmug/frame/image_io.hpp"
 #include "findmug/io/bus.hpp"
 #include "findmug/io/channels.hpp"
 #include "findmug/io/frame_source.hpp"
 #include "findmug/io/lcm_codec.hpp"
 #include "findmug/io/subscriber.hpp"
-#include "findmug/label_image.hpp"
-#include "findmug/labels.hpp"
+#include "findmug/labels/label_image.hpp"
+#include "findmug/labels/labels.hpp"
 #include "findmug_cli.hpp"
 #include "picture.hpp"
 

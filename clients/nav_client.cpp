@@ -19,12 +19,12 @@
 #include <vector>
 
 #include "client_common.hpp"
-#include "findmug/error.hpp"
+#include "findmug/common/error.hpp"
 #include "findmug/io/bus.hpp"
 #include "findmug/io/channels.hpp"
 #include "findmug/io/lcm_codec.hpp"
 #include "findmug/io/subscriber.hpp"
-#include "findmug/tables.hpp"
+#include "findmug/tables/tables.hpp"
 #include "findmug_cli.hpp"
 #include "findmug_json.hpp"
 #include "visiting_order.hpp"

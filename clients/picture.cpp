@@ -7,7 +7,7 @@
 #include <cstdio>
 #include <sstream>
 
-#include "findmug/ground.hpp"
+#include "findmug/ground/ground.hpp"
 #include "visiting_order.hpp"
 
 namespace findmug::clients {

@@ -9,10 +9,10 @@
 #include <string>
 #include <vector>
 
-#include "findmug/frame.hpp"
-#include "findmug/image_io.hpp"
+#include "findmug/frame/frame.hpp"
+#include "findmug/frame/image_io.hpp"
 #include "findmug/io/lcm_codec.hpp"
-#include "findmug/labels.hpp"
+#include "findmug/labels/labels.hpp"
 
 namespace findmug::clients {
 

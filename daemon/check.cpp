@@ -12,12 +12,12 @@
 #include <thread>
 #include <vector>
 
-#include "findmug/cloud.hpp"
+#include "findmug/cloud/cloud.hpp"
+#include "findmug/common/error.hpp"
 #include "findmug/daemon/daemon.hpp"
-#include "findmug/error.hpp"
-#include "findmug/forest.hpp"
 #include "findmug/io/frame_source.hpp"
-#include "findmug/segmenter.hpp"
+#include "findmug/learner/forest.hpp"
+#include "findmug/pipeline/segmenter.hpp"
 
 namespace findmug::daemon {
 namespace {

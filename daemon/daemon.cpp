@@ -7,8 +7,8 @@
 #include <algorithm>
 #include <filesystem>
 
+#include "findmug/common/error.hpp"
 #include "findmug/daemon/status_builder.hpp"
-#include "findmug/error.hpp"
 #include "findmug/io/frame_source.hpp"
 
 namespace findmug::daemon {

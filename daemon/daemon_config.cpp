@@ -9,8 +9,8 @@
 #include <map>
 #include <thread>
 
-#include "findmug/error.hpp"
-#include "findmug/settings.hpp"
+#include "findmug/common/error.hpp"
+#include "findmug/settings/settings.hpp"
 #include "findmug_cli.hpp"
 
 #ifndef FINDMUG_SYSCONF_DIR
@@ -47,7 +47,7 @@ std::string lcmUrlRule(const std::string& v) {
   return {};
 }
 
-// The `daemon:` section, on the core's settings mechanism (findmug/settings.hpp).
+// The `daemon:` section, on the core's settings mechanism (findmug/settings/settings.hpp).
 const SettingsTable<DaemonConfig>& daemonSettings() {
   using D = DaemonConfig;
   static const SettingsTable<D> table = [] {

@@ -11,10 +11,10 @@
 #include <fstream>
 #include <sstream>
 
-#include "findmug/error.hpp"
-#include "findmug/image_io.hpp"
-#include "findmug/labels.hpp"
-#include "findmug/numbers.hpp"
+#include "findmug/common/error.hpp"
+#include "findmug/frame/image_io.hpp"
+#include "findmug/labels/labels.hpp"
+#include "findmug/common/numbers.hpp"
 
 namespace findmug::daemon {
 

@@ -6,7 +6,7 @@
 #include <exception>
 #include <string>
 
-#include "findmug/error.hpp"
+#include "findmug/common/error.hpp"
 
 namespace findmug::daemon {
 

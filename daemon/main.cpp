@@ -11,11 +11,11 @@
 #include <iostream>
 #include <thread>
 
+#include "findmug/common/error.hpp"
 #include "findmug/daemon/check.hpp"
 #include "findmug/daemon/daemon.hpp"
 #include "findmug/daemon/daemon_config.hpp"
 #include "findmug/daemon/service.hpp"
-#include "findmug/error.hpp"
 #include "findmug/version.hpp"
 #include "findmug_signals.hpp"
 

@@ -7,7 +7,7 @@
 #include <exception>
 
 #include "findmug/daemon/daemon.hpp"
-#include "findmug/error.hpp"
+#include "findmug/common/error.hpp"
 
 namespace findmug::daemon {
 

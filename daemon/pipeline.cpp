@@ -11,8 +11,8 @@
 #endif
 #include <thread>
 
+#include "findmug/common/error.hpp"
 #include "findmug/daemon/status_builder.hpp"
-#include "findmug/error.hpp"
 #include "findmug/io/channels.hpp"
 #include "findmug/io/frame_source.hpp"
 

@@ -6,7 +6,7 @@
 #include <algorithm>
 #include <cmath>
 
-#include "findmug/error.hpp"
+#include "findmug/common/error.hpp"
 #include "findmug/io/lcm_codec.hpp"
 #include "findmug/io/udpm.hpp"
 

@@ -5,8 +5,8 @@
 
 #include <algorithm>
 
+#include "findmug/common/error.hpp"
 #include "findmug/daemon/status_builder.hpp"
-#include "findmug/error.hpp"
 #include "findmug/io/lcm_codec.hpp"
 
 namespace findmug::daemon {

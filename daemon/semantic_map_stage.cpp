@@ -6,10 +6,10 @@
 #include <cstdio>
 #include <filesystem>
 
-#include "findmug/error.hpp"
+#include "findmug/common/error.hpp"
 #include "findmug/io/lcm_codec.hpp"
 #include "findmug/io/semantic_map_codec.hpp"
-#include "findmug/table_map.hpp"
+#include "findmug/map/table_map.hpp"
 
 namespace findmug::daemon {
 

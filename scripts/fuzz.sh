@@ -94,7 +94,7 @@ run_one() {
   local found
   found=$(find "$findings" -type f | wc -l)
   # Sanitizer reports that did not stop the run: a child process's (the NYU .mat reader tries
-  # a file in a forked child first, see src/nyu_mat.cpp), where libFuzzer does not see them.
+  # a file in a forked child first, see src/offline/nyu_mat.cpp), where libFuzzer does not see them.
   if [[ $rc == 0 ]]; then
     found=$((found + $(grep -c -E '^==[0-9]+==ERROR: [A-Za-z]+Sanitizer|runtime error:' "$log" || true)))
   fi

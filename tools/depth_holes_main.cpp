@@ -16,10 +16,10 @@
 #include <iostream>
 #include <sstream>
 
-#include "findmug/depth_degradation.hpp"
-#include "findmug/error.hpp"
-#include "findmug/image_io.hpp"
-#include "findmug/training.hpp"
+#include "findmug/common/error.hpp"
+#include "findmug/frame/image_io.hpp"
+#include "findmug/offline/depth_degradation.hpp"
+#include "findmug/offline/training.hpp"
 #include "findmug_cli.hpp"
 #include "tool_common.hpp"
 

@@ -5,8 +5,8 @@
 #include <sstream>
 
 #include "eval_report.hpp"
-#include "findmug/cv_folds.hpp"
-#include "findmug/error.hpp"
+#include "findmug/common/error.hpp"
+#include "findmug/offline/cv_folds.hpp"
 
 namespace findmug::tools {
 namespace {

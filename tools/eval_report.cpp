@@ -7,8 +7,8 @@
 #include <iterator>
 #include <sstream>
 
-#include "findmug/error.hpp"
-#include "findmug/labels.hpp"
+#include "findmug/common/error.hpp"
+#include "findmug/labels/labels.hpp"
 #include "findmug_json.hpp"
 
 namespace findmug::tools {

@@ -7,8 +7,8 @@
 #include <utility>
 #include <vector>
 
-#include "findmug/metrics.hpp"
-#include "findmug/table_metrics.hpp"
+#include "findmug/offline/metrics.hpp"
+#include "findmug/offline/table_metrics.hpp"
 #include "eval_tables.hpp"
 
 namespace findmug::tools {

@@ -7,7 +7,7 @@
 #include <cstdio>
 #include <sstream>
 
-#include "findmug/labels.hpp"
+#include "findmug/labels/labels.hpp"
 
 namespace findmug::tools {
 namespace {

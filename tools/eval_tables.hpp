@@ -8,8 +8,8 @@
 #include <string>
 #include <vector>
 
-#include "findmug/cloud.hpp"
-#include "findmug/table_metrics.hpp"
+#include "findmug/cloud/cloud.hpp"
+#include "findmug/offline/table_metrics.hpp"
 
 namespace findmug::tools {
 

@@ -16,7 +16,7 @@
 #include <string>
 #include <thread>
 
-#include "findmug/error.hpp"
+#include "findmug/common/error.hpp"
 #include "findmug/io/bus.hpp"
 #include "findmug/io/channels.hpp"
 #include "findmug/io/frame_source.hpp"

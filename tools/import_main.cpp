@@ -21,9 +21,9 @@
 #include <string>
 #include <vector>
 
-#include "findmug/error.hpp"
-#include "findmug/image_io.hpp"
-#include "findmug/numbers.hpp"
+#include "findmug/common/error.hpp"
+#include "findmug/common/numbers.hpp"
+#include "findmug/frame/image_io.hpp"
 #include "findmug_cli.hpp"
 
 namespace fs = std::filesystem;

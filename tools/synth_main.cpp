@@ -11,12 +11,12 @@
 #include <string>
 #include <tuple>
 
-#include "findmug/dataset.hpp"
-#include "findmug/error.hpp"
+#include "findmug/common/error.hpp"
+#include "findmug/common/numbers.hpp"
+#include "findmug/frame/dataset.hpp"
 #include "findmug/io/channels.hpp"
 #include "findmug/io/lcm_codec.hpp"
-#include "findmug/numbers.hpp"
-#include "findmug/synth.hpp"
+#include "findmug/synth/synth.hpp"
 #include "findmug_cli.hpp"
 #include "tool_common.hpp"
 

@@ -5,8 +5,8 @@
 #include <cstdio>
 #include <map>
 
-#include "findmug/error.hpp"
-#include "findmug/numbers.hpp"
+#include "findmug/common/error.hpp"
+#include "findmug/common/numbers.hpp"
 #include "findmug_cli.hpp"
 
 namespace findmug::tools {

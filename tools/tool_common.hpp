@@ -10,10 +10,11 @@
 #include <string>
 #include <vector>
 
-#include "findmug/config.hpp"
-#include "findmug/cv_folds.hpp"
-#include "findmug/dataset.hpp"
-#include "findmug/training.hpp"
+#include "findmug/frame/dataset.hpp"
+#include "findmug/offline/cv_folds.hpp"
+#include "findmug/offline/nyu_mat.hpp"
+#include "findmug/offline/training.hpp"
+#include "findmug/settings/config.hpp"
 
 namespace CLI {
 class App;

@@ -8,8 +8,8 @@
 #include <cstdio>
 #include <iostream>
 
-#include "findmug/error.hpp"
-#include "findmug/training.hpp"
+#include "findmug/common/error.hpp"
+#include "findmug/offline/training.hpp"
 #include "findmug_cli.hpp"
 #include "tool_common.hpp"
 

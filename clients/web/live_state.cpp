@@ -4,7 +4,7 @@
 #include <algorithm>
 #include <cstdio>
 
-#include "findmug/labels.hpp"
+#include "findmug/labels/labels.hpp"
 #include "picture.hpp"
 
 namespace findmug::web {

@@ -6,7 +6,7 @@
 #include <cstdio>
 #include <fstream>
 
-#include "findmug/error.hpp"
+#include "findmug/common/error.hpp"
 
 namespace findmug::web {
 

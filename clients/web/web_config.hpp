@@ -10,8 +10,8 @@
 #include <string>
 #include <vector>
 
-#include "findmug/config.hpp"
-#include "findmug/settings.hpp"
+#include "findmug/settings/config.hpp"
+#include "findmug/settings/settings.hpp"
 
 namespace findmug::web {
 

@@ -15,7 +15,7 @@
 #include <vector>
 
 #include "client_common.hpp"
-#include "findmug/error.hpp"
+#include "findmug/common/error.hpp"
 #include "findmug/io/channels.hpp"
 #include "findmug/io/lcm_codec.hpp"
 #include "findmug/io/subscriber.hpp"

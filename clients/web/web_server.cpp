@@ -13,12 +13,12 @@
 #include <sstream>
 #include <system_error>
 
-#include "findmug/dataset.hpp"
-#include "findmug/error.hpp"
-#include "findmug/oversegmentation.hpp"
-#include "findmug/segmenter.hpp"
-#include "findmug/image_io.hpp"
-#include "findmug/labels.hpp"
+#include "findmug/common/error.hpp"
+#include "findmug/frame/dataset.hpp"
+#include "findmug/frame/image_io.hpp"
+#include "findmug/labels/labels.hpp"
+#include "findmug/pipeline/segmenter.hpp"
+#include "findmug/supervoxels/oversegmentation.hpp"
 #include "web_config.hpp"
 
 namespace findmug::web {

@@ -23,7 +23,7 @@
 #include <string>
 #include <vector>
 
-#include "findmug/config.hpp"
+#include "findmug/settings/config.hpp"
 #include "live_state.hpp"
 
 namespace httplib {

@@ -6,7 +6,7 @@
 #include <climits>
 #include <lcm/lcm-cpp.hpp>
 
-#include "findmug/error.hpp"
+#include "findmug/common/error.hpp"
 
 namespace findmug::io {
 

@@ -2,7 +2,7 @@
 
 #include <cctype>
 
-#include "findmug/error.hpp"
+#include "findmug/common/error.hpp"
 
 namespace findmug::io {
 

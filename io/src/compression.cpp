@@ -17,7 +17,7 @@
 #include <emmintrin.h>
 #endif
 
-#include "findmug/error.hpp"
+#include "findmug/common/error.hpp"
 
 namespace findmug::io::detail {
 

@@ -10,7 +10,7 @@
 #include <string>
 #include <vector>
 
-#include "findmug/labels.hpp"
+#include "findmug/labels/labels.hpp"
 
 namespace findmug::io::detail {
 

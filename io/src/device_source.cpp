@@ -4,7 +4,7 @@
 
 #include <algorithm>
 
-#include "findmug/error.hpp"
+#include "findmug/common/error.hpp"
 
 namespace findmug::io {
 

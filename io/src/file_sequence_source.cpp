@@ -1,8 +1,8 @@
 // FileSequenceSource (shared by dataset / pcd / pclzf / tiff) and the dataset source.
 #include <spdlog/spdlog.h>
 
-#include "findmug/dataset.hpp"
-#include "findmug/error.hpp"
+#include "findmug/common/error.hpp"
+#include "findmug/frame/dataset.hpp"
 #include "sources_internal.hpp"
 
 namespace findmug::io::detail {

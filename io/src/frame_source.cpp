@@ -5,8 +5,8 @@
 #include <charconv>
 #include <cmath>
 
-#include "findmug/error.hpp"
-#include "findmug/numbers.hpp"
+#include "findmug/common/error.hpp"
+#include "findmug/common/numbers.hpp"
 #include "sources_internal.hpp"
 
 namespace findmug::io {

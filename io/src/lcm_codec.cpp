@@ -11,8 +11,8 @@
 #endif
 
 #include "compression.hpp"
-#include "findmug/error.hpp"
-#include "findmug/image_io.hpp"
+#include "findmug/common/error.hpp"
+#include "findmug/frame/image_io.hpp"
 
 namespace findmug::io {
 

@@ -2,7 +2,7 @@
 
 #include <spdlog/spdlog.h>
 
-#include "findmug/error.hpp"
+#include "findmug/common/error.hpp"
 #include "findmug/io/channels.hpp"
 #include "findmug/io/lcm_codec.hpp"
 #include "findmug/io/udpm.hpp"

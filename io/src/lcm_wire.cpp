@@ -14,7 +14,7 @@
 #include <string>
 #include <string_view>
 
-#include "findmug/error.hpp"
+#include "findmug/common/error.hpp"
 #include "findmug/io/lcm_codec.hpp"
 
 namespace findmug::io {

@@ -21,7 +21,7 @@
 #include <mutex>
 #include <thread>
 
-#include "findmug/error.hpp"
+#include "findmug/common/error.hpp"
 #include "findmug/io/device_source.hpp"
 #include "sources_internal.hpp"
 

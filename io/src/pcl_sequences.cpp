@@ -13,9 +13,9 @@
 #include <mutex>
 #include <sstream>
 
-#include "findmug/error.hpp"
+#include "findmug/common/error.hpp"
+#include "findmug/common/numbers.hpp"
 #include "findmug/io/pcl_frames.hpp"
-#include "findmug/numbers.hpp"
 #include "sources_internal.hpp"
 
 namespace fs = std::filesystem;

@@ -9,7 +9,7 @@
 #include <tuple>
 
 #include "compression.hpp"
-#include "findmug/error.hpp"
+#include "findmug/common/error.hpp"
 
 namespace findmug::io {
 

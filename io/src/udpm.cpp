@@ -14,9 +14,9 @@
 #include <cstdlib>
 #include <cstring>
 
-#include "findmug/error.hpp"
+#include "findmug/common/error.hpp"
+#include "findmug/common/numbers.hpp"
 #include "findmug/io/frame_source.hpp"
-#include "findmug/numbers.hpp"
 
 namespace findmug::io {
 

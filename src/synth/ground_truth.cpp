@@ -7,8 +7,8 @@
 #include <fstream>
 #include <sstream>
 
-#include "findmug/error.hpp"
-#include "findmug/synth.hpp"
+#include "findmug/common/error.hpp"
+#include "findmug/synth/synth.hpp"
 #include "synth_internal.hpp"
 
 namespace findmug::synth {
@@ -99,7 +99,7 @@ void writeGroundTruth(const std::string& path, const SequenceGroundTruth& truth)
   out << YAML::Key << "fps" << YAML::Value << truth.fps;
   out << YAML::Key << "world_frame" << YAML::Value
       << "z up, floor z=0, room [0,X]x[0,Y]x[0,H] m; camera_to_world = T(x,y,height)*Rz(yaw)*"
-         "Ry(pitch)*R0*Rz(roll), see include/findmug/synth.hpp";
+         "Ry(pitch)*R0*Rz(roll), see include/findmug/synth/synth.hpp";
   out << YAML::Key << "image" << YAML::Value << YAML::BeginMap;
   out << YAML::Key << "width" << YAML::Value << truth.width;
   out << YAML::Key << "height" << YAML::Value << truth.height;

@@ -5,8 +5,8 @@
 #include <cmath>
 #include <sstream>
 
-#include "findmug/error.hpp"
-#include "findmug/synth.hpp"
+#include "findmug/common/error.hpp"
+#include "findmug/synth/synth.hpp"
 #include "synth_internal.hpp"
 
 namespace findmug::synth {

@@ -110,7 +110,7 @@ inline double wrapAngle(double a) {
 
 }  // namespace findmug::synth::detail
 
-#include "findmug/synth.hpp"
+#include "findmug/synth/synth.hpp"
 
 namespace findmug::synth::detail {
 

@@ -10,8 +10,8 @@
 #include <string>
 #include <vector>
 
-#include "findmug/error.hpp"
-#include "findmug/numbers.hpp"
+#include "findmug/common/error.hpp"
+#include "findmug/common/numbers.hpp"
 
 namespace findmug::bench {
 

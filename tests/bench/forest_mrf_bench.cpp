@@ -9,9 +9,9 @@
 #include <random>
 #include <set>
 
-#include "findmug/forest.hpp"
-#include "findmug/mrf.hpp"
-#include "mrf_internal.hpp"
+#include "findmug/learner/forest.hpp"
+#include "findmug/mrf/mrf.hpp"
+#include "mrf/mrf_internal.hpp"
 
 namespace findmug {
 namespace {

@@ -39,11 +39,11 @@
 
 #include "bench_support.hpp"
 #include "counting_new.hpp"  // this program's operator new counts allocations
-#include "findmug/config.hpp"
-#include "findmug/dataset.hpp"
-#include "findmug/error.hpp"
-#include "findmug/segmenter.hpp"
-#include "findmug/tables.hpp"
+#include "findmug/common/error.hpp"
+#include "findmug/frame/dataset.hpp"
+#include "findmug/pipeline/segmenter.hpp"
+#include "findmug/settings/config.hpp"
+#include "findmug/tables/tables.hpp"
 #include "test_data.hpp"
 
 namespace {

@@ -17,15 +17,15 @@
 #include <stdexcept>
 #include <string>
 
-#include "findmug/cloud.hpp"
-#include "findmug/dataset.hpp"
-#include "findmug/features.hpp"
-#include "findmug/ground.hpp"
-#include "findmug/image_io.hpp"
-#include "findmug/oversegmentation.hpp"
-#include "findmug/region_features.hpp"
-#include "findmug/scene_features.hpp"
-#include "lab_internal.hpp"
+#include "findmug/cloud/cloud.hpp"
+#include "findmug/features/features.hpp"
+#include "findmug/features/region_features.hpp"
+#include "findmug/features/scene_features.hpp"
+#include "findmug/frame/dataset.hpp"
+#include "findmug/frame/image_io.hpp"
+#include "findmug/ground/ground.hpp"
+#include "findmug/supervoxels/oversegmentation.hpp"
+#include "supervoxels/lab_internal.hpp"
 
 namespace {
 

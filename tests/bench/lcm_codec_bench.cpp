@@ -7,7 +7,7 @@
 
 #include <cmath>
 
-#include "findmug/dataset.hpp"
+#include "findmug/frame/dataset.hpp"
 #include "compression.hpp"  // io/src: the label images' own deflate
 #include "findmug/io/lcm_codec.hpp"
 #include "test_data.hpp"

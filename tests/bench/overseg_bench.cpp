@@ -31,9 +31,9 @@
 #include <vector>
 
 #include "bench_support.hpp"
-#include "findmug/cloud.hpp"
-#include "findmug/dataset.hpp"
-#include "findmug/oversegmentation.hpp"
+#include "findmug/cloud/cloud.hpp"
+#include "findmug/frame/dataset.hpp"
+#include "findmug/supervoxels/oversegmentation.hpp"
 #include "test_data.hpp"
 
 namespace findmug {

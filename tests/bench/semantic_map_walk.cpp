@@ -32,12 +32,12 @@
 #include <string>
 #include <vector>
 
-#include "findmug/config.hpp"
 #include "findmug/io/semantic_map_codec.hpp"
-#include "findmug/segmenter.hpp"
-#include "findmug/semantic_map.hpp"
-#include "findmug/synth.hpp"
-#include "findmug/table_map.hpp"
+#include "findmug/map/semantic_map.hpp"
+#include "findmug/map/table_map.hpp"
+#include "findmug/pipeline/segmenter.hpp"
+#include "findmug/settings/config.hpp"
+#include "findmug/synth/synth.hpp"
 
 namespace {
 

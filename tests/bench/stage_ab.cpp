@@ -35,15 +35,15 @@
 #include <string>
 #include <vector>
 
-#include "findmug/cloud.hpp"
-#include "findmug/dataset.hpp"
-#include "findmug/error.hpp"
-#include "findmug/features.hpp"
-#include "findmug/ground.hpp"
-#include "findmug/oversegmentation.hpp"
-#include "findmug/scene_features.hpp"
-#include "findmug/synth.hpp"
-#include "findmug/tables.hpp"
+#include "findmug/cloud/cloud.hpp"
+#include "findmug/common/error.hpp"
+#include "findmug/features/features.hpp"
+#include "findmug/features/scene_features.hpp"
+#include "findmug/frame/dataset.hpp"
+#include "findmug/ground/ground.hpp"
+#include "findmug/supervoxels/oversegmentation.hpp"
+#include "findmug/synth/synth.hpp"
+#include "findmug/tables/tables.hpp"
 #include "test_data.hpp"
 
 namespace {

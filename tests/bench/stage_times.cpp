@@ -19,10 +19,10 @@
 #include <vector>
 
 #include "bench_support.hpp"
-#include "findmug/dataset.hpp"
-#include "findmug/error.hpp"
-#include "findmug/segmenter.hpp"
-#include "findmug/training.hpp"
+#include "findmug/common/error.hpp"
+#include "findmug/frame/dataset.hpp"
+#include "findmug/offline/training.hpp"
+#include "findmug/pipeline/segmenter.hpp"
 #include "test_data.hpp"
 
 namespace {

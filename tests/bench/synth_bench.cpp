@@ -6,7 +6,7 @@
 //   synth_bench --benchmark_repetitions=5 --benchmark_report_aggregates_only=true
 #include <benchmark/benchmark.h>
 
-#include "findmug/synth.hpp"
+#include "findmug/synth/synth.hpp"
 
 namespace {
 

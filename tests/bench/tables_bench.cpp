@@ -22,11 +22,11 @@
 #include <string>
 #include <vector>
 
-#include "findmug/cloud.hpp"
-#include "findmug/dataset.hpp"
-#include "findmug/ground.hpp"
-#include "findmug/synth.hpp"
-#include "findmug/tables.hpp"
+#include "findmug/cloud/cloud.hpp"
+#include "findmug/frame/dataset.hpp"
+#include "findmug/ground/ground.hpp"
+#include "findmug/synth/synth.hpp"
+#include "findmug/tables/tables.hpp"
 #include "test_data.hpp"
 
 namespace {

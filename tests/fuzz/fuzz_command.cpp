@@ -2,7 +2,7 @@
 #include <cstddef>
 #include <cstdint>
 #include "findmug/io/lcm_codec.hpp"
-#include "findmug/error.hpp"
+#include "findmug/common/error.hpp"
 #include "fuzz_support.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {

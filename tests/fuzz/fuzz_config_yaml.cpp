@@ -3,9 +3,9 @@
 #include <cstdint>
 #include <string>
 
-#include "findmug/config.hpp"
+#include "findmug/common/error.hpp"
 #include "findmug/daemon/daemon_config.hpp"
-#include "findmug/error.hpp"
+#include "findmug/settings/config.hpp"
 #include "fuzz_support.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {

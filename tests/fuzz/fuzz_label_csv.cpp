@@ -3,8 +3,8 @@
 #include <cstdint>
 #include <string>
 
-#include "findmug/dataset.hpp"
-#include "findmug/error.hpp"
+#include "findmug/common/error.hpp"
+#include "findmug/frame/dataset.hpp"
 #include "fuzz_support.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {

@@ -3,9 +3,9 @@
 #include <cstdint>
 #include <string_view>
 
-#include "findmug/features.hpp"
-#include "findmug/forest.hpp"
-#include "findmug/error.hpp"
+#include "findmug/common/error.hpp"
+#include "findmug/features/features.hpp"
+#include "findmug/learner/forest.hpp"
 #include "fuzz_support.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {

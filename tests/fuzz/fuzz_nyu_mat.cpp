@@ -4,8 +4,9 @@
 #include <cstdint>
 #include <string_view>
 
-#include "findmug/dataset.hpp"
-#include "findmug/error.hpp"
+#include "findmug/common/error.hpp"
+#include "findmug/frame/dataset.hpp"
+#include "findmug/offline/nyu_mat.hpp"
 #include "fuzz_support.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {

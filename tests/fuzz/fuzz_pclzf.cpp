@@ -2,8 +2,8 @@
 // NAME.xml (pclzf: replay source) -> readPclzfFrame.
 #include <cstddef>
 #include <cstdint>
+#include "findmug/common/error.hpp"
 #include "findmug/io/pcl_frames.hpp"
-#include "findmug/error.hpp"
 #include "fuzz_support.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {

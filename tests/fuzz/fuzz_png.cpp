@@ -4,8 +4,8 @@
 #include <string_view>
 #include <vector>
 
-#include "findmug/image_io.hpp"
-#include "findmug/error.hpp"
+#include "findmug/common/error.hpp"
+#include "findmug/frame/image_io.hpp"
 #include "fuzz_support.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {

@@ -2,7 +2,7 @@
 #include <cstddef>
 #include <cstdint>
 
-#include "findmug/error.hpp"
+#include "findmug/common/error.hpp"
 #include "findmug/io/semantic_map_codec.hpp"
 #include "fuzz_support.hpp"
 

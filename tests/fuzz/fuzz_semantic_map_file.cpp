@@ -4,8 +4,8 @@
 #include <cstdint>
 #include <vector>
 
-#include "findmug/error.hpp"
-#include "findmug/semantic_map.hpp"
+#include "findmug/common/error.hpp"
+#include "findmug/map/semantic_map.hpp"
 #include "fuzz_support.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {

@@ -1,8 +1,8 @@
 // Fuzz target status: status_t bytes (FINDMUG_STATUS) -> decodeMessage<status_t>, as findmug-spy reads them.
 #include <cstddef>
 #include <cstdint>
+#include "findmug/common/error.hpp"
 #include "findmug/io/lcm_codec.hpp"
-#include "findmug/error.hpp"
 #include "fuzz_support.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {

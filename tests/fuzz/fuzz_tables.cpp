@@ -2,8 +2,8 @@
 // as the navigation client decodes them.
 #include <cstddef>
 #include <cstdint>
+#include "findmug/common/error.hpp"
 #include "findmug/io/lcm_codec.hpp"
-#include "findmug/error.hpp"
 #include "fuzz_support.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {

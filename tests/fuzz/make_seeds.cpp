@@ -21,15 +21,16 @@
 #include <string>
 #include <vector>
 
-#include "findmug/config.hpp"
-#include "findmug/dataset.hpp"
-#include "findmug/error.hpp"
-#include "findmug/forest.hpp"
-#include "findmug/image_io.hpp"
+#include "findmug/common/error.hpp"
+#include "findmug/frame/dataset.hpp"
+#include "findmug/frame/image_io.hpp"
 #include "findmug/io/lcm_codec.hpp"
-#include "findmug/io/semantic_map_codec.hpp"
-#include "findmug/semantic_map.hpp"
 #include "findmug/io/pcl_frames.hpp"
+#include "findmug/io/semantic_map_codec.hpp"
+#include "findmug/learner/forest.hpp"
+#include "findmug/map/semantic_map.hpp"
+#include "findmug/offline/nyu_mat.hpp"
+#include "findmug/settings/config.hpp"
 #include "findmug_cli.hpp"
 #include "fuzz_support.hpp"
 #include "lcm_samples.hpp"

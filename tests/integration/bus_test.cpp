@@ -11,7 +11,7 @@
 #include <thread>
 #include <vector>
 
-#include "findmug/error.hpp"
+#include "findmug/common/error.hpp"
 #include "findmug/io/lcm_codec.hpp"
 #include "findmug/io/lcm_source.hpp"
 #include "findmug/io/subscriber.hpp"

@@ -12,8 +12,8 @@
 #include <sstream>
 #include <vector>
 
+#include "findmug/common/error.hpp"
 #include "findmug/daemon/daemon_config.hpp"
-#include "findmug/error.hpp"
 #include "findmug/version.hpp"
 #include "findmug_cli.hpp"
 

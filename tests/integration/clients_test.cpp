@@ -30,12 +30,12 @@
 #include <variant>
 
 #include "daemon_test_support.hpp"
-#include "findmug/error.hpp"
-#include "findmug/image_io.hpp"
+#include "findmug/common/error.hpp"
+#include "findmug/frame/image_io.hpp"
 #include "findmug/io/channels.hpp"
 #include "findmug/io/lcm_codec.hpp"
-#include "findmug/labels.hpp"
-#include "findmug/tables.hpp"
+#include "findmug/labels/labels.hpp"
+#include "findmug/tables/tables.hpp"
 #include "test_data.hpp"
 #include "visiting_order.hpp"
 

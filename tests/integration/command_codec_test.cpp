@@ -4,7 +4,7 @@
 
 #include <string>
 
-#include "findmug/error.hpp"
+#include "findmug/common/error.hpp"
 #include "findmug/io/lcm_codec.hpp"
 
 namespace findmug::io {

@@ -10,7 +10,7 @@
 #include <string>
 #include <vector>
 
-#include "findmug/image_io.hpp"
+#include "findmug/frame/image_io.hpp"
 #include "test_data.hpp"
 
 namespace findmug {

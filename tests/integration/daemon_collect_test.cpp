@@ -15,13 +15,13 @@
 #include <thread>
 
 #include "daemon_test_support.hpp"
-#include "findmug/cv_folds.hpp"
+#include "findmug/offline/cv_folds.hpp"
 #include "findmug/daemon/pipeline.hpp"
-#include "findmug/dataset.hpp"
+#include "findmug/frame/dataset.hpp"
 #include "findmug/io/bus.hpp"
 #include "findmug/io/channels.hpp"
 #include "findmug/io/lcm_codec.hpp"
-#include "findmug/segmenter.hpp"
+#include "findmug/pipeline/segmenter.hpp"
 #include "test_data.hpp"
 
 namespace findmug::daemon {

@@ -25,20 +25,20 @@
 #include <thread>
 
 #include "daemon_test_support.hpp"
+#include "findmug/common/error.hpp"
 #include "findmug/daemon/daemon_config.hpp"
 #include "findmug/daemon/pipeline.hpp"
 #include "findmug/daemon/pose_input.hpp"
 #include "findmug/daemon/status_builder.hpp"
-#include "findmug/error.hpp"
 #include "findmug/io/bus.hpp"
 #include "findmug/io/channels.hpp"
 #include "findmug/io/lcm_codec.hpp"
 #include "findmug/io/semantic_map_codec.hpp"
 #include "findmug/io/subscriber.hpp"
-#include "findmug/segmenter.hpp"
-#include "findmug/synth.hpp"
-#include "findmug/table_map.hpp"
-#include "findmug/training.hpp"
+#include "findmug/map/table_map.hpp"
+#include "findmug/offline/training.hpp"
+#include "findmug/pipeline/segmenter.hpp"
+#include "findmug/synth/synth.hpp"
 #include "test_data.hpp"
 
 namespace findmug::daemon {

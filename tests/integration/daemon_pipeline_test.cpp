@@ -15,15 +15,15 @@
 #include <thread>
 
 #include "daemon_test_support.hpp"
+#include "findmug/common/error.hpp"
 #include "findmug/daemon/daemon.hpp"
 #include "findmug/daemon/frame_steps.hpp"
 #include "findmug/daemon/pipeline.hpp"
 #include "findmug/daemon/status_builder.hpp"
-#include "findmug/error.hpp"
 #include "findmug/io/channels.hpp"
 #include "findmug/io/frame_source.hpp"
 #include "findmug/io/lcm_codec.hpp"
-#include "findmug/segmenter.hpp"
+#include "findmug/pipeline/segmenter.hpp"
 #include "test_data.hpp"
 
 namespace findmug::daemon {

@@ -16,13 +16,13 @@
 #include <sstream>
 #include <thread>
 
+#include "findmug/common/error.hpp"
 #include "findmug/daemon/bounded_queue.hpp"
 #include "findmug/daemon/daemon_config.hpp"
 #include "findmug/daemon/reorder_buffer.hpp"
 #include "findmug/daemon/service.hpp"
 #include "findmug/daemon/stage.hpp"
 #include "findmug/daemon/stats.hpp"
-#include "findmug/error.hpp"
 #include "test_data.hpp"
 
 namespace findmug::daemon {

@@ -24,11 +24,11 @@
 
 #include "daemon_test_support.hpp"
 #include "findmug/daemon/pipeline.hpp"
-#include "findmug/error.hpp"
+#include "findmug/common/error.hpp"
 #include "findmug/io/bus.hpp"
 #include "findmug/io/channels.hpp"
 #include "findmug/io/lcm_codec.hpp"
-#include "findmug/segmenter.hpp"
+#include "findmug/pipeline/segmenter.hpp"
 #include "test_data.hpp"
 
 extern char** environ;

@@ -11,10 +11,10 @@
 #include <string>
 #include <vector>
 
+#include "findmug/common/error.hpp"
 #include "findmug/daemon/result_sinks.hpp"
 #include "findmug/daemon/semantic_map_stage.hpp"
 #include "findmug/daemon/status_builder.hpp"
-#include "findmug/error.hpp"
 #include "findmug/io/bus.hpp"
 #include "findmug/io/lcm_codec.hpp"
 #include "findmug_lcm/status_t.hpp"

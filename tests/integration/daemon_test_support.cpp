@@ -9,7 +9,7 @@
 #include <lcm/lcm-cpp.hpp>
 #include <stdexcept>
 
-#include "findmug/segmenter.hpp"
+#include "findmug/pipeline/segmenter.hpp"
 
 namespace findmug::daemon::test {
 

@@ -11,9 +11,9 @@
 #include <string>
 #include <vector>
 
-#include "findmug/config.hpp"
-#include "findmug/dataset.hpp"
-#include "findmug/forest.hpp"
+#include "findmug/frame/dataset.hpp"
+#include "findmug/learner/forest.hpp"
+#include "findmug/settings/config.hpp"
 
 namespace findmug::daemon::test {
 

@@ -12,8 +12,8 @@
 #include <memory>
 #include <string>
 
-#include "findmug/dataset.hpp"
-#include "findmug/image_io.hpp"
+#include "findmug/frame/dataset.hpp"
+#include "findmug/frame/image_io.hpp"
 #include "findmug/io/frame_source.hpp"
 #include "findmug/io/lcm_codec.hpp"
 #include "test_data.hpp"

@@ -16,9 +16,9 @@
 
 #include <zlib.h>
 
-#include "findmug/dataset.hpp"
-#include "findmug/error.hpp"
-#include "findmug/image_io.hpp"
+#include "findmug/common/error.hpp"
+#include "findmug/frame/dataset.hpp"
+#include "findmug/frame/image_io.hpp"
 #include "findmug/io/channels.hpp"
 #include "findmug/io/frame_source.hpp"
 #include "lcm_samples.hpp"

@@ -15,7 +15,7 @@
 #include <string>
 #include <vector>
 
-#include "findmug/error.hpp"
+#include "findmug/common/error.hpp"
 #include "findmug/io/lcm_codec.hpp"
 
 namespace findmug::io {

@@ -24,7 +24,7 @@
 #include <string>
 #include <vector>
 
-#include "findmug/error.hpp"
+#include "findmug/common/error.hpp"
 #include "findmug/io/lcm_codec.hpp"
 #include "findmug_lcm/label_image_t.hpp"
 #include "findmug_lcm/rgbd_frame_t.hpp"

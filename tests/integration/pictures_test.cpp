@@ -6,8 +6,8 @@
 
 #include <cmath>
 
-#include "findmug/ground.hpp"
-#include "findmug/tables.hpp"
+#include "findmug/ground/ground.hpp"
+#include "findmug/tables/tables.hpp"
 #include "picture.hpp"
 
 namespace findmug::clients {

@@ -5,10 +5,10 @@
 #include <string>
 #include <vector>
 
-#include "findmug/error.hpp"
+#include "findmug/common/error.hpp"
 #include "findmug/io/lcm_codec.hpp"
 #include "findmug/io/semantic_map_codec.hpp"
-#include "findmug/semantic_map.hpp"
+#include "findmug/map/semantic_map.hpp"
 
 namespace findmug::io {
 namespace {

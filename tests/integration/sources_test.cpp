@@ -17,8 +17,8 @@
 #include <lcm/lcm-cpp.hpp>
 #include <thread>
 
-#include "findmug/dataset.hpp"
-#include "findmug/error.hpp"
+#include "findmug/common/error.hpp"
+#include "findmug/frame/dataset.hpp"
 #include "findmug/io/channels.hpp"
 #include "findmug/io/device_source.hpp"
 #include "findmug/io/frame_source.hpp"

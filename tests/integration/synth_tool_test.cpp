@@ -6,7 +6,7 @@
 #include <cstdio>
 #include <cstdlib>
 
-#include "findmug/dataset.hpp"
+#include "findmug/frame/dataset.hpp"
 #include "findmug/io/channels.hpp"
 #include "findmug/io/lcm_codec.hpp"
 #include "test_data.hpp"

@@ -19,7 +19,7 @@
 #include <thread>
 #include <vector>
 
-#include "findmug/error.hpp"
+#include "findmug/common/error.hpp"
 #include "findmug/io/bus.hpp"
 #include "findmug/io/lcm_codec.hpp"
 #include "findmug/io/lcm_source.hpp"

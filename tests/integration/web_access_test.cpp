@@ -4,8 +4,8 @@
 // (127.0.0.1, and 127.0.0.2 bound explicitly as "another address").
 // The project's headers (Eigen) before httplib.h: the <resolv.h> it pulls in defines a
 // macro _res, a parameter name inside Eigen.
-#include "findmug/image_io.hpp"
-#include "findmug/labels.hpp"
+#include "findmug/frame/image_io.hpp"
+#include "findmug/labels/labels.hpp"
 #include "live_state.hpp"
 #include "test_data.hpp"
 #include "web_config.hpp"

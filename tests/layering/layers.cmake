@@ -1,12 +1,16 @@
 # tests/layering/layers.cmake — the layering rule of the source tree, checked.
 #
-#   core    src/, include/findmug/ (findmug_core, findmug_synth)   may use: nothing of ours
+#   core    src/ROOM/, include/findmug/ROOM/ (findmug_core)       may use: nothing of ours
+#   offline src/offline/, include/findmug/offline/ (findmug_offline: training, metrics,
+#           the .mat reader)                                        may use: core
+#   synth   src/synth/, include/findmug/synth/ (findmug_synth)     may use: core
 #   lcm     lcmtypes/ (generated findmug_lcm:: headers)            may use: nothing of ours
 #   io      io/ (findmug_io)                                       may use: core, lcm
 #   cli     cli/ (findmug_cli)                                     may use: core
 #   daemon  daemon/ (findmug_daemon, findmugd)                     may use: core, lcm, io, cli
 #   clients clients/                                               may use: core, lcm, io, cli
-#   tools   tools/                                                 may use: core, lcm, io, cli, daemon
+#   tools   tools/                                                 may use: core, offline, synth, lcm,
+#                                                                           io, cli, daemon
 #   tests   tests/                                                 may use anything
 # (tools may use the daemon's pipeline library: findmug-sequential runs it on one thread.)
 #
@@ -20,8 +24,11 @@
 # checks; a violation stops the configure), and run by ctest `layering` in script
 # mode (cmake -DFINDMUG_SOURCE_DIR=... -P layers.cmake: the include check).
 
-set(findmug_layers core lcm io cli daemon clients tools)
+# A path belongs to the last layer whose folder holds it (src/offline is offline, not core).
+set(findmug_layers core offline synth lcm io cli daemon clients tools)
 set(findmug_layer_dirs_core src include)
+set(findmug_layer_dirs_offline src/offline include/findmug/offline)
+set(findmug_layer_dirs_synth src/synth include/findmug/synth)
 set(findmug_layer_dirs_lcm lcmtypes)
 set(findmug_layer_dirs_io io)
 set(findmug_layer_dirs_cli cli)
@@ -30,15 +37,22 @@ set(findmug_layer_dirs_clients clients)
 set(findmug_layer_dirs_tools tools)
 
 set(findmug_layer_uses_core "")
+set(findmug_layer_uses_offline core)
+set(findmug_layer_uses_synth core)
 set(findmug_layer_uses_lcm "")
 set(findmug_layer_uses_io core lcm)
 set(findmug_layer_uses_cli core)
 set(findmug_layer_uses_daemon core lcm io cli)
 set(findmug_layer_uses_clients core lcm io cli)
-set(findmug_layer_uses_tools core lcm io cli daemon)
+set(findmug_layer_uses_tools core offline synth lcm io cli daemon)
 
 # What an #include of each layer looks like (regular expressions on the included name).
-set(findmug_layer_headers_core "^findmug/[^/]+\\.hpp$")
+# The core's rooms (scripts/dev/rooms.py).
+set(findmug_layer_headers_core
+    "^findmug/(common|frame|cloud|ground|supervoxels|features|learner|mrf|labels|pipeline|tables|map|settings)/"
+    "^findmug/version\\.hpp$")
+set(findmug_layer_headers_offline "^findmug/offline/")
+set(findmug_layer_headers_synth "^findmug/synth/")
 set(findmug_layer_headers_lcm "^findmug_lcm/" "^lcm/")
 set(findmug_layer_headers_io "^findmug/io/")
 set(findmug_layer_headers_cli "^findmug_cli\\.hpp$" "^findmug_signals\\.hpp$" "^findmug_json\\.hpp$"
@@ -82,6 +96,11 @@ function(findmug_check_includes source_dir)
       endif()
     endforeach()
     foreach(file IN LISTS files)
+      file(RELATIVE_PATH rel ${source_dir} ${file})
+      findmug_layer_of("${rel}" file_layer)
+      if(NOT file_layer STREQUAL layer)
+        continue()  # in a sub-folder that is a layer of its own (src/offline in src)
+      endif()
       file(STRINGS ${file} lines REGEX "^[ \t]*#[ \t]*include[ \t]*[<\"]")
       foreach(line IN LISTS lines)
         string(REGEX REPLACE "^[ \t]*#[ \t]*include[ \t]*[<\"]([^>\"]+)[>\"].*" "\\1" name "${line}")

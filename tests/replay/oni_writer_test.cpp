@@ -10,7 +10,7 @@
 #include <optional>
 #include <thread>
 
-#include "findmug/error.hpp"
+#include "findmug/common/error.hpp"
 #include "findmug/io/device_source.hpp"
 #include "findmug/io/frame_source.hpp"
 #include "oni_writer.hpp"

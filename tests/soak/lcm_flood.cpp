@@ -30,8 +30,8 @@
 #include <thread>
 #include <vector>
 
+#include "findmug/common/numbers.hpp"
 #include "findmug/io/lcm_codec.hpp"
-#include "findmug/numbers.hpp"
 
 namespace {
 

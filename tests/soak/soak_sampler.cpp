@@ -30,13 +30,13 @@
 #include <thread>
 #include <vector>
 
-#include "findmug/error.hpp"
+#include "findmug/common/error.hpp"
+#include "findmug/common/numbers.hpp"
 #include "findmug/io/bus.hpp"
-#include "findmug/io/udpm.hpp"
 #include "findmug/io/channels.hpp"
 #include "findmug/io/lcm_codec.hpp"
 #include "findmug/io/subscriber.hpp"
-#include "findmug/numbers.hpp"
+#include "findmug/io/udpm.hpp"
 #include "findmug_signals.hpp"
 
 namespace {

@@ -9,7 +9,7 @@
 
 #include <string>
 
-#include "findmug/error.hpp"
+#include "findmug/common/error.hpp"
 
 namespace findmug::test {
 

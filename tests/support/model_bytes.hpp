@@ -1,5 +1,5 @@
 // Test support: editing a model file's bytes by its documented layout
-// (src/forest_format.hpp), to build files that are intact (valid checksum)
+// (src/learner/forest_format.hpp), to build files that are intact (valid checksum)
 // but wrong in one field. For unit tests, which see the core's internal headers.
 #pragma once
 
@@ -11,9 +11,9 @@
 #include <vector>
 
 #include "file_bytes.hpp"
-#include "findmug/error.hpp"
-#include "findmug/forest.hpp"
-#include "forest_format.hpp"
+#include "findmug/common/error.hpp"
+#include "findmug/learner/forest.hpp"
+#include "learner/forest_format.hpp"
 
 namespace findmug::test {
 

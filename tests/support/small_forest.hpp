@@ -9,9 +9,9 @@
 #include <memory>
 #include <vector>
 
-#include "findmug/forest.hpp"
-#include "findmug/frame.hpp"
-#include "findmug/segmenter.hpp"
+#include "findmug/frame/frame.hpp"
+#include "findmug/learner/forest.hpp"
+#include "findmug/pipeline/segmenter.hpp"
 
 namespace findmug::test {
 

@@ -20,7 +20,7 @@
 #include <optional>
 #include <string>
 
-#include "findmug/error.hpp"
+#include "findmug/common/error.hpp"
 #include "findmug/io/frame_source.hpp"
 #include "findmug_cli.hpp"
 #include "findmug_signals.hpp"

@@ -8,7 +8,7 @@
 #include <cstring>
 #include <vector>
 
-#include "findmug/error.hpp"
+#include "findmug/common/error.hpp"
 
 namespace findmug::oni {
 

@@ -34,7 +34,7 @@
 #include <memory>
 #include <string>
 
-#include "findmug/frame.hpp"
+#include "findmug/frame/frame.hpp"
 
 namespace findmug::oni {
 

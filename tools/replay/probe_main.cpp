@@ -39,12 +39,12 @@
 #include <thread>
 #include <vector>
 
-#include "findmug/error.hpp"
+#include "findmug/common/error.hpp"
 #include "findmug/io/bus.hpp"
 #include "findmug/io/channels.hpp"
 #include "findmug/io/lcm_codec.hpp"
 #include "findmug/io/udpm.hpp"
-#include "findmug/labels.hpp"
+#include "findmug/labels/labels.hpp"
 #include "findmug_cli.hpp"
 #include "findmug_signals.hpp"
 #include "replay_check.hpp"

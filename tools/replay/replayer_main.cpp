@@ -27,7 +27,7 @@
 #include <thread>
 #include <vector>
 
-#include "findmug/error.hpp"
+#include "findmug/common/error.hpp"
 #include "findmug/io/bus.hpp"
 #include "findmug/io/channels.hpp"
 #include "findmug/io/frame_source.hpp"

@@ -22,11 +22,11 @@
 #include <optional>
 #include <thread>
 
+#include "findmug/common/error.hpp"
 #include "findmug/daemon/daemon.hpp"
 #include "findmug/daemon/daemon_config.hpp"
 #include "findmug/daemon/pipeline.hpp"
 #include "findmug/daemon/service.hpp"
-#include "findmug/error.hpp"
 #include "findmug/io/frame_source.hpp"
 #include "findmug/version.hpp"
 #include "findmug_signals.hpp"

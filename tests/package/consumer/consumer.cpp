@@ -1,8 +1,8 @@
 // Uses the core library (a label name, the table extraction types) and the generated
 // LCM types from the installed findmug-dev package; prints what it found so that the
 // package test can check that both really linked and ran.
-#include <findmug/dataset.hpp>
-#include <findmug/labels.hpp>
+#include <findmug/frame/dataset.hpp>
+#include <findmug/labels/labels.hpp>
 #include <findmug/version.hpp>
 #include <findmug_lcm/tables_t.hpp>
 #include <iostream>

@@ -11,8 +11,8 @@
 #include <ostream>
 #include <string>
 
-#include "findmug/config.hpp"
 #include "findmug/daemon/daemon_config.hpp"
+#include "findmug/settings/config.hpp"
 
 namespace findmug::daemon {
 

@@ -29,10 +29,10 @@
 #include <string>
 #include <thread>
 
-#include "findmug/config.hpp"
 #include "findmug/daemon/daemon_config.hpp"
 #include "findmug/daemon/pipeline.hpp"
 #include "findmug/daemon/service.hpp"
+#include "findmug/settings/config.hpp"
 
 namespace findmug::io {
 class FrameSource;

@@ -21,9 +21,9 @@
 #include <string>
 #include <vector>
 
-#include "findmug/config.hpp"
-#include "findmug/semantic_map.hpp"
-#include "findmug/table_map.hpp"
+#include "findmug/map/semantic_map.hpp"
+#include "findmug/map/table_map.hpp"
+#include "findmug/settings/config.hpp"
 
 namespace findmug::daemon {
 

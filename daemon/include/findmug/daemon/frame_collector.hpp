@@ -37,7 +37,7 @@
 
 #include "findmug/daemon/daemon_config.hpp"
 #include "findmug/daemon/result_sinks.hpp"
-#include "findmug/frame.hpp"
+#include "findmug/frame/frame.hpp"
 
 namespace findmug::daemon {
 

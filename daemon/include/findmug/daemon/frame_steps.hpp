@@ -21,8 +21,8 @@
 
 #include "findmug/daemon/pose_input.hpp"
 #include "findmug/daemon/result_sinks.hpp"
-#include "findmug/frame.hpp"
-#include "findmug/segmenter.hpp"
+#include "findmug/frame/frame.hpp"
+#include "findmug/pipeline/segmenter.hpp"
 
 namespace findmug::daemon {
 

@@ -28,10 +28,10 @@
 #include <string>
 #include <thread>
 
-#include "findmug/config.hpp"
+#include "findmug/settings/config.hpp"
 #include "findmug/daemon/status_snapshot.hpp"
-#include "findmug/forest.hpp"
-#include "findmug/segmenter.hpp"
+#include "findmug/learner/forest.hpp"
+#include "findmug/pipeline/segmenter.hpp"
 
 namespace findmug::daemon {
 

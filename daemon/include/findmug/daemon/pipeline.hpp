@@ -77,7 +77,6 @@
 #include <optional>
 #include <string>
 
-#include "findmug/config.hpp"
 #include "findmug/daemon/command_input.hpp"
 #include "findmug/daemon/daemon_config.hpp"
 #include "findmug/daemon/frame_collector.hpp"
@@ -89,11 +88,12 @@
 #include "findmug/daemon/service.hpp"
 #include "findmug/daemon/stage.hpp"
 #include "findmug/daemon/status_snapshot.hpp"
-#include "findmug/forest.hpp"
-#include "findmug/frame.hpp"
+#include "findmug/frame/frame.hpp"
 #include "findmug/io/bus.hpp"
-#include "findmug/segmenter.hpp"
-#include "findmug/table_map.hpp"
+#include "findmug/learner/forest.hpp"
+#include "findmug/map/table_map.hpp"
+#include "findmug/pipeline/segmenter.hpp"
+#include "findmug/settings/config.hpp"
 
 namespace findmug::io {
 class FrameSource;

@@ -1,7 +1,7 @@
 // findmug/daemon/pose_input.hpp — the robot's pose in the map, received over LCM.
 //
 // With a pose, findmugd can give table positions in the map frame and keep
-// its persistent table map (findmug/table_map.hpp). The pose comes from the
+// its persistent table map (findmug/map/table_map.hpp). The pose comes from the
 // robot's localisation as findmug_lcm::robot_pose_t on FINDMUG_ROBOT_POSE[_suffix]
 // (see lcmtypes/robot_pose_t.lcm); findmugd only listens, it never needs one.
 //

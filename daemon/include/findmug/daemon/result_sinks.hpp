@@ -3,7 +3,7 @@
 // The pipeline's publish stage hands each labelled frame, in frame order and
 // on the publish thread, to the sinks registered on it, in registration order:
 //
-//   TableMapSink      the persistent table map (findmug/table_map.hpp) and the
+//   TableMapSink      the persistent table map (findmug/map/table_map.hpp) and the
 //                     rule for when it changes: a frame updates the map only
 //                     when it has a robot pose (within daemon.pose_max_age_s)
 //                     AND it was labelled (a ground plane and at least one
@@ -35,8 +35,8 @@
 
 #include "findmug/io/bus.hpp"
 #include "findmug/io/messages.hpp"
-#include "findmug/segmenter.hpp"
-#include "findmug/table_map.hpp"
+#include "findmug/map/table_map.hpp"
+#include "findmug/pipeline/segmenter.hpp"
 
 namespace findmug::daemon {
 

@@ -35,7 +35,7 @@
 #include "findmug/daemon/bounded_queue.hpp"
 #include "findmug/daemon/result_sinks.hpp"
 #include "findmug/io/bus.hpp"
-#include "findmug/semantic_map.hpp"
+#include "findmug/map/semantic_map.hpp"
 
 namespace findmug::daemon {
 

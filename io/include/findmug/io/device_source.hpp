@@ -36,7 +36,7 @@
 #include <string>
 #include <vector>
 
-#include "findmug/frame.hpp"
+#include "findmug/frame/frame.hpp"
 #include "findmug/io/frame_source.hpp"
 
 namespace findmug::io {

@@ -42,7 +42,7 @@
 #include <string>
 #include <string_view>
 
-#include "findmug/frame.hpp"
+#include "findmug/frame/frame.hpp"
 
 namespace findmug::io {
 

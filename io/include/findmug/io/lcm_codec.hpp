@@ -19,10 +19,10 @@
 #include <string_view>
 #include <vector>
 
-#include "findmug/frame.hpp"
+#include "findmug/frame/frame.hpp"
 #include "findmug/io/messages.hpp"
-#include "findmug/label_image.hpp"
-#include "findmug/tables.hpp"
+#include "findmug/labels/label_image.hpp"
+#include "findmug/tables/tables.hpp"
 #include "findmug_lcm/command_t.hpp"
 #include "findmug_lcm/label_image_t.hpp"
 #include "findmug_lcm/rgbd_frame_t.hpp"

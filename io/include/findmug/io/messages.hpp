@@ -13,10 +13,10 @@
 #include <string>
 #include <vector>
 
-#include "findmug/frame.hpp"
-#include "findmug/label_image.hpp"
-#include "findmug/pose2d.hpp"
-#include "findmug/tables.hpp"
+#include "findmug/common/pose2d.hpp"
+#include "findmug/frame/frame.hpp"
+#include "findmug/labels/label_image.hpp"
+#include "findmug/tables/tables.hpp"
 
 namespace findmug::io {
 

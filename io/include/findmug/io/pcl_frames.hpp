@@ -16,7 +16,7 @@
 #include <string>
 #include <vector>
 
-#include "findmug/frame.hpp"
+#include "findmug/frame/frame.hpp"
 
 namespace findmug::io {
 

@@ -13,7 +13,7 @@
 #include <string_view>
 #include <vector>
 
-#include "findmug/semantic_map.hpp"
+#include "findmug/map/semantic_map.hpp"
 #include "findmug_lcm/semantic_map_t.hpp"
 
 namespace findmug::io {

@@ -1,0 +1,180 @@
+// findmug/pipeline/segmenter.hpp — the whole pipeline for one frame, stage by stage.
+//
+// frame -> cloud + normals -> ground plane -> oversegmentation -> features
+//       [-> region features] -> forest p(y|x) [-> context features -> context
+//       forest p(y|x)] -> MRF -> label image -> tables
+// The bracketed stages run when the model has them (features.regions,
+// features.context); the model file is the source of truth and a config
+// that disagrees with it is refused.
+//
+// Each stage is a method taking and returning plain data so that the daemon
+// can run stages on different threads and tests can check each alone.
+// `process` runs them all in sequence. No threads, no LCM.
+#pragma once
+
+#include <memory>
+#include <mutex>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "findmug/cloud/cloud.hpp"
+#include "findmug/features/features.hpp"
+#include "findmug/frame/frame.hpp"
+#include "findmug/ground/ground.hpp"
+#include "findmug/labels/label_image.hpp"
+#include "findmug/learner/forest.hpp"
+#include "findmug/mrf/mrf.hpp"
+#include "findmug/settings/config.hpp"
+#include "findmug/supervoxels/oversegmentation.hpp"
+#include "findmug/tables/tables.hpp"
+
+namespace findmug {
+
+// Time of each stage in milliseconds: wall time in `timings`, the calling
+// thread's CPU time in `cpu_timings` (what a stage costs on a shared machine,
+// where wall time also counts the time other processes ran). In
+// `cpu_timings` the context stage is part of forest_ms (context_ms stays 0).
+struct StageTimings {
+  double cloud_ms = 0, normals_ms = 0, ground_ms = 0, overseg_ms = 0, features_ms = 0,
+         regions_ms = 0, forest_ms = 0, context_ms = 0, mrf_ms = 0, labels_ms = 0,
+         tables_ms = 0;
+  double total() const {
+    return cloud_ms + normals_ms + ground_ms + overseg_ms + features_ms + regions_ms + forest_ms +
+           context_ms + mrf_ms + labels_ms + tables_ms;
+  }
+};
+
+// Stage 1 output: geometry in camera and ground frames.
+struct PreparedFrame {
+  RgbdFrame frame;
+  OrganizedCloud cloud_camera;
+  NormalImage normals_camera;
+  std::optional<GroundPlane> ground;  // nullopt: no ground plane -> frame cannot be labelled
+  OrganizedCloud cloud_ground;        // empty when no ground
+  NormalImage normals_ground;
+  StageTimings timings;
+  StageTimings cpu_timings;
+};
+
+// Stage 2 output.
+struct SegmentedFrame {
+  PreparedFrame prepared;
+  Oversegmentation segmentation;
+  StageTimings timings;
+  StageTimings cpu_timings;
+};
+
+// Stage 3 output: everything a client needs.
+struct LabelledFrame {
+  SegmentedFrame segmented;
+  SegmentFeatures features;
+  // The model's p(y|x) per segment: the context stage's when the model has
+  // one (the first stage's are then in first_stage_probabilities).
+  std::vector<ClassProbabilities> forest_probabilities;
+  std::vector<ClassProbabilities> first_stage_probabilities;  // empty without a context stage
+  std::vector<std::uint8_t> forest_labels;  // argmax of forest_probabilities
+  MrfResult mrf;
+  LabelImage labels;                        // final (MRF if enabled, else forest)
+  std::vector<TableCluster> tables;
+  // Why tables were not found or were rejected (for the caller to log).
+  std::vector<std::string> table_diagnostics;
+  StageTimings timings;
+  StageTimings cpu_timings;
+};
+
+class Segmenter {
+ public:
+  // `forest` may be null for feature extraction only (training). A forest
+  // trained with other extraction settings is refused (checkModelMatchesConfig).
+  Segmenter(SegmenterConfig config, std::shared_ptr<const RandomForest> forest);
+
+  // `gt_labels` is only used when config.ground.source == FloorLabels.
+  // With ground.reestimate_every_frames > 1 the frames are taken as a stream
+  // from one mount: an estimated floor may come from an earlier frame.
+  PreparedFrame prepare(RgbdFrame frame, const std::vector<std::uint8_t>* gt_labels = nullptr) const;
+  SegmentedFrame oversegment(PreparedFrame prepared) const;
+  // Features only (used by the trainer).
+  SegmentFeatures features(const SegmentedFrame& segmented) const;
+  LabelledFrame classify(SegmentedFrame segmented) const;
+  // All stages. Throws findmug::Error for invalid frames; a frame without a
+  // ground plane comes back with an all-void label image.
+  LabelledFrame process(RgbdFrame frame, const std::vector<std::uint8_t>* gt_labels = nullptr) const;
+
+  // Hands the buffers of a frame the caller is done with back to the
+  // Segmenter: the next prepare(), oversegment() and classify() write into
+  // them instead of allocating (clouds, normal images, the segmentation with
+  // its per-segment pixel lists, features, distributions, MRF result, label
+  // image). Optional: without it every frame allocates fresh buffers; with it
+  // a stream of frames of one size allocates next to nothing (BENCHMARKS.md
+  // 9i). Results are the same either way. Thread-safe; at most
+  // kRecycledFrames frames are kept, further ones are freed.
+  void recycle(LabelledFrame&& done) const;
+  static constexpr std::size_t kRecycledFrames = 2;
+
+  const SegmenterConfig& config() const { return config_; }
+  const RandomForest* forest() const { return forest_.get(); }
+
+ private:
+  // estimateGround, or with ground.reestimate_every_frames > 1 the plane of
+  // an earlier frame while confirmGround accepts it (see GroundConfig).
+  std::optional<GroundPlane> groundOfStream(const OrganizedCloud& cloud,
+                                            const NormalImage& normals) const;
+
+  SegmenterConfig config_;
+  std::shared_ptr<const RandomForest> forest_;
+  std::unique_ptr<Oversegmenter> oversegmenter_;
+  // The floor kept between frames (ground.reestimate_every_frames > 1). The
+  // daemon prepares frames in order on one thread; the mutex only keeps
+  // concurrent callers safe (they then share one stream).
+  struct GroundMemory {
+    std::mutex mutex;
+    std::optional<GroundPlane> plane;  // as last estimated (its support is the reference)
+    int frames_since_estimate = 0;
+  };
+  std::unique_ptr<GroundMemory> ground_memory_ = std::make_unique<GroundMemory>();
+  // Buffers handed back by recycle(), taken by prepare() and oversegment().
+  struct Recycled {
+    std::mutex mutex;
+    std::vector<PreparedFrame> prepared;         // clouds and normal images
+    std::vector<Oversegmentation> segmentations;
+    std::vector<LabelledFrame> labelled;  // classify()'s outputs
+  };
+  std::unique_ptr<Recycled> recycled_ = std::make_unique<Recycled>();
+};
+
+// Throws findmug::Error naming the model and every setting whose value
+// differs when `forest` was trained with other feature-extraction settings
+// than `config` has (features would not mean what the trees learnt), or when
+// its columns or stages are not those the config computes (features.regions,
+// features.context; a format-2 model has neither). A model without recorded
+// settings (trained in-process) is only checked for its columns and stages.
+void checkModelMatchesConfig(const RandomForest& forest, const SegmenterConfig& config);
+
+// Column names of the first stage's rows for `config` (kFeatureNames, then
+// kRegionFeatureNames with features.regions, then kSceneFeatureNames with
+// features.scene), and of the context stage's.
+std::vector<std::string> firstStageFeatureNames(const SegmenterConfig& config);
+std::vector<std::string> contextStageFeatureNames(const SegmenterConfig& config);
+
+// Row-major first-stage rows of every segment: base features, then region
+// features when `features.regions` is non-empty, then scene features when
+// `features.scene` is.
+std::vector<float> firstStageRows(const SegmentFeatures& features);
+
+// The model's per-segment class distributions: the first stage, then, when
+// the model has a context stage, the context stage on the first stage's rows
+// plus context features of the first stage's answers. `weights` are the
+// segments' sizes (pixel counts). `first_stage` (optional) receives the first
+// stage's distributions.
+std::vector<ClassProbabilities> predictSegments(
+    const RandomForest& model, const SegmentFeatures& features, const std::vector<float>& weights,
+    const ContextConfig& context, std::vector<ClassProbabilities>* first_stage = nullptr,
+    double* context_ms = nullptr);
+
+// Per-segment training labels: the majority ground-truth label of each
+// segment's pixels; segments whose pixels are mostly void get kVoidLabel.
+std::vector<std::uint8_t> segmentMajorityLabels(const Oversegmentation& segmentation,
+                                                const std::vector<std::uint8_t>& gt_labels);
+
+}  // namespace findmug

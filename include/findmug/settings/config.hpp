@@ -1,0 +1,138 @@
+// findmug/settings/config.hpp — every tunable parameter, one YAML file plus overrides.
+//
+// Keys are `section.name` (e.g. `forest.num_trees`, `mrf.lambda`,
+// `overseg.seed_resolution_m`, `tables.safety_distance_m`). Unknown keys and
+// bad values are errors that name the key. Sections outside SegmenterConfig
+// are accepted only when registered (settings.hpp: configSections(); the core
+// registers `table_map`, other layers their own) and are kept as raw
+// key/value pairs in Config::extra for their owners to resolve.
+#pragma once
+
+#include <map>
+#include <string>
+#include <vector>
+
+#include "findmug/cloud/cloud.hpp"
+#include "findmug/features/context_features.hpp"
+#include "findmug/features/object_features.hpp"
+#include "findmug/features/region_features.hpp"
+#include "findmug/features/scene_features.hpp"
+#include "findmug/ground/ground.hpp"
+#include "findmug/learner/forest.hpp"
+#include "findmug/map/table_map.hpp"
+#include "findmug/mrf/mrf.hpp"
+#include "findmug/settings/offline_settings.hpp"
+#include "findmug/supervoxels/oversegmentation.hpp"
+#include "findmug/tables/tables.hpp"
+
+namespace findmug {
+
+// How the forest's training set is built from labelled frames (training
+// only: findmug-train, findmug-eval's cross-validation; a model does not
+// depend on them at run time, so they are not recorded as extraction settings).
+enum class SampleWeighting {
+  Patches,     // one vote per patch (the paper's)
+  Pixels,      // each patch weighs its pixel count: the figures are per pixel
+  SqrtPixels,  // in between: large patches count more, but not in proportion
+};
+// The classes the forest's splits are chosen by (training.split_labels).
+enum class SplitLabels {
+  Labels,  // the 8 findmug classes the leaves hold (the paper's)
+  Nyu40,   // the NYU-40 class of each patch (needs label40/ or the .mat file):
+           // "cabinet", "object" and "unknown" each gather unlike things, and
+           // splits that tell those apart can help the 8-class answer
+  Nyu13,   // the NYU-13 class of each patch (needs label13/): fewer, larger
+           // classes (books / objects / tv, bed / sofa, wall / window / picture)
+};
+
+struct TrainingOptions {
+  SampleWeighting sample_weight = SampleWeighting::Patches;  // training.sample_weight
+  SplitLabels split_labels = SplitLabels::Labels;            // training.split_labels
+  // Augmentation: each training frame also contributes the patches of this
+  // many other oversegmentations (training.extra_oversegmentations), the k-th
+  // with overseg.seed_resolution_m scaled by extra_seed_scale^j, j = 1, -1,
+  // 2, -2, ... (training.extra_seed_scale): more and more varied patches per
+  // frame. Evaluation and the daemon still use the configured one only.
+  int extra_oversegmentations = 0;
+  float extra_seed_scale = 0.8f;
+  // Augmentation: each training frame also contributes the patches of this
+  // many raw-like copies of it (degradeDepth with degrade.*, copy k with seed
+  // degraded_seed + k; training.degraded_copies, training.degraded_seed).
+  int degraded_copies = 0;
+  std::uint64_t degraded_seed = 7;
+};
+
+// The classes the model learns (learner.classes); the model merges them into
+// the 8 labels. Recorded in the model: the Segmenter refuses a model trained
+// on other classes. Supersedes nothing: training.split_labels (finer classes
+// for the forest's splits only, weighting by label) stays as it was, and the
+// two cannot be combined.
+enum class ClassScheme {
+  Labels,  // the 8 findmug labels (the paper's)
+  Nyu13,   // NYU-13 class x findmug label pairs (needs label13/)
+  Nyu40,   // NYU-40 classes (needs label40/ or the .mat file)
+};
+const char* classSchemeName(ClassScheme scheme);  // "labels", "nyu13", "nyu40"
+
+// What forest.class_weighting balances when the model has internal classes
+// (learner.class_weight; training only, not recorded in the model).
+enum class ClassWeight {
+  Labels,   // every label carries the same total weight, its internal classes
+            // in proportion to their frequency (the 8-class model's balance)
+  Classes,  // every internal class carries the same total weight (a label made
+            // of many internal classes, e.g. unknown, then weighs more)
+};
+
+struct LearnerOptions {
+  LearnerKind kind = LearnerKind::Forest;     // learner.kind
+  ClassScheme classes = ClassScheme::Labels;  // learner.classes
+  ClassWeight class_weight = ClassWeight::Labels;  // learner.class_weight
+};
+
+struct SegmenterConfig {
+  float max_depth_m = 10.0f;
+  NormalConfig normals;
+  GroundConfig ground;
+  OversegmentationConfig overseg;
+  RegionConfig regions;    // features.regions, features.region_*
+  SceneConfig scene;       // features.scene, features.scene_*
+  ObjectConfig objects;    // features.objects, features.objects_*
+  ContextConfig context;   // features.context, features.context_*
+  ForestParams forest;
+  LearnerOptions learner;  // learner.*
+  XGBoostParams xgboost;   // xgboost.* (learner.kind = xgboost)
+  MrfParams mrf;
+  bool use_mrf = true;
+  TableConfig tables;
+  TableMetricsConfig table_metrics;  // findmug-eval only: table instances and their matching
+  TrainingOptions training;          // training.*
+  DepthDegradationConfig degrade;    // degrade.*: the raw-depth model (training, evaluation)
+};
+
+struct Config {
+  SegmenterConfig segmenter;
+  // Everything under the registered sections outside SegmenterConfig, flattened:
+  // "daemon.source" -> "openni2", "table_map.forget_misses" -> "3".
+  std::map<std::string, std::string> extra;
+};
+
+// Parses YAML text; `origin` names it in errors (file path or "<flags>").
+Config parseConfig(const std::string& yaml_text, const std::string& origin);
+Config loadConfig(const std::string& path);
+// Applies "key=value" overrides (from command-line flags) on top.
+void applyOverride(Config& config, const std::string& key_equals_value);
+// The effective config as YAML, for the start-up log and reports.
+std::string dumpConfig(const Config& config);
+
+// The `table_map:` section: reads every "table_map.*" entry of config.extra
+// (tableMapSettings), checks consistency (validateTableMapConfig), writes the
+// effective values of every key back. Throws findmug::Error naming the key.
+TableMapConfig resolveTableMapConfig(Config& config);
+
+// The settings that shape the features (cloud.*, normals.*, overseg.*,
+// features.* except the training-only features.context_cross_fit_folds), as
+// "key" -> "value" in a stable order. The trainer stores them in the model;
+// a model is only run with the same values (see checkModelMatchesConfig).
+RandomForest::Settings extractionSettings(const SegmenterConfig& config);
+
+}  // namespace findmug

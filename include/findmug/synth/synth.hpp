@@ -1,0 +1,308 @@
+// findmug/synth/synth.hpp — synthetic apartment scenes rendered as Kinect-like RGB-D
+// with exact ground truth (library `findmug_synth`).
+//
+// What it is for: the README's default demo (no downloads), deterministic tests
+// of table clusters and search positions, replay latency tests and training
+// augmentation. Everything is a pure function of the seed: the same seed and
+// parameters give the same scene, path and bytes (our own counter-based RNG, no
+// std::*_distribution, whose output differs between standard libraries).
+//
+// WORLD FRAME. A room is the axis-aligned box [0, X] x [0, Y] x [0, H] metres:
+// z up, floor at z = 0, ceiling at z = H. Furniture yaw is about world z.
+//
+// CAMERA POSE. The robot base stands at (x, y) on the floor with heading `yaw`
+// (about z, 0 = +x). The camera sits above the base at `height_m`, looking along
+// the heading, tipped down by `pitch_rad` (> 0 = looking down) and rolled by
+// `roll_rad` (> 0 = image axes turned clockwise looking along the optical axis)
+// — exactly the CameraExtrinsics convention of frame.hpp / groundFromExtrinsics:
+//   camera_to_world = T(x, y, height) * Rz(yaw) * Ry(pitch) * R0 * Rz_optical(roll)
+// with R0 taking the optical frame (x right, y down, z forward) to a level
+// frame (x forward, y left, z up).
+//
+// GROUND-ALIGNED FRAME (ground.hpp) of a frame = the robot base frame: origin on
+// the floor below the camera, z up, x along the heading. Hence
+//   world_to_ground = (T(x, y, 0) * Rz(yaw))^-1
+// and groundFromExtrinsics(pose.extrinsics()).camera_to_ground equals
+// worldToGround(pose) * cameraToWorld(pose). `tableInGroundFrame` converts the
+// world-frame table truth into a given frame's ground-aligned frame, which is
+// where findTables() reports clusters and search positions.
+//
+// DEPTH NOISE MODEL (Kinect v1, structured light), applied per pixel to the
+// exact depth z (metres along the optical axis):
+//  1. Range: z < min_range_m or z > max_range_m -> 0 (no measurement).
+//  2. Grazing incidence: angle between the ray and the surface normal above
+//     grazing_start_deg -> dropped with a probability rising linearly to 1 at
+//     grazing_full_deg.
+//  3. Projector shadow: the IR projector sits projector_baseline_m to the
+//     camera's +x (Kinect v1: 7.5 cm); points it cannot see get no depth. With
+//     rectified geometry a point is lit iff its projector column
+//     u - fx*b/z is left of the projector columns of every pixel to its right
+//     on the same row, so shadows appear on the left of foreground objects.
+//  4. Disparity noise and quantisation (Khoshelham & Elberink 2012, "Accuracy
+//     and resolution of Kinect depth data for indoor mapping applications",
+//     Sensors 12(2)): the sensor measures an integer disparity d with
+//     1/z = k*d (+ const), k = 2.85e-3 1/m per disparity unit (their m/(f b)).
+//     We add Gaussian noise of sigma_d = 0.5 units to the exact disparity
+//     1/(k z), round to an integer and convert back, then round to mm. To first
+//     order that is their random-error model sigma_z = 0.5*k*z^2
+//     = 1.425e-3 * z^2 m (4 mm at 1.7 m, 2.3 cm at 4 m) and their depth
+//     resolution (quantisation step) k*z^2 = 2.85e-3 * z^2 m (7 cm at 5 m).
+//  Pixel noise is independent (the real sensor's is spatially correlated over
+//  its correlation window); the colour camera gets Gaussian noise of
+//  rgb_noise_sigma grey levels per channel.
+//
+// LABELS. Every pixel gets the true class of the surface it sees (no void):
+// doors and windows are Wall, shelves are Cabinet, mugs/boxes/books Object.
+#pragma once
+
+#include <Eigen/Geometry>
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "findmug/frame/dataset.hpp"
+#include "findmug/frame/frame.hpp"
+#include "findmug/labels/labels.hpp"
+
+namespace findmug::synth {
+
+// ---------------------------------------------------------------- scene ----
+
+enum class Shape { Box, Cylinder };  // cylinders are vertical (axis = world z)
+
+enum class Texture {
+  Plain,
+  Wood,    // grain stripes along the primitive's local x
+  Planks,  // floor boards along world x with per-board tone and seams
+  Tiles,   // square tiles with grout lines
+  Carpet,  // fine speckle
+  Panel,   // cabinet fronts: a dark seam between two doors
+};
+
+struct Material {
+  Rgb8 color;
+  Texture texture = Texture::Plain;
+  float texture_scale_m = 0.2f;  // board width, tile size, grain period
+};
+
+// One solid. Box: half extents along its local axes (local x/y yawed by `yaw`
+// about z). Cylinder: half_extent = (radius, radius, half height).
+struct Primitive {
+  Shape shape = Shape::Box;
+  Eigen::Vector3d center = Eigen::Vector3d::Zero();  // world, metres
+  double yaw = 0.0;                                  // rad about world z
+  Eigen::Vector3d half_extent = Eigen::Vector3d::Constant(0.1);
+  int object = 0;  // index into SynthScene::objects
+  Material material;
+};
+
+// A semantic object: a table, a chair, a mug, the floor, one wall, ...
+struct SceneObject {
+  std::string kind;  // "floor", "wall", "door", "window", "table", "chair", "mug", ...
+  Label label = Label::Unknown;
+  int table = -1;  // index into SynthScene::tables for tables, else -1
+};
+
+enum class TableShape { Rectangular, Round };
+
+// Ground truth of one table, world frame.
+struct TableTruth {
+  int id = 0;      // index in SynthScene::tables
+  int object = 0;  // index in SynthScene::objects
+  TableShape shape = TableShape::Rectangular;
+  std::string kind;  // "dining", "desk", "coffee", "bar"
+  Eigen::Vector2d center_xy = Eigen::Vector2d::Zero();
+  double yaw = 0.0;                                // rad about z (long side along local x)
+  Eigen::Vector2d size = Eigen::Vector2d::Zero();  // length, width (round: diameter twice)
+  double height = 0.0;                             // top surface above the floor, metres
+  // Outline of the top at z = height, counter-clockwise. Round tops are a
+  // 64-gon inscribed in the circle (at most 0.12% of the radius inside it).
+  std::vector<Eigen::Vector2d> top_polygon;
+};
+
+// 2-D footprint of furniture the robot cannot drive through.
+struct Obstacle {
+  std::vector<Eigen::Vector2d> polygon;  // convex, counter-clockwise, world xy
+  double top_z = 0.0;
+  int object = 0;
+};
+
+struct SynthScene {
+  std::uint64_t seed = 0;
+  Eigen::Vector3d room_size = Eigen::Vector3d(5, 4, 2.6);  // X, Y, ceiling height H
+  Material floor_material, wall_material, ceiling_material;
+  // Objects 0..5 are the room shell: floor, ceiling, walls x=0, x=X, y=0, y=Y.
+  std::vector<SceneObject> objects;
+  std::vector<Primitive> primitives;  // everything except the room shell
+  std::vector<TableTruth> tables;
+  std::vector<Obstacle> obstacles;
+};
+
+inline constexpr int kFloorObject = 0;
+inline constexpr int kCeilingObject = 1;
+inline constexpr int kFirstWallObject = 2;  // walls: x=0, x=X, y=0, y=Y
+
+// Ranges are inclusive [min, max]; a fixed value is min == max.
+struct ApartmentParams {
+  double room_x_min = 4.5, room_x_max = 7.0;
+  double room_y_min = 4.0, room_y_max = 6.0;
+  double ceiling_min = 2.4, ceiling_max = 2.8;
+  int tables_min = 1, tables_max = 3;
+  double table_height_min = 0.45, table_height_max = 1.1;
+  int cabinets_min = 1, cabinets_max = 3;
+  int shelves_min = 0, shelves_max = 2;
+  int doors_min = 1, doors_max = 2;
+  int windows_min = 0, windows_max = 2;
+  int objects_per_table_min = 1, objects_per_table_max = 5;
+};
+
+// Throws findmug::Error naming the field when a range is empty or absurd.
+void validate(const ApartmentParams& params);
+
+// A random but deterministic apartment room with at least one table the
+// camera path can look at.
+SynthScene makeApartment(std::uint64_t seed, const ApartmentParams& params = {});
+
+// An empty room (shell only), for tests that build their own scene.
+SynthScene makeEmptyRoom(const Eigen::Vector3d& room_size);
+
+// Appends an object made of `parts` (their `object` field is overwritten) and
+// returns its index.
+int addObject(SynthScene& scene, const std::string& kind, Label label,
+              std::vector<Primitive> parts);
+
+// ---------------------------------------------------------------- camera ----
+
+struct CameraPose {
+  Eigen::Vector2d xy = Eigen::Vector2d::Zero();  // robot base on the floor, world
+  double yaw = 0.0;                              // heading about z
+  double height_m = 1.2;                         // optical centre above the floor
+  double pitch_rad = 0.5;                        // > 0 looking down
+  double roll_rad = 0.0;
+  double time_s = 0.0;  // since the start of the sequence
+};
+
+Eigen::Isometry3d cameraToWorld(const CameraPose& pose);
+Eigen::Isometry3d worldToGround(const CameraPose& pose);
+CameraExtrinsics extrinsicsOf(const CameraPose& pose);
+
+// The table as seen in the frame's ground-aligned frame: centre, yaw and top
+// polygon transformed (height and size unchanged).
+TableTruth tableInGroundFrame(const TableTruth& table, const CameraPose& pose);
+
+// Signed distance (metres) from a floor point to the outline of the table top
+// polygon, in whatever frame the table is given: negative inside, positive
+// outside. E.g. a search position should be at about safety_distance_m.
+double signedDistanceToTop(const TableTruth& table, const Eigen::Vector2d& xy);
+
+struct CameraPathParams {
+  double height_min = 1.0, height_max = 1.4;          // camera height, per sequence
+  double pitch_min_deg = 20.0, pitch_max_deg = 45.0;  // tilt down, per sequence
+  double speed_mps = 0.4;                             // driving speed
+  double max_yaw_rate = 0.8;                          // rad/s, head/base turning
+  double dwell_s = 2.0;                               // pause at each viewpoint
+  double pan_amplitude_rad = 0.15;                    // head pan while dwelling
+  double robot_radius_m = 0.3;                        // clearance to furniture
+  double max_view_distance_m = 2.6;                   // viewpoint to table centre
+};
+
+void validate(const CameraPathParams& params);
+
+// A robot's camera driving between viewpoints around the tables (two per table
+// where possible), always turning to look at the table it visits next. The
+// camera height and pitch are drawn once per sequence from the ranges. Throws
+// when the scene has no table the robot can reach.
+std::vector<CameraPose> cameraPath(const SynthScene& scene, int n_frames, double fps,
+                                   const CameraPathParams& params = {});
+
+// ---------------------------------------------------------------- render ----
+
+struct DepthNoiseParams {
+  bool enabled = true;  // false: exact depth (still rounded to mm), no dropouts
+  double min_range_m = 0.5;
+  double max_range_m = 4.5;
+  double disparity_k = 2.85e-3;     // 1/m per disparity unit (K&E 2012)
+  double disparity_sigma = 0.5;     // disparity units (K&E 2012)
+  bool quantise = true;             // integer disparities
+  double grazing_start_deg = 78.0;  // dropout begins
+  double grazing_full_deg = 88.0;   // everything dropped beyond
+  bool projector_shadows = true;
+  double projector_baseline_m = 0.075;
+  double rgb_noise_sigma = 2.0;  // grey levels
+};
+
+struct RenderOptions {
+  int width = 640;
+  int height = 480;
+  CameraIntrinsics intrinsics;  // Kinect: fx = fy = 525, cx = 319.5, cy = 239.5
+  DepthNoiseParams noise;
+};
+
+void validate(const RenderOptions& options);
+
+struct RenderedFrame {
+  LabeledFrame labeled;              // noisy depth, colour, labels, intrinsics, extrinsics
+  std::vector<float> true_depth_m;   // exact z along the optical axis, per pixel
+  std::vector<std::int32_t> object;  // index into SynthScene::objects, per pixel
+};
+
+// Ray casts one frame. `noise_seed` selects the noise realisation (the same
+// seed gives the same bytes). Frame name/seq/utime are left for the caller.
+RenderedFrame render(const SynthScene& scene, const CameraPose& pose, const RenderOptions& options,
+                     std::uint64_t noise_seed);
+
+// One depth sample of the noise model above for an exact depth z (metres) on
+// a surface seen head-on, without dropouts: the millimetre value written to
+// the depth image (0 when out of range). `gaussian` is a standard normal
+// sample (the renderer draws it from a per-pixel hash).
+std::uint16_t noisyDepthMm(double z_m, const DepthNoiseParams& noise, double gaussian);
+
+// --------------------------------------------------------- ground truth ----
+
+struct SequenceGroundTruth {
+  std::uint64_t seed = 0;
+  double fps = 30.0;
+  int width = 640, height = 480;
+  CameraIntrinsics intrinsics;
+  Eigen::Vector3d room_size = Eigen::Vector3d::Zero();
+  std::vector<std::string> frame_names;
+  std::vector<std::uint64_t> frame_utimes;
+  std::vector<CameraPose> poses;
+  std::vector<TableTruth> tables;
+  // Furniture footprints the robot cannot drive through (tables included),
+  // world frame. Absent from files written before they were recorded.
+  std::vector<Obstacle> obstacles;
+};
+
+// Whether a round robot of `robot_radius` standing at world `xy` is clear of
+// the walls and of every obstacle footprint (the same test the camera path
+// planner uses): a search position is "reachable in the ground truth".
+bool robotFits(const Eigen::Vector3d& room_size, const std::vector<Obstacle>& obstacles,
+               const Eigen::Vector2d& xy, double robot_radius);
+
+// YAML (DIR/ground_truth.yaml). Reading throws findmug::Error naming the file
+// and the missing or malformed field.
+void writeGroundTruth(const std::string& path, const SequenceGroundTruth& truth);
+SequenceGroundTruth readGroundTruth(const std::string& path);
+
+struct SequenceSpec {
+  std::uint64_t seed = 1;
+  int frames = 30;
+  double fps = 30.0;
+  ApartmentParams apartment;
+  CameraPathParams path;
+  RenderOptions render;
+};
+
+// Frame i is named "%06d"; utime = round(i * 1e6 / fps) microseconds.
+std::string frameName(int index);
+
+// What `findmug-synth` does: renders the sequence into the dataset folder
+// layout of dataset.hpp (rgb/, depth/, label8/ via writeLabeledFrame, plus
+// intrinsics.yaml and extrinsics.csv) and DIR/ground_truth.yaml. Returns the
+// ground truth it wrote. `progress(done, total)` may be empty.
+SequenceGroundTruth writeSequence(const std::string& dir, const SequenceSpec& spec,
+                                  const std::function<void(int, int)>& progress = {});
+
+}  // namespace findmug::synth

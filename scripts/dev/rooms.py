@@ -1,0 +1,146 @@
+#!/usr/bin/env python3
+"""The core's rooms (issue 37): where each file of src/ and include/findmug/ lives.
+
+  rooms.py move      git-mv every flat core file into its room (skips what is moved) and
+                     then rewrites references (below)
+  rooms.py includes  rewrite old flat references in every tracked text file: #include
+                     "findmug/X.hpp" -> "findmug/<room>/X.hpp", internal "X_internal.hpp"
+                     -> "<room>/X_internal.hpp", and paths such as src/X.cpp in comments and
+                     documents. Idempotent: run it after merging a branch that predates the move.
+"""
+import os
+import re
+import subprocess
+import sys
+
+# room -> (public headers in include/findmug/, sources and internal headers in src/, unit tests)
+ROOMS = {
+    "common": (["error", "numbers", "pose2d"],
+               ["numbers.cpp", "pose2d.cpp", "cpu_features.hpp", "floor_to_int.hpp", "int_runs.hpp",
+                "min_max2.hpp", "scratch.hpp", "simd_table.hpp", "simd_vec3.hpp", "type_layout.cpp",
+                "type_layout.hpp", "union_find.hpp", "point_extent.hpp", "moments_internal.hpp"],
+               ["numbers", "type_layout"]),
+    "frame": (["frame", "image_io", "dataset"],
+              ["frame.cpp", "image_io.cpp", "dataset.cpp"],
+              ["image_io", "dataset"]),
+    "cloud": (["cloud"], ["cloud.cpp", "cloud_internal.hpp"], ["cloud"]),
+    "ground": (["ground"], ["ground.cpp", "ground_internal.hpp"], ["ground"]),
+    "supervoxels": (["oversegmentation"],
+                    ["oversegmentation.cpp", "oversegmentation_internal.hpp", "overseg_organized.cpp",
+                     "overseg_pcl.cpp", "lab_internal.hpp"],
+                    ["oversegmentation"]),
+    "features": (["features", "region_features", "scene_features", "context_features", "object_features"],
+                 ["features.cpp", "features_internal.hpp", "region_features.cpp", "scene_features.cpp",
+                  "context_features.cpp", "object_features.cpp"],
+                 ["features", "region_features", "scene_features", "context_features", "object_features"]),
+    "learner": (["forest"],
+                ["forest.cpp", "forest_format.cpp", "forest_format.hpp", "forest_train.cpp",
+                 "xgboost_learner.cpp", "xgboost_learner.hpp"],
+                ["forest", "learner"]),
+    "mrf": (["mrf"], ["mrf.cpp", "mrf_internal.hpp"], ["mrf"]),
+    "labels": (["labels", "label_image"], ["label_image.cpp"], ["label_image"]),
+    "pipeline": (["segmenter"], ["segmenter.cpp"], ["segmenter", "buffer_reuse"]),
+    "tables": (["tables", "table_regions"],
+               ["tables.cpp", "tables_internal.hpp", "table_clustering.cpp", "table_geometry.cpp",
+                "table_reachability.cpp", "table_regions.cpp", "table_search_positions.cpp"],
+               ["tables", "table_regions"]),
+    "map": (["table_map", "semantic_map"], ["table_map.cpp", "semantic_map.cpp"],
+            ["table_map", "semantic_map"]),
+    "settings": (["config", "settings"], ["config.cpp", "settings.cpp"], ["config", "settings"]),
+    "offline": (["training", "metrics", "table_metrics", "cv_folds", "depth_degradation", "mrf_context",
+                 "nyu_mat"],
+                ["training.cpp", "metrics.cpp", "table_metrics.cpp", "cv_folds.cpp",
+                 "depth_degradation.cpp", "mrf_context.cpp", "nyu_mat.cpp"],
+                ["cv_folds", "depth_degradation", "mrf_context", "nyu_mat", "table_metrics"]),
+    "synth": (["synth"], [], ["synth"]),
+}
+
+
+def top():
+    return subprocess.check_output(["git", "rev-parse", "--show-toplevel"], text=True).strip()
+
+
+def git_mv(src, dst):
+    if os.path.exists(src) and not os.path.exists(dst):
+        os.makedirs(os.path.dirname(dst), exist_ok=True)
+        subprocess.check_call(["git", "mv", src, dst])
+
+
+def move():
+    for room, (headers, sources, tests) in ROOMS.items():
+        for h in headers:
+            git_mv(f"include/findmug/{h}.hpp", f"include/findmug/{room}/{h}.hpp")
+        for s in sources:
+            git_mv(f"src/{s}", f"src/{room}/{s}")
+        for t in tests:
+            git_mv(f"tests/unit/{t}_test.cpp", f"tests/unit/{room}/{t}_test.cpp")
+    left = [f for f in os.listdir("src") if os.path.isfile(os.path.join("src", f)) and f != "CMakeLists.txt"]
+    left += [f for f in os.listdir("include/findmug") if os.path.isfile(os.path.join("include/findmug", f))
+             and f != "version.hpp.in"]
+    left += [f for f in os.listdir("tests/unit") if f.endswith("_test.cpp")]
+    if left:
+        sys.exit("rooms.py: no room for " + ", ".join(sorted(left)) + " (add them to ROOMS)")
+
+
+def replacements():
+    """(compiled pattern, replacement) pairs, each matching only the old flat spelling."""
+    pairs = []
+    for room, (headers, sources, tests) in ROOMS.items():
+        for h in headers:
+            pairs.append((re.compile(r'(?<![\w/])findmug/' + re.escape(h) + r'\.hpp\b'),
+                          f"findmug/{room}/{h}.hpp"))
+        for s in sources:
+            # include/findmug/x.hpp and src/x.cpp spelled as paths in text and CMake
+            pairs.append((re.compile(r'(?<![\w/])src/' + re.escape(s) + r'(?![\w])'), f"src/{room}/{s}"))
+            if s.endswith(".hpp"):
+                pairs.append((re.compile(r'#include "' + re.escape(s) + '"'), f'#include "{room}/{s}"'))
+        for t in tests:
+            pairs.append((re.compile(r'(?<![\w/])tests/unit/' + re.escape(t) + r'_test\.cpp\b'),
+                          f"tests/unit/{room}/{t}_test.cpp"))
+    pairs.append((re.compile(r'(?<![\w/])include/findmug/([a-z_0-9]+)\.hpp\b'), None))
+    return pairs
+
+
+def header_room():
+    return {h: room for room, (headers, _, _) in ROOMS.items() for h in headers}
+
+
+def rewrite_text(text, pairs, rooms_of):
+    for pattern, repl in pairs:
+        if repl is None:
+            text = pattern.sub(lambda m: (f"include/findmug/{rooms_of[m.group(1)]}/{m.group(1)}.hpp"
+                                          if m.group(1) in rooms_of else m.group(0)), text)
+        else:
+            text = pattern.sub(repl, text)
+    return text
+
+
+def includes():
+    pairs = replacements()
+    rooms_of = header_room()
+    files = subprocess.check_output(["git", "ls-files"], text=True).split("\n")
+    files += subprocess.check_output(["git", "ls-files", "--others", "--exclude-standard"], text=True).split("\n")
+    changed = 0
+    for f in files:
+        if not f or not os.path.isfile(f) or f.startswith(("models/", "tests/fixtures/")):
+            continue
+        if f == "scripts/dev/rooms.py" or f.endswith((".png", ".jpg", ".fmf", ".gz", ".lcmlog", ".bin", ".oni")):
+            continue
+        try:
+            text = open(f, encoding="utf-8").read()
+        except (UnicodeDecodeError, IsADirectoryError):
+            continue
+        new = rewrite_text(text, pairs, rooms_of)
+        if new != text:
+            open(f, "w", encoding="utf-8").write(new)
+            changed += 1
+    print(f"rooms.py: rewrote references in {changed} files")
+
+
+if __name__ == "__main__":
+    os.chdir(top())
+    if len(sys.argv) != 2 or sys.argv[1] not in ("move", "includes"):
+        sys.exit(__doc__)
+    if sys.argv[1] == "move":
+        move()
+    includes()

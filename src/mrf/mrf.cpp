@@ -1,0 +1,347 @@
+// Pairwise MRF over the supervoxel adjacency graph, solved by min-sum loopy
+// belief propagation.
+//
+// Unary cost U_i(y) = λ (1 - p_i(y)); Potts pairwise cost w_ij [y_i != y_j]
+// with w_ij = exp(-‖c_i - c_j‖ / σ). Messages live on directed edges: edge k
+// of the input gives directed edges 2k (a -> b) and 2k+1 (b -> a), so the
+// reverse of directed edge e is e ^ 1.
+//
+// Potts makes a message cheap: with h(y) = belief of the sender minus the
+// message it got from the receiver,
+//   m(y) = min( h(y), min_y' h(y') + w ) - min_y' h(y')
+//        = min( h(y) - min h, w ),
+// which is O(L) instead of O(L^2). Messages are normalised (minimum 0), so
+// they stay within [0, w] ⊂ [0, 1] and an absolute convergence tolerance is
+// meaningful. Updates are synchronous (all messages from the previous
+// iteration's beliefs) with damping, which makes the result independent of
+// the edge order and helps convergence on loopy graphs.
+#include "findmug/mrf/mrf.hpp"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <limits>
+#include <string>
+
+#include "common/cpu_features.hpp"
+#include "findmug/common/error.hpp"
+#include "mrf/mrf_internal.hpp"
+#include "common/scratch.hpp"
+
+namespace findmug {
+
+namespace {
+
+// Fixed-size Eigen arrays so that the per-label loops (add, min, clamp)
+// compile to SIMD instructions without relying on -ffast-math.
+using Costs = Eigen::Array<float, kNumLabels, 1>;
+
+void validateParams(const MrfParams& p) {
+  auto fail = [](const std::string& field, float value, const std::string& rule) {
+    throw Error("MRF parameter " + field + " = " + std::to_string(value) + " is invalid (" + rule +
+                ")");
+  };
+  if (!(std::isfinite(p.lambda) && p.lambda >= 0.0f)) fail("lambda", p.lambda, "expected >= 0");
+  if (!(std::isfinite(p.sigma) && p.sigma > 0.0f)) fail("sigma", p.sigma, "expected > 0");
+  if (p.max_iterations < 0)
+    fail("max_iterations", static_cast<float>(p.max_iterations), "expected >= 0");
+  if (!(p.damping >= 0.0f && p.damping < 1.0f)) fail("damping", p.damping, "expected in [0, 1)");
+  if (!(std::isfinite(p.convergence_tol) && p.convergence_tol >= 0.0f))
+    fail("convergence_tol", p.convergence_tol, "expected >= 0");
+}
+
+void validateGraph(const std::vector<ClassProbabilities>& unaries,
+                   const std::vector<Eigen::Vector3f>& centroids,
+                   const std::vector<std::pair<int, int>>& edges) {
+  if (unaries.size() != centroids.size())
+    throw Error("MRF: " + std::to_string(unaries.size()) + " unaries but " +
+                std::to_string(centroids.size()) + " centroids");
+  // Probabilities from the forest; a little slack for rounding.
+  constexpr float kSlack = 1e-3f;
+  for (std::size_t i = 0; i < unaries.size(); ++i) {
+    for (int y = 0; y < kNumLabels; ++y) {
+      const float p = unaries[i][y];
+      if (!(std::isfinite(p) && p >= -kSlack && p <= 1.0f + kSlack))
+        throw Error("MRF: unary of node " + std::to_string(i) + " label " +
+                    std::string(kLabelNames[y]) + " is " + std::to_string(p) +
+                    " (expected a probability)");
+    }
+    if (!centroids[i].allFinite())
+      throw Error("MRF: centroid of node " + std::to_string(i) + " is not finite");
+  }
+  const auto n = static_cast<long long>(unaries.size());
+  for (std::size_t k = 0; k < edges.size(); ++k) {
+    const auto [a, b] = edges[k];
+    if (a < 0 || b < 0 || a >= n || b >= n)
+      throw Error("MRF: edge " + std::to_string(k) + " (" + std::to_string(a) + ", " +
+                  std::to_string(b) + ") refers to a node outside 0.." + std::to_string(n - 1));
+    if (a == b)
+      throw Error("MRF: edge " + std::to_string(k) + " is a self-edge on node " +
+                  std::to_string(a));
+  }
+}
+
+float pairwiseWeight(const Eigen::Vector3f& a, const Eigen::Vector3f& b, float sigma) {
+  return std::exp(-(a - b).norm() / sigma);
+}
+
+#if defined(FINDMUG_AVX2_DISPATCH)
+static_assert(kNumLabels == 8 && sizeof(Costs) == 8 * sizeof(float),
+              "the AVX2 path holds one node's costs in one register");
+
+// The minimum (or maximum) of v's eight lanes, in every lane. Exact in any
+// order, so it matches the portable code's minCoeff/maxCoeff.
+__attribute__((target("avx2"))) inline __m256 pickExtreme(__m256 a, __m256 b, bool maximum) {
+  return maximum ? _mm256_max_ps(a, b) : _mm256_min_ps(a, b);
+}
+__attribute__((target("avx2"))) inline __m256 laneExtreme(__m256 v, bool maximum) {
+  __m256 t = pickExtreme(v, _mm256_permute2f128_ps(v, v, 1), maximum);
+  t = pickExtreme(t, _mm256_shuffle_ps(t, t, _MM_SHUFFLE(1, 0, 3, 2)), maximum);
+  return pickExtreme(t, _mm256_shuffle_ps(t, t, _MM_SHUFFLE(2, 3, 0, 1)), maximum);
+}
+__attribute__((target("avx2"))) inline __m256 laneMin(__m256 v) { return laneExtreme(v, false); }
+__attribute__((target("avx2"))) inline __m256 laneMax(__m256 v) { return laneExtreme(v, true); }
+
+// computeBeliefs of solveMrfInto: each node's unary plus its incoming
+// messages, added in the same order.
+__attribute__((target("avx2"))) void beliefsAvx2(const Costs* unary, const Costs* messages,
+                                                const std::uint32_t* in_begin,
+                                                const std::uint32_t* incoming,
+                                                std::size_t num_nodes, Costs* belief) {
+  for (std::size_t i = 0; i < num_nodes; ++i) {
+    __m256 b = _mm256_loadu_ps(unary[i].data());
+    for (std::uint32_t k = in_begin[i]; k < in_begin[i + 1]; ++k)
+      b = _mm256_add_ps(b, _mm256_loadu_ps(messages[incoming[k]].data()));
+    _mm256_storeu_ps(belief[i].data(), b);
+  }
+}
+
+// One round of messages of solveMrfInto's loop, one directed edge's eight
+// labels per register (Eigen's portable code takes two SSE halves). The
+// same operations per label in the same order (no FMA: the target is
+// "avx2", not "fma"), and min/max are exact in any order, so the same
+// messages to the bit. Returns the largest change of any message entry.
+__attribute__((target("avx2"))) float messageRoundAvx2(const Costs* belief, const Costs* messages,
+                                                      const std::uint32_t* source,
+                                                      const float* weight, std::size_t num_directed,
+                                                      float take, float keep, Costs* next) {
+  const __m256 take8 = _mm256_set1_ps(take);
+  const __m256 keep8 = _mm256_set1_ps(keep);
+  const __m256 abs_mask = _mm256_castsi256_ps(_mm256_set1_epi32(0x7fffffff));
+  __m256 max_change = _mm256_setzero_ps();
+  for (std::size_t e = 0; e < num_directed; ++e) {
+    const __m256 h = _mm256_sub_ps(_mm256_loadu_ps(belief[source[e]].data()),
+                                   _mm256_loadu_ps(messages[e ^ 1].data()));
+    const __m256 old = _mm256_loadu_ps(messages[e].data());
+    __m256 m = _mm256_add_ps(
+        _mm256_mul_ps(take8, _mm256_min_ps(_mm256_sub_ps(h, laneMin(h)),
+                                           _mm256_set1_ps(weight[e / 2]))),
+        _mm256_mul_ps(keep8, old));
+    m = _mm256_sub_ps(m, laneMin(m));
+    max_change = _mm256_max_ps(max_change, _mm256_and_ps(_mm256_sub_ps(m, old), abs_mask));
+    _mm256_storeu_ps(next[e].data(), m);
+  }
+  return _mm_cvtss_f32(_mm256_castps256_ps128(laneMax(max_change)));
+}
+#endif
+
+}  // namespace
+
+MrfResult solveMrf(const std::vector<ClassProbabilities>& unaries,
+                   const std::vector<Eigen::Vector3f>& centroids,
+                   const std::vector<std::pair<int, int>>& edges, const MrfParams& params) {
+  MrfResult result;
+  solveMrfInto(unaries, centroids, edges, params, result);
+  return result;
+}
+
+void solveMrfInto(const std::vector<ClassProbabilities>& unaries,
+                  const std::vector<Eigen::Vector3f>& centroids,
+                  const std::vector<std::pair<int, int>>& edges, const MrfParams& params,
+                  MrfResult& result) {
+  detail::solveMrfInto(unaries, centroids, edges, params, result, detail::MrfSimd::Auto);
+}
+
+MrfResult solveMrfScaled(const std::vector<ClassProbabilities>& unaries,
+                         const std::vector<Eigen::Vector3f>& centroids,
+                         const std::vector<std::pair<int, int>>& edges,
+                         const std::vector<float>& edge_scale, const MrfParams& params) {
+  MrfResult result;
+  detail::solveMrfInto(unaries, centroids, edges, params, result, detail::MrfSimd::Auto,
+                       &edge_scale);
+  return result;
+}
+
+void detail::solveMrfInto(const std::vector<ClassProbabilities>& unaries,
+                          const std::vector<Eigen::Vector3f>& centroids,
+                          const std::vector<std::pair<int, int>>& edges, const MrfParams& params,
+                          MrfResult& result, MrfSimd simd, const std::vector<float>* edge_scale) {
+  validateParams(params);
+  validateGraph(unaries, centroids, edges);
+  if (edge_scale) {
+    if (edge_scale->size() != edges.size())
+      throw Error("MRF: " + std::to_string(edge_scale->size()) + " edge scales for " +
+                  std::to_string(edges.size()) + " edges");
+    for (std::size_t k = 0; k < edge_scale->size(); ++k)
+      if (!(std::isfinite((*edge_scale)[k]) && (*edge_scale)[k] >= 0.0f))
+        throw Error("MRF: scale of edge " + std::to_string(k) + " is " +
+                    std::to_string((*edge_scale)[k]) + " (expected a finite number >= 0)");
+  }
+
+  const std::size_t num_nodes = unaries.size();
+  const std::size_t num_directed = 2 * edges.size();
+
+  // Working memory kept per thread between frames (scratch.hpp).
+  struct Buffers {
+    std::vector<Costs> unary, messages, next, belief;
+    std::vector<std::uint32_t> source, target, in_begin, incoming, fill;
+    std::vector<float> weight;
+  };
+  thread_local Buffers buffers;
+  detail::Borrowed unary_buffer(buffers.unary), messages_buffer(buffers.messages),
+      next_buffer(buffers.next), belief_buffer(buffers.belief);
+  detail::Borrowed source_buffer(buffers.source), target_buffer(buffers.target),
+      in_begin_buffer(buffers.in_begin), incoming_buffer(buffers.incoming),
+      fill_buffer(buffers.fill);
+  detail::Borrowed weight_buffer(buffers.weight);
+
+  // Unary costs.
+  std::vector<Costs>& unary = *unary_buffer;
+  unary.resize(num_nodes);
+  for (std::size_t i = 0; i < num_nodes; ++i)
+    unary[i] = params.lambda * (1.0f - Eigen::Map<const Costs>(unaries[i].data()));
+
+  // Directed edges: source, target, weight; plus per-node incoming lists (CSR).
+  std::vector<std::uint32_t>& source = *source_buffer;
+  std::vector<std::uint32_t>& target = *target_buffer;
+  source.resize(num_directed);
+  target.resize(num_directed);
+  std::vector<float>& weight = *weight_buffer;
+  weight.resize(edges.size());
+  std::vector<std::uint32_t>& in_begin = *in_begin_buffer;
+  in_begin.assign(num_nodes + 1, 0);
+  for (std::size_t k = 0; k < edges.size(); ++k) {
+    const auto a = static_cast<std::uint32_t>(edges[k].first);
+    const auto b = static_cast<std::uint32_t>(edges[k].second);
+    source[2 * k] = a;
+    target[2 * k] = b;
+    source[2 * k + 1] = b;
+    target[2 * k + 1] = a;
+    weight[k] = pairwiseWeight(centroids[a], centroids[b], params.sigma);
+    if (edge_scale) weight[k] *= (*edge_scale)[k];
+    ++in_begin[a + 1];
+    ++in_begin[b + 1];
+  }
+  for (std::size_t i = 0; i < num_nodes; ++i) in_begin[i + 1] += in_begin[i];
+  std::vector<std::uint32_t>& incoming = *incoming_buffer;
+  incoming.resize(num_directed);
+  {
+    std::vector<std::uint32_t>& fill = *fill_buffer;
+    fill.assign(in_begin.begin(), in_begin.end() - 1);
+    for (std::size_t e = 0; e < num_directed; ++e)
+      incoming[fill[target[e]]++] = static_cast<std::uint32_t>(e);
+  }
+
+  std::vector<Costs>& messages = *messages_buffer;
+  messages.assign(num_directed, Costs::Zero());
+  std::vector<Costs>& next = *next_buffer;
+  next.resize(num_directed);
+  std::vector<Costs>& belief = *belief_buffer;
+  belief.resize(num_nodes);
+#if defined(FINDMUG_AVX2_DISPATCH)
+  const bool avx2 = simd == detail::MrfSimd::Auto && detail::cpuHasAvx2();
+#else
+  (void)simd;  // no SIMD path on this platform
+#endif
+  auto computeBeliefs = [&] {
+#if defined(FINDMUG_AVX2_DISPATCH)
+    if (avx2) {
+      beliefsAvx2(unary.data(), messages.data(), in_begin.data(), incoming.data(), num_nodes,
+                  belief.data());
+      return;
+    }
+#endif
+    for (std::size_t i = 0; i < num_nodes; ++i) {
+      Costs b = unary[i];
+      for (std::uint32_t k = in_begin[i]; k < in_begin[i + 1]; ++k) b += messages[incoming[k]];
+      belief[i] = b;
+    }
+  };
+
+  result.iterations = 0;
+  result.converged = edges.empty();
+  const float keep = params.damping;
+  const float take = 1.0f - params.damping;
+  for (int iter = 0; iter < params.max_iterations && !edges.empty(); ++iter) {
+    computeBeliefs();
+    float max_change = 0.0f;
+#if defined(FINDMUG_AVX2_DISPATCH)
+    if (avx2) {
+      max_change = messageRoundAvx2(belief.data(), messages.data(), source.data(), weight.data(),
+                                    num_directed, take, keep, next.data());
+    } else
+#endif
+    for (std::size_t e = 0; e < num_directed; ++e) {
+      const Costs h = belief[source[e]] - messages[e ^ 1];
+      const Costs& old = messages[e];
+      Costs m = take * (h - h.minCoeff()).min(weight[e / 2]) + keep * old;
+      m -= m.minCoeff();
+      max_change = std::max(max_change, (m - old).abs().maxCoeff());
+      next[e] = m;
+    }
+    messages.swap(next);
+    result.iterations = iter + 1;
+    if (max_change < params.convergence_tol) {
+      result.converged = true;
+      break;
+    }
+  }
+  computeBeliefs();
+
+  result.labels.resize(num_nodes);
+  result.confidence.resize(num_nodes);
+  for (std::size_t i = 0; i < num_nodes; ++i) {
+    const Costs& b = belief[i];
+    // Lowest belief wins; ties (e.g. λ = 0, or an isolated node with equal
+    // probabilities) go to the higher forest probability, then the lower id.
+    // For an isolated node this is exactly the argmax of p.
+    int best = 0;
+    for (int y = 1; y < kNumLabels; ++y) {
+      if (b[y] < b[best] || (b[y] == b[best] && unaries[i][y] > unaries[i][best])) best = y;
+    }
+    // Confidence: exp(-b) normalised over the labels, i.e. a softmax of the
+    // negated beliefs, evaluated relative to the minimum for stability.
+    double z = 0.0;
+    for (int y = 0; y < kNumLabels; ++y) z += std::exp(-static_cast<double>(b[y] - b[best]));
+    result.labels[i] = static_cast<std::uint8_t>(best);
+    result.confidence[i] = static_cast<float>(1.0 / z);
+  }
+}
+
+double mrfEnergy(const std::vector<ClassProbabilities>& unaries,
+                 const std::vector<Eigen::Vector3f>& centroids,
+                 const std::vector<std::pair<int, int>>& edges, const MrfParams& params,
+                 const std::vector<std::uint8_t>& labels) {
+  validateParams(params);
+  validateGraph(unaries, centroids, edges);
+  if (labels.size() != unaries.size())
+    throw Error("mrfEnergy: " + std::to_string(labels.size()) + " labels for " +
+                std::to_string(unaries.size()) + " nodes");
+  double energy = 0.0;
+  for (std::size_t i = 0; i < labels.size(); ++i) {
+    if (labels[i] >= kNumLabels)
+      throw Error("mrfEnergy: node " + std::to_string(i) + " has label " +
+                  std::to_string(labels[i]) + " (expected 0.." + std::to_string(kNumLabels - 1) +
+                  ")");
+    energy +=
+        static_cast<double>(params.lambda) * (1.0 - static_cast<double>(unaries[i][labels[i]]));
+  }
+  for (const auto& [a, b] : edges) {
+    if (labels[static_cast<std::size_t>(a)] != labels[static_cast<std::size_t>(b)])
+      energy += pairwiseWeight(centroids[static_cast<std::size_t>(a)],
+                               centroids[static_cast<std::size_t>(b)], params.sigma);
+  }
+  return energy;
+}
+
+}  // namespace findmug

@@ -1,0 +1,616 @@
+#include "findmug/pipeline/segmenter.hpp"
+
+#include <algorithm>
+#include <array>
+#include <chrono>
+#include <ctime>
+
+#include "findmug/common/error.hpp"
+#include "findmug/features/object_features.hpp"
+#include "findmug/features/scene_features.hpp"
+#include "findmug/tables/table_regions.hpp"
+#include "common/scratch.hpp"
+
+namespace findmug {
+
+namespace {
+
+double threadCpuMs() {
+  timespec ts{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &ts);
+  return static_cast<double>(ts.tv_sec) * 1e3 + static_cast<double>(ts.tv_nsec) * 1e-6;
+}
+
+class Stopwatch {
+ public:
+  Stopwatch() : start_(std::chrono::steady_clock::now()), cpu_start_(threadCpuMs()) {}
+  // Milliseconds since construction or the previous lap.
+  double lap() {
+    const auto now = std::chrono::steady_clock::now();
+    const double ms = std::chrono::duration<double, std::milli>(now - start_).count();
+    start_ = now;
+    return ms;
+  }
+  // Wall time into `field` of `wall`, this thread's CPU time into the same
+  // field of `cpu`, both since construction or the previous lap.
+  void lap(StageTimings& wall, StageTimings& cpu, double StageTimings::*field) {
+    wall.*field = lap();
+    const double now = threadCpuMs();
+    cpu.*field = now - cpu_start_;
+    cpu_start_ = now;
+  }
+
+ private:
+  std::chrono::steady_clock::time_point start_;
+  double cpu_start_;
+};
+
+std::uint8_t argmax(const ClassProbabilities& p) {
+  return static_cast<std::uint8_t>(std::max_element(p.begin(), p.end()) - p.begin());
+}
+
+// A label image in which every pixel is void: the answer for a frame that
+// cannot be labelled (no ground plane), so that the consumer still gets one
+// message per frame.
+void voidLabelsInto(int width, int height, LabelImage& image) {
+  image.width = width;
+  image.height = height;
+  image.labels.assign(static_cast<std::size_t>(width) * height, kVoidLabel);
+  image.confidence.assign(image.labels.size(), 0.0f);
+}
+
+}  // namespace
+
+Segmenter::Segmenter(SegmenterConfig config, std::shared_ptr<const RandomForest> forest)
+    : config_(std::move(config)),
+      forest_(std::move(forest)),
+      oversegmenter_(makeOversegmenter(config_.overseg)) {
+  if (forest_) checkModelMatchesConfig(*forest_, config_);
+  if (forest_ && config_.use_mrf && config_.mrf.pairwise != MrfPairwise::Potts)
+    throw Error("mrf.pairwise = context is measured by findmug-eval only: the model file does "
+                "not carry the learned pairwise term yet (use mrf.pairwise = potts)");
+}
+
+std::vector<std::string> firstStageFeatureNames(const SegmenterConfig& config) {
+  std::vector<std::string> names(kFeatureNames.begin(), kFeatureNames.end());
+  if (config.regions.enabled) names.insert(names.end(), kRegionFeatureNames.begin(), kRegionFeatureNames.end());
+  if (config.scene.enabled) names.insert(names.end(), kSceneFeatureNames.begin(), kSceneFeatureNames.end());
+  if (config.objects.enabled) {
+    for (const auto name : objectFeatureNames(config.objects.columns)) names.emplace_back(name);
+  }
+  return names;
+}
+
+std::vector<std::string> contextStageFeatureNames(const SegmenterConfig& config) {
+  std::vector<std::string> names = firstStageFeatureNames(config);
+  const auto context = contextFeatureNames();
+  names.insert(names.end(), context.begin(), context.end());
+  return names;
+}
+
+namespace {
+
+// firstStageRows into `rows`, reusing its memory.
+void firstStageRowsInto(const SegmentFeatures& features, std::vector<float>& rows) {
+  const std::size_t n = features.features.size();
+  const bool regions = !features.regions.empty();
+  if (regions && features.regions.size() != n * kRegionFeatureDim) {
+    throw Error("firstStageRows: " + std::to_string(n) + " segments but " +
+                std::to_string(features.regions.size()) + " region feature values");
+  }
+  const bool scene = !features.scene.empty();
+  if (scene && features.scene.size() != n * kSceneFeatureDim) {
+    throw Error("firstStageRows: " + std::to_string(n) + " segments but " +
+                std::to_string(features.scene.size()) + " scene feature values");
+  }
+  const bool objects = !features.objects.empty();
+  const std::size_t object_dim = objects && n > 0 ? features.objects.size() / n : 0;
+  if (objects && (object_dim * n != features.objects.size() ||
+                  (object_dim != kObjectFeatureDim && object_dim != kObjectContextColumns.size()))) {
+    throw Error("firstStageRows: " + std::to_string(n) + " segments but " +
+                std::to_string(features.objects.size()) + " object feature values");
+  }
+  const std::size_t region_dim = regions ? kRegionFeatureDim : 0;
+  const std::size_t scene_dim = scene ? kSceneFeatureDim : 0;
+  const std::size_t dim = kFeatureDim + region_dim + scene_dim + object_dim;
+  rows.resize(n * dim);
+  for (std::size_t i = 0; i < n; ++i) {
+    float* row = rows.data() + i * dim;
+    std::copy(features.features[i].begin(), features.features[i].end(), row);
+    if (regions) {
+      std::copy_n(features.regions.begin() + static_cast<std::ptrdiff_t>(i * kRegionFeatureDim),
+                  kRegionFeatureDim, row + kFeatureDim);
+    }
+    if (scene) {
+      std::copy_n(features.scene.begin() + static_cast<std::ptrdiff_t>(i * kSceneFeatureDim),
+                  kSceneFeatureDim, row + kFeatureDim + region_dim);
+    }
+    if (objects) {
+      std::copy_n(features.objects.begin() + static_cast<std::ptrdiff_t>(i * object_dim),
+                  object_dim, row + kFeatureDim + region_dim + scene_dim);
+    }
+  }
+}
+
+// predictSegments into `out` and `first_stage` (emptied without a context
+// stage), reusing their memory; the rows are per-thread scratch.
+void predictSegmentsInto(const RandomForest& model, const SegmentFeatures& features,
+                         const std::vector<float>& weights, const ContextConfig& context,
+                         std::vector<ClassProbabilities>& out,
+                         std::vector<ClassProbabilities>& first_stage, double* context_ms) {
+  const std::size_t n = features.features.size();
+  thread_local std::vector<float> rows_tls, row_tls;
+  detail::Borrowed rows_buffer(rows_tls), row_buffer(row_tls);
+  std::vector<float>& rows = *rows_buffer;
+  firstStageRowsInto(features, rows);
+  const auto dim = static_cast<std::size_t>(model.dim());
+  if (rows.size() != n * dim) {
+    throw Error("predictSegments: the model reads " + std::to_string(dim) +
+                " columns per segment, the features give " +
+                std::to_string(n == 0 ? 0 : rows.size() / n) +
+                " (features.regions, features.scene or features.objects differs from the "
+                "model's)");
+  }
+  const RandomForest* stage = model.contextStage();
+  // Without a context stage the first stage's answers are the output.
+  std::vector<ClassProbabilities>& probs = stage ? first_stage : out;
+  probs.resize(n);
+  model.predictRows(rows, n, probs);
+  if (!stage) {
+    first_stage.clear();
+    return;
+  }
+
+  Stopwatch watch;
+  const std::vector<float> ctx = computeContextFeatures(probs, features.centroids, weights, context);
+  const std::size_t dim2 = dim + kContextFeatureDim;
+  if (static_cast<std::size_t>(stage->dim()) != dim2) {
+    throw Error("predictSegments: the context stage reads " + std::to_string(stage->dim()) +
+                " columns, expected " + std::to_string(dim2));
+  }
+  std::vector<float>& row = *row_buffer;
+  row.resize(dim2);
+  out.resize(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    std::copy_n(rows.begin() + static_cast<std::ptrdiff_t>(i * dim), dim, row.begin());
+    std::copy_n(ctx.begin() + static_cast<std::ptrdiff_t>(i * kContextFeatureDim),
+                kContextFeatureDim, row.begin() + static_cast<std::ptrdiff_t>(dim));
+    out[i] = stage->predict(row);
+  }
+  if (context_ms) *context_ms = watch.lap();
+}
+
+}  // namespace
+
+std::vector<float> firstStageRows(const SegmentFeatures& features) {
+  std::vector<float> rows;
+  firstStageRowsInto(features, rows);
+  return rows;
+}
+
+std::vector<ClassProbabilities> predictSegments(const RandomForest& model,
+                                                const SegmentFeatures& features,
+                                                const std::vector<float>& weights,
+                                                const ContextConfig& context,
+                                                std::vector<ClassProbabilities>* first_stage,
+                                                double* context_ms) {
+  std::vector<ClassProbabilities> out, first;
+  predictSegmentsInto(model, features, weights, context, out, first, context_ms);
+  if (first_stage) *first_stage = std::move(first);
+  return out;
+}
+
+void checkModelMatchesConfig(const RandomForest& forest, const SegmenterConfig& config) {
+  const std::string name = forest.source().empty() ? "forest " + forest.id()
+                                                    : forest.source() + " (" + forest.id() + ")";
+  // The learner and its classes: a model answers only what it was trained as.
+  if (forest.learnerKind() != config.learner.kind) {
+    throw Error("model " + name + " is a " + learnerKindName(forest.learnerKind()) +
+                " model but the config has learner.kind = " +
+                learnerKindName(config.learner.kind) + "; set learner.kind = " +
+                learnerKindName(forest.learnerKind()) + " or retrain");
+  }
+  if (forest.internalClasses().scheme != classSchemeName(config.learner.classes)) {
+    throw Error("model " + name + " was trained on internal classes '" +
+                forest.internalClasses().scheme + "' (" +
+                std::to_string(forest.internalClasses().count()) +
+                " classes) but the config has learner.classes = " +
+                classSchemeName(config.learner.classes) + "; set learner.classes = " +
+                forest.internalClasses().scheme + " or retrain");
+  }
+  // Columns and stages first: they say in one line what is wrong.
+  const auto expected = firstStageFeatureNames(config);
+  if (forest.featureNames() != expected) {
+    const bool model_regions = forest.dim() == kFeatureDim + kRegionFeatureDim;
+    const auto& names = forest.featureNames();
+    const bool model_scene =
+        std::find(names.begin(), names.end(), std::string(kSceneFeatureNames[0])) != names.end();
+    const bool model_objects = std::any_of(names.begin(), names.end(), [](const std::string& n) {
+      return std::find(kObjectFeatureNames.begin(), kObjectFeatureNames.end(), n) !=
+             kObjectFeatureNames.end();
+    });
+    throw Error("model " + name + " reads " + std::to_string(forest.dim()) +
+                " feature columns" + (model_regions ? " (with region features)" : "") +
+                (model_scene ? " (with scene features)" : "") +
+                (model_objects ? " (with object features)" : "") +
+                " but the config computes " + std::to_string(expected.size()) +
+                " (features.regions = " + (config.regions.enabled ? "true" : "false") +
+                ", features.scene = " + (config.scene.enabled ? "true" : "false") +
+                ", features.objects = " + (config.objects.enabled ? "true" : "false") +
+                "); set features.regions, features.scene and features.objects to match the "
+                "model or retrain" +
+                (forest.formatVersion() == 2 ? " (a format-2 model has no region features)" : ""));
+  }
+  if (config.context.enabled != (forest.contextStage() != nullptr)) {
+    throw Error("model " + name + (forest.contextStage() ? " has" : " has no") +
+                " auto-context stage but the config has features.context = " +
+                (config.context.enabled ? "true" : "false") +
+                "; set it to match the model or retrain" +
+                (forest.formatVersion() == 2 ? " (a format-2 model has no context stage)" : ""));
+  }
+  if (forest.contextStage() && forest.contextStage()->featureNames() != contextStageFeatureNames(config)) {
+    throw Error("model " + name + ": the context stage's columns are not those this build computes");
+  }
+  const auto& trained = forest.extractionSettings();
+  if (trained.empty()) return;
+  const auto current = extractionSettings(config);
+  std::string differences;
+  for (const auto& [key, value] : trained) {
+    const auto it = std::find_if(current.begin(), current.end(),
+                                 [&name = key](const auto& kv) { return kv.first == name; });
+    if (it == current.end()) {
+      differences += "\n  " + key + ": trained with " + value + ", unknown to this build";
+    } else if (it->second != value) {
+      differences += "\n  " + key + ": trained with " + value + ", config has " + it->second;
+    }
+  }
+  if (!differences.empty()) {
+    throw Error("model " + name +
+                " was trained with other feature-extraction settings than the config; "
+                "set them back or retrain:" + differences);
+  }
+}
+
+void Segmenter::recycle(LabelledFrame&& done) const {
+  PreparedFrame& prepared = done.segmented.prepared;
+  prepared.frame = RgbdFrame{};  // the frame's own buffers are the caller's
+  std::lock_guard lock(recycled_->mutex);
+  if (recycled_->prepared.size() < kRecycledFrames) {
+    recycled_->prepared.push_back(std::move(prepared));
+  }
+  // A frame without a ground plane has no segments: nothing worth keeping.
+  if (!done.segmented.segmentation.segments.empty() &&
+      recycled_->segmentations.size() < kRecycledFrames) {
+    recycled_->segmentations.push_back(std::move(done.segmented.segmentation));
+  }
+  // The rest: the classify stage's outputs (features, distributions, MRF,
+  // label image, tables: detectTablesInto reuses the tables' pixel lists).
+  if (recycled_->labelled.size() < kRecycledFrames) {
+    done.segmented = SegmentedFrame{};
+    recycled_->labelled.push_back(std::move(done));
+  }
+}
+
+PreparedFrame Segmenter::prepare(RgbdFrame frame, const std::vector<std::uint8_t>* gt_labels) const {
+  PreparedFrame out;
+  {
+    std::lock_guard lock(recycled_->mutex);
+    if (!recycled_->prepared.empty()) {
+      out = std::move(recycled_->prepared.back());
+      recycled_->prepared.pop_back();
+      out.ground.reset();
+      out.timings = {};
+      out.cpu_timings = {};
+    }
+  }
+  Stopwatch watch;
+  frameToCloud(frame, config_.max_depth_m, out.cloud_camera);
+  watch.lap(out.timings, out.cpu_timings, &StageTimings::cloud_ms);
+  computeNormals(out.cloud_camera, config_.normals, out.normals_camera);
+  watch.lap(out.timings, out.cpu_timings, &StageTimings::normals_ms);
+
+  switch (config_.ground.source) {
+    case GroundSource::Auto:
+      out.ground = frame.extrinsics ? std::optional(groundFromExtrinsics(*frame.extrinsics))
+                                    : groundOfStream(out.cloud_camera, out.normals_camera);
+      break;
+    case GroundSource::Extrinsics:
+      if (!frame.extrinsics) {
+        throw Error(frame.source + ": ground.source is 'extrinsics' but the frame carries none "
+                                   "(set ground.source to auto or estimated)");
+      }
+      out.ground = groundFromExtrinsics(*frame.extrinsics);
+      break;
+    case GroundSource::FloorLabels:
+      if (gt_labels == nullptr) {
+        throw Error(frame.source + ": ground.source is 'floor_labels' but no ground truth was given");
+      }
+      if (gt_labels->size() != out.cloud_camera.size()) {
+        throw Error(frame.source + ": ground-truth labels have " +
+                    std::to_string(gt_labels->size()) + " pixels, frame has " +
+                    std::to_string(out.cloud_camera.size()));
+      }
+      out.ground = fitGroundToLabels(out.cloud_camera, *gt_labels, config_.ground);
+      break;
+    case GroundSource::Estimated:
+      out.ground = groundOfStream(out.cloud_camera, out.normals_camera);
+      break;
+    case GroundSource::Gravity:
+      // A robot knows its mount; a dataset frame brings its gravity; a frame
+      // with neither falls back to the labelled floor, then to the frame alone.
+      if (frame.extrinsics) {
+        out.ground = groundFromExtrinsics(*frame.extrinsics);
+      } else if (frame.gravity_up) {
+        const auto& g = *frame.gravity_up;
+        const Eigen::Vector3f up(static_cast<float>(g[0]), static_cast<float>(g[1]),
+                                 static_cast<float>(g[2]));
+        if (gt_labels && gt_labels->size() != out.cloud_camera.size()) {
+          throw Error(frame.source + ": ground-truth labels have " +
+                      std::to_string(gt_labels->size()) + " pixels, frame has " +
+                      std::to_string(out.cloud_camera.size()));
+        }
+        out.ground =
+            groundFromGravity(out.cloud_camera, out.normals_camera, up, gt_labels, config_.ground);
+      } else {
+        if (gt_labels && gt_labels->size() == out.cloud_camera.size()) {
+          out.ground = fitGroundToLabels(out.cloud_camera, *gt_labels, config_.ground);
+        }
+        if (!out.ground) {
+          out.ground = estimateGround(out.cloud_camera, out.normals_camera, config_.ground);
+        }
+      }
+      break;
+  }
+  if (out.ground) {
+    transformCloud(out.cloud_camera, out.ground->camera_to_ground, out.cloud_ground);
+    rotateNormals(out.normals_camera, out.ground->camera_to_ground.linear(), out.normals_ground);
+  } else {
+    // Empty without a ground plane (a recycled frame's buffers are kept).
+    out.cloud_ground.width = out.cloud_ground.height = 0;
+    out.cloud_ground.points.clear();
+    out.cloud_ground.colors.clear();
+    out.normals_ground.width = out.normals_ground.height = 0;
+    out.normals_ground.normals.clear();
+  }
+  watch.lap(out.timings, out.cpu_timings, &StageTimings::ground_ms);
+  out.frame = std::move(frame);
+  return out;
+}
+
+std::optional<GroundPlane> Segmenter::groundOfStream(const OrganizedCloud& cloud,
+                                                     const NormalImage& normals) const {
+  if (config_.ground.reestimate_every_frames <= 1) {
+    return estimateGround(cloud, normals, config_.ground);
+  }
+  std::lock_guard lock(ground_memory_->mutex);
+  GroundMemory& memory = *ground_memory_;
+  if (memory.plane && memory.frames_since_estimate + 1 < config_.ground.reestimate_every_frames) {
+    if (auto kept = confirmGround(cloud, normals, *memory.plane, config_.ground)) {
+      ++memory.frames_since_estimate;
+      return kept;
+    }
+  }
+  memory.plane = estimateGround(cloud, normals, config_.ground);
+  memory.frames_since_estimate = 0;
+  return memory.plane;
+}
+
+SegmentedFrame Segmenter::oversegment(PreparedFrame prepared) const {
+  SegmentedFrame out;
+  out.timings = prepared.timings;
+  out.cpu_timings = prepared.cpu_timings;
+  if (prepared.ground) {
+    std::lock_guard lock(recycled_->mutex);
+    if (!recycled_->segmentations.empty()) {
+      out.segmentation = std::move(recycled_->segmentations.back());
+      recycled_->segmentations.pop_back();
+    }
+  }
+  Stopwatch watch;
+  if (prepared.ground) {
+    oversegmenter_->segmentInto(prepared.cloud_camera, prepared.normals_camera, out.segmentation);
+  } else {
+    // Without a ground plane no feature can be computed: skip the work.
+    out.segmentation.width = prepared.cloud_camera.width;
+    out.segmentation.height = prepared.cloud_camera.height;
+    out.segmentation.pixel_segment.assign(prepared.cloud_camera.size(), -1);
+  }
+  watch.lap(out.timings, out.cpu_timings, &StageTimings::overseg_ms);
+  out.prepared = std::move(prepared);
+  return out;
+}
+
+SegmentFeatures Segmenter::features(const SegmentedFrame& segmented) const {
+  if (!segmented.prepared.ground) return {};
+  SegmentFeatures out = computeFeatures(segmented.prepared.cloud_ground,
+                                        segmented.prepared.normals_ground, segmented.segmentation);
+  RegionFeatures regions;
+  if (config_.regions.enabled || config_.objects.enabled)
+    regions = computeRegionFeatures(out, segmented.segmentation, config_.regions);
+  if (config_.regions.enabled) out.regions = regions.values;
+  if (config_.scene.enabled) {
+    out.scene = computeSceneFeatures(segmented.prepared.cloud_ground, segmented.segmentation, out,
+                                     segmented.prepared.ground->camera_to_ground.translation(),
+                                     config_.scene);
+  }
+  if (config_.objects.enabled) {
+    out.objects =
+        computeObjectFeatures(out, segmented.segmentation, regions, config_.objects).values;
+  }
+  return out;
+}
+
+LabelledFrame Segmenter::classify(SegmentedFrame segmented) const {
+  if (!forest_ || forest_->empty()) {
+    throw Error("Segmenter::classify: no trained forest loaded");
+  }
+  // The outputs go into the vectors of a frame handed back by recycle(), if any.
+  LabelledFrame out;
+  {
+    std::lock_guard lock(recycled_->mutex);
+    if (!recycled_->labelled.empty()) {
+      out = std::move(recycled_->labelled.back());
+      recycled_->labelled.pop_back();
+    }
+  }
+  out.timings = segmented.timings;
+  out.cpu_timings = segmented.cpu_timings;
+  const int width = segmented.prepared.cloud_camera.width;
+  const int height = segmented.prepared.cloud_camera.height;
+  if (!segmented.prepared.ground) {
+    // Emptied, not replaced: a recycled frame's vectors keep their capacity
+    // for the frames after this one (a stream with frames lacking a ground
+    // plane otherwise reallocated them all on the next frame with one).
+    // (A new member of either struct must be emptied here too.)
+    static_assert(sizeof(SegmentFeatures) == 6 * sizeof(std::vector<float>));
+    static_assert(sizeof(MrfResult) ==
+                  2 * sizeof(std::vector<float>) + sizeof(std::int64_t));
+    out.features.features.clear();
+    out.features.centroids.clear();
+    out.features.moments.clear();
+    out.features.regions.clear();
+    out.features.scene.clear();
+    out.features.objects.clear();
+    out.forest_probabilities.clear();
+    out.first_stage_probabilities.clear();
+    out.forest_labels.clear();
+    out.mrf.labels.clear();
+    out.mrf.confidence.clear();
+    out.mrf.iterations = 0;
+    out.mrf.converged = false;
+    voidLabelsInto(width, height, out.labels);
+    out.tables.clear();  // a recycled frame's
+    out.table_diagnostics.clear();
+    out.segmented = std::move(segmented);
+    return out;
+  }
+
+  // Per-thread working memory (scratch.hpp).
+  struct Buffers {
+    RegionFeatures regions;
+    ObjectFeatures objects;
+    std::vector<float> weights, confidence;
+    std::vector<ClassProbabilities> weighted;
+  };
+  thread_local Buffers buffers;
+  detail::Borrowed regions_buffer(buffers.regions);
+  detail::Borrowed objects_buffer(buffers.objects);
+  detail::Borrowed weights_buffer(buffers.weights), confidence_buffer(buffers.confidence);
+  detail::Borrowed weighted_buffer(buffers.weighted);
+
+  Stopwatch watch;
+  computeFeaturesInto(segmented.prepared.cloud_ground, segmented.prepared.normals_ground,
+                      segmented.segmentation, out.features);
+  watch.lap(out.timings, out.cpu_timings, &StageTimings::features_ms);
+  RegionFeatures& regions = *regions_buffer;  // kept for the table region vote after the MRF
+  if (config_.regions.enabled || config_.objects.enabled)
+    computeRegionFeaturesInto(out.features, segmented.segmentation, config_.regions, regions);
+  if (config_.regions.enabled) out.features.regions = regions.values;
+  if (config_.scene.enabled) {
+    std::vector<float> scene = std::move(out.features.scene);
+    computeSceneFeaturesInto(segmented.prepared.cloud_ground, segmented.segmentation,
+                             out.features,
+                             segmented.prepared.ground->camera_to_ground.translation(),
+                             config_.scene, scene);
+    out.features.scene = std::move(scene);
+  }
+  if (config_.objects.enabled) {
+    computeObjectFeaturesInto(out.features, segmented.segmentation, regions, config_.objects,
+                              *objects_buffer);
+    out.features.objects = objects_buffer->values;
+  } else {
+    out.features.objects.clear();
+  }
+  // Region, scene and object features share this stage's time.
+  watch.lap(out.timings, out.cpu_timings, &StageTimings::regions_ms);
+
+  const std::size_t n = out.features.features.size();
+  std::vector<float>& weights = *weights_buffer;
+  weights.resize(n);
+  for (std::size_t i = 0; i < n; ++i)
+    weights[i] = static_cast<float>(segmented.segmentation.segments[i].size());
+  double context_ms = 0;
+  predictSegmentsInto(*forest_, out.features, weights, config_.context, out.forest_probabilities,
+                      out.first_stage_probabilities, &context_ms);
+  out.forest_labels.resize(n);
+  for (std::size_t i = 0; i < n; ++i) out.forest_labels[i] = argmax(out.forest_probabilities[i]);
+  // The context stage's time is measured inside and reported on its own.
+  out.timings.context_ms = context_ms;
+  watch.lap(out.timings, out.cpu_timings, &StageTimings::forest_ms);
+  out.timings.forest_ms -= context_ms;  // CPU time: the context stage stays in forest_ms
+
+  std::vector<float>& confidence = *confidence_buffer;
+  confidence.resize(n);
+  const std::vector<std::uint8_t>* final_labels = &out.forest_labels;
+  // The distributions with the decision's bias towards tables.
+  std::vector<ClassProbabilities>& weighted = *weighted_buffer;
+  weighted = out.forest_probabilities;
+  weightTableProbabilityInPlace(weighted, config_.tables.table_weight);
+  if (config_.use_mrf) {
+    solveMrfInto(weighted, out.features.centroids, segmented.segmentation.edges, config_.mrf,
+                 out.mrf);
+    final_labels = &out.mrf.labels;
+    confidence = out.mrf.confidence;
+  } else {
+    out.mrf = MrfResult{};
+    for (std::size_t i = 0; i < n; ++i) {
+      confidence[i] = out.forest_probabilities[i][out.forest_labels[i]];
+    }
+  }
+  // One label per horizontal surface at table height (table_regions.hpp).
+  RegionVoteResult vote;
+  if (config_.tables.region_vote && config_.regions.enabled) {
+    vote = voteTableRegions(*final_labels, confidence, weighted, weights, regions, config_.tables);
+    final_labels = &vote.labels;
+    confidence = std::move(vote.confidence);
+  }
+  watch.lap(out.timings, out.cpu_timings, &StageTimings::mrf_ms);
+
+  projectLabelsInto(segmented.segmentation, *final_labels, confidence, out.labels);
+  watch.lap(out.timings, out.cpu_timings, &StageTimings::labels_ms);
+
+  // A recycled frame's tables lend their buffers to this frame's.
+  TableDetection detection;
+  detection.tables = std::move(out.tables);
+  detection.diagnostics = std::move(out.table_diagnostics);
+  detectTablesInto(segmented.prepared.cloud_ground, out.labels, config_.tables,
+                   &segmented.prepared.normals_ground, detection);
+  out.tables = std::move(detection.tables);
+  out.table_diagnostics = std::move(detection.diagnostics);
+  watch.lap(out.timings, out.cpu_timings, &StageTimings::tables_ms);
+  out.segmented = std::move(segmented);
+  return out;
+}
+
+LabelledFrame Segmenter::process(RgbdFrame frame, const std::vector<std::uint8_t>* gt_labels) const {
+  return classify(oversegment(prepare(std::move(frame), gt_labels)));
+}
+
+std::vector<std::uint8_t> segmentMajorityLabels(const Oversegmentation& segmentation,
+                                                const std::vector<std::uint8_t>& gt_labels) {
+  if (gt_labels.size() != segmentation.pixel_segment.size()) {
+    throw Error("segmentMajorityLabels: label image has " + std::to_string(gt_labels.size()) +
+                " pixels, segmentation has " + std::to_string(segmentation.pixel_segment.size()));
+  }
+  std::vector<std::uint8_t> out(segmentation.segments.size(), kVoidLabel);
+  for (std::size_t s = 0; s < segmentation.segments.size(); ++s) {
+    std::array<int, kNumLabels> counts{};
+    int void_count = 0;
+    for (int pixel : segmentation.segments[s]) {
+      const std::uint8_t y = gt_labels[pixel];
+      if (y < kNumLabels) {
+        ++counts[y];
+      } else {
+        ++void_count;
+      }
+    }
+    const auto best = std::max_element(counts.begin(), counts.end());
+    // The plurality label; a patch that is mostly void has no trustworthy label.
+    if (*best > 0 && void_count * 2 < static_cast<int>(segmentation.segments[s].size())) {
+      out[s] = static_cast<std::uint8_t>(best - counts.begin());
+    }
+  }
+  return out;
+}
+
+}  // namespace findmug

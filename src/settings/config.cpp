@@ -1,0 +1,530 @@
+#include "findmug/settings/config.hpp"
+
+#include <yaml-cpp/yaml.h>
+
+#include <charconv>
+#include <cmath>
+#include <fstream>
+#include <functional>
+#include <limits>
+#include <set>
+#include <sstream>
+
+#include "findmug/common/error.hpp"
+#include "findmug/common/numbers.hpp"
+#include "findmug/settings/settings.hpp"
+
+namespace findmug {
+
+const char* classSchemeName(ClassScheme scheme) {
+  switch (scheme) {
+    case ClassScheme::Nyu13:
+      return "nyu13";
+    case ClassScheme::Nyu40:
+      return "nyu40";
+    case ClassScheme::Labels:
+      break;
+  }
+  return "labels";
+}
+
+namespace {
+
+// One named setting of the segmenter (the shared mechanism, settings.hpp).
+using CoreSetting = Setting<SegmenterConfig>;
+
+[[noreturn]] void badValue(const std::string& origin, const std::string& key,
+                           const std::string& value, const std::string& expected) {
+  throw Error(origin + ": invalid value '" + value + "' for " + key + " (expected " + expected +
+              ")");
+}
+
+double parseDouble(const std::string& origin, const std::string& key, const std::string& value) {
+  const auto out = parseNumber(value);
+  if (!out) badValue(origin, key, value, "a finite number");
+  return *out;
+}
+
+long long parseInt(const std::string& origin, const std::string& key, const std::string& value) {
+  const auto out = parseInteger(value);
+  if (!out) badValue(origin, key, value, "an integer");
+  return *out;
+}
+
+std::string formatDouble(double v) { return formatSettingNumber(v); }
+
+// Builders for the kinds of settings, with inclusive ranges (settings.hpp).
+CoreSetting floatSetting(std::string key, std::function<float&(SegmenterConfig&)> field,
+                         double lo, double hi) {
+  CoreSetting s = numberSetting<SegmenterConfig, float>(std::move(key), field, lo, hi);
+  // Printed as the float widened to double with 9 digits ("0.00999999978"):
+  // models store the feature settings in this text (extractionSettings) and
+  // are compared with it, so it must not change.
+  s.get = [field](const SegmenterConfig& c) {
+    return formatDouble(field(const_cast<SegmenterConfig&>(c)));
+  };
+  return s;
+}
+
+CoreSetting intSetting(std::string key, std::function<int&(SegmenterConfig&)> field, long long lo,
+                       long long hi) {
+  return integerSetting<SegmenterConfig, int>(std::move(key), std::move(field), lo, hi);
+}
+
+CoreSetting doubleSetting(std::string key, std::function<double&(SegmenterConfig&)> field,
+                          double lo, double hi) {
+  return numberSetting<SegmenterConfig, double>(std::move(key), std::move(field), lo, hi);
+}
+
+CoreSetting boolSetting(std::string key, std::function<bool&(SegmenterConfig&)> field) {
+  return findmug::boolSetting<SegmenterConfig>(std::move(key), std::move(field));
+}
+
+template <typename Enum>
+CoreSetting enumSetting(std::string key, std::function<Enum&(SegmenterConfig&)> field,
+                        std::vector<std::pair<std::string, Enum>> names) {
+  return findmug::enumSetting<SegmenterConfig, Enum>(std::move(key), std::move(field),
+                                                     std::move(names));
+}
+
+const std::vector<CoreSetting>& settings() {
+  using C = SegmenterConfig;
+  static const std::vector<CoreSetting> all = {
+      floatSetting("cloud.max_depth_m", [](C& c) -> float& { return c.max_depth_m; }, 0.5, 20),
+      intSetting("normals.window_radius_px",
+                 [](C& c) -> int& { return c.normals.window_radius_px; }, 1, 32),
+      intSetting("normals.smoothing_radius_px",
+                 [](C& c) -> int& { return c.normals.smoothing_radius_px; }, 0, 32),
+      floatSetting("normals.max_depth_jump_m",
+                   [](C& c) -> float& { return c.normals.max_depth_jump_m; }, 0.001, 1),
+      enumSetting<GroundSource>("ground.source", [](C& c) -> GroundSource& { return c.ground.source; },
+                                {{"auto", GroundSource::Auto},
+                                 {"extrinsics", GroundSource::Extrinsics},
+                                 {"floor_labels", GroundSource::FloorLabels},
+                                 {"estimated", GroundSource::Estimated},
+                                 {"gravity", GroundSource::Gravity}}),
+      floatSetting("ground.ransac_inlier_m",
+                   [](C& c) -> float& { return c.ground.ransac_inlier_m; }, 0.001, 0.5),
+      intSetting("ground.ransac_iterations",
+                 [](C& c) -> int& { return c.ground.ransac_iterations; }, 1, 100000),
+      intSetting("ground.min_floor_points",
+                 [](C& c) -> int& { return c.ground.min_floor_points; }, 3, 10000000),
+      floatSetting("ground.min_inlier_fraction",
+                   [](C& c) -> float& { return c.ground.min_inlier_fraction; }, 0.01, 1),
+      floatSetting("ground.normal_agreement_deg",
+                   [](C& c) -> float& { return c.ground.normal_agreement_deg; }, 1, 90),
+      floatSetting("ground.min_camera_height_m",
+                   [](C& c) -> float& { return c.ground.min_camera_height_m; }, 0, 5),
+      floatSetting("ground.floor_percentile",
+                   [](C& c) -> float& { return c.ground.floor_percentile; }, 0, 50),
+      floatSetting("ground.percentile_margin_m",
+                   [](C& c) -> float& { return c.ground.percentile_margin_m; }, 0, 5),
+      floatSetting("ground.prior_camera_height_m",
+                   [](C& c) -> float& { return c.ground.prior_camera_height_m; }, 0.05, 5),
+      floatSetting("ground.gravity_refine_deg",
+                   [](C& c) -> float& { return c.ground.gravity_refine_deg; }, 0, 89),
+      floatSetting("ground.max_tilt_deg", [](C& c) -> float& { return c.ground.max_tilt_deg; },
+                   1, 89),
+      intSetting("ground.reestimate_every_frames",
+                 [](C& c) -> int& { return c.ground.reestimate_every_frames; }, 1, 100000),
+      floatSetting("ground.reuse_min_support_fraction",
+                   [](C& c) -> float& { return c.ground.reuse_min_support_fraction; }, 0.01, 1),
+      enumSetting<OversegmenterKind>(
+          "overseg.method", [](C& c) -> OversegmenterKind& { return c.overseg.kind; },
+          {{"pcl", OversegmenterKind::PclSupervoxels},
+           {"organized", OversegmenterKind::Organized}}),
+      floatSetting("overseg.voxel_resolution_m",
+                   [](C& c) -> float& { return c.overseg.voxel_resolution_m; }, 0.001, 1),
+      floatSetting("overseg.seed_resolution_m",
+                   [](C& c) -> float& { return c.overseg.seed_resolution_m; }, 0.005, 5),
+      floatSetting("overseg.color_importance",
+                   [](C& c) -> float& { return c.overseg.color_importance; }, 0, 100),
+      floatSetting("overseg.spatial_importance",
+                   [](C& c) -> float& { return c.overseg.spatial_importance; }, 0, 100),
+      floatSetting("overseg.normal_importance",
+                   [](C& c) -> float& { return c.overseg.normal_importance; }, 0, 100),
+      intSetting("overseg.min_segment_points",
+                 [](C& c) -> int& { return c.overseg.min_segment_points; }, 1, 100000),
+      intSetting("overseg.max_iterations",
+                 [](C& c) -> int& { return c.overseg.max_iterations; }, 1, 100),
+      floatSetting("overseg.organized_seed_density",
+                   [](C& c) -> float& { return c.overseg.organized_seed_density; }, 0.01, 1000),
+      intSetting("overseg.search_window_factor",
+                 [](C& c) -> int& { return c.overseg.search_window_factor; }, 1, 10),
+      boolSetting("features.regions", [](C& c) -> bool& { return c.regions.enabled; }),
+      floatSetting("features.region_normal_angle_deg",
+                   [](C& c) -> float& { return c.regions.normal_angle_deg; }, 0, 180),
+      floatSetting("features.region_plane_distance_m",
+                   [](C& c) -> float& { return c.regions.plane_distance_m; }, 0, 1),
+      boolSetting("features.scene", [](C& c) -> bool& { return c.scene.enabled; }),
+      floatSetting("features.scene_cell_m", [](C& c) -> float& { return c.scene.cell_m; }, 0.01,
+                   1),
+      intSetting("features.scene_band_px", [](C& c) -> int& { return c.scene.band_px; }, 1, 640),
+      boolSetting("features.objects", [](C& c) -> bool& { return c.objects.enabled; }),
+      enumSetting<ObjectColumns>(
+          "features.objects_columns", [](C& c) -> ObjectColumns& { return c.objects.columns; },
+          {{"all", ObjectColumns::All}, {"context", ObjectColumns::Context}}),
+      floatSetting("features.objects_concave_tolerance_deg",
+                   [](C& c) -> float& { return c.objects.concave_tolerance_deg; }, 0, 90),
+      floatSetting("features.objects_link_gap_m",
+                   [](C& c) -> float& { return c.objects.link_gap_m; }, 0, 1),
+      floatSetting("features.objects_step_m", [](C& c) -> float& { return c.objects.step_m; }, 0,
+                   1),
+      floatSetting("features.objects_convex_margin",
+                   [](C& c) -> float& { return c.objects.convex_margin; }, 0, 2),
+      floatSetting("features.objects_floor_height_m",
+                   [](C& c) -> float& { return c.objects.floor_height_m; }, 0, 2),
+      floatSetting("features.objects_plane_min_area_m2",
+                   [](C& c) -> float& { return c.objects.plane_min_area_m2; }, 0, 100),
+      floatSetting("features.objects_orientation_tolerance_deg",
+                   [](C& c) -> float& { return c.objects.orientation_tolerance_deg; }, 0, 45),
+      boolSetting("features.context", [](C& c) -> bool& { return c.context.enabled; }),
+      floatSetting("features.context_near_m", [](C& c) -> float& { return c.context.near_m; },
+                   0.01, 10),
+      floatSetting("features.context_far_m", [](C& c) -> float& { return c.context.far_m; },
+                   0.01, 10),
+      floatSetting("features.context_column_radius_m",
+                   [](C& c) -> float& { return c.context.column_radius_m; }, 0.01, 10),
+      intSetting("features.context_cross_fit_folds",
+                 [](C& c) -> int& { return c.context.cross_fit_folds; }, 0, 100),
+      intSetting("forest.num_trees", [](C& c) -> int& { return c.forest.num_trees; }, 1, 1000),
+      intSetting("forest.max_depth", [](C& c) -> int& { return c.forest.max_depth; }, 1, 40),
+      intSetting("forest.min_samples_leaf",
+                 [](C& c) -> int& { return c.forest.min_samples_leaf; }, 1, 1000000),
+      intSetting("forest.candidate_features",
+                 [](C& c) -> int& { return c.forest.candidate_features; }, 1, 1024),
+      intSetting("forest.candidate_thresholds",
+                 [](C& c) -> int& { return c.forest.candidate_thresholds; }, 1, 1000),
+      boolSetting("forest.class_weighting",
+                  [](C& c) -> bool& { return c.forest.class_weighting; }),
+      intSetting("forest.num_threads", [](C& c) -> int& { return c.forest.num_threads; }, 0, 256),
+      enumSetting<LearnerKind>("learner.kind", [](C& c) -> LearnerKind& { return c.learner.kind; },
+                               {{"forest", LearnerKind::Forest}, {"xgboost", LearnerKind::XGBoost}}),
+      enumSetting<ClassScheme>("learner.classes",
+                               [](C& c) -> ClassScheme& { return c.learner.classes; },
+                               {{"labels", ClassScheme::Labels},
+                                {"nyu13", ClassScheme::Nyu13},
+                                {"nyu40", ClassScheme::Nyu40}}),
+      enumSetting<ClassWeight>("learner.class_weight",
+                               [](C& c) -> ClassWeight& { return c.learner.class_weight; },
+                               {{"labels", ClassWeight::Labels}, {"classes", ClassWeight::Classes}}),
+      intSetting("xgboost.rounds", [](C& c) -> int& { return c.xgboost.rounds; }, 1, 10000),
+      intSetting("xgboost.max_depth", [](C& c) -> int& { return c.xgboost.max_depth; }, 1, 30),
+      doubleSetting("xgboost.eta", [](C& c) -> double& { return c.xgboost.eta; }, 1e-6, 1),
+      doubleSetting("xgboost.subsample", [](C& c) -> double& { return c.xgboost.subsample; },
+                    1e-3, 1),
+      doubleSetting("xgboost.colsample", [](C& c) -> double& { return c.xgboost.colsample; },
+                    1e-3, 1),
+      doubleSetting("xgboost.min_child_weight",
+                    [](C& c) -> double& { return c.xgboost.min_child_weight; }, 0, 1e6),
+      doubleSetting("xgboost.lambda", [](C& c) -> double& { return c.xgboost.lambda; }, 0, 1e6),
+      intSetting("xgboost.seed", [](C& c) -> int& { return c.xgboost.seed; }, 0, 2147483647),
+      enumSetting<SampleWeighting>(
+          "training.sample_weight", [](C& c) -> SampleWeighting& { return c.training.sample_weight; },
+          {{"patches", SampleWeighting::Patches},
+           {"pixels", SampleWeighting::Pixels},
+           {"sqrt_pixels", SampleWeighting::SqrtPixels}}),
+      enumSetting<SplitLabels>(
+          "training.split_labels", [](C& c) -> SplitLabels& { return c.training.split_labels; },
+          {{"labels", SplitLabels::Labels},
+           {"nyu40", SplitLabels::Nyu40},
+           {"nyu13", SplitLabels::Nyu13}}),
+      intSetting("training.extra_oversegmentations",
+                 [](C& c) -> int& { return c.training.extra_oversegmentations; }, 0, 8),
+      floatSetting("training.extra_seed_scale",
+                   [](C& c) -> float& { return c.training.extra_seed_scale; }, 0.3, 0.99),
+      intSetting("training.degraded_copies",
+                 [](C& c) -> int& { return c.training.degraded_copies; }, 0, 8),
+      floatSetting("degrade.shadow_baseline_m",
+                   [](C& c) -> float& { return c.degrade.shadow_baseline_m; }, -0.5, 0.5),
+      floatSetting("degrade.shadow_focal_px",
+                   [](C& c) -> float& { return c.degrade.shadow_focal_px; }, 1, 5000),
+      floatSetting("degrade.edge_relative_jump",
+                   [](C& c) -> float& { return c.degrade.edge_relative_jump; }, 0.001, 10),
+      intSetting("degrade.edge_band_px", [](C& c) -> int& { return c.degrade.edge_band_px; }, 0,
+                 32),
+      floatSetting("degrade.edge_hole_probability",
+                   [](C& c) -> float& { return c.degrade.edge_hole_probability; }, 0, 1),
+      floatSetting("degrade.base_hole_probability",
+                   [](C& c) -> float& { return c.degrade.base_hole_probability; }, 0, 1),
+      floatSetting("degrade.dark_level", [](C& c) -> float& { return c.degrade.dark_level; }, 0,
+                   255),
+      floatSetting("degrade.dark_hole_probability",
+                   [](C& c) -> float& { return c.degrade.dark_hole_probability; }, 0, 1),
+      floatSetting("degrade.bright_level", [](C& c) -> float& { return c.degrade.bright_level; },
+                   0, 254),
+      floatSetting("degrade.bright_hole_probability",
+                   [](C& c) -> float& { return c.degrade.bright_hole_probability; }, 0, 1),
+      floatSetting("degrade.far_start_m", [](C& c) -> float& { return c.degrade.far_start_m; }, 0,
+                   20),
+      floatSetting("degrade.far_hole_per_m",
+                   [](C& c) -> float& { return c.degrade.far_hole_per_m; }, 0, 10),
+      floatSetting("degrade.blob_size_px", [](C& c) -> float& { return c.degrade.blob_size_px; },
+                   0, 200),
+      boolSetting("degrade.quantise", [](C& c) -> bool& { return c.degrade.quantise; }),
+      floatSetting("degrade.disparity_noise",
+                   [](C& c) -> float& { return c.degrade.disparity_noise; }, 0, 20),
+      floatSetting("degrade.max_input_hole_fraction",
+                   [](C& c) -> float& { return c.degrade.max_input_hole_fraction; }, 0, 1),
+      boolSetting("mrf.enabled", [](C& c) -> bool& { return c.use_mrf; }),
+      enumSetting<MrfPairwise>("mrf.pairwise", [](C& c) -> MrfPairwise& { return c.mrf.pairwise; },
+                               {{"potts", MrfPairwise::Potts}, {"context", MrfPairwise::Context}}),
+      floatSetting("mrf.lambda", [](C& c) -> float& { return c.mrf.lambda; }, 0, 1000),
+      floatSetting("mrf.sigma", [](C& c) -> float& { return c.mrf.sigma; }, 1e-4, 100),
+      intSetting("mrf.max_iterations", [](C& c) -> int& { return c.mrf.max_iterations; }, 1,
+                 10000),
+      floatSetting("mrf.damping", [](C& c) -> float& { return c.mrf.damping; }, 0, 0.99),
+      floatSetting("mrf.convergence_tol", [](C& c) -> float& { return c.mrf.convergence_tol; },
+                   0, 1),
+      intSetting("table_metrics.min_instance_points",
+                 [](C& c) -> int& { return c.table_metrics.min_instance_points; }, 1, 10000000),
+      floatSetting("table_metrics.min_iou",
+                   [](C& c) -> float& { return c.table_metrics.min_iou; }, 0.01, 1),
+      floatSetting("table_metrics.searchable_min_top_area_m2",
+                   [](C& c) -> float& { return c.table_metrics.searchable_min_top_area_m2; }, 0,
+                   100),
+      floatSetting("table_metrics.searchable_min_overlap",
+                   [](C& c) -> float& { return c.table_metrics.searchable_min_overlap; }, 0.01, 1),
+      floatSetting("table_metrics.searchable_max_height_error_m",
+                   [](C& c) -> float& { return c.table_metrics.searchable_max_height_error_m; },
+                   0, 10),
+      floatSetting("tables.cluster_tolerance_m",
+                   [](C& c) -> float& { return c.tables.cluster_tolerance_m; }, 0.005, 1),
+      intSetting("tables.min_cluster_points",
+                 [](C& c) -> int& { return c.tables.min_cluster_points; }, 1, 10000000),
+      intSetting("tables.max_cluster_points",
+                 [](C& c) -> int& { return c.tables.max_cluster_points; }, 1, 10000000),
+      intSetting("tables.point_stride", [](C& c) -> int& { return c.tables.point_stride; }, 1, 8),
+      floatSetting("tables.safety_distance_m",
+                   [](C& c) -> float& { return c.tables.safety_distance_m; }, 0, 5),
+      floatSetting("tables.arm_reach_m", [](C& c) -> float& { return c.tables.arm_reach_m; },
+                   0.05, 5),
+      floatSetting("tables.robot_radius_m",
+                   [](C& c) -> float& { return c.tables.robot_radius_m; }, 0, 3),
+      floatSetting("tables.min_table_height_m",
+                   [](C& c) -> float& { return c.tables.min_table_height_m; }, 0, 3),
+      floatSetting("tables.max_table_height_m",
+                   [](C& c) -> float& { return c.tables.max_table_height_m; }, 0, 3),
+      floatSetting("tables.top_band_m", [](C& c) -> float& { return c.tables.top_band_m; },
+                   0.005, 0.5),
+      floatSetting("tables.min_table_width_m",
+                   [](C& c) -> float& { return c.tables.min_table_width_m; }, 0, 5),
+      floatSetting("tables.obstacle_min_height_m",
+                   [](C& c) -> float& { return c.tables.obstacle_min_height_m; }, 0, 2),
+      floatSetting("tables.robot_height_m",
+                   [](C& c) -> float& { return c.tables.robot_height_m; }, 0.1, 3),
+      intSetting("tables.obstacle_min_points",
+                 [](C& c) -> int& { return c.tables.obstacle_min_points; }, 1, 100000),
+      floatSetting("tables.floor_tolerance_m",
+                   [](C& c) -> float& { return c.tables.floor_tolerance_m; }, 0.005, 1),
+      floatSetting("tables.floor_cell_m", [](C& c) -> float& { return c.tables.floor_cell_m; },
+                   0.01, 1),
+      floatSetting("tables.min_floor_observed_fraction",
+                   [](C& c) -> float& { return c.tables.min_floor_observed_fraction; }, 0, 1),
+      boolSetting("tables.region_vote", [](C& c) -> bool& { return c.tables.region_vote; }),
+      floatSetting("tables.table_weight", [](C& c) -> float& { return c.tables.table_weight; },
+                   0.01, 100),
+      floatSetting("tables.region_max_tilt_deg",
+                   [](C& c) -> float& { return c.tables.region_max_tilt_deg; }, 0, 90),
+      floatSetting("tables.region_min_area_m2",
+                   [](C& c) -> float& { return c.tables.region_min_area_m2; }, 0, 100),
+      floatSetting("tables.min_top_area_m2",
+                   [](C& c) -> float& { return c.tables.min_top_area_m2; }, 0, 100),
+      floatSetting("tables.min_confidence",
+                   [](C& c) -> float& { return c.tables.min_confidence; }, 0, 1),
+      floatSetting("tables.min_horizontal_share",
+                   [](C& c) -> float& { return c.tables.min_horizontal_share; }, 0, 1),
+      floatSetting("tables.horizontal_tilt_deg",
+                   [](C& c) -> float& { return c.tables.horizontal_tilt_deg; }, 0, 90),
+  };
+  return all;
+}
+
+// The seeds are 64-bit and the bagging fraction a double: handled apart from
+// the table above so that no precision is lost.
+bool setSpecial(SegmenterConfig& c, const std::string& key, const std::string& value,
+                const std::string& origin) {
+  if (key == "forest.seed" || key == "ground.seed" || key == "training.degraded_seed") {
+    const long long x = parseInt(origin, key, value);
+    if (x < 0) badValue(origin, key, value, "a non-negative integer");
+    (key == "forest.seed"   ? c.forest.seed
+     : key == "ground.seed" ? c.ground.seed
+                            : c.training.degraded_seed) = static_cast<std::uint64_t>(x);
+    return true;
+  }
+  if (key == "forest.bagging_fraction") {
+    const double x = parseDouble(origin, key, value);
+    if (x <= 0 || x > 1) badValue(origin, key, value, "a number in (0, 1]");
+    c.forest.bagging_fraction = x;
+    return true;
+  }
+  return false;
+}
+
+void setValue(Config& config, const std::string& key, const std::string& value,
+              const std::string& origin) {
+  const auto dot = key.find('.');
+  if (dot == std::string::npos || dot == 0 || dot + 1 == key.size()) {
+    throw Error(origin + ": setting '" + key + "' must be of the form section.name");
+  }
+  const std::string section = key.substr(0, dot);
+  // Sections outside SegmenterConfig, registered by their owners (settings.hpp):
+  // checked now when the owner gave a check, kept as text for it to resolve.
+  if (configSections().has(section)) {
+    try {
+      configSections().check(section, key, value);
+    } catch (const Error& e) {
+      throw Error(origin + ": " + e.what());
+    }
+    config.extra[key] = value;
+    return;
+  }
+  if (setSpecial(config.segmenter, key, value, origin)) return;
+  for (const auto& s : settings()) {
+    if (s.key == key) {
+      try {
+        s.set(config.segmenter, value);
+      } catch (const Error& e) {
+        throw Error(origin + ": " + e.what());
+      }
+      return;
+    }
+  }
+  throw Error(origin + ": unknown setting '" + key + "'");
+}
+
+void validateConsistency(const Config& config, const std::string& origin) {
+  const auto& c = config.segmenter;
+  if (c.overseg.seed_resolution_m <= c.overseg.voxel_resolution_m) {
+    throw Error(origin + ": overseg.seed_resolution_m (" +
+                formatDouble(c.overseg.seed_resolution_m) +
+                ") must be larger than overseg.voxel_resolution_m (" +
+                formatDouble(c.overseg.voxel_resolution_m) + ")");
+  }
+  if (c.tables.min_table_height_m >= c.tables.max_table_height_m) {
+    throw Error(origin + ": tables.min_table_height_m must be below tables.max_table_height_m");
+  }
+  if (c.tables.arm_reach_m <= c.tables.safety_distance_m) {
+    throw Error(origin + ": tables.arm_reach_m (" + formatDouble(c.tables.arm_reach_m) +
+                ") must exceed tables.safety_distance_m (" +
+                formatDouble(c.tables.safety_distance_m) +
+                "): from a search position the arm must reach past the table edge");
+  }
+  if (c.learner.classes != ClassScheme::Labels && c.training.split_labels != SplitLabels::Labels) {
+    throw Error(origin + ": learner.classes = " + classSchemeName(c.learner.classes) +
+                " cannot be combined with training.split_labels (the internal classes already "
+                "choose the splits); set training.split_labels = labels");
+  }
+  if (c.learner.kind == LearnerKind::XGBoost && c.context.enabled) {
+    throw Error(origin + ": learner.kind = xgboost has no auto-context stage; set "
+                "features.context = false or learner.kind = forest");
+  }
+  if (c.tables.min_cluster_points > c.tables.max_cluster_points) {
+    throw Error(origin + ": tables.min_cluster_points must not exceed tables.max_cluster_points");
+  }
+}
+
+// A map key as text. YAML allows maps and sequences as keys ("? [a, b]: 1"),
+// which yaml-cpp's as<std::string>() answers with its own exception: name the
+// place instead (found by fuzzing, tests/fuzz/regressions/config_yaml).
+std::string keyText(const YAML::Node& key, const std::string& origin, const std::string& where) {
+  if (!key.IsScalar()) {
+    throw Error(origin + ": line " + std::to_string(key.Mark().line + 1) + ": " + where +
+                " key must be a plain name, not a map or list");
+  }
+  return key.Scalar();
+}
+
+}  // namespace
+
+Config parseConfig(const std::string& yaml_text, const std::string& origin) {
+  YAML::Node root;
+  try {
+    root = YAML::Load(yaml_text);
+  } catch (const YAML::Exception& e) {
+    throw Error(origin + ": not valid YAML: " + e.what());
+  }
+  Config config;
+  if (root.IsNull()) return config;  // an empty file means all defaults
+  if (!root.IsMap()) throw Error(origin + ": top level must be a map of sections");
+  for (const auto& section : root) {
+    const std::string section_name = keyText(section.first, origin, "section");
+    if (!section.second.IsMap()) {
+      throw Error(origin + ": section '" + section_name + "' must be a map of settings");
+    }
+    for (const auto& entry : section.second) {
+      const std::string key =
+          section_name + "." + keyText(entry.first, origin, "section '" + section_name + "':");
+      if (!entry.second.IsScalar()) {
+        throw Error(origin + ": setting '" + key + "' must be a single value");
+      }
+      setValue(config, key, entry.second.Scalar(), origin);
+    }
+  }
+  validateConsistency(config, origin);
+  return config;
+}
+
+Config loadConfig(const std::string& path) {
+  std::ifstream in(path);
+  if (!in) throw Error(path + ": cannot open config file");
+  std::stringstream buffer;
+  buffer << in.rdbuf();
+  return parseConfig(buffer.str(), path);
+}
+
+void applyOverride(Config& config, const std::string& key_equals_value) {
+  const auto eq = key_equals_value.find('=');
+  if (eq == std::string::npos) {
+    throw Error("<flags>: override '" + key_equals_value + "' must be key=value");
+  }
+  setValue(config, key_equals_value.substr(0, eq), key_equals_value.substr(eq + 1), "<flags>");
+  validateConsistency(config, "<flags>");
+}
+
+std::string dumpConfig(const Config& config) {
+  // Group "section.name" keys back into YAML sections, in a stable order.
+  std::map<std::string, std::vector<std::pair<std::string, std::string>>> sections;
+  auto add = [&](const std::string& key, const std::string& value) {
+    const auto dot = key.find('.');
+    sections[key.substr(0, dot)].emplace_back(key.substr(dot + 1), value);
+  };
+  for (const auto& s : settings()) add(s.key, s.get(config.segmenter));
+  add("forest.seed", std::to_string(config.segmenter.forest.seed));
+  add("forest.bagging_fraction", formatDouble(config.segmenter.forest.bagging_fraction));
+  add("ground.seed", std::to_string(config.segmenter.ground.seed));
+  add("training.degraded_seed", std::to_string(config.segmenter.training.degraded_seed));
+  for (const auto& [key, value] : config.extra) add(key, value);
+
+  std::ostringstream out;
+  for (const auto& [section, entries] : sections) {
+    out << section << ":\n";
+    for (const auto& [name, value] : entries) out << "  " << name << ": " << value << "\n";
+  }
+  return out.str();
+}
+
+RandomForest::Settings extractionSettings(const SegmenterConfig& config) {
+  RandomForest::Settings out;
+  for (const auto& s : settings()) {
+    if (s.key == "features.context_cross_fit_folds") continue;  // training only
+    if (s.key.rfind("cloud.", 0) == 0 || s.key.rfind("normals.", 0) == 0 ||
+        s.key.rfind("overseg.", 0) == 0 || s.key.rfind("features.", 0) == 0) {
+      out.emplace_back(s.key, s.get(config));
+    }
+  }
+  return out;
+}
+
+TableMapConfig resolveTableMapConfig(Config& config) {
+  const auto& table = tableMapSettings();
+  TableMapConfig out;
+  for (const auto& [key, value] : config.extra) {
+    if (key.rfind(table.section() + ".", 0) == 0) table.set(out, key, value);
+  }
+  validateTableMapConfig(out);
+  for (const auto& [key, value] : table.values(out)) config.extra[key] = value;
+  return out;
+}
+
+}  // namespace findmug

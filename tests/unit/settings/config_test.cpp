@@ -1,0 +1,207 @@
+// Config: every parameter is a named setting; bad input names the key.
+#include <gmock/gmock.h>
+#include <gtest/gtest.h>
+
+#include <fstream>
+
+#include "findmug/common/error.hpp"
+#include "findmug/settings/config.hpp"
+#include "findmug/settings/settings.hpp"
+#include "test_data.hpp"
+
+namespace findmug {
+namespace {
+
+using ::testing::HasSubstr;
+
+// This program reads the daemon's file as findmug-train does: it knows the
+// daemon's sections by name only (what cli::declareProjectSections does).
+[[maybe_unused]] const bool kDaemonSectionsDeclared = [] {
+  configSections().addSectionName("daemon");
+  configSections().addSectionName("check");
+  return true;
+}();
+
+std::string errorOf(const std::function<void()>& f) {
+  try {
+    f();
+  } catch (const Error& e) {
+    return e.what();
+  }
+  return "";
+}
+
+TEST(Config, EmptyTextGivesDefaults) {
+  const Config c = parseConfig("", "empty");
+  EXPECT_EQ(c.segmenter.forest.num_trees, ForestParams{}.num_trees);
+  EXPECT_FLOAT_EQ(c.segmenter.overseg.seed_resolution_m, 0.1f);
+  EXPECT_FLOAT_EQ(c.segmenter.overseg.voxel_resolution_m, 0.01f);
+  EXPECT_TRUE(c.segmenter.use_mrf);
+}
+
+TEST(Config, ParsesEverySection) {
+  const Config c = parseConfig(R"(
+forest:
+  num_trees: 16
+  max_depth: 9
+  seed: 123456789012
+  bagging_fraction: 0.5
+mrf:
+  lambda: 2.5
+  sigma: 0.3
+  enabled: false
+overseg:
+  method: organized
+  seed_resolution_m: 0.15
+ground:
+  source: floor_labels
+tables:
+  safety_distance_m: 0.4
+daemon:
+  source: dataset:/tmp/x
+)",
+                               "test.yaml");
+  EXPECT_EQ(c.segmenter.forest.num_trees, 16);
+  EXPECT_EQ(c.segmenter.forest.max_depth, 9);
+  EXPECT_EQ(c.segmenter.forest.seed, 123456789012ull);
+  EXPECT_DOUBLE_EQ(c.segmenter.forest.bagging_fraction, 0.5);
+  EXPECT_FLOAT_EQ(c.segmenter.mrf.lambda, 2.5f);
+  EXPECT_FLOAT_EQ(c.segmenter.mrf.sigma, 0.3f);
+  EXPECT_FALSE(c.segmenter.use_mrf);
+  EXPECT_EQ(c.segmenter.overseg.kind, OversegmenterKind::Organized);
+  EXPECT_EQ(c.segmenter.ground.source, GroundSource::FloorLabels);
+  EXPECT_FLOAT_EQ(c.segmenter.tables.safety_distance_m, 0.4f);
+  EXPECT_EQ(c.extra.at("daemon.source"), "dataset:/tmp/x");
+}
+
+TEST(Config, UnknownKeyIsNamed) {
+  const auto msg = errorOf([] { parseConfig("forest:\n  num_tres: 3\n", "cfg.yaml"); });
+  EXPECT_THAT(msg, HasSubstr("cfg.yaml"));
+  EXPECT_THAT(msg, HasSubstr("forest.num_tres"));
+}
+
+TEST(Config, UnknownSectionIsRefused) {
+  const auto msg = errorOf([] { parseConfig("forrest:\n  num_trees: 3\n", "cfg.yaml"); });
+  EXPECT_THAT(msg, HasSubstr("forrest.num_trees"));
+}
+
+TEST(Config, BadValuesNameKeyAndValue) {
+  EXPECT_THAT(errorOf([] { parseConfig("forest:\n  num_trees: many\n", "a.yaml"); }),
+              HasSubstr("'many' for forest.num_trees"));
+  EXPECT_THAT(errorOf([] { parseConfig("forest:\n  num_trees: 0\n", "a.yaml"); }),
+              HasSubstr("forest.num_trees"));
+  EXPECT_THAT(errorOf([] { parseConfig("mrf:\n  sigma: -1\n", "a.yaml"); }),
+              HasSubstr("mrf.sigma"));
+  EXPECT_THAT(errorOf([] { parseConfig("mrf:\n  lambda: nan\n", "a.yaml"); }),
+              HasSubstr("mrf.lambda"));
+  EXPECT_THAT(errorOf([] { parseConfig("mrf:\n  enabled: maybe\n", "a.yaml"); }),
+              HasSubstr("mrf.enabled"));
+  EXPECT_THAT(errorOf([] { parseConfig("overseg:\n  method: slic\n", "a.yaml"); }),
+              HasSubstr("one of pcl organized"));
+  EXPECT_THAT(errorOf([] { parseConfig("forest: [1, 2]\n", "a.yaml"); }),
+              HasSubstr("section 'forest'"));
+  EXPECT_THAT(errorOf([] { parseConfig("forest:\n  num_trees: [1]\n", "a.yaml"); }),
+              HasSubstr("forest.num_trees"));
+  EXPECT_THAT(errorOf([] { parseConfig("forest: {num_trees: 3", "a.yaml"); }),
+              HasSubstr("not valid YAML"));
+}
+
+// Issue 10's settings: the scene feature group and the training levers.
+TEST(Config, SceneAndTrainingSettings) {
+  const Config c = parseConfig(
+      "features:\n  scene: true\n  scene_cell_m: 0.2\n  scene_band_px: 10\n"
+      "training:\n  sample_weight: sqrt_pixels\n  extra_oversegmentations: 2\n"
+      "  extra_seed_scale: 0.9\n  split_labels: nyu40\n",
+      "t.yaml");
+  EXPECT_TRUE(c.segmenter.scene.enabled);
+  EXPECT_FLOAT_EQ(c.segmenter.scene.cell_m, 0.2f);
+  EXPECT_EQ(c.segmenter.scene.band_px, 10);
+  EXPECT_EQ(c.segmenter.training.sample_weight, SampleWeighting::SqrtPixels);
+  EXPECT_EQ(c.segmenter.training.extra_oversegmentations, 2);
+  EXPECT_FLOAT_EQ(c.segmenter.training.extra_seed_scale, 0.9f);
+  EXPECT_EQ(c.segmenter.training.split_labels, SplitLabels::Nyu40);
+  EXPECT_EQ(SegmenterConfig{}.training.split_labels, SplitLabels::Labels);
+  EXPECT_EQ(parseConfig("training:\n  split_labels: nyu13\n", "a.yaml").segmenter.training.split_labels,
+            SplitLabels::Nyu13);
+  EXPECT_THAT(errorOf([] { parseConfig("training:\n  split_labels: nyu894\n", "a.yaml"); }),
+              HasSubstr("one of labels nyu40 nyu13"));
+  EXPECT_THAT(errorOf([] { parseConfig("training:\n  sample_weight: area\n", "a.yaml"); }),
+              HasSubstr("one of patches pixels sqrt_pixels"));
+  EXPECT_THAT(errorOf([] { parseConfig("features:\n  scene_band_px: 0\n", "a.yaml"); }),
+              HasSubstr("features.scene_band_px"));
+  EXPECT_THAT(errorOf([] { parseConfig("training:\n  extra_seed_scale: 1\n", "a.yaml"); }),
+              HasSubstr("training.extra_seed_scale"));
+  // The scene switches shape the features and go into the model; training.* does not.
+  const auto recorded = extractionSettings(c.segmenter);
+  auto has = [&](const std::string& key) {
+    for (const auto& kv : recorded)
+      if (kv.first == key) return true;
+    return false;
+  };
+  EXPECT_TRUE(has("features.scene"));
+  EXPECT_TRUE(has("features.scene_band_px"));
+  EXPECT_FALSE(has("training.sample_weight"));
+  EXPECT_FALSE(has("training.extra_oversegmentations"));
+  EXPECT_FALSE(has("training.split_labels"));
+}
+
+TEST(Config, InconsistentResolutionsRefused) {
+  const auto msg = errorOf([] {
+    parseConfig("overseg:\n  voxel_resolution_m: 0.2\n  seed_resolution_m: 0.1\n", "a.yaml");
+  });
+  EXPECT_THAT(msg, HasSubstr("overseg.seed_resolution_m"));
+}
+
+TEST(Config, OverridesApplyOnTop) {
+  Config c = parseConfig("forest:\n  num_trees: 4\n", "a.yaml");
+  applyOverride(c, "forest.num_trees=12");
+  applyOverride(c, "daemon.lcm_url=memq://");
+  EXPECT_EQ(c.segmenter.forest.num_trees, 12);
+  EXPECT_EQ(c.extra.at("daemon.lcm_url"), "memq://");
+  EXPECT_THAT(errorOf([&] { applyOverride(c, "forest.num_trees"); }), HasSubstr("key=value"));
+  EXPECT_THAT(errorOf([&] { applyOverride(c, "bogus=1"); }), HasSubstr("section.name"));
+}
+
+TEST(Config, DumpRoundTrips) {
+  Config c = parseConfig(
+      "forest:\n  num_trees: 7\n  seed: 99\nmrf:\n  sigma: 0.25\noverseg:\n  method: organized\n"
+      "ground:\n  source: estimated\ndaemon:\n  workers: 2\n",
+      "a.yaml");
+  const Config again = parseConfig(dumpConfig(c), "dump");
+  EXPECT_EQ(dumpConfig(again), dumpConfig(c));
+  EXPECT_EQ(again.segmenter.forest.num_trees, 7);
+  EXPECT_EQ(again.segmenter.forest.seed, 99u);
+  EXPECT_EQ(again.segmenter.overseg.kind, OversegmenterKind::Organized);
+  EXPECT_EQ(again.segmenter.ground.source, GroundSource::Estimated);
+  EXPECT_EQ(again.extra.at("daemon.workers"), "2");
+}
+
+TEST(Config, LoadConfigNamesMissingFile) {
+  EXPECT_THAT(errorOf([] { loadConfig("/nonexistent/findmugd.yaml"); }),
+              HasSubstr("/nonexistent/findmugd.yaml"));
+}
+
+TEST(Config, ShippedDefaultConfigParses) {
+  const auto path = test::sourceDir() / "daemon" / "findmugd.yaml";
+  ASSERT_TRUE(std::filesystem::exists(path)) << path;
+  const Config c = loadConfig(path.string());
+  EXPECT_GT(c.segmenter.forest.num_trees, 0);
+}
+
+// Found by fuzzing (tests/fuzz/regressions/config_yaml): a map or list used as
+// a key escaped as a yaml-cpp exception and aborted the daemon at start-up.
+TEST(Config, NonScalarKeysAreErrorsNamingTheLine) {
+  for (const std::string yaml : {"? [cloud, x]\n: {max_depth_m: 3}\n",
+                                 "cloud:\n  ? {a: b}\n  : 3\n"}) {
+    try {
+      parseConfig(yaml, "bad.yaml");
+      ADD_FAILURE() << "accepted: " << yaml;
+    } catch (const Error& e) {
+      EXPECT_THAT(e.what(), HasSubstr("bad.yaml: line "));
+      EXPECT_THAT(e.what(), HasSubstr("key must be a plain name"));
+    }
+  }
+}
+
+}  // namespace
+}  // namespace findmug
