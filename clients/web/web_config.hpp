@@ -28,6 +28,14 @@ struct WebConfig {
   double history_s = 300.0;
   // Where the page's HTML/JS/CSS are ("" = the installed folder).
   std::string static_dir;
+  // The Retrain page (retrain.hpp): the tools it runs, where its jobs write their model
+  // and report ("" = the page is off), the model file findmugd loads (daemon.model_path;
+  // "" = no Install), findmug-eval's folds.
+  std::string train_program = "findmug-train";
+  std::string eval_program = "findmug-eval";
+  std::string jobs_dir;
+  std::string install_path;
+  int retrain_folds = 5;
 };
 
 const SettingsTable<WebConfig>& webSettings();

@@ -2,7 +2,7 @@
 // folders).
 //
 // Subscribes to FINDMUG_LABELS, FINDMUG_TABLES, FINDMUG_TABLE_MAP and FINDMUG_STATUS
-// (with --channel-suffix) through findmug's own bus and hardened decoders, keeps the
+// (with --channel-suffix), publishes the page's requests to the daemon on FINDMUG_COMMAND through findmug's own bus and hardened decoders, keeps the
 // latest of each (live_state.hpp) and serves a page that draws them several times a
 // second (static/: HTML, JS and CSS, no network needed). Listens on 127.0.0.1 unless the
 // config (web.bind) or --bind names another address; then the token of --token-file is
@@ -62,7 +62,7 @@ int main(int argc, char** argv) {
   if (auto code = cli::parse(*app, argc, argv)) return *code;
 
   web::WebConfig config;
-  std::string labels_channel, tables_channel, map_channel, status_channel;
+  std::string labels_channel, tables_channel, map_channel, status_channel, command_channel;
   web::ServerOptions options;
   try {
     web::registerWebSection();
@@ -76,6 +76,7 @@ int main(int argc, char** argv) {
     tables_channel = io::channelName(io::kTablesChannel, suffix);
     map_channel = io::channelName(io::kTableMapChannel, suffix);
     status_channel = io::channelName(io::kStatusChannel, suffix);
+    command_channel = io::channelName(io::kCommandChannel, suffix);
     options.bind = config.bind;
     options.port = config.port;
     options.max_body_bytes = static_cast<std::size_t>(config.max_body_bytes);
@@ -96,6 +97,31 @@ int main(int argc, char** argv) {
   clients::installStopHandlers();  // before any thread (the bus's, the server's) starts
   const std::unique_ptr<io::Bus> bus = clients::openBus(url, kProgram);
   if (!bus) return 1;
+  // The page's requests to findmugd (Save this frame, reload after an install) go out on
+  // the same bus; Bus::publish may be called from the server's threads.
+  options.send_command = [&bus, command_channel](const io::CommandMessage& command) {
+    const auto bytes = io::encodeMessage(io::encodeCommand(command));
+    if (!bus->publish(command_channel, bytes.data(), bytes.size())) {
+      throw Error(command_channel + ": the LCM bus refused the command");
+    }
+  };
+  std::unique_ptr<web::RetrainJobs> retrain;
+  if (!config.jobs_dir.empty()) {
+    web::RetrainOptions r;
+    r.train_program = config.train_program;
+    r.eval_program = config.eval_program;
+    r.jobs_dir = config.jobs_dir;
+    r.install_path = config.install_path;
+    r.folds = config.retrain_folds;
+    // The tools read the same config findmug-web was given (the daemon's settings).
+    if (config_flags.config_path) r.config_args = {"--config", *config_flags.config_path};
+    for (const auto& o : config_flags.overrides) {
+      r.config_args.push_back("--set");
+      r.config_args.push_back(o);
+    }
+    retrain = std::make_unique<web::RetrainJobs>(std::move(r));
+    options.retrain = retrain.get();
+  }
   web::LiveState live(config.history_s);
   std::unique_ptr<web::WebServer> server;
   try {

@@ -23,6 +23,8 @@
 #include <string>
 #include <vector>
 
+#include "command_routes.hpp"
+#include "retrain.hpp"
 #include "findmug/settings/config.hpp"
 #include "live_state.hpp"
 
@@ -42,6 +44,10 @@ struct ServerOptions {
   // The oversegmentation the Label page shows is made with these settings (cloud,
   // normals, overseg.*: the ones the model is trained with).
   SegmenterConfig segmenter;
+  // Publishes a command to findmugd (command_routes.hpp); empty: POST /api/command is 503.
+  SendCommand send_command;
+  // The Retrain page's jobs (retrain.hpp; not owned); nullptr: its endpoints are absent.
+  RetrainJobs* retrain = nullptr;
 };
 
 // A path inside one of the data folders, or why not (HTTP status and message).
