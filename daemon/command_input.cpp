@@ -72,6 +72,7 @@ void CommandInput::dispatch(const io::CommandMessage& command) {
                 std::to_string(command.request_id) + ": " + e.what());
     }
   }
+  dispatched_.fetch_add(1);
 }
 
 }  // namespace findmug::daemon

@@ -144,7 +144,7 @@ TEST(Collect, SaveFrameCommandWritesTheNextFrameInTheDatasetLayout) {
   send("save_frame", 5, "two mugs on the table");
   send("save_frame", 6, "a, comma");  // refused: frames.csv is comma-separated
   const auto deadline = std::chrono::steady_clock::now() + 30s;
-  while (rig.pipeline->commandInput()->received() < 2 &&
+  while (rig.pipeline->commandInput()->handled() < 2 &&
          std::chrono::steady_clock::now() < deadline) {
     std::this_thread::sleep_for(20ms);
   }
@@ -209,8 +209,9 @@ TEST(Collect, LowConfidenceSavesExactlyTheFramesBelowTheThreshold) {
   ASSERT_LT(means[means.size() / 2 - 1], means[means.size() / 2]);
   TempDir tmp;
   const std::string dir = tmp.str("collected");
+  // A queue that holds every save: a writer slower than the frames would refuse some.
   Rig rig(dir, {{"low_confidence", std::to_string(threshold)}, {"min_interval_s", "0"},
-                {"max_frames", "100"}});
+                {"max_frames", "100"}, {"queue", "64"}});
   std::vector<std::string> expected;
   for (std::size_t i = 0; i < s->frames.size(); ++i) {
     rig.submit(i, static_cast<std::int64_t>(i), 0.1 * static_cast<double>(i));
@@ -223,6 +224,7 @@ TEST(Collect, LowConfidenceSavesExactlyTheFramesBelowTheThreshold) {
   EXPECT_LT(expected.size(), s->frames.size());
   EXPECT_EQ(savedNames(dir), expected);
   EXPECT_EQ(status.frames_collected, static_cast<std::int64_t>(expected.size()));
+  EXPECT_EQ(status.frames_collect_refused, 0);
   EXPECT_NE(readText(fs::path(dir) / "frames.csv").find(",low_confidence,"), std::string::npos);
 }
 
@@ -241,7 +243,7 @@ TEST(Collect, TableFlickerSavesAfterNChangesWithinTheWindow) {
     TempDir tmp;
     const std::string dir = tmp.str("collected");
     Rig rig(dir, {{"flicker_changes", "3"}, {"flicker_window_s", window_s},
-                  {"min_interval_s", "0"}});
+                  {"min_interval_s", "0"}, {"queue", "64"}});
     for (int i = 0; i < 7; ++i) rig.submit(i % 2 == 0 ? a : b, i, 0.1 * i);
     rig.finish();
     return savedNames(dir);
@@ -265,7 +267,7 @@ TEST(Collect, AutomaticSavesAreRateLimitedByCaptureTime) {
   ASSERT_FALSE(low.empty());
   TempDir tmp;
   const std::string dir = tmp.str("collected");
-  Rig rig(dir, {{"low_confidence", "0.999"}, {"min_interval_s", "1"}});
+  Rig rig(dir, {{"low_confidence", "0.999"}, {"min_interval_s", "1"}, {"queue", "64"}});
   // One frame every 0.4 s for 3.2 s: saved at 0, 1.2 (>= 1 s after 0), 2.4.
   for (int i = 0; i < 8; ++i) rig.submit(low[static_cast<std::size_t>(i) % low.size()], i, 0.4 * i);
   const auto status = rig.finish();

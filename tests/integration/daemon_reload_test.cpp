@@ -331,7 +331,10 @@ TEST(ModelReload, MismatchedCorruptAndHostileAreRefusedAndFramesGoOnWithTheOldMo
       ASSERT_TRUE(rig.commands->publish(std::string(io::kCommandChannel), bytes.data(), bytes.size()));
     }
   });
-  std::this_thread::sleep_for(500ms);  // the command thread handles every 100 ms
+  // Request 9 and the four refused ones, all dealt with by the command thread.
+  for (int i = 0; i < 500 && rig.pipeline->commandInput()->handled() < 5; ++i) {
+    std::this_thread::sleep_for(20ms);
+  }
   rig.finish();
 
   EXPECT_FALSE(mismatched.last_ok);

@@ -145,7 +145,7 @@ TEST(WebCommand, SaveThisFrameAndReloadReachTheDaemonAndItsStatusComesBack) {
                    web.live.onStatus(io::decodeMessage<findmug_lcm::status_t>(d, n, c));
                  });
   const auto awaitCommands = [&](std::uint64_t n) {
-    for (int i = 0; i < 300 && pipeline.commandInput()->received() < n; ++i) {
+    for (int i = 0; i < 300 && pipeline.commandInput()->handled() < n; ++i) {
       std::this_thread::sleep_for(20ms);
     }
   };
@@ -169,6 +169,10 @@ TEST(WebCommand, SaveThisFrameAndReloadReachTheDaemonAndItsStatusComesBack) {
   awaitCommands(2);
   for (int i = 0; i < 500 && pipeline.reloadStatus().reloads + pipeline.reloadStatus().refused == 0;
        ++i) {
+    std::this_thread::sleep_for(20ms);
+  }
+  // The frame is written by the collector's own thread.
+  for (int i = 0; i < 500 && pipeline.statusSnapshot().frames_collected == 0; ++i) {
     std::this_thread::sleep_for(20ms);
   }
   pipeline.publishStatusNow();

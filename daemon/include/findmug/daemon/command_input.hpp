@@ -43,7 +43,9 @@ class CommandInput {
   // Stops the thread and closes the handle. Idempotent; the counters stay readable.
   void stop();
 
-  std::uint64_t received() const { return subscriber_->received(); }  // messages, all of them
+  // Messages dealt with: refused by the decoder, or decoded and their handler run (or
+  // refused). A test waits for this before looking at a command's effect.
+  std::uint64_t handled() const { return subscriber_->rejected() + dispatched_.load(); }
   std::uint64_t accepted() const;  // commands handed to their handler and taken
   std::uint64_t rejected() const;  // undecodable, unknown command, argument refused
   const std::string& channel() const { return channel_; }
@@ -55,7 +57,8 @@ class CommandInput {
   std::string url_, channel_;
   std::map<std::string, Handler> handlers_;
   OnError on_error_;
-  std::atomic<std::uint64_t> refused_{0};  // decoded but refused by the dispatch
+  std::atomic<std::uint64_t> refused_{0};     // decoded but refused by the dispatch
+  std::atomic<std::uint64_t> dispatched_{0};  // decoded and dispatched (taken or refused)
   std::shared_ptr<io::Bus> bus_;
   std::unique_ptr<io::Subscriber<io::CommandMessage>> subscriber_;
 };
