@@ -25,10 +25,11 @@ void forwardSignal(int signal_number) {
 
 }  // namespace
 
-StopSignals::StopSignals() {
+StopSignals::StopSignals(bool take_hangup) : take_hangup_(take_hangup) {
   sigemptyset(&signals_);
   sigaddset(&signals_, SIGINT);
   sigaddset(&signals_, SIGTERM);
+  if (take_hangup_) sigaddset(&signals_, SIGHUP);
   if (const int rc = pthread_sigmask(SIG_BLOCK, &signals_, &old_mask_); rc != 0) {
     throw Error(std::string("cannot block SIGINT/SIGTERM: ") + std::strerror(rc));
   }
@@ -41,11 +42,13 @@ StopSignals::StopSignals() {
   sigemptyset(&action.sa_mask);
   sigaction(SIGINT, &action, &old_int_);
   sigaction(SIGTERM, &action, &old_term_);
+  if (take_hangup_) sigaction(SIGHUP, &action, &old_hup_);
 }
 
 StopSignals::~StopSignals() {
   sigaction(SIGINT, &old_int_, nullptr);
   sigaction(SIGTERM, &old_term_, nullptr);
+  if (take_hangup_) sigaction(SIGHUP, &old_hup_, nullptr);
   g_waiter = nullptr;
   {
     std::lock_guard lock(mutex_);
@@ -63,6 +66,17 @@ void StopSignals::waitLoop() {
     int signal_number = 0;
     if (sigwait(&signals_, &signal_number) != 0) continue;
     std::unique_lock running(running_);
+    if (signal_number == SIGHUP) {
+      std::function<void()> action;
+      {
+        std::lock_guard lock(mutex_);
+        if (closing_) return;
+        action = hangup_action_;
+      }
+      hangups_.fetch_add(1);
+      if (action) action();
+      continue;
+    }
     std::vector<std::function<void()>> actions;
     {
       std::lock_guard lock(mutex_);
@@ -89,6 +103,12 @@ StopSignals::Registration StopSignals::onStop(std::function<void()> action) {
   }
   action();
   return Registration();
+}
+
+void StopSignals::onHangup(std::function<void()> action) {
+  std::lock_guard running(running_);
+  std::lock_guard lock(mutex_);
+  hangup_action_ = std::move(action);
 }
 
 void StopSignals::remove(std::uint64_t id) {

@@ -11,6 +11,10 @@
 // providers, frame sources). Should a thread started earlier take the signal
 // anyway, a handler passes it on to the waiting thread, so it still counts.
 // One StopSignals at a time per process.
+//
+// A daemon may also take SIGHUP (StopSignals(true)): it is blocked and taken by
+// the same thread, stops nothing, and runs the onHangup() action each time
+// (findmugd: reload the model; systemd's ExecReload sends it).
 #pragma once
 
 #include <signal.h>
@@ -28,7 +32,8 @@ namespace findmug::cli {
 
 class StopSignals {
  public:
-  StopSignals();
+  // `take_hangup`: also take SIGHUP (see above); otherwise SIGHUP keeps its default.
+  explicit StopSignals(bool take_hangup = false);
   // Stops the waiting thread; restores the signal mask of the thread that made it
   // and the signals' previous handlers.
   ~StopSignals();
@@ -60,6 +65,13 @@ class StopSignals {
   // (so it must be thread-safe); at once on the calling thread if one already has.
   [[nodiscard]] Registration onStop(std::function<void()> action);
 
+  // The action each SIGHUP runs on the waiting thread (needs take_hangup); replaces
+  // the previous one, and an empty one clears it (waiting for a running one), so
+  // clear it before what it touches goes away.
+  void onHangup(std::function<void()> action);
+  // SIGHUPs taken so far.
+  std::uint64_t hangups() const noexcept { return hangups_.load(); }
+
   // Waits until a stop signal arrives or `timeout` has passed; returns requested().
   bool waitFor(std::chrono::milliseconds timeout);
 
@@ -70,7 +82,10 @@ class StopSignals {
   sigset_t signals_{};
   sigset_t old_mask_{};
   struct sigaction old_int_ {
-  }, old_term_{};
+  }, old_term_{}, old_hup_{};
+  bool take_hangup_ = false;
+  std::atomic<std::uint64_t> hangups_{0};
+  std::function<void()> hangup_action_;  // guarded by mutex_; run holding running_
   std::atomic<bool> requested_{false};
   std::atomic<int> signal_number_{0};
   std::mutex mutex_;    // requested_ transitions, closing_, actions_

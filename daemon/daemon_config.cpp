@@ -125,6 +125,12 @@ const SettingsTable<DaemonConfig>& daemonSettings() {
         },
         "trace, debug, info, warn, error"));
     t.add(boolSetting<D>(
+        "daemon.command_input", [](D& d) -> bool& { return d.command_input; },
+        "listen for command_t (reload_model) on FINDMUG_COMMAND"));
+    t.add(textSetting<D>(
+        "daemon.command_url", [](D& d) -> std::string& { return d.command_url; }, lcmUrlRule,
+        "command LCM provider; empty = the output provider"));
+    t.add(boolSetting<D>(
         "daemon.pose_input", [](D& d) -> bool& { return d.pose_input; },
         "listen for robot_pose_t"));
     t.add(textSetting<D>(
@@ -158,6 +164,31 @@ const SettingsTable<DaemonConfig>& daemonSettings() {
     t.add(numberSetting<D, double>(
         "daemon.semantic_map_save_s", [](D& d) -> double& { return d.semantic_map_save_s; }, 1,
         86400, "save the map this often (and at stop)"));
+    t.add(textSetting<D>(
+        "daemon.collect_dir", [](D& d) -> std::string& { return d.collect_dir; }, nullptr,
+        "save frames worth labelling into this dataset folder; empty = off"));
+    t.add(integerSetting<D, int>(
+        "daemon.collect_max_frames", [](D& d) -> int& { return d.collect_max_frames; }, 1,
+        1000000, "the collection folder holds at most this many frames"));
+    t.add(numberSetting<D, double>(
+        "daemon.collect_max_mb", [](D& d) -> double& { return d.collect_max_mb; }, 1, 1e7,
+        "... and at most this many megabytes of rgb/ and depth/ PNGs"));
+    t.add(numberSetting<D, double>(
+        "daemon.collect_min_interval_s", [](D& d) -> double& { return d.collect_min_interval_s; },
+        0, 86400, "automatic saves at most this often (frame capture time)"));
+    t.add(numberSetting<D, double>(
+        "daemon.collect_low_confidence", [](D& d) -> double& { return d.collect_low_confidence; },
+        0, 1, "save a frame whose mean confidence is below this; 0 = off"));
+    t.add(integerSetting<D, int>(
+        "daemon.collect_flicker_changes", [](D& d) -> int& { return d.collect_flicker_changes; },
+        0, 1000, "save when the table count changed this often within the window; 0 = off"));
+    t.add(numberSetting<D, double>(
+        "daemon.collect_flicker_window_s",
+        [](D& d) -> double& { return d.collect_flicker_window_s; }, 0.1, 3600,
+        "the table flicker window"));
+    t.add(integerSetting<D, int>(
+        "daemon.collect_queue", [](D& d) -> int& { return d.collect_queue; }, 1, 64,
+        "frames waiting for the collection writer (full: the save is refused)"));
     return t;
   }();
   return table;
@@ -225,6 +256,14 @@ std::string effectiveLcmUrl(const DaemonConfig& config) {
 std::optional<std::string> effectivePoseUrl(const DaemonConfig& config) {
   if (!config.pose_input) return std::nullopt;
   if (!config.pose_url.empty()) return config.pose_url;
+  const std::string output = effectiveLcmUrl(config);
+  if (output.rfind("file://", 0) == 0) return std::nullopt;
+  return output;
+}
+
+std::optional<std::string> effectiveCommandUrl(const DaemonConfig& config) {
+  if (!config.command_input) return std::nullopt;
+  if (!config.command_url.empty()) return config.command_url;
   const std::string output = effectiveLcmUrl(config);
   if (output.rfind("file://", 0) == 0) return std::nullopt;
   return output;

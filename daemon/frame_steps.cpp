@@ -10,11 +10,16 @@
 
 namespace findmug::daemon {
 
+CurrentSegmenter fixedSegmenter(const Segmenter& segmenter) {
+  // Aliasing constructor: points at `segmenter`, owns nothing.
+  return [p = &segmenter] { return std::shared_ptr<const Segmenter>(std::shared_ptr<void>(), p); };
+}
+
 PreparedJob PrepareStep::operator()(FrameJob& job) const {
   const std::string name = frameName(job.frame);
   try {
     validateFrame(job.frame);
-    return PreparedJob{segmenter_.prepare(std::move(job.frame)), job.arrival};
+    return PreparedJob{segmenter_()->prepare(std::move(job.frame)), job.arrival};
   } catch (const std::exception& e) {
     throw Error(name + ": " + e.what());
   }
@@ -24,7 +29,8 @@ ResultJob SegmentStep::operator()(PreparedJob& job) const {
   if (before_segment_) before_segment_(job.prepared.frame);
   const std::string name = frameName(job.prepared.frame);
   try {
-    return ResultJob{segmenter_.classify(segmenter_.oversegment(std::move(job.prepared))),
+    const std::shared_ptr<const Segmenter> segmenter = segmenter_();
+    return ResultJob{segmenter->classify(segmenter->oversegment(std::move(job.prepared))),
                      job.arrival};
   } catch (const std::exception& e) {
     throw Error(name + ": " + e.what());

@@ -23,7 +23,8 @@ int main(int argc, char** argv) {
   using namespace findmug;
   using namespace findmug::daemon;
 
-  cli::StopSignals stop_signals;  // before any thread: the mask is inherited by every thread
+  // Before any thread: the mask is inherited by every thread. SIGHUP reloads the model.
+  cli::StopSignals stop_signals(/*take_hangup=*/true);
 
   LoadedConfig loaded;
   CommandLine command_line;
@@ -70,6 +71,12 @@ int main(int argc, char** argv) {
   try {
     Daemon daemon(loaded.config, loaded.daemon);
     const auto stop_registration = stop_signals.onStop([&daemon] { daemon.requestStop(); });
+    stop_signals.onHangup([&daemon] { daemon.requestModelReload(-1, "SIGHUP"); });
+    // Cleared before the daemon goes, however run() ends.
+    struct ClearHangup {
+      cli::StopSignals& signals;
+      ~ClearHangup() { signals.onHangup({}); }
+    } clear_hangup{stop_signals};
     const int code = daemon.run();
     spdlog::info("findmugd exiting with code {}", code);
     // Everything observable is done: final status published, LCM handles and

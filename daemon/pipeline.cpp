@@ -64,15 +64,14 @@ Pipeline::Pipeline(const SegmenterConfig& segmenter_config, const DaemonConfig& 
                    std::shared_ptr<const RandomForest> forest, std::string model_id,
                    ExecutionMode mode, PipelineHooks hooks)
     : daemon_config_(daemon_config),
-      segmenter_(segmenter_config, forest),
-      model_id_(std::move(model_id)),
+      model_(segmenter_config, forest, std::move(model_id)),
       mode_(mode),
       hooks_(std::move(hooks)),
       workers_(daemon_config.effectiveWorkers()),
       pose_max_age_us_(
           static_cast<std::uint64_t>(std::llround(daemon_config.pose_max_age_s * 1e6))),
-      prepare_step_(segmenter_),
-      segment_step_(segmenter_, hooks_.before_segment),
+      prepare_step_([this] { return model_.segmenter(); }),
+      segment_step_([this] { return model_.segmenter(); }, hooks_.before_segment),
       publish_step_(pose_max_age_us_),
       started_(Clock::now()),
       last_sequential_status_(started_),
@@ -115,6 +114,12 @@ Pipeline::Pipeline(const SegmenterConfig& segmenter_config, const DaemonConfig& 
   publish_step_.addSink(table_map_sink_);
   if (semantic_map_) publish_step_.addSink(semantic_map_);  // may set the published labels
   publish_step_.addSink(publisher_);
+  if (!daemon_config_.collect_dir.empty()) {
+    collector_ = std::make_shared<FrameCollector>(
+        FrameCollector::fromConfig(daemon_config_), [this] { return model_.modelId(); },
+        [this](const std::string& what) { recordError(what); });
+    publish_step_.addSink(collector_);
+  }
   const auto window = std::chrono::duration_cast<Clock::duration>(
       std::chrono::duration<double>(daemon_config_.stats_window_s));
   input_rate_ = RateMeter(1000, window);
@@ -178,8 +183,40 @@ Pipeline::Pipeline(const SegmenterConfig& segmenter_config, const DaemonConfig& 
         }
       });
 
-  // Last: its thread reports through recordError, so everything it may touch
-  // must exist already.
+  // Last (with the inputs below): their threads report through recordError,
+  // so everything they may touch must exist already.
+  reloader_ = std::make_unique<ModelReloader>(
+      daemon_config_.model_path, model_,
+      [this](const std::string& what) { recordErrorQuietly(what); });
+  const auto command_url = effectiveCommandUrl(daemon_config_);
+  if (hooks_.command_bus || command_url) {
+    const std::string channel = io::channelName(io::kCommandChannel, daemon_config_.channel_suffix);
+    std::map<std::string, CommandInput::Handler> handlers;
+    handlers.emplace("reload_model", [this](const io::CommandMessage& c) {
+      if (!c.argument.empty()) {
+        throw Error("reload_model takes no argument (it loads daemon.model_path), got '" +
+                    c.argument + "'");
+      }
+      requestModelReload(c.request_id, "command request " + std::to_string(c.request_id));
+    });
+    handlers.emplace("save_frame", [this](const io::CommandMessage& c) {
+      requestFrameSave(c.request_id, c.argument);
+    });
+    auto on_command_error = [this](const std::string& what) { recordError(what); };
+    if (hooks_.command_bus) {
+      command_input_ = std::make_unique<CommandInput>(hooks_.command_bus, channel,
+                                                      std::move(handlers), on_command_error);
+    } else {
+      command_input_ = std::make_unique<CommandInput>(*command_url, channel, std::move(handlers),
+                                                      on_command_error);
+    }
+    spdlog::info("commands from {} on {}", command_input_->describe(), channel);
+  } else {
+    spdlog::info("no command input ({}): reload the model with SIGHUP",
+                 daemon_config_.command_input
+                     ? "the output is a log file and daemon.command_url is empty"
+                     : "daemon.command_input is off");
+  }
   const auto pose_url = effectivePoseUrl(daemon_config_);
   if (hooks_.pose_bus || pose_url) {
     const std::string channel =
@@ -206,6 +243,15 @@ Pipeline::Pipeline(const SegmenterConfig& segmenter_config, const DaemonConfig& 
 }
 
 Pipeline::~Pipeline() { stop(StopMode::Discard); }
+
+void Pipeline::requestModelReload(std::int64_t request_id, const std::string& origin) {
+  reloader_->request(request_id, origin);
+}
+
+void Pipeline::requestFrameSave(std::int64_t request_id, const std::string& note) {
+  if (!collector_) throw Error("save_frame: collection is off (daemon.collect_dir is empty)");
+  collector_->requestSave(request_id, note);
+}
 
 void Pipeline::attachSource(const io::FrameSource* source) { source_.store(source); }
 
@@ -282,10 +328,14 @@ void Pipeline::stop(StopMode mode) {
     if (segment_->stats().in_flight == 0) segment_->join();
   }
   publish_->stop(StopMode::Drain);  // finished results are always published
+  if (collector_) collector_->stop();  // writes what it has queued
   // Nothing feeds the map any more: its last frames (Drain), last publish and save.
   if (semantic_map_) semantic_map_->stop(mode == StopMode::Drain);
   // Nobody looks poses up any more: stop the pose thread, close its handle.
   if (pose_input_) pose_input_->stop();
+  // No more commands, no more reloads (a load in progress is finished first).
+  if (command_input_) command_input_->stop();
+  reloader_->stop();
   finalized_.store(true);
   // The publish thread is gone: the final status is the last message.
   publishStatus();
@@ -298,6 +348,10 @@ void Pipeline::stop(StopMode mode) {
 
 void Pipeline::recordError(const std::string& message) {
   spdlog::warn("{}", message);
+  recordErrorQuietly(message);
+}
+
+void Pipeline::recordErrorQuietly(const std::string& message) {
   std::lock_guard lock(stats_mutex_);
   last_error_ = message;
   last_error_utime_ = utimeNow();
@@ -316,7 +370,8 @@ void Pipeline::publishResult(ResultJob& job) {
   latency_.at("total").add(static_cast<double>(latency_us) / 1000.0, now);
   // The sinks are done with it: its buffers serve the next frames (no
   // per-frame allocation of clouds, normals and segment lists once warm).
-  segmenter_.recycle(std::move(job.labelled));
+  // (Into the Segmenter in use now: after a model swap the old one's are freed.)
+  model_.segmenter()->recycle(std::move(job.labelled));
 }
 
 std::optional<SemanticMapStage::Counters> Pipeline::semanticMapCounters() const {
@@ -384,7 +439,18 @@ StatusSnapshot Pipeline::statusSnapshot() const {
   s.cpu_budget_cores = daemon_config_.max_cpu_cores;
   s.processing_threads = processingThreads();
   s.window_s = daemon_config_.stats_window_s;
-  s.model_id = model_id_;
+  s.model_id = model_.modelId();
+  s.reload = reloader_->status();
+  if (collector_) {
+    const FrameCollector::Counters c = collector_->counters();
+    s.frames_collected = c.saved;
+    s.frames_collect_refused = c.refused;
+    s.last_collected_frame = c.last_saved;
+  }
+  if (command_input_) {
+    s.commands_accepted = command_input_->accepted();
+    s.commands_rejected = command_input_->rejected();
+  }
   s.publish_failures = publishFailures();
   s.heap_in_use_bytes = heapInUseBytes();
 

@@ -41,6 +41,17 @@ findmug_lcm::status_t StatusBuilder::build(const StatusSnapshot& in) {
   s.semantic_map_frames = static_cast<std::int64_t>(in.semantic_map_frames);
   s.semantic_map_skipped = static_cast<std::int64_t>(in.semantic_map_skipped);
   s.semantic_map_voxels = static_cast<std::int64_t>(in.semantic_map_voxels);
+  s.model_reloads = static_cast<std::int64_t>(in.reload.reloads);
+  s.model_reloads_refused = static_cast<std::int64_t>(in.reload.refused);
+  s.last_reload_ok = in.reload.last_ok;
+  s.last_reload_result = in.reload.last_result;
+  s.last_reload_utime = static_cast<std::int64_t>(in.reload.last_utime);
+  s.last_reload_request_id = in.reload.last_request_id;
+  s.commands_accepted = static_cast<std::int64_t>(in.commands_accepted);
+  s.commands_rejected = static_cast<std::int64_t>(in.commands_rejected);
+  s.frames_collected = static_cast<std::int64_t>(in.frames_collected);
+  s.frames_collect_refused = static_cast<std::int64_t>(in.frames_collect_refused);
+  s.last_collected_frame = in.last_collected_frame;
 
   std::string last_error = in.last_error;
   std::uint64_t last_error_utime = in.last_error_utime;

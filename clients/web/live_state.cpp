@@ -280,6 +280,14 @@ nlohmann::json LiveState::liveJson() const {
                      {"source_state", s.source_state_name},
                      {"source_reconnects", s.source_reconnects},
                      {"last_error", s.last_error},
+                     {"model_reloads", s.model_reloads},
+                     {"model_reloads_refused", s.model_reloads_refused},
+                     {"last_reload_ok", s.last_reload_ok != 0},
+                     {"last_reload_result", s.last_reload_result},
+                     {"last_reload_request_id", s.last_reload_request_id},
+                     {"frames_collected", s.frames_collected},
+                     {"frames_collect_refused", s.frames_collect_refused},
+                     {"last_collected_frame", s.last_collected_frame},
                      {"stages", std::move(stages)},
                      {"queues", std::move(queues)}};
   } else {

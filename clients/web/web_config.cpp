@@ -42,6 +42,21 @@ const SettingsTable<WebConfig>& webSettings() {
     t.add(textSetting<W>(
         "web.nyu_rotations", [](W& w) -> std::string& { return w.nyu_rotations; }, {},
         "NYU's camera_rotations_NYU.txt for frames named by NYU index; empty = none"));
+    t.add(textSetting<W>(
+        "web.train_program", [](W& w) -> std::string& { return w.train_program; }, {},
+        "findmug-train to run from the Retrain page (a name on PATH or a path)"));
+    t.add(textSetting<W>(
+        "web.eval_program", [](W& w) -> std::string& { return w.eval_program; }, {},
+        "findmug-eval to run from the Retrain page"));
+    t.add(textSetting<W>(
+        "web.jobs_dir", [](W& w) -> std::string& { return w.jobs_dir; }, {},
+        "where Retrain jobs write models and reports; empty = no Retrain page"));
+    t.add(textSetting<W>(
+        "web.install_path", [](W& w) -> std::string& { return w.install_path; }, {},
+        "Install copies the trained model here (findmugd's daemon.model_path); empty = off"));
+    t.add(integerSetting<W, int>(
+        "web.retrain_folds", [](W& w) -> int& { return w.retrain_folds; }, 2, 50,
+        "findmug-eval --folds on the Retrain page"));
     return t;
   }();
   return table;

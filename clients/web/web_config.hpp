@@ -34,6 +34,14 @@ struct WebConfig {
   // NYU's camera_rotations_NYU.txt, for ground.source=gravity on frames named by their
   // NYU index ("" = none).
   std::string nyu_rotations;
+  // The Retrain page (retrain.hpp): the tools it runs, where its jobs write their model
+  // and report ("" = the page is off), the model file findmugd loads (daemon.model_path;
+  // "" = no Install), findmug-eval's folds.
+  std::string train_program = "findmug-train";
+  std::string eval_program = "findmug-eval";
+  std::string jobs_dir;
+  std::string install_path;
+  int retrain_folds = 5;
 };
 
 const SettingsTable<WebConfig>& webSettings();

@@ -4,9 +4,11 @@
 // Subscribes to FINDMUG_LABELS, FINDMUG_TABLES, FINDMUG_TABLE_MAP, FINDMUG_SEMANTIC_MAP
 // and FINDMUG_STATUS (with --channel-suffix) through findmug's own bus and hardened
 // decoders, keeps the latest of each (live_state.hpp) and serves a page that draws them
-// several times a second (static/: HTML, JS and CSS, no network needed). Listens on
-// 127.0.0.1 unless the config (web.bind) or --bind names another address; then the token
-// of --token-file is required on every request (web_server.hpp has the access rules).
+// several times a second (static/: HTML, JS and CSS, no network needed); publishes the
+// page's requests to the daemon (Save this frame, reload a model) on FINDMUG_COMMAND.
+// Listens on 127.0.0.1 unless the config (web.bind) or --bind names another address; then
+// the token of --token-file is required on every request (web_server.hpp has the access
+// rules).
 #include <cstdio>
 #include <filesystem>
 #include <memory>
@@ -69,7 +71,8 @@ int main(int argc, char** argv) {
   if (auto code = cli::parse(*app, argc, argv)) return *code;
 
   web::WebConfig config;
-  std::string labels_channel, tables_channel, map_channel, semantic_channel, status_channel;
+  std::string labels_channel, tables_channel, map_channel, semantic_channel, status_channel,
+      command_channel;
   web::ServerOptions options;
   try {
     web::registerWebSection();
@@ -86,6 +89,7 @@ int main(int argc, char** argv) {
     map_channel = io::channelName(io::kTableMapChannel, suffix);
     semantic_channel = io::channelName(io::kSemanticMapChannel, suffix);
     status_channel = io::channelName(io::kStatusChannel, suffix);
+    command_channel = io::channelName(io::kCommandChannel, suffix);
     options.bind = config.bind;
     options.port = config.port;
     options.max_body_bytes = static_cast<std::size_t>(config.max_body_bytes);
@@ -112,6 +116,35 @@ int main(int argc, char** argv) {
   clients::installStopHandlers();  // before any thread (the bus's, the server's) starts
   const std::unique_ptr<io::Bus> bus = clients::openBus(url, kProgram);
   if (!bus) return 1;
+  // The page's requests to findmugd (Save this frame, reload after an install) go out on
+  // the same bus; Bus::publish may be called from the server's threads.
+  options.send_command = [&bus, command_channel](const io::CommandMessage& command) {
+    const auto bytes = io::encodeMessage(io::encodeCommand(command));
+    if (!bus->publish(command_channel, bytes.data(), bytes.size())) {
+      throw Error(command_channel + ": the LCM bus refused the command");
+    }
+  };
+  std::unique_ptr<web::RetrainJobs> retrain;
+  if (!config.jobs_dir.empty()) {
+    web::RetrainOptions r;
+    r.train_program = config.train_program;
+    r.eval_program = config.eval_program;
+    r.jobs_dir = config.jobs_dir;
+    r.install_path = config.install_path;
+    r.folds = config.retrain_folds;
+    // The tools read the same config findmug-web was given (the daemon's settings).
+    if (config_flags.config_path) r.config_args = {"--config", *config_flags.config_path};
+    for (const auto& o : config_flags.overrides) {
+      r.config_args.push_back("--set");
+      r.config_args.push_back(o);
+    }
+    // NYU frames get their gravity from NYU's rotations in training as on the Label page.
+    if (!config.nyu_rotations.empty()) {
+      r.config_args.insert(r.config_args.end(), {"--nyu-rotations", config.nyu_rotations});
+    }
+    retrain = std::make_unique<web::RetrainJobs>(std::move(r));
+    options.retrain = retrain.get();
+  }
   web::LiveState live(config.history_s);
   std::unique_ptr<web::WebServer> server;
   try {

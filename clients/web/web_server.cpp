@@ -319,6 +319,10 @@ void WebServer::routes() {
     serveStatic(req.matches[1], res);
   });
 
+  // --- requests to the daemon (command_routes.hpp) ---
+  addCommandRoutes(s, options_.send_command);
+  if (options_.retrain) addRetrainRoutes(s, *options_.retrain, roots_, options_.send_command);
+
   // --- live ---
   s.Get("/api/live", [this](const httplib::Request&, httplib::Response& res) {
     sendJson(res, live_.liveJson());

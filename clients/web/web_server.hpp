@@ -23,6 +23,8 @@
 #include <string>
 #include <vector>
 
+#include "command_routes.hpp"
+#include "retrain.hpp"
 #include "findmug/settings/config.hpp"
 #include "label_tools.hpp"
 #include "live_state.hpp"
@@ -48,6 +50,10 @@ struct ServerOptions {
   std::shared_ptr<const RandomForest> model;
   std::string model_name;
   std::optional<std::string> nyu_rotations;
+  // Publishes a command to findmugd (command_routes.hpp); empty: POST /api/command is 503.
+  SendCommand send_command;
+  // The Retrain page's jobs (retrain.hpp; not owned); nullptr: its endpoints are absent.
+  RetrainJobs* retrain = nullptr;
 };
 
 // A path inside one of the data folders, or why not (HTTP status and message).

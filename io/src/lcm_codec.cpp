@@ -812,4 +812,57 @@ RobotPose decodeRobotPose(const void* data, std::size_t size, std::string_view c
   return RobotPose{static_cast<std::uint64_t>(msg.utime), {msg.x, msg.y, msg.yaw}};
 }
 
+namespace {
+
+void checkCommand(const CommandMessage& c, std::string_view channel) {
+  const auto where = [&](std::string_view name) { return field(channel, "command_t", name); };
+  if (c.request_id < 0) {
+    throw Error(where("request_id") + ": negative id " + std::to_string(c.request_id));
+  }
+  if (c.command.empty() || c.command.size() > kMaxCommandName) {
+    throw Error(where("command") + ": " + std::to_string(c.command.size()) +
+                " characters, expected 1.." + std::to_string(kMaxCommandName));
+  }
+  for (const char ch : c.command) {
+    if (!((ch >= 'a' && ch <= 'z') || ch == '_')) {
+      throw Error(where("command") + ": character " +
+                  std::to_string(static_cast<unsigned char>(ch)) + " is not one of [a-z_]");
+    }
+  }
+  if (c.argument.size() > kMaxCommandArgument) {
+    throw Error(where("argument") + ": " + std::to_string(c.argument.size()) +
+                " characters, at most " + std::to_string(kMaxCommandArgument));
+  }
+  for (const char ch : c.argument) {
+    const auto u = static_cast<unsigned char>(ch);
+    if (u < 0x20 || u == 0x7f) {
+      throw Error(where("argument") + ": control character " + std::to_string(u));
+    }
+  }
+}
+
+}  // namespace
+
+findmug_lcm::command_t encodeCommand(const CommandMessage& command) {
+  checkCommand(command, "encodeCommand");
+  findmug_lcm::command_t msg;
+  msg.utime = static_cast<std::int64_t>(command.utime);
+  msg.request_id = command.request_id;
+  msg.command = command.command;
+  msg.argument = command.argument;
+  return msg;
+}
+
+CommandMessage decodeCommand(const void* data, std::size_t size, std::string_view channel) {
+  const findmug_lcm::command_t msg = decodeMessage<findmug_lcm::command_t>(data, size, channel);
+  if (msg.utime < 0) {
+    throw Error(field(channel, "command_t", "utime") + ": negative time " +
+                std::to_string(msg.utime));
+  }
+  CommandMessage out{static_cast<std::uint64_t>(msg.utime), msg.request_id, msg.command,
+                     msg.argument};
+  checkCommand(out, channel);
+  return out;
+}
+
 }  // namespace findmug::io

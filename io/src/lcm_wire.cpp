@@ -261,6 +261,12 @@ findmug_lcm::status_t decodeMessage<findmug_lcm::status_t>(const void* data, std
     w.skip(kI64, "source_reconnects");
     w.skip(3 * kI64, "frames_lost_in_transit/publish_failures/heap_in_use_bytes");
     w.skip(3 * kI64, "semantic_map_frames/skipped/voxels");
+    w.skip(2 * kI64 + kBool, "model_reloads/model_reloads_refused/last_reload_ok");
+    w.string("last_reload_result");
+    w.skip(2 * kI64, "last_reload_utime/last_reload_request_id");
+    w.skip(2 * kI64, "commands_accepted/commands_rejected");
+    w.skip(2 * kI64, "frames_collected/frames_collect_refused");
+    w.string("last_collected_frame");
   });
 }
 
@@ -270,6 +276,16 @@ findmug_lcm::robot_pose_t decodeMessage<findmug_lcm::robot_pose_t>(const void* d
                                                                    std::string_view channel) {
   return walkThenDecode<findmug_lcm::robot_pose_t>(data, size, channel,
                                                    [](WireWalker& w) { walkRobotPose(w); });
+}
+
+template <>
+findmug_lcm::command_t decodeMessage<findmug_lcm::command_t>(const void* data, std::size_t size,
+                                                             std::string_view channel) {
+  return walkThenDecode<findmug_lcm::command_t>(data, size, channel, [](WireWalker& w) {
+    w.skip(2 * kI64, "utime/request_id");
+    w.string("command");
+    w.string("argument");
+  });
 }
 
 }  // namespace findmug::io

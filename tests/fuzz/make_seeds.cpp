@@ -182,6 +182,18 @@ void lcmSeeds(SeedWriter& w) {
   w.write("robot_pose", "pose", pose,
           [](const std::string& b) { (void)io::decodeRobotPose(b.data(), b.size(), "seed"); });
 
+  auto decodeCommand = [](const std::string& b) {
+    (void)io::decodeCommand(b.data(), b.size(), "seed");
+  };
+  w.write("command", "reload_model",
+          asString(io::encodeMessage(
+              io::encodeCommand(io::CommandMessage{frame.utime, 7, "reload_model", ""}))),
+          decodeCommand);
+  w.write("command", "with_argument",
+          asString(io::encodeMessage(io::encodeCommand(
+              io::CommandMessage{frame.utime, 8, "save_frame", "kitchen, two mugs"}))),
+          decodeCommand);
+
   // A small fused map: a 20 x 20 patch of floor and a table top seen from above.
   {
     SemanticMap map;

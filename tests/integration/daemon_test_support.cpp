@@ -19,6 +19,44 @@ SegmenterConfig fastSegmenterConfig() {
   return config;
 }
 
+SegmenterConfig fastSegmenterConfig(int step) {
+  SegmenterConfig config = fastSegmenterConfig();
+  config.ground.min_floor_points /= step * step;
+  return config;
+}
+
+RgbdFrame subsampled(const RgbdFrame& in, int step) {
+  RgbdFrame out = in;
+  out.width = in.width / step;
+  out.height = in.height / step;
+  out.depth_mm.assign(static_cast<std::size_t>(out.width) * out.height, 0);
+  out.rgb.assign(out.depth_mm.size(), Rgb8{});
+  for (int y = 0; y < out.height; ++y) {
+    for (int x = 0; x < out.width; ++x) {
+      const std::size_t from = static_cast<std::size_t>(step * y) * in.width + step * x;
+      out.depth_mm[static_cast<std::size_t>(y) * out.width + x] = in.depth_mm[from];
+      out.rgb[static_cast<std::size_t>(y) * out.width + x] = in.rgb[from];
+    }
+  }
+  out.intrinsics = {in.intrinsics.fx / step, in.intrinsics.fy / step, in.intrinsics.cx / step,
+                    in.intrinsics.cy / step};
+  return out;
+}
+
+LabeledFrame subsampled(const LabeledFrame& in, int step) {
+  LabeledFrame out;
+  out.name = in.name;
+  out.frame = subsampled(in.frame, step);
+  out.labels.resize(static_cast<std::size_t>(out.frame.width) * out.frame.height);
+  for (int y = 0; y < out.frame.height; ++y) {
+    for (int x = 0; x < out.frame.width; ++x) {
+      out.labels[static_cast<std::size_t>(y) * out.frame.width + x] =
+          in.labels[static_cast<std::size_t>(step * y) * in.frame.width + step * x];
+    }
+  }
+  return out;
+}
+
 std::vector<LabeledFrame> framesWithGround(const std::string& dataset_dir, std::size_t count) {
   DatasetFolder ds(dataset_dir);
   const Segmenter probe(fastSegmenterConfig(), nullptr);

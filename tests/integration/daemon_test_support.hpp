@@ -21,6 +21,13 @@ namespace findmug::daemon::test {
 // every stage (the organized oversegmenter; the MRF stays on).
 SegmenterConfig fastSegmenterConfig();
 
+// Every `step`-th pixel of every `step`-th row, the intrinsics scaled with it (and the
+// labels likewise): smaller frames for tests that need many of them quickly. Pair with
+// fastSegmenterConfig(step), whose floor support is scaled to the smaller frames.
+RgbdFrame subsampled(const RgbdFrame& frame, int step);
+LabeledFrame subsampled(const LabeledFrame& frame, int step);
+SegmenterConfig fastSegmenterConfig(int step);
+
 // The first `count` frames of a labelled dataset whose ground plane the
 // segmenter finds (only those have features to train on).
 std::vector<LabeledFrame> framesWithGround(const std::string& dataset_dir, std::size_t count);

@@ -121,6 +121,12 @@ void walkStatus(Walk& w) {
   // source_reconnects, frames_lost_in_transit, publish_failures, heap_in_use_bytes,
   // semantic_map_{frames,skipped,voxels}
   w.fixed(3 * 8 + 2 * 4 + 4 + 8 + 3 * 8 + 3 * 8);
+  w.fixed(2 * 8 + 1);  // model_reloads, model_reloads_refused, last_reload_ok
+  w.string("last_reload_result");
+  // last_reload_utime, last_reload_request_id, commands_accepted, commands_rejected
+  w.fixed(4 * 8);
+  w.fixed(2 * 8);  // frames_collected, frames_collect_refused
+  w.string("last_collected_frame");
 }
 
 RgbdFrame frame() {
@@ -205,6 +211,15 @@ std::vector<Case> cases() {
                  [](Walk& w) { w.fixed(8 + 8 + 3 * 8); },
                  [](const Bytes& b) { (void)decodeRobotPose(b.data(), b.size(), "CH"); },
                  "robot_pose_t"});
+  out.push_back({"command",
+                 encodeMessage(encodeCommand(CommandMessage{5, 6, "reload_model", "x y"})),
+                 [](Walk& w) {
+                   w.fixed(8 + 2 * 8);
+                   w.string("command");
+                   w.string("argument");
+                 },
+                 [](const Bytes& b) { (void)decodeCommand(b.data(), b.size(), "CH"); },
+                 "command_t"});
   return out;
 }
 

@@ -28,6 +28,7 @@
 #include "findmug/io/lcm_codec.hpp"
 #include "findmug_lcm/label_image_t.hpp"
 #include "findmug_lcm/rgbd_frame_t.hpp"
+#include "findmug_lcm/command_t.hpp"
 #include "findmug_lcm/robot_pose_t.hpp"
 #include "findmug_lcm/status_t.hpp"
 #include "findmug_lcm/tables_t.hpp"
@@ -241,6 +242,26 @@ findmug_lcm::status_t makeStatus(Random& r, const Scale& s) {
   m.semantic_map_frames = r.i64();
   m.semantic_map_skipped = r.i64();
   m.semantic_map_voxels = r.i64();
+  m.model_reloads = r.i64();
+  m.model_reloads_refused = r.i64();
+  m.last_reload_ok = (r.i32() & 1) != 0;
+  m.last_reload_result = r.text(s.text);
+  m.last_reload_utime = r.i64();
+  m.last_reload_request_id = r.i64();
+  m.commands_accepted = r.i64();
+  m.commands_rejected = r.i64();
+  m.frames_collected = r.i64();
+  m.frames_collect_refused = r.i64();
+  m.last_collected_frame = r.text(s.text);
+  return m;
+}
+
+findmug_lcm::command_t makeCommand(Random& r, const Scale& s) {
+  findmug_lcm::command_t m;
+  m.utime = r.i64();
+  m.request_id = r.i64();
+  m.command = r.text(s.text);
+  m.argument = r.text(s.text);
   return m;
 }
 
@@ -340,6 +361,21 @@ TEST(LcmWire, StatusWalkMatchesGeneratedCode) {
     EXPECT_EQ(d.semantic_map_frames, m.semantic_map_frames);
     EXPECT_EQ(d.semantic_map_skipped, m.semantic_map_skipped);
     EXPECT_EQ(d.semantic_map_voxels, m.semantic_map_voxels);
+    EXPECT_EQ(d.model_reloads_refused, m.model_reloads_refused);
+    EXPECT_EQ(d.last_reload_ok, m.last_reload_ok);
+    EXPECT_EQ(d.last_reload_result, m.last_reload_result);
+    EXPECT_EQ(d.last_reload_request_id, m.last_reload_request_id);
+    EXPECT_EQ(d.commands_rejected, m.commands_rejected);
+    EXPECT_EQ(d.frames_collect_refused, m.frames_collect_refused);
+    EXPECT_EQ(d.last_collected_frame, m.last_collected_frame);
+  });
+}
+
+TEST(LcmWire, CommandWalkMatchesGeneratedCode) {
+  forEachMessage(6, makeCommand, [](const auto& d, const auto& m) {
+    EXPECT_EQ(d.request_id, m.request_id);
+    EXPECT_EQ(d.command, m.command);
+    EXPECT_EQ(d.argument, m.argument);
   });
 }
 

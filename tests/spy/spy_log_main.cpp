@@ -1,6 +1,6 @@
 // findmug-test-spy-log LOG — writes an LCM log with one message of every findmug type on its
 // channel (rgbd_frame_t, label_image_t, tables_t on FINDMUG_TABLES and FINDMUG_TABLE_MAP,
-// status_t, robot_pose_t, semantic_map_t; table_t and search_position_t inside the tables), encoded by
+// status_t, robot_pose_t, semantic_map_t, command_t; table_t and search_position_t inside the tables), encoded by
 // findmug_io's codecs, for spy_test.sh to replay into findmug-spy.
 #include <cmath>
 #include <cstdio>
@@ -94,7 +94,16 @@ int main(int argc, char** argv) {
     status.source = "dataset:/test";
     status.source_state_name = "running";
     status.source_state = findmug_lcm::status_t::SOURCE_RUNNING;
+    status.model_reloads = 1;
+    status.last_reload_ok = true;
+    status.last_reload_result = "loaded findmug.fmf:test";
+    status.last_reload_request_id = 7;
     write(log, io::kStatusChannel, io::encodeMessage(status), t + 5);
+
+    write(log, io::kCommandChannel,
+          io::encodeMessage(io::encodeCommand(
+              io::CommandMessage{static_cast<std::uint64_t>(t), 7, "reload_model", ""})),
+          t + 7);
 
     io::SemanticMapMessage semantic;
     semantic.utime = static_cast<std::uint64_t>(t);

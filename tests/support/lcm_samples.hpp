@@ -32,6 +32,17 @@ inline findmug_lcm::status_t sampleStatus() {
   s.source_state = findmug_lcm::status_t::SOURCE_RUNNING;
   s.last_error = "";
   s.last_error_utime = 0;
+  s.model_reloads = 1;
+  s.model_reloads_refused = 1;
+  s.last_reload_ok = false;
+  s.last_reload_result = "refused /var/lib/findmug/model.fmf: cloud.max_depth_m differs";
+  s.last_reload_utime = 98;
+  s.last_reload_request_id = 7;
+  s.commands_accepted = 2;
+  s.commands_rejected = 1;
+  s.frames_collected = 3;
+  s.frames_collect_refused = 1;
+  s.last_collected_frame = "1700000000000000_42";
   return s;
 }
 

@@ -205,6 +205,12 @@ function drawStatus(state) {
     const budget = s.cpu_budget_cores > 0 ? ` of a budget of ${fmt(s.cpu_budget_cores, 2)}` : ' (no budget)';
     row('CPU', `${fmt(s.cpu_used_cores, 2)} cores${budget}, ${s.processing_threads} processing threads`);
     row('model', s.model_id);
+    if (s.model_reloads || s.model_reloads_refused) {
+      row('last model reload', `${s.last_reload_ok ? 'ok' : 'refused'} (request ${s.last_reload_request_id}): ${s.last_reload_result}`);
+    }
+    if (s.frames_collected || s.frames_collect_refused) {
+      row('frames saved for labelling', `${s.frames_collected} (last ${s.last_collected_frame}), ${s.frames_collect_refused} refused`);
+    }
     if (s.last_error) row('last error', s.last_error);
     const stages = el('stages').tBodies[0];
     stages.textContent = '';
@@ -417,4 +423,32 @@ async function poll() {
 }
 
 el('map-frame').addEventListener('change', () => lastLive && drawMap(lastLive));
+
+// "Save this frame": findmug-web sends save_frame to findmugd (daemon.collect_dir), which
+// saves the next frame it publishes; the status then names it.
+el('save-frame').addEventListener('click', async () => {
+  const note = el('save-note');
+  const before = lastLive && lastLive.status ? lastLive.status.frames_collected : 0;
+  note.textContent = 'asking findmugd…';
+  try {
+    const res = await fetch('/api/command', {
+      method: 'POST', headers: { 'Content-Type': 'application/json' },
+      body: JSON.stringify({ command: 'save_frame', argument: '' }),
+    });
+    const answer = await res.json();
+    if (!res.ok) throw new Error(answer.error || 'HTTP ' + res.status);
+    note.textContent = `request ${answer.request_id} sent`;
+    for (let i = 0; i < 50; ++i) {
+      await new Promise((r) => setTimeout(r, 200));
+      const s = lastLive && lastLive.status;
+      if (s && s.frames_collected > before) {
+        note.textContent = `saved ${s.last_collected_frame}`;
+        return;
+      }
+    }
+    note.textContent = `request ${answer.request_id} sent; no frame saved yet (is daemon.collect_dir set?)`;
+  } catch (e) {
+    note.textContent = 'not sent: ' + e.message;
+  }
+});
 poll();

@@ -14,7 +14,9 @@
 //   3. loops every 50 ms: honours requestStop(), publishes the status of a
 //      sequential pipeline when it is due, pings the watchdog when the
 //      WatchdogGate sees progress, and notices the source ending,
-//   4. shuts down: STOPPING=1, source->stop(), pipeline stop (queued frames
+//   4. reloads the model on requestModelReload() (SIGHUP, a reload_model command)
+//      in the background, swapping it in between frames (model_reload.hpp),
+//   5. shuts down: STOPPING=1, source->stop(), pipeline stop (queued frames
 //      are dropped on a stop request, drained at end of stream), final status.
 //
 // Exit codes: 0 after a stop request or an exhausted finite source, 1 when
@@ -53,6 +55,11 @@ class Daemon {
   int run();
   // Thread-safe and async-signal-safe (one atomic store).
   void requestStop() { stop_requested_.store(true); }
+
+  // Thread-safe, never blocks: see Pipeline::requestModelReload.
+  void requestModelReload(std::int64_t request_id, const std::string& origin) {
+    pipeline_->requestModelReload(request_id, origin);
+  }
 
   const Pipeline& pipeline() const { return *pipeline_; }
   // Valid until run() returns (run closes the source on its way out).

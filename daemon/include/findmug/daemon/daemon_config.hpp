@@ -69,6 +69,10 @@ struct DaemonConfig {
   double source_timeout_s = 10.0;
   std::string log_level = "info";     // trace, debug, info, warn, error
 
+  // Commands (command_t on FINDMUG_COMMAND: reload_model), command_input.hpp.
+  bool command_input = true;       // listen for command_t
+  std::string command_url;         // "" = the output provider (see effectiveCommandUrl)
+
   // Robot pose input (FINDMUG_ROBOT_POSE) and the table map (FINDMUG_TABLE_MAP).
   bool pose_input = true;          // listen for robot_pose_t
   std::string pose_url;            // "" = the output provider (see effectivePoseUrl)
@@ -84,6 +88,16 @@ struct DaemonConfig {
   std::string semantic_map_file;           // load at start, save periodically and at stop
   double semantic_map_save_s = 60.0;
   SemanticMapConfig semantic_map_config;   // the `semantic_map:` section
+  // Frames worth labelling saved into a dataset folder (frame_collector.hpp); off
+  // while collect_dir is empty.
+  std::string collect_dir;
+  int collect_max_frames = 500;           // the folder's bound, frames ...
+  double collect_max_mb = 2000.0;         // ... and megabytes (its rgb/ and depth/ PNGs)
+  double collect_min_interval_s = 10.0;   // automatic saves at most this often (capture time)
+  double collect_low_confidence = 0.0;    // save when a frame's mean confidence is below (0: off)
+  int collect_flicker_changes = 0;        // save when the table count changes this often ...
+  double collect_flicker_window_s = 5.0;  // ... within this many seconds (0 changes: off)
+  int collect_queue = 2;                  // frames waiting for the writer thread
   CheckConfig check;               // the `check:` section (findmugd --check only)
 
   // Channel names with the suffix applied.
@@ -112,6 +126,10 @@ std::string effectiveLcmUrl(const DaemonConfig& config);
 // otherwise means the output provider (effectiveLcmUrl), where the robot's
 // localisation publishes on the same LCM network.
 std::optional<std::string> effectivePoseUrl(const DaemonConfig& config);
+
+// Where commands are read from, or nullopt when there is no command input: the
+// same rule as effectivePoseUrl with daemon.command_input and daemon.command_url.
+std::optional<std::string> effectiveCommandUrl(const DaemonConfig& config);
 
 // Parsed command line of findmugd.
 struct CommandLine {

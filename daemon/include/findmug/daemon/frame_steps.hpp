@@ -28,6 +28,12 @@ namespace findmug::daemon {
 
 using StepClock = std::chrono::steady_clock;
 
+// The Segmenter a step runs one frame with, asked for once per frame (the daemon's
+// ModelSlot, whose model may be swapped between frames: model_reload.hpp).
+using CurrentSegmenter = std::function<std::shared_ptr<const Segmenter>()>;
+// Always `segmenter` (not owned: it must outlive the step).
+CurrentSegmenter fixedSegmenter(const Segmenter& segmenter);
+
 // What travels between the steps: the frame's data and when it arrived (for latency).
 struct FrameJob {
   RgbdFrame frame;
@@ -44,11 +50,12 @@ struct ResultJob {
 
 class PrepareStep {
  public:
-  explicit PrepareStep(const Segmenter& segmenter) : segmenter_(segmenter) {}
+  explicit PrepareStep(const Segmenter& segmenter) : segmenter_(fixedSegmenter(segmenter)) {}
+  explicit PrepareStep(CurrentSegmenter segmenter) : segmenter_(std::move(segmenter)) {}
   PreparedJob operator()(FrameJob& job) const;
 
  private:
-  const Segmenter& segmenter_;
+  CurrentSegmenter segmenter_;
 };
 
 class SegmentStep {
@@ -56,11 +63,15 @@ class SegmentStep {
   // `before_segment` (tests: hold a worker) runs first on every frame, if set.
   explicit SegmentStep(const Segmenter& segmenter,
                        std::function<void(const RgbdFrame&)> before_segment = {})
-      : segmenter_(segmenter), before_segment_(std::move(before_segment)) {}
+      : segmenter_(fixedSegmenter(segmenter)), before_segment_(std::move(before_segment)) {}
+  explicit SegmentStep(CurrentSegmenter segmenter,
+                       std::function<void(const RgbdFrame&)> before_segment = {})
+      : segmenter_(std::move(segmenter)), before_segment_(std::move(before_segment)) {}
+  // Oversegments and classifies with one Segmenter (one model) for the whole frame.
   ResultJob operator()(PreparedJob& job) const;
 
  private:
-  const Segmenter& segmenter_;
+  CurrentSegmenter segmenter_;
   std::function<void(const RgbdFrame&)> before_segment_;
 };
 

@@ -47,6 +47,17 @@
 // process's CPU use against the budget.
 // Each published label image is exactly Segmenter::process of its frame.
 //
+// Model reload (model_reload.hpp): the steps take the Segmenter from a ModelSlot
+// once per frame; requestModelReload() (SIGHUP, or a reload_model command_t on
+// FINDMUG_COMMAND through the CommandInput, command_input.hpp) has the
+// ModelReloader's own thread load and check daemon.model_path again and swap
+// it in between frames; no frame waits and none is dropped for it. A refused
+// model leaves the running one; status_t reports the outcome (last_reload_*).
+//
+// Collection (daemon.collect_dir, frame_collector.hpp): a FrameCollector sink
+// after the publisher saves frames worth labelling (save_frame command, low
+// confidence, table flicker) on a writer thread of its own.
+//
 // In ExecutionMode::Sequential every submit() runs all stages on the
 // caller's thread and returns after publishing, deterministically.
 //
@@ -66,8 +77,11 @@
 #include <optional>
 #include <string>
 
+#include "findmug/daemon/command_input.hpp"
 #include "findmug/daemon/daemon_config.hpp"
+#include "findmug/daemon/frame_collector.hpp"
 #include "findmug/daemon/frame_steps.hpp"
+#include "findmug/daemon/model_reload.hpp"
 #include "findmug/daemon/pose_input.hpp"
 #include "findmug/daemon/result_sinks.hpp"
 #include "findmug/daemon/semantic_map_stage.hpp"
@@ -96,6 +110,8 @@ struct PipelineHooks {
   std::shared_ptr<io::Bus> output_bus;
   // Listen for robot poses on this bus instead of daemon.pose_url.
   std::shared_ptr<io::Bus> pose_bus;
+  // Listen for commands (command_t) on this bus instead of daemon.command_url.
+  std::shared_ptr<io::Bus> command_bus;
 };
 
 class Pipeline {
@@ -150,7 +166,17 @@ class Pipeline {
   ProgressSnapshot progress() const;  // source_heartbeat left for the caller
   // The figures status_t reports (StatusBuilder::build / makeStatus turn them into one).
   StatusSnapshot statusSnapshot() const;
-  const std::string& modelId() const { return model_id_; }
+  std::string modelId() const { return model_.modelId(); }
+  // Loads daemon.model_path again in the background and swaps it in between
+  // frames if it passes the start-up checks (model_reload.hpp). Never blocks on
+  // the load; thread-safe. `request_id`: the command's, -1 for SIGHUP.
+  void requestModelReload(std::int64_t request_id, const std::string& origin);
+  ReloadStatus reloadStatus() const { return reloader_->status(); }
+  // Saves the next published frame for labelling (daemon.collect_dir); throws
+  // findmug::Error when collection is off or the note is not fit for frames.csv.
+  void requestFrameSave(std::int64_t request_id, const std::string& note);
+  // The command input, or nullptr when there is none (see effectiveCommandUrl).
+  const CommandInput* commandInput() const { return command_input_.get(); }
   int workers() const { return workers_; }
   // The pose input, or nullptr when there is none (see effectivePoseUrl).
   const PoseInput* poseInput() const { return pose_input_.get(); }
@@ -170,10 +196,10 @@ class Pipeline {
   void publishResult(ResultJob& job);
   void publishStatus();
   void recordError(const std::string& message);
+  void recordErrorQuietly(const std::string& message);  // last_error only (logged elsewhere)
 
   DaemonConfig daemon_config_;
-  Segmenter segmenter_;
-  std::string model_id_;
+  ModelSlot model_;  // the Segmenter (and model) frames run with
   ExecutionMode mode_;
   PipelineHooks hooks_;
   int workers_;
@@ -181,6 +207,9 @@ class Pipeline {
   std::shared_ptr<SemanticMapStage> semantic_map_;  // nullptr unless daemon.semantic_map
   std::shared_ptr<LcmPublisherSink> publisher_;
   std::unique_ptr<PoseInput> pose_input_;  // nullptr: no pose input
+  std::unique_ptr<ModelReloader> reloader_;
+  std::unique_ptr<CommandInput> command_input_;  // nullptr: no command input
+  std::shared_ptr<FrameCollector> collector_;    // nullptr unless daemon.collect_dir
   std::uint64_t pose_max_age_us_ = 0;
   // The three steps (frame_steps.hpp), each run by its Stage below.
   PrepareStep prepare_step_;

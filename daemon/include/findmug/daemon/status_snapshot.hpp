@@ -26,6 +26,16 @@ struct PipelineCounters {
   std::uint64_t pending = 0;              // inside the pipeline now
 };
 
+// Model reloads and commands (model_reload.hpp, command_input.hpp).
+struct ReloadStatus {
+  std::uint64_t reloads = 0;          // models swapped in
+  std::uint64_t refused = 0;          // reloads refused (the running model kept)
+  bool last_ok = false;
+  std::string last_result;            // "" before any reload
+  std::uint64_t last_utime = 0;       // host clock, microseconds; 0 before any
+  std::int64_t last_request_id = -1;  // command_t.request_id; -1: SIGHUP or none
+};
+
 struct StatusSnapshot {
   struct Queue {
     std::string name;  // the pipeline stage it feeds
@@ -55,6 +65,11 @@ struct StatusSnapshot {
   std::int64_t heap_in_use_bytes = -1;  // allocated and not freed (-1: unknown)
   // The semantic map stage (all 0 when daemon.semantic_map is off).
   std::uint64_t semantic_map_frames = 0, semantic_map_skipped = 0, semantic_map_voxels = 0;
+  ReloadStatus reload;
+  std::uint64_t commands_accepted = 0, commands_rejected = 0;
+  // Frames saved for labelling (frame_collector.hpp; 0 / "" when off).
+  std::uint64_t frames_collected = 0, frames_collect_refused = 0;
+  std::string last_collected_frame;
   std::string last_error;  // the pipeline's own
   std::uint64_t last_error_utime = 0;
   std::optional<Source> source;  // nullopt: frames submitted in-process

@@ -14,6 +14,7 @@
 //   FINDMUG_ROBOT_POSE  findmug_lcm::robot_pose_t   robot pose in the map (input, optional)
 //   FINDMUG_SEMANTIC_MAP findmug_lcm::semantic_map_t the fused 3-D semantic map, out at a low
 //                                               rate when it changed (daemon.semantic_map)
+//   FINDMUG_COMMAND     findmug_lcm::command_t      requests to the daemon (reload_model), input
 #pragma once
 
 #include <string>
@@ -28,6 +29,7 @@ inline constexpr std::string_view kTableMapChannel = "FINDMUG_TABLE_MAP";
 inline constexpr std::string_view kStatusChannel = "FINDMUG_STATUS";
 inline constexpr std::string_view kRobotPoseChannel = "FINDMUG_ROBOT_POSE";
 inline constexpr std::string_view kSemanticMapChannel = "FINDMUG_SEMANTIC_MAP";
+inline constexpr std::string_view kCommandChannel = "FINDMUG_COMMAND";
 
 // `base` + "_" + `suffix`, or `base` when the suffix is empty. The suffix may
 // hold only letters, digits and '_' (and may not start with '_'); anything

@@ -23,6 +23,7 @@
 #include "findmug/io/messages.hpp"
 #include "findmug/labels/label_image.hpp"
 #include "findmug/tables/tables.hpp"
+#include "findmug_lcm/command_t.hpp"
 #include "findmug_lcm/label_image_t.hpp"
 #include "findmug_lcm/rgbd_frame_t.hpp"
 #include "findmug_lcm/robot_pose_t.hpp"
@@ -36,7 +37,7 @@ namespace findmug::io {
 // Decodes an LCM message of type Msg from `size` bytes after checking, field by
 // field, that every length fits in the buffer (and the type hash matches, and
 // nothing trails the message). `channel` names the source in errors.
-// Defined for rgbd_frame_t, label_image_t, tables_t, status_t, robot_pose_t.
+// Defined for rgbd_frame_t, label_image_t, tables_t, status_t, robot_pose_t, command_t.
 template <typename Msg>
 Msg decodeMessage(const void* data, std::size_t size, std::string_view channel);
 template <>
@@ -54,6 +55,10 @@ findmug_lcm::status_t decodeMessage<findmug_lcm::status_t>(const void*, std::siz
 template <>
 findmug_lcm::robot_pose_t decodeMessage<findmug_lcm::robot_pose_t>(const void*, std::size_t,
                                                                    std::string_view);
+
+template <>
+findmug_lcm::command_t decodeMessage<findmug_lcm::command_t>(const void*, std::size_t,
+                                                             std::string_view);
 
 template <typename Msg>
 std::vector<std::uint8_t> encodeMessage(const Msg& message) {
@@ -139,5 +144,18 @@ TablesMessage decodeTables(const void* data, std::size_t size, std::string_view 
 
 findmug_lcm::robot_pose_t encodeRobotPose(const RobotPose& pose);
 RobotPose decodeRobotPose(const void* data, std::size_t size, std::string_view channel);
+
+// ---- commands to the daemon (CommandMessage: messages.hpp) ----------------------
+
+// The longest command name and argument a command_t may carry.
+inline constexpr std::size_t kMaxCommandName = 32;
+inline constexpr std::size_t kMaxCommandArgument = 1024;
+// Checks the message as decodeCommand does; throws findmug::Error naming the field.
+findmug_lcm::command_t encodeCommand(const CommandMessage& command);
+// Refuses a negative utime or request_id, a command that is empty, longer than
+// kMaxCommandName or not made of [a-z_], and an argument longer than
+// kMaxCommandArgument or holding a control character. Whether the command is
+// one the daemon knows is the daemon's business.
+CommandMessage decodeCommand(const void* data, std::size_t size, std::string_view channel);
 
 }  // namespace findmug::io

@@ -10,6 +10,7 @@
 #include <Eigen/Geometry>
 #include <cstdint>
 #include <optional>
+#include <string>
 #include <vector>
 
 #include "findmug/common/pose2d.hpp"
@@ -39,6 +40,15 @@ struct LabelImageMessage {
 struct RobotPose {
   std::uint64_t utime = 0;  // host clock, microseconds
   Pose2D pose;
+};
+
+// A request to the daemon (command_t on FINDMUG_COMMAND): what, its argument, and
+// the sender's id for it (reported back in status_t).
+struct CommandMessage {
+  std::uint64_t utime = 0;
+  std::int64_t request_id = 0;
+  std::string command;
+  std::string argument;
 };
 
 // Map-frame copies of one table (tables_t with has_map_pose).

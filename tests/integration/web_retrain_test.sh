@@ -1,0 +1,99 @@
+#!/usr/bin/env bash
+# web_retrain_test.sh — findmug-web's Retrain page in headless chromium, with a running
+# findmugd: cross-validate on a small folder of real NYU frames (a tiny forest, set on the
+# page), cancel a training, train, Install, and see findmugd run the new model
+# (clients/web/test/retrain_test.mjs).
+#
+#   web_retrain_test.sh --findmugd B --web B --train B --eval B [--out DIR]
+#
+# In a private network namespace (loopback only, udpm multicast routed on it): findmugd
+# replays the folder at 2 frames/s with a model trained here first, and listens for
+# commands on the udpm bus findmug-web publishes on; findmug-web serves 127.0.0.1 and
+# runs findmug-train / findmug-eval with the same config file. Exit 0 pass, 1 fail, 77
+# skipped (chromium, node, puppeteer-core or data missing; failures under CI=true).
+set -euo pipefail
+FINDMUGD="" WEB="" TRAIN="" EVAL="" OUT=""
+SOURCE_DIR="$(cd "$(dirname "$0")/../.." && pwd)"
+ARGS=("$@")
+while [[ $# -gt 0 ]]; do
+  case "$1" in
+    --findmugd) FINDMUGD=$2; shift 2 ;;
+    --web) WEB=$2; shift 2 ;;
+    --train) TRAIN=$2; shift 2 ;;
+    --eval) EVAL=$2; shift 2 ;;
+    --out) OUT=$2; shift 2 ;;
+    *) echo "web_retrain_test: unknown argument '$1'" >&2; exit 2 ;;
+  esac
+done
+for b in "$FINDMUGD" "$WEB" "$TRAIN" "$EVAL"; do
+  [[ -x "$b" ]] || { echo "web_retrain_test: --findmugd, --web, --train and --eval must name executables" >&2; exit 2; }
+done
+SKIP_NAME="web_retrain_test"
+source "$SOURCE_DIR/tests/support/skip.sh"
+need_tools node unshare ip
+[[ -x "${FINDMUG_CHROMIUM:-/usr/bin/chromium}" ]] || skip "chromium not installed (scripts/install-deps.sh)"
+[[ -d "$SOURCE_DIR/clients/web/test/node_modules/puppeteer-core" ]] ||
+  skip "puppeteer-core not installed (scripts/install-deps.sh runs npm ci in clients/web/test)"
+NYU="${FINDMUG_DATA:-$SOURCE_DIR/../shared/data}/nyuv2_labeled"
+[[ -f "$NYU/rgb/0001.png" ]] || skip "NYU frames missing at $NYU (set FINDMUG_DATA)"
+if [[ "${FINDMUG_WEB_NETNS:-}" != 1 ]]; then
+  ns=(unshare --net)
+  [[ $EUID -eq 0 ]] || ns=(unshare --net --map-root-user)
+  exec "${ns[@]}" env FINDMUG_WEB_NETNS=1 bash "$0" "${ARGS[@]}"
+fi
+ip link set lo up
+ip route add 224.0.0.0/4 dev lo
+URL="udpm://239.255.76.67:7667?ttl=0&recv_buf_size=4194304"
+PORT=18092
+
+WORK=$(mktemp -d /tmp/findmug-web-retrain.XXXXXX)
+[[ -n "$OUT" ]] || OUT=$WORK
+mkdir -p "$OUT"
+pids=()
+cleanup() {
+  local pid
+  for pid in "${pids[@]}"; do kill -TERM "$pid" 2>/dev/null || true; done
+  for pid in "${pids[@]}"; do wait "$pid" 2>/dev/null || true; done
+  rm -rf "$WORK"
+}
+trap cleanup EXIT
+fail() {
+  echo "web_retrain_test: FAILED: $*" >&2
+  for log in "$WORK"/*.log; do echo "--- $log"; tail -25 "$log"; done >&2
+  exit 1
+}
+
+# A small folder: six labelled NYU frames whose floor the fast settings find (symlinks),
+# split into two scenes for findmug-eval's 2 folds.
+mkdir -p "$WORK/small/rgb" "$WORK/small/depth" "$WORK/small/label8"
+printf 'frame,scene\n' > "$WORK/small/frames.csv"
+for n in 0009 0015 0016 0017 0018 0021; do
+  for sub in rgb depth label8; do ln -s "$NYU/$sub/$n.png" "$WORK/small/$sub/$n.png"; done
+  printf '%s,%s\n' "$n" "$([[ $n < 0017 ]] && echo a || echo b)" >> "$WORK/small/frames.csv"
+done
+# One config for findmugd, findmug-web and the tools it runs (the fast oversegmenter).
+printf 'overseg:\n  method: organized\n' > "$WORK/findmug.yaml"
+TINY=(--set forest.num_trees=3 --set forest.max_depth=6)
+"$TRAIN" --data "$WORK/small" --out "$WORK/installed.fmf" --config "$WORK/findmug.yaml" \
+  "${TINY[@]}" > "$WORK/first-train.log" 2>&1 || fail "the first model could not be trained"
+
+"$FINDMUGD" --config "$WORK/findmug.yaml" --source "dataset:$WORK/small?rate_hz=2&loop=1" \
+  --lcm-url "$URL" --model "$WORK/installed.fmf" --set daemon.status_period_s=0.5 \
+  > "$WORK/findmugd.log" 2>&1 &
+pids+=($!)
+"$WEB" --lcm-url "$URL" --port "$PORT" --static-dir "$SOURCE_DIR/clients/web/static" \
+  --config "$WORK/findmug.yaml" --set "web.jobs_dir=$WORK/jobs" \
+  --set "web.install_path=$WORK/installed.fmf" --set "web.train_program=$TRAIN" \
+  --set "web.eval_program=$EVAL" --set web.retrain_folds=2 \
+  --data "$WORK/small" > "$WORK/findmug-web.log" 2>&1 &
+web_pid=$!
+pids+=($web_pid)
+for _ in $(seq 100); do
+  (exec 3<>/dev/tcp/127.0.0.1/$PORT) 2>/dev/null && break
+  kill -0 "$web_pid" 2>/dev/null || fail "findmug-web exited"
+  sleep 0.1
+done
+node "$SOURCE_DIR/clients/web/test/retrain_test.mjs" --url "http://127.0.0.1:$PORT/" \
+  --out "$OUT" || fail "the page check failed"
+grep -q "model reload (command request" "$WORK/findmugd.log" || fail "findmugd logged no reload"
+echo "web_retrain_test: passed"
