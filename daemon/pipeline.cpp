@@ -139,49 +139,66 @@ Pipeline::Pipeline(const SegmenterConfig& segmenter_config, const DaemonConfig& 
                                std::chrono::duration_cast<Clock::duration>(
                                    std::chrono::duration<double>(daemon_config_.status_period_s))};
   publish_ = std::make_unique<Stage<ResultJob, Published>>(
-      publish_options,
-      [this](ResultJob& job) -> std::optional<Published> {
-        publishResult(job);
-        return Published{};
-      },
-      [](Published&&) {}, Stage<ResultJob, Published>::OnDrop{}, on_error,
-      [this] { publishStatus(); });
+      publish_options, StageCallbacks<ResultJob, Published>{
+                           .work = [this](ResultJob& job) -> std::optional<Published> {
+                             publishResult(job);
+                             return Published{};
+                           },
+                           .emit = [](Published&&) {},
+                           .on_error = on_error,
+                           .tick = [this] { publishStatus(); },
+                       });
 
   StageOptions segment_options{"segment", mode_, workers_, capacity, DropPolicy::DropOldest,
                                window};
   segment_ = std::make_unique<Stage<PreparedJob, ResultJob>>(
-      segment_options,
-      [this](PreparedJob& job) -> std::optional<ResultJob> { return segment_step_(job); },
-      [this](ResultJob&& r) {
-        if (!publish_->push(std::move(r))) abandoned_.fetch_add(1);  // only after stop()
-      },
-      [](const PreparedJob& dropped) {
-        spdlog::debug("segment queue full: dropped {}", frameName(dropped.prepared.frame));
-      },
-      on_error);
+      segment_options, StageCallbacks<PreparedJob, ResultJob>{
+                           .work = [this](PreparedJob& job) -> std::optional<ResultJob> {
+                             return segment_step_(job);
+                           },
+                           .emit =
+                               [this](ResultJob&& r) {
+                                 if (!publish_->push(std::move(r)))
+                                   abandoned_.fetch_add(1);  // only after stop()
+                               },
+                           .on_drop =
+                               [](const PreparedJob& dropped) {
+                                 spdlog::debug("segment queue full: dropped {}",
+                                               frameName(dropped.prepared.frame));
+                               },
+                           .on_error = on_error,
+                       });
 
   StageOptions prepare_options{"prepare", mode_, 1, capacity, DropPolicy::DropOldest, window};
   prepare_ = std::make_unique<Stage<FrameJob, PreparedJob>>(
-      prepare_options,
-      [this](FrameJob& job) -> std::optional<PreparedJob> { return prepare_step_(job); },
-      [this](PreparedJob&& p) {
-        if (!segment_->push(std::move(p))) abandoned_.fetch_add(1);  // only after stop()
-      },
-      [](const FrameJob& dropped) {
-        spdlog::debug("pipeline entry full: dropped {} at the door", frameName(dropped.frame));
-      },
-      on_error, Stage<FrameJob, PreparedJob>::Tick{},
-      // The door: take the next frame only when the segment queue can accept
-      // it, so that under overload frames wait — and the oldest is dropped —
-      // here, before any work is spent on them.
-      [this] {
-        while (!segment_->waitForRoom(std::chrono::milliseconds(50))) {
-          if (segment_->closed()) break;
-          // Stopping: discarded (nothing left to take) or draining into a
-          // live segment stage (waits for room like any frame).
-          if (prepare_->closed() && prepare_->queueSize() == 0) break;
-        }
-      });
+      prepare_options, StageCallbacks<FrameJob, PreparedJob>{
+                           .work = [this](FrameJob& job) -> std::optional<PreparedJob> {
+                             return prepare_step_(job);
+                           },
+                           .emit =
+                               [this](PreparedJob&& p) {
+                                 if (!segment_->push(std::move(p)))
+                                   abandoned_.fetch_add(1);  // only after stop()
+                               },
+                           .on_drop =
+                               [](const FrameJob& dropped) {
+                                 spdlog::debug("pipeline entry full: dropped {} at the door",
+                                               frameName(dropped.frame));
+                               },
+                           .on_error = on_error,
+                           // The door: take the next frame only when the segment queue can accept
+                           // it, so that under overload frames wait — and the oldest is dropped —
+                           // here, before any work is spent on them.
+                           .gate =
+                               [this] {
+                                 while (!segment_->waitForRoom(std::chrono::milliseconds(50))) {
+                                   if (segment_->closed()) break;
+                                   // Stopping: discarded (nothing left to take) or draining into a
+                                   // live segment stage (waits for room like any frame).
+                                   if (prepare_->closed() && prepare_->queueSize() == 0) break;
+                                 }
+                               },
+                       });
 
   // Last (with the inputs below): their threads report through recordError,
   // so everything they may touch must exist already.

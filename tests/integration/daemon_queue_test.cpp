@@ -118,14 +118,14 @@ TEST(ReorderBuffer, ReleasesInTicketOrderAndSkipsTombstones) {
 TEST(Stage, SequentialRunsInlineAndInOrder) {
   std::vector<int> out;
   std::vector<std::string> errors;
-  Stage<int, int> stage(
-      {"double", ExecutionMode::Sequential, 1, 2},
-      [](int& x) -> std::optional<int> {
-        if (x == 3) throw Error("three is bad");
-        if (x == 4) return std::nullopt;
-        return 2 * x;
-      },
-      [&](int&& y) { out.push_back(y); }, {}, [&](const std::string& e) { errors.push_back(e); });
+  Stage<int, int> stage({"double", ExecutionMode::Sequential, 1, 2},
+                        {.work = [](int& x) -> std::optional<int> {
+                           if (x == 3) throw Error("three is bad");
+                           if (x == 4) return std::nullopt;
+                           return 2 * x;
+                         },
+                         .emit = [&](int&& y) { out.push_back(y); },
+                         .on_error = [&](const std::string& e) { errors.push_back(e); }});
   for (int i = 0; i < 6; ++i) EXPECT_TRUE(stage.push(i));
   // No threads: results are there as soon as push returns.
   EXPECT_EQ(out, (std::vector<int>{0, 2, 4, 10}));
@@ -147,23 +147,23 @@ TEST(Stage, ParallelWorkersPublishInInputOrder) {
   std::mutex m;
   std::vector<int> out;
   std::atomic<int> concurrent{0}, max_concurrent{0};
-  Stage<int, int> stage(
-      {"work", ExecutionMode::Threaded, 4, 8, DropPolicy::Block},
-      [&](int& x) -> std::optional<int> {
-        const int now = ++concurrent;
-        int seen = max_concurrent.load();
-        while (now > seen && !max_concurrent.compare_exchange_weak(seen, now)) {
-        }
-        std::mt19937 rng(static_cast<unsigned>(x));
-        std::this_thread::sleep_for(std::chrono::microseconds(rng() % 2000));
-        --concurrent;
-        if (x % 17 == 5) return std::nullopt;  // some items yield nothing
-        return x;
-      },
-      [&](int&& y) {
-        std::lock_guard lock(m);
-        out.push_back(y);
-      });
+  Stage<int, int> stage({"work", ExecutionMode::Threaded, 4, 8, DropPolicy::Block},
+                        {.work = [&](int& x) -> std::optional<int> {
+                           const int now = ++concurrent;
+                           int seen = max_concurrent.load();
+                           while (now > seen && !max_concurrent.compare_exchange_weak(seen, now)) {
+                           }
+                           std::mt19937 rng(static_cast<unsigned>(x));
+                           std::this_thread::sleep_for(std::chrono::microseconds(rng() % 2000));
+                           --concurrent;
+                           if (x % 17 == 5) return std::nullopt;  // some items yield nothing
+                           return x;
+                         },
+                         .emit =
+                             [&](int&& y) {
+                               std::lock_guard lock(m);
+                               out.push_back(y);
+                             }});
   stage.start();
   for (int i = 0; i < kItems; ++i) ASSERT_TRUE(stage.push(i));
   stage.stop(StopMode::Drain);
@@ -184,16 +184,16 @@ TEST(Stage, SlowWorkerMakesTheQueueDropTheOldestItems) {
   bool entered = false, release = false;
   std::vector<int> out;
   std::vector<int> dropped;
-  Stage<int, int> stage(
-      {"slow", ExecutionMode::Threaded, 1, 2, DropPolicy::DropOldest},
-      [&](int& x) -> std::optional<int> {
-        std::unique_lock lock(m);
-        entered = true;
-        cv.notify_all();
-        cv.wait(lock, [&] { return release; });
-        return x;
-      },
-      [&](int&& y) { out.push_back(y); }, [&](const int& d) { dropped.push_back(d); });
+  Stage<int, int> stage({"slow", ExecutionMode::Threaded, 1, 2, DropPolicy::DropOldest},
+                        {.work = [&](int& x) -> std::optional<int> {
+                           std::unique_lock lock(m);
+                           entered = true;
+                           cv.notify_all();
+                           cv.wait(lock, [&] { return release; });
+                           return x;
+                         },
+                         .emit = [&](int&& y) { out.push_back(y); },
+                         .on_drop = [&](const int& d) { dropped.push_back(d); }});
   stage.start();
   stage.push(0);
   {
@@ -219,16 +219,15 @@ TEST(Stage, DiscardOnStopDropsQueuedItemsButFinishesTheOneInFlight) {
   std::condition_variable cv;
   bool entered = false, release = false;
   std::vector<int> out;
-  Stage<int, int> stage(
-      {"slow", ExecutionMode::Threaded, 1, 4, DropPolicy::DropOldest},
-      [&](int& x) -> std::optional<int> {
-        std::unique_lock lock(m);
-        entered = true;
-        cv.notify_all();
-        cv.wait(lock, [&] { return release; });
-        return x;
-      },
-      [&](int&& y) { out.push_back(y); });
+  Stage<int, int> stage({"slow", ExecutionMode::Threaded, 1, 4, DropPolicy::DropOldest},
+                        {.work = [&](int& x) -> std::optional<int> {
+                           std::unique_lock lock(m);
+                           entered = true;
+                           cv.notify_all();
+                           cv.wait(lock, [&] { return release; });
+                           return x;
+                         },
+                         .emit = [&](int&& y) { out.push_back(y); }});
   stage.start();
   stage.push(0);
   {
@@ -254,28 +253,33 @@ TEST(Stage, TickRunsOnTheWorkerThread) {
   std::atomic<int> ticks{0};
   std::thread::id worker_id, tick_id;
   std::mutex m;
-  Stage<int, int> stage(
-      {"tick", ExecutionMode::Threaded, 1, 2, DropPolicy::Block, 10s, 1ms},
-      [&](int& x) -> std::optional<int> {
-        std::lock_guard lock(m);
-        worker_id = std::this_thread::get_id();
-        return x;
-      },
-      [](int&&) {}, {}, {},
-      [&] {
-        std::lock_guard lock(m);
-        tick_id = std::this_thread::get_id();
-        ++ticks;
-      });
+  Stage<int, int> stage({"tick", ExecutionMode::Threaded, 1, 2, DropPolicy::Block, 10s, 1ms},
+                        {.work = [&](int& x) -> std::optional<int> {
+                           std::lock_guard lock(m);
+                           worker_id = std::this_thread::get_id();
+                           return x;
+                         },
+                         .emit = [](int&&) {},
+                         .tick =
+                             [&] {
+                               std::lock_guard lock(m);
+                               tick_id = std::this_thread::get_id();
+                               ++ticks;
+                             }});
   stage.start();
   stage.push(1);
   while (ticks.load() < 3) std::this_thread::sleep_for(1ms);
   stage.stop(StopMode::Drain);
   std::lock_guard lock(m);
   EXPECT_EQ(worker_id, tick_id);
-  EXPECT_THROW((Stage<int, int>(
-                   {"bad", ExecutionMode::Threaded, 2, 2},
-                   [](int& x) { return std::optional<int>(x); }, [](int&&) {}, {}, {}, [] {})),
+  EXPECT_THROW((Stage<int, int>({"bad", ExecutionMode::Threaded, 2, 2},
+                                {.work = [](int& x) { return std::optional<int>(x); },
+                                 .emit = [](int&&) {},
+                                 .tick = [] {}})),
+               std::invalid_argument);
+  // A stage without work or emit is refused at construction, not at the first item.
+  EXPECT_THROW((Stage<int, int>({"no emit", ExecutionMode::Threaded, 1, 2},
+                                {.work = [](int& x) { return std::optional<int>(x); }})),
                std::invalid_argument);
 }
 

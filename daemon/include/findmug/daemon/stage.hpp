@@ -79,27 +79,34 @@ struct StageStats {
   LatencySummary latency;       // wall time of `work`
 };
 
+// What a stage calls, by name (designated initialisers at the call site: `{.work = ...,
+// .emit = ..., .on_error = ...}`). `work` and `emit` are required, the rest optional.
+template <typename In, typename Out>
+struct StageCallbacks {
+  std::function<std::optional<Out>(In&)> work;     // an item -> its result, or nothing
+  std::function<void(Out&&)> emit;                 // each result, in input order, one at a time
+  std::function<void(const In& dropped)> on_drop;  // an item the drop policy evicted
+  std::function<void(const std::string& what)> on_error;  // an exception escaped `work`
+  std::function<void()> tick;  // every StageOptions::tick_period (single worker only)
+  std::function<void()> gate;  // run by a worker before it takes the next item
+};
+
 template <typename In, typename Out>
 class Stage {
  public:
-  using Work = std::function<std::optional<Out>(In&)>;
-  using Emit = std::function<void(Out&&)>;
-  using OnDrop = std::function<void(const In& dropped)>;
-  using OnError = std::function<void(const std::string& what)>;
-  using Tick = std::function<void()>;
-  using Gate = std::function<void()>;
-
-  Stage(StageOptions options, Work work, Emit emit, OnDrop on_drop = {}, OnError on_error = {},
-        Tick tick = {}, Gate gate = {})
+  Stage(StageOptions options, StageCallbacks<In, Out> callbacks)
       : options_(std::move(options)),
-        work_(std::move(work)),
-        emit_(std::move(emit)),
-        on_drop_(std::move(on_drop)),
-        on_error_(std::move(on_error)),
-        tick_(std::move(tick)),
-        gate_(std::move(gate)),
+        work_(std::move(callbacks.work)),
+        emit_(std::move(callbacks.emit)),
+        on_drop_(std::move(callbacks.on_drop)),
+        on_error_(std::move(callbacks.on_error)),
+        tick_(std::move(callbacks.tick)),
+        gate_(std::move(callbacks.gate)),
         queue_(options_.queue_capacity, options_.policy),
         latency_(options_.latency_window) {
+    if (!work_ || !emit_) {
+      throw std::invalid_argument(options_.name + ": work and emit are required");
+    }
     if (options_.workers < 1) throw std::invalid_argument(options_.name + ": workers must be >= 1");
     if (tick_ && options_.workers != 1) {
       throw std::invalid_argument(options_.name + ": a ticking stage must have one worker");
@@ -243,12 +250,12 @@ class Stage {
   }
 
   StageOptions options_;
-  Work work_;
-  Emit emit_;
-  OnDrop on_drop_;
-  OnError on_error_;
-  Tick tick_;
-  Gate gate_;
+  decltype(StageCallbacks<In, Out>::work) work_;
+  decltype(StageCallbacks<In, Out>::emit) emit_;
+  decltype(StageCallbacks<In, Out>::on_drop) on_drop_;
+  decltype(StageCallbacks<In, Out>::on_error) on_error_;
+  decltype(StageCallbacks<In, Out>::tick) tick_;
+  decltype(StageCallbacks<In, Out>::gate) gate_;
   BoundedQueue<In> queue_;
   std::vector<std::thread> threads_;
 
