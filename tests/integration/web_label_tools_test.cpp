@@ -108,16 +108,21 @@ TEST(LabelRuns, DecodeAndEncodeAndRefuseBadRuns) {
 TEST(LabelFrames, RefusesAModelWhoseSettingsAreNotTheConfigs) {
   const fs::path model = test::sourceDir() / "models/findmug.fmf";
   auto forest = std::make_shared<const RandomForest>(RandomForest::load(model.string()));
-  // The shipped model has region and scene features; the default config computes neither.
+  // The shipped model has NYU-13 classes and region, scene and object features; a config
+  // with its classes but without those features is refused, naming the first that differs.
+  SegmenterConfig other_features;
+  other_features.learner.classes = ClassScheme::Nyu13;
   try {
-    LabelFrames frames(SegmenterConfig{}, forest, "findmug.fmf", std::nullopt);
+    LabelFrames frames(other_features, forest, "findmug.fmf", std::nullopt);
     FAIL() << "a model trained with other features was taken";
   } catch (const Error& e) {
-    EXPECT_NE(std::string(e.what()).find("features.regions"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("features."), std::string::npos) << e.what();
   }
-  SegmenterConfig matching;
+  SegmenterConfig matching = other_features;
   matching.regions.enabled = true;
   matching.scene.enabled = true;
+  matching.objects.enabled = true;
+  matching.objects.columns = ObjectColumns::Context;
   EXPECT_NO_THROW(LabelFrames(matching, forest, "findmug.fmf", std::nullopt));
 }
 
