@@ -80,15 +80,16 @@ struct StageStats {
 };
 
 // What a stage calls, by name (designated initialisers at the call site: `{.work = ...,
-// .emit = ..., .on_error = ...}`). `work` and `emit` are required, the rest optional.
+// .emit = ..., .on_error = ...}`). `work` and `emit` are required, the rest optional (the
+// `{}` initialisers let a call site leave them out without a missing-initialiser warning).
 template <typename In, typename Out>
 struct StageCallbacks {
-  std::function<std::optional<Out>(In&)> work;     // an item -> its result, or nothing
-  std::function<void(Out&&)> emit;                 // each result, in input order, one at a time
-  std::function<void(const In& dropped)> on_drop;  // an item the drop policy evicted
-  std::function<void(const std::string& what)> on_error;  // an exception escaped `work`
-  std::function<void()> tick;  // every StageOptions::tick_period (single worker only)
-  std::function<void()> gate;  // run by a worker before it takes the next item
+  std::function<std::optional<Out>(In&)> work{};     // an item -> its result, or nothing
+  std::function<void(Out&&)> emit{};                 // each result, in input order, one at a time
+  std::function<void(const In& dropped)> on_drop{};  // an item the drop policy evicted
+  std::function<void(const std::string& what)> on_error{};  // an exception escaped `work`
+  std::function<void()> tick{};  // every StageOptions::tick_period (single worker only)
+  std::function<void()> gate{};  // run by a worker before it takes the next item
 };
 
 template <typename In, typename Out>
