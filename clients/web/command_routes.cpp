@@ -3,9 +3,6 @@
 // macro _res, a parameter name inside Eigen.
 #include "command_routes.hpp"
 
-#include "findmug/common/error.hpp"
-#include "findmug/io/lcm_codec.hpp"
-
 #include <httplib.h>
 
 #include <atomic>
@@ -13,19 +10,13 @@
 #include <nlohmann/json.hpp>
 #include <string>
 
+#include "findmug/common/error.hpp"
+#include "findmug/io/lcm_codec.hpp"
+#include "web_http.hpp"
+
 namespace findmug::web {
 
 namespace {
-
-void refuse(httplib::Response& res, int status, const std::string& message) {
-  res.status = status;
-  std::string header = message.substr(0, 300);  // printable only: it may echo the request
-  for (char& c : header) {
-    if (static_cast<unsigned char>(c) < 0x20 || static_cast<unsigned char>(c) >= 0x7F) c = '?';
-  }
-  res.set_header("X-Findmug-Error", header);
-  res.set_content(nlohmann::json{{"error", message}}.dump(), "application/json");
-}
 
 std::uint64_t nowUs() {
   return static_cast<std::uint64_t>(std::chrono::duration_cast<std::chrono::microseconds>(
@@ -54,33 +45,31 @@ std::int64_t nextRequestId() {
 }
 
 void addCommandRoutes(httplib::Server& server, SendCommand send) {
-  server.Post("/api/command", [send](const httplib::Request& req,
-                                              httplib::Response& res) {
-    if (!send) return refuse(res, 503, "findmug-web has no LCM bus to publish commands on");
-    const nlohmann::json body = nlohmann::json::parse(req.body, nullptr, false);
-    if (body.is_discarded() || !body.is_object()) {
-      return refuse(res, 400, "the body must be a JSON object");
-    }
+  server.Post("/api/command", [send](const httplib::Request& req, httplib::Response& res) {
+    if (!send) return fail(res, 503, "findmug-web has no LCM bus to publish commands on");
+    auto parsed = jsonObjectBody(req.body, res);
+    if (!parsed) return;
+    nlohmann::json body = std::move(*parsed);
     if (!body.contains("command") || !body["command"].is_string()) {
-      return refuse(res, 400, "\"command\" (a string) is missing");
+      return fail(res, 400, "\"command\" (a string) is missing");
     }
     const auto argument_field = body.find("argument");
     if (argument_field != body.end() && !argument_field->is_string()) {
-      return refuse(res, 400, "\"argument\" must be a string");
+      return fail(res, 400, "\"argument\" must be a string");
     }
     io::CommandMessage command;
     command.utime = nowUs();
     command.command = body["command"].get<std::string>();
     command.argument = argument_field != body.end() ? argument_field->get<std::string>() : "";
     if (const std::string why = checkArgument(command.command, command.argument); !why.empty()) {
-      return refuse(res, 400, why);
+      return fail(res, 400, why);
     }
     command.request_id = nextRequestId();
     try {
       (void)io::encodeCommand(command);  // the daemon's field rules
       send(command);
     } catch (const Error& e) {
-      return refuse(res, 400, e.what());
+      return fail(res, 400, e.what());
     }
     res.set_header("Cache-Control", "no-store");
     res.set_content(nlohmann::json{{"request_id", command.request_id}}.dump(), "application/json");

@@ -333,13 +333,9 @@ void addLabelToolRoutes(httplib::Server& s, LabelFrames& frames,
     std::size_t root = 0;
     const auto frame = frame_of(req, res, root);
     if (!frame) return;
-    nlohmann::json body;
-    try {
-      body = nlohmann::json::parse(req.body);
-    } catch (const std::exception& e) {
-      return fail(res, 400, std::string("request body is not JSON: ") + e.what());
-    }
-    if (!body.is_object()) return fail(res, 400, "request body must be a JSON object");
+    auto parsed = jsonObjectBody(req.body, res);
+    if (!parsed) return;
+    nlohmann::json body = std::move(*parsed);
     for (const char* key : {"width", "height", "runs", "strokes", "author"}) {
       if (!body.contains(key)) return fail(res, 400, std::string("missing field '") + key + "'");
     }

@@ -3,9 +3,6 @@
 // macro _res, a parameter name inside Eigen.
 #include "retrain.hpp"
 
-#include "findmug/common/error.hpp"
-#include "web_server.hpp"
-
 #include <fcntl.h>
 #include <httplib.h>
 #include <signal.h>
@@ -19,6 +16,10 @@
 #include <fstream>
 #include <sstream>
 
+#include "findmug/common/error.hpp"
+#include "web_http.hpp"
+#include "web_server.hpp"
+
 extern char** environ;
 
 namespace findmug::web {
@@ -26,21 +27,6 @@ namespace findmug::web {
 namespace fs = std::filesystem;
 
 namespace {
-
-void refuse(httplib::Response& res, int status, const std::string& message) {
-  res.status = status;
-  std::string header = message.substr(0, 300);  // printable only: it may echo the request
-  for (char& c : header) {
-    if (static_cast<unsigned char>(c) < 0x20 || static_cast<unsigned char>(c) >= 0x7F) c = '?';
-  }
-  res.set_header("X-Findmug-Error", header);
-  res.set_content(nlohmann::json{{"error", message}}.dump(), "application/json");
-}
-
-void sendJson(httplib::Response& res, const nlohmann::json& body) {
-  res.set_header("Cache-Control", "no-store");
-  res.set_content(body.dump(), "application/json");
-}
 
 // KEY=VALUE with a key of letters, digits, '_' and '.', a value without control characters.
 bool validSetting(const std::string& s) {
@@ -250,21 +236,20 @@ void addRetrainRoutes(httplib::Server& server, RetrainJobs& jobs,
                       const std::vector<fs::path>& roots, SendCommand send) {
   server.Post("/api/retrain/start", [&jobs, roots](const httplib::Request& req,
                                                    httplib::Response& res) {
-    const nlohmann::json body = nlohmann::json::parse(req.body, nullptr, false);
-    if (body.is_discarded() || !body.is_object()) {
-      return refuse(res, 400, "the body must be a JSON object");
-    }
+    auto parsed = jsonObjectBody(req.body, res);
+    if (!parsed) return;
+    nlohmann::json body = std::move(*parsed);
     if (!body.contains("tool") || !body["tool"].is_string() || !body.contains("folders") ||
         !body["folders"].is_array()) {
-      return refuse(res, 400, "\"tool\" (train or eval) and \"folders\" (an array) are needed");
+      return fail(res, 400, "\"tool\" (train or eval) and \"folders\" (an array) are needed");
     }
     std::vector<fs::path> folders;
     for (const auto& f : body["folders"]) {
       if (!f.is_object() || !f.contains("root") || !f["root"].is_number_unsigned()) {
-        return refuse(res, 400, "each folder is {\"root\": INDEX, \"path\": \"...\"}");
+        return fail(res, 400, "each folder is {\"root\": INDEX, \"path\": \"...\"}");
       }
       const auto root = f["root"].get<std::size_t>();
-      if (root >= roots.size()) return refuse(res, 400, "no data folder " + std::to_string(root));
+      if (root >= roots.size()) return fail(res, 400, "no data folder " + std::to_string(root));
       const std::string path = f.contains("path") && f["path"].is_string()
                                    ? f["path"].get<std::string>()
                                    : std::string();
@@ -273,23 +258,23 @@ void addRetrainRoutes(httplib::Server& server, RetrainJobs& jobs,
         continue;
       }
       const ResolvedPath dir = resolveInside(roots[root], path);
-      if (dir.status != 200) return refuse(res, dir.status, dir.error);
-      if (!fs::is_directory(dir.path)) return refuse(res, 400, path + ": not a folder");
+      if (dir.status != 200) return fail(res, dir.status, dir.error);
+      if (!fs::is_directory(dir.path)) return fail(res, 400, path + ": not a folder");
       folders.push_back(dir.path);
     }
     std::vector<std::string> sets;
     if (body.contains("set")) {
-      if (!body["set"].is_array()) return refuse(res, 400, "\"set\" must be an array of strings");
+      if (!body["set"].is_array()) return fail(res, 400, "\"set\" must be an array of strings");
       for (const auto& s : body["set"]) {
-        if (!s.is_string()) return refuse(res, 400, "\"set\" must be an array of strings");
+        if (!s.is_string()) return fail(res, 400, "\"set\" must be an array of strings");
         sets.push_back(s.get<std::string>());
       }
     }
-    if (jobs.running()) return refuse(res, 409, "a job is running: wait for it or cancel it");
+    if (jobs.running()) return fail(res, 409, "a job is running: wait for it or cancel it");
     try {
       jobs.start(body["tool"].get<std::string>(), folders, sets);
     } catch (const Error& e) {
-      return refuse(res, jobs.running() ? 409 : 400, e.what());
+      return fail(res, jobs.running() ? 409 : 400, e.what());
     }
     sendJson(res, jobs.job(0));
   });
@@ -298,27 +283,27 @@ void addRetrainRoutes(httplib::Server& server, RetrainJobs& jobs,
     const std::string text = req.get_param_value("offset");
     if (!text.empty()) {
       if (text.size() > 12 || text.find_first_not_of("0123456789") != std::string::npos) {
-        return refuse(res, 400, "offset must be a byte count");
+        return fail(res, 400, "offset must be a byte count");
       }
       offset = static_cast<std::size_t>(std::stoull(text));
     }
     sendJson(res, jobs.job(offset));
   });
   server.Post("/api/retrain/cancel", [&jobs](const httplib::Request&, httplib::Response& res) {
-    if (!jobs.cancel()) return refuse(res, 404, "no job is running");
+    if (!jobs.cancel()) return fail(res, 404, "no job is running");
     sendJson(res, {{"cancelled", true}});
   });
   server.Post("/api/retrain/install", [&jobs, send](const httplib::Request&,
                                                     httplib::Response& res) {
     if (jobs.options().install_path.empty()) {
-      return refuse(res, 503, "no install path configured (web.install_path)");
+      return fail(res, 503, "no install path configured (web.install_path)");
     }
-    if (!send) return refuse(res, 503, "findmug-web has no LCM bus to ask for the reload");
+    if (!send) return fail(res, 503, "findmug-web has no LCM bus to ask for the reload");
     fs::path installed;
     try {
       installed = jobs.install();
     } catch (const Error& e) {
-      return refuse(res, 409, e.what());
+      return fail(res, 409, e.what());
     }
     io::CommandMessage command;
     command.utime = static_cast<std::uint64_t>(std::chrono::duration_cast<std::chrono::microseconds>(
@@ -329,7 +314,7 @@ void addRetrainRoutes(httplib::Server& server, RetrainJobs& jobs,
     try {
       send(command);
     } catch (const Error& e) {
-      return refuse(res, 503, std::string("installed, but the reload was not sent: ") + e.what());
+      return fail(res, 503, std::string("installed, but the reload was not sent: ") + e.what());
     }
     sendJson(res, {{"installed", installed.string()}, {"request_id", command.request_id}});
   });

@@ -1,12 +1,13 @@
-// web_http.hpp — the small helpers findmug-web's endpoints share (web_server.cpp and the
-// Label page's tools, label_tools.cpp): error and JSON answers, frame names, file times.
+// web_http.hpp — the small helpers findmug-web's endpoints share (web_server.cpp, the
+// Label page's tools label_tools.cpp, command_routes.cpp, retrain.cpp): error and JSON
+// answers, JSON request bodies, frame names, file times.
 #pragma once
 
 #include <cstdint>
 #include <filesystem>
-#include <string>
-
 #include <nlohmann/json.hpp>
+#include <optional>
+#include <string>
 
 namespace httplib {
 struct Response;
@@ -17,6 +18,9 @@ namespace findmug::web {
 // Answers `status` with {"error": message}; the reason also goes into a header for the
 // request log (the body may be compressed by then).
 void fail(httplib::Response& res, int status, const std::string& message);
+// A request body that must be a JSON object: the object, or nothing after answering 400
+// ("request body is not JSON: ..." / "request body must be a JSON object").
+std::optional<nlohmann::json> jsonObjectBody(const std::string& body, httplib::Response& res);
 // Answers `body` as JSON, not to be cached.
 void sendJson(httplib::Response& res, const nlohmann::json& body);
 // A frame name of a dataset folder: the file stem of rgb/NAME.png (letters, digits, _ - .).

@@ -102,6 +102,21 @@ void fail(httplib::Response& res, int status, const std::string& message) {
   res.set_content(nlohmann::json{{"error", message}}.dump(), "application/json");
 }
 
+std::optional<nlohmann::json> jsonObjectBody(const std::string& body, httplib::Response& res) {
+  nlohmann::json parsed;
+  try {
+    parsed = nlohmann::json::parse(body);
+  } catch (const std::exception& e) {
+    fail(res, 400, std::string("request body is not JSON: ") + e.what());
+    return std::nullopt;
+  }
+  if (!parsed.is_object()) {
+    fail(res, 400, "request body must be a JSON object");
+    return std::nullopt;
+  }
+  return parsed;
+}
+
 void sendJson(httplib::Response& res, const nlohmann::json& body) {
   res.set_header("Cache-Control", "no-store");
   res.set_content(body.dump(), "application/json");
@@ -498,13 +513,9 @@ void WebServer::routes() {
   // An existing label file whose mtime is not base_mtime_ns (newer work) is not
   // overwritten: 409.
   s.Post("/api/label", [rootOf](const httplib::Request& req, httplib::Response& res) {
-    nlohmann::json body;
-    try {
-      body = nlohmann::json::parse(req.body);
-    } catch (const std::exception& e) {
-      return fail(res, 400, std::string("request body is not JSON: ") + e.what());
-    }
-    if (!body.is_object()) return fail(res, 400, "request body must be a JSON object");
+    auto parsed = jsonObjectBody(req.body, res);
+    if (!parsed) return;
+    nlohmann::json body = std::move(*parsed);
     for (const char* key : {"root", "frame", "width", "height", "runs", "author"}) {
       if (!body.contains(key)) return fail(res, 400, std::string("missing field '") + key + "'");
     }
