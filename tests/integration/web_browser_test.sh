@@ -39,43 +39,19 @@ done
 
 SKIP_NAME="web_browser_test"
 source "$SOURCE_DIR/tests/support/skip.sh"
-need_tools node unshare ip
-CHROMIUM=${FINDMUG_CHROMIUM:-/usr/bin/chromium}
-[[ -x "$CHROMIUM" ]] || skip "$CHROMIUM not installed (scripts/install-deps.sh)"
+source "$SOURCE_DIR/tests/support/web_test.sh"
+web_test_needs_browser
 TEST_DIR="$SOURCE_DIR/clients/web/test"
-[[ -d "$TEST_DIR/node_modules/puppeteer-core" ]] ||
-  skip "puppeteer-core not installed (scripts/install-deps.sh runs npm ci in clients/web/test)"
 DATA_ROOT="${FINDMUG_DATA:-$SOURCE_DIR/../shared/data}"
 NYU="$DATA_ROOT/nyuv2_labeled"
 [[ -d "$NYU/rgb" ]] || skip "NYU frames missing at $NYU (set FINDMUG_DATA)"
 
 # --- into a private network namespace: nothing can leave the machine ----------------
-if [[ "${FINDMUG_WEB_NETNS:-}" != 1 ]]; then
-  ns=(unshare --net)
-  [[ $EUID -eq 0 ]] || ns=(unshare --net --map-root-user)
-  exec "${ns[@]}" env FINDMUG_WEB_NETNS=1 bash "$0" "${ARGS[@]}"
-fi
-ip link set lo up
-ip route add 224.0.0.0/4 dev lo
+web_test_enter_netns "${ARGS[@]}"
 URL="udpm://239.255.76.67:7667?ttl=0&recv_buf_size=4194304"
 PORT=18088
 
-WORK=$(mktemp -d /tmp/findmug-web-test.XXXXXX)
-[[ -n "$OUT" ]] || OUT=$WORK
-mkdir -p "$OUT"
-pids=()
-cleanup() {
-  local pid
-  for pid in "${pids[@]}"; do kill -TERM "$pid" 2>/dev/null || true; done
-  for pid in "${pids[@]}"; do wait "$pid" 2>/dev/null || true; done
-  rm -rf "$WORK"
-}
-trap cleanup EXIT
-fail() {
-  echo "web_browser_test: FAILED: $*" >&2
-  for log in "$WORK"/*.log; do echo "--- $log"; tail -20 "$log"; done >&2
-  exit 1
-}
+web_test_workdir findmug-web-test
 
 MODEL="$SOURCE_DIR/models/findmug.fmf"
 [[ -f "$MODEL" ]] || fail "no model at $MODEL"

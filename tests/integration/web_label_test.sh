@@ -29,21 +29,14 @@ done
 [[ -x "$WEB" ]] || { echo "web_label_test: --web must name findmug-web" >&2; exit 2; }
 SKIP_NAME="web_label_test"
 source "$SOURCE_DIR/tests/support/skip.sh"
-need_tools node unshare ip
-[[ -x "${FINDMUG_CHROMIUM:-/usr/bin/chromium}" ]] || skip "chromium not installed (scripts/install-deps.sh)"
-[[ -d "$SOURCE_DIR/clients/web/test/node_modules/puppeteer-core" ]] ||
-  skip "puppeteer-core not installed (scripts/install-deps.sh runs npm ci in clients/web/test)"
+source "$SOURCE_DIR/tests/support/web_test.sh"
+web_test_needs_browser
 DATA_DIR="${FINDMUG_DATA:-$SOURCE_DIR/../shared/data}"
 NYU="$DATA_DIR/nyuv2_labeled"
 [[ -f "$NYU/rgb/$FRAME.png" ]] || skip "NYU frames missing at $NYU (set FINDMUG_DATA)"
 ROTATIONS="$DATA_DIR/nyuv2_meta/camera_rotations_NYU.txt"
 [[ -f "$ROTATIONS" ]] || skip "NYU gravity rotations missing at $ROTATIONS"
-if [[ "${FINDMUG_WEB_NETNS:-}" != 1 ]]; then
-  ns=(unshare --net)
-  [[ $EUID -eq 0 ]] || ns=(unshare --net --map-root-user)
-  exec "${ns[@]}" env FINDMUG_WEB_NETNS=1 bash "$0" "${ARGS[@]}"
-fi
-ip link set lo up
+web_test_enter_netns "${ARGS[@]}"
 
 WORK=$(mktemp -d /tmp/findmug-web-label.XXXXXX)
 [[ -n "$OUT" ]] || OUT=$WORK

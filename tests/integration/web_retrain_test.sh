@@ -30,38 +30,15 @@ for b in "$FINDMUGD" "$WEB" "$TRAIN" "$EVAL"; do
 done
 SKIP_NAME="web_retrain_test"
 source "$SOURCE_DIR/tests/support/skip.sh"
-need_tools node unshare ip
-[[ -x "${FINDMUG_CHROMIUM:-/usr/bin/chromium}" ]] || skip "chromium not installed (scripts/install-deps.sh)"
-[[ -d "$SOURCE_DIR/clients/web/test/node_modules/puppeteer-core" ]] ||
-  skip "puppeteer-core not installed (scripts/install-deps.sh runs npm ci in clients/web/test)"
+source "$SOURCE_DIR/tests/support/web_test.sh"
+web_test_needs_browser
 NYU="${FINDMUG_DATA:-$SOURCE_DIR/../shared/data}/nyuv2_labeled"
 [[ -f "$NYU/rgb/0001.png" ]] || skip "NYU frames missing at $NYU (set FINDMUG_DATA)"
-if [[ "${FINDMUG_WEB_NETNS:-}" != 1 ]]; then
-  ns=(unshare --net)
-  [[ $EUID -eq 0 ]] || ns=(unshare --net --map-root-user)
-  exec "${ns[@]}" env FINDMUG_WEB_NETNS=1 bash "$0" "${ARGS[@]}"
-fi
-ip link set lo up
-ip route add 224.0.0.0/4 dev lo
+web_test_enter_netns "${ARGS[@]}"
 URL="udpm://239.255.76.67:7667?ttl=0&recv_buf_size=4194304"
 PORT=18092
 
-WORK=$(mktemp -d /tmp/findmug-web-retrain.XXXXXX)
-[[ -n "$OUT" ]] || OUT=$WORK
-mkdir -p "$OUT"
-pids=()
-cleanup() {
-  local pid
-  for pid in "${pids[@]}"; do kill -TERM "$pid" 2>/dev/null || true; done
-  for pid in "${pids[@]}"; do wait "$pid" 2>/dev/null || true; done
-  rm -rf "$WORK"
-}
-trap cleanup EXIT
-fail() {
-  echo "web_retrain_test: FAILED: $*" >&2
-  for log in "$WORK"/*.log; do echo "--- $log"; tail -25 "$log"; done >&2
-  exit 1
-}
+web_test_workdir findmug-web-retrain
 
 # A small folder: six labelled NYU frames whose floor the fast settings find (symlinks),
 # split into two scenes for findmug-eval's 2 folds.
