@@ -520,6 +520,15 @@ TEST(SemanticMap, SettingsSectionIsReadAndChecked) {
   SemanticMapConfig bad;
   bad.hit_logodds = 5.0f;
   EXPECT_THROW(validateSemanticMapConfig(bad), Error);
+  // Seeing through can be turned off (0) but not made to add occupancy.
+  Config off = parseConfig("semantic_map:\n  seen_through_logodds: 0\n", "test");
+  EXPECT_EQ(resolveSemanticMapConfig(off).seen_through_logodds, 0.0f);
+  try {
+    parseConfig("semantic_map:\n  seen_through_logodds: -1\n", "test.yaml");
+    ADD_FAILURE() << "accepted seen_through_logodds -1";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("semantic_map.seen_through_logodds"), std::string::npos);
+  }
 }
 
 TEST(SemanticMap, CameraInMapComposesRobotPoseAndMount) {
