@@ -593,13 +593,18 @@ void SemanticMap::seeThrough(const OrganizedCloud& cloud, const Eigen::Isometry3
       if (p.z() > 0.1 && p.norm() < max_range) {
         const auto u = static_cast<int>(std::lround(pinhole.fx * p.x() / p.z() + pinhole.cx));
         const auto w = static_cast<int>(std::lround(pinhole.fy * p.y() / p.z() + pinhole.cy));
-        if (u >= 1 && w >= 1 && u + 1 < cloud.width && w + 1 < cloud.height) {
-          // The nearest depth around it: an edge or a thin thing in front keeps it.
+        if (u >= 0 && w >= 0 && u < cloud.width && w < cloud.height) {
+          // The nearest depth at it and where its eight neighbour voxels project (one voxel
+          // away in the image): a table edge, a pose error of up to a voxel or a thin thing
+          // in front keeps it.
+          const int reach = std::max(1, static_cast<int>(std::lround(pinhole.fx * voxel / p.z())));
           float nearest = std::numeric_limits<float>::infinity();
-          for (int dy = -1; dy <= 1; ++dy) {
-            for (int dx = -1; dx <= 1; ++dx) {
+          for (int dy = -reach; dy <= reach; dy += reach) {
+            for (int dx = -reach; dx <= reach; dx += reach) {
+              const int qx = u + dx, qy = w + dy;
+              if (qx < 0 || qy < 0 || qx >= cloud.width || qy >= cloud.height) continue;
               const Eigen::Vector3f& q =
-                  cloud.points[static_cast<std::size_t>(w + dy) * cloud.width + (u + dx)];
+                  cloud.points[static_cast<std::size_t>(qy) * cloud.width + qx];
               if (q.allFinite()) nearest = std::min(nearest, q.z());
             }
           }

@@ -22,8 +22,8 @@
 //     table top seen a few times after it left keeps its saturated occupancy. So each
 //     frame also projects every mapped table-top voxel (Table as tables() decides, at
 //     table height, not hit by this frame) into the image (the pinhole fitted to the organized cloud's
-//     pixels, since the cloud carries no intrinsics) and, where the nearest depth of the
-//     3 x 3 pixels around it lies more than carve_margin_m + one voxel behind it, takes
+//     pixels, since the cloud carries no intrinsics) and, where the nearest depth at it and
+//     at its 8 neighbour voxels' pixels lies more than carve_margin_m + one voxel behind it, takes
 //     `seen_through_logodds` from it (once per frame), removing it at 0. Its cost is one
 //     pass over the voxels per frame (docs/results-h-stale38.md).
 //   * Bounded memory: at most `max_voxels` voxels. After a frame that leaves more, the
@@ -92,7 +92,7 @@ struct SemanticMapConfig {
   float miss_logodds = 0.4f;
   float max_logodds = 3.5f;
   // "Seen through": a mapped table-top voxel that projects into the frame where the depth
-  // (nearest of the 3 x 3 pixels around it) lies clearly behind it loses this much log-odds
+  // (nearest at it and one voxel around it) lies clearly behind it loses this much log-odds
   // in that frame, beside the sparse carving (0: off). The camera looked through where the
   // top was, so a moved table goes within a few views of its old place.
   float seen_through_logodds = 1.0f;
