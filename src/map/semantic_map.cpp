@@ -591,13 +591,16 @@ void SemanticMap::seeThrough(const OrganizedCloud& cloud, const Eigen::Isometry3
         tableVoxel(v)) {
       const Eigen::Vector3d p = map_to_camera * centreOf(it->first);
       if (p.z() > 0.1 && p.norm() < max_range) {
-        const auto u = static_cast<int>(std::lround(pinhole.fx * p.x() / p.z() + pinhole.cx));
-        const auto w = static_cast<int>(std::lround(pinhole.fy * p.y() / p.z() + pinhole.cy));
-        if (u >= 0 && w >= 0 && u < cloud.width && w < cloud.height) {
+        const double column = std::floor(pinhole.fx * p.x() / p.z() + pinhole.cx + 0.5);
+        const double row = std::floor(pinhole.fy * p.y() / p.z() + pinhole.cy + 0.5);
+        if (column >= 0 && row >= 0 && column < cloud.width && row < cloud.height) {
+          const auto u = static_cast<int>(column), w = static_cast<int>(row);
           // The nearest depth at it and where its eight neighbour voxels project (one voxel
           // away in the image): a table edge, a pose error of up to a voxel or a thin thing
           // in front keeps it.
-          const int reach = std::max(1, static_cast<int>(std::lround(pinhole.fx * voxel / p.z())));
+          const int reach = static_cast<int>(
+              std::clamp(std::floor(pinhole.fx * voxel / p.z() + 0.5), 1.0,
+                         static_cast<double>(std::max(cloud.width, cloud.height))));
           float nearest = std::numeric_limits<float>::infinity();
           for (int dy = -reach; dy <= reach; dy += reach) {
             for (int dx = -reach; dx <= reach; dx += reach) {
