@@ -166,6 +166,10 @@ void validateSemanticMapConfig(const SemanticMapConfig& c) {
   positive("hit_logodds", c.hit_logodds);
   positive("miss_logodds", c.miss_logodds);
   positive("max_logodds", c.max_logodds);
+  if (!std::isfinite(c.seen_through_logodds) || c.seen_through_logodds < 0.0f ||
+      c.seen_through_logodds > 125.0f) {
+    badSetting("seen_through_logodds", c.seen_through_logodds, "must be in [0, 125] (0: off)");
+  }
   if (c.max_logodds * SemanticMap::kLogOddsScale > 32000.0f) {
     badSetting("max_logodds", c.max_logodds, "must be at most 125");
   }
@@ -218,6 +222,10 @@ const SettingsTable<SemanticMapConfig>& semanticMapSettings() {
     t.add(numberSetting<M, float>(
         "semantic_map.max_logodds", [](M& m) -> float& { return m.max_logodds; }, 0.01, 125,
         "occupancy log-odds cap (how many misses a long-seen voxel survives)"));
+    t.add(numberSetting<M, float>(
+        "semantic_map.seen_through_logodds",
+        [](M& m) -> float& { return m.seen_through_logodds; }, 0, 125,
+        "log-odds a table-top voxel loses in a frame whose depth lies behind it (0: off)"));
     t.add(integerSetting<M, int>(
         "semantic_map.max_voxels", [](M& m) -> int& { return m.max_voxels; }, 1000, 100000000,
         "memory bound: oldest voxels dropped above it (about 64 bytes each)"));
@@ -425,6 +433,7 @@ SemanticMapUpdate SemanticMap::integrate(const OrganizedCloud& cloud, const Labe
   while (static_cast<int>(support_.size()) > map_config_.support_frames) support_.pop_front();
 
   carve(cloud, camera_in_map, update);
+  if (map_config_.seen_through_logodds > 0.0f) seeThrough(cloud, camera_in_map, update);
   update.dropped = enforceBound(camera_in_map.translation());
   return update;
 }
@@ -500,6 +509,128 @@ void SemanticMap::carve(const OrganizedCloud& cloud, const Eigen::Isometry3d& ca
     }
   }
   carved_total_ += static_cast<std::uint64_t>(update.removed);
+}
+
+namespace {
+
+// The pinhole u = fx x/z + cx, v = fy y/z + cy of an organized cloud, fitted by least squares
+// to every `stride`-th pixel's point. Fails (returns false) for clouds that are no pinhole
+// image (too few points, RMS residual above half a pixel).
+struct Pinhole {
+  double fx = 0, fy = 0, cx = 0, cy = 0;
+};
+
+bool fitPinhole(const OrganizedCloud& cloud, int stride, Pinhole& out) {
+  struct Line {
+    double n = 0, sa = 0, sb = 0, saa = 0, sab = 0;
+    void add(double a, double b) {
+      n += 1;
+      sa += a;
+      sb += b;
+      saa += a * a;
+      sab += a * b;
+    }
+    bool solve(double& slope, double& offset) const {
+      const double det = n * saa - sa * sa;
+      if (n < 8 || !(std::abs(det) > 1e-12 * n * n)) return false;
+      slope = (n * sab - sa * sb) / det;
+      offset = (sb - slope * sa) / n;
+      return std::isfinite(slope) && std::isfinite(offset) && slope > 0;
+    }
+  } horizontal, vertical;
+  auto each = [&](auto&& visit) {
+    for (int y = stride / 2; y < cloud.height; y += stride) {
+      for (int x = stride / 2; x < cloud.width; x += stride) {
+        const Eigen::Vector3f& p = cloud.points[static_cast<std::size_t>(y) * cloud.width + x];
+        if (p.allFinite() && p.z() > 0.0f) visit(x, y, p);
+      }
+    }
+  };
+  each([&](int x, int y, const Eigen::Vector3f& p) {
+    horizontal.add(p.x() / p.z(), x);
+    vertical.add(p.y() / p.z(), y);
+  });
+  if (!horizontal.solve(out.fx, out.cx) || !vertical.solve(out.fy, out.cy)) return false;
+  double residual2 = 0.0;
+  each([&](int x, int y, const Eigen::Vector3f& p) {
+    const double du = out.fx * p.x() / p.z() + out.cx - x;
+    const double dv = out.fy * p.y() / p.z() + out.cy - y;
+    residual2 += du * du + dv * dv;
+  });
+  return residual2 / horizontal.n < 0.25;
+}
+
+}  // namespace
+
+bool SemanticMap::tableVoxel(const Voxel& v) const {
+  // As tables() decides: the table votes count tables.table_weight times.
+  const std::uint8_t label = labelOf(v);
+  const int table = static_cast<int>(Label::Table);
+  return label == table ||
+         (label != kVoidLabel && v.votes[table] * table_config_.table_weight > v.votes[label]);
+}
+
+void SemanticMap::seeThrough(const OrganizedCloud& cloud, const Eigen::Isometry3d& camera_in_map,
+                             SemanticMapUpdate& update) {
+  Pinhole pinhole;
+  if (!fitPinhole(cloud, map_config_.carve_stride, pinhole)) return;
+  const double voxel = map_config_.voxel_size_m;
+  const auto z_low = static_cast<int>(std::floor(table_config_.min_table_height_m / voxel + 0.5)) - 1;
+  const auto z_high = static_cast<int>(std::floor(table_config_.max_table_height_m / voxel + 0.5)) + 1;
+  const double margin = map_config_.carve_margin_m + voxel;
+  const double max_range = map_config_.max_range_m;
+  const Eigen::Isometry3d map_to_camera = camera_in_map.inverse();
+  const auto step =
+      static_cast<int>(std::lround(map_config_.seen_through_logodds * kLogOddsScale));
+  int removed = 0;
+  for (auto it = voxels_.begin(); it != voxels_.end();) {
+    const Voxel& v = it->second;
+    const int z_index = static_cast<int>(static_cast<std::int64_t>(it->first & kKeyMask) - kKeyOffset);
+    bool seen_through = false;
+    if (z_index >= z_low && z_index <= z_high && v.last_hit != frame_number_ &&
+        tableVoxel(v)) {
+      const Eigen::Vector3d p = map_to_camera * centreOf(it->first);
+      if (p.z() > 0.1 && p.norm() < max_range) {
+        const double column = std::floor(pinhole.fx * p.x() / p.z() + pinhole.cx + 0.5);
+        const double row = std::floor(pinhole.fy * p.y() / p.z() + pinhole.cy + 0.5);
+        if (column >= 0 && row >= 0 && column < cloud.width && row < cloud.height) {
+          const auto u = static_cast<int>(column), w = static_cast<int>(row);
+          // The nearest depth at it and where its eight neighbour voxels project (one voxel
+          // away in the image): a table edge, a pose error of up to a voxel or a thin thing
+          // in front keeps it.
+          const int reach = static_cast<int>(
+              std::clamp(std::floor(pinhole.fx * voxel / p.z() + 0.5), 1.0,
+                         static_cast<double>(std::max(cloud.width, cloud.height))));
+          float nearest = std::numeric_limits<float>::infinity();
+          for (int dy = -reach; dy <= reach; dy += reach) {
+            for (int dx = -reach; dx <= reach; dx += reach) {
+              const int qx = u + dx, qy = w + dy;
+              if (qx < 0 || qy < 0 || qx >= cloud.width || qy >= cloud.height) continue;
+              const Eigen::Vector3f& q =
+                  cloud.points[static_cast<std::size_t>(qy) * cloud.width + qx];
+              if (q.allFinite()) nearest = std::min(nearest, q.z());
+            }
+          }
+          seen_through = std::isfinite(nearest) && nearest > p.z() + margin;
+        }
+      }
+    }
+    if (!seen_through) {
+      ++it;
+      continue;
+    }
+    ++update.seen_through;
+    const int occupancy = it->second.occupancy - step;
+    if (occupancy <= 0) {
+      it = voxels_.erase(it);
+      ++removed;
+    } else {
+      it->second.occupancy = static_cast<std::int16_t>(occupancy);
+      ++it;
+    }
+  }
+  update.removed += removed;
+  carved_total_ += static_cast<std::uint64_t>(removed);
 }
 
 int SemanticMap::enforceBound(const Eigen::Vector3d& camera) {

@@ -18,6 +18,14 @@
 //     loses `miss_logodds`, at most once per frame, and is removed when its occupancy
 //     reaches 0. So a moved table or a passing person fades after a few views of the
 //     space behind it. Only mapped voxels are touched: free space is never stored.
+//   * Seen through (`seen_through_logodds`): carving rays are sparse (every 8th pixel), so a
+//     table top seen a few times after it left keeps its saturated occupancy. So each
+//     frame also projects every mapped table-top voxel (Table as tables() decides, at
+//     table height, not hit by this frame) into the image (the pinhole fitted to the organized cloud's
+//     pixels, since the cloud carries no intrinsics) and, where the nearest depth at it and
+//     at its 8 neighbour voxels' pixels lies more than carve_margin_m + one voxel behind it, takes
+//     `seen_through_logodds` from it (once per frame), removing it at 0. Its cost is one
+//     pass over the voxels per frame (docs/results-h-stale38.md).
 //   * Bounded memory: at most `max_voxels` voxels. After a frame that leaves more, the
 //     voxels seen longest ago (oldest last hit; among equals, farthest from the camera)
 //     are dropped until 90 % of the bound is left. Budget: a voxel costs about
@@ -83,6 +91,11 @@ struct SemanticMapConfig {
   float hit_logodds = 0.85f;
   float miss_logodds = 0.4f;
   float max_logodds = 3.5f;
+  // "Seen through": a mapped table-top voxel that projects into the frame where the depth
+  // (nearest at it and one voxel around it) lies clearly behind it loses this much log-odds
+  // in that frame, beside the sparse carving (0: off). The camera looked through where the
+  // top was, so a moved table goes within a few views of its old place.
+  float seen_through_logodds = 1.0f;
   int max_voxels = 1000000;
   // Tables from the map.
   int min_table_voxels = 40;         // 0.1 m^2 of top at 5 cm
@@ -126,6 +139,7 @@ struct SemanticMapUpdate {
   int hits = 0;          // voxels that got this frame's vote
   int created = 0;       // of them new
   int carved = 0;        // voxels that lost occupancy along rays
+  int seen_through = 0;  // table-top voxels the frame saw through (removed ones count in removed)
   int removed = 0;       // of them removed (occupancy reached 0)
   int dropped = 0;       // voxels dropped by the memory bound
 };
@@ -210,6 +224,9 @@ class SemanticMap {
 
   void carve(const OrganizedCloud& cloud_camera, const Eigen::Isometry3d& camera_in_map,
              SemanticMapUpdate& update);
+  void seeThrough(const OrganizedCloud& cloud_camera, const Eigen::Isometry3d& camera_in_map,
+                  SemanticMapUpdate& update);
+  bool tableVoxel(const Voxel& voxel) const;  // tables() would label it Table
   int enforceBound(const Eigen::Vector3d& camera);
   std::uint64_t viewpointOf(const Eigen::Isometry3d& camera_in_map) const;
   void countSupport(FusedTable& table) const;

@@ -308,6 +308,43 @@ TEST(SemanticMap, MovedTableFadesByCarving) {
   EXPECT_GT(map.stats().voxels_carved, 200u);
 }
 
+// A table mapped from two views is carried away; the robot then looks at the empty place
+// from one oblique viewpoint only. The top's voxels are saturated (10 hits), so carving
+// alone (0.4 per frame, and only where a ray passes) needs at least 9 such frames; the
+// frames' depth lies behind the old top, so seeing through it (1.0 per frame) clears it in
+// 3-4. A table that is still there, seen from the same viewpoint, stays.
+int framesUntilNoTable(float seen_through_logodds, bool table_stays) {
+  SemanticMapConfig config = testConfig();
+  config.seen_through_logodds = seen_through_logodds;
+  SemanticMap map(config);
+  const Scene before{{tableAt(2.5, 0.0)}};
+  for (int i = 1; i <= 5; ++i) integrate(map, before, kFrontView, static_cast<std::uint64_t>(i));
+  for (int i = 6; i <= 10; ++i) integrate(map, before, kSideView, static_cast<std::uint64_t>(i));
+  EXPECT_EQ(map.tables().size(), 1u);
+  const Scene after = table_stays ? before : Scene{};
+  const Eigen::Isometry3d oblique = lookAt({4.4, 1.7, 1.3}, {2.5, 0.0, 0.6});
+  for (int frame = 1; frame <= 20; ++frame) {
+    integrate(map, after, oblique, static_cast<std::uint64_t>(10 + frame));
+    if (map.tables().empty()) return frame;
+  }
+  return 0;  // not gone
+}
+
+TEST(SemanticMap, TableSeenThroughFromOneObliqueViewGoesWithinFourFrames) {
+  const float on = SemanticMapConfig{}.seen_through_logodds;
+  ASSERT_GT(on, 0.0f) << "seeing through is the default";
+  const int with = framesUntilNoTable(on, false);
+  RecordProperty("frames_seen_through", with);
+  EXPECT_GE(with, 1);
+  EXPECT_LE(with, 4) << "the old table top stayed in tables()";
+  // Carving alone (the behaviour before semantic_map.seen_through_logodds) is slower.
+  const int without = framesUntilNoTable(0.0f, false);
+  RecordProperty("frames_carving_only", without);
+  EXPECT_TRUE(without == 0 || without > 4) << without;
+  // A table still standing there, seen the same way, is kept.
+  EXPECT_EQ(framesUntilNoTable(on, true), 0);
+}
+
 // Of the voxels the view's sampled points fall in, how many are mapped.
 int mappedOf(const SemanticMap& map, const View& view, const Eigen::Isometry3d& camera) {
   int n = 0;
@@ -483,6 +520,15 @@ TEST(SemanticMap, SettingsSectionIsReadAndChecked) {
   SemanticMapConfig bad;
   bad.hit_logodds = 5.0f;
   EXPECT_THROW(validateSemanticMapConfig(bad), Error);
+  // Seeing through can be turned off (0) but not made to add occupancy.
+  Config off = parseConfig("semantic_map:\n  seen_through_logodds: 0\n", "test");
+  EXPECT_EQ(resolveSemanticMapConfig(off).seen_through_logodds, 0.0f);
+  try {
+    parseConfig("semantic_map:\n  seen_through_logodds: -1\n", "test.yaml");
+    ADD_FAILURE() << "accepted seen_through_logodds -1";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("semantic_map.seen_through_logodds"), std::string::npos);
+  }
 }
 
 TEST(SemanticMap, CameraInMapComposesRobotPoseAndMount) {
