@@ -25,7 +25,7 @@
 //     pixels, since the cloud carries no intrinsics) and, where the nearest depth at it and
 //     at its 8 neighbour voxels' pixels lies more than carve_margin_m + one voxel behind it, takes
 //     `seen_through_logodds` from it (once per frame), removing it at 0. Its cost is one
-//     pass over the voxels per frame (docs/results-h-stale38.md).
+//     pass over the voxels per frame (docs/measurements/semantic-map-seen-through.md).
 //   * Bounded memory: at most `max_voxels` voxels. After a frame that leaves more, the
 //     voxels seen longest ago (oldest last hit; among equals, farthest from the camera)
 //     are dropped until 90 % of the bound is left. Budget: a voxel costs about
