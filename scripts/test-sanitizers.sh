@@ -29,7 +29,7 @@ configure() {  # DIR EXTRA-ARGS...
     -DFINDMUG_BUILD_BENCHMARKS=OFF "${launcher[@]}" "$@"
 }
 unit_targets() {
-  for f in tests/unit/*_test.cpp; do printf -- '--target %s ' "$(basename "$f" .cpp)"; done
+  for f in tests/unit/*/*_test.cpp; do printf -- '--target %s ' "$(basename "$f" .cpp)"; done
 }
 timed() {  # LABEL COMMAND...
   local label=$1 start=$SECONDS; shift
