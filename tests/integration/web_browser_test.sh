@@ -67,11 +67,7 @@ pids+=($!)
   --data "$NYU" > "$WORK/findmug-web.log" 2>&1 &
 web_pid=$!
 pids+=($web_pid)
-for _ in $(seq 100); do
-  (exec 3<>/dev/tcp/127.0.0.1/$PORT) 2>/dev/null && break
-  kill -0 "$web_pid" 2>/dev/null || fail "findmug-web exited"
-  sleep 0.1
-done
+web_test_wait_for_port "$PORT" "$web_pid"
 
 map_args=()
 if [[ -n "$SPY_LOG" ]]; then

@@ -64,7 +64,7 @@ fi
 "${WEB_CMD[@]}" > "$WORK/web.log" 2>&1 &
 web=$!
 trap 'kill -TERM $web 2>/dev/null || true; wait $web 2>/dev/null || true; rm -rf "$WORK"' EXIT
-for _ in $(seq 100); do (exec 3<>/dev/tcp/127.0.0.1/18091) 2>/dev/null && break; sleep 0.1; done
+web_test_wait_for_port 18091 "$web"
 if ! node "$SOURCE_DIR/clients/web/test/$SCRIPT" --url "http://127.0.0.1:18091/" \
      --data "$WORK/data" --frame "$FRAME" --out "$OUT"; then
   echo "web_label_test: $SCRIPT FAILED" >&2

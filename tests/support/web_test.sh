@@ -9,6 +9,8 @@
 #   web_test_workdir PREFIX         makes $WORK (and $OUT when empty), kills the processes in
 #                                   the array `pids` and removes $WORK at exit, and defines
 #                                   fail MESSAGE (prints the tails of $WORK/*.log, exits 1)
+#   web_test_wait_for_port PORT PID until 127.0.0.1:PORT accepts a connection (10 s); fails
+#                                   when process PID exits first
 
 web_test_needs_browser() {
   need_tools node unshare ip
@@ -34,6 +36,15 @@ web_test_workdir() {
   mkdir -p "$OUT"
   pids=()
   trap web_test_cleanup EXIT
+}
+
+web_test_wait_for_port() {  # PORT PID: until 127.0.0.1:PORT accepts (10 s), failing if PID exits
+  local _
+  for _ in $(seq 100); do
+    (exec 3<>/dev/tcp/127.0.0.1/"$1") 2>/dev/null && return 0
+    kill -0 "$2" 2>/dev/null || fail "the server (pid $2) exited"
+    sleep 0.1
+  done
 }
 
 web_test_cleanup() {
