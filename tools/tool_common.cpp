@@ -85,6 +85,10 @@ DatasetOptions datasetOptions(const DatasetFlags& f, const SegmenterConfig& conf
   // Split labels and internal classes need each patch's finer class (label40/ or
   // label13/ beside label8/).
   options.fine_labels_folder = fineLabelsFolder(config);
+  options.fine_labels_asked_by =
+      config.learner.classes != ClassScheme::Labels
+          ? std::string("learner.classes = ") + classSchemeName(config.learner.classes)
+          : std::string("training.split_labels");
   if (config.learner.classes == ClassScheme::Nyu13 && !f.mats.empty())
     throw Error("learner.classes = nyu13: --mat gives NYU-40 classes only (use nyu40, or a "
                 "dataset folder with label13/)");

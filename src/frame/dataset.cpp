@@ -419,7 +419,7 @@ DatasetFolder::DatasetFolder(const std::string& dir, const DatasetOptions& optio
                   "' (expected label40 or label13)");
     if (!fs::is_directory(root / options.fine_labels_folder, ec))
       throw Error(dir + ": " + options.fine_labels_folder +
-                  "/ labels asked for (training.split_labels) but there is no " +
+                  "/ labels asked for (" + options.fine_labels_asked_by + ") but there is no " +
                   options.fine_labels_folder + "/ folder");
   }
 

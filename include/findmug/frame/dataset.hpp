@@ -121,6 +121,9 @@ struct DatasetOptions {
   // "label13": ids 0..13) into LabeledFrame::fine_labels, for
   // training.split_labels. "" = not read. A folder without it is then an error.
   std::string fine_labels_folder;
+  // The setting that asked for fine_labels_folder (e.g. "learner.classes = nyu13"),
+  // named in the error when a folder lacks it, so the user knows what to change.
+  std::string fine_labels_asked_by = "training.split_labels";
 };
 
 class DatasetFolder {

@@ -316,6 +316,10 @@ TEST(DatasetFolder, FineLabelsNeedAValidLabel40Folder) {
   DatasetOptions options = noBorder();
   options.fine_labels_folder = "label40";
   EXPECT_CONTAINS(errorOf([&] { DatasetFolder(dir.str("a"), options); }), "no label40/ folder");
+  // The error names the setting that asked for the finer labels.
+  options.fine_labels_asked_by = "learner.classes = nyu40";
+  EXPECT_CONTAINS(errorOf([&] { DatasetFolder(dir.str("a"), options); }),
+                  "asked for (learner.classes = nyu40)");
   options.fine_labels_folder = "label12";
   EXPECT_CONTAINS(errorOf([&] { DatasetFolder(dir.str("a"), options); }),
                   "expected label40 or label13");
