@@ -89,6 +89,9 @@ DatasetOptions datasetOptions(const DatasetFlags& f, const SegmenterConfig& conf
       config.learner.classes != ClassScheme::Labels
           ? std::string("learner.classes = ") + classSchemeName(config.learner.classes)
           : std::string("training.split_labels");
+  // Internal classes infer the finer class of frames labelled with the 8 labels
+  // only (inferMissingFineLabels); split labels need them everywhere.
+  options.fine_labels_optional = config.learner.classes != ClassScheme::Labels;
   if (config.learner.classes == ClassScheme::Nyu13 && !f.mats.empty())
     throw Error("learner.classes = nyu13: --mat gives NYU-40 classes only (use nyu40, or a "
                 "dataset folder with label13/)");

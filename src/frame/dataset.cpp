@@ -417,10 +417,11 @@ DatasetFolder::DatasetFolder(const std::string& dir, const DatasetOptions& optio
     if (options.fine_labels_folder != "label40" && options.fine_labels_folder != "label13")
       throw Error(dir + ": fine labels folder '" + options.fine_labels_folder +
                   "' (expected label40 or label13)");
-    if (!fs::is_directory(root / options.fine_labels_folder, ec))
+    if (!fs::is_directory(root / options.fine_labels_folder, ec) && !options.fine_labels_optional)
       throw Error(dir + ": " + options.fine_labels_folder +
                   "/ labels asked for (" + options.fine_labels_asked_by + ") but there is no " +
                   options.fine_labels_folder + "/ folder");
+    has_fine_labels_ = fs::is_directory(root / options.fine_labels_folder, ec);
   }
 
   if (has_labels_ && !has_label8_) {
@@ -564,7 +565,7 @@ LabeledFrame DatasetFolder::load(std::size_t i) const {
     out.labels[p] = static_cast<std::uint8_t>(lookup[label_ids.pixels[p]]);
   }
 
-  if (!options_.fine_labels_folder.empty()) {
+  if (has_fine_labels_) {
     const std::string fine_path = (root / options_.fine_labels_folder / (name + ".png")).string();
     const int max_id = options_.fine_labels_folder == "label13" ? kNyu13Classes : kNyu40Classes;
     auto fine = readPng8(fine_path);

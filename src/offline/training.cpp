@@ -1,5 +1,6 @@
 #include "findmug/offline/training.hpp"
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 
@@ -262,10 +263,11 @@ std::string fineLabelsFolder(SplitLabels split) {
 
 TrainingSet makeTrainingSet(const std::vector<FrameSample>& samples,
                             const std::vector<std::size_t>& frame_indices,
-                            SampleWeighting weighting, SplitLabels split) {
+                            SampleWeighting weighting, SplitLabels split,
+                            MissingFineLabels missing) {
   std::vector<const FrameSample*> frames;
   for (std::size_t f : frame_indices) frames.push_back(&samples.at(f));
-  return makeTrainingSet(frames, weighting, split);
+  return makeTrainingSet(frames, weighting, split, missing);
 }
 
 namespace {
@@ -288,9 +290,14 @@ const char* splitName(SplitLabels split) {
 }
 
 // The split label of segment k (training.split_labels), or an error naming the frame.
-std::uint8_t splitLabelOf(const FrameSample& s, std::size_t k, SplitLabels split) {
+// A frame without fine labels gives kMissingFineLabel when `missing` allows it
+// (its patches' fine classes are inferred afterwards: inferMissingFineLabels).
+std::uint8_t splitLabelOf(const FrameSample& s, std::size_t k, SplitLabels split,
+                          MissingFineLabels missing) {
   const std::string setting = std::string("training.split_labels = ") +
                               (split == SplitLabels::Nyu13 ? "nyu13" : "nyu40");
+  if (s.segment_fine_labels.empty() && missing == MissingFineLabels::Infer)
+    return kMissingFineLabel;
   if (s.segment_fine_labels.size() != s.segment_labels.size())
     throw Error(setting + ": frame " + s.name + " has no " + splitName(split) +
                 " labels (a dataset folder needs " + fineLabelsFolder(split) + "/)");
@@ -365,10 +372,82 @@ SplitLabels fineKindOf(ClassScheme scheme) {
   return scheme == ClassScheme::Nyu13 ? SplitLabels::Nyu13 : SplitLabels::Nyu40;
 }
 
+// Column scales for the nearest-neighbour vote: each feature column (base and
+// extra) divided by its standard deviation over the set, so that no unit
+// (metres, degrees, CIELAB) outweighs the others. Constant columns get 1.
+std::vector<float> columnScales(const TrainingSet& set) {
+  const std::size_t extra = set.extra_names.size(), dims = kFeatureDim + extra;
+  std::vector<double> sum(dims, 0.0), sum2(dims, 0.0);
+  for (std::size_t i = 0; i < set.labels.size(); ++i) {
+    for (std::size_t d = 0; d < dims; ++d) {
+      const double v = d < kFeatureDim ? set.features[i][d] : set.extra[i * extra + d - kFeatureDim];
+      sum[d] += v;
+      sum2[d] += v * v;
+    }
+  }
+  std::vector<float> scale(dims, 1.0f);
+  const auto n = static_cast<double>(set.labels.size());
+  for (std::size_t d = 0; d < dims && n > 0; ++d) {
+    const double var = sum2[d] / n - (sum[d] / n) * (sum[d] / n);
+    if (var > 1e-12) scale[d] = static_cast<float>(1.0 / std::sqrt(var));
+  }
+  return scale;
+}
+
 }  // namespace
 
+void inferMissingFineLabels(TrainingSet& set, int neighbours) {
+  if (set.split_labels.size() != set.labels.size()) return;
+  std::vector<std::size_t> missing;
+  std::array<std::vector<std::size_t>, kNumLabels> known;  // fine-labelled samples per label
+  for (std::size_t i = 0; i < set.labels.size(); ++i) {
+    if (set.split_labels[i] == kMissingFineLabel)
+      missing.push_back(i);
+    else
+      known[set.labels[i]].push_back(i);
+  }
+  if (missing.empty()) return;
+  const std::size_t extra = set.extra_names.size(), dims = kFeatureDim + extra;
+  const std::vector<float> scale = columnScales(set);
+  auto value = [&](std::size_t i, std::size_t d) {
+    return (d < kFeatureDim ? set.features[i][d] : set.extra[i * extra + d - kFeatureDim]) *
+           scale[d];
+  };
+  const auto k = static_cast<std::size_t>(std::max(1, neighbours));
+  std::vector<std::pair<float, std::size_t>> nearest;
+  for (const std::size_t i : missing) {
+    const std::vector<std::size_t>& pool = known[set.labels[i]];
+    if (pool.empty())
+      throw Error(std::string("finer classes for label '") + std::string(labelName(set.labels[i])) +
+                  "': patches labelled with the 8 labels only (a folder without label13/ or "
+                  "label40/) need frames with finer labels of the same label to learn from; "
+                  "train with the NYU frames beside them, or set learner.classes = labels");
+    nearest.clear();
+    for (const std::size_t j : pool) {
+      float d2 = 0.0f;
+      for (std::size_t d = 0; d < dims; ++d) {
+        const float diff = value(i, d) - value(j, d);
+        d2 += diff * diff;
+      }
+      nearest.emplace_back(d2, j);
+    }
+    const std::size_t take = std::min(k, nearest.size());
+    std::partial_sort(nearest.begin(), nearest.begin() + static_cast<std::ptrdiff_t>(take),
+                      nearest.end());
+    // Majority of the k nearest; a tie goes to the class of the nearer one.
+    std::array<int, kMaxSplitClasses> votes{};
+    std::uint8_t best = set.split_labels[nearest[0].second];
+    for (std::size_t n = 0; n < take; ++n) {
+      const std::uint8_t fine = set.split_labels[nearest[n].second];
+      if (++votes[fine] > votes[best]) best = fine;
+    }
+    set.split_labels[i] = best;
+  }
+}
+
 TrainingSet makeTrainingSet(const std::vector<const FrameSample*>& given,
-                            SampleWeighting weighting, SplitLabels split) {
+                            SampleWeighting weighting, SplitLabels split,
+                            MissingFineLabels missing) {
   TrainingSet set;
   std::vector<const FrameSample*> frames;
   for (const FrameSample* s : given) {
@@ -401,12 +480,16 @@ TrainingSet makeTrainingSet(const std::vector<const FrameSample*>& given,
       set.features.push_back(s->features.features[k]);
       appendExtraColumns(s->features, k, set.extra);
       set.labels.push_back(s->segment_labels[k]);
-      if (split != SplitLabels::Labels) set.split_labels.push_back(splitLabelOf(*s, k, split));
+      if (split != SplitLabels::Labels)
+        set.split_labels.push_back(splitLabelOf(*s, k, split, missing));
       if (weighted)
         set.weights.push_back(patchWeight(weighting, s->segment_pixels[k], s->training_weight));
     }
   }
-  if (split != SplitLabels::Labels) set.split_classes = splitClasses(split);
+  if (split != SplitLabels::Labels) {
+    set.split_classes = splitClasses(split);
+    inferMissingFineLabels(set);
+  }
   return set;
 }
 
@@ -445,7 +528,10 @@ RandomForest trainModel(const std::vector<const FrameSample*>& frames,
   const SampleWeighting weighting = config.training.sample_weight;
   const SplitLabels split =
       internal ? fineKindOf(config.learner.classes) : config.training.split_labels;
-  TrainingSet first_set = makeTrainingSet(frames, weighting, split);
+  // Frames labelled with the 8 labels only (a user's own, from the Label page)
+  // may join a training with internal classes: their fine classes are inferred.
+  const MissingFineLabels missing = internal ? MissingFineLabels::Infer : MissingFineLabels::Refuse;
+  TrainingSet first_set = makeTrainingSet(frames, weighting, split, missing);
   InternalMap map;
   if (internal) {
     map = internalMapOf(first_set, config.learner.classes);
@@ -485,7 +571,7 @@ RandomForest trainModel(const std::vector<const FrameSample*>& frames,
       if (held_out.empty()) continue;
       ForestParams params = config.forest;
       params.seed += 1000 + static_cast<std::uint64_t>(g);
-      TrainingSet set = makeTrainingSet(train, weighting, split);
+      TrainingSet set = makeTrainingSet(train, weighting, split, missing);
       if (set.labels.empty()) throw Error("trainModel: cross-fitting group " + std::to_string(g) +
                                           " leaves no labelled segment to train on");
       if (internal) applyInternalMap(set, map, config.learner.class_weight);
@@ -517,12 +603,16 @@ RandomForest trainModel(const std::vector<const FrameSample*>& frames,
       const auto begin = ctx.begin() + static_cast<std::ptrdiff_t>(k * kContextFeatureDim);
       set.extra.insert(set.extra.end(), begin, begin + kContextFeatureDim);
       set.labels.push_back(s.segment_labels[k]);
-      if (split != SplitLabels::Labels) set.split_labels.push_back(splitLabelOf(s, k, split));
+      if (split != SplitLabels::Labels)
+        set.split_labels.push_back(splitLabelOf(s, k, split, missing));
       if (weighted)
         set.weights.push_back(patchWeight(weighting, s.segment_pixels[k], s.training_weight));
     }
   }
-  if (split != SplitLabels::Labels) set.split_classes = splitClasses(split);
+  if (split != SplitLabels::Labels) {
+    set.split_classes = splitClasses(split);
+    inferMissingFineLabels(set);
+  }
   if (internal) applyInternalMap(set, map, config.learner.class_weight);
   ForestParams params = config.forest;
   params.seed += 500;

@@ -124,6 +124,11 @@ struct DatasetOptions {
   // The setting that asked for fine_labels_folder (e.g. "learner.classes = nyu13"),
   // named in the error when a folder lacks it, so the user knows what to change.
   std::string fine_labels_asked_by = "training.split_labels";
+  // A folder without fine_labels_folder is then read with the 8 labels only
+  // (LabeledFrame::fine_labels empty) rather than refused: internal classes
+  // infer the finer class of such frames' patches (inferMissingFineLabels),
+  // so a robot owner's frames from the Label page can join the NYU ones.
+  bool fine_labels_optional = false;
 };
 
 class DatasetFolder {
@@ -146,6 +151,7 @@ class DatasetFolder {
   DatasetOptions options_;
   std::vector<std::string> names_;
   bool has_label8_ = false;
+  bool has_fine_labels_ = false;  // options_.fine_labels_folder exists here
   bool has_labels_ = true;
   LabelMapping mapping_;
   CameraIntrinsics intrinsics_;

@@ -88,13 +88,31 @@ std::vector<FrameSample> extractSamples(const DatasetFolder& dataset, const Segm
 // extra columns. With SplitLabels::Nyu40 / Nyu13 the set carries each patch's
 // NYU-40 / NYU-13 class as its split label; a frame without fine labels (or
 // with ids beyond the classes) is then an error.
+// With MissingFineLabels::Infer a frame without fine labels is accepted and
+// its patches' fine classes are inferred (inferMissingFineLabels).
+enum class MissingFineLabels { Refuse, Infer };
 TrainingSet makeTrainingSet(const std::vector<FrameSample>& samples,
                             const std::vector<std::size_t>& frame_indices,
                             SampleWeighting weighting = SampleWeighting::Patches,
-                            SplitLabels split = SplitLabels::Labels);
+                            SplitLabels split = SplitLabels::Labels,
+                            MissingFineLabels missing = MissingFineLabels::Refuse);
 TrainingSet makeTrainingSet(const std::vector<const FrameSample*>& frames,
                             SampleWeighting weighting = SampleWeighting::Patches,
-                            SplitLabels split = SplitLabels::Labels);
+                            SplitLabels split = SplitLabels::Labels,
+                            MissingFineLabels missing = MissingFineLabels::Refuse);
+
+// The split label a sample gets while its fine class is not known yet.
+inline constexpr std::uint8_t kMissingFineLabel = 0;
+
+// Patches of frames labelled with the 8 labels only (a robot owner's frames
+// from the Label page, which has no finer classes) in a set whose split
+// labels are fine classes: each gets the fine class most of its `neighbours`
+// nearest fine-labelled patches of the same label hold (feature columns scaled
+// by their spread), so a mixture label (wall: wall, window, picture) is split
+// the way the finely labelled frames split it, and no frame is thrown away.
+// Samples marked kMissingFineLabel are the ones inferred. Throws
+// findmug::Error naming the label when no fine-labelled patch has it.
+void inferMissingFineLabels(TrainingSet& set, int neighbours = 5);
 
 // The dataset folder training.split_labels reads ("" for Labels).
 std::string fineLabelsFolder(SplitLabels split);

@@ -320,6 +320,10 @@ TEST(DatasetFolder, FineLabelsNeedAValidLabel40Folder) {
   options.fine_labels_asked_by = "learner.classes = nyu40";
   EXPECT_CONTAINS(errorOf([&] { DatasetFolder(dir.str("a"), options); }),
                   "asked for (learner.classes = nyu40)");
+  // Optional (internal classes infer them): the folder reads with the 8 labels only.
+  options.fine_labels_optional = true;
+  EXPECT_TRUE(DatasetFolder(dir.str("a"), options).load(0).fine_labels.empty());
+  options.fine_labels_optional = false;
   options.fine_labels_folder = "label12";
   EXPECT_CONTAINS(errorOf([&] { DatasetFolder(dir.str("a"), options); }),
                   "expected label40 or label13");

@@ -496,6 +496,23 @@ TEST(Segmenter, SplitLabelsFromTheFineLabelsOfEachPatch) {
   } catch (const Error& e) {
     EXPECT_THAT(e.what(), HasSubstr("frame scene has no NYU-40 labels (a dataset folder needs label40/)"));
   }
+
+  // Internal classes (learner.classes) take a frame labelled with the 8 labels
+  // only beside finely labelled ones (a robot owner's frames from the Label
+  // page): its patches' fine classes are inferred, so both wall kinds remain.
+  SegmenterConfig internal = fastConfig();
+  internal.learner.classes = ClassScheme::Nyu40;
+  const RandomForest mixed = trainModel({&s, &without[0]}, internal);
+  std::set<std::string> names(mixed.internalClasses().names.begin(),
+                              mixed.internalClasses().names.end());
+  EXPECT_EQ(names, (std::set<std::string>{"floor/floor", "wall/door", "wall/wall"}));
+  // With no finely labelled frame at all there is nothing to infer from.
+  try {
+    trainModel({&without[0]}, internal);
+    FAIL() << "expected a training without any fine labels to be refused";
+  } catch (const Error& e) {
+    EXPECT_THAT(e.what(), HasSubstr("need frames with finer labels of the same label"));
+  }
 }
 
 TEST(Segmenter, MajorityLabelsPerSegment) {
