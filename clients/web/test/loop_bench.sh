@@ -97,7 +97,7 @@ pids+=($!)
   --set "web.install_path=$WORK/installed.fmf" --set "web.train_program=$TRAIN" \
   --set "web.eval_program=$EVAL" --data "$NYU" --data "$WORK/user" > "$WORK/findmug-web.log" 2>&1 &
 web_pid=$!
-pids+=($web_pid)
+pids+=("$web_pid")
 web_test_wait_for_port "$PORT" "$web_pid"
 frames=$(IFS=,; echo "${USER_FRAMES[*]}")
 node "$SOURCE_DIR/clients/web/test/loop_bench.mjs" --url "http://127.0.0.1:$PORT/" --user-root 1 \
