@@ -19,38 +19,24 @@
 //
 // The frames' rgb/ and depth/ are copied to a scratch dataset folder (no labels, so the
 // page starts blank and nothing is written to the data); findmug-web serves it on
-// 127.0.0.1. At every step the user takes the page action that fixes the most labelled
-// pixels still disagreeing with NYU (net: pixels fixed minus pixels broken):
-//   - a patch click (paint tool) on any patch, in any class;
-//   - a region fill (region tool, the page's default limits) from any patch as seed;
-//   - a straight drag (paint tool) between two of the 30 patches with the largest gain;
-// it presses the tool and class keys when they change (counted apart, not as actions).
-// "Start from prediction" is the first action of a run from the prediction. It stops at
-// 95 %, when no action gains, or after --max-actions. Page time is the wall time from
-// the first key of an action until the page has applied it and written its draft
-// (window.findmugLabel: strokes, draftIdle), summed over the actions; the user's own
-// search is not counted. The agreement is counted on the labelled (non-void) NYU pixels
-// inside NYU's valid border (rows 44..470, columns 40..600, 0-based, as findmug-train
-// reads NYU frames); pixels without depth are in no patch and cannot be labelled on the
-// page. This side keeps its own copy of the labels the actions must give, and checks it
-// against the page's at the end of each run (a mismatch is reported and fails the run).
+// 127.0.0.1. The greedy user and how page time and agreement are counted:
+// greedy_user.mjs. Each frame is labelled twice, from blank and from the prediction,
+// each run stopping at 95 %, when no action gains, or after --max-actions; this side's
+// account of the labels is checked against the page's at the end of each run (a
+// mismatch is reported and fails the run).
 import { spawn } from 'node:child_process';
 import fs from 'node:fs';
 import os from 'node:os';
 import path from 'node:path';
 import { openPage, parseArgs } from './browser.mjs';
 import { decodeGrey8 } from './png.mjs';
-import {
-  VOID, canvasActions, differences, frameData, patchesOnLine, regionOf, settled,
-} from './label_page.mjs';
+import { greedyRun, studyFrame } from './greedy_user.mjs';
+import { frameData } from './label_page.mjs';
 
 const args = parseArgs(process.argv.slice(2));
 const port = Number(args.port || 18291);
 const url = `http://127.0.0.1:${port}/`;
 const maxActions = Number(args['max-actions'] || 300);
-const CLASSES = 8;
-const DRAG_CANDIDATES = 30;
-const BORDER = { top: 44, bottom: 470, left: 40, right: 600 };
 
 function usage(message) {
   console.error('label_effort: ' + message);
@@ -90,142 +76,6 @@ for (let i = 0; ; ++i) {
   await new Promise((r) => setTimeout(r, 100));
 }
 
-// --- the greedy user's model of a frame ---
-// Per patch: NYU's labelled pixels per class (inside the border), a pixel to click (well
-// inside the patch, near its centre), and the regions a fill from it takes.
-function studyFrame(data, truth) {
-  const { width, height, count } = data;
-  const inside = (i) => {
-    const x = i % width, y = Math.floor(i / width);
-    return y >= BORDER.top && y <= BORDER.bottom && x >= BORDER.left && x <= BORDER.right;
-  };
-  const counted = new Uint8Array(width * height);
-  let labelled = 0;
-  for (let i = 0; i < counted.length; ++i) if (truth[i] !== VOID && truth[i] < CLASSES && inside(i)) { counted[i] = 1; ++labelled; }
-  const hist = Array.from({ length: count }, () => new Int32Array(CLASSES));
-  const click = [];
-  for (let p = 0; p < count; ++p) {
-    const px = data.patchPixels[p];
-    let sx = 0, sy = 0;
-    for (const i of px) { if (counted[i]) hist[p][truth[i]] += 1; sx += i % width; sy += Math.floor(i / width); }
-    const cx = sx / px.length, cy = sy / px.length;
-    const own = (x, y) => x >= 0 && y >= 0 && x < width && y < height && data.patches[y * width + x] === p;
-    let best = null, bestScore = Infinity;
-    for (const i of px) {
-      const x = i % width, y = Math.floor(i / width);
-      const interior = own(x - 3, y) && own(x + 3, y) && own(x, y - 3) && own(x, y + 3);
-      const score = (x - cx) ** 2 + (y - cy) ** 2 + (interior ? 0 : 1e9);
-      if (score < bestScore) { bestScore = score; best = [x, y]; }
-    }
-    click.push(best);
-  }
-  const regions = Array.from({ length: count }, (_, s) => Int32Array.from(regionOf(data.graph, s)));
-  let oracle = 0;
-  for (const h of hist) oracle += Math.max(...h);
-  return { labelled, hist, click, regions, counted, oracle: labelled ? oracle / labelled : 0 };
-}
-
-// The best action for the current patch labels (`current[p]`: the label of all its pixels).
-function bestAction(data, study, current) {
-  const { hist, regions, click } = study;
-  const have = (p) => (current[p] === VOID ? 0 : hist[p][current[p]]);
-  const gain = (p, c) => hist[p][c] - have(p);
-  let best = { gain: 0 };
-  const consider = (a) => { if (a.gain > best.gain) best = a; };
-  // Patch clicks.
-  const top = [];
-  for (let p = 0; p < data.count; ++p) {
-    let c = 0;
-    for (let k = 1; k < CLASSES; ++k) if (hist[p][k] > hist[p][c]) c = k;
-    const g = gain(p, c);
-    if (g > 0) { consider({ kind: 'click', gain: g, cls: c, at: click[p] }); top.push({ p, c, g }); }
-  }
-  // Region fills.
-  const sums = new Float64Array(CLASSES);
-  for (let s = 0; s < data.count; ++s) {
-    sums.fill(0);
-    let lose = 0;
-    for (const p of regions[s]) { const h = hist[p]; for (let c = 0; c < CLASSES; ++c) sums[c] += h[c]; lose += have(p); }
-    for (let c = 0; c < CLASSES; ++c) {
-      if (sums[c] - lose > best.gain) best = { kind: 'region', gain: sums[c] - lose, cls: c, at: click[s] };
-    }
-  }
-  // Straight drags between the patches with the largest gains, in the first one's class.
-  top.sort((a, b) => b.g - a.g);
-  const ends = top.slice(0, DRAG_CANDIDATES);
-  for (const a of ends) {
-    for (const b of ends) {
-      if (a.p >= b.p || a.c !== b.c) continue;
-      const line = patchesOnLine(data, click[a.p], click[b.p]);
-      let g = 0;
-      for (const p of line) g += gain(p, a.c);
-      consider({ kind: 'drag', gain: g, cls: a.c, at: click[a.p], to: click[b.p] });
-    }
-  }
-  return best;
-}
-
-// One run on the page: returns the actions and page seconds at 90 % and 95 %.
-async function run(page, frame, data, study, fromPrediction) {
-  await fetch(`${url}api/label/draft?root=0&frame=${frame}`, { method: 'DELETE' });
-  await page.goto(`${url}label?root=0&frame=${frame}`, { waitUntil: 'load' });
-  await page.waitForFunction(() => window.findmugLabel && window.findmugLabel.ready, { timeout: 120000 });
-  const act = await canvasActions(page, data.width, data.height);
-  const current = new Uint8Array(data.count).fill(VOID);
-  let agree = 0, actions = 0, keys = 0, pageMs = 0, strokes = 0;
-  const reached = {};
-  const kinds = { prediction: 0, click: 0, region: 0, drag: 0 };
-  const note = () => {
-    const share = study.labelled ? agree / study.labelled : 0;
-    for (const t of [0.9, 0.95]) {
-      if (share >= t && !(t in reached)) reached[t] = { actions, seconds: pageMs / 1000 };
-    }
-    return share;
-  };
-  const assign = (patchList, c) => {
-    for (const p of patchList) {
-      agree += study.hist[p][c] - (current[p] === VOID ? 0 : study.hist[p][current[p]]);
-      current[p] = c;
-    }
-  };
-  if (fromPrediction) {
-    const predicted = (await (await fetch(`${url}api/label/prediction?root=0&frame=${frame}`)).json()).labels;
-    const t0 = performance.now();
-    await page.click('#predict');
-    await settled(page, ++strokes);
-    pageMs += performance.now() - t0;
-    ++actions; ++kinds.prediction;
-    predicted.forEach((c, p) => assign([p], c));
-  }
-  const startShare = note();
-  let tool = 'paint', chosen = await page.evaluate(() => window.findmugLabel.chosen);
-  while (note() < 0.95 && actions < maxActions) {
-    const a = bestAction(data, study, current);
-    if (!(a.gain > 0)) break;
-    const t0 = performance.now();
-    const wantTool = a.kind === 'region' ? 'region' : 'paint';
-    if (wantTool !== tool) { await page.keyboard.press(wantTool === 'region' ? 'r' : 'p'); tool = wantTool; ++keys; }
-    if (a.cls !== chosen) { await page.keyboard.press(String(a.cls)); chosen = a.cls; ++keys; }
-    if (a.kind === 'drag') await act.drag(a.at, a.to);
-    else await act.click(a.at[0], a.at[1]);
-    await settled(page, ++strokes);
-    pageMs += performance.now() - t0;
-    ++actions; ++kinds[a.kind];
-    const seed = data.patches[a.at[1] * data.width + a.at[0]];
-    if (a.kind === 'click') assign([seed], a.cls);
-    else if (a.kind === 'region') assign(study.regions[seed], a.cls);
-    else assign(patchesOnLine(data, a.at, a.to), a.cls);
-  }
-  const finalShare = note();
-  // This side's account against the page's labels.
-  const mine = new Uint8Array(data.width * data.height).fill(VOID);
-  current.forEach((c, p) => { for (const i of data.patchPixels[p]) mine[i] = c; });
-  const onPage = Uint8Array.from(await page.evaluate(() => window.findmugLabel.labels()));
-  const mismatch = differences(mine, onPage).count;
-  return { start: startShare, final: finalShare, actions, keys, kinds, seconds: pageMs / 1000,
-           at90: reached[0.9] || null, at95: reached[0.95] || null, mismatch };
-}
-
 const { page, pageErrors, close } = await openPage(1000, 1000);
 const results = [];
 let failed = false;
@@ -235,8 +85,8 @@ try {
     const data = await frameData(url, 0, frame);
     const truth = decodeGrey8(path.join(args.nyu, 'label8', frame + '.png')).pixels;
     const study = studyFrame(data, truth);
-    const blank = await run(page, frame, data, study, false);
-    const predicted = await run(page, frame, data, study, true);
+    const blank = await greedyRun(page, { url, frame, data, study, fromPrediction: false, maxActions });
+    const predicted = await greedyRun(page, { url, frame, data, study, fromPrediction: true, maxActions });
     const row = { frame, patches: data.count, labelled: study.labelled, oracle: study.oracle, blank, predicted,
                   wall_s: (performance.now() - t0) / 1000 };
     results.push(row);
