@@ -42,10 +42,10 @@ web_test_workdir findmug-web-retrain
 
 # A small folder: six labelled NYU frames whose floor the fast settings find (symlinks),
 # split into two scenes for findmug-eval's 2 folds.
-mkdir -p "$WORK/small/rgb" "$WORK/small/depth" "$WORK/small/label8"
+mkdir -p "$WORK/small/rgb" "$WORK/small/depth" "$WORK/small/label8" "$WORK/small/label13"
 printf 'frame,scene\n' > "$WORK/small/frames.csv"
 for n in 0009 0015 0016 0017 0018 0021; do
-  for sub in rgb depth label8; do ln -s "$NYU/$sub/$n.png" "$WORK/small/$sub/$n.png"; done
+  for sub in rgb depth label8 label13; do ln -s "$NYU/$sub/$n.png" "$WORK/small/$sub/$n.png"; done
   printf '%s,%s\n' "$n" "$([[ $n < 0017 ]] && echo a || echo b)" >> "$WORK/small/frames.csv"
 done
 # The user's folder: one frame outside the small folder, rgb/ and depth/ copied (no labels;
@@ -55,8 +55,11 @@ done
 USER_FRAME=0014
 mkdir -p "$WORK/user/rgb" "$WORK/user/depth"
 for sub in rgb depth; do cp "$NYU/$sub/$USER_FRAME.png" "$WORK/user/$sub/"; done
-# One config for findmugd, findmug-web and the tools it runs (the fast oversegmenter).
-printf 'overseg:\n  method: organized\n' > "$WORK/findmug.yaml"
+# One config for findmugd, findmug-web and the tools it runs: the shipped model's kind
+# (NYU-13 internal classes, object features) with the fast oversegmenter. The page writes
+# label8/ only: the trainer must infer the user frame's NYU-13 classes from the small folder's.
+printf 'overseg:\n  method: organized\nlearner:\n  classes: nyu13\nfeatures:\n  objects: true\n  objects_columns: context\n' \
+  > "$WORK/findmug.yaml"
 TINY=(--set forest.num_trees=3 --set forest.max_depth=6)
 "$TRAIN" --data "$WORK/small" --out "$WORK/installed.fmf" --config "$WORK/findmug.yaml" \
   "${TINY[@]}" > "$WORK/first-train.log" 2>&1 || fail "the first model could not be trained"
