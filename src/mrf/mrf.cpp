@@ -245,6 +245,7 @@ void detail::solveMrfInto(const std::vector<ClassProbabilities>& unaries,
     std::vector<Costs> unary, messages, next, belief;
     std::vector<std::uint32_t> source, target, in_begin, incoming, fill;
     std::vector<float> weight;
+    std::vector<MrfPairTable> oriented;
   };
   thread_local Buffers buffers;
   detail::Borrowed unary_buffer(buffers.unary), messages_buffer(buffers.messages),
@@ -253,6 +254,7 @@ void detail::solveMrfInto(const std::vector<ClassProbabilities>& unaries,
       in_begin_buffer(buffers.in_begin), incoming_buffer(buffers.incoming),
       fill_buffer(buffers.fill);
   detail::Borrowed weight_buffer(buffers.weight);
+  detail::Borrowed oriented_buffer(buffers.oriented);
 
   // Unary costs.
   std::vector<Costs>& unary = *unary_buffer;
@@ -294,9 +296,9 @@ void detail::solveMrfInto(const std::vector<ClassProbabilities>& unaries,
   // Each table as the message of a directed edge reads it: [sender][receiver].
   // Directed edge 2k sends from edges[k].first (the table as given), 2k+1
   // from edges[k].second (its transpose).
-  std::vector<MrfPairTable> oriented;
+  std::vector<MrfPairTable>& oriented = *oriented_buffer;
+  oriented.clear();
   if (factors) {
-    oriented.reserve(2 * factors->tables.size());
     for (const MrfPairTable& t : factors->tables) {
       oriented.push_back(t);
       MrfPairTable transposed{};
