@@ -217,6 +217,40 @@ void patchHeightsInto(const std::vector<FeatureVector>& features, std::vector<fl
   for (std::size_t i = 0; i < features.size(); ++i) heights[i] = features[i][kHeight];
 }
 
+void segmentImageHeightsInto(const std::vector<int>& pixel_segment, int width,
+                             std::size_t segments, std::vector<float>& heights) {
+  if (width < 1 || pixel_segment.size() % static_cast<std::size_t>(width) != 0)
+    throw Error("layout prior: " + std::to_string(pixel_segment.size()) +
+                " pixels do not fill rows of " + std::to_string(width));
+  std::vector<double> row_sum(segments, 0.0), count(segments, 0.0);
+  for (std::size_t p = 0; p < pixel_segment.size(); ++p) {
+    const int s = pixel_segment[p];
+    if (s < 0) continue;
+    if (static_cast<std::size_t>(s) >= segments)
+      throw Error("layout prior: pixel " + std::to_string(p) + " in segment " + std::to_string(s) +
+                  " of " + std::to_string(segments));
+    row_sum[static_cast<std::size_t>(s)] += static_cast<double>(p / static_cast<std::size_t>(width));
+    count[static_cast<std::size_t>(s)] += 1;
+  }
+  heights.resize(segments);
+  for (std::size_t i = 0; i < segments; ++i)
+    heights[i] = count[i] > 0 ? static_cast<float>(-row_sum[i] / count[i])
+                              : std::numeric_limits<float>::quiet_NaN();
+}
+
+float layoutHeightsInto(const MrfParams& params, const LayoutGeometry& geometry,
+                        std::vector<float>& heights) {
+  if (!geometry.features) throw Error("layout prior: no patch features");
+  if (params.layout_direction == LayoutDirection::Image) {
+    if (!geometry.pixel_segment) throw Error("layout prior: no segmentation for image rows");
+    segmentImageHeightsInto(*geometry.pixel_segment, geometry.width, geometry.features->size(),
+                            heights);
+    return params.layout_image_threshold_px;
+  }
+  patchHeightsInto(*geometry.features, heights);
+  return params.layout_height_threshold;
+}
+
 void layoutPairFactorsInto(const LayoutPrior& prior, float weight, float height_threshold,
                            const std::vector<float>& heights,
                            const std::vector<std::pair<int, int>>& edges, MrfPairFactors& out) {

@@ -23,10 +23,10 @@ SampleLabelling labelSample(const RandomForest& model, const FrameSample& s,
     throw Error("labelSample: mrf.pairwise = layout without a loaded layout prior");
   if (with_layout) {
     std::vector<float> heights;
-    patchHeightsInto(s.features.features, heights);
+    const float threshold =
+        layoutHeightsInto(config.mrf, {&s.pixel_segment, s.width, &s.features.features}, heights);
     MrfPairFactors factors;
-    layoutPairFactorsInto(*layout, config.mrf.layout_weight, config.mrf.layout_height_threshold,
-                          heights, s.edges, factors);
+    layoutPairFactorsInto(*layout, config.mrf.layout_weight, threshold, heights, s.edges, factors);
     solveMrfWithFactorsInto(unaries, s.features.centroids, s.edges, factors, config.mrf, out.mrf);
   } else if (config.use_mrf) {
     out.mrf = pairwise ? solveMrfScaled(unaries, s.features.centroids, s.edges,

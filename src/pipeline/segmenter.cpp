@@ -554,9 +554,12 @@ LabelledFrame Segmenter::classify(SegmentedFrame segmented) const {
   weightTableProbabilityInPlace(weighted, config_.tables.table_weight);
   if (config_.use_mrf && layout_prior_) {
     std::vector<float>& heights = *heights_buffer;
-    patchHeightsInto(out.features.features, heights);
-    layoutPairFactorsInto(*layout_prior_, config_.mrf.layout_weight,
-                          config_.mrf.layout_height_threshold, heights,
+    const float threshold = layoutHeightsInto(
+        config_.mrf,
+        {&segmented.segmentation.pixel_segment, segmented.segmentation.width,
+         &out.features.features},
+        heights);
+    layoutPairFactorsInto(*layout_prior_, config_.mrf.layout_weight, threshold, heights,
                           segmented.segmentation.edges, *factors_buffer);
     solveMrfWithFactorsInto(weighted, out.features.centroids, segmented.segmentation.edges,
                             *factors_buffer, config_.mrf, out.mrf);

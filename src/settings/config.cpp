@@ -285,6 +285,11 @@ const std::vector<CoreSetting>& settings() {
       floatSetting("mrf.layout_weight", [](C& c) -> float& { return c.mrf.layout_weight; }, 0, 100),
       floatSetting("mrf.layout_height_threshold",
                    [](C& c) -> float& { return c.mrf.layout_height_threshold; }, 0, 10),
+      enumSetting<LayoutDirection>(
+          "mrf.layout_direction", [](C& c) -> LayoutDirection& { return c.mrf.layout_direction; },
+          {{"height", LayoutDirection::Height}, {"image", LayoutDirection::Image}}),
+      floatSetting("mrf.layout_image_threshold_px",
+                   [](C& c) -> float& { return c.mrf.layout_image_threshold_px; }, 0, 10000),
       floatSetting("mrf.lambda", [](C& c) -> float& { return c.mrf.lambda; }, 0, 1000),
       floatSetting("mrf.sigma", [](C& c) -> float& { return c.mrf.sigma; }, 1e-4, 100),
       intSetting("mrf.max_iterations", [](C& c) -> int& { return c.mrf.max_iterations; }, 1,

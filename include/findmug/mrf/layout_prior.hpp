@@ -75,4 +75,20 @@ void layoutPairFactorsInto(const LayoutPrior& prior, float weight, float height_
 // for layoutPairFactorsInto.
 void patchHeightsInto(const std::vector<FeatureVector>& features, std::vector<float>& heights);
 
+// Minus the mean image row of each of `segments` segments (pixel_segment of
+// an image `width` pixels wide, -1 = no segment), so that a higher place in
+// the image is a larger value, for mrf.layout_direction = image; NaN for a
+// segment without pixels.
+void segmentImageHeightsInto(const std::vector<int>& pixel_segment, int width,
+                             std::size_t segments, std::vector<float>& heights);
+
+// The "heights" and threshold that mrf.layout_direction asks for.
+struct LayoutGeometry {
+  const std::vector<int>* pixel_segment = nullptr;
+  int width = 0;
+  const std::vector<FeatureVector>* features = nullptr;
+};
+float layoutHeightsInto(const MrfParams& params, const LayoutGeometry& geometry,
+                        std::vector<float>& heights);
+
 }  // namespace findmug

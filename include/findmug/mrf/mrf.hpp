@@ -22,6 +22,10 @@ namespace findmug {
 // the learned term, and the Segmenter refuses it), or Potts times a
 // label-pair factor from a label-layout prior file (layout_prior.hpp).
 enum class MrfPairwise { Potts, Context, Layout };
+// mrf.layout_direction: which neighbour of an edge is the upper one for the
+// layout prior: by ground-frame centroid height, or by mean image row (the
+// prior's own sense of "above", counted in label images).
+enum class LayoutDirection { Height, Image };
 
 struct MrfParams {
   MrfPairwise pairwise = MrfPairwise::Potts;
@@ -31,6 +35,8 @@ struct MrfParams {
   std::string layout_prior_path = "models/nyu-layout-prior.csv";
   float layout_weight = 1.0f;
   float layout_height_threshold = 0.1f;
+  LayoutDirection layout_direction = LayoutDirection::Height;
+  float layout_image_threshold_px = 10.0f;  // the same for layout_direction = image
   float lambda = 1.0f;        // unary weight
   float sigma = 0.1f;         // metres; pairwise decay with centroid distance
   int max_iterations = 30;

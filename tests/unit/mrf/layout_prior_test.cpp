@@ -174,6 +174,33 @@ TEST(LayoutPrior, EdgesGetTheTableTheirHeightsAsk) {
   EXPECT_THROW(layoutPairFactorsInto(p, 1.0f, 0.1f, heights, {{0, 4}}, f), Error);
 }
 
+TEST(LayoutPrior, ImageDirectionUsesMeanRows) {
+  // 2x3 image: segment 0 in row 0, segment 1 in rows 1-2, one pixel in none.
+  const std::vector<int> pixel_segment = {0, 0, 1, -1, 1, 1};
+  std::vector<float> heights;
+  segmentImageHeightsInto(pixel_segment, 2, 3, heights);
+  ASSERT_EQ(heights.size(), 3u);
+  EXPECT_FLOAT_EQ(heights[0], 0.0f);
+  EXPECT_FLOAT_EQ(heights[1], -(1 + 2 + 2) / 3.0f);
+  EXPECT_TRUE(std::isnan(heights[2]));  // no pixels: Potts
+  EXPECT_THROW(segmentImageHeightsInto({0, 5}, 2, 3, heights), Error);
+  EXPECT_THROW(segmentImageHeightsInto({0, 0, 0}, 2, 3, heights), Error);
+
+  // layoutHeightsInto picks rows or centroid heights, and the threshold that goes with them.
+  std::vector<FeatureVector> features(3);
+  features[0][3] = 0.2f;
+  features[1][3] = 0.9f;  // higher in the room, lower in the image
+  features[2][3] = 0.5f;
+  MrfParams params;
+  params.layout_height_threshold = 0.25f;
+  params.layout_image_threshold_px = 7.0f;
+  EXPECT_FLOAT_EQ(layoutHeightsInto(params, {&pixel_segment, 2, &features}, heights), 0.25f);
+  EXPECT_FLOAT_EQ(heights[1], 0.9f);
+  params.layout_direction = LayoutDirection::Image;
+  EXPECT_FLOAT_EQ(layoutHeightsInto(params, {&pixel_segment, 2, &features}, heights), 7.0f);
+  EXPECT_GT(heights[0], heights[1]);
+}
+
 // Two patches: the lower one (node 1) is surely a table, the upper one
 // (node 0) leans a little to floor over table. With Potts they part (floor
 // over table costs one Potts weight, less than the unary difference would);
