@@ -210,11 +210,15 @@ void labelFrames(const RandomForest& forest, const SegmenterConfig& config,
                  const PairwiseContext* pairwise = nullptr) {
   SegmenterConfig with_mrf = config;
   with_mrf.use_mrf = true;  // the "+MRF" figures, whatever use_mrf says
+  std::optional<LayoutPrior> layout;
+  if (with_mrf.mrf.pairwise == MrfPairwise::Layout)
+    layout = loadLayoutPrior(with_mrf.mrf.layout_prior_path);
   for (std::size_t f : frames) {
     const FrameSample& s = samples[f];
     const std::size_t n = s.features.features.size();
     SampleLabelling labelling =
-        labelSample(forest, s, with_mrf, regions.empty() ? nullptr : &regions[f], pairwise);
+        labelSample(forest, s, with_mrf, regions.empty() ? nullptr : &regions[f], pairwise,
+                    layout ? &*layout : nullptr);
     std::vector<std::uint8_t> forest_labels(n);
     for (std::size_t k = 0; k < n; ++k) forest_labels[k] = argmax(labelling.probabilities[k]);
     eval.forest.add(s.ground_truth, pixelLabels(s, forest_labels));

@@ -15,6 +15,11 @@
 // meaningful. Updates are synchronous (all messages from the previous
 // iteration's beliefs) with damping, which makes the result independent of
 // the edge order and helps convergence on loopy graphs.
+//
+// With label-pair factors (solveMrfWithFactorsInto) the pairwise cost is
+// w_ij T(y_i, y_j) for a table T per edge, and a message is the full
+// m(y) = min_y' [ h(y') - min h + w T(y', y) ], O(L^2); the Potts table gives
+// back the message above.
 #include "findmug/mrf/mrf.hpp"
 
 #include <algorithm>
@@ -83,6 +88,32 @@ void validateGraph(const std::vector<ClassProbabilities>& unaries,
 
 float pairwiseWeight(const Eigen::Vector3f& a, const Eigen::Vector3f& b, float sigma) {
   return std::exp(-(a - b).norm() / sigma);
+}
+
+void validateFactors(const MrfPairFactors& factors, std::size_t num_edges) {
+  if (factors.table_of_edge.size() != num_edges)
+    throw Error("MRF: " + std::to_string(factors.table_of_edge.size()) + " pair-table indices for " +
+                std::to_string(num_edges) + " edges");
+  for (std::size_t k = 0; k < num_edges; ++k)
+    if (factors.table_of_edge[k] >= factors.tables.size())
+      throw Error("MRF: edge " + std::to_string(k) + " refers to pair table " +
+                  std::to_string(factors.table_of_edge[k]) + " of " +
+                  std::to_string(factors.tables.size()));
+  for (std::size_t t = 0; t < factors.tables.size(); ++t)
+    for (float v : factors.tables[t])
+      if (!(std::isfinite(v) && v >= 0.0f))
+        throw Error("MRF: pair table " + std::to_string(t) + " holds " + std::to_string(v) +
+                    " (expected a finite number >= 0)");
+}
+
+// One message of a directed edge through a label-pair table: `table` is
+// indexed [sender label * L + receiver label].
+Costs factorMessage(const Costs& h, const float* table, float w) {
+  const Costs shifted = h - h.minCoeff();
+  Costs m = shifted[0] + w * Eigen::Map<const Costs>(table);
+  for (int y = 1; y < kNumLabels; ++y)
+    m = m.min(shifted[y] + w * Eigen::Map<const Costs>(table + y * kNumLabels));
+  return m;
 }
 
 #if defined(FINDMUG_AVX2_DISPATCH)
@@ -162,6 +193,22 @@ void solveMrfInto(const std::vector<ClassProbabilities>& unaries,
   detail::solveMrfInto(unaries, centroids, edges, params, result, detail::MrfSimd::Auto);
 }
 
+MrfPairTable pottsPairTable() {
+  MrfPairTable t{};
+  for (int a = 0; a < kNumLabels; ++a)
+    for (int b = 0; b < kNumLabels; ++b) t[a * kNumLabels + b] = a == b ? 0.0f : 1.0f;
+  return t;
+}
+
+void solveMrfWithFactorsInto(const std::vector<ClassProbabilities>& unaries,
+                             const std::vector<Eigen::Vector3f>& centroids,
+                             const std::vector<std::pair<int, int>>& edges,
+                             const MrfPairFactors& factors, const MrfParams& params,
+                             MrfResult& out) {
+  detail::solveMrfInto(unaries, centroids, edges, params, out, detail::MrfSimd::Auto, nullptr,
+                       &factors);
+}
+
 MrfResult solveMrfScaled(const std::vector<ClassProbabilities>& unaries,
                          const std::vector<Eigen::Vector3f>& centroids,
                          const std::vector<std::pair<int, int>>& edges,
@@ -175,9 +222,11 @@ MrfResult solveMrfScaled(const std::vector<ClassProbabilities>& unaries,
 void detail::solveMrfInto(const std::vector<ClassProbabilities>& unaries,
                           const std::vector<Eigen::Vector3f>& centroids,
                           const std::vector<std::pair<int, int>>& edges, const MrfParams& params,
-                          MrfResult& result, MrfSimd simd, const std::vector<float>* edge_scale) {
+                          MrfResult& result, MrfSimd simd, const std::vector<float>* edge_scale,
+                          const MrfPairFactors* factors) {
   validateParams(params);
   validateGraph(unaries, centroids, edges);
+  if (factors) validateFactors(*factors, edges.size());
   if (edge_scale) {
     if (edge_scale->size() != edges.size())
       throw Error("MRF: " + std::to_string(edge_scale->size()) + " edge scales for " +
@@ -196,6 +245,7 @@ void detail::solveMrfInto(const std::vector<ClassProbabilities>& unaries,
     std::vector<Costs> unary, messages, next, belief;
     std::vector<std::uint32_t> source, target, in_begin, incoming, fill;
     std::vector<float> weight;
+    std::vector<MrfPairTable> oriented;
   };
   thread_local Buffers buffers;
   detail::Borrowed unary_buffer(buffers.unary), messages_buffer(buffers.messages),
@@ -204,6 +254,7 @@ void detail::solveMrfInto(const std::vector<ClassProbabilities>& unaries,
       in_begin_buffer(buffers.in_begin), incoming_buffer(buffers.incoming),
       fill_buffer(buffers.fill);
   detail::Borrowed weight_buffer(buffers.weight);
+  detail::Borrowed oriented_buffer(buffers.oriented);
 
   // Unary costs.
   std::vector<Costs>& unary = *unary_buffer;
@@ -242,6 +293,22 @@ void detail::solveMrfInto(const std::vector<ClassProbabilities>& unaries,
       incoming[fill[target[e]]++] = static_cast<std::uint32_t>(e);
   }
 
+  // Each table as the message of a directed edge reads it: [sender][receiver].
+  // Directed edge 2k sends from edges[k].first (the table as given), 2k+1
+  // from edges[k].second (its transpose).
+  std::vector<MrfPairTable>& oriented = *oriented_buffer;
+  oriented.clear();
+  if (factors) {
+    for (const MrfPairTable& t : factors->tables) {
+      oriented.push_back(t);
+      MrfPairTable transposed{};
+      for (int a = 0; a < kNumLabels; ++a)
+        for (int b = 0; b < kNumLabels; ++b)
+          transposed[b * kNumLabels + a] = t[a * kNumLabels + b];
+      oriented.push_back(transposed);
+    }
+  }
+
   std::vector<Costs>& messages = *messages_buffer;
   messages.assign(num_directed, Costs::Zero());
   std::vector<Costs>& next = *next_buffer;
@@ -275,6 +342,17 @@ void detail::solveMrfInto(const std::vector<ClassProbabilities>& unaries,
   for (int iter = 0; iter < params.max_iterations && !edges.empty(); ++iter) {
     computeBeliefs();
     float max_change = 0.0f;
+    if (factors) {
+      for (std::size_t e = 0; e < num_directed; ++e) {
+        const Costs h = belief[source[e]] - messages[e ^ 1];
+        const Costs& old = messages[e];
+        const float* table = oriented[2 * factors->table_of_edge[e / 2] + (e & 1)].data();
+        Costs m = take * factorMessage(h, table, weight[e / 2]) + keep * old;
+        m -= m.minCoeff();
+        max_change = std::max(max_change, (m - old).abs().maxCoeff());
+        next[e] = m;
+      }
+    } else
 #if defined(FINDMUG_AVX2_DISPATCH)
     if (avx2) {
       max_change = messageRoundAvx2(belief.data(), messages.data(), source.data(), weight.data(),

@@ -16,6 +16,7 @@ void solveMrfInto(const std::vector<ClassProbabilities>& unaries,
                   const std::vector<Eigen::Vector3f>& centroids,
                   const std::vector<std::pair<int, int>>& edges, const MrfParams& params,
                   MrfResult& result, MrfSimd simd,
-                  const std::vector<float>* edge_scale = nullptr);
+                  const std::vector<float>* edge_scale = nullptr,
+                  const MrfPairFactors* factors = nullptr);
 
 }  // namespace findmug::detail

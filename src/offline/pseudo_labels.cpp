@@ -13,12 +13,22 @@ namespace findmug {
 
 SampleLabelling labelSample(const RandomForest& model, const FrameSample& s,
                             const SegmenterConfig& config, const RegionFeatures* regions,
-                            const PairwiseContext* pairwise) {
+                            const PairwiseContext* pairwise, const LayoutPrior* layout) {
   SampleLabelling out;
   out.probabilities = predictSample(model, s, config);
   const std::vector<ClassProbabilities> unaries =
       weightTableProbability(out.probabilities, config.tables.table_weight);
-  if (config.use_mrf) {
+  const bool with_layout = config.use_mrf && config.mrf.pairwise == MrfPairwise::Layout;
+  if (with_layout && !layout)
+    throw Error("labelSample: mrf.pairwise = layout without a loaded layout prior");
+  if (with_layout) {
+    std::vector<float> heights;
+    const float threshold =
+        layoutHeightsInto(config.mrf, {&s.pixel_segment, s.width, &s.features.features}, heights);
+    MrfPairFactors factors;
+    layoutPairFactorsInto(*layout, config.mrf.layout_weight, threshold, heights, s.edges, factors);
+    solveMrfWithFactorsInto(unaries, s.features.centroids, s.edges, factors, config.mrf, out.mrf);
+  } else if (config.use_mrf) {
     out.mrf = pairwise ? solveMrfScaled(unaries, s.features.centroids, s.edges,
                                         pairwiseContextScales(*pairwise, s.features.features,
                                                               s.edges),

@@ -66,9 +66,11 @@ Segmenter::Segmenter(SegmenterConfig config, std::shared_ptr<const RandomForest>
       forest_(std::move(forest)),
       oversegmenter_(makeOversegmenter(config_.overseg)) {
   if (forest_) checkModelMatchesConfig(*forest_, config_);
-  if (forest_ && config_.use_mrf && config_.mrf.pairwise != MrfPairwise::Potts)
+  if (forest_ && config_.use_mrf && config_.mrf.pairwise == MrfPairwise::Context)
     throw Error("mrf.pairwise = context is measured by findmug-eval only: the model file does "
                 "not carry the learned pairwise term yet (use mrf.pairwise = potts)");
+  if (forest_ && config_.use_mrf && config_.mrf.pairwise == MrfPairwise::Layout)
+    layout_prior_ = std::make_shared<const LayoutPrior>(loadLayoutPrior(config_.mrf.layout_prior_path));
 }
 
 std::vector<std::string> firstStageFeatureNames(const SegmenterConfig& config) {
@@ -491,12 +493,16 @@ LabelledFrame Segmenter::classify(SegmentedFrame segmented) const {
     ObjectFeatures objects;
     std::vector<float> weights, confidence;
     std::vector<ClassProbabilities> weighted;
+    std::vector<float> heights;  // mrf.pairwise = layout
+    MrfPairFactors factors;
   };
   thread_local Buffers buffers;
   detail::Borrowed regions_buffer(buffers.regions);
   detail::Borrowed objects_buffer(buffers.objects);
   detail::Borrowed weights_buffer(buffers.weights), confidence_buffer(buffers.confidence);
   detail::Borrowed weighted_buffer(buffers.weighted);
+  detail::Borrowed heights_buffer(buffers.heights);
+  detail::Borrowed factors_buffer(buffers.factors);
 
   Stopwatch watch;
   computeFeaturesInto(segmented.prepared.cloud_ground, segmented.prepared.normals_ground,
@@ -546,7 +552,20 @@ LabelledFrame Segmenter::classify(SegmentedFrame segmented) const {
   std::vector<ClassProbabilities>& weighted = *weighted_buffer;
   weighted = out.forest_probabilities;
   weightTableProbabilityInPlace(weighted, config_.tables.table_weight);
-  if (config_.use_mrf) {
+  if (config_.use_mrf && layout_prior_) {
+    std::vector<float>& heights = *heights_buffer;
+    const float threshold = layoutHeightsInto(
+        config_.mrf,
+        {&segmented.segmentation.pixel_segment, segmented.segmentation.width,
+         &out.features.features},
+        heights);
+    layoutPairFactorsInto(*layout_prior_, config_.mrf.layout_weight, threshold, heights,
+                          segmented.segmentation.edges, *factors_buffer);
+    solveMrfWithFactorsInto(weighted, out.features.centroids, segmented.segmentation.edges,
+                            *factors_buffer, config_.mrf, out.mrf);
+    final_labels = &out.mrf.labels;
+    confidence = out.mrf.confidence;
+  } else if (config_.use_mrf) {
     solveMrfInto(weighted, out.features.centroids, segmented.segmentation.edges, config_.mrf,
                  out.mrf);
     final_labels = &out.mrf.labels;

@@ -6,7 +6,9 @@
 #pragma once
 
 #include <Eigen/Core>
+#include <array>
 #include <cstdint>
+#include <string>
 #include <utility>
 #include <vector>
 
@@ -17,11 +19,24 @@ namespace findmug {
 // The pairwise term (mrf.pairwise): the paper's Potts, or Potts scaled per
 // edge by how alike the two patches look, learned from the training frames
 // (mrf_context.hpp; findmug-eval only so far: the model file does not carry
-// the learned term, and the Segmenter refuses it).
-enum class MrfPairwise { Potts, Context };
+// the learned term, and the Segmenter refuses it), or Potts times a
+// label-pair factor from a label-layout prior file (layout_prior.hpp).
+enum class MrfPairwise { Potts, Context, Layout };
+// mrf.layout_direction: which neighbour of an edge is the upper one for the
+// layout prior: by ground-frame centroid height, or by mean image row (the
+// prior's own sense of "above", counted in label images).
+enum class LayoutDirection { Height, Image };
 
 struct MrfParams {
   MrfPairwise pairwise = MrfPairwise::Potts;
+  // mrf.pairwise = layout: the prior file, how strongly an unlikely label
+  // pair is penalised, and the centroid height difference (m) above which
+  // two neighbours count as one above the other.
+  std::string layout_prior_path = "models/nyu-layout-prior.csv";
+  float layout_weight = 1.0f;
+  float layout_height_threshold = 0.1f;
+  LayoutDirection layout_direction = LayoutDirection::Height;
+  float layout_image_threshold_px = 10.0f;  // the same for layout_direction = image
   float lambda = 1.0f;        // unary weight
   float sigma = 0.1f;         // metres; pairwise decay with centroid distance
   int max_iterations = 30;
@@ -56,6 +71,26 @@ MrfResult solveMrfScaled(const std::vector<ClassProbabilities>& unaries,
                          const std::vector<Eigen::Vector3f>& centroids,
                          const std::vector<std::pair<int, int>>& edges,
                          const std::vector<float>& edge_scale, const MrfParams& params);
+
+// Label-pair factors: the pairwise cost of edge k is its Potts weight times
+// tables[table_of_edge[k]][y_first * kNumLabels + y_second] (y_first the
+// label of edges[k].first) instead of times [y_first != y_second]. Entries
+// finite and >= 0; the tables need not be symmetric (layout_prior.hpp).
+using MrfPairTable = std::array<float, kNumLabels * kNumLabels>;
+struct MrfPairFactors {
+  std::vector<MrfPairTable> tables;
+  std::vector<std::uint8_t> table_of_edge;  // one per edge
+};
+// The Potts indicator as a table: 0 on the diagonal, 1 elsewhere.
+MrfPairTable pottsPairTable();
+
+// solveMrfInto with label-pair factors. Messages cost O(L^2) per edge
+// instead of O(L).
+void solveMrfWithFactorsInto(const std::vector<ClassProbabilities>& unaries,
+                             const std::vector<Eigen::Vector3f>& centroids,
+                             const std::vector<std::pair<int, int>>& edges,
+                             const MrfPairFactors& factors, const MrfParams& params,
+                             MrfResult& out);
 
 // The energy above for a labelling, for tests and diagnostics.
 double mrfEnergy(const std::vector<ClassProbabilities>& unaries,

@@ -17,6 +17,7 @@
 #include <string>
 #include <vector>
 
+#include "findmug/mrf/layout_prior.hpp"
 #include "findmug/mrf/mrf.hpp"
 #include "findmug/offline/mrf_context.hpp"
 #include "findmug/offline/training.hpp"
@@ -28,14 +29,17 @@ namespace findmug {
 // the forest's probability when config.use_mrf is off; after the table region
 // vote when features.regions and tables.region_vote are on, which needs
 // `regions` = sampleRegionFeatures of the sample). With mrf.pairwise =
-// context, `pairwise` is the term learned on the training frames.
+// context, `pairwise` is the term learned on the training frames; with
+// mrf.pairwise = layout, `layout` is the prior (loadLayoutPrior of
+// mrf.layout_prior_path; refused when missing).
 struct SampleLabelling {
   std::vector<ClassProbabilities> probabilities;
   MrfResult mrf;
 };
 SampleLabelling labelSample(const RandomForest& model, const FrameSample& sample,
                             const SegmenterConfig& config, const RegionFeatures* regions,
-                            const PairwiseContext* pairwise = nullptr);
+                            const PairwiseContext* pairwise = nullptr,
+                            const LayoutPrior* layout = nullptr);
 
 // What one round added: per label, the patches that passed the confidence
 // threshold and those kept after the per-label cap; the frames they came from.

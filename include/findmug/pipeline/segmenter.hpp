@@ -24,6 +24,7 @@
 #include "findmug/ground/ground.hpp"
 #include "findmug/labels/label_image.hpp"
 #include "findmug/learner/forest.hpp"
+#include "findmug/mrf/layout_prior.hpp"
 #include "findmug/mrf/mrf.hpp"
 #include "findmug/settings/config.hpp"
 #include "findmug/supervoxels/oversegmentation.hpp"
@@ -124,6 +125,8 @@ class Segmenter {
   SegmenterConfig config_;
   std::shared_ptr<const RandomForest> forest_;
   std::unique_ptr<Oversegmenter> oversegmenter_;
+  // mrf.pairwise = layout: the prior file's costs, loaded once.
+  std::shared_ptr<const LayoutPrior> layout_prior_;
   // The floor kept between frames (ground.reestimate_every_frames > 1). The
   // daemon prepares frames in order on one thread; the mutex only keeps
   // concurrent callers safe (they then share one stream).
