@@ -583,36 +583,28 @@ std::optional<GroundPlane> estimateGround(const OrganizedCloud& cloud_camera,
   return detail::estimateGround(cloud_camera, normals_camera, config, detail::GroundSimd::Auto);
 }
 
-std::optional<GroundPlane> detail::estimateGround(const OrganizedCloud& cloud_camera,
-                                                  const NormalImage& normals_camera,
-                                                  const GroundConfig& config, GroundSimd simd) {
-  validateConfig(config, "estimateGround");
-  const bool avx2 = simd == GroundSimd::Auto && cpuAvx2();
-  if (normals_camera.normals.size() != cloud_camera.points.size()) {
-    throw Error("estimateGround: normal image has " +
-                std::to_string(normals_camera.normals.size()) + " entries but the cloud has " +
-                std::to_string(cloud_camera.points.size()) + " points");
-  }
-  const Eigen::Vector3f camera_up(0.0f, -1.0f, 0.0f);
-  const float cos_tilt = cosDeg(config.max_tilt_deg);
-  const float cos_agree = cosDeg(config.normal_agreement_deg);
-  const float tol = config.ransac_inlier_m;
+namespace {
+
+// A horizontal plane that estimateGround's sequential RANSAC found.
+struct FoundPlane {
+  Plane plane;
+  std::size_t support;
+  Eigen::Vector3f centroid;  // of the supporting points, camera frame
+};
+
+// estimateGround's candidates: points whose own normal is roughly "up",
+// copied out with their normals, in pixel order. Normals face the camera,
+// so a floor or table top seen from above has n.dot(-y) > 0, while a
+// ceiling (seen from below) does not qualify. Everything after works on
+// the copies by position: the RANSAC and refit passes then stream through
+// them instead of gathering from all over the image (same values in the
+// same order, so the same planes).
+void collectUpwardCandidates(const OrganizedCloud& cloud_camera, const NormalImage& normals_camera,
+                             const Eigen::Vector3f& camera_up, float cos_tilt, bool avx2,
+                             std::vector<Eigen::Vector3f>& candidate_points,
+                             std::vector<Eigen::Vector3f>& candidate_normals) {
   const auto& pts = cloud_camera.points;
   const auto& nrm = normals_camera.normals;
-
-  // Candidates: points whose own normal is roughly "up". Normals face the
-  // camera, so a floor or table top seen from above has n.dot(-y) > 0, while
-  // a ceiling (seen from below) does not qualify.
-  // Per-thread buffers: estimateGround runs once per frame, and a stream of
-  // frames then reuses them instead of allocating.
-  // The candidates' points and normals are copied out, in pixel order, and
-  // everything below works on the copies by position: the RANSAC and refit
-  // passes then stream through them instead of gathering from all over the
-  // image (same values in the same order, so the same planes).
-  thread_local std::vector<Eigen::Vector3f> candidate_points_tls, candidate_normals_tls;
-  thread_local std::vector<std::size_t> remaining_tls, rest_tls, inliers_tls;
-  std::vector<Eigen::Vector3f>& candidate_points = candidate_points_tls;
-  std::vector<Eigen::Vector3f>& candidate_normals = candidate_normals_tls;
   candidate_points.clear();
   candidate_normals.clear();
   // The normal test first: it rules out most pixels, whose points are then
@@ -630,13 +622,16 @@ std::optional<GroundPlane> detail::estimateGround(const OrganizedCloud& cloud_ca
     first_unscanned = upwardNormalBlocks(nrm.data(), nrm.size(), camera_up, cos_tilt, take);
   }
   for (std::size_t i = first_unscanned; i < pts.size(); ++i) take(i);
-  const std::size_t candidates = candidate_points.size();
-  const std::size_t stride = candidates / kMaxCandidates + 1;
-  std::vector<std::size_t>& remaining = remaining_tls;
-  remaining.clear();
-  for (std::size_t k = 0; k < candidates; k += stride) remaining.push_back(k);
-  const auto min_sampled = static_cast<std::size_t>(config.min_floor_points) / stride;
+}
 
+// Sequential RANSAC over the candidates at `remaining` (consumed): peels off
+// the horizontal planes one by one, up to kMaxPlanes, and keeps (in
+// `planes`) those with min_sampled supporting points below the camera.
+void peelHorizontalPlanes(const std::vector<Eigen::Vector3f>& candidate_points,
+                          const Support& supports, const Eigen::Vector3f& camera_up, float cos_tilt,
+                          std::size_t min_sampled, const GroundConfig& config, bool avx2,
+                          std::vector<std::size_t>& remaining, std::vector<std::size_t>& inliers,
+                          std::vector<std::size_t>& rest, std::vector<FoundPlane>& planes) {
   auto accept = [&](Plane& p) {
     if (p.normal.dot(camera_up) < 0.0f) {
       p.normal = -p.normal;
@@ -644,19 +639,8 @@ std::optional<GroundPlane> detail::estimateGround(const OrganizedCloud& cloud_ca
     }
     return p.normal.dot(camera_up) >= cos_tilt;
   };
-  const Support supports{candidate_points, &candidate_normals, tol, cos_agree};
-
-  // Sequential RANSAC: peel off the horizontal planes one by one.
-  struct Found {
-    Plane plane;
-    std::size_t support;
-    Eigen::Vector3f centroid;  // of the supporting points, camera frame
-  };
-  thread_local std::vector<Found> planes_tls;
-  std::vector<Found>& planes = planes_tls;
   planes.clear();
   std::mt19937_64 rng(config.seed);
-  std::vector<std::size_t>& inliers = inliers_tls;
   for (int k = 0; k < kMaxPlanes && remaining.size() >= std::max<std::size_t>(min_sampled, 3);
        ++k) {
     Plane plane;
@@ -670,19 +654,24 @@ std::optional<GroundPlane> detail::estimateGround(const OrganizedCloud& cloud_ca
       planes.push_back({plane, inliers.size(), centroid / static_cast<float>(inliers.size())});
     }
     // Remove this plane's points (inliers is sorted: it follows `remaining`).
-    std::vector<std::size_t>& rest = rest_tls;
     rest.clear();
     std::set_difference(remaining.begin(), remaining.end(), inliers.begin(), inliers.end(),
                         std::back_inserter(rest));
     remaining.swap(rest);
   }
-  if (planes.empty()) return std::nullopt;
+}
 
-  // Gravity consensus: every real horizontal surface (floor, table tops,
-  // seats) shares one normal, while sloped surfaces that slipped under the
-  // tilt limit (bed covers, cushions, ramps) each have their own. The
-  // reference "up" is the plane whose direction gathers the most support
-  // over all planes; the others must agree with it.
+// The floor among the found planes (not empty). Gravity consensus: every
+// real horizontal surface (floor, table tops, seats) shares one normal,
+// while sloped surfaces that slipped under the tilt limit (bed covers,
+// cushions, ramps) each have their own. The reference "up" is the plane
+// whose direction gathers the most support over all planes; the others must
+// agree with it. Then the lowest level of the consistent planes, and within
+// that level the best-supported plane. "Low" is measured at the supporting
+// points (their centroid's depth below the camera along the reference up),
+// not by the plane offset: a slightly tilted plane's extension can pass far
+// below the floor at the camera while its points sit well above it.
+const FoundPlane& chooseFloorPlane(const std::vector<FoundPlane>& planes) {
   const float cos_consensus = cosDeg(kConsensusDeg);
   std::size_t best_consensus = 0;
   Eigen::Vector3f reference_up = planes.front().plane.normal;
@@ -695,29 +684,66 @@ std::optional<GroundPlane> detail::estimateGround(const OrganizedCloud& cloud_ca
       reference_up = f.plane.normal;
     }
   }
-  // The lowest level of the consistent planes; within that level the
-  // best-supported plane. "Low" is measured at the supporting points (their
-  // centroid's depth below the camera along the reference up), not by the
-  // plane offset: a slightly tilted plane's extension can pass far below the
-  // floor at the camera while its points sit well above it.
-  auto depthBelowCamera = [&](const Found& f) { return -reference_up.dot(f.centroid); };
-  auto consistent = [&](const Found& f) {
+  auto depthBelowCamera = [&](const FoundPlane& f) { return -reference_up.dot(f.centroid); };
+  auto consistent = [&](const FoundPlane& f) {
     return f.plane.normal.dot(reference_up) >= cos_consensus;
   };
   float lowest = -std::numeric_limits<float>::infinity();
   for (const auto& f : planes)
     if (consistent(f)) lowest = std::max(lowest, depthBelowCamera(f));
-  const Found* chosen = nullptr;
+  const FoundPlane* chosen = nullptr;
   for (const auto& f : planes) {
     if (consistent(f) && lowest - depthBelowCamera(f) <= kSameLevelM &&
         (!chosen || f.support > chosen->support)) {
       chosen = &f;
     }
   }
+  return *chosen;  // the reference plane itself is consistent
+}
+
+}  // namespace
+
+std::optional<GroundPlane> detail::estimateGround(const OrganizedCloud& cloud_camera,
+                                                  const NormalImage& normals_camera,
+                                                  const GroundConfig& config, GroundSimd simd) {
+  validateConfig(config, "estimateGround");
+  const bool avx2 = simd == GroundSimd::Auto && cpuAvx2();
+  if (normals_camera.normals.size() != cloud_camera.points.size()) {
+    throw Error("estimateGround: normal image has " +
+                std::to_string(normals_camera.normals.size()) + " entries but the cloud has " +
+                std::to_string(cloud_camera.points.size()) + " points");
+  }
+  const Eigen::Vector3f camera_up(0.0f, -1.0f, 0.0f);
+  const float cos_tilt = cosDeg(config.max_tilt_deg);
+  const float cos_agree = cosDeg(config.normal_agreement_deg);
+  const float tol = config.ransac_inlier_m;
+
+  // Per-thread buffers: estimateGround runs once per frame, and a stream of
+  // frames then reuses them instead of allocating.
+  thread_local std::vector<Eigen::Vector3f> candidate_points_tls, candidate_normals_tls;
+  thread_local std::vector<std::size_t> remaining_tls, rest_tls, inliers_tls;
+  thread_local std::vector<FoundPlane> planes_tls;
+  std::vector<Eigen::Vector3f>& candidate_points = candidate_points_tls;
+  std::vector<Eigen::Vector3f>& candidate_normals = candidate_normals_tls;
+  collectUpwardCandidates(cloud_camera, normals_camera, camera_up, cos_tilt, avx2, candidate_points,
+                          candidate_normals);
+  // RANSAC runs on at most kMaxCandidates of them, evenly strided.
+  const std::size_t candidates = candidate_points.size();
+  const std::size_t stride = candidates / kMaxCandidates + 1;
+  std::vector<std::size_t>& remaining = remaining_tls;
+  remaining.clear();
+  for (std::size_t k = 0; k < candidates; k += stride) remaining.push_back(k);
+  const auto min_sampled = static_cast<std::size_t>(config.min_floor_points) / stride;
+  const Support supports{candidate_points, &candidate_normals, tol, cos_agree};
+  std::vector<FoundPlane>& planes = planes_tls;
+  std::vector<std::size_t>& inliers = inliers_tls;
+  peelHorizontalPlanes(candidate_points, supports, camera_up, cos_tilt, min_sampled, config, avx2,
+                       remaining, inliers, rest_tls, planes);
+  if (planes.empty()) return std::nullopt;
 
   // Final least-squares fit on every candidate (not just the strided subset)
   // that supports the chosen plane, and the support at full resolution.
-  Plane plane = chosen->plane;
+  Plane plane = chooseFloorPlane(planes).plane;
   for (int round = 0; round < 2; ++round) {
     selectSupportAll(supports, plane, candidates, avx2, inliers);
     if (inliers.size() < static_cast<std::size_t>(config.min_floor_points)) return std::nullopt;
