@@ -227,9 +227,11 @@ void markVoxelsThatMayLink(DisjointSets& sets, const std::vector<Eigen::AlignedB
 // one voxel (scratch.run_end, run_voxel: the passes after this one go run by
 // run instead of point by point), and, when the points come with their pixels
 // (`pixels`, checked against `grid`), the links between image neighbours.
-void voxelizeAndLinkImageNeighbours(const std::vector<Eigen::Vector3f>& points,
-                                    const std::vector<int>* pixels, const PointGrid& grid,
-                                    float voxel, float tol2, ClusterScratch& scratch) {
+// Inlined into its one caller: as a function of its own, the clustering ran 2 %
+// more instructions (callgrind, frame_cpu over the NYU frames).
+__attribute__((always_inline)) inline void voxelizeAndLinkImageNeighbours(
+    const std::vector<Eigen::Vector3f>& points, const std::vector<int>* pixels,
+    const PointGrid& grid, float voxel, float tol2, ClusterScratch& scratch) {
   const int n = static_cast<int>(points.size());
   // Pixel offsets of a point's grid neighbours: left and above.
   const int step_x = pixels ? grid.stride : 0;
