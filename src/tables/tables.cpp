@@ -344,7 +344,8 @@ struct DetectionScratch {
   std::vector<int> member_start, members, sample_start, sample_members, fill;
   // Step 3: the sampled points of the cluster being described.
   std::vector<Eigen::Vector3f> cluster_points;
-  // Step 5: every search position's place.
+  // Step 5: where each search position is (the reachability grid is built
+  // around them).
   std::vector<Eigen::Vector2f> position_xy;
 };
 
