@@ -583,36 +583,28 @@ std::optional<GroundPlane> estimateGround(const OrganizedCloud& cloud_camera,
   return detail::estimateGround(cloud_camera, normals_camera, config, detail::GroundSimd::Auto);
 }
 
-std::optional<GroundPlane> detail::estimateGround(const OrganizedCloud& cloud_camera,
-                                                  const NormalImage& normals_camera,
-                                                  const GroundConfig& config, GroundSimd simd) {
-  validateConfig(config, "estimateGround");
-  const bool avx2 = simd == GroundSimd::Auto && cpuAvx2();
-  if (normals_camera.normals.size() != cloud_camera.points.size()) {
-    throw Error("estimateGround: normal image has " +
-                std::to_string(normals_camera.normals.size()) + " entries but the cloud has " +
-                std::to_string(cloud_camera.points.size()) + " points");
-  }
-  const Eigen::Vector3f camera_up(0.0f, -1.0f, 0.0f);
-  const float cos_tilt = cosDeg(config.max_tilt_deg);
-  const float cos_agree = cosDeg(config.normal_agreement_deg);
-  const float tol = config.ransac_inlier_m;
+namespace {
+
+// A horizontal plane that estimateGround's sequential RANSAC found.
+struct FoundPlane {
+  Plane plane;
+  std::size_t support;
+  Eigen::Vector3f centroid;  // of the supporting points, camera frame
+};
+
+// estimateGround's candidates: points whose own normal is roughly "up",
+// copied out with their normals, in pixel order. Normals face the camera,
+// so a floor or table top seen from above has n.dot(-y) > 0, while a
+// ceiling (seen from below) does not qualify. Everything after works on
+// the copies by position: the RANSAC and refit passes then stream through
+// them instead of gathering from all over the image (same values in the
+// same order, so the same planes).
+void collectUpwardCandidates(const OrganizedCloud& cloud_camera, const NormalImage& normals_camera,
+                             const Eigen::Vector3f& camera_up, float cos_tilt, bool avx2,
+                             std::vector<Eigen::Vector3f>& candidate_points,
+                             std::vector<Eigen::Vector3f>& candidate_normals) {
   const auto& pts = cloud_camera.points;
   const auto& nrm = normals_camera.normals;
-
-  // Candidates: points whose own normal is roughly "up". Normals face the
-  // camera, so a floor or table top seen from above has n.dot(-y) > 0, while
-  // a ceiling (seen from below) does not qualify.
-  // Per-thread buffers: estimateGround runs once per frame, and a stream of
-  // frames then reuses them instead of allocating.
-  // The candidates' points and normals are copied out, in pixel order, and
-  // everything below works on the copies by position: the RANSAC and refit
-  // passes then stream through them instead of gathering from all over the
-  // image (same values in the same order, so the same planes).
-  thread_local std::vector<Eigen::Vector3f> candidate_points_tls, candidate_normals_tls;
-  thread_local std::vector<std::size_t> remaining_tls, rest_tls, inliers_tls;
-  std::vector<Eigen::Vector3f>& candidate_points = candidate_points_tls;
-  std::vector<Eigen::Vector3f>& candidate_normals = candidate_normals_tls;
   candidate_points.clear();
   candidate_normals.clear();
   // The normal test first: it rules out most pixels, whose points are then
@@ -630,13 +622,16 @@ std::optional<GroundPlane> detail::estimateGround(const OrganizedCloud& cloud_ca
     first_unscanned = upwardNormalBlocks(nrm.data(), nrm.size(), camera_up, cos_tilt, take);
   }
   for (std::size_t i = first_unscanned; i < pts.size(); ++i) take(i);
-  const std::size_t candidates = candidate_points.size();
-  const std::size_t stride = candidates / kMaxCandidates + 1;
-  std::vector<std::size_t>& remaining = remaining_tls;
-  remaining.clear();
-  for (std::size_t k = 0; k < candidates; k += stride) remaining.push_back(k);
-  const auto min_sampled = static_cast<std::size_t>(config.min_floor_points) / stride;
+}
 
+// Sequential RANSAC over the candidates at `remaining` (consumed): peels off
+// the horizontal planes one by one, up to kMaxPlanes, and keeps (in
+// `planes`) those with min_sampled supporting points below the camera.
+void peelHorizontalPlanes(const std::vector<Eigen::Vector3f>& candidate_points,
+                          const Support& supports, const Eigen::Vector3f& camera_up, float cos_tilt,
+                          std::size_t min_sampled, const GroundConfig& config, bool avx2,
+                          std::vector<std::size_t>& remaining, std::vector<std::size_t>& inliers,
+                          std::vector<std::size_t>& rest, std::vector<FoundPlane>& planes) {
   auto accept = [&](Plane& p) {
     if (p.normal.dot(camera_up) < 0.0f) {
       p.normal = -p.normal;
@@ -644,19 +639,8 @@ std::optional<GroundPlane> detail::estimateGround(const OrganizedCloud& cloud_ca
     }
     return p.normal.dot(camera_up) >= cos_tilt;
   };
-  const Support supports{candidate_points, &candidate_normals, tol, cos_agree};
-
-  // Sequential RANSAC: peel off the horizontal planes one by one.
-  struct Found {
-    Plane plane;
-    std::size_t support;
-    Eigen::Vector3f centroid;  // of the supporting points, camera frame
-  };
-  thread_local std::vector<Found> planes_tls;
-  std::vector<Found>& planes = planes_tls;
   planes.clear();
   std::mt19937_64 rng(config.seed);
-  std::vector<std::size_t>& inliers = inliers_tls;
   for (int k = 0; k < kMaxPlanes && remaining.size() >= std::max<std::size_t>(min_sampled, 3);
        ++k) {
     Plane plane;
@@ -670,19 +654,24 @@ std::optional<GroundPlane> detail::estimateGround(const OrganizedCloud& cloud_ca
       planes.push_back({plane, inliers.size(), centroid / static_cast<float>(inliers.size())});
     }
     // Remove this plane's points (inliers is sorted: it follows `remaining`).
-    std::vector<std::size_t>& rest = rest_tls;
     rest.clear();
     std::set_difference(remaining.begin(), remaining.end(), inliers.begin(), inliers.end(),
                         std::back_inserter(rest));
     remaining.swap(rest);
   }
-  if (planes.empty()) return std::nullopt;
+}
 
-  // Gravity consensus: every real horizontal surface (floor, table tops,
-  // seats) shares one normal, while sloped surfaces that slipped under the
-  // tilt limit (bed covers, cushions, ramps) each have their own. The
-  // reference "up" is the plane whose direction gathers the most support
-  // over all planes; the others must agree with it.
+// The floor among the found planes (not empty). Gravity consensus: every
+// real horizontal surface (floor, table tops, seats) shares one normal,
+// while sloped surfaces that slipped under the tilt limit (bed covers,
+// cushions, ramps) each have their own. The reference "up" is the plane
+// whose direction gathers the most support over all planes; the others must
+// agree with it. Then the lowest level of the consistent planes, and within
+// that level the best-supported plane. "Low" is measured at the supporting
+// points (their centroid's depth below the camera along the reference up),
+// not by the plane offset: a slightly tilted plane's extension can pass far
+// below the floor at the camera while its points sit well above it.
+const FoundPlane& chooseFloorPlane(const std::vector<FoundPlane>& planes) {
   const float cos_consensus = cosDeg(kConsensusDeg);
   std::size_t best_consensus = 0;
   Eigen::Vector3f reference_up = planes.front().plane.normal;
@@ -695,29 +684,66 @@ std::optional<GroundPlane> detail::estimateGround(const OrganizedCloud& cloud_ca
       reference_up = f.plane.normal;
     }
   }
-  // The lowest level of the consistent planes; within that level the
-  // best-supported plane. "Low" is measured at the supporting points (their
-  // centroid's depth below the camera along the reference up), not by the
-  // plane offset: a slightly tilted plane's extension can pass far below the
-  // floor at the camera while its points sit well above it.
-  auto depthBelowCamera = [&](const Found& f) { return -reference_up.dot(f.centroid); };
-  auto consistent = [&](const Found& f) {
+  auto depthBelowCamera = [&](const FoundPlane& f) { return -reference_up.dot(f.centroid); };
+  auto consistent = [&](const FoundPlane& f) {
     return f.plane.normal.dot(reference_up) >= cos_consensus;
   };
   float lowest = -std::numeric_limits<float>::infinity();
   for (const auto& f : planes)
     if (consistent(f)) lowest = std::max(lowest, depthBelowCamera(f));
-  const Found* chosen = nullptr;
+  const FoundPlane* chosen = nullptr;
   for (const auto& f : planes) {
     if (consistent(f) && lowest - depthBelowCamera(f) <= kSameLevelM &&
         (!chosen || f.support > chosen->support)) {
       chosen = &f;
     }
   }
+  return *chosen;  // the reference plane itself is consistent
+}
+
+}  // namespace
+
+std::optional<GroundPlane> detail::estimateGround(const OrganizedCloud& cloud_camera,
+                                                  const NormalImage& normals_camera,
+                                                  const GroundConfig& config, GroundSimd simd) {
+  validateConfig(config, "estimateGround");
+  const bool avx2 = simd == GroundSimd::Auto && cpuAvx2();
+  if (normals_camera.normals.size() != cloud_camera.points.size()) {
+    throw Error("estimateGround: normal image has " +
+                std::to_string(normals_camera.normals.size()) + " entries but the cloud has " +
+                std::to_string(cloud_camera.points.size()) + " points");
+  }
+  const Eigen::Vector3f camera_up(0.0f, -1.0f, 0.0f);
+  const float cos_tilt = cosDeg(config.max_tilt_deg);
+  const float cos_agree = cosDeg(config.normal_agreement_deg);
+  const float tol = config.ransac_inlier_m;
+
+  // Per-thread buffers: estimateGround runs once per frame, and a stream of
+  // frames then reuses them instead of allocating.
+  thread_local std::vector<Eigen::Vector3f> candidate_points_tls, candidate_normals_tls;
+  thread_local std::vector<std::size_t> remaining_tls, rest_tls, inliers_tls;
+  thread_local std::vector<FoundPlane> planes_tls;
+  std::vector<Eigen::Vector3f>& candidate_points = candidate_points_tls;
+  std::vector<Eigen::Vector3f>& candidate_normals = candidate_normals_tls;
+  collectUpwardCandidates(cloud_camera, normals_camera, camera_up, cos_tilt, avx2, candidate_points,
+                          candidate_normals);
+  // RANSAC runs on at most kMaxCandidates of them, evenly strided.
+  const std::size_t candidates = candidate_points.size();
+  const std::size_t stride = candidates / kMaxCandidates + 1;
+  std::vector<std::size_t>& remaining = remaining_tls;
+  remaining.clear();
+  for (std::size_t k = 0; k < candidates; k += stride) remaining.push_back(k);
+  const auto min_sampled = static_cast<std::size_t>(config.min_floor_points) / stride;
+  const Support supports{candidate_points, &candidate_normals, tol, cos_agree};
+  std::vector<FoundPlane>& planes = planes_tls;
+  std::vector<std::size_t>& inliers = inliers_tls;
+  peelHorizontalPlanes(candidate_points, supports, camera_up, cos_tilt, min_sampled, config, avx2,
+                       remaining, inliers, rest_tls, planes);
+  if (planes.empty()) return std::nullopt;
 
   // Final least-squares fit on every candidate (not just the strided subset)
   // that supports the chosen plane, and the support at full resolution.
-  Plane plane = chosen->plane;
+  Plane plane = chooseFloorPlane(planes).plane;
   for (int round = 0; round < 2; ++round) {
     selectSupportAll(supports, plane, candidates, avx2, inliers);
     if (inliers.size() < static_cast<std::size_t>(config.min_floor_points)) return std::nullopt;
@@ -760,12 +786,13 @@ std::size_t detail::planeSupportCount(const std::vector<Eigen::Vector3f>& points
   return packed.count(Plane{plane_normal, plane_offset}, simd == GroundSimd::Auto && cpuAvx2());
 }
 
-std::optional<GroundPlane> groundFromGravity(const OrganizedCloud& cloud_camera,
-                                             const NormalImage& normals_camera,
-                                             const Eigen::Vector3f& up_camera,
-                                             const std::vector<std::uint8_t>* labels,
-                                             const GroundConfig& config) {
-  validateConfig(config, "groundFromGravity");
+namespace {
+
+// groundFromGravity's inputs checked; returns up_camera as a unit vector.
+Eigen::Vector3f checkedGravityUp(const OrganizedCloud& cloud_camera,
+                                 const NormalImage& normals_camera,
+                                 const Eigen::Vector3f& up_camera,
+                                 const std::vector<std::uint8_t>* labels) {
   const float up_norm = up_camera.norm();
   if (!std::isfinite(up_norm) || !(up_norm > 1e-6f)) {
     std::ostringstream msg;
@@ -781,172 +808,223 @@ std::optional<GroundPlane> groundFromGravity(const OrganizedCloud& cloud_camera,
     throw Error("groundFromGravity: label image has " + std::to_string(labels->size()) +
                 " pixels but the cloud has " + std::to_string(cloud_camera.points.size()));
   }
-  const Eigen::Vector3f up = up_camera / up_norm;
-  const auto& pts = cloud_camera.points;
-  const auto& nrm = normals_camera.normals;
-  const auto min_points = static_cast<std::size_t>(config.min_floor_points);
-  const float cos_agree = cosDeg(config.normal_agreement_deg);
+  return up_camera / up_norm;
+}
 
-  // Height (along up, camera at 0) of the floor, how, and on how many points.
-  float floor_height = 0.0f;
-  GroundMethod method = GroundMethod::GravityLowPercentile;
-  std::size_t support = 0;
-  bool found = false;
-
-  // The labelled floor's own plane, when it agrees with gravity: measured
-  // gravity (NYU's rotations) is off by up to ~6 degrees on some frames,
-  // which would tilt heights by ~0.4 m at 4 m, while the floor plane is what
-  // height features are measured from (the paper's protocol).
-  const float cos_refine = cosDeg(config.gravity_refine_deg);
-  if (labels && config.gravity_refine_deg > 0.0f) {
-    if (auto fit = fitGroundToLabels(cloud_camera, *labels, config);
-        fit && fit->normal_camera.dot(up) >= cos_refine) {
-      fit->method = GroundMethod::GravityFloorLabels;
-      return fit;
-    }
-  }
-
-  if (labels) {
-    std::vector<float> floor;
-    for (std::size_t i = 0; i < pts.size(); ++i)
-      if ((*labels)[i] == kFloorId && cloud_camera.valid(i)) floor.push_back(up.dot(pts[i]));
-    if (floor.size() >= min_points) {
-      // The median is robust to mislabelled pixels at object feet; a gravity
-      // direction off by a degree or two only widens the spread around it.
-      floor_height = quantile(floor, 0.5);
-      method = GroundMethod::GravityFloorLabels;
-      support = floor.size();
-      found = true;
-    }
-  }
-
-  // The frame's own lowest horizontal plane (estimateGround: sequential
-  // RANSAC, consistent "up" across surfaces) when it agrees with gravity:
-  // a histogram of heights along a gravity that is a few degrees off smears
-  // a large floor over many bins, while the plane fit is not affected.
-  // As below, it is not the floor when a low percentile of all points lies
-  // well beneath it (a bed or table top seen above a hidden floor).
-  if (!found && config.gravity_refine_deg > 0.0f) {
-    if (auto estimated = estimateGround(cloud_camera, normals_camera, config);
-        estimated && estimated->normal_camera.dot(up) >= cos_refine) {
-      std::vector<float> heights;
-      heights.reserve(pts.size());
-      for (std::size_t i = 0; i < pts.size(); ++i)
-        if (cloud_camera.valid(i)) heights.push_back(estimated->normal_camera.dot(pts[i]));
-      const float low = quantile(heights, config.floor_percentile / 100.0);
-      if (low >= -estimated->offset - config.percentile_margin_m) {
-        estimated->method = GroundMethod::GravityLowestPlane;
-        return estimated;
-      }
-    }
-  }
-
-  if (!found) {
-    std::vector<float> all;
-    std::vector<float> horizontal;
-    all.reserve(pts.size());
-    for (std::size_t i = 0; i < pts.size(); ++i) {
-      if (!cloud_camera.valid(i)) continue;
-      const float h = up.dot(pts[i]);
-      all.push_back(h);
-      if (std::isfinite(nrm[i].x()) && nrm[i].dot(up) >= cos_agree) horizontal.push_back(h);
-    }
-    if (all.empty()) return std::nullopt;
-    const float low = quantile(all, config.floor_percentile / 100.0);
-
-    // Lowest level of horizontal points: bins of ransac_inlier_m, a level
-    // counts the points of its bin and both neighbours (a slightly wrong
-    // gravity or a slightly sloped floor spreads one surface over ~3 bins).
-    std::optional<float> plane_height;
-    std::size_t plane_support = 0;
-    float plane_lo = 0.0f, plane_hi = 0.0f;  // height band of the lowest level
-    if (horizontal.size() >= min_points) {
-      const float bin = config.ransac_inlier_m;
-      const auto [lo_it, hi_it] = std::minmax_element(horizontal.begin(), horizontal.end());
-      const float lo = *lo_it;
-      const auto bins = static_cast<std::size_t>((*hi_it - lo) / bin) + 1;
-      std::vector<std::size_t> count(bins, 0);
-      for (float h : horizontal)
-        ++count[std::min(bins - 1, static_cast<std::size_t>((h - lo) / bin))];
-      auto level = [&](std::size_t b) {
-        return count[b] + (b > 0 ? count[b - 1] : 0) + (b + 1 < bins ? count[b + 1] : 0);
-      };
-      for (std::size_t b = 0; b < bins; ++b) {
-        if (level(b) < min_points) continue;
-        // The surface is the densest level within kSameLevelM above.
-        std::size_t best = b;
-        const auto reach = static_cast<std::size_t>(kSameLevelM / bin);
-        for (std::size_t c = b + 1; c < bins && c <= b + reach; ++c)
-          if (level(c) > level(best)) best = c;
-        // Its height: the mean of the points in the level's three bins.
-        double sum = 0;
-        std::size_t n = 0;
-        for (float h : horizontal) {
-          const float rel = (h - lo) / bin;
-          if (rel >= static_cast<float>(best) - 1.0f && rel < static_cast<float>(best) + 2.0f) {
-            sum += h;
-            ++n;
-          }
-        }
-        plane_height = static_cast<float>(sum / static_cast<double>(n));
-        plane_support = n;
-        plane_lo = lo + bin * (static_cast<float>(best) - 1.0f);
-        plane_hi = lo + bin * (static_cast<float>(best) + 2.0f);
-        break;
-      }
-    }
-    // A surface less than min_camera_height_m below the camera is a table
-    // or seat seen without the floor (see GroundConfig), not the floor.
-    if (plane_height && -*plane_height >= config.min_camera_height_m &&
-        low >= *plane_height - config.percentile_margin_m) {
-      floor_height = *plane_height;
-      method = GroundMethod::GravityLowestPlane;
-      support = plane_support;
-      if (config.gravity_refine_deg > 0.0f) {
-        // That surface's own plane (least squares over its horizontal
-        // points), when it agrees with gravity, as for the labelled floor.
-        std::vector<Eigen::Vector3f> level;
-        for (std::size_t i = 0; i < pts.size(); ++i) {
-          if (!cloud_camera.valid(i) || !std::isfinite(nrm[i].x()) || nrm[i].dot(up) < cos_agree)
-            continue;
-          const float h = up.dot(pts[i]);
-          if (h >= plane_lo && h < plane_hi) level.push_back(pts[i]);
-        }
-        std::vector<std::size_t> idx(level.size());
-        for (std::size_t k = 0; k < idx.size(); ++k) idx[k] = k;
-        Plane hint;
-        hint.normal = up;
-        Plane fitted = hint;  // offset 0: rejected below unless the fit runs
-        if (idx.size() >= 3) fitted = refitPlane(level, idx, hint);
-        // The refined plane must also put the floor where the level is at
-        // the camera (a tilted fit of a far, small surface may not).
-        if (fitted.normal.dot(up) >= cos_refine &&
-            std::abs(fitted.offset + *plane_height) <= kSameLevelM) {
-          GroundPlane ground =
-              groundFromPlane(fitted.normal, fitted.offset, static_cast<int>(support));
-          ground.method = method;
-          return ground;
-        }
-      }
-    } else if (-low >= config.prior_camera_height_m) {
-      floor_height = low;
-      method = GroundMethod::GravityLowPercentile;
-      support = all.size();
-    } else {
-      // Nothing in view reaches as low as a typical floor: the floor is out
-      // of view, and at least the usual camera height below.
-      floor_height = -config.prior_camera_height_m;
-      method = GroundMethod::GravityHeightPrior;
-      support = 0;
-    }
-  }
-
-  // The floor must be below the camera (plane up.p + d = 0 with d > 0).
+// The ground plane with normal `up` through the floor at `floor_height`
+// (along up, camera at 0), or nullopt when that is not below the camera
+// (plane up.p + d = 0 needs d > 0).
+std::optional<GroundPlane> groundAtHeight(const Eigen::Vector3f& up, float floor_height,
+                                          GroundMethod method, std::size_t support) {
   const float offset = -floor_height;
   if (!(offset > 1e-3f)) return std::nullopt;
   GroundPlane ground = groundFromPlane(up, offset, static_cast<int>(support));
   ground.method = method;
   return ground;
+}
+
+// A floor height along up and the points it rests on.
+struct FloorHeight {
+  float height = 0.0f;
+  std::size_t support = 0;
+};
+
+// The median height of the labelled floor's pixels, when there are at least
+// `min_points`: robust to mislabelled pixels at object feet; a gravity
+// direction off by a degree or two only widens the spread around it.
+std::optional<FloorHeight> labelledFloorHeight(const OrganizedCloud& cloud_camera,
+                                               const std::vector<std::uint8_t>& labels,
+                                               const Eigen::Vector3f& up, std::size_t min_points) {
+  const auto& pts = cloud_camera.points;
+  std::vector<float> floor;
+  for (std::size_t i = 0; i < pts.size(); ++i)
+    if (labels[i] == kFloorId && cloud_camera.valid(i)) floor.push_back(up.dot(pts[i]));
+  if (floor.size() < min_points) return std::nullopt;
+  return FloorHeight{quantile(floor, 0.5), floor.size()};
+}
+
+// The frame's own lowest horizontal plane (estimateGround: sequential
+// RANSAC, consistent "up" across surfaces) when it agrees with gravity: a
+// histogram of heights along a gravity that is a few degrees off smears a
+// large floor over many bins, while the plane fit is not affected. As in
+// groundFromHeights, it is not the floor when a low percentile of all
+// points lies well beneath it (a bed or table top seen above a hidden floor).
+std::optional<GroundPlane> lowestPlaneAlongGravity(const OrganizedCloud& cloud_camera,
+                                                   const NormalImage& normals_camera,
+                                                   const Eigen::Vector3f& up,
+                                                   const GroundConfig& config) {
+  const auto& pts = cloud_camera.points;
+  auto estimated = estimateGround(cloud_camera, normals_camera, config);
+  if (!estimated || !(estimated->normal_camera.dot(up) >= cosDeg(config.gravity_refine_deg))) {
+    return std::nullopt;
+  }
+  std::vector<float> heights;
+  heights.reserve(pts.size());
+  for (std::size_t i = 0; i < pts.size(); ++i)
+    if (cloud_camera.valid(i)) heights.push_back(estimated->normal_camera.dot(pts[i]));
+  const float low = quantile(heights, config.floor_percentile / 100.0);
+  if (!(low >= -estimated->offset - config.percentile_margin_m)) return std::nullopt;
+  estimated->method = GroundMethod::GravityLowestPlane;
+  return estimated;
+}
+
+// The lowest level of the heights of horizontal points, and the band of
+// heights [lo, hi) it spans.
+struct HorizontalLevel {
+  float height = 0.0f;
+  std::size_t support = 0;
+  float lo = 0.0f, hi = 0.0f;
+};
+
+// Bins of `bin` metres; a level counts the points of its bin and both
+// neighbours (a slightly wrong gravity or a slightly sloped floor spreads
+// one surface over ~3 bins). The lowest level with min_points, moved to the
+// densest level within kSameLevelM above it; its height is the mean of the
+// points in the level's three bins. `horizontal` holds at least min_points.
+std::optional<HorizontalLevel> lowestHorizontalLevel(const std::vector<float>& horizontal,
+                                                     std::size_t min_points, float bin) {
+  const auto [lo_it, hi_it] = std::minmax_element(horizontal.begin(), horizontal.end());
+  const float lo = *lo_it;
+  const auto bins = static_cast<std::size_t>((*hi_it - lo) / bin) + 1;
+  std::vector<std::size_t> count(bins, 0);
+  for (float h : horizontal) ++count[std::min(bins - 1, static_cast<std::size_t>((h - lo) / bin))];
+  auto level = [&](std::size_t b) {
+    return count[b] + (b > 0 ? count[b - 1] : 0) + (b + 1 < bins ? count[b + 1] : 0);
+  };
+  for (std::size_t b = 0; b < bins; ++b) {
+    if (level(b) < min_points) continue;
+    // The surface is the densest level within kSameLevelM above.
+    std::size_t best = b;
+    const auto reach = static_cast<std::size_t>(kSameLevelM / bin);
+    for (std::size_t c = b + 1; c < bins && c <= b + reach; ++c)
+      if (level(c) > level(best)) best = c;
+    // Its height: the mean of the points in the level's three bins.
+    double sum = 0;
+    std::size_t n = 0;
+    for (float h : horizontal) {
+      const float rel = (h - lo) / bin;
+      if (rel >= static_cast<float>(best) - 1.0f && rel < static_cast<float>(best) + 2.0f) {
+        sum += h;
+        ++n;
+      }
+    }
+    return HorizontalLevel{static_cast<float>(sum / static_cast<double>(n)), n,
+                           lo + bin * (static_cast<float>(best) - 1.0f),
+                           lo + bin * (static_cast<float>(best) + 2.0f)};
+  }
+  return std::nullopt;
+}
+
+// The least-squares plane of the level's horizontal points, when it agrees
+// with gravity, as for the labelled floor, and puts the floor where the
+// level is at the camera (a tilted fit of a far, small surface may not).
+std::optional<GroundPlane> fittedLevelPlane(const OrganizedCloud& cloud_camera,
+                                            const NormalImage& normals_camera,
+                                            const Eigen::Vector3f& up, const HorizontalLevel& level,
+                                            const GroundConfig& config) {
+  const auto& pts = cloud_camera.points;
+  const auto& nrm = normals_camera.normals;
+  const float cos_agree = cosDeg(config.normal_agreement_deg);
+  std::vector<Eigen::Vector3f> points;
+  for (std::size_t i = 0; i < pts.size(); ++i) {
+    if (!cloud_camera.valid(i) || !std::isfinite(nrm[i].x()) || nrm[i].dot(up) < cos_agree)
+      continue;
+    const float h = up.dot(pts[i]);
+    if (h >= level.lo && h < level.hi) points.push_back(pts[i]);
+  }
+  std::vector<std::size_t> idx(points.size());
+  for (std::size_t k = 0; k < idx.size(); ++k) idx[k] = k;
+  Plane hint;
+  hint.normal = up;
+  Plane fitted = hint;  // offset 0: rejected below unless the fit runs
+  if (idx.size() >= 3) fitted = refitPlane(points, idx, hint);
+  if (!(fitted.normal.dot(up) >= cosDeg(config.gravity_refine_deg) &&
+        std::abs(fitted.offset + level.height) <= kSameLevelM)) {
+    return std::nullopt;
+  }
+  GroundPlane ground =
+      groundFromPlane(fitted.normal, fitted.offset, static_cast<int>(level.support));
+  ground.method = GroundMethod::GravityLowestPlane;
+  return ground;
+}
+
+// The floor from the heights of the frame's points along gravity alone
+// (steps 2 and 3 of groundFromGravity in ground.hpp): the lowest horizontal
+// level, else a low percentile of all heights, else the height prior.
+std::optional<GroundPlane> groundFromHeights(const OrganizedCloud& cloud_camera,
+                                             const NormalImage& normals_camera,
+                                             const Eigen::Vector3f& up,
+                                             const GroundConfig& config) {
+  const auto& pts = cloud_camera.points;
+  const auto& nrm = normals_camera.normals;
+  const auto min_points = static_cast<std::size_t>(config.min_floor_points);
+  const float cos_agree = cosDeg(config.normal_agreement_deg);
+  std::vector<float> all;
+  std::vector<float> horizontal;
+  all.reserve(pts.size());
+  for (std::size_t i = 0; i < pts.size(); ++i) {
+    if (!cloud_camera.valid(i)) continue;
+    const float h = up.dot(pts[i]);
+    all.push_back(h);
+    if (std::isfinite(nrm[i].x()) && nrm[i].dot(up) >= cos_agree) horizontal.push_back(h);
+  }
+  if (all.empty()) return std::nullopt;
+  const float low = quantile(all, config.floor_percentile / 100.0);
+  const std::optional<HorizontalLevel> level =
+      horizontal.size() >= min_points
+          ? lowestHorizontalLevel(horizontal, min_points, config.ransac_inlier_m)
+          : std::nullopt;
+  // A surface less than min_camera_height_m below the camera is a table
+  // or seat seen without the floor (see GroundConfig), not the floor.
+  if (level && -level->height >= config.min_camera_height_m &&
+      low >= level->height - config.percentile_margin_m) {
+    if (config.gravity_refine_deg > 0.0f) {
+      if (auto fitted = fittedLevelPlane(cloud_camera, normals_camera, up, *level, config)) {
+        return fitted;
+      }
+    }
+    return groundAtHeight(up, level->height, GroundMethod::GravityLowestPlane, level->support);
+  }
+  if (-low >= config.prior_camera_height_m) {
+    return groundAtHeight(up, low, GroundMethod::GravityLowPercentile, all.size());
+  }
+  // Nothing in view reaches as low as a typical floor: the floor is out
+  // of view, and at least the usual camera height below.
+  return groundAtHeight(up, -config.prior_camera_height_m, GroundMethod::GravityHeightPrior, 0);
+}
+
+}  // namespace
+
+std::optional<GroundPlane> groundFromGravity(const OrganizedCloud& cloud_camera,
+                                             const NormalImage& normals_camera,
+                                             const Eigen::Vector3f& up_camera,
+                                             const std::vector<std::uint8_t>* labels,
+                                             const GroundConfig& config) {
+  validateConfig(config, "groundFromGravity");
+  const Eigen::Vector3f up = checkedGravityUp(cloud_camera, normals_camera, up_camera, labels);
+  // The labelled floor's own plane, when it agrees with gravity: measured
+  // gravity (NYU's rotations) is off by up to ~6 degrees on some frames,
+  // which would tilt heights by ~0.4 m at 4 m, while the floor plane is what
+  // height features are measured from (the paper's protocol).
+  if (labels && config.gravity_refine_deg > 0.0f) {
+    if (auto fit = fitGroundToLabels(cloud_camera, *labels, config);
+        fit && fit->normal_camera.dot(up) >= cosDeg(config.gravity_refine_deg)) {
+      fit->method = GroundMethod::GravityFloorLabels;
+      return fit;
+    }
+  }
+  if (labels) {
+    const auto min_points = static_cast<std::size_t>(config.min_floor_points);
+    if (const auto floor = labelledFloorHeight(cloud_camera, *labels, up, min_points)) {
+      return groundAtHeight(up, floor->height, GroundMethod::GravityFloorLabels, floor->support);
+    }
+  }
+  if (config.gravity_refine_deg > 0.0f) {
+    if (auto plane = lowestPlaneAlongGravity(cloud_camera, normals_camera, up, config)) {
+      return plane;
+    }
+  }
+  return groundFromHeights(cloud_camera, normals_camera, up, config);
 }
 
 }  // namespace findmug

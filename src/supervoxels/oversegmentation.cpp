@@ -125,11 +125,14 @@ std::unique_ptr<Oversegmenter> makeOversegmenter(const OversegmentationConfig& c
               std::to_string(static_cast<int>(config.kind)));
 }
 
+namespace {
+
 // Pixel lists kept per thread for frames with more segments than the last
 // (a VGA frame has about 1500); more are freed.
 constexpr std::size_t kMaxSpareLists = 8192;
 
-void finalizeOversegmentation(Oversegmentation& seg, int min_points, EdgeSource edge_source) {
+// The pixel count of `seg`'s grid, after checking the grid and min_points.
+std::size_t checkFinalizeInput(const Oversegmentation& seg, int min_points) {
   if (seg.width < 0 || seg.height < 0 || seg.width > 100000 || seg.height > 100000) {
     throw Error("finalizeOversegmentation: grid size " + std::to_string(seg.width) + "x" +
                 std::to_string(seg.height) + " is invalid");
@@ -150,12 +153,15 @@ void finalizeOversegmentation(Oversegmentation& seg, int min_points, EdgeSource 
     throw Error("finalizeOversegmentation: min_points = " + std::to_string(min_points) +
                 " (expected >= 0)");
   }
+  return n;
+}
 
-  // Pixel count per input id. Ids are bounded by the pixel count so that the
-  // dense table below stays small. The range check is a plain minimum and
-  // maximum (a loop the compiler vectorises); only a bad image is walked
-  // again, to name its first bad pixel.
-  const int* ids = seg.pixel_segment.data();
+// The largest of the n segment ids (-1 when there is none), after checking
+// that each is in -1..n-1: ids are bounded by the pixel count so that the
+// dense tables indexed by them stay small. The range check is a plain
+// minimum and maximum (a loop the compiler vectorises); only a bad image is
+// walked again, to name its first bad pixel.
+int checkedMaxId(const int* ids, std::size_t n) {
   int min_id = -1, max_id = -1;
   for (std::size_t i = 0; i < n; ++i) {
     min_id = std::min(min_id, ids[i]);
@@ -170,15 +176,17 @@ void finalizeOversegmentation(Oversegmentation& seg, int min_points, EdgeSource 
       }
     }
   }
-  // Runs of one id (a segment crosses a row in one or two): counted per run,
-  // and kept for the renumbering pass below. Pixel by pixel, each count
-  // waited for the previous pixel's store to the same counter.
-  thread_local std::vector<int> counts_tls, remap_tls;
-  thread_local std::vector<int> run_start_tls;
-  std::vector<int>& counts = counts_tls;
+  return max_id;
+}
+
+// Pixel count per id (`counts`, ids 0..max_id), counted per run of one id
+// (a segment crosses a row in one or two); the runs' starts, then n, go to
+// `run_start` for the renumbering pass. Pixel by pixel, each count waited
+// for the previous pixel's store to the same counter.
+void countPixelsByRun(const int* ids, std::size_t n, int max_id, std::vector<int>& counts,
+                      std::vector<int>& run_start) {
   counts.assign(static_cast<std::size_t>(max_id + 1), 0);
-  std::vector<int>& run_start = run_start_tls;  // n fits an int (checked above)
-  run_start.clear();
+  run_start.clear();  // n fits an int (checkFinalizeInput)
   for (std::size_t i = 0; i < n;) {
     const int id = ids[i];
     const std::size_t end = detail::intRunEnd(ids, i, n);
@@ -187,38 +195,36 @@ void finalizeOversegmentation(Oversegmentation& seg, int min_points, EdgeSource 
     i = end;
   }
   run_start.push_back(static_cast<int>(n));
+}
 
-  // Dense renumbering in increasing id order; segments below the threshold
-  // (and ids without pixels) map to -1.
+// Dense renumbering in increasing id order (`remap`); segments below the
+// threshold (and ids without pixels) map to -1. Returns how many are kept.
+int renumberKeptSegments(const std::vector<int>& counts, int min_points, std::vector<int>& remap) {
   const int keep_at_least = std::max(min_points, 1);
-  std::vector<int>& remap = remap_tls;
   remap.assign(counts.size(), -1);
   int next = 0;
   for (std::size_t id = 0; id < counts.size(); ++id) {
     if (counts[id] >= keep_at_least) remap[id] = next++;
   }
+  return next;
+}
 
-  // Not assign(): a recycled `seg` keeps the capacity of its pixel lists
-  // (one allocation per segment and frame otherwise). Lists beyond this
-  // frame's count wait in a per-thread spare pool for a frame with more.
-  //
-  // The largest lists go to the largest segments. Handed out in any order,
-  // every list would in time grow to fit the largest segment it ever met
-  // (lists only grow), and the memory of a long stream with it: the 2026-11-25
-  // soak saw the heap in use climb 10 MB a minute that way. By rank, the k-th
-  // largest list only grows to the k-th largest segment ever seen, which is
-  // bounded by the frame's size over k.
+// seg.segments becomes `count` lists, largest capacity first. Not assign():
+// a recycled `seg` keeps the capacity of its pixel lists (one allocation per
+// segment and frame otherwise). Lists beyond this frame's count wait in a
+// per-thread spare pool for a frame with more; the smallest go first.
+void resizeSegmentLists(Oversegmentation& seg, int count) {
   thread_local std::vector<std::vector<int>> spare_lists_tls;
   std::vector<std::vector<int>>& spare_lists = spare_lists_tls;
   const auto by_capacity = [](const std::vector<int>& a, const std::vector<int>& b) {
     return a.capacity() > b.capacity();
   };
   std::sort(seg.segments.begin(), seg.segments.end(), by_capacity);
-  while (seg.segments.size() > static_cast<std::size_t>(next)) {
+  while (seg.segments.size() > static_cast<std::size_t>(count)) {
     if (spare_lists.size() < kMaxSpareLists) spare_lists.push_back(std::move(seg.segments.back()));
     seg.segments.pop_back();  // the smallest go first
   }
-  while (seg.segments.size() < static_cast<std::size_t>(next)) {
+  while (seg.segments.size() < static_cast<std::size_t>(count)) {
     if (spare_lists.empty()) {
       seg.segments.emplace_back();
     } else {
@@ -227,8 +233,18 @@ void finalizeOversegmentation(Oversegmentation& seg, int min_points, EdgeSource 
     }
   }
   std::sort(seg.segments.begin(), seg.segments.end(), by_capacity);
-  // New ids by decreasing pixel count (ties by id, so the order is fixed),
-  // then list r goes to the id of rank r.
+}
+
+// The largest lists (seg.segments, largest capacity first) go to the
+// largest segments: list r to the new id of rank r, by decreasing pixel
+// count (ties by id, so the order is fixed). Handed out in any order, every
+// list would in time grow to fit the largest segment it ever met (lists only
+// grow), and the memory of a long stream with it: the 2026-11-25 soak saw
+// the heap in use climb 10 MB a minute that way. By rank, the k-th largest
+// list only grows to the k-th largest segment ever seen, which is bounded by
+// the frame's size over k.
+void giveLargestListsToLargestSegments(Oversegmentation& seg, const std::vector<int>& counts,
+                                       const std::vector<int>& remap, int kept) {
   thread_local std::vector<int> rank_order_tls;
   thread_local std::vector<std::vector<int>> ranked_tls;
   std::vector<int>& rank_order = rank_order_tls;
@@ -239,15 +255,22 @@ void finalizeOversegmentation(Oversegmentation& seg, int min_points, EdgeSource 
   }
   std::stable_sort(rank_order.begin(), rank_order.end(),
                    [&counts](int a, int b) { return counts[a] > counts[b]; });
-  ranked.resize(static_cast<std::size_t>(next));
+  ranked.resize(static_cast<std::size_t>(kept));
   for (std::size_t r = 0; r < rank_order.size(); ++r)
     ranked[static_cast<std::size_t>(remap[rank_order[r]])] = std::move(seg.segments[r]);
   seg.segments.swap(ranked);  // `ranked` keeps the moved-from shells for next time
+}
+
+// The runs of countPixelsByRun renumbered in seg.pixel_segment, and each
+// kept segment's pixels listed in seg.segments (one list per new id).
+void listPixelsOfSegments(Oversegmentation& seg, const std::vector<int>& counts,
+                          const std::vector<int>& remap, const std::vector<int>& run_start,
+                          int kept) {
   // Each list is sized to its count first and written through a cursor:
   // push_back per pixel reloaded and stored the list's end every time.
   thread_local std::vector<int*> cursor_tls;
   std::vector<int*>& cursor = cursor_tls;
-  cursor.resize(static_cast<std::size_t>(next));
+  cursor.resize(static_cast<std::size_t>(kept));
   for (auto& pixels : seg.segments) pixels.clear();
   for (std::size_t id = 0; id < counts.size(); ++id) {
     if (remap[id] < 0) continue;
@@ -255,11 +278,11 @@ void finalizeOversegmentation(Oversegmentation& seg, int min_points, EdgeSource 
     const auto count = static_cast<std::size_t>(counts[id]);
     // A recycled list that is too small grows with a quarter to spare, so
     // that over a stream the lists settle at sizes that fit every frame.
-    if (pixels.capacity() < count) pixels.reserve(pixels.capacity() == 0 ? count : count + count / 4);
+    if (pixels.capacity() < count)
+      pixels.reserve(pixels.capacity() == 0 ? count : count + count / 4);
     pixels.resize(count);
     cursor[static_cast<std::size_t>(remap[id])] = pixels.data();
   }
-  // The runs found above, renumbered and listed.
   for (std::size_t r = 0; r + 1 < run_start.size(); ++r) {
     const auto i = static_cast<std::size_t>(run_start[r]);
     const auto end = static_cast<std::size_t>(run_start[r + 1]);
@@ -271,91 +294,115 @@ void finalizeOversegmentation(Oversegmentation& seg, int min_points, EdgeSource 
       for (std::size_t j = i; j < end; ++j) *out++ = static_cast<int>(j);
     }
   }
+}
 
-  // Grid edges are written into seg.edges itself (its capacity is reused);
-  // kept edges need the input list while the new one is built.
-  std::vector<std::pair<int, int>> kept_edges;
-  std::vector<std::pair<int, int>>& edges =
-      edge_source == EdgeSource::Keep ? kept_edges : seg.edges;
-  if (edge_source == EdgeSource::Keep) {
-    edges.reserve(seg.edges.size());
-    for (const auto& [a, b] : seg.edges) {
-      for (const int id : {a, b}) {
-        if (id < 0 || static_cast<std::size_t>(id) >= n) {
-          throw Error("finalizeOversegmentation: edge (" + std::to_string(a) + ", " +
-                      std::to_string(b) + ") names segment id " + std::to_string(id) +
-                      ", outside 0.." + std::to_string(n - 1));
-        }
+// EdgeSource::Keep: the input edges (seg.edges, ids of n pixels) in the new
+// ids, those of dropped segments left out; sorted, each once.
+std::vector<std::pair<int, int>> renumberedKeptEdges(const Oversegmentation& seg,
+                                                     const std::vector<int>& remap, int max_id,
+                                                     std::size_t n) {
+  std::vector<std::pair<int, int>> edges;
+  edges.reserve(seg.edges.size());
+  for (const auto& [a, b] : seg.edges) {
+    for (const int id : {a, b}) {
+      if (id < 0 || static_cast<std::size_t>(id) >= n) {
+        throw Error("finalizeOversegmentation: edge (" + std::to_string(a) + ", " +
+                    std::to_string(b) + ") names segment id " + std::to_string(id) +
+                    ", outside 0.." + std::to_string(n - 1));
       }
-      // Ids beyond max_id have no pixels: such a segment is dropped.
-      const int ra = a <= max_id ? remap[a] : -1;
-      const int rb = b <= max_id ? remap[b] : -1;
-      if (ra < 0 || rb < 0 || ra == rb) continue;
-      edges.emplace_back(std::min(ra, rb), std::max(ra, rb));
     }
-  } else {
-    // Neighbour lists (a segment has a handful) instead of sorting every
-    // boundary pixel pair.
-    // Per-thread and kept between calls: the lists keep their capacity, so a
-    // frame's ~1500 segments cost no allocation once warm.
-    thread_local std::vector<std::vector<int>> neighbours_tls;
-    std::vector<std::vector<int>>& neighbours = neighbours_tls;
-    if (neighbours.size() < static_cast<std::size_t>(next)) neighbours.resize(next);
-    for (int a = 0; a < next; ++a) neighbours[a].clear();
-    const int w = seg.width;
-    const int h = seg.height;
-    int last_a = -1, last_b = -1;
-    const auto add = [&](int a, int b) {
-      if (a < 0 || b < 0 || a == b) return;
-      if (a > b) std::swap(a, b);
-      if (a == last_a && b == last_b) return;  // boundaries run along rows
-      last_a = a;
-      last_b = b;
-      std::vector<int>& list = neighbours[a];
-      if (std::find(list.begin(), list.end(), b) == list.end()) list.push_back(b);
-    };
-    for (int y = 0; y < h; ++y) {
-      const int* row = seg.pixel_segment.data() + static_cast<std::size_t>(y) * w;
-      const int* below = y + 1 < h ? row + w : nullptr;
-      int x = 0;
+    // Ids beyond max_id have no pixels: such a segment is dropped.
+    const int ra = a <= max_id ? remap[a] : -1;
+    const int rb = b <= max_id ? remap[b] : -1;
+    if (ra < 0 || rb < 0 || ra == rb) continue;
+    edges.emplace_back(std::min(ra, rb), std::max(ra, rb));
+  }
+  sortUniqueEdges(edges);
+  return edges;
+}
+
+// EdgeSource::Grid: the pairs of segments (of `segments`, ids in the w x h
+// image `pixel_segment`) that touch left-right or up-down, sorted, each once,
+// into `edges` (its capacity is reused).
+void listGridEdges(const std::vector<int>& pixel_segment, int w, int h, int segments,
+                   std::vector<std::pair<int, int>>& edges) {
+  // Neighbour lists (a segment has a handful) instead of sorting every
+  // boundary pixel pair.
+  // Per-thread and kept between calls: the lists keep their capacity, so a
+  // frame's ~1500 segments cost no allocation once warm.
+  thread_local std::vector<std::vector<int>> neighbours_tls;
+  std::vector<std::vector<int>>& neighbours = neighbours_tls;
+  if (neighbours.size() < static_cast<std::size_t>(segments)) neighbours.resize(segments);
+  for (int a = 0; a < segments; ++a) neighbours[a].clear();
+  int last_a = -1, last_b = -1;
+  const auto add = [&](int a, int b) {
+    if (a < 0 || b < 0 || a == b) return;
+    if (a > b) std::swap(a, b);
+    if (a == last_a && b == last_b) return;  // boundaries run along rows
+    last_a = a;
+    last_b = b;
+    std::vector<int>& list = neighbours[a];
+    if (std::find(list.begin(), list.end(), b) == list.end()) list.push_back(b);
+  };
+  for (int y = 0; y < h; ++y) {
+    const int* row = pixel_segment.data() + static_cast<std::size_t>(y) * w;
+    const int* below = y + 1 < h ? row + w : nullptr;
+    int x = 0;
 #if defined(__SSE2__)
-      // Most pixels equal their right and lower neighbours: four at a time,
-      // and only a group with a boundary goes pixel by pixel (in the same
-      // order, so the same calls to add()).
-      if (below) {
-        for (; x + 5 <= w; x += 4) {
-          const __m128i here = _mm_loadu_si128(reinterpret_cast<const __m128i*>(row + x));
-          const __m128i right = _mm_loadu_si128(reinterpret_cast<const __m128i*>(row + x + 1));
-          const __m128i under = _mm_loadu_si128(reinterpret_cast<const __m128i*>(below + x));
-          const __m128i same =
-              _mm_and_si128(_mm_cmpeq_epi32(here, right), _mm_cmpeq_epi32(here, under));
-          if (_mm_movemask_epi8(same) == 0xffff) continue;
-          // The loop below's body, written out (k + 1 < w holds here): a
-          // lambda shared by both made the oversegmenter 1.03 of itself.
-          for (int k = x; k < x + 4; ++k) {
-            if (row[k] != row[k + 1]) add(row[k], row[k + 1]);
-            if (row[k] != below[k]) add(row[k], below[k]);
-          }
+    // Most pixels equal their right and lower neighbours: four at a time,
+    // and only a group with a boundary goes pixel by pixel (in the same
+    // order, so the same calls to add()).
+    if (below) {
+      for (; x + 5 <= w; x += 4) {
+        const __m128i here = _mm_loadu_si128(reinterpret_cast<const __m128i*>(row + x));
+        const __m128i right = _mm_loadu_si128(reinterpret_cast<const __m128i*>(row + x + 1));
+        const __m128i under = _mm_loadu_si128(reinterpret_cast<const __m128i*>(below + x));
+        const __m128i same =
+            _mm_and_si128(_mm_cmpeq_epi32(here, right), _mm_cmpeq_epi32(here, under));
+        if (_mm_movemask_epi8(same) == 0xffff) continue;
+        // The loop below's body, written out (k + 1 < w holds here): a
+        // lambda shared by both made the oversegmenter 1.03 of itself.
+        for (int k = x; k < x + 4; ++k) {
+          if (row[k] != row[k + 1]) add(row[k], row[k + 1]);
+          if (row[k] != below[k]) add(row[k], below[k]);
         }
       }
-#endif
-      for (; x < w; ++x) {
-        if (x + 1 < w && row[x] != row[x + 1]) add(row[x], row[x + 1]);
-        if (below && row[x] != below[x]) add(row[x], below[x]);
-      }
     }
-    std::size_t edge_count = 0;
-    for (int a = 0; a < next; ++a) edge_count += neighbours[a].size();
-    edges.clear();
-    edges.reserve(edge_count);
-    for (int a = 0; a < next; ++a) {
-      std::sort(neighbours[a].begin(), neighbours[a].end());
-      for (const int b : neighbours[a]) edges.emplace_back(a, b);
+#endif
+    for (; x < w; ++x) {
+      if (x + 1 < w && row[x] != row[x + 1]) add(row[x], row[x + 1]);
+      if (below && row[x] != below[x]) add(row[x], below[x]);
     }
   }
+  std::size_t edge_count = 0;
+  for (int a = 0; a < segments; ++a) edge_count += neighbours[a].size();
+  edges.clear();
+  edges.reserve(edge_count);
+  for (int a = 0; a < segments; ++a) {
+    std::sort(neighbours[a].begin(), neighbours[a].end());
+    for (const int b : neighbours[a]) edges.emplace_back(a, b);
+  }
+}
+
+}  // namespace
+
+void finalizeOversegmentation(Oversegmentation& seg, int min_points, EdgeSource edge_source) {
+  const std::size_t n = checkFinalizeInput(seg, min_points);
+  const int max_id = checkedMaxId(seg.pixel_segment.data(), n);
+  thread_local std::vector<int> counts_tls, remap_tls, run_start_tls;
+  std::vector<int>& counts = counts_tls;
+  std::vector<int>& remap = remap_tls;
+  std::vector<int>& run_start = run_start_tls;
+  countPixelsByRun(seg.pixel_segment.data(), n, max_id, counts, run_start);
+  const int kept = renumberKeptSegments(counts, min_points, remap);
+  resizeSegmentLists(seg, kept);
+  giveLargestListsToLargestSegments(seg, counts, remap, kept);
+  listPixelsOfSegments(seg, counts, remap, run_start, kept);
   if (edge_source == EdgeSource::Keep) {
-    sortUniqueEdges(kept_edges);  // grid edges come out sorted
-    seg.edges = std::move(kept_edges);
+    seg.edges = renumberedKeptEdges(seg, remap, max_id, n);
+  } else {
+    // Written into seg.edges itself: its capacity is reused.
+    listGridEdges(seg.pixel_segment, seg.width, seg.height, kept, seg.edges);
   }
 }
 

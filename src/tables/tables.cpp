@@ -329,14 +329,28 @@ TableCluster reusedTable(TableCluster&& old) {
   table.pixels.clear();
   return table;
 }
-}  // namespace
 
-void detectTablesInto(const OrganizedCloud& cloud_ground, const LabelImage& labels,
-                      const TableConfig& config, const NormalImage* normals_ground,
-                      TableDetection& result) {
-  // The earlier frame's tables become spares, the rest of `result` is reset.
-  thread_local std::vector<TableCluster> spare_tls;
-  std::vector<TableCluster>& spare = spare_tls;
+// detectTablesInto's working buffers, kept per thread: the stage runs once
+// per frame, and a stream of frames then reuses them.
+struct DetectionScratch {
+  std::vector<TableCluster> spare;  // at most kMaxSpareTables
+  // Step 1: the sampled table points and their pixels; with a stride, also
+  // every table point's pixel and the sample index per grid cell (or -1).
+  std::vector<Eigen::Vector3f> points;
+  std::vector<int> pixels, full_pixels, sample_at;
+  // Step 2: the cluster of each sampled point and (with a stride) of each
+  // table point; the members of each cluster, full and sampled.
+  std::vector<int> cluster_of, full_cluster;
+  std::vector<int> member_start, members, sample_start, sample_members, fill;
+  // Step 3: the sampled points of the cluster being described.
+  std::vector<Eigen::Vector3f> cluster_points;
+  // Step 5: where each search position is (the reachability grid is built
+  // around them).
+  std::vector<Eigen::Vector2f> position_xy;
+};
+
+// The earlier frame's tables become spares; the rest of `result` is reset.
+void resetDetection(TableDetection& result, std::vector<TableCluster>& spare) {
   for (TableCluster& old : result.tables) {
     if (spare.size() < kMaxSpareTables) spare.push_back(std::move(old));
   }
@@ -344,90 +358,91 @@ void detectTablesInto(const OrganizedCloud& cloud_ground, const LabelImage& labe
   result.diagnostics.clear();
   result.table_points = result.nonfinite_points = result.implausible_points = 0;
   result.clusters_rejected = result.unsampled_points = 0;
-  const auto takeTable = [&spare] {
-    if (spare.empty()) return TableCluster{};
-    TableCluster table = reusedTable(std::move(spare.back()));
-    spare.pop_back();
-    return table;
-  };
-  validateTableConfig(config);
+}
+
+// A spare's buffers for the next table (a new table when none is left).
+TableCluster takeSpareTable(std::vector<TableCluster>& spare) {
+  if (spare.empty()) return TableCluster{};
+  TableCluster table = reusedTable(std::move(spare.back()));
+  spare.pop_back();
+  return table;
+}
+
+void checkNormals(const OrganizedCloud& cloud_ground, const NormalImage* normals_ground) {
   if (normals_ground && !cloud_ground.points.empty() &&
       normals_ground->normals.size() != cloud_ground.points.size()) {
     throw Error("findTables: " + std::to_string(normals_ground->normals.size()) +
                 " normals for a cloud of " + std::to_string(cloud_ground.points.size()) +
                 " points");
   }
-  const float cos_tilt = std::cos(config.horizontal_tilt_deg * static_cast<float>(M_PI) / 180.0f);
-  if (cloud_ground.points.empty()) {
-    result.diagnostics.push_back(
-        "no ground-aligned cloud (no ground plane for this frame): no tables");
-    return;
-  }
-  checkInputs(cloud_ground, labels);
+}
 
-  // 1. Table points: every one (`full_*`, for pixels, counts, confidence
-  // and normals) and those at the sampled pixels (`points`, `pixels`, for
-  // clustering and geometry; see "Point stride" in tables.hpp). With a
-  // stride of 1 the two are the same lists. Working buffers are kept per
-  // thread: the stage runs once per frame and a stream of frames then
-  // reuses them.
-  const int stride = config.point_stride;
-  const int width = cloud_ground.width, height = cloud_ground.height;
-  // The sample grid: cell (gx, gy) holds pixel (gx * stride, gy * stride).
-  const int grid_width = (width + stride - 1) / stride;
-  const int grid_height = (height + stride - 1) / stride;
-  thread_local std::vector<Eigen::Vector3f> points_tls, cluster_points_tls;
-  thread_local std::vector<int> pixels_tls, member_start_tls, members_tls, fill_tls;
-  thread_local std::vector<int> full_pixels_tls, full_cluster_tls, sample_at_tls;
-  thread_local std::vector<int> sample_start_tls, sample_members_tls;
-  std::vector<Eigen::Vector3f>& points = points_tls;
-  std::vector<int>& pixels = pixels_tls;
-  std::vector<int>& full_pixels_buffer = full_pixels_tls;
-  std::vector<int>& sample_at = sample_at_tls;  // sample index per grid cell, or -1
-  points.clear();
-  pixels.clear();
-  full_pixels_buffer.clear();
-  if (stride == 1) {
-    collectTablePoints(cloud_ground, labels, config, points, pixels, result);
-  } else {
-    // Every table point counts (full_pixels_buffer), the sampled ones also
-    // go to points and pixels. (Not collectTablePoints followed by a pick of
-    // the sampled points: copying every point first made the stride-2 table
-    // stage 1.13 of this in tables_bench.)
-    sample_at.assign(static_cast<std::size_t>(grid_width) * grid_height, -1);
-    for (int y = 0; y < height; ++y) {
-      const bool sampled_row = y % stride == 0;
-      const std::size_t row = static_cast<std::size_t>(y) * width;
-      const std::uint8_t* label_row = labels.labels.data() + row;
-      for (int x = 0; x < width; ++x) {
-        if (label_row[x] != kTableLabel) {
-          // Skip to the next table pixel (as collectTablePoints).
-          const void* next =
-              std::memchr(label_row + x, kTableLabel, static_cast<std::size_t>(width - x));
-          if (!next) break;
-          x = static_cast<int>(static_cast<const std::uint8_t*>(next) - label_row);
-        }
-        const std::size_t i = row + static_cast<std::size_t>(x);
-        const Eigen::Vector3f& p = cloud_ground.points[i];
-        const TablePoint kind = classifyTablePoint(p, config);
-        if (kind == TablePoint::kNonFinite) {
-          ++result.nonfinite_points;
-          continue;
-        }
-        if (kind == TablePoint::kImplausible) {
-          ++result.implausible_points;
-          continue;
-        }
-        ++result.table_points;
-        full_pixels_buffer.push_back(static_cast<int>(i));
-        if (!sampled_row || x % stride != 0) continue;
-        sample_at[static_cast<std::size_t>(y / stride) * grid_width + x / stride] =
-            static_cast<int>(points.size());
-        points.push_back(p);
-        pixels.push_back(static_cast<int>(i));
+// The sample grid of tables.point_stride: cell (gx, gy) holds pixel
+// (gx * stride, gy * stride).
+struct SampleGrid {
+  int stride = 1;
+  int width = 0, height = 0;            // of the image
+  int grid_width = 0, grid_height = 0;  // in cells
+};
+
+SampleGrid sampleGridOf(const OrganizedCloud& cloud, int stride) {
+  return {stride, cloud.width, cloud.height, (cloud.width + stride - 1) / stride,
+          (cloud.height + stride - 1) / stride};
+}
+
+// Step 1 with a stride > 1: every table point counts (`full_pixels`), the
+// sampled ones also go to `points` and `pixels` and are entered in
+// `sample_at`. (Not collectTablePoints followed by a pick of the sampled
+// points: copying every point first made the stride-2 table stage 1.13 of
+// this in tables_bench.)
+void collectSampledTablePoints(const OrganizedCloud& cloud_ground, const LabelImage& labels,
+                               const TableConfig& config, const SampleGrid& grid,
+                               DetectionScratch& scratch, TableDetection& result) {
+  const int stride = grid.stride, width = grid.width, height = grid.height;
+  const int grid_width = grid.grid_width;
+  std::vector<Eigen::Vector3f>& points = scratch.points;
+  std::vector<int>& pixels = scratch.pixels;
+  std::vector<int>& full_pixels_buffer = scratch.full_pixels;
+  std::vector<int>& sample_at = scratch.sample_at;
+  sample_at.assign(static_cast<std::size_t>(grid_width) * grid.grid_height, -1);
+  for (int y = 0; y < height; ++y) {
+    const bool sampled_row = y % stride == 0;
+    const std::size_t row = static_cast<std::size_t>(y) * width;
+    const std::uint8_t* label_row = labels.labels.data() + row;
+    for (int x = 0; x < width; ++x) {
+      if (label_row[x] != kTableLabel) {
+        // Skip to the next table pixel (as collectTablePoints).
+        const void* next =
+            std::memchr(label_row + x, kTableLabel, static_cast<std::size_t>(width - x));
+        if (!next) break;
+        x = static_cast<int>(static_cast<const std::uint8_t*>(next) - label_row);
       }
+      const std::size_t i = row + static_cast<std::size_t>(x);
+      const Eigen::Vector3f& p = cloud_ground.points[i];
+      const TablePoint kind = classifyTablePoint(p, config);
+      if (kind == TablePoint::kNonFinite) {
+        ++result.nonfinite_points;
+        continue;
+      }
+      if (kind == TablePoint::kImplausible) {
+        ++result.implausible_points;
+        continue;
+      }
+      ++result.table_points;
+      full_pixels_buffer.push_back(static_cast<int>(i));
+      if (!sampled_row || x % stride != 0) continue;
+      sample_at[static_cast<std::size_t>(y / stride) * grid_width + x / stride] =
+          static_cast<int>(points.size());
+      points.push_back(p);
+      pixels.push_back(static_cast<int>(i));
     }
   }
+}
+
+// Step 1's diagnostics; false (with the reason) when no point is left to
+// cluster.
+bool reportTablePoints(const TableConfig& config, std::size_t sampled_points,
+                       TableDetection& result) {
   if (result.nonfinite_points > 0) {
     result.diagnostics.push_back(std::to_string(result.nonfinite_points) +
                                  " table-labelled points with non-finite coordinates ignored");
@@ -440,97 +455,153 @@ void detectTablesInto(const OrganizedCloud& cloud_ground, const LabelImage& labe
   }
   if (result.table_points == 0) {
     result.diagnostics.push_back("no table-labelled points at table height: no tables");
-    return;
+    return false;
   }
-  if (points.empty()) {
+  if (sampled_points == 0) {
     result.unsampled_points = result.table_points;
-    result.diagnostics.push_back(std::to_string(result.table_points) +
-                                 " table points, none at a sampled pixel " +
-                                 "(tables.point_stride " + std::to_string(stride) + "): no tables");
-    return;
+    result.diagnostics.push_back(
+        std::to_string(result.table_points) + " table points, none at a sampled pixel " +
+        "(tables.point_stride " + std::to_string(config.point_stride) + "): no tables");
+    return false;
   }
+  return true;
+}
 
-  // 2. Clusters of the sampled points; with a stride, every other table
-  // point joins the cluster of a sampled corner of its grid cell within the
-  // tolerance (tables.hpp). Then the members of each cluster, full and
-  // sampled, grouped by counting sorts: they stay in ascending point order,
-  // hence ascending pixel order, so table.pixels needs no sort, and sums over
-  // members run in the same order as before.
-  thread_local std::vector<int> cluster_of_tls;
-  std::vector<int>& cluster_of = cluster_of_tls;
-  clusterPointsInto(points, config.cluster_tolerance_m, PointGrid{&pixels, width, stride},
-                    cluster_of);
-  const int clusters = *std::max_element(cluster_of.begin(), cluster_of.end()) + 1;
-  const std::vector<int>& full_pixels = stride > 1 ? full_pixels_buffer : pixels;
-  std::vector<int>& full_cluster_buffer = full_cluster_tls;
-  if (stride > 1) {
-    const float tol2 = config.cluster_tolerance_m * config.cluster_tolerance_m;
-    full_cluster_buffer.resize(full_pixels.size());
-    for (std::size_t k = 0; k < full_pixels.size(); ++k) {
-      const int pixel = full_pixels[k];
-      const int gx = (pixel % width) / stride, gy = (pixel / width) / stride;
-      const Eigen::Vector3f& p = cloud_ground.points[static_cast<std::size_t>(pixel)];
-      int cluster = -1;
-      // Own corner first (the point itself when it is sampled), then the
-      // cell's other corners.
-      for (int corner = 0; corner < 4 && cluster < 0; ++corner) {
-        const int cx = gx + (corner & 1), cy = gy + (corner >> 1);
-        if (cx >= grid_width || cy >= grid_height) continue;
-        const int s = sample_at[static_cast<std::size_t>(cy) * grid_width + cx];
-        if (s >= 0 && (points[s] - p).squaredNorm() <= tol2) cluster = cluster_of[s];
-      }
-      full_cluster_buffer[k] = cluster;
-      if (cluster < 0) ++result.unsampled_points;
+// Step 2 with a stride > 1: each table point joins the cluster of a sampled
+// corner of its grid cell within the tolerance (scratch.full_cluster, -1 = none;
+// tables.hpp), its own corner first; the others are counted as unsampled.
+void joinSampledClusters(const OrganizedCloud& cloud_ground, const TableConfig& config,
+                         const SampleGrid& grid, DetectionScratch& scratch,
+                         TableDetection& result) {
+  const int stride = grid.stride, width = grid.width;
+  const int grid_width = grid.grid_width, grid_height = grid.grid_height;
+  const std::vector<int>& full_pixels = scratch.full_pixels;
+  const std::vector<Eigen::Vector3f>& points = scratch.points;
+  const std::vector<int>& sample_at = scratch.sample_at;
+  const std::vector<int>& cluster_of = scratch.cluster_of;
+  std::vector<int>& full_cluster_buffer = scratch.full_cluster;
+  const float tol2 = config.cluster_tolerance_m * config.cluster_tolerance_m;
+  full_cluster_buffer.resize(full_pixels.size());
+  for (std::size_t k = 0; k < full_pixels.size(); ++k) {
+    const int pixel = full_pixels[k];
+    const int gx = (pixel % width) / stride, gy = (pixel / width) / stride;
+    const Eigen::Vector3f& p = cloud_ground.points[static_cast<std::size_t>(pixel)];
+    int cluster = -1;
+    // Own corner first (the point itself when it is sampled), then the
+    // cell's other corners.
+    for (int corner = 0; corner < 4 && cluster < 0; ++corner) {
+      const int cx = gx + (corner & 1), cy = gy + (corner >> 1);
+      if (cx >= grid_width || cy >= grid_height) continue;
+      const int sample = sample_at[static_cast<std::size_t>(cy) * grid_width + cx];
+      if (sample >= 0 && (points[sample] - p).squaredNorm() <= tol2) cluster = cluster_of[sample];
     }
-    if (result.unsampled_points > 0) {
-      result.diagnostics.push_back(std::to_string(result.unsampled_points) +
-                                   " table points with no sampled point " +
-                                   "within tables.cluster_tolerance_m (tables.point_stride " +
-                                   std::to_string(stride) + ") left out");
+    full_cluster_buffer[k] = cluster;
+    if (cluster < 0) ++result.unsampled_points;
+  }
+  if (result.unsampled_points > 0) {
+    result.diagnostics.push_back(std::to_string(result.unsampled_points) +
+                                 " table points with no sampled point " +
+                                 "within tables.cluster_tolerance_m (tables.point_stride " +
+                                 std::to_string(stride) + ") left out");
+  }
+}
+
+// Counting sort of `of` (cluster per point, -1 = none) into `start` and
+// `order`, a run of one cluster at a time: points come in pixel order, so
+// a table's points lie in long runs of one cluster, and point by point
+// every count and every placement waited for the previous one's store to
+// the same counter. Members stay in ascending point order, hence ascending
+// pixel order, so table.pixels needs no sort, and sums over members run in
+// the same order as before.
+void groupByCluster(int clusters, const std::vector<int>& of, std::vector<int>& start,
+                    std::vector<int>& order, std::vector<int>& fill) {
+  start.assign(static_cast<std::size_t>(clusters) + 1, 0);
+  const std::size_t count = of.size();
+  for (std::size_t i = 0, end = 0; i < count; i = end) {
+    end = detail::intRunEnd(of.data(), i, count);
+    if (of[i] >= 0) start[of[i] + 1] += static_cast<int>(end - i);
+  }
+  for (int c = 0; c < clusters; ++c) start[c + 1] += start[c];
+  order.resize(static_cast<std::size_t>(start[clusters]));
+  fill.assign(start.begin(), start.end() - 1);
+  for (std::size_t i = 0, end = 0; i < count; i = end) {
+    end = detail::intRunEnd(of.data(), i, count);
+    const int c = of[i];
+    if (c < 0) continue;
+    std::iota(order.begin() + fill[c], order.begin() + fill[c] + static_cast<int>(end - i),
+              static_cast<int>(i));
+    fill[c] += static_cast<int>(end - i);
+  }
+}
+
+// The members of each cluster: those of cluster c are members[start[c] ..
+// start[c + 1]) (indices into the full table points), and sample_members
+// [sample_start[c] .. sample_start[c + 1]) (indices into the sampled points).
+// With a stride of 1 the two are the same lists.
+struct ClusterMembers {
+  const std::vector<int>& start;
+  const std::vector<int>& members;
+  const std::vector<int>& sample_start;
+  const std::vector<int>& sample_members;
+};
+
+// Step 3's checks of one described cluster of n points, in this order; a
+// rejected one is counted and its reason goes to the diagnostics. With
+// normals, also sets the table's horizontal share.
+bool acceptTable(const ClusterOutcome& outcome, const MemberSums& sums, int n, bool with_normals,
+                 const TableConfig& config, TableCluster& table, TableDetection& result) {
+  if (!outcome.ok) {
+    ++result.clusters_rejected;
+    result.diagnostics.push_back(outcome.reason + ": dropped");
+    return false;
+  }
+  if (table.top_area_m2 < config.min_top_area_m2) {
+    ++result.clusters_rejected;
+    result.diagnostics.push_back("cluster of " + std::to_string(n) + " points with a top of " +
+                                 fmt(table.top_area_m2) + " m² (below tables.min_top_area_m2 " +
+                                 fmt(config.min_top_area_m2) + "): dropped");
+    return false;
+  }
+  if (table.mean_confidence < config.min_confidence) {
+    ++result.clusters_rejected;
+    result.diagnostics.push_back("cluster of " + std::to_string(n) +
+                                 " points with mean confidence " + fmt(table.mean_confidence) +
+                                 " (below tables.min_confidence " + fmt(config.min_confidence) +
+                                 "): dropped");
+    return false;
+  }
+  if (with_normals) {
+    table.horizontal_share =
+        sums.valid_normals > 0 ? static_cast<float>(sums.horizontal) / sums.valid_normals : 0.0f;
+    if (table.horizontal_share < config.min_horizontal_share) {
+      ++result.clusters_rejected;
+      result.diagnostics.push_back("cluster of " + std::to_string(n) + " points with " +
+                                   fmt(100.0 * table.horizontal_share) +
+                                   " % horizontal points (below " + "tables.min_horizontal_share " +
+                                   fmt(config.min_horizontal_share) + "): dropped");
+      return false;
     }
   }
-  const std::vector<int>& full_cluster = stride > 1 ? full_cluster_buffer : cluster_of;
-  // Counting sort of `of` (cluster per point, -1 = none) into `start` and
-  // `order`, a run of one cluster at a time: points come in pixel order, so
-  // a table's points lie in long runs of one cluster, and point by point
-  // every count and every placement waited for the previous one's store to
-  // the same counter.
-  const auto groupByCluster = [clusters](const std::vector<int>& of, std::vector<int>& start,
-                                         std::vector<int>& order, std::vector<int>& fill) {
-    start.assign(static_cast<std::size_t>(clusters) + 1, 0);
-    const std::size_t count = of.size();
-    for (std::size_t i = 0, end = 0; i < count; i = end) {
-      end = detail::intRunEnd(of.data(), i, count);
-      if (of[i] >= 0) start[of[i] + 1] += static_cast<int>(end - i);
-    }
-    for (int c = 0; c < clusters; ++c) start[c + 1] += start[c];
-    order.resize(static_cast<std::size_t>(start[clusters]));
-    fill.assign(start.begin(), start.end() - 1);
-    for (std::size_t i = 0, end = 0; i < count; i = end) {
-      end = detail::intRunEnd(of.data(), i, count);
-      const int c = of[i];
-      if (c < 0) continue;
-      std::iota(order.begin() + fill[c], order.begin() + fill[c] + static_cast<int>(end - i),
-                static_cast<int>(i));
-      fill[c] += static_cast<int>(end - i);
-    }
-  };
-  std::vector<int>& member_start = member_start_tls;
-  std::vector<int>& members = members_tls;  // indices into full_pixels
-  groupByCluster(full_cluster, member_start, members, fill_tls);
-  std::vector<int>& sample_start = stride > 1 ? sample_start_tls : member_start;
-  std::vector<int>& sample_members = stride > 1 ? sample_members_tls : members;  // into points
-  if (stride > 1) groupByCluster(cluster_of, sample_start, sample_members, fill_tls);
+  return true;
+}
 
+// Step 3: each cluster of a size within the limits described (geometry from
+// its sampled points, confidence and horizontal share from all of them) and,
+// when it passes the checks, appended to result.tables with its pixels.
+void describeClusters(int clusters, const ClusterMembers& m, const std::vector<int>& full_pixels,
+                      const LabelImage& labels, const NormalImage* normals_ground,
+                      const TableConfig& config, DetectionScratch& scratch,
+                      TableDetection& result) {
+  const float cos_tilt = std::cos(config.horizontal_tilt_deg * static_cast<float>(M_PI) / 180.0f);
   int small_clusters = 0, largest_small = 0;
-  std::vector<TableCluster>& tables = result.tables;  // empty (see the top)
-  std::vector<Eigen::Vector3f>& cluster_points = cluster_points_tls;
+  std::vector<TableCluster>& tables = result.tables;  // empty (resetDetection)
+  std::vector<Eigen::Vector3f>& cluster_points = scratch.cluster_points;
   // The table being described: a spare's buffers, kept across rejected
   // clusters and replaced when it is taken.
-  TableCluster table = takeTable();
+  TableCluster table = takeSpareTable(scratch.spare);
   for (int c = 0; c < clusters; ++c) {
-    const int* member = members.data() + member_start[c];
-    const int n = member_start[c + 1] - member_start[c];
+    const int* member = m.members.data() + m.start[c];
+    const int n = m.start[c + 1] - m.start[c];
     if (n < config.min_cluster_points) {
       ++small_clusters;
       largest_small = std::max(largest_small, n);
@@ -543,47 +614,17 @@ void detectTablesInto(const OrganizedCloud& cloud_ground, const LabelImage& labe
                                    std::to_string(config.max_cluster_points) + ") dropped");
       continue;
     }
-    // 3. Geometry, from the cluster's sampled points.
-    const int* sample_member = sample_members.data() + sample_start[c];
-    const int samples = sample_start[c + 1] - sample_start[c];
+    const int* sample_member = m.sample_members.data() + m.sample_start[c];
+    const int samples = m.sample_start[c + 1] - m.sample_start[c];
     cluster_points.resize(static_cast<std::size_t>(samples));
-    gatherByIndex(points.data(), sample_member, samples, cluster_points.data());
-    const MemberSums sums = memberSums(member, n, full_pixels.data(), labels.confidence,
-                                       normals_ground, cos_tilt);
+    gatherByIndex(scratch.points.data(), sample_member, samples, cluster_points.data());
+    const MemberSums sums =
+        memberSums(member, n, full_pixels.data(), labels.confidence, normals_ground, cos_tilt);
     table = reusedTable(std::move(table));
     table.mean_confidence = static_cast<float>(sums.confidence / n);
     const ClusterOutcome outcome = describeCluster(cluster_points, n, config, table);
-    if (!outcome.ok) {
-      ++result.clusters_rejected;
-      result.diagnostics.push_back(outcome.reason + ": dropped");
+    if (!acceptTable(outcome, sums, n, normals_ground != nullptr, config, table, result)) {
       continue;
-    }
-    if (table.top_area_m2 < config.min_top_area_m2) {
-      ++result.clusters_rejected;
-      result.diagnostics.push_back("cluster of " + std::to_string(n) + " points with a top of " +
-                                   fmt(table.top_area_m2) + " m² (below tables.min_top_area_m2 " +
-                                   fmt(config.min_top_area_m2) + "): dropped");
-      continue;
-    }
-    if (table.mean_confidence < config.min_confidence) {
-      ++result.clusters_rejected;
-      result.diagnostics.push_back("cluster of " + std::to_string(n) +
-                                   " points with mean confidence " + fmt(table.mean_confidence) +
-                                   " (below tables.min_confidence " + fmt(config.min_confidence) +
-                                   "): dropped");
-      continue;
-    }
-    if (normals_ground) {
-      table.horizontal_share =
-          sums.valid_normals > 0 ? static_cast<float>(sums.horizontal) / sums.valid_normals : 0.0f;
-      if (table.horizontal_share < config.min_horizontal_share) {
-        ++result.clusters_rejected;
-        result.diagnostics.push_back(
-            "cluster of " + std::to_string(n) + " points with " +
-            fmt(100.0 * table.horizontal_share) + " % horizontal points (below " +
-            "tables.min_horizontal_share " + fmt(config.min_horizontal_share) + "): dropped");
-        continue;
-      }
     }
     // A spare list that is too small grows with a quarter to spare, so that
     // over a stream the lists settle at sizes that fit the tables seen.
@@ -592,9 +633,9 @@ void detectTablesInto(const OrganizedCloud& cloud_ground, const LabelImage& labe
     table.pixels.resize(pixel_count);
     gatherByIndex(full_pixels.data(), member, n, table.pixels.data());
     tables.push_back(std::move(table));
-    table = takeTable();
+    table = takeSpareTable(scratch.spare);
   }
-  if (spare.size() < kMaxSpareTables) spare.push_back(std::move(table));
+  if (scratch.spare.size() < kMaxSpareTables) scratch.spare.push_back(std::move(table));
   if (small_clusters > 0) {
     result.clusters_rejected += small_clusters;
     result.diagnostics.push_back(
@@ -602,18 +643,24 @@ void detectTablesInto(const OrganizedCloud& cloud_ground, const LabelImage& labe
         std::to_string(config.min_cluster_points) + ") dropped, the largest of " +
         std::to_string(largest_small) + " points");
   }
-  // Largest first, ties in cluster order: a stable insertion sort (a frame
-  // has a handful of tables; std::stable_sort allocates a buffer).
+}
+
+// Largest first, ties in cluster order: a stable insertion sort (a frame
+// has a handful of tables; std::stable_sort allocates a buffer).
+void sortLargestFirst(std::vector<TableCluster>& tables) {
   for (std::size_t k = 1; k < tables.size(); ++k) {
     for (std::size_t j = k; j > 0 && tables[j - 1].point_count < tables[j].point_count; --j) {
       std::swap(tables[j - 1], tables[j]);
     }
   }
+}
 
-  // 4. Search positions, 5. their reachability.
+// Steps 4 and 5: each table's id and search positions, then their
+// reachability from one grid around all of them.
+void placeSearchPositions(const OrganizedCloud& cloud_ground, const LabelImage& labels,
+                          const TableConfig& config, std::vector<TableCluster>& tables,
+                          std::vector<Eigen::Vector2f>& position_xy) {
   Eigen::AlignedBox2f region;
-  thread_local std::vector<Eigen::Vector2f> position_xy_tls;
-  std::vector<Eigen::Vector2f>& position_xy = position_xy_tls;
   position_xy.clear();
   for (std::size_t k = 0; k < tables.size(); ++k) {
     tables[k].id = static_cast<int>(k);
@@ -623,15 +670,72 @@ void detectTablesInto(const OrganizedCloud& cloud_ground, const LabelImage& labe
       position_xy.push_back(p.xy);
     }
   }
-  if (!tables.empty()) {
-    const float margin = config.robot_radius_m + config.floor_cell_m;
-    region.extend(region.min() - Eigen::Vector2f::Constant(margin));
-    region.extend(region.max() + Eigen::Vector2f::Constant(margin));
-    const ReachabilityGrid grid(cloud_ground, labels, region, position_xy, config);
-    for (auto& found : tables) {
-      for (auto& position : found.search_positions) grid.assess(position);
-    }
+  if (tables.empty()) return;
+  const float margin = config.robot_radius_m + config.floor_cell_m;
+  region.extend(region.min() - Eigen::Vector2f::Constant(margin));
+  region.extend(region.max() + Eigen::Vector2f::Constant(margin));
+  const ReachabilityGrid grid(cloud_ground, labels, region, position_xy, config);
+  for (auto& found : tables) {
+    for (auto& position : found.search_positions) grid.assess(position);
   }
+}
+
+}  // namespace
+
+void detectTablesInto(const OrganizedCloud& cloud_ground, const LabelImage& labels,
+                      const TableConfig& config, const NormalImage* normals_ground,
+                      TableDetection& result) {
+  thread_local DetectionScratch scratch_tls;
+  DetectionScratch& scratch = scratch_tls;
+  resetDetection(result, scratch.spare);
+  validateTableConfig(config);
+  checkNormals(cloud_ground, normals_ground);
+  if (cloud_ground.points.empty()) {
+    result.diagnostics.push_back(
+        "no ground-aligned cloud (no ground plane for this frame): no tables");
+    return;
+  }
+  checkInputs(cloud_ground, labels);
+
+  // 1. Table points: every one (`full_pixels`, for pixels, counts,
+  // confidence and normals) and those at the sampled pixels (`points`,
+  // `pixels`, for clustering and geometry; see "Point stride" in
+  // tables.hpp). With a stride of 1 the two are the same lists.
+  const SampleGrid grid = sampleGridOf(cloud_ground, config.point_stride);
+  const bool strided = grid.stride > 1;
+  scratch.points.clear();
+  scratch.pixels.clear();
+  scratch.full_pixels.clear();
+  if (strided) {
+    collectSampledTablePoints(cloud_ground, labels, config, grid, scratch, result);
+  } else {
+    collectTablePoints(cloud_ground, labels, config, scratch.points, scratch.pixels, result);
+  }
+  if (!reportTablePoints(config, scratch.points.size(), result)) return;
+
+  // 2. Clusters of the sampled points (and, with a stride, of the others),
+  // then the members of each cluster, full and sampled.
+  clusterPointsInto(scratch.points, config.cluster_tolerance_m,
+                    PointGrid{&scratch.pixels, grid.width, grid.stride}, scratch.cluster_of);
+  const int clusters = *std::max_element(scratch.cluster_of.begin(), scratch.cluster_of.end()) + 1;
+  if (strided) joinSampledClusters(cloud_ground, config, grid, scratch, result);
+  const std::vector<int>& full_pixels = strided ? scratch.full_pixels : scratch.pixels;
+  const std::vector<int>& full_cluster = strided ? scratch.full_cluster : scratch.cluster_of;
+  groupByCluster(clusters, full_cluster, scratch.member_start, scratch.members, scratch.fill);
+  if (strided) {
+    groupByCluster(clusters, scratch.cluster_of, scratch.sample_start, scratch.sample_members,
+                   scratch.fill);
+  }
+  const ClusterMembers members{scratch.member_start, scratch.members,
+                               strided ? scratch.sample_start : scratch.member_start,
+                               strided ? scratch.sample_members : scratch.members};
+
+  // 3. Geometry and checks, one cluster at a time.
+  describeClusters(clusters, members, full_pixels, labels, normals_ground, config, scratch, result);
+  sortLargestFirst(result.tables);
+
+  // 4. Search positions, 5. their reachability.
+  placeSearchPositions(cloud_ground, labels, config, result.tables, scratch.position_xy);
 }
 
 std::vector<TableCluster> findTables(const OrganizedCloud& cloud_ground, const LabelImage& labels,
