@@ -120,16 +120,16 @@ TEST(WebCommand, SaveThisFrameAndReloadReachTheDaemonAndItsStatusComesBack) {
 
   auto commands = std::make_shared<io::MemoryBus>(100);
   auto out = std::make_shared<io::MemoryBus>(10000);
-  Config config;
+  daemon::test::TestConfig config;
   config.segmenter = segmenter;
-  config.extra["daemon.model_path"] = installed;
-  config.extra["daemon.status_period_s"] = "60";
-  config.extra["daemon.pose_input"] = "false";
-  config.extra["daemon.collect_dir"] = tmp.str("collected");
+  config.set("daemon.model_path", installed);
+  config.set("daemon.status_period_s", "60");
+  config.set("daemon.pose_input", "false");
+  config.set("daemon.collect_dir", tmp.str("collected"));
   daemon::PipelineHooks hooks;
   hooks.output_bus = out;
   hooks.command_bus = commands;
-  daemon::Pipeline pipeline(segmenter, daemon::resolveDaemonConfig(config), first,
+  daemon::Pipeline pipeline(segmenter, config.daemon, first,
                             "installed.fmf:" + first->id(), daemon::ExecutionMode::Sequential,
                             hooks);
   pipeline.start();
