@@ -14,6 +14,7 @@
 #include <set>
 #include <thread>
 
+#include "daemon_test_config.hpp"
 #include "daemon_test_support.hpp"
 #include "findmug/offline/cv_folds.hpp"
 #include "findmug/daemon/pipeline.hpp"

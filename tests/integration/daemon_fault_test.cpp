@@ -12,6 +12,7 @@
 #include <memory>
 #include <thread>
 
+#include "daemon_test_config.hpp"
 #include "daemon_test_support.hpp"
 #include "findmug/daemon/daemon.hpp"
 #include "findmug/daemon/status_builder.hpp"

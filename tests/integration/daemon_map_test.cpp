@@ -24,6 +24,7 @@
 #include <set>
 #include <thread>
 
+#include "daemon_test_config.hpp"
 #include "daemon_test_support.hpp"
 #include "findmug/common/error.hpp"
 #include "findmug/daemon/daemon_config.hpp"
@@ -813,7 +814,8 @@ TEST(DaemonOnMemoryBus, TheBusesApplyTheChannelSuffix) {
   pose_bus->end();
   auto out = std::make_shared<io::MemoryBus>(100000);
   std::map<std::string, int> seen;
-  for (const std::string base : {io::kLabelsChannel, io::kTablesChannel, io::kStatusChannel}) {
+  for (const std::string_view name : {io::kLabelsChannel, io::kTablesChannel, io::kStatusChannel}) {
+    const std::string base(name);
     for (const std::string channel : {base, base + "_R2"}) {
       out->subscribe(channel, [&seen](const std::string& c, const std::uint8_t*, std::size_t) {
         ++seen[c];

@@ -14,6 +14,7 @@
 #include <mutex>
 #include <thread>
 
+#include "daemon_test_config.hpp"
 #include "daemon_test_support.hpp"
 #include "findmug/common/error.hpp"
 #include "findmug/daemon/daemon.hpp"

@@ -199,7 +199,7 @@ TEST(Findmugd, UnknownSettingsAreRefusedAndCheckConfigPrintsTheEffectiveValues) 
   const std::vector<std::pair<std::string, std::string>> bad = {
       {"daemon:\n  workers: 2\n  wokers: 2\n", "line 3: unknown setting 'daemon.wokers' (daemon keys: "},
       {"forrest:\n  num_trees: 3\n", "line 2: unknown setting 'forrest.num_trees': no section 'forrest'"},
-      {"web:\n  prot: 1\n", "unknown setting 'web.prot' (web keys: "}};
+      {"web:\n  prot: 1\n", "line 2: unknown setting 'web.prot' (web keys: "}};
   for (std::size_t i = 0; i < bad.size(); ++i) {
     const std::string yaml = tmp.str("bad" + std::to_string(i) + ".yaml");
     std::ofstream(yaml) << bad[i].first;

@@ -22,6 +22,7 @@
 #include <map>
 #include <thread>
 
+#include "daemon_test_config.hpp"
 #include "daemon_test_support.hpp"
 #include "findmug/daemon/pipeline.hpp"
 #include "findmug/common/error.hpp"

@@ -13,20 +13,9 @@
 
 #include "findmug/frame/dataset.hpp"
 #include "findmug/learner/forest.hpp"
-#include "findmug/daemon/daemon_config.hpp"
 #include "findmug/settings/config.hpp"
 
 namespace findmug::daemon::test {
-
-// findmugd's settings as a test writes them: set(KEY, VALUE) hands one `section.name`
-// to findmugd's schema (daemonSchema), which parses it into `segmenter` or `daemon`.
-struct TestConfig : Config {
-  DaemonConfig daemon;
-  TestConfig& set(const std::string& key, const std::string& value) {
-    daemonSchema(*this, daemon).set(key, value);
-    return *this;
-  }
-};
 
 // Settings that keep the tests quick on a 2-core machine while exercising
 // every stage (the organized oversegmenter; the MRF stays on).

@@ -6,6 +6,7 @@
 // nothing; without a bus the endpoint answers 503. Traffic: loopback HTTP only.
 // The project's headers (Eigen) before httplib.h: the <resolv.h> it pulls in defines a
 // macro _res, a parameter name inside Eigen.
+#include "daemon_test_config.hpp"
 #include "daemon_test_support.hpp"
 #include "findmug/common/error.hpp"
 #include "findmug/daemon/pipeline.hpp"
