@@ -337,7 +337,9 @@ MapRun runPipeline(const Sequence& seq, const std::string& pose_log,
   // speed), so the history must hold all of it, not the default 5 s that
   // covers a live pipeline's latency.
   config.set("daemon.pose_history_s", "1000");
-  for (const auto& o : overrides) applyOverride(config, o);
+  const SettingsSchema schema = daemonSchema(config, config.daemon);
+  for (const auto& o : overrides) schema.applyOverride(o);
+  schema.validate("<flags>");
   const DaemonConfig dc = config.daemon;
   MapRun run;
   {

@@ -122,7 +122,7 @@ void runAndCompare(const std::string& spec, std::size_t expected_frames,
   TempDir tmp;
   const std::string out = tmp.str("out.lcmlog");
   test::TestConfig config = baseConfig(spec, out);
-  for (const auto& o : overrides) applyOverride(config, o);
+  for (const auto& o : overrides) daemonSchema(config, config.daemon).applyOverride(o);
   config.set("daemon.queue_capacity", "16");  // a finite replay: keep every frame
   const DaemonConfig dc = config.daemon;
   {
