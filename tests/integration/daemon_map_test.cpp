@@ -818,7 +818,7 @@ TEST(DaemonOnMemoryBus, TheBusesApplyTheChannelSuffix) {
   std::map<std::string, int> seen;
   for (const std::string_view name : {io::kLabelsChannel, io::kTablesChannel, io::kStatusChannel}) {
     const std::string base(name);
-    for (const std::string channel : {base, base + "_R2"}) {
+    for (const std::string& channel : {base, base + "_R2"}) {
       out->subscribe(channel, [&seen](const std::string& c, const std::uint8_t*, std::size_t) {
         ++seen[c];
       });
