@@ -4,6 +4,7 @@
 
 #include "findmug/common/numbers.hpp"
 #include "findmug/settings/settings.hpp"
+#include "program_settings.hpp"
 #include "findmug/version.hpp"
 
 namespace findmug::cli {
@@ -32,14 +33,19 @@ void addConfigFlags(CLI::App& app, ConfigFlags& flags, const std::string& config
       });
 }
 
-void declareProjectSections() {
-  for (const char* name : kProjectSections) configSections().addSectionName(name);
+void readSettings(const ConfigFlags& flags, SettingsSchema& schema) {
+  acceptSharedFileSettings(schema);
+  if (flags.config_path) schema.readFile(*flags.config_path);
+  for (const auto& kv : flags.overrides) schema.applyOverride(kv);
+  const std::string origin = flags.config_path ? *flags.config_path : std::string("<flags>");
+  schema.validate(flags.config_path && !flags.overrides.empty() ? origin + " + flags" : origin);
 }
 
 Config configFrom(const ConfigFlags& flags) {
-  declareProjectSections();
-  Config config = flags.config_path ? loadConfig(*flags.config_path) : Config{};
-  for (const auto& kv : flags.overrides) applyOverride(config, kv);
+  Config config;
+  SettingsSchema schema;
+  bindCoreSettings(schema, config);
+  readSettings(flags, schema);
   return config;
 }
 

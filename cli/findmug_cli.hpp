@@ -13,29 +13,18 @@
 #pragma once
 
 #include <CLI/CLI.hpp>
-#include <array>
 #include <memory>
 #include <optional>
 #include <string>
 #include <vector>
 
 #include "findmug/settings/config.hpp"
+#include "findmug/settings/settings.hpp"
 
 namespace findmug::cli {
 
 // An app named `program` (used in messages and --version) with --version.
 std::unique_ptr<CLI::App> makeApp(const std::string& program, const std::string& description);
-
-// The config file is shared by the project's programs. These are the sections
-// that belong to one program and that every other one must accept unread
-// (findmug-train reads findmugd.yaml): the daemon's `daemon:` and `check:`,
-// the clients' `clients:`, findmug-web's `web:`. The owner registers its section with its keys
-// (findmugd: daemon/daemon_config.cpp); others know only the name. The core's
-// own sections (SegmenterConfig and `table_map:`) are not listed here.
-inline constexpr std::array<const char*, 4> kProjectSections = {"daemon", "check", "clients",
-                                                                 "web"};
-// Registers kProjectSections by name in findmug::configSections(). Idempotent.
-void declareProjectSections();
 
 // --config FILE and repeatable --set KEY=VALUE.
 struct ConfigFlags {
@@ -43,9 +32,13 @@ struct ConfigFlags {
   std::vector<std::string> overrides;  // KEY=VALUE as given
 };
 void addConfigFlags(CLI::App& app, ConfigFlags& flags, const std::string& config_help);
-// The config those flags give: the --config file (or the defaults) with every --set on top.
-// Declares the project's sections first (declareProjectSections).
-// Throws findmug::Error naming the file or the setting that is wrong.
+// Reads the --config file (if any), then every --set, through `schema`: the tables the
+// program bound get its values, every other table of the shared file
+// (acceptSharedFileSettings, program_settings.hpp) checks its section; then the rules
+// across keys. Throws findmug::Error naming the file, line or setting that is wrong.
+void readSettings(const ConfigFlags& flags, SettingsSchema& schema);
+// For a program that uses the segmenter's sections only (findmug-train, findmug-eval):
+// readSettings with bindCoreSettings.
 Config configFrom(const ConfigFlags& flags);
 
 CLI::Option* addSourceFlag(CLI::App& app, std::string& spec, const std::string& help);

@@ -29,11 +29,13 @@ inline cli::StopSignals& stopSignals() {
 }
 inline void installStopHandlers() { stopSignals(); }
 
-// The client's bus on `url` (--lcm-url; empty = LCM's default provider), or null after
-// saying on stderr that it cannot be opened.
-inline std::unique_ptr<io::Bus> openBus(const std::string& url, const char* program) {
+// The client's bus on `url` (--lcm-url; empty = LCM's default provider) with its
+// --channel-suffix applied by the bus (channels are then named by their base names), or
+// null after saying on stderr that it cannot be opened.
+inline std::shared_ptr<io::Bus> openBus(const std::string& url, const char* program,
+                                        const std::string& channel_suffix) {
   try {
-    return io::openBus(url, "--lcm-url");
+    return io::openBus(url, "--lcm-url", channel_suffix);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "%s: cannot open LCM provider '%s': %s\n", program,
                  url.empty() ? "default" : url.c_str(), e.what());

@@ -331,13 +331,11 @@ int main(int argc, char** argv) {
                  out_dir.string().c_str());
     return 2;
   }
-  std::string labels_channel, frames_channel, tables_channel, map_channel, semantic_channel;
+  const std::string labels_channel(io::kLabelsChannel), frames_channel(io::kRgbdChannel),
+      tables_channel(io::kTablesChannel), map_channel(io::kTableMapChannel),
+      semantic_channel(io::kSemanticMapChannel);
   try {
-    labels_channel = io::channelName(io::kLabelsChannel, suffix);
-    frames_channel = io::channelName(io::kRgbdChannel, suffix);
-    tables_channel = io::channelName(io::kTablesChannel, suffix);
-    map_channel = io::channelName(io::kTableMapChannel, suffix);
-    semantic_channel = io::channelName(io::kSemanticMapChannel, suffix);
+    io::checkChannelSuffix(suffix);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "%s: --channel-suffix: %s (see --help)\n", kProgram, e.what());
     return 2;
@@ -352,7 +350,7 @@ int main(int argc, char** argv) {
     }
   }
 
-  const std::unique_ptr<io::Bus> bus = clients::openBus(url, kProgram);
+  const std::shared_ptr<io::Bus> bus = clients::openBus(url, kProgram, suffix);
   if (!bus) return 1;
   clients::installStopHandlers();
   LabelViewer viewer(out_dir, static_cast<float>(alpha), every, write_png, std::move(source));
@@ -393,9 +391,9 @@ int main(int argc, char** argv) {
       },
       [&](const io::SemanticMapMessage& m, const std::string&) { viewer.onSemanticMap(m); },
       report("semantic map"));
-  std::fprintf(stderr, "%s: listening on %s, %s, %s, %s and %s\n", kProgram,
+  std::fprintf(stderr, "%s: listening on %s, %s, %s, %s and %s, %s\n", kProgram,
                labels_channel.c_str(), frames_channel.c_str(), tables_channel.c_str(),
-               map_channel.c_str(), semantic_channel.c_str());
+               map_channel.c_str(), semantic_channel.c_str(), bus->describe().c_str());
   return clients::receiveLoop(*bus, kProgram,
                               [&] { return count > 0 && viewer.received() >= count; });
 }

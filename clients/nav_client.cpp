@@ -173,15 +173,15 @@ int main(int argc, char** argv) {
   if (auto code = cli::parse(*app, argc, argv)) return *code;
   if (frame_name == "base") frame = FrameChoice::Base;
   if (frame_name == "map") frame = FrameChoice::Map;
-  std::string channel;
+  const std::string channel(map ? io::kTableMapChannel : io::kTablesChannel);
   try {
-    channel = io::channelName(map ? io::kTableMapChannel : io::kTablesChannel, suffix);
+    io::checkChannelSuffix(suffix);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "%s: --channel-suffix: %s (see --help)\n", kProgram, e.what());
     return 2;
   }
 
-  const std::unique_ptr<io::Bus> bus = clients::openBus(url, kProgram);
+  const std::shared_ptr<io::Bus> bus = clients::openBus(url, kProgram, suffix);
   if (!bus) return 1;
   clients::installStopHandlers();
   NavClient client(frame, json);
@@ -195,7 +195,10 @@ int main(int argc, char** argv) {
       [](const std::string& error) {
         std::fprintf(stderr, "%s: skipping bad message: %s\n", kProgram, error.c_str());
       });
-  if (!json) std::fprintf(stderr, "%s: listening on %s\n", kProgram, channel.c_str());
+  if (!json) {
+    std::fprintf(stderr, "%s: listening on %s, %s\n", kProgram, channel.c_str(),
+                 bus->describe().c_str());
+  }
   // --count counts every message, bad ones included.
   return clients::receiveLoop(*bus, kProgram, [&] {
     return count > 0 && tables.received() >= static_cast<std::uint64_t>(count);

@@ -41,7 +41,7 @@ int main(int argc, char** argv) {
     loaded = loadDaemonConfig(command_line);
     setupLogging(loaded.daemon.log_level);
     if (command_line.check_config) {
-      std::cout << dumpConfig(loaded.config);
+      std::cout << dumpDaemonConfig(loaded);
       return 0;
     }
   } catch (const std::exception& e) {
@@ -67,7 +67,7 @@ int main(int argc, char** argv) {
   }
 
   spdlog::info("findmugd starting; config from {}; effective config:\n{}", loaded.origin,
-               dumpConfig(loaded.config));
+               dumpDaemonConfig(loaded));
   try {
     Daemon daemon(loaded.config, loaded.daemon);
     const auto stop_registration = stop_signals.onStop([&daemon] { daemon.requestStop(); });

@@ -15,6 +15,7 @@
 #include "findmug/daemon/status_builder.hpp"
 #include "findmug/io/channels.hpp"
 #include "findmug/io/frame_source.hpp"
+#include "findmug/io/udpm.hpp"
 
 namespace findmug::daemon {
 
@@ -80,7 +81,8 @@ Pipeline::Pipeline(const SegmenterConfig& segmenter_config, const DaemonConfig& 
   if (!forest || forest->empty()) throw Error("findmugd: the model has no trees");
   std::shared_ptr<io::Bus> bus = hooks_.output_bus;
   if (!bus) bus = std::make_shared<io::LcmBus>(effectiveLcmUrl(daemon_config_), "daemon.lcm_url");
-  const std::string& suffix = daemon_config_.channel_suffix;
+  // Every bus of the daemon applies daemon.channel_suffix: channels are named by base name.
+  bus = io::withChannelSuffix(std::move(bus), daemon_config_.channel_suffix);
   // The sinks, in the order they see a result: the map first, as the frame's
   // tables_t carries what the map made of it.
   // With the semantic map on, FINDMUG_TABLE_MAP carries the map's tables instead.
@@ -98,17 +100,16 @@ Pipeline::Pipeline(const SegmenterConfig& segmenter_config, const DaemonConfig& 
     options.fused_labels = daemon_config_.semantic_map_fused_labels;
     options.file = daemon_config_.semantic_map_file;
     options.save_period_s = daemon_config_.semantic_map_save_s;
-    options.map_channel = io::channelName(io::kSemanticMapChannel, suffix);
-    options.table_map_channel = io::channelName(io::kTableMapChannel, suffix);
+    options.map_channel = io::kSemanticMapChannel;
+    options.table_map_channel = io::kTableMapChannel;
     semantic_map_ = std::make_shared<SemanticMapStage>(
         std::move(options), bus, [this](const std::string& what) { recordError(what); });
   }
   publisher_ = std::make_shared<LcmPublisherSink>(
       std::move(bus),
-      LcmPublisherSink::Channels{io::channelName(io::kLabelsChannel, suffix),
-                                 io::channelName(io::kTablesChannel, suffix),
-                                 io::channelName(io::kTableMapChannel, suffix),
-                                 io::channelName(io::kStatusChannel, suffix)},
+      LcmPublisherSink::Channels{std::string(io::kLabelsChannel), std::string(io::kTablesChannel),
+                                 std::string(io::kTableMapChannel),
+                                 std::string(io::kStatusChannel)},
       daemon_config_.publish_confidence, daemon_config_.publish_tables);
   if (daemon_config_.publish_color) publisher_->publishColor(daemon_config_.color_jpeg_quality);
   publish_step_.addSink(table_map_sink_);
@@ -207,7 +208,7 @@ Pipeline::Pipeline(const SegmenterConfig& segmenter_config, const DaemonConfig& 
       [this](const std::string& what) { recordErrorQuietly(what); });
   const auto command_url = effectiveCommandUrl(daemon_config_);
   if (hooks_.command_bus || command_url) {
-    const std::string channel = io::channelName(io::kCommandChannel, daemon_config_.channel_suffix);
+    const std::string channel(io::kCommandChannel);
     std::map<std::string, CommandInput::Handler> handlers;
     handlers.emplace("reload_model", [this](const io::CommandMessage& c) {
       if (!c.argument.empty()) {
@@ -220,13 +221,13 @@ Pipeline::Pipeline(const SegmenterConfig& segmenter_config, const DaemonConfig& 
       requestFrameSave(c.request_id, c.argument);
     });
     auto on_command_error = [this](const std::string& what) { recordError(what); };
-    if (hooks_.command_bus) {
-      command_input_ = std::make_unique<CommandInput>(hooks_.command_bus, channel,
-                                                      std::move(handlers), on_command_error);
-    } else {
-      command_input_ = std::make_unique<CommandInput>(*command_url, channel, std::move(handlers),
-                                                      on_command_error);
+    std::shared_ptr<io::Bus> command_bus = hooks_.command_bus;
+    if (!command_bus) {
+      command_bus = io::openBus(*command_url, "daemon.command_url (commands on " + channel + ")");
     }
+    command_input_ = std::make_unique<CommandInput>(
+        io::withChannelSuffix(std::move(command_bus), daemon_config_.channel_suffix), channel,
+        std::move(handlers), on_command_error);
     spdlog::info("commands from {} on {}", command_input_->describe(), channel);
   } else {
     spdlog::info("no command input ({}): reload the model with SIGHUP",
@@ -236,16 +237,15 @@ Pipeline::Pipeline(const SegmenterConfig& segmenter_config, const DaemonConfig& 
   }
   const auto pose_url = effectivePoseUrl(daemon_config_);
   if (hooks_.pose_bus || pose_url) {
-    const std::string channel =
-        io::channelName(io::kRobotPoseChannel, daemon_config_.channel_suffix);
+    const std::string channel(io::kRobotPoseChannel);
     auto on_pose_error = [this](const std::string& what) { recordError(what); };
-    if (hooks_.pose_bus) {
-      pose_input_ = std::make_unique<PoseInput>(hooks_.pose_bus, channel,
-                                                daemon_config_.pose_history_s, on_pose_error);
-    } else {
-      pose_input_ = std::make_unique<PoseInput>(*pose_url, channel, daemon_config_.pose_history_s,
-                                                on_pose_error);
+    std::shared_ptr<io::Bus> pose_bus = hooks_.pose_bus;
+    if (!pose_bus) {
+      pose_bus = io::openBus(*pose_url, "daemon.pose_url (robot poses on " + channel + ")");
     }
+    pose_input_ = std::make_unique<PoseInput>(
+        io::withChannelSuffix(std::move(pose_bus), daemon_config_.channel_suffix), channel,
+        daemon_config_.pose_history_s, on_pose_error);
     publish_step_.setPoseInput(pose_input_.get());
     spdlog::info("robot poses from {} on {}: tables also in the map frame, table map on {}",
                  hooks_.pose_bus     ? hooks_.pose_bus->describe()

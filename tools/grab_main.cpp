@@ -73,15 +73,15 @@ int main(int argc, char** argv) {
 
   cli::StopSignals stop_signals;  // before the source and LCM start threads
   try {
-    const std::string channel = channelName(channel_base, suffix);
+    const std::string& channel = channel_base;  // the bus applies --channel-suffix
     SourceSpec spec = parseSourceSpec(source_spec);
     if (rate >= 0) spec.options.rate_hz = rate;
     if (loop) spec.options.loop = true;
     std::unique_ptr<FrameSource> source = makeSource(spec);
 
-    LcmBus bus(url, "--lcm-url");
-    spdlog::info("findmug-grab: {} -> {} on {}", source->describe(), channel,
-                 url.empty() ? std::string("LCM default URL") : url);
+    const std::shared_ptr<Bus> bus =
+        withChannelSuffix(std::make_shared<LcmBus>(url, "--lcm-url"), suffix);
+    spdlog::info("findmug-grab: {} -> {} on {}", source->describe(), channel, bus->describe());
 
     // The source may block in next(); a stop signal turns into stop().
     const auto stop_registration = stop_signals.onStop([&source] { source->stop(); });
@@ -95,7 +95,7 @@ int main(int argc, char** argv) {
         if (!frame) break;
         const findmug_lcm::rgbd_frame_t msg = encodeRgbdFrame(*frame, encode);
         const std::vector<std::uint8_t> data = encodeMessage(msg);
-        if (!bus.publish(channel, data.data(), data.size())) {
+        if (!bus->publish(channel, data.data(), data.size())) {
           throw Error("publishing on " + channel + " failed");
         }
         ++published;

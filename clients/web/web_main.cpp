@@ -71,25 +71,24 @@ int main(int argc, char** argv) {
   if (auto code = cli::parse(*app, argc, argv)) return *code;
 
   web::WebConfig config;
-  std::string labels_channel, tables_channel, map_channel, semantic_channel, status_channel,
-      command_channel;
+  // Base names: the bus applies --channel-suffix (io::SuffixedBus).
+  const std::string labels_channel(io::kLabelsChannel), tables_channel(io::kTablesChannel),
+      map_channel(io::kTableMapChannel), semantic_channel(io::kSemanticMapChannel),
+      status_channel(io::kStatusChannel), command_channel(io::kCommandChannel);
   web::ServerOptions options;
   try {
-    web::registerWebSection();
-    const Config loaded = cli::configFrom(config_flags);
-    config = web::resolveWebConfig(loaded);
+    Config loaded;  // the segmenter's sections (the Label page's prediction) and web:
+    SettingsSchema schema;
+    bindCoreSettings(schema, loaded);
+    schema.bind(web::webSettings(), config);
+    cli::readSettings(config_flags, schema);
     if (!bind.empty()) config.bind = bind;
     if (port != 0) config.port = port;
     if (!token_file.empty()) config.token_file = token_file;
     if (!static_dir.empty()) config.static_dir = static_dir;
     if (!model_path.empty()) config.model_path = model_path;
     if (!nyu_rotations.empty()) config.nyu_rotations = nyu_rotations;
-    labels_channel = io::channelName(io::kLabelsChannel, suffix);
-    tables_channel = io::channelName(io::kTablesChannel, suffix);
-    map_channel = io::channelName(io::kTableMapChannel, suffix);
-    semantic_channel = io::channelName(io::kSemanticMapChannel, suffix);
-    status_channel = io::channelName(io::kStatusChannel, suffix);
-    command_channel = io::channelName(io::kCommandChannel, suffix);
+    io::checkChannelSuffix(suffix);
     options.bind = config.bind;
     options.port = config.port;
     options.max_body_bytes = static_cast<std::size_t>(config.max_body_bytes);
@@ -114,7 +113,7 @@ int main(int argc, char** argv) {
   }
 
   clients::installStopHandlers();  // before any thread (the bus's, the server's) starts
-  const std::unique_ptr<io::Bus> bus = clients::openBus(url, kProgram);
+  const std::shared_ptr<io::Bus> bus = clients::openBus(url, kProgram, suffix);
   if (!bus) return 1;
   // The page's requests to findmugd (Save this frame, reload after an install) go out on
   // the same bus; Bus::publish may be called from the server's threads.

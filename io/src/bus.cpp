@@ -7,6 +7,7 @@
 #include <lcm/lcm-cpp.hpp>
 
 #include "findmug/common/error.hpp"
+#include "findmug/io/channels.hpp"
 
 namespace findmug::io {
 
@@ -125,6 +126,17 @@ std::size_t MemoryBus::queued() const {
 }
 
 // ---- FaultyBus ----------------------------------------------------------------
+
+SuffixedBus::SuffixedBus(std::shared_ptr<Bus> inner, std::string suffix)
+    : inner_(std::move(inner)), suffix_(std::move(suffix)) {
+  if (suffix_.empty()) throw Error("SuffixedBus: empty channel suffix");
+  checkChannelSuffix(suffix_);  // a malformed one: an Error naming it
+}
+
+std::shared_ptr<Bus> withChannelSuffix(std::shared_ptr<Bus> bus, const std::string& suffix) {
+  if (suffix.empty()) return bus;
+  return std::make_shared<SuffixedBus>(std::move(bus), suffix);
+}
 
 void FaultyBus::failPublish(const std::string& channel, bool fail) {
   std::lock_guard lock(mutex_);

@@ -6,8 +6,8 @@
 
 namespace findmug::io {
 
-std::string channelName(std::string_view base, std::string_view suffix) {
-  if (suffix.empty()) return std::string(base);
+void checkChannelSuffix(std::string_view suffix) {
+  if (suffix.empty()) return;
   bool ok = suffix.front() != '_';
   for (char c : suffix) {
     if (!(std::isalnum(static_cast<unsigned char>(c)) || c == '_')) ok = false;
@@ -16,6 +16,11 @@ std::string channelName(std::string_view base, std::string_view suffix) {
     throw Error("channel suffix '" + std::string(suffix) +
                 "': only letters, digits and '_' allowed, not starting with '_'");
   }
+}
+
+std::string channelName(std::string_view base, std::string_view suffix) {
+  if (suffix.empty()) return std::string(base);
+  checkChannelSuffix(suffix);
   return std::string(base) + "_" + std::string(suffix);
 }
 

@@ -437,4 +437,9 @@ std::unique_ptr<Bus> openBus(const std::string& url, const std::string& what) {
   return std::make_unique<LcmBus>(url, what);
 }
 
+std::shared_ptr<Bus> openBus(const std::string& url, const std::string& what,
+                             const std::string& channel_suffix) {
+  return withChannelSuffix(openBus(url, what), channel_suffix);
+}
+
 }  // namespace findmug::io

@@ -255,17 +255,6 @@ const SettingsTable<SemanticMapConfig>& semanticMapSettings() {
   return table;
 }
 
-SemanticMapConfig resolveSemanticMapConfig(Config& config) {
-  const auto& table = semanticMapSettings();
-  SemanticMapConfig out;
-  for (const auto& [key, value] : config.extra) {
-    if (key.rfind(table.section() + ".", 0) == 0) table.set(out, key, value);
-  }
-  validateSemanticMapConfig(out);
-  for (const auto& [key, value] : table.values(out)) config.extra[key] = value;
-  return out;
-}
-
 Eigen::Isometry3d cameraInMap(const Pose2D& base_in_map, const Eigen::Isometry3f& camera_to_base) {
   Eigen::Isometry3d base = Eigen::Isometry3d::Identity();
   base.linear() = Eigen::AngleAxisd(base_in_map.yaw, Eigen::Vector3d::UnitZ()).toRotationMatrix();

@@ -1,7 +1,6 @@
 #include "findmug/settings/config.hpp"
 
-#include <yaml-cpp/yaml.h>
-
+#include <algorithm>
 #include <charconv>
 #include <cmath>
 #include <fstream>
@@ -32,24 +31,6 @@ namespace {
 
 // One named setting of the segmenter (the shared mechanism, settings.hpp).
 using CoreSetting = Setting<SegmenterConfig>;
-
-[[noreturn]] void badValue(const std::string& origin, const std::string& key,
-                           const std::string& value, const std::string& expected) {
-  throw Error(origin + ": invalid value '" + value + "' for " + key + " (expected " + expected +
-              ")");
-}
-
-double parseDouble(const std::string& origin, const std::string& key, const std::string& value) {
-  const auto out = parseNumber(value);
-  if (!out) badValue(origin, key, value, "a finite number");
-  return *out;
-}
-
-long long parseInt(const std::string& origin, const std::string& key, const std::string& value) {
-  const auto out = parseInteger(value);
-  if (!out) badValue(origin, key, value, "an integer");
-  return *out;
-}
 
 std::string formatDouble(double v) { return formatSettingNumber(v); }
 
@@ -85,6 +66,25 @@ CoreSetting enumSetting(std::string key, std::function<Enum&(SegmenterConfig&)> 
                         std::vector<std::pair<std::string, Enum>> names) {
   return findmug::enumSetting<SegmenterConfig, Enum>(std::move(key), std::move(field),
                                                      std::move(names));
+}
+
+CoreSetting seedSetting(std::string key, std::function<std::uint64_t&(SegmenterConfig&)> field) {
+  return integerSetting<SegmenterConfig, std::uint64_t>(std::move(key), std::move(field), 0,
+                                                        std::numeric_limits<long long>::max());
+}
+
+CoreSetting baggingFractionSetting() {
+  CoreSetting s;
+  s.key = "forest.bagging_fraction";
+  s.set = [](SegmenterConfig& c, const std::string& value) {
+    const auto x = parseNumber(value);
+    if (!x || *x <= 0 || *x > 1) {
+      throwBadSettingValue("forest.bagging_fraction", value, "a number in (0, 1]");
+    }
+    c.forest.bagging_fraction = *x;
+  };
+  s.get = [](const SegmenterConfig& c) { return formatDouble(c.forest.bagging_fraction); };
+  return s;
 }
 
 const std::vector<CoreSetting>& settings() {
@@ -357,172 +357,99 @@ const std::vector<CoreSetting>& settings() {
                    [](C& c) -> float& { return c.tables.min_horizontal_share; }, 0, 1),
       floatSetting("tables.horizontal_tilt_deg",
                    [](C& c) -> float& { return c.tables.horizontal_tilt_deg; }, 0, 90),
+      // Last, so that each stays last in its section's listing: the seeds are
+      // 64-bit and the bagging fraction a double with an open lower end.
+      seedSetting("forest.seed", [](C& c) -> std::uint64_t& { return c.forest.seed; }),
+      baggingFractionSetting(),
+      seedSetting("ground.seed", [](C& c) -> std::uint64_t& { return c.ground.seed; }),
+      seedSetting("training.degraded_seed",
+                  [](C& c) -> std::uint64_t& { return c.training.degraded_seed; }),
   };
   return all;
 }
 
-// The seeds are 64-bit and the bagging fraction a double: handled apart from
-// the table above so that no precision is lost.
-bool setSpecial(SegmenterConfig& c, const std::string& key, const std::string& value,
-                const std::string& origin) {
-  if (key == "forest.seed" || key == "ground.seed" || key == "training.degraded_seed") {
-    const long long x = parseInt(origin, key, value);
-    if (x < 0) badValue(origin, key, value, "a non-negative integer");
-    (key == "forest.seed"   ? c.forest.seed
-     : key == "ground.seed" ? c.ground.seed
-                            : c.training.degraded_seed) = static_cast<std::uint64_t>(x);
-    return true;
-  }
-  if (key == "forest.bagging_fraction") {
-    const double x = parseDouble(origin, key, value);
-    if (x <= 0 || x > 1) badValue(origin, key, value, "a number in (0, 1]");
-    c.forest.bagging_fraction = x;
-    return true;
-  }
-  return false;
-}
+}  // namespace
 
-void setValue(Config& config, const std::string& key, const std::string& value,
-              const std::string& origin) {
-  const auto dot = key.find('.');
-  if (dot == std::string::npos || dot == 0 || dot + 1 == key.size()) {
-    throw Error(origin + ": setting '" + key + "' must be of the form section.name");
-  }
-  const std::string section = key.substr(0, dot);
-  // Sections outside SegmenterConfig, registered by their owners (settings.hpp):
-  // checked now when the owner gave a check, kept as text for it to resolve.
-  if (configSections().has(section)) {
-    try {
-      configSections().check(section, key, value);
-    } catch (const Error& e) {
-      throw Error(origin + ": " + e.what());
-    }
-    config.extra[key] = value;
-    return;
-  }
-  if (setSpecial(config.segmenter, key, value, origin)) return;
-  for (const auto& s : settings()) {
-    if (s.key == key) {
-      try {
-        s.set(config.segmenter, value);
-      } catch (const Error& e) {
-        throw Error(origin + ": " + e.what());
+const SettingsTable<SegmenterConfig>& segmenterSettings() {
+  static const SettingsTable<SegmenterConfig> table = [] {
+    std::vector<std::string> sections;
+    for (const auto& s : settings()) {
+      const std::string section = SettingsTable<SegmenterConfig>::sectionOf(s.key);
+      if (std::find(sections.begin(), sections.end(), section) == sections.end()) {
+        sections.push_back(section);
       }
-      return;
     }
-  }
-  throw Error(origin + ": unknown setting '" + key + "'");
+    SettingsTable<SegmenterConfig> t(std::move(sections));
+    for (const auto& s : settings()) t.add(s);
+    return t;
+  }();
+  return table;
 }
 
-void validateConsistency(const Config& config, const std::string& origin) {
-  const auto& c = config.segmenter;
+void validateSegmenterConfig(const SegmenterConfig& c) {
   if (c.overseg.seed_resolution_m <= c.overseg.voxel_resolution_m) {
-    throw Error(origin + ": overseg.seed_resolution_m (" +
+    throw Error("overseg.seed_resolution_m (" +
                 formatDouble(c.overseg.seed_resolution_m) +
                 ") must be larger than overseg.voxel_resolution_m (" +
                 formatDouble(c.overseg.voxel_resolution_m) + ")");
   }
   if (c.tables.min_table_height_m >= c.tables.max_table_height_m) {
-    throw Error(origin + ": tables.min_table_height_m must be below tables.max_table_height_m");
+    throw Error("tables.min_table_height_m must be below tables.max_table_height_m");
   }
   if (c.tables.arm_reach_m <= c.tables.safety_distance_m) {
-    throw Error(origin + ": tables.arm_reach_m (" + formatDouble(c.tables.arm_reach_m) +
+    throw Error("tables.arm_reach_m (" + formatDouble(c.tables.arm_reach_m) +
                 ") must exceed tables.safety_distance_m (" +
                 formatDouble(c.tables.safety_distance_m) +
                 "): from a search position the arm must reach past the table edge");
   }
   if (c.learner.classes != ClassScheme::Labels && c.training.split_labels != SplitLabels::Labels) {
-    throw Error(origin + ": learner.classes = " + classSchemeName(c.learner.classes) +
+    throw Error(std::string("learner.classes = ") + classSchemeName(c.learner.classes) +
                 " cannot be combined with training.split_labels (the internal classes already "
                 "choose the splits); set training.split_labels = labels");
   }
   if (c.learner.kind == LearnerKind::XGBoost && c.context.enabled) {
-    throw Error(origin + ": learner.kind = xgboost has no auto-context stage; set "
+    throw Error("learner.kind = xgboost has no auto-context stage; set "
                 "features.context = false or learner.kind = forest");
   }
   if (c.tables.min_cluster_points > c.tables.max_cluster_points) {
-    throw Error(origin + ": tables.min_cluster_points must not exceed tables.max_cluster_points");
+    throw Error("tables.min_cluster_points must not exceed tables.max_cluster_points");
   }
 }
 
-// A map key as text. YAML allows maps and sequences as keys ("? [a, b]: 1"),
-// which yaml-cpp's as<std::string>() answers with its own exception: name the
-// place instead (found by fuzzing, tests/fuzz/regressions/config_yaml).
-std::string keyText(const YAML::Node& key, const std::string& origin, const std::string& where) {
-  if (!key.IsScalar()) {
-    throw Error(origin + ": line " + std::to_string(key.Mark().line + 1) + ": " + where +
-                " key must be a plain name, not a map or list");
-  }
-  return key.Scalar();
+void bindCoreSettings(SettingsSchema& schema, Config& config) {
+  schema.bind(segmenterSettings(), config.segmenter, validateSegmenterConfig);
 }
-
-}  // namespace
 
 Config parseConfig(const std::string& yaml_text, const std::string& origin) {
-  YAML::Node root;
-  try {
-    root = YAML::Load(yaml_text);
-  } catch (const YAML::Exception& e) {
-    throw Error(origin + ": not valid YAML: " + e.what());
-  }
   Config config;
-  if (root.IsNull()) return config;  // an empty file means all defaults
-  if (!root.IsMap()) throw Error(origin + ": top level must be a map of sections");
-  for (const auto& section : root) {
-    const std::string section_name = keyText(section.first, origin, "section");
-    if (!section.second.IsMap()) {
-      throw Error(origin + ": section '" + section_name + "' must be a map of settings");
-    }
-    for (const auto& entry : section.second) {
-      const std::string key =
-          section_name + "." + keyText(entry.first, origin, "section '" + section_name + "':");
-      if (!entry.second.IsScalar()) {
-        throw Error(origin + ": setting '" + key + "' must be a single value");
-      }
-      setValue(config, key, entry.second.Scalar(), origin);
-    }
-  }
-  validateConsistency(config, origin);
+  SettingsSchema schema;
+  bindCoreSettings(schema, config);
+  schema.readYaml(yaml_text, origin);
+  schema.validate(origin);
   return config;
 }
 
 Config loadConfig(const std::string& path) {
-  std::ifstream in(path);
-  if (!in) throw Error(path + ": cannot open config file");
-  std::stringstream buffer;
-  buffer << in.rdbuf();
-  return parseConfig(buffer.str(), path);
+  Config config;
+  SettingsSchema schema;
+  bindCoreSettings(schema, config);
+  schema.readFile(path);
+  schema.validate(path);
+  return config;
 }
 
 void applyOverride(Config& config, const std::string& key_equals_value) {
-  const auto eq = key_equals_value.find('=');
-  if (eq == std::string::npos) {
-    throw Error("<flags>: override '" + key_equals_value + "' must be key=value");
-  }
-  setValue(config, key_equals_value.substr(0, eq), key_equals_value.substr(eq + 1), "<flags>");
-  validateConsistency(config, "<flags>");
+  SettingsSchema schema;
+  bindCoreSettings(schema, config);
+  schema.applyOverride(key_equals_value);
+  schema.validate("<flags>");
 }
 
 std::string dumpConfig(const Config& config) {
-  // Group "section.name" keys back into YAML sections, in a stable order.
-  std::map<std::string, std::vector<std::pair<std::string, std::string>>> sections;
-  auto add = [&](const std::string& key, const std::string& value) {
-    const auto dot = key.find('.');
-    sections[key.substr(0, dot)].emplace_back(key.substr(dot + 1), value);
-  };
-  for (const auto& s : settings()) add(s.key, s.get(config.segmenter));
-  add("forest.seed", std::to_string(config.segmenter.forest.seed));
-  add("forest.bagging_fraction", formatDouble(config.segmenter.forest.bagging_fraction));
-  add("ground.seed", std::to_string(config.segmenter.ground.seed));
-  add("training.degraded_seed", std::to_string(config.segmenter.training.degraded_seed));
-  for (const auto& [key, value] : config.extra) add(key, value);
-
-  std::ostringstream out;
-  for (const auto& [section, entries] : sections) {
-    out << section << ":\n";
-    for (const auto& [name, value] : entries) out << "  " << name << ": " << value << "\n";
-  }
-  return out.str();
+  Config copy = config;
+  SettingsSchema schema;
+  bindCoreSettings(schema, copy);
+  return schema.dump();
 }
 
 RandomForest::Settings extractionSettings(const SegmenterConfig& config) {
@@ -534,17 +461,6 @@ RandomForest::Settings extractionSettings(const SegmenterConfig& config) {
       out.emplace_back(s.key, s.get(config));
     }
   }
-  return out;
-}
-
-TableMapConfig resolveTableMapConfig(Config& config) {
-  const auto& table = tableMapSettings();
-  TableMapConfig out;
-  for (const auto& [key, value] : config.extra) {
-    if (key.rfind(table.section() + ".", 0) == 0) table.set(out, key, value);
-  }
-  validateTableMapConfig(out);
-  for (const auto& [key, value] : table.values(out)) config.extra[key] = value;
   return out;
 }
 

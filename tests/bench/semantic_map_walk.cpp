@@ -54,6 +54,8 @@
 #include "findmug/pipeline/segmenter.hpp"
 #include "findmug/settings/config.hpp"
 #include "findmug/synth/synth.hpp"
+#include "findmug_cli.hpp"
+#include "program_settings.hpp"
 
 namespace {
 
@@ -240,13 +242,18 @@ int main(int argc, char** argv) {
     }
   }
   try {
-    // findmugd's own sections are kept unchecked (this tool links the core only).
-    configSections().addSectionName("daemon");
-    configSections().addSectionName("check");
-    Config config = loadConfig(config_path);
+    // The file as findmugd reads it; this tool uses the segmenter's and the maps' sections.
+    Config config;
+    daemon::DaemonConfig daemon_settings;
+    SettingsSchema schema;
+    bindCoreSettings(schema, config);
+    daemon::bindDaemonSettings(schema, daemon_settings);
+    cli::acceptSharedFileSettings(schema);
+    schema.readFile(config_path);
+    schema.validate(config_path);
     config.segmenter.forest.num_threads = 1;
-    const SemanticMapConfig map_config = resolveSemanticMapConfig(config);
-    const TableMapConfig table_map_config = resolveTableMapConfig(config);
+    const SemanticMapConfig map_config = daemon_settings.semantic_map_config;
+    const TableMapConfig table_map_config = daemon_settings.table_map;
     auto forest = std::make_shared<const RandomForest>(RandomForest::load(model_path));
     const Segmenter segmenter(config.segmenter, forest);
     const double safety = config.segmenter.tables.safety_distance_m;

@@ -1,4 +1,4 @@
-// Fuzz target config_set: --set key=value lines (findmugd/tools flags) -> applyOverride + resolveDaemonConfig.
+// Fuzz target config_set: --set key=value lines (findmugd/tools flags) -> findmugd's settings schema.
 #include <cstddef>
 #include <cstdint>
 #include <sstream>
@@ -12,12 +12,14 @@
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   try {
     // One --set key=value per line, applied in order to the defaults.
-    findmug::Config config;
+    findmug::daemon::LoadedConfig loaded;
+    const findmug::SettingsSchema schema =
+        findmug::daemon::daemonSchema(loaded.config, loaded.daemon);
     std::istringstream lines(std::string(reinterpret_cast<const char*>(data), size));
     std::string line;
-    while (std::getline(lines, line)) findmug::applyOverride(config, line);
-    (void)findmug::daemon::resolveDaemonConfig(config);
-    (void)findmug::dumpConfig(config);
+    while (std::getline(lines, line)) schema.applyOverride(line);
+    schema.validate("<flags>");
+    (void)findmug::daemon::dumpDaemonConfig(loaded);
   } catch (const findmug::Error&) {
     // The expected answer to a bad input.
   }

@@ -1,4 +1,4 @@
-// Fuzz target config_yaml: YAML config text -> parseConfig + resolveDaemonConfig (findmugd.yaml).
+// Fuzz target config_yaml: YAML config text -> findmugd's settings schema (findmugd.yaml).
 #include <cstddef>
 #include <cstdint>
 #include <string>
@@ -10,10 +10,9 @@
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   try {
-    findmug::Config config =
-        findmug::parseConfig(std::string(reinterpret_cast<const char*>(data), size), "fuzz.yaml");
-    (void)findmug::daemon::resolveDaemonConfig(config);
-    (void)findmug::dumpConfig(config);
+    const findmug::daemon::LoadedConfig loaded = findmug::daemon::parseDaemonConfig(
+        std::string(reinterpret_cast<const char*>(data), size), "fuzz.yaml");
+    (void)findmug::daemon::dumpDaemonConfig(loaded);
   } catch (const findmug::Error&) {
     // The expected answer to a bad input.
   }

@@ -32,6 +32,7 @@
 #include "findmug/offline/nyu_mat.hpp"
 #include "findmug/settings/config.hpp"
 #include "findmug_cli.hpp"
+#include "program_settings.hpp"
 #include "fuzz_support.hpp"
 #include "lcm_samples.hpp"
 
@@ -279,18 +280,31 @@ void modelSeeds(SeedWriter& w, const fs::path& scratch) {
 }
 
 void configSeeds(SeedWriter& w, const fs::path& source_dir) {
-  cli::declareProjectSections();  // findmugd.yaml has the daemon's sections
-  auto checkYaml = [](const std::string& b) { (void)parseConfig(b, "seed"); };
+  // Read as findmugd reads them: the segmenter's sections and every other table of the file.
+  auto schemaOf = [](Config& c) {
+    SettingsSchema schema;
+    bindCoreSettings(schema, c);
+    cli::acceptSharedFileSettings(schema);
+    return schema;
+  };
+  auto checkYaml = [schemaOf](const std::string& b) {
+    Config c;
+    const SettingsSchema schema = schemaOf(c);
+    schema.readYaml(b, "seed");
+    schema.validate("seed");
+  };
   w.write("config_yaml", "defaults", dumpConfig(Config{}), checkYaml);
   w.write("config_yaml", "findmugd", readFile(source_dir / "daemon/findmugd.yaml"), checkYaml);
   const std::string sets =
       "cloud.max_depth_m=8\nmrf.max_iterations=5\nnormals.window_radius_px=3\noverseg.method=organized\n"
       "daemon.source=lcm:?url=memq://\ndaemon.queue_capacity=4\ndaemon.log_level=debug\n";
-  w.write("config_set", "overrides", sets, [](const std::string& b) {
+  w.write("config_set", "overrides", sets, [schemaOf](const std::string& b) {
     Config c;
+    const SettingsSchema schema = schemaOf(c);
     std::istringstream lines(b);
     std::string line;
-    while (std::getline(lines, line)) applyOverride(c, line);
+    while (std::getline(lines, line)) schema.applyOverride(line);
+    schema.validate("<flags>");
   });
   w.write("label_csv", "nyu40_to_findmug8", readFile(source_dir / "models/nyu40_to_findmug8.csv"),
           [](const std::string& b) { (void)parseLabelMapping(b, "seed"); });

@@ -125,6 +125,39 @@ TEST(LcmBus, MemqDeliversWithinTheHandleAndBadUrlNamesTheSetting) {
   }
 }
 
+// The channel suffix is the bus's: a program publishes and subscribes by base name, the
+// wire carries BASE_SUFFIX (what a raw subscriber of the same LCM provider sees).
+TEST(SuffixedBus, PublishesAndSubscribesByBaseNameOnTheSuffixedChannel) {
+  auto raw = std::make_shared<LcmBus>("memq://");
+  const std::shared_ptr<Bus> bus = withChannelSuffix(raw, "KITCHEN");
+  std::vector<std::string> raw_channels, base_got, other_got;
+  raw->subscribe(".*", [&](const std::string& c, const std::uint8_t*, std::size_t) {
+    raw_channels.push_back(c);
+  });
+  bus->subscribe("FINDMUG_STATUS", [&](const std::string& c, const std::uint8_t* d, std::size_t n) {
+    base_got.push_back(c + "=" + std::string(d, d + n));
+  });
+  const auto b = bytesOf("s");
+  ASSERT_TRUE(bus->publish("FINDMUG_STATUS", b.data(), b.size()));
+  // Another daemon's unsuffixed channel is not this bus's.
+  ASSERT_TRUE(raw->publish("FINDMUG_STATUS", b.data(), b.size()));
+  while (bus->handle(200ms) == HandleResult::Handled) {
+  }
+  EXPECT_EQ(raw_channels, (std::vector<std::string>{"FINDMUG_STATUS_KITCHEN", "FINDMUG_STATUS"}));
+  EXPECT_EQ(base_got, (std::vector<std::string>{"FINDMUG_STATUS_KITCHEN=s"}));
+  EXPECT_NE(bus->describe().find("_KITCHEN"), std::string::npos);
+
+  EXPECT_EQ(withChannelSuffix(raw, ""), raw);  // no suffix: the bus itself
+  for (const char* bad : {"A B", "_X", "X/Y"}) {
+    try {
+      withChannelSuffix(raw, bad);
+      ADD_FAILURE() << "suffix '" << bad << "' accepted";
+    } catch (const Error& e) {
+      EXPECT_NE(std::string(e.what()).find(bad), std::string::npos) << e.what();
+    }
+  }
+}
+
 TEST(Subscriber, DecodesCountsRejectsAndKeepsTheLatest) {
   MemoryBus bus;
   std::vector<std::uint64_t> seen;

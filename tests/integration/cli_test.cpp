@@ -16,6 +16,7 @@
 #include "findmug/daemon/daemon_config.hpp"
 #include "findmug/version.hpp"
 #include "findmug_cli.hpp"
+#include "program_settings.hpp"
 
 namespace findmug {
 namespace {
@@ -160,45 +161,73 @@ TEST(Cli, TrainAndEvalReadBothFlagFormsAndLastValueWins) {
   EXPECT_FALSE(has(r.err, "/nonexistent/second")) << r.err;
 }
 
-// findmug-eval reads findmugd's file without knowing the daemon's keys: the
-// project's other sections are accepted by name (cli::kProjectSections) and
-// kept, a section nobody registered is refused naming the setting.
-TEST(Cli, EvalAcceptsTheDaemonsSectionsByNameAndRefusesUnknownOnes) {
+// findmug-eval and findmug-train read findmugd's file with the real tables of every
+// section in it (cli/program_settings.hpp): the other programs' sections are accepted
+// and checked key by key, so a typo in `daemon:` is refused here too, and a section
+// no program has is refused naming the setting.
+TEST(Cli, EvalAndTrainCheckEverySectionOfTheSharedFile) {
   const std::string dir = ::testing::TempDir();
   const std::string shared = dir + "/cli_test_shared.yaml";
+  const std::string daemon_typo = dir + "/cli_test_daemon_typo.yaml";
   const std::string typo = dir + "/cli_test_typo.yaml";
-  std::ofstream(shared) << "daemon:\n  not_a_key_eval_knows: 1\nclients:\n  viewer_scale: 2\n"
-                           "check:\n  frames: 3\nforest:\n  num_trees: 3\n";
+  std::ofstream(shared) << "daemon:\n  workers: 2\ncheck:\n  frames: 3\nweb:\n  port: 9000\n"
+                           "table_map:\n  confirm_sightings: 5\nforest:\n  num_trees: 3\n";
+  std::ofstream(daemon_typo) << "forest:\n  num_trees: 3\ndaemon:\n  wokers: 2\n";
   std::ofstream(typo) << "forrest:\n  num_trees: 3\n";
-  const std::string eval(FINDMUG_EVAL_EXE);
-  const ProgramRun ok = runProgram(eval + " --config " + shared + " --data /nonexistent/d");
-  EXPECT_EQ(ok.exit_code, 1) << ok.err;
-  EXPECT_TRUE(has(ok.err, "/nonexistent/d")) << ok.err;  // got past the config
-  EXPECT_FALSE(has(ok.err, "not_a_key_eval_knows")) << ok.err;
-  const ProgramRun bad = runProgram(eval + " --config " + typo + " --data /nonexistent/d");
-  EXPECT_EQ(bad.exit_code, 1) << bad.err;
-  EXPECT_TRUE(has(bad.err, "unknown setting 'forrest.num_trees'")) << bad.err;
+  for (const std::string program : {FINDMUG_EVAL_EXE, FINDMUG_TRAIN_EXE}) {
+    const std::string exe =
+        program == FINDMUG_TRAIN_EXE ? program + " --out " + dir + "/cli_test.fmf" : program;
+    const ProgramRun ok = runProgram(exe + " --config " + shared + " --data /nonexistent/d");
+    EXPECT_EQ(ok.exit_code, 1) << ok.err;
+    EXPECT_TRUE(has(ok.err, "/nonexistent/d")) << exe << ": " << ok.err;  // got past the config
+    const ProgramRun bad_key = runProgram(exe + " --config " + daemon_typo + " --data /nonexistent/d");
+    EXPECT_EQ(bad_key.exit_code, 1) << bad_key.err;
+    EXPECT_TRUE(has(bad_key.err, daemon_typo + ": line 4: unknown setting 'daemon.wokers' (daemon keys: "))
+        << exe << ": " << bad_key.err;
+    const ProgramRun bad_flag =
+        runProgram(exe + " --config " + shared + " --set daemon.wokers=2 --data /nonexistent/d");
+    EXPECT_EQ(bad_flag.exit_code, 1) << bad_flag.err;
+    EXPECT_TRUE(has(bad_flag.err, "<flags>: unknown setting 'daemon.wokers'")) << bad_flag.err;
+    const ProgramRun bad = runProgram(exe + " --config " + typo + " --data /nonexistent/d");
+    EXPECT_EQ(bad.exit_code, 1) << bad.err;
+    EXPECT_TRUE(has(bad.err, "unknown setting 'forrest.num_trees': no section 'forrest'"))
+        << exe << ": " << bad.err;
+  }
 }
 
-// In a program that links the daemon (as this test does), findmugd registers
-// its sections with their keys: the same file is checked while it is read.
-TEST(Cli, ConfigFromChecksTheDaemonsKeysWhereTheDaemonIsLinked) {
+// readSettings: the tables a program binds get the values, parsed once; every other
+// section of the shared file is checked with its real table.
+TEST(Cli, ReadSettingsFillsTheBoundStructsAndChecksTheOthers) {
   const std::string path = ::testing::TempDir() + "/cli_test_daemon.yaml";
-  std::ofstream(path) << "daemon:\n  wokers: 2\nclients:\n  viewer_scale: 2\n";
+  std::ofstream(path) << "forest:\n  num_trees: 5\ndaemon:\n  wokers: 2\n";
   cli::ConfigFlags flags;
   flags.config_path = path;
   try {
     (void)cli::configFrom(flags);
     ADD_FAILURE() << "daemon.wokers accepted";
   } catch (const Error& e) {
-    EXPECT_TRUE(has(e.what(), path + ": unknown setting 'daemon.wokers' (daemon keys: "))
+    EXPECT_TRUE(has(e.what(), path + ": line 4: unknown setting 'daemon.wokers' (daemon keys: "))
         << e.what();
   }
-  flags.overrides = {"daemon.workers=2"};
-  std::ofstream(path) << "clients:\n  viewer_scale: 2\n";
-  const Config config = cli::configFrom(flags);
-  EXPECT_EQ(config.extra.at("clients.viewer_scale"), "2");
-  EXPECT_EQ(config.extra.at("daemon.workers"), "2");
+  std::ofstream(path) << "forest:\n  num_trees: 5\ndaemon:\n  workers: 2\n";
+  flags.overrides = {"web.port=9000", "forest.num_trees=6"};
+  EXPECT_EQ(cli::configFrom(flags).segmenter.forest.num_trees, 6);
+  // A program that binds web: gets its value; the daemon's section is still checked.
+  Config config;
+  web::WebConfig web;
+  SettingsSchema schema;
+  bindCoreSettings(schema, config);
+  schema.bind(web::webSettings(), web);
+  cli::readSettings(flags, schema);
+  EXPECT_EQ(web.port, 9000);
+  EXPECT_EQ(config.segmenter.forest.num_trees, 6);
+  flags.overrides = {"web.prot=9000"};
+  try {
+    cli::readSettings(flags, schema);
+    ADD_FAILURE() << "web.prot accepted";
+  } catch (const Error& e) {
+    EXPECT_TRUE(has(e.what(), "<flags>: unknown setting 'web.prot' (web keys: ")) << e.what();
+  }
 }
 
 #if defined(FINDMUG_REPLAY_EXE) && defined(FINDMUG_REPLAY_PROBE_EXE) && \

@@ -14,6 +14,7 @@
 #include <set>
 #include <thread>
 
+#include "daemon_test_config.hpp"
 #include "daemon_test_support.hpp"
 #include "findmug/offline/cv_folds.hpp"
 #include "findmug/daemon/pipeline.hpp"
@@ -67,13 +68,13 @@ const Shared* shared() {
 // into `dir` with `settings` (daemon.collect_* without the prefix).
 struct Rig {
   Rig(const std::string& dir, const std::map<std::string, std::string>& settings) {
-    Config config;
+    test::TestConfig config;
     config.segmenter = test::fastSegmenterConfig(kStep);
-    config.extra["daemon.model_path"] = shared()->dir.str("model.fmf");
-    config.extra["daemon.status_period_s"] = "60";
-    config.extra["daemon.pose_input"] = "false";
-    if (!dir.empty()) config.extra["daemon.collect_dir"] = dir;
-    for (const auto& [key, value] : settings) config.extra["daemon.collect_" + key] = value;
+    config.set("daemon.model_path", shared()->dir.str("model.fmf"));
+    config.set("daemon.status_period_s", "60");
+    config.set("daemon.pose_input", "false");
+    if (!dir.empty()) config.set("daemon.collect_dir", dir);
+    for (const auto& [key, value] : settings) config.set("daemon.collect_" + key, value);
     PipelineHooks hooks;
     hooks.output_bus = out;
     hooks.command_bus = commands;
@@ -81,7 +82,7 @@ struct Rig {
                    [this](const std::string& c, const std::uint8_t* d, std::size_t n) {
                      statuses.push_back(io::decodeMessage<findmug_lcm::status_t>(d, n, c));
                    });
-    pipeline = std::make_unique<Pipeline>(config.segmenter, resolveDaemonConfig(config),
+    pipeline = std::make_unique<Pipeline>(config.segmenter, config.daemon,
                                           shared()->forest, "tiny", ExecutionMode::Sequential,
                                           hooks);
     pipeline->start();

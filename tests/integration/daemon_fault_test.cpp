@@ -12,6 +12,7 @@
 #include <memory>
 #include <thread>
 
+#include "daemon_test_config.hpp"
 #include "daemon_test_support.hpp"
 #include "findmug/daemon/daemon.hpp"
 #include "findmug/daemon/status_builder.hpp"
@@ -50,14 +51,14 @@ TEST(DaemonFaults, CameraThatDisappearsMidRunIsReconnectedWithBackoffAndFramesFl
   test::linkDatasetSubset(nyu, {"0001", "0002", "0009", "0014"}, tmp.path() / "camera");
 
   const std::string out = tmp.str("out.lcmlog");
-  Config config;
+  test::TestConfig config;
   config.segmenter = segmenter;
-  config.extra["daemon.source"] = "lcm:unused";  // replaced by the source below
-  config.extra["daemon.lcm_url"] = "file://" + out + "?mode=w";
-  config.extra["daemon.model_path"] = model;
-  config.extra["daemon.workers"] = "2";
-  config.extra["daemon.status_period_s"] = "0.2";
-  const DaemonConfig dc = resolveDaemonConfig(config);
+  config.set("daemon.source", "lcm:unused");  // replaced by the source below
+  config.set("daemon.lcm_url", "file://" + out + "?mode=w");
+  config.set("daemon.model_path", model);
+  config.set("daemon.workers", "2");
+  config.set("daemon.status_period_s", "0.2");
+  const DaemonConfig dc = config.daemon;
 
   auto device = std::make_unique<findmug::test::UnpluggableDevice>(
       "dataset:" + (tmp.path() / "camera").string() + "?loop=1&rate_hz=5");

@@ -24,6 +24,7 @@
 #include <set>
 #include <thread>
 
+#include "daemon_test_config.hpp"
 #include "daemon_test_support.hpp"
 #include "findmug/common/error.hpp"
 #include "findmug/daemon/daemon_config.hpp"
@@ -90,38 +91,38 @@ TEST(PoseHistory, LatePosesAreOrderedDuplicatesReplaceOldOnesExpire) {
 
 // ---- settings -------------------------------------------------------------------------
 
-std::string errorOf(Config config) {
+// The error findmugd's settings give for one key read from a file (line 2 of it).
+std::string errorOf(const std::string& key, const std::string& value) {
+  const auto dot = key.find('.');
   try {
-    resolveDaemonConfig(config);
+    parseDaemonConfig(key.substr(0, dot) + ":\n  " + key.substr(dot + 1) + ": " + value + "\n",
+                      "test.yaml");
   } catch (const Error& e) {
     return e.what();
   }
   return "";
 }
 
-TEST(DaemonMapConfig, PoseAndTableMapKeysAreParsedValidatedAndWrittenBack) {
-  Config config;
-  config.extra["daemon.pose_max_age_s"] = "0.05";
-  config.extra["daemon.pose_url"] = "file:///tmp/poses.lcmlog?speed=0";
-  config.extra["table_map.confirm_sightings"] = "5";
-  config.extra["table_map.match_gap_m"] = "0.25";
-  const DaemonConfig d = resolveDaemonConfig(config);
+TEST(DaemonMapConfig, PoseAndTableMapKeysAreParsedValidatedAndDumped) {
+  const LoadedConfig loaded = parseDaemonConfig(
+      "daemon:\n  pose_max_age_s: 0.05\n  pose_url: file:///tmp/poses.lcmlog?speed=0\n"
+      "table_map:\n  confirm_sightings: 5\n  match_gap_m: 0.25\n",
+      "test.yaml");
+  const DaemonConfig& d = loaded.daemon;  // parsed once, straight into the fields
   EXPECT_DOUBLE_EQ(d.pose_max_age_s, 0.05);
   EXPECT_EQ(d.table_map.confirm_sightings, 5);
   EXPECT_FLOAT_EQ(d.table_map.match_gap_m, 0.25f);
   EXPECT_EQ(d.table_map.forget_misses, TableMapConfig{}.forget_misses);  // default kept
-  // Every key is written back (dumpConfig shows the effective values).
-  EXPECT_EQ(config.extra.at("table_map.confirm_sightings"), "5");
-  EXPECT_EQ(config.extra.at("table_map.view_max_range_m"), "4");
-  EXPECT_EQ(config.extra.at("daemon.pose_history_s"), "5");
-  EXPECT_EQ(config.extra.at("daemon.pose_input"), "true");
+  // The effective values of every key are in the dump (--check-config).
+  const std::string dump = dumpDaemonConfig(loaded);
+  EXPECT_NE(dump.find("table_map:\n"), std::string::npos) << dump;
+  EXPECT_NE(dump.find("  confirm_sightings: 5\n"), std::string::npos) << dump;
+  EXPECT_NE(dump.find("  view_max_range_m: 4\n"), std::string::npos) << dump;
+  EXPECT_NE(dump.find("  pose_history_s: 5\n"), std::string::npos) << dump;
+  EXPECT_NE(dump.find("  pose_input: true\n"), std::string::npos) << dump;
   EXPECT_EQ(effectivePoseUrl(d), "file:///tmp/poses.lcmlog?speed=0");
 
-  auto with = [](const std::string& key, const std::string& value) {
-    Config c;
-    c.extra[key] = value;
-    return errorOf(c);
-  };
+  auto with = [](const std::string& key, const std::string& value) { return errorOf(key, value); };
   EXPECT_NE(with("table_map.confirm_sightings", "0").find("table_map.confirm_sightings"),
             std::string::npos);
   EXPECT_NE(with("table_map.match_gap_m", "wide").find("table_map.match_gap_m"), std::string::npos);
@@ -327,17 +328,19 @@ struct MapRun {
 MapRun runPipeline(const Sequence& seq, const std::string& pose_log,
                    const std::vector<std::string>& overrides = {}) {
   TempDir tmp;
-  Config config;
+  test::TestConfig config;
   config.segmenter = mapSegmenterConfig();
-  config.extra["daemon.lcm_url"] = "file://" + tmp.str("out.lcmlog") + "?mode=w";
-  config.extra["daemon.pose_url"] = "file://" + pose_log + "?speed=0";
-  config.extra["daemon.status_period_s"] = "60";
+  config.set("daemon.lcm_url", "file://" + tmp.str("out.lcmlog") + "?mode=w");
+  config.set("daemon.pose_url", "file://" + pose_log + "?speed=0");
+  config.set("daemon.status_period_s", "60");
   // The whole pose log is read before the first frame (a replay at full
   // speed), so the history must hold all of it, not the default 5 s that
   // covers a live pipeline's latency.
-  config.extra["daemon.pose_history_s"] = "1000";
-  for (const auto& o : overrides) applyOverride(config, o);
-  const DaemonConfig dc = resolveDaemonConfig(config);
+  config.set("daemon.pose_history_s", "1000");
+  const SettingsSchema schema = daemonSchema(config, config.daemon);
+  for (const auto& o : overrides) schema.applyOverride(o);
+  schema.validate("<flags>");
+  const DaemonConfig dc = config.daemon;
   MapRun run;
   {
     Pipeline pipeline(config.segmenter, dc, seq.forest, "synth", ExecutionMode::Sequential);
@@ -747,11 +750,11 @@ void drain(io::MemoryBus& bus) {
   }
 }
 
-Config memoryConfig() {
-  Config config;
+test::TestConfig memoryConfig() {
+  test::TestConfig config;
   config.segmenter = mapSegmenterConfig();
-  config.extra["daemon.status_period_s"] = "60";
-  config.extra["daemon.pose_history_s"] = "1000";
+  config.set("daemon.status_period_s", "60");
+  config.set("daemon.pose_history_s", "1000");
   return config;
 }
 
@@ -772,9 +775,9 @@ TEST(DaemonMapOnMemoryBus, PublishesWhatTheLcmLogPathPublishes) {
   PipelineHooks hooks;
   hooks.output_bus = out;
   hooks.pose_bus = pose_bus;
-  Config config = memoryConfig();
+  test::TestConfig config = memoryConfig();
   {
-    Pipeline pipeline(config.segmenter, resolveDaemonConfig(config), seq.forest, "synth",
+    Pipeline pipeline(config.segmenter, config.daemon, seq.forest, "synth",
                       ExecutionMode::Sequential, hooks);
     pipeline.start();
     ASSERT_NE(pipeline.poseInput(), nullptr);
@@ -802,6 +805,49 @@ TEST(DaemonMapOnMemoryBus, PublishesWhatTheLcmLogPathPublishes) {
   EXPECT_EQ(got.statuses.back().frames_processed, file_run.statuses.back().frames_processed);
 }
 
+// daemon.channel_suffix is applied by the daemon's buses: its messages go out on
+// BASE_SUFFIX, and it reads robot poses from FINDMUG_ROBOT_POSE_SUFFIX only.
+TEST(DaemonOnMemoryBus, TheBusesApplyTheChannelSuffix) {
+  const Sequence& seq = sequence();
+  auto pose_bus = std::make_shared<io::MemoryBus>(100000);
+  for (const auto& m : poseLogMessages(seq, 0.0)) {
+    ASSERT_TRUE(pose_bus->publish(m.channel + "_R2", m.data.data(), m.data.size()));
+  }
+  pose_bus->end();
+  auto out = std::make_shared<io::MemoryBus>(100000);
+  std::map<std::string, int> seen;
+  for (const std::string_view name : {io::kLabelsChannel, io::kTablesChannel, io::kStatusChannel}) {
+    const std::string base(name);
+    for (const std::string& channel : {base, base + "_R2"}) {
+      out->subscribe(channel, [&seen](const std::string& c, const std::uint8_t*, std::size_t) {
+        ++seen[c];
+      });
+    }
+  }
+  PipelineHooks hooks;
+  hooks.output_bus = out;
+  hooks.pose_bus = pose_bus;
+  test::TestConfig config = memoryConfig();
+  config.set("daemon.channel_suffix", "R2");
+  {
+    Pipeline pipeline(config.segmenter, config.daemon, seq.forest, "synth",
+                      ExecutionMode::Sequential, hooks);
+    pipeline.start();
+    ASSERT_NE(pipeline.poseInput(), nullptr);
+    waitUntilFinished(*pipeline.poseInput());
+    EXPECT_GT(pipeline.poseInput()->received(), 0u);  // the suffixed pose channel was read
+    for (std::size_t i = 0; i < 2; ++i) EXPECT_TRUE(pipeline.submit(seq.submitted[i].frame));
+    pipeline.stop(StopMode::Drain);
+  }
+  drain(*out);
+  EXPECT_EQ(seen["FINDMUG_LABELS_R2"], 2);
+  EXPECT_EQ(seen["FINDMUG_TABLES_R2"], 2);
+  EXPECT_GE(seen["FINDMUG_STATUS_R2"], 1);
+  EXPECT_EQ(seen.count("FINDMUG_LABELS") + seen.count("FINDMUG_TABLES") +
+                seen.count("FINDMUG_STATUS"),
+            0u);
+}
+
 // Issue 11, output side: a subscriber that never reads, and publishes that
 // fail. The in-memory bus's bounded queue stands for the unread subscriber's
 // receive buffer (an LCM publisher never waits for subscribers: udpm sends
@@ -814,9 +860,9 @@ TEST(DaemonOutputFaults, AnUnreadBusAndRefusedPublishesLeaveThePipelineRunning) 
   auto faulty = std::make_shared<io::FaultyBus>(memory);
   PipelineHooks hooks;
   hooks.output_bus = faulty;
-  Config config = memoryConfig();
-  config.extra["daemon.pose_input"] = "false";
-  const DaemonConfig dc = resolveDaemonConfig(config);
+  test::TestConfig config = memoryConfig();
+  config.set("daemon.pose_input", "false");
+  const DaemonConfig dc = config.daemon;
   Pipeline pipeline(config.segmenter, dc, seq.forest, "synth", ExecutionMode::Sequential, hooks);
   pipeline.start();
   auto expectBounded = [&] {
@@ -915,10 +961,10 @@ TEST(DaemonOutputFaults, AUdpmSubscriberThatNeverReadsDoesNotHoldThePipeline) {
       });
   reader.startReceiving();
 
-  Config config = memoryConfig();
-  config.extra["daemon.lcm_url"] = url;
-  config.extra["daemon.pose_input"] = "false";
-  const DaemonConfig dc = resolveDaemonConfig(config);
+  test::TestConfig config = memoryConfig();
+  config.set("daemon.lcm_url", url);
+  config.set("daemon.pose_input", "false");
+  const DaemonConfig dc = config.daemon;
   constexpr std::size_t kSubmitted = 12;
   {
     Pipeline pipeline(config.segmenter, dc, seq.forest, "synth", ExecutionMode::Sequential);

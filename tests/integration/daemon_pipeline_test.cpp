@@ -14,6 +14,7 @@
 #include <mutex>
 #include <thread>
 
+#include "daemon_test_config.hpp"
 #include "daemon_test_support.hpp"
 #include "findmug/common/error.hpp"
 #include "findmug/daemon/daemon.hpp"
@@ -52,14 +53,14 @@ const SharedModel* sharedModel() {
   return model;
 }
 
-Config baseConfig(const std::string& source, const std::string& out_log) {
-  Config config;
+test::TestConfig baseConfig(const std::string& source, const std::string& out_log) {
+  test::TestConfig config;
   config.segmenter = test::fastSegmenterConfig();
-  config.extra["daemon.source"] = source;
-  config.extra["daemon.lcm_url"] = "file://" + out_log + "?mode=w";
-  config.extra["daemon.model_path"] = sharedModel()->path;
-  config.extra["daemon.workers"] = "2";
-  config.extra["daemon.status_period_s"] = "0.2";
+  config.set("daemon.source", source);
+  config.set("daemon.lcm_url", "file://" + out_log + "?mode=w");
+  config.set("daemon.model_path", sharedModel()->path);
+  config.set("daemon.workers", "2");
+  config.set("daemon.status_period_s", "0.2");
   return config;
 }
 
@@ -120,10 +121,10 @@ void runAndCompare(const std::string& spec, std::size_t expected_frames,
                    const std::vector<std::string>& overrides = {}) {
   TempDir tmp;
   const std::string out = tmp.str("out.lcmlog");
-  Config config = baseConfig(spec, out);
-  for (const auto& o : overrides) applyOverride(config, o);
-  config.extra["daemon.queue_capacity"] = "16";  // a finite replay: keep every frame
-  const DaemonConfig dc = resolveDaemonConfig(config);
+  test::TestConfig config = baseConfig(spec, out);
+  for (const auto& o : overrides) daemonSchema(config, config.daemon).applyOverride(o);
+  config.set("daemon.queue_capacity", "16");  // a finite replay: keep every frame
+  const DaemonConfig dc = config.daemon;
   {
     Daemon daemon(config, dc);
     EXPECT_EQ(daemon.run(), 0);
@@ -272,8 +273,8 @@ TEST(DaemonPipeline, SequentialModeRunsTheSamePipelineSynchronously) {
   FINDMUG_REQUIRE_DATA(nyu, "nyuv2_labeled");
   ASSERT_TRUE(sharedModel());
   TempDir tmp;
-  Config config = baseConfig("openni2", tmp.str("out.lcmlog"));
-  const DaemonConfig dc = resolveDaemonConfig(config);
+  test::TestConfig config = baseConfig("openni2", tmp.str("out.lcmlog"));
+  const DaemonConfig dc = config.daemon;
   DatasetFolder ds(nyu.string());
   const Segmenter segmenter(config.segmenter, sharedModel()->forest);
   std::vector<LabelImage> expected;
@@ -305,10 +306,10 @@ TEST(DaemonPipeline, HeldSegmentStageDropsTheOldestFramesAndTheNewestWin) {
   FINDMUG_REQUIRE_DATA(nyu, "nyuv2_labeled");
   ASSERT_TRUE(sharedModel());
   TempDir tmp;
-  Config config = baseConfig("openni2", tmp.str("out.lcmlog"));
-  config.extra["daemon.workers"] = "1";
-  config.extra["daemon.queue_capacity"] = "2";
-  const DaemonConfig dc = resolveDaemonConfig(config);
+  test::TestConfig config = baseConfig("openni2", tmp.str("out.lcmlog"));
+  config.set("daemon.workers", "1");
+  config.set("daemon.queue_capacity", "2");
+  const DaemonConfig dc = config.daemon;
 
   // The artificially slow stage: segmentation of the first frame is held
   // until every frame has been offered and the prepare stage has gone idle.
@@ -420,11 +421,11 @@ TEST(DaemonPipeline, CpuBudgetSetsTheProcessingThreadsAndStatusReportsIt) {
   };
   auto run_with = [&](const std::string& budget, const std::string& workers) {
     TempDir tmp;
-    Config config = baseConfig("dataset:" + nyu.string() + "?loop=0", tmp.str("out.lcmlog"));
-    config.extra["daemon.max_cpu_cores"] = budget;
-    config.extra["daemon.workers"] = workers;
-    config.extra["daemon.pose_input"] = "false";
-    const DaemonConfig dc = resolveDaemonConfig(config);
+    test::TestConfig config = baseConfig("dataset:" + nyu.string() + "?loop=0", tmp.str("out.lcmlog"));
+    config.set("daemon.max_cpu_cores", budget);
+    config.set("daemon.workers", workers);
+    config.set("daemon.pose_input", "false");
+    const DaemonConfig dc = config.daemon;
     Run run;
     std::atomic<int> seen{-1};
     PipelineHooks hooks;
@@ -502,9 +503,9 @@ TEST(DaemonPipeline, CorruptLcmMessagesAreCountedAndSkipped) {
   test::writeLcmLog(in_log, in);
 
   const std::string out = tmp.str("out.lcmlog");
-  Config config = baseConfig("lcm:" + ch + "?url=file://" + in_log + "?speed=0", out);
-  config.extra["daemon.queue_capacity"] = "8";
-  const DaemonConfig dc = resolveDaemonConfig(config);
+  test::TestConfig config = baseConfig("lcm:" + ch + "?url=file://" + in_log + "?speed=0", out);
+  config.set("daemon.queue_capacity", "8");
+  const DaemonConfig dc = config.daemon;
   {
     Daemon daemon(config, dc);
     EXPECT_EQ(daemon.run(), 0);  // the log's end is the stream's end
@@ -529,32 +530,32 @@ TEST(DaemonPipeline, StartupErrorsNameTheKey) {
   FINDMUG_REQUIRE_DATA(nyu, "nyuv2_labeled");
   ASSERT_TRUE(sharedModel());
   TempDir tmp;
-  auto error_of = [&](Config config) -> std::string {
+  auto error_of = [&](test::TestConfig config) -> std::string {
     try {
-      const DaemonConfig dc = resolveDaemonConfig(config);
+      const DaemonConfig dc = config.daemon;
       Daemon daemon(config, dc);
     } catch (const Error& e) {
       return e.what();
     }
     return "";
   };
-  Config missing_model = baseConfig("dataset:" + nyu.string(), tmp.str("o.lcmlog"));
-  missing_model.extra["daemon.model_path"] = tmp.str("nope.fmf");
+  test::TestConfig missing_model = baseConfig("dataset:" + nyu.string(), tmp.str("o.lcmlog"));
+  missing_model.set("daemon.model_path", tmp.str("nope.fmf"));
   EXPECT_NE(error_of(missing_model).find("daemon.model_path"), std::string::npos);
 
-  Config corrupt_model = baseConfig("dataset:" + nyu.string(), tmp.str("o.lcmlog"));
+  test::TestConfig corrupt_model = baseConfig("dataset:" + nyu.string(), tmp.str("o.lcmlog"));
   {
     std::ofstream f(tmp.str("bad.fmf"), std::ios::binary);
     f << "not a model";
   }
-  corrupt_model.extra["daemon.model_path"] = tmp.str("bad.fmf");
+  corrupt_model.set("daemon.model_path", tmp.str("bad.fmf"));
   EXPECT_NE(error_of(corrupt_model).find("daemon.model_path"), std::string::npos);
 
-  Config bad_source = baseConfig("dataset:" + tmp.str("no-such-dir"), tmp.str("o.lcmlog"));
+  test::TestConfig bad_source = baseConfig("dataset:" + tmp.str("no-such-dir"), tmp.str("o.lcmlog"));
   EXPECT_NE(error_of(bad_source).find("daemon.source"), std::string::npos);
 
-  Config bad_url = baseConfig("dataset:" + nyu.string(), tmp.str("o.lcmlog"));
-  bad_url.extra["daemon.lcm_url"] = "bogus://x";
+  test::TestConfig bad_url = baseConfig("dataset:" + nyu.string(), tmp.str("o.lcmlog"));
+  bad_url.set("daemon.lcm_url", "bogus://x");
   EXPECT_NE(error_of(bad_url).find("daemon.lcm_url"), std::string::npos);
 }
 
@@ -575,9 +576,9 @@ TEST(DaemonPipeline, WatchdogIsWithheldWhileTheSegmentStageIsStuck) {
   setenv("NOTIFY_SOCKET", notify.path().c_str(), 1);
   // WatchdogSec 3 s: stall limit 1.5 s (longer than any frame takes here), a ping every second.
   setenv("WATCHDOG_USEC", "3000000", 1);
-  Config config = baseConfig("dataset:" + nyu.string() + "?loop=1&rate_hz=20", tmp.str("o.lcmlog"));
-  config.extra["daemon.workers"] = "1";
-  const DaemonConfig dc = resolveDaemonConfig(config);
+  test::TestConfig config = baseConfig("dataset:" + nyu.string() + "?loop=1&rate_hz=20", tmp.str("o.lcmlog"));
+  config.set("daemon.workers", "1");
+  const DaemonConfig dc = config.daemon;
 
   std::mutex m;
   std::condition_variable cv;
@@ -676,9 +677,9 @@ TEST(DaemonFaults, StreamThatRepeatsReordersJumpsBackAndHasACorruptFrameEveryThi
   const std::string in_log = tmp.str("in.lcmlog");
   test::writeLcmLog(in_log, in);
   const std::string out = tmp.str("out.lcmlog");
-  Config config = baseConfig("lcm:" + ch + "?url=file://" + in_log + "?speed=0", out);
-  config.extra["daemon.queue_capacity"] = "16";
-  const DaemonConfig dc = resolveDaemonConfig(config);
+  test::TestConfig config = baseConfig("lcm:" + ch + "?url=file://" + in_log + "?speed=0", out);
+  config.set("daemon.queue_capacity", "16");
+  const DaemonConfig dc = config.daemon;
   {
     Daemon daemon(config, dc);
     EXPECT_EQ(daemon.run(), 0);
@@ -752,9 +753,9 @@ TEST(DaemonFaults, HungSourceIsReportedAndStarvesTheWatchdog) {
   setenv("NOTIFY_SOCKET", notify.path().c_str(), 1);
   // WatchdogSec 3 s: stall limit 1.5 s, a ping every second while healthy.
   setenv("WATCHDOG_USEC", "3000000", 1);
-  Config config = baseConfig("lcm:unused", tmp.str("o.lcmlog"));
-  config.extra["daemon.source_timeout_s"] = "1";
-  const DaemonConfig dc = resolveDaemonConfig(config);
+  test::TestConfig config = baseConfig("lcm:unused", tmp.str("o.lcmlog"));
+  config.set("daemon.source_timeout_s", "1");
+  const DaemonConfig dc = config.daemon;
   DatasetFolder ds(nyu.string());
   auto owned = std::make_unique<CommandedSource>(ds.load(3).frame);
   CommandedSource* source = owned.get();

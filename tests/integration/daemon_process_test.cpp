@@ -192,6 +192,39 @@ TEST(Findmugd, InvalidConfigValueStopsStartupNamingTheKey) {
   EXPECT_NE(readFile(tmp.str("stderr2.txt")).find("mrf.lambda"), std::string::npos);
 }
 
+// An unknown key or section stops findmugd naming it with the file and line; --check-config
+// prints the effective value of every key (defaults included) of the sections it reads.
+TEST(Findmugd, UnknownSettingsAreRefusedAndCheckConfigPrintsTheEffectiveValues) {
+  TempDir tmp;
+  const std::vector<std::pair<std::string, std::string>> bad = {
+      {"daemon:\n  workers: 2\n  wokers: 2\n", "line 3: unknown setting 'daemon.wokers' (daemon keys: "},
+      {"forrest:\n  num_trees: 3\n", "line 2: unknown setting 'forrest.num_trees': no section 'forrest'"},
+      {"web:\n  prot: 1\n", "line 2: unknown setting 'web.prot' (web keys: "}};
+  for (std::size_t i = 0; i < bad.size(); ++i) {
+    const std::string yaml = tmp.str("bad" + std::to_string(i) + ".yaml");
+    std::ofstream(yaml) << bad[i].first;
+    const std::string err = tmp.str("stderr" + std::to_string(i) + ".txt");
+    const pid_t pid = spawnDaemon({"--config", yaml, "--check-config"}, {}, err);
+    const auto status = waitFor(pid, 30s);
+    ASSERT_TRUE(status && WIFEXITED(*status));
+    EXPECT_NE(WEXITSTATUS(*status), 0) << bad[i].first;
+    EXPECT_NE(readFile(err).find(yaml + ": " + bad[i].second), std::string::npos) << readFile(err);
+  }
+  const std::string good = tmp.str("good.yaml");
+  std::ofstream(good) << "daemon:\n  workers: 3\nweb:\n  port: 9000\n";
+  const pid_t pid = spawnDaemon({"--config", good, "--check-config", "--set", "mrf.lambda=2.5"}, {},
+                                tmp.str("check.txt"));
+  const auto status = waitFor(pid, 30s);
+  ASSERT_TRUE(status && WIFEXITED(*status));
+  EXPECT_EQ(WEXITSTATUS(*status), 0) << readFile(tmp.str("check.txt"));
+  const std::string printed = readFile(tmp.str("check.txt"));
+  for (const char* line : {"daemon:\n", "  workers: 3\n", "  queue_capacity: 2\n", "mrf:\n",
+                           "  lambda: 2.5\n", "table_map:\n", "semantic_map:\n", "check:\n"}) {
+    EXPECT_NE(printed.find(line), std::string::npos) << line << " not in\n" << printed;
+  }
+  EXPECT_EQ(printed.find("web:"), std::string::npos) << "findmug-web's section is not findmugd's";
+}
+
 // Fault injection (issue 11): the whole process stalls (SIGSTOP), as a hung
 // kernel call or a debugger would stall it. systemd restarts a service whose
 // keep-alives stop: none may arrive while it is stopped, they resume after

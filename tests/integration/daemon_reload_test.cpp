@@ -22,6 +22,7 @@
 #include <map>
 #include <thread>
 
+#include "daemon_test_config.hpp"
 #include "daemon_test_support.hpp"
 #include "findmug/daemon/pipeline.hpp"
 #include "findmug/common/error.hpp"
@@ -134,16 +135,16 @@ class ReloadRig {
  public:
   explicit ReloadRig(const std::string& model_path, std::shared_ptr<const RandomForest> forest) {
     config_.segmenter = reloadConfig();
-    config_.extra["daemon.model_path"] = model_path;
-    config_.extra["daemon.workers"] = "2";
-    config_.extra["daemon.queue_capacity"] = "8";
-    config_.extra["daemon.status_period_s"] = "0.2";
-    config_.extra["daemon.pose_input"] = "false";
+    config_.set("daemon.model_path", model_path);
+    config_.set("daemon.workers", "2");
+    config_.set("daemon.queue_capacity", "8");
+    config_.set("daemon.status_period_s", "0.2");
+    config_.set("daemon.pose_input", "false");
     collect(*out_, &got);
     PipelineHooks hooks;
     hooks.output_bus = out_;
     hooks.command_bus = commands;
-    pipeline = std::make_unique<Pipeline>(config_.segmenter, resolveDaemonConfig(config_),
+    pipeline = std::make_unique<Pipeline>(config_.segmenter, config_.daemon,
                                           forest, idOf(model_path, *forest),
                                           ExecutionMode::Threaded, hooks);
     pipeline->start();
@@ -190,7 +191,7 @@ class ReloadRig {
   std::unique_ptr<Pipeline> pipeline;
 
  private:
-  Config config_;
+  test::TestConfig config_;
   std::shared_ptr<io::MemoryBus> out_ = std::make_shared<io::MemoryBus>(100000);
   int submitted_ = 0;
 };

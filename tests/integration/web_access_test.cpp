@@ -372,31 +372,41 @@ TEST(WebConfig, TokenFilesAndAddresses) {
   EXPECT_TRUE(web::isLoopbackAddress("127.0.0.2"));
   EXPECT_FALSE(web::isLoopbackAddress("10.0.0.1"));
 
-  web::registerWebSection();
-  Config config;
-  config.extra["web.port"] = "9000";
-  config.extra["web.bind"] = "192.168.1.5";
-  const web::WebConfig resolved = web::resolveWebConfig(config);
-  EXPECT_EQ(resolved.port, 9000);
-  EXPECT_EQ(resolved.bind, "192.168.1.5");
-  config.extra["web.port"] = "70000";
-  EXPECT_THROW(web::resolveWebConfig(config), Error);
-  config.extra.erase("web.port");
-  config.extra["web.prot"] = "1";
-  EXPECT_THROW(web::resolveWebConfig(config), Error);
+  // The web: section read as findmug-web reads it: each value into its WebConfig field.
+  web::WebConfig config;
+  SettingsSchema schema;
+  schema.bind(web::webSettings(), config);
+  schema.readYaml("web:\n  port: 9000\n  bind: 192.168.1.5\n", "web.yaml");
+  EXPECT_EQ(config.port, 9000);
+  EXPECT_EQ(config.bind, "192.168.1.5");
+  EXPECT_THROW(schema.applyOverride("web.port=70000"), Error);
+  try {
+    schema.readYaml("web:\n  prot: 1\n", "web.yaml");
+    ADD_FAILURE() << "web.prot accepted";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("web.yaml: line 2: unknown setting 'web.prot'"),
+              std::string::npos)
+        << e.what();
+  }
 }
 
+// Both directions: every key findmug-web knows is in its shipped file, and every value
+// there is the built-in default.
 TEST(WebConfig, ShippedFileIsValidAndDocumentsEveryKey) {
-  web::registerWebSection();
   const fs::path shipped = test::sourceDir() / "clients/web/findmug-web.yaml";
-  const Config config = loadConfig(shipped.string());
-  const web::WebConfig resolved = web::resolveWebConfig(config);
+  web::WebConfig read;
+  SettingsSchema schema;
+  schema.bind(web::webSettings(), read);
+  schema.readFile(shipped.string());
   const web::WebConfig defaults;
-  EXPECT_EQ(resolved.bind, defaults.bind);  // the shipped file keeps the defaults
-  EXPECT_EQ(resolved.port, defaults.port);
-  EXPECT_EQ(resolved.max_body_bytes, defaults.max_body_bytes);
+  EXPECT_EQ(web::webSettings().values(read), web::webSettings().values(defaults))
+      << shipped << " must hold the built-in defaults";
+  std::ifstream in(shipped);
+  const std::string text((std::istreambuf_iterator<char>(in)), {});
   for (const auto& setting : web::webSettings().settings()) {
-    EXPECT_TRUE(config.extra.count(setting.key)) << setting.key << " not in " << shipped;
+    const std::string name = setting.key.substr(setting.key.find('.') + 1);
+    EXPECT_NE(text.find("\n  " + name + ":"), std::string::npos)
+        << setting.key << " not in " << shipped;
   }
 }
 
@@ -426,4 +436,34 @@ TEST(WebProgram, AnotherAddressWithoutATokenIsRefusedAtStart) {
   std::tie(code, out) = run("--data " + dir.str("no-such-folder") + " --port 18097");
   EXPECT_EQ(code, 1) << out;
   EXPECT_NE(out.find("no-such-folder: not a folder"), std::string::npos) << out;
+}
+
+// findmug-web reads a shared config file with every program's real tables: an unknown key
+// of its own section, a typo in findmugd's, or a section no program has stops it at start,
+// naming the setting; before it listens on anything.
+TEST(WebProgram, UnknownSettingsAreRefusedAtStartNamingTheKey) {
+  test::TempDir dir;
+  const std::string exe = FINDMUG_WEB_EXE;
+  auto run = [&](const std::string& yaml) {
+    std::ofstream(dir.path() / "web.yaml") << yaml;
+    const std::string command = exe + " --lcm-url memq:// --port 18098 --config " +
+                                dir.str("web.yaml") + " > " + dir.str("out.txt") + " 2>&1";
+    const int status = std::system(command.c_str());
+    std::ifstream in(dir.path() / "out.txt");
+    std::stringstream text;
+    text << in.rdbuf();
+    return std::make_pair(WEXITSTATUS(status), text.str());
+  };
+  auto [code, out] = run("web:\n  port: 18098\n  prot: 1\n");
+  EXPECT_EQ(code, 2) << out;
+  EXPECT_NE(out.find("web.yaml: line 3: unknown setting 'web.prot' (web keys: "), std::string::npos)
+      << out;
+  std::tie(code, out) = run("daemon:\n  wokers: 2\n");
+  EXPECT_EQ(code, 2) << out;
+  EXPECT_NE(out.find("unknown setting 'daemon.wokers' (daemon keys: "), std::string::npos) << out;
+  std::tie(code, out) = run("clients:\n  viewer_scale: 2\n");
+  EXPECT_EQ(code, 2) << out;
+  EXPECT_NE(out.find("unknown setting 'clients.viewer_scale': no section 'clients'"),
+            std::string::npos)
+      << out;
 }

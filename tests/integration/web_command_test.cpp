@@ -6,6 +6,7 @@
 // nothing; without a bus the endpoint answers 503. Traffic: loopback HTTP only.
 // The project's headers (Eigen) before httplib.h: the <resolv.h> it pulls in defines a
 // macro _res, a parameter name inside Eigen.
+#include "daemon_test_config.hpp"
 #include "daemon_test_support.hpp"
 #include "findmug/common/error.hpp"
 #include "findmug/daemon/pipeline.hpp"
@@ -120,16 +121,16 @@ TEST(WebCommand, SaveThisFrameAndReloadReachTheDaemonAndItsStatusComesBack) {
 
   auto commands = std::make_shared<io::MemoryBus>(100);
   auto out = std::make_shared<io::MemoryBus>(10000);
-  Config config;
+  daemon::test::TestConfig config;
   config.segmenter = segmenter;
-  config.extra["daemon.model_path"] = installed;
-  config.extra["daemon.status_period_s"] = "60";
-  config.extra["daemon.pose_input"] = "false";
-  config.extra["daemon.collect_dir"] = tmp.str("collected");
+  config.set("daemon.model_path", installed);
+  config.set("daemon.status_period_s", "60");
+  config.set("daemon.pose_input", "false");
+  config.set("daemon.collect_dir", tmp.str("collected"));
   daemon::PipelineHooks hooks;
   hooks.output_bus = out;
   hooks.command_bus = commands;
-  daemon::Pipeline pipeline(segmenter, daemon::resolveDaemonConfig(config), first,
+  daemon::Pipeline pipeline(segmenter, config.daemon, first,
                             "installed.fmf:" + first->id(), daemon::ExecutionMode::Sequential,
                             hooks);
   pipeline.start();

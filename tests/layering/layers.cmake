@@ -56,7 +56,7 @@ set(findmug_layer_headers_synth "^findmug/synth/")
 set(findmug_layer_headers_lcm "^findmug_lcm/" "^lcm/")
 set(findmug_layer_headers_io "^findmug/io/")
 set(findmug_layer_headers_cli "^findmug_cli\\.hpp$" "^findmug_signals\\.hpp$" "^findmug_json\\.hpp$"
-    "^CLI/")
+    "^program_settings\\.hpp$" "^CLI/")
 set(findmug_layer_headers_daemon "^findmug/daemon/")
 set(findmug_layer_headers_clients "^client_common\\.hpp$" "^picture\\.hpp$")
 set(findmug_layer_headers_tools "^tool_common\\.hpp$" "^eval_report\\.hpp$" "^replay_check\\.hpp$"

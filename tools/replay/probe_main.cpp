@@ -176,13 +176,15 @@ class Probe {
  public:
   Probe(const Options& o)
       : options_(o),
-        rgbd_channel_(findmug::io::channelName(findmug::io::kRgbdChannel, o.suffix)),
-        labels_channel_(findmug::io::channelName(findmug::io::kLabelsChannel, o.suffix)),
-        status_channel_(findmug::io::channelName(findmug::io::kStatusChannel, o.suffix)),
-        bus_(findmug::io::openBus(o.url, "--url")) {
+        rgbd_channel_(findmug::io::kRgbdChannel),
+        labels_channel_(findmug::io::kLabelsChannel),
+        status_channel_(findmug::io::kStatusChannel),
+        bus_(findmug::io::openBus(o.url, "--url", o.suffix)) {  // the bus applies the suffix
     if (!o.log.empty()) {
-      for (const FrameInfo& f : readLog(o.log, rgbd_channel_)) check_.addReplayedFrame(f);
-      if (check_.framesReplayed() == 0) throw Error(o.log + ": no frames on " + rgbd_channel_);
+      // A log file holds the names on the wire.
+      const std::string logged = findmug::io::channelName(rgbd_channel_, o.suffix);
+      for (const FrameInfo& f : readLog(o.log, logged)) check_.addReplayedFrame(f);
+      if (check_.framesReplayed() == 0) throw Error(o.log + ": no frames on " + logged);
       expected_ = check_.framesReplayed();
     }
     // This thread owns the bus; the handlers run inside handle().
@@ -320,7 +322,7 @@ class Probe {
 
   Options options_;
   std::string rgbd_channel_, labels_channel_, status_channel_;
-  std::unique_ptr<findmug::io::Bus> bus_;  // owned by the thread that runs run()
+  std::shared_ptr<findmug::io::Bus> bus_;  // owned by the thread that runs run()
   ReplayCheck check_;
   std::optional<std::int64_t> expected_;
   bool ready_ = false;

@@ -122,11 +122,13 @@ int run(int argc, char** argv) {
   source.reset();
   if (frames.empty()) throw Error(source_spec + ": the source delivered no frames");
 
-  io::LcmBus bus(url, "--lcm-url");
-  const std::string channel = io::channelName(io::kRgbdChannel, suffix);
-  const std::string pose_channel = io::channelName(io::kRobotPoseChannel, suffix);
+  // Base names: the bus applies --channel-suffix.
+  const std::shared_ptr<io::Bus> bus =
+      io::withChannelSuffix(std::make_shared<io::LcmBus>(url, "--lcm-url"), suffix);
+  const std::string channel(io::kRgbdChannel);
+  const std::string pose_channel(io::kRobotPoseChannel);
   spdlog::info("findmug-replay: {} frames from {}, {} Hz on {} ({})", frames.size(), described,
-               rate, channel, url.empty() ? std::string("default URL") : url);
+               rate, channel, bus->describe());
 
   using Clock = std::chrono::steady_clock;
   if (warmup > 0) std::this_thread::sleep_for(std::chrono::duration<double>(warmup));
@@ -150,12 +152,12 @@ int run(int argc, char** argv) {
       const io::RobotPose pose{static_cast<std::uint64_t>(msg.utime),
                                {robot_pose[0], robot_pose[1], robot_pose[2]}};
       bytes = io::encodeMessage(io::encodeRobotPose(pose));
-      if (!bus.publish(pose_channel, bytes.data(), bytes.size())) {
+      if (!bus->publish(pose_channel, bytes.data(), bytes.size())) {
         throw Error("publishing on " + pose_channel + " failed");
       }
     }
     bytes = io::encodeMessage(msg);
-    if (!bus.publish(channel, bytes.data(), bytes.size())) {
+    if (!bus->publish(channel, bytes.data(), bytes.size())) {
       throw Error("publishing on " + channel + " failed");
     }
     ++published;

@@ -111,9 +111,6 @@ struct SemanticMapConfig {
 void validateSemanticMapConfig(const SemanticMapConfig& config);
 // The `semantic_map:` section of the config file, one key per field above.
 const SettingsTable<SemanticMapConfig>& semanticMapSettings();
-// Reads every "semantic_map.*" entry of config.extra, checks it, writes the effective
-// values of every key back (as resolveTableMapConfig does for `table_map`).
-SemanticMapConfig resolveSemanticMapConfig(Config& config);
 
 // The camera's pose in the map: the robot base's 2-D pose in the map composed with the
 // camera mount (camera frame -> base frame, e.g. GroundPlane::camera_to_ground).

@@ -71,7 +71,7 @@ void validateTableMapConfig(const TableMapConfig& config);
 
 // The `table_map:` section of the config file, one key per field above. Its
 // ranges only keep single numbers sane; validateTableMapConfig has the final
-// word on consistency (see resolveTableMapConfig in config.hpp).
+// word on consistency (a program binds it with it: SettingsSchema::bind).
 const SettingsTable<TableMapConfig>& tableMapSettings();
 
 struct MappedTable {

@@ -2,10 +2,10 @@
 //
 // Keys are `section.name` (e.g. `forest.num_trees`, `mrf.lambda`,
 // `overseg.seed_resolution_m`, `tables.safety_distance_m`). Unknown keys and
-// bad values are errors that name the key. Sections outside SegmenterConfig
-// are accepted only when registered (settings.hpp: configSections(); the core
-// registers `table_map`, other layers their own) and are kept as raw
-// key/value pairs in Config::extra for their owners to resolve.
+// bad values are errors that name the key. The segmenter's sections are one
+// SettingsTable (segmenterSettings); a program binds it, and the other tables
+// it reads, into a SettingsSchema (settings.hpp). parseConfig/loadConfig read
+// a file of the segmenter's sections only (tests, tools that read no other).
 #pragma once
 
 #include <map>
@@ -22,6 +22,7 @@
 #include "findmug/map/table_map.hpp"
 #include "findmug/mrf/mrf.hpp"
 #include "findmug/settings/offline_settings.hpp"
+#include "findmug/settings/settings.hpp"
 #include "findmug/supervoxels/oversegmentation.hpp"
 #include "findmug/tables/tables.hpp"
 
@@ -122,23 +123,23 @@ struct SegmenterConfig {
 
 struct Config {
   SegmenterConfig segmenter;
-  // Everything under the registered sections outside SegmenterConfig, flattened:
-  // "daemon.source" -> "openni2", "table_map.forget_misses" -> "3".
-  std::map<std::string, std::string> extra;
 };
 
-// Parses YAML text; `origin` names it in errors (file path or "<flags>").
+// The segmenter's sections (cloud, normals, ground, overseg, features, forest,
+// learner, xgboost, training, degrade, mrf, table_metrics, tables): one table.
+const SettingsTable<SegmenterConfig>& segmenterSettings();
+// The rules across its keys (seed above voxel resolution, ...); throws Error naming them.
+void validateSegmenterConfig(const SegmenterConfig& config);
+// Binds segmenterSettings() with validateSegmenterConfig to `config.segmenter`.
+void bindCoreSettings(SettingsSchema& schema, Config& config);
+
+// Parses YAML text of the segmenter's sections; `origin` names it in errors (file path).
 Config parseConfig(const std::string& yaml_text, const std::string& origin);
 Config loadConfig(const std::string& path);
-// Applies "key=value" overrides (from command-line flags) on top.
+// Applies one "key=value" override (a --set flag) on top.
 void applyOverride(Config& config, const std::string& key_equals_value);
-// The effective config as YAML, for the start-up log and reports.
+// The segmenter's effective settings as YAML (reports; SettingsSchema::dump for a whole program).
 std::string dumpConfig(const Config& config);
-
-// The `table_map:` section: reads every "table_map.*" entry of config.extra
-// (tableMapSettings), checks consistency (validateTableMapConfig), writes the
-// effective values of every key back. Throws findmug::Error naming the key.
-TableMapConfig resolveTableMapConfig(Config& config);
 
 // The settings that shape the features (cloud.*, normals.*, overseg.*,
 // features.* except the training-only features.context_cross_fit_folds), as

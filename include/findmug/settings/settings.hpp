@@ -5,28 +5,25 @@
 //
 //  * SettingsTable<T>: the named settings of one struct T (key, how to parse
 //    a value into T with the strict number parser findmug/common/numbers.hpp and a
-//    range, how to print it back, a doc line). Unknown keys and bad values are
-//    findmug::Error naming the key. The core's own tables live next to their
-//    types (SegmenterConfig in config.cpp, TableMapConfig in table_map.cpp);
-//    the daemon keeps its own in daemon/.
-//  * ConfigSections (configSections()): the sections a program accepts that
-//    are not part of SegmenterConfig, each registered by its owner. With a
-//    check (normally SettingsTable::check), parseConfig validates every key
-//    as it reads it; known by name only (addSectionName), the section belongs
-//    to another program reading the same file and its keys are kept unchecked.
-//    Either way the raw values land in Config::extra for the owner to resolve.
-//    The core registers `table_map`; the daemon registers `daemon` and
-//    `check`; the cli layer declares the names of the project's other
-//    sections (cli::declareProjectSections), so findmug-train/-eval accept
-//    the daemon's file without knowing its keys. A section not registered at
-//    all is an "unknown setting" error.
-//
-// Registration happens at start-up, before any config is read (no locking).
+//    range, how to print it back, a doc line), for one section or several (the
+//    segmenter's). Unknown keys and bad values are findmug::Error naming the key.
+//    The core's tables live next to their types (SegmenterConfig in config.cpp,
+//    TableMapConfig in table_map.cpp, SemanticMapConfig in semantic_map.cpp);
+//    the programs' own (daemon, check, web) in cli/program_settings.hpp.
+//  * SettingsSchema: the tables a program states at start-up, each bound to the
+//    struct its values go to (bind) or, for a section the program only has to
+//    accept in a shared file, to defaults the schema owns (accept). The YAML
+//    reader and the --set overrides hand each `section.name` to its table, which
+//    parses it straight into the typed field: once, no text kept for later. A
+//    section no table claims, or a key its table does not have, is an Error
+//    naming it (and the file and line).
 #pragma once
 
 #include <algorithm>
 #include <functional>
 #include <map>
+#include <memory>
+#include <type_traits>
 #include <string>
 #include <utility>
 #include <vector>
@@ -41,7 +38,7 @@ namespace findmug {
                                        const std::string& expected);
 // Numbers in messages (ranges): up to 9 significant digits, no exponent for 1e-4.
 std::string formatSettingNumber(double value);
-// A value as printed back (--check-config, Config::extra): the shortest text
+// A value as printed back (--check-config, the model file): the shortest text
 // that reads back as the same float or double ("0.15", not "0.150000006").
 std::string settingValueText(double value);
 std::string settingValueText(float value);
@@ -58,12 +55,15 @@ struct Setting {
 template <typename T>
 class SettingsTable {
  public:
-  explicit SettingsTable(std::string section) : section_(std::move(section)) {}
+  explicit SettingsTable(std::string section) : sections_{std::move(section)} {}
+  // A table whose struct spans several sections (SegmenterConfig: cloud, forest, mrf ...).
+  explicit SettingsTable(std::vector<std::string> sections) : sections_(std::move(sections)) {}
 
-  // Refuses a second setting with the same key and a key outside the section.
+  // Refuses a second setting with the same key and a key outside the sections.
   SettingsTable& add(Setting<T> setting) {
-    if (setting.key.rfind(section_ + ".", 0) != 0) {
-      throw Error("setting '" + setting.key + "' does not belong to section '" + section_ + "'");
+    if (!holds(sectionOf(setting.key))) {
+      throw Error("setting '" + setting.key + "' does not belong to section '" + sectionList() +
+                  "'");
     }
     for (const auto& s : settings_) {
       if (s.key == setting.key) throw Error("setting '" + setting.key + "' registered twice");
@@ -72,7 +72,11 @@ class SettingsTable {
     return *this;
   }
 
-  const std::string& section() const { return section_; }
+  const std::string& section() const { return sections_.front(); }
+  const std::vector<std::string>& sections() const { return sections_; }
+  bool holds(const std::string& section) const {
+    return std::find(sections_.begin(), sections_.end(), section) != sections_.end();
+  }
   const std::vector<Setting<T>>& settings() const { return settings_; }
 
   // Parses `value` into `target`. Unknown key: "unknown setting 'KEY' (SECTION keys: a, b)".
@@ -83,33 +87,52 @@ class SettingsTable {
         return;
       }
     }
-    throw Error("unknown setting '" + key + "' (" + section_ + " keys: " + keyList() + ")");
+    const std::string section = holds(sectionOf(key)) ? sectionOf(key) : this->section();
+    throw Error("unknown setting '" + key + "' (" + section + " keys: " + keyList(section) + ")");
   }
 
-  // Validates one key=value against defaults (for ConfigSections).
+  // Validates one key=value against defaults.
   void check(const std::string& key, const std::string& value) const {
     T scratch{};
     set(scratch, key, value);
   }
 
-  // Every key of the section with its value in `target`, in key order.
+  // Every key of the table with its value in `target`, in key order.
   std::map<std::string, std::string> values(const T& target) const {
     std::map<std::string, std::string> out;
     for (const auto& s : settings_) out[s.key] = s.get(target);
     return out;
   }
+  // The same in the table's own order (the order of the doc and the dump).
+  std::vector<std::pair<std::string, std::string>> entries(const T& target) const {
+    std::vector<std::pair<std::string, std::string>> out;
+    for (const auto& s : settings_) out.emplace_back(s.key, s.get(target));
+    return out;
+  }
 
-  std::string keyList() const {
+  // The keys of one section (the first when not named), sorted, comma separated.
+  std::string keyList(const std::string& section = {}) const {
+    const std::string& wanted = section.empty() ? this->section() : section;
     std::vector<std::string> keys;
-    for (const auto& s : settings_) keys.push_back(s.key);
+    for (const auto& s : settings_) {
+      if (sectionOf(s.key) == wanted) keys.push_back(s.key);
+    }
     std::sort(keys.begin(), keys.end());
     std::string out;
     for (const auto& k : keys) out += (out.empty() ? "" : ", ") + k;
     return out;
   }
 
+  static std::string sectionOf(const std::string& key) { return key.substr(0, key.find('.')); }
+
  private:
-  std::string section_;
+  std::string sectionList() const {
+    std::string out;
+    for (const auto& s : sections_) out += (out.empty() ? "" : "|") + s;
+    return out;
+  }
+
+  std::vector<std::string> sections_;
   std::vector<Setting<T>> settings_;
 };
 
@@ -205,26 +228,74 @@ Setting<T> textSetting(std::string key, std::function<std::string&(T&)> field,
   return s;
 }
 
-class ConfigSections {
+// The settings a program reads, stated at start-up: every table it knows, bound
+// to where its values go. Reading is: readFile/readYaml, then applyOverride for
+// each --set, then validate (the cross-key rules) once.
+class SettingsSchema {
  public:
-  // Validates one "section.name" = value; throws findmug::Error naming the key.
-  using Check = std::function<void(const std::string& key, const std::string& value)>;
+  // Binds every section of `table` to `target`, which must outlive the schema.
+  // `validate` (optional) checks the struct as a whole after reading and throws
+  // findmug::Error naming the keys. A section bound twice is refused.
+  template <typename T>
+  SettingsSchema& bind(const SettingsTable<T>& table, T& target,
+                       std::type_identity_t<std::function<void(const T&)>> validate = {}) {
+    auto shared = std::make_shared<const SettingsTable<T>>(table);
+    Binding b;
+    b.sections = table.sections();
+    b.set = [shared, &target](const std::string& key, const std::string& value) {
+      shared->set(target, key, value);
+    };
+    b.entries = [shared, &target] { return shared->entries(target); };
+    if (validate) b.validate = [validate, &target] { validate(target); };
+    add(std::move(b));
+    return *this;
+  }
+  // A section of another program sharing the file: accepted, every key checked
+  // and parsed into defaults the schema owns (a typo is refused here too), unused.
+  template <typename T>
+  SettingsSchema& accept(const SettingsTable<T>& table,
+                         std::type_identity_t<std::function<void(const T&)>> validate = {}) {
+    auto owned = std::make_shared<T>();
+    auto shared = std::make_shared<const SettingsTable<T>>(table);
+    Binding b;
+    b.sections = table.sections();
+    b.set = [shared, owned](const std::string& key, const std::string& value) {
+      shared->set(*owned, key, value);
+    };
+    b.entries = [shared, owned] { return shared->entries(*owned); };
+    if (validate) b.validate = [validate, owned] { validate(*owned); };
+    b.accepted_only = true;
+    add(std::move(b));
+    return *this;
+  }
 
-  // A section whose keys `check` validates. A section registered with a check
-  // before is refused (two owners); one known by name only gains the check.
-  void addSection(const std::string& name, Check check);
-  // A section of another program: accepted, keys unchecked. Idempotent.
-  void addSectionName(const std::string& name);
-
-  bool has(const std::string& name) const { return sections_.count(name) != 0; }
-  // Checks key=value when the section has a check. Throws for an unregistered section.
-  void check(const std::string& section, const std::string& key, const std::string& value) const;
+  bool has(const std::string& section) const;
+  // "section.name" = value into its field. Throws Error naming the key.
+  void set(const std::string& key, const std::string& value) const;
+  // A YAML file's text: a map of sections, each a map of single values, every
+  // one handed to its table. `origin` (a path) and the line name an error.
+  void readYaml(const std::string& text, const std::string& origin) const;
+  void readFile(const std::string& path) const;
+  // "section.name=value" (a --set flag); errors say "<flags>".
+  void applyOverride(const std::string& key_equals_value) const;
+  // The cross-key rules of every table; `origin` names where the values came from.
+  void validate(const std::string& origin) const;
+  // The effective values of the bound sections (not the accepted ones) as YAML,
+  // sections in name order, keys in table order (--check-config, the start-up log).
+  std::string dump() const;
 
  private:
-  std::map<std::string, Check> sections_;  // empty Check: known by name only
-};
+  struct Binding {
+    std::vector<std::string> sections;
+    std::function<void(const std::string&, const std::string&)> set;
+    std::function<std::vector<std::pair<std::string, std::string>>()> entries;
+    std::function<void()> validate;
+    bool accepted_only = false;
+  };
+  void add(Binding binding);
+  const Binding* find(const std::string& section) const;
 
-// The process-wide registry parseConfig consults; holds `table_map` from the start.
-ConfigSections& configSections();
+  std::vector<Binding> bindings_;
+};
 
 }  // namespace findmug

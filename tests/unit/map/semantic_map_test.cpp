@@ -506,13 +506,21 @@ TEST(SemanticMap, RefusesBadInput) {
 }
 
 TEST(SemanticMap, SettingsSectionIsReadAndChecked) {
-  Config config = parseConfig("semantic_map:\n  voxel_size_m: 0.1\n  max_voxels: 5000\n", "test");
-  const SemanticMapConfig c = resolveSemanticMapConfig(config);
+  // The section as a program reads it: the table bound to the struct, then the rules.
+  auto read = [](const std::string& yaml) {
+    SemanticMapConfig out;
+    SettingsSchema schema;
+    schema.bind(semanticMapSettings(), out, validateSemanticMapConfig);
+    schema.readYaml(yaml, "test.yaml");
+    schema.validate("test.yaml");
+    return out;
+  };
+  const SemanticMapConfig c = read("semantic_map:\n  voxel_size_m: 0.1\n  max_voxels: 5000\n");
   EXPECT_FLOAT_EQ(c.voxel_size_m, 0.1f);
   EXPECT_EQ(c.max_voxels, 5000);
-  EXPECT_EQ(config.extra.at("semantic_map.carve_stride"), "8");  // effective values written back
+  EXPECT_EQ(semanticMapSettings().values(c).at("semantic_map.carve_stride"), "8");
   try {
-    parseConfig("semantic_map:\n  max_voxels: 10\n", "test.yaml");
+    read("semantic_map:\n  max_voxels: 10\n");
     ADD_FAILURE() << "accepted max_voxels 10";
   } catch (const Error& e) {
     EXPECT_NE(std::string(e.what()).find("semantic_map.max_voxels"), std::string::npos);
@@ -521,10 +529,9 @@ TEST(SemanticMap, SettingsSectionIsReadAndChecked) {
   bad.hit_logodds = 5.0f;
   EXPECT_THROW(validateSemanticMapConfig(bad), Error);
   // Seeing through can be turned off (0) but not made to add occupancy.
-  Config off = parseConfig("semantic_map:\n  seen_through_logodds: 0\n", "test");
-  EXPECT_EQ(resolveSemanticMapConfig(off).seen_through_logodds, 0.0f);
+  EXPECT_EQ(read("semantic_map:\n  seen_through_logodds: 0\n").seen_through_logodds, 0.0f);
   try {
-    parseConfig("semantic_map:\n  seen_through_logodds: -1\n", "test.yaml");
+    read("semantic_map:\n  seen_through_logodds: -1\n");
     ADD_FAILURE() << "accepted seen_through_logodds -1";
   } catch (const Error& e) {
     EXPECT_NE(std::string(e.what()).find("semantic_map.seen_through_logodds"), std::string::npos);

@@ -14,14 +14,6 @@ namespace {
 
 using ::testing::HasSubstr;
 
-// This program reads the daemon's file as findmug-train does: it knows the
-// daemon's sections by name only (what cli::declareProjectSections does).
-[[maybe_unused]] const bool kDaemonSectionsDeclared = [] {
-  configSections().addSectionName("daemon");
-  configSections().addSectionName("check");
-  return true;
-}();
-
 std::string errorOf(const std::function<void()>& f) {
   try {
     f();
@@ -57,8 +49,6 @@ ground:
   source: floor_labels
 tables:
   safety_distance_m: 0.4
-daemon:
-  source: dataset:/tmp/x
 )",
                                "test.yaml");
   EXPECT_EQ(c.segmenter.forest.num_trees, 16);
@@ -71,18 +61,32 @@ daemon:
   EXPECT_EQ(c.segmenter.overseg.kind, OversegmenterKind::Organized);
   EXPECT_EQ(c.segmenter.ground.source, GroundSource::FloorLabels);
   EXPECT_FLOAT_EQ(c.segmenter.tables.safety_distance_m, 0.4f);
-  EXPECT_EQ(c.extra.at("daemon.source"), "dataset:/tmp/x");
 }
 
 TEST(Config, UnknownKeyIsNamed) {
   const auto msg = errorOf([] { parseConfig("forest:\n  num_tres: 3\n", "cfg.yaml"); });
-  EXPECT_THAT(msg, HasSubstr("cfg.yaml"));
-  EXPECT_THAT(msg, HasSubstr("forest.num_tres"));
+  EXPECT_THAT(msg, HasSubstr("cfg.yaml: line 2: unknown setting 'forest.num_tres' (forest keys: "));
+  EXPECT_THAT(msg, HasSubstr("forest.num_trees"));  // the keys that are there
 }
 
 TEST(Config, UnknownSectionIsRefused) {
   const auto msg = errorOf([] { parseConfig("forrest:\n  num_trees: 3\n", "cfg.yaml"); });
-  EXPECT_THAT(msg, HasSubstr("forrest.num_trees"));
+  EXPECT_THAT(msg, HasSubstr("cfg.yaml: line 2: unknown setting 'forrest.num_trees': no section "
+                             "'forrest'"));
+  // A program that reads only the segmenter's sections does not accept another program's.
+  EXPECT_THAT(errorOf([] { parseConfig("daemon:\n  workers: 2\n", "cfg.yaml"); }),
+              HasSubstr("no section 'daemon'"));
+}
+
+// The seeds (64-bit) and the bagging fraction (open lower end) are settings like the others.
+TEST(Config, SeedsAndBaggingFractionAreRangeChecked) {
+  EXPECT_THAT(errorOf([] { parseConfig("forest:\n  seed: -1\n", "a.yaml"); }),
+              HasSubstr("forest.seed"));
+  EXPECT_THAT(errorOf([] { parseConfig("forest:\n  bagging_fraction: 0\n", "a.yaml"); }),
+              HasSubstr("'0' for forest.bagging_fraction (expected a number in (0, 1])"));
+  EXPECT_EQ(parseConfig("training:\n  degraded_seed: 9007199254740993\n", "a.yaml")
+                .segmenter.training.degraded_seed,
+            9007199254740993ull);  // above 2^53: not through a double
 }
 
 TEST(Config, BadValuesNameKeyAndValue) {
@@ -155,9 +159,9 @@ TEST(Config, InconsistentResolutionsRefused) {
 TEST(Config, OverridesApplyOnTop) {
   Config c = parseConfig("forest:\n  num_trees: 4\n", "a.yaml");
   applyOverride(c, "forest.num_trees=12");
-  applyOverride(c, "daemon.lcm_url=memq://");
   EXPECT_EQ(c.segmenter.forest.num_trees, 12);
-  EXPECT_EQ(c.extra.at("daemon.lcm_url"), "memq://");
+  EXPECT_THAT(errorOf([&] { applyOverride(c, "forest.num_tres=3"); }),
+              HasSubstr("<flags>: unknown setting 'forest.num_tres'"));
   EXPECT_THAT(errorOf([&] { applyOverride(c, "forest.num_trees"); }), HasSubstr("key=value"));
   EXPECT_THAT(errorOf([&] { applyOverride(c, "bogus=1"); }), HasSubstr("section.name"));
 }
@@ -165,7 +169,7 @@ TEST(Config, OverridesApplyOnTop) {
 TEST(Config, DumpRoundTrips) {
   Config c = parseConfig(
       "forest:\n  num_trees: 7\n  seed: 99\nmrf:\n  sigma: 0.25\noverseg:\n  method: organized\n"
-      "ground:\n  source: estimated\ndaemon:\n  workers: 2\n",
+      "ground:\n  source: estimated\n",
       "a.yaml");
   const Config again = parseConfig(dumpConfig(c), "dump");
   EXPECT_EQ(dumpConfig(again), dumpConfig(c));
@@ -173,19 +177,11 @@ TEST(Config, DumpRoundTrips) {
   EXPECT_EQ(again.segmenter.forest.seed, 99u);
   EXPECT_EQ(again.segmenter.overseg.kind, OversegmenterKind::Organized);
   EXPECT_EQ(again.segmenter.ground.source, GroundSource::Estimated);
-  EXPECT_EQ(again.extra.at("daemon.workers"), "2");
 }
 
 TEST(Config, LoadConfigNamesMissingFile) {
   EXPECT_THAT(errorOf([] { loadConfig("/nonexistent/findmugd.yaml"); }),
               HasSubstr("/nonexistent/findmugd.yaml"));
-}
-
-TEST(Config, ShippedDefaultConfigParses) {
-  const auto path = test::sourceDir() / "daemon" / "findmugd.yaml";
-  ASSERT_TRUE(std::filesystem::exists(path)) << path;
-  const Config c = loadConfig(path.string());
-  EXPECT_GT(c.segmenter.forest.num_trees, 0);
 }
 
 // Found by fuzzing (tests/fuzz/regressions/config_yaml): a map or list used as

@@ -1,11 +1,12 @@
 // The settings mechanism (findmug/settings/settings.hpp): tables of named settings,
-// the registry of config sections, and the core's table_map section.
+// the schema a program reads its file through, and the core's table_map section.
 #include "findmug/settings/settings.hpp"
 
 #include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
 #include "findmug/common/error.hpp"
+#include "findmug/map/table_map.hpp"
 #include "findmug/settings/config.hpp"
 
 namespace findmug {
@@ -85,67 +86,101 @@ TEST(SettingsTable, DuplicateAndForeignKeysAreRefused) {
               HasSubstr("does not belong to section 'owned'"));
 }
 
-TEST(ConfigSections, SecondOwnerRefusedNameOnlyUpgradedAndIdempotent) {
-  ConfigSections sections;
-  const auto table = ownedTable("a");
-  auto check = [&table](const std::string& k, const std::string& v) { table.check(k, v); };
-  sections.addSectionName("a");
-  sections.addSectionName("a");
-  sections.check("a", "a.anything", "goes");  // known by name only: unchecked
-  sections.addSection("a", check);            // its owner brings the keys
-  EXPECT_THAT(errorOf([&] { sections.check("a", "a.anything", "goes"); }),
-              HasSubstr("unknown setting 'a.anything'"));
-  EXPECT_THAT(errorOf([&] { sections.addSection("a", check); }), HasSubstr("'a' registered twice"));
-  sections.addSectionName("a");  // a name-only declaration keeps the owner's check
-  EXPECT_THAT(errorOf([&] { sections.check("a", "a.count", "0"); }), HasSubstr("a.count"));
-  EXPECT_THAT(errorOf([&] { sections.check("b", "b.x", "1"); }),
-              HasSubstr("unknown setting 'b.x'"));
+// A schema: the tables a program states, each bound to its struct; values go straight
+// into the typed fields, an unknown section or key is refused with its name and line.
+TEST(SettingsSchema, ReadsEachValueOnceIntoItsBoundField) {
+  const auto table = ownedTable("owned");
+  Owned owned;
+  SettingsSchema schema;
+  schema.bind(table, owned);
+  schema.readYaml("owned:\n  count: 4\n  name: mug\n", "own.yaml");
+  EXPECT_EQ(owned.count, 4);  // no resolve step: the field holds the value
+  EXPECT_EQ(owned.name, "mug");
+  schema.applyOverride("owned.rate=0.75");
+  EXPECT_DOUBLE_EQ(owned.rate, 0.75);
+  EXPECT_EQ(schema.dump(), "owned:\n  count: 4\n  rate: 0.75\n  on: false\n  name: mug\n");
+
+  EXPECT_EQ(errorOf([&] { schema.readYaml("owned:\n  count: 4\n  cuont: 4\n", "own.yaml"); }),
+            "own.yaml: line 3: unknown setting 'owned.cuont' (owned keys: owned.count, "
+            "owned.name, owned.on, owned.rate)");
+  EXPECT_EQ(errorOf([&] { schema.applyOverride("owned.count=99"); }),
+            "<flags>: invalid value '99' for owned.count (expected an integer in [1, 10])");
+  EXPECT_EQ(errorOf([&] { schema.readYaml("never_bound:\n  x: 1\n", "own.yaml"); }),
+            "own.yaml: line 2: unknown setting 'never_bound.x': no section 'never_bound' "
+            "(sections: owned)");
+  EXPECT_THAT(errorOf([&] { schema.applyOverride("owned.count"); }), HasSubstr("key=value"));
+  EXPECT_THAT(errorOf([&] { schema.applyOverride("bogus=1"); }), HasSubstr("section.name"));
+  EXPECT_EQ(owned.count, 4);  // refused values leave the fields alone
 }
 
-// The process-wide registry as parseConfig and applyOverride use it.
-TEST(ConfigSections, ParseConfigChecksOwnedSectionsAndKeepsNameOnlyOnes) {
-  static const auto owned = ownedTable("settings_test_owned");
-  configSections().addSection(
-      "settings_test_owned", [](const std::string& k, const std::string& v) { owned.check(k, v); });
-  configSections().addSectionName("settings_test_other");
-
-  Config c = parseConfig("settings_test_owned:\n  count: 4\nsettings_test_other:\n  whatever: 1\n",
-                         "own.yaml");
-  EXPECT_EQ(c.extra.at("settings_test_owned.count"), "4");
-  EXPECT_EQ(c.extra.at("settings_test_other.whatever"), "1");  // kept for its owner
-  applyOverride(c, "settings_test_owned.rate=0.75");
-  EXPECT_EQ(c.extra.at("settings_test_owned.rate"), "0.75");
-
-  EXPECT_EQ(errorOf([] { parseConfig("settings_test_owned:\n  cuont: 4\n", "own.yaml"); }),
-            "own.yaml: unknown setting 'settings_test_owned.cuont' (settings_test_owned keys: "
-            "settings_test_owned.count, settings_test_owned.name, settings_test_owned.on, "
-            "settings_test_owned.rate)");
-  EXPECT_EQ(errorOf([&] { applyOverride(c, "settings_test_owned.count=99"); }),
-            "<flags>: invalid value '99' for settings_test_owned.count (expected an integer in "
-            "[1, 10])");
-  EXPECT_EQ(errorOf([] { parseConfig("never_registered:\n  x: 1\n", "own.yaml"); }),
-            "own.yaml: unknown setting 'never_registered.x'");
+TEST(SettingsSchema, AcceptedSectionsAreCheckedButNotDumpedAndNoSectionIsBoundTwice) {
+  const auto mine = ownedTable("mine");
+  const auto theirs = ownedTable("theirs");
+  Owned owned;
+  SettingsSchema schema;
+  schema.bind(mine, owned);
+  schema.accept(theirs);  // another program's section in the same file
+  schema.readYaml("theirs:\n  count: 9\nmine:\n  count: 3\n", "shared.yaml");
+  EXPECT_EQ(owned.count, 3);
+  EXPECT_THAT(errorOf([&] { schema.readYaml("theirs:\n  count: 11\n", "shared.yaml"); }),
+              HasSubstr("shared.yaml: line 2: invalid value '11' for theirs.count"));
+  EXPECT_THAT(errorOf([&] { schema.readYaml("theirs:\n  cnt: 1\n", "shared.yaml"); }),
+              HasSubstr("unknown setting 'theirs.cnt'"));
+  EXPECT_EQ(schema.dump().find("theirs"), std::string::npos);
+  EXPECT_THAT(errorOf([&] { schema.bind(theirs, owned); }),
+              HasSubstr("section 'theirs' bound twice"));
 }
 
-TEST(TableMapSettings, TheCoreParsesValidatesAndWritesBackItsSection) {
-  Config c = parseConfig("table_map:\n  confirm_sightings: 5\n  match_gap_m: 0.25\n", "map.yaml");
-  const TableMapConfig m = resolveTableMapConfig(c);
+TEST(SettingsSchema, ValidateRunsTheCrossKeyRulesWithTheOrigin) {
+  const auto table = ownedTable("owned");
+  Owned owned;
+  SettingsSchema schema;
+  schema.bind(table, owned, [](const Owned& o) {
+    if (o.on && o.count < 5) throw Error("owned.on needs owned.count >= 5");
+  });
+  schema.readYaml("owned:\n  on: true\n", "own.yaml");
+  EXPECT_EQ(errorOf([&] { schema.validate("own.yaml"); }),
+            "own.yaml: owned.on needs owned.count >= 5");
+  schema.applyOverride("owned.count=5");
+  EXPECT_NO_THROW(schema.validate("own.yaml + flags"));
+}
+
+TEST(TableMapSettings, TheCoreTableParsesAndValidatesItsSection) {
+  TableMapConfig m;
+  SettingsSchema schema;
+  schema.bind(tableMapSettings(), m, validateTableMapConfig);
+  schema.readYaml("table_map:\n  confirm_sightings: 5\n  match_gap_m: 0.25\n", "map.yaml");
   EXPECT_EQ(m.confirm_sightings, 5);
   EXPECT_FLOAT_EQ(m.match_gap_m, 0.25f);
   EXPECT_EQ(m.forget_misses, TableMapConfig{}.forget_misses);
-  EXPECT_EQ(c.extra.at("table_map.forget_misses"), "3");  // every key written back
-  EXPECT_EQ(c.extra.at("table_map.view_max_range_m"), "4");
-  EXPECT_EQ(c.extra.at("table_map.match_height_m"), "0.15");  // the float's shortest text
+  const auto values = tableMapSettings().values(m);
+  EXPECT_EQ(values.at("table_map.forget_misses"), "3");
+  EXPECT_EQ(values.at("table_map.view_max_range_m"), "4");
+  EXPECT_EQ(values.at("table_map.match_height_m"), "0.15");  // the float's shortest text
   EXPECT_EQ(tableMapSettings().settings().size(), 10u);
 
-  EXPECT_THAT(errorOf([] { parseConfig("table_map:\n  no_such_key: 1\n", "map.yaml"); }),
-              HasSubstr("map.yaml: unknown setting 'table_map.no_such_key' (table_map keys: "));
-  EXPECT_THAT(errorOf([] { parseConfig("table_map:\n  confirm_sightings: 0\n", "map.yaml"); }),
+  EXPECT_THAT(errorOf([&] { schema.readYaml("table_map:\n  no_such_key: 1\n", "map.yaml"); }),
+              HasSubstr("map.yaml: line 2: unknown setting 'table_map.no_such_key' (table_map keys: "));
+  EXPECT_THAT(errorOf([&] { schema.readYaml("table_map:\n  confirm_sightings: 0\n", "map.yaml"); }),
               HasSubstr("'0' for table_map.confirm_sightings"));
-  // Consistency across keys is checked when the section is resolved.
-  Config inconsistent = parseConfig("table_map:\n  view_max_range_m: 0.5\n", "map.yaml");
-  EXPECT_THAT(errorOf([&] { resolveTableMapConfig(inconsistent); }),
-              HasSubstr("table_map.view_max_range_m"));
+  // Consistency across keys is checked once everything is read.
+  schema.readYaml("table_map:\n  view_max_range_m: 0.5\n", "map.yaml");
+  EXPECT_THAT(errorOf([&] { schema.validate("map.yaml"); }),
+              HasSubstr("map.yaml: table_map.view_max_range_m"));
+}
+
+// The segmenter's struct spans several sections: one table, each key's own section
+// named when a key is unknown.
+TEST(SettingsTable, SeveralSectionsNameTheKeysOfTheOneAsked) {
+  const auto& table = segmenterSettings();
+  EXPECT_TRUE(table.holds("forest"));
+  EXPECT_TRUE(table.holds("mrf"));
+  EXPECT_FALSE(table.holds("daemon"));
+  SegmenterConfig c;
+  const std::string msg = errorOf([&] { table.set(c, "mrf.lamda", "1"); });
+  EXPECT_THAT(msg, HasSubstr("unknown setting 'mrf.lamda' (mrf keys: "));
+  EXPECT_THAT(msg, HasSubstr("mrf.lambda"));
+  EXPECT_EQ(msg.find("forest."), std::string::npos) << msg;
 }
 
 }  // namespace

@@ -55,8 +55,8 @@ class SemanticMapStage final : public ResultSink {
     bool fused_labels = false;
     std::string file;  // "" = not kept
     double save_period_s = 60.0;
-    std::string map_channel;        // FINDMUG_SEMANTIC_MAP[_suffix]
-    std::string table_map_channel;  // FINDMUG_TABLE_MAP[_suffix]
+    std::string map_channel;        // FINDMUG_SEMANTIC_MAP (the bus applies the suffix)
+    std::string table_map_channel;  // FINDMUG_TABLE_MAP
     // Runs before each frame is fused, on the map thread (tests: hold it).
     std::function<void()> before_fuse;
   };

@@ -14,6 +14,10 @@
 //                handle() report EndOfLog once the queue is drained, as a
 //                replayed log does.
 //   FaultyBus    a decorator whose publish() fails on command (fault tests).
+//   SuffixedBus  a decorator that applies the channel suffix (daemon.channel_suffix,
+//                --channel-suffix): a program publishes and subscribes by base
+//                name (channels.hpp), the bus sends and listens on BASE_SUFFIX.
+//                withChannelSuffix() / openBus(url, what, suffix) give one.
 //   ReceiveThread  the receive loop every listener needs: a thread that owns a
 //                bus and calls handle(100 ms) until stop(), end of log or failure.
 //
@@ -173,6 +177,40 @@ class FaultyBus final : public Bus {
   std::vector<std::string> failing_;
   std::atomic<std::uint64_t> refused_{0};
 };
+
+// ---- SuffixedBus -----------------------------------------------------------------
+
+// Forwards to `inner` with every channel name turned into channelName(channel, suffix)
+// (channels.hpp): the one place a program's channel suffix is applied. Handlers are
+// given the name on the wire (the suffixed one). The suffix is checked at construction
+// (findmug::Error naming it).
+class SuffixedBus final : public Bus {
+ public:
+  SuffixedBus(std::shared_ptr<Bus> inner, std::string suffix);
+
+  bool publish(const std::string& channel, const void* data, std::size_t size) override {
+    return inner_->publish(wireName(channel), data, size);
+  }
+  void subscribeTimed(const std::string& channel, TimedHandler handler) override {
+    inner_->subscribeTimed(wireName(channel), std::move(handler));
+  }
+  HandleResult handle(std::chrono::milliseconds timeout) override {
+    return inner_->handle(timeout);
+  }
+  std::string describe() const override {
+    return inner_->describe() + " (channels suffixed _" + suffix_ + ")";
+  }
+  bool replaysLog() const override { return inner_->replaysLog(); }
+  // The name `channel` has on the wire.
+  std::string wireName(const std::string& channel) const { return channel + "_" + suffix_; }
+
+ private:
+  std::shared_ptr<Bus> inner_;
+  std::string suffix_;
+};
+
+// `bus` itself when `suffix` is empty, else a SuffixedBus over it.
+std::shared_ptr<Bus> withChannelSuffix(std::shared_ptr<Bus> bus, const std::string& suffix);
 
 // ---- ReceiveThread --------------------------------------------------------------
 

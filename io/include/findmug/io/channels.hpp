@@ -3,7 +3,8 @@
 // Every channel is a base name plus an optional suffix, so that several
 // robots / cameras can share one LCM network: suffix "KITCHEN" turns
 // FINDMUG_RGBD into FINDMUG_RGBD_KITCHEN. The suffix is configured once
-// (daemon.channel_suffix, --channel-suffix) and applied by channelName().
+// (daemon.channel_suffix, --channel-suffix) and applied by the bus
+// (io::SuffixedBus, bus.hpp): programs publish and subscribe by base name.
 //
 //   FINDMUG_RGBD        findmug_lcm::rgbd_frame_t   frames in (sensor, findmug-grab)
 //   FINDMUG_LABELS      findmug_lcm::label_image_t  per-pixel labels out
@@ -36,5 +37,7 @@ inline constexpr std::string_view kCommandChannel = "FINDMUG_COMMAND";
 // else throws findmug::Error naming the suffix, because a typo there would
 // silently make publisher and subscriber miss each other.
 std::string channelName(std::string_view base, std::string_view suffix);
+// Throws the same findmug::Error for a suffix channelName() refuses (a flag's check).
+void checkChannelSuffix(std::string_view suffix);
 
 }  // namespace findmug::io

@@ -185,5 +185,9 @@ class UdpmBus final : public Bus {
 // The bus a listener should use for `url`: a UdpmBus for udpm (the default
 // URL included), an LcmBus for anything else (memq://, file://, ...).
 std::unique_ptr<Bus> openBus(const std::string& url, const std::string& what);
+// The same with the program's channel suffix applied by the bus (withChannelSuffix):
+// the program publishes and subscribes by base name.
+std::shared_ptr<Bus> openBus(const std::string& url, const std::string& what,
+                             const std::string& channel_suffix);
 
 }  // namespace findmug::io
