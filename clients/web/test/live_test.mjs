@@ -99,13 +99,20 @@ try {
   await page.waitForFunction((s) => window.findmugLive.lastSeq !== s, { timeout: 60000, polling: 100 }, seqA);
   // Canvas pixels: most of the image carries a label colour blended over the camera
   // image, not the black of an empty canvas.
-  const pixels = await page.evaluate(() => {
+  // Read for up to 10 s: on a busy host headless Chromium has once read back a black canvas
+  // right after a redraw; a page that never draws stays black and fails.
+  const readPixels = () => {
     const c = document.getElementById('view');
     const d = c.getContext('2d').getImageData(0, 0, c.width, c.height).data;
     let lit = 0;
     for (let i = 0; i < d.length; i += 4) if (d[i] + d[i + 1] + d[i + 2] > 30) ++lit;
     return { width: c.width, height: c.height, lit: lit / (d.length / 4) };
-  });
+  };
+  let pixels = await page.evaluate(readPixels);
+  for (let tries = 0; tries < 50 && (pixels.width < 100 || pixels.lit < 0.3); ++tries) {
+    await new Promise((r) => setTimeout(r, 200));
+    pixels = await page.evaluate(readPixels);
+  }
   if (pixels.width < 100 || pixels.lit < 0.3) fail(`label overlay looks empty: ${JSON.stringify(pixels)}`);
 
   // 2. A table hull over the camera image, and the same table on the map.
