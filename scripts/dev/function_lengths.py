@@ -8,7 +8,7 @@ A rough reader, not a parser: comments and literals are blanked, then braces are
 brace after a ')' outside any function opens a function (lambdas and local classes count
 towards the function that holds them). Prints "LINES  FILE:LINE  NAME" from the line of the
 opening brace to the line of the closing one. Used for issue 37 (long functions split into
-named steps; docs/results-h-split37.md).
+named steps; docs/measurements/function-splits.md).
 """
 import os
 import re

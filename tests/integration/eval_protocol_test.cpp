@@ -164,7 +164,7 @@ TEST(EvalProtocol, AFrameNameInTwoFoldersIsRefusedNamingIt) {
 //   NYU-13 classes + object features, 8 trees (shipped until h-depth35):
 //           class average 0.499 / 0.498 / 0.497, chair 0.177 / 0.212 / 0.203,
 //           global 0.580 / 0.575 / 0.577;
-//   shipped, the same with 16 trees (docs/results-h-depth35.md): class average
+//   shipped, the same with 16 trees (docs/measurements/forest-size.md): class average
 //           0.511 / 0.511 / 0.521 (mean 0.514, spread 0.010), chair 0.162 /
 //           0.157 / 0.163 (mean 0.160, spread 0.006), global 0.592 / 0.592 /
 //           0.608 (mean 0.597, spread 0.016).
