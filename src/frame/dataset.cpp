@@ -417,11 +417,11 @@ DatasetFolder::DatasetFolder(const std::string& dir, const DatasetOptions& optio
     if (options.fine_labels_folder != "label40" && options.fine_labels_folder != "label13")
       throw Error(dir + ": fine labels folder '" + options.fine_labels_folder +
                   "' (expected label40 or label13)");
-    if (!fs::is_directory(root / options.fine_labels_folder, ec) && !options.fine_labels_optional)
+    has_fine_labels_ = fs::is_directory(root / options.fine_labels_folder, ec);
+    if (!has_fine_labels_ && !options.fine_labels_optional)
       throw Error(dir + ": " + options.fine_labels_folder +
                   "/ labels asked for (" + options.fine_labels_asked_by + ") but there is no " +
                   options.fine_labels_folder + "/ folder");
-    has_fine_labels_ = fs::is_directory(root / options.fine_labels_folder, ec);
   }
 
   if (has_labels_ && !has_label8_) {

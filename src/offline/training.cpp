@@ -409,10 +409,11 @@ void inferMissingFineLabels(TrainingSet& set, int neighbours) {
   if (missing.empty()) return;
   const std::size_t extra = set.extra_names.size(), dims = kFeatureDim + extra;
   const std::vector<float> scale = columnScales(set);
-  auto value = [&](std::size_t i, std::size_t d) {
-    return (d < kFeatureDim ? set.features[i][d] : set.extra[i * extra + d - kFeatureDim]) *
-           scale[d];
-  };
+  std::vector<float> rows(set.labels.size() * dims);  // every sample's scaled columns
+  for (std::size_t i = 0; i < set.labels.size(); ++i)
+    for (std::size_t d = 0; d < dims; ++d)
+      rows[i * dims + d] =
+          (d < kFeatureDim ? set.features[i][d] : set.extra[i * extra + d - kFeatureDim]) * scale[d];
   const auto k = static_cast<std::size_t>(std::max(1, neighbours));
   std::vector<std::pair<float, std::size_t>> nearest;
   for (const std::size_t i : missing) {
@@ -426,7 +427,7 @@ void inferMissingFineLabels(TrainingSet& set, int neighbours) {
     for (const std::size_t j : pool) {
       float d2 = 0.0f;
       for (std::size_t d = 0; d < dims; ++d) {
-        const float diff = value(i, d) - value(j, d);
+        const float diff = rows[i * dims + d] - rows[j * dims + d];
         d2 += diff * diff;
       }
       nearest.emplace_back(d2, j);

@@ -3,14 +3,12 @@
 // MRF can load.
 #include <gtest/gtest.h>
 
-#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <string>
 
-#include <sys/wait.h>
-
 #include "findmug/mrf/layout_prior.hpp"
+#include "run_command.hpp"
 #include "test_data.hpp"
 
 namespace fs = std::filesystem;
@@ -18,21 +16,8 @@ namespace fs = std::filesystem;
 namespace findmug {
 namespace {
 
-struct ToolRun {
-  int code = -1;
-  std::string output;
-};
-
-ToolRun run(const std::string& args) {
-  ToolRun r;
-  const std::string command = std::string(FINDMUG_LEARN_LAYOUT_EXE) + " " + args + " 2>&1";
-  FILE* pipe = popen(command.c_str(), "r");
-  if (!pipe) return r;
-  char buffer[512];
-  while (std::fgets(buffer, sizeof(buffer), pipe)) r.output += buffer;
-  const int status = pclose(pipe);
-  r.code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  return r;
+test::RunResult run(const std::string& args) {
+  return test::runCommand(std::string(FINDMUG_LEARN_LAYOUT_EXE) + " " + args);
 }
 
 TEST(LearnLayout, CountsRealLabelMapsOutsideTheEvaluationScenes) {
@@ -48,8 +33,8 @@ TEST(LearnLayout, CountsRealLabelMapsOutsideTheEvaluationScenes) {
   const std::string out = dir.str("prior.csv");
   const std::string common = "--labels " + dir.str("label40") + " --nyu-split " + split.string() +
                              " --out " + out;
-  ToolRun r = run(common + " --exclude-scenes-of " + labelled.string());
-  ASSERT_EQ(r.code, 0) << r.output;
+  test::RunResult r = run(common + " --exclude-scenes-of " + labelled.string());
+  ASSERT_EQ(r.exit_code, 0) << r.output;
   EXPECT_NE(r.output.find("2 of 4 label maps counted"), std::string::npos) << r.output;
   const LayoutCounts counts = loadLayoutCounts(out);
   EXPECT_EQ(counts.frames, 2);
@@ -65,13 +50,13 @@ TEST(LearnLayout, CountsRealLabelMapsOutsideTheEvaluationScenes) {
 
   // Without exclusion all four are counted.
   r = run(common);
-  ASSERT_EQ(r.code, 0) << r.output;
+  ASSERT_EQ(r.exit_code, 0) << r.output;
   EXPECT_NE(r.output.find("4 of 4 label maps counted"), std::string::npos) << r.output;
 
   // A label id outside the mapping is refused with the file named.
   std::ofstream(dir.str("map.csv")) << "source_id,findmug_label\n0,void\n";
   r = run(common + " --mapping " + dir.str("map.csv"));
-  EXPECT_NE(r.code, 0);
+  EXPECT_NE(r.exit_code, 0);
   EXPECT_NE(r.output.find(".png: label id"), std::string::npos) << r.output;
 }
 
