@@ -72,7 +72,7 @@ void addCommandRoutes(httplib::Server& server, SendCommand send) {
       return fail(res, 400, e.what());
     }
     res.set_header("Cache-Control", "no-store");
-    res.set_content(nlohmann::json{{"request_id", command.request_id}}.dump(), "application/json");
+    res.set_content(nlohmann::json{{"request_id", command.request_id}}.dump(), kJsonContentType);
   });
 }
 

@@ -15,6 +15,16 @@ struct Response;
 
 namespace findmug::web {
 
+// The Content-Type of every JSON answer. cpp-httplib (Debian's 0.11, built with Brotli)
+// compresses a response whose type is exactly "application/json" with Brotli at its
+// default quality 11 whenever the browser accepts br: at the live page's 10 updates a
+// second that was three quarters of findmug-web's CPU (docs/measurements/web.md). The
+// page is read over loopback or the robot's LAN, where the bytes cost nothing, so JSON
+// goes uncompressed: the charset parameter (which RFC 8259 allows and JSON readers
+// ignore) is not the exact type httplib compresses. WebAccess.JsonAnswersAreNotCompressed
+// fails if a library update starts compressing it again.
+inline constexpr const char* kJsonContentType = "application/json; charset=utf-8";
+
 // Answers `status` with {"error": message}; the reason also goes into a header for the
 // request log (the body may be compressed by then).
 void fail(httplib::Response& res, int status, const std::string& message);

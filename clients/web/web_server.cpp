@@ -68,7 +68,7 @@ std::string contentType(const std::string& name) {
   if (ends(".css")) return "text/css; charset=utf-8";
   if (ends(".png")) return "image/png";
   if (ends(".jpg") || ends(".jpeg")) return "image/jpeg";
-  if (ends(".json")) return "application/json";
+  if (ends(".json")) return kJsonContentType;
   if (ends(".csv") || ends(".txt") || ends(".yaml")) return "text/plain; charset=utf-8";
   return "application/octet-stream";
 }
@@ -99,7 +99,7 @@ void fail(httplib::Response& res, int status, const std::string& message) {
     if (static_cast<unsigned char>(c) < 0x20 || static_cast<unsigned char>(c) >= 0x7F) c = '?';
   }
   res.set_header(kErrorHeader, header);
-  res.set_content(nlohmann::json{{"error", message}}.dump(), "application/json");
+  res.set_content(nlohmann::json{{"error", message}}.dump(), kJsonContentType);
 }
 
 std::optional<nlohmann::json> jsonObjectBody(const std::string& body, httplib::Response& res) {
@@ -119,7 +119,7 @@ std::optional<nlohmann::json> jsonObjectBody(const std::string& body, httplib::R
 
 void sendJson(httplib::Response& res, const nlohmann::json& body) {
   res.set_header("Cache-Control", "no-store");
-  res.set_content(body.dump(), "application/json");
+  res.set_content(body.dump(), kJsonContentType);
 }
 
 bool validFrameName(const std::string& name) {
