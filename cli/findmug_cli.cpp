@@ -45,6 +45,7 @@ Config configFrom(const ConfigFlags& flags) {
   Config config;
   SettingsSchema schema;
   bindCoreSettings(schema, config);
+  bindOfflineSettings(schema, config);
   readSettings(flags, schema);
   return config;
 }

@@ -37,8 +37,8 @@ void addConfigFlags(CLI::App& app, ConfigFlags& flags, const std::string& config
 // (acceptSharedFileSettings, program_settings.hpp) checks its section; then the rules
 // across keys. Throws findmug::Error naming the file, line or setting that is wrong.
 void readSettings(const ConfigFlags& flags, SettingsSchema& schema);
-// For a program that uses the segmenter's sections only (findmug-train, findmug-eval):
-// readSettings with bindCoreSettings.
+// For a program that uses the core's sections only (findmug-train, findmug-eval): readSettings
+// with bindCoreSettings and bindOfflineSettings.
 Config configFrom(const ConfigFlags& flags);
 
 CLI::Option* addSourceFlag(CLI::App& app, std::string& spec, const std::string& help);

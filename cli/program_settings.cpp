@@ -271,6 +271,7 @@ void acceptUnbound(SettingsSchema& schema, const SettingsTable<T>& table,
 
 void acceptSharedFileSettings(SettingsSchema& schema) {
   acceptUnbound<SegmenterConfig>(schema, segmenterSettings(), validateSegmenterConfig);
+  acceptUnbound<OfflineConfig>(schema, offlineSettings());
   acceptUnbound<TableMapConfig>(schema, tableMapSettings(), validateTableMapConfig);
   acceptUnbound<SemanticMapConfig>(schema, semanticMapSettings(), validateSemanticMapConfig);
   acceptUnbound(schema, daemon::daemonSettings());

@@ -114,7 +114,7 @@ int run(int argc, char** argv) {
         RgbdFrame measured = frame.frame;
         if (f.degrade) {
           DegradationReport report;
-          measured = degradeDepth(frame.frame, config.segmenter.degrade,
+          measured = degradeDepth(frame.frame, config.offline.degrade,
                                   degradationSeed(static_cast<std::uint64_t>(k) + 1, i), &report);
           if (report.skipped) std::cerr << frame.name << ": raw already, left as it is\n";
           if (!f.out.empty()) {

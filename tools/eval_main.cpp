@@ -256,8 +256,9 @@ struct TrainSubset {
 Evaluation crossValidate(const std::vector<FrameSample>& samples,
                          const std::vector<FrameSample>& test_samples,
                          const std::vector<FrameSample>& extra_training, const FoldPlan& plan,
-                         const SegmenterConfig& config, const std::vector<RegionFeatures>& regions,
-                         bool keep_pixels, const TrainSubset& subset = {},
+                         const SegmenterConfig& config, const TrainingOptions& training,
+                         const std::vector<RegionFeatures>& regions, bool keep_pixels,
+                         const TrainSubset& subset = {},
                          const std::vector<FrameSample>& unlabelled = {},
                          std::vector<Evaluation>* per_round = nullptr) {
   Evaluation eval;
@@ -267,7 +268,7 @@ Evaluation crossValidate(const std::vector<FrameSample>& samples,
     e.mrf_results.resize(samples.size());
   };
   sized(eval);
-  const int rounds = unlabelled.empty() ? 0 : config.training.pseudo_rounds;
+  const int rounds = unlabelled.empty() ? 0 : training.pseudo_rounds;
   if (per_round) {
     per_round->assign(static_cast<std::size_t>(rounds) + 1, Evaluation{});
     for (auto& e : *per_round) sized(e);
@@ -306,7 +307,7 @@ Evaluation crossValidate(const std::vector<FrameSample>& samples,
             throw Error("fold " + std::to_string(fold) + ": test frame " + u.name +
                         " is among the unlabelled frames");
       const RandomForest forest = trainModelWithPseudoLabels(
-          frames, unlabelled, fold_config, context, &pseudo,
+          frames, unlabelled, fold_config, training, context, &pseudo,
           [&](int r, const RandomForest& model) {
             if (per_round && r < rounds)
               labelFrames(model, config, test_samples, test, regions,
@@ -314,7 +315,7 @@ Evaluation crossValidate(const std::vector<FrameSample>& samples,
           });
       labelFrames(forest, config, test_samples, test, regions, eval, keep_pixels, context);
     } else {
-      const RandomForest forest = trainModel(frames, fold_config);
+      const RandomForest forest = trainModel(frames, fold_config, training);
       labelFrames(forest, config, test_samples, test, regions, eval, keep_pixels, context);
     }
     eval.folds.push_back({fold, train, test, std::move(pseudo)});
@@ -335,8 +336,8 @@ Evaluation crossValidate(const std::vector<FrameSample>& samples,
 // there, with why each unmatched one failed (eval_tables.hpp).
 void measureTables(const LabeledFrames& frames, const std::vector<FrameSample>& samples,
                    const Evaluation& eval, const Segmenter& segmenter,
-                   const synth::SequenceGroundTruth* synth, EvalReport& report,
-                   std::ostream* diagnosis) {
+                   const TableMetricsConfig& metrics, const synth::SequenceGroundTruth* synth,
+                   EvalReport& report, std::ostream* diagnosis) {
   const SegmenterConfig& config = segmenter.config();
   std::map<std::string, std::size_t> pose_of;
   if (synth) {
@@ -350,7 +351,7 @@ void measureTables(const LabeledFrames& frames, const std::vector<FrameSample>& 
       throw Error(samples[f].name + ": no ground plane on the second pass (was found before)");
     }
     const auto truth = groundTruthTables(prepared.cloud_ground, samples[f].ground_truth,
-                                         config.tables, config.table_metrics);
+                                         config.tables, metrics);
     const FrameSample& sample = samples[f];
     std::vector<float> table_probability(sample.pixel_segment.size(), 0.0f);
     std::vector<float> confidence(sample.pixel_segment.size(), 0.0f);
@@ -365,7 +366,7 @@ void measureTables(const LabeledFrames& frames, const std::vector<FrameSample>& 
     const auto detected =
         detectTables(prepared.cloud_ground, predicted, config.tables, &prepared.normals_ground)
             .tables;
-    const auto matches = matchTables(truth, detected, config.table_metrics.min_iou);
+    const auto matches = matchTables(truth, detected, metrics.min_iou);
     if (diagnosis) {
       const FrameTableEvidence evidence{sample.name,          sample.width,
                                         sample.height,        &sample.ground_truth,
@@ -374,7 +375,7 @@ void measureTables(const LabeledFrames& frames, const std::vector<FrameSample>& 
       *diagnosis << diagnoseFrameTables(evidence, truth, detected, matches, report.diagnosis);
     }
     report.tables.add(static_cast<int>(truth.size()), static_cast<int>(detected.size()), matches);
-    report.searchable.add(measureSearchableTables(truth, detected, config.table_metrics));
+    report.searchable.add(measureSearchableTables(truth, detected, metrics));
     {
       std::vector<bool> matched(detected.size(), false);
       for (const auto& m : matches) matched[static_cast<std::size_t>(m.detected)] = true;
@@ -553,7 +554,8 @@ double tableIoU(const ConfusionMatrix& m) {
 void runLearningCurve(const EvalFlags& f, const LabeledFrames& test_frames, const std::vector<FrameSample>& samples,
                       const std::vector<FrameSample>& test_samples,
                       const std::vector<FrameSample>& extra_training, const FoldPlan& plan,
-                      const Segmenter& segmenter, const std::vector<RegionFeatures>& regions) {
+                      const Segmenter& segmenter, const OfflineConfig& offline,
+                      const std::vector<RegionFeatures>& regions) {
   const std::filesystem::path dir = f.curve_dir;
   std::filesystem::create_directories(dir);
   std::vector<LearningCurvePoint> points;
@@ -564,9 +566,11 @@ void runLearningCurve(const EvalFlags& f, const LabeledFrames& test_frames, cons
       config.forest.seed += 1000u * static_cast<std::uint64_t>(seed);
       const TrainSubset subset{size, static_cast<std::uint64_t>(seed)};
       const Evaluation eval =
-          crossValidate(samples, test_samples, extra_training, plan, config, regions, true, subset);
+          crossValidate(samples, test_samples, extra_training, plan, config, offline.training,
+                        regions, true, subset);
       EvalReport tables;
-      measureTables(test_frames, test_samples, eval, segmenter, nullptr, tables, nullptr);
+      measureTables(test_frames, test_samples, eval, segmenter, offline.table_metrics, nullptr,
+                    tables, nullptr);
       LearningCurvePoint p;
       p.requested = size;
       p.seed = seed;
@@ -662,7 +666,7 @@ int run(int argc, char** argv) {
   const Config config = cli::configFrom(f.config);
   const int folds = f.folds;
 
-  const DatasetOptions options = datasetOptions(f.dataset, config.segmenter);
+  const DatasetOptions options = datasetOptions(f.dataset, config);
   const auto input = LabeledInputs::open(f.dataset, options);
   const Segmenter segmenter(config.segmenter, nullptr);
   // Load the model first: a bad file is refused before minutes of feature extraction.
@@ -677,22 +681,19 @@ int run(int argc, char** argv) {
   const auto start = std::chrono::steady_clock::now();
   ProgressBar bar("features");
   ExtractionReport extraction;
-  auto samples = extractSamples(input->frames(), segmenter, extraction,
-                                [&](int done, int total) { bar.update(done, total); });
+  auto samples = extractTrainingSamples(input->frames(), segmenter, config.offline, extraction,
+                                        [&](int done, int total) { bar.update(done, total); });
   bar.finish();
   // The frames evaluated: the same, or raw-like copies (--degrade) of them.
   const LabeledFrames test_frames =
-      f.degrade ? degradedFrames(input->frames(), config.segmenter.degrade, f.degrade_seed)
+      f.degrade ? degradedFrames(input->frames(), config.offline.degrade, f.degrade_seed)
                 : input->frames();
   std::vector<FrameSample> test_samples;
   if (f.degrade) {
     ProgressBar degraded_bar("features (raw-like)");
     ExtractionReport degraded_report;
-    SegmenterConfig test_config = config.segmenter;
-    test_config.training.degraded_copies = 0;  // training-only views are not evaluated
-    test_config.training.extra_oversegmentations = 0;
-    const Segmenter test_segmenter(test_config, nullptr);
-    test_samples = extractSamples(test_frames, test_segmenter, degraded_report,
+    // extractSamples: the training-only views are not evaluated.
+    test_samples = extractSamples(test_frames, segmenter, degraded_report,
                                   [&](int done, int total) { degraded_bar.update(done, total); });
     degraded_bar.finish();
     pairDegradedSamples(samples, test_samples, extraction);
@@ -715,8 +716,9 @@ int run(int argc, char** argv) {
     const auto extra_input = LabeledInput::folder(dir, extra_options);
     ProgressBar extra_bar("features " + dir);
     ExtractionReport extra_report;
-    auto part = extractSamples(extra_input->frames(), segmenter, extra_report,
-                               [&](int done, int total) { extra_bar.update(done, total); });
+    auto part = extractTrainingSamples(extra_input->frames(), segmenter, config.offline,
+                                       extra_report,
+                                       [&](int done, int total) { extra_bar.update(done, total); });
     extra_bar.finish();
     for (auto& s : part) extra_training.push_back(std::move(s));
   }
@@ -729,7 +731,7 @@ int run(int argc, char** argv) {
   if (!f.unlabelled.empty()) {
     if (!f.model.empty())
       throw Error("--unlabelled trains forests (training.pseudo_rounds); not with --model");
-    if (config.segmenter.training.pseudo_rounds == 0)
+    if (config.offline.training.pseudo_rounds == 0)
       std::cerr << "findmug-eval: --unlabelled without training.pseudo_rounds > 0 does nothing\n";
     unlabelled = extractUnlabelled(f.unlabelled, f.dataset, config.segmenter, *input,
                                    unlabelled_report);
@@ -768,16 +770,17 @@ int run(int argc, char** argv) {
     report.fold_rule = plan.rule;
     report.scene_rule = nyuSceneRule(f);
     std::vector<Evaluation> per_round;
-    eval = crossValidate(samples, test_samples, extra_training, plan, config.segmenter, regions,
-                         true, subset, unlabelled, unlabelled.empty() ? nullptr : &per_round);
+    eval = crossValidate(samples, test_samples, extra_training, plan, config.segmenter,
+                         config.offline.training, regions, true, subset, unlabelled,
+                         unlabelled.empty() ? nullptr : &per_round);
     report.folds = foldRecords(eval, plan, samples);
     report.unlabelled_ground_methods = unlabelled_report.ground_methods;
     for (const auto& d : unlabelled_report.dropped)
       report.dropped.push_back("unlabelled " + d);
     for (std::size_t r = 0; r < per_round.size(); ++r) {
       EvalReport round_tables;
-      measureTables(test_frames, test_samples, per_round[r], segmenter, nullptr, round_tables,
-                    nullptr);
+      measureTables(test_frames, test_samples, per_round[r], segmenter,
+                    config.offline.table_metrics, nullptr, round_tables, nullptr);
       report.pseudo_rounds.push_back({static_cast<int>(r), per_round[r].mrf,
                                       round_tables.searchable, round_tables.tables});
     }
@@ -798,7 +801,7 @@ int run(int argc, char** argv) {
       diagnosis.open(f.table_report);
       if (!diagnosis) throw Error(f.table_report + ": cannot write the table report");
     }
-    measureTables(test_frames, test_samples, eval, segmenter,
+    measureTables(test_frames, test_samples, eval, segmenter, config.offline.table_metrics,
                   synth_truth ? &*synth_truth : nullptr, report,
                   f.table_report.empty() ? nullptr : &diagnosis);
     if (diagnosis.is_open()) {
@@ -811,8 +814,8 @@ int run(int argc, char** argv) {
     for (int trees : {1, 2, 4, 6, 8, 10, 12, 14, 16}) {
       SegmenterConfig c = config.segmenter;
       c.forest.num_trees = trees;
-      const Evaluation e = crossValidate(samples, test_samples, extra_training, plan, c, regions, false,
-                                             subset);
+      const Evaluation e = crossValidate(samples, test_samples, extra_training, plan, c,
+                                         config.offline.training, regions, false, subset);
       report.sweep_trees.push_back({trees, c.forest.max_depth, e.forest, e.mrf});
       std::fprintf(stderr, "sweep trees=%d: forest %.1f/%.1f mrf %.1f/%.1f\n", trees,
                    100 * e.forest.classAverageAccuracy(), 100 * e.forest.globalAccuracy(),
@@ -821,8 +824,8 @@ int run(int argc, char** argv) {
     for (int depth : {2, 4, 6, 8, 10, 12, 14, 16}) {
       SegmenterConfig c = config.segmenter;
       c.forest.max_depth = depth;
-      const Evaluation e = crossValidate(samples, test_samples, extra_training, plan, c, regions, false,
-                                             subset);
+      const Evaluation e = crossValidate(samples, test_samples, extra_training, plan, c,
+                                         config.offline.training, regions, false, subset);
       report.sweep_depth.push_back({c.forest.num_trees, depth, e.forest, e.mrf});
       std::fprintf(stderr, "sweep depth=%d: forest %.1f/%.1f mrf %.1f/%.1f\n", depth,
                    100 * e.forest.classAverageAccuracy(), 100 * e.forest.globalAccuracy(),
@@ -832,7 +835,7 @@ int run(int argc, char** argv) {
   report.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   if (!f.curve_dir.empty()) {
     runLearningCurve(f, test_frames, samples, test_samples, extra_training, plan, segmenter,
-                     regions);
+                     config.offline, regions);
   }
 
   std::cout << formatTable(report);

@@ -79,12 +79,14 @@ void addDatasetFlags(CLI::App& app, DatasetFlags& f) {
       ->multi_option_policy(CLI::MultiOptionPolicy::TakeLast);
 }
 
-DatasetOptions datasetOptions(const DatasetFlags& f, const SegmenterConfig& config) {
+DatasetOptions datasetOptions(const DatasetFlags& f, const Config& whole) {
+  const SegmenterConfig& config = whole.segmenter;
+  const TrainingOptions& training = whole.offline.training;
   DatasetOptions options;
   options.mask_nyu_border = !f.no_nyu_border;
   // Split labels and internal classes need each patch's finer class (label40/ or
   // label13/ beside label8/).
-  options.fine_labels_folder = fineLabelsFolder(config);
+  options.fine_labels_folder = fineLabelsFolder(config, training);
   options.fine_labels_asked_by =
       config.learner.classes != ClassScheme::Labels
           ? std::string("learner.classes = ") + classSchemeName(config.learner.classes)
@@ -95,7 +97,7 @@ DatasetOptions datasetOptions(const DatasetFlags& f, const SegmenterConfig& conf
   if (config.learner.classes == ClassScheme::Nyu13 && !f.mats.empty())
     throw Error("learner.classes = nyu13: --mat gives NYU-40 classes only (use nyu40, or a "
                 "dataset folder with label13/)");
-  if (config.training.split_labels == SplitLabels::Nyu13 && !f.mats.empty())
+  if (training.split_labels == SplitLabels::Nyu13 && !f.mats.empty())
     throw Error("training.split_labels = nyu13: --mat gives NYU-40 classes only (use nyu40, or a "
                 "dataset folder with label13/)");
   if (!f.nyu_rotations.empty()) options.nyu_rotations_file = f.nyu_rotations;

@@ -56,7 +56,7 @@ struct DatasetFlags {
 void addDatasetFlags(CLI::App& app, DatasetFlags& flags);
 // The folder-reading options those flags and the config ask for; throws
 // findmug::Error for a combination that cannot work (split labels nyu13 with --mat).
-DatasetOptions datasetOptions(const DatasetFlags& flags, const SegmenterConfig& config);
+DatasetOptions datasetOptions(const DatasetFlags& flags, const Config& config);
 
 // Every --data folder, then every --mat file, as one indexed collection of
 // frames (frames() numbers them in that order). Frame names must be unique

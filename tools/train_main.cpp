@@ -52,15 +52,15 @@ int run(int argc, char** argv) {
   }
   const Config config = cli::configFrom(f.config);
   const Segmenter segmenter(config.segmenter, nullptr);
-  const DatasetOptions options = tools::datasetOptions(f.dataset, config.segmenter);
+  const DatasetOptions options = tools::datasetOptions(f.dataset, config);
   const auto input = tools::LabeledInputs::open(f.dataset, options);
 
   const auto start = std::chrono::steady_clock::now();
   tools::ProgressBar bar_features("features " + input->frames().description);
   ExtractionReport report;
   std::vector<FrameSample> samples =
-      extractSamples(input->frames(), segmenter, report,
-                     [&](int done, int total) { bar_features.update(done, total); });
+      extractTrainingSamples(input->frames(), segmenter, config.offline, report,
+                             [&](int done, int total) { bar_features.update(done, total); });
   bar_features.finish();
   const int frames_total = report.frames_total;
   const std::vector<std::string>& dropped = report.dropped;
@@ -69,14 +69,15 @@ int run(int argc, char** argv) {
 
   std::vector<std::size_t> all(samples.size());
   for (std::size_t i = 0; i < all.size(); ++i) all[i] = i;
-  const TrainingSet training = makeTrainingSet(samples, all, config.segmenter.training.sample_weight,
-                                               config.segmenter.training.split_labels);
+  const TrainingOptions& options_training = config.offline.training;
+  const TrainingSet training = makeTrainingSet(samples, all, options_training.sample_weight,
+                                               options_training.split_labels);
   if (training.labels.empty()) throw Error("no labelled supervoxel to train on");
 
   ExtractionReport unlabelled_report;
   const std::vector<FrameSample> unlabelled = tools::extractUnlabelled(
       f.unlabelled, f.dataset, config.segmenter, *input, unlabelled_report);
-  if (!f.unlabelled.empty() && config.segmenter.training.pseudo_rounds == 0)
+  if (!f.unlabelled.empty() && options_training.pseudo_rounds == 0)
     std::cerr << "findmug-train: --unlabelled without training.pseudo_rounds > 0 does nothing\n";
 
   tools::ProgressBar bar("forests");
@@ -84,10 +85,11 @@ int run(int argc, char** argv) {
   for (const auto& s : samples) frames.push_back(&s);
   PseudoLabelReport pseudo;
   RandomForest forest =
-      unlabelled.empty() || config.segmenter.training.pseudo_rounds == 0
-          ? trainModel(frames, config.segmenter,
+      unlabelled.empty() || options_training.pseudo_rounds == 0
+          ? trainModel(frames, config.segmenter, options_training,
                        [&](int done, int total) { bar.update(done, total); })
-          : trainModelWithPseudoLabels(frames, unlabelled, config.segmenter, nullptr, &pseudo);
+          : trainModelWithPseudoLabels(frames, unlabelled, config.segmenter, options_training,
+                                       nullptr, &pseudo);
   bar.finish();
   // Recorded so that the model is only ever run on features computed alike.
   forest.setExtractionSettings(extractionSettings(config.segmenter));
@@ -114,9 +116,8 @@ int run(int argc, char** argv) {
   if (!pseudo.rounds.empty()) {
     std::printf("  pseudo-labelled  (training.pseudo_min_confidence %g, pseudo_weight %g, "
                 "pseudo_class_cap %g)\n",
-                config.segmenter.training.pseudo_min_confidence,
-                config.segmenter.training.pseudo_weight,
-                config.segmenter.training.pseudo_class_cap);
+                options_training.pseudo_min_confidence, options_training.pseudo_weight,
+                options_training.pseudo_class_cap);
     std::istringstream lines(formatPseudoLabelReport(pseudo));
     for (std::string line; std::getline(lines, line);) std::printf("    %s\n", line.c_str());
   }

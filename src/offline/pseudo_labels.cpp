@@ -92,11 +92,11 @@ std::vector<FrameSample> pseudoLabelledSamples(const std::vector<FrameSample>& u
                                                const std::vector<SampleLabelling>& labellings,
                                                const std::vector<const FrameSample*>& labelled,
                                                const SegmenterConfig& config,
+                                               const TrainingOptions& t,
                                                PseudoLabelRound& round) {
   if (labellings.size() != unlabelled.size())
     throw Error("pseudoLabelledSamples: " + std::to_string(labellings.size()) +
                 " labellings for " + std::to_string(unlabelled.size()) + " frames");
-  const TrainingOptions& t = config.training;
   const bool internal = config.learner.classes != ClassScheme::Labels;
   const std::array<std::uint8_t, kNumLabels> fine_of = dominantFineClasses(labelled);
   // Candidates per label: (confidence, frame, segment), most confident first;
@@ -168,9 +168,10 @@ std::vector<FrameSample> pseudoLabelledSamples(const std::vector<FrameSample>& u
 
 RandomForest trainModelWithPseudoLabels(
     const std::vector<const FrameSample*>& labelled, const std::vector<FrameSample>& unlabelled,
-    const SegmenterConfig& config, const PairwiseContext* pairwise, PseudoLabelReport* report,
+    const SegmenterConfig& config, const TrainingOptions& training,
+    const PairwiseContext* pairwise, PseudoLabelReport* report,
     const std::function<void(int, const RandomForest&)>& after_round) {
-  RandomForest model = trainModel(labelled, config);
+  RandomForest model = trainModel(labelled, config, training);
   if (after_round) after_round(0, model);
   if (report) {
     report->pool.clear();
@@ -181,7 +182,7 @@ RandomForest trainModelWithPseudoLabels(
   std::vector<RegionFeatures> regions;
   if (config.regions.enabled && config.tables.region_vote)
     for (const FrameSample& u : unlabelled) regions.push_back(sampleRegionFeatures(u, config.regions));
-  for (int r = 1; r <= config.training.pseudo_rounds; ++r) {
+  for (int r = 1; r <= training.pseudo_rounds; ++r) {
     std::vector<SampleLabelling> labellings;
     labellings.reserve(unlabelled.size());
     for (std::size_t f = 0; f < unlabelled.size(); ++f)
@@ -190,10 +191,10 @@ RandomForest trainModelWithPseudoLabels(
     PseudoLabelRound round;
     round.round = r;
     const std::vector<FrameSample> pseudo =
-        pseudoLabelledSamples(unlabelled, labellings, labelled, config, round);
+        pseudoLabelledSamples(unlabelled, labellings, labelled, config, training, round);
     std::vector<const FrameSample*> frames = labelled;
     for (const FrameSample& p : pseudo) frames.push_back(&p);
-    model = trainModel(frames, config);
+    model = trainModel(frames, config, training);
     if (report) report->rounds.push_back(std::move(round));
     if (after_round) after_round(r, model);
   }
@@ -201,8 +202,6 @@ RandomForest trainModelWithPseudoLabels(
 }
 
 SegmenterConfig unlabelledExtractionConfig(SegmenterConfig config) {
-  config.training.extra_oversegmentations = 0;
-  config.training.degraded_copies = 0;
   config.ground.reestimate_every_frames = 1;
   // No labels, so no labelled floor: the floor is found in the frame itself.
   if (config.ground.source == GroundSource::FloorLabels)

@@ -158,9 +158,9 @@ FrameSample sampleOf(const Segmenter& segmenter, PreparedFrame prepared,
 
 // Segmenters (no forest) for the training-only oversegmentations: seed
 // resolution scaled by s, 1/s, s^2, 1/s^2, ... (training.extra_*).
-std::vector<Segmenter> variantSegmenters(const SegmenterConfig& config) {
+std::vector<Segmenter> variantSegmenters(const SegmenterConfig& config,
+                                         const TrainingOptions& t) {
   std::vector<Segmenter> out;
-  const TrainingOptions& t = config.training;
   for (int k = 0; k < t.extra_oversegmentations; ++k) {
     const int power = (k / 2 + 1) * (k % 2 == 0 ? 1 : -1);
     SegmenterConfig variant = config;
@@ -184,11 +184,19 @@ std::vector<Segmenter> variantSegmenters(const SegmenterConfig& config) {
 std::vector<FrameSample> extractSamples(const LabeledFrames& frames, const Segmenter& segmenter,
                                         ExtractionReport& report,
                                         const std::function<void(int, int)>& progress) {
+  return extractTrainingSamples(frames, segmenter, OfflineConfig{}, report, progress);
+}
+
+std::vector<FrameSample> extractTrainingSamples(const LabeledFrames& frames,
+                                                const Segmenter& segmenter,
+                                                const OfflineConfig& offline,
+                                                ExtractionReport& report,
+                                                const std::function<void(int, int)>& progress) {
   std::vector<FrameSample> samples;
   report = {};
   report.frames_total = static_cast<int>(frames.count);
-  const std::vector<Segmenter> variants = variantSegmenters(segmenter.config());
-  const TrainingOptions& training = segmenter.config().training;
+  const TrainingOptions& training = offline.training;
+  const std::vector<Segmenter> variants = variantSegmenters(segmenter.config(), training);
   for (std::size_t i = 0; i < frames.count; ++i) {
     LabeledFrame labelled = frames.load(i);
     // Raw-like copies (training.degraded_copies), each through the whole
@@ -196,7 +204,7 @@ std::vector<FrameSample> extractSamples(const LabeledFrames& frames, const Segme
     std::vector<FrameSample> degraded;
     for (int k = 0; k < training.degraded_copies; ++k) {
       RgbdFrame copy = degradeDepth(
-          labelled.frame, segmenter.config().degrade,
+          labelled.frame, offline.degrade,
           degradationSeed(training.degraded_seed + static_cast<std::uint64_t>(k), i));
       PreparedFrame prepared_copy = segmenter.prepare(std::move(copy), &labelled.labels);
       if (!prepared_copy.ground) continue;
@@ -237,7 +245,7 @@ std::vector<FrameSample> extractSamples(const LabeledFrames& frames, const Segme
   return samples;
 }
 
-std::string fineLabelsFolder(const SegmenterConfig& config) {
+std::string fineLabelsFolder(const SegmenterConfig& config, const TrainingOptions& training) {
   switch (config.learner.classes) {
     case ClassScheme::Nyu13:
       return "label13";
@@ -246,7 +254,7 @@ std::string fineLabelsFolder(const SegmenterConfig& config) {
     case ClassScheme::Labels:
       break;
   }
-  return fineLabelsFolder(config.training.split_labels);
+  return fineLabelsFolder(training.split_labels);
 }
 
 std::string fineLabelsFolder(SplitLabels split) {
@@ -508,13 +516,13 @@ std::vector<ClassProbabilities> predictSample(const RandomForest& model, const F
 }
 
 RandomForest trainModel(const std::vector<const FrameSample*>& frames,
-                        const SegmenterConfig& config,
+                        const SegmenterConfig& config, const TrainingOptions& training,
                         const std::function<void(int, int)>& progress) {
   const bool boosted = config.learner.kind == LearnerKind::XGBoost;
   const bool internal = config.learner.classes != ClassScheme::Labels;
   if (boosted && config.context.enabled)
     throw Error("learner.kind = xgboost has no auto-context stage; set features.context = false");
-  if (internal && config.training.split_labels != SplitLabels::Labels)
+  if (internal && training.split_labels != SplitLabels::Labels)
     throw Error(std::string("learner.classes = ") + classSchemeName(config.learner.classes) +
                 " cannot be combined with training.split_labels");
   const int folds = config.context.enabled && config.context.cross_fit_folds >= 2
@@ -526,9 +534,8 @@ RandomForest trainModel(const std::vector<const FrameSample*>& frames,
   auto tick = [&] {
     if (progress) progress(++done, total);
   };
-  const SampleWeighting weighting = config.training.sample_weight;
-  const SplitLabels split =
-      internal ? fineKindOf(config.learner.classes) : config.training.split_labels;
+  const SampleWeighting weighting = training.sample_weight;
+  const SplitLabels split = internal ? fineKindOf(config.learner.classes) : training.split_labels;
   // Frames labelled with the 8 labels only (a user's own, from the Label page)
   // may join a training with internal classes: their fine classes are inferred.
   const MissingFineLabels missing = internal ? MissingFineLabels::Infer : MissingFineLabels::Refuse;

@@ -34,22 +34,23 @@ using CoreSetting = Setting<SegmenterConfig>;
 
 std::string formatDouble(double v) { return formatSettingNumber(v); }
 
-// Builders for the kinds of settings, with inclusive ranges (settings.hpp).
-CoreSetting floatSetting(std::string key, std::function<float&(SegmenterConfig&)> field,
-                         double lo, double hi) {
-  CoreSetting s = numberSetting<SegmenterConfig, float>(std::move(key), field, lo, hi);
+// Builders for the kinds of settings, with inclusive ranges (settings.hpp), for
+// the segmenter's table (T defaults to SegmenterConfig) and the offline one.
+template <typename T = SegmenterConfig>
+Setting<T> floatSetting(std::string key, std::type_identity_t<std::function<float&(T&)>> field,
+                        double lo, double hi) {
+  Setting<T> s = numberSetting<T, float>(std::move(key), field, lo, hi);
   // Printed as the float widened to double with 9 digits ("0.00999999978"):
   // models store the feature settings in this text (extractionSettings) and
   // are compared with it, so it must not change.
-  s.get = [field](const SegmenterConfig& c) {
-    return formatDouble(field(const_cast<SegmenterConfig&>(c)));
-  };
+  s.get = [field](const T& c) { return formatDouble(field(const_cast<T&>(c))); };
   return s;
 }
 
-CoreSetting intSetting(std::string key, std::function<int&(SegmenterConfig&)> field, long long lo,
-                       long long hi) {
-  return integerSetting<SegmenterConfig, int>(std::move(key), std::move(field), lo, hi);
+template <typename T = SegmenterConfig>
+Setting<T> intSetting(std::string key, std::type_identity_t<std::function<int&(T&)>> field,
+                      long long lo, long long hi) {
+  return integerSetting<T, int>(std::move(key), std::move(field), lo, hi);
 }
 
 CoreSetting doubleSetting(std::string key, std::function<double&(SegmenterConfig&)> field,
@@ -57,20 +58,22 @@ CoreSetting doubleSetting(std::string key, std::function<double&(SegmenterConfig
   return numberSetting<SegmenterConfig, double>(std::move(key), std::move(field), lo, hi);
 }
 
-CoreSetting boolSetting(std::string key, std::function<bool&(SegmenterConfig&)> field) {
-  return findmug::boolSetting<SegmenterConfig>(std::move(key), std::move(field));
+template <typename T = SegmenterConfig>
+Setting<T> boolSetting(std::string key, std::type_identity_t<std::function<bool&(T&)>> field) {
+  return findmug::boolSetting<T>(std::move(key), std::move(field));
 }
 
-template <typename Enum>
-CoreSetting enumSetting(std::string key, std::function<Enum&(SegmenterConfig&)> field,
-                        std::vector<std::pair<std::string, Enum>> names) {
-  return findmug::enumSetting<SegmenterConfig, Enum>(std::move(key), std::move(field),
-                                                     std::move(names));
+template <typename Enum, typename T = SegmenterConfig>
+Setting<T> enumSetting(std::string key, std::type_identity_t<std::function<Enum&(T&)>> field,
+                       std::vector<std::pair<std::string, Enum>> names) {
+  return findmug::enumSetting<T, Enum>(std::move(key), std::move(field), std::move(names));
 }
 
-CoreSetting seedSetting(std::string key, std::function<std::uint64_t&(SegmenterConfig&)> field) {
-  return integerSetting<SegmenterConfig, std::uint64_t>(std::move(key), std::move(field), 0,
-                                                        std::numeric_limits<long long>::max());
+template <typename T = SegmenterConfig>
+Setting<T> seedSetting(std::string key,
+                       std::type_identity_t<std::function<std::uint64_t&(T&)>> field) {
+  return integerSetting<T, std::uint64_t>(std::move(key), std::move(field), 0,
+                                          std::numeric_limits<long long>::max());
 }
 
 CoreSetting baggingFractionSetting() {
@@ -219,61 +222,6 @@ const std::vector<CoreSetting>& settings() {
                     [](C& c) -> double& { return c.xgboost.min_child_weight; }, 0, 1e6),
       doubleSetting("xgboost.lambda", [](C& c) -> double& { return c.xgboost.lambda; }, 0, 1e6),
       intSetting("xgboost.seed", [](C& c) -> int& { return c.xgboost.seed; }, 0, 2147483647),
-      enumSetting<SampleWeighting>(
-          "training.sample_weight", [](C& c) -> SampleWeighting& { return c.training.sample_weight; },
-          {{"patches", SampleWeighting::Patches},
-           {"pixels", SampleWeighting::Pixels},
-           {"sqrt_pixels", SampleWeighting::SqrtPixels}}),
-      enumSetting<SplitLabels>(
-          "training.split_labels", [](C& c) -> SplitLabels& { return c.training.split_labels; },
-          {{"labels", SplitLabels::Labels},
-           {"nyu40", SplitLabels::Nyu40},
-           {"nyu13", SplitLabels::Nyu13}}),
-      intSetting("training.extra_oversegmentations",
-                 [](C& c) -> int& { return c.training.extra_oversegmentations; }, 0, 8),
-      floatSetting("training.extra_seed_scale",
-                   [](C& c) -> float& { return c.training.extra_seed_scale; }, 0.3, 0.99),
-      intSetting("training.degraded_copies",
-                 [](C& c) -> int& { return c.training.degraded_copies; }, 0, 8),
-      intSetting("training.pseudo_rounds", [](C& c) -> int& { return c.training.pseudo_rounds; },
-                 0, 10),
-      floatSetting("training.pseudo_min_confidence",
-                   [](C& c) -> float& { return c.training.pseudo_min_confidence; }, 0, 1),
-      floatSetting("training.pseudo_weight", [](C& c) -> float& { return c.training.pseudo_weight; },
-                   0.001, 1),
-      floatSetting("training.pseudo_class_cap",
-                   [](C& c) -> float& { return c.training.pseudo_class_cap; }, 0, 1000),
-      floatSetting("degrade.shadow_baseline_m",
-                   [](C& c) -> float& { return c.degrade.shadow_baseline_m; }, -0.5, 0.5),
-      floatSetting("degrade.shadow_focal_px",
-                   [](C& c) -> float& { return c.degrade.shadow_focal_px; }, 1, 5000),
-      floatSetting("degrade.edge_relative_jump",
-                   [](C& c) -> float& { return c.degrade.edge_relative_jump; }, 0.001, 10),
-      intSetting("degrade.edge_band_px", [](C& c) -> int& { return c.degrade.edge_band_px; }, 0,
-                 32),
-      floatSetting("degrade.edge_hole_probability",
-                   [](C& c) -> float& { return c.degrade.edge_hole_probability; }, 0, 1),
-      floatSetting("degrade.base_hole_probability",
-                   [](C& c) -> float& { return c.degrade.base_hole_probability; }, 0, 1),
-      floatSetting("degrade.dark_level", [](C& c) -> float& { return c.degrade.dark_level; }, 0,
-                   255),
-      floatSetting("degrade.dark_hole_probability",
-                   [](C& c) -> float& { return c.degrade.dark_hole_probability; }, 0, 1),
-      floatSetting("degrade.bright_level", [](C& c) -> float& { return c.degrade.bright_level; },
-                   0, 254),
-      floatSetting("degrade.bright_hole_probability",
-                   [](C& c) -> float& { return c.degrade.bright_hole_probability; }, 0, 1),
-      floatSetting("degrade.far_start_m", [](C& c) -> float& { return c.degrade.far_start_m; }, 0,
-                   20),
-      floatSetting("degrade.far_hole_per_m",
-                   [](C& c) -> float& { return c.degrade.far_hole_per_m; }, 0, 10),
-      floatSetting("degrade.blob_size_px", [](C& c) -> float& { return c.degrade.blob_size_px; },
-                   0, 200),
-      boolSetting("degrade.quantise", [](C& c) -> bool& { return c.degrade.quantise; }),
-      floatSetting("degrade.disparity_noise",
-                   [](C& c) -> float& { return c.degrade.disparity_noise; }, 0, 20),
-      floatSetting("degrade.max_input_hole_fraction",
-                   [](C& c) -> float& { return c.degrade.max_input_hole_fraction; }, 0, 1),
       boolSetting("mrf.enabled", [](C& c) -> bool& { return c.use_mrf; }),
       enumSetting<MrfPairwise>("mrf.pairwise", [](C& c) -> MrfPairwise& { return c.mrf.pairwise; },
                                {{"potts", MrfPairwise::Potts},
@@ -297,18 +245,6 @@ const std::vector<CoreSetting>& settings() {
       floatSetting("mrf.damping", [](C& c) -> float& { return c.mrf.damping; }, 0, 0.99),
       floatSetting("mrf.convergence_tol", [](C& c) -> float& { return c.mrf.convergence_tol; },
                    0, 1),
-      intSetting("table_metrics.min_instance_points",
-                 [](C& c) -> int& { return c.table_metrics.min_instance_points; }, 1, 10000000),
-      floatSetting("table_metrics.min_iou",
-                   [](C& c) -> float& { return c.table_metrics.min_iou; }, 0.01, 1),
-      floatSetting("table_metrics.searchable_min_top_area_m2",
-                   [](C& c) -> float& { return c.table_metrics.searchable_min_top_area_m2; }, 0,
-                   100),
-      floatSetting("table_metrics.searchable_min_overlap",
-                   [](C& c) -> float& { return c.table_metrics.searchable_min_overlap; }, 0.01, 1),
-      floatSetting("table_metrics.searchable_max_height_error_m",
-                   [](C& c) -> float& { return c.table_metrics.searchable_max_height_error_m; },
-                   0, 10),
       floatSetting("tables.cluster_tolerance_m",
                    [](C& c) -> float& { return c.tables.cluster_tolerance_m; }, 0.005, 1),
       intSetting("tables.min_cluster_points",
@@ -362,28 +298,122 @@ const std::vector<CoreSetting>& settings() {
       seedSetting("forest.seed", [](C& c) -> std::uint64_t& { return c.forest.seed; }),
       baggingFractionSetting(),
       seedSetting("ground.seed", [](C& c) -> std::uint64_t& { return c.ground.seed; }),
-      seedSetting("training.degraded_seed",
-                  [](C& c) -> std::uint64_t& { return c.training.degraded_seed; }),
   };
   return all;
+}
+
+
+// The offline tools' settings (offline_settings.hpp).
+const std::vector<Setting<OfflineConfig>>& offlineSettingList() {
+  using O = OfflineConfig;
+  static const std::vector<Setting<OfflineConfig>> all = {
+      enumSetting<SampleWeighting, O>(
+          "training.sample_weight", [](O& c) -> SampleWeighting& { return c.training.sample_weight; },
+          {{"patches", SampleWeighting::Patches},
+           {"pixels", SampleWeighting::Pixels},
+           {"sqrt_pixels", SampleWeighting::SqrtPixels}}),
+      enumSetting<SplitLabels, O>(
+          "training.split_labels", [](O& c) -> SplitLabels& { return c.training.split_labels; },
+          {{"labels", SplitLabels::Labels},
+           {"nyu40", SplitLabels::Nyu40},
+           {"nyu13", SplitLabels::Nyu13}}),
+      intSetting<O>("training.extra_oversegmentations",
+                 [](O& c) -> int& { return c.training.extra_oversegmentations; }, 0, 8),
+      floatSetting<O>("training.extra_seed_scale",
+                   [](O& c) -> float& { return c.training.extra_seed_scale; }, 0.3, 0.99),
+      intSetting<O>("training.degraded_copies",
+                 [](O& c) -> int& { return c.training.degraded_copies; }, 0, 8),
+      intSetting<O>("training.pseudo_rounds", [](O& c) -> int& { return c.training.pseudo_rounds; },
+                 0, 10),
+      floatSetting<O>("training.pseudo_min_confidence",
+                   [](O& c) -> float& { return c.training.pseudo_min_confidence; }, 0, 1),
+      floatSetting<O>("training.pseudo_weight", [](O& c) -> float& { return c.training.pseudo_weight; },
+                   0.001, 1),
+      floatSetting<O>("training.pseudo_class_cap",
+                   [](O& c) -> float& { return c.training.pseudo_class_cap; }, 0, 1000),
+      floatSetting<O>("degrade.shadow_baseline_m",
+                   [](O& c) -> float& { return c.degrade.shadow_baseline_m; }, -0.5, 0.5),
+      floatSetting<O>("degrade.shadow_focal_px",
+                   [](O& c) -> float& { return c.degrade.shadow_focal_px; }, 1, 5000),
+      floatSetting<O>("degrade.edge_relative_jump",
+                   [](O& c) -> float& { return c.degrade.edge_relative_jump; }, 0.001, 10),
+      intSetting<O>("degrade.edge_band_px", [](O& c) -> int& { return c.degrade.edge_band_px; }, 0,
+                 32),
+      floatSetting<O>("degrade.edge_hole_probability",
+                   [](O& c) -> float& { return c.degrade.edge_hole_probability; }, 0, 1),
+      floatSetting<O>("degrade.base_hole_probability",
+                   [](O& c) -> float& { return c.degrade.base_hole_probability; }, 0, 1),
+      floatSetting<O>("degrade.dark_level", [](O& c) -> float& { return c.degrade.dark_level; }, 0,
+                   255),
+      floatSetting<O>("degrade.dark_hole_probability",
+                   [](O& c) -> float& { return c.degrade.dark_hole_probability; }, 0, 1),
+      floatSetting<O>("degrade.bright_level", [](O& c) -> float& { return c.degrade.bright_level; },
+                   0, 254),
+      floatSetting<O>("degrade.bright_hole_probability",
+                   [](O& c) -> float& { return c.degrade.bright_hole_probability; }, 0, 1),
+      floatSetting<O>("degrade.far_start_m", [](O& c) -> float& { return c.degrade.far_start_m; }, 0,
+                   20),
+      floatSetting<O>("degrade.far_hole_per_m",
+                   [](O& c) -> float& { return c.degrade.far_hole_per_m; }, 0, 10),
+      floatSetting<O>("degrade.blob_size_px", [](O& c) -> float& { return c.degrade.blob_size_px; },
+                   0, 200),
+      boolSetting<O>("degrade.quantise", [](O& c) -> bool& { return c.degrade.quantise; }),
+      floatSetting<O>("degrade.disparity_noise",
+                   [](O& c) -> float& { return c.degrade.disparity_noise; }, 0, 20),
+      floatSetting<O>("degrade.max_input_hole_fraction",
+                   [](O& c) -> float& { return c.degrade.max_input_hole_fraction; }, 0, 1),
+      seedSetting<O>("training.degraded_seed",
+                     [](O& c) -> std::uint64_t& { return c.training.degraded_seed; }),
+      intSetting<O>("table_metrics.min_instance_points",
+                 [](O& c) -> int& { return c.table_metrics.min_instance_points; }, 1, 10000000),
+      floatSetting<O>("table_metrics.min_iou",
+                   [](O& c) -> float& { return c.table_metrics.min_iou; }, 0.01, 1),
+      floatSetting<O>("table_metrics.searchable_min_top_area_m2",
+                   [](O& c) -> float& { return c.table_metrics.searchable_min_top_area_m2; }, 0,
+                   100),
+      floatSetting<O>("table_metrics.searchable_min_overlap",
+                   [](O& c) -> float& { return c.table_metrics.searchable_min_overlap; }, 0.01, 1),
+      floatSetting<O>("table_metrics.searchable_max_height_error_m",
+                   [](O& c) -> float& { return c.table_metrics.searchable_max_height_error_m; },
+                   0, 10),
+  };
+  return all;
+}
+
+// A table over every section its settings name, in the order they first appear.
+template <typename T>
+SettingsTable<T> tableOf(const std::vector<Setting<T>>& list) {
+  std::vector<std::string> sections;
+  for (const auto& s : list) {
+    const std::string section = SettingsTable<T>::sectionOf(s.key);
+    if (std::find(sections.begin(), sections.end(), section) == sections.end()) {
+      sections.push_back(section);
+    }
+  }
+  SettingsTable<T> t(std::move(sections));
+  for (const auto& s : list) t.add(s);
+  return t;
 }
 
 }  // namespace
 
 const SettingsTable<SegmenterConfig>& segmenterSettings() {
-  static const SettingsTable<SegmenterConfig> table = [] {
-    std::vector<std::string> sections;
-    for (const auto& s : settings()) {
-      const std::string section = SettingsTable<SegmenterConfig>::sectionOf(s.key);
-      if (std::find(sections.begin(), sections.end(), section) == sections.end()) {
-        sections.push_back(section);
-      }
-    }
-    SettingsTable<SegmenterConfig> t(std::move(sections));
-    for (const auto& s : settings()) t.add(s);
-    return t;
-  }();
+  static const SettingsTable<SegmenterConfig> table = tableOf(settings());
   return table;
+}
+
+const SettingsTable<OfflineConfig>& offlineSettings() {
+  static const SettingsTable<OfflineConfig> table = tableOf(offlineSettingList());
+  return table;
+}
+
+void validateOfflineConfig(const OfflineConfig& offline, const SegmenterConfig& segmenter) {
+  if (segmenter.learner.classes != ClassScheme::Labels &&
+      offline.training.split_labels != SplitLabels::Labels) {
+    throw Error(std::string("learner.classes = ") + classSchemeName(segmenter.learner.classes) +
+                " cannot be combined with training.split_labels (the internal classes already "
+                "choose the splits); set training.split_labels = labels");
+  }
 }
 
 void validateSegmenterConfig(const SegmenterConfig& c) {
@@ -402,11 +432,6 @@ void validateSegmenterConfig(const SegmenterConfig& c) {
                 formatDouble(c.tables.safety_distance_m) +
                 "): from a search position the arm must reach past the table edge");
   }
-  if (c.learner.classes != ClassScheme::Labels && c.training.split_labels != SplitLabels::Labels) {
-    throw Error(std::string("learner.classes = ") + classSchemeName(c.learner.classes) +
-                " cannot be combined with training.split_labels (the internal classes already "
-                "choose the splits); set training.split_labels = labels");
-  }
   if (c.learner.kind == LearnerKind::XGBoost && c.context.enabled) {
     throw Error("learner.kind = xgboost has no auto-context stage; set "
                 "features.context = false or learner.kind = forest");
@@ -420,10 +445,19 @@ void bindCoreSettings(SettingsSchema& schema, Config& config) {
   schema.bind(segmenterSettings(), config.segmenter, validateSegmenterConfig);
 }
 
+void bindOfflineSettings(SettingsSchema& schema, Config& config) {
+  const SegmenterConfig& segmenter = config.segmenter;
+  schema.bind(offlineSettings(), config.offline,
+              [&segmenter](const OfflineConfig& offline) {
+                validateOfflineConfig(offline, segmenter);
+              });
+}
+
 Config parseConfig(const std::string& yaml_text, const std::string& origin) {
   Config config;
   SettingsSchema schema;
   bindCoreSettings(schema, config);
+  bindOfflineSettings(schema, config);
   schema.readYaml(yaml_text, origin);
   schema.validate(origin);
   return config;
@@ -433,6 +467,7 @@ Config loadConfig(const std::string& path) {
   Config config;
   SettingsSchema schema;
   bindCoreSettings(schema, config);
+  bindOfflineSettings(schema, config);
   schema.readFile(path);
   schema.validate(path);
   return config;
@@ -441,6 +476,7 @@ Config loadConfig(const std::string& path) {
 void applyOverride(Config& config, const std::string& key_equals_value) {
   SettingsSchema schema;
   bindCoreSettings(schema, config);
+  bindOfflineSettings(schema, config);
   schema.applyOverride(key_equals_value);
   schema.validate("<flags>");
 }
@@ -449,6 +485,7 @@ std::string dumpConfig(const Config& config) {
   Config copy = config;
   SettingsSchema schema;
   bindCoreSettings(schema, copy);
+  bindOfflineSettings(schema, copy);
   return schema.dump();
 }
 

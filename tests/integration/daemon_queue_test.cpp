@@ -23,6 +23,8 @@
 #include "findmug/daemon/service.hpp"
 #include "findmug/daemon/stage.hpp"
 #include "findmug/daemon/stats.hpp"
+#include "findmug/settings/config.hpp"
+#include "program_settings.hpp"
 #include "test_data.hpp"
 
 namespace findmug::daemon {
@@ -454,9 +456,36 @@ TEST(DaemonConfig, LcmDefaultUrlIsUsedWhenTheConfigLeavesItEmpty) {
 namespace findmug::daemon {
 namespace {
 
+// The offline tools' sections of a config file (training, degrade, table_metrics) as
+// findmug-train and findmug-eval read them; the daemon only accepts them, so its
+// dump leaves them out. Built-in defaults when `path` is empty.
+std::string offlineSectionsDump(const std::string& path) {
+  Config config;
+  SettingsSchema core_and_offline;
+  bindCoreSettings(core_and_offline, config);
+  bindOfflineSettings(core_and_offline, config);
+  cli::acceptSharedFileSettings(core_and_offline);
+  if (!path.empty()) core_and_offline.readFile(path);
+  core_and_offline.validate(path.empty() ? "<built-in>" : path);
+  SettingsSchema offline_only;
+  offline_only.bind(offlineSettings(), config.offline);
+  return offline_only.dump();
+}
+
+// Every key of the file as the programs that bind it read it: the daemon's
+// dump (core, daemon, maps, check) and the offline tools' sections.
+std::string wholeFileDump(const std::string& path) {
+  CommandLine command_line;
+  if (!path.empty()) command_line.config_path = path;
+  const LoadedConfig loaded =
+      path.empty() ? parseDaemonConfig("", "<built-in>") : loadDaemonConfig(command_line);
+  return dumpDaemonConfig(loaded) + offlineSectionsDump(path);
+}
+
 // The shipped default config must load, and must document every key the
-// daemon knows (core and daemon): a key added to config.hpp or
-// daemon_config.hpp without a line in daemon/findmugd.yaml fails here.
+// programs know (core, offline and daemon): a key added to config.hpp,
+// offline_settings.hpp or daemon_config.hpp without a line in
+// daemon/findmugd.yaml fails here.
 TEST(DaemonConfig, ShippedDefaultFileIsValidAndDocumentsEveryKey) {
   const std::string path = (findmug::test::sourceDir() / "daemon" / "findmugd.yaml").string();
   CommandLine command_line;
@@ -465,7 +494,10 @@ TEST(DaemonConfig, ShippedDefaultFileIsValidAndDocumentsEveryKey) {
   EXPECT_EQ(loaded.daemon.source, "openni2");
   std::ifstream in(path);
   const std::string text((std::istreambuf_iterator<char>(in)), {});
-  std::istringstream dump(dumpDaemonConfig(loaded));
+  const std::string whole = wholeFileDump(path);
+  for (const char* section : {"training:", "degrade:", "table_metrics:"})
+    EXPECT_NE(whole.find(std::string("\n") + section + "\n"), std::string::npos) << section;
+  std::istringstream dump(whole);
   std::string line, section;
   int keys = 0;
   while (std::getline(dump, line)) {
@@ -531,10 +563,9 @@ std::string commentsOfKey(const std::string& text, const std::string& section,
 // default" and why, so that a reader of the file never mistakes a choice for a default.
 TEST(DaemonConfig, ShippedFileHoldsTheBuiltInDefaultsOrSaysWhyNot) {
   const std::string path = (findmug::test::sourceDir() / "daemon" / "findmugd.yaml").string();
-  CommandLine command_line;
-  command_line.config_path = path;
-  const auto file_values = flattenDump(dumpDaemonConfig(loadDaemonConfig(command_line)));
-  const auto default_values = flattenDump(dumpDaemonConfig(parseDaemonConfig("", "<built-in>")));
+  const auto file_values = flattenDump(wholeFileDump(path));
+  const auto default_values = flattenDump(wholeFileDump(""));
+  EXPECT_TRUE(default_values.count("training.degraded_seed"));  // the offline sections too
   std::ifstream in(path);
   const std::string text((std::istreambuf_iterator<char>(in)), {});
   int differing = 0;

@@ -65,9 +65,10 @@ std::vector<FrameSample> pseudoLabelledSamples(const std::vector<FrameSample>& u
                                                const std::vector<SampleLabelling>& labellings,
                                                const std::vector<const FrameSample*>& labelled,
                                                const SegmenterConfig& config,
+                                               const TrainingOptions& training,
                                                PseudoLabelRound& round);
 
-// trainModel on `labelled`, then config.training.pseudo_rounds rounds over
+// trainModel on `labelled`, then training.pseudo_rounds rounds over
 // `unlabelled` (extracted frames whose labels are ignored). `after_round(r,
 // model)` sees the model after each round r = 0 (labelled frames only) ..
 // pseudo_rounds, e.g. to evaluate them side by side. `report`, when given,
@@ -75,13 +76,14 @@ std::vector<FrameSample> pseudoLabelledSamples(const std::vector<FrameSample>& u
 // a round that keeps no patch gives the round-0 model again.
 RandomForest trainModelWithPseudoLabels(
     const std::vector<const FrameSample*>& labelled, const std::vector<FrameSample>& unlabelled,
-    const SegmenterConfig& config, const PairwiseContext* pairwise = nullptr,
-    PseudoLabelReport* report = nullptr,
+    const SegmenterConfig& config, const TrainingOptions& training,
+    const PairwiseContext* pairwise = nullptr, PseudoLabelReport* report = nullptr,
     const std::function<void(int, const RandomForest&)>& after_round = {});
 
-// The configuration unlabelled frames are extracted with: no training-only
-// variants (extra oversegmentations, raw-like copies), whose patches could
-// not carry the labels of the frame's own patches.
+// The configuration unlabelled frames are extracted with (by extractSamples, so
+// with no training-only views, whose patches could not carry the labels of the
+// frame's own patches): the ground re-estimated every frame, and found in the
+// frame itself where ground.source would read labelled floor.
 SegmenterConfig unlabelledExtractionConfig(SegmenterConfig config);
 
 // One line per round: "round 1: 1234 patches kept of 2345 confident (floor

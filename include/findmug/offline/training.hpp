@@ -71,15 +71,19 @@ struct ExtractionReport {
 
 // Runs the segmenter's geometric stages on every frame. Frames for which no
 // ground plane is found are dropped (the paper drops frames with too few floor
-// points) and listed in the report. With training.extra_oversegmentations each
-// sample also gets its variants, and with training.degraded_copies raw-like
-// copies (degradeDepth) among them. `progress(done, total)` after each frame.
+// points) and listed in the report. `progress(done, total)` after each frame.
 std::vector<FrameSample> extractSamples(const LabeledFrames& frames, const Segmenter& segmenter,
                                         ExtractionReport& report,
                                         const std::function<void(int, int)>& progress = {});
 std::vector<FrameSample> extractSamples(const DatasetFolder& dataset, const Segmenter& segmenter,
                                         ExtractionReport& report,
                                         const std::function<void(int, int)>& progress = {});
+// The same for training: with offline.training.extra_oversegmentations each sample
+// also gets its variants, and with training.degraded_copies raw-like copies
+// (degradeDepth with offline.degrade) among them.
+std::vector<FrameSample> extractTrainingSamples(
+    const LabeledFrames& frames, const Segmenter& segmenter, const OfflineConfig& offline,
+    ExtractionReport& report, const std::function<void(int, int)>& progress = {});
 
 // Segments with a non-void label from the given frames and their variants,
 // as a training set. Sample weights follow `weighting` (training.sample_weight;
@@ -118,7 +122,7 @@ void inferMissingFineLabels(TrainingSet& set, int neighbours = 5);
 std::string fineLabelsFolder(SplitLabels split);
 // The dataset folder a config's training reads fine labels from: learner.classes
 // (label13/, label40/) or else training.split_labels ("" when neither needs one).
-std::string fineLabelsFolder(const SegmenterConfig& config);
+std::string fineLabelsFolder(const SegmenterConfig& config, const TrainingOptions& training);
 
 // Trains the model `config` asks for on the given frames: the first-stage
 // forest (config.forest) or booster (learner.kind = xgboost, config.xgboost),
@@ -129,9 +133,10 @@ std::string fineLabelsFolder(const SegmenterConfig& config);
 // group's distributions come from a forest trained on the other groups), so
 // the context stage learns from first-stage answers as good as those it will
 // get on new frames. Extraction settings are not set (the caller does).
-// `progress(done, total)` counts forests.
+// `training` says how patches are weighed and which classes choose the splits
+// (training.sample_weight, training.split_labels). `progress(done, total)` counts forests.
 RandomForest trainModel(const std::vector<const FrameSample*>& frames,
-                        const SegmenterConfig& config,
+                        const SegmenterConfig& config, const TrainingOptions& training = {},
                         const std::function<void(int, int)>& progress = {});
 
 // The model's per-segment class distributions for one extracted frame.

@@ -28,52 +28,6 @@
 
 namespace findmug {
 
-// How the forest's training set is built from labelled frames (training
-// only: findmug-train, findmug-eval's cross-validation; a model does not
-// depend on them at run time, so they are not recorded as extraction settings).
-enum class SampleWeighting {
-  Patches,     // one vote per patch (the paper's)
-  Pixels,      // each patch weighs its pixel count: the figures are per pixel
-  SqrtPixels,  // in between: large patches count more, but not in proportion
-};
-// The classes the forest's splits are chosen by (training.split_labels).
-enum class SplitLabels {
-  Labels,  // the 8 findmug classes the leaves hold (the paper's)
-  Nyu40,   // the NYU-40 class of each patch (needs label40/ or the .mat file):
-           // "cabinet", "object" and "unknown" each gather unlike things, and
-           // splits that tell those apart can help the 8-class answer
-  Nyu13,   // the NYU-13 class of each patch (needs label13/): fewer, larger
-           // classes (books / objects / tv, bed / sofa, wall / window / picture)
-};
-
-struct TrainingOptions {
-  SampleWeighting sample_weight = SampleWeighting::Patches;  // training.sample_weight
-  SplitLabels split_labels = SplitLabels::Labels;            // training.split_labels
-  // Augmentation: each training frame also contributes the patches of this
-  // many other oversegmentations (training.extra_oversegmentations), the k-th
-  // with overseg.seed_resolution_m scaled by extra_seed_scale^j, j = 1, -1,
-  // 2, -2, ... (training.extra_seed_scale): more and more varied patches per
-  // frame. Evaluation and the daemon still use the configured one only.
-  int extra_oversegmentations = 0;
-  float extra_seed_scale = 0.8f;
-  // Augmentation: each training frame also contributes the patches of this
-  // many raw-like copies of it (degradeDepth with degrade.*, copy k with seed
-  // degraded_seed + k; training.degraded_copies, training.degraded_seed).
-  int degraded_copies = 0;
-  std::uint64_t degraded_seed = 7;
-  // Semi-supervised rounds (findmug/pseudo_labels.hpp; findmug-train and
-  // findmug-eval --unlabelled DIR): train, label the unlabelled frames with
-  // the whole pipeline (forest + MRF + table region vote), keep the patches
-  // whose confidence exceeds pseudo_min_confidence as training patches of
-  // weight pseudo_weight, at most pseudo_class_cap times the labelled patches
-  // of the same label per label (the most confident first), retrain; this
-  // many times (training.pseudo_rounds, 0 = off).
-  int pseudo_rounds = 0;
-  float pseudo_min_confidence = 0.8f;
-  float pseudo_weight = 1.0f;
-  float pseudo_class_cap = 1.0f;
-};
-
 // The classes the model learns (learner.classes); the model merges them into
 // the 8 labels. Recorded in the model: the Segmenter refuses a model trained
 // on other classes. Supersedes nothing: training.split_labels (finer classes
@@ -116,24 +70,29 @@ struct SegmenterConfig {
   MrfParams mrf;
   bool use_mrf = true;
   TableConfig tables;
-  TableMetricsConfig table_metrics;  // findmug-eval only: table instances and their matching
-  TrainingOptions training;          // training.*
-  DepthDegradationConfig degrade;    // degrade.*: the raw-depth model (training, evaluation)
 };
 
+// The core's sections of a settings file: what the segmenter runs with, and what
+// only the offline tools read (findmug/settings/offline_settings.hpp). The daemon
+// and the clients bind `segmenter` and accept the offline sections unread.
 struct Config {
   SegmenterConfig segmenter;
+  OfflineConfig offline;  // training.*, degrade.*, table_metrics.*
 };
 
 // The segmenter's sections (cloud, normals, ground, overseg, features, forest,
-// learner, xgboost, training, degrade, mrf, table_metrics, tables): one table.
+// learner, xgboost, mrf, tables): one table.
 const SettingsTable<SegmenterConfig>& segmenterSettings();
 // The rules across its keys (seed above voxel resolution, ...); throws Error naming them.
 void validateSegmenterConfig(const SegmenterConfig& config);
 // Binds segmenterSettings() with validateSegmenterConfig to `config.segmenter`.
 void bindCoreSettings(SettingsSchema& schema, Config& config);
+// Binds offlineSettings() to `config.offline`, checked against `config.segmenter`
+// (validateOfflineConfig): findmug-train, findmug-eval and the tools that train.
+void bindOfflineSettings(SettingsSchema& schema, Config& config);
 
-// Parses YAML text of the segmenter's sections; `origin` names it in errors (file path).
+// Parses YAML text of the core's sections (the segmenter's and the offline ones);
+// `origin` names it in errors (file path).
 Config parseConfig(const std::string& yaml_text, const std::string& origin);
 Config loadConfig(const std::string& path);
 // Applies one "key=value" override (a --set flag) on top.

@@ -1,12 +1,68 @@
-// findmug/settings/offline_settings.hpp — the settings tables that only the offline tools
-// read (findmug-eval's table metrics, the raw-depth model of training and evaluation).
+// findmug/settings/offline_settings.hpp — the settings only the offline tools read:
+// how a training set is built (training.*), the raw-depth model of training and
+// evaluation (degrade.*), findmug-eval's table metrics (table_metrics.*).
 //
-// Plain data, here and not beside their code in findmug/offline/, because the settings
-// (findmug/settings/config.hpp) parse every table of the project; the code that uses them
-// lives in the offline library, which the daemon does not link.
+// Plain data and their settings table, here and not beside their code in
+// findmug/offline/, because every program sharing daemon/findmugd.yaml checks these
+// sections too (a typo in training: is refused by findmugd as well); the code that
+// uses them lives in the offline library, which the daemon does not link. None of it
+// is in SegmenterConfig: what a frame goes through at run time does not depend on it.
 #pragma once
 
+#include <cstdint>
+
+#include "findmug/settings/settings.hpp"
+
 namespace findmug {
+
+struct SegmenterConfig;
+
+// How the forest's training set is built from labelled frames (training.*;
+// findmug-train, findmug-eval's cross-validation): a model does not depend on
+// them at run time, so they are not recorded as extraction settings.
+enum class SampleWeighting {
+  Patches,     // one vote per patch (the paper's)
+  Pixels,      // each patch weighs its pixel count: the figures are per pixel
+  SqrtPixels,  // in between: large patches count more, but not in proportion
+};
+// The classes the forest's splits are chosen by (training.split_labels).
+enum class SplitLabels {
+  Labels,  // the 8 findmug classes the leaves hold (the paper's)
+  Nyu40,   // the NYU-40 class of each patch (needs label40/ or the .mat file):
+           // "cabinet", "object" and "unknown" each gather unlike things, and
+           // splits that tell those apart can help the 8-class answer
+  Nyu13,   // the NYU-13 class of each patch (needs label13/): fewer, larger
+           // classes (books / objects / tv, bed / sofa, wall / window / picture)
+};
+
+struct TrainingOptions {
+  SampleWeighting sample_weight = SampleWeighting::Patches;  // training.sample_weight
+  SplitLabels split_labels = SplitLabels::Labels;            // training.split_labels
+  // Augmentation: each training frame also contributes the patches of this
+  // many other oversegmentations (training.extra_oversegmentations), the k-th
+  // with overseg.seed_resolution_m scaled by extra_seed_scale^j, j = 1, -1,
+  // 2, -2, ... (training.extra_seed_scale): more and more varied patches per
+  // frame. Evaluation and the daemon still use the configured one only.
+  int extra_oversegmentations = 0;
+  float extra_seed_scale = 0.8f;
+  // Augmentation: each training frame also contributes the patches of this
+  // many raw-like copies of it (degradeDepth with degrade.*, copy k with seed
+  // degraded_seed + k; training.degraded_copies, training.degraded_seed).
+  int degraded_copies = 0;
+  std::uint64_t degraded_seed = 7;
+  // Semi-supervised rounds (findmug/offline/pseudo_labels.hpp; findmug-train and
+  // findmug-eval --unlabelled DIR): train, label the unlabelled frames with
+  // the whole pipeline (forest + MRF + table region vote), keep the patches
+  // whose confidence exceeds pseudo_min_confidence as training patches of
+  // weight pseudo_weight, at most pseudo_class_cap times the labelled patches
+  // of the same label per label (the most confident first), retrain; this
+  // many times (training.pseudo_rounds, 0 = off).
+  int pseudo_rounds = 0;
+  float pseudo_min_confidence = 0.8f;
+  float pseudo_weight = 1.0f;
+  float pseudo_class_cap = 1.0f;
+};
+
 
 // table_metrics.*: how findmug-eval matches detected tables with ground-truth instances
 // (findmug/offline/table_metrics.hpp).
@@ -62,5 +118,17 @@ struct DepthDegradationConfig {
   // hole) is raw depth already (NYU 0433, a live camera): returned unchanged.
   float max_input_hole_fraction = 0.05f;
 };
+
+struct OfflineConfig {
+  TrainingOptions training;          // training.*
+  DepthDegradationConfig degrade;    // degrade.*
+  TableMetricsConfig table_metrics;  // table_metrics.*
+};
+
+// The sections training, degrade and table_metrics: one table.
+const SettingsTable<OfflineConfig>& offlineSettings();
+// The rule between them and the segmenter's settings (learner.classes cannot be
+// combined with training.split_labels); throws Error naming the keys.
+void validateOfflineConfig(const OfflineConfig& offline, const SegmenterConfig& segmenter);
 
 }  // namespace findmug

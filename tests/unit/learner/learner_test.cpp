@@ -531,7 +531,7 @@ TEST(LearnerTraining, InternalClassesFromRealFramesForBothLearners) {
     SCOPED_TRACE(classSchemeName(scheme));
     config.learner.classes = scheme;
     DatasetOptions options;
-    options.fine_labels_folder = fineLabelsFolder(config);
+    options.fine_labels_folder = fineLabelsFolder(config, TrainingOptions{});
     EXPECT_EQ(options.fine_labels_folder, scheme == ClassScheme::Nyu13 ? "label13" : "label40");
     const DatasetFolder folder(dir.string(), options);
     LabeledFrames frames = framesOf(folder);

@@ -198,7 +198,7 @@ TEST(DepthDegradation, PipelineOnADegradedRealFrame) {
   config.regions.enabled = true;
   config.scene.enabled = true;
   DegradationReport report;
-  const RgbdFrame raw = degradeDepth(clean.frame, config.degrade, 2, &report);
+  const RgbdFrame raw = degradeDepth(clean.frame, DepthDegradationConfig{}, 2, &report);
   ASSERT_FALSE(report.skipped);
   const double holes = static_cast<double>(report.holes_added) / report.valid_before;
   EXPECT_GT(holes, 0.03);
@@ -249,11 +249,12 @@ TEST(DepthDegradation, TrainingCopiesJoinTheTrainingSet) {
   applyOverride(config, "ground.source=gravity");
   applyOverride(config, "training.degraded_copies=2");
   applyOverride(config, "training.degraded_seed=9");
-  EXPECT_EQ(config.segmenter.training.degraded_seed, 9u);
+  EXPECT_EQ(config.offline.training.degraded_seed, 9u);
   EXPECT_THROW(applyOverride(config, "degrade.edge_hole_probability=1.5"), Error);
   EXPECT_THROW(applyOverride(config, "training.degraded_copies=9"), Error);
   ExtractionReport report;
-  const auto samples = extractSamples(one, Segmenter(config.segmenter, nullptr), report);
+  const auto samples =
+      extractTrainingSamples(one, Segmenter(config.segmenter, nullptr), config.offline, report);
   ASSERT_EQ(samples.size(), 1u);
   ASSERT_EQ(samples[0].variants.size(), 2u);
   std::size_t clean_pixels = 0;

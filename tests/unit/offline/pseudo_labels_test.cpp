@@ -88,15 +88,16 @@ std::vector<SampleLabelling> labelAll(const RandomForest& model, const Frames& f
 // gave it; with no cap every confident patch is kept.
 TEST(PseudoLabels, OnlyConfidentPatchesBecomeTrainingPatchesWithThePipelinesLabel) {
   SegmenterConfig config = smallConfig();
+  TrainingOptions training;
   PSEUDO_FRAMES(config, f);
   const RandomForest model = trainModel(f.labelledPointers(), config);
   const std::vector<SampleLabelling> labellings = labelAll(model, f, config);
-  config.training.pseudo_min_confidence = 0.6f;
-  config.training.pseudo_weight = 0.5f;
-  config.training.pseudo_class_cap = 1000.0f;
+  training.pseudo_min_confidence = 0.6f;
+  training.pseudo_weight = 0.5f;
+  training.pseudo_class_cap = 1000.0f;
   PseudoLabelRound round;
   const std::vector<FrameSample> pseudo =
-      pseudoLabelledSamples(f.unlabelled, labellings, f.labelledPointers(), config, round);
+      pseudoLabelledSamples(f.unlabelled, labellings, f.labelledPointers(), config, training, round);
   int kept = 0, below = 0;
   for (const FrameSample& p : pseudo) {
     const auto it = std::find_if(f.unlabelled.begin(), f.unlabelled.end(),
@@ -123,9 +124,9 @@ TEST(PseudoLabels, OnlyConfidentPatchesBecomeTrainingPatchesWithThePipelinesLabe
   EXPECT_EQ(kept, round.keptTotal());
 
   // The per-label cap: at most cap x the labelled frames' patches of a label.
-  config.training.pseudo_class_cap = 0.05f;
+  training.pseudo_class_cap = 0.05f;
   PseudoLabelRound capped;
-  pseudoLabelledSamples(f.unlabelled, labellings, f.labelledPointers(), config, capped);
+  pseudoLabelledSamples(f.unlabelled, labellings, f.labelledPointers(), config, training, capped);
   std::array<long, kNumLabels> labelled_count{};
   for (const FrameSample& s : f.labelled)
     for (const std::uint8_t l : s.segment_labels)
@@ -143,13 +144,14 @@ TEST(PseudoLabels, OnlyConfidentPatchesBecomeTrainingPatchesWithThePipelinesLabe
 // added, and the model is the one trained on the labelled frames alone.
 TEST(PseudoLabels, ThresholdOneAddsNothingAndLeavesTheModelAsItWas) {
   SegmenterConfig config = smallConfig();
+  TrainingOptions training;
   PSEUDO_FRAMES(config, f);
   const RandomForest plain = trainModel(f.labelledPointers(), config);
-  config.training.pseudo_rounds = 2;
-  config.training.pseudo_min_confidence = 1.0f;
+  training.pseudo_rounds = 2;
+  training.pseudo_min_confidence = 1.0f;
   PseudoLabelReport report;
   const RandomForest model =
-      trainModelWithPseudoLabels(f.labelledPointers(), f.unlabelled, config, nullptr, &report);
+      trainModelWithPseudoLabels(f.labelledPointers(), f.unlabelled, config, training, nullptr, &report);
   ASSERT_EQ(report.rounds.size(), 2u);
   for (const auto& r : report.rounds) {
     EXPECT_EQ(r.keptTotal(), 0);
@@ -164,15 +166,16 @@ TEST(PseudoLabels, ThresholdOneAddsNothingAndLeavesTheModelAsItWas) {
 // classes each pseudo patch gets a fine class of its own label.
 TEST(PseudoLabels, ARoundChangesTheModel) {
   SegmenterConfig config = smallConfig();
+  TrainingOptions training;
   PSEUDO_FRAMES(config, f);
   config.learner.classes = ClassScheme::Nyu13;
   const RandomForest plain = trainModel(f.labelledPointers(), config);
-  config.training.pseudo_rounds = 1;
-  config.training.pseudo_min_confidence = 0.5f;
+  training.pseudo_rounds = 1;
+  training.pseudo_min_confidence = 0.5f;
   PseudoLabelReport report;
   std::vector<std::string> ids;
   const RandomForest model = trainModelWithPseudoLabels(
-      f.labelledPointers(), f.unlabelled, config, nullptr, &report,
+      f.labelledPointers(), f.unlabelled, config, training, nullptr, &report,
       [&](int, const RandomForest& m) { ids.push_back(m.id()); });
   ASSERT_EQ(report.rounds.size(), 1u);
   EXPECT_GT(report.rounds[0].keptTotal(), 0);
@@ -186,7 +189,7 @@ TEST(PseudoLabels, ARoundChangesTheModel) {
   const std::vector<SampleLabelling> labellings = labelAll(plain, f, config);
   PseudoLabelRound round;
   for (const FrameSample& p :
-       pseudoLabelledSamples(f.unlabelled, labellings, f.labelledPointers(), config, round)) {
+       pseudoLabelledSamples(f.unlabelled, labellings, f.labelledPointers(), config, training, round)) {
     ASSERT_EQ(p.segment_fine_labels.size(), p.segment_labels.size());
     for (std::size_t k = 0; k < p.segment_labels.size(); ++k)
       EXPECT_EQ(p.segment_fine_labels[k] != 0, p.segment_labels[k] != kVoidLabel) << k;
@@ -196,15 +199,15 @@ TEST(PseudoLabels, ARoundChangesTheModel) {
 // The settings: named, range-checked, defaults off.
 TEST(PseudoLabels, SettingsAreNamedAndRangeChecked) {
   Config c;
-  EXPECT_EQ(c.segmenter.training.pseudo_rounds, 0);
+  EXPECT_EQ(c.offline.training.pseudo_rounds, 0);
   applyOverride(c, "training.pseudo_rounds=2");
   applyOverride(c, "training.pseudo_min_confidence=0.7");
   applyOverride(c, "training.pseudo_weight=0.5");
   applyOverride(c, "training.pseudo_class_cap=0.25");
-  EXPECT_EQ(c.segmenter.training.pseudo_rounds, 2);
-  EXPECT_FLOAT_EQ(c.segmenter.training.pseudo_min_confidence, 0.7f);
-  EXPECT_FLOAT_EQ(c.segmenter.training.pseudo_weight, 0.5f);
-  EXPECT_FLOAT_EQ(c.segmenter.training.pseudo_class_cap, 0.25f);
+  EXPECT_EQ(c.offline.training.pseudo_rounds, 2);
+  EXPECT_FLOAT_EQ(c.offline.training.pseudo_min_confidence, 0.7f);
+  EXPECT_FLOAT_EQ(c.offline.training.pseudo_weight, 0.5f);
+  EXPECT_FLOAT_EQ(c.offline.training.pseudo_class_cap, 0.25f);
   for (const char* bad : {"training.pseudo_rounds=-1", "training.pseudo_min_confidence=1.5",
                           "training.pseudo_weight=0", "training.pseudo_weight=2",
                           "training.pseudo_class_cap=-1"}) {

@@ -200,12 +200,13 @@ TEST(Segmenter, RefusesModelTrainedWithOtherExtractionSettings) {
 }
 
 // The frame's features as the trainer and findmug-eval see them.
-std::vector<FrameSample> extractScene(const Segmenter& segmenter, const Scene& scene) {
+std::vector<FrameSample> extractScene(const Segmenter& segmenter, const Scene& scene,
+                                      const OfflineConfig& offline = {}) {
   LabeledFrames frames{"scene", 1, [&](std::size_t) {
                          return LabeledFrame{"scene", scene.frame, scene.truth, {}};
                        }};
   ExtractionReport report;
-  auto samples = extractSamples(frames, segmenter, report);
+  auto samples = extractTrainingSamples(frames, segmenter, offline, report);
   EXPECT_EQ(report.frames_used, 1);
   return samples;
 }
@@ -392,10 +393,10 @@ TEST(Segmenter, RunsTheObjectFeaturesOfTheModel) {
 // training.sample_weight=pixels weighs each patch by its pixel count.
 TEST(Segmenter, TrainingAugmentationAndSampleWeights) {
   const Scene scene = floorAndWall(true);
-  SegmenterConfig config = fastConfig();
-  config.training.extra_oversegmentations = 2;
-  config.training.extra_seed_scale = 0.7f;
-  const auto samples = extractScene(Segmenter(config, nullptr), scene);
+  OfflineConfig offline;
+  offline.training.extra_oversegmentations = 2;
+  offline.training.extra_seed_scale = 0.7f;
+  const auto samples = extractScene(Segmenter(fastConfig(), nullptr), scene, offline);
   ASSERT_EQ(samples.size(), 1u);
   ASSERT_EQ(samples[0].variants.size(), 2u);
   const std::size_t own = samples[0].segment_labels.size();
@@ -486,12 +487,13 @@ TEST(Segmenter, SplitLabelsFromTheFineLabelsOfEachPatch) {
     EXPECT_THAT(e.what(), HasSubstr("has no NYU-13 class (id 20)"));
   }
 
-  SegmenterConfig config = fastConfig();
-  config.training.split_labels = SplitLabels::Nyu40;
-  EXPECT_FALSE(trainModel({&s}, config).empty());
+  const SegmenterConfig config = fastConfig();
+  TrainingOptions split40;
+  split40.split_labels = SplitLabels::Nyu40;
+  EXPECT_FALSE(trainModel({&s}, config, split40).empty());
   const auto without = extractScene(Segmenter(fastConfig(), nullptr), scene);
   try {
-    trainModel({&without[0]}, config);
+    trainModel({&without[0]}, config, split40);
     FAIL() << "expected a frame without NYU-40 labels to be refused";
   } catch (const Error& e) {
     EXPECT_THAT(e.what(), HasSubstr("frame scene has no NYU-40 labels (a dataset folder needs label40/)"));

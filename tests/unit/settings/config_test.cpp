@@ -85,7 +85,7 @@ TEST(Config, SeedsAndBaggingFractionAreRangeChecked) {
   EXPECT_THAT(errorOf([] { parseConfig("forest:\n  bagging_fraction: 0\n", "a.yaml"); }),
               HasSubstr("'0' for forest.bagging_fraction (expected a number in (0, 1])"));
   EXPECT_EQ(parseConfig("training:\n  degraded_seed: 9007199254740993\n", "a.yaml")
-                .segmenter.training.degraded_seed,
+                .offline.training.degraded_seed,
             9007199254740993ull);  // above 2^53: not through a double
 }
 
@@ -120,12 +120,12 @@ TEST(Config, SceneAndTrainingSettings) {
   EXPECT_TRUE(c.segmenter.scene.enabled);
   EXPECT_FLOAT_EQ(c.segmenter.scene.cell_m, 0.2f);
   EXPECT_EQ(c.segmenter.scene.band_px, 10);
-  EXPECT_EQ(c.segmenter.training.sample_weight, SampleWeighting::SqrtPixels);
-  EXPECT_EQ(c.segmenter.training.extra_oversegmentations, 2);
-  EXPECT_FLOAT_EQ(c.segmenter.training.extra_seed_scale, 0.9f);
-  EXPECT_EQ(c.segmenter.training.split_labels, SplitLabels::Nyu40);
-  EXPECT_EQ(SegmenterConfig{}.training.split_labels, SplitLabels::Labels);
-  EXPECT_EQ(parseConfig("training:\n  split_labels: nyu13\n", "a.yaml").segmenter.training.split_labels,
+  EXPECT_EQ(c.offline.training.sample_weight, SampleWeighting::SqrtPixels);
+  EXPECT_EQ(c.offline.training.extra_oversegmentations, 2);
+  EXPECT_FLOAT_EQ(c.offline.training.extra_seed_scale, 0.9f);
+  EXPECT_EQ(c.offline.training.split_labels, SplitLabels::Nyu40);
+  EXPECT_EQ(OfflineConfig{}.training.split_labels, SplitLabels::Labels);
+  EXPECT_EQ(parseConfig("training:\n  split_labels: nyu13\n", "a.yaml").offline.training.split_labels,
             SplitLabels::Nyu13);
   EXPECT_THAT(errorOf([] { parseConfig("training:\n  split_labels: nyu894\n", "a.yaml"); }),
               HasSubstr("one of labels nyu40 nyu13"));
@@ -147,6 +147,60 @@ TEST(Config, SceneAndTrainingSettings) {
   EXPECT_FALSE(has("training.sample_weight"));
   EXPECT_FALSE(has("training.extra_oversegmentations"));
   EXPECT_FALSE(has("training.split_labels"));
+}
+
+// The settings only training and evaluation read are their own table, not the
+// segmenter's: what a frame goes through at run time cannot depend on them.
+TEST(Config, OfflineSettingsAreNotTheSegmenters) {
+  for (const char* section : {"training", "degrade", "table_metrics"}) {
+    EXPECT_FALSE(segmenterSettings().holds(section)) << section;
+    EXPECT_TRUE(offlineSettings().holds(section)) << section;
+  }
+  for (const char* section : {"forest", "mrf", "tables", "features", "learner"})
+    EXPECT_FALSE(offlineSettings().holds(section)) << section;
+  // A program that binds only the segmenter's table refuses training.* as unknown,
+  // and one that accepts the offline table checks its keys without using them.
+  Config segmenter_only;
+  SettingsSchema schema;
+  bindCoreSettings(schema, segmenter_only);
+  EXPECT_THAT(errorOf([&] { schema.readYaml("training:
+  pseudo_rounds: 2
+", "s.yaml"); }),
+              HasSubstr("'training'"));
+  schema.accept(offlineSettings());
+  schema.readYaml("training:
+  pseudo_rounds: 2
+degrade:
+  quantise: false
+", "s.yaml");
+  EXPECT_THAT(errorOf([&] { schema.readYaml("degrade:
+  quantize: false
+", "s.yaml"); }),
+              HasSubstr("unknown setting 'degrade.quantize'"));
+  EXPECT_EQ(segmenter_only.offline.training.pseudo_rounds, 0);  // accepted, not bound
+  // The one rule across the two tables is checked where both are bound.
+  EXPECT_THAT(errorOf([] {
+                parseConfig("learner:
+  classes: nyu13
+training:
+  split_labels: nyu40
+",
+                            "c.yaml");
+              }),
+              HasSubstr("learner.classes = nyu13 cannot be combined with training.split_labels"));
+  const Config both = parseConfig(
+      "training:
+  pseudo_rounds: 2
+degrade:
+  quantise: false
+"
+      "table_metrics:
+  min_iou: 0.4
+",
+      "c.yaml");
+  EXPECT_EQ(both.offline.training.pseudo_rounds, 2);
+  EXPECT_FALSE(both.offline.degrade.quantise);
+  EXPECT_FLOAT_EQ(both.offline.table_metrics.min_iou, 0.4f);
 }
 
 TEST(Config, InconsistentResolutionsRefused) {
