@@ -7,8 +7,8 @@
 //    a value into T with the strict number parser findmug/common/numbers.hpp and a
 //    range, how to print it back, a doc line), for one section or several (the
 //    segmenter's). Unknown keys and bad values are findmug::Error naming the key.
-//    The core's tables live next to their types (SegmenterConfig in config.cpp,
-//    TableMapConfig in table_map.cpp, SemanticMapConfig in semantic_map.cpp);
+//    The core's tables live next to their types (SegmenterConfig, OfflineConfig in
+//    config.cpp, TableMapConfig in table_map.cpp, SemanticMapConfig in semantic_map.cpp);
 //    the programs' own (daemon, check, web) in cli/program_settings.hpp.
 //  * SettingsSchema: the tables a program states at start-up, each bound to the
 //    struct its values go to (bind) or, for a section the program only has to

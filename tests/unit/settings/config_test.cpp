@@ -163,40 +163,22 @@ TEST(Config, OfflineSettingsAreNotTheSegmenters) {
   Config segmenter_only;
   SettingsSchema schema;
   bindCoreSettings(schema, segmenter_only);
-  EXPECT_THAT(errorOf([&] { schema.readYaml("training:
-  pseudo_rounds: 2
-", "s.yaml"); }),
+  EXPECT_THAT(errorOf([&] { schema.readYaml("training:\n  pseudo_rounds: 2\n", "s.yaml"); }),
               HasSubstr("'training'"));
   schema.accept(offlineSettings());
-  schema.readYaml("training:
-  pseudo_rounds: 2
-degrade:
-  quantise: false
-", "s.yaml");
-  EXPECT_THAT(errorOf([&] { schema.readYaml("degrade:
-  quantize: false
-", "s.yaml"); }),
+  schema.readYaml("training:\n  pseudo_rounds: 2\ndegrade:\n  quantise: false\n", "s.yaml");
+  EXPECT_THAT(errorOf([&] { schema.readYaml("degrade:\n  quantize: false\n", "s.yaml"); }),
               HasSubstr("unknown setting 'degrade.quantize'"));
   EXPECT_EQ(segmenter_only.offline.training.pseudo_rounds, 0);  // accepted, not bound
   // The one rule across the two tables is checked where both are bound.
   EXPECT_THAT(errorOf([] {
-                parseConfig("learner:
-  classes: nyu13
-training:
-  split_labels: nyu40
-",
+                parseConfig("learner:\n  classes: nyu13\ntraining:\n  split_labels: nyu40\n",
                             "c.yaml");
               }),
               HasSubstr("learner.classes = nyu13 cannot be combined with training.split_labels"));
   const Config both = parseConfig(
-      "training:
-  pseudo_rounds: 2
-degrade:
-  quantise: false
-"
-      "table_metrics:
-  min_iou: 0.4
-",
+      "training:\n  pseudo_rounds: 2\ndegrade:\n  quantise: false\n"
+      "table_metrics:\n  min_iou: 0.4\n",
       "c.yaml");
   EXPECT_EQ(both.offline.training.pseudo_rounds, 2);
   EXPECT_FALSE(both.offline.degrade.quantise);
