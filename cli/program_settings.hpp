@@ -145,8 +145,9 @@ namespace findmug::cli {
 
 // Accepts, into defaults the schema owns, every table of the shared config file that
 // `schema` has not bound: the segmenter's sections, the offline tools' (training, degrade,
-// table_metrics), table_map, semantic_map, daemon, check, web. A program binds the tables it uses, then calls this, so that the other
-// programs' sections are checked key by key but not used.
+// table_metrics), table_map, semantic_map, daemon, check, web. A program binds the tables it
+// uses, then calls this, so that the other programs' sections are checked key by key but not
+// used.
 void acceptSharedFileSettings(SettingsSchema& schema);
 
 }  // namespace findmug::cli

@@ -350,8 +350,8 @@ void measureTables(const LabeledFrames& frames, const std::vector<FrameSample>& 
     if (!prepared.ground) {
       throw Error(samples[f].name + ": no ground plane on the second pass (was found before)");
     }
-    const auto truth = groundTruthTables(prepared.cloud_ground, samples[f].ground_truth,
-                                         config.tables, metrics);
+    const auto truth =
+        groundTruthTables(prepared.cloud_ground, samples[f].ground_truth, config.tables, metrics);
     const FrameSample& sample = samples[f];
     std::vector<float> table_probability(sample.pixel_segment.size(), 0.0f);
     std::vector<float> confidence(sample.pixel_segment.size(), 0.0f);
@@ -551,7 +551,8 @@ double tableIoU(const ConfusionMatrix& m) {
 }
 
 // --learning-curve: the CV repeated for every size and seed; one CSV row each.
-void runLearningCurve(const EvalFlags& f, const LabeledFrames& test_frames, const std::vector<FrameSample>& samples,
+void runLearningCurve(const EvalFlags& f, const LabeledFrames& test_frames,
+                      const std::vector<FrameSample>& samples,
                       const std::vector<FrameSample>& test_samples,
                       const std::vector<FrameSample>& extra_training, const FoldPlan& plan,
                       const Segmenter& segmenter, const OfflineConfig& offline,
@@ -565,9 +566,8 @@ void runLearningCurve(const EvalFlags& f, const LabeledFrames& test_frames, cons
       SegmenterConfig config = segmenter.config();
       config.forest.seed += 1000u * static_cast<std::uint64_t>(seed);
       const TrainSubset subset{size, static_cast<std::uint64_t>(seed)};
-      const Evaluation eval =
-          crossValidate(samples, test_samples, extra_training, plan, config, offline.training,
-                        regions, true, subset);
+      const Evaluation eval = crossValidate(samples, test_samples, extra_training, plan, config,
+                                            offline.training, regions, true, subset);
       EvalReport tables;
       measureTables(test_frames, test_samples, eval, segmenter, offline.table_metrics, nullptr,
                     tables, nullptr);
@@ -716,9 +716,9 @@ int run(int argc, char** argv) {
     const auto extra_input = LabeledInput::folder(dir, extra_options);
     ProgressBar extra_bar("features " + dir);
     ExtractionReport extra_report;
-    auto part = extractTrainingSamples(extra_input->frames(), segmenter, config.offline,
-                                       extra_report,
-                                       [&](int done, int total) { extra_bar.update(done, total); });
+    auto part =
+        extractTrainingSamples(extra_input->frames(), segmenter, config.offline, extra_report,
+                               [&](int done, int total) { extra_bar.update(done, total); });
     extra_bar.finish();
     for (auto& s : part) extra_training.push_back(std::move(s));
   }

@@ -70,8 +70,8 @@ int run(int argc, char** argv) {
   std::vector<std::size_t> all(samples.size());
   for (std::size_t i = 0; i < all.size(); ++i) all[i] = i;
   const TrainingOptions& options_training = config.offline.training;
-  const TrainingSet training = makeTrainingSet(samples, all, options_training.sample_weight,
-                                               options_training.split_labels);
+  const TrainingSet training =
+      makeTrainingSet(samples, all, options_training.sample_weight, options_training.split_labels);
   if (training.labels.empty()) throw Error("no labelled supervoxel to train on");
 
   ExtractionReport unlabelled_report;
@@ -84,12 +84,11 @@ int run(int argc, char** argv) {
   std::vector<const FrameSample*> frames;
   for (const auto& s : samples) frames.push_back(&s);
   PseudoLabelReport pseudo;
-  RandomForest forest =
-      unlabelled.empty() || options_training.pseudo_rounds == 0
-          ? trainModel(frames, config.segmenter, options_training,
-                       [&](int done, int total) { bar.update(done, total); })
-          : trainModelWithPseudoLabels(frames, unlabelled, config.segmenter, options_training,
-                                       nullptr, &pseudo);
+  RandomForest forest = unlabelled.empty() || options_training.pseudo_rounds == 0
+                            ? trainModel(frames, config.segmenter, options_training,
+                                         [&](int done, int total) { bar.update(done, total); })
+                            : trainModelWithPseudoLabels(frames, unlabelled, config.segmenter,
+                                                         options_training, nullptr, &pseudo);
   bar.finish();
   // Recorded so that the model is only ever run on features computed alike.
   forest.setExtractionSettings(extractionSettings(config.segmenter));
@@ -114,10 +113,11 @@ int run(int argc, char** argv) {
     std::printf("    %-8s %7d\n", std::string(kLabelNames[c]).c_str(), per_class[c]);
   }
   if (!pseudo.rounds.empty()) {
-    std::printf("  pseudo-labelled  (training.pseudo_min_confidence %g, pseudo_weight %g, "
-                "pseudo_class_cap %g)\n",
-                options_training.pseudo_min_confidence, options_training.pseudo_weight,
-                options_training.pseudo_class_cap);
+    std::printf(
+        "  pseudo-labelled  (training.pseudo_min_confidence %g, pseudo_weight %g, "
+        "pseudo_class_cap %g)\n",
+        options_training.pseudo_min_confidence, options_training.pseudo_weight,
+        options_training.pseudo_class_cap);
     std::istringstream lines(formatPseudoLabelReport(pseudo));
     for (std::string line; std::getline(lines, line);) std::printf("    %s\n", line.c_str());
   }

@@ -92,11 +92,10 @@ std::vector<FrameSample> pseudoLabelledSamples(const std::vector<FrameSample>& u
                                                const std::vector<SampleLabelling>& labellings,
                                                const std::vector<const FrameSample*>& labelled,
                                                const SegmenterConfig& config,
-                                               const TrainingOptions& t,
-                                               PseudoLabelRound& round) {
+                                               const TrainingOptions& t, PseudoLabelRound& round) {
   if (labellings.size() != unlabelled.size())
-    throw Error("pseudoLabelledSamples: " + std::to_string(labellings.size()) +
-                " labellings for " + std::to_string(unlabelled.size()) + " frames");
+    throw Error("pseudoLabelledSamples: " + std::to_string(labellings.size()) + " labellings for " +
+                std::to_string(unlabelled.size()) + " frames");
   const bool internal = config.learner.classes != ClassScheme::Labels;
   const std::array<std::uint8_t, kNumLabels> fine_of = dominantFineClasses(labelled);
   // Candidates per label: (confidence, frame, segment), most confident first;
@@ -168,9 +167,8 @@ std::vector<FrameSample> pseudoLabelledSamples(const std::vector<FrameSample>& u
 
 RandomForest trainModelWithPseudoLabels(
     const std::vector<const FrameSample*>& labelled, const std::vector<FrameSample>& unlabelled,
-    const SegmenterConfig& config, const TrainingOptions& training,
-    const PairwiseContext* pairwise, PseudoLabelReport* report,
-    const std::function<void(int, const RandomForest&)>& after_round) {
+    const SegmenterConfig& config, const TrainingOptions& training, const PairwiseContext* pairwise,
+    PseudoLabelReport* report, const std::function<void(int, const RandomForest&)>& after_round) {
   RandomForest model = trainModel(labelled, config, training);
   if (after_round) after_round(0, model);
   if (report) {

@@ -158,8 +158,7 @@ FrameSample sampleOf(const Segmenter& segmenter, PreparedFrame prepared,
 
 // Segmenters (no forest) for the training-only oversegmentations: seed
 // resolution scaled by s, 1/s, s^2, 1/s^2, ... (training.extra_*).
-std::vector<Segmenter> variantSegmenters(const SegmenterConfig& config,
-                                         const TrainingOptions& t) {
+std::vector<Segmenter> variantSegmenters(const SegmenterConfig& config, const TrainingOptions& t) {
   std::vector<Segmenter> out;
   for (int k = 0; k < t.extra_oversegmentations; ++k) {
     const int power = (k / 2 + 1) * (k % 2 == 0 ? 1 : -1);
@@ -203,9 +202,9 @@ std::vector<FrameSample> extractTrainingSamples(const LabeledFrames& frames,
     // geometry; a copy whose ground is lost is left out.
     std::vector<FrameSample> degraded;
     for (int k = 0; k < training.degraded_copies; ++k) {
-      RgbdFrame copy = degradeDepth(
-          labelled.frame, offline.degrade,
-          degradationSeed(training.degraded_seed + static_cast<std::uint64_t>(k), i));
+      RgbdFrame copy =
+          degradeDepth(labelled.frame, offline.degrade,
+                       degradationSeed(training.degraded_seed + static_cast<std::uint64_t>(k), i));
       PreparedFrame prepared_copy = segmenter.prepare(std::move(copy), &labelled.labels);
       if (!prepared_copy.ground) continue;
       degraded.push_back(sampleOf(segmenter, std::move(prepared_copy), labelled.labels,

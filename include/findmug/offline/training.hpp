@@ -81,9 +81,11 @@ std::vector<FrameSample> extractSamples(const DatasetFolder& dataset, const Segm
 // The same for training: with offline.training.extra_oversegmentations each sample
 // also gets its variants, and with training.degraded_copies raw-like copies
 // (degradeDepth with offline.degrade) among them.
-std::vector<FrameSample> extractTrainingSamples(
-    const LabeledFrames& frames, const Segmenter& segmenter, const OfflineConfig& offline,
-    ExtractionReport& report, const std::function<void(int, int)>& progress = {});
+std::vector<FrameSample> extractTrainingSamples(const LabeledFrames& frames,
+                                                const Segmenter& segmenter,
+                                                const OfflineConfig& offline,
+                                                ExtractionReport& report,
+                                                const std::function<void(int, int)>& progress = {});
 
 // Segments with a non-void label from the given frames and their variants,
 // as a training set. Sample weights follow `weighting` (training.sample_weight;
@@ -127,8 +129,8 @@ std::string fineLabelsFolder(const SegmenterConfig& config, const TrainingOption
 // Trains the model `config` asks for on the given frames: the first-stage
 // forest (config.forest) or booster (learner.kind = xgboost, config.xgboost),
 // on the 8 labels or on internal classes (learner.classes: (label, NYU class)
-// pairs present in the frames, recorded in the model), and with features.context an auto-context stage
-// trained on first-stage distributions that are cross-fitted over
+// pairs present in the frames, recorded in the model), and with features.context an auto-context
+// stage trained on first-stage distributions that are cross-fitted over
 // features.context_cross_fit_folds contiguous groups of the frames (each
 // group's distributions come from a forest trained on the other groups), so
 // the context stage learns from first-stage answers as good as those it will

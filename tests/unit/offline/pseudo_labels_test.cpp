@@ -96,8 +96,8 @@ TEST(PseudoLabels, OnlyConfidentPatchesBecomeTrainingPatchesWithThePipelinesLabe
   training.pseudo_weight = 0.5f;
   training.pseudo_class_cap = 1000.0f;
   PseudoLabelRound round;
-  const std::vector<FrameSample> pseudo =
-      pseudoLabelledSamples(f.unlabelled, labellings, f.labelledPointers(), config, training, round);
+  const std::vector<FrameSample> pseudo = pseudoLabelledSamples(
+      f.unlabelled, labellings, f.labelledPointers(), config, training, round);
   int kept = 0, below = 0;
   for (const FrameSample& p : pseudo) {
     const auto it = std::find_if(f.unlabelled.begin(), f.unlabelled.end(),
@@ -150,8 +150,8 @@ TEST(PseudoLabels, ThresholdOneAddsNothingAndLeavesTheModelAsItWas) {
   training.pseudo_rounds = 2;
   training.pseudo_min_confidence = 1.0f;
   PseudoLabelReport report;
-  const RandomForest model =
-      trainModelWithPseudoLabels(f.labelledPointers(), f.unlabelled, config, training, nullptr, &report);
+  const RandomForest model = trainModelWithPseudoLabels(f.labelledPointers(), f.unlabelled, config,
+                                                        training, nullptr, &report);
   ASSERT_EQ(report.rounds.size(), 2u);
   for (const auto& r : report.rounds) {
     EXPECT_EQ(r.keptTotal(), 0);
@@ -188,8 +188,8 @@ TEST(PseudoLabels, ARoundChangesTheModel) {
 
   const std::vector<SampleLabelling> labellings = labelAll(plain, f, config);
   PseudoLabelRound round;
-  for (const FrameSample& p :
-       pseudoLabelledSamples(f.unlabelled, labellings, f.labelledPointers(), config, training, round)) {
+  for (const FrameSample& p : pseudoLabelledSamples(f.unlabelled, labellings, f.labelledPointers(),
+                                                    config, training, round)) {
     ASSERT_EQ(p.segment_fine_labels.size(), p.segment_labels.size());
     for (std::size_t k = 0; k < p.segment_labels.size(); ++k)
       EXPECT_EQ(p.segment_fine_labels[k] != 0, p.segment_labels[k] != kVoidLabel) << k;

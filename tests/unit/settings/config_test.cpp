@@ -125,8 +125,9 @@ TEST(Config, SceneAndTrainingSettings) {
   EXPECT_FLOAT_EQ(c.offline.training.extra_seed_scale, 0.9f);
   EXPECT_EQ(c.offline.training.split_labels, SplitLabels::Nyu40);
   EXPECT_EQ(OfflineConfig{}.training.split_labels, SplitLabels::Labels);
-  EXPECT_EQ(parseConfig("training:\n  split_labels: nyu13\n", "a.yaml").offline.training.split_labels,
-            SplitLabels::Nyu13);
+  EXPECT_EQ(
+      parseConfig("training:\n  split_labels: nyu13\n", "a.yaml").offline.training.split_labels,
+      SplitLabels::Nyu13);
   EXPECT_THAT(errorOf([] { parseConfig("training:\n  split_labels: nyu894\n", "a.yaml"); }),
               HasSubstr("one of labels nyu40 nyu13"));
   EXPECT_THAT(errorOf([] { parseConfig("training:\n  sample_weight: area\n", "a.yaml"); }),
