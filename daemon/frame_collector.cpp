@@ -164,7 +164,7 @@ std::optional<double> FrameCollector::meanConfidence(const LabelImage& labels) {
   double sum = 0.0;
   std::size_t n = 0;
   for (std::size_t i = 0; i < labels.labels.size(); ++i) {
-    if (labels.labels[i] == kVoidLabel) continue;
+    if (labels.labels[i] == kVoidLabel || labels.confidence[i] <= 0.0f) continue;
     sum += labels.confidence[i];
     ++n;
   }

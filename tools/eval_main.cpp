@@ -26,8 +26,9 @@
 // of every fold; it is never evaluated, so figures stay comparable.
 // --degrade evaluates on raw-like copies of the frames (depth_degradation.hpp,
 // degrade.* settings) while training stays on the frames as they are;
-// --score-labelled-only leaves pixels the pipeline gave no label (depth
-// holes) out of the figures instead of counting them as wrong.
+// The depth holes take their neighbours' labels as the daemon's label image
+// does (labels.fill_holes); --score-labelled-only leaves the pixels without
+// a patch (depth holes) out of the figures instead.
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -221,8 +222,8 @@ void labelFrames(const RandomForest& forest, const SegmenterConfig& config,
                     layout ? &*layout : nullptr);
     std::vector<std::uint8_t> forest_labels(n);
     for (std::size_t k = 0; k < n; ++k) forest_labels[k] = argmax(labelling.probabilities[k]);
-    eval.forest.add(s.ground_truth, pixelLabels(s, forest_labels));
-    auto mrf_pixels = pixelLabels(s, labelling.mrf.labels);
+    eval.forest.add(s.ground_truth, publishedPixelLabels(s, forest_labels, config.label_holes));
+    auto mrf_pixels = publishedPixelLabels(s, labelling.mrf.labels, config.label_holes);
     eval.mrf.add(s.ground_truth, mrf_pixels);
     if (keep_pixels) {
       eval.mrf_pixels[f] = std::move(mrf_pixels);

@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "findmug/common/error.hpp"
+#include "findmug/labels/label_holes.hpp"
 
 namespace findmug {
 
@@ -224,8 +225,10 @@ std::vector<FrameSample> extractTrainingSamples(const LabeledFrames& frames,
         views.back().source_index = i;
         views.back().ground_method = method;
       }
+      std::vector<std::uint16_t> depth_mm = prepared.frame.depth_mm;
       FrameSample sample =
           sampleOf(segmenter, std::move(prepared), labelled.labels, labelled.fine_labels);
+      sample.depth_mm = std::move(depth_mm);
       sample.name = labelled.name;
       sample.source_index = i;
       sample.ground_truth = std::move(labelled.labels);
@@ -656,6 +659,21 @@ std::vector<std::uint8_t> pixelLabels(const FrameSample& sample,
     if (s >= 0) out[p] = segment_labels.at(static_cast<std::size_t>(s));
   }
   return out;
+}
+
+std::vector<std::uint8_t> publishedPixelLabels(const FrameSample& sample,
+                                               const std::vector<std::uint8_t>& segment_labels,
+                                               const LabelHoleFillConfig& fill) {
+  LabelImage image{sample.width, sample.height, pixelLabels(sample, segment_labels), {}};
+  if (!fill.enabled) return std::move(image.labels);
+  if (sample.depth_mm.size() != image.labels.size()) {
+    throw Error("publishedPixelLabels: frame " + sample.name + " has " +
+                std::to_string(sample.depth_mm.size()) + " depth pixels for " +
+                std::to_string(image.labels.size()) + " pixels");
+  }
+  image.confidence.assign(image.labels.size(), 0.0f);
+  fillLabelHoles(sample.depth_mm, fill, image);
+  return std::move(image.labels);
 }
 
 }  // namespace findmug

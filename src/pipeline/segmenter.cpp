@@ -8,6 +8,7 @@
 #include "findmug/common/error.hpp"
 #include "findmug/features/object_features.hpp"
 #include "findmug/features/scene_features.hpp"
+#include "findmug/labels/label_holes.hpp"
 #include "findmug/tables/table_regions.hpp"
 #include "common/scratch.hpp"
 
@@ -38,6 +39,13 @@ class Stopwatch {
     const double now = threadCpuMs();
     cpu.*field = now - cpu_start_;
     cpu_start_ = now;
+  }
+  // The same, added to what `field` holds (a stage done in two parts).
+  void addLap(StageTimings& wall, StageTimings& cpu, double StageTimings::*field) {
+    const double wall_before = wall.*field, cpu_before = cpu.*field;
+    lap(wall, cpu, field);
+    wall.*field += wall_before;
+    cpu.*field += cpu_before;
   }
 
  private:
@@ -597,6 +605,11 @@ LabelledFrame Segmenter::classify(SegmentedFrame segmented) const {
   out.tables = std::move(detection.tables);
   out.table_diagnostics = std::move(detection.diagnostics);
   watch.lap(out.timings, out.cpu_timings, &StageTimings::tables_ms);
+
+  // After the tables: the filled pixels have no point, and the table stage
+  // counts the table pixels without one as a diagnostic.
+  fillLabelHoles(segmented.prepared.frame.depth_mm, config_.label_holes, out.labels);
+  watch.addLap(out.timings, out.cpu_timings, &StageTimings::labels_ms);
   out.segmented = std::move(segmented);
   return out;
 }

@@ -229,6 +229,21 @@ TEST(Collect, LowConfidenceSavesExactlyTheFramesBelowTheThreshold) {
   EXPECT_NE(readText(fs::path(dir) / "frames.csv").find(",low_confidence,"), std::string::npos);
 }
 
+// The pixels filled in from their neighbours (labels.fill_holes: confidence 0)
+// say nothing about how sure the model is, so they do not lower the mean.
+TEST(Collect, MeanConfidenceLeavesFilledHolesOut) {
+  LabelImage labels;
+  labels.width = 4;
+  labels.height = 1;
+  labels.labels = {2, 2, 2, kVoidLabel};
+  labels.confidence = {0.8f, 0.0f, 0.6f, 0.0f};
+  const auto mean = FrameCollector::meanConfidence(labels);
+  ASSERT_TRUE(mean.has_value());
+  EXPECT_NEAR(*mean, 0.7, 1e-6);
+  labels.confidence = {0.0f, 0.0f, 0.0f, 0.0f};
+  EXPECT_FALSE(FrameCollector::meanConfidence(labels).has_value());
+}
+
 TEST(Collect, TableFlickerSavesAfterNChangesWithinTheWindow) {
   FINDMUG_REQUIRE_DATA(nyu, "nyuv2_labeled");
   const Shared* s = shared();

@@ -33,6 +33,9 @@ struct FrameSample {
   std::vector<std::uint8_t> segment_fine_labels;
   std::vector<std::uint32_t> segment_pixels;     // pixel count per segment
   std::vector<std::uint8_t> ground_truth;        // per pixel, 255 = void
+  // The frame's depth (0 = none), for the label image's hole filling
+  // (labels.fill_holes, label_holes.hpp); empty in training-only views.
+  std::vector<std::uint16_t> depth_mm;
   GroundMethod ground_method = GroundMethod::Given;  // how its ground frame was obtained
   // Training weight of each of its patches, times the pixel weighting
   // (training.sample_weight): 1 for labelled frames, training.pseudo_weight
@@ -154,5 +157,11 @@ RegionFeatures sampleRegionFeatures(const FrameSample& sample, const RegionConfi
 // Per-pixel labels of a frame from per-segment labels (255 where no segment).
 std::vector<std::uint8_t> pixelLabels(const FrameSample& sample,
                                       const std::vector<std::uint8_t>& segment_labels);
+// The same with the pixels without a segment filled as Segmenter::classify
+// fills the label image it publishes (labels.fill_holes): what the robot's
+// user sees, and what findmug-eval scores.
+std::vector<std::uint8_t> publishedPixelLabels(const FrameSample& sample,
+                                               const std::vector<std::uint8_t>& segment_labels,
+                                               const LabelHoleFillConfig& fill);
 
 }  // namespace findmug

@@ -18,6 +18,7 @@
 #include "findmug/features/region_features.hpp"
 #include "findmug/features/scene_features.hpp"
 #include "findmug/ground/ground.hpp"
+#include "findmug/labels/label_holes.hpp"
 #include "findmug/learner/forest.hpp"
 #include "findmug/map/table_map.hpp"
 #include "findmug/mrf/mrf.hpp"
@@ -69,6 +70,7 @@ struct SegmenterConfig {
   XGBoostParams xgboost;   // xgboost.* (learner.kind = xgboost)
   MrfParams mrf;
   bool use_mrf = true;
+  LabelHoleFillConfig label_holes;  // labels.*
   TableConfig tables;
 };
 
@@ -81,7 +83,7 @@ struct Config {
 };
 
 // The segmenter's sections (cloud, normals, ground, overseg, features, forest,
-// learner, xgboost, mrf, tables): one table.
+// learner, xgboost, mrf, labels, tables): one table.
 const SettingsTable<SegmenterConfig>& segmenterSettings();
 // The rules across its keys (seed above voxel resolution, ...); throws Error naming them.
 void validateSegmenterConfig(const SegmenterConfig& config);

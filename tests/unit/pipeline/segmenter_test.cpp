@@ -86,16 +86,58 @@ TEST(Segmenter, LabelsAKnownSceneCorrectly) {
   EXPECT_GT(cm.globalAccuracy(), 0.9);
   EXPECT_GT(cm.perClassAccuracy()[static_cast<int>(Label::Floor)], 0.9);
   EXPECT_GT(cm.perClassAccuracy()[static_cast<int>(Label::Wall)], 0.9);
-  // Void exactly where there is no depth (no label invented there).
+  // Where there is no depth, a label is only filled in, with no confidence
+  // (labels.fill_holes, FillsTheLabelImagesDepthHoles below).
   for (std::size_t i = 0; i < scene.truth.size(); ++i) {
     if (scene.frame.depth_mm[i] == 0) {
-      ASSERT_EQ(out.labels.labels[i], kVoidLabel) << i;
+      ASSERT_EQ(out.labels.confidence[i], 0.0f) << i;
     }
   }
   // The stages report their own time.
   EXPECT_GT(out.timings.total(), 0.0);
   EXPECT_EQ(out.forest_labels.size(), out.features.features.size());
   EXPECT_EQ(out.mrf.labels.size(), out.features.features.size());
+}
+
+// A raw camera's holes: a blob on the wall (a dark poster) and a shadow run
+// beside nothing in particular on the floor. With labels.fill_holes they take
+// the label around them with confidence 0; without it they stay void; the
+// patches, their labels and the tables do not change either way.
+TEST(Segmenter, FillsTheLabelImagesDepthHoles) {
+  Scene scene = floorAndWall(true);
+  const Segmenter untrained(fastConfig(), nullptr);
+  const auto forest = trainOn(untrained, scene);
+  std::vector<std::size_t> holes;
+  const auto punch = [&](int u0, int v0, int w, int h) {
+    for (int v = v0; v < v0 + h; ++v) {
+      for (int u = u0; u < u0 + w; ++u) {
+        const std::size_t i = static_cast<std::size_t>(v) * scene.frame.width + u;
+        ASSERT_NE(scene.frame.depth_mm[i], 0);
+        scene.frame.depth_mm[i] = 0;
+        holes.push_back(i);
+      }
+    }
+  };
+  punch(150, 30, 12, 8);  // on the wall, rows 30-37
+  punch(100, 200, 9, 1);  // a shadow run on the floor
+  for (std::size_t i : holes) ASSERT_NE(scene.truth[i], kVoidLabel);
+
+  SegmenterConfig fill = fastConfig();
+  SegmenterConfig no_fill = fastConfig();
+  no_fill.label_holes.enabled = false;
+  const LabelledFrame filled = Segmenter(fill, forest).process(scene.frame);
+  const LabelledFrame unfilled = Segmenter(no_fill, forest).process(scene.frame);
+  for (std::size_t i : holes) {
+    ASSERT_EQ(unfilled.labels.labels[i], kVoidLabel) << i;
+    ASSERT_EQ(filled.labels.labels[i], scene.truth[i]) << i;
+    ASSERT_EQ(filled.labels.confidence[i], 0.0f) << i;
+  }
+  EXPECT_EQ(filled.mrf.labels, unfilled.mrf.labels);
+  EXPECT_EQ(filled.tables.size(), unfilled.tables.size());
+  ConfusionMatrix with, without;
+  with.add(scene.truth, filled.labels.labels);
+  without.add(scene.truth, unfilled.labels.labels);
+  EXPECT_GT(with.globalAccuracy(), without.globalAccuracy());
 }
 
 TEST(Segmenter, GroundFromExtrinsicsPutsFloorAtZeroHeight) {

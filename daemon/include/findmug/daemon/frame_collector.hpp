@@ -79,7 +79,8 @@ class FrameCollector final : public ResultSink {
   void stop();
   Counters counters() const;
 
-  // Mean confidence over the labelled pixels; nullopt when none is labelled.
+  // Mean confidence over the pixels the model labelled (the depth holes filled
+  // from their neighbours, confidence 0, are left out); nullopt when none is.
   static std::optional<double> meanConfidence(const LabelImage& labels);
 
  private:
