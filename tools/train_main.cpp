@@ -132,11 +132,10 @@ int run(int argc, char** argv) {
   }
   std::printf("  classes          %s (%d internal classes)\n",
               forest.internalClasses().scheme.c_str(), forest.internalClasses().count());
-  std::printf("  features         %d columns%s%s%s%s%s\n", forest.dim(),
+  std::printf("  features         %d columns%s%s%s%s\n", forest.dim(),
               config.segmenter.regions.enabled ? " (with region features)" : "",
               config.segmenter.scene.enabled ? " (with scene features)" : "",
               config.segmenter.objects.enabled ? " (with object features)" : "",
-              config.segmenter.texture.enabled ? " (with texture features)" : "",
               forest.contextStage() ? ", auto-context stage" : "");
   std::printf("  model            %s (id %s)\n", f.out.c_str(), forest.id().c_str());
   std::printf("  time             %.1f s\n", seconds);

@@ -615,7 +615,6 @@ void detail::computeFeaturesInto(const OrganizedCloud& cloud_ground,
   out.regions.clear();
   out.scene.clear();
   out.objects.clear();
-  out.texture.clear();
   for (std::size_t s = 0; s < segment_count; ++s) {
     if (acc[s].count == 0) {
       throw Error("computeFeatures: segment " + std::to_string(s) + " (" +

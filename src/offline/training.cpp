@@ -68,10 +68,9 @@ std::size_t objectColumnsOf(const SegmentFeatures& f) {
   return f.features.empty() ? 0 : f.objects.size() / f.features.size();
 }
 
-// Names of the first stage's extra columns: region, scene, object features
-// (`object_columns` of them: all or the context set), then texture features.
-std::vector<std::string> extraColumnNames(bool regions, bool scene, std::size_t object_columns,
-                                          bool texture) {
+// Names of the first stage's extra columns: region, scene, then object
+// features (`object_columns` of them: all or the context set).
+std::vector<std::string> extraColumnNames(bool regions, bool scene, std::size_t object_columns) {
   std::vector<std::string> names;
   if (regions) names.assign(kRegionFeatureNames.begin(), kRegionFeatureNames.end());
   if (scene) names.insert(names.end(), kSceneFeatureNames.begin(), kSceneFeatureNames.end());
@@ -80,13 +79,10 @@ std::vector<std::string> extraColumnNames(bool regions, bool scene, std::size_t 
                                                              : ObjectColumns::Context;
     for (const auto name : objectFeatureNames(columns)) names.emplace_back(name);
   }
-  if (texture)
-    names.insert(names.end(), kTextureFeatureNames.begin(), kTextureFeatureNames.end());
   return names;
 }
 
-// Segment k's extra columns (region, scene, object, then texture features, as
-// present).
+// Segment k's extra columns (region, scene, then object features, as present).
 void appendExtraColumns(const SegmentFeatures& f, std::size_t k, std::vector<float>& out) {
   if (!f.regions.empty()) {
     const auto begin = f.regions.begin() + static_cast<std::ptrdiff_t>(k * kRegionFeatureDim);
@@ -100,10 +96,6 @@ void appendExtraColumns(const SegmentFeatures& f, std::size_t k, std::vector<flo
     const std::size_t dim = objectColumnsOf(f);
     const auto begin = f.objects.begin() + static_cast<std::ptrdiff_t>(k * dim);
     out.insert(out.end(), begin, begin + static_cast<std::ptrdiff_t>(dim));
-  }
-  if (!f.texture.empty()) {
-    const auto begin = f.texture.begin() + static_cast<std::ptrdiff_t>(k * kTextureFeatureDim);
-    out.insert(out.end(), begin, begin + kTextureFeatureDim);
   }
 }
 
@@ -474,8 +466,7 @@ TrainingSet makeTrainingSet(const std::vector<const FrameSample*>& given,
   const bool scene = !frames.empty() && !frames.front()->features.scene.empty();
   const std::size_t object_columns = frames.empty() ? 0 : objectColumnsOf(frames.front()->features);
   const bool objects = object_columns > 0;
-  const bool texture = !frames.empty() && !frames.front()->features.texture.empty();
-  set.extra_names = extraColumnNames(regions, scene, object_columns, texture);
+  set.extra_names = extraColumnNames(regions, scene, object_columns);
   const bool weighted = needsWeights(weighting, frames);
   for (const FrameSample* s : frames) {
     if (s->features.regions.empty() == regions && !s->features.features.empty()) {
@@ -491,10 +482,6 @@ TrainingSet makeTrainingSet(const std::vector<const FrameSample*>& given,
         !s->features.features.empty()) {
       throw Error("makeTrainingSet: frame " + s->name + (objects ? " lacks" : " has") +
                   " object features, or other object columns, unlike the first frame");
-    }
-    if (s->features.texture.empty() == texture && !s->features.features.empty()) {
-      throw Error("makeTrainingSet: frame " + s->name + (texture ? " lacks" : " has") +
-                  " texture features unlike the first frame");
     }
     for (std::size_t k = 0; k < s->segment_labels.size(); ++k) {
       if (s->segment_labels[k] >= kNumLabels) continue;
@@ -609,8 +596,7 @@ RandomForest trainModel(const std::vector<const FrameSample*>& frames,
   if (!frames.empty())
     set.extra_names = extraColumnNames(!frames.front()->features.regions.empty(),
                                        !frames.front()->features.scene.empty(),
-                                       objectColumnsOf(frames.front()->features),
-                                       !frames.front()->features.texture.empty());
+                                       objectColumnsOf(frames.front()->features));
   for (const auto& name : contextFeatureNames()) set.extra_names.push_back(name);
   const bool weighted = needsWeights(weighting, frames);
   for (std::size_t i = 0; i < n; ++i) {

@@ -8,7 +8,6 @@
 #include "findmug/common/error.hpp"
 #include "findmug/features/object_features.hpp"
 #include "findmug/features/scene_features.hpp"
-#include "findmug/features/texture_features.hpp"
 #include "findmug/tables/table_regions.hpp"
 #include "common/scratch.hpp"
 
@@ -81,8 +80,6 @@ std::vector<std::string> firstStageFeatureNames(const SegmenterConfig& config) {
   if (config.objects.enabled) {
     for (const auto name : objectFeatureNames(config.objects.columns)) names.emplace_back(name);
   }
-  if (config.texture.enabled)
-    names.insert(names.end(), kTextureFeatureNames.begin(), kTextureFeatureNames.end());
   return names;
 }
 
@@ -115,15 +112,9 @@ void firstStageRowsInto(const SegmentFeatures& features, std::vector<float>& row
     throw Error("firstStageRows: " + std::to_string(n) + " segments but " +
                 std::to_string(features.objects.size()) + " object feature values");
   }
-  const bool texture = !features.texture.empty();
-  if (texture && features.texture.size() != n * kTextureFeatureDim) {
-    throw Error("firstStageRows: " + std::to_string(n) + " segments but " +
-                std::to_string(features.texture.size()) + " texture feature values");
-  }
   const std::size_t region_dim = regions ? kRegionFeatureDim : 0;
   const std::size_t scene_dim = scene ? kSceneFeatureDim : 0;
-  const std::size_t texture_dim = texture ? kTextureFeatureDim : 0;
-  const std::size_t dim = kFeatureDim + region_dim + scene_dim + object_dim + texture_dim;
+  const std::size_t dim = kFeatureDim + region_dim + scene_dim + object_dim;
   rows.resize(n * dim);
   for (std::size_t i = 0; i < n; ++i) {
     float* row = rows.data() + i * dim;
@@ -139,10 +130,6 @@ void firstStageRowsInto(const SegmentFeatures& features, std::vector<float>& row
     if (objects) {
       std::copy_n(features.objects.begin() + static_cast<std::ptrdiff_t>(i * object_dim),
                   object_dim, row + kFeatureDim + region_dim + scene_dim);
-    }
-    if (texture) {
-      std::copy_n(features.texture.begin() + static_cast<std::ptrdiff_t>(i * kTextureFeatureDim),
-                  kTextureFeatureDim, row + kFeatureDim + region_dim + scene_dim + object_dim);
     }
   }
 }
@@ -163,8 +150,8 @@ void predictSegmentsInto(const RandomForest& model, const SegmentFeatures& featu
     throw Error("predictSegments: the model reads " + std::to_string(dim) +
                 " columns per segment, the features give " +
                 std::to_string(n == 0 ? 0 : rows.size() / n) +
-                " (features.regions, features.scene, features.objects or features.texture "
-                "differs from the model's)");
+                " (features.regions, features.scene or features.objects differs from the "
+                "model's)");
   }
   const RandomForest* stage = model.contextStage();
   // Without a context stage the first stage's answers are the output.
@@ -244,20 +231,16 @@ void checkModelMatchesConfig(const RandomForest& forest, const SegmenterConfig& 
       return std::find(kObjectFeatureNames.begin(), kObjectFeatureNames.end(), n) !=
              kObjectFeatureNames.end();
     });
-    const bool model_texture =
-        std::find(names.begin(), names.end(), std::string(kTextureFeatureNames[0])) != names.end();
     throw Error("model " + name + " reads " + std::to_string(forest.dim()) +
                 " feature columns" + (model_regions ? " (with region features)" : "") +
                 (model_scene ? " (with scene features)" : "") +
                 (model_objects ? " (with object features)" : "") +
-                (model_texture ? " (with texture features)" : "") +
                 " but the config computes " + std::to_string(expected.size()) +
                 " (features.regions = " + (config.regions.enabled ? "true" : "false") +
                 ", features.scene = " + (config.scene.enabled ? "true" : "false") +
                 ", features.objects = " + (config.objects.enabled ? "true" : "false") +
-                ", features.texture = " + (config.texture.enabled ? "true" : "false") +
-                "); set features.regions, features.scene, features.objects and "
-                "features.texture to match the model or retrain" +
+                "); set features.regions, features.scene and features.objects to match the "
+                "model or retrain" +
                 (forest.formatVersion() == 2 ? " (a format-2 model has no region features)" : ""));
   }
   if (config.context.enabled != (forest.contextStage() != nullptr)) {
@@ -456,10 +439,6 @@ SegmentFeatures Segmenter::features(const SegmentedFrame& segmented) const {
     out.objects =
         computeObjectFeatures(out, segmented.segmentation, regions, config_.objects).values;
   }
-  if (config_.texture.enabled) {
-    out.texture = computeTextureFeatures(segmented.prepared.cloud_ground, segmented.segmentation,
-                                         config_.texture);
-  }
   return out;
 }
 
@@ -485,7 +464,7 @@ LabelledFrame Segmenter::classify(SegmentedFrame segmented) const {
     // for the frames after this one (a stream with frames lacking a ground
     // plane otherwise reallocated them all on the next frame with one).
     // (A new member of either struct must be emptied here too.)
-    static_assert(sizeof(SegmentFeatures) == 7 * sizeof(std::vector<float>));
+    static_assert(sizeof(SegmentFeatures) == 6 * sizeof(std::vector<float>));
     static_assert(sizeof(MrfResult) ==
                   2 * sizeof(std::vector<float>) + sizeof(std::int64_t));
     out.features.features.clear();
@@ -494,7 +473,6 @@ LabelledFrame Segmenter::classify(SegmentedFrame segmented) const {
     out.features.regions.clear();
     out.features.scene.clear();
     out.features.objects.clear();
-    out.features.texture.clear();
     out.forest_probabilities.clear();
     out.first_stage_probabilities.clear();
     out.forest_labels.clear();
@@ -549,13 +527,7 @@ LabelledFrame Segmenter::classify(SegmentedFrame segmented) const {
   } else {
     out.features.objects.clear();
   }
-  if (config_.texture.enabled) {
-    std::vector<float> texture = std::move(out.features.texture);
-    computeTextureFeaturesInto(segmented.prepared.cloud_ground, segmented.segmentation,
-                               config_.texture, texture);
-    out.features.texture = std::move(texture);
-  }
-  // Region, scene, object and texture features share this stage's time.
+  // Region, scene and object features share this stage's time.
   watch.lap(out.timings, out.cpu_timings, &StageTimings::regions_ms);
 
   const std::size_t n = out.features.features.size();

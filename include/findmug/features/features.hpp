@@ -60,10 +60,6 @@ struct SegmentFeatures {
   // as features.objects_columns selects; empty unless features.objects is on. They follow the scene
   // features in a model's rows.
   std::vector<float> objects;
-  // Texture features (texture_features.hpp), row-major, kTextureFeatureDim
-  // per segment; empty unless features.texture is on. They follow the object
-  // features in a model's rows.
-  std::vector<float> texture;
 };
 
 // sRGB (0..255) to CIELAB (D65).
@@ -79,8 +75,8 @@ FeatureVector computePatchFeatures(const std::vector<Eigen::Vector3f>& points_gr
 SegmentFeatures computeFeatures(const OrganizedCloud& cloud_ground,
                                 const NormalImage& normals_ground,
                                 const Oversegmentation& segmentation);
-// The same into `out` (features, centroids and moments; regions, scene,
-// objects and texture are emptied), reusing the memory it holds: a stream of frames then allocates
+// The same into `out` (features, centroids and moments; regions, scene and
+// objects are emptied), reusing the memory it holds: a stream of frames then allocates
 // nothing here (Segmenter::recycle).
 void computeFeaturesInto(const OrganizedCloud& cloud_ground, const NormalImage& normals_ground,
                          const Oversegmentation& segmentation, SegmentFeatures& out);

@@ -156,15 +156,13 @@ void checkModelMatchesConfig(const RandomForest& forest, const SegmenterConfig& 
 
 // Column names of the first stage's rows for `config` (kFeatureNames, then
 // kRegionFeatureNames with features.regions, then kSceneFeatureNames with
-// features.scene, then the object columns with features.objects, then
-// kTextureFeatureNames with features.texture), and of the context stage's.
+// features.scene), and of the context stage's.
 std::vector<std::string> firstStageFeatureNames(const SegmenterConfig& config);
 std::vector<std::string> contextStageFeatureNames(const SegmenterConfig& config);
 
 // Row-major first-stage rows of every segment: base features, then region
 // features when `features.regions` is non-empty, then scene features when
-// `features.scene` is, then object features, then texture features, each
-// when present.
+// `features.scene` is.
 std::vector<float> firstStageRows(const SegmentFeatures& features);
 
 // The model's per-segment class distributions: the first stage, then, when

@@ -17,7 +17,6 @@
 #include "findmug/features/object_features.hpp"
 #include "findmug/features/region_features.hpp"
 #include "findmug/features/scene_features.hpp"
-#include "findmug/features/texture_features.hpp"
 #include "findmug/ground/ground.hpp"
 #include "findmug/learner/forest.hpp"
 #include "findmug/map/table_map.hpp"
@@ -64,7 +63,6 @@ struct SegmenterConfig {
   RegionConfig regions;    // features.regions, features.region_*
   SceneConfig scene;       // features.scene, features.scene_*
   ObjectConfig objects;    // features.objects, features.objects_*
-  TextureConfig texture;   // features.texture, features.texture_*
   ContextConfig context;   // features.context, features.context_*
   ForestParams forest;
   LearnerOptions learner;  // learner.*
