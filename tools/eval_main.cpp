@@ -351,8 +351,10 @@ void measureTables(const LabeledFrames& frames, const std::vector<FrameSample>& 
     if (!prepared.ground) {
       throw Error(samples[f].name + ": no ground plane on the second pass (was found before)");
     }
+    // The truth is clustered with the built-in table settings, not the
+    // evaluated ones: a sweep of tables.* then moves the detections only.
     const auto truth =
-        groundTruthTables(prepared.cloud_ground, samples[f].ground_truth, config.tables, metrics);
+        groundTruthTables(prepared.cloud_ground, samples[f].ground_truth, TableConfig{}, metrics);
     const FrameSample& sample = samples[f];
     std::vector<float> table_probability(sample.pixel_segment.size(), 0.0f);
     std::vector<float> confidence(sample.pixel_segment.size(), 0.0f);

@@ -5,7 +5,9 @@
 // detectTables finds on the GROUND-TRUTH label image (3-D connected
 // components of table-labelled points at table height, linked within
 // tables.cluster_tolerance_m), keeping those of at least
-// `min_instance_points` points. Their geometry (top height, centroid,
+// `min_instance_points` points. findmug-eval clusters them with the built-in
+// `TableConfig{}` (the shipped values), whatever tables.* it evaluates, so
+// that changing a table setting changes what is found, not what is there. Their geometry (top height, centroid,
 // principal axis) is computed exactly as for detected tables, so that a
 // perfect labelling has zero error.
 //
