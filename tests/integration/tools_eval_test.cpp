@@ -359,8 +359,8 @@ TEST(ToolsEval, TableTruthDoesNotMoveWithTheEvaluatedTableSettings) {
   FINDMUG_REQUIRE_DATA(rotations, "nyuv2_meta/camera_rotations_NYU.txt");
   test::TempDir tmp;
   const std::string common = " --data " + nyu.string() +
-                             " --set ground.source=gravity --nyu-rotations " +
-                             rotations.string() + " --folds 2 --set forest.num_trees=4";
+                             " --set ground.source=gravity --nyu-rotations " + rotations.string() +
+                             " --folds 2 --set forest.num_trees=4";
   auto evaluate = [&](const std::string& flags, const std::string& json) {
     const auto r = run(std::string(FINDMUG_EVAL_EXE) + common + flags + " --json " + tmp.str(json));
     EXPECT_EQ(r.exit_code, 0) << r.output;
@@ -418,7 +418,8 @@ TEST(ToolsEval, DegradeEvaluatesRawLikeCopies) {
   EXPECT_THAT(raw, HasSubstr("raw-like depth, seed 1"));
   EXPECT_EQ(number(raw, "frames_used"), 5);
   EXPECT_EQ(scored(raw), scored(clean));
-  const std::string unfilled = evaluate(" --degrade --set labels.fill_holes=false", "unfilled.json");
+  const std::string unfilled =
+      evaluate(" --degrade --set labels.fill_holes=false", "unfilled.json");
   EXPECT_EQ(scored(unfilled), scored(clean));
   EXPECT_LT(number(section(unfilled, "mrf"), "global"),
             number(section(clean, "mrf"), "global") - 0.02);
@@ -427,8 +428,7 @@ TEST(ToolsEval, DegradeEvaluatesRawLikeCopies) {
   EXPECT_EQ(section(raw, "mrf"), section(raw_again, "mrf"));  // deterministic for a seed
   EXPECT_NE(section(raw, "mrf"), section(other_seed, "mrf"));
   EXPECT_LT(scored(measured), 0.97 * scored(raw));
-  EXPECT_GT(number(section(measured, "mrf"), "global"),
-            number(section(unfilled, "mrf"), "global"));
+  EXPECT_GT(number(section(measured, "mrf"), "global"), number(section(unfilled, "mrf"), "global"));
 }
 
 }  // namespace

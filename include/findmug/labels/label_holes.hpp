@@ -31,8 +31,8 @@
 namespace findmug {
 
 struct LabelHoleFillConfig {
-  bool enabled = true;   // labels.fill_holes
-  int max_run_px = 64;   // labels.fill_max_run_px (1..10000)
+  bool enabled = true;  // labels.fill_holes
+  int max_run_px = 64;  // labels.fill_max_run_px (1..10000)
 };
 
 // Fills the void pixels of `labels` in place as above; `depth_mm` (the

@@ -21,7 +21,8 @@ LabelImage imageOf(int width, std::vector<std::uint8_t> labels) {
   image.width = width;
   image.height = static_cast<int>(labels.size()) / width;
   image.confidence.resize(labels.size());
-  for (std::size_t i = 0; i < labels.size(); ++i) image.confidence[i] = labels[i] == V ? 0.0f : 0.9f;
+  for (std::size_t i = 0; i < labels.size(); ++i)
+    image.confidence[i] = labels[i] == V ? 0.0f : 0.9f;
   image.labels = std::move(labels);
   return image;
 }
