@@ -5,12 +5,12 @@
 #include <chrono>
 #include <ctime>
 
-#include "common/scratch.hpp"
 #include "findmug/common/error.hpp"
 #include "findmug/features/object_features.hpp"
 #include "findmug/features/scene_features.hpp"
 #include "findmug/labels/label_holes.hpp"
 #include "findmug/tables/table_regions.hpp"
+#include "common/scratch.hpp"
 
 namespace findmug {
 
