@@ -336,7 +336,7 @@ const std::vector<Setting<OfflineConfig>>& offlineSettingList() {
                       [](O& c) -> float& { return c.training.pseudo_class_cap; }, 0, 1000),
       // 64-bit: parsed as an integer, never through a double.
       seedSetting<O>("training.degraded_seed",
-                        [](O& c) -> std::uint64_t& { return c.training.degraded_seed; }),
+                     [](O& c) -> std::uint64_t& { return c.training.degraded_seed; }),
       floatSetting<O>("degrade.shadow_baseline_m",
                       [](O& c) -> float& { return c.degrade.shadow_baseline_m; }, -0.5, 0.5),
       floatSetting<O>("degrade.shadow_focal_px",

@@ -7,9 +7,9 @@
 // tables.cluster_tolerance_m), keeping those of at least
 // `min_instance_points` points. findmug-eval clusters them with the built-in
 // `TableConfig{}` (the shipped values), whatever tables.* it evaluates, so
-// that changing a table setting changes what is found, not what is there. Their geometry (top height, centroid,
-// principal axis) is computed exactly as for detected tables, so that a
-// perfect labelling has zero error.
+// that changing a table setting changes what is found, not what is there.
+// Their geometry (top height, centroid, principal axis) is computed exactly
+// as for detected tables, so that a perfect labelling has zero error.
 //
 // Matching: a detected table (a TableCluster from the pipeline, its image
 // mask = TableCluster::pixels) matches a ground-truth instance when their
