@@ -49,7 +49,6 @@
 #include "findmug/offline/cv_folds.hpp"
 #include "findmug/offline/metrics.hpp"
 #include "findmug/offline/mrf_context.hpp"
-#include "findmug/offline/object_stage.hpp"
 #include "findmug/offline/pseudo_labels.hpp"
 #include "findmug/offline/table_metrics.hpp"
 #include "findmug/offline/training.hpp"
@@ -85,8 +84,6 @@ struct EvalFlags {
   bool sweep = false;
   bool degrade = false, score_labelled_only = false;
   std::uint64_t degrade_seed = 1;
-  float object_stage_weight = 0.0f;
-  int object_stage_trees = 16, object_stage_leaf = 2, object_stage_depth = 10;
   std::vector<std::string> train_extra;
   std::vector<std::string> unlabelled;
   cli::ConfigFlags config;
@@ -160,12 +157,6 @@ std::unique_ptr<CLI::App> makeEvalApp(EvalFlags& f) {
                        "write a per-frame diagnosis of table instances and detections "
                        "(why each unmatched one failed) to FILE")
            ->type_name("FILE"));
-  last(app->add_option("--object-stage", f.object_stage_weight,
-                       "mix an object-candidate forest into the posterior with this weight")
-           ->type_name("W"));
-  last(app->add_option("--object-stage-trees", f.object_stage_trees, "object forest trees"));
-  last(app->add_option("--object-stage-leaf", f.object_stage_leaf, "object forest min leaf"));
-  last(app->add_option("--object-stage-depth", f.object_stage_depth, "object forest depth"));
   app->add_flag("--degrade", f.degrade,
                 "evaluate on raw-like copies of the frames (degrade.* settings); training "
                 "uses the frames as they are");
@@ -175,8 +166,6 @@ std::unique_ptr<CLI::App> makeEvalApp(EvalFlags& f) {
                 "score only pixels the pipeline labelled (leave depth holes out)");
   return app;
 }
-
-ObjectStageConfig g_object_stage;
 
 struct Evaluation {
   ConfusionMatrix forest, mrf;
@@ -219,8 +208,7 @@ std::vector<RegionFeatures> sampleRegions(const std::vector<FrameSample>& sample
 void labelFrames(const RandomForest& forest, const SegmenterConfig& config,
                  const std::vector<FrameSample>& samples, const std::vector<std::size_t>& frames,
                  const std::vector<RegionFeatures>& regions, Evaluation& eval, bool keep_pixels,
-                 const PairwiseContext* pairwise = nullptr,
-                 const ObjectStageModel* object_stage = nullptr) {
+                 const PairwiseContext* pairwise = nullptr) {
   SegmenterConfig with_mrf = config;
   with_mrf.use_mrf = true;  // the "+MRF" figures, whatever use_mrf says
   std::optional<LayoutPrior> layout;
@@ -231,7 +219,7 @@ void labelFrames(const RandomForest& forest, const SegmenterConfig& config,
     const std::size_t n = s.features.features.size();
     SampleLabelling labelling =
         labelSample(forest, s, with_mrf, regions.empty() ? nullptr : &regions[f], pairwise,
-                    layout ? &*layout : nullptr, object_stage);
+                    layout ? &*layout : nullptr);
     std::vector<std::uint8_t> forest_labels(n);
     for (std::size_t k = 0; k < n; ++k) forest_labels[k] = argmax(labelling.probabilities[k]);
     eval.forest.add(s.ground_truth, publishedPixelLabels(s, forest_labels, config.label_holes));
@@ -329,17 +317,7 @@ Evaluation crossValidate(const std::vector<FrameSample>& samples,
       labelFrames(forest, config, test_samples, test, regions, eval, keep_pixels, context);
     } else {
       const RandomForest forest = trainModel(frames, fold_config, training);
-      std::optional<RandomForest> object_forest;
-      ObjectStageModel object_stage;
-      if (g_object_stage.weight > 0) {
-        ForestParams params = g_object_stage.forest;
-        params.seed = fold_config.forest.seed;
-        params.num_threads = fold_config.forest.num_threads;
-        object_forest = trainObjectForest(frames, fold_config, params);
-        object_stage = {&*object_forest, g_object_stage.weight};
-      }
-      labelFrames(forest, config, test_samples, test, regions, eval, keep_pixels, context,
-                  object_forest ? &object_stage : nullptr);
+      labelFrames(forest, config, test_samples, test, regions, eval, keep_pixels, context);
     }
     eval.folds.push_back({fold, train, test, std::move(pseudo)});
   }
@@ -684,10 +662,6 @@ int run(int argc, char** argv) {
   EvalFlags f;
   const auto app = makeEvalApp(f);
   if (auto code = cli::parse(*app, argc, argv)) return *code;
-  g_object_stage.weight = f.object_stage_weight;
-  g_object_stage.forest.num_trees = f.object_stage_trees;
-  g_object_stage.forest.min_samples_leaf = f.object_stage_leaf;
-  g_object_stage.forest.max_depth = f.object_stage_depth;
   if (f.dataset.data.empty() && f.dataset.mats.empty()) {
     std::cerr << "findmug-eval: give --data DIR or --mat FILE (repeatable; see --help)\n";
     return 2;

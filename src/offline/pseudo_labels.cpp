@@ -7,19 +7,15 @@
 #include <tuple>
 
 #include "findmug/common/error.hpp"
-#include "findmug/offline/object_stage.hpp"
 #include "findmug/tables/table_regions.hpp"
 
 namespace findmug {
 
 SampleLabelling labelSample(const RandomForest& model, const FrameSample& s,
                             const SegmenterConfig& config, const RegionFeatures* regions,
-                            const PairwiseContext* pairwise, const LayoutPrior* layout,
-                            const ObjectStageModel* object_stage) {
+                            const PairwiseContext* pairwise, const LayoutPrior* layout) {
   SampleLabelling out;
   out.probabilities = predictSample(model, s, config);
-  if (object_stage && object_stage->forest && object_stage->weight > 0)
-    fuseObjectPosterior(*object_stage->forest, s, config, object_stage->weight, out.probabilities);
   const std::vector<ClassProbabilities> unaries =
       weightTableProbability(out.probabilities, config.tables.table_weight);
   const bool with_layout = config.use_mrf && config.mrf.pairwise == MrfPairwise::Layout;

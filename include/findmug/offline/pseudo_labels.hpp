@@ -24,12 +24,6 @@
 
 namespace findmug {
 
-// An object forest and its weight (object_stage.hpp), mixed into the posterior before the MRF.
-struct ObjectStageModel {
-  const RandomForest* forest = nullptr;
-  float weight = 0.0f;
-};
-
 // The pipeline's answer for one extracted frame: the model's p(y|x) per
 // segment, and the final labels with their confidence (the MRF's belief, or
 // the forest's probability when config.use_mrf is off; after the table region
@@ -45,8 +39,7 @@ struct SampleLabelling {
 SampleLabelling labelSample(const RandomForest& model, const FrameSample& sample,
                             const SegmenterConfig& config, const RegionFeatures* regions,
                             const PairwiseContext* pairwise = nullptr,
-                            const LayoutPrior* layout = nullptr,
-                            const ObjectStageModel* object_stage = nullptr);
+                            const LayoutPrior* layout = nullptr);
 
 // What one round added: per label, the patches that passed the confidence
 // threshold and those kept after the per-label cap; the frames they came from.
