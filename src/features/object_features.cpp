@@ -438,4 +438,14 @@ void computeObjectFeaturesInto(const SegmentFeatures& features,
   }
 }
 
+void objectCandidatesInto(const ObjectFeatures& objects, std::vector<int>& out) {
+  out.resize(objects.segment_group.size());
+  for (std::size_t s = 0; s < out.size(); ++s) {
+    const int g = objects.segment_group[s];
+    const bool candidate = g >= 0 && static_cast<std::size_t>(g) < objects.groups.size() &&
+                           objects.groups[static_cast<std::size_t>(g)].kind == GroupKind::Object;
+    out[s] = candidate ? g : -1;
+  }
+}
+
 }  // namespace findmug

@@ -7,6 +7,7 @@
 #include <tuple>
 
 #include "findmug/common/error.hpp"
+#include "findmug/mrf/object_consistency.hpp"
 #include "findmug/tables/table_regions.hpp"
 
 namespace findmug {
@@ -16,8 +17,14 @@ SampleLabelling labelSample(const RandomForest& model, const FrameSample& s,
                             const PairwiseContext* pairwise, const LayoutPrior* layout) {
   SampleLabelling out;
   out.probabilities = predictSample(model, s, config);
-  const std::vector<ClassProbabilities> unaries =
-      weightTableProbability(out.probabilities, config.tables.table_weight);
+  std::vector<ClassProbabilities> unaries = out.probabilities;
+  if (config.use_mrf) {
+    const std::vector<float> weights(s.segment_pixels.begin(), s.segment_pixels.end());
+    ObjectMeanScratch scratch;
+    mixObjectMeansInPlace(unaries, s.features.object_group, weights,
+                          config.mrf.object_consistency, scratch);
+  }
+  weightTableProbabilityInPlace(unaries, config.tables.table_weight);
   const bool with_layout = config.use_mrf && config.mrf.pairwise == MrfPairwise::Layout;
   if (with_layout && !layout)
     throw Error("labelSample: mrf.pairwise = layout without a loaded layout prior");

@@ -9,6 +9,7 @@
 #include "findmug/features/object_features.hpp"
 #include "findmug/features/scene_features.hpp"
 #include "findmug/labels/label_holes.hpp"
+#include "findmug/mrf/object_consistency.hpp"
 #include "findmug/tables/table_regions.hpp"
 #include "common/scratch.hpp"
 
@@ -444,8 +445,10 @@ SegmentFeatures Segmenter::features(const SegmentedFrame& segmented) const {
                                      config_.scene);
   }
   if (config_.objects.enabled) {
-    out.objects =
-        computeObjectFeatures(out, segmented.segmentation, regions, config_.objects).values;
+    const ObjectFeatures objects =
+        computeObjectFeatures(out, segmented.segmentation, regions, config_.objects);
+    out.objects = objects.values;
+    objectCandidatesInto(objects, out.object_group);
   }
   return out;
 }
@@ -472,7 +475,7 @@ LabelledFrame Segmenter::classify(SegmentedFrame segmented) const {
     // for the frames after this one (a stream with frames lacking a ground
     // plane otherwise reallocated them all on the next frame with one).
     // (A new member of either struct must be emptied here too.)
-    static_assert(sizeof(SegmentFeatures) == 6 * sizeof(std::vector<float>));
+    static_assert(sizeof(SegmentFeatures) == 7 * sizeof(std::vector<float>));
     static_assert(sizeof(MrfResult) ==
                   2 * sizeof(std::vector<float>) + sizeof(std::int64_t));
     out.features.features.clear();
@@ -481,6 +484,7 @@ LabelledFrame Segmenter::classify(SegmentedFrame segmented) const {
     out.features.regions.clear();
     out.features.scene.clear();
     out.features.objects.clear();
+    out.features.object_group.clear();
     out.forest_probabilities.clear();
     out.first_stage_probabilities.clear();
     out.forest_labels.clear();
@@ -501,6 +505,7 @@ LabelledFrame Segmenter::classify(SegmentedFrame segmented) const {
     ObjectFeatures objects;
     std::vector<float> weights, confidence;
     std::vector<ClassProbabilities> weighted;
+    ObjectMeanScratch object_means;  // mrf.object_consistency
     std::vector<float> heights;  // mrf.pairwise = layout
     MrfPairFactors factors;
   };
@@ -509,6 +514,7 @@ LabelledFrame Segmenter::classify(SegmentedFrame segmented) const {
   detail::Borrowed objects_buffer(buffers.objects);
   detail::Borrowed weights_buffer(buffers.weights), confidence_buffer(buffers.confidence);
   detail::Borrowed weighted_buffer(buffers.weighted);
+  detail::Borrowed object_means_buffer(buffers.object_means);
   detail::Borrowed heights_buffer(buffers.heights);
   detail::Borrowed factors_buffer(buffers.factors);
 
@@ -532,8 +538,10 @@ LabelledFrame Segmenter::classify(SegmentedFrame segmented) const {
     computeObjectFeaturesInto(out.features, segmented.segmentation, regions, config_.objects,
                               *objects_buffer);
     out.features.objects = objects_buffer->values;
+    objectCandidatesInto(*objects_buffer, out.features.object_group);
   } else {
     out.features.objects.clear();
+    out.features.object_group.clear();
   }
   // Region, scene and object features share this stage's time.
   watch.lap(out.timings, out.cpu_timings, &StageTimings::regions_ms);
@@ -559,6 +567,9 @@ LabelledFrame Segmenter::classify(SegmentedFrame segmented) const {
   // The distributions with the decision's bias towards tables.
   std::vector<ClassProbabilities>& weighted = *weighted_buffer;
   weighted = out.forest_probabilities;
+  if (config_.use_mrf)
+    mixObjectMeansInPlace(weighted, out.features.object_group, weights,
+                          config_.mrf.object_consistency, *object_means_buffer);
   weightTableProbabilityInPlace(weighted, config_.tables.table_weight);
   if (config_.use_mrf && layout_prior_) {
     std::vector<float>& heights = *heights_buffer;

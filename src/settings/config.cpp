@@ -238,6 +238,8 @@ const std::vector<CoreSetting>& settings() {
           {{"height", LayoutDirection::Height}, {"image", LayoutDirection::Image}}),
       floatSetting("mrf.layout_image_threshold_px",
                    [](C& c) -> float& { return c.mrf.layout_image_threshold_px; }, 0, 10000),
+      floatSetting("mrf.object_consistency",
+                   [](C& c) -> float& { return c.mrf.object_consistency; }, 0, 1),
       floatSetting("mrf.lambda", [](C& c) -> float& { return c.mrf.lambda; }, 0, 1000),
       floatSetting("mrf.sigma", [](C& c) -> float& { return c.mrf.sigma; }, 1e-4, 100),
       intSetting("mrf.max_iterations", [](C& c) -> int& { return c.mrf.max_iterations; }, 1,

@@ -60,6 +60,11 @@ struct SegmentFeatures {
   // as features.objects_columns selects; empty unless features.objects is on. They follow the scene
   // features in a model's rows.
   std::vector<float> objects;
+  // Per segment, the object candidate it belongs to (an index into
+  // ObjectFeatures::groups, object_features.hpp), -1 for a floor, wall or
+  // ceiling plane; empty unless features.objects is on. The MRF's unaries
+  // use it (mrf.object_consistency, object_consistency.hpp).
+  std::vector<int> object_group;
 };
 
 // sRGB (0..255) to CIELAB (D65).

@@ -118,6 +118,11 @@ struct ObjectFeatures {
   std::vector<float> values;
 };
 
+// Per segment of `objects`, the index of its group when that group is an
+// object candidate, -1 when it is a floor, wall or ceiling plane
+// (SegmentFeatures::object_group), into `out`.
+void objectCandidatesInto(const ObjectFeatures& objects, std::vector<int>& out);
+
 // Throws findmug::Error naming the setting when a value is out of range.
 void validateObjectConfig(const ObjectConfig& config);
 

@@ -37,6 +37,12 @@ struct MrfParams {
   float layout_height_threshold = 0.1f;
   LayoutDirection layout_direction = LayoutDirection::Height;
   float layout_image_threshold_px = 10.0f;  // the same for layout_direction = image
+  // mrf.object_consistency: the share w of each object candidate's mean
+  // distribution mixed into its patches' unaries (object_consistency.hpp);
+  // 0 = off (the paper's unaries). Without features.objects there are no
+  // candidates and it changes nothing (a model without object features, as
+  // the demo's, runs with the shipped file as it is).
+  float object_consistency = 0.0f;
   float lambda = 1.0f;        // unary weight
   float sigma = 0.1f;         // metres; pairwise decay with centroid distance
   int max_iterations = 30;

@@ -144,6 +144,7 @@ SegmenterConfig allStagesConfig() {
   c.regions.enabled = true;
   c.scene.enabled = true;
   c.objects.enabled = true;
+  c.mrf.object_consistency = 0.5f;
   c.context.enabled = true;
   c.context.cross_fit_folds = 0;  // one frame: nothing to cross-fit over
   c.forest.num_trees = 4;

@@ -193,6 +193,18 @@ TEST(Config, InconsistentResolutionsRefused) {
   EXPECT_THAT(msg, HasSubstr("overseg.seed_resolution_m"));
 }
 
+TEST(Config, ObjectConsistencyIsAShareOfOne) {
+  const Config c = parseConfig(
+      "features:\n  objects: true\nmrf:\n  object_consistency: 0.5\n", "a.yaml");
+  EXPECT_FLOAT_EQ(c.segmenter.mrf.object_consistency, 0.5f);
+  EXPECT_FLOAT_EQ(Config{}.segmenter.mrf.object_consistency, 0.0f);  // the paper's unaries
+  // Without object features it has nothing to act on, and is accepted (the
+  // shipped file with a model that has none).
+  EXPECT_NO_THROW(parseConfig("mrf:\n  object_consistency: 0.5\n", "a.yaml"));
+  EXPECT_THAT(errorOf([] { parseConfig("mrf:\n  object_consistency: 1.5\n", "a.yaml"); }),
+              HasSubstr("mrf.object_consistency"));
+}
+
 TEST(Config, OverridesApplyOnTop) {
   Config c = parseConfig("forest:\n  num_trees: 4\n", "a.yaml");
   applyOverride(c, "forest.num_trees=12");
