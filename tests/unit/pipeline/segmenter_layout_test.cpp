@@ -12,6 +12,7 @@
 #include "findmug/learner/forest.hpp"
 #include "findmug/pipeline/segmenter.hpp"
 #include "findmug/settings/config.hpp"
+#include "shipped_model.hpp"
 #include "test_data.hpp"
 
 namespace findmug {
@@ -20,19 +21,11 @@ namespace {
 const std::string kCommittedPrior =
     (test::sourceDir() / "models" / "nyu-layout-prior.csv").string();
 
-// The shipped model with the settings it was trained with (daemon/findmugd.yaml).
-Config shippedConfig() {
-  Config config;
-  for (const char* kv : {"features.regions=true", "features.scene=true", "learner.classes=nyu13",
-                         "features.objects=true", "features.objects_columns=context",
-                         "forest.num_threads=1"})
-    applyOverride(config, kv);
-  return config;
-}
+using test::shippedModel;
+Config shippedConfig() { return test::shippedModelConfig(); }
 
 TEST(SegmenterLayout, LoadsThePriorAndRefusesABadOne) {
-  auto forest = std::make_shared<const RandomForest>(
-      RandomForest::load((test::sourceDir() / "models" / "findmug.fmf").string()));
+  const auto forest = shippedModel();
   Config config = shippedConfig();
   applyOverride(config, "mrf.pairwise=layout");
   test::TempDir dir;
@@ -60,11 +53,8 @@ TEST(SegmenterLayout, LoadsThePriorAndRefusesABadOne) {
 // none: the term is used by the pipeline, and weight 0 is Potts.
 TEST(SegmenterLayout, ReachesTheLabelsOfARealFrame) {
   FINDMUG_REQUIRE_DATA(nyu, "nyuv2_labeled");
-  auto forest = std::make_shared<const RandomForest>(
-      RandomForest::load((test::sourceDir() / "models" / "findmug.fmf").string()));
-  DatasetOptions options;
-  options.require_labels = false;
-  const DatasetFolder dataset(nyu.string(), options);
+  const auto forest = shippedModel();
+  const DatasetFolder dataset = test::framesOf(nyu.string());
   const Config potts = shippedConfig();
   const Segmenter potts_segmenter(potts.segmenter, forest);
   int frames_changed = 0, frames_with_mrf = 0;

@@ -13,18 +13,15 @@
 #include "findmug/learner/forest.hpp"
 #include "findmug/pipeline/segmenter.hpp"
 #include "findmug/settings/config.hpp"
+#include "shipped_model.hpp"
 #include "test_data.hpp"
 
 namespace findmug {
 namespace {
 
-// The shipped model with the settings it was trained with (daemon/findmugd.yaml).
+// The shipped model's settings with mrf.object_consistency = `consistency`.
 Config shippedConfig(const std::string& consistency) {
-  Config config;
-  for (const char* kv : {"features.regions=true", "features.scene=true", "learner.classes=nyu13",
-                         "features.objects=true", "features.objects_columns=context",
-                         "forest.num_threads=1"})
-    applyOverride(config, kv);
+  Config config = test::shippedModelConfig();
   applyOverride(config, "mrf.object_consistency=" + consistency);
   return config;
 }
@@ -41,11 +38,8 @@ int mixedCandidates(const std::vector<int>& object_group, const std::vector<std:
 
 TEST(SegmenterObjects, ObjectConsistencyGivesACandidateOneOpinion) {
   FINDMUG_REQUIRE_DATA(nyu, "nyuv2_labeled");
-  auto forest = std::make_shared<const RandomForest>(
-      RandomForest::load((test::sourceDir() / "models" / "findmug.fmf").string()));
-  DatasetOptions options;
-  options.require_labels = false;
-  const DatasetFolder dataset(nyu.string(), options);
+  const auto forest = test::shippedModel();
+  const DatasetFolder dataset = test::framesOf(nyu.string());
   Config no_pairwise_off = shippedConfig("0"), no_pairwise_on = shippedConfig("1");
   for (Config* c : {&no_pairwise_off, &no_pairwise_on}) applyOverride(*c, "mrf.sigma=0.0001");
   const Segmenter off(no_pairwise_off.segmenter, forest), on(no_pairwise_on.segmenter, forest);
