@@ -164,10 +164,12 @@ MODEL_SETS=()
 if [[ -z "$MODEL" ]]; then
   [[ -f "$ROOT/models/findmug.fmf" ]] && MODEL="$ROOT/models/findmug.fmf"
   # The shipped model's settings (models/README.md: region, scene and object features,
-  # NYU-13 classes); findmugd refuses a model whose stages differ from its config.
+  # NYU-13 classes); findmugd refuses a model whose stages differ from its config. Also
+  # daemon/findmugd.yaml's object consistency, so that the rows are the shipped labelling.
   [[ -n "$MODEL" ]] && MODEL_SETS=(--set features.regions=true --set features.scene=true
                                    --set learner.classes=nyu13 --set features.objects=true
-                                   --set features.objects_columns=context)
+                                   --set features.objects_columns=context
+                                   --set mrf.object_consistency=0.5)
 fi
 if [[ -z "$MODEL" && $TABLES_ONLY == 0 ]]; then
   MODEL="$RESULTS/nyu31.fmf"
