@@ -17,9 +17,10 @@ SampleLabelling labelSample(const RandomForest& model, const FrameSample& s,
                             const PairwiseContext* pairwise, const LayoutPrior* layout) {
   SampleLabelling out;
   out.probabilities = predictSample(model, s, config);
+  // Per patch its pixel count: the object means' and the region vote's weights.
+  const std::vector<float> weights(s.segment_pixels.begin(), s.segment_pixels.end());
   std::vector<ClassProbabilities> unaries = out.probabilities;
   if (config.use_mrf) {
-    const std::vector<float> weights(s.segment_pixels.begin(), s.segment_pixels.end());
     ObjectMeanScratch scratch;
     mixObjectMeansInPlace(unaries, s.features.object_group, weights,
                           config.mrf.object_consistency, scratch);
@@ -49,7 +50,6 @@ SampleLabelling labelSample(const RandomForest& model, const FrameSample& s,
     }
   }
   if (regions) {
-    const std::vector<float> weights(s.segment_pixels.begin(), s.segment_pixels.end());
     RegionVoteResult vote =
         voteTableRegions(out.mrf.labels, out.mrf.confidence, unaries, weights, *regions,
                          config.tables);

@@ -21,12 +21,10 @@ namespace {
 const std::string kCommittedPrior =
     (test::sourceDir() / "models" / "nyu-layout-prior.csv").string();
 
-using test::shippedModel;
-Config shippedConfig() { return test::shippedModelConfig(); }
 
 TEST(SegmenterLayout, LoadsThePriorAndRefusesABadOne) {
-  const auto forest = shippedModel();
-  Config config = shippedConfig();
+  const auto forest = test::shippedModel();
+  Config config = test::shippedModelConfig();
   applyOverride(config, "mrf.pairwise=layout");
   test::TempDir dir;
   const std::string bad = dir.str("prior.csv");
@@ -53,9 +51,9 @@ TEST(SegmenterLayout, LoadsThePriorAndRefusesABadOne) {
 // none: the term is used by the pipeline, and weight 0 is Potts.
 TEST(SegmenterLayout, ReachesTheLabelsOfARealFrame) {
   FINDMUG_REQUIRE_DATA(nyu, "nyuv2_labeled");
-  const auto forest = shippedModel();
+  const auto forest = test::shippedModel();
   const DatasetFolder dataset = test::framesOf(nyu.string());
-  const Config potts = shippedConfig();
+  const Config potts = test::shippedModelConfig();
   const Segmenter potts_segmenter(potts.segmenter, forest);
   int frames_changed = 0, frames_with_mrf = 0;
   for (std::size_t i = 0; i < 3 && i < dataset.size(); ++i) {
