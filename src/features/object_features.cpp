@@ -177,13 +177,53 @@ GroupKind surfaceKind(const SegmentMoments& m, double span, const ObjectConfig& 
   return GroupKind::Object;
 }
 
+// What stands on each object candidate's top (ObjectColumns::Relations): the
+// other candidates whose lowest point is near the top's height and whose
+// centroid is over its footprint disc. O(G^2) over the groups, a few hundred at most.
+void countLoadsOnTops(std::vector<ObjectGroup>& groups) {
+  // A thing's lowest point sits on the top, up to the depth noise either way.
+  constexpr float kBelowTop = 0.05f, kAboveTop = 0.08f;
+  for (ObjectGroup& g : groups) {
+    if (g.kind != GroupKind::Object || g.top_area <= 0) continue;
+    const Eigen::Vector2f at = g.centroid.head<2>();
+    for (const ObjectGroup& h : groups) {
+      if (&h == &g || h.kind != GroupKind::Object) continue;
+      const bool stands_on_top = h.min_height >= g.top_height - kBelowTop &&
+                                 h.min_height <= g.top_height + kAboveTop &&
+                                 h.max_height > g.top_height &&
+                                 (h.centroid.head<2>() - at).norm() <= 0.5f * g.extent_major;
+      if (stands_on_top) ++g.load_on_top;
+    }
+  }
+}
+
 }  // namespace
 
+std::vector<int> objectFeatureColumns(ObjectColumns columns) {
+  switch (columns) {
+    case ObjectColumns::Context:
+      return {kObjectContextColumns.begin(), kObjectContextColumns.end()};
+    case ObjectColumns::Relations:
+      return {kObjectRelationsColumns.begin(), kObjectRelationsColumns.end()};
+    case ObjectColumns::All:
+      break;
+  }
+  std::vector<int> all(kObjectFeatureDim);
+  for (int k = 0; k < kObjectFeatureDim; ++k) all[static_cast<std::size_t>(k)] = k;
+  return all;
+}
+
 std::vector<std::string_view> objectFeatureNames(ObjectColumns columns) {
-  if (columns == ObjectColumns::All) return {kObjectFeatureNames.begin(), kObjectFeatureNames.end()};
   std::vector<std::string_view> names;
-  for (const int k : kObjectContextColumns) names.push_back(kObjectFeatureNames[static_cast<std::size_t>(k)]);
+  for (const int k : objectFeatureColumns(columns))
+    names.push_back(kObjectFeatureNames[static_cast<std::size_t>(k)]);
   return names;
+}
+
+ObjectColumns objectColumnsWithCount(std::size_t count) {
+  for (const ObjectColumns c : {ObjectColumns::All, ObjectColumns::Context, ObjectColumns::Relations})
+    if (objectFeatureColumns(c).size() == count) return c;
+  throw Error("no object feature column set has " + std::to_string(count) + " columns");
 }
 
 void validateObjectConfig(const ObjectConfig& config) {
@@ -406,8 +446,10 @@ void computeObjectFeaturesInto(const SegmentFeatures& features,
     }
   }
 
-  const bool all = config.columns == ObjectColumns::All;
-  const std::size_t dim = all ? kObjectFeatureDim : kObjectContextColumns.size();
+  if (config.columns == ObjectColumns::Relations) countLoadsOnTops(out.groups);
+
+  const std::vector<int> columns = objectFeatureColumns(config.columns);
+  const std::size_t dim = columns.size();
   out.values.resize(n * dim);
   for (std::size_t s = 0; s < n; ++s) {
     const ObjectGroup& g = out.groups[static_cast<std::size_t>(out.segment_group[s])];
@@ -415,8 +457,7 @@ void computeObjectFeaturesInto(const SegmentFeatures& features,
     const float relative = std::clamp(
         (static_cast<float>(patches[s].centroid.z()) - g.min_height) / std::max(span, 0.01f),
         0.0f, 1.0f);
-    std::array<float, kObjectFeatureDim> row_values;
-    float* row = row_values.data();
+    std::array<float, kObjectFeatureCount> row;
     row[0] = span;
     row[1] = g.min_height;
     row[2] = g.footprint_area;
@@ -428,13 +469,9 @@ void computeObjectFeaturesInto(const SegmentFeatures& features,
     row[8] = g.wall_distance;
     row[9] = static_cast<float>(static_cast<int>(g.kind));
     row[10] = relative;
+    row[11] = static_cast<float>(g.load_on_top);
     float* out_row = out.values.data() + s * dim;
-    if (all) {
-      std::copy(row_values.begin(), row_values.end(), out_row);
-    } else {
-      for (std::size_t k = 0; k < dim; ++k)
-        out_row[k] = row_values[static_cast<std::size_t>(kObjectContextColumns[k])];
-    }
+    for (std::size_t k = 0; k < dim; ++k) out_row[k] = row[static_cast<std::size_t>(columns[k])];
   }
 }
 

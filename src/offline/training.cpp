@@ -70,15 +70,14 @@ std::size_t objectColumnsOf(const SegmentFeatures& f) {
 }
 
 // Names of the first stage's extra columns: region, scene, then object
-// features (`object_columns` of them: all or the context set).
+// features (`object_columns` of them: one of the ObjectColumns sets).
 std::vector<std::string> extraColumnNames(bool regions, bool scene, std::size_t object_columns) {
   std::vector<std::string> names;
   if (regions) names.assign(kRegionFeatureNames.begin(), kRegionFeatureNames.end());
   if (scene) names.insert(names.end(), kSceneFeatureNames.begin(), kSceneFeatureNames.end());
   if (object_columns > 0) {
-    const auto columns = object_columns == kObjectFeatureDim ? ObjectColumns::All
-                                                             : ObjectColumns::Context;
-    for (const auto name : objectFeatureNames(columns)) names.emplace_back(name);
+    for (const auto name : objectFeatureNames(objectColumnsWithCount(object_columns)))
+      names.emplace_back(name);
   }
   return names;
 }

@@ -116,8 +116,11 @@ void firstStageRowsInto(const SegmentFeatures& features, std::vector<float>& row
   }
   const bool objects = !features.objects.empty();
   const std::size_t object_dim = objects && n > 0 ? features.objects.size() / n : 0;
-  if (objects && (object_dim * n != features.objects.size() ||
-                  (object_dim != kObjectFeatureDim && object_dim != kObjectContextColumns.size()))) {
+  const auto is_column_set = [](std::size_t d) {
+    return d == kObjectFeatureDim || d == kObjectContextColumns.size() ||
+           d == kObjectRelationsColumns.size();
+  };
+  if (objects && (object_dim * n != features.objects.size() || !is_column_set(object_dim))) {
     throw Error("firstStageRows: " + std::to_string(n) + " segments but " +
                 std::to_string(features.objects.size()) + " object feature values");
   }

@@ -166,7 +166,9 @@ const std::vector<CoreSetting>& settings() {
       boolSetting("features.objects", [](C& c) -> bool& { return c.objects.enabled; }),
       enumSetting<ObjectColumns>(
           "features.objects_columns", [](C& c) -> ObjectColumns& { return c.objects.columns; },
-          {{"all", ObjectColumns::All}, {"context", ObjectColumns::Context}}),
+          {{"all", ObjectColumns::All},
+           {"context", ObjectColumns::Context},
+           {"relations", ObjectColumns::Relations}}),
       floatSetting("features.objects_concave_tolerance_deg",
                    [](C& c) -> float& { return c.objects.concave_tolerance_deg; }, 0, 90),
       floatSetting("features.objects_link_gap_m",

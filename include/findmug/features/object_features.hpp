@@ -49,11 +49,17 @@
 //   patch_height_in_object   the patch's centroid height above the group's
 //                            lowest point over its height span (0..1): a seat
 //                            sits in the middle of a chair, a table top at the top
+// and, from the candidates around it (features.objects_columns = relations):
+//   object_load_on_top       how many other candidates stand on its top (lowest
+//                            point within -0.05..+0.08 m of the top's height,
+//                            centroid within half its major extent of its
+//                            centroid); 0 without a top: a table holds things,
+//                            a chair seat rarely does
 // Cost: two union-finds over the edges and a few passes over the patches.
 #pragma once
 
 #include <array>
-#include <string_view>
+#include <cstddef>
 #include <string_view>
 #include <vector>
 
@@ -68,6 +74,7 @@ enum class ObjectColumns {
   All,      // all kObjectFeatureDim
   Context,  // the three that say where the patch sits in its object and the room:
             // object_back_rise, object_wall_distance, patch_height_in_object
+  Relations,  // those three and what stands on its object: object_load_on_top
 };
 
 struct ObjectConfig {
@@ -82,18 +89,26 @@ struct ObjectConfig {
   float orientation_tolerance_deg = 25.0f;  // features.objects_orientation_tolerance_deg
 };
 
+// Every object feature; ObjectColumns::All is the first kObjectFeatureDim of them
+// (the set models with "all" were trained on), the relational one follows.
 inline constexpr int kObjectFeatureDim = 11;
-inline constexpr std::array<std::string_view, kObjectFeatureDim> kObjectFeatureNames = {
-    "object_height_span", "object_min_height",    "object_footprint_area",
-    "object_extent_major", "object_extent_minor", "object_top_height",
-    "object_top_area",     "object_back_rise",    "object_wall_distance",
-    "object_kind",         "patch_height_in_object"};
+inline constexpr int kObjectFeatureCount = 12;
+inline constexpr std::array<std::string_view, kObjectFeatureCount> kObjectFeatureNames = {
+    "object_height_span",     "object_min_height",      "object_footprint_area",
+    "object_extent_major",    "object_extent_minor",    "object_top_height",
+    "object_top_area",        "object_back_rise",       "object_wall_distance",
+    "object_kind",            "patch_height_in_object", "object_load_on_top"};
 
-// The columns of ObjectColumns::Context, as indices into kObjectFeatureNames.
+// The columns of ObjectColumns::Context and ::Relations, as indices into kObjectFeatureNames.
 inline constexpr std::array<int, 3> kObjectContextColumns = {7, 8, 10};
+inline constexpr std::array<int, 4> kObjectRelationsColumns = {7, 8, 10, 11};
 
+// The indices into kObjectFeatureNames of the columns `columns` selects, in row order.
+std::vector<int> objectFeatureColumns(ObjectColumns columns);
 // The names of the columns `columns` selects, in row order.
 std::vector<std::string_view> objectFeatureNames(ObjectColumns columns);
+// The column set with `count` columns per patch; throws findmug::Error when none has.
+ObjectColumns objectColumnsWithCount(std::size_t count);
 
 // object_wall_distance when the frame has no wall (m).
 inline constexpr float kNoWallDistance = 10.0f;
@@ -109,6 +124,7 @@ struct ObjectGroup {
   float top_height = 0, top_area = 0;  // largest horizontal up-facing part; 0, 0 without one
   float back_rise = 0;                 // m; > 0 when a vertical part rises above the top
   float wall_distance = kNoWallDistance;
+  int load_on_top = 0;                 // candidates standing on its top (Relations only)
 };
 
 struct ObjectFeatures {

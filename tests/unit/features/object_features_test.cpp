@@ -335,6 +335,64 @@ TEST(ObjectFeatures, ContextColumnsAreTheirColumnsOfAll) {
   EXPECT_EQ(context.segment_group, all.segment_group);
 }
 
+// features.objects_columns = relations: the context columns and what stands
+// on the object's top: a box on the table counts, the table's legs and the
+// box's own top do not.
+TEST(ObjectFeatures, RelationsCountWhatStandsOnATop) {
+  const TableScene scene;
+  const auto names = objectFeatureNames(ObjectColumns::Relations);
+  ASSERT_EQ(names.size(), 4u);
+  EXPECT_EQ(names[3], "object_load_on_top");
+  EXPECT_EQ(objectColumnsWithCount(4), ObjectColumns::Relations);
+  EXPECT_EQ(objectColumnsWithCount(3), ObjectColumns::Context);
+  EXPECT_EQ(objectColumnsWithCount(11), ObjectColumns::All);
+  EXPECT_THROW(objectColumnsWithCount(5), Error);
+  ObjectConfig config;
+  config.columns = ObjectColumns::Relations;
+  const auto& bare = scene.built;
+  const ObjectFeatures empty = computeObjectFeatures(bare.features, bare.seg, bare.regions, config);
+  EXPECT_EQ(groupOf(empty, scene.top[0]).load_on_top, 0);
+
+  // The same table with a 0.2 m box standing on its centre (not image-adjacent to it).
+  Builder with_box;
+  const auto floor = addFloor(with_box);
+  std::vector<int> top;
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 2; ++j)
+      top.push_back(with_box.patch({-0.6f + 0.4f * i, -0.4f + 0.4f * j, 0.75f}, {0.4f, 0, 0},
+                                   {0, 0.4f, 0}, kUp));
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 2; ++j) {
+      if (i < 2) with_box.edge(top[i * 2 + j], top[(i + 1) * 2 + j]);
+      if (j < 1) with_box.edge(top[i * 2 + j], top[i * 2 + j + 1]);
+    }
+  const int leg = with_box.patch({-0.6f, -0.4f, 0.0f}, {0.05f, 0, 0}, {0, 0, 0.73f}, kTowardsCamera);
+  with_box.edge(leg, top[0]);
+  with_box.edge(leg, floor[4]);
+  const int box_top = with_box.patch({-0.1f, -0.1f, 0.95f}, {0.2f, 0, 0}, {0, 0.2f, 0}, kUp);
+  const int box_front =
+      with_box.patch({-0.1f, -0.1f, 0.76f}, {0.2f, 0, 0}, {0, 0, 0.19f}, kTowardsCamera);
+  with_box.edge(box_top, box_front);
+  const auto built = with_box.build();
+  const ObjectFeatures o = computeObjectFeatures(built.features, built.seg, built.regions, config);
+  ASSERT_NE(o.segment_group[static_cast<std::size_t>(box_top)],
+            o.segment_group[static_cast<std::size_t>(top[0])]);
+  EXPECT_EQ(groupOf(o, top[0]).load_on_top, 1);
+  EXPECT_EQ(groupOf(o, box_top).load_on_top, 0);
+  const std::size_t n = built.seg.segments.size();
+  ASSERT_EQ(o.values.size(), n * names.size());
+  EXPECT_EQ(o.values[static_cast<std::size_t>(top[2]) * names.size() + 3], 1.0f);
+  EXPECT_EQ(o.values[static_cast<std::size_t>(leg) * names.size() + 3], 1.0f);  // the table's leg
+  EXPECT_EQ(o.values[static_cast<std::size_t>(box_front) * names.size() + 3], 0.0f);
+  // Its first three columns are the context ones.
+  ObjectConfig context = config;
+  context.columns = ObjectColumns::Context;
+  const ObjectFeatures c = computeObjectFeatures(built.features, built.seg, built.regions, context);
+  for (std::size_t s = 0; s < n; ++s)
+    for (std::size_t k = 0; k < 3; ++k)
+      EXPECT_EQ(o.values[s * names.size() + k], c.values[s * 3 + k]);
+}
+
 TEST(ObjectFeatures, RefusesBadInputNamingIt) {
   const TableScene scene;
   const auto& built = scene.built;

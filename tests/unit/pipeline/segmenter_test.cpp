@@ -375,7 +375,7 @@ TEST(Segmenter, RunsTheObjectFeaturesOfTheModel) {
   RandomForest trained = trainModel({&samples[0]}, config);
   EXPECT_EQ(trained.dim(), kFeatureDim + kRegionFeatureDim + kSceneFeatureDim + kObjectFeatureDim);
   EXPECT_EQ(trained.featureNames(), firstStageFeatureNames(config));
-  EXPECT_EQ(trained.featureNames().back(), std::string(kObjectFeatureNames.back()));
+  EXPECT_EQ(trained.featureNames().back(), std::string(kObjectFeatureNames[kObjectFeatureDim - 1]));
   trained.setExtractionSettings(extractionSettings(config));
   const auto model = std::make_shared<const RandomForest>(trained);
   const LabelledFrame out = Segmenter(config, model).process(scene.frame);
@@ -421,6 +421,18 @@ TEST(Segmenter, RunsTheObjectFeaturesOfTheModel) {
   } catch (const Error& e) {
     EXPECT_THAT(e.what(), HasSubstr("with object features"));
   }
+  // The relations columns: trained and run through the same rows, refused by a context config.
+  SegmenterConfig relations = config;
+  relations.objects.columns = ObjectColumns::Relations;
+  const auto relations_samples = extractScene(Segmenter(relations, nullptr), scene);
+  ASSERT_EQ(relations_samples[0].features.objects.size(), n * kObjectRelationsColumns.size());
+  RandomForest relations_model = trainModel({&relations_samples[0]}, relations);
+  EXPECT_EQ(relations_model.featureNames().back(), "object_load_on_top");
+  relations_model.setExtractionSettings(extractionSettings(relations));
+  const auto relations_shared = std::make_shared<const RandomForest>(relations_model);
+  EXPECT_EQ(Segmenter(relations, relations_shared).process(scene.frame).features.objects,
+            relations_samples[0].features.objects);
+  EXPECT_THROW(Segmenter(context, relations_shared), Error);
   // Objects on and regions off: the regions are still formed for the objects.
   SegmenterConfig objects_only = config;
   objects_only.regions.enabled = false;

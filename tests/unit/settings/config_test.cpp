@@ -205,6 +205,16 @@ TEST(Config, ObjectConsistencyIsAShareOfOne) {
               HasSubstr("mrf.object_consistency"));
 }
 
+TEST(Config, ObjectColumnsAreOneOfTheirSets) {
+  const Config c = parseConfig("features:\n  objects: true\n  objects_columns: relations\n", "a.yaml");
+  EXPECT_EQ(c.segmenter.objects.columns, ObjectColumns::Relations);
+  EXPECT_EQ(Config{}.segmenter.objects.columns, ObjectColumns::All);
+  const std::string error =
+      errorOf([] { parseConfig("features:\n  objects_columns: relation\n", "a.yaml"); });
+  EXPECT_THAT(error, HasSubstr("features.objects_columns"));
+  EXPECT_THAT(error, HasSubstr("relations"));  // the choices are named
+}
+
 TEST(Config, OverridesApplyOnTop) {
   Config c = parseConfig("forest:\n  num_trees: 4\n", "a.yaml");
   applyOverride(c, "forest.num_trees=12");
