@@ -220,6 +220,18 @@ std::vector<std::string_view> objectFeatureNames(ObjectColumns columns) {
   return names;
 }
 
+std::string objectColumnsName(ObjectColumns columns) {
+  switch (columns) {
+    case ObjectColumns::Context:
+      return "context";
+    case ObjectColumns::Relations:
+      return "relations";
+    case ObjectColumns::All:
+      break;
+  }
+  return "all";
+}
+
 ObjectColumns objectColumnsWithCount(std::size_t count) {
   for (const ObjectColumns c : {ObjectColumns::All, ObjectColumns::Context, ObjectColumns::Relations})
     if (objectFeatureColumns(c).size() == count) return c;

@@ -25,6 +25,8 @@ void forest_format::validateParams(const ForestParams& p, const std::string& whe
     fail("max_depth", std::to_string(p.max_depth), "expected 0.." + std::to_string(kMaxDepth));
   if (p.min_samples_leaf < 1)
     fail("min_samples_leaf", std::to_string(p.min_samples_leaf), "expected >= 1");
+  if (!(p.shrinkage >= 0.0 && p.shrinkage <= 1e6))
+    fail("shrinkage", std::to_string(p.shrinkage), "expected 0 .. 1e6");
   if (p.candidate_features < 1 || p.candidate_features > static_cast<int>(kMaxFeatures))
     fail("candidate_features", std::to_string(p.candidate_features),
          "expected 1.." + std::to_string(kMaxFeatures));

@@ -8,7 +8,10 @@
 // of that feature are tried; the candidate with the highest weighted
 // information gain (Shannon entropy of the weighted label histograms) wins.
 // A node becomes a leaf at max_depth, when it is pure, or when no candidate
-// leaves at least min_samples_leaf samples on each side.
+// leaves at least min_samples_leaf samples on each side. With forest.shrinkage
+// the leaves hold their path's histograms shrunk towards the root's
+// (hierarchical shrinkage), so that a leaf of five patches says less than
+// its ancestors of thousands.
 //
 // Split labels (TrainingSet::split_labels): the gain may be measured over
 // finer classes than the ones the leaves hold (e.g. NYU-40 "bookshelf",
@@ -183,12 +186,20 @@ class TreeBuilder {
     tree.emplace_back();
     // Explicit stack instead of recursion; children are appended, so a child's
     // index is always larger than its parent's (the loader relies on that).
+    // Hierarchical shrinkage (forest.shrinkage): a node's answer is its
+    // parent's answer plus its own histogram's change over the parent's,
+    // damped by 1 / (1 + lambda / parent samples), so small nodes deep down
+    // move the root's answer less (Agarwal et al., 2022). Each pending node
+    // carries its parent's histogram, sample count and answer.
     struct Pending {
       std::int32_t node;
       std::size_t begin, end;
       int depth;
+      Histogram parent_mean{};
+      Histogram parent_answer{};
+      double parent_count = 0;  // 0 at the root
     };
-    std::vector<Pending> stack{{0, 0, samples.size(), 0}};
+    std::vector<Pending> stack{{0, 0, samples.size(), 0, {}, {}, 0}};
     while (!stack.empty()) {
       const Pending job = stack.back();
       stack.pop_back();
@@ -202,8 +213,17 @@ class TreeBuilder {
         classes_present += c > 0.0;
       }
 
-      Split split;
       const std::size_t count = job.end - job.begin;
+      Histogram mean{}, answer{};
+      for (int c = 0; c < kNumLabels; ++c) mean[c] = hist[c] / total;
+      // Without shrinkage (or at the root) the node's own histogram, to the bit.
+      const bool shrink = params_.shrinkage > 0.0 && job.parent_count > 0;
+      const double damping = shrink ? 1.0 / (1.0 + params_.shrinkage / job.parent_count) : 1.0;
+      for (int c = 0; c < kNumLabels; ++c)
+        answer[c] = shrink ? job.parent_answer[c] + (mean[c] - job.parent_mean[c]) * damping
+                           : mean[c];
+
+      Split split;
       const bool can_split = job.depth < params_.max_depth && classes_present > 1 &&
                              count >= 2 * static_cast<std::size_t>(params_.min_samples_leaf);
       if (can_split) {
@@ -221,8 +241,7 @@ class TreeBuilder {
       if (!split.valid) {
         RandomForest::Node& leaf = tree[job.node];
         leaf.feature = -1;
-        for (int c = 0; c < kNumLabels; ++c)
-          leaf.distribution[c] = static_cast<float>(hist[c] / total);
+        for (int c = 0; c < kNumLabels; ++c) leaf.distribution[c] = static_cast<float>(answer[c]);
         continue;
       }
       // Partition in place: samples going left first.
@@ -241,8 +260,9 @@ class TreeBuilder {
       node.left = left;
       node.right = right;
       // Right first so that the left subtree is built (and numbered) first.
-      stack.push_back({right, mid, job.end, job.depth + 1});
-      stack.push_back({left, job.begin, mid, job.depth + 1});
+      const auto parent_count = static_cast<double>(count);
+      stack.push_back({right, mid, job.end, job.depth + 1, mean, answer, parent_count});
+      stack.push_back({left, job.begin, mid, job.depth + 1, mean, answer, parent_count});
     }
     return tree;
   }

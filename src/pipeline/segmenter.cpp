@@ -239,10 +239,11 @@ void checkModelMatchesConfig(const RandomForest& forest, const SegmenterConfig& 
     const auto& names = forest.featureNames();
     const bool model_scene =
         std::find(names.begin(), names.end(), std::string(kSceneFeatureNames[0])) != names.end();
-    const bool model_objects = std::any_of(names.begin(), names.end(), [](const std::string& n) {
+    const auto model_object_columns = std::count_if(names.begin(), names.end(), [](const std::string& n) {
       return std::find(kObjectFeatureNames.begin(), kObjectFeatureNames.end(), n) !=
              kObjectFeatureNames.end();
     });
+    const bool model_objects = model_object_columns > 0;
     throw Error("model " + name + " reads " + std::to_string(forest.dim()) +
                 " feature columns" + (model_regions ? " (with region features)" : "") +
                 (model_scene ? " (with scene features)" : "") +
@@ -251,8 +252,14 @@ void checkModelMatchesConfig(const RandomForest& forest, const SegmenterConfig& 
                 " (features.regions = " + (config.regions.enabled ? "true" : "false") +
                 ", features.scene = " + (config.scene.enabled ? "true" : "false") +
                 ", features.objects = " + (config.objects.enabled ? "true" : "false") +
-                "); set features.regions, features.scene and features.objects to match the "
-                "model or retrain" +
+                (config.objects.enabled
+                     ? ", features.objects_columns = " + objectColumnsName(config.objects.columns) +
+                           " (" + std::to_string(objectFeatureColumns(config.objects.columns).size()) +
+                           " object columns; the model has " + std::to_string(model_object_columns) +
+                           ")"
+                     : std::string()) +
+                "); set features.regions, features.scene, features.objects and "
+                "features.objects_columns to match the model or retrain" +
                 (forest.formatVersion() == 2 ? " (a format-2 model has no region features)" : ""));
   }
   if (config.context.enabled != (forest.contextStage() != nullptr)) {

@@ -196,6 +196,8 @@ const std::vector<CoreSetting>& settings() {
       intSetting("forest.max_depth", [](C& c) -> int& { return c.forest.max_depth; }, 1, 40),
       intSetting("forest.min_samples_leaf",
                  [](C& c) -> int& { return c.forest.min_samples_leaf; }, 1, 1000000),
+      doubleSetting("forest.shrinkage", [](C& c) -> double& { return c.forest.shrinkage; }, 0,
+                    1e6),
       intSetting("forest.candidate_features",
                  [](C& c) -> int& { return c.forest.candidate_features; }, 1, 1024),
       intSetting("forest.candidate_thresholds",

@@ -55,7 +55,7 @@ host_ref() {
   local ms
   ms=$(taskset -c 0 "$ROOT/build/tests/bench/frame_cpu" --model "$ROOT/models/findmug.fmf" \
          --passes 1 --set features.regions=true --set features.scene=true --set learner.classes=nyu13 \
-         --set features.objects=true --set features.objects_columns=context --heap-keep-mb 256 \
+         --set features.objects=true --set features.objects_columns=relations --heap-keep-mb 256 \
          2>/dev/null | awk -F'|' '/\*\*total\*\*/ { gsub(/[* ]/, "", $3); print $3 }') || true
   echo "${ms:--}" > "$1"
 }

@@ -168,7 +168,7 @@ if [[ -z "$MODEL" ]]; then
   # daemon/findmugd.yaml's object consistency, so that the rows are the shipped labelling.
   [[ -n "$MODEL" ]] && MODEL_SETS=(--set features.regions=true --set features.scene=true
                                    --set learner.classes=nyu13 --set features.objects=true
-                                   --set features.objects_columns=context
+                                   --set features.objects_columns=relations
                                    --set mrf.object_consistency=0.5)
 fi
 if [[ -z "$MODEL" && $TABLES_ONLY == 0 ]]; then

@@ -42,7 +42,7 @@ for round in $(seq "$rounds"); do
       [[ $data == synthetic ]] && extra+=(--data "$synth")
       report=$(taskset -c 0 "$exe" --model models/findmug.fmf --passes 1 \
         --set features.regions=true --set features.scene=true --set learner.classes=nyu13 \
-        --set features.objects=true --set features.objects_columns=context \
+        --set features.objects=true --set features.objects_columns=relations \
         --heap-keep-mb 256 "${extra[@]}")
       [[ -n ${REPORTS:-} ]] && mkdir -p "$REPORTS" && echo "$report" >"$REPORTS/$data-$variant-$round.md"
       tables=$(awk -F'|' -v s=" $stage " '$2 == s {print $3 + 0}' <<<"$report")

@@ -23,7 +23,7 @@ trap 'rm -rf "$TMP"' EXIT
 
 "$BUILD/tests/bench/frame_cpu" --model "$MODEL" --data "$DATA/nyuv2_labeled" --passes 1 \
   --set features.regions=true --set features.scene=true --set learner.classes=nyu13 \
-  --set features.objects=true --set features.objects_columns=context \
+  --set features.objects=true --set features.objects_columns=relations \
   --per-frame "$TMP/frames.csv" \
   > "$TMP/summary.txt"
 runs=$(sed -n 's/.*medians over the \([0-9]*\) of \([0-9]*\) runs.*/\1/p' "$TMP/summary.txt")

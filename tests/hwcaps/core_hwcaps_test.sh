@@ -59,7 +59,7 @@ expect_same() {
 }
 # The shipped model's settings (models/README.md).
 FRAME_ARGS=(--model "$MODEL" --passes 1 --set features.regions=true --set features.scene=true
-            --set learner.classes=nyu13 --set features.objects=true --set features.objects_columns=context)
+            --set learner.classes=nyu13 --set features.objects=true --set features.objects_columns=relations)
 for data in nyu synth; do
   data_args=()
   [[ $data == synth ]] && data_args=(--data "$WORK/synth")

@@ -59,7 +59,7 @@ MODEL="$SOURCE_DIR/models/findmug.fmf"
 # (models/README.md).
 "$FINDMUGD" --source "dataset:$NYU?rate_hz=$RATE&loop=1" --lcm-url "$URL" --model "$MODEL" \
   --set features.regions=true --set features.scene=true --set learner.classes=nyu13 \
-  --set features.objects=true --set features.objects_columns=context \
+  --set features.objects=true --set features.objects_columns=relations \
   --set daemon.publish_color=true \
   --set daemon.status_period_s=0.5 --log-level warn > "$WORK/findmugd.log" 2>&1 &
 pids+=($!)

@@ -46,7 +46,7 @@ cp "$NYU/depth/$FRAME.png" "$WORK/data/depth/"
 WEB_CMD=("$WEB" --lcm-url memq:// --port 18091 --static-dir "$SOURCE_DIR/clients/web/static"
          --data "$WORK/data" --model "$SOURCE_DIR/models/findmug.fmf" --nyu-rotations "$ROTATIONS"
          --set ground.source=gravity --set features.regions=true --set features.scene=true
-         --set learner.classes=nyu13 --set features.objects=true --set features.objects_columns=context)
+         --set learner.classes=nyu13 --set features.objects=true --set features.objects_columns=relations)
 if [[ "$SCRIPT" == draft_test.mjs ]]; then
   # It starts (and kills) findmug-web itself.
   if ! node "$SOURCE_DIR/clients/web/test/draft_test.mjs" --url "http://127.0.0.1:18091/" \

@@ -122,7 +122,15 @@ TEST(LabelFrames, RefusesAModelWhoseSettingsAreNotTheConfigs) {
   matching.regions.enabled = true;
   matching.scene.enabled = true;
   matching.objects.enabled = true;
-  matching.objects.columns = ObjectColumns::Context;
+  matching.objects.columns = ObjectColumns::Context;  // the columns of the model before
+  try {
+    LabelFrames frames(matching, forest, "findmug.fmf", std::nullopt);
+    FAIL() << "a model trained with other object columns was taken";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("features.objects_columns = context"), std::string::npos)
+        << e.what();
+  }
+  matching.objects.columns = ObjectColumns::Relations;
   EXPECT_NO_THROW(LabelFrames(matching, forest, "findmug.fmf", std::nullopt));
 }
 

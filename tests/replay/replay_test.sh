@@ -122,7 +122,7 @@ if [[ -z "$MODEL" ]]; then
   # NYU-13 classes); findmugd refuses a model whose stages differ from its config.
   [[ -n "$MODEL" ]] && MODEL_SETS=(--set features.regions=true --set features.scene=true
                                    --set learner.classes=nyu13 --set features.objects=true
-                                   --set features.objects_columns=context)
+                                   --set features.objects_columns=relations)
 fi
 if [[ -z "$MODEL" ]]; then
   # No committed model: train a small one (the replay test checks plumbing

@@ -22,7 +22,7 @@ inline std::shared_ptr<const RandomForest> shippedModel() {
 inline Config shippedModelConfig() {
   Config config;
   for (const char* kv : {"features.regions=true", "features.scene=true", "learner.classes=nyu13",
-                         "features.objects=true", "features.objects_columns=context",
+                         "features.objects=true", "features.objects_columns=relations",
                          "forest.num_threads=1"})
     applyOverride(config, kv);
   return config;

@@ -36,7 +36,7 @@ trap 'kill $(jobs -p) 2>/dev/null || true; wait 2>/dev/null || true; rm -rf "$WO
 
 "$FINDMUGD" --source "dataset:$NYU?rate_hz=4&loop=1" --lcm-url "file://$WORK/out.lcm?mode=w" \
   --model "$SOURCE_DIR/models/findmug.fmf" --set features.regions=true --set features.scene=true \
-  --set learner.classes=nyu13 --set features.objects=true --set features.objects_columns=context \
+  --set learner.classes=nyu13 --set features.objects=true --set features.objects_columns=relations \
   --set daemon.publish_color=true --set daemon.status_period_s=0.5 --log-level warn \
   > "$WORK/findmugd.log" 2>&1 &
 daemon=$!

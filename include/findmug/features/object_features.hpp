@@ -60,6 +60,7 @@
 
 #include <array>
 #include <cstddef>
+#include <string>
 #include <string_view>
 #include <vector>
 
@@ -107,6 +108,8 @@ inline constexpr std::array<int, 4> kObjectRelationsColumns = {7, 8, 10, 11};
 std::vector<int> objectFeatureColumns(ObjectColumns columns);
 // The names of the columns `columns` selects, in row order.
 std::vector<std::string_view> objectFeatureNames(ObjectColumns columns);
+// The setting's word for a column set: "all", "context", "relations".
+std::string objectColumnsName(ObjectColumns columns);
 // The column set with `count` columns per patch; throws findmug::Error when none has.
 ObjectColumns objectColumnsWithCount(std::size_t count);
 

@@ -44,6 +44,12 @@ struct ForestParams {
   bool class_weighting = true;    // weight samples by inverse class frequency
   double bagging_fraction = 1.0;  // share of samples (with replacement) per tree;
                                   // 1.0 = every tree sees all samples, no bootstrap
+  // Hierarchical shrinkage of the leaves' distributions towards their
+  // ancestors' (lambda; 0 = off, the paper's leaves): each step down the path
+  // counts 1 / (1 + lambda / N) with N the parent's sample count. Applied when
+  // the leaves are made, so a model's file holds the shrunk distributions and
+  // prediction does not read it (not saved, as num_threads).
+  double shrinkage = 0.0;
   std::uint64_t seed = 42;
   int num_threads = 0;            // 0 = hardware concurrency; not part of the model
                                   // (not saved: the model does not depend on it)

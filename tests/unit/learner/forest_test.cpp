@@ -169,6 +169,55 @@ TEST(Forest, LeafHistogramUsesSampleAndClassWeights) {
   EXPECT_NEAR(p[7], 0.5f, 1e-6f);
 }
 
+// forest.shrinkage: a pure leaf under a mixed root is pulled towards the root
+// by 1 / (1 + lambda / N_root); 0 leaves the histograms as they are; on a
+// deeper forest every leaf stays a distribution, less sure than without.
+TEST(Forest, ShrinkagePullsLeavesTowardsTheirAncestors) {
+  TrainingSet train;
+  for (int i = 0; i < 20; ++i) {
+    FeatureVector x{};
+    x[0] = i < 10 ? 0.0f : 1.0f;
+    train.features.push_back(x);
+    train.labels.push_back(i < 10 ? 2 : 4);  // wall | table
+  }
+  ForestParams params;
+  params.num_trees = 1;
+  params.max_depth = 1;
+  params.min_samples_leaf = 1;
+  params.candidate_features = kFeatureDim;  // the one useful feature is always tried
+  params.class_weighting = false;
+  FeatureVector wall_side{};
+  auto p = RandomForest::train(train, params).predict(wall_side);
+  EXPECT_FLOAT_EQ(p[2], 1.0f);
+  params.shrinkage = 20.0;  // damping 1 / (1 + 20 / 20) = 0.5: 0.5 + 0.5 * 0.5
+  p = RandomForest::train(train, params).predict(wall_side);
+  EXPECT_NEAR(p[2], 0.75f, 1e-6f);
+  EXPECT_NEAR(p[4], 0.25f, 1e-6f);
+
+  const TrainingSet blobs = makeBlobs(40, 3, 2.5f);
+  ForestParams deep;
+  deep.num_trees = 4;
+  const RandomForest sharp = RandomForest::train(blobs, deep);
+  deep.shrinkage = 50.0;
+  const RandomForest shrunk = RandomForest::train(blobs, deep);
+  double sharp_max = 0, shrunk_max = 0;
+  for (std::size_t i = 0; i < blobs.features.size(); ++i) {
+    const auto a = sharp.predict(blobs.features[i]);
+    const auto b = shrunk.predict(blobs.features[i]);
+    float sum = 0;
+    for (float v : b) {
+      EXPECT_GE(v, 0.0f);
+      sum += v;
+    }
+    EXPECT_NEAR(sum, 1.0f, 1e-5f);
+    sharp_max += *std::max_element(a.begin(), a.end());
+    shrunk_max += *std::max_element(b.begin(), b.end());
+  }
+  EXPECT_LT(shrunk_max, sharp_max);
+  deep.shrinkage = -1.0;
+  EXPECT_THROW(RandomForest::train(blobs, deep), Error);
+}
+
 // A rare class overlapping a frequent one: chair (5 %) vs wall, shifted in one
 // feature. Without weighting the leaves in the overlap vote wall.
 TrainingSet makeRareClassSet(std::uint32_t seed) {

@@ -215,6 +215,13 @@ TEST(Config, ObjectColumnsAreOneOfTheirSets) {
   EXPECT_THAT(error, HasSubstr("relations"));  // the choices are named
 }
 
+TEST(Config, ForestShrinkageIsANonNegativeNumber) {
+  EXPECT_EQ(Config{}.segmenter.forest.shrinkage, 0.0);  // the paper's leaves
+  EXPECT_EQ(parseConfig("forest:\n  shrinkage: 20\n", "a.yaml").segmenter.forest.shrinkage, 20.0);
+  EXPECT_THAT(errorOf([] { parseConfig("forest:\n  shrinkage: -1\n", "a.yaml"); }),
+              HasSubstr("forest.shrinkage"));
+}
+
 TEST(Config, OverridesApplyOnTop) {
   Config c = parseConfig("forest:\n  num_trees: 4\n", "a.yaml");
   applyOverride(c, "forest.num_trees=12");
