@@ -99,7 +99,22 @@ const ObjectGroup& groupOf(const ObjectFeatures& o, int segment) {
   return o.groups[static_cast<std::size_t>(o.segment_group[static_cast<std::size_t>(segment)])];
 }
 
-// A 1.2 x 0.8 m table top at 0.75 m (six 0.4 m patches) on four legs
+// A 1.2 x 0.8 m table top at 0.75 m: six 0.4 m patches, 3 x 2, joined as a grid.
+std::vector<int> addTableTop(Builder& b) {
+  std::vector<int> top;
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 2; ++j)
+      top.push_back(b.patch({-0.6f + 0.4f * i, -0.4f + 0.4f * j, 0.75f}, {0.4f, 0, 0},
+                            {0, 0.4f, 0}, kUp));
+  for (int i = 0; i < 3; ++i)
+    for (int j = 0; j < 2; ++j) {
+      if (i < 2) b.edge(top[i * 2 + j], top[(i + 1) * 2 + j]);
+      if (j < 1) b.edge(top[i * 2 + j], top[i * 2 + j + 1]);
+    }
+  return top;
+}
+
+// That table top (six 0.4 m patches) on four legs
 // (0.05 m wide faces towards the camera) on the floor, a 3 x 2.5 m wall
 // 1.5 m behind the table's centre, image-adjacent to the top's far patches.
 struct TableScene {
@@ -108,15 +123,7 @@ struct TableScene {
   TableScene() {
     Builder b;
     floor = addFloor(b);
-    for (int i = 0; i < 3; ++i)
-      for (int j = 0; j < 2; ++j)
-        top.push_back(b.patch({-0.6f + 0.4f * i, -0.4f + 0.4f * j, 0.75f}, {0.4f, 0, 0},
-                              {0, 0.4f, 0}, kUp));
-    for (int i = 0; i < 3; ++i)
-      for (int j = 0; j < 2; ++j) {
-        if (i < 2) b.edge(top[i * 2 + j], top[(i + 1) * 2 + j]);
-        if (j < 1) b.edge(top[i * 2 + j], top[i * 2 + j + 1]);
-      }
+    top = addTableTop(b);
     const float xs[2] = {-0.6f, 0.55f}, ys[2] = {-0.4f, 0.35f};
     for (int i = 0; i < 2; ++i)
       for (int j = 0; j < 2; ++j) {
@@ -356,16 +363,7 @@ TEST(ObjectFeatures, RelationsCountWhatStandsOnATop) {
   // The same table with a 0.2 m box standing on its centre (not image-adjacent to it).
   Builder with_box;
   const auto floor = addFloor(with_box);
-  std::vector<int> top;
-  for (int i = 0; i < 3; ++i)
-    for (int j = 0; j < 2; ++j)
-      top.push_back(with_box.patch({-0.6f + 0.4f * i, -0.4f + 0.4f * j, 0.75f}, {0.4f, 0, 0},
-                                   {0, 0.4f, 0}, kUp));
-  for (int i = 0; i < 3; ++i)
-    for (int j = 0; j < 2; ++j) {
-      if (i < 2) with_box.edge(top[i * 2 + j], top[(i + 1) * 2 + j]);
-      if (j < 1) with_box.edge(top[i * 2 + j], top[i * 2 + j + 1]);
-    }
+  const std::vector<int> top = addTableTop(with_box);
   const int leg = with_box.patch({-0.6f, -0.4f, 0.0f}, {0.05f, 0, 0}, {0, 0, 0.73f}, kTowardsCamera);
   with_box.edge(leg, top[0]);
   with_box.edge(leg, floor[4]);

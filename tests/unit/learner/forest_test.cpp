@@ -55,6 +55,16 @@ double accuracy(const RandomForest& forest, const TrainingSet& set) {
   return static_cast<double>(correct) / static_cast<double>(set.features.size());
 }
 
+// Every probability non-negative, summing to one.
+void expectDistribution(const ClassProbabilities& p) {
+  float sum = 0.0f;
+  for (float v : p) {
+    EXPECT_GE(v, 0.0f);
+    sum += v;
+  }
+  EXPECT_NEAR(sum, 1.0f, 1e-5f);
+}
+
 using test::readBytes;
 using test::fixChecksum;
 using test::putU32;
@@ -73,15 +83,7 @@ TEST(Forest, LearnsSeparableProblem) {
   EXPECT_EQ(forest.trees().size(), 8u);
   EXPECT_GT(accuracy(forest, test), 0.95);
   // Every prediction is a distribution.
-  for (std::size_t i = 0; i < 50; ++i) {
-    const auto p = forest.predict(test.features[i]);
-    float sum = 0.0f;
-    for (float v : p) {
-      EXPECT_GE(v, 0.0f);
-      sum += v;
-    }
-    EXPECT_NEAR(sum, 1.0f, 1e-5f);
-  }
+  for (std::size_t i = 0; i < 50; ++i) expectDistribution(forest.predict(test.features[i]));
 }
 
 TEST(Forest, DeeperTreesFitBetterThanStumps) {
@@ -204,12 +206,7 @@ TEST(Forest, ShrinkagePullsLeavesTowardsTheirAncestors) {
   for (std::size_t i = 0; i < blobs.features.size(); ++i) {
     const auto a = sharp.predict(blobs.features[i]);
     const auto b = shrunk.predict(blobs.features[i]);
-    float sum = 0;
-    for (float v : b) {
-      EXPECT_GE(v, 0.0f);
-      sum += v;
-    }
-    EXPECT_NEAR(sum, 1.0f, 1e-5f);
+    expectDistribution(b);
     sharp_max += *std::max_element(a.begin(), a.end());
     shrunk_max += *std::max_element(b.begin(), b.end());
   }
