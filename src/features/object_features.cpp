@@ -199,42 +199,27 @@ void countLoadsOnTops(std::vector<ObjectGroup>& groups) {
 
 }  // namespace
 
-std::vector<int> objectFeatureColumns(ObjectColumns columns) {
-  switch (columns) {
-    case ObjectColumns::Context:
-      return {kObjectContextColumns.begin(), kObjectContextColumns.end()};
-    case ObjectColumns::Relations:
-      return {kObjectRelationsColumns.begin(), kObjectRelationsColumns.end()};
-    case ObjectColumns::All:
-      break;
-  }
-  std::vector<int> all(kObjectFeatureDim);
-  for (int k = 0; k < kObjectFeatureDim; ++k) all[static_cast<std::size_t>(k)] = k;
-  return all;
+const ObjectColumnSet& objectColumnSet(ObjectColumns columns) {
+  for (const ObjectColumnSet& set : kObjectColumnSets)
+    if (set.columns == columns) return set;
+  return kObjectColumnSets.front();  // unreachable: every value is in the table
 }
 
 std::vector<std::string_view> objectFeatureNames(ObjectColumns columns) {
   std::vector<std::string_view> names;
-  for (const int k : objectFeatureColumns(columns))
+  for (const int k : objectColumnSet(columns).indices)
     names.push_back(kObjectFeatureNames[static_cast<std::size_t>(k)]);
   return names;
 }
 
-std::string objectColumnsName(ObjectColumns columns) {
-  switch (columns) {
-    case ObjectColumns::Context:
-      return "context";
-    case ObjectColumns::Relations:
-      return "relations";
-    case ObjectColumns::All:
-      break;
-  }
-  return "all";
+const ObjectColumnSet* objectColumnSetWithCount(std::size_t count) {
+  for (const ObjectColumnSet& set : kObjectColumnSets)
+    if (set.indices.size() == count) return &set;
+  return nullptr;
 }
 
 ObjectColumns objectColumnsWithCount(std::size_t count) {
-  for (const ObjectColumns c : {ObjectColumns::All, ObjectColumns::Context, ObjectColumns::Relations})
-    if (objectFeatureColumns(c).size() == count) return c;
+  if (const ObjectColumnSet* set = objectColumnSetWithCount(count)) return set->columns;
   throw Error("no object feature column set has " + std::to_string(count) + " columns");
 }
 
@@ -460,7 +445,7 @@ void computeObjectFeaturesInto(const SegmentFeatures& features,
 
   if (config.columns == ObjectColumns::Relations) countLoadsOnTops(out.groups);
 
-  const std::vector<int> columns = objectFeatureColumns(config.columns);
+  const std::span<const int> columns = objectColumnSet(config.columns).indices;
   const std::size_t dim = columns.size();
   out.values.resize(n * dim);
   for (std::size_t s = 0; s < n; ++s) {

@@ -116,11 +116,8 @@ void firstStageRowsInto(const SegmentFeatures& features, std::vector<float>& row
   }
   const bool objects = !features.objects.empty();
   const std::size_t object_dim = objects && n > 0 ? features.objects.size() / n : 0;
-  const auto is_column_set = [](std::size_t d) {
-    return d == kObjectFeatureDim || d == kObjectContextColumns.size() ||
-           d == kObjectRelationsColumns.size();
-  };
-  if (objects && (object_dim * n != features.objects.size() || !is_column_set(object_dim))) {
+  if (objects && (object_dim * n != features.objects.size() ||
+                  objectColumnSetWithCount(object_dim) == nullptr)) {
     throw Error("firstStageRows: " + std::to_string(n) + " segments but " +
                 std::to_string(features.objects.size()) + " object feature values");
   }
@@ -253,8 +250,9 @@ void checkModelMatchesConfig(const RandomForest& forest, const SegmenterConfig& 
                 ", features.scene = " + (config.scene.enabled ? "true" : "false") +
                 ", features.objects = " + (config.objects.enabled ? "true" : "false") +
                 (config.objects.enabled
-                     ? ", features.objects_columns = " + objectColumnsName(config.objects.columns) +
-                           " (" + std::to_string(objectFeatureColumns(config.objects.columns).size()) +
+                     ? ", features.objects_columns = " +
+                           std::string(objectColumnSet(config.objects.columns).name) + " (" +
+                           std::to_string(objectColumnSet(config.objects.columns).indices.size()) +
                            " object columns; the model has " + std::to_string(model_object_columns) +
                            ")"
                      : std::string()) +

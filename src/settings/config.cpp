@@ -76,6 +76,13 @@ Setting<T> seedSetting(std::string key,
                                           std::numeric_limits<long long>::max());
 }
 
+// features.objects_columns' words, from the column sets' table.
+std::vector<std::pair<std::string, ObjectColumns>> objectColumnsWords() {
+  std::vector<std::pair<std::string, ObjectColumns>> words;
+  for (const ObjectColumnSet& set : kObjectColumnSets) words.emplace_back(set.name, set.columns);
+  return words;
+}
+
 CoreSetting baggingFractionSetting() {
   CoreSetting s;
   s.key = "forest.bagging_fraction";
@@ -166,9 +173,7 @@ const std::vector<CoreSetting>& settings() {
       boolSetting("features.objects", [](C& c) -> bool& { return c.objects.enabled; }),
       enumSetting<ObjectColumns>(
           "features.objects_columns", [](C& c) -> ObjectColumns& { return c.objects.columns; },
-          {{"all", ObjectColumns::All},
-           {"context", ObjectColumns::Context},
-           {"relations", ObjectColumns::Relations}}),
+          objectColumnsWords()),
       floatSetting("features.objects_concave_tolerance_deg",
                    [](C& c) -> float& { return c.objects.concave_tolerance_deg; }, 0, 90),
       floatSetting("features.objects_link_gap_m",

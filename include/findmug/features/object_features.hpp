@@ -60,7 +60,7 @@
 
 #include <array>
 #include <cstddef>
-#include <string>
+#include <span>
 #include <string_view>
 #include <vector>
 
@@ -100,17 +100,31 @@ inline constexpr std::array<std::string_view, kObjectFeatureCount> kObjectFeatur
     "object_top_area",        "object_back_rise",       "object_wall_distance",
     "object_kind",            "patch_height_in_object", "object_load_on_top"};
 
-// The columns of ObjectColumns::Context and ::Relations, as indices into kObjectFeatureNames.
+// The columns of each ObjectColumns set, as indices into kObjectFeatureNames.
+inline constexpr std::array<int, kObjectFeatureDim> kObjectAllColumns = {0, 1, 2, 3, 4, 5,
+                                                                        6, 7, 8, 9, 10};
 inline constexpr std::array<int, 3> kObjectContextColumns = {7, 8, 10};
 inline constexpr std::array<int, 4> kObjectRelationsColumns = {7, 8, 10, 11};
 
-// The indices into kObjectFeatureNames of the columns `columns` selects, in row order.
-std::vector<int> objectFeatureColumns(ObjectColumns columns);
+// The column sets: the setting's word (features.objects_columns) and the columns, in row order.
+struct ObjectColumnSet {
+  ObjectColumns columns;
+  std::string_view name;
+  std::span<const int> indices;
+};
+inline constexpr std::array<ObjectColumnSet, 3> kObjectColumnSets = {{
+    {ObjectColumns::All, "all", kObjectAllColumns},
+    {ObjectColumns::Context, "context", kObjectContextColumns},
+    {ObjectColumns::Relations, "relations", kObjectRelationsColumns},
+}};
+
+// The set `columns` names (never fails: every enum value has one).
+const ObjectColumnSet& objectColumnSet(ObjectColumns columns);
 // The names of the columns `columns` selects, in row order.
 std::vector<std::string_view> objectFeatureNames(ObjectColumns columns);
-// The setting's word for a column set: "all", "context", "relations".
-std::string objectColumnsName(ObjectColumns columns);
-// The column set with `count` columns per patch; throws findmug::Error when none has.
+// The column set with `count` columns per patch, or nullptr when none has.
+const ObjectColumnSet* objectColumnSetWithCount(std::size_t count);
+// The same, throwing findmug::Error when none has.
 ObjectColumns objectColumnsWithCount(std::size_t count);
 
 // object_wall_distance when the frame has no wall (m).
