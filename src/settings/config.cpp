@@ -101,6 +101,10 @@ const std::vector<CoreSetting>& settings() {
   using C = SegmenterConfig;
   static const std::vector<CoreSetting> all = {
       floatSetting("cloud.max_depth_m", [](C& c) -> float& { return c.max_depth_m; }, 0.5, 20),
+      intSetting("cloud.fill_depth_max_run_px",
+                 [](C& c) -> int& { return c.depth_holes.max_run_px; }, 0, 10000),
+      floatSetting("cloud.fill_depth_smooth_tolerance",
+                   [](C& c) -> float& { return c.depth_holes.smooth_tolerance; }, 0, 1),
       intSetting("normals.window_radius_px",
                  [](C& c) -> int& { return c.normals.window_radius_px; }, 1, 32),
       intSetting("normals.smoothing_radius_px",
@@ -509,6 +513,9 @@ RandomForest::Settings extractionSettings(const SegmenterConfig& config) {
   RandomForest::Settings out;
   for (const auto& s : settings()) {
     if (s.key == "features.context_cross_fit_folds") continue;  // training only
+    // Which gaps get depth changes which pixels have points, not what a
+    // feature means: a model serves filled and raw depth alike.
+    if (s.key.rfind("cloud.fill_depth_", 0) == 0) continue;
     if (s.key.rfind("cloud.", 0) == 0 || s.key.rfind("normals.", 0) == 0 ||
         s.key.rfind("overseg.", 0) == 0 || s.key.rfind("features.", 0) == 0) {
       out.emplace_back(s.key, s.get(config));

@@ -18,6 +18,7 @@
 #include "findmug/features/region_features.hpp"
 #include "findmug/features/scene_features.hpp"
 #include "findmug/ground/ground.hpp"
+#include "findmug/frame/depth_holes.hpp"
 #include "findmug/labels/label_holes.hpp"
 #include "findmug/learner/forest.hpp"
 #include "findmug/map/table_map.hpp"
@@ -58,6 +59,7 @@ struct LearnerOptions {
 
 struct SegmenterConfig {
   float max_depth_m = 10.0f;
+  DepthHoleFillConfig depth_holes;  // cloud.fill_depth_*
   NormalConfig normals;
   GroundConfig ground;
   OversegmentationConfig overseg;

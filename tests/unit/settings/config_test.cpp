@@ -222,6 +222,19 @@ TEST(Config, ForestShrinkageIsANonNegativeNumber) {
               HasSubstr("forest.shrinkage"));
 }
 
+TEST(Config, DepthFillIsOffByDefaultAndRangeChecked) {
+  EXPECT_EQ(Config{}.segmenter.depth_holes.max_run_px, 0);  // the paper fills nothing
+  const Config c = parseConfig(
+      "cloud:\n  fill_depth_max_run_px: 40\n  fill_depth_smooth_tolerance: 0.05\n", "a.yaml");
+  EXPECT_EQ(c.segmenter.depth_holes.max_run_px, 40);
+  EXPECT_FLOAT_EQ(c.segmenter.depth_holes.smooth_tolerance, 0.05f);
+  EXPECT_THAT(errorOf([] { parseConfig("cloud:\n  fill_depth_max_run_px: -3\n", "a.yaml"); }),
+              HasSubstr("cloud.fill_depth_max_run_px"));
+  EXPECT_THAT(
+      errorOf([] { parseConfig("cloud:\n  fill_depth_smooth_tolerance: 1.5\n", "a.yaml"); }),
+      HasSubstr("cloud.fill_depth_smooth_tolerance"));
+}
+
 TEST(Config, OverridesApplyOnTop) {
   Config c = parseConfig("forest:\n  num_trees: 4\n", "a.yaml");
   applyOverride(c, "forest.num_trees=12");
