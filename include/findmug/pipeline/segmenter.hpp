@@ -1,6 +1,6 @@
 // findmug/pipeline/segmenter.hpp — the whole pipeline for one frame, stage by stage.
 //
-// frame -> cloud + normals -> ground plane -> oversegmentation -> features
+// frame [-> short depth gaps filled, cloud.fill_depth_*] -> cloud + normals -> ground plane -> oversegmentation -> features
 //       [-> region features] -> forest p(y|x) [-> context features -> context
 //       forest p(y|x)] -> MRF -> label image -> tables [-> the label image's
 //       depth holes filled, labels.fill_holes]
