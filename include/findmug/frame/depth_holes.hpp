@@ -17,7 +17,8 @@
 //   4. runs that touch the image border or are longer stay without depth (a
 //      window, a mirror, what lies beyond the camera's range).
 // The filled pixels are points like the others for every later stage. One
-// pass over the image per direction, in place, no allocation.
+// pass over the image per direction, in memory order, in place; one int per
+// column of per-thread scratch.
 #pragma once
 
 #include <cstddef>

@@ -1,9 +1,10 @@
 // findmug/pipeline/segmenter.hpp — the whole pipeline for one frame, stage by stage.
 //
-// frame [-> short depth gaps filled, cloud.fill_depth_*] -> cloud + normals -> ground plane -> oversegmentation -> features
-//       [-> region features] -> forest p(y|x) [-> context features -> context
-//       forest p(y|x)] -> MRF -> label image -> tables [-> the label image's
-//       depth holes filled, labels.fill_holes]
+// frame [-> short depth gaps filled, cloud.fill_depth_*] -> cloud + normals
+//       -> ground plane -> oversegmentation -> features [-> region features]
+//       -> forest p(y|x) [-> context features -> context forest p(y|x)] -> MRF
+//       -> label image -> tables [-> the label image's depth holes filled,
+//       labels.fill_holes]
 // The bracketed stages run when the model has them (features.regions,
 // features.context); the model file is the source of truth and a config
 // that disagrees with it is refused.
