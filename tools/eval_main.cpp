@@ -48,7 +48,6 @@
 #include "findmug/labels/label_image.hpp"
 #include "findmug/offline/cv_folds.hpp"
 #include "findmug/offline/metrics.hpp"
-#include "findmug/offline/mrf_context.hpp"
 #include "findmug/offline/pseudo_labels.hpp"
 #include "findmug/offline/table_metrics.hpp"
 #include "findmug/offline/training.hpp"
@@ -202,13 +201,11 @@ std::vector<RegionFeatures> sampleRegions(const std::vector<FrameSample>& sample
 
 // Labels the test frames with `forest` and accumulates both confusions. The
 // "+MRF" labels are the pipeline's final ones: with `regions`, after the
-// table region vote, as in Segmenter::classify.
-// With mrf.pairwise = context, `pairwise` is the term learned on the
-// training frames (mrf_context.hpp).
+// table region vote, as in Segmenter::classify. With mrf.pairwise = context
+// the term is the one the fold's model learned from its training frames.
 void labelFrames(const RandomForest& forest, const SegmenterConfig& config,
                  const std::vector<FrameSample>& samples, const std::vector<std::size_t>& frames,
-                 const std::vector<RegionFeatures>& regions, Evaluation& eval, bool keep_pixels,
-                 const PairwiseContext* pairwise = nullptr) {
+                 const std::vector<RegionFeatures>& regions, Evaluation& eval, bool keep_pixels) {
   SegmenterConfig with_mrf = config;
   with_mrf.use_mrf = true;  // the "+MRF" figures, whatever use_mrf says
   std::optional<LayoutPrior> layout;
@@ -218,7 +215,7 @@ void labelFrames(const RandomForest& forest, const SegmenterConfig& config,
     const FrameSample& s = samples[f];
     const std::size_t n = s.features.features.size();
     SampleLabelling labelling =
-        labelSample(forest, s, with_mrf, regions.empty() ? nullptr : &regions[f], pairwise,
+        labelSample(forest, s, with_mrf, regions.empty() ? nullptr : &regions[f],
                     layout ? &*layout : nullptr);
     std::vector<std::uint8_t> forest_labels(n);
     for (std::size_t k = 0; k < n; ++k) forest_labels[k] = argmax(labelling.probabilities[k]);
@@ -289,14 +286,6 @@ Evaluation crossValidate(const std::vector<FrameSample>& samples,
     if (makeTrainingSet(frames).labels.empty()) continue;
     SegmenterConfig fold_config = config;
     fold_config.forest.seed += static_cast<std::uint64_t>(fold);
-    std::optional<PairwiseContext> pairwise;
-    if (config.use_mrf && config.mrf.pairwise == MrfPairwise::Context) {
-      std::vector<LabelledGraph> graphs;
-      for (const FrameSample* s : frames)
-        graphs.push_back({&s->features.features, &s->edges, &s->segment_labels});
-      pairwise = learnPairwiseContext(graphs);
-    }
-    const PairwiseContext* context = pairwise ? &*pairwise : nullptr;
     PseudoLabelReport pseudo;
     if (rounds > 0) {
       // The pool: unlabelled frames only. A frame also among the labelled
@@ -308,16 +297,16 @@ Evaluation crossValidate(const std::vector<FrameSample>& samples,
             throw Error("fold " + std::to_string(fold) + ": test frame " + u.name +
                         " is among the unlabelled frames");
       const RandomForest forest = trainModelWithPseudoLabels(
-          frames, unlabelled, fold_config, training, context, &pseudo,
+          frames, unlabelled, fold_config, training, &pseudo,
           [&](int r, const RandomForest& model) {
             if (per_round && r < rounds)
               labelFrames(model, config, test_samples, test, regions,
-                          (*per_round)[static_cast<std::size_t>(r)], keep_pixels, context);
+                          (*per_round)[static_cast<std::size_t>(r)], keep_pixels);
           });
-      labelFrames(forest, config, test_samples, test, regions, eval, keep_pixels, context);
+      labelFrames(forest, config, test_samples, test, regions, eval, keep_pixels);
     } else {
       const RandomForest forest = trainModel(frames, fold_config, training);
-      labelFrames(forest, config, test_samples, test, regions, eval, keep_pixels, context);
+      labelFrames(forest, config, test_samples, test, regions, eval, keep_pixels);
     }
     eval.folds.push_back({fold, train, test, std::move(pseudo)});
   }
@@ -757,9 +746,6 @@ int run(int argc, char** argv) {
   const std::vector<RegionFeatures> regions = sampleRegions(test_samples, segmenter.config());
   Evaluation eval;
   if (model) {
-    if (config.segmenter.use_mrf && config.segmenter.mrf.pairwise == MrfPairwise::Context)
-      throw Error("mrf.pairwise = context is learned from the training frames: it needs "
-                  "cross-validation, not --model");
     const RandomForest& forest = *model;
     report.protocol = "model " + f.model + " (id " + forest.id() + ") on all frames";
     eval.mrf_pixels.resize(samples.size());

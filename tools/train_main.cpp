@@ -88,7 +88,7 @@ int run(int argc, char** argv) {
                             ? trainModel(frames, config.segmenter, options_training,
                                          [&](int done, int total) { bar.update(done, total); })
                             : trainModelWithPseudoLabels(frames, unlabelled, config.segmenter,
-                                                         options_training, nullptr, &pseudo);
+                                                         options_training, &pseudo);
   bar.finish();
   // Recorded so that the model is only ever run on features computed alike.
   forest.setExtractionSettings(extractionSettings(config.segmenter));
@@ -137,6 +137,9 @@ int run(int argc, char** argv) {
               config.segmenter.scene.enabled ? " (with scene features)" : "",
               config.segmenter.objects.enabled ? " (with object features)" : "",
               forest.contextStage() ? ", auto-context stage" : "");
+  if (const PairwiseContext* term = forest.pairwiseContext())
+    std::printf("  pairwise term    learned from %zu labelled neighbour pairs (mrf.pairwise = context)\n",
+                term->training_edges);
   std::printf("  model            %s (id %s)\n", f.out.c_str(), forest.id().c_str());
   std::printf("  time             %.1f s\n", seconds);
   return 0;

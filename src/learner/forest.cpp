@@ -93,8 +93,11 @@ std::string RandomForest::summary() const {
   const std::string classes = std::to_string(internal_classes_.count()) +
                               (internal_classes_.scheme == "labels" ? " classes (" : " internal classes (") +
                               internal_classes_.scheme + ")";
-  if (booster_) return "xgboost of " + std::to_string(xgboost_params_.rounds) + " rounds, " + classes;
-  return "forest of " + std::to_string(trees_.size()) + " trees, " + classes;
+  const std::string pairwise = pairwise_context_ ? ", learned pairwise term" : "";
+  if (booster_)
+    return "xgboost of " + std::to_string(xgboost_params_.rounds) + " rounds, " + classes +
+           pairwise;
+  return "forest of " + std::to_string(trees_.size()) + " trees, " + classes + pairwise;
 }
 
 void RandomForest::setExtractionSettings(Settings settings) {
@@ -120,6 +123,12 @@ void RandomForest::setContextStage(RandomForest stage) {
     throw Error("RandomForest: the context stage's rows must start with the first stage's " +
                 std::to_string(feature_names_.size()) + " columns and add context columns");
   context_stage_ = std::make_shared<const RandomForest>(std::move(stage));
+  updateId();
+}
+
+void RandomForest::setPairwiseContext(std::optional<PairwiseContext> term) {
+  if (term) validatePairwiseContext(*term, "RandomForest");
+  pairwise_context_ = std::move(term);
   updateId();
 }
 

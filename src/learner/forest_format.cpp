@@ -202,6 +202,16 @@ std::vector<std::uint8_t> forest_format::serialize(const RandomForest& forest) {
     writeParams(w, stage->params());
     writeTrees(w, stage->trees());
   }
+  const PairwiseContext* pairwise = forest.pairwiseContext();
+  w.u8(pairwise ? 1 : 0);
+  if (pairwise) {
+    w.f64(pairwise->bias);
+    for (double v : pairwise->weights) w.f64(v);
+    for (double v : pairwise->mean) w.f64(v);
+    for (double v : pairwise->scale) w.f64(v);
+    w.f64(pairwise->mean_cost);
+    w.u64(pairwise->training_edges);
+  }
   auto& buf = w.buffer();
   w.u64(fnv1a64(buf.data(), buf.size()));
   return std::move(buf);
@@ -494,6 +504,23 @@ RandomForest RandomForest::load(const std::string& path) {
         readTrees(stage, "context stage ");
         stage.format_version_ = version;
         forest.context_stage_ = std::make_shared<const RandomForest>(std::move(stage));
+      }
+    }
+    if (version >= 5) {
+      const std::uint8_t has_pairwise = r.u8("pairwise term flag");
+      if (has_pairwise > 1)
+        throw Error(path + ": forest model pairwise term flag = " + std::to_string(has_pairwise) +
+                    " (expected 0 or 1)");
+      if (has_pairwise == 1) {
+        PairwiseContext term;
+        term.bias = r.f64("pairwise term bias");
+        for (double& v : term.weights) v = r.f64("pairwise term weights");
+        for (double& v : term.mean) v = r.f64("pairwise term means");
+        for (double& v : term.scale) v = r.f64("pairwise term scales");
+        term.mean_cost = r.f64("pairwise term mean cost");
+        term.training_edges = r.u64("pairwise term training edges");
+        validatePairwiseContext(term, path + ": forest model");
+        forest.pairwise_context_ = term;
       }
     }
     if (r.remaining() < kChecksumSize) r.need(kChecksumSize, "checksum");

@@ -29,6 +29,9 @@
 //            XGBoost's UBJSON model; its output width must be the class count)
 //   uint8    (version 3) 1 when an auto-context stage follows, else 0; the stage is
 //            feature count + names, params, tree count + trees as above
+//   uint8    (version 5) 1 when the learned pairwise term of mrf.pairwise = context
+//            follows, else 0; the term is float64 bias, weights[4], mean[4], scale[4],
+//            mean_cost, then uint64 training edge count (context_pairwise.hpp)
 //   uint64   FNV-1a 64 checksum of every byte before it
 #pragma once
 
@@ -42,7 +45,7 @@
 namespace findmug::forest_format {
 
 inline constexpr char kMagic[8] = {'F', 'M', 'U', 'G', 'F', 'R', 'S', 'T'};
-inline constexpr std::uint32_t kFormatVersion = 4;
+inline constexpr std::uint32_t kFormatVersion = 5;
 // Format 2: the 14 base features only, no context stage. Still read; such a
 // model means features.regions = false and features.context = false.
 inline constexpr std::uint32_t kOldestFormatVersion = 2;

@@ -214,9 +214,17 @@ MrfResult solveMrfScaled(const std::vector<ClassProbabilities>& unaries,
                          const std::vector<std::pair<int, int>>& edges,
                          const std::vector<float>& edge_scale, const MrfParams& params) {
   MrfResult result;
-  detail::solveMrfInto(unaries, centroids, edges, params, result, detail::MrfSimd::Auto,
-                       &edge_scale);
+  solveMrfScaledInto(unaries, centroids, edges, edge_scale, params, result);
   return result;
+}
+
+void solveMrfScaledInto(const std::vector<ClassProbabilities>& unaries,
+                        const std::vector<Eigen::Vector3f>& centroids,
+                        const std::vector<std::pair<int, int>>& edges,
+                        const std::vector<float>& edge_scale, const MrfParams& params,
+                        MrfResult& out) {
+  detail::solveMrfInto(unaries, centroids, edges, params, out, detail::MrfSimd::Auto,
+                       &edge_scale);
 }
 
 void detail::solveMrfInto(const std::vector<ClassProbabilities>& unaries,

@@ -11,31 +11,12 @@ namespace findmug {
 
 namespace {
 
-// Base feature columns (kFeatureNames).
-constexpr int kCentroidHeight = 3, kNormalAngle = 6, kLabL = 8, kLabA = 9, kLabB = 10;
 constexpr double kRidge = 1e-3;
 constexpr int kNewtonSteps = 25;
 
 double logistic(double t) { return 1.0 / (1.0 + std::exp(-t)); }
 
-// The cost of parting two neighbours: -log P(different label), i.e. the
-// negative log-likelihood of "they differ"; P capped below 1 so that it stays finite.
-double partingCost(double p_same) { return -std::log1p(-std::min(p_same, 1.0 - 1e-6)); }
-
-double logit(const PairwiseContext& m, const std::array<float, kPairFeatureDim>& x) {
-  double t = m.bias;
-  for (int k = 0; k < kPairFeatureDim; ++k) t += m.weights[k] * (x[k] - m.mean[k]) / m.scale[k];
-  return t;
-}
-
 }  // namespace
-
-std::array<float, kPairFeatureDim> pairFeatures(const FeatureVector& a, const FeatureVector& b) {
-  const float da = a[kLabA] - b[kLabA], db = a[kLabB] - b[kLabB];
-  return {std::abs(a[kLabL] - b[kLabL]), std::sqrt(da * da + db * db),
-          std::abs(a[kCentroidHeight] - b[kCentroidHeight]),
-          std::abs(a[kNormalAngle] - b[kNormalAngle])};
-}
 
 PairwiseContext learnPairwiseContext(const std::vector<LabelledGraph>& graphs) {
   std::vector<std::array<float, kPairFeatureDim>> xs;
@@ -109,35 +90,9 @@ PairwiseContext learnPairwiseContext(const std::vector<LabelledGraph>& graphs) {
   m.bias = theta[0];
   for (int k = 0; k < kPairFeatureDim; ++k) m.weights[k] = theta[k + 1];
   double mean_cost = 0;
-  for (const auto& x : xs) mean_cost += partingCost(sameLabelProbability(m, x));
+  for (const auto& x : xs) mean_cost += contextPartingCost(sameLabelProbability(m, x));
   m.mean_cost = mean_cost / count;
   return m;
-}
-
-double sameLabelProbability(const PairwiseContext& model,
-                            const std::array<float, kPairFeatureDim>& x) {
-  return logistic(logit(model, x));
-}
-
-std::vector<float> pairwiseContextScales(const PairwiseContext& model,
-                                         const std::vector<FeatureVector>& features,
-                                         const std::vector<std::pair<int, int>>& edges) {
-  std::vector<float> out(edges.size(), 1.0f);
-  const auto n = static_cast<long long>(features.size());
-  for (std::size_t k = 0; k < edges.size(); ++k) {
-    const auto [a, b] = edges[k];
-    if (a < 0 || b < 0 || a >= n || b >= n)
-      throw Error("pairwiseContextScales: edge " + std::to_string(k) + " (" + std::to_string(a) +
-                  ", " + std::to_string(b) + ") outside " + std::to_string(n) + " patches");
-    const auto x =
-        pairFeatures(features[static_cast<std::size_t>(a)], features[static_cast<std::size_t>(b)]);
-    bool finite = true;
-    for (float v : x) finite = finite && std::isfinite(v);
-    // A patch without a finite feature keeps the paper's weight.
-    if (finite)
-      out[k] = static_cast<float>(partingCost(sameLabelProbability(model, x)) / model.mean_cost);
-  }
-  return out;
 }
 
 }  // namespace findmug

@@ -7,6 +7,7 @@
 #include <tuple>
 
 #include "findmug/common/error.hpp"
+#include "findmug/mrf/context_pairwise.hpp"
 #include "findmug/mrf/object_consistency.hpp"
 #include "findmug/tables/table_regions.hpp"
 
@@ -14,7 +15,7 @@ namespace findmug {
 
 SampleLabelling labelSample(const RandomForest& model, const FrameSample& s,
                             const SegmenterConfig& config, const RegionFeatures* regions,
-                            const PairwiseContext* pairwise, const LayoutPrior* layout) {
+                            const LayoutPrior* layout) {
   SampleLabelling out;
   out.probabilities = predictSample(model, s, config);
   // Per patch its pixel count: the object means' and the region vote's weights.
@@ -29,6 +30,11 @@ SampleLabelling labelSample(const RandomForest& model, const FrameSample& s,
   const bool with_layout = config.use_mrf && config.mrf.pairwise == MrfPairwise::Layout;
   if (with_layout && !layout)
     throw Error("labelSample: mrf.pairwise = layout without a loaded layout prior");
+  const bool with_context = config.use_mrf && config.mrf.pairwise == MrfPairwise::Context;
+  const PairwiseContext* pairwise = with_context ? model.pairwiseContext() : nullptr;
+  if (with_context && !pairwise)
+    throw Error("labelSample: mrf.pairwise = context but model " + model.id() +
+                " carries no learned pairwise term (train it with mrf.pairwise = context)");
   if (with_layout) {
     std::vector<float> heights;
     const float threshold =
@@ -174,8 +180,7 @@ std::vector<FrameSample> pseudoLabelledSamples(const std::vector<FrameSample>& u
 
 RandomForest trainModelWithPseudoLabels(
     const std::vector<const FrameSample*>& labelled, const std::vector<FrameSample>& unlabelled,
-    const SegmenterConfig& config, const TrainingOptions& training, const PairwiseContext* pairwise,
-    PseudoLabelReport* report, const std::function<void(int, const RandomForest&)>& after_round) {
+    const SegmenterConfig& config, const TrainingOptions& training, PseudoLabelReport* report, const std::function<void(int, const RandomForest&)>& after_round) {
   RandomForest model = trainModel(labelled, config, training);
   if (after_round) after_round(0, model);
   if (report) {
@@ -192,7 +197,7 @@ RandomForest trainModelWithPseudoLabels(
     labellings.reserve(unlabelled.size());
     for (std::size_t f = 0; f < unlabelled.size(); ++f)
       labellings.push_back(labelSample(model, unlabelled[f], config,
-                                       regions.empty() ? nullptr : &regions[f], pairwise));
+                                       regions.empty() ? nullptr : &regions[f]));
     PseudoLabelRound round;
     round.round = r;
     const std::vector<FrameSample> pseudo =

@@ -6,6 +6,7 @@
 
 #include "findmug/common/error.hpp"
 #include "findmug/labels/label_holes.hpp"
+#include "findmug/offline/mrf_context.hpp"
 
 namespace findmug {
 
@@ -516,6 +517,20 @@ std::vector<ClassProbabilities> predictSample(const RandomForest& model, const F
   return predictSegments(model, sample.features, segmentWeights(sample), config.context);
 }
 
+namespace {
+
+// The pairwise term of mrf.pairwise = context, learned from the frames' own
+// patches (their training-only views are left out).
+PairwiseContext learnedPairwiseTerm(const std::vector<const FrameSample*>& frames) {
+  std::vector<LabelledGraph> graphs;
+  graphs.reserve(frames.size());
+  for (const FrameSample* s : frames)
+    graphs.push_back({&s->features.features, &s->edges, &s->segment_labels});
+  return learnPairwiseContext(graphs);
+}
+
+}  // namespace
+
 RandomForest trainModel(const std::vector<const FrameSample*>& frames,
                         const SegmenterConfig& config, const TrainingOptions& training,
                         const std::function<void(int, int)>& progress) {
@@ -556,6 +571,8 @@ RandomForest trainModel(const std::vector<const FrameSample*>& frames,
     return forest;
   };
   RandomForest first = trainFirst(first_set, config.forest);
+  if (config.mrf.pairwise == MrfPairwise::Context)
+    first.setPairwiseContext(learnedPairwiseTerm(frames));
   tick();
   if (!config.context.enabled) return first;
 

@@ -10,6 +10,7 @@
 #include "findmug/features/scene_features.hpp"
 #include "findmug/frame/depth_holes.hpp"
 #include "findmug/labels/label_holes.hpp"
+#include "findmug/mrf/context_pairwise.hpp"
 #include "findmug/mrf/object_consistency.hpp"
 #include "findmug/tables/table_regions.hpp"
 #include "common/scratch.hpp"
@@ -76,9 +77,6 @@ Segmenter::Segmenter(SegmenterConfig config, std::shared_ptr<const RandomForest>
       forest_(std::move(forest)),
       oversegmenter_(makeOversegmenter(config_.overseg)) {
   if (forest_) checkModelMatchesConfig(*forest_, config_);
-  if (forest_ && config_.use_mrf && config_.mrf.pairwise == MrfPairwise::Context)
-    throw Error("mrf.pairwise = context is measured by findmug-eval only: the model file does "
-                "not carry the learned pairwise term yet (use mrf.pairwise = potts)");
   if (forest_ && config_.use_mrf && config_.mrf.pairwise == MrfPairwise::Layout)
     layout_prior_ = std::make_shared<const LayoutPrior>(loadLayoutPrior(config_.mrf.layout_prior_path));
 }
@@ -260,6 +258,16 @@ void checkModelMatchesConfig(const RandomForest& forest, const SegmenterConfig& 
                 "); set features.regions, features.scene, features.objects and "
                 "features.objects_columns to match the model or retrain" +
                 (forest.formatVersion() == 2 ? " (a format-2 model has no region features)" : ""));
+  }
+  // The learned pairwise term travels with the model (context_pairwise.hpp).
+  if (config.use_mrf && config.mrf.pairwise == MrfPairwise::Context && !forest.pairwiseContext()) {
+    throw Error("model " + name + " carries no learned pairwise term but the config has "
+                "mrf.pairwise = context; set mrf.pairwise = potts or retrain with mrf.pairwise = "
+                "context" +
+                (forest.formatVersion() != 0 && forest.formatVersion() < 5
+                     ? " (a format-" + std::to_string(forest.formatVersion()) +
+                           " model has no pairwise term)"
+                     : std::string()));
   }
   if (config.context.enabled != (forest.contextStage() != nullptr)) {
     throw Error("model " + name + (forest.contextStage() ? " has" : " has no") +
@@ -519,6 +527,7 @@ LabelledFrame Segmenter::classify(SegmentedFrame segmented) const {
     ObjectMeanScratch object_means;  // mrf.object_consistency
     std::vector<float> heights;  // mrf.pairwise = layout
     MrfPairFactors factors;
+    std::vector<float> edge_scales;  // mrf.pairwise = context
   };
   thread_local Buffers buffers;
   detail::Borrowed regions_buffer(buffers.regions);
@@ -528,6 +537,7 @@ LabelledFrame Segmenter::classify(SegmentedFrame segmented) const {
   detail::Borrowed object_means_buffer(buffers.object_means);
   detail::Borrowed heights_buffer(buffers.heights);
   detail::Borrowed factors_buffer(buffers.factors);
+  detail::Borrowed edge_scales_buffer(buffers.edge_scales);
 
   Stopwatch watch;
   computeFeaturesInto(segmented.prepared.cloud_ground, segmented.prepared.normals_ground,
@@ -593,6 +603,14 @@ LabelledFrame Segmenter::classify(SegmentedFrame segmented) const {
                           segmented.segmentation.edges, *factors_buffer);
     solveMrfWithFactorsInto(weighted, out.features.centroids, segmented.segmentation.edges,
                             *factors_buffer, config_.mrf, out.mrf);
+    final_labels = &out.mrf.labels;
+    confidence = out.mrf.confidence;
+  } else if (config_.use_mrf && config_.mrf.pairwise == MrfPairwise::Context) {
+    std::vector<float>& scales = *edge_scales_buffer;
+    pairwiseContextScalesInto(*forest_->pairwiseContext(), out.features.features,
+                              segmented.segmentation.edges, scales);
+    solveMrfScaledInto(weighted, out.features.centroids, segmented.segmentation.edges, scales,
+                       config_.mrf, out.mrf);
     final_labels = &out.mrf.labels;
     confidence = out.mrf.confidence;
   } else if (config_.use_mrf) {

@@ -164,12 +164,14 @@ MODEL_SETS=()
 if [[ -z "$MODEL" ]]; then
   [[ -f "$ROOT/models/findmug.fmf" ]] && MODEL="$ROOT/models/findmug.fmf"
   # The shipped model's settings (models/README.md: region, scene and object features,
-  # NYU-13 classes); findmugd refuses a model whose stages differ from its config. Also
-  # daemon/findmugd.yaml's object consistency, so that the rows are the shipped labelling.
+  # NYU-13 classes, the learned pairwise term); findmugd refuses a model whose stages
+  # differ from its config. Also daemon/findmugd.yaml's object consistency and depth
+  # fill, so that the rows are the shipped labelling.
   [[ -n "$MODEL" ]] && MODEL_SETS=(--set features.regions=true --set features.scene=true
                                    --set learner.classes=nyu13 --set features.objects=true
                                    --set features.objects_columns=relations
-                                   --set mrf.object_consistency=0.5)
+                                   --set mrf.object_consistency=0.5 --set mrf.pairwise=context
+                                   --set cloud.fill_depth_max_run_px=40)
 fi
 if [[ -z "$MODEL" && $TABLES_ONLY == 0 ]]; then
   MODEL="$RESULTS/nyu31.fmf"

@@ -19,12 +19,14 @@
 // may be trained on finer internal classes (NYU-13 or NYU-40 classes, each
 // split by the findmug label its pixels carry, so every internal class is
 // pure) and merges its posterior into the 8 labels; the internal class names
-// and their merge map are part of the model (format 4).
+// and their merge map are part of the model (format 4). A model may also carry
+// the learned pairwise term of mrf.pairwise = context (format 5).
 #pragma once
 
 #include <cstdint>
 #include <functional>
 #include <memory>
+#include <optional>
 #include <span>
 #include <string>
 #include <utility>
@@ -32,6 +34,7 @@
 
 #include "findmug/features/features.hpp"
 #include "findmug/labels/labels.hpp"
+#include "findmug/mrf/context_pairwise.hpp"
 
 namespace findmug {
 
@@ -150,7 +153,8 @@ class RandomForest {
   // labels, count); changes id().
   void setInternalClasses(InternalClasses classes);
   // One line for logs: "forest of 8 trees, 8 classes (labels)", "xgboost of
-  // 100 rounds, 17 internal classes (nyu13)".
+  // 100 rounds, 17 internal classes (nyu13)", with ", learned pairwise term"
+  // when the model carries one.
   std::string summary() const;
   // The booster's parameters (meaningful when learnerKind() is XGBoost).
   const XGBoostParams& xgboostParams() const { return xgboost_params_; }
@@ -169,14 +173,23 @@ class RandomForest {
   // forest's rows followed by context columns. Setting it changes id().
   void setContextStage(RandomForest stage);
   const RandomForest* contextStage() const { return context_stage_.get(); }
+  // The learned pairwise term of mrf.pairwise = context (context_pairwise.hpp):
+  // learned from the same training frames, so it travels with the model
+  // (format 5). Null when the model has none. Checked
+  // (validatePairwiseContext); setting it changes id().
+  void setPairwiseContext(std::optional<PairwiseContext> term);
+  const PairwiseContext* pairwiseContext() const {
+    return pairwise_context_ ? &*pairwise_context_ : nullptr;
+  }
   // Model file format the forest was loaded from (0 when trained in-process).
   std::uint32_t formatVersion() const { return format_version_; }
 
   // Versioned binary model: magic, format version, label names, learner and
   // internal classes (format 4), feature layout, parameters, trees or booster,
-  // optional context stage, checksum. Format 4 is written; formats 3 (a forest
-  // on the 8 labels) and 2 (also: 14 base features, no context stage) are
-  // still read. `load` refuses a truncated, corrupt or wrong-version file with
+  // optional context stage, optional learned pairwise term (format 5),
+  // checksum. Format 5 is written; formats 4 (no pairwise term), 3 (also: a
+  // forest on the 8 labels) and 2 (also: 14 base features, no context stage)
+  // are still read. `load` refuses a truncated, corrupt or wrong-version file with
   // a findmug::Error naming the file and the problem.
   void save(const std::string& path) const;
   static RandomForest load(const std::string& path);
@@ -208,6 +221,7 @@ class RandomForest {
   std::vector<Tree> trees_;
   std::vector<std::string> feature_names_;
   std::shared_ptr<const RandomForest> context_stage_;
+  std::optional<PairwiseContext> pairwise_context_;
   std::uint32_t format_version_ = 0;
   Settings extraction_settings_;
   std::string id_;

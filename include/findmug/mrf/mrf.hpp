@@ -18,8 +18,7 @@ namespace findmug {
 
 // The pairwise term (mrf.pairwise): the paper's Potts, or Potts scaled per
 // edge by how alike the two patches look, learned from the training frames
-// (mrf_context.hpp; findmug-eval only so far: the model file does not carry
-// the learned term, and the Segmenter refuses it), or Potts times a
+// and carried by the model (context_pairwise.hpp), or Potts times a
 // label-pair factor from a label-layout prior file (layout_prior.hpp).
 enum class MrfPairwise { Potts, Context, Layout };
 // mrf.layout_direction: which neighbour of an edge is the upper one for the
@@ -72,11 +71,17 @@ void solveMrfInto(const std::vector<ClassProbabilities>& unaries,
 
 // The same with each edge k's Potts weight multiplied by edge_scale[k]
 // (finite, >= 0; one per edge): a pairwise term that also knows how alike
-// the two patches look (mrf_context.hpp).
+// the two patches look (context_pairwise.hpp).
 MrfResult solveMrfScaled(const std::vector<ClassProbabilities>& unaries,
                          const std::vector<Eigen::Vector3f>& centroids,
                          const std::vector<std::pair<int, int>>& edges,
                          const std::vector<float>& edge_scale, const MrfParams& params);
+// The same into `out`, reusing the memory it holds.
+void solveMrfScaledInto(const std::vector<ClassProbabilities>& unaries,
+                        const std::vector<Eigen::Vector3f>& centroids,
+                        const std::vector<std::pair<int, int>>& edges,
+                        const std::vector<float>& edge_scale, const MrfParams& params,
+                        MrfResult& out);
 
 // Label-pair factors: the pairwise cost of edge k is its Potts weight times
 // tables[table_of_edge[k]][y_first * kNumLabels + y_second] (y_first the

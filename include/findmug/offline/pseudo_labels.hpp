@@ -19,7 +19,6 @@
 
 #include "findmug/mrf/layout_prior.hpp"
 #include "findmug/mrf/mrf.hpp"
-#include "findmug/offline/mrf_context.hpp"
 #include "findmug/offline/training.hpp"
 
 namespace findmug {
@@ -29,16 +28,15 @@ namespace findmug {
 // the forest's probability when config.use_mrf is off; after the table region
 // vote when features.regions and tables.region_vote are on, which needs
 // `regions` = sampleRegionFeatures of the sample). With mrf.pairwise =
-// context, `pairwise` is the term learned on the training frames; with
-// mrf.pairwise = layout, `layout` is the prior (loadLayoutPrior of
-// mrf.layout_prior_path; refused when missing).
+// context the term is the model's (refused when it has none, as by the
+// Segmenter); with mrf.pairwise = layout, `layout` is the prior
+// (loadLayoutPrior of mrf.layout_prior_path; refused when missing).
 struct SampleLabelling {
   std::vector<ClassProbabilities> probabilities;
   MrfResult mrf;
 };
 SampleLabelling labelSample(const RandomForest& model, const FrameSample& sample,
                             const SegmenterConfig& config, const RegionFeatures* regions,
-                            const PairwiseContext* pairwise = nullptr,
                             const LayoutPrior* layout = nullptr);
 
 // What one round added: per label, the patches that passed the confidence
@@ -77,7 +75,7 @@ std::vector<FrameSample> pseudoLabelledSamples(const std::vector<FrameSample>& u
 RandomForest trainModelWithPseudoLabels(
     const std::vector<const FrameSample*>& labelled, const std::vector<FrameSample>& unlabelled,
     const SegmenterConfig& config, const TrainingOptions& training,
-    const PairwiseContext* pairwise = nullptr, PseudoLabelReport* report = nullptr,
+    PseudoLabelReport* report = nullptr,
     const std::function<void(int, const RandomForest&)>& after_round = {});
 
 // The configuration unlabelled frames are extracted with (by extractSamples, so

@@ -137,7 +137,9 @@ std::string fineLabelsFolder(const SegmenterConfig& config, const TrainingOption
 // features.context_cross_fit_folds contiguous groups of the frames (each
 // group's distributions come from a forest trained on the other groups), so
 // the context stage learns from first-stage answers as good as those it will
-// get on new frames. Extraction settings are not set (the caller does).
+// get on new frames. With mrf.pairwise = context the model also carries the
+// pairwise term learned from the frames' labelled neighbours
+// (learnPairwiseContext). Extraction settings are not set (the caller does).
 // `training` says how patches are weighed and which classes choose the splits
 // (training.sample_weight, training.split_labels). `progress(done, total)` counts forests.
 RandomForest trainModel(const std::vector<const FrameSample*>& frames,

@@ -3,8 +3,9 @@
 // frame [-> short depth gaps filled, cloud.fill_depth_*] -> cloud + normals
 //       -> ground plane -> oversegmentation -> features [-> region features]
 //       -> forest p(y|x) [-> context features -> context forest p(y|x)] -> MRF
-//       -> label image -> tables [-> the label image's depth holes filled,
-//       labels.fill_holes]
+//       (Potts, or with mrf.pairwise = context the model's learned pairwise
+//       term) -> label image -> tables [-> the label image's depth holes
+//       filled, labels.fill_holes]
 // The bracketed stages run when the model has them (features.regions,
 // features.context); the model file is the source of truth and a config
 // that disagrees with it is refused.
@@ -152,8 +153,10 @@ class Segmenter {
 // differs when `forest` was trained with other feature-extraction settings
 // than `config` has (features would not mean what the trees learnt), or when
 // its columns or stages are not those the config computes (features.regions,
-// features.context; a format-2 model has neither). A model without recorded
-// settings (trained in-process) is only checked for its columns and stages.
+// features.context; a format-2 model has neither), or when the config has
+// mrf.pairwise = context and the model carries no learned pairwise term. A
+// model without recorded settings (trained in-process) is only checked for
+// its columns, stages and pairwise term.
 void checkModelMatchesConfig(const RandomForest& forest, const SegmenterConfig& config);
 
 // Column names of the first stage's rows for `config` (kFeatureNames, then

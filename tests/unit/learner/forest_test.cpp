@@ -2,6 +2,7 @@
 // file and its refusal of truncated/corrupt/foreign files.
 #include "findmug/learner/forest.hpp"
 
+#include <gmock/gmock.h>
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -9,6 +10,8 @@
 #include <cstring>
 #include <fstream>
 #include <iterator>
+#include <limits>
+#include <optional>
 #include <random>
 #include <thread>
 
@@ -554,7 +557,7 @@ TEST(ForestFile, ExtraColumnsAndContextStageRoundTrip) {
   forest.save(dir.str("two-stage.fmf"));
   const RandomForest loaded = RandomForest::load(dir.str("two-stage.fmf"));
   EXPECT_EQ(loaded.id(), forest.id());
-  EXPECT_EQ(loaded.formatVersion(), 4u);
+  EXPECT_EQ(loaded.formatVersion(), 5u);
   EXPECT_EQ(loaded.featureNames(), forest.featureNames());
   ASSERT_NE(loaded.contextStage(), nullptr);
   EXPECT_EQ(loaded.contextStage()->featureNames(), forest.contextStage()->featureNames());
@@ -575,6 +578,51 @@ TEST(ForestFile, ExtraColumnsAndContextStageRoundTrip) {
   // Rows of the wrong length are refused, not read out of bounds.
   EXPECT_THROW(forest.predict(FeatureVector{}), Error);
   EXPECT_THROW(forest.predict(std::vector<float>(kFeatureDim + 4, 0.0f)), Error);
+}
+
+// A term as findmug-train learns it (mrf.pairwise = context), with values
+// that do not survive a float32 round trip, so a narrowing writer is caught.
+PairwiseContext learnedLookingTerm() {
+  PairwiseContext term;
+  term.bias = 1.2345678901234567;
+  term.weights = {-0.8123456789012345, -1.1, -2.7, -0.3333333333333333};
+  term.mean = {4.1, 6.2, 0.08, 0.21};
+  term.scale = {5.5, 7.25, 0.11, 0.4};
+  term.mean_cost = 3.1415926535897931;
+  term.training_edges = 133071;
+  return term;
+}
+
+TEST(ForestFile, PairwiseTermRoundTripsAndNamesTheModel) {
+  ForestParams params;
+  params.num_trees = 2;
+  params.seed = 3;
+  RandomForest forest = RandomForest::train(makeBlobs(10, 4), params);
+  EXPECT_EQ(forest.pairwiseContext(), nullptr);
+  const std::string plain_id = forest.id();
+  EXPECT_EQ(forest.summary().find("pairwise"), std::string::npos);
+  forest.setPairwiseContext(learnedLookingTerm());
+  EXPECT_NE(forest.id(), plain_id);  // the id names the term too
+  EXPECT_NE(forest.summary().find("learned pairwise term"), std::string::npos) << forest.summary();
+
+  TempDir dir;
+  forest.save(dir.str("term.fmf"));
+  const RandomForest loaded = RandomForest::load(dir.str("term.fmf"));
+  EXPECT_EQ(loaded.formatVersion(), 5u);
+  EXPECT_EQ(loaded.id(), forest.id());
+  ASSERT_NE(loaded.pairwiseContext(), nullptr);
+  EXPECT_EQ(*loaded.pairwiseContext(), learnedLookingTerm());  // bit-exact, doubles kept
+  loaded.save(dir.str("again.fmf"));
+  EXPECT_EQ(readBytes(dir.str("again.fmf")), readBytes(dir.str("term.fmf")));
+
+  // A term that cannot be used is refused when it is set, naming the field.
+  PairwiseContext bad = learnedLookingTerm();
+  bad.scale[2] = 0.0;
+  EXPECT_THAT([&] { forest.setPairwiseContext(bad); },
+              ::testing::ThrowsMessage<Error>(::testing::HasSubstr("scale")));
+  // Removing it gives the plain forest back.
+  forest.setPairwiseContext(std::nullopt);
+  EXPECT_EQ(forest.id(), plain_id);
 }
 
 TEST(ForestFile, ContextStageMustExtendTheFirstStage) {
@@ -759,10 +807,10 @@ TEST_F(ForestFileCorruption, WrongVersion) {
   auto bytes = good_;
   putU32(bytes, kVersionOffset, 1);  // the format before extraction settings were stored
   expectRefused(bytes, "version 1");
-  putU32(bytes, kVersionOffset, 5);
-  expectRefused(bytes, "version 5");
+  putU32(bytes, kVersionOffset, 6);
+  expectRefused(bytes, "version 6");
   fixChecksum(bytes);
-  expectRefused(bytes, "version 5");
+  expectRefused(bytes, "version 6");
 }
 
 // Format 2 (before extra columns and context stages): the same layout
@@ -770,9 +818,10 @@ TEST_F(ForestFileCorruption, WrongVersion) {
 // forests without a context stage.
 TEST_F(ForestFileCorruption, Format2FileLoadsAsFourteenColumnsWithoutContextStage) {
   auto bytes = good_;
-  ASSERT_EQ(getU32(bytes, kVersionOffset), 4u);
-  ASSERT_EQ(bytes[bytes.size() - 9], 0u);  // the context-stage flag: none
-  bytes.erase(bytes.end() - 9);
+  ASSERT_EQ(getU32(bytes, kVersionOffset), 5u);
+  ASSERT_EQ(bytes[bytes.size() - 10], 0u);  // the context-stage flag: none
+  ASSERT_EQ(bytes[bytes.size() - 9], 0u);   // the pairwise term flag: none
+  bytes.erase(bytes.end() - 10, bytes.end() - 8);
   // Format 4's learner and class map, which format 2 does not have.
   bytes.erase(bytes.begin() + static_cast<std::ptrdiff_t>(labelsEndOffset()),
               bytes.begin() + static_cast<std::ptrdiff_t>(featureSectionOffset()));
@@ -799,10 +848,99 @@ TEST_F(ForestFileCorruption, Format2FileLoadsAsFourteenColumnsWithoutContextStag
 
 TEST_F(ForestFileCorruption, BadContextStageFlag) {
   auto bytes = good_;
-  ASSERT_GT(bytes.size(), 9u);
-  bytes[bytes.size() - 9] = 2;
+  ASSERT_GT(bytes.size(), 10u);
+  bytes[bytes.size() - 10] = 2;
   fixChecksum(bytes);
   expectRefused(bytes, "context stage flag = 2");
+}
+
+// Format 4 (issue 35, before the learned pairwise term): format 5 without the
+// pairwise term flag. Such files (models/findmug.fmf 12292e1b) still load,
+// without a term.
+TEST_F(ForestFileCorruption, Format4FileLoadsWithoutPairwiseTerm) {
+  auto bytes = good_;
+  ASSERT_EQ(bytes[bytes.size() - 9], 0u);  // the pairwise term flag: none
+  bytes.erase(bytes.end() - 9);
+  putU32(bytes, kVersionOffset, 4);
+  fixChecksum(bytes);
+  const std::string old = dir_.str("format4.fmf");
+  writeBytes(old, bytes);
+  const RandomForest loaded = RandomForest::load(old);
+  EXPECT_EQ(loaded.formatVersion(), 4u);
+  EXPECT_EQ(loaded.pairwiseContext(), nullptr);
+  EXPECT_EQ(loaded.trees().size(), forest_.trees().size());
+  // A format-4 file that still has the flag byte has a byte too many.
+  auto longer = good_;
+  putU32(longer, kVersionOffset, 4);
+  fixChecksum(longer);
+  expectRefused(longer, "unexpected bytes");
+}
+
+// The pairwise term's bytes: the flag, then 14 float64 and a uint64 before the
+// checksum. Each unusable value is refused naming the file and the field.
+class PairwiseTermCorruption : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    ForestParams params;
+    params.num_trees = 2;
+    params.max_depth = 3;
+    forest_ = RandomForest::train(makeBlobs(10, 12, 2.0f), params);
+    forest_.setPairwiseContext(learnedLookingTerm());
+    forest_.save(dir_.str("model.fmf"));
+    good_ = readBytes(dir_.str("model.fmf"));
+    term_ = good_.size() - kChecksumBytes - kTermBytes;
+    ASSERT_EQ(good_[term_ - 1], 1u);  // the flag
+  }
+  // Offset of the term's k-th float64 (0 bias, 1-4 weights, 5-8 means,
+  // 9-12 scales, 13 mean cost); 14 is the uint64 edge count.
+  std::size_t field(int k) const { return term_ + 8 * static_cast<std::size_t>(k); }
+  std::vector<std::uint8_t> withDouble(int k, double v) const {
+    auto bytes = good_;
+    std::uint64_t u = 0;
+    std::memcpy(&u, &v, sizeof u);
+    test::putU64(bytes, field(k), u);
+    fixChecksum(bytes);
+    return bytes;
+  }
+  void expectRefused(const std::vector<std::uint8_t>& bytes, const std::string& word) {
+    test::expectModelRefused(dir_.str("bad.fmf"), bytes, word);
+  }
+
+  static constexpr std::size_t kChecksumBytes = 8;
+  static constexpr std::size_t kTermBytes = 14 * 8 + 8;
+  TempDir dir_;
+  RandomForest forest_;
+  std::vector<std::uint8_t> good_;
+  std::size_t term_ = 0;
+};
+
+TEST_F(PairwiseTermCorruption, IntactTermLoads) {
+  const RandomForest loaded = RandomForest::load(dir_.str("model.fmf"));
+  ASSERT_NE(loaded.pairwiseContext(), nullptr);
+  EXPECT_EQ(loaded.pairwiseContext()->training_edges, 133071u);
+}
+
+TEST_F(PairwiseTermCorruption, BadFlagAndValuesAreRefusedByName) {
+  auto bytes = good_;
+  bytes[term_ - 1] = 3;
+  fixChecksum(bytes);
+  expectRefused(bytes, "pairwise term flag = 3");
+  expectRefused(withDouble(0, std::nan("")), "bias");
+  expectRefused(withDouble(2, std::numeric_limits<double>::infinity()), "weight");
+  expectRefused(withDouble(6, std::nan("")), "mean");
+  expectRefused(withDouble(11, 0.0), "scale");
+  expectRefused(withDouble(12, -1.0), "scale");
+  expectRefused(withDouble(13, 0.0), "mean cost");
+  bytes = good_;
+  test::putU64(bytes, field(14), 0);
+  fixChecksum(bytes);
+  expectRefused(bytes, "training edge");
+  // The term cut off before the checksum.
+  bytes = good_;
+  bytes.erase(bytes.begin() + static_cast<std::ptrdiff_t>(field(13)),
+              bytes.begin() + static_cast<std::ptrdiff_t>(field(14)));
+  fixChecksum(bytes);
+  expectRefused(bytes, "");
 }
 
 TEST_F(ForestFileCorruption, DifferentLabelNames) {

@@ -128,7 +128,7 @@ TEST(LearnerForest, ThirteenAndFortyInternalClassesRoundTripAndPredictTheSame) {
     const std::string path = dir.str(std::string(scheme) + ".fmf");
     forest.save(path);
     const RandomForest loaded = RandomForest::load(path);
-    EXPECT_EQ(loaded.formatVersion(), 4u);
+    EXPECT_EQ(loaded.formatVersion(), 5u);
     EXPECT_EQ(loaded.learnerKind(), LearnerKind::Forest);
     EXPECT_EQ(loaded.internalClasses(), fine.classes);
     EXPECT_EQ(loaded.id(), forest.id());
@@ -229,7 +229,7 @@ TEST(LearnerXGBoost, LearnsAndRoundTripsBitIdentically) {
   model.save(path);
   const RandomForest loaded = RandomForest::load(path);
   EXPECT_EQ(loaded.learnerKind(), LearnerKind::XGBoost);
-  EXPECT_EQ(loaded.formatVersion(), 4u);
+  EXPECT_EQ(loaded.formatVersion(), 5u);
   EXPECT_EQ(loaded.id(), model.id());
   EXPECT_EQ(loaded.xgboostParams().rounds, 8);
   EXPECT_EQ(loaded.xgboostParams().max_depth, 3);
@@ -309,7 +309,7 @@ TEST(LearnerXGBoost, RefusesBadParameters) {
 }
 
 // ---------------------------------------------------------------------------
-// The model file: format 3 still loads, corrupt format-4 files are refused
+// The model file: format 3 still loads, corrupt boosted files are refused
 
 // The fixture is the daemon's default model before issue 35 (models/findmug.fmf
 // 35d9fa37 at commit 6f38cdc, format 3; tests/fixtures/models/README.md): a model a
@@ -323,11 +323,13 @@ TEST(LearnerFile, ShippedFormat3ModelStillLoads) {
   EXPECT_EQ(model.learnerKind(), LearnerKind::Forest);
   EXPECT_EQ(model.internalClasses(), labelClasses());
   EXPECT_FALSE(model.trees().empty());
-  // Written again, it becomes format 4 and predicts the same.
+  EXPECT_EQ(model.pairwiseContext(), nullptr);
+  // Written again, it becomes format 5 (without a pairwise term) and predicts the same.
   TempDir dir;
-  model.save(dir.str("v4.fmf"));
-  const RandomForest again = RandomForest::load(dir.str("v4.fmf"));
-  EXPECT_EQ(again.formatVersion(), 4u);
+  model.save(dir.str("v5.fmf"));
+  const RandomForest again = RandomForest::load(dir.str("v5.fmf"));
+  EXPECT_EQ(again.formatVersion(), 5u);
+  EXPECT_EQ(again.pairwiseContext(), nullptr);
   std::vector<float> row(static_cast<std::size_t>(model.dim()), 0.5f);
   const auto a = model.predict(row);
   const auto b = again.predict(row);
@@ -343,8 +345,9 @@ class BoostedFileCorruption : public ::testing::Test {
     model_.save(path_);
     good_ = readBytes(path_);
     blob_size_ = model_.booster()->blob.size();
-    // Layout tail: uint64 blob length, blob, uint8 context flag, uint64 checksum.
-    blob_offset_ = good_.size() - 8 - 1 - blob_size_;
+    // Layout tail: uint64 blob length, blob, uint8 context flag, uint8 pairwise term
+    // flag, uint64 checksum.
+    blob_offset_ = good_.size() - 8 - 1 - 1 - blob_size_;
     length_offset_ = blob_offset_ - 8;
     std::uint64_t stored = 0;
     for (int i = 0; i < 8; ++i)
@@ -431,7 +434,7 @@ TEST_F(BoostedFileCorruption, BadLearnerByteAndContextStage) {
   fixChecksum(bytes);
   expectRefused(bytes, "learner = 7");
   bytes = good_;
-  bytes[bytes.size() - 9] = 1;  // a context stage behind a booster
+  bytes[bytes.size() - 10] = 1;  // a context stage behind a booster
   fixChecksum(bytes);
   expectRefused(bytes, "auto-context stage");
 }

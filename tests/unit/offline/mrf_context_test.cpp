@@ -1,6 +1,8 @@
-// The context-aware pairwise term (mrf_context.hpp): learned on hand-made
-// graphs where a colour step means a label change, it lets a weak patch
-// follow its look-alike neighbour where the paper's Potts term does not.
+// The learned pairwise term (mrf/context_pairwise.hpp, learned by
+// offline/mrf_context.hpp): learned on hand-made graphs where a colour step
+// means a label change, it lets a weak patch follow its look-alike neighbour
+// where the paper's Potts term does not. The Segmenter's use of it:
+// tests/unit/pipeline/segmenter_context_test.cpp.
 #include "findmug/offline/mrf_context.hpp"
 
 #include <gmock/gmock.h>
@@ -8,8 +10,6 @@
 
 #include "findmug/common/error.hpp"
 #include "findmug/mrf/mrf.hpp"
-#include "findmug/pipeline/segmenter.hpp"
-#include "findmug/settings/config.hpp"
 
 namespace findmug {
 namespace {
@@ -133,34 +133,6 @@ TEST(MrfContext, BadGraphsAreNamed) {
   const std::vector<std::uint8_t> void_labels = {kVoidLabel, 1};
   EXPECT_THROW(learnPairwiseContext({{&features, &fine, &void_labels}}), Error);
   EXPECT_THROW(pairwiseContextScales(PairwiseContext{}, features, edges), Error);
-}
-
-// The model file does not carry the learned term: a Segmenter that would
-// classify with it refuses, naming the setting; one that only extracts
-// features (training) does not care.
-TEST(MrfContext, SegmenterRefusesTheTermWithoutItsWeights) {
-  TrainingSet set;
-  for (int i = 0; i < 20; ++i) {
-    set.features.push_back(patch(static_cast<float>(i)));
-    set.labels.push_back(static_cast<std::uint8_t>(i % 2 ? Label::Wall : Label::Floor));
-  }
-  ForestParams params;
-  params.num_trees = 1;
-  params.max_depth = 2;
-  Config config;
-  applyOverride(config, "mrf.pairwise=context");
-  auto forest = std::make_shared<RandomForest>(RandomForest::train(set, params));
-  forest->setExtractionSettings(extractionSettings(config.segmenter));
-  try {
-    Segmenter segmenter(config.segmenter, forest);
-    FAIL() << "mrf.pairwise=context was accepted without learned weights";
-  } catch (const Error& e) {
-    EXPECT_THAT(e.what(), ::testing::HasSubstr("mrf.pairwise = context"));
-  }
-  EXPECT_NO_THROW(Segmenter(config.segmenter, nullptr));
-  applyOverride(config, "mrf.pairwise=potts");
-  EXPECT_NO_THROW(Segmenter(config.segmenter, forest));
-  EXPECT_THROW(applyOverride(config, "mrf.pairwise=crf"), Error);
 }
 
 }  // namespace

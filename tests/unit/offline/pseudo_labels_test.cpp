@@ -151,7 +151,7 @@ TEST(PseudoLabels, ThresholdOneAddsNothingAndLeavesTheModelAsItWas) {
   training.pseudo_min_confidence = 1.0f;
   PseudoLabelReport report;
   const RandomForest model = trainModelWithPseudoLabels(f.labelledPointers(), f.unlabelled, config,
-                                                        training, nullptr, &report);
+                                                        training, &report);
   ASSERT_EQ(report.rounds.size(), 2u);
   for (const auto& r : report.rounds) {
     EXPECT_EQ(r.keptTotal(), 0);
@@ -175,7 +175,7 @@ TEST(PseudoLabels, ARoundChangesTheModel) {
   PseudoLabelReport report;
   std::vector<std::string> ids;
   const RandomForest model = trainModelWithPseudoLabels(
-      f.labelledPointers(), f.unlabelled, config, training, nullptr, &report,
+      f.labelledPointers(), f.unlabelled, config, training, &report,
       [&](int, const RandomForest& m) { ids.push_back(m.id()); });
   ASSERT_EQ(report.rounds.size(), 1u);
   EXPECT_GT(report.rounds[0].keptTotal(), 0);
