@@ -732,6 +732,16 @@ class ForestFileCorruption : public ::testing::Test {
     test::expectModelRefused(dir_.str("bad.fmf"), bytes, word);
   }
 
+  // `bytes` stamped as format `version` (checksum fixed), written and loaded: an
+  // older writer's file, made from this one.
+  RandomForest loadAsFormat(std::vector<std::uint8_t> bytes, std::uint32_t version) {
+    putU32(bytes, kVersionOffset, version);
+    fixChecksum(bytes);
+    const std::string old = dir_.str("format" + std::to_string(version) + ".fmf");
+    writeBytes(old, bytes);
+    return RandomForest::load(old);
+  }
+
   TempDir dir_;
   RandomForest forest_;
   std::string path_;
@@ -825,11 +835,7 @@ TEST_F(ForestFileCorruption, Format2FileLoadsAsFourteenColumnsWithoutContextStag
   // Format 4's learner and class map, which format 2 does not have.
   bytes.erase(bytes.begin() + static_cast<std::ptrdiff_t>(labelsEndOffset()),
               bytes.begin() + static_cast<std::ptrdiff_t>(featureSectionOffset()));
-  putU32(bytes, kVersionOffset, 2);
-  fixChecksum(bytes);
-  const std::string old = dir_.str("format2.fmf");
-  writeBytes(old, bytes);
-  const RandomForest loaded = RandomForest::load(old);
+  const RandomForest loaded = loadAsFormat(bytes, 2);
   EXPECT_EQ(loaded.formatVersion(), 2u);
   EXPECT_EQ(loaded.dim(), kFeatureDim);
   EXPECT_EQ(loaded.contextStage(), nullptr);
@@ -841,6 +847,7 @@ TEST_F(ForestFileCorruption, Format2FileLoadsAsFourteenColumnsWithoutContextStag
   }
   // A format-2 file cannot carry extra columns.
   auto more = bytes;
+  putU32(more, kVersionOffset, 2);
   putU32(more, labelsEndOffset(), kFeatureDim + 1);
   fixChecksum(more);
   expectRefused(more, "15 features");
@@ -861,11 +868,7 @@ TEST_F(ForestFileCorruption, Format4FileLoadsWithoutPairwiseTerm) {
   auto bytes = good_;
   ASSERT_EQ(bytes[bytes.size() - 9], 0u);  // the pairwise term flag: none
   bytes.erase(bytes.end() - 9);
-  putU32(bytes, kVersionOffset, 4);
-  fixChecksum(bytes);
-  const std::string old = dir_.str("format4.fmf");
-  writeBytes(old, bytes);
-  const RandomForest loaded = RandomForest::load(old);
+  const RandomForest loaded = loadAsFormat(bytes, 4);
   EXPECT_EQ(loaded.formatVersion(), 4u);
   EXPECT_EQ(loaded.pairwiseContext(), nullptr);
   EXPECT_EQ(loaded.trees().size(), forest_.trees().size());
