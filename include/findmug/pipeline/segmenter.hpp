@@ -29,6 +29,7 @@
 #include "findmug/learner/forest.hpp"
 #include "findmug/mrf/layout_prior.hpp"
 #include "findmug/mrf/mrf.hpp"
+#include "findmug/objects/table_objects.hpp"
 #include "findmug/settings/config.hpp"
 #include "findmug/supervoxels/oversegmentation.hpp"
 #include "findmug/tables/tables.hpp"
@@ -42,10 +43,10 @@ namespace findmug {
 struct StageTimings {
   double cloud_ms = 0, normals_ms = 0, ground_ms = 0, overseg_ms = 0, features_ms = 0,
          regions_ms = 0, forest_ms = 0, context_ms = 0, mrf_ms = 0, labels_ms = 0,
-         tables_ms = 0;
+         tables_ms = 0, objects_ms = 0;
   double total() const {
     return cloud_ms + normals_ms + ground_ms + overseg_ms + features_ms + regions_ms + forest_ms +
-           context_ms + mrf_ms + labels_ms + tables_ms;
+           context_ms + mrf_ms + labels_ms + tables_ms + objects_ms;
   }
 };
 
@@ -83,6 +84,9 @@ struct LabelledFrame {
   std::vector<TableCluster> tables;
   // Why tables were not found or were rejected (for the caller to log).
   std::vector<std::string> table_diagnostics;
+  // The object candidates standing on `tables` (table_objects.*), with their
+  // diagnostics and counts; empty with table_objects.enabled false.
+  TableObjectDetection table_objects;
   StageTimings timings;
   StageTimings cpu_timings;
 };

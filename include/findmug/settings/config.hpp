@@ -23,6 +23,7 @@
 #include "findmug/learner/forest.hpp"
 #include "findmug/map/table_map.hpp"
 #include "findmug/mrf/mrf.hpp"
+#include "findmug/objects/table_objects.hpp"
 #include "findmug/settings/offline_settings.hpp"
 #include "findmug/settings/settings.hpp"
 #include "findmug/supervoxels/oversegmentation.hpp"
@@ -74,6 +75,7 @@ struct SegmenterConfig {
   bool use_mrf = true;
   LabelHoleFillConfig label_holes;  // labels.*
   TableConfig tables;
+  TableObjectConfig table_objects;  // table_objects.*
 };
 
 // The core's sections of a settings file: what the segmenter runs with, and what
