@@ -115,13 +115,19 @@ try {
   }
   if (pixels.width < 100 || pixels.lit < 0.3) fail(`label overlay looks empty: ${JSON.stringify(pixels)}`);
 
-  // 2. A table hull over the camera image, and the same table on the map.
+  // 2. A table hull over the camera image, and the same table on the map. The map's hull
+  // comes from FINDMUG_TABLE_MAP, which the daemon publishes after the frame's tables and the
+  // page draws on its own message: on a loaded host it can follow the camera's hull by a frame
+  // or more, so wait for both (a page that never draws the map still fails, at the timeout).
   await page.waitForFunction(() => {
-    for (const p of document.querySelectorAll('#overlay polygon.hull')) {
-      const pts = p.getAttribute('points').trim().split(/\s+/).map((xy) => xy.split(',').map(Number));
-      if (pts.length >= 3 && pts.every(([x, y]) => Number.isFinite(x) && Number.isFinite(y))) return true;
-    }
-    return false;
+    const drawn = (selector) => {
+      for (const p of document.querySelectorAll(selector)) {
+        const pts = p.getAttribute('points').trim().split(/\s+/).map((xy) => xy.split(',').map(Number));
+        if (pts.length >= 3 && pts.every(([x, y]) => Number.isFinite(x) && Number.isFinite(y))) return true;
+      }
+      return false;
+    };
+    return drawn('#overlay polygon.hull') && drawn('#map polygon.hull');
   }, { timeout: 180000, polling: 100 });
   const hulls = await page.evaluate(() => ({
     camera: document.querySelectorAll('#overlay polygon.hull').length,
