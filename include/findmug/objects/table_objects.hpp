@@ -123,4 +123,10 @@ int relabelTableObjects(const std::vector<TableObject>& objects, LabelImage& lab
 // when `rgb` is empty.
 ObjectColourHistogram objectColourHistogram(const std::vector<Rgb8>& rgb);
 
+// 1 - the Bhattacharyya coefficient of two histograms (each summing to 1):
+// 0 for equal colours, 1 for colours with no bin in common. A histogram that
+// is all zero (no pixels) is at distance 1 from everything.
+// (src/objects/colour_distance.cpp)
+float colourHistogramDistance(const ObjectColourHistogram& a, const ObjectColourHistogram& b);
+
 }  // namespace findmug

@@ -1,0 +1,111 @@
+// findmug/map/object_map.hpp — the objects seen on table tops, kept across frames.
+//
+// findTableObjects (objects/table_objects.hpp) sees one frame in the robot
+// base frame. With the robot's pose in a map frame, the ObjectMap places each
+// frame's candidates in the map and keeps them under stable ids, so that a
+// robot asked for its mug can be told where it saw it last, and when.
+//
+//   * A candidate is the same object as a mapped one when their centroids are
+//     within `match_distance_m` on the floor and `match_height_m` in height,
+//     and their colour histograms are within `match_colour_distance`
+//     (colourHistogramDistance, table_objects.hpp): a blue mug put where a red one stood is a new
+//     object. Pairs are taken nearest first, one to one (deterministic).
+//   * A matched object's position, footprint and colour are the running mean
+//     of its last `max_mean_sightings` sightings (objects stand still while
+//     they are seen; a few centimetres of depth noise average out).
+//   * A mapped object is missed in a frame when its place was seen without it:
+//     its floor position lies inside the visible top of one of the frame's
+//     tables (its hull shrunk by `seen_margin_m`) and no candidate matched it.
+//     After `forget_misses` consecutive misses it is forgotten: somebody took
+//     the mug away. An object whose place is out of view is neither matched
+//     nor missed: it stays, with its last-seen time.
+//
+// Pure core code: no LCM, no clock, no threads; the caller passes the time.
+#pragma once
+
+#include <Eigen/Core>
+#include <cstdint>
+#include <vector>
+
+#include "findmug/common/pose2d.hpp"
+#include "findmug/objects/table_objects.hpp"
+#include "findmug/settings/settings.hpp"
+#include "findmug/tables/tables.hpp"
+
+namespace findmug {
+
+struct ObjectMapConfig {
+  float match_distance_m = 0.10f;       // centroids this close on the floor ...
+  float match_height_m = 0.10f;         // ... and in height may be one object ...
+  float match_colour_distance = 0.5f;   // ... when their colours are this close (0..1)
+  int forget_misses = 3;                // consecutive frames its place was seen without it
+  float seen_margin_m = 0.05f;          // a place is seen when this far inside a visible top
+  int max_mean_sightings = 10;          // sightings the running means weigh
+};
+
+// Throws findmug::Error naming the setting (as `object_map.KEY`) when out of range.
+void validateObjectMapConfig(const ObjectMapConfig& config);
+
+// The `object_map:` section of the config file, one key per field above.
+const SettingsTable<ObjectMapConfig>& objectMapSettings();
+
+struct MappedObject {
+  int id = 0;  // stable: 1, 2, ... in order of creation, never reused
+  // Map frame: floor position and height of the centroid, the footprint's
+  // first axis (unit, map frame) and half-lengths, the height above its table.
+  Eigen::Vector3f centroid = Eigen::Vector3f::Zero();
+  Eigen::Vector2f major_axis = Eigen::Vector2f::UnitX();
+  Eigen::Vector2f extents = Eigen::Vector2f::Zero();
+  float height_above_top = 0.0f;
+  Eigen::Vector3f mean_rgb = Eigen::Vector3f::Zero();
+  ObjectColourHistogram colour_histogram{};
+  int point_count = 0;  // of the last sighting
+  // The table it was last seen on: the caller's id for it (the table map's
+  // stable id; 0 when that table was not in a map).
+  int table_id = 0;
+  int sightings = 0;  // frames it was seen in
+  int misses = 0;     // consecutive frames its place was seen without it
+  std::uint64_t first_seen_utime = 0;
+  std::uint64_t last_seen_utime = 0;
+};
+
+struct ObjectMapUpdate {
+  // Per candidate of the frame (same order): the id of the mapped object it
+  // is now part of (matched or created).
+  std::vector<int> object_ids;
+  std::vector<int> created;
+  std::vector<int> forgotten;
+};
+
+class ObjectMap {
+ public:
+  explicit ObjectMap(ObjectMapConfig config = {});
+
+  // One labelled frame's candidates (`objects`, base frame) on its `tables`
+  // (base frame), with `table_ids[i]` the caller's id of tables[i] (e.g. its
+  // table map id, 0 for none; empty: all 0), taken at `base_in_map` at time
+  // `utime` (microseconds). Throws findmug::Error when an object's table
+  // index or table_ids' size does not fit `tables`.
+  ObjectMapUpdate update(const std::vector<TableObject>& objects,
+                         const std::vector<TableCluster>& tables,
+                         const std::vector<int>& table_ids, const Pose2D& base_in_map,
+                         std::uint64_t utime);
+
+  const std::vector<MappedObject>& objects() const { return objects_; }
+  void clear();
+  const ObjectMapConfig& config() const { return config_; }
+
+ private:
+  void absorb(MappedObject& mapped, const TableObject& seen, const Pose2D& base_in_map,
+              int table_id, std::uint64_t utime) const;
+  MappedObject create(const TableObject& seen, const Pose2D& base_in_map, int table_id,
+                      std::uint64_t utime);
+  bool placeSeen(const MappedObject& mapped, const std::vector<TableCluster>& tables,
+                 const Pose2D& map_in_base) const;
+
+  ObjectMapConfig config_;
+  std::vector<MappedObject> objects_;
+  int next_id_ = 1;
+};
+
+}  // namespace findmug
