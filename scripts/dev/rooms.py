@@ -113,7 +113,8 @@ def check():
 
 
 def top():
-    return subprocess.check_output(["git", "rev-parse", "--show-toplevel"], text=True).strip()
+    return subprocess.check_output(["git", "rev-parse", "--show-toplevel"], text=True,
+                                   cwd=os.path.dirname(os.path.abspath(__file__))).strip()
 
 
 def git_mv(src, dst):
@@ -194,9 +195,10 @@ def includes():
 
 
 if __name__ == "__main__":
-    os.chdir(top())
     if len(sys.argv) == 3 and sys.argv[1] == "check":
         os.chdir(sys.argv[2])
+    else:
+        os.chdir(top())
     if len(sys.argv) < 2 or sys.argv[1] not in ("move", "includes", "check"):
         sys.exit(__doc__)
     if sys.argv[1] == "check":
