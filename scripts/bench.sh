@@ -15,7 +15,7 @@ cd "$(dirname "$0")/.."
 BUILD_DIR=${BUILD_DIR:-build}
 JOBS=${JOBS:-$(nproc)}
 source scripts/build-env.sh
-cmake -S . -B "$BUILD_DIR" -DCMAKE_BUILD_TYPE=Release > /dev/null
+scripts/configure.sh "$BUILD_DIR" > /dev/null    # the tree scripts/test.sh and demo.sh share
 cmake --build "$BUILD_DIR" -j"$JOBS" --target findmugd findmug-replay findmug-replay-probe \
   findmug-sequential findmug-synth findmug-train
 BUILD_DIR="$BUILD_DIR" exec tests/bench/daemon_bench.sh --build-dir "$BUILD_DIR" "$@"

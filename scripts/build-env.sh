@@ -1,5 +1,5 @@
-# Sourced by the scripts that configure a build tree (test.sh, demo.sh, test-sanitizers.sh,
-# fuzz.sh, bench.sh, package.sh, fuzz-seeds.sh).
+# Sourced by the scripts that configure a build tree (configure.sh, which test.sh, demo.sh,
+# bench.sh and fuzz-seeds.sh share; test-sanitizers.sh, fuzz.sh, package.sh).
 #
 # New build trees use Ninja when it is installed (scripts/install-deps.sh installs it).
 # With make, the targets named on one `cmake --build --target a --target b ...` are built

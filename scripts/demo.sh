@@ -28,7 +28,8 @@ quietly() {
 echo "== 0. Installing packages and building (log: $OUT/setup.log)"
 quietly scripts/install-deps.sh
 source scripts/build-env.sh
-quietly cmake -S . -B "$BUILD_DIR" -DCMAKE_BUILD_TYPE=Release
+# The configure scripts/test.sh shares: its build reuses what this one compiled.
+quietly scripts/configure.sh "$BUILD_DIR"
 quietly cmake --build "$BUILD_DIR" -j"$(nproc)" --target findmugd findmug-synth \
   findmug-nav-client findmug-label-viewer
 LOG="$OUT_ABS/findmug.lcmlog"

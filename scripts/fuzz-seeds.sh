@@ -10,7 +10,7 @@ cd "$(dirname "$0")/.."
 BUILD_DIR=${BUILD_DIR:-build}
 source scripts/build-env.sh
 if [[ ! -f "$BUILD_DIR/CMakeCache.txt" ]]; then
-  cmake -S . -B "$BUILD_DIR" -DCMAKE_BUILD_TYPE=Release
+  scripts/configure.sh "$BUILD_DIR"
 fi
 cmake --build "$BUILD_DIR" -j"${JOBS:-$(nproc)}" --target findmug-fuzz-seeds
 seeds=$(find "$BUILD_DIR" -name findmug-fuzz-seeds -type f -perm -u+x | head -n1)

@@ -12,12 +12,9 @@ JOBS=${JOBS:-$(nproc)}
 
 scripts/install-deps.sh
 source scripts/build-env.sh
-# Prefix /usr: the tree the package test (label package) turns into the Debian package.
-# ccache (installed by install-deps.sh) makes a rebuild of unchanged sources cheap.
-launcher=()
-command -v ccache >/dev/null && launcher=(-DCMAKE_CXX_COMPILER_LAUNCHER=ccache -DCMAKE_C_COMPILER_LAUNCHER=ccache)
-cmake -S . -B "$BUILD_DIR" -DCMAKE_BUILD_TYPE=Release -DFINDMUG_WERROR=ON -DCMAKE_INSTALL_PREFIX=/usr \
-  "${launcher[@]}"
+# The configure scripts/demo.sh and scripts/bench.sh share (Release, warnings as errors,
+# prefix /usr for the package test, ccache): after the demo only what it did not build compiles.
+scripts/configure.sh "$BUILD_DIR"
 cmake --build "$BUILD_DIR" -j"$JOBS"
 # Tests that need the third-party data read it from $FINDMUG_DATA or
 # ../shared/data; under CI=true a missing data set is a failure, not a skip.

@@ -1,5 +1,9 @@
 #!/usr/bin/env python3
-"""The core's rooms (issue 37): where each file of src/ and include/findmug/ lives.
+"""The core's rooms: where each file of src/, include/findmug/ and tests/unit/ lives.
+
+  rooms.py check     fail, naming each file, when a file under src/ROOM/, include/findmug/ROOM/
+                     or tests/unit/ROOM/ is not listed in ROOMS (or ROOM is not a room);
+                     run by ctest (`rooms`)
 
   rooms.py move      git-mv every flat core file into its room (skips what is moved) and
                      then rewrites references (below)
@@ -40,26 +44,77 @@ ROOMS = {
     "mrf": (["mrf", "context_pairwise", "object_consistency", "layout_prior"],
             ["mrf.cpp", "mrf_internal.hpp", "context_pairwise.cpp", "object_consistency.cpp",
              "layout_prior.cpp"], ["mrf", "object_consistency", "layout_prior"]),
-    "labels": (["labels", "label_image"], ["label_image.cpp"], ["label_image"]),
-    "pipeline": (["segmenter"], ["segmenter.cpp"], ["segmenter", "buffer_reuse"]),
+    "labels": (["labels", "label_image", "label_holes"], ["label_image.cpp", "label_holes.cpp"],
+               ["label_image", "label_holes"]),
+    "pipeline": (["segmenter"], ["segmenter.cpp"],
+                 ["segmenter", "buffer_reuse", "segmenter_context", "segmenter_layout",
+                  "segmenter_objects"]),
     "tables": (["tables", "table_regions"],
                ["tables.cpp", "tables_internal.hpp", "table_clustering.cpp", "table_geometry.cpp",
                 "table_reachability.cpp", "table_regions.cpp", "table_search_positions.cpp"],
                ["tables", "table_regions"]),
+    "objects": (["table_objects"], ["table_objects.cpp"], ["table_objects"]),
     "map": (["table_map", "semantic_map"], ["table_map.cpp", "semantic_map.cpp"],
             ["table_map", "semantic_map"]),
     "settings": (["config", "settings", "offline_settings"], ["config.cpp", "settings.cpp"], ["config", "settings"]),
     "offline": (["training", "metrics", "table_metrics", "cv_folds", "depth_degradation", "mrf_context",
-                 "nyu_mat"],
+                 "nyu_mat", "layout_counts", "pseudo_labels"],
                 ["training.cpp", "metrics.cpp", "table_metrics.cpp", "cv_folds.cpp",
-                 "depth_degradation.cpp", "mrf_context.cpp", "nyu_mat.cpp"],
-                ["cv_folds", "depth_degradation", "mrf_context", "nyu_mat", "table_metrics"]),
-    "synth": (["synth"], [], ["synth"]),
+                 "depth_degradation.cpp", "mrf_context.cpp", "nyu_mat.cpp", "layout_counts.cpp",
+                 "pseudo_labels.cpp"],
+                ["cv_folds", "depth_degradation", "mrf_context", "nyu_mat", "table_metrics",
+                 "fine_label_inference", "layout_counts", "pseudo_labels"]),
+    # synth builds in its own CMakeLists.txt and includes synth_internal.hpp from its own folder
+    "synth": (["synth"], ["camera_path.cpp", "ground_truth.cpp", "render.cpp", "scene.cpp",
+                          "scene_edit.cpp", "synth_internal.hpp"], ["synth"]),
 }
+
+# Rooms built by their own CMakeLists.txt with their folder on the include path: their internal
+# headers are included by bare name and are not rewritten to "ROOM/X.hpp".
+OWN_INCLUDE_DIR = {"synth"}
+
+
+def unlisted():
+    """Files under a room's three folders that ROOMS does not list, and folders that are no room."""
+    problems = []
+    for base, kind in (("src", 1), ("include/findmug", 0), ("tests/unit", 2)):
+        if not os.path.isdir(base):
+            continue
+        for room in sorted(os.listdir(base)):
+            folder = os.path.join(base, room)
+            if not os.path.isdir(folder):
+                continue
+            if room not in ROOMS:
+                problems.append(f"{folder}/: not a room in scripts/dev/rooms.py ROOMS")
+                continue
+            listed = ROOMS[room][kind]
+            if kind == 0:
+                names = {f"{h}.hpp" for h in listed}
+            elif kind == 2:
+                names = {f"{t}_test.cpp" for t in listed}
+            else:
+                names = set(listed) | {"CMakeLists.txt"}
+            for dirpath, _, files in os.walk(folder):
+                for f in sorted(files):
+                    rel = os.path.relpath(os.path.join(dirpath, f), folder)
+                    if rel not in names:
+                        problems.append(f"{os.path.join(folder, rel)}: not listed in room '{room}'")
+    return problems
+
+
+def check():
+    problems = unlisted()
+    for p in problems:
+        print(f"rooms.py: {p}")
+    if problems:
+        sys.exit(f"rooms.py check: {len(problems)} file(s) not listed; add them to ROOMS")
+    print(f"rooms.py check: every file of src/, include/findmug/ and tests/unit/ rooms is listed "
+          f"({len(ROOMS)} rooms)")
 
 
 def top():
-    return subprocess.check_output(["git", "rev-parse", "--show-toplevel"], text=True).strip()
+    return subprocess.check_output(["git", "rev-parse", "--show-toplevel"], text=True,
+                                   cwd=os.path.dirname(os.path.abspath(__file__))).strip()
 
 
 def git_mv(src, dst):
@@ -94,7 +149,7 @@ def replacements():
         for s in sources:
             # include/findmug/x.hpp and src/x.cpp spelled as paths in text and CMake
             pairs.append((re.compile(r'(?<![\w/])src/' + re.escape(s) + r'(?![\w])'), f"src/{room}/{s}"))
-            if s.endswith(".hpp"):
+            if s.endswith(".hpp") and room not in OWN_INCLUDE_DIR:
                 pairs.append((re.compile(r'#include "' + re.escape(s) + '"'), f'#include "{room}/{s}"'))
         for t in tests:
             pairs.append((re.compile(r'(?<![\w/])tests/unit/' + re.escape(t) + r'_test\.cpp\b'),
@@ -140,9 +195,15 @@ def includes():
 
 
 if __name__ == "__main__":
-    os.chdir(top())
-    if len(sys.argv) != 2 or sys.argv[1] not in ("move", "includes"):
+    if len(sys.argv) == 3 and sys.argv[1] == "check":
+        os.chdir(sys.argv[2])
+    else:
+        os.chdir(top())
+    if len(sys.argv) < 2 or sys.argv[1] not in ("move", "includes", "check"):
         sys.exit(__doc__)
+    if sys.argv[1] == "check":
+        check()
+        sys.exit(0)
     if sys.argv[1] == "move":
         move()
     includes()

@@ -46,7 +46,7 @@ def without(settings, key, value=None):
 
 # (name, table label, settings, extra flags, reference row for the paired column or None)
 ROWS = [
-    ("before", "**before issue 35** (regions + scene features, 8 labels, 8 trees, no hole fill)",
+    ("before", "**before** (the configuration shipped before: regions + scene features, 8 labels, 8 trees, no hole fill)",
      BEFORE, [], None),
     ("before+nyu13", "+ NYU-13 internal classes (`learner.classes=nyu13`)",
      BEFORE + ["learner.classes=nyu13"], [], "before"),
@@ -93,7 +93,7 @@ ROWS = [
      SHIPPED + PSEUDO, ["--unlabelled", "{data}/nyuv2_unlabeled_train"], "shipped"),
     ("shipped+rawcopies", "shipped + a raw-like training copy of every frame",
      SHIPPED + ["training.degraded_copies=1"], [], "shipped"),
-    ("before@raw", "*raw-like copies (`--degrade`)*: before issue 35", BEFORE, ["--degrade"], None),
+    ("before@raw", "*raw-like copies (`--degrade`)*: before", BEFORE, ["--degrade"], None),
     ("shipped@raw", "*raw-like copies*: **shipped**", SHIPPED, ["--degrade"], "before@raw"),
     ("shipped-depthfill@raw", "*raw-like copies*: shipped without the depth fill",
      without(SHIPPED, "cloud.fill_depth_max_run_px", "0"), ["--degrade"], "shipped@raw"),

@@ -72,9 +72,11 @@ done
 for n in "${HOLDOUT[@]}"; do
   for sub in rgb depth label8; do ln -s "$EXTRA/$sub/$n.png" "$WORK/holdout/$sub/$n.png"; done
 done
-# The shipped configuration (daemon/findmugd.yaml's segmentation settings, BENCHMARKS.md 1)
-# as a file, for every program: NYU-13 internal classes, whose finer classes the trainer infers
-# for the page's label8-only frames, and object features.
+# The configuration shipped when BENCHMARKS.md section 2's loop table was measured (eb2f1c0;
+# today's daemon/findmugd.yaml adds the load-on-top column, leaf shrinkage, the depth fill,
+# object consistency and the learned pairwise term) as a file, for every program: NYU-13
+# internal classes, whose finer classes the trainer infers for the page's label8-only frames,
+# and object features.
 cat > "$WORK/findmug.yaml" <<'EOF'
 ground:
   source: gravity

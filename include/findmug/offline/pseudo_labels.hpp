@@ -1,4 +1,4 @@
-// findmug/pseudo_labels.hpp — semi-supervised training rounds on unlabelled frames.
+// findmug/offline/pseudo_labels.hpp — semi-supervised training rounds on unlabelled frames.
 //
 // Offline only (findmug-train, findmug-eval --unlabelled DIR). A round: label
 // every unlabelled frame with the whole pipeline of the current model

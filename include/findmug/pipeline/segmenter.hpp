@@ -115,7 +115,7 @@ class Segmenter {
   // its per-segment pixel lists, features, distributions, MRF result, label
   // image). Optional: without it every frame allocates fresh buffers; with it
   // a stream of frames of one size allocates next to nothing (BENCHMARKS.md
-  // 9i). Results are the same either way. Thread-safe; at most
+  // section 2; perf-log §9i). Results are the same either way. Thread-safe; at most
   // kRecycledFrames frames are kept, further ones are freed.
   void recycle(LabelledFrame&& done) const;
   static constexpr std::size_t kRecycledFrames = 2;
