@@ -27,7 +27,7 @@
 #include "findmug/tables/tables.hpp"
 #include "findmug_cli.hpp"
 #include "findmug_json.hpp"
-#include "visiting_order.hpp"
+#include "findmug/map/visiting_order.hpp"
 
 namespace {
 

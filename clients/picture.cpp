@@ -8,7 +8,7 @@
 #include <sstream>
 
 #include "findmug/ground/ground.hpp"
-#include "visiting_order.hpp"
+#include "findmug/map/visiting_order.hpp"
 
 namespace findmug::clients {
 namespace {

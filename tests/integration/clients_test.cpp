@@ -43,7 +43,7 @@
 #include "findmug/tables/tables.hpp"
 #include "test_data.hpp"
 #include "semantic_map_picture.hpp"
-#include "visiting_order.hpp"
+#include "findmug/map/visiting_order.hpp"
 
 extern char** environ;
 

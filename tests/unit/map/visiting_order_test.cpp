@@ -1,8 +1,8 @@
-// Tests of visitingOrder (clients/visiting_order.hpp): the tour a navigation
+// Tests of visitingOrder (findmug/map/visiting_order.hpp): the tour a navigation
 // client takes over search positions. Exact on small sets (against brute
 // force over every order), no worse than greedy nearest neighbour on large
 // ones, and the obvious order on a line.
-#include "visiting_order.hpp"
+#include "findmug/map/visiting_order.hpp"
 
 #include <gtest/gtest.h>
 

@@ -1,7 +1,7 @@
-// visiting_order.hpp — the order in which a navigation client visits search
-// positions: a short open tour from the robot's position. Used by
-// findmug-nav-client (and the table-map picture that shows the tour); the
-// core library does not need it, so it lives with the clients.
+// findmug/map/visiting_order.hpp — the order in which to visit search
+// positions: a short open tour from the robot's position. The daemon's answer
+// to a "find" request lists the places to look in this order, and
+// findmug-nav-client and the table-map picture show the same tour.
 #pragma once
 
 #include <Eigen/Core>

@@ -1,6 +1,6 @@
 // visiting_order.cpp — visitingOrder: exact (Held-Karp) for the few search
 // positions of a frame, nearest neighbour + 2-opt for a whole map's worth.
-#include "visiting_order.hpp"
+#include "findmug/map/visiting_order.hpp"
 
 #include <algorithm>
 #include <cstddef>
