@@ -58,7 +58,12 @@ Eigen::Vector2f alignedAxis(const Eigen::Vector2f& axis, const Eigen::Vector2f& 
 
 void checkUpdateInputs(const std::vector<TableObject>& objects,
                        const std::vector<TableCluster>& tables,
-                       const std::vector<int>& table_ids) {
+                       const std::vector<int>& table_ids,
+                       const std::vector<ObjectIdentity>& identities) {
+  if (!identities.empty() && identities.size() != objects.size()) {
+    throw Error("ObjectMap::update: " + std::to_string(identities.size()) + " identities for " +
+                std::to_string(objects.size()) + " objects");
+  }
   if (!table_ids.empty() && table_ids.size() != tables.size()) {
     throw Error("ObjectMap::update: " + std::to_string(table_ids.size()) + " table ids for " +
                 std::to_string(tables.size()) + " tables");
@@ -132,7 +137,24 @@ ObjectMap::ObjectMap(ObjectMapConfig config) : config_(config) {
 
 void ObjectMap::clear() {
   objects_.clear();
+  seen_on_tables_.clear();
   next_id_ = 1;
+}
+
+std::vector<int> ObjectMap::seenOnTables(const std::string& name) const {
+  const auto found = seen_on_tables_.find(name);
+  if (name.empty() || found == seen_on_tables_.end()) return {};
+  return {found->second.begin(), found->second.end()};
+}
+
+void ObjectMap::name(MappedObject& mapped, const ObjectIdentity* identity) {
+  if (identity != nullptr && !identity->name.empty()) {
+    mapped.name = identity->name;
+    mapped.name_score = identity->score;
+  }
+  if (!mapped.name.empty() && mapped.table_id != 0) {
+    seen_on_tables_[mapped.name].insert(mapped.table_id);
+  }
 }
 
 MappedObject ObjectMap::create(const TableObject& seen, const Pose2D& base_in_map, int table_id,
@@ -192,8 +214,12 @@ bool ObjectMap::placeSeen(const MappedObject& mapped, const std::vector<TableClu
 ObjectMapUpdate ObjectMap::update(const std::vector<TableObject>& objects,
                                   const std::vector<TableCluster>& tables,
                                   const std::vector<int>& table_ids, const Pose2D& base_in_map,
-                                  std::uint64_t utime) {
-  checkUpdateInputs(objects, tables, table_ids);
+                                  std::uint64_t utime,
+                                  const std::vector<ObjectIdentity>& identities) {
+  checkUpdateInputs(objects, tables, table_ids, identities);
+  const auto identityOf = [&](std::size_t c) {
+    return identities.empty() ? nullptr : &identities[c];
+  };
   const auto tableId = [&](const TableObject& o) { return table_ids.empty() ? 0 : table_ids[o.table]; };
 
   // Every admissible (distance, candidate, mapped) pair, nearest first.
@@ -220,6 +246,7 @@ ObjectMapUpdate ObjectMap::update(const std::vector<TableObject>& objects,
   for (const auto& [distance, c, m] : pairs) {
     if (result.object_ids[c] != 0 || matched[m]) continue;
     absorb(objects_[m], objects[c], base_in_map, tableId(objects[c]), utime);
+    name(objects_[m], identityOf(static_cast<std::size_t>(c)));
     matched[m] = true;
     result.object_ids[c] = objects_[m].id;
   }
@@ -242,6 +269,7 @@ ObjectMapUpdate ObjectMap::update(const std::vector<TableObject>& objects,
   for (std::size_t c = 0; c < objects.size(); ++c) {
     if (result.object_ids[c] != 0) continue;
     objects_.push_back(create(objects[c], base_in_map, tableId(objects[c]), utime));
+    name(objects_.back(), identityOf(c));
     result.object_ids[c] = objects_.back().id;
     result.created.push_back(objects_.back().id);
   }

@@ -13,6 +13,11 @@
 //   * A matched object's position, footprint and colour are the running mean
 //     of its last `max_mean_sightings` sightings (objects stand still while
 //     they are seen; a few centimetres of depth noise average out).
+//   * A candidate the taught-object matcher named (ObjectIdentity) gives its
+//     mapped object that name; a later sighting without a name keeps it, one
+//     with another name replaces it. The map also remembers, per name, the
+//     tables it was ever seen on (seenOnTables), forgotten objects included:
+//     where the mug was before is where to look for it first.
 //   * A mapped object is missed in a frame when its place was seen without it:
 //     its floor position lies inside the visible top of one of the frame's
 //     tables (its hull shrunk by `seen_margin_m`) and no candidate matched it.
@@ -25,6 +30,9 @@
 
 #include <Eigen/Core>
 #include <cstdint>
+#include <map>
+#include <set>
+#include <string>
 #include <vector>
 
 #include "findmug/common/pose2d.hpp"
@@ -49,6 +57,13 @@ void validateObjectMapConfig(const ObjectMapConfig& config);
 // The `object_map:` section of the config file, one key per field above.
 const SettingsTable<ObjectMapConfig>& objectMapSettings();
 
+// What the taught-object matcher said of one candidate: its name ("" when it
+// matched no taught object) and the match score (higher is better).
+struct ObjectIdentity {
+  std::string name;
+  float score = 0.0f;
+};
+
 struct MappedObject {
   int id = 0;  // stable: 1, 2, ... in order of creation, never reused
   // Map frame: floor position and height of the centroid, the footprint's
@@ -63,6 +78,8 @@ struct MappedObject {
   // The table it was last seen on: the caller's id for it (the table map's
   // stable id; 0 when that table was not in a map).
   int table_id = 0;
+  std::string name;        // the taught object it was last matched as ("" none yet)
+  float name_score = 0.0f;  // that match's score
   int sightings = 0;  // frames it was seen in
   int misses = 0;     // consecutive frames its place was seen without it
   std::uint64_t first_seen_utime = 0;
@@ -84,14 +101,18 @@ class ObjectMap {
   // One labelled frame's candidates (`objects`, base frame) on its `tables`
   // (base frame), with `table_ids[i]` the caller's id of tables[i] (e.g. its
   // table map id, 0 for none; empty: all 0), taken at `base_in_map` at time
-  // `utime` (microseconds). Throws findmug::Error when an object's table
-  // index or table_ids' size does not fit `tables`.
+  // `utime` (microseconds). `identities` (empty, or one per candidate) are
+  // the matcher's names for the candidates. Throws findmug::Error when an
+  // object's table index, table_ids' or identities' size does not fit.
   ObjectMapUpdate update(const std::vector<TableObject>& objects,
                          const std::vector<TableCluster>& tables,
                          const std::vector<int>& table_ids, const Pose2D& base_in_map,
-                         std::uint64_t utime);
+                         std::uint64_t utime, const std::vector<ObjectIdentity>& identities = {});
 
   const std::vector<MappedObject>& objects() const { return objects_; }
+  // The caller's ids of the tables (non-zero ones) an object of this name was
+  // ever seen on, ascending; forgotten objects count too. Empty for "".
+  std::vector<int> seenOnTables(const std::string& name) const;
   void clear();
   const ObjectMapConfig& config() const { return config_; }
 
@@ -100,11 +121,13 @@ class ObjectMap {
               int table_id, std::uint64_t utime) const;
   MappedObject create(const TableObject& seen, const Pose2D& base_in_map, int table_id,
                       std::uint64_t utime);
+  void name(MappedObject& mapped, const ObjectIdentity* identity);
   bool placeSeen(const MappedObject& mapped, const std::vector<TableCluster>& tables,
                  const Pose2D& map_in_base) const;
 
   ObjectMapConfig config_;
   std::vector<MappedObject> objects_;
+  std::map<std::string, std::set<int>> seen_on_tables_;  // name -> table ids
   int next_id_ = 1;
 };
 

@@ -135,6 +135,30 @@ TEST(ObjectMap, NearestCandidateTakesTheMappedObjectTheOtherIsNew) {
   EXPECT_EQ(update.object_ids[0], id + 1);
 }
 
+TEST(ObjectMap, ANamedSightingNamesTheObjectAndItsTablesAreRemembered) {
+  ObjectMapConfig config;
+  config.forget_misses = 1;
+  ObjectMap map(config);
+  const Pose2D pose{};
+  map.update({mugAt(2.0f, 0.1f)}, {tableAt(2.0f, 0.0f)}, {4}, pose, 1, {{"mug", 0.9f}});
+  ASSERT_EQ(map.objects().size(), 1u);
+  EXPECT_EQ(map.objects()[0].name, "mug");
+  EXPECT_FLOAT_EQ(map.objects()[0].name_score, 0.9f);
+  // Seen again without a name: it keeps its name.
+  map.update({mugAt(2.0f, 0.1f)}, {tableAt(2.0f, 0.0f)}, {4}, pose, 2, {{"", 0.0f}});
+  EXPECT_EQ(map.objects()[0].name, "mug");
+  // Its place seen empty: forgotten, but where it stood is remembered.
+  const auto update = map.update({}, {tableAt(2.0f, 0.0f)}, {4}, pose, 3);
+  EXPECT_EQ(update.forgotten.size(), 1u);
+  EXPECT_TRUE(map.objects().empty());
+  EXPECT_EQ(map.seenOnTables("mug"), std::vector<int>{4});
+  EXPECT_TRUE(map.seenOnTables("book").empty());
+  EXPECT_TRUE(map.seenOnTables("").empty());
+  EXPECT_THROW(map.update({mugAt(2.0f, 0.1f)}, {tableAt(2.0f, 0.0f)}, {4}, pose, 4,
+                          {{"mug", 1.0f}, {"cup", 1.0f}}),
+               Error);
+}
+
 TEST(ObjectMap, ColourDistanceIsZeroForEqualAndOneForDisjointOrEmptyHistograms) {
   EXPECT_NEAR(colourHistogramDistance(histogramAt(3), histogramAt(3)), 0.0f, 1e-6f);
   EXPECT_NEAR(colourHistogramDistance(histogramAt(3), histogramAt(4)), 1.0f, 1e-6f);

@@ -1,0 +1,97 @@
+// findmug/map/object_search.hpp — the answer to "find my mug".
+//
+// A robot asks a running findmugd to find a taught object by name. The answer
+// comes from what the daemon keeps: the object map (object_map.hpp: objects
+// seen on table tops, named by the taught-object matcher) and the table map
+// (table_map.hpp: tables with search positions, map frame).
+//
+//   * Seen: the most recently seen mapped object of that name: where it is
+//     (map frame), on which table, when it was last seen, the match score,
+//     and where to stand: the reachable search position of its table nearest
+//     to it (none when its table is not in the table map).
+//   * Not seen: the places to look, every reachable search position of the
+//     mapped tables, in three groups: tables not yet searched for this
+//     request where the object was seen before, then the other tables not yet
+//     searched, then the searched ones. Each group is a short tour
+//     (visitingOrder) from the robot, or from where the previous group ends.
+//   * A name nobody taught is refused, the answer listing the taught names.
+//
+// A table is searched for a request when the robot stood at one of its search
+// positions (within `position_tolerance_m`, heading within
+// `heading_tolerance_rad` of the position's, so that the top was in view)
+// after the request was made. ObjectSearch keeps that per request: a new
+// request (another request id) starts with no table searched.
+//
+// Pure core code: no LCM, no clock, no threads.
+#pragma once
+
+#include <Eigen/Core>
+#include <cstdint>
+#include <optional>
+#include <set>
+#include <string>
+#include <vector>
+
+#include "findmug/common/pose2d.hpp"
+#include "findmug/map/object_map.hpp"
+#include "findmug/tables/tables.hpp"
+
+namespace findmug {
+
+struct ObjectSearchConfig {
+  float position_tolerance_m = 0.3f;   // robot this near a search position stood there
+  float heading_tolerance_rad = 0.5f;  // ... facing within this of the position's yaw
+};
+
+// Throws findmug::Error naming the setting (`object_search.KEY`) when out of range.
+void validateObjectSearchConfig(const ObjectSearchConfig& config);
+
+// One place to look: a search position (map frame) of a mapped table.
+struct PlaceToLook {
+  int table_id = 0;  // the table map's stable id
+  SearchPosition position;
+  bool seen_here_before = false;  // the object was once seen on this table
+  bool searched = false;          // the robot already stood here for this request
+};
+
+struct FindAnswer {
+  enum class Kind { Seen, LookAt, UnknownName };
+  Kind kind = Kind::LookAt;
+  std::string name;
+  // Seen: the mapped object, its table, and where to stand (nullopt when its
+  // table has no reachable search position in the table map).
+  std::optional<MappedObject> object;
+  std::optional<SearchPosition> stand_here;
+  // LookAt: the places in the order to visit them.
+  std::vector<PlaceToLook> places;
+  // One line for people and logs: what was found or why not.
+  std::string summary;
+};
+
+class ObjectSearch {
+ public:
+  explicit ObjectSearch(ObjectSearchConfig config = {});
+
+  // The answer to request `request_id` for `name`, given the taught names,
+  // the object map, the table map's tables (map frame; TableCluster::id the
+  // stable id) and the robot's pose (nullopt: unknown; tours then start at
+  // the first place). `now_utime` only words the summary ("seen 12 s ago").
+  FindAnswer answer(std::int64_t request_id, const std::string& name,
+                    const std::vector<std::string>& taught_names, const ObjectMap& objects,
+                    const std::vector<TableCluster>& map_tables,
+                    const std::optional<Pose2D>& robot, std::uint64_t now_utime);
+
+  // The robot's pose now: marks, for the current request, the tables at one
+  // of whose search positions it stands. Returns the ids newly marked.
+  std::vector<int> observeRobot(const Pose2D& robot, const std::vector<TableCluster>& map_tables);
+
+  std::int64_t requestId() const { return request_id_; }
+  const std::set<int>& searchedTables() const { return searched_; }
+
+ private:
+  ObjectSearchConfig config_;
+  std::int64_t request_id_ = -1;
+  std::set<int> searched_;
+};
+
+}  // namespace findmug

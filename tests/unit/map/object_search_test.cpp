@@ -1,0 +1,138 @@
+// ObjectSearch (findmug/map/object_search.hpp): the answer to "find my mug" —
+// where it was seen and where to stand, or the places to look in order, with
+// tables seen before first and searched tables last; unknown names refused.
+#include "findmug/map/object_search.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "findmug/common/error.hpp"
+
+namespace findmug {
+namespace {
+
+// A mapped table (map frame) with id `id` centred at (cx, cy), 1.2 x 0.8 m,
+// one search position on each long side facing it.
+TableCluster mappedTable(int id, float cx, float cy) {
+  TableCluster t;
+  t.id = id;
+  t.top_height = 0.75f;
+  t.centroid = {cx, cy, 0.75f};
+  t.center = {cx, cy};
+  t.extents = {0.6f, 0.4f};
+  t.hull = {{cx - 0.6f, cy - 0.4f}, {cx + 0.6f, cy - 0.4f}, {cx + 0.6f, cy + 0.4f},
+            {cx - 0.6f, cy + 0.4f}};
+  SearchPosition north, south;
+  north.xy = {cx, cy + 0.9f};
+  north.yaw = static_cast<float>(-M_PI / 2);
+  south.xy = {cx, cy - 0.9f};
+  south.yaw = static_cast<float>(M_PI / 2);
+  t.search_positions = {north, south};
+  return t;
+}
+
+TableObject mugOn(int table, float x, float y) {
+  TableObject o;
+  o.table = table;
+  o.centroid = {x, y, 0.80f};
+  o.height_above_top = 0.1f;
+  o.extents = {0.05f, 0.05f};
+  o.colour_histogram[2] = 1.0f;
+  return o;
+}
+
+const std::vector<std::string> kTaught = {"book", "mug"};
+
+TEST(ObjectSearch, AMugSeenOnATableIsReportedWithWhereToStand) {
+  const std::vector<TableCluster> tables = {mappedTable(1, 0.0f, 0.0f), mappedTable(2, 4.0f, 0.0f)};
+  ObjectMap objects;
+  // Seen from the map origin (pose = identity, so base = map) on table 2, near its north side.
+  objects.update({mugOn(0, 4.1f, 0.3f)}, {tables[1]}, {2}, Pose2D{}, 5'000'000, {{"mug", 0.8f}});
+  ObjectSearch search;
+  const FindAnswer answer =
+      search.answer(7, "mug", kTaught, objects, tables, Pose2D{0, 0, 0}, 17'000'000);
+  ASSERT_EQ(answer.kind, FindAnswer::Kind::Seen);
+  ASSERT_TRUE(answer.object.has_value());
+  EXPECT_EQ(answer.object->table_id, 2);
+  ASSERT_TRUE(answer.stand_here.has_value());
+  EXPECT_NEAR(answer.stand_here->xy.y(), 0.9f, 1e-6f);  // the north side, nearer the mug
+  EXPECT_NE(answer.summary.find("12.0 s ago"), std::string::npos) << answer.summary;
+  EXPECT_NE(answer.summary.find("table 2"), std::string::npos) << answer.summary;
+}
+
+TEST(ObjectSearch, UnseenObjectGetsPlacesSeenBeforeFirstSearchedLast) {
+  std::vector<TableCluster> tables = {mappedTable(1, 1.0f, 0.0f), mappedTable(2, 3.0f, 0.0f),
+                                      mappedTable(3, 8.0f, 0.0f)};
+  // Table 1's south side is blocked.
+  tables[0].search_positions[1].reachable = false;
+  ObjectMapConfig forgetful;
+  forgetful.forget_misses = 1;
+  ObjectMap objects(forgetful);
+  // The mug was once seen on table 3, then its place was seen empty.
+  objects.update({mugOn(0, 8.0f, 0.0f)}, {tables[2]}, {3}, Pose2D{}, 1, {{"mug", 0.9f}});
+  objects.update({}, {tables[2]}, {3}, Pose2D{}, 2);
+  ASSERT_TRUE(objects.objects().empty());
+
+  ObjectSearch search;
+  const Pose2D robot{0.0, 0.0, 0.0};
+  FindAnswer answer = search.answer(1, "mug", kTaught, objects, tables, robot, 10);
+  ASSERT_EQ(answer.kind, FindAnswer::Kind::LookAt);
+  ASSERT_EQ(answer.places.size(), 5u);  // 2 + 2 + 2 positions, one unreachable
+  EXPECT_EQ(answer.places[0].table_id, 3);
+  EXPECT_EQ(answer.places[1].table_id, 3);
+  EXPECT_TRUE(answer.places[0].seen_here_before);
+  // Then, from table 3, the tour goes back over table 2 before table 1.
+  EXPECT_EQ(answer.places[2].table_id, 2);
+  EXPECT_EQ(answer.places[4].table_id, 1);
+  for (const PlaceToLook& p : answer.places) EXPECT_TRUE(p.position.reachable);
+
+  // The robot stands at table 3's north position facing it: table 3 is searched
+  // and goes last; a pose near a position but facing away marks nothing.
+  EXPECT_TRUE(search.observeRobot(Pose2D{8.0, 0.95, 0.0}, tables).empty());
+  EXPECT_EQ(search.observeRobot(Pose2D{8.0, 0.95, -M_PI / 2}, tables), std::vector<int>{3});
+  answer = search.answer(1, "mug", kTaught, objects, tables, robot, 20);
+  ASSERT_EQ(answer.places.size(), 5u);
+  EXPECT_EQ(answer.places[0].table_id, 1);  // nearest of the unsearched from the robot
+  EXPECT_EQ(answer.places[3].table_id, 3);
+  EXPECT_TRUE(answer.places[3].searched);
+  // A new request starts with nothing searched.
+  answer = search.answer(2, "mug", kTaught, objects, tables, robot, 30);
+  EXPECT_EQ(answer.places[0].table_id, 3);
+  EXPECT_TRUE(search.searchedTables().empty());
+}
+
+TEST(ObjectSearch, AnUntaughtNameIsRefusedListingTheTaughtOnes) {
+  ObjectMap objects;
+  ObjectSearch search;
+  const FindAnswer answer =
+      search.answer(1, "teapot", kTaught, objects, {mappedTable(1, 1, 0)}, std::nullopt, 0);
+  EXPECT_EQ(answer.kind, FindAnswer::Kind::UnknownName);
+  EXPECT_TRUE(answer.places.empty());
+  EXPECT_NE(answer.summary.find("teapot"), std::string::npos);
+  EXPECT_NE(answer.summary.find("book, mug"), std::string::npos) << answer.summary;
+}
+
+TEST(ObjectSearch, WithoutAPoseTheTourStartsAtTheFirstPlace) {
+  ObjectMap objects;
+  ObjectSearch search;
+  const std::vector<TableCluster> tables = {mappedTable(1, 0.0f, 0.0f)};
+  const FindAnswer answer = search.answer(1, "mug", kTaught, objects, tables, std::nullopt, 0);
+  ASSERT_EQ(answer.places.size(), 2u);
+  EXPECT_NE(answer.summary.find("not seen yet"), std::string::npos);
+}
+
+TEST(ObjectSearch, SettingsAreChecked) {
+  ObjectSearchConfig config;
+  config.heading_tolerance_rad = 4.0f;
+  try {
+    ObjectSearch search(config);
+    FAIL() << "accepted heading_tolerance_rad 4";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("object_search.heading_tolerance_rad"),
+              std::string::npos);
+  }
+}
+
+}  // namespace
+}  // namespace findmug
