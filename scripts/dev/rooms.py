@@ -46,6 +46,7 @@ ROOMS = {
                ["tables.cpp", "tables_internal.hpp", "table_clustering.cpp", "table_geometry.cpp",
                 "table_reachability.cpp", "table_regions.cpp", "table_search_positions.cpp"],
                ["tables", "table_regions"]),
+    "objects": (["table_objects"], ["table_objects.cpp"], ["table_objects"]),
     "map": (["table_map", "semantic_map"], ["table_map.cpp", "semantic_map.cpp"],
             ["table_map", "semantic_map"]),
     "settings": (["config", "settings", "offline_settings"], ["config.cpp", "settings.cpp"], ["config", "settings"]),
