@@ -41,7 +41,7 @@ ROOMS = {
             ["mrf.cpp", "mrf_internal.hpp", "context_pairwise.cpp", "object_consistency.cpp",
              "layout_prior.cpp"], ["mrf", "object_consistency", "layout_prior"]),
     "labels": (["labels", "label_image"], ["label_image.cpp"], ["label_image"]),
-    "pipeline": (["segmenter"], ["segmenter.cpp"], ["segmenter", "buffer_reuse"]),
+    "pipeline": (["segmenter"], ["segmenter.cpp"], ["segmenter", "buffer_reuse", "segmenter_table_objects"]),
     "tables": (["tables", "table_regions"],
                ["tables.cpp", "tables_internal.hpp", "table_clustering.cpp", "table_geometry.cpp",
                 "table_reachability.cpp", "table_regions.cpp", "table_search_positions.cpp"],
