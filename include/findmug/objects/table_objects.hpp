@@ -21,7 +21,12 @@
 //      at most max_base_height_m above the top, its footprint centroid is
 //      inside the hull (not only in the margin), and its footprint is at most
 //      max_extent_m along its longer principal axis (a chair back at the table
-//      edge or a monitor wall behind it are not objects on the table).
+//      edge or a monitor wall behind it are not objects on the table). A
+//      cluster that fails and holds several labels (clutter joined through
+//      unlabelled or table points between the things) is split by label:
+//      each label's points but the table's are clustered alone and the parts
+//      that stand are candidates (a mug labelled half table, half object stands as one
+//      cluster and is never split).
 //   4. per candidate: centroid, height above the top, footprint axes and
 //      half-lengths, point count, mean colour and colour histogram, and why it
 //      may be incomplete (truncation flags below).

@@ -11,6 +11,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <map>
@@ -312,6 +313,33 @@ TEST(TableObjects, TwoObjectsTenCentimetresApartAreTwoCandidatesBySize) {
   EXPECT_NEAR(d.objects[1].centroid.x(), 0.5f, 1e-3f);
   EXPECT_EQ(d.objects[0].pixels.back(), big_pixels.back());
   EXPECT_EQ(d.objects[1].pixels.back(), small_pixels.back());
+}
+
+// Clutter: a mug touching a long unlabelled thing (a keyboard, a cable) is
+// one cluster too long to stand; split by label, the mug stands on its own.
+// The same with the long thing labelled Table: it is more of the table.
+TEST(TableObjects, ClutterOfSeveralLabelsIsSplitByLabel) {
+  int cols = 0;
+  const auto keyboard = panelPoints(0.645f, -0.4f, 0.4f, kTop + 0.011f, kTop + 0.05f, cols);
+  for (const Label other : {Label::Unknown, Label::Table}) {
+    Frame f;
+    f.add(topPoints(), 121, Label::Table);
+    f.add(cylinderPoints({0.6f, 0.0f}, 0.04f, 0.1f), kCylinderCols, Label::Object);
+    f.add(keyboard, cols, other);
+    const TableObjectDetection d = run(f);
+    ASSERT_EQ(d.objects.size(), 1u) << kLabelNames[static_cast<int>(other)];
+    EXPECT_EQ(d.objects[0].point_count, 19 * kCylinderCols);
+    EXPECT_NEAR(d.objects[0].centroid.x(), 0.6f, 1e-3f);
+    EXPECT_EQ(d.clusters_not_standing, 1);
+    ASSERT_FALSE(d.diagnostics.empty());
+    EXPECT_THAT(d.diagnostics[0], HasSubstr("table_objects.max_extent_m"));
+    // One label: no split, no candidate.
+    Frame one;
+    one.add(topPoints(), 121, Label::Table);
+    one.add(cylinderPoints({0.6f, 0.0f}, 0.04f, 0.1f), kCylinderCols, Label::Object);
+    one.add(keyboard, cols, Label::Object);
+    EXPECT_TRUE(run(one).objects.empty());
+  }
 }
 
 // A top seen tilted (here rising 4 cm over its 1.2 m, a gravity estimate 2°
@@ -623,15 +651,16 @@ bool nearBorder(int pixel, int width, int height) {
 
 struct RenderedScore {
   int objects = 0, found = 0, candidates = 0, bad_candidates = 0;
-  std::vector<float> centroid_errors;
+  std::vector<float> centroid_errors;  // candidate centroid to its points' mean
+  std::vector<float> centre_errors;    // footprint box centre to the true object's, on the floor
 };
 
 // Small objects (mug, box, book) on a detected table: at least 100 pixels with
 // a point, none on the image border, most of their points above a detected
 // table's top (within its hull grown by the margin). Found: a candidate holds
 // half of those points or more.
-void scoreRenderedFrame(const synth::SynthScene& scene, const synth::RenderedFrame& r,
-                        RenderedScore& score) {
+void scoreRenderedFrame(const synth::SynthScene& scene, const synth::CameraPose& pose,
+                        const synth::RenderedFrame& r, RenderedScore& score) {
   const OrganizedCloud cloud = frameToCloud(r.labeled.frame);
   const GroundPlane ground = groundFromExtrinsics(*r.labeled.frame.extrinsics);
   const OrganizedCloud cloud_ground = transformCloud(cloud, ground.camera_to_ground);
@@ -699,6 +728,13 @@ void scoreRenderedFrame(const synth::SynthScene& scene, const synth::RenderedFra
     mean /= static_cast<double>(above.size());
     const TableObject& o = d.objects[static_cast<std::size_t>(best->first)];
     score.centroid_errors.push_back(static_cast<float>((o.centroid.cast<double>() - mean).norm()));
+    // The object's first part stands on its footprint's centre.
+    for (const synth::Primitive& part : scene.primitives) {
+      if (part.object != obj) continue;
+      const Eigen::Vector2d truth = (synth::worldToGround(pose) * part.center).head<2>();
+      score.centre_errors.push_back(static_cast<float>((o.center.cast<double>() - truth).norm()));
+      break;
+    }
   }
 }
 
@@ -708,19 +744,24 @@ TEST(TableObjectsRendered, SmallObjectsOnVisibleTablesAreFound) {
     const synth::SynthScene scene = synth::makeApartment(seed);
     const auto poses = synth::cameraPath(scene, 8, 1.0);
     for (std::size_t f = 0; f < poses.size(); f += 2) {
-      scoreRenderedFrame(scene, synth::render(scene, poses[f], synth::RenderOptions{}, f), score);
+      scoreRenderedFrame(scene, poses[f], synth::render(scene, poses[f], synth::RenderOptions{}, f),
+                         score);
     }
   }
-  std::sort(score.centroid_errors.begin(), score.centroid_errors.end());
-  const float median =
-      score.centroid_errors.empty() ? 1.0f : score.centroid_errors[score.centroid_errors.size() / 2];
+  auto median = [](std::vector<float> v) {
+    std::sort(v.begin(), v.end());
+    return v.empty() ? 1.0f : v[v.size() / 2];
+  };
   std::printf("rendered: %d objects on tables, %d found; %d candidates, %d mostly not objects; "
-              "median centroid error %.4f m\n",
-              score.objects, score.found, score.candidates, score.bad_candidates, median);
+              "median error of the centroid %.4f m (to its points' mean), of the footprint "
+              "centre %.4f m (to the true object's)\n",
+              score.objects, score.found, score.candidates, score.bad_candidates,
+              median(score.centroid_errors), median(score.centre_errors));
   ASSERT_GE(score.objects, 20);
   EXPECT_GE(score.found, 0.85 * score.objects);
   EXPECT_LE(score.bad_candidates, score.candidates / 10);
-  EXPECT_LT(median, 0.01f);
+  EXPECT_LT(median(score.centroid_errors), 0.005f);
+  EXPECT_LT(median(score.centre_errors), 0.03f);
 }
 
 // ------------------------------------------------------------ real data ----
@@ -788,6 +829,7 @@ TEST(TableObjectsOnNyu, GroundTruthObjectsOnTableTopsAreFound) {
   const Segmenter segmenter(config, nullptr);
   long object_points = 0, in_candidates = 0, candidate_points = 0, candidate_object_points = 0;
   int frames_with_tables = 0, candidates = 0, instances = 0, found = 0;
+  std::array<long, kNumLabels + 1> candidate_labels{};  // the last: void
   for (std::size_t i = 0; i < folder.size(); ++i) {
     LabeledFrame f = folder.load(i);
     const PreparedFrame p = segmenter.prepare(std::move(f.frame), &f.labels);
@@ -814,6 +856,7 @@ TEST(TableObjectsOnNyu, GroundTruthObjectsOnTableTopsAreFound) {
         candidate_of[static_cast<std::size_t>(q)] = o.id;
         ++candidate_points;
         candidate_object_points += labels.labels[static_cast<std::size_t>(q)] == 7;
+        ++candidate_labels[std::min<std::size_t>(labels.labels[static_cast<std::size_t>(q)], kNumLabels)];
       }
     }
     std::vector<std::uint8_t> above(labels.labels.size(), 0);
@@ -849,9 +892,14 @@ TEST(TableObjectsOnNyu, GroundTruthObjectsOnTableTopsAreFound) {
               "candidate points are objects\n",
               frames_with_tables, candidates, found, instances, in_candidates, object_points,
               candidate_object_points, candidate_points);
+  std::printf("candidate points by true label:");
+  for (std::size_t l = 0; l <= kNumLabels; ++l) {
+    std::printf(" %s %ld", l < kNumLabels ? kLabelNames[l].data() : "void", candidate_labels[l]);
+  }
+  std::printf("\n");
   ASSERT_GE(frames_with_tables, 5);
   ASSERT_GE(instances, 10);
-  EXPECT_GE(found, 4);  // measured 6 of 34 (see the report): clutter merges into clusters too long
+  EXPECT_GE(found, 0.6 * instances);  // measured 26 of 34
   EXPECT_GE(static_cast<double>(candidate_object_points), 0.5 * static_cast<double>(candidate_points));
 }
 
