@@ -70,7 +70,10 @@ struct TableRegion {
 struct ObjectSums {
   double r = 0, g = 0, b = 0;
   std::array<int, kObjectColourBins> bins{};
-  bool outline = false, border = false;
+  bool border = false;
+  // The object's box on the floor.
+  float x_lo = std::numeric_limits<float>::infinity(), x_hi = -x_lo;
+  float y_lo = std::numeric_limits<float>::infinity(), y_hi = -y_lo;
 };
 
 // Per-thread working memory (scratch.hpp).
@@ -322,24 +325,56 @@ void takePixelBuffer(TableObject& object, Scratch& s) {
 }
 
 // kTruncatedDepthHole: of the candidate's edge pixels (a 4-neighbour in the
-// image but not in the candidate), a quarter or more touch a pixel without a point.
+// image but not in the candidate), a quarter or more touch a pixel without a
+// point. The pixels are ascending, so the neighbours above and below are
+// looked up with cursors that only move forward: O(n), no search.
 bool bordersDepthHoles(const std::vector<int>& pixels, const OrganizedCloud& cloud) {
   const int w = cloud.width, h = cloud.height;
+  const int n = static_cast<int>(pixels.size());
   int edge = 0, hole = 0;
-  for (const int p : pixels) {
+  int up = 0, down = 0;  // first pixels >= p - w and >= p + w
+  for (int k = 0; k < n; ++k) {
+    const int p = pixels[static_cast<std::size_t>(k)];
     const int x = p % w, y = p / w;
-    const int neighbours[4] = {x > 0 ? p - 1 : -1, x + 1 < w ? p + 1 : -1, y > 0 ? p - w : -1,
-                               y + 1 < h ? p + w : -1};
+    while (up < n && pixels[static_cast<std::size_t>(up)] < p - w) ++up;
+    while (down < n && pixels[static_cast<std::size_t>(down)] < p + w) ++down;
+    const bool has_left = k > 0 && pixels[static_cast<std::size_t>(k - 1)] == p - 1;
+    const bool has_right = k + 1 < n && pixels[static_cast<std::size_t>(k + 1)] == p + 1;
+    const bool has_up = up < n && pixels[static_cast<std::size_t>(up)] == p - w;
+    const bool has_down = down < n && pixels[static_cast<std::size_t>(down)] == p + w;
     bool is_edge = false, at_hole = false;
-    for (const int q : neighbours) {
-      if (q < 0 || std::binary_search(pixels.begin(), pixels.end(), q)) continue;
+    auto look = [&](bool inside_image, bool in_candidate, int q) {
+      if (!inside_image || in_candidate) return;
       is_edge = true;
       at_hole |= !cloud.valid(static_cast<std::size_t>(q));
-    }
+    };
+    look(x > 0, has_left, p - 1);
+    look(x + 1 < w, has_right, p + 1);
+    look(y > 0, has_up, p - w);
+    look(y + 1 < h, has_down, p + w);
     edge += is_edge;
     hole += at_hole;
   }
   return edge > 0 && 4 * hole >= edge;
+}
+
+// kTruncatedOutline: whether a point of the object lies within kOutlineFlagM
+// of the grown outline. The points inside a convex region form a convex set,
+// so when the four corners of the object's box on the floor are all further
+// inside, every point is and none needs a look.
+bool nearOutline(const HalfPlane* edges, int count, float margin, const ObjectSums& a,
+                 const std::vector<Eigen::Vector3f>& points, const std::vector<int>& cluster_of,
+                 int cluster) {
+  const float limit = -margin + kOutlineFlagM;
+  auto far_inside = [&](float x, float y) { return minEdgeDistance(edges, count, x, y) > limit; };
+  if (far_inside(a.x_lo, a.y_lo) && far_inside(a.x_hi, a.y_lo) && far_inside(a.x_lo, a.y_hi) &&
+      far_inside(a.x_hi, a.y_hi)) {
+    return false;
+  }
+  for (std::size_t k = 0; k < points.size(); ++k) {
+    if (cluster_of[k] == cluster && !far_inside(points[k].x(), points[k].y())) return true;
+  }
+  return false;
 }
 
 // Step 4 for one region: every candidate's fields from its points.
@@ -363,8 +398,10 @@ void describeCandidates(const OrganizedCloud& cloud, const TableRegion& region,
     object.pixels.push_back(p);
     const int x = p % w, y = p / w;
     a.border |= x < kBorderPx || y < kBorderPx || x >= w - kBorderPx || y >= h - kBorderPx;
-    a.outline |= minEdgeDistance(edges, region.count, points[k].x(), points[k].y()) <=
-                 -margin + kOutlineFlagM;
+    a.x_lo = std::min(a.x_lo, points[k].x());
+    a.x_hi = std::max(a.x_hi, points[k].x());
+    a.y_lo = std::min(a.y_lo, points[k].y());
+    a.y_hi = std::max(a.y_hi, points[k].y());
     if (has_colour) {
       const Rgb8& c = cloud.colors[static_cast<std::size_t>(p)];
       a.r += c.r;
@@ -393,7 +430,10 @@ void describeCandidates(const OrganizedCloud& cloud, const TableRegion& region,
                                  : Eigen::Vector3f::Zero();
     normalise(a.bins, has_colour ? c.count : 0, object.colour_histogram);
     object.truncation = static_cast<std::uint8_t>(
-        (a.outline ? kTruncatedOutline : 0) | (a.border ? kTruncatedBorder : 0) |
+        (nearOutline(edges, region.count, margin, a, points, cluster_of,
+                     cluster_of_object[static_cast<std::size_t>(o)])
+             ? kTruncatedOutline
+             : 0) | (a.border ? kTruncatedBorder : 0) |
         (bordersDepthHoles(object.pixels, cloud) ? kTruncatedDepthHole : 0));
   }
 }
