@@ -163,8 +163,8 @@ void buildRegions(const std::vector<TableCluster>& tables, const TableObjectConf
 
 // Step 1: the points above the regions' tops, each to the first region that
 // holds it, appended in pixel order. Returns how many.
-int collectPointsAboveTops(const OrganizedCloud& cloud, const LabelImage& labels,
-                           float margin, Scratch& s) {
+int collectPointsAboveTops(const OrganizedCloud& cloud, const LabelImage& labels, float margin,
+                           Scratch& s) {
   const std::size_t n_regions = s.regions.size();
   s.points.resize(n_regions);
   s.pixels.resize(n_regions);
@@ -209,7 +209,7 @@ int collectPointsAboveTops(const OrganizedCloud& cloud, const LabelImage& labels
 struct ClusterStats {
   int count = 0;
   int first_pixel = 0;
-  double sx = 0, sy = 0, sz = 0;  // sums of coordinates
+  double sx = 0, sy = 0, sz = 0;     // sums of coordinates
   double sxx = 0, sxy = 0, syy = 0;  // of products, for the footprint's covariance
   float h_min = std::numeric_limits<float>::infinity();  // heights above the local top
   float h_max = -std::numeric_limits<float>::infinity();
@@ -379,8 +379,9 @@ bool nearOutline(const HalfPlane* edges, int count, float margin, const ObjectSu
 
 // Step 4 for one region: every candidate's fields from its points.
 void describeCandidates(const OrganizedCloud& cloud, const TableRegion& region,
-                        const HalfPlane* edges, float margin, const std::vector<Eigen::Vector3f>& points,
-                        const std::vector<int>& pixels, const std::vector<int>& cluster_of,
+                        const HalfPlane* edges, float margin,
+                        const std::vector<Eigen::Vector3f>& points, const std::vector<int>& pixels,
+                        const std::vector<int>& cluster_of,
                         const std::vector<int>& object_of_cluster,
                         const std::vector<ClusterStats>& stats,
                         const std::vector<int>& cluster_of_object, std::vector<ObjectSums>& acc,
@@ -411,7 +412,8 @@ void describeCandidates(const OrganizedCloud& cloud, const TableRegion& region,
     }
   }
   for (int o = 0; o < n_objects; ++o) {
-    const ClusterStats& c = stats[static_cast<std::size_t>(cluster_of_object[static_cast<std::size_t>(o)])];
+    const ClusterStats& c =
+        stats[static_cast<std::size_t>(cluster_of_object[static_cast<std::size_t>(o)])];
     const ObjectSums& a = acc[static_cast<std::size_t>(o)];
     TableObject& object = out.objects[static_cast<std::size_t>(first_object + o)];
     const double n = c.count;
@@ -422,18 +424,20 @@ void describeCandidates(const OrganizedCloud& cloud, const TableRegion& region,
     object.major_axis = c.axis;
     object.extents = Eigen::Vector2f(0.5f * (c.u_hi - c.u_lo), 0.5f * (c.v_hi - c.v_lo));
     const float u = 0.5f * (c.u_lo + c.u_hi), v = 0.5f * (c.v_lo + c.v_hi);
-    object.center = Eigen::Vector2f(c.axis.x() * u - c.axis.y() * v, c.axis.y() * u + c.axis.x() * v);
+    object.center =
+        Eigen::Vector2f(c.axis.x() * u - c.axis.y() * v, c.axis.y() * u + c.axis.x() * v);
     object.point_count = c.count;
-    object.mean_rgb = has_colour ? Eigen::Vector3f(static_cast<float>(a.r / n),
-                                                   static_cast<float>(a.g / n),
-                                                   static_cast<float>(a.b / n))
-                                 : Eigen::Vector3f::Zero();
+    object.mean_rgb =
+        has_colour ? Eigen::Vector3f(static_cast<float>(a.r / n), static_cast<float>(a.g / n),
+                                     static_cast<float>(a.b / n))
+                   : Eigen::Vector3f::Zero();
     normalise(a.bins, has_colour ? c.count : 0, object.colour_histogram);
     object.truncation = static_cast<std::uint8_t>(
         (nearOutline(edges, region.count, margin, a, points, cluster_of,
                      cluster_of_object[static_cast<std::size_t>(o)])
              ? kTruncatedOutline
-             : 0) | (a.border ? kTruncatedBorder : 0) |
+             : 0) |
+        (a.border ? kTruncatedBorder : 0) |
         (bordersDepthHoles(object.pixels, cloud) ? kTruncatedDepthHole : 0));
   }
 }
@@ -533,9 +537,8 @@ int localTops(int r, const LabelImage& labels, const TableObjectConfig& config, 
 // parts that stand become candidates (their points take new cluster indices). One label's
 // object is never split: a mug the forest calls half table, half object stands
 // as one cluster and is not looked at here. Returns how many parts stand.
-int splitByLabel(int r, int c, const LabelImage& labels, const TableObjectConfig& config,
-                 int width, Scratch& s, std::vector<ClusterStats>& stats,
-                 std::vector<Candidate>& candidates) {
+int splitByLabel(int r, int c, const LabelImage& labels, const TableObjectConfig& config, int width,
+                 Scratch& s, std::vector<ClusterStats>& stats, std::vector<Candidate>& candidates) {
   const auto ur = static_cast<std::size_t>(r);
   const std::vector<Eigen::Vector3f>& points = s.points[ur];
   const std::vector<int>& pixels = s.pixels[ur];
@@ -563,7 +566,8 @@ int splitByLabel(int r, int c, const LabelImage& labels, const TableObjectConfig
     s.part_points.clear();
     s.part_pixels.clear();
     for (const int k : s.split_index) {
-      if (labels.labels[static_cast<std::size_t>(pixels[static_cast<std::size_t>(k)])] != l) continue;
+      if (labels.labels[static_cast<std::size_t>(pixels[static_cast<std::size_t>(k)])] != l)
+        continue;
       s.part_index.push_back(k);
       s.part_points.push_back(points[static_cast<std::size_t>(k)]);
       s.part_pixels.push_back(pixels[static_cast<std::size_t>(k)]);
@@ -603,8 +607,7 @@ int splitByLabel(int r, int c, const LabelImage& labels, const TableObjectConfig
 // Steps 2 and 3 for one region: its candidates appended to `candidates`,
 // the clusters dropped counted in `out`.
 void clusterRegion(int r, const LabelImage& labels, const TableObjectConfig& config, int width,
-                   Scratch& s,
-                   std::vector<ClusterStats>& stats, std::vector<Candidate>& candidates,
+                   Scratch& s, std::vector<ClusterStats>& stats, std::vector<Candidate>& candidates,
                    TableObjectDetection& out) {
   const std::vector<Eigen::Vector3f>& points = s.points[static_cast<std::size_t>(r)];
   const std::vector<int>& pixels = s.pixels[static_cast<std::size_t>(r)];
@@ -640,21 +643,20 @@ void clusterRegion(int r, const LabelImage& labels, const TableObjectConfig& con
     if (!why.empty()) {
       ++out.clusters_not_standing;
       const int parts = splitByLabel(r, c, labels, config, width, s, stats, candidates);
-      out.diagnostics.push_back("table " + std::to_string(region.table) + ": cluster of " +
-                                std::to_string(st.count) + " points is not an object on it: " +
-                                why + (parts > 0 ? "; " + std::to_string(parts) +
-                                                       " of its labels' parts stand there"
-                                                 : std::string()));
+      out.diagnostics.push_back(
+          "table " + std::to_string(region.table) + ": cluster of " + std::to_string(st.count) +
+          " points is not an object on it: " + why +
+          (parts > 0 ? "; " + std::to_string(parts) + " of its labels' parts stand there"
+                     : std::string()));
       continue;
     }
     candidates.push_back({r, c, region.table, st.count, st.first_pixel});
   }
   if (too_small > 0) {
     out.clusters_too_small += too_small;
-    out.diagnostics.push_back("table " + std::to_string(region.table) + ": " +
-                              std::to_string(too_small) +
-                              " clusters below table_objects.min_points (" +
-                              std::to_string(config.min_points) + ")");
+    out.diagnostics.push_back(
+        "table " + std::to_string(region.table) + ": " + std::to_string(too_small) +
+        " clusters below table_objects.min_points (" + std::to_string(config.min_points) + ")");
   }
 }
 
@@ -713,8 +715,8 @@ void validateTableObjectConfig(const TableObjectConfig& c) {
 }
 
 void findTableObjectsInto(const OrganizedCloud& cloud_ground, const LabelImage& labels,
-                          const std::vector<TableCluster>& tables,
-                          const TableObjectConfig& config, TableObjectDetection& out) {
+                          const std::vector<TableCluster>& tables, const TableObjectConfig& config,
+                          TableObjectDetection& out) {
   thread_local Scratch scratch_tls;
   detail::Borrowed scratch(scratch_tls);
   Scratch& s = *scratch;

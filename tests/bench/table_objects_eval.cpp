@@ -51,22 +51,22 @@ float median(std::vector<float> v) {
 }
 
 struct Score {
-  int frames = 0, frames_with_tables = 0, objects = 0, found = 0, candidates = 0, false_candidates = 0;
+  int frames = 0, frames_with_tables = 0, objects = 0, found = 0, candidates = 0,
+      false_candidates = 0;
   std::vector<float> centroid_errors, cpu_ms;
 
   void print(const char* name) const {
-    std::printf("%s: %d frames (%d with a table), %d true objects on the tables, %d found "
-                "(recall %.3f); %d candidates, %d mostly not object pixels (precision %.3f, "
-                "%.2f false candidates per frame with a table); median centroid error %.4f m; "
-                "stage CPU time per frame with a table: median %.3f ms, max %.3f ms\n",
-                name, frames, frames_with_tables, objects, found,
-                objects ? static_cast<double>(found) / objects : 0.0, candidates,
-                false_candidates,
-                candidates ? 1.0 - static_cast<double>(false_candidates) / candidates : 0.0,
-                frames_with_tables ? static_cast<double>(false_candidates) / frames_with_tables
-                                   : 0.0,
-                median(centroid_errors), median(cpu_ms),
-                cpu_ms.empty() ? 0.0f : *std::max_element(cpu_ms.begin(), cpu_ms.end()));
+    std::printf(
+        "%s: %d frames (%d with a table), %d true objects on the tables, %d found "
+        "(recall %.3f); %d candidates, %d mostly not object pixels (precision %.3f, "
+        "%.2f false candidates per frame with a table); median centroid error %.4f m; "
+        "stage CPU time per frame with a table: median %.3f ms, max %.3f ms\n",
+        name, frames, frames_with_tables, objects, found,
+        objects ? static_cast<double>(found) / objects : 0.0, candidates, false_candidates,
+        candidates ? 1.0 - static_cast<double>(false_candidates) / candidates : 0.0,
+        frames_with_tables ? static_cast<double>(false_candidates) / frames_with_tables : 0.0,
+        median(centroid_errors), median(cpu_ms),
+        cpu_ms.empty() ? 0.0f : *std::max_element(cpu_ms.begin(), cpu_ms.end()));
   }
 };
 
@@ -105,7 +105,8 @@ std::vector<int> countCandidates(const TableObjectDetection& d, const LabelImage
 int matchingCandidate(const std::vector<int>& points, const std::vector<int>& candidate_of) {
   std::map<int, int> votes;
   for (const int p : points) {
-    if (candidate_of[static_cast<std::size_t>(p)] >= 0) ++votes[candidate_of[static_cast<std::size_t>(p)]];
+    if (candidate_of[static_cast<std::size_t>(p)] >= 0)
+      ++votes[candidate_of[static_cast<std::size_t>(p)]];
   }
   for (const auto& [id, n] : votes) {
     if (2 * n >= static_cast<int>(points.size())) return id;
@@ -156,7 +157,8 @@ void scoreRendered(const synth::SynthScene& scene, const synth::CameraPose& pose
   for (std::size_t i = 0; i < cloud.points.size(); ++i) {
     if (!cloud.valid(i)) continue;
     const std::string& kind = scene.objects[static_cast<std::size_t>(r.object[i])].kind;
-    if (kind == "mug" || kind == "box" || kind == "book") pixels_of[r.object[i]].push_back(static_cast<int>(i));
+    if (kind == "mug" || kind == "box" || kind == "book")
+      pixels_of[r.object[i]].push_back(static_cast<int>(i));
   }
   for (const auto& [obj, pixels] : pixels_of) {
     if (pixels.size() < 100 || std::any_of(pixels.begin(), pixels.end(), [&](int p) {
@@ -254,7 +256,8 @@ void scoreNyuFolder(const std::string& dir, const std::string& rotations, Score&
       if (id < 0) continue;
       ++score.found;
       Eigen::Vector3d mean = Eigen::Vector3d::Zero();
-      for (const int q : instance) mean += p.cloud_ground.points[static_cast<std::size_t>(q)].cast<double>();
+      for (const int q : instance)
+        mean += p.cloud_ground.points[static_cast<std::size_t>(q)].cast<double>();
       mean /= static_cast<double>(instance.size());
       score.centroid_errors.push_back(static_cast<float>(
           (d.objects[static_cast<std::size_t>(id)].centroid.cast<double>() - mean).norm()));
@@ -285,7 +288,8 @@ int run(int argc, char** argv) {
     }
   }
   rendered.print(("rendered (seeds 1.." + std::to_string(seeds) + ", " + std::to_string(frames) +
-                  " frames each, 640x480, Kinect noise)").c_str());
+                  " frames each, 640x480, Kinect noise)")
+                     .c_str());
   const auto rotations = test::dataPath("nyuv2_meta/camera_rotations_NYU.txt");
   Score nyu;
   for (const char* set : {"nyuv2_labeled", "nyuv2_labeled_extra"}) {

@@ -124,7 +124,8 @@ std::vector<Eigen::Vector3f> panelPoints(float x, float y0, float y1, float z0, 
   const int rows = static_cast<int>(std::lround((z1 - z0) / 0.01f)) + 1;
   for (int r = 0; r < rows; ++r) {
     for (int c = 0; c < cols; ++c) {
-      points.emplace_back(x, y0 + 0.01f * static_cast<float>(c), z0 + 0.01f * static_cast<float>(r));
+      points.emplace_back(x, y0 + 0.01f * static_cast<float>(c),
+                          z0 + 0.01f * static_cast<float>(r));
     }
   }
   return points;
@@ -441,8 +442,8 @@ TEST(TableObjects, ColourHistogramsOfRedAndBlueDifferInTheirHueBins) {
   // Pale red (saturation 0.3): the lower band of the same sector.
   EXPECT_FLOAT_EQ(objectColourHistogram({Rgb8{200, 140, 140}})[0], 1.0f);
   // Achromatic: black, dark grey, light grey, white.
-  const auto grey = objectColourHistogram({Rgb8{10, 10, 10}, Rgb8{100, 100, 100},
-                                           Rgb8{170, 170, 170}, Rgb8{250, 250, 250}});
+  const auto grey = objectColourHistogram(
+      {Rgb8{10, 10, 10}, Rgb8{100, 100, 100}, Rgb8{170, 170, 170}, Rgb8{250, 250, 250}});
   for (int b = 24; b < 28; ++b) EXPECT_FLOAT_EQ(grey[static_cast<std::size_t>(b)], 0.25f) << b;
   // Half and half.
   std::vector<Rgb8> mixed(10, kRed);
@@ -483,9 +484,14 @@ TEST(TableObjects, BadSettingsAreRefusedByName) {
     }
     return std::string("accepted");
   };
-  EXPECT_THAT(refusal([](auto& c) { c.min_height_m = -0.1f; }), HasSubstr("table_objects.min_height_m"));
-  EXPECT_THAT(refusal([](auto& c) { c.max_height_m = 5.0f; }), HasSubstr("table_objects.max_height_m"));
-  EXPECT_THAT(refusal([](auto& c) { c.min_height_m = 0.5f; c.max_height_m = 0.4f; }),
+  EXPECT_THAT(refusal([](auto& c) { c.min_height_m = -0.1f; }),
+              HasSubstr("table_objects.min_height_m"));
+  EXPECT_THAT(refusal([](auto& c) { c.max_height_m = 5.0f; }),
+              HasSubstr("table_objects.max_height_m"));
+  EXPECT_THAT(refusal([](auto& c) {
+                c.min_height_m = 0.5f;
+                c.max_height_m = 0.4f;
+              }),
               HasSubstr("table_objects.min_height_m"));
   EXPECT_THAT(refusal([](auto& c) { c.outline_margin_m = std::nanf(""); }),
               HasSubstr("table_objects.outline_margin_m"));
@@ -494,8 +500,10 @@ TEST(TableObjects, BadSettingsAreRefusedByName) {
   EXPECT_THAT(refusal([](auto& c) { c.min_points = 0; }), HasSubstr("table_objects.min_points"));
   EXPECT_THAT(refusal([](auto& c) { c.max_base_height_m = 0.005f; }),
               HasSubstr("table_objects.max_base_height_m"));
-  EXPECT_THAT(refusal([](auto& c) { c.max_extent_m = 0.0f; }), HasSubstr("table_objects.max_extent_m"));
-  EXPECT_THAT(refusal([](auto& c) { c.top_cell_m = 0.001f; }), HasSubstr("table_objects.top_cell_m"));
+  EXPECT_THAT(refusal([](auto& c) { c.max_extent_m = 0.0f; }),
+              HasSubstr("table_objects.max_extent_m"));
+  EXPECT_THAT(refusal([](auto& c) { c.top_cell_m = 0.001f; }),
+              HasSubstr("table_objects.top_cell_m"));
   EXPECT_EQ(refusal([](auto&) {}), "accepted");
   // Through the settings file: the range, and the cross-key rule at validation.
   EXPECT_THROW(parseConfig("table_objects:\n  min_points: 0\n", "t.yaml"), Error);
@@ -551,7 +559,8 @@ TEST(TableObjects, DisabledNoTablesOrEmptyCloudGiveNothing) {
   EXPECT_TRUE(run(f, off).objects.empty());
   EXPECT_EQ(run(f, off).points_above_tops, 0);
   EXPECT_TRUE(findTableObjects(f.cloud, f.labels, {}, {}).objects.empty());
-  EXPECT_TRUE(findTableObjects(OrganizedCloud{}, LabelImage{}, {handBuiltTable()}, {}).objects.empty());
+  EXPECT_TRUE(
+      findTableObjects(OrganizedCloud{}, LabelImage{}, {handBuiltTable()}, {}).objects.empty());
   // A table without a usable outline is reported, not searched.
   TableCluster line = handBuiltTable();
   line.hull = {{0.0f, 0.0f}, {1.0f, 0.0f}};
@@ -678,7 +687,8 @@ void scoreRenderedFrame(const synth::SynthScene& scene, const synth::CameraPose&
                        l == static_cast<std::uint8_t>(Label::Wall);
     }
     ++score.candidates;
-    if (2 * table_or_wall > o.point_count || 2 * object_pixels < o.point_count) ++score.bad_candidates;
+    if (2 * table_or_wall > o.point_count || 2 * object_pixels < o.point_count)
+      ++score.bad_candidates;
   }
   // Pixels with a point per true object.
   std::map<int, std::vector<int>> pixels_of;
@@ -686,7 +696,8 @@ void scoreRenderedFrame(const synth::SynthScene& scene, const synth::CameraPose&
     if (!cloud.valid(i)) continue;
     const int obj = r.object[i];
     const std::string& kind = scene.objects[static_cast<std::size_t>(obj)].kind;
-    if (kind == "mug" || kind == "box" || kind == "book") pixels_of[obj].push_back(static_cast<int>(i));
+    if (kind == "mug" || kind == "box" || kind == "book")
+      pixels_of[obj].push_back(static_cast<int>(i));
   }
   const float margin = TableObjectConfig{}.outline_margin_m;
   for (const auto& [obj, pixels] : pixels_of) {
@@ -717,14 +728,17 @@ void scoreRenderedFrame(const synth::SynthScene& scene, const synth::CameraPose&
     ++score.objects;
     std::map<int, int> votes;
     for (const int p : above) {
-      if (candidate_of[static_cast<std::size_t>(p)] >= 0) ++votes[candidate_of[static_cast<std::size_t>(p)]];
+      if (candidate_of[static_cast<std::size_t>(p)] >= 0)
+        ++votes[candidate_of[static_cast<std::size_t>(p)]];
     }
-    const auto best = std::max_element(votes.begin(), votes.end(),
-                                       [](const auto& a, const auto& b) { return a.second < b.second; });
+    const auto best =
+        std::max_element(votes.begin(), votes.end(),
+                         [](const auto& a, const auto& b) { return a.second < b.second; });
     if (best == votes.end() || 2 * best->second < static_cast<int>(above.size())) continue;
     ++score.found;
     Eigen::Vector3d mean = Eigen::Vector3d::Zero();
-    for (const int p : above) mean += cloud_ground.points[static_cast<std::size_t>(p)].cast<double>();
+    for (const int p : above)
+      mean += cloud_ground.points[static_cast<std::size_t>(p)].cast<double>();
     mean /= static_cast<double>(above.size());
     const TableObject& o = d.objects[static_cast<std::size_t>(best->first)];
     score.centroid_errors.push_back(static_cast<float>((o.centroid.cast<double>() - mean).norm()));
@@ -752,11 +766,12 @@ TEST(TableObjectsRendered, SmallObjectsOnVisibleTablesAreFound) {
     std::sort(v.begin(), v.end());
     return v.empty() ? 1.0f : v[v.size() / 2];
   };
-  std::printf("rendered: %d objects on tables, %d found; %d candidates, %d mostly not objects; "
-              "median error of the centroid %.4f m (to its points' mean), of the footprint "
-              "centre %.4f m (to the true object's)\n",
-              score.objects, score.found, score.candidates, score.bad_candidates,
-              median(score.centroid_errors), median(score.centre_errors));
+  std::printf(
+      "rendered: %d objects on tables, %d found; %d candidates, %d mostly not objects; "
+      "median error of the centroid %.4f m (to its points' mean), of the footprint "
+      "centre %.4f m (to the true object's)\n",
+      score.objects, score.found, score.candidates, score.bad_candidates,
+      median(score.centroid_errors), median(score.centre_errors));
   ASSERT_GE(score.objects, 20);
   EXPECT_GE(score.found, 0.85 * score.objects);
   EXPECT_LE(score.bad_candidates, score.candidates / 10);
@@ -856,7 +871,8 @@ TEST(TableObjectsOnNyu, GroundTruthObjectsOnTableTopsAreFound) {
         candidate_of[static_cast<std::size_t>(q)] = o.id;
         ++candidate_points;
         candidate_object_points += labels.labels[static_cast<std::size_t>(q)] == 7;
-        ++candidate_labels[std::min<std::size_t>(labels.labels[static_cast<std::size_t>(q)], kNumLabels)];
+        ++candidate_labels[std::min<std::size_t>(labels.labels[static_cast<std::size_t>(q)],
+                                                 kNumLabels)];
       }
     }
     std::vector<std::uint8_t> above(labels.labels.size(), 0);
@@ -873,7 +889,8 @@ TEST(TableObjectsOnNyu, GroundTruthObjectsOnTableTopsAreFound) {
       ++frame_instances;
       std::map<int, int> votes;
       for (const int q : instance) {
-        if (candidate_of[static_cast<std::size_t>(q)] >= 0) ++votes[candidate_of[static_cast<std::size_t>(q)]];
+        if (candidate_of[static_cast<std::size_t>(q)] >= 0)
+          ++votes[candidate_of[static_cast<std::size_t>(q)]];
       }
       for (const auto& [id, n] : votes) {
         if (2 * n >= static_cast<int>(instance.size())) {
@@ -887,11 +904,12 @@ TEST(TableObjectsOnNyu, GroundTruthObjectsOnTableTopsAreFound) {
     instances += frame_instances;
     found += frame_found;
   }
-  std::printf("NYU: %d frames with tables, %d candidates; %d of %d object instances on the tops "
-              "found; %ld of %ld object points above the tops in candidates; %ld of %ld "
-              "candidate points are objects\n",
-              frames_with_tables, candidates, found, instances, in_candidates, object_points,
-              candidate_object_points, candidate_points);
+  std::printf(
+      "NYU: %d frames with tables, %d candidates; %d of %d object instances on the tops "
+      "found; %ld of %ld object points above the tops in candidates; %ld of %ld "
+      "candidate points are objects\n",
+      frames_with_tables, candidates, found, instances, in_candidates, object_points,
+      candidate_object_points, candidate_points);
   std::printf("candidate points by true label:");
   for (std::size_t l = 0; l <= kNumLabels; ++l) {
     std::printf(" %s %ld", l < kNumLabels ? kLabelNames[l].data() : "void", candidate_labels[l]);
@@ -900,7 +918,8 @@ TEST(TableObjectsOnNyu, GroundTruthObjectsOnTableTopsAreFound) {
   ASSERT_GE(frames_with_tables, 5);
   ASSERT_GE(instances, 10);
   EXPECT_GE(found, 0.6 * instances);  // measured 26 of 34
-  EXPECT_GE(static_cast<double>(candidate_object_points), 0.5 * static_cast<double>(candidate_points));
+  EXPECT_GE(static_cast<double>(candidate_object_points),
+            0.5 * static_cast<double>(candidate_points));
 }
 
 }  // namespace
