@@ -15,7 +15,9 @@
 // the stage's CPU time per frame (findTableObjects alone, this thread's clock,
 // median and maximum over the frames with a table).
 //
-//   table_objects_eval [--seeds N] [--frames N]
+//   table_objects_eval [--seeds N] [--frames N] [--per-frame]
+// --per-frame lists the NYU frames with a table: points above the tops,
+// candidates, CPU time.
 #include <algorithm>
 #include <array>
 #include <cstdio>
@@ -226,7 +228,8 @@ std::vector<std::vector<int>> nyuInstances(const OrganizedCloud& cloud, const La
   return instances;
 }
 
-void scoreNyuFolder(const std::string& dir, const std::string& rotations, Score& score) {
+void scoreNyuFolder(const std::string& dir, const std::string& rotations, bool per_frame,
+                    Score& score) {
   DatasetOptions options;
   options.nyu_rotations_file = rotations;
   const DatasetFolder folder(dir, options);
@@ -248,6 +251,11 @@ void scoreNyuFolder(const std::string& dir, const std::string& rotations, Score&
     if (tables.tables.empty()) continue;
     ++score.frames_with_tables;
     const TableObjectDetection d = timedObjects(p.cloud_ground, labels, tables.tables, score);
+    if (per_frame) {
+      std::printf("  %s: %zu tables, %d points above the tops, %zu candidates, %.3f ms\n",
+                  f.name.c_str(), tables.tables.size(), d.points_above_tops, d.objects.size(),
+                  static_cast<double>(score.cpu_ms.back()));
+    }
     const std::vector<int> candidate_of = countCandidates(d, labels, score);
     const auto above = aboveTops(p.cloud_ground, labels, tables.tables);
     for (const auto& instance : nyuInstances(p.cloud_ground, labels, above)) {
@@ -267,14 +275,21 @@ void scoreNyuFolder(const std::string& dir, const std::string& rotations, Score&
 
 int run(int argc, char** argv) {
   int seeds = 8, frames = 8;
-  for (int i = 1; i + 1 < argc; i += 2) {
+  bool per_frame = false;
+  for (int i = 1; i < argc; i += 2) {
     const std::string flag = argv[i];
-    if (flag == "--seeds") {
+    if (flag == "--per-frame") {
+      per_frame = true;
+      --i;
+    } else if (i + 1 >= argc) {
+      std::fprintf(stderr, "%s needs a value\n", flag.c_str());
+      return 2;
+    } else if (flag == "--seeds") {
       seeds = std::atoi(argv[i + 1]);
     } else if (flag == "--frames") {
       frames = std::atoi(argv[i + 1]);
     } else {
-      std::fprintf(stderr, "usage: table_objects_eval [--seeds N] [--frames N]\n");
+      std::fprintf(stderr, "usage: table_objects_eval [--seeds N] [--frames N] [--per-frame]\n");
       return 2;
     }
   }
@@ -298,7 +313,7 @@ int run(int argc, char** argv) {
       std::printf("NYU: %s or the rotations missing under %s\n", set, test::dataRoot().c_str());
       continue;
     }
-    scoreNyuFolder(dir.string(), rotations.string(), nyu);
+    scoreNyuFolder(dir.string(), rotations.string(), per_frame, nyu);
   }
   nyu.print("NYU (labelled frames, ground-truth labels, gravity ground)");
   return 0;
