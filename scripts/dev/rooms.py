@@ -48,7 +48,7 @@ ROOMS = {
                ["label_image", "label_holes"]),
     "pipeline": (["segmenter"], ["segmenter.cpp"],
                  ["segmenter", "buffer_reuse", "segmenter_context", "segmenter_layout",
-                  "segmenter_objects"]),
+                  "segmenter_objects", "segmenter_table_objects"]),
     "tables": (["tables", "table_regions"],
                ["tables.cpp", "tables_internal.hpp", "table_clustering.cpp", "table_geometry.cpp",
                 "table_reachability.cpp", "table_regions.cpp", "table_search_positions.cpp"],

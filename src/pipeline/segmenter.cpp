@@ -514,6 +514,7 @@ LabelledFrame Segmenter::classify(SegmentedFrame segmented) const {
     voidLabelsInto(width, height, out.labels);
     out.tables.clear();  // a recycled frame's
     out.table_diagnostics.clear();
+    findTableObjectsInto({}, out.labels, out.tables, config_.table_objects, out.table_objects);
     out.segmented = std::move(segmented);
     return out;
   }
@@ -645,6 +646,13 @@ LabelledFrame Segmenter::classify(SegmentedFrame segmented) const {
   out.tables = std::move(detection.tables);
   out.table_diagnostics = std::move(detection.diagnostics);
   watch.lap(out.timings, out.cpu_timings, &StageTimings::tables_ms);
+
+  // The objects standing on them (their pixel lists reuse a recycled frame's).
+  findTableObjectsInto(segmented.prepared.cloud_ground, out.labels, out.tables,
+                       config_.table_objects, out.table_objects);
+  // Before the hole filling, which then spreads Object into the gaps beside them.
+  if (config_.table_objects.relabel) relabelTableObjects(out.table_objects.objects, out.labels);
+  watch.lap(out.timings, out.cpu_timings, &StageTimings::objects_ms);
 
   // After the tables: the filled pixels have no point, and the table stage
   // counts the table pixels without one as a diagnostic.

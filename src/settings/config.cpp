@@ -76,6 +76,13 @@ Setting<T> seedSetting(std::string key,
                                           std::numeric_limits<long long>::max());
 }
 
+// `setting` with its doc line (the listing of --help style tools).
+template <typename T>
+Setting<T> documented(Setting<T> setting, std::string doc) {
+  setting.doc = std::move(doc);
+  return setting;
+}
+
 // features.objects_columns' words, from the column sets' table.
 std::vector<std::pair<std::string, ObjectColumns>> objectColumnsWords() {
   std::vector<std::pair<std::string, ObjectColumns>> words;
@@ -311,6 +318,42 @@ const std::vector<CoreSetting>& settings() {
                    [](C& c) -> float& { return c.tables.min_horizontal_share; }, 0, 1),
       floatSetting("tables.horizontal_tilt_deg",
                    [](C& c) -> float& { return c.tables.horizontal_tilt_deg; }, 0, 90),
+      // The objects on the table tops (table_objects.hpp); ranges as
+      // validateTableObjectConfig's.
+      documented(boolSetting("table_objects.enabled",
+                             [](C& c) -> bool& { return c.table_objects.enabled; }),
+                 "look for object candidates standing on each table's top"),
+      documented(floatSetting("table_objects.min_height_m",
+                              [](C& c) -> float& { return c.table_objects.min_height_m; }, 0, 1),
+                 "points at least this high above the top (m); lower is the top's depth noise"),
+      documented(floatSetting("table_objects.max_height_m",
+                              [](C& c) -> float& { return c.table_objects.max_height_m; }, 0.01, 3),
+                 "points at most this high above the top (m); higher is a shelf, a lamp, a person"),
+      documented(floatSetting("table_objects.outline_margin_m",
+                              [](C& c) -> float& { return c.table_objects.outline_margin_m; }, 0,
+                              0.5),
+                 "the top's hull grown by this (m): an object at the edge hides the top under it"),
+      documented(floatSetting("table_objects.cluster_tolerance_m",
+                              [](C& c) -> float& { return c.table_objects.cluster_tolerance_m; },
+                              0.005, 0.5),
+                 "Euclidean clustering distance of the points above a top (m)"),
+      documented(intSetting("table_objects.min_points",
+                            [](C& c) -> int& { return c.table_objects.min_points; }, 1, 1000000),
+                 "smaller clusters are dropped (a 5 cm mug 3 m away covers about 60 pixels)"),
+      documented(floatSetting("table_objects.max_base_height_m",
+                              [](C& c) -> float& { return c.table_objects.max_base_height_m; }, 0,
+                              1),
+                 "a candidate's lowest point at most this above the top (m): it stands there"),
+      documented(floatSetting("table_objects.max_extent_m",
+                              [](C& c) -> float& { return c.table_objects.max_extent_m; }, 0.01,
+                              10),
+                 "a candidate's longer footprint side at most this (m): not a chair back"),
+      documented(floatSetting("table_objects.top_cell_m",
+                              [](C& c) -> float& { return c.table_objects.top_cell_m; }, 0, 2),
+                 "heights above the mean top in cells of this size (m); 0: the top height"),
+      documented(boolSetting("table_objects.relabel",
+                             [](C& c) -> bool& { return c.table_objects.relabel; }),
+                 "label a candidate's table-labelled pixels Object in the published labels"),
       // Last, so that each stays last in its section's listing: the seeds are
       // 64-bit and the bagging fraction a double with an open lower end.
       seedSetting("forest.seed", [](C& c) -> std::uint64_t& { return c.forest.seed; }),
@@ -459,6 +502,7 @@ void validateSegmenterConfig(const SegmenterConfig& c) {
   if (c.tables.min_cluster_points > c.tables.max_cluster_points) {
     throw Error("tables.min_cluster_points must not exceed tables.max_cluster_points");
   }
+  validateTableObjectConfig(c.table_objects);
 }
 
 void bindCoreSettings(SettingsSchema& schema, Config& config) {

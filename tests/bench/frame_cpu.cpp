@@ -123,7 +123,8 @@ int run(int argc, char** argv) {
       {"ground", &StageTimings::ground_ms},     {"oversegmentation", &StageTimings::overseg_ms},
       {"features", &StageTimings::features_ms}, {"regions", &StageTimings::regions_ms},
       {"forest", &StageTimings::forest_ms},     {"mrf", &StageTimings::mrf_ms},
-      {"labels", &StageTimings::labels_ms},     {"tables", &StageTimings::tables_ms}};
+      {"labels", &StageTimings::labels_ms},     {"tables", &StageTimings::tables_ms},
+      {"objects", &StageTimings::objects_ms}};
   std::vector<std::vector<double>> cpu(std::size(stages)), wall(std::size(stages));
   std::vector<double> cpu_total, wall_total, news, megabytes;
   std::array<std::vector<double>, 3> news_split;  // prepare, oversegment, classify

@@ -43,7 +43,7 @@ void record(Column& c, const StageTimings& t, std::size_t segments) {
       {"oversegmentation", t.overseg_ms}, {"features", t.features_ms},
       {"regions", t.regions_ms},   {"forest", t.forest_ms},     {"context", t.context_ms},
       {"mrf", t.mrf_ms},           {"labels", t.labels_ms},     {"tables", t.tables_ms},
-      {"total", t.total()}};
+      {"objects", t.objects_ms},   {"total", t.total()}};
   for (const auto& [name, ms] : stages) c.stage_ms[name].push_back(ms);
   c.segments.push_back(static_cast<double>(segments));
 }
@@ -146,8 +146,8 @@ int run(int argc, char** argv) {
   std::printf("\n|---|");
   for (std::size_t i = 0; i < columns.size(); ++i) std::printf("---:|");
   std::printf("\n");
-  for (const char* stage : {"cloud", "normals", "ground", "oversegmentation", "features",
-                            "regions", "forest", "context", "mrf", "labels", "tables", "total"}) {
+  for (const char* stage : {"cloud", "normals", "ground", "oversegmentation", "features", "regions",
+                            "forest", "context", "mrf", "labels", "tables", "objects", "total"}) {
     std::printf("| %s |", stage);
     for (const auto& c : columns) std::printf(" %.1f |", median(c.stage_ms.at(stage)));
     std::printf("\n");

@@ -4,8 +4,10 @@
 //       -> ground plane -> oversegmentation -> features [-> region features]
 //       -> forest p(y|x) [-> context features -> context forest p(y|x)] -> MRF
 //       (Potts, or with mrf.pairwise = context the model's learned pairwise
-//       term) -> label image -> tables [-> the label image's depth holes
-//       filled, labels.fill_holes]
+//       term) -> label image -> tables -> objects on the tables' tops
+//       (table_objects.*; with table_objects.relabel their table pixels
+//       become Object) [-> the label image's depth holes filled,
+//       labels.fill_holes]
 // The bracketed stages run when the model has them (features.regions,
 // features.context); the model file is the source of truth and a config
 // that disagrees with it is refused.
