@@ -112,9 +112,15 @@ ObjectShapeDescriptor objectShapeDescriptor(const std::vector<Eigen::Vector3f>& 
   finite.reserve(points.size());
   for (const auto& p : points)
     if (p.allFinite()) finite.push_back(p);
+  // Repeated points only make ESF draw again (a triple needs three places):
+  // many copies of one point would keep it drawing for hours.
+  std::sort(finite.begin(), finite.end(), [](const Eigen::Vector3f& a, const Eigen::Vector3f& b) {
+    return std::lexicographical_compare(a.data(), a.data() + 3, b.data(), b.data() + 3);
+  });
+  finite.erase(std::unique(finite.begin(), finite.end()), finite.end());
   if (static_cast<int>(finite.size()) < kMinObjectViewPoints) {
-    throw Error("object shape: " + std::to_string(finite.size()) + " finite points, need " +
-                std::to_string(kMinObjectViewPoints));
+    throw Error("object shape: " + std::to_string(finite.size()) +
+                " distinct finite points, need " + std::to_string(kMinObjectViewPoints));
   }
   checkSpansSurface(finite);
   auto cloud = pcl::make_shared<pcl::PointCloud<EsfPoint>>();

@@ -21,6 +21,10 @@
 // "why was my mug not found" can be answered from a log line. The shipped
 // thresholds come from tests/bench/object_recognition_eval.cpp.
 //
+// Cost: the shape gate's ESF is about 27 ms per candidate that reaches it
+// (up to 2000 points; one core of the development host), the other gates
+// microseconds: a caller at frame rate should match off the frame's thread.
+//
 // Core code: plain types in and out, no LCM, no threads; deterministic.
 #pragma once
 

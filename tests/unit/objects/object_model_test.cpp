@@ -216,7 +216,13 @@ TEST(ObjectShape, RefusesTooFewOrCollinearPoints) {
   for (int i = 0; i < 100; ++i) line.emplace_back(0.001f * i, 0.0f, 0.0f);
   EXPECT_CONTAINS(errorOf([&] { objectShapeDescriptor(line); }), "do not span a surface");
   std::vector<Eigen::Vector3f> few(line.begin(), line.begin() + 19);
-  EXPECT_CONTAINS(errorOf([&] { objectShapeDescriptor(few); }), "19 finite points, need 20");
+  EXPECT_CONTAINS(errorOf([&] { objectShapeDescriptor(few); }),
+                  "19 distinct finite points, need 20");
+  // Copies of a point count once (ESF would draw triples of one place for ever).
+  std::vector<Eigen::Vector3f> copies(1990, Eigen::Vector3f(0.01f, 0.02f, 0.03f));
+  copies.insert(copies.end(), few.begin(), few.end() - 1);
+  EXPECT_CONTAINS(errorOf([&] { objectShapeDescriptor(copies); }),
+                  "19 distinct finite points, need 20");
 }
 
 TEST(ObjectView, MadeFromARenderedCandidate) {
