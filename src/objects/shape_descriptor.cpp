@@ -33,14 +33,16 @@
 #include "findmug/common/error.hpp"
 #include "findmug/objects/object_model.hpp"
 
-namespace {
-// Only this file's ESF instantiation uses it (see above).
+namespace findmug::detail {
+// Only this file's ESF instantiation uses it (see above). Not in an unnamed
+// namespace: PCL's point registration then leaves constants clang calls unused.
 struct EIGEN_ALIGN16 EsfPoint {
   PCL_ADD_POINT4D;
   PCL_MAKE_ALIGNED_OPERATOR_NEW
 };
-}  // namespace
-POINT_CLOUD_REGISTER_POINT_STRUCT(EsfPoint, (float, x, x)(float, y, y)(float, z, z))
+}  // namespace findmug::detail
+POINT_CLOUD_REGISTER_POINT_STRUCT(findmug::detail::EsfPoint,
+                                  (float, x, x)(float, y, y)(float, z, z))
 
 namespace findmug::detail {
 // splitmix64 (Steele, Lea & Flood 2014): one multiply-xorshift chain per draw.
@@ -73,9 +75,9 @@ namespace {
 
 // Runs PCL's ESF steps on a cloud directly: compute() would build a kd-tree
 // of the cloud that ESF never uses.
-class DeterministicEsf : public pcl::ESFEstimation<EsfPoint, pcl::ESFSignature640> {
+class DeterministicEsf : public pcl::ESFEstimation<detail::EsfPoint, pcl::ESFSignature640> {
  public:
-  void computeOn(const pcl::PointCloud<EsfPoint>::ConstPtr& cloud,
+  void computeOn(const pcl::PointCloud<detail::EsfPoint>::ConstPtr& cloud,
                  pcl::PointCloud<pcl::ESFSignature640>& out) {
     setInputCloud(cloud);
     surface_ = cloud;
@@ -123,7 +125,7 @@ ObjectShapeDescriptor objectShapeDescriptor(const std::vector<Eigen::Vector3f>& 
                 " distinct finite points, need " + std::to_string(kMinObjectViewPoints));
   }
   checkSpansSurface(finite);
-  auto cloud = pcl::make_shared<pcl::PointCloud<EsfPoint>>();
+  auto cloud = pcl::make_shared<pcl::PointCloud<detail::EsfPoint>>();
   cloud->resize(finite.size());
   for (std::size_t i = 0; i < finite.size(); ++i) {
     (*cloud)[i].x = finite[i].x();
