@@ -166,6 +166,9 @@ const SettingsTable<DaemonConfig>& daemonSettings() {
     t.add(integerSetting<D, int>(
         "daemon.collect_queue", [](D& d) -> int& { return d.collect_queue; }, 1, 64,
         "frames waiting for the collection writer (full: the save is refused)"));
+    t.add(textSetting<D>(
+        "daemon.objects_dir", [](D& d) -> std::string& { return d.objects_dir; }, nullptr,
+        "taught objects (*.fmo from findmug-teach) to look for, re-read when changed; empty = off"));
     return t;
   }();
   return table;

@@ -88,6 +88,8 @@ struct DaemonConfig {
   int collect_flicker_changes = 0;        // save when the table count changes this often ...
   double collect_flicker_window_s = 5.0;  // ... within this many seconds (0 changes: off)
   int collect_queue = 2;                  // frames waiting for the writer thread
+  // Taught objects (*.fmo, object_library.hpp) the daemon looks for; off while empty.
+  std::string objects_dir;
   CheckConfig check;               // the `check:` section (findmugd --check only)
 
   // Number of segmentation workers after resolving 0 to the core count and

@@ -29,12 +29,14 @@
 #include "findmug/io/semantic_map_codec.hpp"
 #include "findmug/learner/forest.hpp"
 #include "findmug/map/semantic_map.hpp"
+#include "findmug/objects/object_model.hpp"
 #include "findmug/offline/nyu_mat.hpp"
 #include "findmug/settings/config.hpp"
 #include "findmug_cli.hpp"
 #include "program_settings.hpp"
 #include "fuzz_support.hpp"
 #include "lcm_samples.hpp"
+#include "object_scenes.hpp"
 
 // After the LCM types: tiff.h defines COMPRESSION_* macros that clash with their constants.
 #include <tiffio.h>
@@ -240,6 +242,19 @@ void lcmSeeds(SeedWriter& w) {
   w.write("status", "status", asString(io::encodeMessage(s)), [](const std::string& b) {
     (void)io::decodeMessage<findmug_lcm::status_t>(b.data(), b.size(), "seed");
   });
+}
+
+// Taught objects (*.fmo): one view of the fewest points a view may have, and
+// two views, so that the fuzzer mutates a few kB.
+void objectModelSeeds(SeedWriter& w) {
+  auto decodes = [](const std::string& b) {
+    (void)decodeObjectModel(bytesOf(b), b.size(), "seed");
+  };
+  w.write("object_model", "one_view",
+          asString(encodeObjectModel(test::sampleObjectModel("mug", 1, kMinObjectViewPoints))),
+          decodes);
+  w.write("object_model", "two_views",
+          asString(encodeObjectModel(test::sampleObjectModel("red_mug-2", 2, 40))), decodes);
 }
 
 void modelSeeds(SeedWriter& w, const fs::path& scratch) {
@@ -541,6 +556,7 @@ int main(int argc, char** argv) {
     lcmSeeds(w);
     udpmSeeds(w);
     modelSeeds(w, scratch);
+    objectModelSeeds(w);
     configSeeds(w, argv[1]);
     pngSeeds(w, scratch);
     pclSeeds(w, scratch);
