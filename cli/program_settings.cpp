@@ -198,6 +198,9 @@ void bindDaemonSettings(SettingsSchema& schema, DaemonConfig& daemon) {
   schema.bind(checkSettings(), daemon.check);
   schema.bind(tableMapSettings(), daemon.table_map, validateTableMapConfig);
   schema.bind(semanticMapSettings(), daemon.semantic_map_config, validateSemanticMapConfig);
+  schema.bind(objectMatcherSettings(), daemon.object_matcher, validateObjectMatcherConfig);
+  schema.bind(objectMapSettings(), daemon.object_map, validateObjectMapConfig);
+  schema.bind(objectSearchSettings(), daemon.object_search, validateObjectSearchConfig);
 }
 
 }  // namespace findmug::daemon
@@ -277,6 +280,9 @@ void acceptSharedFileSettings(SettingsSchema& schema) {
   acceptUnbound<OfflineConfig>(schema, offlineSettings());
   acceptUnbound<TableMapConfig>(schema, tableMapSettings(), validateTableMapConfig);
   acceptUnbound<SemanticMapConfig>(schema, semanticMapSettings(), validateSemanticMapConfig);
+  acceptUnbound<ObjectMatcherConfig>(schema, objectMatcherSettings(), validateObjectMatcherConfig);
+  acceptUnbound<ObjectMapConfig>(schema, objectMapSettings(), validateObjectMapConfig);
+  acceptUnbound<ObjectSearchConfig>(schema, objectSearchSettings(), validateObjectSearchConfig);
   acceptUnbound(schema, daemon::daemonSettings());
   acceptUnbound(schema, daemon::checkSettings());
   acceptUnbound(schema, web::webSettings());

@@ -10,8 +10,11 @@
 
 #include <string>
 
+#include "findmug/map/object_map.hpp"
+#include "findmug/map/object_search.hpp"
 #include "findmug/map/semantic_map.hpp"
 #include "findmug/map/table_map.hpp"
+#include "findmug/objects/object_matcher.hpp"
 #include "findmug/settings/config.hpp"
 #include "findmug/settings/settings.hpp"
 
@@ -90,6 +93,11 @@ struct DaemonConfig {
   int collect_queue = 2;                  // frames waiting for the writer thread
   // Taught objects (*.fmo, object_library.hpp) the daemon looks for; off while empty.
   std::string objects_dir;
+  // The objects on the tables named, mapped and found (object_search_sink.hpp): the
+  // `object_matcher:`, `object_map:` and `object_search:` sections.
+  ObjectMatcherConfig object_matcher;
+  ObjectMapConfig object_map;
+  ObjectSearchConfig object_search;
   CheckConfig check;               // the `check:` section (findmugd --check only)
 
   // Number of segmentation workers after resolving 0 to the core count and

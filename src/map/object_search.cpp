@@ -82,6 +82,23 @@ void validateObjectSearchConfig(const ObjectSearchConfig& c) {
   }
 }
 
+const SettingsTable<ObjectSearchConfig>& objectSearchSettings() {
+  using S = ObjectSearchConfig;
+  static const SettingsTable<S> table = [] {
+    SettingsTable<S> t("object_search");
+    t.add(numberSetting<S, float>(
+        "object_search.position_tolerance_m",
+        [](S& s) -> float& { return s.position_tolerance_m; }, 0, 10,
+        "the robot this near a table's search position has searched the table ..."));
+    t.add(numberSetting<S, float>(
+        "object_search.heading_tolerance_rad",
+        [](S& s) -> float& { return s.heading_tolerance_rad; }, 0, 3.14159f,
+        "... when it faces within this of the position's heading (the top in view)"));
+    return t;
+  }();
+  return table;
+}
+
 ObjectSearch::ObjectSearch(ObjectSearchConfig config) : config_(config) {
   validateObjectSearchConfig(config_);
 }

@@ -34,6 +34,7 @@
 
 #include "findmug/common/pose2d.hpp"
 #include "findmug/map/object_map.hpp"
+#include "findmug/settings/settings.hpp"
 #include "findmug/tables/tables.hpp"
 
 namespace findmug {
@@ -45,6 +46,9 @@ struct ObjectSearchConfig {
 
 // Throws findmug::Error naming the setting (`object_search.KEY`) when out of range.
 void validateObjectSearchConfig(const ObjectSearchConfig& config);
+
+// The `object_search:` section of the config file, one key per field above.
+const SettingsTable<ObjectSearchConfig>& objectSearchSettings();
 
 // One place to look: a search position (map frame) of a mapped table.
 struct PlaceToLook {

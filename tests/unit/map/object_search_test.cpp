@@ -122,7 +122,11 @@ TEST(ObjectSearch, WithoutAPoseTheTourStartsAtTheFirstPlace) {
   EXPECT_NE(answer.summary.find("not seen yet"), std::string::npos);
 }
 
-TEST(ObjectSearch, SettingsAreChecked) {
+TEST(ObjectSearch, SettingsAreCheckedAndParsed) {
+  ObjectSearchConfig parsed;
+  objectSearchSettings().set(parsed, "object_search.position_tolerance_m", "0.5");
+  EXPECT_FLOAT_EQ(parsed.position_tolerance_m, 0.5f);
+  EXPECT_THROW(objectSearchSettings().set(parsed, "object_search.tolerance", "1"), Error);
   ObjectSearchConfig config;
   config.heading_tolerance_rad = 4.0f;
   try {
