@@ -200,9 +200,9 @@ TableObject fromLcm(const findmug_lcm::table_object_t& o) {
   TableObject out;
   out.id = o.id;
   out.table = o.table_id;
-  out.centroid = Eigen::Vector3f(static_cast<float>(o.centroid[0]),
-                                 static_cast<float>(o.centroid[1]),
-                                 static_cast<float>(o.centroid[2]));
+  out.centroid =
+      Eigen::Vector3f(static_cast<float>(o.centroid[0]), static_cast<float>(o.centroid[1]),
+                      static_cast<float>(o.centroid[2]));
   out.height_above_top = static_cast<float>(o.height_above_top);
   out.major_axis =
       Eigen::Vector2f(static_cast<float>(o.major_axis[0]), static_cast<float>(o.major_axis[1]));
@@ -220,8 +220,7 @@ ObjectMapInfo mapInfoFromLcm(const findmug_lcm::table_object_t& o, bool has_map_
   ObjectMapInfo info;
   info.table_map_id = o.table_map_id;
   if (has_map_pose) {
-    checkFinite({o.map_centroid[0], o.map_centroid[1], o.map_centroid[2]},
-                where + ".map_centroid");
+    checkFinite({o.map_centroid[0], o.map_centroid[1], o.map_centroid[2]}, where + ".map_centroid");
     info.map_centroid = Eigen::Vector3d(o.map_centroid[0], o.map_centroid[1], o.map_centroid[2]);
   }
   info.map_id = o.map_id;

@@ -2,6 +2,7 @@
 // navigation client and any other listener decode them.
 #include <cstddef>
 #include <cstdint>
+
 #include "findmug/common/error.hpp"
 #include "findmug/io/lcm_codec_objects.hpp"
 #include "fuzz_support.hpp"

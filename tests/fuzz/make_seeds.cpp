@@ -186,9 +186,8 @@ void lcmSeeds(SeedWriter& w) {
     (void)io::decodeObjects(b.data(), b.size(), "seed");
   };
   w.write("objects", "empty",
-          asString(io::encodeMessage(io::encodeObjects(frame.utime, frame.seq,
-                                                       TableObjectDetection{}, tables.tables,
-                                                       std::nullopt, {}))),
+          asString(io::encodeMessage(io::encodeObjects(
+              frame.utime, frame.seq, TableObjectDetection{}, tables.tables, std::nullopt, {}))),
           decodeObjects);
   {
     TableObjectDetection objects;
@@ -204,9 +203,9 @@ void lcmSeeds(SeedWriter& w) {
     mug.truncation = kTruncatedOutline;
     objects.objects = {mug};
     w.write("objects", "mug",
-            asString(io::encodeMessage(io::encodeObjects(
-                frame.utime, frame.seq, objects, tables.tables,
-                io::RobotPose{frame.utime, {2.0, -1.0, 0.3}}, tables.map_info))),
+            asString(io::encodeMessage(
+                io::encodeObjects(frame.utime, frame.seq, objects, tables.tables,
+                                  io::RobotPose{frame.utime, {2.0, -1.0, 0.3}}, tables.map_info))),
             decodeObjects);
   }
   w.write("objects", "sample", asString(io::encodeMessage(test::sampleObjects())), decodeObjects);
