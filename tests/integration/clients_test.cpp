@@ -837,21 +837,42 @@ TEST(LabelViewer, DrawsTablesWithTheDaemonsCameraOverTheCarriedImage) {
   camera_to_base.translation() = Eigen::Vector3d(0, 0, 1.2);
   io::setCameraView(message, CameraIntrinsics{40, 40, 31.5, 23.5}, camera_to_base);
   io::setColorJpeg(message, std::vector<Rgb8>(64 * 48, Rgb8{90, 90, 90}), 90);
+  // A yellow mug on table 0, 3 m ahead and 0.35 m below the camera: pixel (31.5, 28.2).
+  TableObjectDetection objects;
+  TableObject mug;
+  mug.centroid = Eigen::Vector3f(3.0f, 0.0f, 0.85f);
+  mug.point_count = 60;
+  mug.mean_rgb = Eigen::Vector3f(250.0f, 200.0f, 10.0f);
+  mug.colour_histogram[2] = 1.0f;
+  objects.objects = {mug};
   const std::string log = tmp.str("camera.lcmlog");
-  daemon::test::writeLcmLog(log, {{std::string(io::kLabelsChannel), io::encodeMessage(message)},
-                                  {std::string(io::kTablesChannel),
-                                   io::encodeMessage(io::encodeTables(tables))}});
+  daemon::test::writeLcmLog(
+      log, {{std::string(io::kLabelsChannel), io::encodeMessage(message)},
+            {std::string(io::kTablesChannel), io::encodeMessage(io::encodeTables(tables))},
+            {std::string(io::kObjectsChannel),
+             io::encodeMessage(
+                 io::encodeObjects(tables.utime, tables.seq, objects, tables.tables, {}, {}))}});
   const ProcessResult r =
       run(FINDMUG_LABEL_VIEWER_EXE, {"--lcm-url", replayUrl(log), "--out", tmp.str("png")}, tmp);
   EXPECT_EQ(r.exit_code, 0) << r.err;
   EXPECT_NE(r.out.find("overlay "), std::string::npos) << r.out;  // over the carried image
   EXPECT_EQ(r.out.find("no colour frame"), std::string::npos) << r.out;
   EXPECT_NE(r.out.find("with 2 of 2 tables in view"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("objects seq 5: 1 objects; redrawn"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("tables in view, 1 of 1 objects"), std::string::npos) << r.out;
   // The hulls are drawn in white (the carried image is grey, the labels blend with it).
   const Image<Rgb8> overlay = cropped(readPngRgb(tmp.str("png/labels_00000005.png")), 64, 48);
   int white = 0;
   for (const Rgb8& p : overlay.pixels) white += (p.r == 255 && p.g == 255 && p.b == 255) ? 1 : 0;
   EXPECT_GT(white, 10);
+  // The mug's marker, in its own colour, where the camera sees its centroid.
+  int mug_pixels = 0;
+  for (int v = 26; v <= 30; ++v) {
+    for (int u = 30; u <= 33; ++u) {
+      mug_pixels += overlay.pixels[static_cast<std::size_t>(v) * 64 + u] == Rgb8{250, 200, 10};
+    }
+  }
+  EXPECT_GE(mug_pixels, 12);
 }
 
 // A known semantic map at 10 cm: a 2 x 1 m floor, a table top (0.7 m) over part of it, a
