@@ -258,6 +258,10 @@ findmug_lcm::objects_t encodeObjects(std::uint64_t utime, std::int64_t seq,
     msg.objects.push_back(toLcm(o, table_map_id, map_pose));
   }
   msg.num_objects = static_cast<std::int32_t>(msg.objects.size());
+  // What every listener would refuse is refused here, naming the field: a candidate the
+  // object stage got wrong fails the frame's publish (reported and counted by findmugd)
+  // rather than going out as a message each client drops. A few objects: cheap.
+  (void)decodeObjects(msg, "encodeObjects");
   return msg;
 }
 

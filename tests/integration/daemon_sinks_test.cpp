@@ -343,6 +343,27 @@ TEST(LcmPublisherSink, ARefusedObjectsPublishFailsTheFrame) {
   EXPECT_EQ(p.drain(), (std::vector<std::string>{"L", "T"}));
 }
 
+// A candidate the object stage got wrong (here a histogram that does not sum to 1) is
+// refused before it goes out: the frame fails with the field named, its labels and tables
+// are out already.
+TEST(LcmPublisherSink, ACandidateTheDecoderWouldRefuseFailsTheFrame) {
+  auto bus = std::make_shared<io::MemoryBus>();
+  LcmPublisherSink sink(bus, kChannels, true, true);
+  LabelledFrame l = labelledFrame(6, true, true, {tableAhead(2.0f)});
+  l.table_objects.objects = {mugOn(0, Eigen::Vector3f(2.0f, 0.0f, 0.8f))};
+  l.table_objects.objects[0].colour_histogram[0] = 0.5f;
+  FrameResult r{l, 0, std::nullopt, {}, std::nullopt};
+  Collector p(*bus, kChannels);
+  try {
+    sink.consume(r);
+    FAIL() << "a bad candidate must fail the frame";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("objects[0].colour_histogram"), std::string::npos)
+        << e.what();
+  }
+  EXPECT_EQ(p.drain(), (std::vector<std::string>{"L", "T"}));
+}
+
 StatusSnapshot sampleSnapshot() {
   StatusSnapshot s;
   s.utime = 5000000;

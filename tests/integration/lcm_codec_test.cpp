@@ -1089,6 +1089,15 @@ TEST(ObjectsCodec, EncoderRefusesAnObjectOffTheTables) {
   expectError(
       [&] { encodeObjects(1, 2, makeObjects(), makeTables().tables, {}, {{TableMapInfo{}}}); },
       "1 table map entries for 2 tables");
+  // What the decoder refuses, the encoder refuses too, naming the field.
+  d = makeObjects();
+  d.objects[0].colour_histogram[1] = 0.5f;
+  expectError([&] { encodeObjects(1, 2, d, makeTables().tables, {}, {}); },
+              "encodeObjects: objects_t.objects[0].colour_histogram: sums to 1.25");
+  d = makeObjects();
+  d.objects[1].point_count = 0;
+  expectError([&] { encodeObjects(1, 2, d, makeTables().tables, {}, {}); },
+              "objects[1].point_count");
 }
 
 TEST(ObjectsCodec, TheSampleMessageDecodes) {

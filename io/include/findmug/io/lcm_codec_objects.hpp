@@ -34,8 +34,9 @@ findmug_lcm::objects_t decodeMessage<findmug_lcm::objects_t>(const void*, std::s
 // objects' `table` indices refer to; `table_map_info` is empty or one entry
 // per table (FrameResult::map_info); with `map_pose` the map_centroid fields
 // are the centroids in the map frame, as encodeTables computes the tables'.
-// Throws findmug::Error when an object's table index is outside `tables` or
-// table_map_info has another size.
+// Throws findmug::Error when an object's table index is outside `tables`,
+// table_map_info has another size, or the message breaks a rule decodeObjects checks
+// (e.g. a colour histogram that does not sum to 1), naming the field as it does.
 findmug_lcm::objects_t encodeObjects(std::uint64_t utime, std::int64_t seq,
                                      const TableObjectDetection& detection,
                                      std::span<const TableCluster> tables,
