@@ -76,7 +76,7 @@ const SettingsTable<DaemonConfig>& daemonSettings() {
         "per-pixel confidence in label images"));
     t.add(boolSetting<D>(
         "daemon.publish_tables", [](D& d) -> bool& { return d.publish_tables; },
-        "publish FINDMUG_TABLES"));
+        "publish FINDMUG_TABLES and FINDMUG_OBJECTS"));
     t.add(boolSetting<D>(
         "daemon.publish_color", [](D& d) -> bool& { return d.publish_color; },
         "the frame's colour image (JPEG) in each label image, for viewers"));

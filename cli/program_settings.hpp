@@ -49,7 +49,7 @@ struct DaemonConfig {
   double status_period_s = 1.0;       // FINDMUG_STATUS period
   double stats_window_s = 10.0;       // window of the status rates and latency percentiles
   bool publish_confidence = true;     // include per-pixel confidence in label images
-  bool publish_tables = true;         // publish FINDMUG_TABLES
+  bool publish_tables = true;         // publish FINDMUG_TABLES and FINDMUG_OBJECTS
   // The frame's colour image (JPEG) in each label image, for viewers (findmug-web)
   // on sources that do not publish FINDMUG_RGBD (datasets, logs, PCD, devices).
   bool publish_color = false;

@@ -12,7 +12,9 @@
 // brings the tables of the same frame, the table hulls and the search positions (numbered
 // in visiting order, unreachable ones crossed) are drawn over the image with the camera
 // the daemon used for the frame (label_image_t.camera_to_base: every source, replays,
-// datasets and PCD included), or, from an older daemon, the colour frame's mount. A label
+// datasets and PCD included), or, from an older daemon, the colour frame's mount; with them
+// the object candidates of FINDMUG_OBJECTS[_suffix] on those tables (a marker in each
+// candidate's mean colour at its centroid, with its id). A label
 // image that carries the frame's colour image (findmugd daemon.publish_color) is drawn
 // over it when FINDMUG_RGBD is not published. table_map.png and table_map.svg
 // show the tables top-down: the table map with the robot's pose from
@@ -21,8 +23,8 @@
 // semantic_map.png shows FINDMUG_SEMANTIC_MAP[_suffix] top-down: each floor cell in the
 // colour of the label on top there, faded by how sure the map is, with the tables of
 // FINDMUG_TABLE_MAP (ids, supporting frames and viewpoints) and the robot's pose
-// (semantic_map_picture.hpp). --source SPEC takes the colour frames from a frame source (e.g. the dataset
-// folder the daemon replayed), matched by sequence number, for logs without frames.
+// (semantic_map_picture.hpp). --source SPEC takes the colour frames from a frame source (e.g. the
+// dataset folder the daemon replayed), matched by sequence number, for logs without frames.
 //
 // Exits cleanly on SIGINT/SIGTERM, after --count label images, or at the end
 // of a replayed log (--lcm-url file://LOG?speed=0). Bad messages are
@@ -45,6 +47,7 @@
 #include "findmug/io/channels.hpp"
 #include "findmug/io/frame_source.hpp"
 #include "findmug/io/lcm_codec.hpp"
+#include "findmug/io/lcm_codec_objects.hpp"
 #include "findmug/io/semantic_map_codec.hpp"
 #include "findmug/io/subscriber.hpp"
 #include "findmug/labels/label_image.hpp"
@@ -110,6 +113,23 @@ class LabelViewer {
         } catch (const std::exception& e) {
           std::fprintf(stderr, "%s: overlay not redrawn: %s\n", kProgram, e.what());
         }
+      }
+    }
+  }
+
+  // The candidates of a frame, which arrive after its tables: its overlay is drawn again.
+  void onObjects(const io::ObjectsMessage& message) {
+    objects_.push_back(message);
+    while (objects_.size() > kKeptLabelImages) objects_.pop_front();
+    for (const auto& labels : labels_) {
+      if (labels.utime != message.utime || !write_png_) continue;
+      try {
+        const std::string written = writeOverlay(labels);
+        std::printf("objects seq %lld: %zu objects; redrawn %s\n",
+                    static_cast<long long>(message.seq), message.objects.size(), written.c_str());
+        std::fflush(stdout);
+      } catch (const std::exception& e) {
+        std::fprintf(stderr, "%s: overlay not redrawn: %s\n", kProgram, e.what());
       }
     }
   }
@@ -238,15 +258,15 @@ class LabelViewer {
       }
       clients::Canvas canvas(std::move(overlay));
       const std::vector<std::uint16_t>* depth = match ? &match->depth_mm : nullptr;
-      const int drawn =
-          message.camera
-              ? clients::drawTablesInImage(canvas, tables, message.camera->intrinsics,
-                                           message.camera->camera_to_base, depth)
-              : clients::drawTablesInImage(canvas, tables, match->intrinsics,
-                                           *match->extrinsics, depth);
-      overlay = canvas.image();
+      const int drawn = message.camera
+                            ? clients::drawTablesInImage(canvas, tables, message.camera->intrinsics,
+                                                         message.camera->camera_to_base, depth)
+                            : clients::drawTablesInImage(canvas, tables, match->intrinsics,
+                                                         *match->extrinsics, depth);
       tables_note = " with " + std::to_string(drawn) + " of " +
                     std::to_string(tables.tables.size()) + " tables in view";
+      tables_note += drawObjects(canvas, message, match);
+      overlay = canvas.image();
       break;
     }
     char name[64];
@@ -256,6 +276,23 @@ class LabelViewer {
     return std::string(match || !carried.empty() ? "overlay " : "palette (no colour frame) ") +
            path.string() +
            tables_note;
+  }
+
+  // The candidates of the label image's frame, with the camera its tables were drawn with;
+  // returns the note for the summary ("" when none arrived for this frame).
+  std::string drawObjects(clients::Canvas& canvas, const io::LabelImageMessage& message,
+                          const ColorFrame* match) const {
+    for (const auto& objects : objects_) {
+      if (objects.utime != message.utime) continue;
+      const int drawn =
+          message.camera
+              ? clients::drawObjectsInImage(canvas, objects, message.camera->intrinsics,
+                                            message.camera->camera_to_base)
+              : clients::drawObjectsInImage(canvas, objects, match->intrinsics, *match->extrinsics);
+      return ", " + std::to_string(drawn) + " of " + std::to_string(objects.objects.size()) +
+             " objects";
+    }
+    return "";
   }
 
   void writeTableMap(const io::TablesMessage& message) const {
@@ -290,6 +327,7 @@ class LabelViewer {
   std::deque<ColorFrame> colors_;
   std::deque<io::LabelImageMessage> labels_;
   std::deque<io::TablesMessage> tables_;
+  std::deque<io::ObjectsMessage> objects_;
 };
 
 }  // namespace
@@ -333,7 +371,7 @@ int main(int argc, char** argv) {
   }
   const std::string labels_channel(io::kLabelsChannel), frames_channel(io::kRgbdChannel),
       tables_channel(io::kTablesChannel), map_channel(io::kTableMapChannel),
-      semantic_channel(io::kSemanticMapChannel);
+      semantic_channel(io::kSemanticMapChannel), objects_channel(io::kObjectsChannel);
   try {
     io::checkChannelSuffix(suffix);
   } catch (const std::exception& e) {
@@ -384,6 +422,13 @@ int main(int argc, char** argv) {
       *bus, map_channel, decode_tables,
       [&](const io::TablesMessage& m, const std::string&) { viewer.onTables(m); },
       report("tables message"));
+  io::Subscriber<io::ObjectsMessage> objects(
+      *bus, objects_channel,
+      [](const std::uint8_t* d, std::size_t n, const std::string& c) {
+        return io::decodeObjects(d, n, c);
+      },
+      [&](const io::ObjectsMessage& m, const std::string&) { viewer.onObjects(m); },
+      report("objects message"));
   io::Subscriber<io::SemanticMapMessage> semantic_map(
       *bus, semantic_channel,
       [](const std::uint8_t* d, std::size_t n, const std::string& c) {
@@ -391,9 +436,10 @@ int main(int argc, char** argv) {
       },
       [&](const io::SemanticMapMessage& m, const std::string&) { viewer.onSemanticMap(m); },
       report("semantic map"));
-  std::fprintf(stderr, "%s: listening on %s, %s, %s, %s and %s, %s\n", kProgram,
+  std::fprintf(stderr, "%s: listening on %s, %s, %s, %s, %s and %s, %s\n", kProgram,
                labels_channel.c_str(), frames_channel.c_str(), tables_channel.c_str(),
-               map_channel.c_str(), semantic_channel.c_str(), bus->describe().c_str());
+               objects_channel.c_str(), map_channel.c_str(), semantic_channel.c_str(),
+               bus->describe().c_str());
   return clients::receiveLoop(*bus, kProgram,
                               [&] { return count > 0 && viewer.received() >= count; });
 }

@@ -6,7 +6,13 @@
 // unreachable ones with their reason. Positions are given in the map frame
 // when the message carries the robot's map pose (and --frame is auto or
 // map), else in the robot base frame, where the robot stands at the origin.
-// With --json, one JSON object per message on its own line (JSON lines).
+// It also subscribes to FINDMUG_OBJECTS[_suffix] (objects_t, not with --map) and,
+// for every message, lists the object candidates on each table: where they
+// stand (same frame choice), their height above the top, footprint, colour
+// and whether they may be cut off, so that a robot knows what to look at
+// from the search positions.
+// With --json, one JSON object per message on its own line (JSON lines): a
+// tables message's line has "tour", an objects message's line "objects".
 //
 // Exits cleanly on SIGINT/SIGTERM, after --count messages, or at the end of
 // a replayed log (--lcm-url file://LOG?speed=0). Bad messages are reported on
@@ -14,6 +20,7 @@
 #include <cmath>
 #include <cstdio>
 #include <iostream>
+#include <optional>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -23,6 +30,7 @@
 #include "findmug/io/bus.hpp"
 #include "findmug/io/channels.hpp"
 #include "findmug/io/lcm_codec.hpp"
+#include "findmug/io/lcm_codec_objects.hpp"
 #include "findmug/io/subscriber.hpp"
 #include "findmug/tables/tables.hpp"
 #include "findmug_cli.hpp"
@@ -80,7 +88,75 @@ class NavClient {
     std::fflush(stdout);
   }
 
+  // A decoded objects message: the candidates on each table, in the frame
+  // the tables are printed in.
+  void onObjects(const io::ObjectsMessage& message) {
+    const bool use_map = message.map_pose.has_value() && frame_ != FrameChoice::Base;
+    std::vector<Eigen::Vector3d> where;
+    for (std::size_t k = 0; k < message.objects.size(); ++k) {
+      where.push_back(use_map ? message.map_info[k].map_centroid
+                              : message.objects[k].centroid.cast<double>());
+    }
+    if (json_) {
+      printObjectsJson(message, use_map, where);
+    } else {
+      printObjectsText(message, use_map, where);
+    }
+    std::fflush(stdout);
+  }
+
  private:
+  static std::vector<std::string> truncationNames(std::uint8_t bits) {
+    std::vector<std::string> names;
+    if (bits & kTruncatedOutline) names.push_back("outline");
+    if (bits & kTruncatedBorder) names.push_back("border");
+    if (bits & kTruncatedDepthHole) names.push_back("depth_hole");
+    return names;
+  }
+
+  void printObjectsText(const io::ObjectsMessage& m, bool use_map,
+                        const std::vector<Eigen::Vector3d>& where) const {
+    std::printf("objects seq %lld utime %llu: %zu objects on %d tables, %s frame\n",
+                static_cast<long long>(m.seq), static_cast<unsigned long long>(m.utime),
+                m.objects.size(), m.num_tables, use_map ? "map" : "base");
+    for (std::size_t k = 0; k < m.objects.size(); ++k) {
+      const TableObject& o = m.objects[k];
+      std::string cut;
+      for (const std::string& name : truncationNames(o.truncation)) {
+        cut += (cut.empty() ? "  cut off: " : ",") + name;
+      }
+      std::printf(
+          "   o  table %d  object %d  x %7.2f  y %7.2f  z %5.2f  height %5.2f m  "
+          "%4.2f x %4.2f m  rgb (%3.0f, %3.0f, %3.0f)  %d points%s\n",
+          o.table, o.id, where[k].x(), where[k].y(), where[k].z(), o.height_above_top,
+          2.0f * o.extents.x(), 2.0f * o.extents.y(), o.mean_rgb.x(), o.mean_rgb.y(),
+          o.mean_rgb.z(), o.point_count, cut.c_str());
+    }
+  }
+
+  void printObjectsJson(const io::ObjectsMessage& m, bool use_map,
+                        const std::vector<Eigen::Vector3d>& where) const {
+    std::ostringstream out;
+    out << "{\"utime\":" << m.utime << ",\"seq\":" << m.seq << ",\"frame\":\""
+        << (use_map ? "map" : "base") << "\",\"tables\":" << m.num_tables << ",\"objects\":[";
+    for (std::size_t k = 0; k < m.objects.size(); ++k) {
+      const TableObject& o = m.objects[k];
+      out << (k ? "," : "") << "{\"id\":" << o.id << ",\"table\":" << o.table
+          << ",\"x\":" << cli::jsonNumber(where[k].x(), 3)
+          << ",\"y\":" << cli::jsonNumber(where[k].y(), 3)
+          << ",\"z\":" << cli::jsonNumber(where[k].z(), 3)
+          << ",\"height_m\":" << cli::jsonNumber(o.height_above_top, 3)
+          << ",\"points\":" << o.point_count << ",\"truncated\":[";
+      const std::vector<std::string> names = truncationNames(o.truncation);
+      for (std::size_t i = 0; i < names.size(); ++i) {
+        out << (i ? "," : "") << cli::jsonString(names[i]);
+      }
+      out << "]}";
+    }
+    out << "]}";
+    std::puts(out.str().c_str());
+  }
+
   void printText(const io::TablesMessage& m, bool use_map, const Eigen::Vector2f& robot,
                  double robot_yaw, const std::vector<Position>& reachable,
                  const std::vector<int>& order, const std::vector<Position>& unreachable) const {
@@ -195,11 +271,25 @@ int main(int argc, char** argv) {
       [](const std::string& error) {
         std::fprintf(stderr, "%s: skipping bad message: %s\n", kProgram, error.c_str());
       });
+  // The objects on the frame's tables (the table map has none yet).
+  std::optional<io::Subscriber<io::ObjectsMessage>> objects;
+  if (!map) {
+    objects.emplace(
+        *bus, std::string(io::kObjectsChannel),
+        [](const std::uint8_t* d, std::size_t n, const std::string& c) {
+          return io::decodeObjects(d, n, c);
+        },
+        [&](const io::ObjectsMessage& m, const std::string&) { client.onObjects(m); },
+        [](const std::string& error) {
+          std::fprintf(stderr, "%s: skipping bad message: %s\n", kProgram, error.c_str());
+        });
+  }
   if (!json) {
-    std::fprintf(stderr, "%s: listening on %s, %s\n", kProgram, channel.c_str(),
+    std::fprintf(stderr, "%s: listening on %s%s, %s\n", kProgram, channel.c_str(),
+                 map ? "" : (" and " + std::string(io::kObjectsChannel)).c_str(),
                  bus->describe().c_str());
   }
-  // --count counts every message, bad ones included.
+  // --count counts every tables message, bad ones included.
   return clients::receiveLoop(*bus, kProgram, [&] {
     return count > 0 && tables.received() >= static_cast<std::uint64_t>(count);
   });

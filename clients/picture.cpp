@@ -118,6 +118,29 @@ void drawHiddenMarker(Canvas& canvas, double x, double y, int order, double radi
   }
 }
 
+// "O<id>" for an object candidate (snprintf for the reason tableName gives).
+std::string objectName(int id) {
+  char buffer[16];
+  std::snprintf(buffer, sizeof(buffer), "O%d", id);
+  return buffer;
+}
+
+// An object candidate: a disc in its own mean colour, so that the marker says which thing it
+// is, inside a white ring that stands out on any label colour.
+void drawObjectMarker(Canvas& canvas, double x, double y, Rgb8 colour, double radius) {
+  canvas.disc(x, y, radius + 4.5, kBlack);
+  canvas.disc(x, y, radius + 3, kWhite);
+  canvas.disc(x, y, radius + 1, kBlack);
+  canvas.disc(x, y, radius, colour);
+}
+
+Rgb8 meanColour(const TableObject& o) {
+  auto channel = [](float v) {
+    return static_cast<std::uint8_t>(std::lround(std::clamp(v, 0.0f, 255.0f)));
+  };
+  return Rgb8{channel(o.mean_rgb.x()), channel(o.mean_rgb.y()), channel(o.mean_rgb.z())};
+}
+
 }  // namespace
 
 Canvas::Canvas(int width, int height, Rgb8 background)
@@ -195,7 +218,7 @@ void Canvas::paste(const Image<Rgb8>& other, int x, int y) {
 
 Image<Rgb8> withLegend(const Image<Rgb8>& overlay) {
   const int panel = 150, row = 22;
-  Canvas canvas(overlay.width + panel, std::max(overlay.height, row * 15), kPanel);
+  Canvas canvas(overlay.width + panel, std::max(overlay.height, row * 16), kPanel);
   canvas.paste(overlay, 0, 0);
   const int x = overlay.width + 10;
   int y = 10;
@@ -224,6 +247,9 @@ Image<Rgb8> withLegend(const Image<Rgb8>& overlay) {
   canvas.line(x, y + 6, x + 16, y + 6, kHull, 3);
   canvas.line(x, y + 6, x + 16, y + 6, kBlack, 1);
   canvas.text(x + 24, y + 3, "table top hull", kBlack, 1);
+  y += row;
+  drawObjectMarker(canvas, x + 8, y + 6, Rgb8{200, 60, 40}, 3);
+  canvas.text(x + 24, y + 3, "object on a table", kBlack, 1);
   return canvas.image();
 }
 
@@ -314,6 +340,30 @@ int drawTablesInImage(Canvas& canvas, const io::TablesMessage& tables, const Cam
     } else {
       drawPositionMarker(canvas, pixel.x(), pixel.y(), p.order, 10);
     }
+  }
+  return drawn;
+}
+
+int drawObjectsInImage(Canvas& canvas, const io::ObjectsMessage& objects, const CameraIntrinsics& k,
+                       const CameraExtrinsics& extrinsics) {
+  return drawObjectsInImage(canvas, objects, k,
+                            groundFromExtrinsics(extrinsics).camera_to_ground.cast<double>());
+}
+
+int drawObjectsInImage(Canvas& canvas, const io::ObjectsMessage& objects, const CameraIntrinsics& k,
+                       const Eigen::Isometry3d& camera_to_base) {
+  const Eigen::Isometry3f base_to_camera = camera_to_base.cast<float>().inverse();
+  int drawn = 0;
+  for (const TableObject& o : objects.objects) {
+    const Eigen::Vector3f c = base_to_camera * o.centroid;
+    if (c.z() < 0.1f) continue;  // behind or at the camera
+    const double u = k.fx * c.x() / c.z() + k.cx, v = k.fy * c.y() / c.z() + k.cy;
+    drawObjectMarker(canvas, u, v, meanColour(o), 5);
+    const std::string id = objectName(o.id);
+    const int x = static_cast<int>(std::lround(u)) + 12, y = static_cast<int>(std::lround(v)) - 4;
+    canvas.fillRect(x - 2, y - 2, Canvas::textWidth(id) + 4, Canvas::textHeight() + 4, kWhite);
+    canvas.text(x, y, id, kBlack);
+    ++drawn;
   }
   return drawn;
 }

@@ -1,6 +1,6 @@
 // picture.hpp — the pictures findmug's clients draw for people: a label legend, table
-// hulls and numbered search positions over the camera image, and a top-down table map
-// (PNG and SVG) with the robot's pose. Plain RGB canvases; text in a built-in 5x7 font
+// hulls, numbered search positions and object candidates over the camera image, and a top-down
+// table map (PNG and SVG) with the robot's pose. Plain RGB canvases; text in a built-in 5x7 font
 // (no font library on a robot PC).
 #pragma once
 
@@ -69,6 +69,16 @@ int drawTablesInImage(Canvas& canvas, const io::TablesMessage& tables,
 int drawTablesInImage(Canvas& canvas, const io::TablesMessage& tables,
                       const CameraIntrinsics& intrinsics, const Eigen::Isometry3d& camera_to_base,
                       const std::vector<std::uint16_t>* depth_mm = nullptr);
+
+// The object candidates of an objects message (base frame) as markers at their centroids
+// projected into the image of a camera at `camera_to_base`: a disc in the candidate's mean
+// colour inside a white ring, its id ("O<id>") beside it. Returns how many were in front of
+// the camera. The candidates' pixels are not on the wire, hence a marker, not an outline.
+int drawObjectsInImage(Canvas& canvas, const io::ObjectsMessage& objects,
+                       const CameraIntrinsics& intrinsics, const Eigen::Isometry3d& camera_to_base);
+// The same for a camera mounted as `extrinsics` (older daemons: the colour frame's mount).
+int drawObjectsInImage(Canvas& canvas, const io::ObjectsMessage& objects,
+                       const CameraIntrinsics& intrinsics, const CameraExtrinsics& extrinsics);
 
 // Top-down view of a tables message: the map frame with the robot at map_pose when the
 // message has one (FINDMUG_TABLE_MAP), else the base frame with the robot at the origin.

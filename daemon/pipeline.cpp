@@ -31,7 +31,7 @@ const std::vector<std::pair<std::string, double StageTimings::*>>& subStages() {
       {"features", &StageTimings::features_ms}, {"regions", &StageTimings::regions_ms},
       {"forest", &StageTimings::forest_ms},     {"context", &StageTimings::context_ms},
       {"mrf", &StageTimings::mrf_ms},           {"labels", &StageTimings::labels_ms},
-      {"tables", &StageTimings::tables_ms}};
+      {"tables", &StageTimings::tables_ms},     {"objects", &StageTimings::objects_ms}};
   return all;
 }
 
@@ -108,6 +108,7 @@ Pipeline::Pipeline(const SegmenterConfig& segmenter_config, const DaemonConfig& 
   publisher_ = std::make_shared<LcmPublisherSink>(
       std::move(bus),
       LcmPublisherSink::Channels{std::string(io::kLabelsChannel), std::string(io::kTablesChannel),
+                                 std::string(io::kObjectsChannel),
                                  std::string(io::kTableMapChannel),
                                  std::string(io::kStatusChannel)},
       daemon_config_.publish_confidence, daemon_config_.publish_tables);

@@ -8,6 +8,7 @@
 #include "findmug/common/error.hpp"
 #include "findmug/daemon/status_builder.hpp"
 #include "findmug/io/lcm_codec.hpp"
+#include "findmug/io/lcm_codec_objects.hpp"
 
 namespace findmug::daemon {
 
@@ -152,6 +153,13 @@ void LcmPublisherSink::consume(FrameResult& result) {
               io::encodeTables(frame.utime, frame.seq, io::TablesContent::Frame,
                                result.labelled.tables, result.pose, result.map_info))) {
       throw Error("LCM publish on " + channels_.tables + " failed for " + frameName(frame));
+    }
+    // With every tables_t, even without candidates: an empty list tells a
+    // client the tables were looked at and hold nothing.
+    if (!send(channels_.objects,
+              io::encodeObjects(frame.utime, frame.seq, result.labelled.table_objects,
+                                result.labelled.tables, result.pose, result.map_info))) {
+      throw Error("LCM publish on " + channels_.objects + " failed for " + frameName(frame));
     }
   }
   if (result.table_map) {

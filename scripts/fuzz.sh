@@ -21,7 +21,7 @@ SECONDS_EACH=${1:-30}
 shift || true
 BUILD_DIR=${BUILD_DIR:-build-fuzz}
 JOBS=${JOBS:-1}
-ALL_TARGETS=(rgbd_frame robot_pose label_image tables status model config_yaml config_set png
+ALL_TARGETS=(rgbd_frame robot_pose label_image tables objects status model config_yaml config_set png
              pcd pclzf tiff nyu_mat label_csv udpm label_deflate semantic_map semantic_map_file
              command object_model)
 TARGETS=("$@")

@@ -16,6 +16,7 @@
 
 #include "findmug/common/error.hpp"
 #include "findmug/io/lcm_codec.hpp"
+#include "findmug/io/lcm_codec_objects.hpp"
 
 namespace findmug::io {
 
@@ -145,6 +146,12 @@ void walkTable(WireWalker& w) {
   w.skip(kI32 + kBool + 2 * kI32, "tables.map_id/confirmed/sightings/viewpoints");
 }
 
+// table_object_t has only fixed-size fields: id, table_id, table_map_id, centroid,
+// map_centroid, height_above_top, major_axis, extents, center, point_count, mean_rgb,
+// colour_histogram, truncation, map_id, sightings, last_seen_utime.
+constexpr std::size_t kTableObject =
+    3 * kI32 + 6 * kF64 + kF64 + 6 * kF64 + kI32 + 3 * kF32 + 28 * kF32 + kI8 + 2 * kI32 + kI64;
+
 template <typename Msg>
 Msg decodeWalked(const void* data, std::size_t size, std::string_view channel) {
   Msg msg;
@@ -232,6 +239,16 @@ findmug_lcm::tables_t decodeMessage<findmug_lcm::tables_t>(const void* data, std
                                                           3 * kF64 + 4 * kF64 + 3 * kI32 + kBool);
     for (std::int32_t i = 0; i < tables; ++i) walkTable(w);
     w.skip(kI8, "content");
+  });
+}
+
+template <>
+findmug_lcm::objects_t decodeMessage<findmug_lcm::objects_t>(const void* data, std::size_t size,
+                                                             std::string_view channel) {
+  return walkThenDecode<findmug_lcm::objects_t>(data, size, channel, [](WireWalker& w) {
+    w.skip(2 * kI64 + kI8 + kI32 + kBool, "utime/seq/content/num_tables/has_map_pose");
+    walkRobotPose(w);
+    w.array(w.count("num_objects", kTableObject), kTableObject, "objects");
   });
 }
 

@@ -25,6 +25,7 @@
 #include "findmug/frame/dataset.hpp"
 #include "findmug/frame/image_io.hpp"
 #include "findmug/io/lcm_codec.hpp"
+#include "findmug/io/lcm_codec_objects.hpp"
 #include "findmug/io/pcl_frames.hpp"
 #include "findmug/io/semantic_map_codec.hpp"
 #include "findmug/learner/forest.hpp"
@@ -180,6 +181,36 @@ void lcmSeeds(SeedWriter& w) {
   tables.map_pose = io::RobotPose{frame.utime, {2.0, -1.0, 0.3}};
   tables.map_info = {io::TableMapInfo{1, true, 5, 3}};
   w.write("tables", "map", asString(io::encodeMessage(io::encodeTables(tables))), decodeTables);
+
+  // Objects on that table: none (looked, nothing), a mug with the map pose known, and the
+  // tests' sample (two tables, a cut-off candidate).
+  auto decodeObjects = [](const std::string& b) {
+    (void)io::decodeObjects(b.data(), b.size(), "seed");
+  };
+  w.write("objects", "empty",
+          asString(io::encodeMessage(io::encodeObjects(
+              frame.utime, frame.seq, TableObjectDetection{}, tables.tables, std::nullopt, {}))),
+          decodeObjects);
+  {
+    TableObjectDetection objects;
+    TableObject mug;
+    mug.centroid = Eigen::Vector3f(1.4f, 0.3f, 0.8f);
+    mug.height_above_top = 0.1f;
+    mug.extents = Eigen::Vector2f(0.04f, 0.035f);
+    mug.center = Eigen::Vector2f(1.4f, 0.3f);
+    mug.point_count = 80;
+    mug.mean_rgb = Eigen::Vector3f(30.0f, 60.0f, 200.0f);
+    mug.colour_histogram[16] = 0.75f;
+    mug.colour_histogram[26] = 0.25f;
+    mug.truncation = kTruncatedOutline;
+    objects.objects = {mug};
+    w.write("objects", "mug",
+            asString(io::encodeMessage(
+                io::encodeObjects(frame.utime, frame.seq, objects, tables.tables,
+                                  io::RobotPose{frame.utime, {2.0, -1.0, 0.3}}, tables.map_info))),
+            decodeObjects);
+  }
+  w.write("objects", "sample", asString(io::encodeMessage(test::sampleObjects())), decodeObjects);
 
   const auto pose = asString(io::encodeMessage(io::encodeRobotPose(io::RobotPose{frame.utime, {2.0, -1.0, 0.3}})));
   w.write("robot_pose", "pose", pose,

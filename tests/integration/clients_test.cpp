@@ -5,8 +5,10 @@
 //   nav-client    positions in visiting order (checked against
 //                 findmug::visitingOrder AND against brute force over every
 //                 order, i.e. the geometry), base or map frame, unreachable
-//                 positions with their reason, JSON lines that parse, exit 0
-//                 at the end of the log, exit 2 on bad flags;
+//                 positions with their reason, the objects on each table (in
+//                 the same frame, the corrupt objects message skipped), JSON
+//                 lines that parse, exit 0 at the end of the log, exit 2 on
+//                 bad flags;
 //   label-viewer  overlay PNGs in the paper's palette (pixel colours against
 //                 kLabelColors, blended with the colour frame of the same
 //                 utime), the console summary, the corrupt message skipped
@@ -38,6 +40,7 @@
 #include "findmug/frame/image_io.hpp"
 #include "findmug/io/channels.hpp"
 #include "findmug/io/lcm_codec.hpp"
+#include "findmug/io/lcm_codec_objects.hpp"
 #include "findmug/io/semantic_map_codec.hpp"
 #include "findmug/labels/labels.hpp"
 #include "findmug/tables/tables.hpp"
@@ -333,6 +336,28 @@ io::TablesMessage mapFrameTables() {
   return m;
 }
 
+// One candidate standing on table `table` of `tables`, at `centroid` (base frame), cut off at
+// the image border, encoded with the tables' map pose as findmugd does.
+std::vector<std::uint8_t> objectOn(const io::TablesMessage& tables, int table,
+                                   const Eigen::Vector3f& centroid, int bad_table_id = -1) {
+  TableObjectDetection d;
+  TableObject o;
+  o.table = table;
+  o.centroid = centroid;
+  o.height_above_top = 0.12f;
+  o.extents = Eigen::Vector2f(0.05f, 0.04f);
+  o.center = centroid.head<2>();
+  o.point_count = 95;
+  o.mean_rgb = Eigen::Vector3f(200, 20, 10);
+  o.colour_histogram[0] = 1.0f;
+  o.truncation = kTruncatedBorder;
+  d.objects = {o};
+  findmug_lcm::objects_t m =
+      io::encodeObjects(tables.utime, tables.seq, d, tables.tables, tables.map_pose, {});
+  if (bad_table_id >= 0) m.objects[0].table_id = bad_table_id;
+  return io::encodeMessage(m);
+}
+
 // What the client should list for a message: (table, x, y) of the
 // reachable positions in visiting order, in the requested frame.
 struct Stop {
@@ -425,10 +450,15 @@ const ClientLog& clientLog() {
     auto* l = new ClientLog;
     Log messages;
     const std::string tables_channel(io::kTablesChannel), labels_channel(io::kLabelsChannel);
+    const std::string objects_channel(io::kObjectsChannel);
     messages.push_back({tables_channel, io::encodeMessage(io::encodeTables(baseFrameTables()))});
+    messages.push_back({objects_channel, objectOn(baseFrameTables(), 1, {1.5f, -1.5f, 0.85f})});
     messages.push_back(
         {tables_channel, truncated(io::encodeMessage(io::encodeTables(baseFrameTables())))});
+    // A table id beyond the frame's two tables: well-formed bytes, bad content.
+    messages.push_back({objects_channel, objectOn(baseFrameTables(), 1, {1.5f, -1.5f, 0.85f}, 2)});
     messages.push_back({tables_channel, io::encodeMessage(io::encodeTables(mapFrameTables()))});
+    messages.push_back({objects_channel, objectOn(mapFrameTables(), 0, {3.0f, 0.1f, 0.84f})});
 
     l->labels1.image = labelBlocks(12, 8);
     l->labels1.utime = 1'000'000;
@@ -549,6 +579,51 @@ TEST(NavClient, PrintsReachablePositionsInVisitingOrderAndSkipsTheCorruptMessage
       << r.err;
 }
 
+// The objects message after each tables message: its candidates, in the frame the tables
+// are printed in (map: the robot at (10, -2) facing map +y turns base (3.0, 0.1) into
+// (9.9, 1.0)); the corrupt one reported and skipped.
+TEST(NavClient, PrintsTheObjectsOnEachTable) {
+  const ClientLog& log = clientLog();
+  TempDir tmp;
+  const ProcessResult r = run(FINDMUG_NAV_CLIENT_EXE, {"--lcm-url", replayUrl(log.path)}, tmp);
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  std::vector<std::string> headers, objects;
+  for (const std::string& line : lines(r.out)) {
+    if (line.rfind("objects seq", 0) == 0) headers.push_back(line);
+    if (line.rfind("   o  table", 0) == 0) objects.push_back(line);
+  }
+  ASSERT_EQ(headers.size(), 2u) << r.out;
+  ASSERT_EQ(objects.size(), 2u) << r.out;
+  EXPECT_NE(headers[0].find("objects seq 1 utime 1000000: 1 objects on 2 tables, base frame"),
+            std::string::npos)
+      << headers[0];
+  EXPECT_NE(headers[1].find("objects seq 3 utime 3000000: 1 objects on 2 tables, map frame"),
+            std::string::npos)
+      << headers[1];
+  int table = -1, id = -1;
+  float x = 0, y = 0, z = 0;
+  ASSERT_EQ(std::sscanf(objects[0].c_str(), "   o  table %d  object %d  x %f  y %f  z %f", &table,
+                        &id, &x, &y, &z),
+            5)
+      << objects[0];
+  EXPECT_EQ(table, 1);
+  EXPECT_NEAR(x, 1.5f, 0.006f);
+  EXPECT_NEAR(y, -1.5f, 0.006f);
+  EXPECT_NEAR(z, 0.85f, 0.006f);
+  EXPECT_NE(objects[0].find("height  0.12 m"), std::string::npos) << objects[0];
+  EXPECT_NE(objects[0].find("cut off: border"), std::string::npos) << objects[0];
+  ASSERT_EQ(std::sscanf(objects[1].c_str(), "   o  table %d  object %d  x %f  y %f  z %f", &table,
+                        &id, &x, &y, &z),
+            5)
+      << objects[1];
+  EXPECT_EQ(table, 0);
+  EXPECT_NEAR(x, 9.9f, 0.006f);
+  EXPECT_NEAR(y, 1.0f, 0.006f);
+  EXPECT_NE(r.err.find("skipping bad message: FINDMUG_OBJECTS: objects_t.objects[0].table_id"),
+            std::string::npos)
+      << r.err;
+}
+
 TEST(NavClient, BaseFrameIsUsedWhenAskedEvenWithAMapPose) {
   const ClientLog& log = clientLog();
   TempDir tmp;
@@ -568,8 +643,27 @@ TEST(NavClient, JsonLinesParseAndCarryTheTour) {
   const ProcessResult r =
       run(FINDMUG_NAV_CLIENT_EXE, {"--lcm-url", replayUrl(log.path), "--json"}, tmp);
   EXPECT_EQ(r.exit_code, 0) << r.err;
-  const auto out = lines(r.out);
-  ASSERT_EQ(out.size(), 2u) << r.out;  // one object per good message, nothing else on stdout
+  // One object per good message, nothing else on stdout: tables lines carry "tour", objects
+  // lines "objects".
+  std::vector<std::string> out, objects;
+  for (const std::string& line : lines(r.out)) {
+    (line.find("\"objects\":") != std::string::npos ? objects : out).push_back(line);
+  }
+  ASSERT_EQ(out.size(), 2u) << r.out;
+  ASSERT_EQ(objects.size(), 2u) << r.out;
+  for (std::size_t i = 0; i < objects.size(); ++i) {
+    Json j;
+    ASSERT_NO_THROW(j = parseJson(objects[i])) << objects[i];
+    EXPECT_EQ(j["seq"].number(), i == 0 ? 1.0 : 3.0);
+    EXPECT_EQ(j["frame"].string(), i == 0 ? "base" : "map");
+    ASSERT_EQ(j["objects"].array().size(), 1u);
+    const Json& o = j["objects"].array()[0];
+    EXPECT_EQ(o["table"].number(), i == 0 ? 1.0 : 0.0);
+    EXPECT_NEAR(o["x"].number(), i == 0 ? 1.5 : 9.9, 0.0006);
+    EXPECT_NEAR(o["y"].number(), i == 0 ? -1.5 : 1.0, 0.0006);
+    ASSERT_EQ(o["truncated"].array().size(), 1u);
+    EXPECT_EQ(o["truncated"].array()[0].string(), "border");
+  }
   const io::TablesMessage expected[] = {baseFrameTables(), mapFrameTables()};
   for (std::size_t i = 0; i < out.size(); ++i) {
     Json j;
@@ -743,21 +837,42 @@ TEST(LabelViewer, DrawsTablesWithTheDaemonsCameraOverTheCarriedImage) {
   camera_to_base.translation() = Eigen::Vector3d(0, 0, 1.2);
   io::setCameraView(message, CameraIntrinsics{40, 40, 31.5, 23.5}, camera_to_base);
   io::setColorJpeg(message, std::vector<Rgb8>(64 * 48, Rgb8{90, 90, 90}), 90);
+  // A yellow mug on table 0, 3 m ahead and 0.35 m below the camera: pixel (31.5, 28.2).
+  TableObjectDetection objects;
+  TableObject mug;
+  mug.centroid = Eigen::Vector3f(3.0f, 0.0f, 0.85f);
+  mug.point_count = 60;
+  mug.mean_rgb = Eigen::Vector3f(250.0f, 200.0f, 10.0f);
+  mug.colour_histogram[2] = 1.0f;
+  objects.objects = {mug};
   const std::string log = tmp.str("camera.lcmlog");
-  daemon::test::writeLcmLog(log, {{std::string(io::kLabelsChannel), io::encodeMessage(message)},
-                                  {std::string(io::kTablesChannel),
-                                   io::encodeMessage(io::encodeTables(tables))}});
+  daemon::test::writeLcmLog(
+      log, {{std::string(io::kLabelsChannel), io::encodeMessage(message)},
+            {std::string(io::kTablesChannel), io::encodeMessage(io::encodeTables(tables))},
+            {std::string(io::kObjectsChannel),
+             io::encodeMessage(
+                 io::encodeObjects(tables.utime, tables.seq, objects, tables.tables, {}, {}))}});
   const ProcessResult r =
       run(FINDMUG_LABEL_VIEWER_EXE, {"--lcm-url", replayUrl(log), "--out", tmp.str("png")}, tmp);
   EXPECT_EQ(r.exit_code, 0) << r.err;
   EXPECT_NE(r.out.find("overlay "), std::string::npos) << r.out;  // over the carried image
   EXPECT_EQ(r.out.find("no colour frame"), std::string::npos) << r.out;
   EXPECT_NE(r.out.find("with 2 of 2 tables in view"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("objects seq 5: 1 objects; redrawn"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("tables in view, 1 of 1 objects"), std::string::npos) << r.out;
   // The hulls are drawn in white (the carried image is grey, the labels blend with it).
   const Image<Rgb8> overlay = cropped(readPngRgb(tmp.str("png/labels_00000005.png")), 64, 48);
   int white = 0;
   for (const Rgb8& p : overlay.pixels) white += (p.r == 255 && p.g == 255 && p.b == 255) ? 1 : 0;
   EXPECT_GT(white, 10);
+  // The mug's marker, in its own colour, where the camera sees its centroid.
+  int mug_pixels = 0;
+  for (int v = 26; v <= 30; ++v) {
+    for (int u = 30; u <= 33; ++u) {
+      mug_pixels += overlay.pixels[static_cast<std::size_t>(v) * 64 + u] == Rgb8{250, 200, 10};
+    }
+  }
+  EXPECT_GE(mug_pixels, 12);
 }
 
 // A known semantic map at 10 cm: a 2 x 1 m floor, a table top (0.7 m) over part of it, a

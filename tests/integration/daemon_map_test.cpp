@@ -34,6 +34,7 @@
 #include "findmug/io/bus.hpp"
 #include "findmug/io/channels.hpp"
 #include "findmug/io/lcm_codec.hpp"
+#include "findmug/io/lcm_codec_objects.hpp"
 #include "findmug/io/semantic_map_codec.hpp"
 #include "findmug/io/subscriber.hpp"
 #include "findmug/map/table_map.hpp"
@@ -723,6 +724,7 @@ TEST(DaemonSemanticMap, AnUnreadableMapFileIsSetAsideAndTheDaemonRuns) {
 struct Collected {
   std::vector<io::LabelImageMessage> labels;
   std::vector<io::TablesMessage> tables, table_map;
+  std::vector<io::ObjectsMessage> objects;
   std::vector<findmug_lcm::status_t> statuses;
 };
 
@@ -739,6 +741,10 @@ void collect(io::MemoryBus& bus, Collected* out) {
                 [out](const std::string& c, const std::uint8_t* d, std::size_t n) {
                   out->table_map.push_back(io::decodeTables(d, n, c));
                 });
+  bus.subscribe(std::string(io::kObjectsChannel),
+                [out](const std::string& c, const std::uint8_t* d, std::size_t n) {
+                  out->objects.push_back(io::decodeObjects(d, n, c));
+                });
   bus.subscribe(std::string(io::kStatusChannel),
                 [out](const std::string& c, const std::uint8_t* d, std::size_t n) {
                   out->statuses.push_back(io::decodeMessage<findmug_lcm::status_t>(d, n, c));
@@ -748,6 +754,34 @@ void collect(io::MemoryBus& bus, Collected* out) {
 void drain(io::MemoryBus& bus) {
   while (bus.handle(std::chrono::milliseconds(0)) == io::HandleResult::Handled) {
   }
+}
+
+// FINDMUG_OBJECTS: one objects_t per tables_t, in the same order, for the
+// same frame (seq, utime), with the same table count and map pose, and each
+// object naming its table's map id as the tables_t does.
+void expectObjectsFollowTables(const std::vector<io::ObjectsMessage>& objects,
+                               const std::vector<io::TablesMessage>& tables) {
+  ASSERT_EQ(objects.size(), tables.size());
+  std::size_t with_pose = 0;
+  for (std::size_t i = 0; i < objects.size(); ++i) {
+    const io::ObjectsMessage& o = objects[i];
+    const io::TablesMessage& t = tables[i];
+    EXPECT_EQ(o.content, io::TablesContent::Frame);
+    EXPECT_EQ(o.seq, t.seq);
+    EXPECT_EQ(o.utime, t.utime);
+    EXPECT_EQ(o.num_tables, static_cast<int>(t.tables.size())) << "seq " << t.seq;
+    ASSERT_EQ(o.map_pose.has_value(), t.map_pose.has_value()) << "seq " << t.seq;
+    with_pose += o.map_pose.has_value();
+    if (o.map_pose) {
+      EXPECT_EQ(o.map_pose->utime, t.map_pose->utime);
+    }
+    for (std::size_t k = 0; k < o.objects.size(); ++k) {
+      const auto table = static_cast<std::size_t>(o.objects[k].table);
+      const int map_id = t.map_info.empty() ? 0 : t.map_info.at(table).map_id;
+      EXPECT_EQ(o.map_info[k].table_map_id, map_id) << "seq " << t.seq;
+    }
+  }
+  EXPECT_GT(with_pose, 0u);  // the map-pose path was exercised
 }
 
 test::TestConfig memoryConfig() {
@@ -798,6 +832,7 @@ TEST(DaemonMapOnMemoryBus, PublishesWhatTheLcmLogPathPublishes) {
     EXPECT_EQ(got.tables[i].map_pose.has_value(), file_run.tables[i].map_pose.has_value());
     EXPECT_EQ(got.tables[i].map_info.size(), file_run.tables[i].map_info.size());
   }
+  expectObjectsFollowTables(got.objects, got.tables);
   ASSERT_EQ(got.table_map.size(), file_run.table_map.size());
   ASSERT_FALSE(got.table_map.empty());
   EXPECT_EQ(got.table_map.back().tables.size(), file_run.table_map.back().tables.size());
@@ -816,7 +851,8 @@ TEST(DaemonOnMemoryBus, TheBusesApplyTheChannelSuffix) {
   pose_bus->end();
   auto out = std::make_shared<io::MemoryBus>(100000);
   std::map<std::string, int> seen;
-  for (const std::string_view name : {io::kLabelsChannel, io::kTablesChannel, io::kStatusChannel}) {
+  for (const std::string_view name :
+       {io::kLabelsChannel, io::kTablesChannel, io::kObjectsChannel, io::kStatusChannel}) {
     const std::string base(name);
     for (const std::string& channel : {base, base + "_R2"}) {
       out->subscribe(channel, [&seen](const std::string& c, const std::uint8_t*, std::size_t) {
@@ -842,9 +878,10 @@ TEST(DaemonOnMemoryBus, TheBusesApplyTheChannelSuffix) {
   drain(*out);
   EXPECT_EQ(seen["FINDMUG_LABELS_R2"], 2);
   EXPECT_EQ(seen["FINDMUG_TABLES_R2"], 2);
+  EXPECT_EQ(seen["FINDMUG_OBJECTS_R2"], 2);
   EXPECT_GE(seen["FINDMUG_STATUS_R2"], 1);
   EXPECT_EQ(seen.count("FINDMUG_LABELS") + seen.count("FINDMUG_TABLES") +
-                seen.count("FINDMUG_STATUS"),
+                seen.count("FINDMUG_OBJECTS") + seen.count("FINDMUG_STATUS"),
             0u);
 }
 
@@ -884,16 +921,17 @@ TEST(DaemonOutputFaults, AnUnreadBusAndRefusedPublishesLeaveThePipelineRunning) 
   // its newest kCapacity messages and discards the rest.
   submitFrames(6);
   EXPECT_EQ(pipeline.counters().processed, 6u);
-  EXPECT_EQ(memory->published(), 12u);  // labels + tables per frame
+  EXPECT_EQ(memory->published(), 18u);  // labels + tables + objects per frame
   EXPECT_EQ(memory->queued(), kCapacity);
-  EXPECT_EQ(memory->discarded(), 12u - kCapacity);
+  EXPECT_EQ(memory->discarded(), 18u - kCapacity);
 
   // A reader arrives and takes what is queued.
   Collected got;
   collect(*memory, &got);
   drain(*memory);
-  EXPECT_EQ(got.labels.size() + got.tables.size(), kCapacity);
+  EXPECT_EQ(got.labels.size() + got.tables.size() + got.objects.size(), kCapacity);
   const std::size_t labels_before = got.labels.size(), tables_before = got.tables.size();
+  const std::size_t objects_before = got.objects.size();
 
   // (b) Publishing tables fails: each frame's labels still go out, the frame
   // counts as rejected (its tables_t is lost) and the error names the channel.
@@ -902,6 +940,7 @@ TEST(DaemonOutputFaults, AnUnreadBusAndRefusedPublishesLeaveThePipelineRunning) 
   drain(*memory);
   EXPECT_EQ(got.labels.size(), labels_before + 4);
   EXPECT_EQ(got.tables.size(), tables_before);
+  EXPECT_EQ(got.objects.size(), objects_before);  // not without the frame's tables
   EXPECT_EQ(pipeline.counters().processed, 6u);
   EXPECT_EQ(pipeline.counters().rejected, 4u);
   EXPECT_EQ(pipeline.publishFailures(), 4u);
@@ -921,6 +960,7 @@ TEST(DaemonOutputFaults, AnUnreadBusAndRefusedPublishesLeaveThePipelineRunning) 
   drain(*memory);
   EXPECT_EQ(pipeline.counters().processed, 8u);
   EXPECT_EQ(got.tables.size(), tables_before + 2);
+  EXPECT_EQ(got.objects.size(), objects_before + 2);
   EXPECT_EQ(faulty->refused(), 5u);
   pipeline.stop(StopMode::Drain);
   drain(*memory);

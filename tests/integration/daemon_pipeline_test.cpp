@@ -24,6 +24,7 @@
 #include "findmug/io/channels.hpp"
 #include "findmug/io/frame_source.hpp"
 #include "findmug/io/lcm_codec.hpp"
+#include "findmug/io/lcm_codec_objects.hpp"
 #include "findmug/pipeline/segmenter.hpp"
 #include "test_data.hpp"
 
@@ -67,6 +68,7 @@ test::TestConfig baseConfig(const std::string& source, const std::string& out_lo
 struct Published {
   std::vector<io::LabelImageMessage> labels;
   std::vector<io::TablesMessage> tables;
+  std::vector<io::ObjectsMessage> objects;
   std::vector<findmug_lcm::status_t> statuses;
 };
 
@@ -77,6 +79,8 @@ Published readPublished(const std::string& log) {
       p.labels.push_back(io::decodeLabelImage(m.data.data(), m.data.size(), m.channel));
     } else if (m.channel == io::kTablesChannel) {
       p.tables.push_back(io::decodeTables(m.data.data(), m.data.size(), m.channel));
+    } else if (m.channel == io::kObjectsChannel) {
+      p.objects.push_back(io::decodeObjects(m.data.data(), m.data.size(), m.channel));
     } else if (m.channel == io::kStatusChannel) {
       p.statuses.push_back(
           io::decodeMessage<findmug_lcm::status_t>(m.data.data(), m.data.size(), m.channel));
@@ -134,6 +138,8 @@ void runAndCompare(const std::string& spec, std::size_t expected_frames,
   const Published published = readPublished(out);
   ASSERT_EQ(published.labels.size(), expected_frames);
   ASSERT_EQ(published.tables.size(), expected_frames);
+  // One objects_t per frame, after its tables_t, even when it holds no candidate.
+  ASSERT_EQ(published.objects.size(), expected_frames);
   std::int64_t previous = -1;
   std::size_t labelled_pixels = 0;
   for (const auto& l : published.labels) {
@@ -152,6 +158,11 @@ void runAndCompare(const std::string& spec, std::size_t expected_frames,
     EXPECT_EQ(got.utime, published.tables[i].utime);
     EXPECT_EQ(published.tables[i].seq, got.seq);
     EXPECT_EQ(published.tables[i].tables.size(), want.tables.size());
+    const io::ObjectsMessage& objects = published.objects[i];
+    EXPECT_EQ(objects.seq, got.seq);
+    EXPECT_EQ(objects.utime, got.utime);
+    EXPECT_EQ(objects.num_tables, static_cast<int>(want.tables.size()));
+    EXPECT_EQ(objects.objects.size(), want.table_objects.objects.size());
     EXPECT_GT(got.latency_us, 0);
   }
   ASSERT_FALSE(published.statuses.empty());
@@ -165,7 +176,8 @@ void runAndCompare(const std::string& spec, std::size_t expected_frames,
   EXPECT_EQ(last.source_state, findmug_lcm::status_t::SOURCE_END_OF_STREAM);
   EXPECT_EQ(last.num_queues, 3);
   const auto& names = last.stage_names;
-  for (const char* stage : {"prepare", "segment", "publish", "supervoxels", "forest", "total"}) {
+  for (const char* stage :
+       {"prepare", "segment", "publish", "supervoxels", "forest", "tables", "objects", "total"}) {
     EXPECT_NE(std::find(names.begin(), names.end(), stage), names.end()) << stage;
   }
   const auto total = std::find(names.begin(), names.end(), "total") - names.begin();

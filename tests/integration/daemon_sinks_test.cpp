@@ -17,6 +17,7 @@
 #include "findmug/daemon/status_builder.hpp"
 #include "findmug/io/bus.hpp"
 #include "findmug/io/lcm_codec.hpp"
+#include "findmug/io/lcm_codec_objects.hpp"
 #include "findmug_lcm/status_t.hpp"
 
 namespace findmug::daemon {
@@ -134,6 +135,10 @@ class Collector {
       channels.push_back(c);
       labels.push_back(io::decodeLabelImage(d, n, c));
     });
+    bus.subscribe(ch.objects, [this](const std::string& c, const std::uint8_t* d, std::size_t n) {
+      channels.push_back(c);
+      objects.push_back(io::decodeObjects(d, n, c));
+    });
     for (const std::string& name : {ch.tables, ch.table_map}) {
       bus.subscribe(name, [this](const std::string& c, const std::uint8_t* d, std::size_t n) {
         channels.push_back(c);
@@ -154,14 +159,30 @@ class Collector {
   std::vector<std::string> channels;
   std::vector<io::LabelImageMessage> labels;
   std::vector<io::TablesMessage> tables;
+  std::vector<io::ObjectsMessage> objects;
 
  private:
   io::MemoryBus& bus_;
 };
 
-const LcmPublisherSink::Channels kChannels{"L", "T", "M", "S"};
+const LcmPublisherSink::Channels kChannels{"L", "T", "O", "M", "S"};
 
-TEST(LcmPublisherSink, PublishesLabelsTablesAndMapInThatOrder) {
+// A mug-sized candidate standing on table `table` of a frame.
+TableObject mugOn(int table, const Eigen::Vector3f& centroid) {
+  TableObject o;
+  o.table = table;
+  o.centroid = centroid;
+  o.height_above_top = 0.1f;
+  o.extents = Eigen::Vector2f(0.04f, 0.04f);
+  o.center = centroid.head<2>();
+  o.point_count = 120;
+  o.mean_rgb = Eigen::Vector3f(200, 30, 20);
+  o.colour_histogram[0] = 1.0f;
+  o.pixels = {0, 1};
+  return o;
+}
+
+TEST(LcmPublisherSink, PublishesLabelsTablesObjectsAndMapInThatOrder) {
   auto bus = std::make_shared<io::MemoryBus>();
   LcmPublisherSink sink(bus, kChannels, true, true);
   const LabelledFrame l = labelledFrame(7, true, true, {tableAhead(2.0f)});
@@ -172,7 +193,7 @@ TEST(LcmPublisherSink, PublishesLabelsTablesAndMapInThatOrder) {
   r.table_map->map_pose = r.pose;
   Collector p(*bus, kChannels);
   sink.consume(r);
-  EXPECT_EQ(p.drain(), (std::vector<std::string>{"L", "T", "M"}));
+  EXPECT_EQ(p.drain(), (std::vector<std::string>{"L", "T", "O", "M"}));
   ASSERT_EQ(p.labels.size(), 1u);
   EXPECT_EQ(p.labels[0].seq, 7);
   EXPECT_EQ(p.labels[0].latency_us, 1234);
@@ -185,7 +206,40 @@ TEST(LcmPublisherSink, PublishesLabelsTablesAndMapInThatOrder) {
   ASSERT_EQ(p.tables[0].map_info.size(), 1u);
   EXPECT_EQ(p.tables[0].map_info[0].map_id, 5);
   EXPECT_EQ(p.tables[1].content, io::TablesContent::Map);
+  // A table without candidates still gets its (empty) objects message.
+  ASSERT_EQ(p.objects.size(), 1u);
+  EXPECT_EQ(p.objects[0].seq, 7);
+  EXPECT_EQ(p.objects[0].num_tables, 1);
+  EXPECT_TRUE(p.objects[0].objects.empty());
   EXPECT_EQ(sink.publishFailures(), 0u);
+}
+
+// The frame's candidates go out with their table's index and map id, and the
+// map-frame centroid through the frame's pose (poseAt: x + 1, y + 2, no turn).
+TEST(LcmPublisherSink, ObjectsCarryTheirTableAndMapFrameCentroid) {
+  auto bus = std::make_shared<io::MemoryBus>();
+  LcmPublisherSink sink(bus, kChannels, true, true);
+  LabelledFrame l = labelledFrame(9, true, true, {tableAhead(2.0f), tableAhead(4.0f)});
+  l.tables[1].id = 1;
+  l.table_objects.objects = {mugOn(1, Eigen::Vector3f(4.1f, 0.2f, 0.8f))};
+  FrameResult r{l, 0, poseAt(l.segmented.prepared.frame.utime), {{3, true, 4}, {8, false, 1}},
+                std::nullopt};
+  Collector p(*bus, kChannels);
+  sink.consume(r);
+  EXPECT_EQ(p.drain(), (std::vector<std::string>{"L", "T", "O"}));
+  ASSERT_EQ(p.objects.size(), 1u);
+  const io::ObjectsMessage& m = p.objects[0];
+  EXPECT_EQ(m.utime, l.segmented.prepared.frame.utime);
+  EXPECT_EQ(m.num_tables, 2);
+  ASSERT_EQ(m.objects.size(), 1u);
+  EXPECT_EQ(m.objects[0].table, 1);
+  EXPECT_EQ(m.map_info[0].table_map_id, 8);
+  ASSERT_TRUE(m.map_pose.has_value());
+  EXPECT_NEAR(m.map_info[0].map_centroid.x(), 5.1, 1e-5);
+  EXPECT_NEAR(m.map_info[0].map_centroid.y(), 2.2, 1e-5);
+  EXPECT_NEAR(m.map_info[0].map_centroid.z(), 0.8, 1e-5);
+  EXPECT_EQ(m.objects[0].point_count, 120);
+  EXPECT_TRUE(m.objects[0].pixels.empty());  // not on the wire
 }
 
 TEST(LcmPublisherSink, TablesCanBeSwitchedOff) {
@@ -252,7 +306,7 @@ TEST(LcmPublisherSink, ARefusedPublishNamesTheChannelAndFrameAndIsCounted) {
         << e.what();
   }
   EXPECT_EQ(sink.publishFailures(), 1u);
-  // The labels went out before the refused tables.
+  // The labels went out before the refused tables; no objects without their tables.
   EXPECT_EQ(p.drain(), (std::vector<std::string>{"L"}));
   // A refused status is counted, not thrown; after close() nothing goes out.
   faulty->failPublish("S", true);
@@ -263,6 +317,51 @@ TEST(LcmPublisherSink, ARefusedPublishNamesTheChannelAndFrameAndIsCounted) {
   sink.close();
   EXPECT_FALSE(sink.publishStatus(StatusSnapshot{}));
   EXPECT_EQ(p.drain(), (std::vector<std::string>{"L", "S"}));
+}
+
+// A refused objects message fails the frame like a refused tables message: the
+// publish stage counts it, and the table map (after it) is not sent.
+TEST(LcmPublisherSink, ARefusedObjectsPublishFailsTheFrame) {
+  auto memory = std::make_shared<io::MemoryBus>();
+  auto faulty = std::make_shared<io::FaultyBus>(memory);
+  LcmPublisherSink sink(faulty, kChannels, true, true);
+  Collector p(*memory, kChannels);
+  const LabelledFrame l = labelledFrame(4, true, true, {tableAhead(2.0f)});
+  faulty->failPublish("O", true);
+  FrameResult r{l, 0, std::nullopt, {}, io::TablesMessage{}};
+  r.table_map->content = io::TablesContent::Map;
+  r.table_map->map_pose = poseAt(1);
+  try {
+    sink.consume(r);
+    FAIL() << "a refused publish must throw";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("LCM publish on O failed for test seq 4"),
+              std::string::npos)
+        << e.what();
+  }
+  EXPECT_EQ(sink.publishFailures(), 1u);
+  EXPECT_EQ(p.drain(), (std::vector<std::string>{"L", "T"}));
+}
+
+// A candidate the object stage got wrong (here a histogram that does not sum to 1) is
+// refused before it goes out: the frame fails with the field named, its labels and tables
+// are out already.
+TEST(LcmPublisherSink, ACandidateTheDecoderWouldRefuseFailsTheFrame) {
+  auto bus = std::make_shared<io::MemoryBus>();
+  LcmPublisherSink sink(bus, kChannels, true, true);
+  LabelledFrame l = labelledFrame(6, true, true, {tableAhead(2.0f)});
+  l.table_objects.objects = {mugOn(0, Eigen::Vector3f(2.0f, 0.0f, 0.8f))};
+  l.table_objects.objects[0].colour_histogram[0] = 0.5f;
+  FrameResult r{l, 0, std::nullopt, {}, std::nullopt};
+  Collector p(*bus, kChannels);
+  try {
+    sink.consume(r);
+    FAIL() << "a bad candidate must fail the frame";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("objects[0].colour_histogram"), std::string::npos)
+        << e.what();
+  }
+  EXPECT_EQ(p.drain(), (std::vector<std::string>{"L", "T"}));
 }
 
 StatusSnapshot sampleSnapshot() {

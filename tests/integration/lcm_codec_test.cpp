@@ -12,6 +12,7 @@
 #include <cstdio>
 #include <limits>
 #include <cstring>
+#include <functional>
 #include <random>
 
 #include <zlib.h>
@@ -21,6 +22,7 @@
 #include "findmug/frame/image_io.hpp"
 #include "findmug/io/channels.hpp"
 #include "findmug/io/frame_source.hpp"
+#include "findmug/io/lcm_codec_objects.hpp"
 #include "lcm_samples.hpp"
 #include "test_data.hpp"
 
@@ -985,6 +987,237 @@ TEST(TablesCorrupt, EveryClass) {
   bad = good;
   bad.num_tables = 3;
   expectError([&] { decodeTables(bad, "C"); }, "num_tables");
+}
+
+// ---- table-top objects ---------------------------------------------------------------------
+
+// Two candidates on the second of makeTables()' two tables, the second cut off.
+TableObjectDetection makeObjects() {
+  TableObjectDetection d;
+  TableObject mug;
+  mug.id = 0;
+  mug.table = 1;
+  mug.centroid = {1.4f, 0.1f, 0.82f};
+  mug.height_above_top = 0.11f;
+  mug.major_axis = Eigen::Vector2f(0.6f, 0.8f);
+  mug.extents = {0.045f, 0.04f};
+  mug.center = {1.41f, 0.1f};
+  mug.point_count = 140;
+  mug.mean_rgb = {190.0f, 35.0f, 30.5f};
+  mug.colour_histogram[0] = 0.625f;
+  mug.colour_histogram[1] = 0.25f;
+  mug.colour_histogram[27] = 0.125f;
+  mug.pixels = {10, 11, 12};
+  TableObject box = mug;
+  box.id = 1;
+  box.centroid = {1.8f, -0.2f, 0.9f};
+  box.point_count = 90;
+  box.truncation = kTruncatedBorder | kTruncatedDepthHole;
+  d.objects = {mug, box};
+  return d;
+}
+
+TEST(ObjectsCodec, RoundTripInBaseFrame) {
+  const TablesMessage tables = makeTables();
+  const TableObjectDetection in = makeObjects();
+  const Bytes b =
+      encodeMessage(encodeObjects(5550001, 9, in, tables.tables, std::nullopt, {}));
+  const ObjectsMessage out = decodeObjects(b.data(), b.size(), "FINDMUG_OBJECTS");
+  EXPECT_EQ(out.utime, 5550001u);
+  EXPECT_EQ(out.seq, 9);
+  EXPECT_EQ(out.content, TablesContent::Frame);
+  EXPECT_EQ(out.num_tables, 2);
+  EXPECT_FALSE(out.map_pose.has_value());
+  ASSERT_EQ(out.objects.size(), 2u);
+  ASSERT_EQ(out.map_info.size(), 2u);
+  for (std::size_t k = 0; k < 2; ++k) {
+    const TableObject& o = out.objects[k];
+    const TableObject& want = in.objects[k];
+    EXPECT_EQ(o.id, want.id);
+    EXPECT_EQ(o.table, 1);
+    EXPECT_EQ(o.centroid, want.centroid);
+    EXPECT_EQ(o.height_above_top, want.height_above_top);
+    EXPECT_EQ(o.major_axis, want.major_axis);
+    EXPECT_EQ(o.extents, want.extents);
+    EXPECT_EQ(o.center, want.center);
+    EXPECT_EQ(o.point_count, want.point_count);
+    EXPECT_EQ(o.mean_rgb, want.mean_rgb);
+    EXPECT_EQ(o.colour_histogram, want.colour_histogram);
+    EXPECT_EQ(o.truncation, want.truncation);
+    EXPECT_TRUE(o.pixels.empty());
+    EXPECT_EQ(out.map_info[k].table_map_id, 0);
+    EXPECT_EQ(out.map_info[k].map_id, 0);
+  }
+}
+
+// The map-frame centroid goes through the pose exactly as the tables' does, and each
+// object names its table's map id.
+TEST(ObjectsCodec, MapCentroidFollowsThePoseAsTheTablesDo) {
+  TablesMessage tables = makeTables();
+  tables.tables[1].centroid = makeObjects().objects[1].centroid;  // the box's place
+  tables.map_pose = RobotPose{777, {10.0, -2.0, M_PI / 2}};
+  tables.map_info = {{3, true, 4, 0}, {8, false, 1, 0}};
+  const Bytes tb = encodeMessage(encodeTables(tables));
+  const TablesMessage t = decodeTables(tb.data(), tb.size(), "T");
+  const Bytes ob = encodeMessage(encodeObjects(5550001, 9, makeObjects(), tables.tables,
+                                               tables.map_pose, tables.map_info));
+  const ObjectsMessage o = decodeObjects(ob.data(), ob.size(), "O");
+  ASSERT_TRUE(o.map_pose.has_value());
+  EXPECT_EQ(o.map_pose->utime, 777u);
+  EXPECT_NEAR(o.map_info[0].map_centroid.x(), 10.0 - 0.1, 1e-6);
+  EXPECT_NEAR(o.map_info[0].map_centroid.y(), -2.0 + 1.4, 1e-6);
+  EXPECT_NEAR(o.map_info[0].map_centroid.z(), 0.82, 1e-6);
+  // The box stands where table 1's centroid is: both map to the same point.
+  EXPECT_EQ(o.map_info[1].map_centroid, t.map_tables[1].centroid);
+  EXPECT_EQ(o.map_info[0].table_map_id, 8);
+  EXPECT_EQ(o.objects[0].centroid, makeObjects().objects[0].centroid);  // base frame untouched
+}
+
+// "Looked, nothing": a frame with tables and no candidates is a valid, empty message.
+TEST(ObjectsCodec, NoCandidatesIsAnEmptyMessage) {
+  const Bytes b =
+      encodeMessage(encodeObjects(1, 2, TableObjectDetection{}, makeTables().tables, {}, {}));
+  const ObjectsMessage out = decodeObjects(b.data(), b.size(), "O");
+  EXPECT_EQ(out.num_tables, 2);
+  EXPECT_TRUE(out.objects.empty());
+}
+
+TEST(ObjectsCodec, EncoderRefusesAnObjectOffTheTables) {
+  TableObjectDetection d = makeObjects();
+  d.objects[1].table = 2;
+  expectError([&] { encodeObjects(1, 2, d, makeTables().tables, {}, {}); }, "table 2 of 2");
+  expectError(
+      [&] { encodeObjects(1, 2, makeObjects(), makeTables().tables, {}, {{TableMapInfo{}}}); },
+      "1 table map entries for 2 tables");
+  // What the decoder refuses, the encoder refuses too, naming the field.
+  d = makeObjects();
+  d.objects[0].colour_histogram[1] = 0.5f;
+  expectError([&] { encodeObjects(1, 2, d, makeTables().tables, {}, {}); },
+              "encodeObjects: objects_t.objects[0].colour_histogram: sums to 1.25");
+  d = makeObjects();
+  d.objects[1].point_count = 0;
+  expectError([&] { encodeObjects(1, 2, d, makeTables().tables, {}, {}); },
+              "objects[1].point_count");
+}
+
+TEST(ObjectsCodec, TheSampleMessageDecodes) {
+  const findmug_lcm::objects_t sample = test::sampleObjects();
+  const Bytes b = encodeMessage(sample);
+  const ObjectsMessage out = decodeObjects(b.data(), b.size(), "O");
+  ASSERT_EQ(out.objects.size(), 2u);
+  EXPECT_EQ(out.objects[1].truncation, kTruncatedBorder | kTruncatedDepthHole);
+  EXPECT_EQ(out.map_info[0].table_map_id, 4);
+  // The sample's map centroid is the encoder's for its pose.
+  const TableObject& o = out.objects[0];
+  TableCluster table;
+  table.centroid = o.centroid;
+  const Bytes tb = encodeMessage(
+      encodeTables(1, 2, TablesContent::Frame, std::vector<TableCluster>{table}, out.map_pose, {}));
+  const TablesMessage t = decodeTables(tb.data(), tb.size(), "T");
+  EXPECT_NEAR((out.map_info[0].map_centroid - t.map_tables[0].centroid).norm(), 0.0, 1e-6);
+}
+
+// Every check of decodeObjects, each naming the field.
+TEST(ObjectsCorrupt, EveryFieldCheckNamesTheField) {
+  const findmug_lcm::objects_t good = test::sampleObjects();
+  ASSERT_NO_THROW(decodeObjects(good, "C"));
+  struct Case {
+    std::function<void(findmug_lcm::objects_t&)> spoil;
+    std::string named;
+  };
+  const std::vector<Case> cases = {
+      {[](auto& m) { m.num_objects = 3; }, "objects_t.num_objects: size field says 3"},
+      {[](auto& m) { m.utime = -1; }, "objects_t.utime: negative"},
+      {[](auto& m) { m.content = 7; }, "objects_t.content: unknown content id 7"},
+      {[](auto& m) { m.num_tables = -1; }, "objects_t.num_tables: negative"},
+      {[](auto& m) { m.map_pose.yaw = NAN; }, "objects_t.map_pose"},
+      {[](auto& m) { m.map_pose.utime = -5; }, "objects_t.map_pose.utime"},
+      {[](auto& m) { m.objects[1].id = 0; }, "objects[1].id: 0 appears twice"},
+      {[](auto& m) { m.objects[1].id = 2; }, "objects[1].id: 2 outside [0, num_objects 2)"},
+      {[](auto& m) { m.objects[1].table_id = 2; },
+       "objects[1].table_id: 2 outside [0, num_tables 2)"},
+      {[](auto& m) { m.num_tables = 1; }, "objects[1].table_id: 1 outside [0, num_tables 1)"},
+      {[](auto& m) { m.objects[0].table_id = -1; }, "objects[0].table_id"},
+      {[](auto& m) { m.objects[0].table_map_id = -1; }, "objects[0].table_map_id: negative"},
+      {[](auto& m) { m.objects[0].centroid[2] = INFINITY; }, "objects[0].centroid"},
+      {[](auto& m) { m.objects[0].map_centroid[0] = NAN; }, "objects[0].map_centroid"},
+      {[](auto& m) { m.objects[0].height_above_top = -0.1; }, "objects[0].height_above_top"},
+      {[](auto& m) { m.objects[0].height_above_top = NAN; }, "objects[0].height_above_top"},
+      {[](auto& m) { m.objects[0].major_axis[0] = 0.7; },
+       "objects[0].major_axis: not a unit vector"},
+      {[](auto& m) { m.objects[0].major_axis[1] = NAN; }, "objects[0].major_axis"},
+      {[](auto& m) { m.objects[0].extents[1] = -0.01; }, "objects[0].extents: negative"},
+      {[](auto& m) { m.objects[0].center[0] = NAN; }, "objects[0].center"},
+      {[](auto& m) { m.objects[0].point_count = 0; }, "objects[0].point_count"},
+      {[](auto& m) { m.objects[0].mean_rgb[2] = 256.0f; }, "objects[0].mean_rgb"},
+      {[](auto& m) { m.objects[0].mean_rgb[0] = NAN; }, "objects[0].mean_rgb"},
+      {[](auto& m) { m.objects[0].colour_histogram[5] = -0.1f; },
+       "objects[0].colour_histogram[5]"},
+      {[](auto& m) { m.objects[0].colour_histogram[5] = NAN; }, "objects[0].colour_histogram[5]"},
+      {[](auto& m) { m.objects[0].colour_histogram[0] = 0.5f; },
+       "objects[0].colour_histogram: sums to 0.875"},
+      {[](auto& m) { m.objects[0].truncation = 8; }, "objects[0].truncation: unknown bits"},
+      {[](auto& m) { m.objects[0].map_id = 3; }, "must be 0 in a frame message"},
+      {[](auto& m) { m.objects[0].sightings = 1; }, "must be 0 in a frame message"},
+      {[](auto& m) { m.objects[0].last_seen_utime = 1; }, "must be 0 in a frame message"},
+      {[](auto& m) {
+         m.content = findmug_lcm::objects_t::CONTENT_MAP;
+         m.has_map_pose = false;
+       },
+       "objects_t.has_map_pose"},
+      {[](auto& m) { m.content = findmug_lcm::objects_t::CONTENT_MAP; },
+       "objects[0].map_id: an object map entry needs id == map_id > 0"},
+  };
+  for (const Case& c : cases) {
+    findmug_lcm::objects_t bad = good;
+    c.spoil(bad);
+    expectError([&] { decodeObjects(bad, "C"); }, c.named);
+  }
+}
+
+// Map content (reserved for an object map): the entries need their stable ids.
+TEST(ObjectsCodec, MapContentNeedsMapEntries) {
+  findmug_lcm::objects_t m = test::sampleObjects();
+  m.content = findmug_lcm::objects_t::CONTENT_MAP;
+  for (int k = 0; k < 2; ++k) {
+    m.objects[k].id = m.objects[k].map_id = 5 + k;
+    m.objects[k].sightings = 3;
+    m.objects[k].last_seen_utime = 5550001;
+  }
+  const Bytes b = encodeMessage(m);
+  const ObjectsMessage out = decodeObjects(b.data(), b.size(), "O");
+  EXPECT_EQ(out.content, TablesContent::Map);
+  EXPECT_EQ(out.map_info[1].map_id, 6);
+  EXPECT_EQ(out.map_info[1].sightings, 3);
+  EXPECT_EQ(out.map_info[1].last_seen_utime, 5550001u);
+  m.objects[1].sightings = 0;
+  expectError([&] { decodeObjects(m, "C"); }, "objects[1].sightings/last_seen_utime");
+}
+
+TEST(ObjectsCorrupt, EveryClass) {
+  const Bytes full = encodeMessage(test::sampleObjects());
+  for (std::size_t len = 0; len < full.size(); ++len) {
+    const std::string r = outcome([&] { decodeObjects(full.data(), len, "FINDMUG_OBJECTS"); });
+    ASSERT_EQ(r.rfind("error: FINDMUG_OBJECTS", 0), 0u) << len << ": " << r;
+  }
+  std::mt19937 rng(6);
+  std::size_t refused = 0;
+  for (int trial = 0; trial < 3000; ++trial) {
+    Bytes b = full;
+    b[rng() % b.size()] ^= static_cast<std::uint8_t>(1 + rng() % 255);
+    const std::string r = outcome([&] { decodeObjects(b.data(), b.size(), "C"); });
+    ASSERT_TRUE(r == "ok" || r.rfind("error: ", 0) == 0) << r;
+    refused += r != "ok";
+  }
+  EXPECT_GT(refused, 100u);  // the checks do refuse flipped bytes
+  // num_objects huge: refused by the wire check, not by a failed allocation.
+  Bytes b = full;
+  putBe32(b, 8 + 8 + 8 + 1 + 4 + 1 + 32, 0x7fffffff);
+  expectError([&] { decodeObjects(b.data(), b.size(), "C"); }, "objects_t.num_objects");
+  // Another type's bytes: refused by the type hash.
+  const Bytes tables = encodeMessage(encodeTables(makeTables()));
+  expectError([&] { decodeObjects(tables.data(), tables.size(), "C"); },
+              "not a findmug_lcm.objects_t");
 }
 
 // ---- status and robot pose -----------------------------------------------------------------

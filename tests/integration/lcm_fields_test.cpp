@@ -17,6 +17,8 @@
 
 #include "findmug/common/error.hpp"
 #include "findmug/io/lcm_codec.hpp"
+#include "findmug/io/lcm_codec_objects.hpp"
+#include "lcm_samples.hpp"
 
 namespace findmug::io {
 namespace {
@@ -101,6 +103,19 @@ void walkTables(Walk& w) {
                                              // viewpoints
   }
   w.fixed(1);
+}
+
+void walkObjects(Walk& w) {
+  // hash, utime, seq, content, num_tables, has_map_pose, map_pose (nested: no hash)
+  // (num_tables is a count of another message's tables, not a length of this one.)
+  w.fixed(8 + 8 + 8 + 1 + 4 + 1 + 4 * 8);
+  const int n = w.field("num_objects");
+  // Each table_object_t: id, table_id, table_map_id, centroid, map_centroid,
+  // height_above_top, major_axis, extents, center, point_count, mean_rgb,
+  // colour_histogram[28], truncation, map_id, sightings, last_seen_utime.
+  constexpr std::size_t kObject =
+      3 * 4 + 3 * 8 + 3 * 8 + 8 + 2 * 8 + 2 * 8 + 2 * 8 + 4 + 3 * 4 + 28 * 4 + 1 + 4 + 4 + 8;
+  w.fixed(static_cast<std::size_t>(n) * kObject);
 }
 
 void walkStatus(Walk& w) {
@@ -191,6 +206,9 @@ std::vector<Case> cases() {
   tables.map_pose = RobotPose{1, {2, 3, 0.5}};
   out.push_back({"tables", encodeMessage(encodeTables(tables)), walkTables,
                  [](const Bytes& b) { (void)decodeTables(b.data(), b.size(), "CH"); }, "tables_t"});
+  out.push_back({"objects", encodeMessage(test::sampleObjects()), walkObjects,
+                 [](const Bytes& b) { (void)decodeObjects(b.data(), b.size(), "CH"); },
+                 "objects_t"});
   findmug_lcm::status_t s{};
   s.num_stages = 2;
   s.stage_names = {"cloud", "total"};

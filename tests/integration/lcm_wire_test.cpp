@@ -26,9 +26,11 @@
 
 #include "findmug/common/error.hpp"
 #include "findmug/io/lcm_codec.hpp"
+#include "findmug/io/lcm_codec_objects.hpp"
 #include "findmug_lcm/label_image_t.hpp"
 #include "findmug_lcm/rgbd_frame_t.hpp"
 #include "findmug_lcm/command_t.hpp"
+#include "findmug_lcm/objects_t.hpp"
 #include "findmug_lcm/robot_pose_t.hpp"
 #include "findmug_lcm/status_t.hpp"
 #include "findmug_lcm/tables_t.hpp"
@@ -197,6 +199,37 @@ findmug_lcm::tables_t makeTables(Random& r, const Scale& s) {
   return m;
 }
 
+findmug_lcm::objects_t makeObjects(Random& r, const Scale& s) {
+  findmug_lcm::objects_t m;
+  m.utime = r.i64();
+  m.seq = r.i64();
+  m.content = r.i8();
+  m.num_tables = r.i32();
+  m.has_map_pose = r.boolean();
+  m.map_pose = makePose(r);
+  m.objects.resize(static_cast<std::size_t>(r.length(s.array)));
+  for (auto& o : m.objects) {
+    o.id = r.i32();
+    o.table_id = r.i32();
+    o.table_map_id = r.i32();
+    for (double& v : o.centroid) v = r.f64();
+    for (double& v : o.map_centroid) v = r.f64();
+    o.height_above_top = r.f64();
+    for (double& v : o.major_axis) v = r.f64();
+    for (double& v : o.extents) v = r.f64();
+    for (double& v : o.center) v = r.f64();
+    o.point_count = r.i32();
+    for (float& v : o.mean_rgb) v = r.f32();
+    for (float& v : o.colour_histogram) v = r.f32();
+    o.truncation = r.i8();
+    o.map_id = r.i32();
+    o.sightings = r.i32();
+    o.last_seen_utime = r.i64();
+  }
+  m.num_objects = static_cast<std::int32_t>(m.objects.size());
+  return m;
+}
+
 findmug_lcm::status_t makeStatus(Random& r, const Scale& s) {
   findmug_lcm::status_t m;
   m.utime = r.i64();
@@ -346,6 +379,18 @@ TEST(LcmWire, TablesWalkMatchesGeneratedCode) {
       EXPECT_EQ(d.tables[t].sightings, m.tables[t].sightings);
     }
     EXPECT_EQ(d.content, m.content);
+  });
+}
+
+TEST(LcmWire, ObjectsWalkMatchesGeneratedCode) {
+  forEachMessage(7, makeObjects, [](const auto& d, const auto& m) {
+    ASSERT_EQ(d.objects.size(), m.objects.size());
+    for (std::size_t k = 0; k < m.objects.size(); ++k) {
+      EXPECT_EQ(d.objects[k].table_id, m.objects[k].table_id);
+      EXPECT_EQ(d.objects[k].colour_histogram[27], m.objects[k].colour_histogram[27]);
+      EXPECT_EQ(d.objects[k].last_seen_utime, m.objects[k].last_seen_utime);
+    }
+    EXPECT_EQ(d.num_tables, m.num_tables);
   });
 }
 

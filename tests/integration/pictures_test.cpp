@@ -149,6 +149,29 @@ TEST(Pictures, TableMapShowsTablesPositionsAndTheRobotPose) {
   EXPECT_GT(robot_y / robot_n, table_y / table_n);
 }
 
+// An object candidate's marker sits where the camera sees its centroid, in its mean colour;
+// one behind the camera is not drawn.
+TEST(Pictures, ObjectMarkersAreDrawnWhereTheCameraSeesTheCentroid) {
+  Canvas canvas(320, 240, kGrey);
+  io::ObjectsMessage objects;
+  TableObject mug;
+  mug.id = 2;
+  mug.centroid = groundPointAt(80.0, 60.0, 0.85f);
+  mug.mean_rgb = Eigen::Vector3f(250.0f, 200.0f, 10.0f);
+  TableObject behind = mug;
+  behind.id = 3;
+  behind.centroid = Eigen::Vector3f(-2.0f, 0.0f, 0.8f);  // the camera looks along +x
+  objects.objects = {mug, behind};
+  EXPECT_EQ(drawObjectsInImage(canvas, objects, kK, kMount), 1);
+  EXPECT_EQ(at(canvas, 80, 60), (Rgb8{250, 200, 10}));
+  EXPECT_EQ(at(canvas, 80 + 7, 60), (Rgb8{255, 255, 255}));  // the ring
+  EXPECT_EQ(at(canvas, 80 - 30, 60), kGrey);                 // nothing beyond the marker
+  int marked = 0;  // only the one marker in the mug's colour
+  for (const Rgb8& p : canvas.image().pixels) marked += p == Rgb8{250, 200, 10};
+  EXPECT_GT(marked, 50);
+  EXPECT_LT(marked, 150);
+}
+
 TEST(Pictures, LegendPanelKeepsTheImageAndListsEveryClass) {
   Image<Rgb8> image{40, 30, std::vector<Rgb8>(1200, kGrey)};
   const Image<Rgb8> out = withLegend(image);

@@ -1,6 +1,7 @@
 // findmug-test-spy-log LOG — writes an LCM log with one message of every findmug type on its
 // channel (rgbd_frame_t, label_image_t, tables_t on FINDMUG_TABLES and FINDMUG_TABLE_MAP,
-// status_t, robot_pose_t, semantic_map_t, command_t; table_t and search_position_t inside the tables), encoded by
+// objects_t, status_t, robot_pose_t, semantic_map_t, command_t; table_t and search_position_t
+// inside the tables, table_object_t inside the objects), encoded by
 // findmug_io's codecs, for spy_test.sh to replay into findmug-spy.
 #include <cmath>
 #include <cstdio>
@@ -10,6 +11,7 @@
 
 #include "findmug/io/channels.hpp"
 #include "findmug/io/lcm_codec.hpp"
+#include "findmug/io/lcm_codec_objects.hpp"
 #include "findmug/io/semantic_map_codec.hpp"
 #include "findmug_lcm/status_t.hpp"
 
@@ -78,6 +80,25 @@ int main(int argc, char** argv) {
     table.search_positions = {position};
     tables.tables = {table};
     write(log, io::kTablesChannel, io::encodeMessage(io::encodeTables(tables)), t + 2);
+
+    // A mug on that table, seen with the robot's pose known (map_centroid filled in).
+    TableObjectDetection objects;
+    TableObject mug;
+    mug.centroid = {1.4f, 0.1f, 0.82f};
+    mug.height_above_top = 0.1f;
+    mug.extents = {0.04f, 0.04f};
+    mug.center = {1.4f, 0.1f};
+    mug.point_count = 150;
+    mug.mean_rgb = {180.0f, 40.0f, 30.0f};
+    mug.colour_histogram[0] = 0.75f;
+    mug.colour_histogram[27] = 0.25f;
+    mug.truncation = kTruncatedDepthHole;
+    objects.objects = {mug};
+    write(log, io::kObjectsChannel,
+          io::encodeMessage(io::encodeObjects(
+              static_cast<std::uint64_t>(t), 0, objects, tables.tables,
+              io::RobotPose{static_cast<std::uint64_t>(t), {2.0, 1.0, 0.3}}, {})),
+          t + 2);
 
     io::TablesMessage map = tables;
     map.content = io::TablesContent::Map;

@@ -1,7 +1,10 @@
-// lcm_samples.hpp — a filled-in findmug_lcm message for tests and the fuzz seed maker, so
-// that one place says what a plausible daemon status looks like (two stages, one queue).
+// lcm_samples.hpp — filled-in findmug_lcm messages for tests and the fuzz seed maker, so
+// that one place says what a plausible daemon status (two stages, one queue) and a
+// plausible objects message (two tables, a mug and a cut-off box, the map pose known)
+// look like.
 #pragma once
 
+#include <findmug_lcm/objects_t.hpp>
 #include <findmug_lcm/status_t.hpp>
 
 namespace findmug::test {
@@ -44,6 +47,56 @@ inline findmug_lcm::status_t sampleStatus() {
   s.frames_collect_refused = 1;
   s.last_collected_frame = "1700000000000000_42";
   return s;
+}
+
+// One candidate on table `table_id` (map id `table_map_id`) at `x`, `y` on a 0.75 m top.
+inline findmug_lcm::table_object_t sampleTableObject(int id, int table_id, int table_map_id,
+                                                     double x, double y) {
+  findmug_lcm::table_object_t o{};
+  o.id = id;
+  o.table_id = table_id;
+  o.table_map_id = table_map_id;
+  o.centroid[0] = x;
+  o.centroid[1] = y;
+  o.centroid[2] = 0.81;
+  // Robot at (2, 1), facing map +y (yaw pi/2): base (x, y) -> map (2 - y, 1 + x).
+  o.map_centroid[0] = 2.0 - y;
+  o.map_centroid[1] = 1.0 + x;
+  o.map_centroid[2] = 0.81;
+  o.height_above_top = 0.11;
+  o.major_axis[0] = 0.6;
+  o.major_axis[1] = 0.8;
+  o.extents[0] = 0.045;
+  o.extents[1] = 0.04;
+  o.center[0] = x + 0.005;
+  o.center[1] = y;
+  o.point_count = 140;
+  o.mean_rgb[0] = 190.0f;
+  o.mean_rgb[1] = 35.0f;
+  o.mean_rgb[2] = 30.0f;
+  o.colour_histogram[0] = 0.625f;  // red, sums to 1 exactly in binary
+  o.colour_histogram[1] = 0.25f;
+  o.colour_histogram[27] = 0.125f;  // white highlights
+  o.truncation = 0;
+  return o;
+}
+
+inline findmug_lcm::objects_t sampleObjects() {
+  findmug_lcm::objects_t m{};
+  m.utime = 5550001;
+  m.seq = 9;
+  m.content = findmug_lcm::objects_t::CONTENT_FRAME;
+  m.num_tables = 2;
+  m.has_map_pose = true;
+  m.map_pose.utime = 5550000;
+  m.map_pose.x = 2.0;
+  m.map_pose.y = 1.0;
+  m.map_pose.yaw = 1.5707963267948966;
+  m.objects = {sampleTableObject(0, 0, 4, 1.4, 0.1), sampleTableObject(1, 1, 0, 2.6, -0.7)};
+  m.objects[1].truncation = findmug_lcm::table_object_t::TRUNCATED_BORDER |
+                            findmug_lcm::table_object_t::TRUNCATED_DEPTH_HOLE;
+  m.num_objects = 2;
+  return m;
 }
 
 }  // namespace findmug::test

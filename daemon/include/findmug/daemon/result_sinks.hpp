@@ -15,8 +15,10 @@
 //                     map_info and table_map for the sinks after it.
 //   LcmPublisherSink  encodes label_image_t (FINDMUG_LABELS), tables_t
 //                     (FINDMUG_TABLES, when daemon.publish_tables; with the
-//                     pose and map_info) and the table map, and publishes them
-//                     on an io::Bus in that order; also status_t. A refused
+//                     pose and map_info), objects_t (FINDMUG_OBJECTS, with
+//                     every tables_t, empty when the frame has no candidates)
+//                     and the table map, and publishes them on an io::Bus in
+//                     that order; also status_t. A refused
 //                     publish of a frame's message throws findmug::Error
 //                     naming the channel and the frame (the publish stage
 //                     counts the frame as failed and reports it); a refused
@@ -98,7 +100,7 @@ class TableMapSink final : public ResultSink {
 class LcmPublisherSink final : public ResultSink {
  public:
   struct Channels {
-    std::string labels, tables, table_map, status;
+    std::string labels, tables, objects, table_map, status;
   };
 
   LcmPublisherSink(std::shared_ptr<io::Bus> bus, Channels channels, bool publish_confidence,

@@ -9,6 +9,9 @@
 //   FINDMUG_RGBD        findmug_lcm::rgbd_frame_t   frames in (sensor, findmug-grab)
 //   FINDMUG_LABELS      findmug_lcm::label_image_t  per-pixel labels out
 //   FINDMUG_TABLES      findmug_lcm::tables_t       tables + search positions out (one frame)
+//   FINDMUG_OBJECTS     findmug_lcm::objects_t      object candidates on the table tops, out with
+//                                               every FINDMUG_TABLES message (same seq; none
+//                                               found: an empty list)
 //   FINDMUG_TABLE_MAP   findmug_lcm::tables_t       confirmed tables of the persistent map, out
 //                                               after each map update (needs robot poses)
 //   FINDMUG_STATUS      findmug_lcm::status_t       daemon health, about 1 Hz
@@ -26,6 +29,7 @@ namespace findmug::io {
 inline constexpr std::string_view kRgbdChannel = "FINDMUG_RGBD";
 inline constexpr std::string_view kLabelsChannel = "FINDMUG_LABELS";
 inline constexpr std::string_view kTablesChannel = "FINDMUG_TABLES";
+inline constexpr std::string_view kObjectsChannel = "FINDMUG_OBJECTS";
 inline constexpr std::string_view kTableMapChannel = "FINDMUG_TABLE_MAP";
 inline constexpr std::string_view kStatusChannel = "FINDMUG_STATUS";
 inline constexpr std::string_view kRobotPoseChannel = "FINDMUG_ROBOT_POSE";

@@ -37,7 +37,8 @@ namespace findmug::io {
 // Decodes an LCM message of type Msg from `size` bytes after checking, field by
 // field, that every length fits in the buffer (and the type hash matches, and
 // nothing trails the message). `channel` names the source in errors.
-// Defined for rgbd_frame_t, label_image_t, tables_t, status_t, robot_pose_t, command_t.
+// Defined for rgbd_frame_t, label_image_t, tables_t, status_t, robot_pose_t, command_t
+// (and objects_t, declared in lcm_codec_objects.hpp).
 template <typename Msg>
 Msg decodeMessage(const void* data, std::size_t size, std::string_view channel);
 template <>

@@ -1,5 +1,6 @@
 // findmug/io/messages.hpp — the plain C++ form of findmug's output messages
-// (label images, tables, the robot's pose), without the generated LCM types.
+// (label images, tables, table-top objects, the robot's pose), without the
+// generated LCM types.
 //
 // lcm_codec.hpp encodes and decodes them; code that only passes them around
 // (the daemon's pipeline and sinks, the pose input) includes this header and
@@ -16,6 +17,7 @@
 #include "findmug/common/pose2d.hpp"
 #include "findmug/frame/frame.hpp"
 #include "findmug/labels/label_image.hpp"
+#include "findmug/objects/table_objects.hpp"
 #include "findmug/tables/tables.hpp"
 
 namespace findmug::io {
@@ -81,6 +83,30 @@ struct TablesMessage {
   std::vector<MapFrameTable> map_tables;  // one per table when map_pose, else empty
   // One per table, or empty (= no table is in the map). Always filled by the decoder.
   std::vector<TableMapInfo> map_info;
+};
+
+// What an objects_t carries per object besides the TableObject itself
+// (table_object_t's map fields). The object map is not published yet: with
+// Frame content map_id, sightings and last_seen_utime are 0.
+struct ObjectMapInfo {
+  int table_map_id = 0;  // the map id of the table it stands on; 0 = not in the map
+  Eigen::Vector3d map_centroid = Eigen::Vector3d::Zero();  // valid when the message has map_pose
+  int map_id = 0;        // stable id in an object map; 0 with Frame content
+  int sightings = 0;
+  std::uint64_t last_seen_utime = 0;
+};
+
+// One frame's object candidates on FINDMUG_OBJECTS (objects_t;
+// lcm_codec_objects.hpp). The content ids are those of tables_t.
+struct ObjectsMessage {
+  std::uint64_t utime = 0;  // source frame's utime
+  std::int64_t seq = 0;
+  TablesContent content = TablesContent::Frame;
+  int num_tables = 0;  // tables in the tables_t of the same seq; objects' `table` < this
+  std::optional<RobotPose> map_pose;
+  // Base frame; `table` is table_object_t.table_id and `pixels` is empty (not on the wire).
+  std::vector<TableObject> objects;
+  std::vector<ObjectMapInfo> map_info;  // one per object; always filled by the decoder
 };
 
 }  // namespace findmug::io
