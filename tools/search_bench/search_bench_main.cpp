@@ -129,7 +129,11 @@ int run(const Options& o) {
           << " m/s, 45 deg/s; " << params.view_processing_s << " s per view; look-around "
           << params.look_around_views
           << " views; oracle mug recognition (>= " << params.recognise_min_pixels << " px within "
-          << params.recognise_range_m << " m).\n\n";
+          << params.recognise_range_m
+          << " m). The robot starts outside the mug's room; mug placements no pose can "
+             "recognise are drawn again. Mug prior: table "
+          << params.prior.table << ", cabinet/shelf " << params.prior.cabinet << ", floor "
+          << params.prior.floor << ".\n\n";
   writeSummary(summary, names, rows, o.budget_s);
   std::ofstream(o.out_dir + "/summary.md") << summary.str();
   if (!csv || !svg) throw Error("cannot write the results into " + o.out_dir);
