@@ -60,7 +60,8 @@ set(findmug_layer_headers_cli "^findmug_cli\\.hpp$" "^findmug_signals\\.hpp$" "^
 set(findmug_layer_headers_daemon "^findmug/daemon/")
 set(findmug_layer_headers_clients "^client_common\\.hpp$" "^picture\\.hpp$")
 set(findmug_layer_headers_tools "^tool_common\\.hpp$" "^eval_report\\.hpp$" "^replay_check\\.hpp$"
-    "^oni_writer\\.hpp$")
+    "^oni_writer\\.hpp$" "^search_sim\\.hpp$" "^findmug_tables\\.hpp$" "^strategies\\.hpp$"
+    "^report\\.hpp$")
 
 # Layer of a source-tree path relative to the top ("" if none, e.g. tests/).
 function(findmug_layer_of relative out)

@@ -192,6 +192,91 @@ std::optional<Eigen::Vector2d> freeSpotForTable(const SynthScene& scene, int tab
                                                 double clearance_m = 0.7,
                                                 double min_move_m = 1.0);
 
+// ------------------------------------------------------ multi-room apartments ----
+// Apartments worth searching (src/synth/apartment.cpp; issue 51): 3-6 rooms of a kind
+// (kitchen, living room, bedroom, study, hall) inside one shell box, separated by interior
+// walls (Wall-labelled box primitives, also obstacles) with open doorways. Each room is
+// furnished by makeApartment() in its own frame with settings by room kind, then moved into
+// place; bedrooms get a bed and living rooms a sofa (label Unknown, as in the NYU mapping:
+// not a search place, though a model may take their flat tops for tables). A target mug
+// is added per episode by placeTargetMug(), on a table, a cabinet/shelf or the floor by a
+// stated prior. Everything is a pure function of the seeds.
+
+enum class RoomKind { Kitchen, Living, Bedroom, Study, Hall };
+const char* roomKindName(RoomKind kind);
+
+struct RoomTruth {
+  RoomKind kind = RoomKind::Living;
+  Eigen::Vector2d lo = Eigen::Vector2d::Zero(), hi = Eigen::Vector2d::Zero();  // free interior
+  Eigen::Vector2d center() const { return 0.5 * (lo + hi); }
+  bool contains(const Eigen::Vector2d& xy) const {
+    return xy.x() >= lo.x() && xy.y() >= lo.y() && xy.x() <= hi.x() && xy.y() <= hi.y();
+  }
+};
+
+// An open doorway in an interior wall: its centre on the wall's centre line.
+struct DoorwayTruth {
+  Eigen::Vector2d center = Eigen::Vector2d::Zero();
+  bool wall_along_y = true;  // the wall runs along y (a split in x), else along x
+  double width = 1.0;
+};
+
+// A piece of furniture the robot must drive around, with what it is and where.
+struct FurnitureTruth {
+  int object = 0;    // index into SynthScene::objects
+  std::string kind;  // "table", "chair", "cabinet", "shelf", "bed", "sofa"
+  int room = -1;     // index into MultiRoomApartment::rooms
+  int table = -1;    // index into SynthScene::tables for tables
+  std::vector<Eigen::Vector2d> footprint;  // convex, CCW, world xy
+  double top_z = 0.0;
+};
+
+struct MultiRoomParams {
+  int rooms_min = 3, rooms_max = 6;
+  double room_area_min = 16.0, room_area_max = 24.0;  // m^2 per room, before splitting
+  double min_room_side = 3.2;                         // metres, interior
+  double wall_thickness = 0.1;
+  double door_width = 1.0;
+  double ceiling = 2.6;
+};
+
+struct MultiRoomApartment {
+  SynthScene scene;  // room_size = the whole apartment's box
+  std::vector<RoomTruth> rooms;
+  std::vector<DoorwayTruth> doorways;
+  std::vector<FurnitureTruth> furniture;
+  // Index into rooms of the room holding `xy`, or -1 (in a wall or a doorway).
+  int roomAt(const Eigen::Vector2d& xy) const;
+};
+
+// Throws findmug::Error naming the field when a parameter is out of range, or when no
+// apartment whose rooms are all connected was found for the seed.
+MultiRoomApartment makeMultiRoomApartment(std::uint64_t seed, const MultiRoomParams& params = {});
+
+enum class MugPlace { Table, Cabinet, Floor };
+const char* mugPlaceName(MugPlace place);
+
+// Where the target mug stands: probabilities (normalised) of a table top, a cabinet top or
+// shelf board (furniture kinds "cabinet" and "shelf", boards below 1.5 m), the floor.
+struct MugPrior {
+  double table = 0.7, cabinet = 0.2, floor = 0.1;
+};
+
+struct TargetMug {
+  int object = -1;     // index into SynthScene::objects (kind "target_mug")
+  MugPlace place = MugPlace::Table;
+  int furniture = -1;  // index into MultiRoomApartment::furniture it stands on, -1: the floor
+  int room = -1;
+  Eigen::Vector3d position = Eigen::Vector3d::Zero();  // centre of its base, world
+  double height = 0.0;
+};
+
+// Adds a target mug to `apartment` (its scene, and an obstacle when on the floor) by the
+// prior, clear of the objects already there. Deterministic in `seed`. Throws
+// findmug::Error when the prior is not a distribution or no place could be found.
+TargetMug placeTargetMug(MultiRoomApartment& apartment, std::uint64_t seed,
+                         const MugPrior& prior = {});
+
 // ---------------------------------------------------------------- camera ----
 
 struct CameraPose {

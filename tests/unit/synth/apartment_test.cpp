@@ -1,0 +1,149 @@
+// Multi-room apartments (synth.hpp, src/synth/apartment.cpp): rooms of a kind joined by
+// doorways, furniture inside its room, the target mug where its prior puts it, and all of
+// it a pure function of the seeds.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <set>
+
+#include "findmug/common/error.hpp"
+#include "findmug/synth/synth.hpp"
+
+namespace findmug::synth {
+namespace {
+
+bool insidePolygon(const std::vector<Eigen::Vector2d>& poly, const Eigen::Vector2d& p) {
+  for (std::size_t i = 0; i < poly.size(); ++i) {
+    const Eigen::Vector2d e = poly[(i + 1) % poly.size()] - poly[i];
+    const Eigen::Vector2d q = p - poly[i];
+    if (e.x() * q.y() - e.y() * q.x() < -1e-9) return false;
+  }
+  return true;
+}
+
+TEST(MultiRoomApartment, SameSeedSameApartmentOtherSeedOther) {
+  const MultiRoomApartment a = makeMultiRoomApartment(5);
+  const MultiRoomApartment b = makeMultiRoomApartment(5);
+  const MultiRoomApartment c = makeMultiRoomApartment(6);
+  ASSERT_EQ(a.scene.primitives.size(), b.scene.primitives.size());
+  for (std::size_t i = 0; i < a.scene.primitives.size(); ++i)
+    EXPECT_EQ(a.scene.primitives[i].center, b.scene.primitives[i].center);
+  EXPECT_EQ(a.rooms.size(), b.rooms.size());
+  EXPECT_TRUE(a.scene.room_size != c.scene.room_size ||
+              a.scene.primitives.size() != c.scene.primitives.size());
+}
+
+TEST(MultiRoomApartment, RoomsDoorwaysAndFurnitureHangTogether) {
+  std::set<std::string> kinds_seen;
+  for (std::uint64_t seed = 1; seed <= 6; ++seed) {
+    const MultiRoomApartment apt = makeMultiRoomApartment(seed);
+    const int n = static_cast<int>(apt.rooms.size());
+    ASSERT_GE(n, 3);
+    ASSERT_LE(n, 6);
+    // Guillotine splits: one interior wall, and one doorway in it, per split.
+    EXPECT_EQ(static_cast<int>(apt.doorways.size()), n - 1);
+    for (const RoomTruth& r : apt.rooms) {
+      EXPECT_GE(r.hi.x() - r.lo.x(), MultiRoomParams{}.min_room_side - 1e-9);
+      EXPECT_GE(r.hi.y() - r.lo.y(), MultiRoomParams{}.min_room_side - 1e-9);
+    }
+    for (const FurnitureTruth& f : apt.furniture) {
+      kinds_seen.insert(f.kind);
+      ASSERT_GE(f.room, 0);
+      const RoomTruth& r = apt.rooms[f.room];
+      for (const auto& v : f.footprint) {
+        EXPECT_GE(v.x(), r.lo.x() - 0.03) << f.kind << " seed " << seed;
+        EXPECT_LE(v.x(), r.hi.x() + 0.03) << f.kind << " seed " << seed;
+        EXPECT_GE(v.y(), r.lo.y() - 0.03) << f.kind << " seed " << seed;
+        EXPECT_LE(v.y(), r.hi.y() + 0.03) << f.kind << " seed " << seed;
+      }
+      if (f.kind == "bed" || f.kind == "sofa") {
+        EXPECT_EQ(apt.scene.objects[f.object].label, Label::Unknown);
+      }
+      if (f.kind == "table") {
+        ASSERT_GE(f.table, 0);
+        EXPECT_EQ(apt.scene.tables[f.table].object, f.object);
+      }
+    }
+    // A doorway is open: no obstacle covers its centre, and it is inside the apartment.
+    for (const DoorwayTruth& d : apt.doorways) {
+      EXPECT_EQ(apt.roomAt(d.center), -1);
+      EXPECT_TRUE(robotFits(apt.scene.room_size, apt.scene.obstacles, d.center, 0.3));
+    }
+  }
+  for (const char* kind : {"table", "chair", "cabinet", "bed", "sofa"})
+    EXPECT_TRUE(kinds_seen.count(kind)) << kind;
+}
+
+TEST(MultiRoomApartment, InteriorWallsAreRenderedAsWalls) {
+  const MultiRoomApartment apt = makeMultiRoomApartment(3);
+  // From the middle of the first room, looking at the middle of the apartment.
+  const RoomTruth& room = apt.rooms.front();
+  CameraPose pose;
+  pose.xy = room.center();
+  const Eigen::Vector2d to = 0.5 * apt.scene.room_size.head<2>() - pose.xy;
+  int interior_wall_pixels = 0;
+  for (int k = 0; k < 8; ++k) {
+    pose.yaw = std::atan2(to.y(), to.x()) + k * M_PI / 4;
+    pose.pitch_rad = 0.2;
+    const RenderedFrame frame = render(apt.scene, pose, RenderOptions{}, 1);
+    for (std::size_t i = 0; i < frame.object.size(); ++i) {
+      const int o = frame.object[i];
+      if (o >= 6 && apt.scene.objects[o].kind == "wall") {
+        ++interior_wall_pixels;
+        EXPECT_EQ(frame.labeled.labels[i], static_cast<std::uint8_t>(Label::Wall));
+      }
+    }
+  }
+  EXPECT_GT(interior_wall_pixels, 10000);
+}
+
+TEST(MultiRoomApartment, TargetMugFollowsItsPrior) {
+  for (std::uint64_t seed = 1; seed <= 5; ++seed) {
+    MultiRoomApartment on_table = makeMultiRoomApartment(2);
+    const TargetMug t = placeTargetMug(on_table, seed, {1.0, 0.0, 0.0});
+    ASSERT_EQ(t.place, MugPlace::Table);
+    const FurnitureTruth& f = on_table.furniture[t.furniture];
+    ASSERT_GE(f.table, 0);
+    const TableTruth& table = on_table.scene.tables[f.table];
+    EXPECT_NEAR(t.position.z(), table.height, 1e-9);
+    EXPECT_TRUE(insidePolygon(table.top_polygon, t.position.head<2>()));
+    EXPECT_EQ(on_table.scene.objects[t.object].kind, "target_mug");
+    EXPECT_EQ(t.room, f.room);
+
+    MultiRoomApartment on_floor = makeMultiRoomApartment(2);
+    const std::size_t obstacles = on_floor.scene.obstacles.size();
+    const TargetMug m = placeTargetMug(on_floor, seed, {0.0, 0.0, 1.0});
+    EXPECT_EQ(m.place, MugPlace::Floor);
+    EXPECT_EQ(m.position.z(), 0.0);
+    EXPECT_EQ(on_floor.scene.obstacles.size(), obstacles + 1);  // the robot drives around it
+    EXPECT_EQ(on_floor.roomAt(m.position.head<2>()), m.room);
+
+    MultiRoomApartment on_cabinet = makeMultiRoomApartment(2);
+    const TargetMug c = placeTargetMug(on_cabinet, seed, {0.0, 1.0, 0.0});
+    if (c.place == MugPlace::Cabinet) {
+      const std::string& kind = on_cabinet.furniture[c.furniture].kind;
+      EXPECT_TRUE(kind == "cabinet" || kind == "shelf") << kind;
+      EXPECT_GT(c.position.z(), 0.2);
+    }
+  }
+  MultiRoomApartment apt = makeMultiRoomApartment(2);
+  const TargetMug a = placeTargetMug(apt, 9);
+  MultiRoomApartment again = makeMultiRoomApartment(2);
+  EXPECT_EQ(placeTargetMug(again, 9).position, a.position);
+  EXPECT_THROW(placeTargetMug(apt, 1, {-1.0, 1.0, 1.0}), Error);
+  EXPECT_THROW(placeTargetMug(apt, 1, {0.0, 0.0, 0.0}), Error);
+}
+
+TEST(MultiRoomApartment, BadParametersAreRejected) {
+  MultiRoomParams p;
+  p.rooms_min = 5;
+  p.rooms_max = 4;
+  EXPECT_THROW(makeMultiRoomApartment(1, p), Error);
+  p = {};
+  p.door_width = 0.3;
+  EXPECT_THROW(makeMultiRoomApartment(1, p), Error);
+}
+
+}  // namespace
+}  // namespace findmug::synth

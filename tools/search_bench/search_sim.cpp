@@ -1,0 +1,360 @@
+// The simulated robot of findmug-search-bench: occupancy grid and planner, episode worlds,
+// the oracle recogniser and the time accounting of the base (see search_sim.hpp).
+#include "search_sim.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <queue>
+
+#include "findmug/common/error.hpp"
+
+namespace findmug::search {
+
+namespace {
+
+// SplitMix64, the same mix the renderer uses: seeds from seeds, the same on every platform.
+std::uint64_t mix(std::uint64_t z) {
+  z += 0x9e3779b97f4a7c15ULL;
+  z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
+  z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
+  return z ^ (z >> 31);
+}
+
+double unit(std::uint64_t bits) { return (bits >> 11) * 0x1.0p-53; }
+
+double wrap(double a) {
+  while (a > M_PI) a -= 2.0 * M_PI;
+  while (a < -M_PI) a += 2.0 * M_PI;
+  return a;
+}
+
+// Point inside a convex CCW polygon grown by `margin` (the renderer's test, restated here:
+// the synth library keeps its helpers internal).
+bool insideGrown(const std::vector<Eigen::Vector2d>& poly, const Eigen::Vector2d& p,
+                 double margin) {
+  const std::size_t n = poly.size();
+  for (std::size_t i = 0; i < n; ++i) {
+    const Eigen::Vector2d e = poly[(i + 1) % n] - poly[i];
+    const double cross = e.x() * (p.y() - poly[i].y()) - e.y() * (p.x() - poly[i].x());
+    if (cross < -margin * e.norm()) return false;
+  }
+  return true;
+}
+
+synth::RenderOptions oracleRender() {
+  synth::RenderOptions options;
+  options.noise.enabled = false;  // object indices do not depend on the noise
+  return options;
+}
+
+// The first cell (in order of planned distance from the start) from which the mug is
+// recognised, on a 0.15 m lattice within range of the mug; -1 when none.
+int nearestRecognisingCell(const World& w, const SimParams& params, const std::vector<double>& dist,
+                           double& yaw_out) {
+  const Eigen::Vector2d mug = w.mug.position.head<2>();
+  const int stride = std::max(1, static_cast<int>(std::lround(0.15 / w.grid.cell())));
+  std::vector<std::pair<double, int>> candidates;
+  for (int i = 0; i < w.grid.size(); ++i) {
+    if (!std::isfinite(dist[i])) continue;
+    if ((i % w.grid.nx()) % stride != 0 || (i / w.grid.nx()) % stride != 0) continue;
+    if (mugInRange(w, params, w.grid.center(i))) candidates.push_back({dist[i], i});
+  }
+  std::sort(candidates.begin(), candidates.end());
+  for (const auto& [d, i] : candidates) {
+    const Eigen::Vector2d to = mug - w.grid.center(i);
+    const double yaw = std::atan2(to.y(), to.x());
+    if (mugRecognisable(w, params, w.grid.center(i), yaw)) {
+      yaw_out = yaw;
+      return i;
+    }
+  }
+  return -1;
+}
+
+// A uniformly drawn free cell of the largest free-space region reachable from a room's
+// centre (rooms can hold small pockets walled in by furniture; the robot starts outside
+// them), in another room than `avoid_room`.
+int drawStartCell(const Grid& grid, const synth::MultiRoomApartment& apt, int avoid_room,
+                  std::uint64_t seed) {
+  std::vector<int> best;
+  for (std::size_t r = 0; r < apt.rooms.size(); ++r) {
+    const int c = grid.nearestFree(apt.rooms[r].center(), 2.0);
+    if (c < 0) continue;
+    const std::vector<double> dist = grid.distancesFrom(c);
+    std::vector<int> reachable;
+    for (int i = 0; i < grid.size(); ++i)
+      if (std::isfinite(dist[i])) reachable.push_back(i);
+    if (reachable.size() > best.size()) best = std::move(reachable);
+  }
+  // A search starts away from the mug: outside its room, when the region reaches another.
+  std::vector<int> elsewhere;
+  for (int c : best) {
+    const int room = apt.roomAt(grid.center(c));
+    if (room >= 0 && room != avoid_room) elsewhere.push_back(c);
+  }
+  if (!elsewhere.empty()) best = std::move(elsewhere);
+  if (best.empty())
+    throw Error("search: no free start cell in apartment " + std::to_string(apt.scene.seed));
+  return best[mix(seed) % best.size()];
+}
+
+}  // namespace
+
+// ---- Grid ----------------------------------------------------------------------------
+
+Grid::Grid(const synth::SynthScene& scene, double robot_radius, double cell)
+    : cell_(cell),
+      nx_(static_cast<int>(std::ceil(scene.room_size.x() / cell))),
+      ny_(static_cast<int>(std::ceil(scene.room_size.y() / cell))) {
+  free_.assign(static_cast<std::size_t>(nx_) * ny_, 0);
+  for (int i = 0; i < size(); ++i) {
+    const Eigen::Vector2d p = center(i);
+    bool ok = p.x() >= robot_radius && p.y() >= robot_radius &&
+              p.x() <= scene.room_size.x() - robot_radius &&
+              p.y() <= scene.room_size.y() - robot_radius;
+    for (std::size_t o = 0; ok && o < scene.obstacles.size(); ++o)
+      ok = !insideGrown(scene.obstacles[o].polygon, p, robot_radius);
+    free_[i] = ok ? 1 : 0;
+  }
+}
+
+int Grid::cellAt(const Eigen::Vector2d& xy) const {
+  const int ix = static_cast<int>(std::floor(xy.x() / cell_));
+  const int iy = static_cast<int>(std::floor(xy.y() / cell_));
+  return ix >= 0 && iy >= 0 && ix < nx_ && iy < ny_ ? iy * nx_ + ix : -1;
+}
+
+int Grid::nearestFree(const Eigen::Vector2d& xy, double max_m) const {
+  const int r = static_cast<int>(std::ceil(max_m / cell_));
+  const int cx = static_cast<int>(std::floor(xy.x() / cell_));
+  const int cy = static_cast<int>(std::floor(xy.y() / cell_));
+  int best = -1;
+  double best_d = kInfinity;
+  for (int y = std::max(0, cy - r); y <= std::min(ny_ - 1, cy + r); ++y)
+    for (int x = std::max(0, cx - r); x <= std::min(nx_ - 1, cx + r); ++x) {
+      const int i = y * nx_ + x;
+      const double d = (center(i) - xy).norm();
+      if (free_[i] && d <= max_m && d < best_d) best = i, best_d = d;
+    }
+  return best;
+}
+
+std::vector<double> Grid::distancesFrom(int start) const {
+  std::vector<double> dist(free_.size(), kInfinity);
+  if (start < 0 || !free_[start]) return dist;
+  using Item = std::pair<double, int>;
+  std::priority_queue<Item, std::vector<Item>, std::greater<Item>> open;
+  dist[start] = 0.0;
+  open.push({0.0, start});
+  while (!open.empty()) {
+    const auto [d, c] = open.top();
+    open.pop();
+    if (d > dist[c]) continue;
+    const int cx = c % nx_, cy = c / nx_;
+    for (int dy = -1; dy <= 1; ++dy)
+      for (int dx = -1; dx <= 1; ++dx) {
+        const int x = cx + dx, y = cy + dy;
+        if ((!dx && !dy) || x < 0 || y < 0 || x >= nx_ || y >= ny_) continue;
+        const int n = y * nx_ + x;
+        // Diagonal moves must not cut a blocked corner.
+        if (!free_[n] || !free_[cy * nx_ + x] || !free_[y * nx_ + cx]) continue;
+        const double nd = d + cell_ * ((dx && dy) ? M_SQRT2 : 1.0);
+        if (nd < dist[n]) dist[n] = nd, open.push({nd, n});
+      }
+  }
+  return dist;
+}
+
+bool Grid::lineFree(const Eigen::Vector2d& a, const Eigen::Vector2d& b) const {
+  const int steps = std::max(1, static_cast<int>(std::ceil((b - a).norm() / (0.5 * cell_))));
+  for (int s = 0; s <= steps; ++s) {
+    const int c = cellAt(a + (b - a) * (static_cast<double>(s) / steps));
+    if (c < 0 || !free_[c]) return false;
+  }
+  return true;
+}
+
+std::vector<Eigen::Vector2d> Grid::path(int from, int to) const {
+  if (from < 0 || to < 0 || !free_[from] || !free_[to]) return {};
+  std::vector<double> g(free_.size(), kInfinity);
+  std::vector<int> parent(free_.size(), -1);
+  const Eigen::Vector2d goal = center(to);
+  auto h = [&](int c) {  // octile distance: admissible on the 8-connected grid
+    const double dx = std::abs(center(c).x() - goal.x()), dy = std::abs(center(c).y() - goal.y());
+    return std::max(dx, dy) + (M_SQRT2 - 1.0) * std::min(dx, dy);
+  };
+  using Item = std::pair<double, int>;
+  std::priority_queue<Item, std::vector<Item>, std::greater<Item>> open;
+  g[from] = 0.0;
+  open.push({h(from), from});
+  while (!open.empty()) {
+    const auto [f, c] = open.top();
+    open.pop();
+    if (c == to) break;
+    if (f - h(c) > g[c] + 1e-9) continue;
+    const int cx = c % nx_, cy = c / nx_;
+    for (int dy = -1; dy <= 1; ++dy)
+      for (int dx = -1; dx <= 1; ++dx) {
+        const int x = cx + dx, y = cy + dy;
+        if ((!dx && !dy) || x < 0 || y < 0 || x >= nx_ || y >= ny_) continue;
+        const int n = y * nx_ + x;
+        if (!free_[n] || !free_[cy * nx_ + x] || !free_[y * nx_ + cx]) continue;
+        const double ng = g[c] + cell_ * ((dx && dy) ? M_SQRT2 : 1.0);
+        if (ng < g[n]) g[n] = ng, parent[n] = c, open.push({ng + h(n), n});
+      }
+  }
+  if (!std::isfinite(g[to])) return {};
+  std::vector<Eigen::Vector2d> cells;
+  for (int c = to; c >= 0; c = parent[c]) cells.push_back(center(c));
+  std::reverse(cells.begin(), cells.end());
+  // String pulling: jump to the furthest cell in sight (never longer than the grid path).
+  std::vector<Eigen::Vector2d> out{cells.front()};
+  std::size_t i = 0;
+  while (i + 1 < cells.size()) {
+    std::size_t j = cells.size() - 1;
+    while (j > i + 1 && !lineFree(cells[i], cells[j])) --j;
+    out.push_back(cells[j]);
+    i = j;
+  }
+  return out;
+}
+
+// ---- worlds and the recogniser --------------------------------------------------------
+
+synth::CameraPose cameraAt(const SimParams& params, const Eigen::Vector2d& xy, double yaw) {
+  synth::CameraPose pose;
+  pose.xy = xy;
+  pose.yaw = yaw;
+  pose.height_m = params.camera_height_m;
+  pose.pitch_rad = params.camera_pitch_rad;
+  return pose;
+}
+
+int mugPixels(const World& world, const synth::RenderedFrame& frame) {
+  int n = 0;
+  for (const std::int32_t object : frame.object) n += object == world.mug.object;
+  return n;
+}
+
+bool mugInRange(const World& world, const SimParams& params, const Eigen::Vector2d& xy) {
+  const Eigen::Vector3d camera(xy.x(), xy.y(), params.camera_height_m);
+  const Eigen::Vector3d mug = world.mug.position + Eigen::Vector3d(0, 0, world.mug.height / 2);
+  return (mug - camera).norm() <= params.recognise_range_m;
+}
+
+bool mugRecognisable(const World& world, const SimParams& params, const Eigen::Vector2d& xy,
+                     double yaw) {
+  if (!mugInRange(world, params, xy)) return false;
+  // Well outside the horizontal field of view (half angle atan(320 / 525) = 0.547 rad, plus
+  // the mug's own angular size and a margin) no pixel can count: skip the render.
+  const Eigen::Vector2d to = world.mug.position.head<2>() - xy;
+  const double d = std::max(to.norm(), 0.1);
+  const double half_width = std::asin(std::min(1.0, 0.08 / d));
+  if (std::abs(wrap(std::atan2(to.y(), to.x()) - yaw)) > 0.547 + half_width + 0.05) return false;
+  static const synth::RenderOptions options = oracleRender();
+  const synth::RenderedFrame frame =
+      synth::render(world.apartment.scene, cameraAt(params, xy, yaw), options, 0);
+  return mugPixels(world, frame) >= params.recognise_min_pixels;
+}
+
+World makeWorld(const Episode& episode, const SimParams& params) {
+  const synth::MultiRoomApartment base =
+      synth::makeMultiRoomApartment(episode.apartment_seed, params.apartment);
+  for (int attempt = 0; attempt < 10; ++attempt) {
+    World w;
+    w.episode = episode;
+    w.apartment = base;
+    w.mug =
+        synth::placeTargetMug(w.apartment, mix(episode.episode_seed + 977 * attempt), params.prior);
+    w.grid = Grid(w.apartment.scene, params.robot_radius_m, params.cell_m);
+    const int start =
+        drawStartCell(w.grid, w.apartment, w.mug.room, mix(episode.episode_seed ^ 0x5747ULL));
+    w.start = w.grid.center(start);
+    w.start_yaw = 2.0 * M_PI * unit(mix(episode.episode_seed ^ 0x9a3ULL)) - M_PI;
+    const std::vector<double> dist = w.grid.distancesFrom(start);
+    const int best = nearestRecognisingCell(w, params, dist, w.best_view_yaw);
+    if (best < 0) continue;
+    w.best_view = w.grid.center(best);
+    // What the robot drives (the string-pulled A* path), so no strategy beats it.
+    const std::vector<Eigen::Vector2d> path = w.grid.path(start, best);
+    w.shortest_path_m = 0.0;
+    for (std::size_t i = 1; i < path.size(); ++i)
+      w.shortest_path_m += (path[i] - path[i - 1]).norm();
+    return w;
+  }
+  throw Error("search: no recognisable mug placement for episode seed " +
+              std::to_string(episode.episode_seed));
+}
+
+// ---- the robot ------------------------------------------------------------------------
+
+Robot::Robot(const World& world, const SimParams& params, FrameHook on_frame)
+    : world_(world),
+      params_(params),
+      on_frame_(std::move(on_frame)),
+      xy_(world.start),
+      yaw_(world.start_yaw) {}
+
+void Robot::spend(double seconds) { stats_.time_s += seconds; }
+
+void Robot::turnTo(double yaw) {
+  if (!active()) return;
+  const double turn = std::abs(wrap(yaw - yaw_)) / params_.turn_rate_rad_s;
+  stats_.turn_s += turn;
+  spend(turn);
+  yaw_ = wrap(yaw);
+}
+
+bool Robot::driveTo(const Eigen::Vector2d& goal) {
+  if (!active()) return false;
+  const int to = world_.grid.nearestFree(goal, 0.5);
+  const std::vector<Eigen::Vector2d> path = world_.grid.path(cell(), to);
+  if (path.empty()) return false;
+  for (std::size_t i = 1; i < path.size() && active(); ++i) {
+    const Eigen::Vector2d leg = path[i] - xy_;
+    if (leg.norm() < 1e-9) continue;
+    turnTo(std::atan2(leg.y(), leg.x()));
+    const double t = leg.norm() / params_.speed_mps;
+    stats_.drive_s += t;
+    stats_.path_m += leg.norm();
+    spend(t);
+    xy_ = path[i];
+  }
+  return true;
+}
+
+bool Robot::look() {
+  if (!active()) return false;
+  stats_.process_s += params_.view_processing_s;
+  spend(params_.view_processing_s);
+  ++stats_.views;
+  views_.push_back({xy_, yaw_});
+  bool seen = false;
+  if (on_frame_) {
+    // Noise differs per view; the object index (what the oracle reads) does not.
+    synth::RenderedFrame frame =
+        synth::render(world_.apartment.scene, cameraAt(params_, xy_, yaw_), synth::RenderOptions{},
+                      mix(world_.episode.episode_seed * 1315423911ULL + stats_.views));
+    seen = mugInRange(world_, params_, xy_) &&
+           mugPixels(world_, frame) >= params_.recognise_min_pixels;
+    on_frame_(frame, xy_, yaw_, stats_.time_s);
+  } else {
+    seen = mugRecognisable(world_, params_, xy_, yaw_);
+  }
+  if (seen && stats_.time_s <= params_.time_budget_s) {
+    stats_.found = true;
+    stats_.found_time_s = stats_.time_s;
+  }
+  return seen;
+}
+
+bool Robot::lookAround() {
+  const int n = params_.look_around_views;
+  for (int k = 0; k < n && active(); ++k) {
+    if (k > 0) turnTo(yaw_ + 2.0 * M_PI / n);
+    if (look()) return true;
+  }
+  return stats_.found;
+}
+
+}  // namespace findmug::search

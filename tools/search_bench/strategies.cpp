@@ -1,0 +1,334 @@
+// The search strategies of findmug-search-bench (see strategies.hpp).
+#include "strategies.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "findmug/common/error.hpp"
+
+namespace findmug::search {
+
+namespace {
+
+std::uint64_t mix(std::uint64_t z) {
+  z += 0x9e3779b97f4a7c15ULL;
+  z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
+  z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
+  return z ^ (z >> 31);
+}
+
+// Among the reachable cells (finite `dist`) within `max_m` of `xy`, the one closest to it.
+int reachableCellNear(const Grid& grid, const std::vector<double>& dist, const Eigen::Vector2d& xy,
+                      double max_m) {
+  const int r = static_cast<int>(std::ceil(max_m / grid.cell()));
+  const int c = grid.cellAt(xy);
+  if (c < 0) return -1;
+  const int cx = c % grid.nx(), cy = c / grid.nx();
+  int best = -1;
+  double best_d = kInfinity;
+  for (int y = std::max(0, cy - r); y <= std::min(grid.ny() - 1, cy + r); ++y)
+    for (int x = std::max(0, cx - r); x <= std::min(grid.nx() - 1, cx + r); ++x) {
+      const int i = y * grid.nx() + x;
+      const double d = (grid.center(i) - xy).norm();
+      if (std::isfinite(dist[i]) && d <= max_m && d < best_d) best = i, best_d = d;
+    }
+  return best;
+}
+
+// The reachable cell of `room` nearest its centre, or -1.
+int reachableCellInRoom(const Grid& grid, const std::vector<double>& dist,
+                        const synth::RoomTruth& room) {
+  int best = -1;
+  double best_d = kInfinity;
+  for (int i = 0; i < grid.size(); ++i) {
+    const Eigen::Vector2d p = grid.center(i);
+    if (!std::isfinite(dist[i]) || !room.contains(p)) continue;
+    const double d = (p - room.center()).norm();
+    if (d < best_d) best = i, best_d = d;
+  }
+  return best;
+}
+
+// Rooms a strategy has looked around in; the fallback explores the others, nearest first.
+class RoomExplorer {
+ public:
+  explicit RoomExplorer(const World& world) : world_(world), done_(world.apartment.rooms.size()) {}
+  void markHere(const Robot& robot) {
+    const int r = world_.apartment.roomAt(robot.xy());
+    if (r >= 0) done_[r] = true;
+  }
+  // Drives to the reachable cell nearest the centre of the nearest room not yet explored
+  // and looks around; false when every room is done.
+  bool exploreNext(Robot& robot) {
+    const std::vector<double> dist = world_.grid.distancesFrom(robot.cell());
+    int best_room = -1, best_cell = -1;
+    for (std::size_t r = 0; r < done_.size(); ++r) {
+      if (done_[r]) continue;
+      const synth::RoomTruth& room = world_.apartment.rooms[r];
+      const int c = reachableCellInRoom(world_.grid, dist, room);
+      if (c < 0) {
+        done_[r] = true;  // nothing of it is reachable
+        continue;
+      }
+      if (best_cell < 0 || dist[c] < dist[best_cell])
+        best_room = static_cast<int>(r), best_cell = c;
+    }
+    if (best_cell < 0) return false;
+    done_[best_room] = true;
+    robot.driveTo(world_.grid.center(best_cell));
+    robot.lookAround();
+    return true;
+  }
+
+ private:
+  const World& world_;
+  std::vector<bool> done_;
+};
+
+void coverUntilDone(Robot& robot, const World& world, const SimParams& params, bool look_first);
+
+EpisodeResult runFindmug(const World& world, const SimParams& params, const FindmugModel& model) {
+  EpisodeResult result;
+  FindmugTables tables(model);
+  Robot robot(world, params,
+              [&tables](const synth::RenderedFrame& frame, const Eigen::Vector2d& xy, double yaw,
+                        double t) { tables.feed(frame, xy, yaw, t); });
+  RoomExplorer rooms(world);
+  rooms.markHere(robot);
+  robot.lookAround();
+  std::vector<Eigen::Vector2d> visited;
+  while (robot.active()) {
+    const std::vector<double> dist = world.grid.distancesFrom(robot.cell());
+    const MapSearchPosition* next = nullptr;
+    int next_cell = -1;
+    for (const MapSearchPosition& p : tables.positions()) {
+      if (!p.reachable) continue;
+      const bool seen_before = std::any_of(visited.begin(), visited.end(),
+                                           [&p](const auto& v) { return (v - p.xy).norm() < 0.5; });
+      const int c = seen_before ? -1 : reachableCellNear(world.grid, dist, p.xy, 0.25);
+      if (c >= 0 && (next_cell < 0 || dist[c] < dist[next_cell])) next = &p, next_cell = c;
+    }
+    if (next == nullptr) {
+      if (rooms.exploreNext(robot)) continue;
+      coverUntilDone(robot, world, params, false);  // nothing left but the floor plan
+      break;
+    }
+    const MapSearchPosition target = *next;  // positions() changes with the next frame
+    visited.push_back(target.xy);
+    ++result.positions_visited;
+    robot.driveTo(world.grid.center(next_cell));
+    robot.turnTo(target.yaw);
+    robot.look();
+    rooms.markHere(robot);
+  }
+  result.stats = robot.stats();
+  result.tables_mapped = tables.tables();
+  result.frames_processed = tables.frames();
+  return result;
+}
+
+// One hand-placed place in front of a piece of furniture: the first reachable spot just
+// clear of it, trying directions from the one towards its room's centre.
+struct Place {
+  int cell = -1;
+  double yaw = 0.0;
+};
+
+std::vector<Place> handPlacedPlaces(const World& world, const SimParams& params) {
+  const std::vector<double> from_start = world.grid.distancesFrom(world.grid.cellAt(world.start));
+  std::vector<Place> places;
+  for (const synth::FurnitureTruth& f : world.apartment.furniture) {
+    if (f.kind != "table" && f.kind != "cabinet" && f.kind != "shelf") continue;
+    if (f.room < 0) continue;
+    Eigen::Vector2d c = Eigen::Vector2d::Zero();
+    for (const auto& v : f.footprint) c += v / static_cast<double>(f.footprint.size());
+    const Eigen::Vector2d to_room = world.apartment.rooms[f.room].center() - c;
+    const double a0 = std::atan2(to_room.y(), to_room.x());
+    for (int k = 0; k < 16; ++k) {
+      const double a = a0 + (k % 2 ? 1 : -1) * ((k + 1) / 2) * (2.0 * M_PI / 16);
+      const Eigen::Vector2d dir(std::cos(a), std::sin(a));
+      // Step out until the robot would clear the footprint by 0.15 m.
+      double r = 0.0;
+      const double clear = params.robot_radius_m + 0.15;
+      auto inside = [&](const Eigen::Vector2d& p) {
+        const std::size_t n = f.footprint.size();
+        for (std::size_t i = 0; i < n; ++i) {
+          const Eigen::Vector2d e = f.footprint[(i + 1) % n] - f.footprint[i];
+          const Eigen::Vector2d q = p - f.footprint[i];
+          if (e.x() * q.y() - e.y() * q.x() < -clear * e.norm()) return false;
+        }
+        return true;
+      };
+      while (r < 3.0 && inside(c + r * dir)) r += 0.05;
+      const int cell = reachableCellNear(world.grid, from_start, c + r * dir, 0.1);
+      if (cell < 0) continue;
+      const Eigen::Vector2d look = c - world.grid.center(cell);
+      places.push_back({cell, std::atan2(look.y(), look.x())});
+      break;
+    }
+  }
+  return places;
+}
+
+EpisodeResult runPlaces(const World& world, const SimParams& params) {
+  EpisodeResult result;
+  Robot robot(world, params);
+  std::vector<Place> todo = handPlacedPlaces(world, params);
+  RoomExplorer rooms(world);
+  while (robot.active() && !todo.empty()) {
+    const std::vector<double> dist = world.grid.distancesFrom(robot.cell());
+    const auto next = std::min_element(
+        todo.begin(), todo.end(),
+        [&dist](const Place& a, const Place& b) { return dist[a.cell] < dist[b.cell]; });
+    const Place place = *next;
+    todo.erase(next);
+    ++result.positions_visited;
+    robot.driveTo(world.grid.center(place.cell));
+    robot.turnTo(place.yaw);
+    robot.look();
+  }
+  while (robot.active() && rooms.exploreNext(robot)) {
+  }
+  coverUntilDone(robot, world, params, false);
+  result.stats = robot.stats();
+  return result;
+}
+
+// Floor cells seen by the camera: rays across the field of view until a tall obstacle.
+class Coverage {
+ public:
+  Coverage(const World& world, const SimParams& params)
+      : world_(world), params_(params), seen_(world.grid.size(), 0), blocks_(world.grid.size(), 0) {
+    for (int i = 0; i < world.grid.size(); ++i) {
+      const Eigen::Vector2d p = world.grid.center(i);
+      for (const synth::Obstacle& o : world.apartment.scene.obstacles) {
+        if (o.top_z <= params.camera_height_m - 0.2) continue;  // the camera looks over it
+        const std::size_t n = o.polygon.size();
+        bool inside = true;
+        for (std::size_t k = 0; k < n && inside; ++k) {
+          const Eigen::Vector2d e = o.polygon[(k + 1) % n] - o.polygon[k];
+          const Eigen::Vector2d q = p - o.polygon[k];
+          inside = e.x() * q.y() - e.y() * q.x() >= 0.0;
+        }
+        if (inside) blocks_[i] = 1;
+      }
+    }
+  }
+  void markView(const Eigen::Vector2d& xy, double yaw) {
+    for (double a = -0.547; a <= 0.547; a += 0.01) {
+      const Eigen::Vector2d dir(std::cos(yaw + a), std::sin(yaw + a));
+      for (double r = 0.0; r <= params_.coverage_range_m; r += 0.5 * world_.grid.cell()) {
+        const int c = world_.grid.cellAt(xy + r * dir);
+        if (c < 0 || blocks_[c]) break;
+        seen_[c] = 1;
+      }
+    }
+  }
+  // The nearest reachable free cell in a patch of unseen free floor, or -1.
+  int nextGoal(const std::vector<double>& dist) const {
+    const Grid& g = world_.grid;
+    int best = -1;
+    for (int i = 0; i < g.size(); ++i) {
+      if (seen_[i] || !std::isfinite(dist[i]) || (best >= 0 && dist[i] >= dist[best])) continue;
+      int unseen = 0;
+      const int cx = i % g.nx(), cy = i / g.nx();
+      for (int y = std::max(0, cy - 3); y <= std::min(g.ny() - 1, cy + 3); ++y)
+        for (int x = std::max(0, cx - 3); x <= std::min(g.nx() - 1, cx + 3); ++x)
+          unseen += g.free(y * g.nx() + x) && !seen_[y * g.nx() + x];
+      if (unseen >= 12) best = i;
+    }
+    return best;
+  }
+
+ private:
+  const World& world_;
+  const SimParams& params_;
+  std::vector<std::uint8_t> seen_, blocks_;
+};
+
+// Coverage from wherever the robot is: every view taken so far counts as searched floor;
+// look around, drive to the nearest floor not yet seen, until none is left.
+void coverUntilDone(Robot& robot, const World& world, const SimParams& params, bool look_first) {
+  Coverage coverage(world, params);
+  std::size_t marked = 0;
+  auto mark = [&] {
+    for (; marked < robot.viewPoses().size(); ++marked)
+      coverage.markView(robot.viewPoses()[marked].first, robot.viewPoses()[marked].second);
+  };
+  if (look_first) robot.lookAround();
+  mark();
+  while (robot.active()) {
+    const int goal = coverage.nextGoal(world.grid.distancesFrom(robot.cell()));
+    if (goal < 0 || !robot.driveTo(world.grid.center(goal))) break;
+    robot.lookAround();
+    mark();
+  }
+}
+
+EpisodeResult runCoverage(const World& world, const SimParams& params) {
+  EpisodeResult result;
+  Robot robot(world, params);
+  coverUntilDone(robot, world, params, true);
+  result.stats = robot.stats();
+  return result;
+}
+
+EpisodeResult runRandom(const World& world, const SimParams& params) {
+  EpisodeResult result;
+  Robot robot(world, params);
+  const std::vector<double> dist = world.grid.distancesFrom(robot.cell());
+  std::vector<int> reachable;
+  for (int i = 0; i < world.grid.size(); ++i)
+    if (std::isfinite(dist[i])) reachable.push_back(i);
+  std::uint64_t state = mix(world.episode.episode_seed ^ 0x7a4d0ULL);
+  robot.lookAround();
+  while (robot.active()) {
+    state = mix(state);
+    robot.driveTo(world.grid.center(reachable[state % reachable.size()]));
+    robot.lookAround();
+  }
+  result.stats = robot.stats();
+  return result;
+}
+
+EpisodeResult runOracle(const World& world, const SimParams& params) {
+  EpisodeResult result;
+  Robot robot(world, params);
+  robot.driveTo(world.best_view);
+  robot.turnTo(world.best_view_yaw);
+  robot.look();
+  result.stats = robot.stats();
+  return result;
+}
+
+}  // namespace
+
+std::string canonicalStrategy(const std::string& name) {
+  static const char* names[] = {"findmug", "places", "coverage", "random", "oracle"};
+  for (int i = 0; i < 5; ++i)
+    if (name == names[i] || (name.size() == 1 && name[0] == 'a' + i)) return names[i];
+  throw Error("search: unknown strategy '" + name +
+              "' (findmug|a, places|b, coverage|c, random|d, oracle|e)");
+}
+
+EpisodeResult runStrategy(const std::string& strategy, const World& world, const SimParams& params,
+                          const FindmugModel* model) {
+  const std::string name = canonicalStrategy(strategy);
+  EpisodeResult result;
+  if (name == "findmug") {
+    if (model == nullptr) throw Error("search: the findmug strategy needs a model");
+    result = runFindmug(world, params, *model);
+  } else if (name == "places") {
+    result = runPlaces(world, params);
+  } else if (name == "coverage") {
+    result = runCoverage(world, params);
+  } else if (name == "random") {
+    result = runRandom(world, params);
+  } else {
+    result = runOracle(world, params);
+  }
+  result.strategy = name;
+  return result;
+}
+
+}  // namespace findmug::search
