@@ -15,7 +15,7 @@ namespace findmug::daemon {
 namespace {
 
 // What tells one answer from the next: a client is told again only when it changed.
-std::string answerKey(const FindResultMessage& m) {
+std::string answerKey(const io::FindResultMessage& m) {
   std::ostringstream key;
   key << static_cast<int>(m.result) << '|' << m.seen_object_id << '|' << m.seen_table_id << '|'
       << m.stand_here.has_value() << '|' << m.places.size();
@@ -35,10 +35,12 @@ std::uint64_t nowUtime() {
 }  // namespace
 
 ObjectSearchSink::ObjectSearchSink(ObjectSearchSettings settings, std::shared_ptr<io::Bus> bus,
-                                   std::string find_channel, OnError on_error)
+                                   std::string find_channel, MapTables map_tables,
+                                   OnError on_error)
     : settings_(std::move(settings)),
       bus_(std::move(bus)),
       find_channel_(std::move(find_channel)),
+      map_tables_source_(std::move(map_tables)),
       on_error_(std::move(on_error)),
       library_(settings_.objects_dir),
       map_(settings_.object_map),
@@ -90,15 +92,13 @@ std::vector<ObjectIdentity> ObjectSearchSink::nameCandidates(const LabelledFrame
   return identities;
 }
 
-void ObjectSearchSink::rememberTableMap(const FrameResult& result) {
-  // mutex_ held. The confirmed tables in the map frame, with their stable ids.
-  if (!result.table_map || !result.table_map->map_pose) return;
-  const io::TablesMessage& map = *result.table_map;
+void ObjectSearchSink::rememberTableMap() {
+  // mutex_ held. The confirmed tables, map frame, stable ids: what FINDMUG_TABLE_MAP
+  // publishes, so that the places to look are tables a client has been told of.
+  if (!map_tables_source_) return;
   map_tables_.clear();
-  for (std::size_t i = 0; i < map.tables.size(); ++i) {
-    TableCluster table = transformTable(map.tables[i], map.map_pose->pose);
-    table.id = i < map.map_info.size() ? map.map_info[i].map_id : table.id;
-    map_tables_.push_back(std::move(table));
+  for (MappedTable& mapped : map_tables_source_()) {
+    if (mapped.confirmed) map_tables_.push_back(std::move(mapped.table));
   }
 }
 
@@ -120,15 +120,15 @@ void ObjectSearchSink::consume(FrameResult& result) {
   if (!settings_.objects_dir.empty() && Clock::now() >= next_refresh_) refreshLibrary();
   const std::vector<ObjectIdentity> identities = nameCandidates(result.labelled);
   if (!settings_.map_objects || !result.pose) return;
-  std::optional<FindResultMessage> changed;
+  std::optional<io::FindResultMessage> changed;
   {
     std::lock_guard lock(mutex_);
-    rememberTableMap(result);
+    rememberTableMap();
     if (TableMapSink::isEvidence(result.labelled)) updateMap(result, identities);
     robot_ = result.pose->pose;
     search_.observeRobot(*robot_, map_tables_);
     if (request_name_) {
-      FindResultMessage answer = answerLocked(nowUtime());
+      io::FindResultMessage answer = answerLocked(nowUtime());
       if (answerKey(answer) != last_answer_) {
         last_answer_ = answerKey(answer);
         changed = std::move(answer);
@@ -138,7 +138,7 @@ void ObjectSearchSink::consume(FrameResult& result) {
   if (changed) publish(*changed);
 }
 
-FindResultMessage ObjectSearchSink::answerLocked(std::uint64_t utime) {
+io::FindResultMessage ObjectSearchSink::answerLocked(std::uint64_t utime) {
   const FindAnswer answer = search_.answer(search_.requestId(), *request_name_, taught_, map_,
                                            map_tables_, robot_, utime);
   return io::findResultMessage(answer, search_.requestId(), utime, taught_);
@@ -147,7 +147,7 @@ FindResultMessage ObjectSearchSink::answerLocked(std::uint64_t utime) {
 void ObjectSearchSink::requestFind(std::int64_t request_id, const std::string& name,
                                    std::uint64_t utime) {
   validateObjectModelName(name);  // throws: the command input counts the refusal
-  FindResultMessage message;
+  io::FindResultMessage message;
   {
     std::lock_guard lock(mutex_);
     ++counters_.find_requests;
@@ -170,7 +170,7 @@ void ObjectSearchSink::requestFind(std::int64_t request_id, const std::string& n
   publish(message);
 }
 
-void ObjectSearchSink::publish(const FindResultMessage& message) {
+void ObjectSearchSink::publish(const io::FindResultMessage& message) {
   if (!bus_) return;
   if (!io::publishMessage(*bus_, find_channel_, io::encodeFindResult(message))) {
     on_error_("publish refused on " + find_channel_ + " (find request " +

@@ -105,6 +105,17 @@ Pipeline::Pipeline(const SegmenterConfig& segmenter_config, const DaemonConfig& 
     semantic_map_ = std::make_shared<SemanticMapStage>(
         std::move(options), bus, [this](const std::string& what) { recordError(what); });
   }
+  ObjectSearchSettings object_search;
+  object_search.objects_dir = daemon_config_.objects_dir;
+  object_search.map_objects =
+      hooks_.pose_bus != nullptr || effectivePoseUrl(daemon_config_).has_value();
+  object_search.object_map = daemon_config_.object_map;
+  object_search.object_search = daemon_config_.object_search;
+  object_search.matcher = daemon_config_.object_matcher;
+  object_search_ = std::make_shared<ObjectSearchSink>(
+      std::move(object_search), bus, std::string(io::kFindResultChannel),
+      [sink = table_map_sink_] { return sink->tables(); },
+      [this](const std::string& what) { recordError(what); });
   publisher_ = std::make_shared<LcmPublisherSink>(
       std::move(bus),
       LcmPublisherSink::Channels{std::string(io::kLabelsChannel), std::string(io::kTablesChannel),
@@ -116,6 +127,7 @@ Pipeline::Pipeline(const SegmenterConfig& segmenter_config, const DaemonConfig& 
   publish_step_.addSink(table_map_sink_);
   if (semantic_map_) publish_step_.addSink(semantic_map_);  // may set the published labels
   publish_step_.addSink(publisher_);
+  publish_step_.addSink(object_search_);  // after the table map and the frame's messages
   if (!daemon_config_.collect_dir.empty()) {
     collector_ = std::make_shared<FrameCollector>(
         FrameCollector::fromConfig(daemon_config_), [this] { return model_.modelId(); },
@@ -220,6 +232,9 @@ Pipeline::Pipeline(const SegmenterConfig& segmenter_config, const DaemonConfig& 
     });
     handlers.emplace("save_frame", [this](const io::CommandMessage& c) {
       requestFrameSave(c.request_id, c.argument);
+    });
+    handlers.emplace("find", [this](const io::CommandMessage& c) {
+      object_search_->requestFind(c.request_id, c.argument, c.utime);
     });
     auto on_command_error = [this](const std::string& what) { recordError(what); };
     std::shared_ptr<io::Bus> command_bus = hooks_.command_bus;

@@ -16,6 +16,7 @@
 
 #include "findmug/common/error.hpp"
 #include "findmug/io/lcm_codec.hpp"
+#include "findmug/io/lcm_codec_find.hpp"
 #include "findmug/io/lcm_codec_objects.hpp"
 
 namespace findmug::io {
@@ -249,6 +250,28 @@ findmug_lcm::objects_t decodeMessage<findmug_lcm::objects_t>(const void* data, s
     w.skip(2 * kI64 + kI8 + kI32 + kBool, "utime/seq/content/num_tables/has_map_pose");
     walkRobotPose(w);
     w.array(w.count("num_objects", kTableObject), kTableObject, "objects");
+  });
+}
+
+template <>
+findmug_lcm::find_result_t decodeMessage<findmug_lcm::find_result_t>(const void* data,
+                                                                     std::size_t size,
+                                                                     std::string_view channel) {
+  return walkThenDecode<findmug_lcm::find_result_t>(data, size, channel, [](WireWalker& w) {
+    w.skip(2 * kI64, "utime/request_id");
+    w.string("name");
+    w.skip(kI8, "result");
+    w.string("summary");
+    w.skip(kI32 + 3 * kF64 + kI32 + kI64 + kF32 + kBool, "seen_*/has_stand_here");
+    walkSearchPosition(w, "stand_here");
+    const std::int32_t places =
+        w.count("num_places", kMinSearchPosition + kI32 + 2 * kBool);
+    for (std::int32_t i = 0; i < places; ++i) walkSearchPosition(w, "places");
+    w.array(places, kI32, "place_table_ids");
+    w.array(places, kBool, "place_seen_before");
+    w.array(places, kBool, "place_searched");
+    const std::int32_t taught = w.count("num_taught", kMinString);
+    for (std::int32_t i = 0; i < taught; ++i) w.string("taught_names");
   });
 }
 

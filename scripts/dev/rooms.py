@@ -70,8 +70,8 @@ ROOMS = {
                 ["cv_folds", "depth_degradation", "mrf_context", "nyu_mat", "table_metrics",
                  "fine_label_inference", "layout_counts", "pseudo_labels"]),
     # synth builds in its own CMakeLists.txt and includes synth_internal.hpp from its own folder
-    "synth": (["synth"], ["camera_path.cpp", "ground_truth.cpp", "render.cpp", "scene.cpp",
-                          "scene_edit.cpp", "synth_internal.hpp"], ["synth"]),
+    "synth": (["synth"], ["camera_path.cpp", "ground_truth.cpp", "render.cpp", "scene.cpp", "apartment.cpp",
+                          "scene_edit.cpp", "synth_internal.hpp"], ["synth", "apartment"]),
 }
 
 # Rooms built by their own CMakeLists.txt with their folder on the include path: their internal

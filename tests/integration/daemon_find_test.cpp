@@ -8,6 +8,7 @@
 
 #include <chrono>
 #include <fstream>
+#include <memory>
 #include <string>
 #include <utility>
 #include <vector>
@@ -57,18 +58,12 @@ LabelledFrame frameWith(std::vector<TableCluster> tables, std::uint64_t utime) {
 }
 
 // What TableMapSink gives the sinks after it for a frame seen at `pose`: every
-// table in the map (ids 1..n), confirmed, and due on the table map channel.
+// table of the frame in the map under ids 1..n.
 void asMapped(FrameResult& result, const Pose2D& pose) {
   result.pose = io::RobotPose{result.labelled.segmented.prepared.frame.utime, pose};
-  io::TablesMessage map;
-  map.content = io::TablesContent::Map;
-  map.map_pose = result.pose;
-  map.tables = result.labelled.tables;
-  for (std::size_t i = 0; i < map.tables.size(); ++i) {
+  for (std::size_t i = 0; i < result.labelled.tables.size(); ++i) {
     result.map_info.push_back({static_cast<int>(i + 1), true, 3, 0});
   }
-  map.map_info = result.map_info;
-  result.table_map = map;
 }
 
 struct Fixture : ::testing::Test {
@@ -91,27 +86,42 @@ struct Fixture : ::testing::Test {
     return std::exchange(received, {});
   }
 
-  ObjectSearchSink makeSink(bool map_objects = true) {
+  std::vector<MappedTable> table_map;  // what the table map holds (map frame)
+
+  std::unique_ptr<ObjectSearchSink> makeSink(bool map_objects = true) {
     ObjectSearchSettings settings;
     settings.objects_dir = dir.str();
     settings.map_objects = map_objects;
-    return ObjectSearchSink(settings, bus, kFindChannel,
-                            [this](const std::string& what) { errors.push_back(what); });
+    return std::make_unique<ObjectSearchSink>(
+        settings, bus, kFindChannel, [this] { return table_map; },
+        [this](const std::string& what) { errors.push_back(what); });
+  }
+
+  void mapTables(const std::vector<TableCluster>& tables) {
+    table_map.clear();
+    for (std::size_t i = 0; i < tables.size(); ++i) {
+      MappedTable m;
+      m.table = tables[i];
+      m.table.id = static_cast<int>(i + 1);
+      m.confirmed = true;
+      table_map.push_back(m);
+    }
   }
 };
 
 TEST_F(Fixture, FindListsThePlacesToLookAndPutsASearchedTableLast) {
   saveObjectModel(dir.str("mug.fmo"), test::sampleObjectModel("mug", 1));
-  ObjectSearchSink sink = makeSink();
-  EXPECT_EQ(sink.taughtNames(), std::vector<std::string>{"mug"});
+  auto sink = makeSink();
+  EXPECT_EQ(sink->taughtNames(), std::vector<std::string>{"mug"});
 
-  // Two tables ahead of the robot at the map origin.
+  // Two tables ahead of the robot at the map origin (pose = identity: base = map).
+  mapTables({tableAt(2.0f, 0.0f), tableAt(5.0f, 0.0f)});
   LabelledFrame frame = frameWith({tableAt(2.0f, 0.0f), tableAt(5.0f, 0.0f)}, 1000);
   FrameResult result{frame};
   asMapped(result, Pose2D{});
-  sink.consume(result);
+  sink->consume(result);
 
-  sink.requestFind(11, "mug", 2000);
+  sink->requestFind(11, "mug", 2000);
   auto answers = drain();
   ASSERT_EQ(answers.size(), 1u);
   EXPECT_EQ(answers[0].request_id, 11);
@@ -125,7 +135,7 @@ TEST_F(Fixture, FindListsThePlacesToLookAndPutsASearchedTableLast) {
   LabelledFrame there = frameWith({}, 3000);
   FrameResult at_table{there};
   at_table.pose = io::RobotPose{3000, Pose2D{2.0, -0.9, M_PI / 2}};
-  sink.consume(at_table);
+  sink->consume(at_table);
   answers = drain();
   ASSERT_EQ(answers.size(), 1u);
   EXPECT_EQ(answers[0].places.front().table_id, 2);
@@ -133,27 +143,27 @@ TEST_F(Fixture, FindListsThePlacesToLookAndPutsASearchedTableLast) {
   EXPECT_EQ(answers[0].places.back().table_id, 1);
 
   // The same pose again changes nothing: no new message.
-  sink.consume(at_table);
+  sink->consume(at_table);
   EXPECT_TRUE(drain().empty());
-  EXPECT_EQ(sink.counters().find_requests, 1u);
-  EXPECT_EQ(sink.counters().find_answers, 2u);
+  EXPECT_EQ(sink->counters().find_requests, 1u);
+  EXPECT_EQ(sink->counters().find_answers, 2u);
 }
 
 TEST_F(Fixture, AnUntaughtNameIsAnsweredWithTheTaughtNamesABadNameIsRefused) {
   saveObjectModel(dir.str("mug.fmo"), test::sampleObjectModel("mug", 1));
-  ObjectSearchSink sink = makeSink();
-  sink.requestFind(3, "teapot", 10);
+  auto sink = makeSink();
+  sink->requestFind(3, "teapot", 10);
   const auto answers = drain();
   ASSERT_EQ(answers.size(), 1u);
   EXPECT_EQ(answers[0].result, io::FindResult::UnknownName);
   EXPECT_NE(answers[0].summary.find("taught: mug"), std::string::npos) << answers[0].summary;
-  EXPECT_THROW(sink.requestFind(4, "Tea Pot!", 10), Error);
+  EXPECT_THROW(sink->requestFind(4, "Tea Pot!", 10), Error);
   EXPECT_TRUE(drain().empty());
 }
 
 TEST_F(Fixture, WithoutAPoseInputFindIsRefusedWithTheReason) {
-  ObjectSearchSink sink = makeSink(/*map_objects=*/false);
-  sink.requestFind(5, "mug", 10);
+  auto sink = makeSink(/*map_objects=*/false);
+  sink->requestFind(5, "mug", 10);
   const auto answers = drain();
   ASSERT_EQ(answers.size(), 1u);
   EXPECT_EQ(answers[0].result, io::FindResult::Refused);
@@ -163,11 +173,11 @@ TEST_F(Fixture, WithoutAPoseInputFindIsRefusedWithTheReason) {
 TEST_F(Fixture, ACorruptTaughtObjectIsReportedByNameAndTheGoodOnesStay) {
   saveObjectModel(dir.str("mug.fmo"), test::sampleObjectModel("mug", 1));
   { std::ofstream(dir.str("broken.fmo")) << "FMOBJECT garbage"; }
-  ObjectSearchSink sink = makeSink();
+  auto sink = makeSink();
   ASSERT_EQ(errors.size(), 1u);
   EXPECT_NE(errors[0].find("broken.fmo"), std::string::npos) << errors[0];
-  EXPECT_EQ(sink.counters().object_files_refused, 1u);
-  EXPECT_EQ(sink.taughtNames(), std::vector<std::string>{"mug"});
+  EXPECT_EQ(sink->counters().object_files_refused, 1u);
+  EXPECT_EQ(sink->taughtNames(), std::vector<std::string>{"mug"});
 }
 
 TEST(FindCodec, RoundTripsAndRefusesWhatIsNotAnAnswer) {

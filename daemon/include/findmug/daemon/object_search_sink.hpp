@@ -64,9 +64,13 @@ class ObjectSearchSink final : public ResultSink {
     std::uint64_t mapped_objects = 0;  // now
   };
 
-  // `bus` (may be null: nothing is published) and `channel` for find_result_t.
+  // The table map's tables now (map frame, stable ids; TableMapSink::tables).
+  using MapTables = std::function<std::vector<MappedTable>()>;
+
+  // `bus` (may be null: nothing is published) and `channel` for find_result_t;
+  // `map_tables` (may be empty: no tables) where the places to look come from.
   ObjectSearchSink(ObjectSearchSettings settings, std::shared_ptr<io::Bus> bus,
-                   std::string find_channel, OnError on_error);
+                   std::string find_channel, MapTables map_tables, OnError on_error);
 
   void consume(FrameResult& result) override;
 
@@ -83,13 +87,14 @@ class ObjectSearchSink final : public ResultSink {
   void refreshLibrary();
   std::vector<ObjectIdentity> nameCandidates(const LabelledFrame& labelled);
   void updateMap(const FrameResult& result, const std::vector<ObjectIdentity>& identities);
-  void rememberTableMap(const FrameResult& result);
-  FindResultMessage answerLocked(std::uint64_t utime);
-  void publish(const FindResultMessage& message);
+  void rememberTableMap();
+  io::FindResultMessage answerLocked(std::uint64_t utime);
+  void publish(const io::FindResultMessage& message);
 
   ObjectSearchSettings settings_;
   std::shared_ptr<io::Bus> bus_;
   std::string find_channel_;
+  MapTables map_tables_source_;
   OnError on_error_;
   ObjectLibrary library_;
   Clock::time_point next_refresh_{};

@@ -18,7 +18,9 @@
 //             the pipeline (result_sinks.hpp): the TableMapSink (the map
 //             update rule), then the LcmPublisherSink (label_image_t on
 //             FINDMUG_LABELS, tables_t on FINDMUG_TABLES, the map on
-//             FINDMUG_TABLE_MAP), then any added with addSink(); and, every
+//             FINDMUG_TABLE_MAP), then the ObjectSearchSink (taught objects
+//             named among the table-top candidates, the object map, answers to
+//             "find" on FINDMUG_FIND_RESULT), then any added with addSink(); and, every
 //             daemon.status_period_s, status_t on FINDMUG_STATUS, built by
 //             StatusBuilder (status_builder.hpp) from statusSnapshot()
 //
@@ -82,6 +84,7 @@
 #include "findmug/daemon/frame_collector.hpp"
 #include "findmug/daemon/frame_steps.hpp"
 #include "findmug/daemon/model_reload.hpp"
+#include "findmug/daemon/object_search_sink.hpp"
 #include "findmug/daemon/pose_input.hpp"
 #include "findmug/daemon/result_sinks.hpp"
 #include "findmug/daemon/semantic_map_stage.hpp"
@@ -175,6 +178,8 @@ class Pipeline {
   // Saves the next published frame for labelling (daemon.collect_dir); throws
   // findmug::Error when collection is off or the note is not fit for frames.csv.
   void requestFrameSave(std::int64_t request_id, const std::string& note);
+  // The objects on the tables: taught ones named, mapped and found (object_search_sink.hpp).
+  const ObjectSearchSink& objectSearch() const { return *object_search_; }
   // The command input, or nullptr when there is none (see effectiveCommandUrl).
   const CommandInput* commandInput() const { return command_input_.get(); }
   int workers() const { return workers_; }
@@ -210,6 +215,7 @@ class Pipeline {
   std::unique_ptr<ModelReloader> reloader_;
   std::unique_ptr<CommandInput> command_input_;  // nullptr: no command input
   std::shared_ptr<FrameCollector> collector_;    // nullptr unless daemon.collect_dir
+  std::shared_ptr<ObjectSearchSink> object_search_;  // taught objects, object map, "find"
   std::uint64_t pose_max_age_us_ = 0;
   // The three steps (frame_steps.hpp), each run by its Stage below.
   PrepareStep prepare_step_;

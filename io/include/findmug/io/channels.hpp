@@ -19,6 +19,7 @@
 //   FINDMUG_SEMANTIC_MAP findmug_lcm::semantic_map_t the fused 3-D semantic map, out at a low
 //                                               rate when it changed (daemon.semantic_map)
 //   FINDMUG_COMMAND     findmug_lcm::command_t      requests to the daemon (reload_model), input
+//   FINDMUG_FIND_RESULT findmug_lcm::find_result_t  the answer to a "find NAME" command
 #pragma once
 
 #include <string>
@@ -35,6 +36,7 @@ inline constexpr std::string_view kStatusChannel = "FINDMUG_STATUS";
 inline constexpr std::string_view kRobotPoseChannel = "FINDMUG_ROBOT_POSE";
 inline constexpr std::string_view kSemanticMapChannel = "FINDMUG_SEMANTIC_MAP";
 inline constexpr std::string_view kCommandChannel = "FINDMUG_COMMAND";
+inline constexpr std::string_view kFindResultChannel = "FINDMUG_FIND_RESULT";
 
 // `base` + "_" + `suffix`, or `base` when the suffix is empty. The suffix may
 // hold only letters, digits and '_' (and may not start with '_'); anything

@@ -18,10 +18,16 @@
 #include <string_view>
 #include <vector>
 
+#include "findmug/io/lcm_codec.hpp"
 #include "findmug/map/object_search.hpp"
 #include "findmug_lcm/find_result_t.hpp"
 
 namespace findmug::io {
+
+// Walks the wire layout of a find_result_t, then lets LCM decode it (lcm_wire.cpp).
+template <>
+findmug_lcm::find_result_t decodeMessage<findmug_lcm::find_result_t>(const void*, std::size_t,
+                                                                     std::string_view);
 
 enum class FindResult : std::int8_t { Seen = 0, LookAt = 1, UnknownName = 2, Refused = 3 };
 
