@@ -14,9 +14,18 @@
 // With --json, one JSON object per message on its own line (JSON lines): a
 // tables message's line has "tour", an objects message's line "objects".
 //
+// With --find NAME it asks instead: it sends command_t "find NAME" on
+// FINDMUG_COMMAND and prints findmugd's answer from FINDMUG_FIND_RESULT
+// (find_result_t): where the object was seen and where to stand, or the places
+// to look in order; then exits (0: an answer; 4: the name was not taught or
+// the daemon refused; 1: no answer within --timeout). With --count N it waits
+// for N answers: the daemon answers again when the places change (a table
+// searched, the object seen).
+//
 // Exits cleanly on SIGINT/SIGTERM, after --count messages, or at the end of
 // a replayed log (--lcm-url file://LOG?speed=0). Bad messages are reported on
 // stderr and skipped.
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <iostream>
@@ -30,6 +39,7 @@
 #include "findmug/io/bus.hpp"
 #include "findmug/io/channels.hpp"
 #include "findmug/io/lcm_codec.hpp"
+#include "findmug/io/lcm_codec_find.hpp"
 #include "findmug/io/lcm_codec_objects.hpp"
 #include "findmug/io/subscriber.hpp"
 #include "findmug/tables/tables.hpp"
@@ -224,12 +234,123 @@ class NavClient {
 
 }  // namespace
 
+void printPosition(std::ostream& out, const SearchPosition& p) {
+  out << "(" << p.xy.x() << ", " << p.xy.y() << ") facing " << p.yaw << " rad";
+}
+
+// One answer to --find, as text or one JSON line.
+void printFindResult(const io::FindResultMessage& m, bool json) {
+  std::ostringstream out;
+  out.precision(2);
+  out << std::fixed;
+  if (json) {
+    const char* kinds[] = {"seen", "look_at", "unknown_name", "refused"};
+    out << "{\"find\":" << cli::jsonString(m.name) << ",\"request_id\":" << m.request_id
+        << ",\"result\":\"" << kinds[static_cast<int>(m.result)] << "\""
+        << ",\"summary\":" << cli::jsonString(m.summary);
+    if (m.result == io::FindResult::Seen) {
+      out << ",\"position\":[" << cli::jsonNumber(m.seen_position.x(), 3) << ","
+          << cli::jsonNumber(m.seen_position.y(), 3) << "," << cli::jsonNumber(m.seen_position.z(), 3)
+          << "],\"table\":" << m.seen_table_id;
+      if (m.stand_here) {
+        out << ",\"stand_here\":[" << cli::jsonNumber(m.stand_here->xy.x(), 3) << ","
+            << cli::jsonNumber(m.stand_here->xy.y(), 3) << ","
+            << cli::jsonNumber(m.stand_here->yaw, 3) << "]";
+      }
+    }
+    out << ",\"places\":[";
+    for (std::size_t i = 0; i < m.places.size(); ++i) {
+      const PlaceToLook& p = m.places[i];
+      out << (i ? "," : "") << "{\"table\":" << p.table_id
+          << ",\"x\":" << cli::jsonNumber(p.position.xy.x(), 3)
+          << ",\"y\":" << cli::jsonNumber(p.position.xy.y(), 3)
+          << ",\"yaw\":" << cli::jsonNumber(p.position.yaw, 3)
+          << ",\"seen_before\":" << (p.seen_here_before ? "true" : "false")
+          << ",\"searched\":" << (p.searched ? "true" : "false") << "}";
+    }
+    out << "]}";
+    std::cout << out.str() << std::endl;
+    return;
+  }
+  out << m.summary << "\n";
+  if (m.result == io::FindResult::Seen && m.stand_here) {
+    out << "  stand at ";
+    printPosition(out, *m.stand_here);
+    out << "\n";
+  }
+  for (std::size_t i = 0; i < m.places.size(); ++i) {
+    const PlaceToLook& p = m.places[i];
+    out << "  " << (i + 1) << ". table " << p.table_id << " at ";
+    printPosition(out, p.position);
+    if (p.seen_here_before) out << " (seen here before)";
+    if (p.searched) out << " (searched)";
+    out << "\n";
+  }
+  std::cout << out.str() << std::flush;
+}
+
+// --find NAME: asks findmugd and prints its answers (see the header comment).
+int runFind(io::Bus& bus, const std::string& name, bool json, long count, double timeout_s) {
+  const auto started = std::chrono::steady_clock::now();
+  const std::int64_t request_id =
+      std::chrono::duration_cast<std::chrono::microseconds>(
+          std::chrono::system_clock::now().time_since_epoch())
+          .count() %
+      1000000000;
+  long answers = 0;
+  int code = 1;
+  io::Subscriber<io::FindResultMessage> results(
+      bus, std::string(io::kFindResultChannel),
+      [](const std::uint8_t* d, std::size_t n, const std::string& c) {
+        return io::decodeFindResult(d, n, c);
+      },
+      [&](const io::FindResultMessage& m, const std::string&) {
+        if (m.request_id != request_id) return;  // another client's question
+        printFindResult(m, json);
+        ++answers;
+        const bool refused =
+            m.result == io::FindResult::UnknownName || m.result == io::FindResult::Refused;
+        code = refused ? 4 : 0;
+      },
+      [](const std::string& error) {
+        std::fprintf(stderr, "%s: skipping bad message: %s\n", kProgram, error.c_str());
+      });
+  io::CommandMessage command;
+  command.utime = static_cast<std::uint64_t>(
+      std::chrono::duration_cast<std::chrono::microseconds>(
+          std::chrono::system_clock::now().time_since_epoch())
+          .count());
+  command.request_id = request_id;
+  command.command = "find";
+  command.argument = name;
+  if (!io::publishMessage(bus, std::string(io::kCommandChannel), io::encodeCommand(command))) {
+    std::fprintf(stderr, "%s: could not send the find command on %s\n", kProgram,
+                 std::string(io::kCommandChannel).c_str());
+    return 1;
+  }
+  const long wanted = count > 0 ? count : 1;
+  const int loop = clients::receiveLoop(bus, kProgram, [&] {
+    const double waited =
+        std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count();
+    return answers >= wanted || code == 4 || waited > timeout_s;
+  });
+  if (loop != 0) return loop;
+  if (answers == 0) {
+    std::fprintf(stderr, "%s: no answer to \"find %s\" within %.1f s on %s (is findmugd running "
+                 "with a command input?)\n", kProgram, name.c_str(), timeout_s,
+                 std::string(io::kFindResultChannel).c_str());
+  }
+  return code;
+}
+
 int main(int argc, char** argv) {
   using namespace findmug;
   std::string url, suffix, frame_name = "auto";
   FrameChoice frame = FrameChoice::Auto;
   bool json = false, map = false;
   long count = 0;
+  std::string find;
+  double timeout_s = 10.0;
   auto app = cli::makeApp(kProgram,
                           "Prints the tables' search positions in visiting order from the robot");
   cli::addLcmUrlFlag(*app, url,
@@ -246,6 +367,12 @@ int main(int argc, char** argv) {
       ->capture_default_str();
   app->add_flag("--json", json, "one JSON object per message (JSON lines)");
   app->add_option("--count", count, "exit after N messages")->check(cli::positive());
+  app->add_option("--find", find,
+                  "ask findmugd where the taught object NAME is (command_t find) and print "
+                  "its answer: where it was seen, or the places to look in order");
+  app->add_option("--timeout", timeout_s, "with --find: give up after this many seconds")
+      ->check(CLI::Range(0.1, 3600.0))
+      ->capture_default_str();
   if (auto code = cli::parse(*app, argc, argv)) return *code;
   if (frame_name == "base") frame = FrameChoice::Base;
   if (frame_name == "map") frame = FrameChoice::Map;
@@ -260,6 +387,7 @@ int main(int argc, char** argv) {
   const std::shared_ptr<io::Bus> bus = clients::openBus(url, kProgram, suffix);
   if (!bus) return 1;
   clients::installStopHandlers();
+  if (!find.empty()) return runFind(*bus, find, json, count, timeout_s);
   NavClient client(frame, json);
   // This thread owns the bus: the callbacks run inside receiveLoop.
   io::Subscriber<io::TablesMessage> tables(
