@@ -23,7 +23,7 @@ BUILD_DIR=${BUILD_DIR:-build-fuzz}
 JOBS=${JOBS:-1}
 ALL_TARGETS=(rgbd_frame robot_pose label_image tables objects status model config_yaml config_set png
              pcd pclzf tiff nyu_mat label_csv udpm label_deflate semantic_map semantic_map_file
-             command object_model)
+             command object_model find_result)
 TARGETS=("$@")
 [[ ${#TARGETS[@]} -gt 0 ]] || TARGETS=("${ALL_TARGETS[@]}")
 

@@ -25,6 +25,7 @@
 #include "findmug/frame/dataset.hpp"
 #include "findmug/frame/image_io.hpp"
 #include "findmug/io/lcm_codec.hpp"
+#include "findmug/io/lcm_codec_find.hpp"
 #include "findmug/io/lcm_codec_objects.hpp"
 #include "findmug/io/pcl_frames.hpp"
 #include "findmug/io/semantic_map_codec.hpp"
@@ -211,6 +212,48 @@ void lcmSeeds(SeedWriter& w) {
             decodeObjects);
   }
   w.write("objects", "sample", asString(io::encodeMessage(test::sampleObjects())), decodeObjects);
+
+  // Answers to "find mug": seen with where to stand, and the places to look.
+  auto decodeFind = [](const std::string& b) {
+    (void)io::decodeFindResult(b.data(), b.size(), "seed");
+  };
+  {
+    io::FindResultMessage seen;
+    seen.utime = frame.utime;
+    seen.request_id = 7;
+    seen.name = "mug";
+    seen.result = io::FindResult::Seen;
+    seen.summary = "mug seen at (3.1, 1.0, 0.8) on table 2";
+    seen.seen_object_id = 4;
+    seen.seen_position = Eigen::Vector3d(3.1, 1.0, 0.8);
+    seen.seen_table_id = 2;
+    seen.seen_utime = frame.utime;
+    seen.seen_score = 0.8f;
+    SearchPosition stand;
+    stand.xy = Eigen::Vector2f(3.1f, 1.8f);
+    stand.yaw = -1.57f;
+    seen.stand_here = stand;
+    seen.taught_names = {"book", "mug"};
+    w.write("find_result", "seen", asString(io::encodeMessage(io::encodeFindResult(seen))),
+            decodeFind);
+    io::FindResultMessage look = seen;
+    look.result = io::FindResult::LookAt;
+    look.summary = "mug not seen yet";
+    look.seen_object_id = look.seen_table_id = 0;
+    look.seen_position = Eigen::Vector3d::Zero();
+    look.seen_utime = 0;
+    look.seen_score = 0.0f;
+    look.stand_here.reset();
+    PlaceToLook place;
+    place.table_id = 1;
+    place.position = stand;
+    place.seen_here_before = true;
+    look.places = {place, place};
+    look.places[1].table_id = 3;
+    look.places[1].searched = true;
+    w.write("find_result", "look_at", asString(io::encodeMessage(io::encodeFindResult(look))),
+            decodeFind);
+  }
 
   const auto pose = asString(io::encodeMessage(io::encodeRobotPose(io::RobotPose{frame.utime, {2.0, -1.0, 0.3}})));
   w.write("robot_pose", "pose", pose,

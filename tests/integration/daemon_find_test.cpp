@@ -117,7 +117,7 @@ TEST_F(Fixture, FindListsThePlacesToLookAndPutsASearchedTableLast) {
   // Two tables ahead of the robot at the map origin (pose = identity: base = map).
   mapTables({tableAt(2.0f, 0.0f), tableAt(5.0f, 0.0f)});
   LabelledFrame frame = frameWith({tableAt(2.0f, 0.0f), tableAt(5.0f, 0.0f)}, 1000);
-  FrameResult result{frame};
+  FrameResult result{frame, 0, std::nullopt, {}, std::nullopt};
   asMapped(result, Pose2D{});
   sink->consume(result);
 
@@ -133,7 +133,7 @@ TEST_F(Fixture, FindListsThePlacesToLookAndPutsASearchedTableLast) {
   // The robot stands at table 1's south position, facing it: searched, and
   // the answer changes (table 2 first now) and is published again.
   LabelledFrame there = frameWith({}, 3000);
-  FrameResult at_table{there};
+  FrameResult at_table{there, 0, std::nullopt, {}, std::nullopt};
   at_table.pose = io::RobotPose{3000, Pose2D{2.0, -0.9, M_PI / 2}};
   sink->consume(at_table);
   answers = drain();
