@@ -66,13 +66,13 @@ void asMapped(FrameResult& result, const Pose2D& pose) {
   }
 }
 
-struct Fixture : ::testing::Test {
+struct DaemonFind : ::testing::Test {
   test::TempDir dir;
   std::shared_ptr<io::MemoryBus> bus = std::make_shared<io::MemoryBus>();
   std::vector<std::string> errors;
   std::vector<io::FindResultMessage> received;
 
-  Fixture() {
+  DaemonFind() {
     bus->subscribeTimed(kFindChannel, [this](const std::string& channel, const std::uint8_t* data,
                                              std::size_t size, std::int64_t) {
       received.push_back(io::decodeFindResult(data, size, channel));
@@ -109,7 +109,7 @@ struct Fixture : ::testing::Test {
   }
 };
 
-TEST_F(Fixture, FindListsThePlacesToLookAndPutsASearchedTableLast) {
+TEST_F(DaemonFind, FindListsThePlacesToLookAndPutsASearchedTableLast) {
   saveObjectModel(dir.str("mug.fmo"), test::sampleObjectModel("mug", 1));
   auto sink = makeSink();
   EXPECT_EQ(sink->taughtNames(), std::vector<std::string>{"mug"});
@@ -149,7 +149,7 @@ TEST_F(Fixture, FindListsThePlacesToLookAndPutsASearchedTableLast) {
   EXPECT_EQ(sink->counters().find_answers, 2u);
 }
 
-TEST_F(Fixture, AnUntaughtNameIsAnsweredWithTheTaughtNamesABadNameIsRefused) {
+TEST_F(DaemonFind, AnUntaughtNameIsAnsweredWithTheTaughtNamesABadNameIsRefused) {
   saveObjectModel(dir.str("mug.fmo"), test::sampleObjectModel("mug", 1));
   auto sink = makeSink();
   sink->requestFind(3, "teapot", 10);
@@ -161,7 +161,7 @@ TEST_F(Fixture, AnUntaughtNameIsAnsweredWithTheTaughtNamesABadNameIsRefused) {
   EXPECT_TRUE(drain().empty());
 }
 
-TEST_F(Fixture, WithoutAPoseInputFindIsRefusedWithTheReason) {
+TEST_F(DaemonFind, WithoutAPoseInputFindIsRefusedWithTheReason) {
   auto sink = makeSink(/*map_objects=*/false);
   sink->requestFind(5, "mug", 10);
   const auto answers = drain();
@@ -170,7 +170,7 @@ TEST_F(Fixture, WithoutAPoseInputFindIsRefusedWithTheReason) {
   EXPECT_NE(answers[0].summary.find("daemon.pose_input"), std::string::npos);
 }
 
-TEST_F(Fixture, ACorruptTaughtObjectIsReportedByNameAndTheGoodOnesStay) {
+TEST_F(DaemonFind, ACorruptTaughtObjectIsReportedByNameAndTheGoodOnesStay) {
   saveObjectModel(dir.str("mug.fmo"), test::sampleObjectModel("mug", 1));
   { std::ofstream(dir.str("broken.fmo")) << "FMOBJECT garbage"; }
   auto sink = makeSink();
