@@ -170,9 +170,19 @@ void ObjectSearchSink::requestFind(std::int64_t request_id, const std::string& n
   publish(message);
 }
 
+void ObjectSearchSink::close() {
+  std::lock_guard lock(bus_mutex_);
+  bus_.reset();
+}
+
 void ObjectSearchSink::publish(const io::FindResultMessage& message) {
-  if (!bus_) return;
-  if (!io::publishMessage(*bus_, find_channel_, io::encodeFindResult(message))) {
+  std::shared_ptr<io::Bus> bus;
+  {
+    std::lock_guard lock(bus_mutex_);
+    bus = bus_;
+  }
+  if (!bus) return;
+  if (!io::publishMessage(*bus, find_channel_, io::encodeFindResult(message))) {
     on_error_("publish refused on " + find_channel_ + " (find request " +
               std::to_string(message.request_id) + ")");
     return;

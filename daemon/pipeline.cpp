@@ -373,6 +373,7 @@ void Pipeline::stop(StopMode mode) {
   // The publish thread is gone: the final status is the last message.
   publishStatus();
   // Release the bus: closing an LcmBus flushes a file:// log, leaves a udpm group.
+  object_search_->close();  // before the publisher's: the last to let go of the bus closes it
   publisher_->close();
   const auto c = counters();
   spdlog::info("pipeline stopped: {} received, {} processed, {} dropped, {} rejected", c.received,

@@ -32,7 +32,7 @@ if [[ -z "$runs" || "$runs" -lt 1 ]]; then
   cat "$TMP/summary.txt" >&2
   exit 1
 fi
-header="pass,frame,cloud,normals,ground,oversegmentation,features,regions,forest,mrf,labels,tables,total"
+header="pass,frame,cloud,normals,ground,oversegmentation,features,regions,forest,mrf,labels,tables,objects,total"
 if [[ "$(head -n 1 "$TMP/frames.csv")" != "$header" ]]; then
   echo "FAIL: header is '$(head -n 1 "$TMP/frames.csv")', expected '$header'" >&2
   exit 1
@@ -45,19 +45,19 @@ fi
 # Frames in the data set's order (names ascend), each once, every time >= 0,
 # the stages summing to the total within the rounding of 3 decimals.
 awk -F, 'NR > 1 {
-  if (NF != 13) { printf "FAIL: row %d has %d fields\n", NR, NF; bad = 1; exit }
+  if (NF != 14) { printf "FAIL: row %d has %d fields\n", NR, NF; bad = 1; exit }
   if ($1 != 0) { printf "FAIL: row %d: pass %s, expected 0\n", NR, $1; bad = 1; exit }
   if ($2 == "" || (NR > 2 && $2 <= last)) {
     printf "FAIL: row %d: frame %s after %s\n", NR, $2, last; bad = 1; exit
   }
   last = $2
   sum = 0
-  for (i = 3; i <= 12; ++i) {
+  for (i = 3; i <= 13; ++i) {
     if ($i < 0) { printf "FAIL: row %d: column %d is %s\n", NR, i, $i; bad = 1; exit }
     sum += $i
   }
-  if ($13 <= 0 || sum - $13 > 0.01 || $13 - sum > 0.01) {
-    printf "FAIL: row %d (%s): stages sum to %.3f, total %s\n", NR, $2, sum, $13; bad = 1; exit
+  if ($14 <= 0 || sum - $14 > 0.01 || $14 - sum > 0.01) {
+    printf "FAIL: row %d (%s): stages sum to %.3f, total %s\n", NR, $2, sum, $14; bad = 1; exit
   }
 } END { exit bad }' "$TMP/frames.csv"
 echo "PASS: $rows frames, one row each, stages sum to the totals"

@@ -79,6 +79,10 @@ class ObjectSearchSink final : public ResultSink {
   // not a taught-object name (the command input counts it as refused).
   void requestFind(std::int64_t request_id, const std::string& name, std::uint64_t utime);
 
+  // Lets go of the bus (the pipeline's stop: the last holder closes it, which
+  // flushes a file:// log); later answers are not sent. Thread-safe, idempotent.
+  void close();
+
   Counters counters() const;
   std::vector<MappedObject> mappedObjects() const;  // thread-safe copy
   std::vector<std::string> taughtNames() const;
@@ -92,6 +96,7 @@ class ObjectSearchSink final : public ResultSink {
   void publish(const io::FindResultMessage& message);
 
   ObjectSearchSettings settings_;
+  mutable std::mutex bus_mutex_;  // guards bus_ (publish thread, command thread, stop)
   std::shared_ptr<io::Bus> bus_;
   std::string find_channel_;
   MapTables map_tables_source_;
