@@ -148,6 +148,7 @@ constexpr int kMinCandidatePoints = 30;  // table_objects.min_points' default
 // --stage: candidates from the real stage instead of ground-truth pixels.
 bool g_use_stage = false;
 struct StageCounts {
+  // Over the teaching and the test views.
   int objects = 0;    // scene objects with at least kMinCandidatePoints pixels with depth
   int dropped = 0;    // ... of which no stage candidate is mostly
   int fragments = 0;  // further candidates of an object that has a larger one (left out)
@@ -185,11 +186,10 @@ std::vector<TableObject> stageCandidatesFor(const test::RenderedTable& r,
       findTableObjects(r.cloud_ground, labels, tables.tables, TableObjectConfig{});
   std::vector<TableObject> out(objects.size());
   for (const TableObject& c : d.objects) {
-    const auto at = std::find(objects.begin(), objects.end(), majorityObject(r, c));
-    if (at == objects.end()) {
-      g_stage.mixed++;
-      continue;
-    }
+    const int majority = majorityObject(r, c);
+    g_stage.mixed += majority < 0;
+    const auto at = std::find(objects.begin(), objects.end(), majority);
+    if (at == objects.end()) continue;  // mixed, or an object not asked for
     TableObject& slot = out[static_cast<std::size_t>(at - objects.begin())];
     if (slot.point_count > 0) g_stage.fragments++;
     if (c.point_count > slot.point_count) slot = c;

@@ -28,7 +28,7 @@
 //
 // Cost: the shape gate's ESF is about 32 ms per candidate that reaches it
 // (one core of the development host; the same on 500 points as on 2000: its
-// cost is its 20000 sampled point triples), the roundness cue under 1 ms, the
+// cost is its 20000 sampled point triples), the roundness cue about 1 ms, the
 // other gates microseconds: a caller at frame rate should match off the
 // frame's thread.
 //

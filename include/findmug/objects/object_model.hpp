@@ -96,7 +96,7 @@ ObjectShapeDescriptor objectShapeDescriptor(const std::vector<Eigen::Vector3f>& 
 // noise alone would give), relative to the radius. A cylinder gives about
 // 0.01-0.05 near, a box's L of faces 0.08 or more; a single face (a circle
 // much wider than the points) or too few side points give kNotRound, the
-// largest value. In [0, kNotRound]; deterministic; under a millisecond.
+// largest value. In [0, kNotRound]; deterministic; about a millisecond.
 float objectRoundnessResidual(const std::vector<Eigen::Vector3f>& points);
 
 // Half the L1 distance of two shape descriptors: 0 equal, 1 disjoint.
