@@ -55,7 +55,7 @@ ROOMS = {
                ["tables", "table_regions"]),
     "objects": (["table_objects", "object_model", "object_matcher"],
                 ["table_objects.cpp", "colour_distance.cpp", "object_model.cpp", "object_matcher.cpp",
-                 "shape_descriptor.cpp"],
+                 "shape_descriptor.cpp", "roundness.cpp"],
                 ["table_objects", "object_model", "object_matcher"]),
     "map": (["table_map", "semantic_map", "object_map", "object_search", "visiting_order"],
             ["table_map.cpp", "semantic_map.cpp", "object_map.cpp", "object_search.cpp",

@@ -1,7 +1,7 @@
 // Matching table-top candidates against taught objects (object_matcher.hpp):
-// size, then colour, then shape, cheapest first, so that the ESF descriptor
-// (milliseconds) is computed only for a candidate some model's size and colour
-// let through.
+// size, then colour, then roundness, then ESF shape, cheapest first, so that
+// the ESF descriptor (milliseconds) is computed only for a candidate some
+// model's size, colour and roundness let through.
 #include "findmug/objects/object_matcher.hpp"
 
 #include <algorithm>
@@ -34,7 +34,9 @@ std::string number(float v) {
   return buf;
 }
 
-// How far a candidate got with one model: the gates passed (0..3) and, for
+constexpr int kGates = 4;  // size, colour, roundness, shape
+
+// How far a candidate got with one model: the gates passed (0..kGates) and, for
 // the gate it failed, how far beyond the limit, relative to the limit.
 struct Verdict {
   int gates_passed = 0;
@@ -105,34 +107,52 @@ float nearestShape(const ObjectShapeDescriptor& d, const ObjectModel& model) {
   return best;
 }
 
-// The candidate's shape descriptor, computed on first use; nullopt with the
-// reason when its points make no shape.
+// The least roundness residual of the model's views: the model is round (and
+// the roundness gate applies) when it is at most max_roundness_residual.
+float modelRoundness(const ObjectModel& model) {
+  float best = kNotRound;
+  for (const auto& view : model.views) best = std::min(best, view.roundness);
+  return best;
+}
+
+// The candidate's points, roundness and shape descriptor, each computed on
+// first use (only candidates that pass the cheaper gates pay for them).
 class CandidateShape {
  public:
   CandidateShape(const OrganizedCloud& cloud, const TableObject& candidate)
       : cloud_(cloud), candidate_(candidate) {}
 
-  const ObjectShapeDescriptor* get() {
-    if (!computed_) compute();
+  // nullptr with failure() when there are too few points for a shape.
+  const std::vector<Eigen::Vector3f>* points() {
+    if (!have_points_) collectPoints();
+    return point_count_ < kMinObjectViewPoints ? nullptr : &points_;
+  }
+  float roundness() {
+    if (!roundness_) roundness_ = objectRoundnessResidual(points_);
+    return *roundness_;
+  }
+  // nullptr with failure() when its points make no shape.
+  const ObjectShapeDescriptor* descriptor() {
+    if (!computed_) computeDescriptor();
     return descriptor_ ? &*descriptor_ : nullptr;
   }
   const std::string& failure() const { return failure_; }
-  int pointCount() const { return point_count_; }
 
  private:
-  void compute() {
-    computed_ = true;
-    std::vector<Eigen::Vector3f> points;
+  void collectPoints() {
+    have_points_ = true;
     std::vector<Rgb8> colors;
-    objectPointsOf(cloud_, candidate_.pixels, kMaxObjectViewPoints, points, colors);
-    point_count_ = static_cast<int>(points.size());
+    objectPointsOf(cloud_, candidate_.pixels, kMaxObjectViewPoints, points_, colors);
+    point_count_ = static_cast<int>(points_.size());
     if (point_count_ < kMinObjectViewPoints) {
       failure_ = "too few points: " + std::to_string(point_count_) + " with depth, need " +
                  std::to_string(kMinObjectViewPoints);
-      return;
     }
+  }
+  void computeDescriptor() {
+    computed_ = true;
     try {
-      descriptor_ = objectShapeDescriptor(points);
+      descriptor_ = objectShapeDescriptor(points_);
     } catch (const Error& e) {
       failure_ = std::string("wrong shape: ") + e.what();
     }
@@ -140,11 +160,38 @@ class CandidateShape {
 
   const OrganizedCloud& cloud_;
   const TableObject& candidate_;
+  bool have_points_ = false;
   bool computed_ = false;
   int point_count_ = 0;
+  std::vector<Eigen::Vector3f> points_;
+  std::optional<float> roundness_;
   std::optional<ObjectShapeDescriptor> descriptor_;
   std::string failure_;
 };
+
+Verdict shapeFailure(int gates_passed, const std::string& why) {
+  Verdict v;
+  v.gates_passed = gates_passed;
+  v.excess = std::numeric_limits<float>::infinity();
+  v.rejection = why;
+  return v;
+}
+
+// A round model (a mug) refuses a candidate whose side is no cylinder.
+std::optional<Verdict> roundnessRejection(CandidateShape& shape, const ObjectModel& model,
+                                          const ObjectMatcherConfig& config) {
+  const float taught = modelRoundness(model);
+  if (taught > config.max_roundness_residual) return std::nullopt;
+  const float measured = shape.roundness();
+  if (measured <= config.max_roundness_residual) return std::nullopt;
+  Verdict v;
+  v.gates_passed = 2;
+  v.excess =
+      (measured - config.max_roundness_residual) / std::max(config.max_roundness_residual, 1e-6f);
+  v.rejection = "wrong shape: not round: roundness residual " + number(measured) + " > " +
+                number(config.max_roundness_residual) + " (taught " + number(taught) + ")";
+  return v;
+}
 
 Verdict judge(const TableObject& c, CandidateShape& shape, const ObjectModel& model,
               const ObjectMatcherConfig& config) {
@@ -158,22 +205,19 @@ Verdict judge(const TableObject& c, CandidateShape& shape, const ObjectModel& mo
         "wrong colour: distance " + number(colour) + " > " + number(config.max_colour_distance);
     return v;
   }
-  const ObjectShapeDescriptor* d = shape.get();
-  if (d == nullptr) {
-    v.gates_passed = 2;
-    v.excess = std::numeric_limits<float>::infinity();
-    v.rejection = shape.failure();
-    return v;
-  }
+  if (shape.points() == nullptr) return shapeFailure(2, shape.failure());
+  if (auto refused = roundnessRejection(shape, model, config)) return *refused;
+  const ObjectShapeDescriptor* d = shape.descriptor();
+  if (d == nullptr) return shapeFailure(3, shape.failure());
   const float distance = nearestShape(*d, model);
   if (distance > config.max_shape_distance) {
-    v.gates_passed = 2;
+    v.gates_passed = 3;
     v.excess = (distance - config.max_shape_distance) / std::max(config.max_shape_distance, 1e-6f);
     v.rejection =
         "wrong shape: distance " + number(distance) + " > " + number(config.max_shape_distance);
     return v;
   }
-  v.gates_passed = 3;
+  v.gates_passed = kGates;
   const float colour_part = colour / std::max(config.max_colour_distance, 1e-6f);
   const float shape_part = distance / std::max(config.max_shape_distance, 1e-6f);
   v.score = std::clamp(1.0f - 0.5f * (colour_part + shape_part), 0.0f, 1.0f);
@@ -184,7 +228,7 @@ Verdict judge(const TableObject& c, CandidateShape& shape, const ObjectModel& mo
 // (or, when both matched, a higher score).
 bool nearer(const Verdict& a, const Verdict& b) {
   if (a.gates_passed != b.gates_passed) return a.gates_passed > b.gates_passed;
-  if (a.gates_passed == 3) return a.score > b.score;
+  if (a.gates_passed == kGates) return a.score > b.score;
   return a.excess < b.excess;
 }
 
@@ -215,7 +259,7 @@ ObjectMatch matchCandidate(const OrganizedCloud& cloud, const TableObject& c,
   }
   ObjectMatch match;
   match.name = models[best_model].name;
-  if (best->gates_passed == 3) {
+  if (best->gates_passed == kGates) {
     match.score = best->score;
   } else {
     match.rejection = best->rejection;
@@ -241,6 +285,10 @@ void validateObjectMatcherConfig(const ObjectMatcherConfig& c) {
       c.max_shape_distance > 1.0f) {
     badMatcherSetting("max_shape_distance", c.max_shape_distance, "must be in [0, 1]");
   }
+  if (!std::isfinite(c.max_roundness_residual) || c.max_roundness_residual < 0.0f ||
+      c.max_roundness_residual > kNotRound) {
+    badMatcherSetting("max_roundness_residual", c.max_roundness_residual, "must be in [0, 1]");
+  }
 }
 
 const SettingsTable<ObjectMatcherConfig>& objectMatcherSettings() {
@@ -259,6 +307,11 @@ const SettingsTable<ObjectMatcherConfig>& objectMatcherSettings() {
     t.add(numberSetting<M, float>(
         "object_matcher.max_shape_distance", [](M& m) -> float& { return m.max_shape_distance; }, 0,
         1, "ESF shape descriptors at most this far apart (half the L1 distance)"));
+    t.add(numberSetting<M, float>(
+        "object_matcher.max_roundness_residual",
+        [](M& m) -> float& { return m.max_roundness_residual; }, 0, kNotRound,
+        "a taught object this round (a mug) refuses candidates less round: side points' residual "
+        "off a vertical cylinder, relative to its radius"));
     return t;
   }();
   return table;

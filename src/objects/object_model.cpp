@@ -102,6 +102,10 @@ void checkView(const std::string& what, int v, const ObjectView& view) {
   }
   checkHistogram(what, viewField(v, "colour_histogram"), view.colour_histogram);
   checkHistogram(what, viewField(v, "shape"), view.shape);
+  if (!std::isfinite(view.roundness) || view.roundness < 0.0f || view.roundness > kNotRound) {
+    badField(what, viewField(v, "roundness"), formatValue(view.roundness),
+             "must be a finite number in [0, " + formatValue(kNotRound) + "]");
+  }
   checkPoints(what, v, view);
 }
 
@@ -130,6 +134,7 @@ void writeView(Writer& w, const ObjectView& view) {
   w.put(view.extents.y());
   w.putBytes(view.colour_histogram.data(), sizeof(float) * kObjectColourBins);
   w.putBytes(view.shape.data(), sizeof(float) * kObjectShapeBins);
+  w.put(view.roundness);
   w.put(static_cast<std::uint32_t>(view.points.size()));
   for (std::size_t i = 0; i < view.points.size(); ++i) {
     w.put(view.points[i].x());
@@ -181,7 +186,10 @@ class Reader {
 
 constexpr std::size_t kPointBytes = 3 * sizeof(float) + 3;
 
-void readHeader(Reader& r, const std::string& what) {
+// The version 1 file had no roundness: it is computed from the view's points.
+constexpr std::uint32_t kFirstRoundnessVersion = 2;
+
+std::uint32_t readHeader(Reader& r, const std::string& what) {
   char magic[sizeof(kMagic)];
   r.getBytes(magic, sizeof(magic), "magic");
   if (std::memcmp(magic, kMagic, sizeof(kMagic)) != 0) {
@@ -190,11 +198,12 @@ void readHeader(Reader& r, const std::string& what) {
     badField(what, "magic", "\"" + shown + "\"", "must be \"FMOBJECT\" (not an object model)");
   }
   const auto version = r.get<std::uint32_t>("version");
-  if (version != kObjectModelFormatVersion) {
+  if (version < 1 || version > kObjectModelFormatVersion) {
     badField(what, "version", std::to_string(version),
-             "unknown format version (this program reads " +
+             "unknown format version (this program reads 1 to " +
                  std::to_string(kObjectModelFormatVersion) + ")");
   }
+  return version;
 }
 
 std::string readName(Reader& r, const std::string& what) {
@@ -213,7 +222,20 @@ std::string readName(Reader& r, const std::string& what) {
   return name;
 }
 
-ObjectView readView(Reader& r, const std::string& what, int v) {
+// Version 1 had no roundness, and its shape descriptor was ESF on all (up to
+// 2000) points where version 2's is on kObjectShapePoints of them: both are
+// computed from the stored points, so that old files match as new ones do.
+void upgradeVersion1View(ObjectView& view, const std::string& what, int v) {
+  view.roundness = objectRoundnessResidual(view.points);
+  try {
+    view.shape = objectShapeDescriptor(view.points);
+  } catch (const Error& e) {
+    badField(what, viewField(v, "points"), std::to_string(view.points.size()) + " points",
+             std::string("version 1 view without a shape: ") + e.what());
+  }
+}
+
+ObjectView readView(Reader& r, const std::string& what, int v, std::uint32_t version) {
   ObjectView view;
   view.height_above_top = r.get<float>(viewField(v, "height_above_top"));
   view.extents.x() = r.get<float>(viewField(v, "extents[0]"));
@@ -221,6 +243,7 @@ ObjectView readView(Reader& r, const std::string& what, int v) {
   r.getBytes(view.colour_histogram.data(), sizeof(float) * kObjectColourBins,
              viewField(v, "colour_histogram"));
   r.getBytes(view.shape.data(), sizeof(float) * kObjectShapeBins, viewField(v, "shape"));
+  if (version >= kFirstRoundnessVersion) view.roundness = r.get<float>(viewField(v, "roundness"));
   const auto count = r.get<std::uint32_t>(viewField(v, "point_count"));
   if (count < static_cast<std::uint32_t>(kMinObjectViewPoints) ||
       count > static_cast<std::uint32_t>(kMaxObjectViewPoints)) {
@@ -242,6 +265,7 @@ ObjectView readView(Reader& r, const std::string& what, int v) {
     view.colors[i].g = r.get<std::uint8_t>(field);
     view.colors[i].b = r.get<std::uint8_t>(field);
   }
+  if (version < kFirstRoundnessVersion) upgradeVersion1View(view, what, v);
   return view;
 }
 
@@ -328,6 +352,7 @@ ObjectView makeObjectView(const OrganizedCloud& cloud_ground, const TableObject&
   const Eigen::Vector3f c = centroid.cast<float>();
   for (auto& p : view.points) p -= c;
   view.shape = objectShapeDescriptor(view.points);
+  view.roundness = objectRoundnessResidual(view.points);
   return view;
 }
 
@@ -345,7 +370,7 @@ std::vector<std::uint8_t> encodeObjectModel(const ObjectModel& model) {
 
 ObjectModel decodeObjectModel(const std::uint8_t* data, std::size_t size, const std::string& what) {
   Reader r(data, size, what);
-  readHeader(r, what);
+  const std::uint32_t version = readHeader(r, what);
   ObjectModel model;
   model.name = readName(r, what);
   const auto count = r.get<std::uint32_t>("view_count");
@@ -354,7 +379,7 @@ ObjectModel decodeObjectModel(const std::uint8_t* data, std::size_t size, const 
              "must be in [1, " + std::to_string(kMaxObjectViews) + "]");
   }
   for (std::uint32_t v = 0; v < count; ++v) {
-    model.views.push_back(readView(r, what, static_cast<int>(v)));
+    model.views.push_back(readView(r, what, static_cast<int>(v), version));
     checkView(what, static_cast<int>(v), model.views.back());
   }
   if (r.left() != 0) {

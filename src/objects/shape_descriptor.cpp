@@ -107,19 +107,40 @@ void checkSpansSurface(const std::vector<Eigen::Vector3f>& points) {
   }
 }
 
+// The finite points, each place once, in their first occurrence's order (the
+// pixel order the subsample spreads over). Repeated points only make ESF draw
+// again (a triple needs three places): many copies of one point would keep it
+// drawing for hours.
+std::vector<Eigen::Vector3f> distinctFinitePoints(const std::vector<Eigen::Vector3f>& points) {
+  std::vector<std::size_t> order;
+  order.reserve(points.size());
+  for (std::size_t i = 0; i < points.size(); ++i)
+    if (points[i].allFinite()) order.push_back(i);
+  auto less = [&](std::size_t a, std::size_t b) {
+    return std::lexicographical_compare(points[a].data(), points[a].data() + 3, points[b].data(),
+                                        points[b].data() + 3);
+  };
+  std::stable_sort(order.begin(), order.end(), less);
+  std::vector<char> keep(points.size(), 0);
+  for (std::size_t k = 0; k < order.size(); ++k)
+    keep[order[k]] = k == 0 || points[order[k]] != points[order[k - 1]];
+  std::vector<Eigen::Vector3f> out;
+  for (std::size_t i = 0; i < points.size(); ++i)
+    if (keep[i]) out.push_back(points[i]);
+  return out;
+}
+
 }  // namespace
 
-ObjectShapeDescriptor objectShapeDescriptor(const std::vector<Eigen::Vector3f>& points) {
-  std::vector<Eigen::Vector3f> finite;
-  finite.reserve(points.size());
-  for (const auto& p : points)
-    if (p.allFinite()) finite.push_back(p);
-  // Repeated points only make ESF draw again (a triple needs three places):
-  // many copies of one point would keep it drawing for hours.
-  std::sort(finite.begin(), finite.end(), [](const Eigen::Vector3f& a, const Eigen::Vector3f& b) {
-    return std::lexicographical_compare(a.data(), a.data() + 3, b.data(), b.data() + 3);
-  });
-  finite.erase(std::unique(finite.begin(), finite.end()), finite.end());
+ObjectShapeDescriptor objectShapeDescriptor(const std::vector<Eigen::Vector3f>& points,
+                                            int max_points) {
+  std::vector<Eigen::Vector3f> finite = distinctFinitePoints(points);
+  // Evenly over the (pixel-ordered) points, as objectPointsOf: ESF's cost
+  // grows with the points it voxelises and looks up.
+  const std::size_t n = finite.size();
+  const std::size_t m = std::min(n, static_cast<std::size_t>(std::max(max_points, 1)));
+  for (std::size_t k = 0; k < m; ++k) finite[k] = finite[k * n / m];
+  finite.resize(m);
   if (static_cast<int>(finite.size()) < kMinObjectViewPoints) {
     throw Error("object shape: " + std::to_string(finite.size()) +
                 " distinct finite points, need " + std::to_string(kMinObjectViewPoints));

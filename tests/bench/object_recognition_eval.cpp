@@ -8,7 +8,9 @@
 // taught from 1, 3 or 10 views around the table; unseen test views (other
 // bearings, distances, heights and noise) are rendered twice, with the mug and
 // with it taken away. Candidates are the renderer's per-object pixels (ground
-// truth), so recognition is measured alone. Printed:
+// truth), so recognition is measured alone, or with --stage the real stage's
+// (detectTables and findTableObjects on the true label image), each taken for
+// the object most of its pixels show. Printed:
 //   1. the distances the gates compare (colour, shape, the size tolerance a
 //      candidate needs), per kind of candidate, as percentiles;
 //   2. a sweep of the colour and shape thresholds at each size tolerance:
@@ -17,8 +19,9 @@
 //   3. matchObjects itself with the shipped defaults (or --size/--colour/
 //      --shape): the same figures and why the distractors were refused.
 //
-//   object_recognition_eval [--seeds 30] [--first-seed 1] [--test-views 4]
+//   object_recognition_eval [--seeds 30] [--first-seed 1] [--test-views 4] [--stage]
 //                           [--size 0.25] [--colour 0.20] [--shape 0.25]
+//                           [--roundness 0.10]
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -32,6 +35,8 @@
 
 #include "findmug/objects/object_matcher.hpp"
 #include "findmug/objects/object_model.hpp"
+#include "findmug/objects/table_objects.hpp"
+#include "findmug/tables/tables.hpp"
 #include "object_scenes.hpp"
 
 namespace {
@@ -140,6 +145,74 @@ synth::CameraPose randomPose(Rng& rng, const TableScene& t, double bearing) {
 
 constexpr int kMinCandidatePoints = 30;  // table_objects.min_points' default
 
+// --stage: candidates from the real stage instead of ground-truth pixels.
+bool g_use_stage = false;
+struct StageCounts {
+  // Over the teaching and the test views.
+  int objects = 0;    // scene objects with at least kMinCandidatePoints pixels with depth
+  int dropped = 0;    // ... of which no stage candidate is mostly
+  int fragments = 0;  // further candidates of an object that has a larger one (left out)
+  int mixed = 0;      // candidates no object has half of (left out)
+};
+StageCounts g_stage;
+
+// The scene object index that at least half of `c`'s pixels show, or -1.
+int majorityObject(const test::RenderedTable& r, const TableObject& c) {
+  std::map<int, int> count;
+  for (int p : c.pixels) count[r.frame.object[static_cast<std::size_t>(p)]]++;
+  for (const auto& [object, n] : count)
+    if (2 * n >= static_cast<int>(c.pixels.size())) return object;
+  return -1;
+}
+
+int validPixelsOf(const test::RenderedTable& r, int object) {
+  int n = 0;
+  for (std::size_t i = 0; i < r.frame.object.size(); ++i)
+    n += r.frame.object[i] == object && r.cloud_ground.valid(static_cast<int>(i));
+  return n;
+}
+
+// The real stage on the renderer's true label image: detectTables, then
+// findTableObjects; per object of `objects`, its largest candidate.
+std::vector<TableObject> stageCandidatesFor(const test::RenderedTable& r,
+                                            const std::vector<int>& objects) {
+  LabelImage labels;
+  labels.width = r.cloud_ground.width;
+  labels.height = r.cloud_ground.height;
+  labels.labels = r.frame.labeled.labels;
+  labels.confidence.assign(labels.labels.size(), 1.0f);
+  const TableDetection tables = detectTables(r.cloud_ground, labels, TableConfig{});
+  const TableObjectDetection d =
+      findTableObjects(r.cloud_ground, labels, tables.tables, TableObjectConfig{});
+  std::vector<TableObject> out(objects.size());
+  for (const TableObject& c : d.objects) {
+    const int majority = majorityObject(r, c);
+    g_stage.mixed += majority < 0;
+    const auto at = std::find(objects.begin(), objects.end(), majority);
+    if (at == objects.end()) continue;  // mixed, or an object not asked for
+    TableObject& slot = out[static_cast<std::size_t>(at - objects.begin())];
+    if (slot.point_count > 0) g_stage.fragments++;
+    if (c.point_count > slot.point_count) slot = c;
+  }
+  for (std::size_t o = 0; o < objects.size(); ++o) {
+    if (validPixelsOf(r, objects[o]) < kMinCandidatePoints) continue;
+    g_stage.objects++;
+    g_stage.dropped += out[o].point_count == 0;
+  }
+  return out;
+}
+
+// One candidate per object of `objects` (point_count 0 when it has none),
+// from ground-truth pixels or (--stage) the real stage.
+std::vector<TableObject> candidatesFor(const test::RenderedTable& r,
+                                       const std::vector<int>& objects, float top) {
+  if (g_use_stage) return stageCandidatesFor(r, objects);
+  std::vector<TableObject> out;
+  for (std::size_t o = 0; o < objects.size(); ++o)
+    out.push_back(test::candidateOf(r, objects[o], top, static_cast<int>(o)));
+  return out;
+}
+
 // A candidate of a test view and the numbers the gates compare, per teaching.
 struct Record {
   int kind = 0;
@@ -149,8 +222,36 @@ struct Record {
   // Per teaching (1, 3, 10 views): what the gates compare.
   float size_need[3] = {0, 0, 0};  // smallest relative tolerance that lets it through
   float colour[3] = {1, 1, 1};
-  float shape[3] = {1, 1, 1};
+  float shape[3] = {1, 1, 1};       // ESF on kObjectShapePoints points (as matchObjects)
+  float shape_full[3] = {1, 1, 1};  // ESF on all (up to 2000) points, as before
+  float model_roundness[3] = {kNotRound, kNotRound, kNotRound};
+  float roundness = kNotRound;  // the candidate's objectRoundnessResidual
 };
+
+// Per-candidate cost of the shape cues (milliseconds, summed over candidates).
+struct Costs {
+  double roundness_ms = 0, esf_ms = 0, esf_full_ms = 0;
+  int n = 0;
+};
+Costs g_costs;
+
+double msSince(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+}
+
+// The candidate's ESF on `max_points` of its points, timed into `ms`; false
+// when its points make no shape.
+bool timedShape(const std::vector<Eigen::Vector3f>& points, int max_points,
+                ObjectShapeDescriptor& out, double& ms) {
+  const auto t0 = std::chrono::steady_clock::now();
+  try {
+    out = objectShapeDescriptor(points, max_points);
+  } catch (const Error&) {
+    return false;
+  }
+  ms += msSince(t0);
+  return true;
+}
 
 float sizeNeed(const TableObject& c, const ObjectModel& m, float tolerance_m) {
   const bool truncated = (c.truncation & (kTruncatedBorder | kTruncatedDepthHole)) != 0;
@@ -190,12 +291,13 @@ void evaluateSeed(std::uint64_t seed, int test_views, Run& run,
   for (int i = 0; i < 10; ++i) {
     const auto pose = randomPose(rng, layout.with_target, start + i * 2 * M_PI / 10);
     const auto r = test::renderTable(layout.with_target, pose, seed * 100 + i);
-    const TableObject c = test::candidateOf(r, layout.objects_with[0], top);
+    const TableObject c = candidatesFor(r, {layout.objects_with[0]}, top)[0];
     if (c.point_count < kMinCandidatePoints) continue;
     taught.push_back(makeObjectView(r.cloud_ground, c));
     taught_index.push_back(i);
   }
   std::vector<ObjectModel> models(3);
+  std::vector<std::vector<ObjectShapeDescriptor>> full_shapes(3);  // 2000-point ESF per view
   for (int k = 0; k < 3; ++k) {
     models[k].name = "mug";
     // 1 view: the first; 3: spread around (every third); 10: all.
@@ -204,6 +306,7 @@ void evaluateSeed(std::uint64_t seed, int test_views, Run& run,
          i < taught.size() && static_cast<int>(models[k].views.size()) < kTeachCounts[k];
          i += step) {
       models[k].views.push_back(taught[i]);
+      full_shapes[k].push_back(objectShapeDescriptor(taught[i].points, kMaxObjectViewPoints));
     }
   }
   if (taught.empty()) return;
@@ -218,28 +321,38 @@ void evaluateSeed(std::uint64_t seed, int test_views, Run& run,
       const auto r = test::renderTable(scene, pose, seed * 100 + 50 + v);
       const int view = with ? run.present_views++ : run.absent_views++;
       run.clouds.push_back(r.cloud_ground);
+      const std::vector<TableObject> candidates = candidatesFor(r, objects, top);
       for (std::size_t o = 0; o < objects.size(); ++o) {
         Record rec;
         rec.kind = kinds[o];
         rec.view_has_target = with;
         rec.view = view;
-        rec.candidate = test::candidateOf(r, objects[o], top, static_cast<int>(o));
+        rec.candidate = candidates[o];
         if (rec.candidate.point_count < kMinCandidatePoints) continue;
         std::vector<Eigen::Vector3f> points;
         std::vector<Rgb8> colors;
         objectPointsOf(r.cloud_ground, rec.candidate.pixels, kMaxObjectViewPoints, points, colors);
-        ObjectShapeDescriptor shape{};
-        bool has_shape = true;
-        try {
-          shape = objectShapeDescriptor(points);
-        } catch (const Error&) {
-          has_shape = false;
-        }
+        ObjectShapeDescriptor shape{}, shape_full{};
+        const bool has_shape =
+            timedShape(points, kObjectShapePoints, shape, g_costs.esf_ms) &&
+            timedShape(points, kMaxObjectViewPoints, shape_full, g_costs.esf_full_ms);
+        const auto t0 = std::chrono::steady_clock::now();
+        rec.roundness = objectRoundnessResidual(points);
+        g_costs.roundness_ms += msSince(t0);
+        g_costs.n++;
         for (int k = 0; k < 3; ++k) {
+          rec.model_roundness[k] = kNotRound;
+          for (const auto& tv : models[k].views)
+            rec.model_roundness[k] = std::min(rec.model_roundness[k], tv.roundness);
           rec.size_need[k] =
               sizeNeed(rec.candidate, models[k], ObjectMatcherConfig{}.size_tolerance_m);
           rec.colour[k] = 1.0f;
           rec.shape[k] = 1.0f;
+          rec.shape_full[k] = 1.0f;
+          for (std::size_t t = 0; t < full_shapes[k].size() && has_shape; ++t) {
+            rec.shape_full[k] =
+                std::min(rec.shape_full[k], shapeDescriptorDistance(shape_full, full_shapes[k][t]));
+          }
           for (const auto& tv : models[k].views) {
             rec.colour[k] = std::min(
                 rec.colour[k],
@@ -291,22 +404,27 @@ void printDistances(const Run& run) {
   std::printf("\n## 1. What the gates compare (percentiles 5/50/95 over test candidates)\n\n");
   std::printf(
       "| taught views | candidate | n | size tolerance needed | colour distance | shape distance "
-      "|\n");
-  std::printf("|---|---|---|---|---|---|\n");
+      "(ESF, %d points) | shape distance (ESF, %d points) | roundness residual |\n",
+      kObjectShapePoints, kMaxObjectViewPoints);
+  std::printf("|---|---|---|---|---|---|---|---|\n");
+  auto triple = [](const std::vector<float>& v) {
+    std::printf(" %.2f / %.2f / %.2f |", percentile(v, 0.05), percentile(v, 0.5),
+                percentile(v, 0.95));
+  };
   for (int k = 0; k < 3; ++k) {
     for (int kind = 0; kind < kKindCount; ++kind) {
-      std::vector<float> s, c, h;
+      std::vector<float> s, c, h, hf, rd;
       for (const auto& r : run.records) {
         if (r.kind != kind) continue;
         s.push_back(r.size_need[k]);
         c.push_back(r.colour[k]);
         h.push_back(r.shape[k]);
+        hf.push_back(r.shape_full[k]);
+        rd.push_back(r.roundness);
       }
-      std::printf(
-          "| %d | %s | %zu | %.2f / %.2f / %.2f | %.2f / %.2f / %.2f | %.2f / %.2f / %.2f |\n",
-          kTeachCounts[k], kKinds[kind], s.size(), percentile(s, 0.05), percentile(s, 0.5),
-          percentile(s, 0.95), percentile(c, 0.05), percentile(c, 0.5), percentile(c, 0.95),
-          percentile(h, 0.05), percentile(h, 0.5), percentile(h, 0.95));
+      std::printf("| %d | %s | %zu |", kTeachCounts[k], kKinds[kind], s.size());
+      for (const auto* v : {&s, &c, &h, &hf, &rd}) triple(*v);
+      std::printf("\n");
     }
   }
 }
@@ -339,16 +457,55 @@ void printSweep(const Run& run) {
       }
 }
 
+// The roundness gate's threshold and ESF's point count, the other gates at
+// the shipped defaults (a model that is not round skips the roundness gate).
+void printRoundnessSweep(const Run& run, const ObjectMatcherConfig& config) {
+  const float thresholds[] = {kNotRound, 0.04f, 0.06f, 0.08f, 0.10f, 0.12f, 0.15f, 0.20f};
+  std::printf(
+      "\n## 2b. Roundness threshold sweep (size %.2f, colour %.2f, shape %.2f; P / R / FF as "
+      "above; roundness 1 = gate off)\n\n",
+      config.size_tolerance, config.max_colour_distance, config.max_shape_distance);
+  std::printf(
+      "| roundness | ESF points | 1 view P / R / FF | 3 views P / R / FF | 10 views P / R / FF "
+      "|\n|---|---|---|---|---|\n");
+  for (float rt : thresholds)
+    for (bool full : {false, true}) {
+      std::printf("| %.2f | %d |", rt, full ? kMaxObjectViewPoints : kObjectShapePoints);
+      for (int k = 0; k < 3; ++k) {
+        const Figures f = figuresOf(run, [&](std::size_t, const Record& r) {
+          const bool round = r.model_roundness[k] > rt || r.roundness <= rt;
+          return r.size_need[k] <= config.size_tolerance &&
+                 r.colour[k] <= config.max_colour_distance && round &&
+                 (full ? r.shape_full[k] : r.shape[k]) <= config.max_shape_distance;
+        });
+        std::printf(
+            " %.3f / %.3f / %.3f |", f.precision(), f.recall(),
+            run.absent_views ? static_cast<double>(f.false_found_views) / run.absent_views : 0.0);
+      }
+      std::printf("\n");
+    }
+}
+
+void printCosts() {
+  const double n = std::max(1, g_costs.n);
+  std::printf(
+      "\n## 4. Cost per candidate (ms, mean over %d candidates, one thread)\n\n"
+      "| roundness | ESF, %d points | ESF, %d points |\n|---|---|---|\n| %.3f | %.2f | %.2f |\n",
+      g_costs.n, kObjectShapePoints, kMaxObjectViewPoints, g_costs.roundness_ms / n,
+      g_costs.esf_ms / n, g_costs.esf_full_ms / n);
+}
+
 void printMatcher(const Run& run, const std::vector<std::vector<ObjectModel>>& per_seed_models,
                   const ObjectMatcherConfig& config) {
   std::printf(
       "\n## 3. matchObjects (size_tolerance %.2f + %.3f m, max_colour_distance %.2f, "
-      "max_shape_distance %.2f)\n\n",
+      "max_shape_distance %.2f, max_roundness_residual %.2f)\n\n",
       config.size_tolerance, config.size_tolerance_m, config.max_colour_distance,
-      config.max_shape_distance);
+      config.max_shape_distance, config.max_roundness_residual);
   std::printf(
       "| taught views | precision | recall | false found | targets | distractors | "
-      "distractors refused: too big / too small / wrong colour / wrong shape / other |\n");
+      "distractors refused: too big / too small / wrong colour / not round / wrong shape / other "
+      "|\n");
   std::printf("|---|---|---|---|---|---|---|\n");
   std::vector<std::string> accepted_lines;
   for (int k = 0; k < 3; ++k) {
@@ -379,16 +536,19 @@ void printMatcher(const Run& run, const std::vector<std::vector<ObjectModel>>& p
       ++distractors;
       const std::string& rej = matches[i].rejection;
       std::string key = "other";
-      for (const char* w : {"too big", "too small", "wrong colour", "wrong shape"})
+      // The last that fits: "wrong shape: not round" is also "wrong shape".
+      for (const char* w :
+           {"too big", "too small", "wrong colour", "wrong shape", "wrong shape: not round"})
         if (rej.rfind(w, 0) == 0) key = w;
       if (!rej.empty()) why[key]++;
     }
     std::printf(
-        "| %d | %.3f | %.3f | %.3f (%d of %d) | %d | %d | %d / %d / %d / %d / %d |\n",
+        "| %d | %.3f | %.3f | %.3f (%d of %d) | %d | %d | %d / %d / %d / %d / %d / %d |\n",
         kTeachCounts[k], f.precision(), f.recall(),
         run.absent_views ? static_cast<double>(f.false_found_views) / run.absent_views : 0.0,
         f.false_found_views, run.absent_views, f.tp + f.fn, distractors, why["too big"],
-        why["too small"], why["wrong colour"], why["wrong shape"], why["other"]);
+        why["too small"], why["wrong colour"], why["wrong shape: not round"], why["wrong shape"],
+        why["other"]);
   }
   std::printf("\nDistractors taken for the mug, by kind:\n");
   for (const auto& line : accepted_lines) std::printf("- %s\n", line.c_str());
@@ -406,6 +566,7 @@ int main(int argc, char** argv) {
   const int seeds = static_cast<int>(flagValue(argc, argv, "--seeds", 30));
   const int first = static_cast<int>(flagValue(argc, argv, "--first-seed", 1));
   const int test_views = static_cast<int>(flagValue(argc, argv, "--test-views", 4));
+  for (int i = 1; i < argc; ++i) g_use_stage = g_use_stage || std::strcmp(argv[i], "--stage") == 0;
   ObjectMatcherConfig config;
   config.size_tolerance =
       static_cast<float>(flagValue(argc, argv, "--size", config.size_tolerance));
@@ -413,6 +574,8 @@ int main(int argc, char** argv) {
       static_cast<float>(flagValue(argc, argv, "--colour", config.max_colour_distance));
   config.max_shape_distance =
       static_cast<float>(flagValue(argc, argv, "--shape", config.max_shape_distance));
+  config.max_roundness_residual =
+      static_cast<float>(flagValue(argc, argv, "--roundness", config.max_roundness_residual));
   const auto t0 = std::chrono::steady_clock::now();
   Run run;
   std::vector<std::vector<ObjectModel>> per_seed_models;
@@ -423,8 +586,18 @@ int main(int argc, char** argv) {
       "mug), %zu candidates, %.0f s\n",
       first, first + seeds - 1, test_views, run.records.size(),
       std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count());
+  if (g_use_stage) {
+    std::printf(
+        "\nCandidates: findTableObjects on the true label image (detectTables). Of %d objects "
+        "in view, %d had no candidate; %d smaller fragments and %d mixed candidates left out.\n",
+        g_stage.objects, g_stage.dropped, g_stage.fragments, g_stage.mixed);
+  } else {
+    std::printf("\nCandidates: the renderer's per-object pixels (ground truth).\n");
+  }
   printDistances(run);
   printSweep(run);
+  printRoundnessSweep(run, config);
   printMatcher(run, per_seed_models, config);
+  printCosts();
   return 0;
 }

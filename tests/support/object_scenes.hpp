@@ -7,8 +7,9 @@
 // measured alone, whatever the segmentation gets wrong.
 // tableObjectFromPixels fills a TableObject the way table_objects.hpp
 // describes it (centroid, height above the top, footprint PCA axes and
-// half-lengths, mean colour, the 28-bin colour histogram, the border bit); it
-// stands in for the real stage's code in tests and may be replaced by it.
+// half-lengths, mean colour, the colour histogram by the stage's own
+// objectColourHistogram, the border bit) from ground-truth pixels, for tests
+// that measure recognition without the segmentation's errors.
 #pragma once
 
 #include <Eigen/Eigenvalues>
@@ -25,39 +26,6 @@
 #include "findmug/synth/synth.hpp"
 
 namespace findmug::test {
-
-// The histogram of table_objects.hpp: chromatic pixels (HSV saturation >= 0.2,
-// value >= 0.15) in 12 hue sectors x 2 saturation bands (split at 0.6),
-// the others in 4 bands of value. Normalised to sum 1 (all zero when empty).
-inline ObjectColourHistogram colourHistogramOf(const std::vector<Rgb8>& rgb) {
-  ObjectColourHistogram h{};
-  if (rgb.empty()) return h;
-  for (const Rgb8& c : rgb) {
-    const float r = c.r / 255.0f, g = c.g / 255.0f, b = c.b / 255.0f;
-    const float mx = std::max({r, g, b}), mn = std::min({r, g, b});
-    const float v = mx, s = mx > 0.0f ? (mx - mn) / mx : 0.0f;
-    int bin;
-    if (s >= 0.2f && v >= 0.15f) {
-      float hue;  // degrees
-      const float d = mx - mn;
-      if (mx == r) {
-        hue = 60.0f * std::fmod((g - b) / d, 6.0f);
-      } else if (mx == g) {
-        hue = 60.0f * ((b - r) / d + 2.0f);
-      } else {
-        hue = 60.0f * ((r - g) / d + 4.0f);
-      }
-      if (hue < 0.0f) hue += 360.0f;
-      const int sector = std::min(11, static_cast<int>(hue / 30.0f));
-      bin = sector * 2 + (s >= 0.6f ? 1 : 0);
-    } else {
-      bin = 24 + std::min(3, static_cast<int>(v * 4.0f));
-    }
-    h[bin] += 1.0f;
-  }
-  for (auto& x : h) x /= static_cast<float>(rgb.size());
-  return h;
-}
 
 // A TableObject of `pixels` of an organized ground-frame cloud on a table
 // whose top is at `top_z` (metres above the floor). Pixels without depth are
@@ -105,7 +73,7 @@ inline TableObject tableObjectFromPixels(const OrganizedCloud& cloud,
   Eigen::Vector3f mean_rgb = Eigen::Vector3f::Zero();
   for (const auto& c : rgb) mean_rgb += Eigen::Vector3f(c.r, c.g, c.b);
   o.mean_rgb = mean_rgb / static_cast<float>(rgb.size());
-  o.colour_histogram = colourHistogramOf(rgb);
+  o.colour_histogram = objectColourHistogram(rgb);
   return o;
 }
 
@@ -128,6 +96,7 @@ inline ObjectModel sampleObjectModel(const std::string& name, int views, int poi
       view.colors.push_back(Rgb8{200, 40, static_cast<std::uint8_t>(40 + i % 7)});
     }
     view.shape = objectShapeDescriptor(view.points);
+    view.roundness = objectRoundnessResidual(view.points);
     m.views.push_back(std::move(view));
   }
   return m;

@@ -14,12 +14,14 @@
 // binary file: the magic "FMOBJECT", u32 format version, u32 name length and
 // the name, u32 view count, then per view: f32 height above the top, f32
 // footprint half-lengths (2), f32 colour histogram (28), f32 shape
-// descriptor (640), u32 point count and per point f32 x, y, z and u8 r, g, b.
-// Nothing may follow. Loading checks every field and throws findmug::Error
-// naming the file, the field and the value (bad magic, unknown version,
-// truncation, NaN, counts out of range, a histogram not summing to 1,
-// trailing bytes); a folder of models read by a daemon can then refuse a bad
-// file with its reason and keep the good ones.
+// descriptor (640), f32 roundness (from version 2), u32 point count and per
+// point f32 x, y, z and u8 r, g, b. Nothing may follow. Loading checks every
+// field and throws findmug::Error naming the file, the field and the value
+// (bad magic, unknown version, truncation, NaN, counts out of range, a
+// histogram not summing to 1, trailing bytes); a folder of models read by a
+// daemon can then refuse a bad file with its reason and keep the good ones.
+// A version 1 file loads with each view's roundness and shape descriptor
+// computed from its stored points (version 1's ESF ran on all of them).
 //
 // Core code: no LCM, no threads. PCL stays in the .cpp.
 #pragma once
@@ -48,7 +50,14 @@ inline constexpr int kMaxObjectNameLength = 32;
 inline constexpr int kMaxObjectViewPoints = 2000;
 // Fewer points do not make a shape (ESF samples point triples).
 inline constexpr int kMinObjectViewPoints = 20;
-inline constexpr std::uint32_t kObjectModelFormatVersion = 1;
+// ESF runs on at most this many of a view's or candidate's points
+// (object_recognition_eval: fewer cost less at the same accuracy).
+inline constexpr int kObjectShapePoints = 500;
+// Version 2 added each view's roundness; version 1 files load with it
+// computed from the stored points (objectRoundnessResidual).
+inline constexpr std::uint32_t kObjectModelFormatVersion = 2;
+// The value of objectRoundnessResidual that says "not a vertical cylinder".
+inline constexpr float kNotRound = 1.0f;
 
 struct ObjectView {
   float height_above_top = 0.0f;  // metres, as TableObject::height_above_top
@@ -56,6 +65,8 @@ struct ObjectView {
   Eigen::Vector2f extents = Eigen::Vector2f::Zero();
   ObjectColourHistogram colour_histogram{};
   ObjectShapeDescriptor shape{};
+  // objectRoundnessResidual of `points`: ~0.01-0.05 for a cylinder, more for a box.
+  float roundness = kNotRound;
   // Ground-frame axes (z up), metres, about the view's centroid; same length.
   std::vector<Eigen::Vector3f> points;
   std::vector<Rgb8> colors;
@@ -69,11 +80,24 @@ struct ObjectModel {
 // Throws findmug::Error naming the name when it is not [a-z0-9_-]{1,32}.
 void validateObjectModelName(const std::string& name);
 
-// The ESF descriptor of `points` (any frame; they are centred here),
-// normalised to sum 1. Deterministic: the same points give the same bits.
-// Throws findmug::Error when there are fewer than kMinObjectViewPoints finite
-// points or they do not span a surface (all on one line).
-ObjectShapeDescriptor objectShapeDescriptor(const std::vector<Eigen::Vector3f>& points);
+// The ESF descriptor of `points` (any frame; they are centred here), of at
+// most `max_points` of them taken evenly, normalised to sum 1. Deterministic:
+// the same points give the same bits. Throws findmug::Error when there are
+// fewer than kMinObjectViewPoints finite points or they do not span a
+// surface (all on one line).
+ObjectShapeDescriptor objectShapeDescriptor(const std::vector<Eigen::Vector3f>& points,
+                                            int max_points = kObjectShapePoints);
+
+// How far the side points of `points` (ground-frame axes, z up; below the top
+// fifth of their height and above the lowest tenth) are from a vertical
+// cylinder: a circle fitted to their x, y (RANSAC, then least squares on the
+// points within 12 mm), and the RMS over 15-degree bins around it of each
+// bin's mean distance off the circle (of the bin's middle half, less what its
+// noise alone would give), relative to the radius. A cylinder gives about
+// 0.01-0.05 near, a box's L of faces 0.08 or more; a single face (a circle
+// much wider than the points) or too few side points give kNotRound, the
+// largest value. In [0, kNotRound]; deterministic; about a millisecond.
+float objectRoundnessResidual(const std::vector<Eigen::Vector3f>& points);
 
 // Half the L1 distance of two shape descriptors: 0 equal, 1 disjoint.
 float shapeDescriptorDistance(const ObjectShapeDescriptor& a, const ObjectShapeDescriptor& b);

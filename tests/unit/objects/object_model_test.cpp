@@ -1,7 +1,8 @@
 // Taught object models (object_model.hpp): the file round trip to the bit,
 // every corruption refused with the file and the field named, the ESF shape
-// descriptor deterministic and leaving the C library's rand() alone, and a
-// view made from a rendered candidate.
+// descriptor deterministic and leaving the C library's rand() alone, the
+// roundness cue on cylinders and boxes, version 1 files, and a view made from
+// a rendered candidate.
 #include "findmug/objects/object_model.hpp"
 
 #include <gtest/gtest.h>
@@ -11,9 +12,11 @@
 #include <cstring>
 #include <fstream>
 #include <limits>
+#include <random>
 #include <thread>
 
 #include "expect_error.hpp"
+#include "findmug/objects/object_matcher.hpp"
 #include "object_scenes.hpp"
 #include "test_data.hpp"
 
@@ -33,9 +36,10 @@ constexpr std::size_t kVersionAt = 8;
 constexpr std::size_t kNameLengthAt = 12;
 std::size_t viewCountAt(const ObjectModel& m) { return 16 + m.name.size(); }
 std::size_t viewAt(const ObjectModel& m) { return viewCountAt(m) + 4; }
-std::size_t pointCountAt(const ObjectModel& m) {
+std::size_t roundnessAt(const ObjectModel& m) {
   return viewAt(m) + 4 * (3 + kObjectColourBins + kObjectShapeBins);
 }
+std::size_t pointCountAt(const ObjectModel& m) { return roundnessAt(m) + 4; }
 
 template <typename T>
 void poke(std::vector<std::uint8_t>& bytes, std::size_t at, T value) {
@@ -59,6 +63,7 @@ TEST(ObjectModelFile, RoundTripIsBitExact) {
                           sizeof(a.colour_histogram)),
               0);
     EXPECT_EQ(std::memcmp(a.shape.data(), b.shape.data(), sizeof(a.shape)), 0);
+    EXPECT_EQ(std::memcmp(&a.roundness, &b.roundness, sizeof(float)), 0);
     ASSERT_EQ(a.points.size(), b.points.size());
     for (std::size_t i = 0; i < a.points.size(); ++i) {
       EXPECT_EQ(std::memcmp(a.points[i].data(), b.points[i].data(), 3 * sizeof(float)), 0);
@@ -82,8 +87,10 @@ TEST(ObjectModelFile, TruncationAtEveryOffsetIsRefusedNamingTheField) {
   }
   EXPECT_CONTAINS(decodeError({bytes.begin(), bytes.begin() + 4}), "reading magic");
   EXPECT_CONTAINS(decodeError({bytes.begin(), bytes.begin() + kVersionAt + 2}), "reading version");
-  EXPECT_CONTAINS(decodeError({bytes.begin(), bytes.begin() + pointCountAt(m) - 1}),
+  EXPECT_CONTAINS(decodeError({bytes.begin(), bytes.begin() + roundnessAt(m) - 1}),
                   "reading views[0].shape");
+  EXPECT_CONTAINS(decodeError({bytes.begin(), bytes.begin() + pointCountAt(m) - 1}),
+                  "reading views[0].roundness");
   EXPECT_CONTAINS(decodeError({bytes.begin(), bytes.end() - 1}), "reading views[0].points");
 }
 
@@ -99,8 +106,61 @@ TEST(ObjectModelFile, BadMagicAndUnknownVersionAreRefused) {
   bytes[0] ^= 0x20;
   EXPECT_CONTAINS(decodeError(bytes), "mug.fmo: magic = \"fMOBJECT\"");
   bytes = good;
-  poke<std::uint32_t>(bytes, kVersionAt, 2);
-  EXPECT_CONTAINS(decodeError(bytes), "mug.fmo: version = 2: unknown format version");
+  poke<std::uint32_t>(bytes, kVersionAt, 3);
+  EXPECT_CONTAINS(decodeError(bytes),
+                  "mug.fmo: version = 3: unknown format version (this program reads 1 to 2)");
+  poke<std::uint32_t>(bytes, kVersionAt, 0);
+  EXPECT_CONTAINS(decodeError(bytes), "mug.fmo: version = 0: unknown format version");
+}
+
+// Version 1: the same without each view's roundness, and its ESF descriptor
+// of all the view's points.
+std::vector<std::uint8_t> version1BytesOf(const ObjectModel& m) {
+  auto bytes = bytesOf(m);
+  EXPECT_EQ(m.views.size(), 1u);
+  poke<std::uint32_t>(bytes, kVersionAt, 1);
+  const auto at = bytes.begin() + static_cast<std::ptrdiff_t>(roundnessAt(m));
+  bytes.erase(at, at + 4);
+  return bytes;
+}
+
+TEST(ObjectModelFile, Version1LoadsWithRoundnessAndShapeFromItsPoints) {
+  ObjectModel m = test::sampleObjectModel("mug", 1, 1000);
+  m.views[0].roundness = 0.5f;                     // what the file cannot say: it must be computed
+  m.views[0].shape.fill(1.0f / kObjectShapeBins);  // no ESF gives this: it must be replaced
+  const auto v1 = version1BytesOf(m);
+  const ObjectModel back = decodeObjectModel(v1.data(), v1.size(), "old.fmo");
+  ASSERT_EQ(back.views.size(), 1u);
+  const auto& points = m.views[0].points;
+  EXPECT_EQ(back.views[0].roundness, objectRoundnessResidual(points));
+  EXPECT_LT(back.views[0].roundness, 0.02f);  // the points are on a cylinder
+  const ObjectShapeDescriptor now = objectShapeDescriptor(points);
+  EXPECT_EQ(std::memcmp(back.views[0].shape.data(), now.data(), sizeof(now)), 0);
+  // Written again it is a version 2 file holding the computed values.
+  const auto v2 = bytesOf(back);
+  EXPECT_EQ(v2.size(), v1.size() + 4);
+  EXPECT_EQ(v2[kVersionAt], 2);
+  const ObjectModel again = decodeObjectModel(v2.data(), v2.size(), "new.fmo");
+  EXPECT_EQ(again.views[0].roundness, back.views[0].roundness);
+}
+
+TEST(ObjectModelFile, Version1WithoutAShapeIsRefusedNamingIt) {
+  ObjectModel m = test::sampleObjectModel("mug", 1, 100);
+  for (int i = 0; i < 100; ++i) m.views[0].points[i] = Eigen::Vector3f(0.001f * i, 0.0f, 0.0f);
+  const auto v1 = version1BytesOf(m);
+  EXPECT_CONTAINS(decodeError(v1), "views[0].points = 100 points: version 1 view without a shape");
+}
+
+TEST(ObjectModelFile, RoundnessOutOfRangeIsRefused) {
+  const ObjectModel m = test::sampleObjectModel("mug", 1);
+  auto bytes = bytesOf(m);
+  poke(bytes, roundnessAt(m), std::numeric_limits<float>::quiet_NaN());
+  EXPECT_CONTAINS(decodeError(bytes),
+                  "views[0].roundness = nan: must be a finite number in [0, 1]");
+  poke(bytes, roundnessAt(m), 1.5f);
+  EXPECT_CONTAINS(decodeError(bytes), "views[0].roundness = 1.5");
+  poke(bytes, roundnessAt(m), -0.1f);
+  EXPECT_CONTAINS(decodeError(bytes), "views[0].roundness = -0.1");
 }
 
 TEST(ObjectModelFile, BadNamesAreRefused) {
@@ -225,6 +285,78 @@ TEST(ObjectShape, RefusesTooFewOrCollinearPoints) {
                   "19 distinct finite points, need 20");
 }
 
+// A partial view of a vertical object's side and top as a depth camera at
+// `bearing` (rad, from the object towards the camera) sees it: the surface
+// points facing the camera, 1 cm apart, with Gaussian noise of `sigma` m
+// along the line of sight. Cylinder of radius `r`, or box of half sides `a`,
+// `b` turned by `yaw`.
+std::vector<Eigen::Vector3f> seenSide(bool cylinder, double r_or_a, double b, double yaw,
+                                      double bearing, double sigma, unsigned seed) {
+  std::vector<Eigen::Vector3f> points;
+  std::mt19937 rng(seed);
+  std::normal_distribution<double> noise(0.0, sigma);
+  const Eigen::Vector2d view(std::cos(bearing), std::sin(bearing));
+  const double h = 0.10, step = 0.004;
+  auto add = [&](Eigen::Vector2d xy, double z, const Eigen::Vector2d& normal) {
+    if (normal.dot(view) <= 0.05) return;  // faces away or grazing
+    xy += noise(rng) * view;
+    points.emplace_back(static_cast<float>(xy.x()), static_cast<float>(xy.y()),
+                        static_cast<float>(z));
+  };
+  for (double z = 0.0; z <= h; z += step) {
+    if (cylinder) {
+      for (double t = 0.0; t < 2 * M_PI; t += step / r_or_a) {
+        const Eigen::Vector2d n(std::cos(t), std::sin(t));
+        add(r_or_a * n, z, n);
+      }
+      continue;
+    }
+    const Eigen::Rotation2Dd rot(yaw);
+    const double half[2] = {r_or_a, b};
+    for (int axis = 0; axis < 2; ++axis)
+      for (int sign : {-1, 1}) {
+        const Eigen::Vector2d n =
+            rot * (axis == 0 ? Eigen::Vector2d(sign, 0) : Eigen::Vector2d(0, sign));
+        const Eigen::Vector2d along =
+            rot * (axis == 0 ? Eigen::Vector2d(0, 1) : Eigen::Vector2d(1, 0));
+        const double len = half[1 - axis];
+        for (double u = -len; u <= len; u += step) add(half[axis] * n + u * along, z, n);
+      }
+  }
+  // The top (which the cue leaves out), seen from above.
+  for (double x = -r_or_a; x <= r_or_a; x += step)
+    for (double y = -r_or_a; y <= r_or_a; y += step)
+      if (!cylinder || x * x + y * y <= r_or_a * r_or_a)
+        points.emplace_back(static_cast<float>(x), static_cast<float>(y),
+                            static_cast<float>(h + noise(rng)));
+  return points;
+}
+
+TEST(ObjectRoundness, ACylinderIsRoundABoxIsNot) {
+  unsigned seed = 1;
+  for (double bearing : {0.0, 0.7, 2.0, 4.0}) {
+    for (double sigma : {0.0, 0.003}) {
+      const float cyl = objectRoundnessResidual(seenSide(true, 0.04, 0, 0, bearing, sigma, seed++));
+      EXPECT_LT(cyl, 0.05f) << "cylinder, bearing " << bearing << ", noise " << sigma;
+      EXPECT_LT(cyl, ObjectMatcherConfig{}.max_roundness_residual);
+      // A box of the mug's size: one face (yaw 0 facing bearing 0), or an L of two.
+      for (double yaw : {0.0, 0.3, M_PI / 4}) {
+        const float box = objectRoundnessResidual(
+            seenSide(false, 0.04, 0.04, bearing + yaw, bearing, sigma, seed++));
+        EXPECT_GT(box, 0.08f) << "box, yaw " << yaw << ", bearing " << bearing << ", noise "
+                              << sigma;
+      }
+    }
+  }
+}
+
+TEST(ObjectRoundness, TooFewSidePointsOrAFlatFaceAreNotRound) {
+  EXPECT_EQ(objectRoundnessResidual({}), kNotRound);
+  std::vector<Eigen::Vector3f> face;
+  for (int i = 0; i < 400; ++i) face.emplace_back(0.004f * (i % 20), 0.0f, 0.005f * (i / 20));
+  EXPECT_EQ(objectRoundnessResidual(face), kNotRound);
+}
+
 TEST(ObjectView, MadeFromARenderedCandidate) {
   auto scene = test::makeTableScene();
   const Rgb8 red{200, 40, 40};
@@ -243,6 +375,8 @@ TEST(ObjectView, MadeFromARenderedCandidate) {
   // Red: most pixels in the hue sectors either side of 0 degrees (0 and 11).
   const auto& h = view.colour_histogram;
   EXPECT_GT(h[0] + h[1] + h[22] + h[23], 0.8f);
+  EXPECT_EQ(view.roundness, objectRoundnessResidual(view.points));
+  EXPECT_LT(view.roundness, ObjectMatcherConfig{}.max_roundness_residual) << "a mug is round";
   ObjectModel m{"mug", {view}};
   EXPECT_NO_THROW(validateObjectModel(m, "test"));
   TableObject outside = c;
