@@ -69,7 +69,7 @@ findmugd --source "dataset:/tmp/synth" --lcm-url "file:///tmp/out.lcmlog?mode=w"
   >/tmp/daemon.log 2>&1 || { tail -n 30 /tmp/daemon.log; fail "findmugd over the dataset"; }
 findmug-nav-client --lcm-url "file:///tmp/out.lcmlog?mode=r&speed=0" --json >/tmp/tables.json ||
   fail "findmug-nav-client"
-frames=$(grep -c '"utime"' /tmp/tables.json || true)
+frames=$(grep -c '"tour"' /tmp/tables.json || true)
 echo "tables messages: $frames"
 [[ "$frames" -eq 3 ]] || { head -c 2000 /tmp/tables.json; fail "expected 3 tables messages"; }
 
