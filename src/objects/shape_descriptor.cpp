@@ -45,12 +45,23 @@ POINT_CLOUD_REGISTER_POINT_STRUCT(findmug::detail::EsfPoint,
                                   (float, x, x)(float, y, y)(float, z, z))
 
 namespace findmug::detail {
+// ESF draws three indices a sample and draws again after a degenerate triple;
+// on points that nearly all coincide once scaled to the unit sphere (a far
+// outlier beside a tight clump: found by fuzzing a model file) almost every
+// triple is degenerate and the loop would run for minutes. A sane cloud needs
+// about 70,000 draws for ESF's 20,000 samples; past this many the draws stop.
+inline constexpr std::uint64_t kMaxEsfDraws = 1'000'000;
+struct EsfDrawsExhausted {};
+
 // splitmix64 (Steele, Lea & Flood 2014): one multiply-xorshift chain per draw.
 inline thread_local std::uint64_t esf_random_state = 0;
+inline thread_local std::uint64_t esf_draws = 0;
 inline void esfSeed(unsigned /*ignored: PCL passes the time*/) {
   esf_random_state = 0x853C49E6748FEA9Bull;
+  esf_draws = 0;
 }
 inline int esfRandom() {
+  if (++esf_draws > kMaxEsfDraws) throw EsfDrawsExhausted{};
   std::uint64_t z = (esf_random_state += 0x9E3779B97F4A7C15ull);
   z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
   z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
@@ -157,7 +168,12 @@ ObjectShapeDescriptor objectShapeDescriptor(const std::vector<Eigen::Vector3f>& 
   // once per thread, cleared by ESF itself after each use.
   thread_local DeterministicEsf esf;
   pcl::PointCloud<pcl::ESFSignature640> out;
-  esf.computeOn(cloud, out);
+  try {
+    esf.computeOn(cloud, out);
+  } catch (const detail::EsfDrawsExhausted&) {
+    throw Error("object shape: the points make no shape (nearly every triple of them is "
+                "degenerate, e.g. a clump and a far outlier)");
+  }
   ObjectShapeDescriptor d{};
   double sum = 0.0;
   for (int i = 0; i < kObjectShapeBins; ++i) {
