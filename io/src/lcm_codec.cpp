@@ -11,6 +11,7 @@
 #endif
 
 #include "compression.hpp"
+#include "search_position_codec.hpp"
 #include "findmug/common/error.hpp"
 #include "findmug/frame/image_io.hpp"
 
@@ -547,35 +548,12 @@ LabelImageMessage decodeLabelImage(const void* data, std::size_t size, std::stri
 
 namespace {
 
-findmug_lcm::search_position_t toLcm(const SearchPosition& p) {
-  findmug_lcm::search_position_t out;
-  out.x = p.xy.x();
-  out.y = p.xy.y();
-  out.yaw = p.yaw;
-  out.reachable = p.reachable;
-  out.reason = p.reason;
-  return out;
-}
-
 findmug_lcm::search_position_t toLcmMap(const SearchPosition& p, const RobotPose& pose) {
-  findmug_lcm::search_position_t out = toLcm(p);
+  findmug_lcm::search_position_t out = detail::searchPositionToLcm(p);
   const Eigen::Vector2d m = transformPointD(pose.pose, p.xy.cast<double>());
   out.x = m.x();
   out.y = m.y();
   out.yaw = wrapAngle(p.yaw + pose.pose.yaw);
-  return out;
-}
-
-SearchPosition fromLcm(const findmug_lcm::search_position_t& p, const std::string& where) {
-  if (!finite(p.x) || !finite(p.y) || !finite(p.yaw)) {
-    throw Error(where + ": non-finite search position (" + std::to_string(p.x) + ", " +
-                std::to_string(p.y) + ", yaw " + std::to_string(p.yaw) + ")");
-  }
-  SearchPosition out;
-  out.xy = Eigen::Vector2f(static_cast<float>(p.x), static_cast<float>(p.y));
-  out.yaw = static_cast<float>(p.yaw);
-  out.reachable = p.reachable;
-  out.reason = p.reason;
   return out;
 }
 
@@ -641,7 +619,7 @@ findmug_lcm::tables_t encodeTables(std::uint64_t utime, std::int64_t seq, Tables
     out.point_count = t.point_count;
     out.mean_confidence = t.mean_confidence;
     out.num_search_positions = static_cast<std::int32_t>(t.search_positions.size());
-    for (const auto& p : t.search_positions) out.search_positions.push_back(toLcm(p));
+    for (const auto& p : t.search_positions) out.search_positions.push_back(detail::searchPositionToLcm(p));
     if (map_pose) {
       const Eigen::Vector2d c =
           transformPointD(map_pose->pose, t.centroid.head<2>().cast<double>());
@@ -663,7 +641,7 @@ findmug_lcm::tables_t encodeTables(std::uint64_t utime, std::int64_t seq, Tables
       for (int i = 0; i < 3; ++i) out.map_centroid[i] = 0.0;
       out.map_center[0] = out.map_center[1] = 0.0;
       out.map_hull.assign(t.hull.size(), std::vector<double>(2, 0.0));
-      out.map_search_positions.assign(t.search_positions.size(), toLcm(SearchPosition{}));
+      out.map_search_positions.assign(t.search_positions.size(), detail::searchPositionToLcm(SearchPosition{}));
     }
     msg.tables.push_back(std::move(out));
   }
@@ -765,7 +743,7 @@ TablesMessage decodeTables(const findmug_lcm::tables_t& msg, std::string_view ch
     c.point_count = t.point_count;
     c.mean_confidence = t.mean_confidence;
     for (const auto& p : t.search_positions) {
-      c.search_positions.push_back(fromLcm(p, where + ".search_positions"));
+      c.search_positions.push_back(detail::searchPositionFromLcm(p, where + ".search_positions"));
     }
     if (msg.has_map_pose) {
       MapFrameTable m;
@@ -779,7 +757,7 @@ TablesMessage decodeTables(const findmug_lcm::tables_t& msg, std::string_view ch
         m.hull.emplace_back(p[0], p[1]);
       }
       for (const auto& p : t.map_search_positions) {
-        m.search_positions.push_back(fromLcm(p, where + ".map_search_positions"));
+        m.search_positions.push_back(detail::searchPositionFromLcm(p, where + ".map_search_positions"));
       }
       out.map_tables.push_back(std::move(m));
     }

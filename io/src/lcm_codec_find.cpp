@@ -8,6 +8,7 @@
 #include "findmug/common/error.hpp"
 #include "findmug/io/lcm_codec.hpp"
 #include "findmug/objects/object_model.hpp"
+#include "search_position_codec.hpp"
 
 namespace findmug::io {
 namespace {
@@ -16,30 +17,6 @@ constexpr std::string_view kType = "find_result_t";
 
 std::string where(std::string_view channel, const std::string& field) {
   return std::string(channel) + ": " + std::string(kType) + "." + field;
-}
-
-findmug_lcm::search_position_t positionToLcm(const SearchPosition& p) {
-  findmug_lcm::search_position_t out;
-  out.x = p.xy.x();
-  out.y = p.xy.y();
-  out.yaw = p.yaw;
-  out.reachable = p.reachable;
-  out.reason = p.reason;
-  return out;
-}
-
-SearchPosition positionFromLcm(const findmug_lcm::search_position_t& p, const std::string& at) {
-  if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.yaw) ||
-      std::abs(p.x) > 1e6 || std::abs(p.y) > 1e6) {
-    throw Error(at + ": position (" + std::to_string(p.x) + ", " + std::to_string(p.y) +
-                ", yaw " + std::to_string(p.yaw) + ") is not a finite place on a map");
-  }
-  SearchPosition out;
-  out.xy = Eigen::Vector2f(static_cast<float>(p.x), static_cast<float>(p.y));
-  out.yaw = static_cast<float>(p.yaw);
-  out.reachable = p.reachable;
-  out.reason = p.reason;
-  return out;
 }
 
 // A name as taught objects have them (validateObjectModelName); "" allowed where `optional`.
@@ -87,7 +64,7 @@ void decodeSeen(const findmug_lcm::find_result_t& m, std::string_view channel,
   out.seen_table_id = m.seen_table_id;
   out.seen_utime = static_cast<std::uint64_t>(m.seen_utime);
   out.seen_score = m.seen_score;
-  if (m.has_stand_here) out.stand_here = positionFromLcm(m.stand_here, where(channel, "stand_here"));
+  if (m.has_stand_here) out.stand_here = detail::searchPositionFromLcm(m.stand_here, where(channel, "stand_here"));
 }
 
 void decodePlaces(const findmug_lcm::find_result_t& m, std::string_view channel,
@@ -104,7 +81,7 @@ void decodePlaces(const findmug_lcm::find_result_t& m, std::string_view channel,
   for (std::int32_t i = 0; i < m.num_places; ++i) {
     const std::string at = "places[" + std::to_string(i) + "]";
     PlaceToLook place;
-    place.position = positionFromLcm(m.places[i], where(channel, at));
+    place.position = detail::searchPositionFromLcm(m.places[i], where(channel, at));
     if (!place.position.reachable) {
       throw Error(where(channel, at) + ": an unreachable place among the places to look");
     }
@@ -177,10 +154,10 @@ findmug_lcm::find_result_t encodeFindResult(const FindResultMessage& in) {
   m.seen_utime = static_cast<std::int64_t>(in.seen_utime);
   m.seen_score = in.seen_score;
   m.has_stand_here = in.stand_here.has_value();
-  m.stand_here = positionToLcm(in.stand_here.value_or(SearchPosition{}));
+  m.stand_here = detail::searchPositionToLcm(in.stand_here.value_or(SearchPosition{}));
   m.num_places = static_cast<std::int32_t>(in.places.size());
   for (const PlaceToLook& p : in.places) {
-    m.places.push_back(positionToLcm(p.position));
+    m.places.push_back(detail::searchPositionToLcm(p.position));
     m.place_table_ids.push_back(p.table_id);
     m.place_seen_before.push_back(p.seen_here_before);
     m.place_searched.push_back(p.searched);
