@@ -104,6 +104,10 @@ nlohmann::json objectsJson(const io::ObjectsMessage& message) {
                        {"point_count", o.point_count},
                        {"mean_rgb", {o.mean_rgb.x(), o.mean_rgb.y(), o.mean_rgb.z()}},
                        {"truncation", o.truncation}});
+    if (message.map_pose && k < message.map_info.size()) {
+      const Eigen::Vector3d& m = message.map_info[k].map_centroid;
+      objects.back()["map_centroid"] = {m.x(), m.y(), m.z()};
+    }
   }
   return {{"seq", message.seq}, {"utime", message.utime}, {"objects", std::move(objects)}};
 }

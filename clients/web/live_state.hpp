@@ -103,7 +103,8 @@ nlohmann::json tablesJson(const io::TablesMessage& message);
 
 // JSON of a frame's object candidates: per candidate its index in the message (what a
 // teach command names), table, centroid, footprint box, height above the top, point
-// count, mean colour and truncation bits (base frame).
+// count, mean colour and truncation bits (base frame); with the robot's map pose also the
+// centroid in the map frame (what a find answer's position is in).
 nlohmann::json objectsJson(const io::ObjectsMessage& message);
 
 // JSON of a find answer: its request id, name, result ("seen", "look_at", "unknown_name",
