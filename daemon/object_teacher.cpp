@@ -73,7 +73,7 @@ std::string ObjectTeacher::teach(std::int64_t request_id, const std::string& arg
       if (f.seq == request.seq) frame = &f;
     }
     if (!frame) {
-      why = "frame seq " + std::to_string(request.seq) + " is no longer held (the last " +
+      why = "frame seq " + std::to_string(request.seq) + " is not held (the last " +
             std::to_string(frames_kept_) + " frames are kept; " +
             (frames_.empty() ? std::string("none held yet")
                              : "holding seqs " + std::to_string(frames_.front().seq) + ".." +

@@ -207,7 +207,7 @@ TEST(DaemonTeach, RefusalsSayWhyAndAreCounted) {
     std::string argument, expected;
   };
   const std::vector<Case> cases = {
-      {"mug 999999 0", "frame seq 999999 is no longer held"},
+      {"mug 999999 0", "frame seq 999999 is not held"},
       {"mug " + std::to_string(seq) + " 9999", "no index 9999"},
   };
   std::int64_t id = 20;
@@ -254,7 +254,7 @@ TEST(ObjectTeacher, HoldsTheLastFramesOnlyAndRefusesAFullModelAndNoFolder) {
   }
   EXPECT_EQ(teacher.heldSeqs(), (std::vector<std::int64_t>{3, 4, 5}));
   EXPECT_THROW(teacher.teach(1, "cup 1 0"), Error);
-  EXPECT_NE(teacher.status().last_result.find("no longer held"), std::string::npos);
+  EXPECT_NE(teacher.status().last_result.find("is not held"), std::string::npos);
   EXPECT_THROW(teacher.teach(2, "Cup! 5 0"), Error);
   EXPECT_NE(teacher.status().last_result.find("teach NAME"), std::string::npos)
       << teacher.status().last_result;

@@ -2,7 +2,7 @@
 # web_teach_test.sh — "teach my mug" on findmug-web's live page and find it, in headless
 # chromium, over a running findmugd on the demo's synthetic apartment.
 #
-#   web_teach_test.sh --findmugd B --web B --synth B --replay B [--out DIR]
+#   web_teach_test.sh --findmugd B --web B --synth B --replay B --nav B [--out DIR]
 #
 # In a private network namespace (only loopback; udpm multicast routed on it):
 # findmug-synth renders the demo's apartment (scripts/demo.sh: seed 7, here 60 frames at
@@ -12,13 +12,15 @@
 # the same bus; findmug-web serves 127.0.0.1:PORT. clients/web/test/teach_test.mjs
 # (puppeteer-core driving /usr/bin/chromium) waits for the mug among the drawn candidates,
 # names it "mug" and clicks it, waits for "taught mug (1 view)", asks find "mug" and waits
-# for "seen ... on table"; saves OUT/teach.png. Then checks the model file findmugd wrote.
+# for "seen ... on table"; saves OUT/teach.png. Then checks the model file findmugd wrote,
+# and findmug-nav-client's --find (answered: mug seen) and --teach (a frame not held:
+# refused, saying so) on the same bus.
 #
 # Exit: 0 pass, 1 fail, 77 skipped (chromium, node or puppeteer-core missing; under
 # CI=true those fail instead).
 set -euo pipefail
 
-FINDMUGD="" WEB="" SYNTH="" REPLAY="" OUT=""
+FINDMUGD="" WEB="" SYNTH="" REPLAY="" NAV="" OUT=""
 SOURCE_DIR="$(cd "$(dirname "$0")/../.." && pwd)"
 ARGS=("$@")
 while [[ $# -gt 0 ]]; do
@@ -27,13 +29,14 @@ while [[ $# -gt 0 ]]; do
     --web) WEB=$2; shift 2 ;;
     --synth) SYNTH=$2; shift 2 ;;
     --replay) REPLAY=$2; shift 2 ;;
+    --nav) NAV=$2; shift 2 ;;
     --out) OUT=$2; shift 2 ;;
     -h|--help) sed -n '2,19p' "$0"; exit 0 ;;
     *) echo "web_teach_test: unknown argument '$1'" >&2; exit 2 ;;
   esac
 done
-for tool in "$FINDMUGD" "$WEB" "$SYNTH" "$REPLAY"; do
-  [[ -x "$tool" ]] || { echo "web_teach_test: --findmugd, --web, --synth and --replay must name executables" >&2; exit 2; }
+for tool in "$FINDMUGD" "$WEB" "$SYNTH" "$REPLAY" "$NAV"; do
+  [[ -x "$tool" ]] || { echo "web_teach_test: --findmugd, --web, --synth, --replay and --nav must name executables" >&2; exit 2; }
 done
 
 SKIP_NAME="web_teach_test"
@@ -75,5 +78,14 @@ echo "web_teach_test: $result"
 # What the click made: the daemon's model file, one view, named mug.
 [[ -s "$WORK/objects/mug.fmo" ]] || fail "no $WORK/objects/mug.fmo"
 grep -q "taught object loaded: .*mug.fmo" "$WORK/findmugd.log" || fail "findmugd never loaded mug.fmo"
+# The navigation client's side of the same loop.
+found=$("$NAV" --lcm-url "$URL" --find mug --timeout 20) || fail "findmug-nav-client --find mug: $found"
+[[ "$found" == *"mug seen at"* ]] || fail "findmug-nav-client --find mug: $found"
+echo "web_teach_test: findmug-nav-client --find mug: $(head -n1 <<< "$found")"
+rc=0
+refused=$("$NAV" --lcm-url "$URL" --teach mug 999999999 0 --timeout 20) || rc=$?
+[[ $rc -eq 4 && "$refused" == *"frame seq 999999999 is not held"* ]] ||
+  fail "findmug-nav-client --teach mug 999999999 0: exit $rc, '$refused'"
+echo "web_teach_test: findmug-nav-client --teach mug 999999999 0: $refused"
 echo "web_teach_test: screenshot $OUT/teach.png"
 echo "web_teach_test: passed"
