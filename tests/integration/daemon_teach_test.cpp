@@ -277,6 +277,16 @@ TEST(ObjectTeacher, HoldsTheLastFramesOnlyAndRefusesAFullModelAndNoFolder) {
   EXPECT_THROW(teacher.teach(31, "other 6 0"), Error);
   EXPECT_NE(teacher.status().last_result.find("image border"), std::string::npos);
 
+  // A folder that cannot be written (here: none there): refused, saying where.
+  ObjectTeacher unwritable(dir.str("missing"), 3);
+  frame.table_objects.objects[0].truncation = 0;
+  FrameResult again{frame, 0, std::nullopt, {}, std::nullopt};
+  unwritable.consume(again);
+  EXPECT_THROW(unwritable.teach(40, "cup 6 0"), Error);
+  EXPECT_NE(unwritable.status().last_result.find("cannot open"), std::string::npos)
+      << unwritable.status().last_result;
+  EXPECT_EQ(unwritable.status().refused, 1u);
+
   ObjectTeacher nowhere("", 3);
   EXPECT_THROW(nowhere.teach(1, "cup 1 0"), Error);
   EXPECT_NE(nowhere.status().last_result.find("daemon.objects_dir"), std::string::npos);
