@@ -22,6 +22,13 @@
 // for N answers: the daemon answers again when the places change (a table
 // searched, the object seen).
 //
+// With --teach NAME SEQ INDEX it sends command_t "teach NAME SEQ INDEX": object
+// INDEX of the objects message of frame SEQ (as printed above: "objects seq SEQ",
+// "object INDEX") becomes one more view of the taught object NAME in findmugd's
+// daemon.objects_dir; it prints the daemon's answer from status_t
+// (last_teach_result) and exits (0: taught; 4: refused, with why; 1: no answer
+// within --timeout).
+//
 // Exits cleanly on SIGINT/SIGTERM, after --count messages, or at the end of
 // a replayed log (--lcm-url file://LOG?speed=0). Bad messages are reported on
 // stderr and skipped.
@@ -343,6 +350,48 @@ int runFind(io::Bus& bus, const std::string& name, bool json, long count, double
   return code;
 }
 
+// --teach NAME SEQ INDEX: asks findmugd to teach and prints its answer (see the header comment).
+int runTeach(io::Bus& bus, const io::TeachRequest& teach, double timeout_s) {
+  const auto started = std::chrono::steady_clock::now();
+  const auto now_us = std::chrono::duration_cast<std::chrono::microseconds>(
+                          std::chrono::system_clock::now().time_since_epoch())
+                          .count();
+  const std::int64_t request_id = now_us % 1000000000;
+  int code = 1;
+  io::Subscriber<findmug_lcm::status_t> status(
+      bus, std::string(io::kStatusChannel),
+      [](const std::uint8_t* d, std::size_t n, const std::string& c) {
+        return io::decodeMessage<findmug_lcm::status_t>(d, n, c);
+      },
+      [&](const findmug_lcm::status_t& s, const std::string&) {
+        if (s.last_teach_request_id != request_id || code != 1) return;
+        std::printf("%s\n", s.last_teach_result.c_str());
+        code = s.last_teach_ok ? 0 : 4;
+      },
+      [](const std::string& error) {
+        std::fprintf(stderr, "%s: skipping bad message: %s\n", kProgram, error.c_str());
+      });
+  const io::CommandMessage command{static_cast<std::uint64_t>(now_us), request_id, "teach",
+                                   io::teachArgument(teach)};
+  if (!io::publishMessage(bus, std::string(io::kCommandChannel), io::encodeCommand(command))) {
+    std::fprintf(stderr, "%s: could not send the teach command on %s\n", kProgram,
+                 std::string(io::kCommandChannel).c_str());
+    return 1;
+  }
+  const int loop = clients::receiveLoop(bus, kProgram, [&] {
+    return code != 1 ||
+           std::chrono::duration<double>(std::chrono::steady_clock::now() - started).count() >
+               timeout_s;
+  });
+  if (loop != 0) return loop;
+  if (code == 1) {
+    std::fprintf(stderr, "%s: no answer to \"teach %s\" within %.1f s on %s (is findmugd running "
+                 "with a command input?)\n", kProgram, command.argument.c_str(), timeout_s,
+                 std::string(io::kStatusChannel).c_str());
+  }
+  return code;
+}
+
 int main(int argc, char** argv) {
   using namespace findmug;
   std::string url, suffix, frame_name = "auto";
@@ -350,6 +399,7 @@ int main(int argc, char** argv) {
   bool json = false, map = false;
   long count = 0;
   std::string find;
+  std::vector<std::string> teach_words;
   double timeout_s = 10.0;
   auto app = cli::makeApp(kProgram,
                           "Prints the tables' search positions in visiting order from the robot");
@@ -370,10 +420,27 @@ int main(int argc, char** argv) {
   app->add_option("--find", find,
                   "ask findmugd where the taught object NAME is (command_t find) and print "
                   "its answer: where it was seen, or the places to look in order");
-  app->add_option("--timeout", timeout_s, "with --find: give up after this many seconds")
+  app->add_option("--teach", teach_words,
+                  "teach findmugd object INDEX of the objects message of frame SEQ as the "
+                  "object NAME (command_t teach) and print its answer")
+      ->type_name("NAME SEQ INDEX")
+      ->expected(3)
+      ->excludes("--find");
+  app->add_option("--timeout", timeout_s,
+                  "with --find or --teach: give up after this many seconds")
       ->check(CLI::Range(0.1, 3600.0))
       ->capture_default_str();
   if (auto code = cli::parse(*app, argc, argv)) return *code;
+  std::optional<io::TeachRequest> teach;
+  if (!teach_words.empty()) {
+    try {
+      teach = io::parseTeachArgument(teach_words[0] + " " + teach_words[1] + " " + teach_words[2],
+                                     "--teach");
+    } catch (const std::exception& e) {
+      std::fprintf(stderr, "%s: %s (see --help)\n", kProgram, e.what());
+      return 2;
+    }
+  }
   if (frame_name == "base") frame = FrameChoice::Base;
   if (frame_name == "map") frame = FrameChoice::Map;
   const std::string channel(map ? io::kTableMapChannel : io::kTablesChannel);
@@ -388,6 +455,7 @@ int main(int argc, char** argv) {
   if (!bus) return 1;
   clients::installStopHandlers();
   if (!find.empty()) return runFind(*bus, find, json, count, timeout_s);
+  if (teach) return runTeach(*bus, *teach, timeout_s);
   NavClient client(frame, json);
   // This thread owns the bus: the callbacks run inside receiveLoop.
   io::Subscriber<io::TablesMessage> tables(

@@ -126,6 +126,10 @@ Pipeline::Pipeline(const SegmenterConfig& segmenter_config, const DaemonConfig& 
   if (daemon_config_.publish_color) publisher_->publishColor(daemon_config_.color_jpeg_quality);
   publish_step_.addSink(table_map_sink_);
   if (semantic_map_) publish_step_.addSink(semantic_map_);  // may set the published labels
+  // Before the publisher: a client that saw a frame's objects_t may name one of its
+  // candidates at once, so the teacher holds them before they go out.
+  object_teacher_ = std::make_shared<ObjectTeacher>(daemon_config_.objects_dir);
+  publish_step_.addSink(object_teacher_);
   publish_step_.addSink(publisher_);
   publish_step_.addSink(object_search_);  // after the table map and the frame's messages
   if (!daemon_config_.collect_dir.empty()) {
@@ -235,6 +239,9 @@ Pipeline::Pipeline(const SegmenterConfig& segmenter_config, const DaemonConfig& 
     });
     handlers.emplace("find", [this](const io::CommandMessage& c) {
       object_search_->requestFind(c.request_id, c.argument, c.utime);
+    });
+    handlers.emplace("teach", [this](const io::CommandMessage& c) {
+      object_teacher_->teach(c.request_id, c.argument);
     });
     auto on_command_error = [this](const std::string& what) { recordError(what); };
     std::shared_ptr<io::Bus> command_bus = hooks_.command_bus;
@@ -481,6 +488,7 @@ StatusSnapshot Pipeline::statusSnapshot() const {
     s.frames_collect_refused = c.refused;
     s.last_collected_frame = c.last_saved;
   }
+  s.teach = object_teacher_->status();
   if (command_input_) {
     s.commands_accepted = command_input_->accepted();
     s.commands_rejected = command_input_->rejected();

@@ -52,6 +52,11 @@ findmug_lcm::status_t StatusBuilder::build(const StatusSnapshot& in) {
   s.frames_collected = static_cast<std::int64_t>(in.frames_collected);
   s.frames_collect_refused = static_cast<std::int64_t>(in.frames_collect_refused);
   s.last_collected_frame = in.last_collected_frame;
+  s.objects_taught = static_cast<std::int64_t>(in.teach.taught);
+  s.teach_refused = static_cast<std::int64_t>(in.teach.refused);
+  s.last_teach_ok = in.teach.last_ok;
+  s.last_teach_result = in.teach.last_result;
+  s.last_teach_request_id = in.teach.last_request_id;
 
   std::string last_error = in.last_error;
   std::uint64_t last_error_utime = in.last_error_utime;

@@ -12,6 +12,7 @@
 
 #include "findmug/common/error.hpp"
 #include "findmug/io/lcm_codec.hpp"
+#include "findmug/objects/object_model.hpp"
 #include "web_http.hpp"
 
 namespace findmug::web {
@@ -34,7 +35,24 @@ std::string checkArgument(const std::string& command, const std::string& argumen
                ? ""
                : "the save_frame note may not hold a comma or a quote";
   }
-  return "command must be save_frame or reload_model, not '" + command.substr(0, 40) + "'";
+  if (command == "teach") {
+    try {
+      (void)io::parseTeachArgument(argument, "argument");
+      return "";
+    } catch (const Error& e) {
+      return e.what();
+    }
+  }
+  if (command == "find") {
+    try {
+      validateObjectModelName(argument);
+      return "";
+    } catch (const Error& e) {
+      return std::string("find: ") + e.what();
+    }
+  }
+  return "command must be save_frame, reload_model, teach or find, not '" +
+         command.substr(0, 40) + "'";
 }
 
 }  // namespace

@@ -90,6 +90,66 @@ nlohmann::json tablesJson(const io::TablesMessage& message) {
   return out;
 }
 
+nlohmann::json objectsJson(const io::ObjectsMessage& message) {
+  nlohmann::json objects = nlohmann::json::array();
+  for (std::size_t k = 0; k < message.objects.size(); ++k) {
+    const TableObject& o = message.objects[k];
+    objects.push_back({{"index", k},
+                       {"table", o.table},
+                       {"centroid", {o.centroid.x(), o.centroid.y(), o.centroid.z()}},
+                       {"center", {o.center.x(), o.center.y()}},
+                       {"major_axis", {o.major_axis.x(), o.major_axis.y()}},
+                       {"extents", {o.extents.x(), o.extents.y()}},
+                       {"height_above_top", o.height_above_top},
+                       {"point_count", o.point_count},
+                       {"mean_rgb", {o.mean_rgb.x(), o.mean_rgb.y(), o.mean_rgb.z()}},
+                       {"truncation", o.truncation}});
+    if (message.map_pose && k < message.map_info.size()) {
+      const Eigen::Vector3d& m = message.map_info[k].map_centroid;
+      objects.back()["map_centroid"] = {m.x(), m.y(), m.z()};
+    }
+  }
+  return {{"seq", message.seq}, {"utime", message.utime}, {"objects", std::move(objects)}};
+}
+
+nlohmann::json findResultJson(const io::FindResultMessage& m) {
+  static constexpr const char* kResults[] = {"seen", "look_at", "unknown_name", "refused"};
+  const auto r = static_cast<std::size_t>(m.result);
+  nlohmann::json places = nlohmann::json::array();
+  for (const PlaceToLook& p : m.places) {
+    places.push_back({{"table_id", p.table_id},
+                      {"x", p.position.xy.x()},
+                      {"y", p.position.xy.y()},
+                      {"searched", p.searched},
+                      {"seen_here_before", p.seen_here_before}});
+  }
+  nlohmann::json out = {{"request_id", m.request_id},
+                        {"utime", m.utime},
+                        {"name", m.name},
+                        {"result", r < std::size(kResults) ? kResults[r] : "refused"},
+                        {"summary", m.summary},
+                        {"places", std::move(places)},
+                        {"taught_names", m.taught_names}};
+  if (m.result == io::FindResult::Seen) {
+    out["seen"] = {{"table_id", m.seen_table_id},
+                   {"position", {m.seen_position.x(), m.seen_position.y(), m.seen_position.z()}},
+                   {"utime", m.seen_utime},
+                   {"score", m.seen_score}};
+  }
+  return out;
+}
+
+void LiveState::onObjects(const io::ObjectsMessage& message) {
+  if (message.content != io::TablesContent::Frame) return;
+  std::lock_guard lock(mutex_);
+  frame_objects_ = message;
+}
+
+void LiveState::onFindResult(const io::FindResultMessage& message) {
+  std::lock_guard lock(mutex_);
+  find_result_ = message;
+}
+
 void LiveState::onLabels(const io::LabelImageMessage& message) {
   auto bytes = std::make_shared<const std::vector<std::uint8_t>>(message.image.labels);
   std::shared_ptr<const std::vector<std::uint8_t>> jpeg;
@@ -241,6 +301,8 @@ nlohmann::json LiveState::liveJson() const {
   out["tables"] = frame_tables_ ? tablesJson(*frame_tables_) : nlohmann::json(nullptr);
   out["table_map"] = table_map_ ? tablesJson(*table_map_) : nlohmann::json(nullptr);
   out["semantic_map"] = semantic_map_meta_;
+  out["objects"] = frame_objects_ ? objectsJson(*frame_objects_) : nlohmann::json(nullptr);
+  out["find"] = find_result_ ? findResultJson(*find_result_) : nlohmann::json(nullptr);
   if (status_) {
     const auto& s = *status_;
     nlohmann::json stages = nlohmann::json::array();
@@ -288,6 +350,11 @@ nlohmann::json LiveState::liveJson() const {
                      {"frames_collected", s.frames_collected},
                      {"frames_collect_refused", s.frames_collect_refused},
                      {"last_collected_frame", s.last_collected_frame},
+                     {"objects_taught", s.objects_taught},
+                     {"teach_refused", s.teach_refused},
+                     {"last_teach_ok", s.last_teach_ok != 0},
+                     {"last_teach_result", s.last_teach_result},
+                     {"last_teach_request_id", s.last_teach_request_id},
                      {"stages", std::move(stages)},
                      {"queues", std::move(queues)}};
   } else {

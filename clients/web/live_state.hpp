@@ -1,7 +1,10 @@
 // live_state.hpp — what findmug-web knows of a running findmugd: the latest label image
 // (with the camera and the colour image the daemon sent with it), the latest frame's
 // tables, the persistent table map, the fused semantic map seen from above (when findmugd
-// publishes it: daemon.semantic_map), the latest status and a few minutes of status history.
+// publishes it: daemon.semantic_map), the latest frame's table-top object candidates
+// (FINDMUG_OBJECTS, with the frame's seq: what the page's teach click names), the latest
+// answer to a find (FINDMUG_FIND_RESULT), the latest status and a few minutes of status
+// history.
 //
 // Fed by the bus thread (io::Subscriber callbacks), read by the HTTP threads: every
 // member is behind one mutex, and readers get copies (JSON or bytes).
@@ -18,6 +21,7 @@
 #include <string>
 #include <vector>
 
+#include "findmug/io/lcm_codec_find.hpp"
 #include "findmug/io/messages.hpp"
 #include "findmug/io/semantic_map_codec.hpp"
 #include "findmug_lcm/status_t.hpp"
@@ -48,6 +52,8 @@ class LiveState {
   void onLabels(const io::LabelImageMessage& message);
   void onTables(const io::TablesMessage& message);  // FINDMUG_TABLES or FINDMUG_TABLE_MAP
   void onSemanticMap(const io::SemanticMapMessage& message);  // FINDMUG_SEMANTIC_MAP
+  void onObjects(const io::ObjectsMessage& message);          // FINDMUG_OBJECTS (frame content)
+  void onFindResult(const io::FindResultMessage& message);    // FINDMUG_FIND_RESULT
   void onStatus(const findmug_lcm::status_t& status);
   void onBadMessage(const std::string& channel, const std::string& what);
   void onBusEnded(const std::string& how);
@@ -81,6 +87,8 @@ class LiveState {
   std::optional<io::LabelImageMessage> labels_meta_;  // pixels moved to labels_bytes_
   std::shared_ptr<const std::vector<std::uint8_t>> labels_bytes_, color_jpeg_;
   std::optional<io::TablesMessage> frame_tables_, table_map_;
+  std::optional<io::ObjectsMessage> frame_objects_;
+  std::optional<io::FindResultMessage> find_result_;
   nlohmann::json semantic_map_meta_;  // null until a semantic map came
   SemanticMapRaster semantic_map_;
   std::optional<findmug_lcm::status_t> status_;
@@ -92,5 +100,15 @@ class LiveState {
 // JSON of a tables message for the drawing: hulls, ids, numbered search positions, in the
 // base frame and, when the message has the robot's map pose, the map frame.
 nlohmann::json tablesJson(const io::TablesMessage& message);
+
+// JSON of a frame's object candidates: per candidate its index in the message (what a
+// teach command names), table, centroid, footprint box, height above the top, point
+// count, mean colour and truncation bits (base frame); with the robot's map pose also the
+// centroid in the map frame (what a find answer's position is in).
+nlohmann::json objectsJson(const io::ObjectsMessage& message);
+
+// JSON of a find answer: its request id, name, result ("seen", "look_at", "unknown_name",
+// "refused"), summary, where it was seen, the places to look and the taught names.
+nlohmann::json findResultJson(const io::FindResultMessage& message);
 
 }  // namespace findmug::web

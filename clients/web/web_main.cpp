@@ -20,6 +20,8 @@
 #include "findmug/common/error.hpp"
 #include "findmug/io/channels.hpp"
 #include "findmug/io/lcm_codec.hpp"
+#include "findmug/io/lcm_codec_find.hpp"
+#include "findmug/io/lcm_codec_objects.hpp"
 #include "findmug/io/semantic_map_codec.hpp"
 #include "findmug/io/subscriber.hpp"
 #include "findmug_cli.hpp"
@@ -74,7 +76,8 @@ int main(int argc, char** argv) {
   // Base names: the bus applies --channel-suffix (io::SuffixedBus).
   const std::string labels_channel(io::kLabelsChannel), tables_channel(io::kTablesChannel),
       map_channel(io::kTableMapChannel), semantic_channel(io::kSemanticMapChannel),
-      status_channel(io::kStatusChannel), command_channel(io::kCommandChannel);
+      status_channel(io::kStatusChannel), command_channel(io::kCommandChannel),
+      objects_channel(io::kObjectsChannel), find_channel(io::kFindResultChannel);
   web::ServerOptions options;
   try {
     Config loaded;  // the segmenter's sections (the Label page's prediction) and web:
@@ -182,6 +185,20 @@ int main(int argc, char** argv) {
       },
       [&](const io::SemanticMapMessage& m, const std::string&) { live.onSemanticMap(m); },
       bad(semantic_channel));
+  io::Subscriber<io::ObjectsMessage> objects(
+      *bus, objects_channel,
+      [](const std::uint8_t* d, std::size_t n, const std::string& c) {
+        return io::decodeObjects(d, n, c);
+      },
+      [&](const io::ObjectsMessage& m, const std::string&) { live.onObjects(m); },
+      bad(objects_channel));
+  io::Subscriber<io::FindResultMessage> find_results(
+      *bus, find_channel,
+      [](const std::uint8_t* d, std::size_t n, const std::string& c) {
+        return io::decodeFindResult(d, n, c);
+      },
+      [&](const io::FindResultMessage& m, const std::string&) { live.onFindResult(m); },
+      bad(find_channel));
   io::Subscriber<findmug_lcm::status_t> status(
       *bus, status_channel,
       [](const std::uint8_t* d, std::size_t n, const std::string& c) {
@@ -192,10 +209,12 @@ int main(int argc, char** argv) {
 
   std::thread http([&] { server->serve(); });
   const auto stop_server = clients::stopSignals().onStop([&] { server->stop(); });
-  std::fprintf(stderr, "%s: serving http://%s:%d/ ; listening on %s, %s, %s, %s and %s (%s)\n",
+  std::fprintf(stderr,
+               "%s: serving http://%s:%d/ ; listening on %s, %s, %s, %s, %s, %s and %s (%s)\n",
                kProgram, config.bind.c_str(), server->port(), labels_channel.c_str(),
                tables_channel.c_str(), map_channel.c_str(), semantic_channel.c_str(),
-               status_channel.c_str(), bus->describe().c_str());
+               objects_channel.c_str(), find_channel.c_str(), status_channel.c_str(),
+               bus->describe().c_str());
   // This thread owns the bus. At the end of a replayed log the page stays up, showing
   // the last state, until a stop signal.
   int code = clients::receiveLoop(*bus, kProgram, [] { return false; });

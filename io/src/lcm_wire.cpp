@@ -307,6 +307,9 @@ findmug_lcm::status_t decodeMessage<findmug_lcm::status_t>(const void* data, std
     w.skip(2 * kI64, "commands_accepted/commands_rejected");
     w.skip(2 * kI64, "frames_collected/frames_collect_refused");
     w.string("last_collected_frame");
+    w.skip(2 * kI64 + kBool, "objects_taught/teach_refused/last_teach_ok");
+    w.string("last_teach_result");
+    w.skip(kI64, "last_teach_request_id");
   });
 }
 

@@ -335,13 +335,23 @@ void objectPointsOf(const OrganizedCloud& cloud, const std::vector<int>& pixels,
   }
 }
 
-ObjectView makeObjectView(const OrganizedCloud& cloud_ground, const TableObject& candidate) {
+ObjectView makeObjectView(const TableObject& candidate, std::vector<Eigen::Vector3f> points,
+                          std::vector<Rgb8> colors) {
+  if (colors.size() != points.size()) {
+    throw Error("object view: " + std::to_string(points.size()) + " points but " +
+                std::to_string(colors.size()) + " colours");
+  }
+  if (points.size() > static_cast<std::size_t>(kMaxObjectViewPoints)) {
+    throw Error("object view: " + std::to_string(points.size()) + " points, at most " +
+                std::to_string(kMaxObjectViewPoints) + " (objectPointsOf subsamples)");
+  }
   ObjectView view;
   view.height_above_top = candidate.height_above_top;
   view.extents = Eigen::Vector2f(std::max(candidate.extents.x(), candidate.extents.y()),
                                  std::min(candidate.extents.x(), candidate.extents.y()));
   view.colour_histogram = candidate.colour_histogram;
-  objectPointsOf(cloud_ground, candidate.pixels, kMaxObjectViewPoints, view.points, view.colors);
+  view.points = std::move(points);
+  view.colors = std::move(colors);
   if (static_cast<int>(view.points.size()) < kMinObjectViewPoints) {
     throw Error("object view: the candidate has " + std::to_string(view.points.size()) +
                 " points with depth, need " + std::to_string(kMinObjectViewPoints));
@@ -354,6 +364,33 @@ ObjectView makeObjectView(const OrganizedCloud& cloud_ground, const TableObject&
   view.shape = objectShapeDescriptor(view.points);
   view.roundness = objectRoundnessResidual(view.points);
   return view;
+}
+
+ObjectView makeObjectView(const OrganizedCloud& cloud_ground, const TableObject& candidate) {
+  std::vector<Eigen::Vector3f> points;
+  std::vector<Rgb8> colors;
+  objectPointsOf(cloud_ground, candidate.pixels, kMaxObjectViewPoints, points, colors);
+  return makeObjectView(candidate, std::move(points), std::move(colors));
+}
+
+int addObjectViewToFile(const std::string& path, const std::string& name, ObjectView view) {
+  validateObjectModelName(name);
+  ObjectModel model{name, {}};
+  std::error_code ec;
+  if (std::filesystem::exists(path, ec)) {
+    model = loadObjectModel(path);
+    if (model.name != name) {
+      throw Error("object model " + path + ": holds \"" + model.name + "\", not \"" + name +
+                  "\"");
+    }
+    if (model.views.size() >= static_cast<std::size_t>(kMaxObjectViews)) {
+      throw Error("object model " + path + ": \"" + name + "\" already has " +
+                  std::to_string(model.views.size()) + " views, the most a model may hold");
+    }
+  }
+  model.views.push_back(std::move(view));
+  saveObjectModel(path, model);
+  return static_cast<int>(model.views.size());
 }
 
 std::vector<std::uint8_t> encodeObjectModel(const ObjectModel& model) {

@@ -270,6 +270,10 @@ void lcmSeeds(SeedWriter& w) {
           asString(io::encodeMessage(io::encodeCommand(
               io::CommandMessage{frame.utime, 8, "save_frame", "kitchen, two mugs"}))),
           decodeCommand);
+  w.write("command", "teach",
+          asString(io::encodeMessage(io::encodeCommand(
+              io::CommandMessage{frame.utime, 9, "teach", "mug 41 2"}))),
+          decodeCommand);
 
   // A small fused map: a 20 x 20 patch of floor and a table top seen from above.
   {

@@ -6,6 +6,7 @@
 
 #include "findmug/common/error.hpp"
 #include "findmug/io/lcm_codec.hpp"
+#include "findmug/objects/object_model.hpp"
 
 namespace findmug::io {
 namespace {
@@ -63,6 +64,38 @@ TEST(CommandCodec, EveryFieldRuleIsEnforced) {
   EXPECT_NO_THROW((void)decodeCommand(longest.data(), longest.size(), "C"));
   // The encoder refuses what the decoder would.
   EXPECT_THROW((void)encodeCommand(CommandMessage{0, 0, "BAD", ""}), Error);
+}
+
+TEST(CommandCodec, TeachTakesANameAFrameSeqAndACandidateIndex) {
+  const auto good = raw(1, 2, "teach", "my-mug_2 41 3");
+  const CommandMessage got = decodeCommand(good.data(), good.size(), "C");
+  const TeachRequest request = parseTeachArgument(got.argument);
+  EXPECT_EQ(request.name, "my-mug_2");
+  EXPECT_EQ(request.seq, 41);
+  EXPECT_EQ(request.index, 3);
+  EXPECT_EQ(teachArgument(request), "my-mug_2 41 3");
+  // Each malformed argument is refused on decoding, naming what is wrong.
+  expectRefused(raw(0, 0, "teach", ""), "three words");
+  expectRefused(raw(0, 0, "teach", "mug 41"), "three words");
+  expectRefused(raw(0, 0, "teach", "mug 41 2 7"), "three words");
+  expectRefused(raw(0, 0, "teach", "mug  41 2"), "three words");
+  expectRefused(raw(0, 0, "teach", "Mug 41 2"), "teach NAME");
+  expectRefused(raw(0, 0, "teach", std::string(kMaxObjectNameLength + 1, 'm') + " 41 2"),
+                "teach NAME");
+  expectRefused(raw(0, 0, "teach", "../mug 41 2"), "teach NAME");
+  expectRefused(raw(0, 0, "teach", "mug -1 2"), "teach SEQ");
+  expectRefused(raw(0, 0, "teach", "mug 041 2"), "teach SEQ");
+  expectRefused(raw(0, 0, "teach", "mug 1234567890123456789 2"), "teach SEQ");
+  expectRefused(raw(0, 0, "teach", "mug 41 x"), "teach INDEX");
+  expectRefused(raw(0, 0, "teach", "mug 41 10000"), "teach INDEX");
+  expectRefused(raw(0, 0, "teach", "mug 41 2 "), "three words");
+  // The largest values pass; the encoder refuses what the decoder would.
+  const auto largest = raw(0, 0, "teach", "mug 999999999999999999 9999");
+  EXPECT_NO_THROW((void)decodeCommand(largest.data(), largest.size(), "C"));
+  EXPECT_THROW((void)encodeCommand(CommandMessage{0, 0, "teach", "mug"}), Error);
+  // Other commands' arguments are not read as teach's.
+  const auto other = raw(0, 0, "save_frame", "mug");
+  EXPECT_NO_THROW((void)decodeCommand(other.data(), other.size(), "C"));
 }
 
 TEST(CommandCodec, OtherTypesAndTruncationAreRefused) {

@@ -142,6 +142,9 @@ void walkStatus(Walk& w) {
   w.fixed(4 * 8);
   w.fixed(2 * 8);  // frames_collected, frames_collect_refused
   w.string("last_collected_frame");
+  w.fixed(2 * 8 + 1);  // objects_taught, teach_refused, last_teach_ok
+  w.string("last_teach_result");
+  w.fixed(8);  // last_teach_request_id
 }
 
 RgbdFrame frame() {

@@ -286,6 +286,11 @@ findmug_lcm::status_t makeStatus(Random& r, const Scale& s) {
   m.frames_collected = r.i64();
   m.frames_collect_refused = r.i64();
   m.last_collected_frame = r.text(s.text);
+  m.objects_taught = r.i64();
+  m.teach_refused = r.i64();
+  m.last_teach_ok = (r.i32() & 1) != 0;
+  m.last_teach_result = r.text(s.text);
+  m.last_teach_request_id = r.i64();
   return m;
 }
 

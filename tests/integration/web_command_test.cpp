@@ -70,7 +70,13 @@ TEST(WebCommand, BadRequestsAre400AndPublishNothing) {
         R"({"command": "reload_model", "argument": "/etc/passwd"})",
         R"({"command": "save_frame", "argument": 7})",
         R"({"command": "save_frame", "argument": "a, b"})",
-        R"({"command": "save_frame", "argument": "line\nbreak"})"}) {
+        R"({"command": "save_frame", "argument": "line\nbreak"})",
+        R"({"command": "teach"})", R"({"command": "teach", "argument": "mug 41"})",
+        R"({"command": "teach", "argument": "My Mug 41 2"})",
+        R"({"command": "teach", "argument": "mug -1 2"})",
+        R"({"command": "teach", "argument": "mug 41 two"})",
+        R"({"command": "find", "argument": ""})",
+        R"({"command": "find", "argument": "../etc"})"}) {
     const auto res = rig.post(body);
     ASSERT_TRUE(res) << body;
     EXPECT_EQ(res->status, 400) << body;
@@ -93,6 +99,62 @@ TEST(WebCommand, BadRequestsAre400AndPublishNothing) {
   EXPECT_EQ(sent[1].command, "reload_model");
   EXPECT_EQ(nlohmann::json::parse(a->body)["request_id"].get<std::int64_t>(), sent[0].request_id);
   EXPECT_EQ(sent[1].request_id, sent[0].request_id + 1);
+  // The live page's teach click and find box.
+  const auto teach = rig.post(R"({"command": "teach", "argument": "mug 41 2"})");
+  const auto find = rig.post(R"({"command": "find", "argument": "mug"})");
+  ASSERT_TRUE(teach && find);
+  ASSERT_EQ(teach->status, 200) << teach->body;
+  ASSERT_EQ(find->status, 200) << find->body;
+  ASSERT_EQ(sent.size(), 4u);
+  EXPECT_EQ(sent[2].command, "teach");
+  EXPECT_EQ(sent[2].argument, "mug 41 2");
+  EXPECT_EQ(sent[3].command, "find");
+  // Why a bad teach is refused is in the answer.
+  const auto bad = rig.post(R"({"command": "teach", "argument": "mug 41 x"})");
+  ASSERT_TRUE(bad);
+  EXPECT_NE(bad->get_header_value("X-Findmug-Error").find("teach INDEX"), std::string::npos)
+      << bad->get_header_value("X-Findmug-Error");
+}
+
+// The frame's candidates and the find answer as the page reads them from /api/live.
+TEST(WebCommand, LiveCarriesTheFramesCandidatesAndTheLatestFindAnswer) {
+  WebRig rig({});
+  io::ObjectsMessage objects;
+  objects.seq = 41;
+  objects.utime = 7;
+  objects.num_tables = 1;
+  TableObject o;
+  o.table = 0;
+  o.centroid = {1.5f, 0.2f, 0.8f};
+  o.center = {1.5f, 0.2f};
+  o.extents = {0.05f, 0.04f};
+  o.height_above_top = 0.1f;
+  o.point_count = 300;
+  o.truncation = kTruncatedDepthHole;
+  objects.objects = {o, o};
+  objects.map_info.resize(2);
+  rig.live.onObjects(objects);
+  io::FindResultMessage find;
+  find.request_id = 12;
+  find.name = "mug";
+  find.result = io::FindResult::Seen;
+  find.summary = "mug seen at (1.5, 0.2, 0.8) on table 1";
+  find.seen_table_id = 1;
+  find.seen_position = {1.5, 0.2, 0.8};
+  find.taught_names = {"mug"};
+  rig.live.onFindResult(find);
+  const auto res = rig.client->Get("/api/live");
+  ASSERT_TRUE(res);
+  const auto live = nlohmann::json::parse(res->body);
+  EXPECT_EQ(live["objects"]["seq"], 41);
+  ASSERT_EQ(live["objects"]["objects"].size(), 2u);
+  EXPECT_EQ(live["objects"]["objects"][1]["index"], 1);
+  EXPECT_EQ(live["objects"]["objects"][1]["truncation"], kTruncatedDepthHole);
+  EXPECT_NEAR(live["objects"]["objects"][0]["height_above_top"].get<double>(), 0.1, 1e-6);
+  EXPECT_EQ(live["find"]["request_id"], 12);
+  EXPECT_EQ(live["find"]["result"], "seen");
+  EXPECT_EQ(live["find"]["seen"]["table_id"], 1);
+  EXPECT_EQ(live["find"]["summary"], find.summary);
 }
 
 TEST(WebCommand, WithoutABusTheEndpointIs503) {

@@ -46,6 +46,11 @@ inline findmug_lcm::status_t sampleStatus() {
   s.frames_collected = 3;
   s.frames_collect_refused = 1;
   s.last_collected_frame = "1700000000000000_42";
+  s.objects_taught = 2;
+  s.teach_refused = 1;
+  s.last_teach_ok = true;
+  s.last_teach_result = "taught mug (2 views) from frame seq 41, candidate 0";
+  s.last_teach_request_id = 77;
   return s;
 }
 

@@ -1,6 +1,8 @@
 // findmug-web live page: polls /api/live, draws the label image over the camera image,
 // the tables (hulls, numbered search positions) over it and from above, the fused semantic
-// map from above under the table map (when findmugd publishes it), and the status.
+// map from above under the table map (when findmugd publishes it), the table-top object
+// candidates over the camera image (click one to teach it: the command teach), the answer
+// to a find, and the status.
 // Plain browser JavaScript, no libraries. window.findmugLive holds what the tests read.
 'use strict';
 
@@ -15,6 +17,11 @@ const live = window.findmugLive = {
   publishToPageMs: [], // page time of a draw minus the daemon's publish time (utime + latency)
   receiveToPageMs: [], // page time of a draw minus findmug-web's receive time
   hullsDrawn: 0,       // table hulls on the camera view in the last drawing
+  candidates: [],      // candidates drawn over the camera view: {seq, index, box: [x0, y0, x1, y1] (image
+                       // pixels), cut (by the image border), height (above the top, m), extents (m)}
+  teachResult: null,   // the daemon's answer to the page's last teach: {ok, text}
+  foundDrawn: null,    // the found object drawn named on the camera view: {seq, index}
+  findResult: null,    // the daemon's answer to the page's last find (GET /api/live's "find")
   semanticMapSeq: null,     // the semantic map drawn under the map panel (its seq)
   semanticMapCells: 0,      // its floor cells with a label
   semanticMapCanvas: null,  // its raster, one pixel per cell (row 0 = highest y)
@@ -96,12 +103,73 @@ function drawPosition(parent, x, y, p, radius) {
   return g;
 }
 
+// The image box of a candidate: its footprint box from the top of its table to its top,
+// projected; null when behind the camera.
+function candidateBox(project, o, topHeight) {
+  const [ax, ay] = o.major_axis;
+  const corners = [];
+  for (const [s, t] of [[1, 1], [1, -1], [-1, 1], [-1, -1]]) {
+    const x = o.center[0] + s * o.extents[0] * ax - t * o.extents[1] * ay;
+    const y = o.center[1] + s * o.extents[0] * ay + t * o.extents[1] * ax;
+    for (const z of [topHeight, topHeight + o.height_above_top]) {
+      const p = project(x, y, z);
+      if (!p) return null;
+      corners.push(p);
+    }
+  }
+  const xs = corners.map((p) => p[0]), ys = corners.map((p) => p[1]);
+  return [Math.min(...xs) - 2, Math.min(...ys) - 2, Math.max(...xs) + 2, Math.max(...ys) + 2];
+}
+
+// The frame's object candidates (FINDMUG_OBJECTS of the same seq) as dashed boxes; those
+// cut by the image border grey (the daemon refuses to teach them).
+function drawCameraObjects(state, project, overlay) {
+  live.candidates = [];
+  const objects = state.objects, tables = state.tables;
+  if (!objects || objects.seq !== state.labels.seq || !tables || tables.seq !== objects.seq) return;
+  // The object the page asked to find, in the frame the answer saw it in: the candidate
+  // nearest that place on the map floor (within 10 cm), drawn with the name and the
+  // daemon's score. (objects_t does not carry the names the daemon gives.)
+  const f = live.findResult;
+  let found = null;
+  if (f && f.result === 'seen' && f.seen.utime === objects.utime) {
+    let best = 0.1;
+    for (const o of objects.objects) {
+      if (!o.map_centroid) continue;
+      const d = Math.hypot(o.map_centroid[0] - f.seen.position[0], o.map_centroid[1] - f.seen.position[1]);
+      if (d < best) { best = d; found = o; }
+    }
+  }
+  for (const o of objects.objects) {
+    const table = tables.tables[o.table];
+    if (!table) continue;
+    const box = candidateBox(project, o, table.top_height);
+    if (!box) continue;
+    const cut = (o.truncation & 2) !== 0;
+    const isFound = o === found;
+    const rect = svg('rect', { class: 'candidate' + (cut ? ' cut' : '') + (isFound ? ' found' : ''), x: box[0],
+                               y: box[1], width: box[2] - box[0], height: box[3] - box[1], 'data-index': o.index }, overlay);
+    svg('title', {}, rect).textContent =
+      `candidate ${o.index}: ${fmt(100 * o.height_above_top, 0)} cm tall, ${o.point_count} points` +
+      (cut ? ', cut by the image border (cannot be taught from this frame)' : '');
+    // The label above the box, or inside it at the image's top edge.
+    const t = svg('text', { class: 'candidate-label' + (isFound ? ' found' : ''), x: Math.max(2, box[0]),
+                            y: box[1] > 16 ? box[1] - 3 : Math.max(box[1], 0) + 14 }, overlay);
+    t.textContent = isFound ? `${f.name} (${fmt(f.seen.score, 2)})` : String(o.index) + (cut ? ' cut' : '');
+    if (isFound) live.foundDrawn = { seq: objects.seq, index: o.index, box };
+    live.candidates.push({ seq: objects.seq, index: o.index, box, cut, height: o.height_above_top,
+                           extents: o.extents });
+  }
+  live.objectsSeq = objects.seq;
+}
+
 function drawCameraTables(state) {
   const overlay = el('overlay');
   overlay.textContent = '';
   const labels = state.labels;
   let hulls = 0;
   const tables = state.tables;
+  live.candidates = [];
   if (!labels || !tables || tables.seq !== labels.seq) {
     live.hullsDrawn = 0;
     return;
@@ -138,6 +206,7 @@ function drawCameraTables(state) {
     }
   }
   live.hullsDrawn = hulls;
+  drawCameraObjects(state, project, overlay);
 }
 
 async function drawLabels(state) {
@@ -394,7 +463,11 @@ async function poll() {
                state.tables.tables.length > 0) {
       drawCameraTables(state);  // the tables came after their labels
       drawMap(state);
+    } else if (state.objects && state.labels && state.objects.seq === state.labels.seq &&
+               live.objectsSeq !== state.objects.seq && live.hullsDrawn > 0) {
+      drawCameraTables(state);  // the candidates came after their tables
     }
+    showFind(state);
     // A new semantic map (a few seconds apart at most): fetch its raster, draw the map panel.
     if (state.semantic_map && state.semantic_map.seq !== live.semanticMapSeq && palette) {
       await fetchSemanticMap(state.semantic_map);
@@ -423,6 +496,87 @@ async function poll() {
 }
 
 el('map-frame').addEventListener('change', () => lastLive && drawMap(lastLive));
+
+async function sendCommand(command, argument) {
+  const res = await fetch('/api/command', {
+    method: 'POST', headers: { 'Content-Type': 'application/json' },
+    body: JSON.stringify({ command, argument }),
+  });
+  const answer = await res.json();
+  if (!res.ok) throw new Error(answer.error || 'HTTP ' + res.status);
+  return answer.request_id;
+}
+
+function setNote(id, text, cls) {
+  const note = el(id);
+  note.textContent = text;
+  note.className = cls || 'muted';
+}
+
+// Teaching: a click on a candidate's box sends "teach NAME SEQ INDEX" at once (findmugd
+// holds the last 30 frames' candidates), and the status then says what became of it.
+el('camera').addEventListener('click', async (event) => {
+  const rect = view.getBoundingClientRect();
+  const x = (event.clientX - rect.left) * view.width / rect.width;
+  const y = (event.clientY - rect.top) * view.height / rect.height;
+  const hits = live.candidates.filter((c) => x >= c.box[0] && x <= c.box[2] && y >= c.box[1] && y <= c.box[3]);
+  if (!hits.length) return;
+  // Of overlapping boxes, the one whose middle is nearest the pointer.
+  const away = (c) => Math.hypot((c.box[0] + c.box[2]) / 2 - x, (c.box[1] + c.box[3]) / 2 - y);
+  const hit = hits.reduce((a, b) => (away(b) < away(a) ? b : a));
+  const name = el('teach-name').value.trim();
+  if (!name) {
+    setNote('teach-note', 'type the object\'s name first, then click it', 'refused');
+    el('teach-name').focus();
+    return;
+  }
+  setNote('teach-note', `teaching ${name}: candidate ${hit.index} of frame ${hit.seq}…`);
+  try {
+    const id = await sendCommand('teach', `${name} ${hit.seq} ${hit.index}`);
+    for (let i = 0; i < 100; ++i) {
+      await new Promise((r) => setTimeout(r, 100));
+      const s = lastLive && lastLive.status;
+      if (s && s.last_teach_request_id === id) {
+        live.teachResult = { ok: s.last_teach_ok, text: s.last_teach_result };
+        setNote('teach-note', s.last_teach_result, s.last_teach_ok ? 'ok' : 'refused');
+        return;
+      }
+    }
+    setNote('teach-note', `teach request ${id} sent; no answer in the daemon's status yet`, 'refused');
+  } catch (e) {
+    live.teachResult = { ok: false, text: e.message };
+    setNote('teach-note', 'not sent: ' + e.message, 'refused');
+  }
+});
+
+// Find: "find NAME"; the daemon answers on FINDMUG_FIND_RESULT, again whenever the answer
+// changes, and /api/live carries the latest.
+let findRequestId = null;
+function showFind(state) {
+  const f = state.find;
+  if (findRequestId === null || !f || f.request_id !== findRequestId) return;
+  if (live.findResult === null || live.findResult.utime !== f.utime) {
+    live.findResult = f;
+    drawCameraTables(state);  // the sighting may be of the frame on view
+  }
+  let text = f.summary;
+  if (f.result === 'look_at' && f.places.length) {
+    text += ': ' + f.places.slice(0, 5).map((p) => `table ${p.table_id}` + (p.searched ? ' (searched)' : '')).join(', ');
+  }
+  setNote('find-note', text, f.result === 'seen' ? 'ok' : f.result === 'look_at' ? 'muted' : 'refused');
+}
+
+el('find-form').addEventListener('submit', async (event) => {
+  event.preventDefault();
+  const name = el('find-name').value.trim();
+  setNote('find-note', `asking findmugd where ${name} is…`);
+  try {
+    findRequestId = await sendCommand('find', name);
+    live.findResult = null;
+  } catch (e) {
+    setNote('find-note', 'not sent: ' + e.message, 'refused');
+  }
+});
 
 // "Save this frame": findmug-web sends save_frame to findmugd (daemon.collect_dir), which
 // saves the next frame it publishes; the status then names it.

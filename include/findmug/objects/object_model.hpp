@@ -113,6 +113,21 @@ void objectPointsOf(const OrganizedCloud& cloud, const std::vector<int>& pixels,
 // Throws findmug::Error when a pixel is outside the cloud or the candidate
 // has too few points for a shape.
 ObjectView makeObjectView(const OrganizedCloud& cloud_ground, const TableObject& candidate);
+// The same from the candidate's points already taken out of the cloud
+// (objectPointsOf with kMaxObjectViewPoints, ground frame): what a caller that
+// keeps candidates past their frame (findmugd's teacher) holds. The overload
+// above is this after objectPointsOf, so both give the same view. Throws
+// findmug::Error for too few points, more than kMaxObjectViewPoints, or
+// colours not one per point.
+ObjectView makeObjectView(const TableObject& candidate, std::vector<Eigen::Vector3f> points,
+                          std::vector<Rgb8> colors);
+
+// Adds `view` to the model `name` in the file `path`: a new model when the
+// file does not exist, else one more view of the model it holds. Written with
+// saveObjectModel (temporary file, rename). Returns the model's view count
+// now. Throws findmug::Error when the name is not valid, the file holds
+// another name or cannot be read, or the model has kMaxObjectViews already.
+int addObjectViewToFile(const std::string& path, const std::string& name, ObjectView view);
 
 // Throws findmug::Error ("object model WHAT: FIELD = VALUE: rule") when a
 // field is outside what a file may hold (the checks loading makes).

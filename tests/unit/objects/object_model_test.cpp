@@ -385,5 +385,50 @@ TEST(ObjectView, MadeFromARenderedCandidate) {
                   "pixel 307200 outside the 640x480 cloud");
 }
 
+TEST(ObjectView, FromHeldPointsIsTheViewFromTheCloud) {
+  // findmugd's teacher keeps a candidate's points past its frame; the view it makes from
+  // them must be the one findmug-teach makes from the cloud, bit for bit.
+  auto scene = test::makeTableScene();
+  const int mug = test::addMug(scene, scene.table_center, 0.04, 0.10, 0.5, Rgb8{40, 60, 200});
+  const auto r = test::renderTable(scene, test::cameraAround(scene, 0.3, 1.1), 7);
+  const TableObject c = test::candidateOf(r, mug, static_cast<float>(scene.top_z));
+  std::vector<Eigen::Vector3f> points;
+  std::vector<Rgb8> colors;
+  objectPointsOf(r.cloud_ground, c.pixels, kMaxObjectViewPoints, points, colors);
+  const ObjectView held = makeObjectView(c, points, colors);
+  const ObjectView direct = makeObjectView(r.cloud_ground, c);
+  EXPECT_EQ(encodeObjectModel({"mug", {held}}), encodeObjectModel({"mug", {direct}}));
+  colors.pop_back();
+  EXPECT_CONTAINS(errorOf([&] { makeObjectView(c, points, colors); }), "colours");
+  points.resize(5);
+  colors.resize(5);
+  EXPECT_CONTAINS(errorOf([&] { makeObjectView(c, points, colors); }), "need 20");
+}
+
+TEST(ObjectModelFile, AddingViewsMakesAModelThenGrowsItUpToTen) {
+  test::TempDir dir;
+  const std::string path = dir.str("mug.fmo");
+  const ObjectView view = test::sampleObjectModel("mug", 1).views[0];
+  for (int n = 1; n <= kMaxObjectViews; ++n) EXPECT_EQ(addObjectViewToFile(path, "mug", view), n);
+  const ObjectModel m = loadObjectModel(path);
+  EXPECT_EQ(m.name, "mug");
+  EXPECT_EQ(m.views.size(), static_cast<std::size_t>(kMaxObjectViews));
+  EXPECT_CONTAINS(errorOf([&] { addObjectViewToFile(path, "mug", view); }),
+                  "already has 10 views");
+  EXPECT_EQ(loadObjectModel(path).views.size(), static_cast<std::size_t>(kMaxObjectViews));
+  // Another name in the file, a bad name, a corrupt file: refused, the file kept.
+  EXPECT_CONTAINS(errorOf([&] { addObjectViewToFile(path, "cup", view); }), "holds \"mug\"");
+  EXPECT_CONTAINS(errorOf([&] { addObjectViewToFile(dir.str("x.fmo"), "X Y", view); }), "X Y");
+  { std::ofstream(dir.str("bad.fmo")) << "FMOBJECT junk"; }
+  EXPECT_THROW(addObjectViewToFile(dir.str("bad.fmo"), "bad", view), Error);
+  // Nothing but the model files is left in the folder (the writes go through a rename).
+  int files = 0;
+  for (const auto& e : std::filesystem::directory_iterator(dir.path())) {
+    ++files;
+    EXPECT_EQ(e.path().extension(), ".fmo") << e.path();
+  }
+  EXPECT_EQ(files, 2);
+}
+
 }  // namespace
 }  // namespace findmug

@@ -85,6 +85,7 @@
 #include "findmug/daemon/frame_steps.hpp"
 #include "findmug/daemon/model_reload.hpp"
 #include "findmug/daemon/object_search_sink.hpp"
+#include "findmug/daemon/object_teacher.hpp"
 #include "findmug/daemon/pose_input.hpp"
 #include "findmug/daemon/result_sinks.hpp"
 #include "findmug/daemon/semantic_map_stage.hpp"
@@ -180,6 +181,8 @@ class Pipeline {
   void requestFrameSave(std::int64_t request_id, const std::string& note);
   // The objects on the tables: taught ones named, mapped and found (object_search_sink.hpp).
   const ObjectSearchSink& objectSearch() const { return *object_search_; }
+  // Teaching from the live view, the command "teach" (object_teacher.hpp).
+  const ObjectTeacher& objectTeacher() const { return *object_teacher_; }
   // The command input, or nullptr when there is none (see effectiveCommandUrl).
   const CommandInput* commandInput() const { return command_input_.get(); }
   int workers() const { return workers_; }
@@ -216,6 +219,7 @@ class Pipeline {
   std::unique_ptr<CommandInput> command_input_;  // nullptr: no command input
   std::shared_ptr<FrameCollector> collector_;    // nullptr unless daemon.collect_dir
   std::shared_ptr<ObjectSearchSink> object_search_;  // taught objects, object map, "find"
+  std::shared_ptr<ObjectTeacher> object_teacher_;    // "teach": the last frames' candidates
   std::uint64_t pose_max_age_us_ = 0;
   // The three steps (frame_steps.hpp), each run by its Stage below.
   PrepareStep prepare_step_;

@@ -9,6 +9,7 @@
 #include <utility>
 #include <vector>
 
+#include "findmug/daemon/object_teacher.hpp"
 #include "findmug/daemon/stats.hpp"
 #include "findmug/io/frame_source.hpp"
 
@@ -70,6 +71,7 @@ struct StatusSnapshot {
   // Frames saved for labelling (frame_collector.hpp; 0 / "" when off).
   std::uint64_t frames_collected = 0, frames_collect_refused = 0;
   std::string last_collected_frame;
+  TeachStatus teach;  // the command "teach" (object_teacher.hpp)
   std::string last_error;  // the pipeline's own
   std::uint64_t last_error_utime = 0;
   std::optional<Source> source;  // nullopt: frames submitted in-process

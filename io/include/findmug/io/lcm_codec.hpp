@@ -159,4 +159,19 @@ findmug_lcm::command_t encodeCommand(const CommandMessage& command);
 // one the daemon knows is the daemon's business.
 CommandMessage decodeCommand(const void* data, std::size_t size, std::string_view channel);
 
+// The argument of the command "teach": "NAME SEQ INDEX", one space apart: the
+// taught object's name ([a-z0-9_-]{1,32}, validateObjectModelName), the seq of
+// the frame whose objects_t showed the candidate (>= 0) and the candidate's
+// index in that message (0..kMaxTeachIndex). encodeCommand and decodeCommand
+// refuse a teach command whose argument is not this.
+struct TeachRequest {
+  std::string name;
+  std::int64_t seq = 0;
+  int index = 0;
+};
+inline constexpr int kMaxTeachIndex = 9999;
+// Throws findmug::Error naming `where` and what is wrong.
+TeachRequest parseTeachArgument(const std::string& argument, std::string_view where = "teach");
+std::string teachArgument(const TeachRequest& request);
+
 }  // namespace findmug::io
