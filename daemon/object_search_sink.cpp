@@ -72,7 +72,7 @@ ObjectSearchSink::ObjectSearchSink(ObjectSearchSettings settings, std::shared_pt
                    .on_error = [this](const std::string& what) { on_error_(what); },
                });
   // A worker only where there can be work: taught objects to look for, or a map to keep.
-  if (!settings_.objects_dir.empty() || settings_.map_objects) stage_->start();
+  if (active()) stage_->start();
 }
 
 ObjectSearchSink::~ObjectSearchSink() { stop(false); }

@@ -504,7 +504,7 @@ StatusSnapshot Pipeline::statusSnapshot() const {
     s.input_fps = input_rate_.rate(now);
     s.output_fps = output_rate_.rate(now);
     for (const auto& st : stages) s.latencies.emplace_back(st.name, st.latency);
-    s.latencies.emplace_back("object_search", objects.latency);
+    if (object_search_->active()) s.latencies.emplace_back("object_search", objects.latency);
     for (const auto& [name, field] : subStages()) {
       s.latencies.emplace_back(name, latency_.at(name).summary(now));
     }
@@ -514,7 +514,9 @@ StatusSnapshot Pipeline::statusSnapshot() const {
     s.cpu_used_cores = cpu_used_cores_;
   }
   for (const auto& st : stages) s.queues.push_back({st.name, st.queue_depth, st.queue_capacity});
-  s.queues.push_back({"object_search", objects.queue_depth, objects.queue_capacity});
+  if (object_search_->active()) {
+    s.queues.push_back({"object_search", objects.queue_depth, objects.queue_capacity});
+  }
   s.objects = {objects.frames_queued,     objects.frames_skipped,     objects.candidates,
                objects.matches,           objects.refused_too_big,    objects.refused_too_small,
                objects.refused_colour,    objects.refused_not_round,  objects.refused_shape,

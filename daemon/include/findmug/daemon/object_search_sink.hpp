@@ -135,6 +135,9 @@ class ObjectSearchSink final : public ResultSink {
 
   // Threaded: waits at most `timeout` until every job handed over is done (tests).
   bool waitIdle(Clock::duration timeout) const;
+  // Whether there is object work at all: taught objects to look for or a map to keep
+  // (otherwise no worker, no job; status then leaves its queue and time out).
+  bool active() const { return !settings_.objects_dir.empty() || settings_.map_objects; }
 
   Counters counters() const;
   std::vector<MappedObject> mappedObjects() const;  // thread-safe copy
