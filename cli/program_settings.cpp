@@ -169,6 +169,12 @@ const SettingsTable<DaemonConfig>& daemonSettings() {
     t.add(textSetting<D>(
         "daemon.objects_dir", [](D& d) -> std::string& { return d.objects_dir; }, nullptr,
         "taught objects (*.fmo from findmug-teach) to look for, re-read when changed; empty = off"));
+    t.add(integerSetting<D, int>(
+        "daemon.objects_queue", [](D& d) -> int& { return d.objects_queue; }, 1, 64,
+        "frames waiting for the object worker (matching, object map; drop-oldest)"));
+    t.add(boolSetting<D>(
+        "daemon.publish_object_map", [](D& d) -> bool& { return d.publish_object_map; },
+        "publish FINDMUG_OBJECT_MAP after each object map update"));
     return t;
   }();
   return table;

@@ -93,6 +93,8 @@ struct DaemonConfig {
   int collect_queue = 2;                  // frames waiting for the writer thread
   // Taught objects (*.fmo, object_library.hpp) the daemon looks for; off while empty.
   std::string objects_dir;
+  int objects_queue = 2;            // frames waiting for the object worker (drop-oldest)
+  bool publish_object_map = true;   // publish FINDMUG_OBJECT_MAP after each object map update
   // The objects on the tables named, mapped and found (object_search_sink.hpp): the
   // `object_matcher:`, `object_map:` and `object_search:` sections.
   ObjectMatcherConfig object_matcher;

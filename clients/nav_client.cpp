@@ -6,11 +6,13 @@
 // unreachable ones with their reason. Positions are given in the map frame
 // when the message carries the robot's map pose (and --frame is auto or
 // map), else in the robot base frame, where the robot stands at the origin.
-// It also subscribes to FINDMUG_OBJECTS[_suffix] (objects_t, not with --map) and,
-// for every message, lists the object candidates on each table: where they
-// stand (same frame choice), their height above the top, footprint, colour
-// and whether they may be cut off, so that a robot knows what to look at
-// from the search positions.
+// It also subscribes to FINDMUG_OBJECTS[_suffix] (objects_t; with --map to
+// FINDMUG_OBJECT_MAP[_suffix], the object map) and, for every message, lists
+// the object candidates on each table: where they stand (same frame choice),
+// their height above the top, footprint, colour and whether they may be cut
+// off, so that a robot knows what to look at from the search positions; the
+// object map's entries also with their stable id, the taught object they were
+// named as (with the match score), their sightings and when last seen.
 // With --json, one JSON object per message on its own line (JSON lines): a
 // tables message's line has "tour", an objects message's line "objects".
 //
@@ -133,7 +135,8 @@ class NavClient {
 
   void printObjectsText(const io::ObjectsMessage& m, bool use_map,
                         const std::vector<Eigen::Vector3d>& where) const {
-    std::printf("objects seq %lld utime %llu: %zu objects on %d tables, %s frame\n",
+    std::printf("%s seq %lld utime %llu: %zu objects on %d tables, %s frame\n",
+                m.content == io::TablesContent::Map ? "object map" : "objects",
                 static_cast<long long>(m.seq), static_cast<unsigned long long>(m.utime),
                 m.objects.size(), m.num_tables, use_map ? "map" : "base");
     for (std::size_t k = 0; k < m.objects.size(); ++k) {
@@ -142,12 +145,24 @@ class NavClient {
       for (const std::string& name : truncationNames(o.truncation)) {
         cut += (cut.empty() ? "  cut off: " : ",") + name;
       }
+      std::string mapped;
+      if (m.content == io::TablesContent::Map) {
+        const io::ObjectMapInfo& info = m.map_info[k];
+        char score[32] = "";
+        if (!info.name.empty()) {
+          std::snprintf(score, sizeof(score), " (score %.2f)", static_cast<double>(info.name_score));
+        }
+        char text[96];
+        std::snprintf(text, sizeof(text), "  seen %d times, last utime %llu", info.sightings,
+                      static_cast<unsigned long long>(info.last_seen_utime));
+        mapped = "  " + (info.name.empty() ? std::string("(not named)") : info.name) + score + text;
+      }
       std::printf(
           "   o  table %d  object %d  x %7.2f  y %7.2f  z %5.2f  height %5.2f m  "
-          "%4.2f x %4.2f m  rgb (%3.0f, %3.0f, %3.0f)  %d points%s\n",
+          "%4.2f x %4.2f m  rgb (%3.0f, %3.0f, %3.0f)  %d points%s%s\n",
           o.table, o.id, where[k].x(), where[k].y(), where[k].z(), o.height_above_top,
           2.0f * o.extents.x(), 2.0f * o.extents.y(), o.mean_rgb.x(), o.mean_rgb.y(),
-          o.mean_rgb.z(), o.point_count, cut.c_str());
+          o.mean_rgb.z(), o.point_count, cut.c_str(), mapped.c_str());
     }
   }
 
@@ -155,7 +170,9 @@ class NavClient {
                         const std::vector<Eigen::Vector3d>& where) const {
     std::ostringstream out;
     out << "{\"utime\":" << m.utime << ",\"seq\":" << m.seq << ",\"frame\":\""
-        << (use_map ? "map" : "base") << "\",\"tables\":" << m.num_tables << ",\"objects\":[";
+        << (use_map ? "map" : "base") << "\",\"tables\":" << m.num_tables
+        << (m.content == io::TablesContent::Map ? ",\"object_map\":true" : "")
+        << ",\"objects\":[";
     for (std::size_t k = 0; k < m.objects.size(); ++k) {
       const TableObject& o = m.objects[k];
       out << (k ? "," : "") << "{\"id\":" << o.id << ",\"table\":" << o.table
@@ -163,7 +180,15 @@ class NavClient {
           << ",\"y\":" << cli::jsonNumber(where[k].y(), 3)
           << ",\"z\":" << cli::jsonNumber(where[k].z(), 3)
           << ",\"height_m\":" << cli::jsonNumber(o.height_above_top, 3)
-          << ",\"points\":" << o.point_count << ",\"truncated\":[";
+          << ",\"points\":" << o.point_count;
+      if (m.content == io::TablesContent::Map) {
+        const io::ObjectMapInfo& info = m.map_info[k];
+        out << ",\"name\":" << cli::jsonString(info.name)
+            << ",\"score\":" << cli::jsonNumber(info.name_score, 3)
+            << ",\"sightings\":" << info.sightings
+            << ",\"last_seen_utime\":" << info.last_seen_utime;
+      }
+      out << ",\"truncated\":[";
       const std::vector<std::string> names = truncationNames(o.truncation);
       for (std::size_t i = 0; i < names.size(); ++i) {
         out << (i ? "," : "") << cli::jsonString(names[i]);
@@ -409,7 +434,7 @@ int main(int argc, char** argv) {
   cli::addChannelSuffixFlag(*app, suffix);
   app->add_flag("--map", map,
                 "listen on the persistent table map (FINDMUG_TABLE_MAP): confirmed tables "
-                "with stable ids, in the map frame");
+                "with stable ids, in the map frame; and on the object map (FINDMUG_OBJECT_MAP)");
   app->add_option("--frame", frame_name,
                   "frame of the printed positions (auto: map when the message has the "
                   "robot's map pose)")
@@ -467,11 +492,12 @@ int main(int argc, char** argv) {
       [](const std::string& error) {
         std::fprintf(stderr, "%s: skipping bad message: %s\n", kProgram, error.c_str());
       });
-  // The objects on the frame's tables (the table map has none yet).
+  // The objects on the frame's tables; with --map, the object map.
+  const std::string objects_channel(map ? io::kObjectMapChannel : io::kObjectsChannel);
   std::optional<io::Subscriber<io::ObjectsMessage>> objects;
-  if (!map) {
+  {
     objects.emplace(
-        *bus, std::string(io::kObjectsChannel),
+        *bus, objects_channel,
         [](const std::uint8_t* d, std::size_t n, const std::string& c) {
           return io::decodeObjects(d, n, c);
         },
@@ -481,9 +507,8 @@ int main(int argc, char** argv) {
         });
   }
   if (!json) {
-    std::fprintf(stderr, "%s: listening on %s%s, %s\n", kProgram, channel.c_str(),
-                 map ? "" : (" and " + std::string(io::kObjectsChannel)).c_str(),
-                 bus->describe().c_str());
+    std::fprintf(stderr, "%s: listening on %s and %s, %s\n", kProgram, channel.c_str(),
+                 objects_channel.c_str(), bus->describe().c_str());
   }
   // --count counts every tables message, bad ones included.
   return clients::receiveLoop(*bus, kProgram, [&] {

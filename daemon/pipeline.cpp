@@ -112,9 +112,16 @@ Pipeline::Pipeline(const SegmenterConfig& segmenter_config, const DaemonConfig& 
   object_search.object_map = daemon_config_.object_map;
   object_search.object_search = daemon_config_.object_search;
   object_search.matcher = daemon_config_.object_matcher;
+  object_search.publish_map = daemon_config_.publish_object_map;
+  object_search.mode = mode_;
+  object_search.queue_capacity = daemon_config_.objects_queue;
+  object_search.before_job = hooks_.before_object_job;
   object_search_ = std::make_shared<ObjectSearchSink>(
-      std::move(object_search), bus, std::string(io::kFindResultChannel),
-      [sink = table_map_sink_] { return sink->tables(); },
+      std::move(object_search), bus,
+      ObjectSearchSink::Channels{std::string(io::kFindResultChannel),
+                                 std::string(io::kObjectMapChannel)},
+      TableMapSource{[sink = table_map_sink_] { return sink->revision(); },
+                     [sink = table_map_sink_] { return sink->confirmedTables(); }},
       [this](const std::string& what) { recordError(what); });
   publisher_ = std::make_shared<LcmPublisherSink>(
       std::move(bus),
@@ -371,6 +378,8 @@ void Pipeline::stop(StopMode mode) {
   if (collector_) collector_->stop();  // writes what it has queued
   // Nothing feeds the map any more: its last frames (Drain), last publish and save.
   if (semantic_map_) semantic_map_->stop(mode == StopMode::Drain);
+  // Nothing feeds the object work any more: its last frames (Drain), before the final status.
+  object_search_->stop(mode == StopMode::Drain);
   // Nobody looks poses up any more: stop the pose thread, close its handle.
   if (pose_input_) pose_input_->stop();
   // No more commands, no more reloads (a load in progress is finished first).
@@ -497,11 +506,13 @@ StatusSnapshot Pipeline::statusSnapshot() const {
   s.heap_in_use_bytes = heapInUseBytes();
 
   const StageStats stages[] = {prepare_->stats(), segment_->stats(), publish_->stats()};
+  const ObjectSearchSink::Counters objects = object_search_->counters();
   {
     std::lock_guard lock(stats_mutex_);
     s.input_fps = input_rate_.rate(now);
     s.output_fps = output_rate_.rate(now);
     for (const auto& st : stages) s.latencies.emplace_back(st.name, st.latency);
+    if (object_search_->active()) s.latencies.emplace_back("object_search", objects.latency);
     for (const auto& [name, field] : subStages()) {
       s.latencies.emplace_back(name, latency_.at(name).summary(now));
     }
@@ -511,6 +522,14 @@ StatusSnapshot Pipeline::statusSnapshot() const {
     s.cpu_used_cores = cpu_used_cores_;
   }
   for (const auto& st : stages) s.queues.push_back({st.name, st.queue_depth, st.queue_capacity});
+  if (object_search_->active()) {
+    s.queues.push_back({"object_search", objects.queue_depth, objects.queue_capacity});
+  }
+  s.objects = {objects.frames_queued,     objects.frames_skipped,     objects.candidates,
+               objects.matches,           objects.refused_too_big,    objects.refused_too_small,
+               objects.refused_colour,    objects.refused_not_round,  objects.refused_shape,
+               objects.refused_few_points, objects.object_files_refused, objects.find_requests,
+               objects.find_answers,      objects.mapped_objects,     objects.map_publishes};
   if (semantic_map_) {
     const SemanticMapStage::Counters c = semantic_map_->counters();
     s.queues.push_back({"semantic_map", c.queue_depth, c.queue_capacity});

@@ -70,6 +70,10 @@ bool TableMapSink::update(const LabelledFrame& labelled, const io::RobotPose& po
       spdlog::debug("{}: table map: {}", frameName(frame), line);
     }
   }
+  if (!update.assigned_ids.empty() || !update.created.empty() || !update.confirmed.empty() ||
+      !update.forgotten.empty()) {
+    revision_.fetch_add(1);
+  }
   map_info->clear();
   for (int id : update.assigned_ids) {
     io::TableMapInfo info;
@@ -103,6 +107,11 @@ io::TablesMessage TableMapSink::mapMessage(const RgbdFrame& frame,
 std::vector<MappedTable> TableMapSink::tables() const {
   std::lock_guard lock(mutex_);
   return map_.tables();
+}
+
+std::vector<TableCluster> TableMapSink::confirmedTables() const {
+  std::lock_guard lock(mutex_);
+  return map_.confirmedTables();
 }
 
 // ---- LcmPublisherSink -----------------------------------------------------------------

@@ -57,6 +57,22 @@ findmug_lcm::status_t StatusBuilder::build(const StatusSnapshot& in) {
   s.last_teach_ok = in.teach.last_ok;
   s.last_teach_result = in.teach.last_result;
   s.last_teach_request_id = in.teach.last_request_id;
+  const StatusSnapshot::Objects& o = in.objects;
+  s.object_frames = static_cast<std::int64_t>(o.frames);
+  s.object_frames_skipped = static_cast<std::int64_t>(o.frames_skipped);
+  s.object_candidates = static_cast<std::int64_t>(o.candidates);
+  s.objects_named = static_cast<std::int64_t>(o.named);
+  s.objects_refused_too_big = static_cast<std::int64_t>(o.refused_too_big);
+  s.objects_refused_too_small = static_cast<std::int64_t>(o.refused_too_small);
+  s.objects_refused_colour = static_cast<std::int64_t>(o.refused_colour);
+  s.objects_refused_not_round = static_cast<std::int64_t>(o.refused_not_round);
+  s.objects_refused_shape = static_cast<std::int64_t>(o.refused_shape);
+  s.objects_refused_few_points = static_cast<std::int64_t>(o.refused_few_points);
+  s.object_files_refused = static_cast<std::int64_t>(o.files_refused);
+  s.find_requests = static_cast<std::int64_t>(o.find_requests);
+  s.find_answers = static_cast<std::int64_t>(o.find_answers);
+  s.mapped_objects = static_cast<std::int64_t>(o.mapped);
+  s.object_map_publishes = static_cast<std::int64_t>(o.map_publishes);
 
   std::string last_error = in.last_error;
   std::uint64_t last_error_utime = in.last_error_utime;

@@ -4,8 +4,8 @@
 #               the unit tests, the io integration tests (LCM codecs, wire fields,
 #               frame sources) and the daemon's building blocks; then every fuzz
 #               target for FUZZ_SECONDS (default 30) from the committed corpus;
-#   build-tsan clang-14, TSan: the daemon's queue/stage tests and the threaded
-#               pipeline end to end.
+#   build-tsan clang-14, TSan: the daemon's queue/stage tests, the threaded
+#               pipeline end to end and the object search sink's worker.
 # Only the targets these runs need are built (the sanitizer builds are 2-3x
 # slower to compile and run than Release). Every sanitizer report is fatal.
 #
@@ -70,9 +70,10 @@ for step in "${STEPS[@]}"; do
     tsan)
       configure "$TSAN_DIR" -DFINDMUG_SANITIZE=thread
       timed "tsan build" cmake --build "$TSAN_DIR" -j"$JOBS" --target daemon_queue_test \
-        --target daemon_pipeline_test --target daemon_fault_test --target findmugd
+        --target daemon_pipeline_test --target daemon_fault_test --target daemon_find_test \
+        --target findmugd
       timed "tsan tests" ctest --test-dir "$TSAN_DIR" --output-on-failure -j"$JOBS" --timeout 1800 \
-        -R '^(BoundedQueue|ReorderBuffer|Stage|LatencyWindow|RateMeter|WatchdogGate|DaemonPipeline|DaemonFaults)\.' ;;
+        -R '^(BoundedQueue|ReorderBuffer|Stage|LatencyWindow|RateMeter|WatchdogGate|DaemonPipeline|DaemonFaults|DaemonFind)\.' ;;
     *) echo "test-sanitizers: unknown step '$step' (asan, fuzz, tsan)" >&2; exit 2 ;;
   esac
 done

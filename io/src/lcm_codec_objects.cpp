@@ -4,6 +4,7 @@
 // lcm_wire.cpp with the other types'.
 #include "findmug/io/lcm_codec_objects.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <initializer_list>
 #include <string>
@@ -11,6 +12,7 @@
 
 #include "findmug/common/error.hpp"
 #include "findmug/common/pose2d.hpp"
+#include "findmug/objects/object_model.hpp"
 
 namespace findmug::io {
 
@@ -65,9 +67,57 @@ findmug_lcm::table_object_t toLcm(const TableObject& o, int table_map_id,
   out.point_count = o.point_count;
   for (int b = 0; b < kObjectColourBins; ++b) out.colour_histogram[b] = o.colour_histogram[b];
   out.truncation = static_cast<std::int8_t>(o.truncation);
-  out.map_id = 0;  // no object map yet: frame content
+  out.map_id = 0;  // frame content: no object map fields
   out.sightings = 0;
   out.last_seen_utime = 0;
+  out.name_score = 0.0f;
+  return out;
+}
+
+// One object of the object map: map-frame fields from the map, the others relative to
+// the robot at `map_pose` (`map_to_base`).
+findmug_lcm::table_object_t mapObjectToLcm(const MappedObject& o, int table_index,
+                                           const Pose2D& map_to_base) {
+  findmug_lcm::table_object_t out{};
+  out.id = o.id;
+  out.table_id = table_index;
+  out.table_map_id = o.table_id;
+  const Eigen::Vector2d base_xy =
+      transformPointD(map_to_base, o.centroid.head<2>().cast<double>());
+  const double c = std::cos(map_to_base.yaw), s = std::sin(map_to_base.yaw);
+  const Eigen::Vector2d axis(c * o.major_axis.x() - s * o.major_axis.y(),
+                             s * o.major_axis.x() + c * o.major_axis.y());
+  for (int i = 0; i < 3; ++i) {
+    out.map_centroid[i] = o.centroid[i];
+    out.mean_rgb[i] = std::clamp(o.mean_rgb[i], 0.0f, 255.0f);
+  }
+  out.centroid[0] = base_xy.x();
+  out.centroid[1] = base_xy.y();
+  out.centroid[2] = o.centroid.z();
+  out.height_above_top = std::max(o.height_above_top, 0.0f);
+  const double norm = axis.norm();
+  out.major_axis[0] = norm > 0 ? axis.x() / norm : 1.0;
+  out.major_axis[1] = norm > 0 ? axis.y() / norm : 0.0;
+  out.extents[0] = o.extents.x();
+  out.extents[1] = o.extents.y();
+  // The map keeps no footprint box centre apart from the centroid.
+  out.center[0] = base_xy.x();
+  out.center[1] = base_xy.y();
+  out.point_count = std::max(o.point_count, 1);
+  // The running mean of normalised histograms sums to 1 up to rounding: renormalised.
+  double sum = 0.0;
+  for (int b = 0; b < kObjectColourBins; ++b) sum += std::max(o.colour_histogram[b], 0.0f);
+  for (int b = 0; b < kObjectColourBins; ++b) {
+    out.colour_histogram[b] =
+        sum > 0 ? static_cast<float>(std::max(o.colour_histogram[b], 0.0f) / sum)
+                : (b == kObjectColourBins - 1 ? 1.0f : 0.0f);
+  }
+  out.truncation = 0;
+  out.map_id = o.id;
+  out.sightings = o.sightings;
+  out.last_seen_utime = static_cast<std::int64_t>(o.last_seen_utime);
+  out.name = o.name;
+  out.name_score = o.name.empty() ? 0.0f : o.name_score;
   return out;
 }
 
@@ -120,9 +170,12 @@ void checkIds(const findmug_lcm::table_object_t& o, const findmug_lcm::objects_t
     }
     id_seen[static_cast<std::size_t>(o.id)] = true;
   }
-  if (o.table_id < 0 || o.table_id >= msg.num_tables) {
-    throw Error(where + ".table_id: " + std::to_string(o.table_id) + " outside [0, num_tables " +
-                std::to_string(msg.num_tables) + ")");
+  // An object map entry whose table is not among the table map's confirmed tables: -1.
+  const bool no_table = map_content && o.table_id == -1;
+  if (!no_table && (o.table_id < 0 || o.table_id >= msg.num_tables)) {
+    throw Error(where + ".table_id: " + std::to_string(o.table_id) + " outside [" +
+                (map_content ? "-1" : "0") + ", num_tables " + std::to_string(msg.num_tables) +
+                ")");
   }
   if (o.table_map_id < 0) {
     throw Error(where + ".table_map_id: negative (" + std::to_string(o.table_map_id) + ")");
@@ -183,7 +236,21 @@ void checkMapEntry(const findmug_lcm::table_object_t& o, bool map_content,
                   std::to_string(o.map_id) + ", " + std::to_string(o.sightings) + ", " +
                   std::to_string(o.last_seen_utime) + ")");
     }
+    if (!o.name.empty() || o.name_score != 0.0f) {
+      throw Error(where + ".name/name_score: must be \"\" and 0 in a frame message");
+    }
     return;
+  }
+  if (!o.name.empty()) {
+    try {
+      validateObjectModelName(o.name);
+    } catch (const Error& e) {
+      throw Error(where + ".name: " + e.what());
+    }
+  }
+  if (!(o.name_score >= 0.0f && o.name_score <= 1.0f) || (o.name.empty() && o.name_score != 0.0f)) {
+    throw Error(where + ".name_score: " + std::to_string(o.name_score) +
+                " (in [0, 1] for a named object, 0 for one never named)");
   }
   if (o.map_id <= 0 || o.id != o.map_id) {
     throw Error(where + ".map_id: an object map entry needs id == map_id > 0 (id " +
@@ -226,6 +293,8 @@ ObjectMapInfo mapInfoFromLcm(const findmug_lcm::table_object_t& o, bool has_map_
   info.map_id = o.map_id;
   info.sightings = o.sightings;
   info.last_seen_utime = static_cast<std::uint64_t>(o.last_seen_utime);
+  info.name = o.name;
+  info.name_score = o.name_score;
   return info;
 }
 
@@ -262,6 +331,31 @@ findmug_lcm::objects_t encodeObjects(std::uint64_t utime, std::int64_t seq,
   // object stage got wrong fails the frame's publish (reported and counted by findmugd)
   // rather than going out as a message each client drops. A few objects: cheap.
   (void)decodeObjects(msg, "encodeObjects");
+  return msg;
+}
+
+findmug_lcm::objects_t encodeObjectMap(std::uint64_t utime, std::int64_t seq,
+                                       std::span<const MappedObject> objects,
+                                       std::span<const TableCluster> map_tables,
+                                       const RobotPose& map_pose) {
+  findmug_lcm::objects_t msg{};
+  msg.utime = static_cast<std::int64_t>(utime);
+  msg.seq = seq;
+  msg.content = findmug_lcm::objects_t::CONTENT_MAP;
+  msg.num_tables = static_cast<std::int32_t>(map_tables.size());
+  msg.has_map_pose = true;
+  msg.map_pose = encodeRobotPose(map_pose);
+  const Pose2D map_to_base = inversePose(map_pose.pose);
+  msg.objects.reserve(objects.size());
+  for (const MappedObject& o : objects) {
+    int index = -1;
+    for (std::size_t k = 0; k < map_tables.size(); ++k) {
+      if (o.table_id != 0 && map_tables[k].id == o.table_id) index = static_cast<int>(k);
+    }
+    msg.objects.push_back(mapObjectToLcm(o, index, map_to_base));
+  }
+  msg.num_objects = static_cast<std::int32_t>(msg.objects.size());
+  (void)decodeObjects(msg, "encodeObjectMap");  // what a listener refuses is refused here
   return msg;
 }
 

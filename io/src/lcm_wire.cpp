@@ -147,11 +147,19 @@ void walkTable(WireWalker& w) {
   w.skip(kI32 + kBool + 2 * kI32, "tables.map_id/confirmed/sightings/viewpoints");
 }
 
-// table_object_t has only fixed-size fields: id, table_id, table_map_id, centroid,
+// table_object_t: the fixed-size fields id, table_id, table_map_id, centroid,
 // map_centroid, height_above_top, major_axis, extents, center, point_count, mean_rgb,
-// colour_histogram, truncation, map_id, sightings, last_seen_utime.
-constexpr std::size_t kTableObject =
+// colour_histogram, truncation, map_id, sightings, last_seen_utime; then name (a
+// string) and name_score.
+constexpr std::size_t kTableObjectFixed =
     3 * kI32 + 6 * kF64 + kF64 + 6 * kF64 + kI32 + 3 * kF32 + 28 * kF32 + kI8 + 2 * kI32 + kI64;
+constexpr std::size_t kMinTableObject = kTableObjectFixed + kMinString + kF32;
+
+void walkTableObject(WireWalker& w) {
+  w.skip(kTableObjectFixed, "objects");
+  w.string("objects.name");
+  w.skip(kF32, "objects.name_score");
+}
 
 template <typename Msg>
 Msg decodeWalked(const void* data, std::size_t size, std::string_view channel) {
@@ -249,7 +257,8 @@ findmug_lcm::objects_t decodeMessage<findmug_lcm::objects_t>(const void* data, s
   return walkThenDecode<findmug_lcm::objects_t>(data, size, channel, [](WireWalker& w) {
     w.skip(2 * kI64 + kI8 + kI32 + kBool, "utime/seq/content/num_tables/has_map_pose");
     walkRobotPose(w);
-    w.array(w.count("num_objects", kTableObject), kTableObject, "objects");
+    const std::int32_t objects = w.count("num_objects", kMinTableObject);
+    for (std::int32_t i = 0; i < objects; ++i) walkTableObject(w);
   });
 }
 
@@ -310,6 +319,7 @@ findmug_lcm::status_t decodeMessage<findmug_lcm::status_t>(const void* data, std
     w.skip(2 * kI64 + kBool, "objects_taught/teach_refused/last_teach_ok");
     w.string("last_teach_result");
     w.skip(kI64, "last_teach_request_id");
+    w.skip(15 * kI64, "object_frames ... object_map_publishes");
   });
 }
 

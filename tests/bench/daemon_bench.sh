@@ -8,6 +8,10 @@
 #       [--set KEY=VALUE]...   (extra daemon settings, e.g. --set daemon.max_cpu_cores=1)
 #       [--robot-pose X,Y,YAW] (findmug-replay also publishes this fixed robot pose with
 #                               every frame: what daemon.semantic_map / the table map need)
+#       [--objects]            (objects on: an object taught with findmug-teach from the first
+#                               NYU frame it can teach from, in daemon.objects_dir, so every
+#                               frame's candidates go through the matcher; with the robot pose
+#                               (0,0,0 unless --robot-pose) the object map runs and is published)
 #   (scripts/bench.sh runs this with the defaults.)
 #
 # For each data set, input rate and mode, inside a private network namespace:
@@ -46,6 +50,7 @@ OUT="$ROOT/BENCHMARKS-replay.md"
 RESULTS=""
 EXTRA_SETS=()
 REPLAY_POSE=()
+OBJECTS=0
 COMMAND_LINE="tests/bench/daemon_bench.sh $*"
 ARGS=("$@")
 while [[ $# -gt 0 ]]; do
@@ -62,7 +67,8 @@ while [[ $# -gt 0 ]]; do
     --results) RESULTS=$2; shift 2 ;;
     --set) EXTRA_SETS+=(--set "$2"); shift 2 ;;
     --robot-pose) REPLAY_POSE=(--robot-pose "$2"); shift 2 ;;
-    -h|--help) sed -n '2,34p' "$0"; exit 0 ;;
+    --objects) OBJECTS=1; shift ;;
+    -h|--help) sed -n '2,38p' "$0"; exit 0 ;;
     *) echo "daemon_bench: unknown argument '$1'" >&2; exit 2 ;;
   esac
 done
@@ -77,6 +83,7 @@ SEQUENTIAL="$REPLAY_DIR/findmug-sequential"
 REPLAY="$REPLAY_DIR/findmug-replay"
 PROBE="$REPLAY_DIR/findmug-replay-probe"
 SYNTH="$BUILD/tools/findmug-synth"
+TEACH="$BUILD/tools/findmug-teach"
 TRAIN="$BUILD/tools/findmug-train"
 for exe in "$FINDMUGD" "$SEQUENTIAL" "$REPLAY" "$PROBE"; do
   [[ -x "$exe" ]] || { echo "daemon_bench: $exe missing: build first (cmake --build $BUILD)" >&2; exit 1; }
@@ -122,23 +129,29 @@ wait_for() {  # FILE SECONDS PID
   done
 }
 
-# monitor PID FILE: "epoch_ms cpu_ticks vmhwm_kb map_ticks" every 0.2 s while PID lives;
-# map_ticks = CPU ticks of the semantic map thread ("findmug-semmap"; 0 without it).
+# monitor PID FILE: "epoch_ms cpu_ticks vmhwm_kb map_ticks objects_ticks" every 0.2 s while
+# PID lives; map_ticks = CPU ticks of the semantic map thread ("findmug-semmap"), objects_ticks
+# those of the object work's thread ("findmug-objects"); 0 without them.
 monitor() {
-  local pid=$1 file=$2 stat ticks hwm map task
+  local pid=$1 file=$2 stat ticks hwm map objects task comm
   : > "$file"
   while [[ -r /proc/$pid/stat ]]; do
     stat=$(cat "/proc/$pid/stat" 2>/dev/null) || break
     # Fields after the command name (which may hold spaces): utime is 14th, stime 15th.
     ticks=$(echo "${stat##*) }" | awk '{print $12 + $13}')
     hwm=$(awk '/^VmHWM:/ {print $2}' "/proc/$pid/status" 2>/dev/null || echo 0)
-    map=0
+    map=0 objects=0
     for task in /proc/$pid/task/*; do
-      [[ "$(cat "$task/comm" 2>/dev/null)" == findmug-semmap ]] || continue
+      comm=$(cat "$task/comm" 2>/dev/null) || continue
+      [[ "$comm" == findmug-semmap || "$comm" == findmug-objects ]] || continue
       stat=$(cat "$task/stat" 2>/dev/null) || continue
-      map=$(echo "${stat##*) }" | awk '{print $12 + $13}')
+      if [[ "$comm" == findmug-semmap ]]; then
+        map=$(echo "${stat##*) }" | awk '{print $12 + $13}')
+      else
+        objects=$(echo "${stat##*) }" | awk '{print $12 + $13}')
+      fi
     done
-    [[ -n "$hwm" ]] && echo "$(date +%s%3N) $ticks $hwm $map" >> "$file"
+    [[ -n "$hwm" ]] && echo "$(date +%s%3N) $ticks $hwm $map $objects" >> "$file"
     sleep 0.2
   done
 }
@@ -188,6 +201,28 @@ if [[ $TABLES_ONLY == 0 ]]; then
   MODEL="$RESULTS/model.fmf"
 else
   MODEL_NAME="$(cat "$RESULTS/model-name" 2>/dev/null || basename "$MODEL")"
+fi
+
+# --- objects on: a taught object -----------------------------------------------------------
+if [[ $OBJECTS == 1 && $TABLES_ONLY == 0 ]]; then
+  [[ -x "$TEACH" ]] || { log "findmug-teach missing: build it first"; exit 1; }
+  mkdir -p "$RESULTS/objects"
+  # The first NYU frame with a candidate on a table to teach from: a model of something that
+  # is on NYU's tables, so that candidates get past the cheap gates to the shape descriptor.
+  taught=""
+  for png in "$DATA_ROOT"/nyuv2_labeled/rgb/*.png; do
+    f=$(basename "$png" .png)
+    if "$TEACH" --name nyu_object --data "$DATA_ROOT/nyuv2_labeled" --frames "$f" \
+         --model "$MODEL" "${MODEL_SETS[@]}" --out "$RESULTS/objects/nyu_object.fmo" \
+         > "$RESULTS/teach.log" 2>&1; then
+      taught=$f; break
+    fi
+  done
+  [[ -n "$taught" ]] || { cat "$RESULTS/teach.log"; log "no NYU frame to teach an object from"; exit 1; }
+  echo "$taught" > "$RESULTS/objects/taught-from"
+  log "objects on: taught nyu_object from NYU frame $taught"
+  EXTRA_SETS+=(--set "daemon.objects_dir=$RESULTS/objects")
+  [[ ${#REPLAY_POSE[@]} -gt 0 ]] || REPLAY_POSE=(--robot-pose 0,0,0)
 fi
 
 # --- one run -------------------------------------------------------------------------------
@@ -245,14 +280,17 @@ figures() {
   local tck; tck=$(getconf CLK_TCK)
   local usage
   usage=$(awk -v s="$(cat "$dir/start_ms")" -v e="$(cat "$dir/end_ms")" -v tck="$tck" '
-    { if ($1 <= s) { t0 = $1; c0 = $2; m0 = $4 } if ($1 <= e) { t1 = $1; c1 = $2; m1 = $4 }
+    { if ($1 <= s) { t0 = $1; c0 = $2; m0 = $4; o0 = $5 }
+      if ($1 <= e) { t1 = $1; c1 = $2; m1 = $4; o1 = $5 }
       if ($3 > hwm) hwm = $3 }
-    END { if (t1 > t0) printf "%.0f %.0f %.1f", 100 * (c1 - c0) / tck / ((t1 - t0) / 1000), hwm / 1024,
-                              100 * (m1 - m0) / tck / ((t1 - t0) / 1000);
-          else printf "? %.0f ?", hwm / 1024 }' "$dir/usage")
+    END { if (t1 > t0) printf "%.0f %.0f %.1f %.1f", 100 * (c1 - c0) / tck / ((t1 - t0) / 1000), hwm / 1024,
+                              100 * (m1 - m0) / tck / ((t1 - t0) / 1000),
+                              100 * (o1 - o0) / tck / ((t1 - t0) / 1000);
+          else printf "? %.0f ? ?", hwm / 1024 }' "$dir/usage")
   local span; span=$(awk -v s="$(cat "$dir/start_ms")" -v e="$(cat "$dir/end_ms")" 'BEGIN { printf "%.1f", (e - s) / 1000 }')
   local rest=${usage#* }
-  echo "input_fps=$(get input_fps) output_fps=$(get output_fps) frames_in=$frames_in published=$published dropped=$dropped labelled=$((published - void)) p50=$(lat p50) p99=$(lat p99) max=$(lat max) cpu=${usage%% *} rss=${rest% *} map_cpu=${usage##* } map_frames=$(get semantic_map_frames) map_skipped=$(get semantic_map_skipped) map_voxels=$(get semantic_map_voxels) span_s=$span"
+  rest=${rest% *}
+  echo "input_fps=$(get input_fps) output_fps=$(get output_fps) frames_in=$frames_in published=$published dropped=$dropped labelled=$((published - void)) p50=$(lat p50) p99=$(lat p99) max=$(lat max) cpu=${usage%% *} rss=${rest% *} map_cpu=${rest##* } obj_cpu=${usage##* } map_frames=$(get semantic_map_frames) map_skipped=$(get semantic_map_skipped) map_voxels=$(get semantic_map_voxels) obj_frames=$(get object_frames) obj_skipped=$(get object_frames_skipped) obj_candidates=$(get object_candidates) obj_named=$(get objects_named) obj_mapped=$(get mapped_objects) obj_maps=$(get object_map_publishes) span_s=$span"
 }
 val() { sed -n "s/.*\b$2=\([^ ]*\).*/\1/p" <<< "$1"; }
 fmt1() { awk -v v="$1" 'BEGIN { if (v == "") print "-"; else printf "%.1f", v }'; }
@@ -388,6 +426,39 @@ mem_gb=$(awk '/MemTotal/ {printf "%.0f", $2 / 1048576}' /proc/meminfo)
     echo "|---|---|---|---|---|---|---|---|"
     printf "%s" "$map_rows"
   fi
+  obj_rows=""
+  for ds in $DATASETS; do
+    for rate in $RATES $([[ $ds == nyu ]] && echo "$SEARCHED"); do
+      for mode in $MODES; do
+        dir="$RESULTS/$ds-${rate}fps-$mode"
+        f=$(figures "$dir")
+        [[ -n "$f" && "$(val "$f" obj_frames)" != "" && "$(val "$f" obj_frames)" != 0 ]] || continue
+        j="$dir/probe.json"
+        stage_cell() {
+          grep -o "{\"name\": \"$1\", \"p50_ms\": [0-9.]*, \"p95_ms\": [0-9.]*, \"max_ms\": [0-9.]*}" "$j" 2>/dev/null \
+            | head -1 | awk -F'[:,}]' '{printf "%.1f / %.1f / %.1f", $4, $6, $8}'
+        }
+        cand=$(awk -v c="$(val "$f" obj_candidates)" -v n="$(val "$f" obj_frames)" -v s="$(val "$f" obj_skipped)" \
+          'BEGIN { if (n - s > 0) printf "%.1f", c / (n - s); else print "-" }')
+        obj_rows+="| $ds | $rate | $mode | $(val "$f" obj_frames) | $(val "$f" obj_skipped) | $cand | $(val "$f" obj_named) | $(val "$f" obj_mapped) | $(val "$f" obj_maps) | $(stage_cell objects) | $(stage_cell object_search) | $(val "$f" obj_cpu) |"$'\n'
+      done
+    done
+  done
+  if [[ -n "$obj_rows" ]]; then
+    echo
+    echo "### Object work (daemon.objects_dir, robot pose on)"
+    echo
+    echo "Frames handed to the object work and of them skipped (its queue dropped them: the labels"
+    echo "went out all the same), candidates put to the matcher per frame it worked on, candidates"
+    echo "named, objects in the map at the end, object maps published; the table-top object stage"
+    echo "(\`objects\`, on the segmentation workers) and the object work per frame (\`object_search\`:"
+    echo "matching, object map, publishing; on its own thread), ms p50 / p95 / max over the run; that"
+    echo "thread's CPU (findmug-objects, % of one core over the run)."
+    echo
+    echo "| data | input fps | mode | frames | skipped | candidates / frame | named | mapped | maps out | objects stage ms | object work ms | object thread CPU % |"
+    echo "|---|---|---|---|---|---|---|---|---|---|---|---|"
+    printf "%s" "$obj_rows"
+  fi
   if [[ " $MODES " == *" threaded "* && " $MODES " == *" sequential "* ]]; then
     echo
     echo "### Gain from pipelining (same library, same input)"
@@ -407,7 +478,7 @@ mem_gb=$(awk '/MemTotal/ {printf "%.0f", $2 / 1048576}' /proc/meminfo)
   echo "### Time per stage (threaded, lowest input rate: no queueing), ms p50 / p95 / max"
   echo
   low=$(tr ' ' '\n' <<< "$RATES" | sort -g | head -1)
-  stages="prepare segment publish cloud normals ground supervoxels features forest mrf labels tables total"
+  stages="prepare segment publish object_search cloud normals ground supervoxels features forest mrf labels tables objects total"
   header="| stage |"; rule="|---|"
   for ds in $DATASETS; do header="$header $ds |"; rule="$rule---|"; done
   echo "$header"; echo "$rule"

@@ -212,6 +212,10 @@ void lcmSeeds(SeedWriter& w) {
             decodeObjects);
   }
   w.write("objects", "sample", asString(io::encodeMessage(test::sampleObjects())), decodeObjects);
+  // The object map (FINDMUG_OBJECT_MAP, same decoder): a named mug on a confirmed table
+  // and an object whose table is not confirmed.
+  w.write("objects", "object_map", asString(io::encodeMessage(test::sampleObjectMap())),
+          decodeObjects);
 
   // Answers to "find mug": seen with where to stand, and the places to look.
   auto decodeFind = [](const std::string& b) {

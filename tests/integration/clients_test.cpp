@@ -44,6 +44,7 @@
 #include "findmug/io/semantic_map_codec.hpp"
 #include "findmug/labels/labels.hpp"
 #include "findmug/tables/tables.hpp"
+#include "lcm_samples.hpp"
 #include "test_data.hpp"
 #include "semantic_map_picture.hpp"
 #include "findmug/map/visiting_order.hpp"
@@ -622,6 +623,33 @@ TEST(NavClient, PrintsTheObjectsOnEachTable) {
   EXPECT_NE(r.err.find("skipping bad message: FINDMUG_OBJECTS: objects_t.objects[0].table_id"),
             std::string::npos)
       << r.err;
+}
+
+// With --map: the object map's entries with their stable ids, names, scores and sightings.
+TEST(NavClient, MapListsTheObjectMapWithNamesAndSightings) {
+  TempDir tmp;
+  const std::string log = tmp.str("object_map.lcmlog");
+  findmug_lcm::objects_t map = test::sampleObjectMap();
+  map.num_tables = 1;
+  map.objects[0].table_id = 0;
+  daemon::test::writeLcmLog(log, {{std::string(io::kObjectMapChannel), io::encodeMessage(map)}});
+  const ProcessResult r =
+      run(FINDMUG_NAV_CLIENT_EXE, {"--lcm-url", replayUrl(log), "--map"}, tmp);
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("object map seq 9 utime 5550001: 2 objects on 1 tables, map frame"),
+            std::string::npos)
+      << r.out;
+  EXPECT_NE(r.out.find("mug (score 0.80)  seen 12 times, last utime 5550001"), std::string::npos)
+      << r.out;
+  EXPECT_NE(r.out.find("table -1  object 2"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("(not named)  seen 12 times, last utime 4550001"), std::string::npos)
+      << r.out;
+  const ProcessResult json =
+      run(FINDMUG_NAV_CLIENT_EXE, {"--lcm-url", replayUrl(log), "--map", "--json"}, tmp);
+  EXPECT_EQ(json.exit_code, 0) << json.err;
+  EXPECT_NE(json.out.find("\"object_map\":true"), std::string::npos) << json.out;
+  EXPECT_NE(json.out.find("\"name\":\"mug\",\"score\":0.800,\"sightings\":12"), std::string::npos)
+      << json.out;
 }
 
 TEST(NavClient, BaseFrameIsUsedWhenAskedEvenWithAMapPose) {

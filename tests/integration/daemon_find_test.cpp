@@ -7,6 +7,9 @@
 #include <gtest/gtest.h>
 
 #include <chrono>
+#include <condition_variable>
+#include <future>
+#include <mutex>
 #include <fstream>
 #include <memory>
 #include <string>
@@ -16,6 +19,7 @@
 #include "findmug/common/error.hpp"
 #include "findmug/io/bus.hpp"
 #include "findmug/io/lcm_codec_find.hpp"
+#include "findmug/io/lcm_codec_objects.hpp"
 #include "object_scenes.hpp"
 #include "test_data.hpp"
 
@@ -86,26 +90,29 @@ struct DaemonFind : ::testing::Test {
     return std::exchange(received, {});
   }
 
-  std::vector<MappedTable> table_map;  // what the table map holds (map frame)
+  std::vector<TableCluster> table_map;  // the table map's confirmed tables (map frame)
+  std::uint64_t table_map_revision = 0;
 
+  // Sequential: consume() does the object work before it returns (the threaded worker
+  // has tests of its own in daemon_objects_test).
   std::unique_ptr<ObjectSearchSink> makeSink(bool map_objects = true) {
     ObjectSearchSettings settings;
     settings.objects_dir = dir.str();
     settings.map_objects = map_objects;
+    settings.mode = ExecutionMode::Sequential;
     return std::make_unique<ObjectSearchSink>(
-        settings, bus, kFindChannel, [this] { return table_map; },
+        settings, bus, ObjectSearchSink::Channels{kFindChannel, "FINDMUG_OBJECT_MAP"},
+        TableMapSource{[this] { return table_map_revision; }, [this] { return table_map; }},
         [this](const std::string& what) { errors.push_back(what); });
   }
 
   void mapTables(const std::vector<TableCluster>& tables) {
     table_map.clear();
     for (std::size_t i = 0; i < tables.size(); ++i) {
-      MappedTable m;
-      m.table = tables[i];
-      m.table.id = static_cast<int>(i + 1);
-      m.confirmed = true;
-      table_map.push_back(m);
+      table_map.push_back(tables[i]);
+      table_map.back().id = static_cast<int>(i + 1);
     }
+    ++table_map_revision;
   }
 };
 
@@ -178,6 +185,181 @@ TEST_F(DaemonFind, ACorruptTaughtObjectIsReportedByNameAndTheGoodOnesStay) {
   EXPECT_NE(errors[0].find("broken.fmo"), std::string::npos) << errors[0];
   EXPECT_EQ(sink->counters().object_files_refused, 1u);
   EXPECT_EQ(sink->taughtNames(), std::vector<std::string>{"mug"});
+}
+
+// A candidate made of `model`'s first view's points, standing on the table at (x, y) of
+// the frame (top 0.75 m), its points appended to `cloud` (one row); `colour_bin` and
+// `height` as it was measured.
+TableObject candidateLike(const ObjectModel& model, float x, float y, int colour_bin, float height,
+                          OrganizedCloud& cloud, int id) {
+  const ObjectView& view = model.views.front();
+  TableObject c;
+  c.id = id;
+  c.table = 0;
+  c.centroid = {x, y, 0.75f + height / 2};
+  c.height_above_top = height;
+  c.extents = view.extents;
+  c.center = {x, y};
+  c.mean_rgb = {200, 40, 40};
+  c.colour_histogram[colour_bin] = 1.0f;
+  for (const Eigen::Vector3f& p : view.points) {
+    c.pixels.push_back(static_cast<int>(cloud.points.size()));
+    cloud.points.push_back(p + c.centroid);
+  }
+  c.point_count = static_cast<int>(c.pixels.size());
+  cloud.width = static_cast<int>(cloud.points.size());
+  cloud.height = 1;
+  return c;
+}
+
+// A frame on the table at (2, 0) with three candidates: the taught mug, one of the mug's
+// shape in another colour, and one far too tall.
+LabelledFrame frameWithCandidates(const ObjectModel& mug, std::uint64_t utime) {
+  LabelledFrame frame = frameWith({tableAt(2.0f, 0.0f)}, utime);
+  OrganizedCloud& cloud = frame.segmented.prepared.cloud_ground;
+  auto& objects = frame.table_objects.objects;
+  objects.push_back(candidateLike(mug, 1.8f, 0.0f, 1, 0.10f, cloud, 0));
+  objects.push_back(candidateLike(mug, 2.0f, 0.2f, 9, 0.10f, cloud, 1));
+  objects.push_back(candidateLike(mug, 2.2f, -0.2f, 1, 0.50f, cloud, 2));
+  return frame;
+}
+
+TEST_F(DaemonFind, TheObjectMapIsPublishedWithStableIdsAndNamesAndRefusalsAreCounted) {
+  const ObjectModel mug = test::sampleObjectModel("mug", 1);
+  saveObjectModel(dir.str("mug.fmo"), mug);
+  std::vector<io::ObjectsMessage> maps;
+  bus->subscribeTimed("FINDMUG_OBJECT_MAP",
+                      [&](const std::string& channel, const std::uint8_t* data, std::size_t size,
+                          std::int64_t) { maps.push_back(io::decodeObjects(data, size, channel)); });
+  auto sink = makeSink();
+  mapTables({tableAt(2.0f, 0.0f)});
+  for (std::uint64_t utime : {1000u, 2000u}) {
+    LabelledFrame frame = frameWithCandidates(mug, utime);
+    frame.segmented.prepared.frame.seq = static_cast<std::int64_t>(utime / 1000);
+    FrameResult result{frame, 0, std::nullopt, {}, std::nullopt};
+    asMapped(result, Pose2D{0.5, 0.0, 0.0});
+    sink->consume(result);
+  }
+  drain();
+  ASSERT_EQ(maps.size(), 2u) << "one object map per frame the map took";
+  const io::ObjectsMessage& map = maps.back();
+  EXPECT_EQ(map.content, io::TablesContent::Map);
+  EXPECT_EQ(map.seq, 2);
+  EXPECT_EQ(map.num_tables, 1);
+  ASSERT_TRUE(map.map_pose.has_value());
+  ASSERT_EQ(map.objects.size(), 3u);
+  int named = 0;
+  for (std::size_t i = 0; i < map.objects.size(); ++i) {
+    const io::ObjectMapInfo& info = map.map_info[i];
+    EXPECT_EQ(info.map_id, static_cast<int>(i + 1)) << "the same three objects, ids kept";
+    EXPECT_EQ(info.sightings, 2);
+    EXPECT_EQ(info.last_seen_utime, 2000u);
+    EXPECT_EQ(info.table_map_id, 1);
+    EXPECT_EQ(map.objects[i].table, 0) << "the table map's first confirmed table";
+    if (info.name.empty()) continue;
+    ++named;
+    EXPECT_EQ(info.name, "mug");
+    EXPECT_GT(info.name_score, 0.0f);
+    // Map frame: the candidate at (1.8, 0) of a robot at (0.5, 0).
+    EXPECT_NEAR(info.map_centroid.x(), 2.3, 1e-4);
+    EXPECT_NEAR(map.objects[i].centroid.x(), 1.8, 1e-4) << "relative to the robot at map_pose";
+  }
+  EXPECT_EQ(named, 1);
+
+  const ObjectSearchSink::Counters c = sink->counters();
+  EXPECT_EQ(c.frames_queued, 2u);
+  EXPECT_EQ(c.frames_matched, 2u);
+  EXPECT_EQ(c.candidates, 6u);
+  EXPECT_EQ(c.matches, 2u);
+  EXPECT_EQ(c.refused_colour, 2u);
+  EXPECT_EQ(c.refused_too_big, 2u);
+  EXPECT_EQ(c.refused_too_small + c.refused_shape + c.refused_not_round + c.refused_few_points,
+            0u);
+  EXPECT_EQ(c.map_publishes, 2u);
+  EXPECT_EQ(c.mapped_objects, 3u);
+  EXPECT_EQ(c.table_map_copies, 1u) << "the table map did not change between the frames";
+  EXPECT_EQ(c.frames_skipped, 0u);
+}
+
+TEST_F(DaemonFind, WithoutPublishObjectMapNoMapGoesOut) {
+  const ObjectModel mug = test::sampleObjectModel("mug", 1);
+  int maps = 0;
+  bus->subscribeTimed("FINDMUG_OBJECT_MAP",
+                      [&](const std::string&, const std::uint8_t*, std::size_t, std::int64_t) {
+                        ++maps;
+                      });
+  ObjectSearchSettings settings;
+  settings.mode = ExecutionMode::Sequential;
+  settings.publish_map = false;
+  ObjectSearchSink sink(settings, bus, {kFindChannel, "FINDMUG_OBJECT_MAP"}, {},
+                        [this](const std::string& what) { errors.push_back(what); });
+  LabelledFrame frame = frameWithCandidates(mug, 1000);
+  FrameResult result{frame, 0, std::nullopt, {}, std::nullopt};
+  asMapped(result, Pose2D{});
+  sink.consume(result);
+  drain();
+  EXPECT_EQ(maps, 0);
+  EXPECT_EQ(sink.counters().mapped_objects, 3u) << "the map itself is kept";
+}
+
+// The worker has a thread of its own: with it held (an ESF on a big candidate can take
+// tens of milliseconds), the publish thread's consume() returns at once, the queue keeps
+// the newest frames and counts what it dropped, and the worker catches up afterwards.
+TEST_F(DaemonFind, ASlowObjectWorkerNeverHoldsThePublishThreadAndItsDropsAreCounted) {
+  const ObjectModel mug = test::sampleObjectModel("mug", 1);
+  saveObjectModel(dir.str("mug.fmo"), mug);
+  std::mutex gate_mutex;
+  std::condition_variable gate_changed;
+  bool held = false, released = false;
+  ObjectSearchSettings settings;
+  settings.objects_dir = dir.str();
+  settings.queue_capacity = 2;
+  settings.before_job = [&] {
+    std::unique_lock lock(gate_mutex);
+    held = true;
+    gate_changed.notify_all();
+    gate_changed.wait(lock, [&] { return released; });
+  };
+  ObjectSearchSink sink(settings, bus, {kFindChannel, "FINDMUG_OBJECT_MAP"}, {},
+                        [this](const std::string& what) { errors.push_back(what); });
+  std::vector<LabelledFrame> frames;
+  for (int i = 0; i < 5; ++i) frames.push_back(frameWithCandidates(mug, 1000u * (i + 1)));
+  auto consumeFrame = [&](int i) {
+    FrameResult result{frames[static_cast<std::size_t>(i)], 0, std::nullopt, {}, std::nullopt};
+    asMapped(result, Pose2D{});
+    sink.consume(result);
+  };
+  consumeFrame(0);
+  {
+    std::unique_lock lock(gate_mutex);
+    ASSERT_TRUE(gate_changed.wait_for(lock, 10s, [&] { return held; }))
+        << "the worker never took the first frame";
+  }
+  // The worker is held with frame 0: the next four must not wait for it.
+  auto publishing = std::async(std::launch::async, [&] {
+    for (int i = 1; i < 5; ++i) consumeFrame(i);
+  });
+  const bool returned = publishing.wait_for(10s) == std::future_status::ready;
+  ObjectSearchSink::Counters c = sink.counters();
+  {
+    std::lock_guard lock(gate_mutex);
+    released = true;
+  }
+  gate_changed.notify_all();
+  ASSERT_TRUE(returned) << "consume() waited for the held object worker";
+  EXPECT_EQ(c.frames_queued, 5u);
+  EXPECT_EQ(c.frames_skipped, 2u) << "frames 1 and 2 made room for 3 and 4";
+  EXPECT_EQ(c.queue_depth, 2u);
+  EXPECT_EQ(c.queue_capacity, 2u);
+  ASSERT_TRUE(sink.waitIdle(30s));
+  c = sink.counters();
+  EXPECT_EQ(c.frames_matched, 3u) << "frames 0, 3 and 4";
+  EXPECT_EQ(c.map_publishes, 3u);
+  EXPECT_EQ(c.latency.samples, 3u);
+  sink.stop(true);
+  sink.consume(*std::make_unique<FrameResult>(FrameResult{frames[0], 0, std::nullopt, {},
+                                                          std::nullopt}));
+  EXPECT_EQ(sink.counters().frames_queued, 5u) << "nothing is taken after stop()";
 }
 
 TEST(FindCodec, RoundTripsAndRefusesWhatIsNotAnAnswer) {

@@ -410,6 +410,82 @@ TEST(DaemonPipeline, HeldSegmentStageDropsTheOldestFramesAndTheNewestWin) {
   EXPECT_EQ(published.statuses.back().frames_processed, kept);
 }
 
+// The object work (matching, object map) runs on its own worker: while it is held, the
+// publish thread goes on publishing every frame's labels, the object queue keeps the
+// newest frames and status_t counts what it dropped; released, it catches up.
+TEST(DaemonPipeline, HeldObjectWorkerNeverHoldsTheLabelsAndItsDropsAreCounted) {
+  FINDMUG_REQUIRE_DATA(nyu, "nyuv2_labeled");
+  ASSERT_TRUE(sharedModel());
+  TempDir tmp;
+  std::filesystem::create_directories(tmp.path() / "objects");
+  test::TestConfig config = baseConfig("openni2", tmp.str("out.lcmlog"));
+  config.set("daemon.objects_dir", tmp.str("objects"));
+  config.set("daemon.objects_queue", "2");
+  config.set("daemon.queue_capacity", "16");
+  const DaemonConfig dc = config.daemon;
+  std::mutex m;
+  std::condition_variable cv;
+  bool held = false, release = false;
+  PipelineHooks hooks;
+  hooks.before_object_job = [&] {
+    std::unique_lock lock(m);
+    held = true;
+    cv.notify_all();
+    cv.wait(lock, [&] { return release; });
+  };
+  DatasetFolder ds(nyu.string());
+  const RgbdFrame frame = ds.load(6).frame;
+  constexpr int kFrames = 6;
+  Pipeline pipeline(config.segmenter, dc, sharedModel()->forest, "tiny", ExecutionMode::Threaded,
+                    hooks);
+  pipeline.start();
+  for (int seq = 0; seq < kFrames; ++seq) {
+    RgbdFrame f = frame;
+    f.seq = seq;
+    f.utime = 1000 + static_cast<std::uint64_t>(seq);
+    ASSERT_TRUE(pipeline.waitForRoom(120s));
+    ASSERT_TRUE(pipeline.submit(std::move(f)));
+  }
+  // Every label image goes out while the object worker still holds the first frame.
+  const auto deadline = std::chrono::steady_clock::now() + 300s;
+  while (pipeline.counters().processed < static_cast<std::uint64_t>(kFrames) &&
+         std::chrono::steady_clock::now() < deadline) {
+    std::this_thread::sleep_for(10ms);
+  }
+  const findmug_lcm::status_t during = makeStatus(pipeline);
+  bool was_held = false;
+  {
+    std::lock_guard lock(m);
+    was_held = held;
+    release = true;
+  }
+  cv.notify_all();
+  EXPECT_TRUE(was_held);
+  EXPECT_EQ(during.frames_processed, kFrames) << "the labels waited for the object work";
+  EXPECT_EQ(during.object_frames, kFrames);
+  // The held frame, two waiting: the other three were dropped from the object queue.
+  EXPECT_EQ(during.object_frames_skipped, kFrames - 3);
+  EXPECT_EQ(during.frames_dropped, 0) << "an object drop is no frame drop";
+  int object_queue = -1;
+  for (int i = 0; i < during.num_queues; ++i) {
+    if (during.queue_names[i] == "object_search") object_queue = i;
+  }
+  ASSERT_GE(object_queue, 0) << "the object queue is in status";
+  EXPECT_EQ(during.queue_depths[object_queue], 2);
+  EXPECT_EQ(during.queue_capacities[object_queue], 2);
+  pipeline.stop(StopMode::Drain);
+  const Published published = readPublished(tmp.str("out.lcmlog"));
+  EXPECT_EQ(published.labels.size(), static_cast<std::size_t>(kFrames));
+  ASSERT_FALSE(published.statuses.empty());
+  const findmug_lcm::status_t& last = published.statuses.back();
+  EXPECT_EQ(last.object_frames_skipped, kFrames - 3);
+  bool timed = false;
+  for (int i = 0; i < last.num_stages; ++i) {
+    if (last.stage_names[i] == "object_search") timed = last.latency_max_us[i] > 0;
+  }
+  EXPECT_TRUE(timed) << "the object work's time per frame is in status";
+}
+
 // Counts the threads of this process (/proc/self/task).
 int threadCount() {
   int n = 0;

@@ -390,6 +390,7 @@ StatusSnapshot sampleSnapshot() {
   s.semantic_map_frames = 40;
   s.semantic_map_skipped = 3;
   s.semantic_map_voxels = 250000;
+  s.objects = {120, 2, 300, 40, 101, 91, 51, 11, 5, 4, 1, 3, 4, 6, 118};
   return s;
 }
 
@@ -432,6 +433,22 @@ TEST(StatusBuilder, FillsEveryFieldFromTheSnapshot) {
   EXPECT_EQ(s.semantic_map_skipped, 3);
   EXPECT_EQ(s.semantic_map_voxels, 250000);
   EXPECT_EQ(s.frames_lost_in_transit, 0);
+  // The object work, each counter in its own field.
+  EXPECT_EQ(s.object_frames, 120);
+  EXPECT_EQ(s.object_frames_skipped, 2);
+  EXPECT_EQ(s.object_candidates, 300);
+  EXPECT_EQ(s.objects_named, 40);
+  EXPECT_EQ(s.objects_refused_too_big, 101);
+  EXPECT_EQ(s.objects_refused_too_small, 91);
+  EXPECT_EQ(s.objects_refused_colour, 51);
+  EXPECT_EQ(s.objects_refused_not_round, 11);
+  EXPECT_EQ(s.objects_refused_shape, 5);
+  EXPECT_EQ(s.objects_refused_few_points, 4);
+  EXPECT_EQ(s.object_files_refused, 1);
+  EXPECT_EQ(s.find_requests, 3);
+  EXPECT_EQ(s.find_answers, 4);
+  EXPECT_EQ(s.mapped_objects, 6);
+  EXPECT_EQ(s.object_map_publishes, 118);
 }
 
 TEST(StatusBuilder, TheSourceStateAndTheNewerErrorWin) {

@@ -1194,6 +1194,93 @@ TEST(ObjectsCodec, MapContentNeedsMapEntries) {
   expectError([&] { decodeObjects(m, "C"); }, "objects[1].sightings/last_seen_utime");
 }
 
+// The object map as findmugd publishes it on FINDMUG_OBJECT_MAP: names and scores come
+// through; a bad name, a score out of range, a name in a frame message and a table index
+// below -1 are refused by field.
+TEST(ObjectsCodec, ObjectMapCarriesNamesAndRefusesBadOnes) {
+  const findmug_lcm::objects_t good = test::sampleObjectMap();
+  const Bytes b = encodeMessage(good);
+  const ObjectsMessage out = decodeObjects(b.data(), b.size(), "FINDMUG_OBJECT_MAP");
+  ASSERT_EQ(out.objects.size(), 2u);
+  EXPECT_EQ(out.map_info[0].name, "mug");
+  EXPECT_FLOAT_EQ(out.map_info[0].name_score, 0.8f);
+  EXPECT_EQ(out.map_info[1].name, "");
+  EXPECT_EQ(out.objects[1].table, -1) << "its table is not among the confirmed ones";
+  struct Case {
+    std::function<void(findmug_lcm::objects_t&)> spoil;
+    std::string named;
+  };
+  const std::vector<Case> cases = {
+      {[](auto& m) { m.objects[0].name = "Red Mug"; }, "objects[0].name: "},
+      {[](auto& m) { m.objects[0].name_score = 1.5f; }, "objects[0].name_score"},
+      {[](auto& m) { m.objects[0].name_score = NAN; }, "objects[0].name_score"},
+      {[](auto& m) { m.objects[1].name_score = 0.5f; }, "objects[1].name_score"},
+      {[](auto& m) { m.objects[1].table_id = -2; }, "objects[1].table_id: -2 outside [-1"},
+      {[](auto& m) {
+         m = test::sampleObjects();
+         m.objects[0].name = "mug";
+       },
+       "objects[0].name/name_score: must be"},
+      {[](auto& m) {
+         m = test::sampleObjects();
+         m.objects[0].table_id = -1;
+       },
+       "objects[0].table_id: -1 outside [0"},
+  };
+  for (const Case& c : cases) {
+    findmug_lcm::objects_t bad = good;
+    c.spoil(bad);
+    expectError([&] { decodeObjects(bad, "C"); }, c.named);
+  }
+}
+
+// encodeObjectMap: map-frame fields from the map, the others relative to the robot, the
+// table index among the confirmed tables (-1 when not there), what it makes decodes.
+TEST(ObjectsCodec, EncodeObjectMapPlacesObjectsRelativeToTheRobot) {
+  MappedObject mug;
+  mug.id = 4;
+  mug.centroid = {3.0f, 1.0f, 0.8f};
+  mug.major_axis = {0.0f, 1.0f};
+  mug.extents = {0.05f, 0.04f};
+  mug.height_above_top = 0.1f;
+  mug.mean_rgb = {200, 30, 30};
+  mug.colour_histogram[0] = 0.7f;
+  mug.colour_histogram[1] = 0.3001f;  // a running mean: sums to 1 only roughly
+  mug.point_count = 300;
+  mug.table_id = 7;
+  mug.name = "mug";
+  mug.name_score = 0.9f;
+  mug.sightings = 5;
+  mug.last_seen_utime = 900;
+  MappedObject other = mug;
+  other.id = 5;
+  other.table_id = 8;  // tentative: not among the confirmed tables
+  other.name = "";
+  other.name_score = 0.0f;
+  TableCluster seven;
+  seven.id = 7;
+  const std::vector<MappedObject> objects = {mug, other};
+  const std::vector<TableCluster> tables = {seven};
+  const RobotPose pose{1000, Pose2D{2.0, 1.0, M_PI / 2}};
+  const Bytes b = encodeMessage(encodeObjectMap(1000, 33, objects, tables, pose));
+  const ObjectsMessage out = decodeObjects(b.data(), b.size(), "FINDMUG_OBJECT_MAP");
+  EXPECT_EQ(out.content, TablesContent::Map);
+  EXPECT_EQ(out.seq, 33);
+  EXPECT_EQ(out.num_tables, 1);
+  ASSERT_EQ(out.objects.size(), 2u);
+  EXPECT_EQ(out.objects[0].table, 0);
+  EXPECT_EQ(out.objects[1].table, -1);
+  EXPECT_EQ(out.map_info[0].table_map_id, 7);
+  EXPECT_EQ(out.map_info[1].table_map_id, 8);
+  EXPECT_EQ(out.map_info[0].map_id, 4);
+  EXPECT_EQ(out.map_info[0].name, "mug");
+  EXPECT_NEAR(out.map_info[0].map_centroid.x(), 3.0, 1e-6);
+  // 1 m to the right of a robot at (2, 1) facing +y (base frame: x ahead, y to the left).
+  EXPECT_NEAR(out.objects[0].centroid.x(), 0.0, 1e-5);
+  EXPECT_NEAR(out.objects[0].centroid.y(), -1.0, 1e-5);
+  EXPECT_NEAR(out.objects[0].major_axis.x(), 1.0, 1e-5) << "map +y is the robot's +x";
+}
+
 TEST(ObjectsCorrupt, EveryClass) {
   const Bytes full = encodeMessage(test::sampleObjects());
   for (std::size_t len = 0; len < full.size(); ++len) {

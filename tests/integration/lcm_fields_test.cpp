@@ -112,10 +112,14 @@ void walkObjects(Walk& w) {
   const int n = w.field("num_objects");
   // Each table_object_t: id, table_id, table_map_id, centroid, map_centroid,
   // height_above_top, major_axis, extents, center, point_count, mean_rgb,
-  // colour_histogram[28], truncation, map_id, sightings, last_seen_utime.
+  // colour_histogram[28], truncation, map_id, sightings, last_seen_utime; name, name_score.
   constexpr std::size_t kObject =
       3 * 4 + 3 * 8 + 3 * 8 + 8 + 2 * 8 + 2 * 8 + 2 * 8 + 4 + 3 * 4 + 28 * 4 + 1 + 4 + 4 + 8;
-  w.fixed(static_cast<std::size_t>(n) * kObject);
+  for (int i = 0; i < n; ++i) {
+    w.fixed(kObject);
+    w.string("objects.name");
+    w.fixed(4);
+  }
 }
 
 void walkStatus(Walk& w) {
@@ -145,6 +149,7 @@ void walkStatus(Walk& w) {
   w.fixed(2 * 8 + 1);  // objects_taught, teach_refused, last_teach_ok
   w.string("last_teach_result");
   w.fixed(8);  // last_teach_request_id
+  w.fixed(15 * 8);  // object_frames ... object_map_publishes
 }
 
 RgbdFrame frame() {
@@ -210,6 +215,9 @@ std::vector<Case> cases() {
   out.push_back({"tables", encodeMessage(encodeTables(tables)), walkTables,
                  [](const Bytes& b) { (void)decodeTables(b.data(), b.size(), "CH"); }, "tables_t"});
   out.push_back({"objects", encodeMessage(test::sampleObjects()), walkObjects,
+                 [](const Bytes& b) { (void)decodeObjects(b.data(), b.size(), "CH"); },
+                 "objects_t"});
+  out.push_back({"object_map", encodeMessage(test::sampleObjectMap()), walkObjects,
                  [](const Bytes& b) { (void)decodeObjects(b.data(), b.size(), "CH"); },
                  "objects_t"});
   findmug_lcm::status_t s{};

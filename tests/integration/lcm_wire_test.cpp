@@ -225,6 +225,8 @@ findmug_lcm::objects_t makeObjects(Random& r, const Scale& s) {
     o.map_id = r.i32();
     o.sightings = r.i32();
     o.last_seen_utime = r.i64();
+    o.name = r.text(s.text);
+    o.name_score = r.f32();
   }
   m.num_objects = static_cast<std::int32_t>(m.objects.size());
   return m;
@@ -291,6 +293,21 @@ findmug_lcm::status_t makeStatus(Random& r, const Scale& s) {
   m.last_teach_ok = (r.i32() & 1) != 0;
   m.last_teach_result = r.text(s.text);
   m.last_teach_request_id = r.i64();
+  m.object_frames = r.i64();
+  m.object_frames_skipped = r.i64();
+  m.object_candidates = r.i64();
+  m.objects_named = r.i64();
+  m.objects_refused_too_big = r.i64();
+  m.objects_refused_too_small = r.i64();
+  m.objects_refused_colour = r.i64();
+  m.objects_refused_not_round = r.i64();
+  m.objects_refused_shape = r.i64();
+  m.objects_refused_few_points = r.i64();
+  m.object_files_refused = r.i64();
+  m.find_requests = r.i64();
+  m.find_answers = r.i64();
+  m.mapped_objects = r.i64();
+  m.object_map_publishes = r.i64();
   return m;
 }
 
@@ -394,6 +411,8 @@ TEST(LcmWire, ObjectsWalkMatchesGeneratedCode) {
       EXPECT_EQ(d.objects[k].table_id, m.objects[k].table_id);
       EXPECT_EQ(d.objects[k].colour_histogram[27], m.objects[k].colour_histogram[27]);
       EXPECT_EQ(d.objects[k].last_seen_utime, m.objects[k].last_seen_utime);
+      EXPECT_EQ(d.objects[k].name, m.objects[k].name);
+      EXPECT_EQ(d.objects[k].name_score, m.objects[k].name_score);
     }
     EXPECT_EQ(d.num_tables, m.num_tables);
   });
@@ -418,6 +437,9 @@ TEST(LcmWire, StatusWalkMatchesGeneratedCode) {
     EXPECT_EQ(d.commands_rejected, m.commands_rejected);
     EXPECT_EQ(d.frames_collect_refused, m.frames_collect_refused);
     EXPECT_EQ(d.last_collected_frame, m.last_collected_frame);
+    EXPECT_EQ(d.object_frames, m.object_frames);
+    EXPECT_EQ(d.objects_refused_not_round, m.objects_refused_not_round);
+    EXPECT_EQ(d.object_map_publishes, m.object_map_publishes);
   });
 }
 

@@ -1,6 +1,6 @@
 // findmug-test-spy-log LOG — writes an LCM log with one message of every findmug type on its
 // channel (rgbd_frame_t, label_image_t, tables_t on FINDMUG_TABLES and FINDMUG_TABLE_MAP,
-// objects_t, status_t, robot_pose_t, semantic_map_t, command_t; table_t and search_position_t
+// objects_t on FINDMUG_OBJECTS and FINDMUG_OBJECT_MAP, status_t, robot_pose_t, semantic_map_t, command_t; table_t and search_position_t
 // inside the tables, table_object_t inside the objects), encoded by
 // findmug_io's codecs, for spy_test.sh to replay into findmug-spy.
 #include <cmath>
@@ -106,6 +106,27 @@ int main(int argc, char** argv) {
     map.map_info = {io::TableMapInfo{1, true, 3, 2}};
     map.tables[0].id = 1;
     write(log, io::kTableMapChannel, io::encodeMessage(io::encodeTables(map)), t + 3);
+
+    MappedObject mapped;
+    mapped.id = 1;
+    mapped.centroid = {3.3f, 1.5f, 0.82f};
+    mapped.extents = {0.04f, 0.04f};
+    mapped.height_above_top = 0.1f;
+    mapped.mean_rgb = {180.0f, 40.0f, 30.0f};
+    mapped.colour_histogram[0] = 0.75f;
+    mapped.colour_histogram[27] = 0.25f;
+    mapped.point_count = 150;
+    mapped.table_id = 1;
+    mapped.name = "mug";
+    mapped.name_score = 0.8f;
+    mapped.sightings = 4;
+    mapped.last_seen_utime = static_cast<std::uint64_t>(t);
+    const std::vector<MappedObject> object_map = {mapped};
+    const std::vector<TableCluster> map_tables = {map.tables[0]};
+    write(log, io::kObjectMapChannel,
+          io::encodeMessage(io::encodeObjectMap(static_cast<std::uint64_t>(t), 0, object_map,
+                                                map_tables, *map.map_pose)),
+          t + 3);
 
     write(log, io::kRobotPoseChannel, io::encodeMessage(io::encodeRobotPose(*map.map_pose)), t + 4);
 

@@ -52,7 +52,7 @@ echo "== lcm-spy's channel table"
 cat "$work/table.txt"
 status=0
 for pair in FINDMUG_RGBD:rgbd_frame_t FINDMUG_LABELS:label_image_t FINDMUG_TABLES:tables_t \
-            FINDMUG_OBJECTS:objects_t \
+            FINDMUG_OBJECTS:objects_t FINDMUG_OBJECT_MAP:objects_t \
             FINDMUG_TABLE_MAP:tables_t FINDMUG_STATUS:status_t FINDMUG_ROBOT_POSE:robot_pose_t \
             FINDMUG_SEMANTIC_MAP:semantic_map_t FINDMUG_COMMAND:command_t; do
   channel=${pair%%:*}

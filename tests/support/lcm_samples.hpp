@@ -51,6 +51,21 @@ inline findmug_lcm::status_t sampleStatus() {
   s.last_teach_ok = true;
   s.last_teach_result = "taught mug (2 views) from frame seq 41, candidate 0";
   s.last_teach_request_id = 77;
+  s.object_frames = 120;
+  s.object_frames_skipped = 2;
+  s.object_candidates = 300;
+  s.objects_named = 40;
+  s.objects_refused_too_big = 100;
+  s.objects_refused_too_small = 90;
+  s.objects_refused_colour = 50;
+  s.objects_refused_not_round = 10;
+  s.objects_refused_shape = 5;
+  s.objects_refused_few_points = 5;
+  s.object_files_refused = 1;
+  s.find_requests = 3;
+  s.find_answers = 4;
+  s.mapped_objects = 6;
+  s.object_map_publishes = 118;
   return s;
 }
 
@@ -101,6 +116,26 @@ inline findmug_lcm::objects_t sampleObjects() {
   m.objects[1].truncation = findmug_lcm::table_object_t::TRUNCATED_BORDER |
                             findmug_lcm::table_object_t::TRUNCATED_DEPTH_HOLE;
   m.num_objects = 2;
+  return m;
+}
+
+// An object map (FINDMUG_OBJECT_MAP, CONTENT_MAP): a mug named by the matcher on the
+// table map's first confirmed table, and an unnamed object whose table is not confirmed
+// (table_id -1).
+inline findmug_lcm::objects_t sampleObjectMap() {
+  findmug_lcm::objects_t m = sampleObjects();
+  m.content = findmug_lcm::objects_t::CONTENT_MAP;
+  for (std::size_t i = 0; i < m.objects.size(); ++i) {
+    auto& o = m.objects[i];
+    o.id = o.map_id = static_cast<std::int32_t>(i + 1);
+    o.sightings = 12;
+    o.last_seen_utime = 5550001 - static_cast<std::int64_t>(i) * 1000000;
+    o.truncation = 0;
+  }
+  m.objects[0].name = "mug";
+  m.objects[0].name_score = 0.8f;
+  m.objects[1].table_id = -1;
+  m.objects[1].table_map_id = 0;
   return m;
 }
 

@@ -292,6 +292,12 @@ class Probe {
       info.semantic_map_frames = s.semantic_map_frames;
       info.semantic_map_skipped = s.semantic_map_skipped;
       info.semantic_map_voxels = s.semantic_map_voxels;
+      info.object_frames = s.object_frames;
+      info.object_frames_skipped = s.object_frames_skipped;
+      info.object_candidates = s.object_candidates;
+      info.objects_named = s.objects_named;
+      info.mapped_objects = s.mapped_objects;
+      info.object_map_publishes = s.object_map_publishes;
       for (int i = 0; i < s.num_stages; ++i) {
         info.stages.push_back({s.stage_names[i], s.latency_p50_us[i] / 1000.0,
                                s.latency_p95_us[i] / 1000.0, s.latency_max_us[i] / 1000.0});

@@ -245,6 +245,12 @@ void printReport(std::ostream& out, const std::string& name, const Report& r) {
       out << "   semantic map: fused " << s.semantic_map_frames << ", skipped "
           << s.semantic_map_skipped << ", voxels " << s.semantic_map_voxels << "\n";
     }
+    if (s.object_frames > 0) {
+      out << "   objects: frames " << s.object_frames << ", skipped " << s.object_frames_skipped
+          << ", candidates " << s.object_candidates << ", named " << s.objects_named
+          << ", mapped " << s.mapped_objects << ", object maps published "
+          << s.object_map_publishes << "\n";
+    }
   }
   out << "   input " << fixed(r.input_fps, 2) << " fps, output " << fixed(r.output_fps, 2)
       << " fps\n";
@@ -281,7 +287,13 @@ void writeJson(std::ostream& out, const std::string& name, const Report& r) {
         << ", \"source_state\": " << s.source_state
         << ", \"semantic_map_frames\": " << s.semantic_map_frames
         << ", \"semantic_map_skipped\": " << s.semantic_map_skipped
-        << ", \"semantic_map_voxels\": " << s.semantic_map_voxels << ", \"stages\": [";
+        << ", \"semantic_map_voxels\": " << s.semantic_map_voxels
+        << ", \"object_frames\": " << s.object_frames
+        << ", \"object_frames_skipped\": " << s.object_frames_skipped
+        << ", \"object_candidates\": " << s.object_candidates
+        << ", \"objects_named\": " << s.objects_named
+        << ", \"mapped_objects\": " << s.mapped_objects
+        << ", \"object_map_publishes\": " << s.object_map_publishes << ", \"stages\": [";
     for (std::size_t i = 0; i < s.stages.size(); ++i) {
       const auto& st = s.stages[i];
       out << (i ? ", " : "") << "{\"name\": " << jsonString(st.name)

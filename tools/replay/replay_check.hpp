@@ -64,6 +64,10 @@ struct StatusInfo {
   // The semantic map stage (daemon.semantic_map; 0 when off): frames fused, frames it
   // skipped (fell behind), voxels.
   std::int64_t semantic_map_frames = 0, semantic_map_skipped = 0, semantic_map_voxels = 0;
+  // The object work (status_t.object_*): frames it took and skipped, candidates matched and
+  // named, objects mapped, object maps published.
+  std::int64_t object_frames = 0, object_frames_skipped = 0, object_candidates = 0,
+               objects_named = 0, mapped_objects = 0, object_map_publishes = 0;
   struct Stage {
     std::string name;
     double p50_ms = 0, p95_ms = 0, max_ms = 0;

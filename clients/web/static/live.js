@@ -280,6 +280,14 @@ function drawStatus(state) {
     if (s.frames_collected || s.frames_collect_refused) {
       row('frames saved for labelling', `${s.frames_collected} (last ${s.last_collected_frame}), ${s.frames_collect_refused} refused`);
     }
+    const o = s.objects;
+    if (o && (o.frames || o.files_refused || o.find_requests)) {
+      const r = o.refused;
+      row('objects', `${o.frames} frames (${o.skipped} skipped), ${o.candidates} candidates matched, ${o.named} named; ` +
+          `refused: ${r.too_big} too big, ${r.too_small} too small, ${r.colour} colour, ${r.not_round} not round, ` +
+          `${r.shape} shape, ${r.few_points} too few points; ${o.mapped} mapped, ${o.files_refused} object files refused, ` +
+          `find: ${o.find_requests} asked, ${o.find_answers} answers`);
+    }
     if (s.last_error) row('last error', s.last_error);
     const stages = el('stages').tBodies[0];
     stages.textContent = '';

@@ -18,9 +18,12 @@
 //             the pipeline (result_sinks.hpp): the TableMapSink (the map
 //             update rule), then the LcmPublisherSink (label_image_t on
 //             FINDMUG_LABELS, tables_t on FINDMUG_TABLES, the map on
-//             FINDMUG_TABLE_MAP), then the ObjectSearchSink (taught objects
-//             named among the table-top candidates, the object map, answers to
-//             "find" on FINDMUG_FIND_RESULT), then any added with addSink(); and, every
+//             FINDMUG_TABLE_MAP), then the ObjectSearchSink, which copies what
+//             the object work needs and hands it to a worker thread of its own
+//             (taught objects named among the table-top candidates, the object
+//             map on FINDMUG_OBJECT_MAP, answers to "find" on
+//             FINDMUG_FIND_RESULT; a drop-oldest queue, daemon.objects_queue),
+//             then any added with addSink(); and, every
 //             daemon.status_period_s, status_t on FINDMUG_STATUS, built by
 //             StatusBuilder (status_builder.hpp) from statusSnapshot()
 //
@@ -116,6 +119,8 @@ struct PipelineHooks {
   std::shared_ptr<io::Bus> pose_bus;
   // Listen for commands (command_t) on this bus instead of daemon.command_url.
   std::shared_ptr<io::Bus> command_bus;
+  // Called by the object worker before each frame's object work (tests hold it there).
+  std::function<void()> before_object_job;
 };
 
 class Pipeline {

@@ -83,7 +83,13 @@ class TableMapSink final : public ResultSink {
 
   // Tables in the map now, tentative ones included (thread-safe copy).
   std::vector<MappedTable> tables() const;
+  // The confirmed tables only (map frame, by id): what FINDMUG_TABLE_MAP carries.
+  std::vector<TableCluster> confirmedTables() const;
   std::uint64_t updates() const { return updates_.load(); }  // frames the map took
+  // Advances whenever an update may have changed a table (created, seen, confirmed or
+  // forgotten); an update that only counted misses leaves it. A reader that copies the
+  // tables copies them again only when this moved.
+  std::uint64_t revision() const { return revision_.load(); }
 
  private:
   bool update(const LabelledFrame& labelled, const io::RobotPose& pose,
@@ -95,6 +101,7 @@ class TableMapSink final : public ResultSink {
   mutable std::mutex mutex_;  // guards map_ (updated by the publish thread only)
   TableMap map_;
   std::atomic<std::uint64_t> updates_{0};
+  std::atomic<std::uint64_t> revision_{0};
 };
 
 class LcmPublisherSink final : public ResultSink {

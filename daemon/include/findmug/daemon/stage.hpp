@@ -29,6 +29,8 @@
 // one bad frame never stalls the frames behind it.
 #pragma once
 
+#include <pthread.h>
+
 #include <atomic>
 #include <chrono>
 #include <exception>
@@ -64,6 +66,9 @@ struct StageOptions {
   std::chrono::steady_clock::duration latency_window = std::chrono::seconds(10);
   // Periodic tick (single worker only); zero = none.
   std::chrono::steady_clock::duration tick_period{0};
+  // Threaded: the workers' thread name (top -H; the benchmarks read a named thread's CPU
+  // time from /proc), at most 15 characters; "" = unnamed.
+  std::string thread_name{};
 };
 
 struct StageStats {
@@ -223,6 +228,9 @@ class Stage {
 
   void workerLoop() {
     using Clock = std::chrono::steady_clock;
+    if (!options_.thread_name.empty()) {
+      pthread_setname_np(pthread_self(), options_.thread_name.substr(0, 15).c_str());
+    }
     const bool ticking = tick_ && options_.tick_period > Clock::duration::zero();
     auto next_tick = Clock::now() + options_.tick_period;
     for (;;) {

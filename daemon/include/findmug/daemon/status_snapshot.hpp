@@ -72,6 +72,14 @@ struct StatusSnapshot {
   std::uint64_t frames_collected = 0, frames_collect_refused = 0;
   std::string last_collected_frame;
   TeachStatus teach;  // the command "teach" (object_teacher.hpp)
+  // The objects on the tables (object_search_sink.hpp; status_t's object_* fields).
+  struct Objects {
+    std::uint64_t frames = 0, frames_skipped = 0, candidates = 0, named = 0;
+    std::uint64_t refused_too_big = 0, refused_too_small = 0, refused_colour = 0,
+                  refused_not_round = 0, refused_shape = 0, refused_few_points = 0;
+    std::uint64_t files_refused = 0, find_requests = 0, find_answers = 0;
+    std::uint64_t mapped = 0, map_publishes = 0;
+  } objects;
   std::string last_error;  // the pipeline's own
   std::uint64_t last_error_utime = 0;
   std::optional<Source> source;  // nullopt: frames submitted in-process

@@ -14,6 +14,8 @@
 //                                               found: an empty list)
 //   FINDMUG_TABLE_MAP   findmug_lcm::tables_t       confirmed tables of the persistent map, out
 //                                               after each map update (needs robot poses)
+//   FINDMUG_OBJECT_MAP  findmug_lcm::objects_t      the object map (stable ids, names), out after
+//                                               each object map update (needs robot poses)
 //   FINDMUG_STATUS      findmug_lcm::status_t       daemon health, about 1 Hz
 //   FINDMUG_ROBOT_POSE  findmug_lcm::robot_pose_t   robot pose in the map (input, optional)
 //   FINDMUG_SEMANTIC_MAP findmug_lcm::semantic_map_t the fused 3-D semantic map, out at a low
@@ -32,6 +34,7 @@ inline constexpr std::string_view kLabelsChannel = "FINDMUG_LABELS";
 inline constexpr std::string_view kTablesChannel = "FINDMUG_TABLES";
 inline constexpr std::string_view kObjectsChannel = "FINDMUG_OBJECTS";
 inline constexpr std::string_view kTableMapChannel = "FINDMUG_TABLE_MAP";
+inline constexpr std::string_view kObjectMapChannel = "FINDMUG_OBJECT_MAP";
 inline constexpr std::string_view kStatusChannel = "FINDMUG_STATUS";
 inline constexpr std::string_view kRobotPoseChannel = "FINDMUG_ROBOT_POSE";
 inline constexpr std::string_view kSemanticMapChannel = "FINDMUG_SEMANTIC_MAP";

@@ -3,7 +3,8 @@
 // One frame's TableObjectDetection (include/findmug/objects/table_objects.hpp)
 // goes out on FINDMUG_OBJECTS beside the frame's tables_t, naming each
 // object's table by its index in that message (and its map id when the table
-// map took the frame). The decoder trusts nothing, as those of lcm_codec.hpp:
+// map took the frame); the object map (include/findmug/map/object_map.hpp) on
+// FINDMUG_OBJECT_MAP, each object under its stable id with its name. The decoder trusts nothing, as those of lcm_codec.hpp:
 // the wire layout is walked before LCM allocates (lcm_wire.cpp), then sizes,
 // finite numbers, ranges, unit axes, histogram sums, truncation bits and the
 // table ids are checked; any problem is a findmug::Error naming the channel
@@ -19,6 +20,7 @@
 
 #include "findmug/io/lcm_codec.hpp"
 #include "findmug/io/messages.hpp"
+#include "findmug/map/object_map.hpp"
 #include "findmug/objects/table_objects.hpp"
 #include "findmug/tables/tables.hpp"
 #include "findmug_lcm/objects_t.hpp"
@@ -43,9 +45,22 @@ findmug_lcm::objects_t encodeObjects(std::uint64_t utime, std::int64_t seq,
                                      const std::optional<RobotPose>& map_pose,
                                      std::span<const TableMapInfo> table_map_info);
 
+// The object map (Map content, FINDMUG_OBJECT_MAP) after an update with the frame of
+// `utime`/`seq` seen at `map_pose`: every object of `objects` (map frame; the fields
+// without the map_ prefix are computed relative to the robot at map_pose, as encodeTables
+// does for the table map), its table_id the index of its table (MappedObject::table_id,
+// a table map id) in `map_tables` (the table map's confirmed tables, in the order
+// FINDMUG_TABLE_MAP lists them), -1 when it is not there. Throws findmug::Error, naming
+// the field, for what decodeObjects would refuse.
+findmug_lcm::objects_t encodeObjectMap(std::uint64_t utime, std::int64_t seq,
+                                       std::span<const MappedObject> objects,
+                                       std::span<const TableCluster> map_tables,
+                                       const RobotPose& map_pose);
+
 // Checks every field (see the header comment; with Frame content the object-map
-// fields must be 0, with Map content has_map_pose, id == map_id > 0 and
-// sightings > 0); fills map_info for every object.
+// fields must be 0 and the name "", with Map content has_map_pose, id == map_id > 0,
+// sightings > 0, table_id -1 or a table, and a name that is "" or a taught-object
+// name); fills map_info for every object.
 ObjectsMessage decodeObjects(const findmug_lcm::objects_t& message, std::string_view channel);
 ObjectsMessage decodeObjects(const void* data, std::size_t size, std::string_view channel);
 

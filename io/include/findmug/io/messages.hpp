@@ -86,14 +86,16 @@ struct TablesMessage {
 };
 
 // What an objects_t carries per object besides the TableObject itself
-// (table_object_t's map fields). The object map is not published yet: with
-// Frame content map_id, sightings and last_seen_utime are 0.
+// (table_object_t's map fields). With Frame content map_id, sightings,
+// last_seen_utime and the name are 0 / "".
 struct ObjectMapInfo {
   int table_map_id = 0;  // the map id of the table it stands on; 0 = not in the map
   Eigen::Vector3d map_centroid = Eigen::Vector3d::Zero();  // valid when the message has map_pose
-  int map_id = 0;        // stable id in an object map; 0 with Frame content
+  int map_id = 0;        // stable id in the object map (FINDMUG_OBJECT_MAP); 0 with Frame content
   int sightings = 0;
   std::uint64_t last_seen_utime = 0;
+  std::string name;        // the taught object it was named as ("" none)
+  float name_score = 0.0f;
 };
 
 // One frame's object candidates on FINDMUG_OBJECTS (objects_t;
@@ -104,7 +106,8 @@ struct ObjectsMessage {
   TablesContent content = TablesContent::Frame;
   int num_tables = 0;  // tables in the tables_t of the same seq; objects' `table` < this
   std::optional<RobotPose> map_pose;
-  // Base frame; `table` is table_object_t.table_id and `pixels` is empty (not on the wire).
+  // Base frame; `table` is table_object_t.table_id (with Map content -1 when the object's
+  // table is not among the table map's confirmed tables) and `pixels` is empty (not on the wire).
   std::vector<TableObject> objects;
   std::vector<ObjectMapInfo> map_info;  // one per object; always filled by the decoder
 };
