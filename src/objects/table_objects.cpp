@@ -102,6 +102,7 @@ struct Scratch {
   std::vector<Eigen::Vector3f> sample_points;
   // sample_of: union-find parents, then each sampled point's cluster.
   std::vector<int> sample_pixels, sample_of, sample_cluster_of_root, sample_at_pixel;
+  std::vector<int> sample_index;  // per point of the clustered set: its sampled index or -1
 };
 
 // The smallest signed distance of (x, y) to the region's edges: >= 0 inside the hull.
@@ -568,9 +569,19 @@ int clusterSampled(const std::vector<Eigen::Vector3f>& points, const std::vector
   }
   s.sample_points.clear();
   s.sample_pixels.clear();
+  // Per point, its sampled point's index, or -1 when it is not sampled. The
+  // pixels ascend, so the row is followed without a division per point.
+  std::vector<int>& sample_index = s.sample_index;
+  sample_index.assign(points.size(), -1);
+  int row = 0, row_start = 0;
   for (std::size_t k = 0; k < points.size(); ++k) {
     const int p = pixels[k];
-    if ((p % width) % stride != 0 || (p / width) % stride != 0) continue;
+    if (p >= row_start + width) {
+      row = p / width;
+      row_start = row * width;
+    }
+    if (row % stride != 0 || (p - row_start) % stride != 0) continue;
+    sample_index[k] = static_cast<int>(s.sample_points.size());
     s.sample_points.push_back(points[k]);
     s.sample_pixels.push_back(p);
   }
@@ -620,9 +631,19 @@ int clusterSampled(const std::vector<Eigen::Vector3f>& points, const std::vector
     parent[static_cast<std::size_t>(j)] =
         s.sample_cluster_of_root[static_cast<std::size_t>(parent[static_cast<std::size_t>(j)])];
   }
+  row = 0;
+  row_start = 0;
   for (std::size_t k = 0; k < points.size(); ++k) {
+    if (sample_index[k] >= 0) {
+      cluster_of[k] = parent[static_cast<std::size_t>(sample_index[k])];
+      continue;
+    }
     const int p = pixels[k];
-    const int x = p % width, y = p / width;
+    if (p >= row_start + width) {
+      row = p / width;
+      row_start = row * width;
+    }
+    const int x = p - row_start, y = row;
     const int x0 = x - x % stride, y0 = y - y % stride;
     int best = -1;
     float best_d2 = tol2;
