@@ -23,7 +23,9 @@
 //     pending (MappedObject::pending_name): "maybe the mug, look closer".
 //     A far match never confirms a name: beyond about 1.5 m the depth steps
 //     bend a box's faces like a mug's side, and the roundness cue that tells
-//     them apart fails. A match for another name starts the count again for
+//     them apart weakens. The defaults (2 matches within 2 m) were chosen on
+//     object_recognition_eval's visits of seeds 101-160, and measured on
+//     seeds 1-30 (BENCHMARKS.md section 8). A match for another name starts the count again for
 //     that name; a sighting without a name changes nothing. A named object
 //     keeps its name until another name is confirmed the same way. The map
 //     also remembers, per name, the tables it was ever seen on
@@ -61,7 +63,7 @@ struct ObjectMapConfig {
   float seen_margin_m = 0.05f;          // a place is seen when this far inside a visible top
   int max_mean_sightings = 10;          // sightings the running means weigh
   int name_after_matches = 2;           // near matches for a name before the object takes it
-  float max_name_range_m = 1.5f;        // a match farther from the robot is not evidence
+  float max_name_range_m = 2.0f;        // a match farther from the robot is not evidence
 };
 
 // Throws findmug::Error naming the setting (as `object_map.KEY`) when out of range.

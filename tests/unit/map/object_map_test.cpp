@@ -192,7 +192,7 @@ TEST(ObjectMap, OneMatchLeavesTheNamePendingASecondNearOneConfirmsIt) {
   EXPECT_EQ(map.seenOnTables("mug"), std::vector<int>{4});
 }
 
-// Matches from beyond max_name_range_m (1.5 m) never confirm a name, however
+// Matches from beyond max_name_range_m (2 m) never confirm a name, however
 // many: the robot must look closer. Near matches then count from the first.
 TEST(ObjectMap, MatchesFromFarNeverConfirmANameNearOnesDo) {
   ObjectMap map;

@@ -111,7 +111,7 @@ TEST(ObjectSearch, UnseenObjectGetsPlacesSeenBeforeFirstSearchedLast) {
   EXPECT_TRUE(search.searchedTables().empty());
 }
 
-// A match from too far (the shipped max_name_range_m, 1.5 m) or only one
+// A match from too far (the shipped max_name_range_m, 2 m) or only one
 // match does not make the mug "seen": the answer is the places to look, its
 // table first, searched or not, with "look closer" in the summary.
 TEST(ObjectSearch, AMugMatchedOnlyFromFarIsLookCloserWithItsTableFirst) {
