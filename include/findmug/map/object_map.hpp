@@ -18,8 +18,8 @@
 //     the name once `name_after_matches` sightings matched it from no
 //     farther than `max_name_range_m` (floor distance from the robot to the
 //     candidate). One match is not enough: from a single view a mug-sized
-//     box of the mug's colour is taken for the mug about once in ten views
-//     (BENCHMARKS.md section 8), rarely twice. Until then the name is only
+//     box of the mug's colour is taken for the mug in 4-8 % of single views
+//     (BENCHMARKS.md section 8), rarely twice in one visit. Until then the name is only
 //     pending (MappedObject::pending_name): "maybe the mug, look closer".
 //     A far match never confirms a name: beyond about 1.5 m the depth steps
 //     bend a box's faces like a mug's side, and the roundness cue that tells
