@@ -647,18 +647,29 @@ int clusterSampled(const std::vector<Eigen::Vector3f>& points, const std::vector
     const int x0 = x - x % stride, y0 = y - y % stride;
     int best = -1;
     float best_d2 = tol2;
-    for (const int yy : {y0, y0 + stride}) {
-      if (yy >= height) continue;
-      for (const int xx : {x0, x0 + stride}) {
-        if (xx >= width) continue;
-        const int j = s.sample_at_pixel[static_cast<std::size_t>(yy) * width + xx];
-        if (j < 0) continue;
-        const float d2 = (points[k] - s.sample_points[static_cast<std::size_t>(j)]).squaredNorm();
-        if (d2 <= best_d2) {
-          best_d2 = d2;
-          best = j;
+    // The four sampled pixels around it (steps 0 and 1); when none is within
+    // the tolerance (a silhouette's edge, quantised depth far away), the ring
+    // of twelve around those (steps -1 and 2): on rendered rooms a small far
+    // object otherwise lost a fifth of its pixels.
+    for (const int ring : {0, 1}) {
+      for (int dy = -ring; dy <= 1 + ring; ++dy) {
+        const int yy = y0 + dy * stride;
+        if (yy < 0 || yy >= height) continue;
+        for (int dx = -ring; dx <= 1 + ring; ++dx) {
+          if (ring == 1 && dy >= 0 && dy <= 1 && dx >= 0 && dx <= 1) continue;  // looked at
+          const int xx = x0 + dx * stride;
+          if (xx < 0 || xx >= width) continue;
+          const int j = s.sample_at_pixel[static_cast<std::size_t>(yy) * width + xx];
+          if (j < 0) continue;
+          const float d2 =
+              (points[k] - s.sample_points[static_cast<std::size_t>(j)]).squaredNorm();
+          if (d2 <= best_d2) {
+            best_d2 = d2;
+            best = j;
+          }
         }
       }
+      if (best >= 0) break;
     }
     cluster_of[k] = best < 0 ? clusters : parent[static_cast<std::size_t>(best)];
   }
