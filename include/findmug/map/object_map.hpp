@@ -25,7 +25,7 @@
 //     bend a box's faces like a mug's side, and the roundness cue that tells
 //     them apart weakens. The defaults (2 matches within 2 m) were chosen on
 //     object_recognition_eval's visits of seeds 101-160, and measured on
-//     seeds 1-30 (BENCHMARKS.md section 8). A match for another name starts the count again for
+//     seeds 1-60 (BENCHMARKS.md section 8). A match for another name starts the count again for
 //     that name; a sighting without a name changes nothing. A named object
 //     keeps its name until another name is confirmed the same way. The map
 //     also remembers, per name, the tables it was ever seen on
