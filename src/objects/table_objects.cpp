@@ -553,7 +553,8 @@ constexpr int kOrganizedReachSteps = 2;
 // within kOrganizedReachSteps sampled steps of each other in the image and
 // within cluster_tolerance_m in 3-D, and the clusters are the linked sets.
 // Every other point then joins the cluster of the nearest of the four sampled
-// pixels around it that lies within cluster_tolerance_m. A point with none (a
+// pixels around it that lies within cluster_tolerance_m (else of the twelve
+// around those). A point with none (a
 // depth edge, a thin strand) joins no cluster: it is given the id returned
 // (the cluster count), which the caller never makes a candidate. Unlike the
 // exact clustering, parts close in 3-D but further apart in the image stay

@@ -111,7 +111,8 @@ struct TableObjectConfig {
   // point_stride-th row, on the image grid (sampled points up to 2 sampled
   // steps apart in the image and within cluster_tolerance_m are linked), and
   // each other point joins the cluster of a sampled image neighbour (of the
-  // four around it) within cluster_tolerance_m, or none (clusterSampled in
+  // four around it, else of the twelve around those) within
+  // cluster_tolerance_m, or none (clusterSampled in
   // table_objects.cpp). The candidates keep all their points. 1: the exact
   // Euclidean clustering of every point. See BENCHMARKS.md section 8 for
   // what each costs and finds.
