@@ -134,7 +134,7 @@ const SettingsTable<ObjectMapConfig>& objectMapSettings() {
         10000, "sightings the running mean of an object's position and colour weighs"));
     t.add(integerSetting<M, int>(
         "object_map.name_after_matches", [](M& m) -> int& { return m.name_after_matches; }, 1,
-        1000, "sightings matched as a taught object (near enough) before the object takes its name"));
+        1000, "matches (near enough) of a taught object before the object takes its name"));
     t.add(numberSetting<M, float>(
         "object_map.max_name_range_m", [](M& m) -> float& { return m.max_name_range_m; }, 0, 100,
         "a match farther than this from the robot (m) only makes the name pending: look closer"));

@@ -655,7 +655,9 @@ void printVisits(const Run& run) {
         }
       }
       char range_text[16] = "any";
-      if (range < 50) std::snprintf(range_text, sizeof range_text, "%.1f", static_cast<double>(range));
+      if (range < 50) {
+        std::snprintf(range_text, sizeof range_text, "%.1f", static_cast<double>(range));
+      }
       std::printf("| %d | %s | %.3f (%d of %d) | %.3f (%d of %d) | %d |\n", k, range_text,
                   with ? static_cast<double>(found) / with : 0.0, found, with,
                   without ? static_cast<double>(false_found) / without : 0.0, false_found,

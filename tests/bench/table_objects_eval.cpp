@@ -309,7 +309,8 @@ int run(int argc, char** argv) {
         char* end = nullptr;
         const long v = std::strtol(p, &end, 10);
         if (end == p || v < 1 || v > 8) {
-          std::fprintf(stderr, "--strides: a comma-separated list of 1..8, not '%s'\n", argv[i + 1]);
+          std::fprintf(stderr, "--strides: a comma-separated list of 1..8, not '%s'\n",
+                       argv[i + 1]);
           return 2;
         }
         strides.push_back(static_cast<int>(v));

@@ -847,7 +847,8 @@ TEST(TableObjectsRendered, SampledClusteringFindsTheExactClusteringsObjects) {
       }
       for (const TableObject& o : exact.objects) {
         const auto object_pixels = std::count_if(o.pixels.begin(), o.pixels.end(), [&](int p) {
-          return labels.labels[static_cast<std::size_t>(p)] == static_cast<std::uint8_t>(Label::Object);
+          return labels.labels[static_cast<std::size_t>(p)] ==
+                 static_cast<std::uint8_t>(Label::Object);
         });
         if (o.pixels.size() < 100 || 2 * object_pixels < static_cast<long>(o.pixels.size())) {
           continue;
@@ -855,7 +856,8 @@ TEST(TableObjectsRendered, SampledClusteringFindsTheExactClusteringsObjects) {
         ++exact_objects;
         std::map<int, int> votes;
         for (const int p : o.pixels) {
-          if (sampled_of[static_cast<std::size_t>(p)] >= 0) ++votes[sampled_of[static_cast<std::size_t>(p)]];
+          const int id = sampled_of[static_cast<std::size_t>(p)];
+          if (id >= 0) ++votes[id];
         }
         int best = 0;
         for (const auto& [id, n] : votes) best = std::max(best, n);
