@@ -101,6 +101,12 @@ void validateObjectMapConfig(const ObjectMapConfig& c) {
   if (c.max_mean_sightings < 1) {
     badObjectMapSetting("max_mean_sightings", c.max_mean_sightings, "must be >= 1");
   }
+  if (c.name_after_matches < 1) {
+    badObjectMapSetting("name_after_matches", c.name_after_matches, "must be >= 1");
+  }
+  if (!std::isfinite(c.max_name_range_m) || c.max_name_range_m <= 0.0f) {
+    badObjectMapSetting("max_name_range_m", c.max_name_range_m, "must be a positive number");
+  }
 }
 
 const SettingsTable<ObjectMapConfig>& objectMapSettings() {
@@ -126,6 +132,12 @@ const SettingsTable<ObjectMapConfig>& objectMapSettings() {
     t.add(integerSetting<M, int>(
         "object_map.max_mean_sightings", [](M& m) -> int& { return m.max_mean_sightings; }, 1,
         10000, "sightings the running mean of an object's position and colour weighs"));
+    t.add(integerSetting<M, int>(
+        "object_map.name_after_matches", [](M& m) -> int& { return m.name_after_matches; }, 1,
+        1000, "matches (near enough) of a taught object before the object takes its name"));
+    t.add(numberSetting<M, float>(
+        "object_map.max_name_range_m", [](M& m) -> float& { return m.max_name_range_m; }, 0, 100,
+        "a match farther than this from the robot (m) only makes the name pending: look closer"));
     return t;
   }();
   return table;
@@ -147,10 +159,28 @@ std::vector<int> ObjectMap::seenOnTables(const std::string& name) const {
   return {found->second.begin(), found->second.end()};
 }
 
-void ObjectMap::name(MappedObject& mapped, const ObjectIdentity* identity) {
+void ObjectMap::name(MappedObject& mapped, const ObjectIdentity* identity, float range_m) {
   if (identity != nullptr && !identity->name.empty()) {
-    mapped.name = identity->name;
-    mapped.name_score = identity->score;
+    const bool near = range_m <= config_.max_name_range_m;
+    if (identity->name == mapped.name) {
+      // Confirmed already: a near match refreshes the score; a competing
+      // pending name loses its count.
+      if (near) mapped.name_score = identity->score;
+      mapped.pending_name.clear();
+      mapped.pending_matches = 0;
+    } else {
+      if (identity->name != mapped.pending_name) {
+        mapped.pending_name = identity->name;
+        mapped.pending_matches = 0;
+      }
+      if (near) ++mapped.pending_matches;
+      if (mapped.pending_matches >= config_.name_after_matches) {
+        mapped.name = mapped.pending_name;
+        mapped.name_score = identity->score;
+        mapped.pending_name.clear();
+        mapped.pending_matches = 0;
+      }
+    }
   }
   if (!mapped.name.empty() && mapped.table_id != 0) {
     seen_on_tables_[mapped.name].insert(mapped.table_id);
@@ -221,6 +251,8 @@ ObjectMapUpdate ObjectMap::update(const std::vector<TableObject>& objects,
     return identities.empty() ? nullptr : &identities[c];
   };
   const auto tableId = [&](const TableObject& o) { return table_ids.empty() ? 0 : table_ids[o.table]; };
+  // The candidate's floor distance from the robot (the base frame's origin).
+  const auto rangeOf = [](const TableObject& o) { return o.centroid.head<2>().norm(); };
 
   // Every admissible (distance, candidate, mapped) pair, nearest first.
   std::vector<std::tuple<float, int, int>> pairs;
@@ -246,7 +278,7 @@ ObjectMapUpdate ObjectMap::update(const std::vector<TableObject>& objects,
   for (const auto& [distance, c, m] : pairs) {
     if (result.object_ids[c] != 0 || matched[m]) continue;
     absorb(objects_[m], objects[c], base_in_map, tableId(objects[c]), utime);
-    name(objects_[m], identityOf(static_cast<std::size_t>(c)));
+    name(objects_[m], identityOf(static_cast<std::size_t>(c)), rangeOf(objects[c]));
     matched[m] = true;
     result.object_ids[c] = objects_[m].id;
   }
@@ -269,7 +301,7 @@ ObjectMapUpdate ObjectMap::update(const std::vector<TableObject>& objects,
   for (std::size_t c = 0; c < objects.size(); ++c) {
     if (result.object_ids[c] != 0) continue;
     objects_.push_back(create(objects[c], base_in_map, tableId(objects[c]), utime));
-    name(objects_.back(), identityOf(c));
+    name(objects_.back(), identityOf(c), rangeOf(objects[c]));
     result.object_ids[c] = objects_.back().id;
     result.created.push_back(objects_.back().id);
   }

@@ -164,13 +164,20 @@ FindAnswer ObjectSearch::answer(std::int64_t request_id, const std::string& name
 
   answer.kind = FindAnswer::Kind::LookAt;
   const std::vector<int> before = objects.seenOnTables(name);
-  std::vector<PlaceToLook> groups[3];  // seen before, not searched, searched
+  // Tables holding an object that may be it (matched, but too few times or
+  // from too far to be sure): look closer there first, searched or not.
+  std::set<int> maybe_here;
+  for (const MappedObject& o : objects.objects()) {
+    if (o.pending_name == name && o.table_id != 0) maybe_here.insert(o.table_id);
+  }
+  std::vector<PlaceToLook> groups[3];  // maybe here or seen before, not searched, searched
   for (const TableCluster& table : map_tables) {
     const bool seen_before = std::binary_search(before.begin(), before.end(), table.id);
     const bool searched = searched_.count(table.id) != 0;
+    const bool maybe = maybe_here.count(table.id) != 0;
     for (const SearchPosition& p : table.search_positions) {
       if (!p.reachable) continue;
-      const int group = searched ? 2 : (seen_before ? 0 : 1);
+      const int group = maybe ? 0 : (searched ? 2 : (seen_before ? 0 : 1));
       groups[group].push_back({table.id, p, seen_before, searched});
     }
   }
@@ -191,6 +198,11 @@ FindAnswer ObjectSearch::answer(std::int64_t request_id, const std::string& name
   text << name << " not seen yet; " << answer.places.size() << " place(s) to look on "
        << (map_tables.size()) << " mapped table(s), " << searched_.size() << " searched";
   if (!before.empty()) text << ", seen before on " << before.size() << " of them";
+  if (!maybe_here.empty()) {
+    text << "; maybe on table";
+    for (const int id : maybe_here) text << " " << id;
+    text << " (matched too few times or from too far): look closer there first";
+  }
   answer.summary = text.str();
   return answer;
 }

@@ -13,11 +13,24 @@
 //   * A matched object's position, footprint and colour are the running mean
 //     of its last `max_mean_sightings` sightings (objects stand still while
 //     they are seen; a few centimetres of depth noise average out).
-//   * A candidate the taught-object matcher named (ObjectIdentity) gives its
-//     mapped object that name; a later sighting without a name keeps it, one
-//     with another name replaces it. The map also remembers, per name, the
-//     tables it was ever seen on (seenOnTables), forgotten objects included:
-//     where the mug was before is where to look for it first.
+//   * Names need evidence. A candidate the taught-object matcher named
+//     (ObjectIdentity) is one match for that name; its mapped object takes
+//     the name once `name_after_matches` sightings matched it from no
+//     farther than `max_name_range_m` (floor distance from the robot to the
+//     candidate). One match is not enough: from a single view a mug-sized
+//     box of the mug's colour is taken for the mug in 4-8 % of single views
+//     (BENCHMARKS.md section 8), rarely twice in one visit. Until then the name is only
+//     pending (MappedObject::pending_name): "maybe the mug, look closer".
+//     A far match never confirms a name: beyond about 1.5 m the depth steps
+//     bend a box's faces like a mug's side, and the roundness cue that tells
+//     them apart weakens. The defaults (2 matches within 2 m) were chosen on
+//     object_recognition_eval's visits of seeds 101-160, and measured on
+//     seeds 1-60 (BENCHMARKS.md section 8). A match for another name starts the count again for
+//     that name; a sighting without a name changes nothing. A named object
+//     keeps its name until another name is confirmed the same way. The map
+//     also remembers, per name, the tables it was ever seen on
+//     (seenOnTables), forgotten objects included: where the mug was before
+//     is where to look for it first.
 //   * A mapped object is missed in a frame when its place was seen without it:
 //     its floor position lies inside the visible top of one of the frame's
 //     tables (its hull shrunk by `seen_margin_m`) and no candidate matched it.
@@ -49,6 +62,8 @@ struct ObjectMapConfig {
   int forget_misses = 3;                // consecutive frames its place was seen without it
   float seen_margin_m = 0.05f;          // a place is seen when this far inside a visible top
   int max_mean_sightings = 10;          // sightings the running means weigh
+  int name_after_matches = 2;           // near matches for a name before the object takes it
+  float max_name_range_m = 2.0f;        // a match farther from the robot is not evidence
 };
 
 // Throws findmug::Error naming the setting (as `object_map.KEY`) when out of range.
@@ -78,8 +93,14 @@ struct MappedObject {
   // The table it was last seen on: the caller's id for it (the table map's
   // stable id; 0 when that table was not in a map).
   int table_id = 0;
-  std::string name;        // the taught object it was last matched as ("" none yet)
-  float name_score = 0.0f;  // that match's score
+  // The taught object it was confirmed as ("" none yet): name_after_matches
+  // near matches; the score is that of the last near match.
+  std::string name;
+  float name_score = 0.0f;
+  // A name with matches that do not confirm it yet (too few, or from too far):
+  // "maybe this, look closer". "" when none, or when it is `name`.
+  std::string pending_name;
+  int pending_matches = 0;  // near matches for pending_name so far
   int sightings = 0;  // frames it was seen in
   int misses = 0;     // consecutive frames its place was seen without it
   std::uint64_t first_seen_utime = 0;
@@ -121,7 +142,7 @@ class ObjectMap {
               int table_id, std::uint64_t utime) const;
   MappedObject create(const TableObject& seen, const Pose2D& base_in_map, int table_id,
                       std::uint64_t utime);
-  void name(MappedObject& mapped, const ObjectIdentity* identity);
+  void name(MappedObject& mapped, const ObjectIdentity* identity, float range_m);
   bool placeSeen(const MappedObject& mapped, const std::vector<TableCluster>& tables,
                  const Pose2D& map_in_base) const;
 

@@ -10,9 +10,11 @@
 //     and where to stand: the reachable search position of its table nearest
 //     to it (none when its table is not in the table map).
 //   * Not seen: the places to look, every reachable search position of the
-//     mapped tables, in three groups: tables not yet searched for this
-//     request where the object was seen before, then the other tables not yet
-//     searched, then the searched ones. Each group is a short tour
+//     mapped tables, in three groups: tables holding a mapped object whose
+//     name is only pending (MappedObject::pending_name: matched too few times
+//     or from too far, "look closer"), searched or not, and tables not yet
+//     searched for this request where the object was seen before, then the
+//     other tables not yet searched, then the searched ones. Each group is a short tour
 //     (visitingOrder) from the robot, or from where the previous group ends.
 //   * A name nobody taught is refused, the answer listing the taught names.
 //

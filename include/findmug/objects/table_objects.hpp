@@ -15,8 +15,10 @@
 //      labelled floor, wall or ceiling are left out: a wall behind a table
 //      rises through the grown outline but stands on nothing.
 //   2. Euclidean clustering of those points with cluster_tolerance_m (the
-//      exact partition of euclideanClusterLabels, tables.hpp); clusters with
-//      fewer than min_points points are dropped and counted.
+//      exact partition of euclideanClusterLabels, tables.hpp; with
+//      point_stride > 1 a sample of them linked on the image grid, the others
+//      joining a sampled image neighbour's cluster); clusters with fewer than min_points points
+//      are dropped and counted.
 //   3. a cluster is a candidate when it stands on the top: its lowest point is
 //      at most max_base_height_m above the top, its footprint centroid is
 //      inside the hull (not only in the margin), and its footprint is at most
@@ -105,6 +107,16 @@ struct TableObjectConfig {
   // the top becomes candidates (rendered frames: 55 of 140 candidates mostly
   // not object pixels with 0.1 m cells, 2 of 94 without).
   float top_cell_m = 0.0f;
+  // > 1: step 2 clusters only every point_stride-th pixel of every
+  // point_stride-th row, on the image grid (sampled points up to 2 sampled
+  // steps apart in the image and within cluster_tolerance_m are linked), and
+  // each other point joins the cluster of a sampled image neighbour (of the
+  // four around it, else of the twelve around those) within
+  // cluster_tolerance_m, or none (clusterSampled in
+  // table_objects.cpp). The candidates keep all their points. 1: the exact
+  // Euclidean clustering of every point. See BENCHMARKS.md section 8 for
+  // what each costs and finds.
+  int point_stride = 2;
   // Label a candidate's table-labelled pixels Object (relabelTableObjects).
   bool relabel = false;
 };

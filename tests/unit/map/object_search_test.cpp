@@ -44,9 +44,18 @@ TableObject mugOn(int table, float x, float y) {
 
 const std::vector<std::string> kTaught = {"book", "mug"};
 
+// A map that names an object from one match at any range: the tests of the
+// answers below are not about the evidence a name needs (object_map_test is).
+ObjectMapConfig oneMatchNames() {
+  ObjectMapConfig config;
+  config.name_after_matches = 1;
+  config.max_name_range_m = 100.0f;
+  return config;
+}
+
 TEST(ObjectSearch, AMugSeenOnATableIsReportedWithWhereToStand) {
   const std::vector<TableCluster> tables = {mappedTable(1, 0.0f, 0.0f), mappedTable(2, 4.0f, 0.0f)};
-  ObjectMap objects;
+  ObjectMap objects(oneMatchNames());
   // Seen from the map origin (pose = identity, so base = map) on table 2, near its north side.
   objects.update({mugOn(0, 4.1f, 0.3f)}, {tables[1]}, {2}, Pose2D{}, 5'000'000, {{"mug", 0.8f}});
   ObjectSearch search;
@@ -66,7 +75,7 @@ TEST(ObjectSearch, UnseenObjectGetsPlacesSeenBeforeFirstSearchedLast) {
                                       mappedTable(3, 8.0f, 0.0f)};
   // Table 1's south side is blocked.
   tables[0].search_positions[1].reachable = false;
-  ObjectMapConfig forgetful;
+  ObjectMapConfig forgetful = oneMatchNames();
   forgetful.forget_misses = 1;
   ObjectMap objects(forgetful);
   // The mug was once seen on table 3, then its place was seen empty.
@@ -100,6 +109,39 @@ TEST(ObjectSearch, UnseenObjectGetsPlacesSeenBeforeFirstSearchedLast) {
   answer = search.answer(2, "mug", kTaught, objects, tables, robot, 30);
   EXPECT_EQ(answer.places[0].table_id, 3);
   EXPECT_TRUE(search.searchedTables().empty());
+}
+
+// A match from too far (the shipped max_name_range_m, 2 m) or only one
+// match does not make the mug "seen": the answer is the places to look, its
+// table first, searched or not, with "look closer" in the summary.
+TEST(ObjectSearch, AMugMatchedOnlyFromFarIsLookCloserWithItsTableFirst) {
+  const std::vector<TableCluster> tables = {mappedTable(1, 1.0f, 0.0f), mappedTable(2, 4.0f, 0.0f)};
+  ObjectMap objects;
+  // Twice from the map origin, 4 m away: never near enough to confirm.
+  for (std::uint64_t t : {1u, 2u}) {
+    objects.update({mugOn(0, 4.1f, 0.3f)}, {tables[1]}, {2}, Pose2D{}, t, {{"mug", 0.8f}});
+  }
+  ASSERT_EQ(objects.objects().size(), 1u);
+  EXPECT_EQ(objects.objects()[0].name, "");
+  EXPECT_EQ(objects.objects()[0].pending_name, "mug");
+  ObjectSearch search;
+  EXPECT_EQ(search.observeRobot(Pose2D{4.0, 0.95, -M_PI / 2}, tables), std::vector<int>{2});
+  FindAnswer answer = search.answer(1, "mug", kTaught, objects, tables, Pose2D{}, 10);
+  ASSERT_EQ(answer.kind, FindAnswer::Kind::LookAt);
+  ASSERT_EQ(answer.places.size(), 4u);
+  // Table 2 first although it is farther and was searched.
+  EXPECT_EQ(answer.places[0].table_id, 2);
+  EXPECT_EQ(answer.places[1].table_id, 2);
+  EXPECT_NE(answer.summary.find("look closer"), std::string::npos) << answer.summary;
+  // Two near sightings (the robot 1 m from it) confirm it: seen.
+  const Pose2D near{4.0, 1.3, -M_PI / 2};  // facing -y: the mug 1 m ahead, 0.1 m left
+  for (std::uint64_t t : {3u, 4u}) {
+    objects.update({mugOn(0, 1.0f, 0.1f)}, {mappedTable(2, 1.3f, 0.0f)}, {2}, near, t,
+                   {{"mug", 0.9f}});
+  }
+  ASSERT_EQ(objects.objects().size(), 1u);
+  answer = search.answer(1, "mug", kTaught, objects, tables, Pose2D{}, 10);
+  EXPECT_EQ(answer.kind, FindAnswer::Kind::Seen) << answer.summary;
 }
 
 TEST(ObjectSearch, AnUntaughtNameIsRefusedListingTheTaughtOnes) {
