@@ -46,6 +46,7 @@
 #include "findmug/common/numbers.hpp"
 #include "findmug/frame/image_io.hpp"
 #include "findmug/labels/label_image.hpp"
+#include "findmug/objects/table_objects.hpp"
 #include "findmug/offline/cv_folds.hpp"
 #include "findmug/offline/metrics.hpp"
 #include "findmug/offline/pseudo_labels.hpp"
@@ -317,6 +318,25 @@ Evaluation crossValidate(const std::vector<FrameSample>& samples,
   return eval;
 }
 
+// The frame's table-top candidates on its detected tables, and its labels without and
+// with their table pixels relabelled Object (the pipeline's table_objects.relabel). The
+// labels here are hole-filled already (the pipeline relabels before the fill): the
+// candidates are made of pixels with depth, which the fill never changes.
+void measureRelabel(const PreparedFrame& prepared, const LabelImage& predicted,
+                    const std::vector<TableCluster>& detected,
+                    const std::vector<std::uint8_t>& ground_truth, const SegmenterConfig& config,
+                    EvalReport::Relabel& relabel) {
+  const TableObjectDetection candidates =
+      findTableObjects(prepared.cloud_ground, predicted, detected, config.table_objects);
+  LabelImage relabelled = predicted;
+  relabel.pixels_changed += static_cast<std::uint64_t>(
+      relabelTableObjects(candidates.objects, relabelled));
+  relabel.candidates += static_cast<int>(candidates.objects.size());
+  ++relabel.frames;
+  relabel.without.add(ground_truth, predicted.labels);
+  relabel.with.add(ground_truth, relabelled.labels);
+}
+
 // Tables found on each evaluated frame's forest+MRF labels (the pipeline's
 // detectTables) against the ground-truth instances. The frame's geometry is
 // recomputed (cloud, ground): cheap, and it keeps FrameSample small.
@@ -359,6 +379,7 @@ void measureTables(const LabeledFrames& frames, const std::vector<FrameSample>& 
         detectTables(prepared.cloud_ground, predicted, config.tables, &prepared.normals_ground)
             .tables;
     const auto matches = matchTables(truth, detected, metrics.min_iou);
+    measureRelabel(prepared, predicted, detected, sample.ground_truth, config, report.relabel);
     if (diagnosis) {
       const FrameTableEvidence evidence{sample.name,          sample.width,
                                         sample.height,        &sample.ground_truth,

@@ -187,6 +187,25 @@ std::string formatTable(const EvalReport& r) {
                   100 * s.falseTableFrameShare());
     out << line;
   }
+  if (r.relabel.frames > 0) {
+    const auto& m = r.relabel;
+    const auto before = m.without.perClassAccuracy(), after = m.with.perClassAccuracy();
+    const auto t = static_cast<std::size_t>(Label::Table);
+    const auto o = static_cast<std::size_t>(Label::Object);
+    char text[512];
+    std::snprintf(text, sizeof text,
+                  "\n  table-top candidates' table pixels labelled object (table_objects.relabel), "
+                  "%d frames, %d candidates, %llu pixels changed:\n"
+                  "  %-10s %s -> %s\n  %-10s %s -> %s\n  %-10s %s -> %s\n  %-10s %s -> %s\n",
+                  m.frames, m.candidates, static_cast<unsigned long long>(m.pixels_changed),
+                  "table", percent(before[t]).c_str(), percent(after[t]).c_str(), "object",
+                  percent(before[o]).c_str(), percent(after[o]).c_str(), "class avg",
+                  percent(m.without.classAverageAccuracy()).c_str(),
+                  percent(m.with.classAverageAccuracy()).c_str(), "global",
+                  percent(m.without.globalAccuracy()).c_str(),
+                  percent(m.with.globalAccuracy()).c_str());
+    out << text;
+  }
   if (r.has_search_truth) {
     const SearchPositionMetrics& p = r.search;
     std::snprintf(line, sizeof line,
@@ -335,6 +354,20 @@ std::string formatJson(const EvalReport& r) {
           << ", \"matched\": " << f.matched << "}";
     }
     out << "]}";
+  }
+  if (r.relabel.frames > 0) {
+    const auto& m = r.relabel;
+    const auto t = static_cast<std::size_t>(Label::Table);
+    const auto o = static_cast<std::size_t>(Label::Object);
+    const auto before = m.without.perClassAccuracy(), after = m.with.perClassAccuracy();
+    out << ",\n  \"table_objects_relabel\": {\"frames\": " << m.frames
+        << ", \"candidates\": " << m.candidates << ", \"pixels_changed\": " << m.pixels_changed
+        << ", \"table\": [" << jsonNumber(before[t]) << ", " << jsonNumber(after[t])
+        << "], \"object\": [" << jsonNumber(before[o]) << ", " << jsonNumber(after[o])
+        << "], \"class_average\": [" << jsonNumber(m.without.classAverageAccuracy()) << ", "
+        << jsonNumber(m.with.classAverageAccuracy()) << "], \"global\": ["
+        << jsonNumber(m.without.globalAccuracy()) << ", " << jsonNumber(m.with.globalAccuracy())
+        << "]}";
   }
   {
     const SearchableMetrics& s = r.searchable;

@@ -75,6 +75,15 @@ struct EvalReport {
   std::vector<ScoredDetection> scored_tables;
   // Why true instances and detections were not matched (eval_tables.hpp).
   TableDiagnosisCounts diagnosis;
+  // The table-top object candidates (objects/table_objects.hpp) found on each frame's
+  // detected tables, and the forest+MRF labels without and with their table pixels
+  // labelled Object (table_objects.relabel), over the frames whose tables were measured:
+  // what the relabelling does to the object and table classes, side by side in one run.
+  struct Relabel {
+    int frames = 0, candidates = 0;
+    std::uint64_t pixels_changed = 0;
+    ConfusionMatrix without, with;
+  } relabel;
   // Synthetic folders only: their search positions against the true tables'.
   bool has_search_truth = false;
   SearchPositionMetrics search;

@@ -231,6 +231,25 @@ TEST(ToolsEval, GravityGroundUsesEveryFrameAndTablesAreMeasured) {
   EXPECT_GE(number(tables, "precision"), 0.0) << tables;
   EXPECT_GE(number(tables, "recall"), 0.0) << tables;
   EXPECT_LE(number(tables, "recall"), 1.0) << tables;
+  // The table-top candidates on the detected tables, and the labels with their table
+  // pixels relabelled Object: only Table pixels become Object, so the object class can
+  // only gain and the table class only lose.
+  const std::string relabel = section(json, "table_objects_relabel");
+  ASSERT_FALSE(relabel.empty()) << json;
+  EXPECT_EQ(number(relabel, "frames"), 31) << relabel;
+  EXPECT_GE(number(relabel, "candidates"), 1) << relabel;
+  EXPECT_GE(number(relabel, "pixels_changed"), 1) << relabel;
+  const auto pair = [&](const std::string& key) {
+    std::smatch m;
+    const std::regex re("\"" + key + "\": \\[([0-9.eE+-]+), ([0-9.eE+-]+)\\]");
+    if (!std::regex_search(relabel, m, re)) return std::make_pair(-1.0, -1.0);
+    return std::make_pair(std::stod(m[1]), std::stod(m[2]));
+  };
+  const auto object = pair("object"), table = pair("table");
+  EXPECT_GT(object.first, 0.0) << relabel;
+  EXPECT_GT(object.second, object.first) << relabel;
+  EXPECT_LE(table.second, table.first) << relabel;
+  EXPECT_GE(table.second, 0.0) << relabel;
 }
 
 // Issue 10, tables as objects (perf-log §1f): on all 31 frames with the
