@@ -337,6 +337,37 @@ void measureRelabel(const PreparedFrame& prepared, const LabelImage& predicted,
   relabel.with.add(ground_truth, relabelled.labels);
 }
 
+// The true NYU-40 class under every pixel labelled Table (EvalReport::TableByNyu40), for
+// the frames whose label40/NAME.png is in one of `folders` (NYU folders; others have none).
+void countTableByNyu40(const std::vector<std::string>& folders,
+                       const std::vector<FrameSample>& samples, const Evaluation& eval,
+                       EvalReport::TableByNyu40& out) {
+  constexpr auto kTable = static_cast<std::uint8_t>(Label::Table);
+  for (std::size_t f = 0; f < samples.size(); ++f) {
+    const std::vector<std::uint8_t>& predicted = eval.mrf_pixels[f];
+    if (predicted.empty()) continue;
+    for (const std::string& folder : folders) {
+      const auto path = std::filesystem::path(folder) / "label40" / (samples[f].name + ".png");
+      if (!std::filesystem::exists(path)) continue;
+      const Image<std::uint8_t> fine = readPng8(path.string());
+      if (fine.pixels.size() != predicted.size()) {
+        throw Error(path.string() + ": " + std::to_string(fine.width) + "x" +
+                    std::to_string(fine.height) + " labels for a " +
+                    std::to_string(samples[f].width) + "x" + std::to_string(samples[f].height) +
+                    " frame");
+      }
+      for (std::size_t p = 0; p < predicted.size(); ++p) {
+        const std::uint8_t c = fine.pixels[p];
+        if (c == 0 || c > kNyu40Classes || samples[f].ground_truth[p] == kVoidLabel) continue;
+        ++out.pixels[c];
+        out.labelled_table[c] += predicted[p] == kTable;
+      }
+      ++out.frames;
+      break;
+    }
+  }
+}
+
 // Tables found on each evaluated frame's forest+MRF labels (the pipeline's
 // detectTables) against the ground-truth instances. The frame's geometry is
 // recomputed (cloud, ground): cheap, and it keeps FrameSample small.
@@ -814,6 +845,7 @@ int run(int argc, char** argv) {
     measureTables(test_frames, test_samples, eval, segmenter, config.offline.table_metrics,
                   synth_truth ? &*synth_truth : nullptr, report,
                   f.table_report.empty() ? nullptr : &diagnosis);
+    countTableByNyu40(f.dataset.data, test_samples, eval, report.table_by_nyu40);
     if (diagnosis.is_open()) {
       diagnosis << "\nsummary over all frames\n" << formatDiagnosisCounts(report.diagnosis);
     }

@@ -9,6 +9,7 @@
 
 #include "findmug/common/error.hpp"
 #include "findmug/labels/labels.hpp"
+#include "findmug/offline/training.hpp"
 #include "findmug_json.hpp"
 
 namespace findmug::tools {
@@ -206,6 +207,32 @@ std::string formatTable(const EvalReport& r) {
                   percent(m.with.globalAccuracy()).c_str());
     out << text;
   }
+  if (r.table_by_nyu40.frames > 0) {
+    const auto& t = r.table_by_nyu40;
+    std::uint64_t table_pixels = 0;
+    for (const std::uint64_t n : t.labelled_table) table_pixels += n;
+    std::vector<int> order;
+    for (int c = 1; c <= 40; ++c) {
+      if (t.labelled_table[static_cast<std::size_t>(c)] > 0) order.push_back(c);
+    }
+    std::sort(order.begin(), order.end(), [&](int a, int b) {
+      return t.labelled_table[static_cast<std::size_t>(a)] >
+             t.labelled_table[static_cast<std::size_t>(b)];
+    });
+    out << "\n  pixels labelled table, by true NYU-40 class (" << t.frames
+        << " frames with label40; share of the table-labelled pixels, share of the class "
+           "labelled table):\n";
+    for (std::size_t k = 0; k < std::min<std::size_t>(order.size(), 10); ++k) {
+      const auto c = static_cast<std::size_t>(order[k]);
+      std::snprintf(line, sizeof line, "  %-16s %s of table pixels, %s of its own\n",
+                    nyu40ClassName(order[k]),
+                    percent(static_cast<double>(t.labelled_table[c]) /
+                            static_cast<double>(table_pixels)).c_str(),
+                    percent(static_cast<double>(t.labelled_table[c]) /
+                            static_cast<double>(t.pixels[c])).c_str());
+      out << line;
+    }
+  }
   if (r.has_search_truth) {
     const SearchPositionMetrics& p = r.search;
     std::snprintf(line, sizeof line,
@@ -368,6 +395,20 @@ std::string formatJson(const EvalReport& r) {
         << jsonNumber(m.with.classAverageAccuracy()) << "], \"global\": ["
         << jsonNumber(m.without.globalAccuracy()) << ", " << jsonNumber(m.with.globalAccuracy())
         << "]}";
+  }
+  if (r.table_by_nyu40.frames > 0) {
+    const auto& t = r.table_by_nyu40;
+    out << ",\n  \"table_by_nyu40\": {\"frames\": " << t.frames << ", \"classes\": [";
+    bool first = true;
+    for (int c = 1; c <= 40; ++c) {
+      const auto k = static_cast<std::size_t>(c);
+      if (t.pixels[k] == 0) continue;
+      out << (first ? "" : ", ") << "{\"class\": " << jsonString(nyu40ClassName(c))
+          << ", \"pixels\": " << t.pixels[k] << ", \"labelled_table\": " << t.labelled_table[k]
+          << "}";
+      first = false;
+    }
+    out << "]}";
   }
   {
     const SearchableMetrics& s = r.searchable;

@@ -3,6 +3,7 @@
 
 #include <cstdint>
 #include <filesystem>
+#include <array>
 #include <string>
 #include <utility>
 #include <vector>
@@ -84,6 +85,14 @@ struct EvalReport {
     std::uint64_t pixels_changed = 0;
     ConfusionMatrix without, with;
   } relabel;
+  // Where the forest+MRF labels say Table, the true NYU-40 class (the folders' label40/
+  // images, where present): pixels of each class (index = NYU-40 id, 0 unlabelled) and of
+  // those the ones labelled Table, over the evaluated frames. What becomes "table" (bed,
+  // sofa, counter, dresser, ...) is what makes false tables.
+  struct TableByNyu40 {
+    int frames = 0;
+    std::array<std::uint64_t, 41> pixels{}, labelled_table{};
+  } table_by_nyu40;
   // Synthetic folders only: their search positions against the true tables'.
   bool has_search_truth = false;
   SearchPositionMetrics search;

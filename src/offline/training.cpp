@@ -692,4 +692,11 @@ std::vector<std::uint8_t> publishedPixelLabels(const FrameSample& sample,
   return std::move(image.labels);
 }
 
+const char* nyu40ClassName(int id) {
+  if (id < 0 || id > kNyu40Classes)
+    throw Error("NYU-40 class id " + std::to_string(id) + " is not in 0.." +
+                std::to_string(kNyu40Classes));
+  return kNyu40Names[static_cast<std::size_t>(id)];
+}
+
 }  // namespace findmug

@@ -250,6 +250,19 @@ TEST(ToolsEval, GravityGroundUsesEveryFrameAndTablesAreMeasured) {
   EXPECT_GT(object.second, object.first) << relabel;
   EXPECT_LE(table.second, table.first) << relabel;
   EXPECT_GE(table.second, 0.0) << relabel;
+  // What becomes "table", by true NYU-40 class (label40/): every frame has its label40
+  // image, and the NYU-40 class "table" is among the classes labelled table.
+  const auto by_class = json.find("\"table_by_nyu40\": {");
+  ASSERT_NE(by_class, std::string::npos) << json;
+  const std::string nyu40 = json.substr(by_class, json.find(']', by_class) - by_class);
+  EXPECT_EQ(number(nyu40, "frames"), 31) << nyu40;
+  std::smatch m;
+  const std::regex table_entry(
+      R"re(\{"class": "table", "pixels": (\d+), "labelled_table": (\d+)\})re");
+  ASSERT_TRUE(std::regex_search(nyu40, m, table_entry)) << nyu40;
+  EXPECT_GT(std::stoull(m[2]), 0u) << nyu40;
+  EXPECT_LE(std::stoull(m[2]), std::stoull(m[1])) << nyu40;
+  EXPECT_THAT(result.output, HasSubstr("pixels labelled table, by true NYU-40 class"));
 }
 
 // Issue 10, tables as objects (perf-log §1f): on all 31 frames with the

@@ -156,6 +156,9 @@ std::vector<ClassProbabilities> predictSample(const RandomForest& model, const F
 // frame when a pixel's segment is out of range.
 RegionFeatures sampleRegionFeatures(const FrameSample& sample, const RegionConfig& config);
 
+// The NYU-40 class name of `id` (1..40; 0 "unlabelled"); throws findmug::Error beyond.
+const char* nyu40ClassName(int id);
+
 // Per-pixel labels of a frame from per-segment labels (255 where no segment).
 std::vector<std::uint8_t> pixelLabels(const FrameSample& sample,
                                       const std::vector<std::uint8_t>& segment_labels);
