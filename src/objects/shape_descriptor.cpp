@@ -119,6 +119,21 @@ void checkSpansSurface(const std::vector<Eigen::Vector3f>& points) {
   }
 }
 
+// An object's points are metres from the robot: a coordinate beyond this can only come
+// from a corrupt file or message, and would overflow ESF's squared distances (its voxel
+// indices then come from NaN).
+constexpr float kMaxPointCoordinate = 1000.0f;
+
+void checkWithinReach(const std::vector<Eigen::Vector3f>& points) {
+  for (const auto& p : points) {
+    if (p.cwiseAbs().maxCoeff() > kMaxPointCoordinate) {
+      throw Error("object shape: a point at (" + std::to_string(p.x()) + ", " +
+                  std::to_string(p.y()) + ", " + std::to_string(p.z()) + ") is more than " +
+                  std::to_string(static_cast<int>(kMaxPointCoordinate)) + " m away");
+    }
+  }
+}
+
 // The finite points, each place once, in their first occurrence's order (the
 // pixel order the subsample spreads over). Repeated points only make ESF draw
 // again (a triple needs three places): many copies of one point would keep it
@@ -157,6 +172,7 @@ ObjectShapeDescriptor objectShapeDescriptor(const std::vector<Eigen::Vector3f>& 
     throw Error("object shape: " + std::to_string(finite.size()) +
                 " distinct finite points, need " + std::to_string(kMinObjectViewPoints));
   }
+  checkWithinReach(finite);
   checkSpansSurface(finite);
   auto cloud = pcl::make_shared<pcl::PointCloud<detail::EsfPoint>>();
   cloud->resize(finite.size());
