@@ -1,6 +1,6 @@
 // The table-top objects message (lcm_codec_objects.hpp): TableObjectDetection
 // -> objects_t for findmugd, and the checked way back for every listener.
-// Kept apart from lcm_codec.cpp, one file per message; the wire walk is in
+// One file per message (lcm_codec_*.cpp); the wire walk is in
 // lcm_wire.cpp with the other types'.
 #include "findmug/io/lcm_codec_objects.hpp"
 
