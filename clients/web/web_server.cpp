@@ -147,8 +147,7 @@ std::string utcNow() {
   return buf;
 }
 
-ResolvedPath resolveInside(const fs::path& root, const std::string& relative,
-                           bool may_be_missing) {
+ResolvedPath resolveInside(const fs::path& root, const std::string& relative, bool may_be_missing) {
   ResolvedPath out;
   auto refuse = [&](int status, std::string why) {
     out.status = status;
@@ -232,65 +231,81 @@ void WebServer::loadStaticFiles() {
 void WebServer::routes() {
   httplib::Server& s = *server_;
   s.set_payload_max_length(options_.max_body_bytes);
-
   s.set_pre_routing_handler([this](const httplib::Request& req, httplib::Response& res) {
-    if (options_.token) {
-      std::string given;
-      bool from_query = false;
-      const std::string auth = req.get_header_value("Authorization");
-      if (auth.rfind("Bearer ", 0) == 0) {
-        given = auth.substr(7);
-      } else if (req.has_param("token")) {
-        given = req.get_param_value("token");
-        from_query = true;
-      } else {
-        given = cookieValue(req.get_header_value("Cookie"), kTokenCookie);
-      }
-      if (given.empty()) {
-        fail(res, 401, "this server needs its access token (see findmug-web --help)");
-        return httplib::Server::HandlerResponse::Handled;
-      }
-      if (!sameToken(given, *options_.token)) {
-        fail(res, 403, "wrong access token");
-        return httplib::Server::HandlerResponse::Handled;
-      }
-      if (from_query) {
-        res.set_header("Set-Cookie", std::string(kTokenCookie) + "=" + given +
-                                         "; Path=/; HttpOnly; SameSite=Strict");
-      }
-    } else if (!isLoopbackAddress(req.remote_addr)) {
-      fail(res, 403, "served to this machine only (no token configured)");
-      return httplib::Server::HandlerResponse::Handled;
-    }
-    if (req.has_header("Content-Length")) {
-      const std::string length = req.get_header_value("Content-Length");
-      std::size_t n = 0;
-      bool digits = !length.empty() && length.size() <= 19;
-      for (char c : length) {
-        if (c < '0' || c > '9') digits = false;
-      }
-      if (!digits) {
-        fail(res, 400, "bad Content-Length '" + length + "'");
-        res.set_header("Connection", "close");
-        return httplib::Server::HandlerResponse::Handled;
-      }
-      n = static_cast<std::size_t>(std::stoull(length));
-      if (n > options_.max_body_bytes) {
-        fail(res, 413,
-             "request body of " + length + " bytes is over the limit of " +
-                 std::to_string(options_.max_body_bytes));
-        res.set_header("Connection", "close");
-        return httplib::Server::HandlerResponse::Handled;
-      }
-    }
-    return httplib::Server::HandlerResponse::Unhandled;
+    return admit(req, res) ? httplib::Server::HandlerResponse::Unhandled
+                           : httplib::Server::HandlerResponse::Handled;
   });
+  addErrorReporting(s);
+  addPageRoutes(s);
+  // Requests to the daemon (command_routes.hpp).
+  addCommandRoutes(s, options_.send_command);
+  if (options_.retrain) addRetrainRoutes(s, *options_.retrain, roots_, options_.send_command);
+  addLiveRoutes(s);
+  addDataRoutes(s);
+  addLabelRoutes(s);
+}
 
+// Whom and what this server serves: the token (header, query or cookie) or, without one,
+// this machine only; a body within the limit. False after the refusal is answered.
+bool WebServer::admit(const httplib::Request& req, httplib::Response& res) const {
+  if (options_.token) {
+    std::string given;
+    bool from_query = false;
+    const std::string auth = req.get_header_value("Authorization");
+    if (auth.rfind("Bearer ", 0) == 0) {
+      given = auth.substr(7);
+    } else if (req.has_param("token")) {
+      given = req.get_param_value("token");
+      from_query = true;
+    } else {
+      given = cookieValue(req.get_header_value("Cookie"), kTokenCookie);
+    }
+    if (given.empty()) {
+      fail(res, 401, "this server needs its access token (see findmug-web --help)");
+      return false;
+    }
+    if (!sameToken(given, *options_.token)) {
+      fail(res, 403, "wrong access token");
+      return false;
+    }
+    if (from_query) {
+      res.set_header("Set-Cookie", std::string(kTokenCookie) + "=" + given +
+                                       "; Path=/; HttpOnly; SameSite=Strict");
+    }
+  } else if (!isLoopbackAddress(req.remote_addr)) {
+    fail(res, 403, "served to this machine only (no token configured)");
+    return false;
+  }
+  if (req.has_header("Content-Length")) {
+    const std::string length = req.get_header_value("Content-Length");
+    std::size_t n = 0;
+    bool digits = !length.empty() && length.size() <= 19;
+    for (char c : length) {
+      if (c < '0' || c > '9') digits = false;
+    }
+    if (!digits) {
+      fail(res, 400, "bad Content-Length '" + length + "'");
+      res.set_header("Connection", "close");
+      return false;
+    }
+    n = static_cast<std::size_t>(std::stoull(length));
+    if (n > options_.max_body_bytes) {
+      fail(res, 413,
+           "request body of " + length + " bytes is over the limit of " +
+               std::to_string(options_.max_body_bytes));
+      res.set_header("Connection", "close");
+      return false;
+    }
+  }
+  return true;
+}
+
+void WebServer::addErrorReporting(httplib::Server& s) {
   s.set_logger([](const httplib::Request& req, const httplib::Response& res) {
     if (res.status < 400) return;
     const std::string why = res.get_header_value(kErrorHeader);
-    std::fprintf(stderr, "findmug-web: %d for %s %s from %s: %s\n", res.status,
-                 req.method.c_str(), req.path.c_str(), req.remote_addr.c_str(), why.c_str());
+    std::fprintf(stderr, "findmug-web: %d for %s %s from %s: %s\n", res.status, req.method.c_str(),
+                 req.path.c_str(), req.remote_addr.c_str(), why.c_str());
   });
   s.set_error_handler([](const httplib::Request&, httplib::Response& res) {
     if (!res.body.empty()) return;  // a handler said why already
@@ -313,31 +328,32 @@ void WebServer::routes() {
         }
         fail(res, 500, "internal error");
       });
+}
 
+void WebServer::serveStatic(const std::string& name, httplib::Response& res) const {
+  const auto it = static_files_.find(name);
+  if (it == static_files_.end()) {
+    fail(res, 404, "no file '" + name + "'");
+    return;
+  }
+  res.set_header("Cache-Control", "no-cache");
+  res.set_content(it->second, contentType(name));
+}
+
+void WebServer::addPageRoutes(httplib::Server& s) {
   // --- the page's files ---
-  auto serveStatic = [this](const std::string& name, httplib::Response& res) {
-    const auto it = static_files_.find(name);
-    if (it == static_files_.end()) {
-      fail(res, 404, "no file '" + name + "'");
-      return;
-    }
-    res.set_header("Cache-Control", "no-cache");
-    res.set_content(it->second, contentType(name));
-  };
-  s.Get("/", [serveStatic](const httplib::Request&, httplib::Response& res) {
+  s.Get("/", [this](const httplib::Request&, httplib::Response& res) {
     serveStatic("index.html", res);
   });
-  s.Get("/label", [serveStatic](const httplib::Request&, httplib::Response& res) {
+  s.Get("/label", [this](const httplib::Request&, httplib::Response& res) {
     serveStatic("label.html", res);
   });
-  s.Get(R"(/static/([^/]+))", [serveStatic](const httplib::Request& req, httplib::Response& res) {
+  s.Get(R"(/static/([^/]+))", [this](const httplib::Request& req, httplib::Response& res) {
     serveStatic(req.matches[1], res);
   });
+}
 
-  // --- requests to the daemon (command_routes.hpp) ---
-  addCommandRoutes(s, options_.send_command);
-  if (options_.retrain) addRetrainRoutes(s, *options_.retrain, roots_, options_.send_command);
-
+void WebServer::addLiveRoutes(httplib::Server& s) {
   // --- live ---
   s.Get("/api/live", [this](const httplib::Request&, httplib::Response& res) {
     sendJson(res, live_.liveJson());
@@ -375,30 +391,55 @@ void WebServer::routes() {
     res.set_content(reinterpret_cast<const char*>(color->second->data()), color->second->size(),
                     "image/jpeg");
   });
+}
 
+const fs::path* WebServer::rootOf(const httplib::Request& req, httplib::Response& res) const {
+  return rootAt(req.get_param_value("root"), res);
+}
+
+const fs::path* WebServer::rootAt(const std::string& text, httplib::Response& res) const {
+  std::size_t index = 0;
+  bool ok = !text.empty() && text.size() < 6;
+  for (char c : text) ok = ok && c >= '0' && c <= '9';
+  if (ok) index = static_cast<std::size_t>(std::stoul(text));
+  if (!ok || index >= roots_.size()) {
+    fail(res, 400,
+         "root must be the index of a data folder (0.." + std::to_string(roots_.size()) +
+             " exclusive), got '" + text + "'");
+    return nullptr;
+  }
+  return &roots_[index];
+}
+
+std::optional<std::string> WebServer::frameOf(const httplib::Request& req, httplib::Response& res,
+                                              std::size_t& root_index) const {
+  const fs::path* root = rootOf(req, res);
+  if (!root) return std::nullopt;
+  root_index = static_cast<std::size_t>(root - roots_.data());
+  const std::string frame = req.get_param_value("frame");
+  if (!validFrameName(frame)) {
+    fail(res, 400, "frame '" + frame + "' is not a frame name (letters, digits, _ - .)");
+    return std::nullopt;
+  }
+  const ResolvedPath rgb = resolveInside(*root, "rgb/" + frame + ".png");
+  if (rgb.status != 200) {
+    fail(res, rgb.status, rgb.error);
+    return std::nullopt;
+  }
+  return frame;
+}
+
+void WebServer::addDataRoutes(httplib::Server& s) {
   // --- data folders ---
-  auto rootOf = [this](const httplib::Request& req, httplib::Response& res) -> const fs::path* {
-    const std::string text = req.get_param_value("root");
-    std::size_t index = 0;
-    bool ok = !text.empty() && text.size() < 6;
-    for (char c : text) ok = ok && c >= '0' && c <= '9';
-    if (ok) index = static_cast<std::size_t>(std::stoul(text));
-    if (!ok || index >= roots_.size()) {
-      fail(res, 400, "root must be the index of a data folder (0.." +
-                         std::to_string(roots_.size()) + " exclusive), got '" + text + "'");
-      return nullptr;
-    }
-    return &roots_[index];
-  };
   s.Get("/api/data", [this](const httplib::Request&, httplib::Response& res) {
     nlohmann::json folders = nlohmann::json::array();
     for (std::size_t i = 0; i < roots_.size(); ++i) {
-      folders.push_back({{"root", i}, {"name", roots_[i].filename().string()},
-                         {"path", roots_[i].string()}});
+      folders.push_back(
+          {{"root", i}, {"name", roots_[i].filename().string()}, {"path", roots_[i].string()}});
     }
     sendJson(res, {{"folders", folders}});
   });
-  s.Get("/api/data/list", [rootOf](const httplib::Request& req, httplib::Response& res) {
+  s.Get("/api/data/list", [this](const httplib::Request& req, httplib::Response& res) {
     const fs::path* root = rootOf(req, res);
     if (!root) return;
     const ResolvedPath dir = resolveInside(*root, req.get_param_value("path"));
@@ -413,7 +454,7 @@ void WebServer::routes() {
     for (const auto& [name, is_dir] : names) entries.push_back({{"name", name}, {"dir", is_dir}});
     sendJson(res, {{"entries", entries}});
   });
-  s.Get("/api/data/file", [rootOf](const httplib::Request& req, httplib::Response& res) {
+  s.Get("/api/data/file", [this](const httplib::Request& req, httplib::Response& res) {
     const fs::path* root = rootOf(req, res);
     if (!root) return;
     const ResolvedPath file = resolveInside(*root, req.get_param_value("path"));
@@ -422,27 +463,12 @@ void WebServer::routes() {
     res.set_header("X-Findmug-Mtime-Ns", std::to_string(mtimeNs(file.path)));
     res.set_content(readWholeFile(file.path), contentType(file.path.filename().string()));
   });
+}
 
+void WebServer::addLabelRoutes(httplib::Server& s) {
   // --- the Label page: a dataset folder's frames, their oversegmentation, their labels ---
-  auto frameOf = [this, rootOf](const httplib::Request& req, httplib::Response& res,
-                                std::size_t& root_index) -> std::optional<std::string> {
-    const fs::path* root = rootOf(req, res);
-    if (!root) return std::nullopt;
-    root_index = static_cast<std::size_t>(root - roots_.data());
-    const std::string frame = req.get_param_value("frame");
-    if (!validFrameName(frame)) {
-      fail(res, 400, "frame '" + frame + "' is not a frame name (letters, digits, _ - .)");
-      return std::nullopt;
-    }
-    const ResolvedPath rgb = resolveInside(*root, "rgb/" + frame + ".png");
-    if (rgb.status != 200) {
-      fail(res, rgb.status, rgb.error);
-      return std::nullopt;
-    }
-    return frame;
-  };
   // Frames of a dataset folder: rgb/NAME.png with depth/NAME.png (labelled or not yet).
-  s.Get("/api/label/frames", [rootOf](const httplib::Request& req, httplib::Response& res) {
+  s.Get("/api/label/frames", [this](const httplib::Request& req, httplib::Response& res) {
     const fs::path* root = rootOf(req, res);
     if (!root) return;
     const ResolvedPath rgb = resolveInside(*root, "rgb");
@@ -456,12 +482,12 @@ void WebServer::routes() {
     std::sort(names.begin(), names.end());
     nlohmann::json frames = nlohmann::json::array();
     for (const auto& name : names) {
-      frames.push_back({{"name", name},
-                        {"labelled", fs::exists(*root / "label8" / (name + ".png"))}});
+      frames.push_back(
+          {{"name", name}, {"labelled", fs::exists(*root / "label8" / (name + ".png"))}});
     }
     sendJson(res, {{"frames", frames}});
   });
-  s.Get("/api/label/frame", [this, frameOf](const httplib::Request& req, httplib::Response& res) {
+  s.Get("/api/label/frame", [this](const httplib::Request& req, httplib::Response& res) {
     std::size_t root = 0;
     const auto frame = frameOf(req, res, root);
     if (!frame) return;
@@ -477,128 +503,131 @@ void WebServer::routes() {
     sendJson(res, body);
   });
   // The patch of every pixel, uint16 little-endian, 65535 = in no patch.
-  s.Get("/api/label/patches.bin",
-        [this, frameOf](const httplib::Request& req, httplib::Response& res) {
-          std::size_t root = 0;
-          const auto frame = frameOf(req, res, root);
-          if (!frame) return;
-          const auto patches = patchesOf(root, *frame);
-          std::string bytes(patches->patch.size() * 2, '\0');
-          for (std::size_t i = 0; i < patches->patch.size(); ++i) {
-            bytes[2 * i] = static_cast<char>(patches->patch[i] & 0xFF);
-            bytes[2 * i + 1] = static_cast<char>(patches->patch[i] >> 8);
-          }
-          res.set_header("Cache-Control", "no-store");
-          res.set_content(bytes, "application/octet-stream");
-        });
-  // The frame's label8/ file as one byte per pixel (404 when it has none yet).
-  s.Get("/api/label/labels.bin",
-        [this, frameOf](const httplib::Request& req, httplib::Response& res) {
-          std::size_t root = 0;
-          const auto frame = frameOf(req, res, root);
-          if (!frame) return;
-          const ResolvedPath label = resolveInside(roots_[root], "label8/" + *frame + ".png");
-          if (label.status != 200) return fail(res, label.status, label.error);
-          const Image<std::uint8_t> image = readPng8(label.path.string());
-          res.set_header("Cache-Control", "no-store");
-          res.set_header("X-Findmug-Mtime-Ns", std::to_string(mtimeNs(label.path)));
-          res.set_content(reinterpret_cast<const char*>(image.pixels.data()), image.pixels.size(),
-                          "application/octet-stream");
-        });
-
-  // POST /api/label: {"root": K, "frame": NAME, "width": W, "height": H,
-  //   "runs": [[id, count], ...] (row-major, ids 0..7 or 255), "author": "...",
-  //   "base_mtime_ns": "N" (text, as /api/label/frame gives it) or null}
-  //   -> DATA/label8/NAME.png (+ NAME.json: who, when).
-  // An existing label file whose mtime is not base_mtime_ns (newer work) is not
-  // overwritten: 409.
-  s.Post("/api/label", [rootOf](const httplib::Request& req, httplib::Response& res) {
-    auto parsed = jsonObjectBody(req.body, res);
-    if (!parsed) return;
-    nlohmann::json body = std::move(*parsed);
-    for (const char* key : {"root", "frame", "width", "height", "runs", "author"}) {
-      if (!body.contains(key)) return fail(res, 400, std::string("missing field '") + key + "'");
+  s.Get("/api/label/patches.bin", [this](const httplib::Request& req, httplib::Response& res) {
+    std::size_t root = 0;
+    const auto frame = frameOf(req, res, root);
+    if (!frame) return;
+    const auto patches = patchesOf(root, *frame);
+    std::string bytes(patches->patch.size() * 2, '\0');
+    for (std::size_t i = 0; i < patches->patch.size(); ++i) {
+      bytes[2 * i] = static_cast<char>(patches->patch[i] & 0xFF);
+      bytes[2 * i + 1] = static_cast<char>(patches->patch[i] >> 8);
     }
-    if (!body["root"].is_number_unsigned() || !body["frame"].is_string() ||
-        !body["width"].is_number_unsigned() || !body["height"].is_number_unsigned() ||
-        !body["runs"].is_array() || !body["author"].is_string()) {
-      return fail(res, 400, "fields root, width, height must be unsigned numbers, frame and "
-                            "author strings, runs an array");
-    }
-    httplib::Request root_req;
-    root_req.params.emplace("root", std::to_string(body["root"].get<std::uint64_t>()));
-    const fs::path* root = rootOf(root_req, res);
-    if (!root) return;
-    const std::string frame = body["frame"].get<std::string>();
-    if (!validFrameName(frame)) {
-      return fail(res, 400, "frame '" + frame + "' is not a frame name (letters, digits, _ - .)");
-    }
-    const ResolvedPath rgb = resolveInside(*root, "rgb/" + frame + ".png");
-    if (rgb.status != 200) return fail(res, rgb.status, rgb.error);
-    const std::uint64_t width = body["width"].get<std::uint64_t>();
-    const std::uint64_t height = body["height"].get<std::uint64_t>();
-    if (width == 0 || height == 0 || width > 4096 || height > 4096) {
-      return fail(res, 400, "width and height must be 1..4096");
-    }
-    const Image<Rgb8> image = readPngRgb(rgb.path.string());
-    if (static_cast<std::uint64_t>(image.width) != width ||
-        static_cast<std::uint64_t>(image.height) != height) {
-      return fail(res, 400, "labels are " + std::to_string(width) + "x" + std::to_string(height) +
-                                " but the frame is " + std::to_string(image.width) + "x" +
-                                std::to_string(image.height));
-    }
-    Image<std::uint8_t> labels;
-    labels.width = image.width;
-    labels.height = image.height;
-    try {
-      labels.pixels = labelsFromRuns(body["runs"], width * height);
-    } catch (const Error& e) {
-      return fail(res, 400, e.what());
-    }
-    const std::string author = body["author"].get<std::string>();
-    if (author.size() > 200) return fail(res, 400, "author longer than 200 characters");
-    // label8/ is made on the first save (resolveInside then checks it stays inside).
-    if (!fs::exists(fs::symlink_status(*root / "label8"))) fs::create_directory(*root / "label8");
-    const ResolvedPath out = resolveInside(*root, "label8/" + frame + ".png", true);
-    if (out.status != 200) return fail(res, out.status, out.error);
-    if (fs::exists(out.path)) {
-      const std::int64_t on_disk = mtimeNs(out.path);
-      // base_mtime_ns: what /api/label/frame or the last save said, as text (or a number).
-      bool same = false;
-      if (body.contains("base_mtime_ns")) {
-        const auto& base = body["base_mtime_ns"];
-        same = (base.is_string() && base.get<std::string>() == std::to_string(on_disk)) ||
-               (base.is_number_integer() && base.get<std::int64_t>() == on_disk);
-      }
-      if (!same) {
-        return fail(res, 409, "label8/" + frame + ".png was written since this page read it "
-                                  "(mtime " + std::to_string(on_disk) + "): not overwritten");
-      }
-    }
-    // Written next to its place and renamed over it: a crash leaves the old file whole.
-    const fs::path tmp = out.path.parent_path() / ("." + frame + ".png.tmp");
-    writePng8(tmp.string(), labels);
-    fs::rename(tmp, out.path);
-    const nlohmann::json sidecar = {{"author", author},
-                                    {"saved_utc", utcNow()},
-                                    {"tool", "findmug-web"},
-                                    {"frame", frame}};
-    const fs::path sidecar_path = out.path.parent_path() / (frame + ".json");
-    {
-      std::ofstream side(out.path.parent_path() / ("." + frame + ".json.tmp"));
-      side << sidecar.dump(2) << "\n";
-      if (!side) throw Error(sidecar_path.string() + ": cannot write");
-    }
-    fs::rename(out.path.parent_path() / ("." + frame + ".json.tmp"), sidecar_path);
-    fs::remove(draftPath(*root, frame));  // saved: the draft's work is in the file
-    sendJson(res, {{"saved", "label8/" + frame + ".png"},
-                   {"mtime_ns", std::to_string(mtimeNs(out.path))}});
+    res.set_header("Cache-Control", "no-store");
+    res.set_content(bytes, "application/octet-stream");
   });
-  addLabelToolRoutes(s, *label_frames_, roots_, frameOf);
+  // The frame's label8/ file as one byte per pixel (404 when it has none yet).
+  s.Get("/api/label/labels.bin", [this](const httplib::Request& req, httplib::Response& res) {
+    std::size_t root = 0;
+    const auto frame = frameOf(req, res, root);
+    if (!frame) return;
+    const ResolvedPath label = resolveInside(roots_[root], "label8/" + *frame + ".png");
+    if (label.status != 200) return fail(res, label.status, label.error);
+    const Image<std::uint8_t> image = readPng8(label.path.string());
+    res.set_header("Cache-Control", "no-store");
+    res.set_header("X-Findmug-Mtime-Ns", std::to_string(mtimeNs(label.path)));
+    res.set_content(reinterpret_cast<const char*>(image.pixels.data()), image.pixels.size(),
+                    "application/octet-stream");
+  });
+
+  s.Post("/api/label",
+         [this](const httplib::Request& req, httplib::Response& res) { saveLabels(req, res); });
+  addLabelToolRoutes(s, *label_frames_, roots_,
+                     [this](const httplib::Request& req, httplib::Response& res,
+                            std::size_t& root_index) { return frameOf(req, res, root_index); });
 }
 
-std::shared_ptr<const LabelFrame> WebServer::patchesOf(std::size_t root,
-                                                     const std::string& frame) {
+// POST /api/label: {"root": K, "frame": NAME, "width": W, "height": H,
+//   "runs": [[id, count], ...] (row-major, ids 0..7 or 255), "author": "...",
+//   "base_mtime_ns": "N" (text, as /api/label/frame gives it) or null}
+//   -> DATA/label8/NAME.png (+ NAME.json: who, when).
+// An existing label file whose mtime is not base_mtime_ns (newer work) is not
+// overwritten: 409.
+void WebServer::saveLabels(const httplib::Request& req, httplib::Response& res) {
+  auto parsed = jsonObjectBody(req.body, res);
+  if (!parsed) return;
+  nlohmann::json body = std::move(*parsed);
+  for (const char* key : {"root", "frame", "width", "height", "runs", "author"}) {
+    if (!body.contains(key)) return fail(res, 400, std::string("missing field '") + key + "'");
+  }
+  if (!body["root"].is_number_unsigned() || !body["frame"].is_string() ||
+      !body["width"].is_number_unsigned() || !body["height"].is_number_unsigned() ||
+      !body["runs"].is_array() || !body["author"].is_string()) {
+    return fail(res, 400,
+                "fields root, width, height must be unsigned numbers, frame and "
+                "author strings, runs an array");
+  }
+  const fs::path* root = rootAt(std::to_string(body["root"].get<std::uint64_t>()), res);
+  if (!root) return;
+  const std::string frame = body["frame"].get<std::string>();
+  if (!validFrameName(frame)) {
+    return fail(res, 400, "frame '" + frame + "' is not a frame name (letters, digits, _ - .)");
+  }
+  const ResolvedPath rgb = resolveInside(*root, "rgb/" + frame + ".png");
+  if (rgb.status != 200) return fail(res, rgb.status, rgb.error);
+  const std::uint64_t width = body["width"].get<std::uint64_t>();
+  const std::uint64_t height = body["height"].get<std::uint64_t>();
+  if (width == 0 || height == 0 || width > 4096 || height > 4096) {
+    return fail(res, 400, "width and height must be 1..4096");
+  }
+  const Image<Rgb8> image = readPngRgb(rgb.path.string());
+  if (static_cast<std::uint64_t>(image.width) != width ||
+      static_cast<std::uint64_t>(image.height) != height) {
+    return fail(res, 400,
+                "labels are " + std::to_string(width) + "x" + std::to_string(height) +
+                    " but the frame is " + std::to_string(image.width) + "x" +
+                    std::to_string(image.height));
+  }
+  Image<std::uint8_t> labels;
+  labels.width = image.width;
+  labels.height = image.height;
+  try {
+    labels.pixels = labelsFromRuns(body["runs"], width * height);
+  } catch (const Error& e) {
+    return fail(res, 400, e.what());
+  }
+  const std::string author = body["author"].get<std::string>();
+  if (author.size() > 200) return fail(res, 400, "author longer than 200 characters");
+  // label8/ is made on the first save (resolveInside then checks it stays inside).
+  if (!fs::exists(fs::symlink_status(*root / "label8"))) fs::create_directory(*root / "label8");
+  const ResolvedPath out = resolveInside(*root, "label8/" + frame + ".png", true);
+  if (out.status != 200) return fail(res, out.status, out.error);
+  if (fs::exists(out.path)) {
+    const std::int64_t on_disk = mtimeNs(out.path);
+    // base_mtime_ns: what /api/label/frame or the last save said, as text (or a number).
+    bool same = false;
+    if (body.contains("base_mtime_ns")) {
+      const auto& base = body["base_mtime_ns"];
+      same = (base.is_string() && base.get<std::string>() == std::to_string(on_disk)) ||
+             (base.is_number_integer() && base.get<std::int64_t>() == on_disk);
+    }
+    if (!same) {
+      return fail(res, 409,
+                  "label8/" + frame +
+                      ".png was written since this page read it "
+                      "(mtime " +
+                      std::to_string(on_disk) + "): not overwritten");
+    }
+  }
+  // Written next to its place and renamed over it: a crash leaves the old file whole.
+  const fs::path tmp = out.path.parent_path() / ("." + frame + ".png.tmp");
+  writePng8(tmp.string(), labels);
+  fs::rename(tmp, out.path);
+  const nlohmann::json sidecar = {
+      {"author", author}, {"saved_utc", utcNow()}, {"tool", "findmug-web"}, {"frame", frame}};
+  const fs::path sidecar_path = out.path.parent_path() / (frame + ".json");
+  {
+    std::ofstream side(out.path.parent_path() / ("." + frame + ".json.tmp"));
+    side << sidecar.dump(2) << "\n";
+    if (!side) throw Error(sidecar_path.string() + ": cannot write");
+  }
+  fs::rename(out.path.parent_path() / ("." + frame + ".json.tmp"), sidecar_path);
+  fs::remove(draftPath(*root, frame));  // saved: the draft's work is in the file
+  sendJson(res, {{"saved", "label8/" + frame + ".png"},
+                 {"mtime_ns", std::to_string(mtimeNs(out.path))}});
+}
+
+std::shared_ptr<const LabelFrame> WebServer::patchesOf(std::size_t root, const std::string& frame) {
   return label_frames_->of(roots_[root], root, frame);
 }
 

@@ -24,10 +24,10 @@
 #include <vector>
 
 #include "command_routes.hpp"
-#include "retrain.hpp"
 #include "findmug/settings/config.hpp"
 #include "label_tools.hpp"
 #include "live_state.hpp"
+#include "retrain.hpp"
 
 namespace httplib {
 class Server;
@@ -37,10 +37,10 @@ namespace findmug::web {
 
 struct ServerOptions {
   std::string bind = "127.0.0.1";
-  int port = 8088;                    // 0: any free port (see WebServer::port())
-  std::optional<std::string> token;   // required on every request when set
+  int port = 8088;                   // 0: any free port (see WebServer::port())
+  std::optional<std::string> token;  // required on every request when set
   std::size_t max_body_bytes = 4u << 20;
-  std::filesystem::path static_dir;   // index.html, *.js, *.css
+  std::filesystem::path static_dir;  // index.html, *.js, *.css
   std::vector<std::filesystem::path> data_dirs;
   // The oversegmentation the Label page shows is made with these settings (cloud,
   // normals, overseg.*: the ones the model is trained with).
@@ -85,7 +85,23 @@ class WebServer {
   int port() const { return port_; }
 
  private:
+  // The endpoints, by group; routes() installs them all.
   void routes();
+  bool admit(const httplib::Request& req, httplib::Response& res) const;
+  static void addErrorReporting(httplib::Server& s);
+  void addPageRoutes(httplib::Server& s);
+  void addLiveRoutes(httplib::Server& s);
+  void addDataRoutes(httplib::Server& s);
+  void addLabelRoutes(httplib::Server& s);
+  void serveStatic(const std::string& name, httplib::Response& res) const;
+  // The data folder a request's "root" names (or a given index as text), or nullptr after
+  // a 400 answer; the frame a request names in it, or nullopt after an error answer.
+  const std::filesystem::path* rootOf(const httplib::Request& req, httplib::Response& res) const;
+  const std::filesystem::path* rootAt(const std::string& text, httplib::Response& res) const;
+  std::optional<std::string> frameOf(const httplib::Request& req, httplib::Response& res,
+                                     std::size_t& root_index) const;
+  // POST /api/label (the Label page's save).
+  void saveLabels(const httplib::Request& req, httplib::Response& res);
   void loadStaticFiles();
 
   // The oversegmentation of a dataset frame for the Label page (cached, last few).
@@ -94,7 +110,7 @@ class WebServer {
   ServerOptions options_;
   std::unique_ptr<LabelFrames> label_frames_;
   LiveState& live_;
-  std::vector<std::filesystem::path> roots_;          // canonical data folders
+  std::vector<std::filesystem::path> roots_;         // canonical data folders
   std::map<std::string, std::string> static_files_;  // name -> content
   std::unique_ptr<httplib::Server> server_;
   int port_ = 0;
