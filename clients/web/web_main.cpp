@@ -34,119 +34,207 @@
 #endif
 
 namespace {
-constexpr const char* kProgram = "findmug-web";
-}
 
-int main(int argc, char** argv) {
-  using namespace findmug;
+using namespace findmug;
+constexpr const char* kProgram = "findmug-web";
+
+// The command line; empty / 0 means "as the config says".
+struct WebFlags {
   std::string url, suffix, bind, token_file, static_dir, model_path, nyu_rotations;
   std::vector<std::string> data_dirs;
   int port = 0;
-  cli::ConfigFlags config_flags;
+  cli::ConfigFlags config;
+};
+
+void addFlags(CLI::App& app, WebFlags& f) {
+  cli::addConfigFlags(app, f.config, "YAML config (its web: section)");
+  cli::addLcmUrlFlag(app, f.url, "LCM provider (default: LCM_DEFAULT_URL or udpm default)");
+  cli::addChannelSuffixFlag(app, f.suffix);
+  app.add_option("--port", f.port, "TCP port (default web.port, 8088)")
+      ->check(CLI::Range(1, 65535));
+  app.add_option("--bind", f.bind,
+                 "address to listen on (default web.bind, 127.0.0.1); any other than "
+                 "127.0.0.1/::1/localhost needs --token-file")
+      ->type_name("ADDR");
+  app.add_option("--token-file", f.token_file,
+                 "file with the access token (owner-only permissions); required on every "
+                 "request when given")
+      ->type_name("FILE");
+  app.add_option("--data", f.data_dirs, "data folders the page may read and label (repeatable)")
+      ->type_name("DIR");
+  app.add_option("--static-dir", f.static_dir,
+                 "the page's files (default web.static_dir, or " FINDMUG_WEB_STATIC_DIR ")")
+      ->type_name("DIR");
+  app.add_option("--model", f.model_path,
+                 "model the Label page's prediction comes from (default web.model_path)")
+      ->type_name("FILE");
+  app.add_option("--nyu-rotations", f.nyu_rotations,
+                 "NYU's camera_rotations_NYU.txt (default web.nyu_rotations)")
+      ->type_name("FILE");
+}
+
+// Reads the config (its segmenter sections for the Label page's prediction, and web:),
+// lets the flags override it and checks the result. Throws findmug::Error naming the
+// setting or file at fault.
+web::ServerOptions serverOptions(const WebFlags& f, web::WebConfig& config) {
+  Config loaded;
+  SettingsSchema schema;
+  bindCoreSettings(schema, loaded);
+  schema.bind(web::webSettings(), config);
+  cli::readSettings(f.config, schema);
+  if (!f.bind.empty()) config.bind = f.bind;
+  if (f.port != 0) config.port = f.port;
+  if (!f.token_file.empty()) config.token_file = f.token_file;
+  if (!f.static_dir.empty()) config.static_dir = f.static_dir;
+  if (!f.model_path.empty()) config.model_path = f.model_path;
+  if (!f.nyu_rotations.empty()) config.nyu_rotations = f.nyu_rotations;
+  io::checkChannelSuffix(f.suffix);
+  web::ServerOptions options;
+  options.bind = config.bind;
+  options.port = config.port;
+  options.max_body_bytes = static_cast<std::size_t>(config.max_body_bytes);
+  options.static_dir = config.static_dir.empty() ? FINDMUG_WEB_STATIC_DIR : config.static_dir;
+  for (const auto& d : f.data_dirs) options.data_dirs.emplace_back(d);
+  options.segmenter = loaded.segmenter;
+  if (!config.model_path.empty()) {
+    options.model = std::make_shared<const RandomForest>(RandomForest::load(config.model_path));
+    options.model_name =
+        std::filesystem::path(config.model_path).filename().string() + ":" + options.model->id();
+  }
+  if (!config.nyu_rotations.empty()) options.nyu_rotations = config.nyu_rotations;
+  if (!config.token_file.empty()) {
+    options.token = web::readTokenFile(config.token_file);
+  } else if (!web::isDefaultLoopback(config.bind)) {
+    throw Error("listening on " + config.bind +
+                " needs an access token: give --token-file (or web.token_file)");
+  }
+  return options;
+}
+
+// The Retrain page's jobs (none without web.jobs_dir). The tools read the same config
+// findmug-web was given (the daemon's settings).
+std::unique_ptr<web::RetrainJobs> retrainJobs(const web::WebConfig& config,
+                                              const cli::ConfigFlags& config_flags) {
+  if (config.jobs_dir.empty()) return nullptr;
+  web::RetrainOptions r;
+  r.train_program = config.train_program;
+  r.eval_program = config.eval_program;
+  r.jobs_dir = config.jobs_dir;
+  r.install_path = config.install_path;
+  r.folds = config.retrain_folds;
+  if (config_flags.config_path) r.config_args = {"--config", *config_flags.config_path};
+  for (const auto& o : config_flags.overrides) {
+    r.config_args.push_back("--set");
+    r.config_args.push_back(o);
+  }
+  // NYU frames get their gravity from NYU's rotations in training as on the Label page.
+  if (!config.nyu_rotations.empty()) {
+    r.config_args.insert(r.config_args.end(), {"--nyu-rotations", config.nyu_rotations});
+  }
+  return std::make_unique<web::RetrainJobs>(std::move(r));
+}
+
+// Base names: the bus applies --channel-suffix (io::SuffixedBus).
+const std::string kLabels(io::kLabelsChannel), kTables(io::kTablesChannel),
+    kTableMap(io::kTableMapChannel), kSemanticMap(io::kSemanticMapChannel),
+    kStatus(io::kStatusChannel), kCommand(io::kCommandChannel), kObjects(io::kObjectsChannel),
+    kFindResult(io::kFindResultChannel);
+
+template <class Message, class Decode, class Keep>
+std::unique_ptr<io::Subscriber<Message>> subscribe(io::Bus& bus, web::LiveState& live,
+                                                   const std::string& channel, Decode decode,
+                                                   Keep keep) {
+  return std::make_unique<io::Subscriber<Message>>(
+      bus, channel,
+      [decode](const std::uint8_t* d, std::size_t n, const std::string& c) {
+        return decode(d, n, c);
+      },
+      [&live, keep](const Message& m, const std::string&) { (live.*keep)(m); },
+      [&live, channel](const std::string& what) { live.onBadMessage(channel, what); });
+}
+
+// The daemon's channels the page shows, each decoded by io's checked decoders into the
+// live state; a bad message is counted there and dropped.
+struct LiveSubscriptions {
+  LiveSubscriptions(io::Bus& bus, web::LiveState& live) {
+    const auto tables = [](const std::uint8_t* d, std::size_t n, const std::string& c) {
+      return io::decodeTables(d, n, c);
+    };
+    labels = subscribe<io::LabelImageMessage>(
+        bus, live, kLabels,
+        [](const std::uint8_t* d, std::size_t n, const std::string& c) {
+          return io::decodeLabelImage(d, n, c);
+        },
+        &web::LiveState::onLabels);
+    frame_tables =
+        subscribe<io::TablesMessage>(bus, live, kTables, tables, &web::LiveState::onTables);
+    table_map =
+        subscribe<io::TablesMessage>(bus, live, kTableMap, tables, &web::LiveState::onTables);
+    semantic_map = subscribe<io::SemanticMapMessage>(
+        bus, live, kSemanticMap,
+        [](const std::uint8_t* d, std::size_t n, const std::string& c) {
+          return io::decodeSemanticMap(d, n, c);
+        },
+        &web::LiveState::onSemanticMap);
+    objects = subscribe<io::ObjectsMessage>(
+        bus, live, kObjects,
+        [](const std::uint8_t* d, std::size_t n, const std::string& c) {
+          return io::decodeObjects(d, n, c);
+        },
+        &web::LiveState::onObjects);
+    find_results = subscribe<io::FindResultMessage>(
+        bus, live, kFindResult,
+        [](const std::uint8_t* d, std::size_t n, const std::string& c) {
+          return io::decodeFindResult(d, n, c);
+        },
+        &web::LiveState::onFindResult);
+    status = subscribe<findmug_lcm::status_t>(
+        bus, live, kStatus,
+        [](const std::uint8_t* d, std::size_t n, const std::string& c) {
+          return io::decodeMessage<findmug_lcm::status_t>(d, n, c);
+        },
+        &web::LiveState::onStatus);
+  }
+  std::unique_ptr<io::Subscriber<io::LabelImageMessage>> labels;
+  std::unique_ptr<io::Subscriber<io::TablesMessage>> frame_tables, table_map;
+  std::unique_ptr<io::Subscriber<io::SemanticMapMessage>> semantic_map;
+  std::unique_ptr<io::Subscriber<io::ObjectsMessage>> objects;
+  std::unique_ptr<io::Subscriber<io::FindResultMessage>> find_results;
+  std::unique_ptr<io::Subscriber<findmug_lcm::status_t>> status;
+};
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  WebFlags flags;
   auto app = cli::makeApp(kProgram,
                           "Serves a local web page showing findmugd live: labels over the "
                           "camera image, tables and search positions, the table map, status");
-  cli::addConfigFlags(*app, config_flags, "YAML config (its web: section)");
-  cli::addLcmUrlFlag(*app, url, "LCM provider (default: LCM_DEFAULT_URL or udpm default)");
-  cli::addChannelSuffixFlag(*app, suffix);
-  app->add_option("--port", port, "TCP port (default web.port, 8088)")
-      ->check(CLI::Range(1, 65535));
-  app->add_option("--bind", bind,
-                  "address to listen on (default web.bind, 127.0.0.1); any other than "
-                  "127.0.0.1/::1/localhost needs --token-file")
-      ->type_name("ADDR");
-  app->add_option("--token-file", token_file,
-                  "file with the access token (owner-only permissions); required on every "
-                  "request when given")
-      ->type_name("FILE");
-  app->add_option("--data", data_dirs, "data folders the page may read and label (repeatable)")
-      ->type_name("DIR");
-  app->add_option("--static-dir", static_dir, "the page's files (default web.static_dir, or "
-                                              FINDMUG_WEB_STATIC_DIR ")")
-      ->type_name("DIR");
-  app->add_option("--model", model_path,
-                  "model the Label page's prediction comes from (default web.model_path)")
-      ->type_name("FILE");
-  app->add_option("--nyu-rotations", nyu_rotations,
-                  "NYU's camera_rotations_NYU.txt (default web.nyu_rotations)")
-      ->type_name("FILE");
+  addFlags(*app, flags);
   if (auto code = cli::parse(*app, argc, argv)) return *code;
 
   web::WebConfig config;
-  // Base names: the bus applies --channel-suffix (io::SuffixedBus).
-  const std::string labels_channel(io::kLabelsChannel), tables_channel(io::kTablesChannel),
-      map_channel(io::kTableMapChannel), semantic_channel(io::kSemanticMapChannel),
-      status_channel(io::kStatusChannel), command_channel(io::kCommandChannel),
-      objects_channel(io::kObjectsChannel), find_channel(io::kFindResultChannel);
   web::ServerOptions options;
   try {
-    Config loaded;  // the segmenter's sections (the Label page's prediction) and web:
-    SettingsSchema schema;
-    bindCoreSettings(schema, loaded);
-    schema.bind(web::webSettings(), config);
-    cli::readSettings(config_flags, schema);
-    if (!bind.empty()) config.bind = bind;
-    if (port != 0) config.port = port;
-    if (!token_file.empty()) config.token_file = token_file;
-    if (!static_dir.empty()) config.static_dir = static_dir;
-    if (!model_path.empty()) config.model_path = model_path;
-    if (!nyu_rotations.empty()) config.nyu_rotations = nyu_rotations;
-    io::checkChannelSuffix(suffix);
-    options.bind = config.bind;
-    options.port = config.port;
-    options.max_body_bytes = static_cast<std::size_t>(config.max_body_bytes);
-    options.static_dir = config.static_dir.empty() ? FINDMUG_WEB_STATIC_DIR : config.static_dir;
-    for (const auto& d : data_dirs) options.data_dirs.emplace_back(d);
-    options.segmenter = loaded.segmenter;
-    if (!config.model_path.empty()) {
-      options.model = std::make_shared<const RandomForest>(RandomForest::load(config.model_path));
-      options.model_name =
-          std::filesystem::path(config.model_path).filename().string() + ":" + options.model->id();
-    }
-    if (!config.nyu_rotations.empty()) options.nyu_rotations = config.nyu_rotations;
-    if (!config.token_file.empty()) {
-      options.token = web::readTokenFile(config.token_file);
-    } else if (!web::isDefaultLoopback(config.bind)) {
-      throw Error("listening on " + config.bind +
-                  " needs an access token: give --token-file (or web.token_file)");
-    }
+    options = serverOptions(flags, config);
   } catch (const std::exception& e) {
     std::fprintf(stderr, "%s: %s\n", kProgram, e.what());
     return 2;
   }
 
   clients::installStopHandlers();  // before any thread (the bus's, the server's) starts
-  const std::shared_ptr<io::Bus> bus = clients::openBus(url, kProgram, suffix);
+  const std::shared_ptr<io::Bus> bus = clients::openBus(flags.url, kProgram, flags.suffix);
   if (!bus) return 1;
   // The page's requests to findmugd (Save this frame, reload after an install) go out on
   // the same bus; Bus::publish may be called from the server's threads.
-  options.send_command = [&bus, command_channel](const io::CommandMessage& command) {
+  options.send_command = [&bus](const io::CommandMessage& command) {
     const auto bytes = io::encodeMessage(io::encodeCommand(command));
-    if (!bus->publish(command_channel, bytes.data(), bytes.size())) {
-      throw Error(command_channel + ": the LCM bus refused the command");
+    if (!bus->publish(kCommand, bytes.data(), bytes.size())) {
+      throw Error(kCommand + ": the LCM bus refused the command");
     }
   };
-  std::unique_ptr<web::RetrainJobs> retrain;
-  if (!config.jobs_dir.empty()) {
-    web::RetrainOptions r;
-    r.train_program = config.train_program;
-    r.eval_program = config.eval_program;
-    r.jobs_dir = config.jobs_dir;
-    r.install_path = config.install_path;
-    r.folds = config.retrain_folds;
-    // The tools read the same config findmug-web was given (the daemon's settings).
-    if (config_flags.config_path) r.config_args = {"--config", *config_flags.config_path};
-    for (const auto& o : config_flags.overrides) {
-      r.config_args.push_back("--set");
-      r.config_args.push_back(o);
-    }
-    // NYU frames get their gravity from NYU's rotations in training as on the Label page.
-    if (!config.nyu_rotations.empty()) {
-      r.config_args.insert(r.config_args.end(), {"--nyu-rotations", config.nyu_rotations});
-    }
-    retrain = std::make_unique<web::RetrainJobs>(std::move(r));
-    options.retrain = retrain.get();
-  }
+  const std::unique_ptr<web::RetrainJobs> retrain = retrainJobs(config, flags.config);
+  options.retrain = retrain.get();
   web::LiveState live(config.history_s);
   std::unique_ptr<web::WebServer> server;
   try {
@@ -156,65 +244,15 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "%s: %s\n", kProgram, e.what());
     return 1;
   }
-
-  auto bad = [&live](const std::string& channel) {
-    return [&live, channel](const std::string& what) { live.onBadMessage(channel, what); };
-  };
-  auto decode_tables = [](const std::uint8_t* d, std::size_t n, const std::string& c) {
-    return io::decodeTables(d, n, c);
-  };
-  io::Subscriber<io::LabelImageMessage> labels(
-      *bus, labels_channel,
-      [](const std::uint8_t* d, std::size_t n, const std::string& c) {
-        return io::decodeLabelImage(d, n, c);
-      },
-      [&](const io::LabelImageMessage& m, const std::string&) { live.onLabels(m); },
-      bad(labels_channel));
-  io::Subscriber<io::TablesMessage> tables(
-      *bus, tables_channel, decode_tables,
-      [&](const io::TablesMessage& m, const std::string&) { live.onTables(m); },
-      bad(tables_channel));
-  io::Subscriber<io::TablesMessage> table_map(
-      *bus, map_channel, decode_tables,
-      [&](const io::TablesMessage& m, const std::string&) { live.onTables(m); },
-      bad(map_channel));
-  io::Subscriber<io::SemanticMapMessage> semantic_map(
-      *bus, semantic_channel,
-      [](const std::uint8_t* d, std::size_t n, const std::string& c) {
-        return io::decodeSemanticMap(d, n, c);
-      },
-      [&](const io::SemanticMapMessage& m, const std::string&) { live.onSemanticMap(m); },
-      bad(semantic_channel));
-  io::Subscriber<io::ObjectsMessage> objects(
-      *bus, objects_channel,
-      [](const std::uint8_t* d, std::size_t n, const std::string& c) {
-        return io::decodeObjects(d, n, c);
-      },
-      [&](const io::ObjectsMessage& m, const std::string&) { live.onObjects(m); },
-      bad(objects_channel));
-  io::Subscriber<io::FindResultMessage> find_results(
-      *bus, find_channel,
-      [](const std::uint8_t* d, std::size_t n, const std::string& c) {
-        return io::decodeFindResult(d, n, c);
-      },
-      [&](const io::FindResultMessage& m, const std::string&) { live.onFindResult(m); },
-      bad(find_channel));
-  io::Subscriber<findmug_lcm::status_t> status(
-      *bus, status_channel,
-      [](const std::uint8_t* d, std::size_t n, const std::string& c) {
-        return io::decodeMessage<findmug_lcm::status_t>(d, n, c);
-      },
-      [&](const findmug_lcm::status_t& m, const std::string&) { live.onStatus(m); },
-      bad(status_channel));
+  const LiveSubscriptions subscriptions(*bus, live);
 
   std::thread http([&] { server->serve(); });
   const auto stop_server = clients::stopSignals().onStop([&] { server->stop(); });
   std::fprintf(stderr,
                "%s: serving http://%s:%d/ ; listening on %s, %s, %s, %s, %s, %s and %s (%s)\n",
-               kProgram, config.bind.c_str(), server->port(), labels_channel.c_str(),
-               tables_channel.c_str(), map_channel.c_str(), semantic_channel.c_str(),
-               objects_channel.c_str(), find_channel.c_str(), status_channel.c_str(),
-               bus->describe().c_str());
+               kProgram, config.bind.c_str(), server->port(), kLabels.c_str(), kTables.c_str(),
+               kTableMap.c_str(), kSemanticMap.c_str(), kObjects.c_str(), kFindResult.c_str(),
+               kStatus.c_str(), bus->describe().c_str());
   // This thread owns the bus. At the end of a replayed log the page stays up, showing
   // the last state, until a stop signal.
   int code = clients::receiveLoop(*bus, kProgram, [] { return false; });
