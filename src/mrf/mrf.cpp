@@ -29,9 +29,9 @@
 #include <string>
 
 #include "common/cpu_features.hpp"
+#include "common/scratch.hpp"
 #include "findmug/common/error.hpp"
 #include "mrf/mrf_internal.hpp"
-#include "common/scratch.hpp"
 
 namespace findmug {
 
@@ -92,8 +92,8 @@ float pairwiseWeight(const Eigen::Vector3f& a, const Eigen::Vector3f& b, float s
 
 void validateFactors(const MrfPairFactors& factors, std::size_t num_edges) {
   if (factors.table_of_edge.size() != num_edges)
-    throw Error("MRF: " + std::to_string(factors.table_of_edge.size()) + " pair-table indices for " +
-                std::to_string(num_edges) + " edges");
+    throw Error("MRF: " + std::to_string(factors.table_of_edge.size()) +
+                " pair-table indices for " + std::to_string(num_edges) + " edges");
   for (std::size_t k = 0; k < num_edges; ++k)
     if (factors.table_of_edge[k] >= factors.tables.size())
       throw Error("MRF: edge " + std::to_string(k) + " refers to pair table " +
@@ -136,9 +136,9 @@ __attribute__((target("avx2"))) inline __m256 laneMax(__m256 v) { return laneExt
 // computeBeliefs of solveMrfInto: each node's unary plus its incoming
 // messages, added in the same order.
 __attribute__((target("avx2"))) void beliefsAvx2(const Costs* unary, const Costs* messages,
-                                                const std::uint32_t* in_begin,
-                                                const std::uint32_t* incoming,
-                                                std::size_t num_nodes, Costs* belief) {
+                                                 const std::uint32_t* in_begin,
+                                                 const std::uint32_t* incoming,
+                                                 std::size_t num_nodes, Costs* belief) {
   for (std::size_t i = 0; i < num_nodes; ++i) {
     __m256 b = _mm256_loadu_ps(unary[i].data());
     for (std::uint32_t k = in_begin[i]; k < in_begin[i + 1]; ++k)
@@ -153,9 +153,10 @@ __attribute__((target("avx2"))) void beliefsAvx2(const Costs* unary, const Costs
 // "avx2", not "fma"), and min/max are exact in any order, so the same
 // messages to the bit. Returns the largest change of any message entry.
 __attribute__((target("avx2"))) float messageRoundAvx2(const Costs* belief, const Costs* messages,
-                                                      const std::uint32_t* source,
-                                                      const float* weight, std::size_t num_directed,
-                                                      float take, float keep, Costs* next) {
+                                                       const std::uint32_t* source,
+                                                       const float* weight,
+                                                       std::size_t num_directed, float take,
+                                                       float keep, Costs* next) {
   const __m256 take8 = _mm256_set1_ps(take);
   const __m256 keep8 = _mm256_set1_ps(keep);
   const __m256 abs_mask = _mm256_castsi256_ps(_mm256_set1_epi32(0x7fffffff));
@@ -164,10 +165,9 @@ __attribute__((target("avx2"))) float messageRoundAvx2(const Costs* belief, cons
     const __m256 h = _mm256_sub_ps(_mm256_loadu_ps(belief[source[e]].data()),
                                    _mm256_loadu_ps(messages[e ^ 1].data()));
     const __m256 old = _mm256_loadu_ps(messages[e].data());
-    __m256 m = _mm256_add_ps(
-        _mm256_mul_ps(take8, _mm256_min_ps(_mm256_sub_ps(h, laneMin(h)),
-                                           _mm256_set1_ps(weight[e / 2]))),
-        _mm256_mul_ps(keep8, old));
+    __m256 m = _mm256_add_ps(_mm256_mul_ps(take8, _mm256_min_ps(_mm256_sub_ps(h, laneMin(h)),
+                                                                _mm256_set1_ps(weight[e / 2]))),
+                             _mm256_mul_ps(keep8, old));
     m = _mm256_sub_ps(m, laneMin(m));
     max_change = _mm256_max_ps(max_change, _mm256_and_ps(_mm256_sub_ps(m, old), abs_mask));
     _mm256_storeu_ps(next[e].data(), m);
@@ -223,9 +223,157 @@ void solveMrfScaledInto(const std::vector<ClassProbabilities>& unaries,
                         const std::vector<std::pair<int, int>>& edges,
                         const std::vector<float>& edge_scale, const MrfParams& params,
                         MrfResult& out) {
-  detail::solveMrfInto(unaries, centroids, edges, params, out, detail::MrfSimd::Auto,
-                       &edge_scale);
+  detail::solveMrfInto(unaries, centroids, edges, params, out, detail::MrfSimd::Auto, &edge_scale);
 }
+
+namespace {
+
+void validateEdgeScale(const std::vector<float>& edge_scale, std::size_t num_edges) {
+  if (edge_scale.size() != num_edges)
+    throw Error("MRF: " + std::to_string(edge_scale.size()) + " edge scales for " +
+                std::to_string(num_edges) + " edges");
+  for (std::size_t k = 0; k < edge_scale.size(); ++k)
+    if (!(std::isfinite(edge_scale[k]) && edge_scale[k] >= 0.0f))
+      throw Error("MRF: scale of edge " + std::to_string(k) + " is " +
+                  std::to_string(edge_scale[k]) + " (expected a finite number >= 0)");
+}
+
+// The graph as message passing walks it: directed edge 2k runs from edges[k].first to
+// edges[k].second, 2k+1 back; each undirected edge's Potts weight (times its scale);
+// every node's incoming directed edges (CSR: incoming[in_begin[i] .. in_begin[i+1])).
+struct DirectedGraph {
+  std::vector<std::uint32_t>& source;
+  std::vector<std::uint32_t>& target;
+  std::vector<float>& weight;
+  std::vector<std::uint32_t>& in_begin;
+  std::vector<std::uint32_t>& incoming;
+};
+
+void buildDirectedGraph(const std::vector<Eigen::Vector3f>& centroids,
+                        const std::vector<std::pair<int, int>>& edges, float sigma,
+                        const std::vector<float>* edge_scale, std::size_t num_nodes,
+                        std::vector<std::uint32_t>& fill, DirectedGraph& g) {
+  const std::size_t num_directed = 2 * edges.size();
+  g.source.resize(num_directed);
+  g.target.resize(num_directed);
+  g.weight.resize(edges.size());
+  g.in_begin.assign(num_nodes + 1, 0);
+  for (std::size_t k = 0; k < edges.size(); ++k) {
+    const auto a = static_cast<std::uint32_t>(edges[k].first);
+    const auto b = static_cast<std::uint32_t>(edges[k].second);
+    g.source[2 * k] = a;
+    g.target[2 * k] = b;
+    g.source[2 * k + 1] = b;
+    g.target[2 * k + 1] = a;
+    g.weight[k] = pairwiseWeight(centroids[a], centroids[b], sigma);
+    if (edge_scale) g.weight[k] *= (*edge_scale)[k];
+    ++g.in_begin[a + 1];
+    ++g.in_begin[b + 1];
+  }
+  for (std::size_t i = 0; i < num_nodes; ++i) g.in_begin[i + 1] += g.in_begin[i];
+  g.incoming.resize(num_directed);
+  fill.assign(g.in_begin.begin(), g.in_begin.end() - 1);
+  for (std::size_t e = 0; e < num_directed; ++e)
+    g.incoming[fill[g.target[e]]++] = static_cast<std::uint32_t>(e);
+}
+
+// Each table as the message of a directed edge reads it: [sender][receiver].
+// Directed edge 2k sends from edges[k].first (the table as given), 2k+1
+// from edges[k].second (its transpose).
+void orientTables(const MrfPairFactors& factors, std::vector<MrfPairTable>& oriented) {
+  oriented.clear();
+  for (const MrfPairTable& t : factors.tables) {
+    oriented.push_back(t);
+    MrfPairTable transposed{};
+    for (int a = 0; a < kNumLabels; ++a)
+      for (int b = 0; b < kNumLabels; ++b) transposed[b * kNumLabels + a] = t[a * kNumLabels + b];
+    oriented.push_back(transposed);
+  }
+}
+
+// belief[i] = unary[i] + the messages into i.
+void computeBeliefs(bool avx2, const std::vector<Costs>& unary, const std::vector<Costs>& messages,
+                    const DirectedGraph& g, std::vector<Costs>& belief) {
+#if defined(FINDMUG_AVX2_DISPATCH)
+  if (avx2) {
+    beliefsAvx2(unary.data(), messages.data(), g.in_begin.data(), g.incoming.data(), unary.size(),
+                belief.data());
+    return;
+  }
+#else
+  (void)avx2;
+#endif
+  for (std::size_t i = 0; i < unary.size(); ++i) {
+    Costs b = unary[i];
+    for (std::uint32_t k = g.in_begin[i]; k < g.in_begin[i + 1]; ++k) b += messages[g.incoming[k]];
+    belief[i] = b;
+  }
+}
+
+// One damped round of min-sum messages into `next`: the learned tables' messages with
+// factors, else Potts (AVX2 or portable, the same bits). Returns the largest change.
+float messageRound(bool avx2, const std::vector<Costs>& belief, const std::vector<Costs>& messages,
+                   const DirectedGraph& g, const MrfPairFactors* factors,
+                   const std::vector<MrfPairTable>& oriented, float take, float keep,
+                   std::vector<Costs>& next) {
+  const std::size_t num_directed = messages.size();
+  float max_change = 0.0f;
+  if (factors) {
+    for (std::size_t e = 0; e < num_directed; ++e) {
+      const Costs h = belief[g.source[e]] - messages[e ^ 1];
+      const Costs& old = messages[e];
+      const float* table = oriented[2 * factors->table_of_edge[e / 2] + (e & 1)].data();
+      Costs m = take * factorMessage(h, table, g.weight[e / 2]) + keep * old;
+      m -= m.minCoeff();
+      max_change = std::max(max_change, (m - old).abs().maxCoeff());
+      next[e] = m;
+    }
+    return max_change;
+  }
+#if defined(FINDMUG_AVX2_DISPATCH)
+  if (avx2) {
+    return messageRoundAvx2(belief.data(), messages.data(), g.source.data(), g.weight.data(),
+                            num_directed, take, keep, next.data());
+  }
+#else
+  (void)avx2;
+#endif
+  for (std::size_t e = 0; e < num_directed; ++e) {
+    const Costs h = belief[g.source[e]] - messages[e ^ 1];
+    const Costs& old = messages[e];
+    Costs m = take * (h - h.minCoeff()).min(g.weight[e / 2]) + keep * old;
+    m -= m.minCoeff();
+    max_change = std::max(max_change, (m - old).abs().maxCoeff());
+    next[e] = m;
+  }
+  return max_change;
+}
+
+// Labels and confidences from the final beliefs.
+void decideLabels(const std::vector<Costs>& belief, const std::vector<ClassProbabilities>& unaries,
+                  MrfResult& result) {
+  const std::size_t num_nodes = belief.size();
+  result.labels.resize(num_nodes);
+  result.confidence.resize(num_nodes);
+  for (std::size_t i = 0; i < num_nodes; ++i) {
+    const Costs& b = belief[i];
+    // Lowest belief wins; ties (e.g. λ = 0, or an isolated node with equal
+    // probabilities) go to the higher forest probability, then the lower id.
+    // For an isolated node this is exactly the argmax of p.
+    int best = 0;
+    for (int y = 1; y < kNumLabels; ++y) {
+      if (b[y] < b[best] || (b[y] == b[best] && unaries[i][y] > unaries[i][best])) best = y;
+    }
+    // Confidence: exp(-b) normalised over the labels, i.e. a softmax of the
+    // negated beliefs, evaluated relative to the minimum for stability.
+    double z = 0.0;
+    for (int y = 0; y < kNumLabels; ++y) z += std::exp(-static_cast<double>(b[y] - b[best]));
+    result.labels[i] = static_cast<std::uint8_t>(best);
+    result.confidence[i] = static_cast<float>(1.0 / z);
+  }
+}
+
+}  // namespace
 
 void detail::solveMrfInto(const std::vector<ClassProbabilities>& unaries,
                           const std::vector<Eigen::Vector3f>& centroids,
@@ -235,15 +383,7 @@ void detail::solveMrfInto(const std::vector<ClassProbabilities>& unaries,
   validateParams(params);
   validateGraph(unaries, centroids, edges);
   if (factors) validateFactors(*factors, edges.size());
-  if (edge_scale) {
-    if (edge_scale->size() != edges.size())
-      throw Error("MRF: " + std::to_string(edge_scale->size()) + " edge scales for " +
-                  std::to_string(edges.size()) + " edges");
-    for (std::size_t k = 0; k < edge_scale->size(); ++k)
-      if (!(std::isfinite((*edge_scale)[k]) && (*edge_scale)[k] >= 0.0f))
-        throw Error("MRF: scale of edge " + std::to_string(k) + " is " +
-                    std::to_string((*edge_scale)[k]) + " (expected a finite number >= 0)");
-  }
+  if (edge_scale) validateEdgeScale(*edge_scale, edges.size());
 
   const std::size_t num_nodes = unaries.size();
   const std::size_t num_directed = 2 * edges.size();
@@ -264,58 +404,18 @@ void detail::solveMrfInto(const std::vector<ClassProbabilities>& unaries,
   detail::Borrowed weight_buffer(buffers.weight);
   detail::Borrowed oriented_buffer(buffers.oriented);
 
-  // Unary costs.
+  // Unary costs λ(1 − p).
   std::vector<Costs>& unary = *unary_buffer;
   unary.resize(num_nodes);
   for (std::size_t i = 0; i < num_nodes; ++i)
     unary[i] = params.lambda * (1.0f - Eigen::Map<const Costs>(unaries[i].data()));
 
-  // Directed edges: source, target, weight; plus per-node incoming lists (CSR).
-  std::vector<std::uint32_t>& source = *source_buffer;
-  std::vector<std::uint32_t>& target = *target_buffer;
-  source.resize(num_directed);
-  target.resize(num_directed);
-  std::vector<float>& weight = *weight_buffer;
-  weight.resize(edges.size());
-  std::vector<std::uint32_t>& in_begin = *in_begin_buffer;
-  in_begin.assign(num_nodes + 1, 0);
-  for (std::size_t k = 0; k < edges.size(); ++k) {
-    const auto a = static_cast<std::uint32_t>(edges[k].first);
-    const auto b = static_cast<std::uint32_t>(edges[k].second);
-    source[2 * k] = a;
-    target[2 * k] = b;
-    source[2 * k + 1] = b;
-    target[2 * k + 1] = a;
-    weight[k] = pairwiseWeight(centroids[a], centroids[b], params.sigma);
-    if (edge_scale) weight[k] *= (*edge_scale)[k];
-    ++in_begin[a + 1];
-    ++in_begin[b + 1];
-  }
-  for (std::size_t i = 0; i < num_nodes; ++i) in_begin[i + 1] += in_begin[i];
-  std::vector<std::uint32_t>& incoming = *incoming_buffer;
-  incoming.resize(num_directed);
-  {
-    std::vector<std::uint32_t>& fill = *fill_buffer;
-    fill.assign(in_begin.begin(), in_begin.end() - 1);
-    for (std::size_t e = 0; e < num_directed; ++e)
-      incoming[fill[target[e]]++] = static_cast<std::uint32_t>(e);
-  }
-
-  // Each table as the message of a directed edge reads it: [sender][receiver].
-  // Directed edge 2k sends from edges[k].first (the table as given), 2k+1
-  // from edges[k].second (its transpose).
+  DirectedGraph graph{*source_buffer, *target_buffer, *weight_buffer, *in_begin_buffer,
+                      *incoming_buffer};
+  buildDirectedGraph(centroids, edges, params.sigma, edge_scale, num_nodes, *fill_buffer, graph);
   std::vector<MrfPairTable>& oriented = *oriented_buffer;
   oriented.clear();
-  if (factors) {
-    for (const MrfPairTable& t : factors->tables) {
-      oriented.push_back(t);
-      MrfPairTable transposed{};
-      for (int a = 0; a < kNumLabels; ++a)
-        for (int b = 0; b < kNumLabels; ++b)
-          transposed[b * kNumLabels + a] = t[a * kNumLabels + b];
-      oriented.push_back(transposed);
-    }
-  }
+  if (factors) orientTables(*factors, oriented);
 
   std::vector<Costs>& messages = *messages_buffer;
   messages.assign(num_directed, Costs::Zero());
@@ -327,54 +427,17 @@ void detail::solveMrfInto(const std::vector<ClassProbabilities>& unaries,
   const bool avx2 = simd == detail::MrfSimd::Auto && detail::cpuHasAvx2();
 #else
   (void)simd;  // no SIMD path on this platform
+  const bool avx2 = false;
 #endif
-  auto computeBeliefs = [&] {
-#if defined(FINDMUG_AVX2_DISPATCH)
-    if (avx2) {
-      beliefsAvx2(unary.data(), messages.data(), in_begin.data(), incoming.data(), num_nodes,
-                  belief.data());
-      return;
-    }
-#endif
-    for (std::size_t i = 0; i < num_nodes; ++i) {
-      Costs b = unary[i];
-      for (std::uint32_t k = in_begin[i]; k < in_begin[i + 1]; ++k) b += messages[incoming[k]];
-      belief[i] = b;
-    }
-  };
 
   result.iterations = 0;
   result.converged = edges.empty();
   const float keep = params.damping;
   const float take = 1.0f - params.damping;
   for (int iter = 0; iter < params.max_iterations && !edges.empty(); ++iter) {
-    computeBeliefs();
-    float max_change = 0.0f;
-    if (factors) {
-      for (std::size_t e = 0; e < num_directed; ++e) {
-        const Costs h = belief[source[e]] - messages[e ^ 1];
-        const Costs& old = messages[e];
-        const float* table = oriented[2 * factors->table_of_edge[e / 2] + (e & 1)].data();
-        Costs m = take * factorMessage(h, table, weight[e / 2]) + keep * old;
-        m -= m.minCoeff();
-        max_change = std::max(max_change, (m - old).abs().maxCoeff());
-        next[e] = m;
-      }
-    } else
-#if defined(FINDMUG_AVX2_DISPATCH)
-    if (avx2) {
-      max_change = messageRoundAvx2(belief.data(), messages.data(), source.data(), weight.data(),
-                                    num_directed, take, keep, next.data());
-    } else
-#endif
-    for (std::size_t e = 0; e < num_directed; ++e) {
-      const Costs h = belief[source[e]] - messages[e ^ 1];
-      const Costs& old = messages[e];
-      Costs m = take * (h - h.minCoeff()).min(weight[e / 2]) + keep * old;
-      m -= m.minCoeff();
-      max_change = std::max(max_change, (m - old).abs().maxCoeff());
-      next[e] = m;
-    }
+    computeBeliefs(avx2, unary, messages, graph, belief);
+    const float max_change =
+        messageRound(avx2, belief, messages, graph, factors, oriented, take, keep, next);
     messages.swap(next);
     result.iterations = iter + 1;
     if (max_change < params.convergence_tol) {
@@ -382,26 +445,8 @@ void detail::solveMrfInto(const std::vector<ClassProbabilities>& unaries,
       break;
     }
   }
-  computeBeliefs();
-
-  result.labels.resize(num_nodes);
-  result.confidence.resize(num_nodes);
-  for (std::size_t i = 0; i < num_nodes; ++i) {
-    const Costs& b = belief[i];
-    // Lowest belief wins; ties (e.g. λ = 0, or an isolated node with equal
-    // probabilities) go to the higher forest probability, then the lower id.
-    // For an isolated node this is exactly the argmax of p.
-    int best = 0;
-    for (int y = 1; y < kNumLabels; ++y) {
-      if (b[y] < b[best] || (b[y] == b[best] && unaries[i][y] > unaries[i][best])) best = y;
-    }
-    // Confidence: exp(-b) normalised over the labels, i.e. a softmax of the
-    // negated beliefs, evaluated relative to the minimum for stability.
-    double z = 0.0;
-    for (int y = 0; y < kNumLabels; ++y) z += std::exp(-static_cast<double>(b[y] - b[best]));
-    result.labels[i] = static_cast<std::uint8_t>(best);
-    result.confidence[i] = static_cast<float>(1.0 / z);
-  }
+  computeBeliefs(avx2, unary, messages, graph, belief);
+  decideLabels(belief, unaries, result);
 }
 
 double mrfEnergy(const std::vector<ClassProbabilities>& unaries,
