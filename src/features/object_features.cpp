@@ -10,10 +10,10 @@
 #include <numeric>
 #include <string>
 
-#include "findmug/common/error.hpp"
 #include "common/moments_internal.hpp"
 #include "common/scratch.hpp"
 #include "common/union_find.hpp"
+#include "findmug/common/error.hpp"
 
 namespace findmug {
 
@@ -124,8 +124,7 @@ void describePatches(const SegmentFeatures& features, double tolerance,
     const SegmentMoments& m = features.moments[s];
     Patch& p = patches[s];
     p.centroid = m.mean;
-    p.normal = m.normal_sum.squaredNorm() > 0 ? m.normal_sum.normalized()
-                                               : Eigen::Vector3d::Zero();
+    p.normal = m.normal_sum.squaredNorm() > 0 ? m.normal_sum.normalized() : Eigen::Vector3d::Zero();
     p.radius = 0.5 * std::sqrt(12.0 * std::max(m.scatter.trace() / m.count, 0.0));
     const bool has_normal = m.normal_sum.squaredNorm() > 0;
     p.up = has_normal && p.normal.z() > cos_tol;
@@ -226,8 +225,8 @@ ObjectColumns objectColumnsWithCount(std::size_t count) {
 void validateObjectConfig(const ObjectConfig& config) {
   auto check = [](float value, double lo, double hi, const char* key) {
     if (!(value >= lo && value <= hi)) {
-      throw Error(std::string("features.") + key + " = " + std::to_string(value) +
-                  " is outside " + std::to_string(lo) + ".." + std::to_string(hi));
+      throw Error(std::string("features.") + key + " = " + std::to_string(value) + " is outside " +
+                  std::to_string(lo) + ".." + std::to_string(hi));
     }
   };
   check(config.concave_tolerance_deg, 0, 90, "objects_concave_tolerance_deg");
@@ -247,37 +246,16 @@ ObjectFeatures computeObjectFeatures(const SegmentFeatures& features,
   return out;
 }
 
-void computeObjectFeaturesInto(const SegmentFeatures& features,
-                               const Oversegmentation& segmentation,
-                               const RegionFeatures& regions, const ObjectConfig& config,
-                               ObjectFeatures& out) {
-  validateObjectConfig(config);
-  checkInputs(features, segmentation, regions);
-  const std::size_t n = segmentation.segments.size();
-  const double tolerance = config.orientation_tolerance_deg * M_PI / 180.0;
-  const double cos_smooth = std::cos(config.concave_tolerance_deg * M_PI / 180.0);
+namespace {
 
-  thread_local std::vector<Patch> patches_tls;
-  thread_local std::vector<GroupKind> kind_tls;
-  thread_local std::vector<int> parent_tls, root_group_tls, plane_rep_tls, tops_tls, top_region_tls;
-  thread_local std::vector<SegmentMoments> pooled_tls;
-  thread_local std::vector<FootprintBox> boxes_tls;
-  thread_local std::vector<float> low_tls, high_tls;
-  detail::Borrowed patches_buffer(patches_tls);
-  detail::Borrowed kind_buffer(kind_tls);
-  detail::Borrowed parent_buffer(parent_tls), root_group_buffer(root_group_tls);
-  detail::Borrowed plane_rep_buffer(plane_rep_tls), tops_buffer(tops_tls);
-  detail::Borrowed top_region_buffer(top_region_tls);
-  detail::Borrowed pooled_buffer(pooled_tls);
-  detail::Borrowed boxes_buffer(boxes_tls);
-  detail::Borrowed low_buffer(low_tls), high_buffer(high_tls);
-  std::vector<Patch>& patches = *patches_buffer;
-  std::vector<GroupKind>& kind = *kind_buffer;
-  std::vector<int>& parent = *parent_buffer;
-  describePatches(features, tolerance, patches);
-
-  // 1. Smooth surfaces, and the large planes among them (or among the
-  // coplanar regions): floor, walls and ceiling.
+// Step 1: smooth surfaces, and the large planes among them (or among the coplanar
+// regions): floor, walls and ceiling; every other patch an object part.
+void surfaceKinds(const SegmentFeatures& features, const Oversegmentation& segmentation,
+                  const RegionFeatures& regions, const ObjectConfig& config,
+                  const std::vector<Patch>& patches, double tolerance, double cos_smooth,
+                  std::vector<int>& parent, std::vector<SegmentMoments>& pooled,
+                  std::vector<float>& low, std::vector<float>& high, std::vector<GroupKind>& kind) {
+  const std::size_t n = patches.size();
   parent.resize(n);
   std::iota(parent.begin(), parent.end(), 0);
   for (const auto& [a, b] : segmentation.edges) {
@@ -286,9 +264,6 @@ void computeObjectFeaturesInto(const SegmentFeatures& features,
         smooth(patches[ua], patches[ub], cos_smooth, config.step_m))
       unionFindJoin(parent, a, b);
   }
-  std::vector<SegmentMoments>& pooled = *pooled_buffer;
-  std::vector<float>& low = *low_buffer;
-  std::vector<float>& high = *high_buffer;
   pooled.assign(n, SegmentMoments{});
   low.assign(n, std::numeric_limits<float>::infinity());
   high.assign(n, -std::numeric_limits<float>::infinity());
@@ -308,10 +283,16 @@ void computeObjectFeaturesInto(const SegmentFeatures& features,
         patches[s].centroid.z() < config.floor_height_m)
       kind[s] = GroupKind::Floor;
   }
-  // 2. Groups: the large planes' smooth surfaces and coplanar regions;
-  // object candidates over convex or smooth joints between touching patches.
+}
+
+// Step 2: groups: the large planes' smooth surfaces and coplanar regions; object
+// candidates over convex or smooth joints between touching patches (into `parent`).
+void joinGroups(const Oversegmentation& segmentation, const RegionFeatures& regions,
+                const ObjectConfig& config, const std::vector<Patch>& patches,
+                const std::vector<GroupKind>& kind, double cos_smooth, std::vector<int>& parent,
+                std::vector<int>& plane_rep) {
+  const std::size_t n = patches.size();
   std::iota(parent.begin(), parent.end(), 0);
-  std::vector<int>& plane_rep = *plane_rep_buffer;  // per region, its first structural patch
   plane_rep.assign(static_cast<std::size_t>(regions.region_count), -1);
   for (std::size_t s = 0; s < n; ++s) {
     if (kind[s] == GroupKind::Object) continue;
@@ -325,15 +306,20 @@ void computeObjectFeaturesInto(const SegmentFeatures& features,
     const auto ua = static_cast<std::size_t>(a), ub = static_cast<std::size_t>(b);
     if (kind[ua] != kind[ub] || !touching(patches[ua], patches[ub], config.link_gap_m)) continue;
     if (smooth(patches[ua], patches[ub], cos_smooth, config.step_m) ||
-        (kind[ua] == GroupKind::Object &&
-         convex(patches[ua], patches[ub], config.convex_margin)))
+        (kind[ua] == GroupKind::Object && convex(patches[ua], patches[ub], config.convex_margin)))
       unionFindJoin(parent, a, b);
   }
+}
 
-  // Dense group ids in order of first patch, pooled moments and heights.
+// Step 3: dense group ids in order of first patch, with their pooled moments, heights,
+// centroids and footprints.
+void describeGroups(const SegmentFeatures& features, std::vector<int>& parent,
+                    const std::vector<GroupKind>& kind, std::vector<int>& root_group,
+                    std::vector<SegmentMoments>& pooled, std::vector<FootprintBox>& boxes,
+                    ObjectFeatures& out) {
+  const std::size_t n = kind.size();
   out.segment_group.assign(n, -1);
   out.groups.clear();
-  std::vector<int>& root_group = *root_group_buffer;
   root_group.assign(n, -1);
   pooled.clear();
   for (std::size_t s = 0; s < n; ++s) {
@@ -355,7 +341,6 @@ void computeObjectFeaturesInto(const SegmentFeatures& features,
     group.max_height = std::max(group.max_height, features.features[s][5]);
     detail::poolMoments(pooled[static_cast<std::size_t>(g)], features.moments[s]);
   }
-  std::vector<FootprintBox>& boxes = *boxes_buffer;
   boxes.clear();
   for (std::size_t g = 0; g < out.groups.size(); ++g) boxes.emplace_back(majorAxis(pooled[g]));
   for (std::size_t s = 0; s < n; ++s)
@@ -368,10 +353,14 @@ void computeObjectFeaturesInto(const SegmentFeatures& features,
     group.extent_minor = static_cast<float>(minor);
     group.footprint_area = static_cast<float>(major * minor);
   }
+}
 
-  // The largest up-facing part of each group: its up-facing patches pooled
-  // per coplanar region.
-  std::vector<int>& tops = *tops_buffer;
+// Step 4: the largest up-facing part of each group (its up-facing patches pooled per
+// coplanar region): top area and height, and which region it is (top_region).
+void largestTops(const SegmentFeatures& features, const RegionFeatures& regions,
+                 const std::vector<Patch>& patches, std::vector<int>& tops,
+                 std::vector<int>& top_region, ObjectFeatures& out) {
+  const std::size_t n = patches.size();
   tops.clear();
   for (std::size_t s = 0; s < n; ++s)
     if (patches[s].up) tops.push_back(static_cast<int>(s));
@@ -384,7 +373,6 @@ void computeObjectFeaturesInto(const SegmentFeatures& features,
     return ra != rb ? ra < rb : a < b;
   };
   std::sort(tops.begin(), tops.end(), by_group_region);
-  std::vector<int>& top_region = *top_region_buffer;
   top_region.assign(out.groups.size(), -1);
   for (std::size_t i = 0; i < tops.size();) {
     const auto first = static_cast<std::size_t>(tops[i]);
@@ -409,8 +397,13 @@ void computeObjectFeaturesInto(const SegmentFeatures& features,
       group.top_height = static_cast<float>(part.mean.z());
     }
   }
+}
 
-  // What rises above an object's top: the group of a vertical patch touching one of its top patches.
+// Step 5: what rises above an object's top: the group of a vertical patch touching one
+// of its top patches.
+void backRises(const Oversegmentation& segmentation, const RegionFeatures& regions,
+               const ObjectConfig& config, const std::vector<Patch>& patches,
+               const std::vector<int>& top_region, ObjectFeatures& out) {
   const auto rise = [&](std::size_t top, std::size_t side) {
     const int g = out.segment_group[top];
     ObjectGroup& group = out.groups[static_cast<std::size_t>(g)];
@@ -425,9 +418,11 @@ void computeObjectFeaturesInto(const SegmentFeatures& features,
     rise(static_cast<std::size_t>(a), static_cast<std::size_t>(b));
     rise(static_cast<std::size_t>(b), static_cast<std::size_t>(a));
   }
+}
 
-  // The nearest wall: each wall group is a segment on the ground, along its
-  // major extent, across its mean normal.
+// Step 6: the nearest wall: each wall group is a segment on the ground, along its
+// major extent, across its mean normal.
+void wallDistances(const std::vector<SegmentMoments>& pooled, ObjectFeatures& out) {
   for (std::size_t w = 0; w < out.groups.size(); ++w) {
     if (out.groups[w].kind != GroupKind::Wall) continue;
     const Eigen::Vector2d normal = pooled[w].normal_sum.head<2>();
@@ -442,18 +437,20 @@ void computeObjectFeaturesInto(const SegmentFeatures& features,
       group.wall_distance = std::min(group.wall_distance, static_cast<float>(distance));
     }
   }
+}
 
-  if (config.columns == ObjectColumns::Relations) countLoadsOnTops(out.groups);
-
-  const std::span<const int> columns = objectColumnSet(config.columns).indices;
+// Step 7: each patch's row: its group's columns of config.columns.
+void writeRows(const std::vector<Patch>& patches, ObjectColumns column_set, ObjectFeatures& out) {
+  const std::size_t n = patches.size();
+  const std::span<const int> columns = objectColumnSet(column_set).indices;
   const std::size_t dim = columns.size();
   out.values.resize(n * dim);
   for (std::size_t s = 0; s < n; ++s) {
     const ObjectGroup& g = out.groups[static_cast<std::size_t>(out.segment_group[s])];
     const float span = g.max_height - g.min_height;
     const float relative = std::clamp(
-        (static_cast<float>(patches[s].centroid.z()) - g.min_height) / std::max(span, 0.01f),
-        0.0f, 1.0f);
+        (static_cast<float>(patches[s].centroid.z()) - g.min_height) / std::max(span, 0.01f), 0.0f,
+        1.0f);
     std::array<float, kObjectFeatureCount> row;
     row[0] = span;
     row[1] = g.min_height;
@@ -470,6 +467,46 @@ void computeObjectFeaturesInto(const SegmentFeatures& features,
     float* out_row = out.values.data() + s * dim;
     for (std::size_t k = 0; k < dim; ++k) out_row[k] = row[static_cast<std::size_t>(columns[k])];
   }
+}
+
+}  // namespace
+
+void computeObjectFeaturesInto(const SegmentFeatures& features,
+                               const Oversegmentation& segmentation, const RegionFeatures& regions,
+                               const ObjectConfig& config, ObjectFeatures& out) {
+  validateObjectConfig(config);
+  checkInputs(features, segmentation, regions);
+  const double tolerance = config.orientation_tolerance_deg * M_PI / 180.0;
+  const double cos_smooth = std::cos(config.concave_tolerance_deg * M_PI / 180.0);
+
+  thread_local std::vector<Patch> patches_tls;
+  thread_local std::vector<GroupKind> kind_tls;
+  thread_local std::vector<int> parent_tls, root_group_tls, plane_rep_tls, tops_tls, top_region_tls;
+  thread_local std::vector<SegmentMoments> pooled_tls;
+  thread_local std::vector<FootprintBox> boxes_tls;
+  thread_local std::vector<float> low_tls, high_tls;
+  detail::Borrowed patches_buffer(patches_tls);
+  detail::Borrowed kind_buffer(kind_tls);
+  detail::Borrowed parent_buffer(parent_tls), root_group_buffer(root_group_tls);
+  detail::Borrowed plane_rep_buffer(plane_rep_tls), tops_buffer(tops_tls);
+  detail::Borrowed top_region_buffer(top_region_tls);
+  detail::Borrowed pooled_buffer(pooled_tls);
+  detail::Borrowed boxes_buffer(boxes_tls);
+  detail::Borrowed low_buffer(low_tls), high_buffer(high_tls);
+  std::vector<Patch>& patches = *patches_buffer;
+  describePatches(features, tolerance, patches);
+
+  surfaceKinds(features, segmentation, regions, config, patches, tolerance, cos_smooth,
+               *parent_buffer, *pooled_buffer, *low_buffer, *high_buffer, *kind_buffer);
+  joinGroups(segmentation, regions, config, patches, *kind_buffer, cos_smooth, *parent_buffer,
+             *plane_rep_buffer);
+  describeGroups(features, *parent_buffer, *kind_buffer, *root_group_buffer, *pooled_buffer,
+                 *boxes_buffer, out);
+  largestTops(features, regions, patches, *tops_buffer, *top_region_buffer, out);
+  backRises(segmentation, regions, config, patches, *top_region_buffer, out);
+  wallDistances(*pooled_buffer, out);
+  if (config.columns == ObjectColumns::Relations) countLoadsOnTops(out.groups);
+  writeRows(patches, config.columns, out);
 }
 
 void objectCandidatesInto(const ObjectFeatures& objects, std::vector<int>& out) {
