@@ -10,17 +10,17 @@
 #include <limits>
 #include <string>
 
-#include "findmug/common/error.hpp"
 #include "common/floor_to_int.hpp"
 #include "common/point_extent.hpp"
 #include "common/scratch.hpp"
+#include "findmug/common/error.hpp"
 
 namespace findmug {
 
 namespace {
 
-constexpr int kHeightBins = 64;             // one bit each in a cell's mask
-constexpr float kHistogramStep = 0.01f;     // m, for the frame's top
+constexpr int kHeightBins = 64;          // one bit each in a cell's mask
+constexpr float kHistogramStep = 0.01f;  // m, for the frame's top
 constexpr float kTopPercentile = 0.98f;
 
 float horizontalDistance(const Eigen::Vector3f& p, const Eigen::Vector3f& camera) {
@@ -38,6 +38,37 @@ float fill(std::uint64_t mask, int lo, int hi) {
   return static_cast<float>(std::popcount(mask & range)) / static_cast<float>(width);
 }
 
+void checkSceneInputs(const OrganizedCloud& cloud_ground, const Oversegmentation& segmentation,
+                      const SegmentFeatures& features, const SceneConfig& config) {
+  const std::size_t pixels = segmentation.pixel_segment.size();
+  if (cloud_ground.points.size() != pixels || cloud_ground.width != segmentation.width) {
+    throw Error("computeSceneFeatures: grids disagree: segmentation has " + std::to_string(pixels) +
+                " pixels, cloud " + std::to_string(cloud_ground.points.size()));
+  }
+  const std::size_t n = segmentation.segments.size();
+  if (features.features.size() != n || features.centroids.size() != n) {
+    throw Error("computeSceneFeatures: " + std::to_string(n) + " segments but features for " +
+                std::to_string(features.features.size()));
+  }
+  if (!(config.cell_m >= 0.01f && config.cell_m <= 1.0f))
+    throw Error("computeSceneFeatures: features.scene_cell_m = " + std::to_string(config.cell_m) +
+                " is out of range (0.01..1)");
+  if (config.band_px < 1)
+    throw Error("computeSceneFeatures: features.scene_band_px = " + std::to_string(config.band_px) +
+                " must be at least 1");
+}
+
+// The frame's top: the 98th percentile of the point heights, from their histogram.
+float frameTop(const std::vector<std::uint32_t>& heights, std::size_t valid) {
+  const auto target = static_cast<std::size_t>(kTopPercentile * static_cast<float>(valid));
+  std::size_t seen = 0;
+  for (std::size_t h = 0; h < heights.size(); ++h) {
+    seen += heights[h];
+    if (seen > target) return (static_cast<float>(h) + 0.5f) * kHistogramStep;
+  }
+  return 0.0f;
+}
+
 }  // namespace
 
 std::vector<float> computeSceneFeatures(const OrganizedCloud& cloud_ground,
@@ -50,29 +81,13 @@ std::vector<float> computeSceneFeatures(const OrganizedCloud& cloud_ground,
   return out;
 }
 
-
 void computeSceneFeaturesInto(const OrganizedCloud& cloud_ground,
-                              const Oversegmentation& segmentation,
-                              const SegmentFeatures& features,
+                              const Oversegmentation& segmentation, const SegmentFeatures& features,
                               const Eigen::Vector3f& camera_position, const SceneConfig& config,
                               std::vector<float>& out) {
+  checkSceneInputs(cloud_ground, segmentation, features, config);
   const std::size_t pixels = segmentation.pixel_segment.size();
-  if (cloud_ground.points.size() != pixels || cloud_ground.width != segmentation.width) {
-    throw Error("computeSceneFeatures: grids disagree: segmentation has " +
-                std::to_string(pixels) + " pixels, cloud " +
-                std::to_string(cloud_ground.points.size()));
-  }
   const std::size_t n = segmentation.segments.size();
-  if (features.features.size() != n || features.centroids.size() != n) {
-    throw Error("computeSceneFeatures: " + std::to_string(n) + " segments but features for " +
-                std::to_string(features.features.size()));
-  }
-  if (!(config.cell_m >= 0.01f && config.cell_m <= 1.0f))
-    throw Error("computeSceneFeatures: features.scene_cell_m = " + std::to_string(config.cell_m) +
-                " is out of range (0.01..1)");
-  if (config.band_px < 1)
-    throw Error("computeSceneFeatures: features.scene_band_px = " +
-                std::to_string(config.band_px) + " must be at least 1");
   out.assign(n * kSceneFeatureDim, 0.0f);
   if (n == 0) return;
 
@@ -161,19 +176,7 @@ void computeSceneFeaturesInto(const OrganizedCloud& cloud_ground,
     closeRun(width);
   }
   for (float& far : band_far) far = std::sqrt(far);
-  // The frame's top: the 98th percentile of the point heights.
-  float top = 0.0f;
-  {
-    const auto target = static_cast<std::size_t>(kTopPercentile * static_cast<float>(valid));
-    std::size_t seen = 0;
-    for (int h = 0; h < histogram_bins; ++h) {
-      seen += heights[h];
-      if (seen > target) {
-        top = (static_cast<float>(h) + 0.5f) * kHistogramStep;
-        break;
-      }
-    }
-  }
+  const float top = frameTop(heights, valid);
   const int top_bin = binOf(top) + 1;
 
   for (std::size_t s = 0; s < n; ++s) {
