@@ -231,47 +231,42 @@ std::uint16_t noisyDepthMm(double z_m, const DepthNoiseParams& noise, double gau
   return mm >= 1.0 && mm <= 65535.0 ? static_cast<std::uint16_t>(mm) : 0;
 }
 
-RenderedFrame render(const SynthScene& scene, const CameraPose& pose, const RenderOptions& options,
-                     std::uint64_t noise_seed) {
-  validate(options);
-  const int W = options.width, H = options.height;
-  const std::size_t N = static_cast<std::size_t>(W) * H;
-  const CameraIntrinsics& K = options.intrinsics;
-  const DepthNoiseParams& noise = options.noise;
-  const Eigen::Vector3d room = scene.room_size;
+namespace {
 
-  const Eigen::Isometry3d cam_to_world = cameraToWorld(pose);
+// The camera's rays: through pixel (u, v) d = a[u] * c0 + b[v] * c1 + c2 (optical z
+// component 1), from o, all in the world frame.
+struct Rays {
+  V3 o, c0, c1, c2;
+  std::vector<float> a, b;
+};
+
+Rays raysOf(const Eigen::Isometry3d& cam_to_world, const CameraIntrinsics& K, int W, int H) {
+  Rays r;
   const Eigen::Vector3d o_d = cam_to_world.translation();
-  if (!(o_d.x() > 0 && o_d.y() > 0 && o_d.z() > 0 && o_d.x() < room.x() && o_d.y() < room.y() &&
-        o_d.z() < room.z())) {
-    std::ostringstream msg;
-    msg << "synth: camera at (" << o_d.transpose() << ") is outside the room (" << room.transpose()
-        << ")";
-    throw Error(msg.str());
-  }
-  const Eigen::Isometry3d world_to_cam = cam_to_world.inverse();
   const Eigen::Matrix3d& Rd = cam_to_world.linear();
-  const V3 o{static_cast<float>(o_d.x()), static_cast<float>(o_d.y()), static_cast<float>(o_d.z())};
+  r.o = {static_cast<float>(o_d.x()), static_cast<float>(o_d.y()), static_cast<float>(o_d.z())};
   auto col = [&](int c) {
     return V3{static_cast<float>(Rd(0, c)), static_cast<float>(Rd(1, c)),
               static_cast<float>(Rd(2, c))};
   };
-  const V3 c0 = col(0), c1 = col(1), c2 = col(2);
-  // Ray through pixel (u, v): d = a[u] * c0 + b[v] * c1 + c2 (optical z component 1).
-  std::vector<float> a(W), b(H);
-  for (int u = 0; u < W; ++u) a[u] = static_cast<float>((u - K.cx) / K.fx);
-  for (int v = 0; v < H; ++v) b[v] = static_cast<float>((v - K.cy) / K.fy);
+  r.c0 = col(0);
+  r.c1 = col(1);
+  r.c2 = col(2);
+  r.a.resize(W);
+  r.b.resize(H);
+  for (int u = 0; u < W; ++u) r.a[u] = static_cast<float>((u - K.cx) / K.fx);
+  for (int v = 0; v < H; ++v) r.b[v] = static_cast<float>((v - K.cy) / K.fy);
+  return r;
+}
 
-  std::vector<float> zbuf(N);
-  std::vector<std::int32_t> hit(N);  // primitive index, or -1 - shell surface
-
-  // 1. Room shell: exit point of the box [0,X]x[0,Y]x[0,H].
-  const float X = static_cast<float>(room.x()), Y = static_cast<float>(room.y()),
-              Hc = static_cast<float>(room.z());
+// Step 1: the room shell: exit point of the box [0,X]x[0,Y]x[0,Hc] (hit = -1 - surface).
+void traceShell(const Rays& r, float X, float Y, float Hc, int W, int H, std::vector<float>& zbuf,
+                std::vector<std::int32_t>& hit) {
+  const V3 o = r.o;
   for (int v = 0; v < H; ++v) {
-    const V3 base = b[v] * c1 + c2;
+    const V3 base = r.b[v] * r.c1 + r.c2;
     for (int u = 0; u < W; ++u) {
-      const V3 d = a[u] * c0 + base;
+      const V3 d = r.a[u] * r.c0 + base;
       float t = kInf;
       int surface = 0;
       auto consider = [&](float dc, float oc, float hi, int s_lo, int s_hi) {
@@ -297,92 +292,257 @@ RenderedFrame render(const SynthScene& scene, const CameraPose& pose, const Rend
       hit[i] = -1 - surface;
     }
   }
+}
 
-  // 2. Primitives over their screen bounding boxes.
-  for (std::size_t pi = 0; pi < scene.primitives.size(); ++pi) {
-    const Primitive& p = scene.primitives[pi];
-    int u0, u1, v0, v1;
-    if (!screenBounds(p, world_to_cam, K, W, H, u0, u1, v0, v1)) continue;
-    const float cy = static_cast<float>(std::cos(p.yaw)), sy = static_cast<float>(std::sin(p.yaw));
-    const V3 center{static_cast<float>(p.center.x()), static_cast<float>(p.center.y()),
-                    static_cast<float>(p.center.z())};
-    const V3 half{static_cast<float>(p.half_extent.x()), static_cast<float>(p.half_extent.y()),
-                  static_cast<float>(p.half_extent.z())};
-    // Rotate by -yaw into the primitive's frame.
-    const V3 ol = rotZ(o - center, cy, -sy);
-    const V3 l0 = rotZ(c0, cy, -sy), l1 = rotZ(c1, cy, -sy), l2 = rotZ(c2, cy, -sy);
-    const std::int32_t id = static_cast<std::int32_t>(pi);
-    if (p.shape == Shape::Box) {
-      for (int v = v0; v <= v1; ++v) {
-        const V3 base = b[v] * l1 + l2;
-        float* zrow = &zbuf[static_cast<std::size_t>(v) * W];
-        std::int32_t* hrow = &hit[static_cast<std::size_t>(v) * W];
-        for (int u = u0; u <= u1; ++u) {
-          const V3 d = a[u] * l0 + base;
-          const float ix = 1.0f / d.x, iy = 1.0f / d.y, iz = 1.0f / d.z;
-          const float tx1 = (-half.x - ol.x) * ix, tx2 = (half.x - ol.x) * ix;
-          const float ty1 = (-half.y - ol.y) * iy, ty2 = (half.y - ol.y) * iy;
-          const float tz1 = (-half.z - ol.z) * iz, tz2 = (half.z - ol.z) * iz;
-          const float tmin =
-              std::max(std::max(std::min(tx1, tx2), std::min(ty1, ty2)), std::min(tz1, tz2));
-          const float tmax =
-              std::min(std::min(std::max(tx1, tx2), std::max(ty1, ty2)), std::max(tz1, tz2));
-          if (tmin <= tmax && tmin > kNear && tmin < zrow[u]) {
-            zrow[u] = tmin;
-            hrow[u] = id;
-          }
+// Step 2: one primitive over its screen bounding box [u0, u1] x [v0, v1], nearer hits
+// replacing farther ones.
+void tracePrimitive(const Primitive& p, std::int32_t id, const Rays& r, int u0, int u1, int v0,
+                    int v1, int W, std::vector<float>& zbuf, std::vector<std::int32_t>& hit) {
+  const float cy = static_cast<float>(std::cos(p.yaw)), sy = static_cast<float>(std::sin(p.yaw));
+  const V3 center{static_cast<float>(p.center.x()), static_cast<float>(p.center.y()),
+                  static_cast<float>(p.center.z())};
+  const V3 half{static_cast<float>(p.half_extent.x()), static_cast<float>(p.half_extent.y()),
+                static_cast<float>(p.half_extent.z())};
+  // Rotate by -yaw into the primitive's frame.
+  const V3 ol = rotZ(r.o - center, cy, -sy);
+  const V3 l0 = rotZ(r.c0, cy, -sy), l1 = rotZ(r.c1, cy, -sy), l2 = rotZ(r.c2, cy, -sy);
+  if (p.shape == Shape::Box) {
+    for (int v = v0; v <= v1; ++v) {
+      const V3 base = r.b[v] * l1 + l2;
+      float* zrow = &zbuf[static_cast<std::size_t>(v) * W];
+      std::int32_t* hrow = &hit[static_cast<std::size_t>(v) * W];
+      for (int u = u0; u <= u1; ++u) {
+        const V3 d = r.a[u] * l0 + base;
+        const float ix = 1.0f / d.x, iy = 1.0f / d.y, iz = 1.0f / d.z;
+        const float tx1 = (-half.x - ol.x) * ix, tx2 = (half.x - ol.x) * ix;
+        const float ty1 = (-half.y - ol.y) * iy, ty2 = (half.y - ol.y) * iy;
+        const float tz1 = (-half.z - ol.z) * iz, tz2 = (half.z - ol.z) * iz;
+        const float tmin =
+            std::max(std::max(std::min(tx1, tx2), std::min(ty1, ty2)), std::min(tz1, tz2));
+        const float tmax =
+            std::min(std::min(std::max(tx1, tx2), std::max(ty1, ty2)), std::max(tz1, tz2));
+        if (tmin <= tmax && tmin > kNear && tmin < zrow[u]) {
+          zrow[u] = tmin;
+          hrow[u] = id;
         }
       }
+    }
+    return;
+  }
+  const float r2 = half.x * half.x;
+  const float cxy = ol.x * ol.x + ol.y * ol.y - r2;
+  for (int v = v0; v <= v1; ++v) {
+    const V3 base = r.b[v] * l1 + l2;
+    float* zrow = &zbuf[static_cast<std::size_t>(v) * W];
+    std::int32_t* hrow = &hit[static_cast<std::size_t>(v) * W];
+    for (int u = u0; u <= u1; ++u) {
+      const V3 d = r.a[u] * l0 + base;
+      float t = kInf;
+      const float qa = d.x * d.x + d.y * d.y;
+      const float qb = ol.x * d.x + ol.y * d.y;
+      const float disc = qb * qb - qa * cxy;
+      if (qa > 0.0f && disc >= 0.0f) {
+        const float ts = (-qb - std::sqrt(disc)) / qa;
+        const float zs = ol.z + ts * d.z;
+        if (ts > kNear && std::abs(zs) <= half.z) t = ts;
+      }
+      // The cap facing the camera.
+      const float cap = ol.z > half.z ? half.z : (ol.z < -half.z ? -half.z : 0.0f);
+      if (cap != 0.0f && d.z != 0.0f) {
+        const float tc = (cap - ol.z) / d.z;
+        const float x = ol.x + tc * d.x, y = ol.y + tc * d.y;
+        if (tc > kNear && tc < t && x * x + y * y <= r2) t = tc;
+      }
+      if (t < zrow[u]) {
+        zrow[u] = t;
+        hrow[u] = id;
+      }
+    }
+  }
+}
+
+// Step 3: projector shadows (see synth.hpp): row-wise scan from the projector side.
+std::vector<std::uint8_t> projectorShadows(const std::vector<float>& zbuf,
+                                           const CameraIntrinsics& K, const DepthNoiseParams& noise,
+                                           int W, int H) {
+  std::vector<std::uint8_t> shadow(zbuf.size(), 0);
+  if (!(noise.enabled && noise.projector_shadows && noise.projector_baseline_m > 0.0)) {
+    return shadow;
+  }
+  const float fb = static_cast<float>(K.fx * noise.projector_baseline_m);
+  for (int v = 0; v < H; ++v) {
+    float min_col = kInf;
+    for (int u = W - 1; u >= 0; --u) {
+      const std::size_t i = static_cast<std::size_t>(v) * W + u;
+      const float col_p = static_cast<float>(u) - fb / zbuf[i];
+      if (col_p >= min_col) shadow[i] = 1;
+      min_col = std::min(min_col, col_p);
+    }
+  }
+  return shadow;
+}
+
+// What a ray hit at P: the surface's normal, material, object, the point in the
+// primitive's own frame (texture coordinates), its dominant axis and texture salt.
+struct SurfaceHit {
+  V3 n, local;
+  int axis = 2;
+  const Material* m = nullptr;
+  int object = 0;
+  std::uint64_t salt = 0;
+};
+
+SurfaceHit surfaceAt(const SynthScene& scene, std::int32_t hit, const V3& P) {
+  static const std::array<V3, 6> kShellNormals = {
+      {{0, 0, 1}, {0, 0, -1}, {1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}}};
+  SurfaceHit h;
+  if (hit < 0) {
+    const int s = -1 - hit;
+    h.n = kShellNormals[s];
+    h.object = s;  // objects 0..5 are floor, ceiling and the walls in this order
+    h.m =
+        s == 0 ? &scene.floor_material : (s == 1 ? &scene.ceiling_material : &scene.wall_material);
+    h.local = P;
+    h.salt = scene.seed;
+    return h;
+  }
+  const Primitive& p = scene.primitives[hit];
+  const float cy = static_cast<float>(std::cos(p.yaw)), sy = static_cast<float>(std::sin(p.yaw));
+  const V3 center{static_cast<float>(p.center.x()), static_cast<float>(p.center.y()),
+                  static_cast<float>(p.center.z())};
+  const V3 local = rotZ(P - center, cy, -sy);
+  const float hx = static_cast<float>(p.half_extent.x()),
+              hy = static_cast<float>(p.half_extent.y()),
+              hz = static_cast<float>(p.half_extent.z());
+  V3 nl;
+  if (p.shape == Shape::Box) {
+    const float ex = std::abs(local.x) / hx, ey = std::abs(local.y) / hy,
+                ez = std::abs(local.z) / hz;
+    if (ex >= ey && ex >= ez) {
+      nl = {local.x > 0 ? 1.0f : -1.0f, 0, 0};
+      h.axis = 0;
+    } else if (ey >= ez) {
+      nl = {0, local.y > 0 ? 1.0f : -1.0f, 0};
+      h.axis = 1;
     } else {
-      const float r2 = half.x * half.x;
-      const float cxy = ol.x * ol.x + ol.y * ol.y - r2;
-      for (int v = v0; v <= v1; ++v) {
-        const V3 base = b[v] * l1 + l2;
-        float* zrow = &zbuf[static_cast<std::size_t>(v) * W];
-        std::int32_t* hrow = &hit[static_cast<std::size_t>(v) * W];
-        for (int u = u0; u <= u1; ++u) {
-          const V3 d = a[u] * l0 + base;
-          float t = kInf;
-          const float qa = d.x * d.x + d.y * d.y;
-          const float qb = ol.x * d.x + ol.y * d.y;
-          const float disc = qb * qb - qa * cxy;
-          if (qa > 0.0f && disc >= 0.0f) {
-            const float ts = (-qb - std::sqrt(disc)) / qa;
-            const float zs = ol.z + ts * d.z;
-            if (ts > kNear && std::abs(zs) <= half.z) t = ts;
-          }
-          // The cap facing the camera.
-          const float cap = ol.z > half.z ? half.z : (ol.z < -half.z ? -half.z : 0.0f);
-          if (cap != 0.0f && d.z != 0.0f) {
-            const float tc = (cap - ol.z) / d.z;
-            const float x = ol.x + tc * d.x, y = ol.y + tc * d.y;
-            if (tc > kNear && tc < t && x * x + y * y <= r2) t = tc;
-          }
-          if (t < zrow[u]) {
-            zrow[u] = t;
-            hrow[u] = id;
-          }
-        }
-      }
+      nl = {0, 0, local.z > 0 ? 1.0f : -1.0f};
+      h.axis = 2;
+    }
+  } else {
+    const float radial = std::sqrt(local.x * local.x + local.y * local.y);
+    if (std::abs(hz - std::abs(local.z)) < std::abs(hx - radial)) {
+      nl = {0, 0, local.z > 0 ? 1.0f : -1.0f};
+      h.axis = 2;
+    } else {
+      nl = {local.x / radial, local.y / radial, 0};
+      h.axis = 0;
     }
   }
+  h.n = rotZ(nl, cy, sy);
+  h.local = local;
+  h.m = &p.material;
+  h.object = p.object;
+  h.salt = static_cast<std::uint64_t>(hit) * 0x9e3779b9ULL + scene.seed;
+  return h;
+}
 
-  // 3. Projector shadows (see synth.hpp): row-wise scan from the projector side.
-  std::vector<std::uint8_t> shadow(N, 0);
-  if (noise.enabled && noise.projector_shadows && noise.projector_baseline_m > 0.0) {
-    const float fb = static_cast<float>(K.fx * noise.projector_baseline_m);
-    for (int v = 0; v < H; ++v) {
-      float min_col = kInf;
-      for (int u = W - 1; u >= 0; --u) {
-        const std::size_t i = static_cast<std::size_t>(v) * W + u;
-        const float col_p = static_cast<float>(u) - fb / zbuf[i];
-        if (col_p >= min_col) shadow[i] = 1;
-        min_col = std::min(min_col, col_p);
+// Step 4: per-pixel shading, labels and depth noise into `out` (sized by the caller).
+void shadePixels(const SynthScene& scene, const Rays& r, const std::vector<float>& zbuf,
+                 const std::vector<std::int32_t>& hit, const std::vector<std::uint8_t>& shadow,
+                 const RenderOptions& options, float X, float Y, float Hc, std::uint64_t noise_seed,
+                 RenderedFrame& out) {
+  const int W = options.width, H = options.height;
+  const DepthNoiseParams& noise = options.noise;
+  RgbdFrame& frame = out.labeled.frame;
+  const auto& gauss_table = detail::inverseCdfTable();
+  const float cos_start = static_cast<float>(std::cos(noise.grazing_start_deg * M_PI / 180.0));
+  const float cos_full = static_cast<float>(std::cos(noise.grazing_full_deg * M_PI / 180.0));
+  const V3 light{X / 2, Y / 2, Hc - 0.05f};
+  const float rgb_sigma = static_cast<float>(noise.rgb_noise_sigma);
+  const std::uint64_t frame_key = detail::mix64(noise_seed ^ 0xd1b54a32d192ed03ULL);
+
+  for (int v = 0; v < H; ++v) {
+    const V3 base = r.b[v] * r.c1 + r.c2;
+    for (int u = 0; u < W; ++u) {
+      const std::size_t i = static_cast<std::size_t>(v) * W + u;
+      const V3 d = r.a[u] * r.c0 + base;
+      const float t = zbuf[i];
+      const V3 P = r.o + t * d;
+      const SurfaceHit s = surfaceAt(scene, hit[i], P);
+
+      // Colour: texture x (ambient + diffuse from a ceiling light) + sensor noise.
+      const V3 to_light = light - P;
+      const float dist2 = dot(to_light, to_light);
+      const float diffuse = std::max(0.0f, dot(s.n, to_light)) / std::sqrt(dist2);
+      const float shade =
+          (0.38f + 0.8f * diffuse / (1.0f + 0.06f * dist2) + 0.15f * std::max(0.0f, -s.n.z)) *
+          textureFactor(*s.m, P, s.local, s.axis, s.salt);
+      const std::uint64_t h_rgb = detail::hash3(frame_key, i, 1);
+      auto channel = [&](std::uint8_t c, int k) {
+        const float g = detail::gaussianFrom21(
+            gauss_table, static_cast<std::uint32_t>(h_rgb >> (43 - 21 * k)) & 0x1fffffu);
+        const float value = c * shade + rgb_sigma * g;
+        return static_cast<std::uint8_t>(std::clamp(value + 0.5f, 0.0f, 255.0f));
+      };
+      frame.rgb[i] = {channel(s.m->color.r, 0), channel(s.m->color.g, 1), channel(s.m->color.b, 2)};
+      out.labeled.labels[i] = static_cast<std::uint8_t>(scene.objects[s.object].label);
+      out.object[i] = s.object;
+      out.true_depth_m[i] = t;
+
+      // Depth: range, grazing dropout, projector shadow, disparity noise.
+      if (!noise.enabled) {
+        const float mm = std::round(t * 1000.0f);
+        frame.depth_mm[i] = mm >= 1.0f && mm <= 65535.0f ? static_cast<std::uint16_t>(mm) : 0;
+        continue;
       }
+      if (shadow[i] || t < noise.min_range_m || t > noise.max_range_m) continue;
+      const std::uint64_t h_depth = detail::hash3(frame_key, i, 2);
+      const float cos_inc = std::abs(dot(s.n, d)) / std::sqrt(dot(d, d));
+      if (cos_inc < cos_start) {
+        const float p_drop = (cos_start - cos_inc) / (cos_start - cos_full);
+        if (static_cast<float>(detail::toUnit(detail::mix64(h_depth))) < p_drop) continue;
+      }
+      frame.depth_mm[i] = noisyDepthMm(
+          t, noise, detail::gaussianFrom21(gauss_table, static_cast<std::uint32_t>(h_depth >> 43)));
     }
   }
+}
 
-  // 4. Per-pixel shading, labels and depth noise.
+}  // namespace
+
+RenderedFrame render(const SynthScene& scene, const CameraPose& pose, const RenderOptions& options,
+                     std::uint64_t noise_seed) {
+  validate(options);
+  const int W = options.width, H = options.height;
+  const std::size_t N = static_cast<std::size_t>(W) * H;
+  const CameraIntrinsics& K = options.intrinsics;
+  const Eigen::Vector3d room = scene.room_size;
+
+  const Eigen::Isometry3d cam_to_world = cameraToWorld(pose);
+  const Eigen::Vector3d o_d = cam_to_world.translation();
+  if (!(o_d.x() > 0 && o_d.y() > 0 && o_d.z() > 0 && o_d.x() < room.x() && o_d.y() < room.y() &&
+        o_d.z() < room.z())) {
+    std::ostringstream msg;
+    msg << "synth: camera at (" << o_d.transpose() << ") is outside the room (" << room.transpose()
+        << ")";
+    throw Error(msg.str());
+  }
+  const Eigen::Isometry3d world_to_cam = cam_to_world.inverse();
+  const Rays rays = raysOf(cam_to_world, K, W, H);
+
+  std::vector<float> zbuf(N);
+  std::vector<std::int32_t> hit(N);  // primitive index, or -1 - shell surface
+  const float X = static_cast<float>(room.x()), Y = static_cast<float>(room.y()),
+              Hc = static_cast<float>(room.z());
+  traceShell(rays, X, Y, Hc, W, H, zbuf, hit);
+  for (std::size_t pi = 0; pi < scene.primitives.size(); ++pi) {
+    int u0, u1, v0, v1;
+    if (!screenBounds(scene.primitives[pi], world_to_cam, K, W, H, u0, u1, v0, v1)) continue;
+    tracePrimitive(scene.primitives[pi], static_cast<std::int32_t>(pi), rays, u0, u1, v0, v1, W,
+                   zbuf, hit);
+  }
+  const std::vector<std::uint8_t> shadow = projectorShadows(zbuf, K, options.noise, W, H);
+
   RenderedFrame out;
   RgbdFrame& frame = out.labeled.frame;
   frame.width = W;
@@ -395,112 +555,7 @@ RenderedFrame render(const SynthScene& scene, const CameraPose& pose, const Rend
   out.labeled.labels.resize(N);
   out.true_depth_m.resize(N);
   out.object.resize(N);
-
-  const auto& gauss_table = detail::inverseCdfTable();
-  const float cos_start = static_cast<float>(std::cos(noise.grazing_start_deg * M_PI / 180.0));
-  const float cos_full = static_cast<float>(std::cos(noise.grazing_full_deg * M_PI / 180.0));
-  const V3 light{X / 2, Y / 2, Hc - 0.05f};
-  const float rgb_sigma = static_cast<float>(noise.rgb_noise_sigma);
-  const std::uint64_t frame_key = detail::mix64(noise_seed ^ 0xd1b54a32d192ed03ULL);
-  static const std::array<V3, 6> kShellNormals = {
-      {{0, 0, 1}, {0, 0, -1}, {1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}}};
-
-  for (int v = 0; v < H; ++v) {
-    const V3 base = b[v] * c1 + c2;
-    for (int u = 0; u < W; ++u) {
-      const std::size_t i = static_cast<std::size_t>(v) * W + u;
-      const V3 d = a[u] * c0 + base;
-      const float t = zbuf[i];
-      const V3 P = o + t * d;
-      V3 n, local;
-      int axis = 2;
-      const Material* m;
-      int object;
-      std::uint64_t salt;
-      if (hit[i] < 0) {
-        const int s = -1 - hit[i];
-        n = kShellNormals[s];
-        object = s;  // objects 0..5 are floor, ceiling and the walls in this order
-        m = s == 0 ? &scene.floor_material
-                   : (s == 1 ? &scene.ceiling_material : &scene.wall_material);
-        local = P;
-        salt = scene.seed;
-      } else {
-        const Primitive& p = scene.primitives[hit[i]];
-        const float cy = static_cast<float>(std::cos(p.yaw)),
-                    sy = static_cast<float>(std::sin(p.yaw));
-        const V3 center{static_cast<float>(p.center.x()), static_cast<float>(p.center.y()),
-                        static_cast<float>(p.center.z())};
-        local = rotZ(P - center, cy, -sy);
-        const float hx = static_cast<float>(p.half_extent.x()),
-                    hy = static_cast<float>(p.half_extent.y()),
-                    hz = static_cast<float>(p.half_extent.z());
-        V3 nl;
-        if (p.shape == Shape::Box) {
-          const float ex = std::abs(local.x) / hx, ey = std::abs(local.y) / hy,
-                      ez = std::abs(local.z) / hz;
-          if (ex >= ey && ex >= ez) {
-            nl = {local.x > 0 ? 1.0f : -1.0f, 0, 0};
-            axis = 0;
-          } else if (ey >= ez) {
-            nl = {0, local.y > 0 ? 1.0f : -1.0f, 0};
-            axis = 1;
-          } else {
-            nl = {0, 0, local.z > 0 ? 1.0f : -1.0f};
-            axis = 2;
-          }
-        } else {
-          const float radial = std::sqrt(local.x * local.x + local.y * local.y);
-          if (std::abs(hz - std::abs(local.z)) < std::abs(hx - radial)) {
-            nl = {0, 0, local.z > 0 ? 1.0f : -1.0f};
-            axis = 2;
-          } else {
-            nl = {local.x / radial, local.y / radial, 0};
-            axis = 0;
-          }
-        }
-        n = rotZ(nl, cy, sy);
-        m = &p.material;
-        object = p.object;
-        salt = static_cast<std::uint64_t>(hit[i]) * 0x9e3779b9ULL + scene.seed;
-      }
-
-      // Colour: texture x (ambient + diffuse from a ceiling light) + sensor noise.
-      const V3 to_light = light - P;
-      const float dist2 = dot(to_light, to_light);
-      const float diffuse = std::max(0.0f, dot(n, to_light)) / std::sqrt(dist2);
-      const float shade =
-          (0.38f + 0.8f * diffuse / (1.0f + 0.06f * dist2) + 0.15f * std::max(0.0f, -n.z)) *
-          textureFactor(*m, P, local, axis, salt);
-      const std::uint64_t h_rgb = detail::hash3(frame_key, i, 1);
-      auto channel = [&](std::uint8_t c, int k) {
-        const float g = detail::gaussianFrom21(
-            gauss_table, static_cast<std::uint32_t>(h_rgb >> (43 - 21 * k)) & 0x1fffffu);
-        const float value = c * shade + rgb_sigma * g;
-        return static_cast<std::uint8_t>(std::clamp(value + 0.5f, 0.0f, 255.0f));
-      };
-      frame.rgb[i] = {channel(m->color.r, 0), channel(m->color.g, 1), channel(m->color.b, 2)};
-      out.labeled.labels[i] = static_cast<std::uint8_t>(scene.objects[object].label);
-      out.object[i] = object;
-      out.true_depth_m[i] = t;
-
-      // Depth: range, grazing dropout, projector shadow, disparity noise.
-      if (!noise.enabled) {
-        const float mm = std::round(t * 1000.0f);
-        frame.depth_mm[i] = mm >= 1.0f && mm <= 65535.0f ? static_cast<std::uint16_t>(mm) : 0;
-        continue;
-      }
-      if (shadow[i] || t < noise.min_range_m || t > noise.max_range_m) continue;
-      const std::uint64_t h_depth = detail::hash3(frame_key, i, 2);
-      const float cos_inc = std::abs(dot(n, d)) / std::sqrt(dot(d, d));
-      if (cos_inc < cos_start) {
-        const float p_drop = (cos_start - cos_inc) / (cos_start - cos_full);
-        if (static_cast<float>(detail::toUnit(detail::mix64(h_depth))) < p_drop) continue;
-      }
-      frame.depth_mm[i] = noisyDepthMm(
-          t, noise, detail::gaussianFrom21(gauss_table, static_cast<std::uint32_t>(h_depth >> 43)));
-    }
-  }
+  shadePixels(scene, rays, zbuf, hit, shadow, options, X, Y, Hc, noise_seed, out);
   return out;
 }
 
