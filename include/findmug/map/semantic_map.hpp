@@ -76,7 +76,6 @@
 #include "findmug/cloud/cloud.hpp"
 #include "findmug/common/pose2d.hpp"
 #include "findmug/labels/label_image.hpp"
-#include "findmug/settings/config.hpp"
 #include "findmug/settings/settings.hpp"
 #include "findmug/tables/tables.hpp"
 
