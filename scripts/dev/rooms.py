@@ -28,7 +28,7 @@ ROOMS = {
               ["frame.cpp", "image_io.cpp", "dataset.cpp", "depth_holes.cpp"],
               ["image_io", "dataset", "depth_holes"]),
     "cloud": (["cloud"], ["cloud.cpp", "cloud_internal.hpp"], ["cloud"]),
-    "ground": (["ground"], ["ground.cpp", "ground_internal.hpp"], ["ground"]),
+    "ground": (["ground"], ["ground.cpp", "ground_gravity.cpp", "ground_internal.hpp"], ["ground"]),
     "supervoxels": (["oversegmentation"],
                     ["oversegmentation.cpp", "oversegmentation_internal.hpp", "overseg_organized.cpp",
                      "overseg_pcl.cpp", "lab_internal.hpp"],
