@@ -21,12 +21,14 @@
 #include "common/union_find.hpp"
 #include "findmug/common/error.hpp"
 #include "findmug/labels/labels.hpp"
+#include "objects/table_objects_internal.hpp"
 #include "tables/tables_internal.hpp"
 
 namespace findmug {
 
 namespace {
 
+using objects_detail::clusterSampled;
 using tables_detail::fmt;
 
 constexpr auto kFloorLabel = static_cast<std::uint8_t>(Label::Floor);
@@ -96,13 +98,7 @@ struct Scratch {
   std::vector<int> split_index, part_index, part_pixels, part_of;
   std::vector<Eigen::Vector3f> part_points;
   std::vector<std::vector<int>> spare_pixels;
-  // clusterSampled's: the sampled points, their pixels and clusters, and per
-  // image pixel the sampled point
-  // there (-1 elsewhere; only the entries set are reset after use).
-  std::vector<Eigen::Vector3f> sample_points;
-  // sample_of: union-find parents, then each sampled point's cluster.
-  std::vector<int> sample_pixels, sample_of, sample_cluster_of_root, sample_at_pixel;
-  std::vector<int> sample_index;  // per point of the clustered set: its sampled index or -1
+  objects_detail::SampledClusteringScratch sampled;  // clusterSampled's
 };
 
 // The smallest signed distance of (x, y) to the region's edges: >= 0 inside the hull.
@@ -539,145 +535,6 @@ int localTops(int r, const LabelImage& labels, const TableObjectConfig& config, 
   return static_cast<int>(kept);
 }
 
-// Image reach of the organized clustering, in sampled steps: a sampled point
-// links to the sampled points up to this many steps away on each image axis
-// (within cluster_tolerance_m in 3-D), so that a gap of a few pixels (a depth
-// hole, a thin occluder) does not split an object.
-constexpr int kOrganizedReachSteps = 2;
-
-// Step 2 with table_objects.point_stride = s > 1: the points at pixels (x, y)
-// with x and y multiples of s are clustered on the image grid (a cluttered
-// NYU desk holds up to 54,000 points above its top; the exact clustering's
-// voxel pass was most of the stage's cost there, and sampling alone does not
-// cut the number of voxels): two sampled points are linked when they are
-// within kOrganizedReachSteps sampled steps of each other in the image and
-// within cluster_tolerance_m in 3-D, and the clusters are the linked sets.
-// Every other point then joins the cluster of the nearest of the four sampled
-// pixels around it that lies within cluster_tolerance_m (else of the twelve
-// around those). A point with none (a
-// depth edge, a thin strand) joins no cluster: it is given the id returned
-// (the cluster count), which the caller never makes a candidate. Unlike the
-// exact clustering, parts close in 3-D but further apart in the image stay
-// apart. With s = 1: the exact clustering; no point is left out. Returns the
-// number of clusters, numbered in pixel order of their first sampled point.
-int clusterSampled(const std::vector<Eigen::Vector3f>& points, const std::vector<int>& pixels,
-                   float tolerance, int width, int height, int stride, Scratch& s,
-                   std::vector<int>& cluster_of) {
-  if (stride <= 1) {
-    tables_detail::clusterPointsInto(points, tolerance,
-                                     tables_detail::PointGrid{&pixels, width, 1}, cluster_of);
-    return *std::max_element(cluster_of.begin(), cluster_of.end()) + 1;
-  }
-  s.sample_points.clear();
-  s.sample_pixels.clear();
-  // Per point, its sampled point's index, or -1 when it is not sampled. The
-  // pixels ascend, so the row is followed without a division per point.
-  std::vector<int>& sample_index = s.sample_index;
-  sample_index.assign(points.size(), -1);
-  int row = 0, row_start = 0;
-  for (std::size_t k = 0; k < points.size(); ++k) {
-    const int p = pixels[k];
-    if (p >= row_start + width) {
-      row = p / width;
-      row_start = row * width;
-    }
-    if (row % stride != 0 || (p - row_start) % stride != 0) continue;
-    sample_index[k] = static_cast<int>(s.sample_points.size());
-    s.sample_points.push_back(points[k]);
-    s.sample_pixels.push_back(p);
-  }
-  cluster_of.assign(points.size(), 0);
-  const int samples = static_cast<int>(s.sample_points.size());
-  if (samples == 0) return 0;  // every point joins no cluster (id 0 = the count)
-  const std::size_t image = static_cast<std::size_t>(width) * static_cast<std::size_t>(height);
-  if (s.sample_at_pixel.size() < image) s.sample_at_pixel.resize(image, -1);
-  for (int j = 0; j < samples; ++j) {
-    s.sample_at_pixel[static_cast<std::size_t>(s.sample_pixels[static_cast<std::size_t>(j)])] = j;
-  }
-  const float tol2 = tolerance * tolerance;
-  std::vector<int>& parent = s.sample_of;
-  parent.resize(static_cast<std::size_t>(samples));
-  for (int j = 0; j < samples; ++j) parent[static_cast<std::size_t>(j)] = j;
-  constexpr int R = kOrganizedReachSteps;
-  for (int j = 0; j < samples; ++j) {
-    const int p = s.sample_pixels[static_cast<std::size_t>(j)];
-    const int x = p % width, y = p / width;
-    const Eigen::Vector3f& a = s.sample_points[static_cast<std::size_t>(j)];
-    // The later half of the window: the rest of this row, then the rows below.
-    for (int dy = 0; dy <= R; ++dy) {
-      const int yy = y + dy * stride;
-      if (yy >= height) break;
-      for (int dx = dy == 0 ? 1 : -R; dx <= R; ++dx) {
-        const int xx = x + dx * stride;
-        if (xx < 0 || xx >= width) continue;
-        const int q = s.sample_at_pixel[static_cast<std::size_t>(yy) * width + xx];
-        if (q < 0 || (a - s.sample_points[static_cast<std::size_t>(q)]).squaredNorm() > tol2) {
-          continue;
-        }
-        detail::unionFindJoin(parent, j, q);
-      }
-    }
-  }
-  // Roots are the lowest index of their set (union_find.hpp), so numbering
-  // the roots in index order numbers the clusters in pixel order.
-  s.sample_cluster_of_root.assign(static_cast<std::size_t>(samples), -1);
-  int clusters = 0;
-  for (int j = 0; j < samples; ++j) {
-    const int root = detail::unionFindRoot(parent, j);
-    int& id = s.sample_cluster_of_root[static_cast<std::size_t>(root)];
-    if (id < 0) id = clusters++;
-    parent[static_cast<std::size_t>(j)] = root;
-  }
-  for (int j = 0; j < samples; ++j) {
-    parent[static_cast<std::size_t>(j)] =
-        s.sample_cluster_of_root[static_cast<std::size_t>(parent[static_cast<std::size_t>(j)])];
-  }
-  row = 0;
-  row_start = 0;
-  for (std::size_t k = 0; k < points.size(); ++k) {
-    if (sample_index[k] >= 0) {
-      cluster_of[k] = parent[static_cast<std::size_t>(sample_index[k])];
-      continue;
-    }
-    const int p = pixels[k];
-    if (p >= row_start + width) {
-      row = p / width;
-      row_start = row * width;
-    }
-    const int x = p - row_start, y = row;
-    const int x0 = x - x % stride, y0 = y - y % stride;
-    int best = -1;
-    float best_d2 = tol2;
-    // The four sampled pixels around it (steps 0 and 1); when none is within
-    // the tolerance (a silhouette's edge, quantised depth far away), the ring
-    // of twelve around those (steps -1 and 2): on rendered rooms a small far
-    // object otherwise lost a fifth of its pixels.
-    for (const int ring : {0, 1}) {
-      for (int dy = -ring; dy <= 1 + ring; ++dy) {
-        const int yy = y0 + dy * stride;
-        if (yy < 0 || yy >= height) continue;
-        for (int dx = -ring; dx <= 1 + ring; ++dx) {
-          if (ring == 1 && dy >= 0 && dy <= 1 && dx >= 0 && dx <= 1) continue;  // looked at
-          const int xx = x0 + dx * stride;
-          if (xx < 0 || xx >= width) continue;
-          const int j = s.sample_at_pixel[static_cast<std::size_t>(yy) * width + xx];
-          if (j < 0) continue;
-          const float d2 =
-              (points[k] - s.sample_points[static_cast<std::size_t>(j)]).squaredNorm();
-          if (d2 <= best_d2) {
-            best_d2 = d2;
-            best = j;
-          }
-        }
-      }
-      if (best >= 0) break;
-    }
-    cluster_of[k] = best < 0 ? clusters : parent[static_cast<std::size_t>(best)];
-  }
-  for (const int p : s.sample_pixels) s.sample_at_pixel[static_cast<std::size_t>(p)] = -1;
-  return clusters;
-}
-
 // Step 3 for a cluster that does not stand but holds several labels (clutter
 // on a desk joined through unlabelled, table or cabinet points between the
 // things): each label's points but the table's are clustered alone, and the
@@ -723,7 +580,7 @@ int splitByLabel(int r, int c, const LabelImage& labels, const TableObjectConfig
     if (static_cast<int>(s.part_points.size()) < config.min_points) continue;
     // Id `parts` (one past the last): the points the sampled clustering left out.
     const int parts = clusterSampled(s.part_points, s.part_pixels, config.cluster_tolerance_m,
-                                     width, height, config.point_stride, s, s.part_of);
+                                     width, height, config.point_stride, s.sampled, s.part_of);
     const std::size_t base = stats.size();
     stats.resize(base + static_cast<std::size_t>(parts) + 1);
     for (std::size_t j = 0; j < s.part_index.size(); ++j) {
@@ -767,7 +624,7 @@ void clusterRegion(int r, const LabelImage& labels, const TableObjectConfig& con
   // Id `clusters` (one past the last) holds the points a sampled clustering
   // left in no cluster: never a candidate, not counted as too small.
   const int clusters = clusterSampled(points, pixels, config.cluster_tolerance_m, width, height,
-                                      config.point_stride, s, cluster_of);
+                                      config.point_stride, s.sampled, cluster_of);
   stats.assign(static_cast<std::size_t>(clusters) + 1, ClusterStats{});
   sumClusters(points, pixels, s.heights[static_cast<std::size_t>(r)], cluster_of, stats);
   std::vector<int>& big = s.object_of_cluster;  // here: 1 for clusters of min_points or more
