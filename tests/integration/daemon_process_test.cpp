@@ -184,8 +184,11 @@ TEST(Findmugd, InvalidConfigValueStopsStartupNamingTheKey) {
       << readFile(tmp.str("stderr.txt"));
   EXPECT_FALSE(notify.receive(0ms)) << "no READY=1 for a daemon that failed to start";
 
-  // A core key is validated the same way, from a flag (no file: a bad file is reported first).
-  const pid_t pid2 = spawnDaemon({"--set", "mrf.lambda=-3"}, {}, tmp.str("stderr2.txt"));
+  // A core key is validated the same way, from a flag (over the repository's config, not
+  // whatever /etc/findmug holds on this machine: a bad file is reported first).
+  const pid_t pid2 = spawnDaemon(
+      {"--config", FINDMUG_SOURCE_DIR "/daemon/findmugd.yaml", "--set", "mrf.lambda=-3"}, {},
+      tmp.str("stderr2.txt"));
   const auto status2 = waitFor(pid2, 30s);
   ASSERT_TRUE(status2);
   EXPECT_NE(WEXITSTATUS(*status2), 0);
@@ -197,8 +200,10 @@ TEST(Findmugd, InvalidConfigValueStopsStartupNamingTheKey) {
 TEST(Findmugd, UnknownSettingsAreRefusedAndCheckConfigPrintsTheEffectiveValues) {
   TempDir tmp;
   const std::vector<std::pair<std::string, std::string>> bad = {
-      {"daemon:\n  workers: 2\n  wokers: 2\n", "line 3: unknown setting 'daemon.wokers' (daemon keys: "},
-      {"forrest:\n  num_trees: 3\n", "line 2: unknown setting 'forrest.num_trees': no section 'forrest'"},
+      {"daemon:\n  workers: 2\n  wokers: 2\n",
+       "line 3: unknown setting 'daemon.wokers' (daemon keys: "},
+      {"forrest:\n  num_trees: 3\n",
+       "line 2: unknown setting 'forrest.num_trees': no section 'forrest'"},
       {"web:\n  prot: 1\n", "line 2: unknown setting 'web.prot' (web keys: "}};
   for (std::size_t i = 0; i < bad.size(); ++i) {
     const std::string yaml = tmp.str("bad" + std::to_string(i) + ".yaml");
