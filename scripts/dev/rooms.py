@@ -55,7 +55,7 @@ ROOMS = {
                ["tables", "table_regions"]),
     "objects": (["table_objects", "object_model", "object_matcher"],
                 ["table_objects.cpp", "table_objects_clustering.cpp", "table_objects_internal.hpp",
-                 "colour_distance.cpp", "object_model.cpp", "object_matcher.cpp",
+                 "object_colour.cpp", "object_model.cpp", "object_matcher.cpp",
                  "shape_descriptor.cpp", "roundness.cpp"],
                 ["table_objects", "object_model", "object_matcher"]),
     "map": (["table_map", "semantic_map", "object_map", "object_search", "visiting_order"],

@@ -29,6 +29,8 @@ namespace findmug {
 namespace {
 
 using objects_detail::clusterSampled;
+using objects_detail::colourBin;
+using objects_detail::normaliseColourCounts;
 using tables_detail::fmt;
 
 constexpr auto kFloorLabel = static_cast<std::uint8_t>(Label::Floor);
@@ -286,39 +288,6 @@ struct Candidate {
   int first_pixel = 0;
 };
 
-// HSV bin of one colour (see ObjectColourHistogram).
-int colourBin(const Rgb8& c) {
-  const int r = c.r, g = c.g, b = c.b;
-  const int hi = std::max({r, g, b}), lo = std::min({r, g, b});
-  const float value = static_cast<float>(hi) / 255.0f;
-  const float saturation = hi > 0 ? static_cast<float>(hi - lo) / static_cast<float>(hi) : 0.0f;
-  if (saturation >= 0.2f && value >= 0.15f) {
-    const float d = static_cast<float>(hi - lo);
-    float hue;  // degrees, [0, 360)
-    if (hi == r) {
-      hue = 60.0f * static_cast<float>(g - b) / d;
-      if (hue < 0) hue += 360.0f;
-    } else if (hi == g) {
-      hue = 60.0f * (static_cast<float>(b - r) / d + 2.0f);
-    } else {
-      hue = 60.0f * (static_cast<float>(r - g) / d + 4.0f);
-    }
-    const int sector = std::min(11, static_cast<int>(hue / 30.0f));
-    return sector * 2 + (saturation >= 0.5f ? 1 : 0);
-  }
-  return 24 + std::min(3, static_cast<int>(value * 4.0f));
-}
-
-void normalise(const std::array<int, kObjectColourBins>& counts, int total,
-               ObjectColourHistogram& out) {
-  out.fill(0.0f);
-  if (total <= 0) return;
-  for (int k = 0; k < kObjectColourBins; ++k) {
-    out[static_cast<std::size_t>(k)] =
-        static_cast<float>(counts[static_cast<std::size_t>(k)]) / static_cast<float>(total);
-  }
-}
-
 // A pixel list for a new candidate: the one the object held, else a spare one.
 void takePixelBuffer(TableObject& object, Scratch& s) {
   if (object.pixels.capacity() == 0 && !s.spare_pixels.empty()) {
@@ -435,7 +404,7 @@ void describeCandidates(const OrganizedCloud& cloud, const TableRegion& region,
         has_colour ? Eigen::Vector3f(static_cast<float>(a.r / n), static_cast<float>(a.g / n),
                                      static_cast<float>(a.b / n))
                    : Eigen::Vector3f::Zero();
-    normalise(a.bins, has_colour ? c.count : 0, object.colour_histogram);
+    normaliseColourCounts(a.bins, has_colour ? c.count : 0, object.colour_histogram);
     object.truncation = static_cast<std::uint8_t>(
         (nearOutline(edges, region.count, margin, a, points, cluster_of,
                      cluster_of_object[static_cast<std::size_t>(o)])
@@ -817,14 +786,6 @@ int relabelTableObjects(const std::vector<TableObject>& objects, LabelImage& lab
     }
   }
   return changed;
-}
-
-ObjectColourHistogram objectColourHistogram(const std::vector<Rgb8>& rgb) {
-  std::array<int, kObjectColourBins> counts{};
-  for (const Rgb8& c : rgb) ++counts[static_cast<std::size_t>(colourBin(c))];
-  ObjectColourHistogram out;
-  normalise(counts, static_cast<int>(rgb.size()), out);
-  return out;
 }
 
 }  // namespace findmug

@@ -1,9 +1,14 @@
 // table_objects_internal.hpp — what the table-top objects' source files share (internal to
-// src/objects): the sampled clustering of step 2 and its working memory.
+// src/objects): the sampled clustering of step 2 and its working memory, and the colour
+// bins of an object's histogram.
 #pragma once
 
 #include <Eigen/Core>
+#include <algorithm>
+#include <array>
 #include <vector>
+
+#include "findmug/objects/table_objects.hpp"
 
 namespace findmug::objects_detail {
 
@@ -35,5 +40,39 @@ struct SampledClusteringScratch {
 int clusterSampled(const std::vector<Eigen::Vector3f>& points, const std::vector<int>& pixels,
                    float tolerance, int width, int height, int stride, SampledClusteringScratch& s,
                    std::vector<int>& cluster_of);
+
+// HSV bin of one colour (see ObjectColourHistogram).
+inline int colourBin(const Rgb8& c) {
+  const int r = c.r, g = c.g, b = c.b;
+  const int hi = std::max({r, g, b}), lo = std::min({r, g, b});
+  const float value = static_cast<float>(hi) / 255.0f;
+  const float saturation = hi > 0 ? static_cast<float>(hi - lo) / static_cast<float>(hi) : 0.0f;
+  if (saturation >= 0.2f && value >= 0.15f) {
+    const float d = static_cast<float>(hi - lo);
+    float hue;  // degrees, [0, 360)
+    if (hi == r) {
+      hue = 60.0f * static_cast<float>(g - b) / d;
+      if (hue < 0) hue += 360.0f;
+    } else if (hi == g) {
+      hue = 60.0f * (static_cast<float>(b - r) / d + 2.0f);
+    } else {
+      hue = 60.0f * (static_cast<float>(r - g) / d + 4.0f);
+    }
+    const int sector = std::min(11, static_cast<int>(hue / 30.0f));
+    return sector * 2 + (saturation >= 0.5f ? 1 : 0);
+  }
+  return 24 + std::min(3, static_cast<int>(value * 4.0f));
+}
+
+// counts / total per bin (all 0 when total is 0).
+inline void normaliseColourCounts(const std::array<int, kObjectColourBins>& counts, int total,
+                                  ObjectColourHistogram& out) {
+  out.fill(0.0f);
+  if (total <= 0) return;
+  for (int k = 0; k < kObjectColourBins; ++k) {
+    out[static_cast<std::size_t>(k)] =
+        static_cast<float>(counts[static_cast<std::size_t>(k)]) / static_cast<float>(total);
+  }
+}
 
 }  // namespace findmug::objects_detail
