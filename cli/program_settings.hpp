@@ -134,7 +134,7 @@ struct WebConfig {
   // Where the page's HTML/JS/CSS are ("" = the installed folder).
   std::string static_dir;
   // The model whose prediction the Label page starts from ("" = none); its cloud.*,
-  // normals.*, overseg.* and features.* settings must be the config's, as for findmugd.
+  // normals.*, oversegmentation.* and features.* settings must be the config's, as for findmugd.
   std::string model_path;
   // NYU's camera_rotations_NYU.txt, for ground.source=gravity on frames named by their
   // NYU index ("" = none).

@@ -68,7 +68,8 @@ int runSelfCheck(const LoadedConfig& loaded, std::ostream& out) {
   } catch (const std::exception& e) {
     say(Verdict::Fail, "model", e.what(),
         "set daemon.model_path to a model made by findmug-train with this config's cloud.*, "
-        "normals.* and overseg.* settings (the package's are in /usr/share/findmug/models)");
+        "normals.* and oversegmentation.* settings (the package's are in "
+        "/usr/share/findmug/models)");
   }
 
   // Source: opens as the daemon would open it.

@@ -27,7 +27,8 @@ namespace {
 const std::vector<std::pair<std::string, double StageTimings::*>>& subStages() {
   static const std::vector<std::pair<std::string, double StageTimings::*>> all = {
       {"cloud", &StageTimings::cloud_ms},       {"normals", &StageTimings::normals_ms},
-      {"ground", &StageTimings::ground_ms},     {"supervoxels", &StageTimings::overseg_ms},
+      {"ground", &StageTimings::ground_ms},
+      {"oversegmentation", &StageTimings::oversegmentation_ms},
       {"features", &StageTimings::features_ms}, {"regions", &StageTimings::regions_ms},
       {"forest", &StageTimings::forest_ms},     {"context", &StageTimings::context_ms},
       {"mrf", &StageTimings::mrf_ms},           {"labels", &StageTimings::labels_ms},

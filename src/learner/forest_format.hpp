@@ -21,7 +21,7 @@
 //            subsample, colsample, min_child_weight, lambda; int32 seed; uint8
 //            class_weighting)
 //   uint32   extraction setting count (version 2), then per setting: key, value
-//            as uint32 length + bytes (cloud.*, normals.*, overseg.* of training)
+//            as uint32 length + bytes (cloud.*, normals.*, oversegmentation.* of training)
 //   uint32   tree count; per tree: uint32 node count, then per node:
 //            int32 feature; inner (feature >= 0): float32 threshold, int32 left, int32 right;
 //            leaf (feature == -1): float32[kNumLabels] distribution

@@ -164,14 +164,15 @@ std::vector<Segmenter> variantSegmenters(const SegmenterConfig& config, const Tr
   for (int k = 0; k < t.extra_oversegmentations; ++k) {
     const int power = (k / 2 + 1) * (k % 2 == 0 ? 1 : -1);
     SegmenterConfig variant = config;
-    variant.overseg.seed_resolution_m =
-        config.overseg.seed_resolution_m * std::pow(t.extra_seed_scale, static_cast<float>(power));
-    if (variant.overseg.seed_resolution_m <= variant.overseg.voxel_resolution_m) {
+    variant.oversegmentation.seed_resolution_m =
+        config.oversegmentation.seed_resolution_m *
+        std::pow(t.extra_seed_scale, static_cast<float>(power));
+    if (variant.oversegmentation.seed_resolution_m <= variant.oversegmentation.voxel_resolution_m) {
       throw Error("training.extra_oversegmentations = " + std::to_string(t.extra_oversegmentations) +
                   " with training.extra_seed_scale = " + std::to_string(t.extra_seed_scale) +
-                  " takes overseg.seed_resolution_m down to " +
-                  std::to_string(variant.overseg.seed_resolution_m) +
-                  ", not above overseg.voxel_resolution_m");
+                  " takes oversegmentation.seed_resolution_m down to " +
+                  std::to_string(variant.oversegmentation.seed_resolution_m) +
+                  ", not above oversegmentation.voxel_resolution_m");
     }
     variant.ground.reestimate_every_frames = 1;
     out.emplace_back(variant, nullptr);

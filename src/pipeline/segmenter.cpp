@@ -12,6 +12,7 @@
 #include "findmug/labels/label_holes.hpp"
 #include "findmug/mrf/context_pairwise.hpp"
 #include "findmug/mrf/object_consistency.hpp"
+#include "findmug/settings/settings.hpp"
 #include "findmug/tables/table_regions.hpp"
 #include "common/scratch.hpp"
 
@@ -75,7 +76,7 @@ void voidLabelsInto(int width, int height, LabelImage& image) {
 Segmenter::Segmenter(SegmenterConfig config, std::shared_ptr<const RandomForest> forest)
     : config_(std::move(config)),
       forest_(std::move(forest)),
-      oversegmenter_(makeOversegmenter(config_.overseg)) {
+      oversegmenter_(makeOversegmenter(config_.oversegmentation)) {
   if (forest_) checkModelMatchesConfig(*forest_, config_);
   if (forest_ && config_.use_mrf && config_.mrf.pairwise == MrfPairwise::Layout)
     layout_prior_ = std::make_shared<const LayoutPrior>(loadLayoutPrior(config_.mrf.layout_prior_path));
@@ -283,7 +284,9 @@ void checkModelMatchesConfig(const RandomForest& forest, const SegmenterConfig& 
   if (trained.empty()) return;
   const auto current = extractionSettings(config);
   std::string differences;
-  for (const auto& [key, value] : trained) {
+  for (const auto& [trained_key, value] : trained) {
+    // A model keeps the key names it was trained with (overseg.* before the rename).
+    const std::string key = currentSettingKey(trained_key);
     const auto it = std::find_if(current.begin(), current.end(),
                                  [&name = key](const auto& kv) { return kv.first == name; });
     if (it == current.end()) {
@@ -445,7 +448,7 @@ SegmentedFrame Segmenter::oversegment(PreparedFrame prepared) const {
     out.segmentation.height = prepared.cloud_camera.height;
     out.segmentation.pixel_segment.assign(prepared.cloud_camera.size(), -1);
   }
-  watch.lap(out.timings, out.cpu_timings, &StageTimings::overseg_ms);
+  watch.lap(out.timings, out.cpu_timings, &StageTimings::oversegmentation_ms);
   out.prepared = std::move(prepared);
   return out;
 }

@@ -478,7 +478,7 @@ mem_gb=$(awk '/MemTotal/ {printf "%.0f", $2 / 1048576}' /proc/meminfo)
   echo "### Time per stage (threaded, lowest input rate: no queueing), ms p50 / p95 / max"
   echo
   low=$(tr ' ' '\n' <<< "$RATES" | sort -g | head -1)
-  stages="prepare segment publish object_search cloud normals ground supervoxels features forest mrf labels tables objects total"
+  stages="prepare segment publish object_search cloud normals ground oversegmentation features forest mrf labels tables objects total"
   header="| stage |"; rule="|---|"
   for ds in $DATASETS; do header="$header $ds |"; rule="$rule---|"; done
   echo "$header"; echo "$rule"

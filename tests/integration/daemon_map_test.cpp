@@ -523,7 +523,7 @@ TEST(DaemonMap, PosesPutTablesInTheMapFrameAndTheMapHoldsEachTrueTableOnce) {
     // off by 0.7, 1.6 and 7.8 cm, the height by at most 3 mm. With the
     // ground-truth labels every single-frame hull lies within 2.3 cm of the
     // true outline (depth noise, the 5 cm top band); the forest's labels
-    // are per supervoxel, and a supervoxel straddling the table edge drags
+    // are per patch, and a patch straddling the table edge drags
     // up to 16 cm of neighbouring surface into one frame's cluster (frame
     // 30 of table 1), which the hull of the recent hulls keeps: that is the
     // 7.8 cm. A frame placed with the pose one period (0.1 s) off would

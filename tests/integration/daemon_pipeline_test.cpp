@@ -177,7 +177,8 @@ void runAndCompare(const std::string& spec, std::size_t expected_frames,
   EXPECT_EQ(last.num_queues, 3);
   const auto& names = last.stage_names;
   for (const char* stage :
-       {"prepare", "segment", "publish", "supervoxels", "forest", "tables", "objects", "total"}) {
+       {"prepare", "segment", "publish", "oversegmentation", "forest", "tables", "objects",
+        "total"}) {
     EXPECT_NE(std::find(names.begin(), names.end(), stage), names.end()) << stage;
   }
   const auto total = std::find(names.begin(), names.end(), "total") - names.begin();

@@ -15,7 +15,7 @@ namespace findmug::daemon::test {
 
 SegmenterConfig fastSegmenterConfig() {
   SegmenterConfig config;
-  config.overseg.kind = OversegmenterKind::Organized;
+  config.oversegmentation.kind = OversegmenterKind::Organized;
   return config;
 }
 

@@ -22,7 +22,7 @@
 #include <vector>
 
 #include "findmug/cloud/cloud.hpp"
-#include "findmug/supervoxels/oversegmentation.hpp"
+#include "findmug/oversegmentation/oversegmentation.hpp"
 
 namespace findmug {
 

@@ -195,7 +195,7 @@ class RandomForest {
   static RandomForest load(const std::string& path);
 
   // Settings of the feature extraction the forest was trained with (cloud.*,
-  // normals.*, overseg.* as "key" -> "value"), stored in the model file so
+  // normals.*, oversegmentation.* as "key" -> "value"), stored in the model file so
   // that a model is never run on features computed differently. Empty for
   // forests trained in-process without them. Setting them changes id().
   using Settings = std::vector<std::pair<std::string, std::string>>;

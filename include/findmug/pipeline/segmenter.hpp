@@ -33,7 +33,7 @@
 #include "findmug/mrf/mrf.hpp"
 #include "findmug/objects/table_objects.hpp"
 #include "findmug/settings/config.hpp"
-#include "findmug/supervoxels/oversegmentation.hpp"
+#include "findmug/oversegmentation/oversegmentation.hpp"
 #include "findmug/tables/tables.hpp"
 
 namespace findmug {
@@ -43,12 +43,12 @@ namespace findmug {
 // where wall time also counts the time other processes ran). In
 // `cpu_timings` the context stage is part of forest_ms (context_ms stays 0).
 struct StageTimings {
-  double cloud_ms = 0, normals_ms = 0, ground_ms = 0, overseg_ms = 0, features_ms = 0,
+  double cloud_ms = 0, normals_ms = 0, ground_ms = 0, oversegmentation_ms = 0, features_ms = 0,
          regions_ms = 0, forest_ms = 0, context_ms = 0, mrf_ms = 0, labels_ms = 0,
          tables_ms = 0, objects_ms = 0;
   double total() const {
-    return cloud_ms + normals_ms + ground_ms + overseg_ms + features_ms + regions_ms + forest_ms +
-           context_ms + mrf_ms + labels_ms + tables_ms + objects_ms;
+    return cloud_ms + normals_ms + ground_ms + oversegmentation_ms + features_ms + regions_ms +
+           forest_ms + context_ms + mrf_ms + labels_ms + tables_ms + objects_ms;
   }
 };
 

@@ -40,7 +40,7 @@ struct TrainingOptions {
   SplitLabels split_labels = SplitLabels::Labels;            // training.split_labels
   // Augmentation: each training frame also contributes the patches of this
   // many other oversegmentations (training.extra_oversegmentations), the k-th
-  // with overseg.seed_resolution_m scaled by extra_seed_scale^j, j = 1, -1,
+  // with oversegmentation.seed_resolution_m scaled by extra_seed_scale^j, j = 1, -1,
   // 2, -2, ... (training.extra_seed_scale): more and more varied patches per
   // frame. Evaluation and the daemon still use the configured one only.
   int extra_oversegmentations = 0;

@@ -14,7 +14,7 @@
 #include "findmug/cloud/cloud.hpp"
 #include "findmug/common/error.hpp"
 #include "findmug/frame/dataset.hpp"
-#include "findmug/supervoxels/oversegmentation.hpp"
+#include "findmug/oversegmentation/oversegmentation.hpp"
 #include "test_data.hpp"
 
 namespace findmug {

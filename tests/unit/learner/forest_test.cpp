@@ -499,7 +499,8 @@ TEST(ForestFile, FileIsSerializeEndingInItsChecksumAndTheIdComesFromIt) {
 TEST(ForestFile, ExtractionSettingsRoundTripAndChangeTheId) {
   RandomForest forest = RandomForest::train(makeBlobs(20, 3), ForestParams{});
   const std::string bare_id = forest.id();
-  forest.setExtractionSettings({{"overseg.method", "organized"}, {"normals.window_radius_px", "4"}});
+  forest.setExtractionSettings(
+      {{"oversegmentation.method", "organized"}, {"normals.window_radius_px", "4"}});
   EXPECT_NE(forest.id(), bare_id);  // the id names the content, settings included
   TempDir dir;
   forest.save(dir.str("m.fmf"));
@@ -507,7 +508,7 @@ TEST(ForestFile, ExtractionSettingsRoundTripAndChangeTheId) {
   EXPECT_EQ(loaded.id(), forest.id());
   EXPECT_EQ(loaded.source(), dir.str("m.fmf"));
   ASSERT_EQ(loaded.extractionSettings().size(), 2u);
-  EXPECT_EQ(loaded.extractionSettings()[0].first, "overseg.method");
+  EXPECT_EQ(loaded.extractionSettings()[0].first, "oversegmentation.method");
   EXPECT_EQ(loaded.extractionSettings()[0].second, "organized");
   EXPECT_THROW(forest.setExtractionSettings({{"", "x"}}), Error);
 }

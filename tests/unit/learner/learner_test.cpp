@@ -525,7 +525,7 @@ TEST(LearnerSegmenter, RefusesModelOfAnotherLearnerOrClasses) {
 TEST(LearnerTraining, InternalClassesFromRealFramesForBothLearners) {
   FINDMUG_REQUIRE_DATA(dir, "nyuv2_labeled");
   SegmenterConfig config;
-  config.overseg.kind = OversegmenterKind::Organized;
+  config.oversegmentation.kind = OversegmenterKind::Organized;
   config.ground.source = GroundSource::FloorLabels;
   config.forest.num_trees = 3;
   config.forest.num_threads = 1;

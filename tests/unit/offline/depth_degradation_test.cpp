@@ -193,7 +193,7 @@ TEST(DepthDegradation, PipelineOnADegradedRealFrame) {
   const DatasetFolder folder(nyu.string(), options);
   const LabeledFrame clean = folder.load(0);  // 0001: filled depth
   SegmenterConfig config;
-  config.overseg.kind = OversegmenterKind::Organized;
+  config.oversegmentation.kind = OversegmenterKind::Organized;
   config.ground.source = GroundSource::Gravity;
   config.regions.enabled = true;
   config.scene.enabled = true;
@@ -258,7 +258,7 @@ TEST(DepthDegradation, TrainingCopiesJoinTheTrainingSet) {
   const LabeledFrame clean = folder.load(1);  // 0002
   const LabeledFrames one{"0002", 1, [&](std::size_t) { return clean; }};
   Config config;
-  applyOverride(config, "overseg.method=organized");
+  applyOverride(config, "oversegmentation.method=organized");
   applyOverride(config, "ground.source=gravity");
   applyOverride(config, "training.degraded_copies=2");
   applyOverride(config, "training.degraded_seed=9");

@@ -27,7 +27,7 @@ struct Frames {
 
 SegmenterConfig smallConfig() {
   SegmenterConfig config;
-  config.overseg.kind = OversegmenterKind::Organized;
+  config.oversegmentation.kind = OversegmenterKind::Organized;
   config.ground.source = GroundSource::Gravity;
   config.regions.enabled = true;  // and so the table region vote, as shipped
   config.forest.num_trees = 4;

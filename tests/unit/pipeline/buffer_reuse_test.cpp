@@ -15,7 +15,7 @@
 #include "findmug/frame/dataset.hpp"
 #include "findmug/offline/training.hpp"
 #include "findmug/pipeline/segmenter.hpp"
-#include "findmug/supervoxels/oversegmentation.hpp"
+#include "findmug/oversegmentation/oversegmentation.hpp"
 #include "small_forest.hpp"
 
 namespace findmug {
@@ -84,7 +84,7 @@ RgbdFrame emptyFrame() {
 
 SegmenterConfig config() {
   SegmenterConfig c;
-  c.overseg.kind = OversegmenterKind::Organized;
+  c.oversegmentation.kind = OversegmenterKind::Organized;
   return c;
 }
 
@@ -213,7 +213,7 @@ TEST(BufferReuse, CloudFunctionsWriteIntoUsedBuffersAsIntoFreshOnes) {
 TEST(BufferReuse, SegmentIntoAUsedSegmentationEqualsAFreshOne) {
   const Scene a = floorAndWall(320, 240, 3.0, 1.2);
   const Scene b = floorAndWall(640, 480, 2.2, 1.0);
-  const auto oversegmenter = makeOversegmenter(config().overseg);
+  const auto oversegmenter = makeOversegmenter(config().oversegmentation);
   const OrganizedCloud cloud_a = frameToCloud(a.frame), cloud_b = frameToCloud(b.frame);
   const NormalImage normals_a = computeNormals(cloud_a, NormalConfig{});
   const NormalImage normals_b = computeNormals(cloud_b, NormalConfig{});

@@ -18,7 +18,7 @@ constexpr auto kObject = static_cast<std::uint8_t>(Label::Object);
 
 SegmenterConfig fastConfig() {
   SegmenterConfig config;
-  config.overseg.kind = OversegmenterKind::Organized;
+  config.oversegmentation.kind = OversegmenterKind::Organized;
   return config;
 }
 

@@ -18,6 +18,7 @@ namespace findmug {
 namespace {
 
 using ::testing::HasSubstr;
+using ::testing::Not;
 
 // A camera 1.2 m above a floor, pitched 30 degrees down, facing a wall 3 m
 // ahead. Floor is grey-brown, wall light blue. Returns the frame and, per
@@ -67,7 +68,7 @@ std::shared_ptr<const RandomForest> trainOn(const Segmenter& segmenter, const Sc
 
 SegmenterConfig fastConfig() {
   SegmenterConfig config;
-  config.overseg.kind = OversegmenterKind::Organized;
+  config.oversegmentation.kind = OversegmenterKind::Organized;
   return config;
 }
 
@@ -224,14 +225,15 @@ TEST(Segmenter, RefusesModelTrainedWithOtherExtractionSettings) {
 
   EXPECT_NO_THROW(Segmenter(trained_config, model));
   SegmenterConfig other = trained_config;
-  other.overseg.kind = OversegmenterKind::PclSupervoxels;
-  other.overseg.seed_resolution_m = 0.15f;
+  other.oversegmentation.kind = OversegmenterKind::PclSupervoxels;
+  other.oversegmentation.seed_resolution_m = 0.15f;
   try {
     Segmenter segmenter(other, model);
     FAIL() << "expected the model to be refused";
   } catch (const Error& e) {
-    EXPECT_THAT(e.what(), HasSubstr("overseg.method: trained with organized, config has pcl"));
-    EXPECT_THAT(e.what(), HasSubstr("overseg.seed_resolution_m"));
+    EXPECT_THAT(e.what(),
+                HasSubstr("oversegmentation.method: trained with organized, config has pcl"));
+    EXPECT_THAT(e.what(), HasSubstr("oversegmentation.seed_resolution_m"));
     EXPECT_THAT(e.what(), HasSubstr(forest.id()));
   }
   // Settings that do not shape the features (MRF, tables) may differ freely.
@@ -239,6 +241,37 @@ TEST(Segmenter, RefusesModelTrainedWithOtherExtractionSettings) {
   mrf_only.mrf.lambda = 3.0f;
   mrf_only.tables.safety_distance_m = 0.4f;
   EXPECT_NO_THROW(Segmenter(mrf_only, model));
+}
+
+// Models trained before the rename of overseg.* record the old key names: they are
+// compared under the new names (currentSettingKey), so such a model still runs with
+// the settings it was trained with and is still refused with others.
+TEST(Segmenter, ModelsRecordingOldKeyNamesAreComparedUnderTheNewNames) {
+  const Scene scene = floorAndWall(true);
+  const SegmenterConfig trained_config = fastConfig();
+  RandomForest forest = *trainOn(Segmenter(trained_config, nullptr), scene);
+  RandomForest::Settings recorded = extractionSettings(trained_config);
+  int renamed = 0;
+  for (auto& [key, value] : recorded) {
+    if (key.rfind("oversegmentation.", 0) == 0) {
+      key = "overseg." + key.substr(std::string("oversegmentation.").size());
+      ++renamed;
+    }
+  }
+  ASSERT_GT(renamed, 5);
+  forest.setExtractionSettings(recorded);
+  const auto model = std::make_shared<const RandomForest>(forest);
+  EXPECT_NO_THROW(Segmenter(trained_config, model));
+  SegmenterConfig other = trained_config;
+  other.oversegmentation.kind = OversegmenterKind::PclSupervoxels;
+  try {
+    Segmenter segmenter(other, model);
+    FAIL() << "expected the model to be refused";
+  } catch (const Error& e) {
+    EXPECT_THAT(e.what(),
+                HasSubstr("oversegmentation.method: trained with organized, config has pcl"));
+    EXPECT_THAT(e.what(), Not(HasSubstr("unknown to this build")));
+  }
 }
 
 // The frame's features as the trainer and findmug-eval see them.

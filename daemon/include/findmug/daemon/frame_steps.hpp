@@ -2,7 +2,7 @@
 //
 //   PrepareStep   the frame checked (validateFrame), then Segmenter::prepare: cloud,
 //                 normals, ground plane
-//   SegmentStep   Segmenter::oversegment + classify: supervoxels, features, forest, MRF,
+//   SegmentStep   Segmenter::oversegment + classify: oversegmentation, features, forest, MRF,
 //                 labels, tables
 //   PublishStep   the robot's pose for the frame (PoseInput, if any), then every
 //                 ResultSink in the order they were added (result_sinks.hpp)

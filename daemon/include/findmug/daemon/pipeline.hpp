@@ -11,7 +11,7 @@
 // PublishStep) on its thread(s); the Pipeline only wires them and keeps the counters.
 //
 //   prepare   Segmenter::prepare: cloud, normals, ground plane
-//   segment   Segmenter::oversegment + classify (supervoxels, features, forest,
+//   segment   Segmenter::oversegment + classify (oversegmentation, features, forest,
 //             MRF, labels, tables): the bottleneck, run on N workers; results
 //             leave in frame order (ReorderBuffer)
 //   publish   hands each result, in frame order, to the sinks registered on
