@@ -17,7 +17,7 @@
 #include "findmug/daemon/daemon.hpp"
 #include "findmug/io/frame_source.hpp"
 #include "findmug/learner/forest.hpp"
-#include "findmug/pipeline/segmenter.hpp"
+#include "findmug/segmenter/segmenter.hpp"
 
 namespace findmug::daemon {
 namespace {

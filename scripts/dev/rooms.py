@@ -47,7 +47,7 @@ ROOMS = {
              "layout_prior.cpp"], ["mrf", "object_consistency", "layout_prior"]),
     "labels": (["labels", "label_image", "label_holes"], ["label_image.cpp", "label_holes.cpp"],
                ["label_image", "label_holes"]),
-    "pipeline": (["segmenter"], ["segmenter.cpp"],
+    "segmenter": (["segmenter"], ["segmenter.cpp"],
                  ["segmenter", "buffer_reuse", "segmenter_context", "segmenter_layout",
                   "segmenter_objects", "segmenter_table_objects"]),
     "tables": (["tables", "table_regions"],
@@ -83,6 +83,9 @@ RENAMED = [
     ("supervoxels/", "oversegmentation/"),
     ("overseg_organized.cpp", "oversegmentation_organized.cpp"),
     ("overseg_pcl.cpp", "oversegmentation_pcl.cpp"),
+    ("findmug/pipeline/", "findmug/segmenter/"),
+    ("src/pipeline/", "src/segmenter/"),
+    ("tests/unit/pipeline/", "tests/unit/segmenter/"),
 ]
 
 # Rooms built by their own CMakeLists.txt with their folder on the include path: their internal

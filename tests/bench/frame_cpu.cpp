@@ -41,7 +41,7 @@
 #include "counting_new.hpp"  // this program's operator new counts allocations
 #include "findmug/common/error.hpp"
 #include "findmug/frame/dataset.hpp"
-#include "findmug/pipeline/segmenter.hpp"
+#include "findmug/segmenter/segmenter.hpp"
 #include "findmug/settings/config.hpp"
 #include "findmug/tables/tables.hpp"
 #include "test_data.hpp"

@@ -51,7 +51,7 @@
 #include "findmug/io/semantic_map_codec.hpp"
 #include "findmug/map/semantic_map.hpp"
 #include "findmug/map/table_map.hpp"
-#include "findmug/pipeline/segmenter.hpp"
+#include "findmug/segmenter/segmenter.hpp"
 #include "findmug/settings/config.hpp"
 #include "findmug/synth/synth.hpp"
 #include "findmug_cli.hpp"

@@ -39,7 +39,7 @@
 #include "findmug/io/subscriber.hpp"
 #include "findmug/map/table_map.hpp"
 #include "findmug/offline/training.hpp"
-#include "findmug/pipeline/segmenter.hpp"
+#include "findmug/segmenter/segmenter.hpp"
 #include "findmug/synth/synth.hpp"
 #include "test_data.hpp"
 

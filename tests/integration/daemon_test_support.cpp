@@ -9,7 +9,7 @@
 #include <lcm/lcm-cpp.hpp>
 #include <stdexcept>
 
-#include "findmug/pipeline/segmenter.hpp"
+#include "findmug/segmenter/segmenter.hpp"
 
 namespace findmug::daemon::test {
 

@@ -14,7 +14,7 @@
 #include "findmug/learner/forest.hpp"
 #include "findmug/offline/depth_degradation.hpp"
 #include "findmug/offline/nyu_mat.hpp"
-#include "findmug/pipeline/segmenter.hpp"
+#include "findmug/segmenter/segmenter.hpp"
 
 namespace findmug {
 

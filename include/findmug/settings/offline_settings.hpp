@@ -52,7 +52,7 @@ struct TrainingOptions {
   std::uint64_t degraded_seed = 7;
   // Semi-supervised rounds (findmug/offline/pseudo_labels.hpp; findmug-train and
   // findmug-eval --unlabelled DIR): train, label the unlabelled frames with
-  // the whole pipeline (forest + MRF + table region vote), keep the patches
+  // the whole Segmenter (forest + MRF + table region vote), keep the patches
   // whose confidence exceeds pseudo_min_confidence as training patches of
   // weight pseudo_weight, at most pseudo_class_cap times the labelled patches
   // of the same label per label (the most confident first), retrain; this

@@ -16,7 +16,7 @@
 #include "findmug/frame/dataset.hpp"
 #include "findmug/learner/forest.hpp"
 #include "findmug/offline/training.hpp"
-#include "findmug/pipeline/segmenter.hpp"
+#include "findmug/segmenter/segmenter.hpp"
 #include "findmug/settings/config.hpp"
 #include "learner/forest_format.hpp"    // internal: file layout and checksum (src/)
 #include "test_data.hpp"

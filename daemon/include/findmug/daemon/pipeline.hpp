@@ -99,7 +99,7 @@
 #include "findmug/io/bus.hpp"
 #include "findmug/learner/forest.hpp"
 #include "findmug/map/table_map.hpp"
-#include "findmug/pipeline/segmenter.hpp"
+#include "findmug/segmenter/segmenter.hpp"
 #include "findmug/settings/config.hpp"
 
 namespace findmug::io {

@@ -38,7 +38,7 @@
 #include "findmug/io/bus.hpp"
 #include "findmug/io/messages.hpp"
 #include "findmug/map/table_map.hpp"
-#include "findmug/pipeline/segmenter.hpp"
+#include "findmug/segmenter/segmenter.hpp"
 
 namespace findmug::daemon {
 

@@ -14,7 +14,7 @@
 #include "findmug/cloud/cloud.hpp"
 #include "findmug/frame/dataset.hpp"
 #include "findmug/offline/training.hpp"
-#include "findmug/pipeline/segmenter.hpp"
+#include "findmug/segmenter/segmenter.hpp"
 #include "findmug/oversegmentation/oversegmentation.hpp"
 #include "small_forest.hpp"
 

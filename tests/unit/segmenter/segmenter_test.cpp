@@ -11,7 +11,7 @@
 #include "findmug/common/error.hpp"
 #include "findmug/offline/metrics.hpp"
 #include "findmug/offline/training.hpp"
-#include "findmug/pipeline/segmenter.hpp"
+#include "findmug/segmenter/segmenter.hpp"
 #include "small_forest.hpp"
 
 namespace findmug {

@@ -6,7 +6,7 @@
 #include <algorithm>
 #include <set>
 
-#include "findmug/pipeline/segmenter.hpp"
+#include "findmug/segmenter/segmenter.hpp"
 #include "findmug/synth/synth.hpp"
 #include "small_forest.hpp"
 

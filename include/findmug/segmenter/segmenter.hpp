@@ -1,4 +1,4 @@
-// findmug/pipeline/segmenter.hpp — the whole pipeline for one frame, stage by stage.
+// findmug/segmenter/segmenter.hpp — the core's steps for one frame, in order.
 //
 // frame [-> short depth gaps filled, cloud.fill_depth_*] -> cloud + normals
 //       -> ground plane -> oversegmentation -> features [-> region features]

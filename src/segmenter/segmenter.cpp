@@ -1,4 +1,4 @@
-#include "findmug/pipeline/segmenter.hpp"
+#include "findmug/segmenter/segmenter.hpp"
 
 #include <algorithm>
 #include <array>
