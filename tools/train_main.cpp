@@ -136,7 +136,7 @@ int run(int argc, char** argv) {
               config.segmenter.regions.enabled ? " (with region features)" : "",
               config.segmenter.scene.enabled ? " (with scene features)" : "",
               config.segmenter.objects.enabled ? " (with object features)" : "",
-              forest.contextStage() ? ", auto-context stage" : "");
+              forest.contextRound() ? ", auto-context round" : "");
   if (const PairwiseContext* term = forest.pairwiseContext())
     std::printf("  pairwise term    learned from %zu labelled neighbour pairs (mrf.pairwise = context)\n",
                 term->training_edges);

@@ -501,7 +501,7 @@ void validateSegmenterConfig(const SegmenterConfig& c) {
                 "): from a search position the arm must reach past the table edge");
   }
   if (c.learner.kind == LearnerKind::XGBoost && c.context.enabled) {
-    throw Error("learner.kind = xgboost has no auto-context stage; set "
+    throw Error("learner.kind = xgboost has no auto-context round; set "
                 "features.context = false or learner.kind = forest");
   }
   if (c.tables.min_cluster_points > c.tables.max_cluster_points) {

@@ -44,7 +44,7 @@ bool parseSettingBool(const std::string& key, const std::string& value) {
 const std::vector<RenamedSetting>& renamedSettings() {
   // Kept for one release after the rename, then removed (the old name is then unknown).
   static const std::vector<RenamedSetting> all = {
-      // The stage is called oversegmentation everywhere (its room, status_t's stage name).
+      // The step is called oversegmentation everywhere (its room, status_t's stage name).
       {"overseg.*", "oversegmentation.*"},
   };
   return all;

@@ -416,7 +416,7 @@ mem_gb=$(awk '/MemTotal/ {printf "%.0f", $2 / 1048576}' /proc/meminfo)
   done
   if [[ -n "$map_rows" ]]; then
     echo
-    echo "### Semantic map stage (daemon.semantic_map)"
+    echo "### Semantic map sink (daemon.semantic_map)"
     echo
     echo "Frames fused into the map (those with a ground plane and a robot pose), per second of the run,"
     echo "frames its queue dropped (the map fell behind; their labels went out all the same), the map"

@@ -1,6 +1,6 @@
 // stage_times: wall time of each pipeline stage per 640x480 frame, median over
 // a labelled dataset, for each oversegmenter side by side in one run, and for
-// the organized oversegmenter with the region, scene and auto-context stages.
+// the organized oversegmenter with the region, scene and auto-context rounds.
 //
 //   stage_times [--data DIR] [--model MODEL] [--repeat N] [--clock wall|cpu]
 //

@@ -320,7 +320,7 @@ struct MapRun {
   PipelineCounters counters;
   std::vector<MappedTable> mapped;  // the map at the end, tentative tables included
   std::vector<io::SemanticMapMessage> semantic_maps;  // FINDMUG_SEMANTIC_MAP
-  std::optional<SemanticMapStage::Counters> semantic_map_counters;
+  std::optional<SemanticMapSink::Counters> semantic_map_counters;
   std::vector<FusedTable> semantic_map_tables;
 };
 
@@ -612,7 +612,7 @@ TEST(DaemonSemanticMap, TablesFromTheFusedMapAreTheGeneratorsTables) {
 
   // Every labelled frame with a pose went into the map (sequential: nothing skipped).
   ASSERT_TRUE(run.semantic_map_counters.has_value());
-  const SemanticMapStage::Counters& c = *run.semantic_map_counters;
+  const SemanticMapSink::Counters& c = *run.semantic_map_counters;
   std::size_t with_pose = 0;
   for (const Submitted& s : seq.submitted) with_pose += s.index >= 0 && !inPoseGap(s.index);
   EXPECT_EQ(c.integrated, with_pose);

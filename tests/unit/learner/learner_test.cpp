@@ -424,7 +424,7 @@ TEST_F(BoostedFileCorruption, BadClassMap) {
   expectRefused(bytes, "bad class map");
 }
 
-TEST_F(BoostedFileCorruption, BadLearnerByteAndContextStage) {
+TEST_F(BoostedFileCorruption, BadLearnerByteAndContextRound) {
   // The learner byte follows the label names.
   std::size_t offset = 12 + 4;
   for (auto name : kLabelNames) offset += 4 + name.size();
@@ -434,9 +434,9 @@ TEST_F(BoostedFileCorruption, BadLearnerByteAndContextStage) {
   fixChecksum(bytes);
   expectRefused(bytes, "learner = 7");
   bytes = good_;
-  bytes[bytes.size() - 10] = 1;  // a context stage behind a booster
+  bytes[bytes.size() - 10] = 1;  // a context round behind a booster
   fixChecksum(bytes);
-  expectRefused(bytes, "auto-context stage");
+  expectRefused(bytes, "auto-context round");
 }
 
 // ---------------------------------------------------------------------------

@@ -286,7 +286,7 @@ std::vector<FrameSample> extractScene(const Segmenter& segmenter, const Scene& s
   return samples;
 }
 
-TEST(Segmenter, RunsTheRegionAndContextStagesOfTheModel) {
+TEST(Segmenter, RunsTheRegionAndContextRoundsOfTheModel) {
   const Scene scene = floorAndWall(true);
   SegmenterConfig config = fastConfig();
   config.regions.enabled = true;
@@ -299,9 +299,9 @@ TEST(Segmenter, RunsTheRegionAndContextStagesOfTheModel) {
   const std::size_t n = samples[0].features.features.size();
   ASSERT_EQ(samples[0].features.regions.size(), n * kRegionFeatureDim);
   RandomForest trained = trainModel({&samples[0]}, config);
-  ASSERT_NE(trained.contextStage(), nullptr);
+  ASSERT_NE(trained.contextRound(), nullptr);
   EXPECT_EQ(trained.dim(), kFeatureDim + kRegionFeatureDim);
-  EXPECT_EQ(trained.contextStage()->featureNames(), contextStageFeatureNames(config));
+  EXPECT_EQ(trained.contextRound()->featureNames(), contextRoundFeatureNames(config));
   trained.setExtractionSettings(extractionSettings(config));
   const auto model = std::make_shared<const RandomForest>(trained);
 
@@ -309,7 +309,7 @@ TEST(Segmenter, RunsTheRegionAndContextStagesOfTheModel) {
   const LabelledFrame out = segmenter.process(scene.frame);
   ASSERT_EQ(out.features.features.size(), n);
   EXPECT_EQ(out.features.regions.size(), n * kRegionFeatureDim);
-  ASSERT_EQ(out.first_stage_probabilities.size(), n);
+  ASSERT_EQ(out.first_round_probabilities.size(), n);
   // The daemon's path gives exactly what evaluation computes for the frame.
   const auto expected = predictSample(*model, samples[0], config);
   ASSERT_EQ(out.forest_probabilities.size(), n);
@@ -343,7 +343,7 @@ TEST(Segmenter, RefusesModelWhoseStagesDifferFromTheConfig) {
     Segmenter segmenter(context, with_regions);
     FAIL() << "expected the model to be refused";
   } catch (const Error& e) {
-    EXPECT_THAT(e.what(), HasSubstr("has no auto-context stage"));
+    EXPECT_THAT(e.what(), HasSubstr("has no auto-context round"));
     EXPECT_THAT(e.what(), HasSubstr("features.context = true"));
   }
   // A 14-column model (as every format-2 model is) with features.regions on.
@@ -368,7 +368,7 @@ TEST(Segmenter, RunsTheSceneFeaturesOfTheModel) {
   ASSERT_EQ(samples[0].features.scene.size(), n * kSceneFeatureDim);
   RandomForest trained = trainModel({&samples[0]}, config);
   EXPECT_EQ(trained.dim(), kFeatureDim + kRegionFeatureDim + kSceneFeatureDim);
-  EXPECT_EQ(trained.featureNames(), firstStageFeatureNames(config));
+  EXPECT_EQ(trained.featureNames(), firstRoundFeatureNames(config));
   EXPECT_EQ(trained.featureNames().back(), std::string(kSceneFeatureNames.back()));
   trained.setExtractionSettings(extractionSettings(config));
   const auto model = std::make_shared<const RandomForest>(trained);
@@ -407,7 +407,7 @@ TEST(Segmenter, RunsTheObjectFeaturesOfTheModel) {
   ASSERT_EQ(samples[0].features.objects.size(), n * kObjectFeatureDim);
   RandomForest trained = trainModel({&samples[0]}, config);
   EXPECT_EQ(trained.dim(), kFeatureDim + kRegionFeatureDim + kSceneFeatureDim + kObjectFeatureDim);
-  EXPECT_EQ(trained.featureNames(), firstStageFeatureNames(config));
+  EXPECT_EQ(trained.featureNames(), firstRoundFeatureNames(config));
   EXPECT_EQ(trained.featureNames().back(), std::string(kObjectFeatureNames[kObjectFeatureDim - 1]));
   trained.setExtractionSettings(extractionSettings(config));
   const auto model = std::make_shared<const RandomForest>(trained);
@@ -443,7 +443,7 @@ TEST(Segmenter, RunsTheObjectFeaturesOfTheModel) {
   const auto context_samples = extractScene(Segmenter(context, nullptr), scene);
   ASSERT_EQ(context_samples[0].features.objects.size(), n * kObjectContextColumns.size());
   RandomForest context_model = trainModel({&context_samples[0]}, context);
-  EXPECT_EQ(context_model.featureNames(), firstStageFeatureNames(context));
+  EXPECT_EQ(context_model.featureNames(), firstRoundFeatureNames(context));
   EXPECT_EQ(context_model.featureNames().back(), "patch_height_in_object");
   context_model.setExtractionSettings(extractionSettings(context));
   const auto context_shared = std::make_shared<const RandomForest>(context_model);

@@ -91,7 +91,7 @@
 #include "findmug/daemon/object_teacher.hpp"
 #include "findmug/daemon/pose_input.hpp"
 #include "findmug/daemon/result_sinks.hpp"
-#include "findmug/daemon/semantic_map_stage.hpp"
+#include "findmug/daemon/semantic_map_sink.hpp"
 #include "findmug/daemon/service.hpp"
 #include "findmug/daemon/stage.hpp"
 #include "findmug/daemon/status_snapshot.hpp"
@@ -195,8 +195,8 @@ class Pipeline {
   const PoseInput* poseInput() const { return pose_input_.get(); }
   // Tables in the map now, tentative ones included (thread-safe copy).
   std::vector<MappedTable> mappedTables() const;
-  // The semantic map stage's counters (daemon.semantic_map), or nullopt when it is off.
-  std::optional<SemanticMapStage::Counters> semanticMapCounters() const;
+  // The semantic map sink's counters (daemon.semantic_map), or nullopt when it is off.
+  std::optional<SemanticMapSink::Counters> semanticMapCounters() const;
   // The semantic map's tables at its last publish (empty when it is off).
   std::vector<FusedTable> semanticMapTables() const;
   // Publishes refused by the output bus (frames' messages and status).
@@ -217,7 +217,7 @@ class Pipeline {
   PipelineHooks hooks_;
   int workers_;
   std::shared_ptr<TableMapSink> table_map_sink_;
-  std::shared_ptr<SemanticMapStage> semantic_map_;  // nullptr unless daemon.semantic_map
+  std::shared_ptr<SemanticMapSink> semantic_map_;  // nullptr unless daemon.semantic_map
   std::shared_ptr<LcmPublisherSink> publisher_;
   std::unique_ptr<PoseInput> pose_input_;  // nullptr: no pose input
   std::unique_ptr<ModelReloader> reloader_;
