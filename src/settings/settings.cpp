@@ -46,6 +46,9 @@ const std::vector<RenamedSetting>& renamedSettings() {
   static const std::vector<RenamedSetting> all = {
       // The step is called oversegmentation everywhere (its room, status_t's stage name).
       {"overseg.*", "oversegmentation.*"},
+      // What trains either learner (the forest and the boosted trees) is learner.*.
+      {"forest.class_weighting", "learner.class_weighting"},
+      {"forest.num_threads", "learner.num_threads"},
   };
   return all;
 }

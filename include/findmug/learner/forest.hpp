@@ -104,7 +104,7 @@ struct TrainingSet {
   std::vector<std::uint8_t> split_labels;
   int split_classes = 0;
   // Internal classes (learner.classes): split_labels then hold the internal
-  // class of each sample, and class weighting (forest.class_weighting) is by
+  // class of each sample, and class weighting (learner.class_weighting) is by
   // internal class frequency rather than label frequency. The forest stores
   // its leaves merged into the 8 labels (for an averaging forest the same
   // answer as merging the averaged fine posterior); the booster learns the

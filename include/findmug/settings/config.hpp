@@ -43,7 +43,7 @@ enum class ClassScheme {
 };
 const char* classSchemeName(ClassScheme scheme);  // "labels", "nyu13", "nyu40"
 
-// What forest.class_weighting balances when the model has internal classes
+// What learner.class_weighting balances when the model has internal classes
 // (learner.class_weight; training only, not recorded in the model).
 enum class ClassWeight {
   Labels,   // every label carries the same total weight, its internal classes

@@ -250,5 +250,33 @@ TEST(SettingsSchema, BothNamesOfOneSettingAreRefusedNamingBoth) {
   EXPECT_FLOAT_EQ(flag_config.segmenter.oversegmentation.seed_resolution_m, 0.25f);
 }
 
+// forest.class_weighting and forest.num_threads train either learner: they are
+// learner.* now, the old keys read as the new ones (one key each, not a section).
+TEST(SettingsSchema, TheLearnersSharedKeysAreReadByTheirOldForestNames) {
+  EXPECT_EQ(currentSettingKey("forest.num_threads"), "learner.num_threads");
+  EXPECT_EQ(currentSettingKey("forest.class_weighting"), "learner.class_weighting");
+  EXPECT_EQ(currentSettingKey("forest.num_trees"), "forest.num_trees");  // the forest's own
+  Config config;
+  std::vector<std::string> warnings;
+  SettingsSchema schema;
+  schema.onWarning([&](const std::string& w) { warnings.push_back(w); });
+  bindCoreSettings(schema, config);
+  schema.readYaml("forest:\n  num_trees: 3\n  num_threads: 2\n  class_weighting: false\n",
+                  "old.yaml");
+  EXPECT_EQ(config.segmenter.forest.num_trees, 3);
+  EXPECT_EQ(config.segmenter.forest.num_threads, 2);
+  EXPECT_FALSE(config.segmenter.forest.class_weighting);
+  ASSERT_EQ(warnings.size(), 2u);
+  EXPECT_THAT(warnings[0], HasSubstr("'forest.num_threads' is now called 'learner.num_threads'"));
+  const std::string dump = schema.dump();
+  EXPECT_THAT(dump, HasSubstr("learner:\n"));
+  EXPECT_THAT(dump, HasSubstr("  num_threads: 2\n"));
+  EXPECT_THAT(errorOf([&] {
+                schema.readYaml("learner:\n  num_threads: 1\nforest:\n  num_threads: 2\n",
+                                "both.yaml");
+              }),
+              HasSubstr("'learner.num_threads' is given by both its names"));
+}
+
 }  // namespace
 }  // namespace findmug
