@@ -127,7 +127,7 @@ const SettingsTable<DaemonConfig>& daemonSettings() {
         "fuse labelled frames with poses into the 3-D semantic map (semantic_map:)"));
     t.add(integerSetting<D, int>(
         "daemon.semantic_map_queue", [](D& d) -> int& { return d.semantic_map_queue; }, 1, 64,
-        "frames waiting for the map stage (drop-oldest)"));
+        "frames waiting for the map sink (drop-oldest)"));
     t.add(numberSetting<D, double>(
         "daemon.semantic_map_publish_s", [](D& d) -> double& { return d.semantic_map_publish_s; },
         0, 3600, "FINDMUG_SEMANTIC_MAP and the map's tables at most this often, when changed"));

@@ -73,7 +73,7 @@ struct DaemonConfig {
   double pose_history_s = 5.0;     // poses kept for the lookup (must cover the latency)
   bool publish_table_map = true;   // publish FINDMUG_TABLE_MAP after each map update
   TableMapConfig table_map;        // the `table_map:` section
-  // The fused 3-D semantic map (semantic_map_stage.hpp): off by default; needs poses.
+  // The fused 3-D semantic map (semantic_map_sink.hpp): off by default; needs poses.
   bool semantic_map = false;
   int semantic_map_queue = 2;              // frames waiting for the map thread (drop-oldest)
   double semantic_map_publish_s = 2.0;     // map message and map tables at most this often
@@ -134,7 +134,7 @@ struct WebConfig {
   // Where the page's HTML/JS/CSS are ("" = the installed folder).
   std::string static_dir;
   // The model whose prediction the Label page starts from ("" = none); its cloud.*,
-  // normals.*, overseg.* and features.* settings must be the config's, as for findmugd.
+  // normals.*, oversegmentation.* and features.* settings must be the config's, as for findmugd.
   std::string model_path;
   // NYU's camera_rotations_NYU.txt, for ground.source=gravity on frames named by their
   // NYU index ("" = none).

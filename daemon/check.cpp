@@ -17,7 +17,7 @@
 #include "findmug/daemon/daemon.hpp"
 #include "findmug/io/frame_source.hpp"
 #include "findmug/learner/forest.hpp"
-#include "findmug/pipeline/segmenter.hpp"
+#include "findmug/segmenter/segmenter.hpp"
 
 namespace findmug::daemon {
 namespace {
@@ -78,7 +78,8 @@ class SelfCheck {
     } catch (const std::exception& e) {
       say(Verdict::Fail, "model", e.what(),
           "set daemon.model_path to a model made by findmug-train with this config's cloud.*, "
-          "normals.* and overseg.* settings (the package's are in /usr/share/findmug/models)");
+          "normals.* and oversegmentation.* settings (the package's are in "
+          "/usr/share/findmug/models)");
       return nullptr;
     }
   }

@@ -27,7 +27,8 @@ namespace {
 const std::vector<std::pair<std::string, double StageTimings::*>>& subStages() {
   static const std::vector<std::pair<std::string, double StageTimings::*>> all = {
       {"cloud", &StageTimings::cloud_ms},       {"normals", &StageTimings::normals_ms},
-      {"ground", &StageTimings::ground_ms},     {"supervoxels", &StageTimings::overseg_ms},
+      {"ground", &StageTimings::ground_ms},
+      {"oversegmentation", &StageTimings::oversegmentation_ms},
       {"features", &StageTimings::features_ms}, {"regions", &StageTimings::regions_ms},
       {"forest", &StageTimings::forest_ms},     {"context", &StageTimings::context_ms},
       {"mrf", &StageTimings::mrf_ms},           {"labels", &StageTimings::labels_ms},
@@ -91,7 +92,7 @@ Pipeline::Pipeline(const SegmenterConfig& segmenter_config, const DaemonConfig& 
       daemon_config_.publish_table_map && !daemon_config_.semantic_map,
       [this](const std::string& what) { recordError(what); });
   if (daemon_config_.semantic_map) {
-    SemanticMapStage::Options options;
+    SemanticMapSink::Options options;
     options.map = daemon_config_.semantic_map_config;
     options.tables = segmenter_config.tables;
     options.threaded = mode_ == ExecutionMode::Threaded;
@@ -102,7 +103,7 @@ Pipeline::Pipeline(const SegmenterConfig& segmenter_config, const DaemonConfig& 
     options.save_period_s = daemon_config_.semantic_map_save_s;
     options.map_channel = io::kSemanticMapChannel;
     options.table_map_channel = io::kTableMapChannel;
-    semantic_map_ = std::make_shared<SemanticMapStage>(
+    semantic_map_ = std::make_shared<SemanticMapSink>(
         std::move(options), bus, [this](const std::string& what) { recordError(what); });
   }
   ObjectSearchSettings object_search;
@@ -424,7 +425,7 @@ void Pipeline::publishResult(ResultJob& job) {
   model_.segmenter()->recycle(std::move(job.labelled));
 }
 
-std::optional<SemanticMapStage::Counters> Pipeline::semanticMapCounters() const {
+std::optional<SemanticMapSink::Counters> Pipeline::semanticMapCounters() const {
   if (!semantic_map_) return std::nullopt;
   return semantic_map_->counters();
 }
@@ -531,7 +532,7 @@ StatusSnapshot Pipeline::statusSnapshot() const {
                objects.refused_few_points, objects.object_files_refused, objects.find_requests,
                objects.find_answers,      objects.mapped_objects,     objects.map_publishes};
   if (semantic_map_) {
-    const SemanticMapStage::Counters c = semantic_map_->counters();
+    const SemanticMapSink::Counters c = semantic_map_->counters();
     s.queues.push_back({"semantic_map", c.queue_depth, c.queue_capacity});
     s.semantic_map_frames = c.integrated;
     s.semantic_map_skipped = c.skipped;

@@ -141,7 +141,7 @@ void LcmPublisherSink::consume(FrameResult& result) {
   // Encoded from the frame's own label image and tables: copying them into
   // message structs first cost a copy of 1.5 MB and of every table's pixel
   // list per frame.
-  // The map's labels when the semantic map stage replaced them (daemon.semantic_map_fused_labels).
+  // The map's labels when the semantic map sink replaced them (daemon.semantic_map_fused_labels).
   const LabelImage& published =
       result.published_labels ? *result.published_labels : result.labelled.labels;
   findmug_lcm::label_image_t labels = io::encodeLabelImage(

@@ -163,7 +163,7 @@ std::unique_ptr<CLI::App> makeEvalApp(EvalFlags& f) {
   last(app->add_option("--degrade-seed", f.degrade_seed, "seed of the --degrade copies")
            ->type_name("N"));
   app->add_flag("--score-labelled-only", f.score_labelled_only,
-                "score only pixels the pipeline labelled (leave depth holes out)");
+                "score only pixels the Segmenter labelled (leave depth holes out)");
   return app;
 }
 
@@ -188,7 +188,7 @@ std::uint8_t argmax(const ClassProbabilities& p) {
 }
 
 // The regions of every sample's segmentation (region_features.hpp), for the
-// table region vote that follows the MRF in the pipeline (table_regions.hpp);
+// table region vote that follows the MRF in the Segmenter (table_regions.hpp);
 // empty when the vote is off. They come from what the sample kept: its
 // segments' moments (SegmentFeatures::moments) and its adjacency.
 std::vector<RegionFeatures> sampleRegions(const std::vector<FrameSample>& samples,
@@ -201,7 +201,7 @@ std::vector<RegionFeatures> sampleRegions(const std::vector<FrameSample>& sample
 }
 
 // Labels the test frames with `forest` and accumulates both confusions. The
-// "+MRF" labels are the pipeline's final ones: with `regions`, after the
+// "+MRF" labels are the Segmenter's final ones: with `regions`, after the
 // table region vote, as in Segmenter::classify. With mrf.pairwise = context
 // the term is the one the fold's model learned from its training frames.
 void labelFrames(const RandomForest& forest, const SegmenterConfig& config,
@@ -319,8 +319,8 @@ Evaluation crossValidate(const std::vector<FrameSample>& samples,
 }
 
 // The frame's table-top candidates on its detected tables, and its labels without and
-// with their table pixels relabelled Object (the pipeline's table_objects.relabel). The
-// labels here are hole-filled already (the pipeline relabels before the fill): the
+// with their table pixels relabelled Object (the Segmenter's table_objects.relabel). The
+// labels here are hole-filled already (the Segmenter relabels before the fill): the
 // candidates are made of pixels with depth, which the fill never changes.
 void measureRelabel(const PreparedFrame& prepared, const LabelImage& predicted,
                     const std::vector<TableCluster>& detected,
@@ -368,7 +368,7 @@ void countTableByNyu40(const std::vector<std::string>& folders,
   }
 }
 
-// Tables found on each evaluated frame's forest+MRF labels (the pipeline's
+// Tables found on each evaluated frame's forest+MRF labels (the Segmenter's
 // detectTables) against the ground-truth instances. The frame's geometry is
 // recomputed (cloud, ground): cheap, and it keeps FrameSample small.
 // On synthetic folders (`synth` = their ground_truth.yaml) also the search

@@ -28,7 +28,7 @@
 #include "findmug/learner/forest.hpp"
 #include "findmug/objects/object_model.hpp"
 #include "findmug/objects/table_objects.hpp"
-#include "findmug/pipeline/segmenter.hpp"
+#include "findmug/segmenter/segmenter.hpp"
 #include "findmug/settings/config.hpp"
 #include "findmug_cli.hpp"
 

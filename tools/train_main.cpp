@@ -6,7 +6,7 @@
 // With --unlabelled and training.pseudo_rounds > 0 the model is retrained
 // with pseudo-labelled patches of the unlabelled frames (pseudo_labels.hpp).
 // Each --data folder is read with its own ground-truth labels; every
-// supervoxel with a non-void plurality label becomes one training sample.
+// patch with a non-void plurality label becomes one training sample.
 #include <chrono>
 #include <cstdio>
 #include <iostream>
@@ -72,7 +72,7 @@ int run(int argc, char** argv) {
   const TrainingOptions& options_training = config.offline.training;
   const TrainingSet training =
       makeTrainingSet(samples, all, options_training.sample_weight, options_training.split_labels);
-  if (training.labels.empty()) throw Error("no labelled supervoxel to train on");
+  if (training.labels.empty()) throw Error("no labelled patch to train on");
 
   ExtractionReport unlabelled_report;
   const std::vector<FrameSample> unlabelled = tools::extractUnlabelled(
@@ -136,7 +136,7 @@ int run(int argc, char** argv) {
               config.segmenter.regions.enabled ? " (with region features)" : "",
               config.segmenter.scene.enabled ? " (with scene features)" : "",
               config.segmenter.objects.enabled ? " (with object features)" : "",
-              forest.contextStage() ? ", auto-context stage" : "");
+              forest.contextRound() ? ", auto-context round" : "");
   if (const PairwiseContext* term = forest.pairwiseContext())
     std::printf("  pairwise term    learned from %zu labelled neighbour pairs (mrf.pairwise = context)\n",
                 term->training_edges);

@@ -12,7 +12,7 @@
 #include "findmug/common/error.hpp"
 #include "findmug/frame/dataset.hpp"
 #include "findmug/labels/labels.hpp"
-#include "findmug/supervoxels/oversegmentation.hpp"
+#include "findmug/oversegmentation/oversegmentation.hpp"
 #include "web_http.hpp"
 #include "web_server.hpp"
 
@@ -138,7 +138,7 @@ std::shared_ptr<const LabelFrame> LabelFrames::make(const fs::path& root, std::s
     segmentation = std::move(segmented.segmentation);
     prepared = std::move(segmented.prepared);
   } else {
-    segmentation = makeOversegmenter(segmenter_.config().overseg)
+    segmentation = makeOversegmenter(segmenter_.config().oversegmentation)
                        ->segment(prepared.cloud_camera, prepared.normals_camera);
     out->prediction_error = "no ground plane found in frame " + frame +
                             " (ground.* settings): the model cannot label it";

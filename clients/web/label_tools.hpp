@@ -31,7 +31,7 @@
 #include <nlohmann/json.hpp>
 
 #include "findmug/learner/forest.hpp"
-#include "findmug/pipeline/segmenter.hpp"
+#include "findmug/segmenter/segmenter.hpp"
 #include "findmug/settings/config.hpp"
 
 namespace httplib {

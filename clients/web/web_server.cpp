@@ -17,8 +17,8 @@
 #include "findmug/frame/dataset.hpp"
 #include "findmug/frame/image_io.hpp"
 #include "findmug/labels/labels.hpp"
-#include "findmug/pipeline/segmenter.hpp"
-#include "findmug/supervoxels/oversegmentation.hpp"
+#include "findmug/segmenter/segmenter.hpp"
+#include "findmug/oversegmentation/oversegmentation.hpp"
 #include "web_config.hpp"
 #include "web_http.hpp"
 

@@ -12,7 +12,7 @@ that differs:
   - `section.key=value` (a --set, or in backticks) and `section.key value` / `key value` in
     words state it when their sentence, table row or command speaks of the shipped
     configuration and names no other one (instead of, without, until, before, earlier, older,
-    not, only with, "shipped + ...", ...). In a command, ground.source, forest.num_threads,
+    not, only with, "shipped + ...", ...). In a command, ground.source, learner.num_threads,
     forest.seed and daemon.* may differ (how a tool finds the ground, uses the machine).
 A bare key counts only when one section of the file has it. It also fails where a user
 document (those three and daemon/findmugd.yaml) names an issue number ("issue 35",
@@ -32,7 +32,7 @@ OTHER = re.compile(r"instead of|without|\buntil\b|\bbefore\b|\bearlier\b|\bolder
                    re.I)
 # Settings a command may set otherwise than the daemon's file on purpose: how training and
 # evaluation find the ground and use the machine, and the daemon's own section in benchmarks.
-COMMAND_OWN = re.compile(r"^(ground\.source|forest\.num_threads|forest\.seed|daemon\..*)$")
+COMMAND_OWN = re.compile(r"^(ground\.source|learner\.num_threads|forest\.seed|daemon\..*)$")
 ISSUE = re.compile(r"\b(?:issues?|pull request|PR)\s*#?\s*\d+", re.I)
 
 

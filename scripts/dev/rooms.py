@@ -10,7 +10,8 @@
   rooms.py includes  rewrite old flat references in every tracked text file: #include
                      "findmug/X.hpp" -> "findmug/<room>/X.hpp", internal "X_internal.hpp"
                      -> "<room>/X_internal.hpp", and paths such as src/X.cpp in comments and
-                     documents. Idempotent: run it after merging a branch that predates the move.
+                     documents; then the references to renamed rooms and files (RENAMED).
+                     Idempotent: run it after merging a branch that predates the move or a rename.
 """
 import os
 import re
@@ -29,10 +30,10 @@ ROOMS = {
               ["image_io", "dataset", "depth_holes"]),
     "cloud": (["cloud"], ["cloud.cpp", "cloud_internal.hpp"], ["cloud"]),
     "ground": (["ground"], ["ground.cpp", "ground_gravity.cpp", "ground_internal.hpp"], ["ground"]),
-    "supervoxels": (["oversegmentation"],
-                    ["oversegmentation.cpp", "oversegmentation_internal.hpp", "overseg_organized.cpp",
-                     "overseg_pcl.cpp", "lab_internal.hpp"],
-                    ["oversegmentation"]),
+    "oversegmentation": (["oversegmentation"],
+                         ["oversegmentation.cpp", "oversegmentation_internal.hpp",
+                          "oversegmentation_organized.cpp", "oversegmentation_pcl.cpp", "lab_internal.hpp"],
+                         ["oversegmentation"]),
     "features": (["features", "region_features", "scene_features", "context_features", "object_features"],
                  ["features.cpp", "features_internal.hpp", "region_features.cpp", "scene_features.cpp",
                   "context_features.cpp", "object_features.cpp"],
@@ -46,7 +47,7 @@ ROOMS = {
              "layout_prior.cpp"], ["mrf", "object_consistency", "layout_prior"]),
     "labels": (["labels", "label_image", "label_holes"], ["label_image.cpp", "label_holes.cpp"],
                ["label_image", "label_holes"]),
-    "pipeline": (["segmenter"], ["segmenter.cpp"],
+    "segmenter": (["segmenter"], ["segmenter.cpp"],
                  ["segmenter", "buffer_reuse", "segmenter_context", "segmenter_layout",
                   "segmenter_objects", "segmenter_table_objects"]),
     "tables": (["tables", "table_regions"],
@@ -75,6 +76,19 @@ ROOMS = {
     "synth": (["synth"], ["camera_path.cpp", "ground_truth.cpp", "render.cpp", "scene.cpp", "apartment.cpp",
                           "scene_edit.cpp", "synth_internal.hpp"], ["synth", "apartment"]),
 }
+
+# Rooms and files renamed after the move, old -> new: `includes` rewrites references to them
+# (paths, #include lines) in a branch that predates the rename.
+RENAMED = [
+    ("supervoxels/overseg_organized.cpp", "oversegmentation/oversegmentation_organized.cpp"),
+    ("supervoxels/overseg_pcl.cpp", "oversegmentation/oversegmentation_pcl.cpp"),
+    ("supervoxels/", "oversegmentation/"),
+    ("overseg_organized.cpp", "oversegmentation_organized.cpp"),
+    ("overseg_pcl.cpp", "oversegmentation_pcl.cpp"),
+    ("findmug/pipeline/", "findmug/segmenter/"),
+    ("src/pipeline/", "src/segmenter/"),
+    ("tests/unit/pipeline/", "tests/unit/segmenter/"),
+]
 
 # Rooms built by their own CMakeLists.txt with their folder on the include path: their internal
 # headers are included by bare name and are not rewritten to "ROOM/X.hpp".
@@ -162,6 +176,9 @@ def replacements():
             pairs.append((re.compile(r'(?<![\w/])tests/unit/' + re.escape(t) + r'_test\.cpp\b'),
                           f"tests/unit/{room}/{t}_test.cpp"))
     pairs.append((re.compile(r'(?<![\w/])include/findmug/([a-z_0-9]+)\.hpp\b'), None))
+    for old, new in RENAMED:
+        # findmug/OLD, src/OLD, tests/unit/OLD, "OLD (an internal #include) and OLD at a word start
+        pairs.append((re.compile(r'(?<![\w.-])' + re.escape(old)), new))
     return pairs
 
 

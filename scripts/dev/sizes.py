@@ -26,13 +26,13 @@ ROOTS = ["src", "include", "io", "daemon", "clients", "tools"]
 
 # path (or path:function) -> lines today.
 KNOWN = {
-    "src/supervoxels/overseg_organized.cpp": 1483,
+    "src/oversegmentation/oversegmentation_organized.cpp": 1483,
     "tools/eval_main.cpp": 917,
-    "src/settings/config.cpp:settings": 261,
+    "src/settings/config.cpp:settings": 265,
     "src/learner/forest_format.cpp:RandomForest::load": 255,
     "tools/eval_main.cpp:run": 204,
     "tools/eval_report.cpp:formatTable": 199,
-    "src/pipeline/segmenter.cpp:Segmenter::classify": 189,
+    "src/segmenter/segmenter.cpp:Segmenter::classify": 189,
     "tools/eval_report.cpp:formatJson": 184,
 }
 

@@ -17,7 +17,7 @@
 
 #include "findmug/features/features.hpp"
 #include "findmug/ground/ground.hpp"
-#include "findmug/pipeline/segmenter.hpp"
+#include "findmug/segmenter/segmenter.hpp"
 #include "findmug/tables/tables.hpp"
 
 namespace findmug::detail {

@@ -1,4 +1,4 @@
-// Auto-context features: size-weighted means of the first stage's class
+// Auto-context features: size-weighted means of the first round's class
 // distributions over four 3-D neighbourhoods of every patch. All pairs are
 // visited (a frame has a few hundred to a few thousand patches, and the
 // inner loop is a few compares): simpler and, at these sizes, as fast as a grid.

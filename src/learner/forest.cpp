@@ -1,5 +1,5 @@
 // forest.cpp — RandomForest's model-independent parts: prediction, the
-// context stage and extraction settings, the model id, and the parameter
+// context round and extraction settings, the model id, and the parameter
 // check. Training is in forest_train.cpp, the model file in forest_format.cpp.
 #include "findmug/learner/forest.hpp"
 
@@ -113,16 +113,16 @@ void RandomForest::setExtractionSettings(Settings settings) {
   updateId();
 }
 
-void RandomForest::setContextStage(RandomForest stage) {
-  if (stage.empty()) throw Error("RandomForest: the context stage is empty (not trained)");
-  if (stage.contextStage())
-    throw Error("RandomForest: a context stage cannot have a context stage of its own");
-  const auto& names = stage.featureNames();
+void RandomForest::setContextRound(RandomForest round) {
+  if (round.empty()) throw Error("RandomForest: the context round is empty (not trained)");
+  if (round.contextRound())
+    throw Error("RandomForest: a context round cannot have a context round of its own");
+  const auto& names = round.featureNames();
   if (names.size() <= feature_names_.size() ||
       !std::equal(feature_names_.begin(), feature_names_.end(), names.begin()))
-    throw Error("RandomForest: the context stage's rows must start with the first stage's " +
+    throw Error("RandomForest: the context round's rows must start with the first round's " +
                 std::to_string(feature_names_.size()) + " columns and add context columns");
-  context_stage_ = std::make_shared<const RandomForest>(std::move(stage));
+  context_round_ = std::make_shared<const RandomForest>(std::move(round));
   updateId();
 }
 
@@ -133,7 +133,7 @@ void RandomForest::setPairwiseContext(std::optional<PairwiseContext> term) {
 }
 
 void RandomForest::updateId() {
-  // The id names the model's content: settings and context stage included.
+  // The id names the model's content: settings and context round included.
   const auto bytes = serialize(*this);
   std::uint64_t checksum = 0;
   for (std::size_t i = 0; i < kChecksumSize; ++i)

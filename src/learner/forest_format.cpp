@@ -195,12 +195,12 @@ std::vector<std::uint8_t> forest_format::serialize(const RandomForest& forest) {
   } else {
     writeTrees(w, forest.trees());
   }
-  const RandomForest* stage = forest.contextStage();
-  w.u8(stage ? 1 : 0);
-  if (stage) {
-    writeFeatureNames(w, stage->featureNames());
-    writeParams(w, stage->params());
-    writeTrees(w, stage->trees());
+  const RandomForest* round = forest.contextRound();
+  w.u8(round ? 1 : 0);
+  if (round) {
+    writeFeatureNames(w, round->featureNames());
+    writeParams(w, round->params());
+    writeTrees(w, round->trees());
   }
   const PairwiseContext* pairwise = forest.pairwiseContext();
   w.u8(pairwise ? 1 : 0);
@@ -360,11 +360,11 @@ RandomForest RandomForest::load(const std::string& path) {
       forest.internal_classes_ = std::move(classes);
     }
     // Column names: the 14 base features first; format 3 may add extras.
-    auto readFeatureNames = [&](const std::string& stage) {
-      const std::uint32_t num_features = r.u32(stage + "feature count");
+    auto readFeatureNames = [&](const std::string& which) {
+      const std::uint32_t num_features = r.u32(which + "feature count");
       if (version == 2 ? num_features != kFeatureDim
                        : (num_features < kFeatureDim || num_features > kMaxFeatures))
-        throw Error(path + ": forest model " + stage + "has " + std::to_string(num_features) +
+        throw Error(path + ": forest model " + which + "has " + std::to_string(num_features) +
                     " features, this build computes " + std::to_string(kFeatureDim) +
                     (version == 2
                          ? ""
@@ -372,42 +372,42 @@ RandomForest RandomForest::load(const std::string& path) {
                                std::to_string(kMaxFeatures - kFeatureDim) + " extra ones"));
       std::vector<std::string> names;
       for (std::uint32_t f = 0; f < num_features; ++f) {
-        std::string name = r.str(stage + "feature name");
+        std::string name = r.str(which + "feature name");
         if (f < kFeatureDim && name != kFeatureNames[f])
-          throw Error(path + ": forest model " + stage + "feature " + std::to_string(f) + " is '" +
+          throw Error(path + ": forest model " + which + "feature " + std::to_string(f) + " is '" +
                       name + "', this build computes '" + std::string(kFeatureNames[f]) +
                       "' (feature layout differs)");
-        if (name.empty()) throw Error(path + ": forest model " + stage + "feature name is empty");
+        if (name.empty()) throw Error(path + ": forest model " + which + "feature name is empty");
         names.push_back(std::move(name));
       }
       return names;
     };
-    auto readParams = [&](ForestParams& p, const std::string& stage) {
-      p.num_trees = r.i32(stage + "params.num_trees");
-      p.max_depth = r.i32(stage + "params.max_depth");
-      p.min_samples_leaf = r.i32(stage + "params.min_samples_leaf");
-      p.candidate_features = r.i32(stage + "params.candidate_features");
-      p.candidate_thresholds = r.i32(stage + "params.candidate_thresholds");
-      const std::uint8_t weighting = r.u8(stage + "params.class_weighting");
+    auto readParams = [&](ForestParams& p, const std::string& which) {
+      p.num_trees = r.i32(which + "params.num_trees");
+      p.max_depth = r.i32(which + "params.max_depth");
+      p.min_samples_leaf = r.i32(which + "params.min_samples_leaf");
+      p.candidate_features = r.i32(which + "params.candidate_features");
+      p.candidate_thresholds = r.i32(which + "params.candidate_thresholds");
+      const std::uint8_t weighting = r.u8(which + "params.class_weighting");
       if (weighting > 1)
-        throw Error(path + ": forest model " + stage +
+        throw Error(path + ": forest model " + which +
                     "params.class_weighting = " + std::to_string(weighting) + " (expected 0 or 1)");
       p.class_weighting = weighting == 1;
-      p.bagging_fraction = r.f64(stage + "params.bagging_fraction");
-      p.seed = r.u64(stage + "params.seed");
+      p.bagging_fraction = r.f64(which + "params.bagging_fraction");
+      p.seed = r.u64(which + "params.seed");
       validateParams(p, path);
     };
-    auto readTrees = [&](RandomForest& f, const std::string& stage) {
-      const std::uint32_t num_trees = r.u32(stage + "tree count");
+    auto readTrees = [&](RandomForest& f, const std::string& which) {
+      const std::uint32_t num_trees = r.u32(which + "tree count");
       if (num_trees == 0 || num_trees > kMaxTrees)
-        throw Error(path + ": forest model " + stage + "has an absurd num_trees " +
+        throw Error(path + ": forest model " + which + "has an absurd num_trees " +
                     std::to_string(num_trees) + " (expected 1.." + std::to_string(kMaxTrees) + ")");
       if (num_trees != static_cast<std::uint32_t>(f.params_.num_trees))
-        throw Error(path + ": forest model " + stage + "holds " + std::to_string(num_trees) +
+        throw Error(path + ": forest model " + which + "holds " + std::to_string(num_trees) +
                     " trees but params.num_trees = " + std::to_string(f.params_.num_trees));
       f.trees_.resize(num_trees);
       for (std::uint32_t t = 0; t < num_trees; ++t) {
-        const std::string tree_name = stage + "tree " + std::to_string(t);
+        const std::string tree_name = which + "tree " + std::to_string(t);
         const std::uint32_t num_nodes = r.u32(tree_name + " node count");
         // Every node takes at least kInnerNodeBytes, so a count the rest of the
         // file cannot hold is refused before allocating for it.
@@ -485,25 +485,25 @@ RandomForest RandomForest::load(const std::string& path) {
       readTrees(forest, "");
     }
     if (version >= 3) {
-      const std::uint8_t has_stage = r.u8("context stage flag");
-      if (has_stage > 1)
-        throw Error(path + ": forest model context stage flag = " + std::to_string(has_stage) +
+      const std::uint8_t has_round = r.u8("context round flag");
+      if (has_round > 1)
+        throw Error(path + ": forest model context round flag = " + std::to_string(has_round) +
                     " (expected 0 or 1)");
-      if (has_stage == 1 && boosted)
-        throw Error(path + ": an xgboost model cannot have an auto-context stage");
-      if (has_stage == 1) {
-        RandomForest stage;
-        stage.feature_names_ = readFeatureNames("context stage ");
-        if (stage.feature_names_.size() <= forest.feature_names_.size() ||
+      if (has_round == 1 && boosted)
+        throw Error(path + ": an xgboost model cannot have an auto-context round");
+      if (has_round == 1) {
+        RandomForest round;
+        round.feature_names_ = readFeatureNames("context round ");
+        if (round.feature_names_.size() <= forest.feature_names_.size() ||
             !std::equal(forest.feature_names_.begin(), forest.feature_names_.end(),
-                        stage.feature_names_.begin()))
-          throw Error(path + ": forest model context stage columns do not start with the " +
+                        round.feature_names_.begin()))
+          throw Error(path + ": forest model context round columns do not start with the " +
                       std::to_string(forest.feature_names_.size()) +
-                      " first-stage columns followed by context columns");
-        readParams(stage.params_, "context stage ");
-        readTrees(stage, "context stage ");
-        stage.format_version_ = version;
-        forest.context_stage_ = std::make_shared<const RandomForest>(std::move(stage));
+                      " first-round columns followed by context columns");
+        readParams(round.params_, "context round ");
+        readTrees(round, "context round ");
+        round.format_version_ = version;
+        forest.context_round_ = std::make_shared<const RandomForest>(std::move(round));
       }
     }
     if (version >= 5) {

@@ -21,13 +21,13 @@
 //            subsample, colsample, min_child_weight, lambda; int32 seed; uint8
 //            class_weighting)
 //   uint32   extraction setting count (version 2), then per setting: key, value
-//            as uint32 length + bytes (cloud.*, normals.*, overseg.* of training)
+//            as uint32 length + bytes (cloud.*, normals.*, oversegmentation.* of training)
 //   uint32   tree count; per tree: uint32 node count, then per node:
 //            int32 feature; inner (feature >= 0): float32 threshold, int32 left, int32 right;
 //            leaf (feature == -1): float32[kNumLabels] distribution
 //            (version 4, xgboost instead: uint64 length + the booster's bytes,
 //            XGBoost's UBJSON model; its output width must be the class count)
-//   uint8    (version 3) 1 when an auto-context stage follows, else 0; the stage is
+//   uint8    (version 3) 1 when an auto-context round follows, else 0; the round is
 //            feature count + names, params, tree count + trees as above
 //   uint8    (version 5) 1 when the learned pairwise term of mrf.pairwise = context
 //            follows, else 0; the term is float64 bias, weights[4], mean[4], scale[4],
@@ -46,7 +46,7 @@ namespace findmug::forest_format {
 
 inline constexpr char kMagic[8] = {'F', 'M', 'U', 'G', 'F', 'R', 'S', 'T'};
 inline constexpr std::uint32_t kFormatVersion = 5;
-// Format 2: the 14 base features only, no context stage. Still read; such a
+// Format 2: the 14 base features only, no context round. Still read; such a
 // model means features.regions = false and features.context = false.
 inline constexpr std::uint32_t kOldestFormatVersion = 2;
 inline constexpr std::uint32_t kMaxFeatures = 1024;

@@ -6,7 +6,7 @@
 // Determinism: prediction runs with nthread = 1 on dense float rows, and the
 // model the trainer returns is the one its bytes load into, so eval, the
 // daemon and a reloaded file give the same bits. Training runs on
-// forest.num_threads threads (offline only: findmug-train, findmug-eval).
+// learner.num_threads threads (offline only: findmug-train, findmug-eval).
 #include "learner/xgboost_learner.hpp"
 
 #include <xgboost/c_api.h>

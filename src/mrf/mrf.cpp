@@ -1,4 +1,4 @@
-// Pairwise MRF over the supervoxel adjacency graph, solved by min-sum loopy
+// Pairwise MRF over the patch adjacency graph, solved by min-sum loopy
 // belief propagation.
 //
 // Unary cost U_i(y) = λ (1 - p_i(y)); Potts pairwise cost w_ij [y_i != y_j]

@@ -70,7 +70,7 @@ std::size_t objectColumnsOf(const SegmentFeatures& f) {
   return f.features.empty() ? 0 : f.objects.size() / f.features.size();
 }
 
-// Names of the first stage's extra columns: region, scene, then object
+// Names of the first round's extra columns: region, scene, then object
 // features (`object_columns` of them: one of the ObjectColumns sets).
 std::vector<std::string> extraColumnNames(bool regions, bool scene, std::size_t object_columns) {
   std::vector<std::string> names;
@@ -164,14 +164,15 @@ std::vector<Segmenter> variantSegmenters(const SegmenterConfig& config, const Tr
   for (int k = 0; k < t.extra_oversegmentations; ++k) {
     const int power = (k / 2 + 1) * (k % 2 == 0 ? 1 : -1);
     SegmenterConfig variant = config;
-    variant.overseg.seed_resolution_m =
-        config.overseg.seed_resolution_m * std::pow(t.extra_seed_scale, static_cast<float>(power));
-    if (variant.overseg.seed_resolution_m <= variant.overseg.voxel_resolution_m) {
+    variant.oversegmentation.seed_resolution_m =
+        config.oversegmentation.seed_resolution_m *
+        std::pow(t.extra_seed_scale, static_cast<float>(power));
+    if (variant.oversegmentation.seed_resolution_m <= variant.oversegmentation.voxel_resolution_m) {
       throw Error("training.extra_oversegmentations = " + std::to_string(t.extra_oversegmentations) +
                   " with training.extra_seed_scale = " + std::to_string(t.extra_seed_scale) +
-                  " takes overseg.seed_resolution_m down to " +
-                  std::to_string(variant.overseg.seed_resolution_m) +
-                  ", not above overseg.voxel_resolution_m");
+                  " takes oversegmentation.seed_resolution_m down to " +
+                  std::to_string(variant.oversegmentation.seed_resolution_m) +
+                  ", not above oversegmentation.voxel_resolution_m");
     }
     variant.ground.reestimate_every_frames = 1;
     out.emplace_back(variant, nullptr);
@@ -537,7 +538,7 @@ RandomForest trainModel(const std::vector<const FrameSample*>& frames,
   const bool boosted = config.learner.kind == LearnerKind::XGBoost;
   const bool internal = config.learner.classes != ClassScheme::Labels;
   if (boosted && config.context.enabled)
-    throw Error("learner.kind = xgboost has no auto-context stage; set features.context = false");
+    throw Error("learner.kind = xgboost has no auto-context round; set features.context = false");
   if (internal && training.split_labels != SplitLabels::Labels)
     throw Error(std::string("learner.classes = ") + classSchemeName(config.learner.classes) +
                 " cannot be combined with training.split_labels");
@@ -576,7 +577,7 @@ RandomForest trainModel(const std::vector<const FrameSample*>& frames,
   tick();
   if (!config.context.enabled) return first;
 
-  // First-stage distributions of every training frame, each from a forest
+  // First-round distributions of every training frame, each from a forest
   // that did not see it (folds >= 2), or in-sample.
   const std::size_t n = frames.size();
   std::vector<std::vector<ClassProbabilities>> probs(n);
@@ -610,7 +611,7 @@ RandomForest trainModel(const std::vector<const FrameSample*>& frames,
     for (std::size_t i = 0; i < n; ++i) probs[i] = predictSample(first, *frames[i], first_only);
   }
 
-  // Context-stage rows: first-stage rows, then context columns.
+  // Context-round rows: first-round rows, then context columns.
   TrainingSet set;
   if (!frames.empty())
     set.extra_names = extraColumnNames(!frames.front()->features.regions.empty(),
@@ -644,7 +645,7 @@ RandomForest trainModel(const std::vector<const FrameSample*>& frames,
   params.seed += 500;
   RandomForest second = RandomForest::train(set, params);
   tick();
-  first.setContextStage(std::move(second));
+  first.setContextRound(std::move(second));
   return first;
 }
 

@@ -151,27 +151,29 @@ const std::vector<CoreSetting>& settings() {
       floatSetting("ground.reuse_min_support_fraction",
                    [](C& c) -> float& { return c.ground.reuse_min_support_fraction; }, 0.01, 1),
       enumSetting<OversegmenterKind>(
-          "overseg.method", [](C& c) -> OversegmenterKind& { return c.overseg.kind; },
+          "oversegmentation.method",
+          [](C& c) -> OversegmenterKind& { return c.oversegmentation.kind; },
           {{"pcl", OversegmenterKind::PclSupervoxels},
            {"organized", OversegmenterKind::Organized}}),
-      floatSetting("overseg.voxel_resolution_m",
-                   [](C& c) -> float& { return c.overseg.voxel_resolution_m; }, 0.001, 1),
-      floatSetting("overseg.seed_resolution_m",
-                   [](C& c) -> float& { return c.overseg.seed_resolution_m; }, 0.005, 5),
-      floatSetting("overseg.color_importance",
-                   [](C& c) -> float& { return c.overseg.color_importance; }, 0, 100),
-      floatSetting("overseg.spatial_importance",
-                   [](C& c) -> float& { return c.overseg.spatial_importance; }, 0, 100),
-      floatSetting("overseg.normal_importance",
-                   [](C& c) -> float& { return c.overseg.normal_importance; }, 0, 100),
-      intSetting("overseg.min_segment_points",
-                 [](C& c) -> int& { return c.overseg.min_segment_points; }, 1, 100000),
-      intSetting("overseg.max_iterations",
-                 [](C& c) -> int& { return c.overseg.max_iterations; }, 1, 100),
-      floatSetting("overseg.organized_seed_density",
-                   [](C& c) -> float& { return c.overseg.organized_seed_density; }, 0.01, 1000),
-      intSetting("overseg.search_window_factor",
-                 [](C& c) -> int& { return c.overseg.search_window_factor; }, 1, 10),
+      floatSetting("oversegmentation.voxel_resolution_m",
+                   [](C& c) -> float& { return c.oversegmentation.voxel_resolution_m; }, 0.001, 1),
+      floatSetting("oversegmentation.seed_resolution_m",
+                   [](C& c) -> float& { return c.oversegmentation.seed_resolution_m; }, 0.005, 5),
+      floatSetting("oversegmentation.color_importance",
+                   [](C& c) -> float& { return c.oversegmentation.color_importance; }, 0, 100),
+      floatSetting("oversegmentation.spatial_importance",
+                   [](C& c) -> float& { return c.oversegmentation.spatial_importance; }, 0, 100),
+      floatSetting("oversegmentation.normal_importance",
+                   [](C& c) -> float& { return c.oversegmentation.normal_importance; }, 0, 100),
+      intSetting("oversegmentation.min_segment_points",
+                 [](C& c) -> int& { return c.oversegmentation.min_segment_points; }, 1, 100000),
+      intSetting("oversegmentation.max_iterations",
+                 [](C& c) -> int& { return c.oversegmentation.max_iterations; }, 1, 100),
+      floatSetting("oversegmentation.organized_seed_density",
+                   [](C& c) -> float& { return c.oversegmentation.organized_seed_density; },
+                   0.01, 1000),
+      intSetting("oversegmentation.search_window_factor",
+                 [](C& c) -> int& { return c.oversegmentation.search_window_factor; }, 1, 10),
       boolSetting("features.regions", [](C& c) -> bool& { return c.regions.enabled; }),
       floatSetting("features.region_normal_angle_deg",
                    [](C& c) -> float& { return c.regions.normal_angle_deg; }, 0, 180),
@@ -218,9 +220,6 @@ const std::vector<CoreSetting>& settings() {
                  [](C& c) -> int& { return c.forest.candidate_features; }, 1, 1024),
       intSetting("forest.candidate_thresholds",
                  [](C& c) -> int& { return c.forest.candidate_thresholds; }, 1, 1000),
-      boolSetting("forest.class_weighting",
-                  [](C& c) -> bool& { return c.forest.class_weighting; }),
-      intSetting("forest.num_threads", [](C& c) -> int& { return c.forest.num_threads; }, 0, 256),
       enumSetting<LearnerKind>("learner.kind", [](C& c) -> LearnerKind& { return c.learner.kind; },
                                {{"forest", LearnerKind::Forest}, {"xgboost", LearnerKind::XGBoost}}),
       enumSetting<ClassScheme>("learner.classes",
@@ -231,6 +230,11 @@ const std::vector<CoreSetting>& settings() {
       enumSetting<ClassWeight>("learner.class_weight",
                                [](C& c) -> ClassWeight& { return c.learner.class_weight; },
                                {{"labels", ClassWeight::Labels}, {"classes", ClassWeight::Classes}}),
+      // Both learners train with these; ForestParams carries them to either.
+      boolSetting("learner.class_weighting",
+                  [](C& c) -> bool& { return c.forest.class_weighting; }),
+      intSetting("learner.num_threads", [](C& c) -> int& { return c.forest.num_threads; }, 0,
+                 256),
       intSetting("xgboost.rounds", [](C& c) -> int& { return c.xgboost.rounds; }, 1, 10000),
       intSetting("xgboost.max_depth", [](C& c) -> int& { return c.xgboost.max_depth; }, 1, 30),
       doubleSetting("xgboost.eta", [](C& c) -> double& { return c.xgboost.eta; }, 1e-6, 1),
@@ -483,11 +487,11 @@ void validateOfflineConfig(const OfflineConfig& offline, const SegmenterConfig& 
 }
 
 void validateSegmenterConfig(const SegmenterConfig& c) {
-  if (c.overseg.seed_resolution_m <= c.overseg.voxel_resolution_m) {
-    throw Error("overseg.seed_resolution_m (" +
-                formatDouble(c.overseg.seed_resolution_m) +
-                ") must be larger than overseg.voxel_resolution_m (" +
-                formatDouble(c.overseg.voxel_resolution_m) + ")");
+  if (c.oversegmentation.seed_resolution_m <= c.oversegmentation.voxel_resolution_m) {
+    throw Error("oversegmentation.seed_resolution_m (" +
+                formatDouble(c.oversegmentation.seed_resolution_m) +
+                ") must be larger than oversegmentation.voxel_resolution_m (" +
+                formatDouble(c.oversegmentation.voxel_resolution_m) + ")");
   }
   if (c.tables.min_table_height_m >= c.tables.max_table_height_m) {
     throw Error("tables.min_table_height_m must be below tables.max_table_height_m");
@@ -499,7 +503,7 @@ void validateSegmenterConfig(const SegmenterConfig& c) {
                 "): from a search position the arm must reach past the table edge");
   }
   if (c.learner.kind == LearnerKind::XGBoost && c.context.enabled) {
-    throw Error("learner.kind = xgboost has no auto-context stage; set "
+    throw Error("learner.kind = xgboost has no auto-context round; set "
                 "features.context = false or learner.kind = forest");
   }
   if (c.tables.min_cluster_points > c.tables.max_cluster_points) {
@@ -564,7 +568,7 @@ RandomForest::Settings extractionSettings(const SegmenterConfig& config) {
     // feature means: a model serves filled and raw depth alike.
     if (s.key.rfind("cloud.fill_depth_", 0) == 0) continue;
     if (s.key.rfind("cloud.", 0) == 0 || s.key.rfind("normals.", 0) == 0 ||
-        s.key.rfind("overseg.", 0) == 0 || s.key.rfind("features.", 0) == 0) {
+        s.key.rfind("oversegmentation.", 0) == 0 || s.key.rfind("features.", 0) == 0) {
       out.emplace_back(s.key, s.get(config));
     }
   }

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <charconv>
 #include <fstream>
+#include <iostream>
 #include <sstream>
 
 namespace findmug {
@@ -40,6 +41,34 @@ bool parseSettingBool(const std::string& key, const std::string& value) {
   throwBadSettingValue(key, value, "true or false");
 }
 
+const std::vector<RenamedSetting>& renamedSettings() {
+  // Kept for one release after the rename, then removed (the old name is then unknown).
+  static const std::vector<RenamedSetting> all = {
+      // The step is called oversegmentation everywhere (its room, status_t's stage name).
+      {"overseg.*", "oversegmentation.*"},
+      // What trains either learner (the forest and the boosted trees) is learner.*.
+      {"forest.class_weighting", "learner.class_weighting"},
+      {"forest.num_threads", "learner.num_threads"},
+  };
+  return all;
+}
+
+std::string currentSettingKey(const std::string& key) {
+  for (const auto& r : renamedSettings()) {
+    const bool section =
+        r.old_key.size() > 2 && r.old_key.compare(r.old_key.size() - 2, 2, ".*") == 0;
+    if (!section) {
+      if (key == r.old_key) return r.new_key;
+      continue;
+    }
+    const std::string old_prefix = r.old_key.substr(0, r.old_key.size() - 1);  // "overseg."
+    if (key.size() > old_prefix.size() && key.compare(0, old_prefix.size(), old_prefix) == 0) {
+      return r.new_key.substr(0, r.new_key.size() - 1) + key.substr(old_prefix.size());
+    }
+  }
+  return key;
+}
+
 void SettingsSchema::add(Binding binding) {
   for (const auto& section : binding.sections) {
     if (has(section)) throw Error("settings section '" + section + "' bound twice");
@@ -56,11 +85,35 @@ const SettingsSchema::Binding* SettingsSchema::find(const std::string& section) 
 
 bool SettingsSchema::has(const std::string& section) const { return find(section) != nullptr; }
 
-void SettingsSchema::set(const std::string& key, const std::string& value) const {
-  const auto dot = key.find('.');
-  if (dot == std::string::npos || dot == 0 || dot + 1 == key.size()) {
-    throw Error("setting '" + key + "' must be of the form section.name");
+void SettingsSchema::setFrom(const std::string& given_key, const std::string& value,
+                             const std::string& origin, const std::string& where) const {
+  const auto given_dot = given_key.find('.');
+  if (given_dot == std::string::npos || given_dot == 0 || given_dot + 1 == given_key.size()) {
+    throw Error("setting '" + given_key + "' must be of the form section.name");
   }
+  const std::string key = currentSettingKey(given_key);
+  const auto [earlier, first] = given_.try_emplace(key, Given{given_key, origin, where});
+  if (!first) {
+    if (earlier->second.origin == origin && earlier->second.key != given_key) {
+      const std::string old_key = key == given_key ? earlier->second.key : given_key;
+      std::string place = earlier->second.where;  // "a.yaml: line 2: " -> " (a.yaml: line 2)"
+      while (!place.empty() && (place.back() == ' ' || place.back() == ':')) place.pop_back();
+      throw Error("setting '" + key + "' is given by both its names, '" + earlier->second.key +
+                  "'" + (place.empty() ? "" : " (" + place + ")") + " and '" + given_key +
+                  "'; '" + old_key + "' is its old name: keep only '" + key + "'");
+    }
+    earlier->second = Given{given_key, origin, where};
+  }
+  if (key != given_key) {
+    const std::string warning = where + "setting '" + given_key + "' is now called '" + key +
+                                "'; the old name is read for this release only";
+    if (warn_) {
+      warn_(warning);
+    } else {
+      std::cerr << "warning: " << warning << "\n";
+    }
+  }
+  const auto dot = key.find('.');
   const Binding* binding = find(key.substr(0, dot));
   if (!binding) {
     std::vector<std::string> names;
@@ -112,7 +165,7 @@ void SettingsSchema::readYaml(const std::string& text, const std::string& origin
       const std::string where = origin + ": line " + lineOf(entry.first) + ": ";
       if (!entry.second.IsScalar()) throw Error(where + "setting '" + key + "' must be a single value");
       try {
-        set(key, entry.second.Scalar());
+        setFrom(key, entry.second.Scalar(), origin, where);
       } catch (const Error& e) {
         throw Error(where + e.what());
       }
@@ -134,7 +187,8 @@ void SettingsSchema::applyOverride(const std::string& key_equals_value) const {
     throw Error("<flags>: override '" + key_equals_value + "' must be key=value");
   }
   try {
-    set(key_equals_value.substr(0, eq), key_equals_value.substr(eq + 1));
+    setFrom(key_equals_value.substr(0, eq), key_equals_value.substr(eq + 1), "<flags>",
+            "<flags>: ");
   } catch (const Error& e) {
     throw Error(std::string("<flags>: ") + e.what());
   }

@@ -114,7 +114,7 @@ def eval_command(args, settings, extra, seed, json_path):
            "--nyu-rotations", f"{d}/nyuv2_meta/camera_rotations_NYU.txt",
            "--json", json_path]
     common = ["ground.source=gravity", "features.regions=true", "features.scene=true",
-              "forest.num_threads=1", f"forest.seed={seed}"]
+              "learner.num_threads=1", f"forest.seed={seed}"]
     if any(s.startswith("learner.kind=xgboost") for s in settings):
         common.append(f"xgboost.seed={seed}")
     for s in common + settings:

@@ -416,7 +416,7 @@ mem_gb=$(awk '/MemTotal/ {printf "%.0f", $2 / 1048576}' /proc/meminfo)
   done
   if [[ -n "$map_rows" ]]; then
     echo
-    echo "### Semantic map stage (daemon.semantic_map)"
+    echo "### Semantic map sink (daemon.semantic_map)"
     echo
     echo "Frames fused into the map (those with a ground plane and a robot pose), per second of the run,"
     echo "frames its queue dropped (the map fell behind; their labels went out all the same), the map"
@@ -478,7 +478,7 @@ mem_gb=$(awk '/MemTotal/ {printf "%.0f", $2 / 1048576}' /proc/meminfo)
   echo "### Time per stage (threaded, lowest input rate: no queueing), ms p50 / p95 / max"
   echo
   low=$(tr ' ' '\n' <<< "$RATES" | sort -g | head -1)
-  stages="prepare segment publish object_search cloud normals ground supervoxels features forest mrf labels tables objects total"
+  stages="prepare segment publish object_search cloud normals ground oversegmentation features forest mrf labels tables objects total"
   header="| stage |"; rule="|---|"
   for ds in $DATASETS; do header="$header $ds |"; rule="$rule---|"; done
   echo "$header"; echo "$rule"

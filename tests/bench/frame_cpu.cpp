@@ -41,7 +41,7 @@
 #include "counting_new.hpp"  // this program's operator new counts allocations
 #include "findmug/common/error.hpp"
 #include "findmug/frame/dataset.hpp"
-#include "findmug/pipeline/segmenter.hpp"
+#include "findmug/segmenter/segmenter.hpp"
 #include "findmug/settings/config.hpp"
 #include "findmug/tables/tables.hpp"
 #include "test_data.hpp"
@@ -120,7 +120,8 @@ int run(int argc, char** argv) {
 
   const std::pair<const char*, double StageTimings::*> stages[] = {
       {"cloud", &StageTimings::cloud_ms},       {"normals", &StageTimings::normals_ms},
-      {"ground", &StageTimings::ground_ms},     {"oversegmentation", &StageTimings::overseg_ms},
+      {"ground", &StageTimings::ground_ms},
+      {"oversegmentation", &StageTimings::oversegmentation_ms},
       {"features", &StageTimings::features_ms}, {"regions", &StageTimings::regions_ms},
       {"forest", &StageTimings::forest_ms},     {"mrf", &StageTimings::mrf_ms},
       {"labels", &StageTimings::labels_ms},     {"tables", &StageTimings::tables_ms},

@@ -8,7 +8,7 @@
 # Runs the 31 NYU frames once after the warm-up pass. Checks the header, that
 # the rows are exactly the runs the summary counts ("medians over the N of M
 # runs"), one per frame in the data set's order, with non-negative times whose
-# stage columns sum to the total (the context stage is off). Exit 77 (ctest:
+# stage columns sum to the total (the context round is off). Exit 77 (ctest:
 # skipped) when the NYU data is missing outside CI; under CI=true that fails.
 set -euo pipefail
 BUILD=$(cd "$1" && pwd)

@@ -24,8 +24,8 @@
 #include "findmug/frame/dataset.hpp"
 #include "findmug/frame/image_io.hpp"
 #include "findmug/ground/ground.hpp"
-#include "findmug/supervoxels/oversegmentation.hpp"
-#include "supervoxels/lab_internal.hpp"
+#include "findmug/oversegmentation/oversegmentation.hpp"
+#include "oversegmentation/lab_internal.hpp"
 
 namespace {
 

@@ -2,7 +2,7 @@
 // organized oversegmenter, ground estimated from the frame:
 //   1. time per frame at 640x480 and at 320x240 (QVGA: every second pixel
 //      of every second row, intrinsics halved);
-//   2. time per frame and segment count against overseg.seed_resolution_m;
+//   2. time per frame and segment count against oversegmentation.seed_resolution_m;
 //   3. table-stage time against the number of pixels labelled table;
 //   4. heap allocations per frame in Segmenter::process (steady state:
 //      global operator new calls and bytes, counted after a warm-up pass).
@@ -25,7 +25,7 @@
 #include "findmug/common/error.hpp"
 #include "findmug/frame/dataset.hpp"
 #include "findmug/offline/training.hpp"
-#include "findmug/pipeline/segmenter.hpp"
+#include "findmug/segmenter/segmenter.hpp"
 #include "test_data.hpp"
 
 namespace {
@@ -72,7 +72,7 @@ int run(int argc, char** argv) {
 
   SegmenterConfig base;
   base.ground.source = GroundSource::Estimated;
-  base.overseg.kind = OversegmenterKind::Organized;
+  base.oversegmentation.kind = OversegmenterKind::Organized;
   base.forest.num_threads = 1;
   SegmenterConfig train_config = base;
   train_config.ground.source = GroundSource::FloorLabels;
@@ -112,26 +112,27 @@ int run(int argc, char** argv) {
 
   // 2. Seed resolution (segment count).
   std::printf(
-      "\n| overseg.seed_resolution_m | segments (median) | total ms | oversegmentation ms | "
+      "\n| oversegmentation.seed_resolution_m | segments (median) | total ms | "
+      "oversegmentation ms | "
       "features ms | MRF ms |\n|---:|---:|---:|---:|---:|---:|\n");
   for (const float seed : {0.05f, 0.075f, 0.1f, 0.15f, 0.2f}) {
     SegmenterConfig config = base;
-    config.overseg.seed_resolution_m = seed;
+    config.oversegmentation.seed_resolution_m = seed;
     const Segmenter segmenter(config, forest);
-    std::vector<double> total, overseg, features, mrf, segments;
+    std::vector<double> total, oversegmentation, features, mrf, segments;
     for (int r = 0; r < repeat; ++r) {
       for (const auto& f : frames) {
         const LabelledFrame out = segmenter.process(f.frame);
         if (!out.segmented.prepared.ground) continue;
         total.push_back(out.timings.total());
-        overseg.push_back(out.timings.overseg_ms);
+        oversegmentation.push_back(out.timings.oversegmentation_ms);
         features.push_back(out.timings.features_ms);
         mrf.push_back(out.timings.mrf_ms);
         segments.push_back(static_cast<double>(out.segmented.segmentation.segments.size()));
       }
     }
     std::printf("| %.3f | %.0f | %.1f | %.1f | %.1f | %.1f |\n", seed, median(segments),
-                median(total), median(overseg), median(features), median(mrf));
+                median(total), median(oversegmentation), median(features), median(mrf));
   }
 
   // 3. Table points: table-stage time per frame, grouped by pixels labelled table.

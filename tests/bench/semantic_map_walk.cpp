@@ -12,7 +12,7 @@
 //   * tables at the end against the generator's: the persistent per-frame table map
 //     (TableMap, FINDMUG_TABLE_MAP today) and the tables from the fused map; a table
 //     matches a true one when its box centre lies on the true top (one to one);
-//   * the map stage's CPU per frame (integrate, thread CPU time, median), tables() CPU,
+//   * the map sink's CPU per frame (integrate, thread CPU time, median), tables() CPU,
 //     voxels and memory after the walk, and the map message's size (zlib);
 //   * the search positions' error: for the tables matched to a true one, the mean over
 //     their search positions (reachable or not) of |distance to the true top's edge - the
@@ -51,7 +51,7 @@
 #include "findmug/io/semantic_map_codec.hpp"
 #include "findmug/map/semantic_map.hpp"
 #include "findmug/map/table_map.hpp"
-#include "findmug/pipeline/segmenter.hpp"
+#include "findmug/segmenter/segmenter.hpp"
 #include "findmug/settings/config.hpp"
 #include "findmug/synth/synth.hpp"
 #include "findmug_cli.hpp"

@@ -9,7 +9,7 @@
 //   stage_ab LIB_A LIB_B STAGE [--reps N] [--data DIR]
 //
 // LIB_A, LIB_B: two builds' libfindmug_core.so (copy them out of the build
-// trees first: a rebuild overwrites the file). STAGE: normals, overseg
+// trees first: a rebuild overwrites the file). STAGE: normals, oversegmentation
 // (the organized oversegmenter), features (14-D), scene (scene features) or
 // tables (detectTables). Frames: the NYU labelled frames (default
 // FINDMUG_DATA/nyuv2_labeled), inputs made once by this program's own core;
@@ -41,7 +41,7 @@
 #include "findmug/features/scene_features.hpp"
 #include "findmug/frame/dataset.hpp"
 #include "findmug/ground/ground.hpp"
-#include "findmug/supervoxels/oversegmentation.hpp"
+#include "findmug/oversegmentation/oversegmentation.hpp"
 #include "findmug/synth/synth.hpp"
 #include "findmug/tables/tables.hpp"
 #include "test_data.hpp"
@@ -153,7 +153,7 @@ struct Outputs {
 void runStage(const std::string& stage, Build& b, const Input& in, Outputs& out) {
   if (stage == "normals") {
     b.normals(in.cloud, NormalConfig{}, out.normals);
-  } else if (stage == "overseg") {
+  } else if (stage == "oversegmentation") {
     b.oversegmenter->segmentInto(in.cloud, in.normals, out.segmentation);
   } else if (stage == "features") {
     b.features(in.cloud, in.normals, in.segmentation, out.features);
@@ -171,7 +171,9 @@ bool sameOutput(const std::string& stage, const Outputs& a, const Outputs& b) {
            sameBits(a.normals.normals.data(), b.normals.normals.data(),
                     a.normals.normals.size() * sizeof(Eigen::Vector3f));
   }
-  if (stage == "overseg") return a.segmentation.pixel_segment == b.segmentation.pixel_segment;
+  if (stage == "oversegmentation") {
+    return a.segmentation.pixel_segment == b.segmentation.pixel_segment;
+  }
   if (stage == "features") {
     if (a.features.features.size() != b.features.features.size()) return false;
     for (std::size_t s = 0; s < a.features.features.size(); ++s) {
@@ -243,13 +245,13 @@ void addSynthTables(std::vector<Input>& out) {
 int run(int argc, char** argv) {
   if (argc < 4) {
     std::fprintf(stderr,
-                 "usage: stage_ab LIB_A LIB_B normals|overseg|features|scene|tables "
+                 "usage: stage_ab LIB_A LIB_B normals|oversegmentation|features|scene|tables "
                  "[--reps N] [--data DIR]\n");
     return 2;
   }
   const std::string stage = argv[3];
-  if (stage != "normals" && stage != "overseg" && stage != "features" && stage != "scene" &&
-      stage != "tables") {
+  if (stage != "normals" && stage != "oversegmentation" && stage != "features" &&
+      stage != "scene" && stage != "tables") {
     std::fprintf(stderr, "stage_ab: unknown stage '%s'\n", stage.c_str());
     return 2;
   }

@@ -1,13 +1,13 @@
 // stage_times: wall time of each pipeline stage per 640x480 frame, median over
 // a labelled dataset, for each oversegmenter side by side in one run, and for
-// the organized oversegmenter with the region, scene and auto-context stages.
+// the organized oversegmenter with the region, scene and auto-context rounds.
 //
 //   stage_times [--data DIR] [--model MODEL] [--repeat N] [--clock wall|cpu]
 //
 // Without --model the forests are trained in-process on the same frames (the
 // timing of prediction does not depend on what the trees learnt, only on
 // their size); --model replaces the forest of the columns whose settings it
-// matches (features.regions/scene/context, overseg.method). Prints a Markdown table
+// matches (features.regions/scene/context, oversegmentation.method). Prints a Markdown table
 // for BENCHMARKS.md. Single-threaded.
 #include <algorithm>
 #include <cstdio>
@@ -22,7 +22,7 @@
 #include "findmug/common/error.hpp"
 #include "findmug/frame/dataset.hpp"
 #include "findmug/offline/training.hpp"
-#include "findmug/pipeline/segmenter.hpp"
+#include "findmug/segmenter/segmenter.hpp"
 #include "test_data.hpp"
 
 namespace {
@@ -40,7 +40,7 @@ struct Column {
 void record(Column& c, const StageTimings& t, std::size_t segments) {
   const std::pair<const char*, double> stages[] = {
       {"cloud", t.cloud_ms},       {"normals", t.normals_ms},   {"ground", t.ground_ms},
-      {"oversegmentation", t.overseg_ms}, {"features", t.features_ms},
+      {"oversegmentation", t.oversegmentation_ms}, {"features", t.features_ms},
       {"regions", t.regions_ms},   {"forest", t.forest_ms},     {"context", t.context_ms},
       {"mrf", t.mrf_ms},           {"labels", t.labels_ms},     {"tables", t.tables_ms},
       {"objects", t.objects_ms},   {"total", t.total()}};
@@ -74,7 +74,7 @@ int run(int argc, char** argv) {
   base.forest.num_threads = 1;
 
   SegmenterConfig contextual = base;
-  contextual.overseg.kind = OversegmenterKind::Organized;
+  contextual.oversegmentation.kind = OversegmenterKind::Organized;
   contextual.regions.enabled = true;
   contextual.context.enabled = true;
   struct Variant {
@@ -85,7 +85,7 @@ int run(int argc, char** argv) {
   std::vector<Variant> variants;
   for (auto kind : {OversegmenterKind::PclSupervoxels, OversegmenterKind::Organized}) {
     SegmenterConfig config = base;
-    config.overseg.kind = kind;
+    config.oversegmentation.kind = kind;
     variants.push_back(
         {kind == OversegmenterKind::PclSupervoxels ? "PCL supervoxels" : "organized", config, {}});
   }
@@ -112,7 +112,7 @@ int run(int argc, char** argv) {
       }
     }
     SegmenterConfig train_config = v.config;
-    train_config.overseg.kind = OversegmenterKind::Organized;
+    train_config.oversegmentation.kind = OversegmenterKind::Organized;
     train_config.ground.source = GroundSource::FloorLabels;
     ExtractionReport report;
     const auto samples = extractSamples(dataset, Segmenter(train_config, nullptr), report);

@@ -34,7 +34,7 @@
 #include "findmug/frame/dataset.hpp"
 #include "findmug/ground/ground.hpp"
 #include "findmug/objects/table_objects.hpp"
-#include "findmug/pipeline/segmenter.hpp"
+#include "findmug/segmenter/segmenter.hpp"
 #include "findmug/synth/synth.hpp"
 #include "test_data.hpp"
 

@@ -393,16 +393,23 @@ void configSeeds(SeedWriter& w, const fs::path& source_dir) {
   w.write("config_yaml", "defaults", dumpConfig(Config{}), checkYaml);
   w.write("config_yaml", "findmugd", readFile(source_dir / "daemon/findmugd.yaml"), checkYaml);
   const std::string sets =
-      "cloud.max_depth_m=8\nmrf.max_iterations=5\nnormals.window_radius_px=3\noverseg.method=organized\n"
+      "cloud.max_depth_m=8\nmrf.max_iterations=5\nnormals.window_radius_px=3\n"
+      "oversegmentation.method=organized\n"
       "daemon.source=lcm:?url=memq://\ndaemon.queue_capacity=4\ndaemon.log_level=debug\n";
-  w.write("config_set", "overrides", sets, [schemaOf](const std::string& b) {
+  auto checkSets = [schemaOf](const std::string& b) {
     Config c;
-    const SettingsSchema schema = schemaOf(c);
+    SettingsSchema schema = schemaOf(c);
+    schema.onWarning([](const std::string&) {});
     std::istringstream lines(b);
     std::string line;
     while (std::getline(lines, line)) schema.applyOverride(line);
     schema.validate("<flags>");
-  });
+  };
+  w.write("config_set", "overrides", sets, checkSets);
+  // Renamed keys by their old names (renamedSettings): the alias path.
+  w.write("config_set", "old_names",
+          "overseg.method=organized\nforest.num_threads=1\nforest.class_weighting=false\n",
+          checkSets);
   w.write("label_csv", "nyu40_to_findmug8", readFile(source_dir / "models/nyu40_to_findmug8.csv"),
           [](const std::string& b) { (void)parseLabelMapping(b, "seed"); });
 }

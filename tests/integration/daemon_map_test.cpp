@@ -39,7 +39,7 @@
 #include "findmug/io/subscriber.hpp"
 #include "findmug/map/table_map.hpp"
 #include "findmug/offline/training.hpp"
-#include "findmug/pipeline/segmenter.hpp"
+#include "findmug/segmenter/segmenter.hpp"
 #include "findmug/synth/synth.hpp"
 #include "test_data.hpp"
 
@@ -320,7 +320,7 @@ struct MapRun {
   PipelineCounters counters;
   std::vector<MappedTable> mapped;  // the map at the end, tentative tables included
   std::vector<io::SemanticMapMessage> semantic_maps;  // FINDMUG_SEMANTIC_MAP
-  std::optional<SemanticMapStage::Counters> semantic_map_counters;
+  std::optional<SemanticMapSink::Counters> semantic_map_counters;
   std::vector<FusedTable> semantic_map_tables;
 };
 
@@ -523,7 +523,7 @@ TEST(DaemonMap, PosesPutTablesInTheMapFrameAndTheMapHoldsEachTrueTableOnce) {
     // off by 0.7, 1.6 and 7.8 cm, the height by at most 3 mm. With the
     // ground-truth labels every single-frame hull lies within 2.3 cm of the
     // true outline (depth noise, the 5 cm top band); the forest's labels
-    // are per supervoxel, and a supervoxel straddling the table edge drags
+    // are per patch, and a patch straddling the table edge drags
     // up to 16 cm of neighbouring surface into one frame's cluster (frame
     // 30 of table 1), which the hull of the recent hulls keeps: that is the
     // 7.8 cm. A frame placed with the pose one period (0.1 s) off would
@@ -612,7 +612,7 @@ TEST(DaemonSemanticMap, TablesFromTheFusedMapAreTheGeneratorsTables) {
 
   // Every labelled frame with a pose went into the map (sequential: nothing skipped).
   ASSERT_TRUE(run.semantic_map_counters.has_value());
-  const SemanticMapStage::Counters& c = *run.semantic_map_counters;
+  const SemanticMapSink::Counters& c = *run.semantic_map_counters;
   std::size_t with_pose = 0;
   for (const Submitted& s : seq.submitted) with_pose += s.index >= 0 && !inPoseGap(s.index);
   EXPECT_EQ(c.integrated, with_pose);

@@ -25,7 +25,7 @@
 #include "findmug/io/frame_source.hpp"
 #include "findmug/io/lcm_codec.hpp"
 #include "findmug/io/lcm_codec_objects.hpp"
-#include "findmug/pipeline/segmenter.hpp"
+#include "findmug/segmenter/segmenter.hpp"
 #include "test_data.hpp"
 
 namespace findmug::daemon {
@@ -177,7 +177,8 @@ void runAndCompare(const std::string& spec, std::size_t expected_frames,
   EXPECT_EQ(last.num_queues, 3);
   const auto& names = last.stage_names;
   for (const char* stage :
-       {"prepare", "segment", "publish", "supervoxels", "forest", "tables", "objects", "total"}) {
+       {"prepare", "segment", "publish", "oversegmentation", "forest", "tables", "objects",
+        "total"}) {
     EXPECT_NE(std::find(names.begin(), names.end(), stage), names.end()) << stage;
   }
   const auto total = std::find(names.begin(), names.end(), "total") - names.begin();

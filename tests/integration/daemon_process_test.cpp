@@ -106,7 +106,7 @@ TEST(Findmugd, NotifyProtocolWatchdogAndCleanShutdownOnSigterm) {
   const std::string out = tmp.str("out.lcmlog");
   {
     std::ofstream yaml(tmp.str("findmugd.yaml"));
-    yaml << "overseg:\n  method: organized\n"
+    yaml << "oversegmentation:\n  method: organized\n"
          << "daemon:\n"
          << "  source: dataset:" << nyu.string() << "?rate_hz=4&loop=1\n"
          << "  model_path: " << model << "\n"
@@ -240,7 +240,7 @@ TEST(Findmugd, SigstopStopsTheKeepAlivesAndSigtermMidFrameExitsCleanly) {
   const std::string model = writeModel(nyu, tmp);
   {
     std::ofstream yaml(tmp.str("findmugd.yaml"));
-    yaml << "overseg:\n  method: organized\n"
+    yaml << "oversegmentation:\n  method: organized\n"
          << "daemon:\n"
          << "  source: dataset:" << nyu.string() << "?rate_hz=10&loop=1\n"
          << "  model_path: " << model << "\n"

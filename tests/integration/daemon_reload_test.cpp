@@ -29,7 +29,7 @@
 #include "findmug/io/bus.hpp"
 #include "findmug/io/channels.hpp"
 #include "findmug/io/lcm_codec.hpp"
-#include "findmug/pipeline/segmenter.hpp"
+#include "findmug/segmenter/segmenter.hpp"
 #include "test_data.hpp"
 
 extern char** environ;
@@ -401,7 +401,7 @@ TEST(ModelReload, FindmugdReloadsOnSighupAndKeepsPublishing) {
   const std::string out = tmp.str("out.lcmlog");
   {
     std::ofstream yaml(tmp.str("findmugd.yaml"));
-    yaml << "overseg:\n  method: organized\n"
+    yaml << "oversegmentation:\n  method: organized\n"
          << "daemon:\n"
          << "  source: dataset:" << nyu.string() << "?rate_hz=4&loop=1\n"
          << "  model_path: " << model_path << "\n"

@@ -13,7 +13,7 @@
 
 #include "findmug/common/error.hpp"
 #include "findmug/daemon/result_sinks.hpp"
-#include "findmug/daemon/semantic_map_stage.hpp"
+#include "findmug/daemon/semantic_map_sink.hpp"
 #include "findmug/daemon/status_builder.hpp"
 #include "findmug/io/bus.hpp"
 #include "findmug/io/lcm_codec.hpp"
@@ -469,7 +469,7 @@ TEST(StatusBuilder, TheSourceStateAndTheNewerErrorWin) {
   EXPECT_EQ(s.last_error_utime, 100);
 }
 
-// ---- the semantic map stage ----------------------------------------------------------------
+// ---- the semantic map sink ----------------------------------------------------------------
 
 // A frame of a 40 x 40 camera looking straight down from 1.5 m at a floor with a table top:
 // labelled, with a ground plane whose camera_to_ground is that mount.
@@ -502,8 +502,8 @@ LabelledFrame topDownFrame(std::int64_t seq, Label top_label = Label::Table) {
   return l;
 }
 
-SemanticMapStage::Options stageOptions(bool threaded) {
-  SemanticMapStage::Options o;
+SemanticMapSink::Options sinkOptions(bool threaded) {
+  SemanticMapSink::Options o;
   o.threaded = threaded;
   o.queue_capacity = 2;
   o.publish_period_s = 0.0;
@@ -514,38 +514,38 @@ SemanticMapStage::Options stageOptions(bool threaded) {
   return o;
 }
 
-TEST(SemanticMapStage, AFullQueueDropsTheOldestFrameAndNeverHoldsThePublishThread) {
+TEST(SemanticMapSink, AFullQueueDropsTheOldestFrameAndNeverHoldsThePublishThread) {
   auto bus = std::make_shared<io::MemoryBus>();
   std::promise<void> entered, release;
   std::shared_future<void> released = release.get_future().share();
   std::atomic<int> fused{0};
-  SemanticMapStage::Options options = stageOptions(true);
+  SemanticMapSink::Options options = sinkOptions(true);
   options.before_fuse = [&] {
     if (fused.fetch_add(1) == 0) {
       entered.set_value();
       released.wait();  // the map thread is busy with the first frame
     }
   };
-  SemanticMapStage stage(options, bus, nullptr);
-  stage.start();
+  SemanticMapSink sink(options, bus, nullptr);
+  sink.start();
   std::vector<LabelledFrame> frames;
   for (int i = 1; i <= 5; ++i) frames.push_back(topDownFrame(i));
   auto consume = [&](const LabelledFrame& l) {
     FrameResult r{l, 0, poseAt(l.segmented.prepared.frame.utime), {}, std::nullopt, std::nullopt};
-    stage.consume(r);
+    sink.consume(r);
   };
   consume(frames[0]);
   entered.get_future().wait();
   // While the map is busy, four more frames arrive: two wait, two are dropped (the oldest).
   for (int i = 1; i < 5; ++i) consume(frames[static_cast<std::size_t>(i)]);
-  SemanticMapStage::Counters c = stage.counters();
+  SemanticMapSink::Counters c = sink.counters();
   EXPECT_EQ(c.queued, 5u);
   EXPECT_EQ(c.skipped, 2u);
   EXPECT_EQ(c.queue_depth, 2u);
   EXPECT_EQ(c.integrated, 0u);
   release.set_value();
-  stage.stop(true);
-  c = stage.counters();
+  sink.stop(true);
+  c = sink.counters();
   EXPECT_EQ(c.integrated, 3u);
   EXPECT_EQ(c.failed, 0u);
   EXPECT_GE(c.publishes, 1u);
@@ -566,30 +566,30 @@ TEST(SemanticMapStage, AFullQueueDropsTheOldestFrameAndNeverHoldsThePublishThrea
   EXPECT_EQ(tables.back().map_info[0].sightings, 3);  // the three frames fused
   // ... all from one pose: one viewpoint, as the map counted it.
   EXPECT_EQ(tables.back().map_info[0].viewpoints, 1);
-  ASSERT_EQ(stage.tables().size(), 1u);
-  EXPECT_EQ(stage.tables()[0].viewpoints, 1);
+  ASSERT_EQ(sink.tables().size(), 1u);
+  EXPECT_EQ(sink.tables()[0].viewpoints, 1);
   // Map frame: the robot at (1, 2), the top 0.5 m square under the camera.
   ASSERT_EQ(tables.back().map_tables.size(), 1u);
   EXPECT_NEAR(tables.back().map_tables[0].center.x(), 1.0, 0.05);
   EXPECT_NEAR(tables.back().map_tables[0].center.y(), 2.0, 0.05);
 }
 
-TEST(SemanticMapStage, FusedLabelsReplaceAWrongFramesLabels) {
+TEST(SemanticMapSink, FusedLabelsReplaceAWrongFramesLabels) {
   auto bus = std::make_shared<io::MemoryBus>();
-  SemanticMapStage::Options options = stageOptions(false);
+  SemanticMapSink::Options options = sinkOptions(false);
   options.fused_labels = true;
-  SemanticMapStage stage(options, bus, nullptr);
-  stage.start();
+  SemanticMapSink sink(options, bus, nullptr);
+  sink.start();
   for (int i = 1; i <= 3; ++i) {
     const LabelledFrame l = topDownFrame(i);
     FrameResult r{l, 0, poseAt(l.segmented.prepared.frame.utime), {}, std::nullopt, std::nullopt};
-    stage.consume(r);
+    sink.consume(r);
   }
   // A frame calling the top a chair is published with the map's labels: table.
   const LabelledFrame wrong = topDownFrame(4, Label::Chair);
   FrameResult r{wrong, 0, poseAt(wrong.segmented.prepared.frame.utime), {}, std::nullopt,
                 std::nullopt};
-  stage.consume(r);
+  sink.consume(r);
   ASSERT_TRUE(r.published_labels.has_value());
   int chair = 0, table = 0;
   for (std::size_t i = 0; i < wrong.labels.labels.size(); ++i) {
@@ -600,13 +600,13 @@ TEST(SemanticMapStage, FusedLabelsReplaceAWrongFramesLabels) {
   EXPECT_EQ(chair, 0);
   EXPECT_EQ(table, 400);
 
-  EXPECT_EQ(stage.counters().fused_frames, 4u);
+  EXPECT_EQ(sink.counters().fused_frames, 4u);
   // A frame without a pose is neither fused nor relabelled.
   FrameResult no_pose{wrong, 0, std::nullopt, {}, std::nullopt, std::nullopt};
-  stage.consume(no_pose);
+  sink.consume(no_pose);
   EXPECT_FALSE(no_pose.published_labels.has_value());
-  EXPECT_EQ(stage.counters().integrated, 4u);
-  stage.stop(true);
+  EXPECT_EQ(sink.counters().integrated, 4u);
+  sink.stop(true);
 }
 
 }  // namespace

@@ -9,13 +9,13 @@
 #include <lcm/lcm-cpp.hpp>
 #include <stdexcept>
 
-#include "findmug/pipeline/segmenter.hpp"
+#include "findmug/segmenter/segmenter.hpp"
 
 namespace findmug::daemon::test {
 
 SegmenterConfig fastSegmenterConfig() {
   SegmenterConfig config;
-  config.overseg.kind = OversegmenterKind::Organized;
+  config.oversegmentation.kind = OversegmenterKind::Organized;
   return config;
 }
 

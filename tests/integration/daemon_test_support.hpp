@@ -32,7 +32,7 @@ SegmenterConfig fastSegmenterConfig(int step);
 // segmenter finds (only those have features to train on).
 std::vector<LabeledFrame> framesWithGround(const std::string& dataset_dir, std::size_t count);
 
-// Trains a small forest on the frames' supervoxel features and ground-truth
+// Trains a small forest on the frames' patch features and ground-truth
 // labels, saves it to `path` and returns it.
 std::shared_ptr<const RandomForest> trainTinyModel(const SegmenterConfig& config,
                                                    const std::vector<LabeledFrame>& frames,

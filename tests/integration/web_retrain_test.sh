@@ -58,7 +58,7 @@ for sub in rgb depth; do cp "$NYU/$sub/$USER_FRAME.png" "$WORK/user/$sub/"; done
 # One config for findmugd, findmug-web and the tools it runs: the shipped model's kind
 # (NYU-13 internal classes, object features) with the fast oversegmenter. The page writes
 # label8/ only: the trainer must infer the user frame's NYU-13 classes from the small folder's.
-printf 'overseg:\n  method: organized\nlearner:\n  classes: nyu13\nfeatures:\n  objects: true\n  objects_columns: context\n' \
+printf 'oversegmentation:\n  method: organized\nlearner:\n  classes: nyu13\nfeatures:\n  objects: true\n  objects_columns: context\n' \
   > "$WORK/findmug.yaml"
 TINY=(--set forest.num_trees=3 --set forest.max_depth=6)
 "$TRAIN" --data "$WORK/small" --out "$WORK/installed.fmf" --config "$WORK/findmug.yaml" \

@@ -49,7 +49,7 @@ set(findmug_layer_uses_tools core offline synth lcm io cli daemon)
 # What an #include of each layer looks like (regular expressions on the included name).
 # The core's rooms (scripts/dev/rooms.py).
 set(findmug_layer_headers_core
-    "^findmug/(common|frame|cloud|ground|supervoxels|features|learner|mrf|labels|pipeline|tables|objects|map|settings)/"
+    "^findmug/(common|frame|cloud|ground|oversegmentation|features|learner|mrf|labels|segmenter|tables|objects|map|settings)/"
     "^findmug/version\\.hpp$")
 set(findmug_layer_headers_offline "^findmug/offline/")
 set(findmug_layer_headers_synth "^findmug/synth/")

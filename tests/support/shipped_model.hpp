@@ -23,7 +23,7 @@ inline Config shippedModelConfig() {
   Config config;
   for (const char* kv : {"features.regions=true", "features.scene=true", "learner.classes=nyu13",
                          "features.objects=true", "features.objects_columns=relations",
-                         "forest.num_threads=1"})
+                         "learner.num_threads=1"})
     applyOverride(config, kv);
   return config;
 }

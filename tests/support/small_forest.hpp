@@ -11,7 +11,7 @@
 
 #include "findmug/frame/frame.hpp"
 #include "findmug/learner/forest.hpp"
-#include "findmug/pipeline/segmenter.hpp"
+#include "findmug/segmenter/segmenter.hpp"
 
 namespace findmug::test {
 

@@ -61,7 +61,7 @@ struct StatusInfo {
   std::int64_t frames_dropped = 0;
   std::int64_t frames_rejected = 0;
   int source_state = -1;  // status_t::SOURCE_*
-  // The semantic map stage (daemon.semantic_map; 0 when off): frames fused, frames it
+  // The semantic map sink (daemon.semantic_map; 0 when off): frames fused, frames it
   // skipped (fell behind), voxels.
   std::int64_t semantic_map_frames = 0, semantic_map_skipped = 0, semantic_map_voxels = 0;
   // The object work (status_t.object_*): frames it took and skipped, candidates matched and

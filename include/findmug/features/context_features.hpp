@@ -2,7 +2,7 @@
 //
 // A table top is a horizontal patch with chairs below its edge and objects
 // above it; a chair seat has a chair back above it. The first forest sees
-// one patch at a time. The auto-context stage (Tu & Bai 2010; the step Wolf
+// one patch at a time. The auto-context round (Tu & Bai 2010; the step Wolf
 // et al. took next, 2015) gives a second forest the first forest's class
 // distributions p(y|x) aggregated over 3-D neighbourhoods of each patch, so
 // it can learn such arrangements. Per patch, four size-weighted means of
@@ -30,11 +30,11 @@ struct ContextConfig {
   float near_m = 0.3f;           // features.context_near_m
   float far_m = 1.0f;            // features.context_far_m
   float column_radius_m = 0.5f;  // features.context_column_radius_m
-  // Training only (not part of the model): the first-stage distributions the
-  // second stage learns from are predicted for each training frame by a
-  // first-stage forest that did not see it, trained on the other frames in
+  // Training only (not part of the model): the first-round distributions the
+  // second round learns from are predicted for each training frame by a
+  // first-round forest that did not see it, trained on the other frames in
   // this many groups (cross-fitting). 0 = in-sample predictions of the final
-  // first stage (overfit: the second stage then trusts them too much).
+  // first round (overfit: the second round then trusts them too much).
   int cross_fit_folds = 5;  // features.context_cross_fit_folds
 };
 

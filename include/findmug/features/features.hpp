@@ -22,7 +22,7 @@
 #include <vector>
 
 #include "findmug/cloud/cloud.hpp"
-#include "findmug/supervoxels/oversegmentation.hpp"
+#include "findmug/oversegmentation/oversegmentation.hpp"
 
 namespace findmug {
 
@@ -35,7 +35,7 @@ inline constexpr std::array<std::string_view, kFeatureDim> kFeatureNames = {
     "lab_l_std", "lab_a_std", "lab_b_std"};
 
 // The sums a segment's features were computed from, kept so that a later
-// stage needing more of the same points (region features merge whole
+// step needing more of the same points (region features merge whole
 // segments) does not make another pass over the pixels.
 struct SegmentMoments {
   double count = 0;                                     // valid points

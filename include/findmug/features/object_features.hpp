@@ -66,7 +66,7 @@
 
 #include "findmug/features/features.hpp"
 #include "findmug/features/region_features.hpp"
-#include "findmug/supervoxels/oversegmentation.hpp"
+#include "findmug/oversegmentation/oversegmentation.hpp"
 
 namespace findmug {
 

@@ -24,7 +24,7 @@
 
 #include "findmug/cloud/cloud.hpp"
 #include "findmug/features/features.hpp"
-#include "findmug/supervoxels/oversegmentation.hpp"
+#include "findmug/oversegmentation/oversegmentation.hpp"
 
 namespace findmug {
 
@@ -61,7 +61,7 @@ void computeRegionFeaturesInto(const OrganizedCloud& cloud_ground,
 // From the segments' moments (computeFeatures of the same segmentation), with
 // no pass over the pixels: the same regions and, up to rounding in the last
 // bits, the same values as from the points (the segment sums are pooled
-// instead of summed point by point). The pipeline uses this one: the pixel
+// instead of summed point by point). The Segmenter uses this one: the pixel
 // pass cost as much as the 14-D features themselves. Throws findmug::Error
 // when `features` does not match the segmentation.
 RegionFeatures computeRegionFeatures(const SegmentFeatures& features,

@@ -36,7 +36,7 @@
 
 #include "findmug/cloud/cloud.hpp"
 #include "findmug/features/features.hpp"
-#include "findmug/supervoxels/oversegmentation.hpp"
+#include "findmug/oversegmentation/oversegmentation.hpp"
 
 namespace findmug {
 

@@ -5,7 +5,7 @@
 #include <vector>
 
 #include "findmug/labels/labels.hpp"
-#include "findmug/supervoxels/oversegmentation.hpp"
+#include "findmug/oversegmentation/oversegmentation.hpp"
 
 namespace findmug {
 

@@ -9,8 +9,8 @@
 // first, optionally followed by extra columns (region features, context
 // features; see context_features.hpp). The column names are part of the
 // model, so a model is never fed columns it was not trained on. A model may
-// carry a second, auto-context stage: a forest whose rows are the first
-// stage's rows followed by the first stage's class distributions aggregated
+// carry a second, auto-context round: a forest whose rows are the first
+// round's rows followed by the first round's class distributions aggregated
 // over 3-D neighbourhoods.
 //
 // Learners (learner.kind): the model is this forest (the paper's, the
@@ -104,7 +104,7 @@ struct TrainingSet {
   std::vector<std::uint8_t> split_labels;
   int split_classes = 0;
   // Internal classes (learner.classes): split_labels then hold the internal
-  // class of each sample, and class weighting (forest.class_weighting) is by
+  // class of each sample, and class weighting (learner.class_weighting) is by
   // internal class frequency rather than label frequency. The forest stores
   // its leaves merged into the 8 labels (for an averaging forest the same
   // answer as merging the averaged fine posterior); the booster learns the
@@ -169,10 +169,10 @@ class RandomForest {
   const std::vector<std::string>& featureNames() const { return feature_names_; }
   int dim() const { return static_cast<int>(feature_names_.size()); }
 
-  // The auto-context stage (null when the model has none). Its rows are this
+  // The auto-context round (null when the model has none). Its rows are this
   // forest's rows followed by context columns. Setting it changes id().
-  void setContextStage(RandomForest stage);
-  const RandomForest* contextStage() const { return context_stage_.get(); }
+  void setContextRound(RandomForest round);
+  const RandomForest* contextRound() const { return context_round_.get(); }
   // The learned pairwise term of mrf.pairwise = context (context_pairwise.hpp):
   // learned from the same training frames, so it travels with the model
   // (format 5). Null when the model has none. Checked
@@ -186,16 +186,16 @@ class RandomForest {
 
   // Versioned binary model: magic, format version, label names, learner and
   // internal classes (format 4), feature layout, parameters, trees or booster,
-  // optional context stage, optional learned pairwise term (format 5),
+  // optional context round, optional learned pairwise term (format 5),
   // checksum. Format 5 is written; formats 4 (no pairwise term), 3 (also: a
-  // forest on the 8 labels) and 2 (also: 14 base features, no context stage)
+  // forest on the 8 labels) and 2 (also: 14 base features, no context round)
   // are still read. `load` refuses a truncated, corrupt or wrong-version file with
   // a findmug::Error naming the file and the problem.
   void save(const std::string& path) const;
   static RandomForest load(const std::string& path);
 
   // Settings of the feature extraction the forest was trained with (cloud.*,
-  // normals.*, overseg.* as "key" -> "value"), stored in the model file so
+  // normals.*, oversegmentation.* as "key" -> "value"), stored in the model file so
   // that a model is never run on features computed differently. Empty for
   // forests trained in-process without them. Setting them changes id().
   using Settings = std::vector<std::pair<std::string, std::string>>;
@@ -220,7 +220,7 @@ class RandomForest {
   ForestParams params_;
   std::vector<Tree> trees_;
   std::vector<std::string> feature_names_;
-  std::shared_ptr<const RandomForest> context_stage_;
+  std::shared_ptr<const RandomForest> context_round_;
   std::optional<PairwiseContext> pairwise_context_;
   std::uint32_t format_version_ = 0;
   Settings extraction_settings_;

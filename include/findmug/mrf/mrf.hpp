@@ -1,4 +1,4 @@
-// findmug/mrf/mrf.hpp — pairwise MRF over the supervoxel adjacency graph.
+// findmug/mrf/mrf.hpp — pairwise MRF over the patch adjacency graph.
 //
 // Energy E(y) = Σ_i λ (1 - p_i(y_i)) + Σ_(i,j) [y_i != y_j] exp(-‖c_i - c_j‖ / σ)
 // (the paper's unary and Potts pairwise with centroid distance), minimised

@@ -1,7 +1,7 @@
 // findmug/offline/pseudo_labels.hpp — semi-supervised training rounds on unlabelled frames.
 //
 // Offline only (findmug-train, findmug-eval --unlabelled DIR). A round: label
-// every unlabelled frame with the whole pipeline of the current model
+// every unlabelled frame with the whole Segmenter of the current model
 // (forest, table weight, MRF, table region vote: labelSample), keep the
 // patches whose confidence exceeds training.pseudo_min_confidence as training
 // patches of weight training.pseudo_weight, at most training.pseudo_class_cap
@@ -23,7 +23,7 @@
 
 namespace findmug {
 
-// The pipeline's answer for one extracted frame: the model's p(y|x) per
+// The Segmenter's answer for one extracted frame: the model's p(y|x) per
 // segment, and the final labels with their confidence (the MRF's belief, or
 // the forest's probability when config.use_mrf is off; after the table region
 // vote when features.regions and tables.region_vote are on, which needs

@@ -11,7 +11,7 @@
 // Their geometry (top height, centroid, principal axis) is computed exactly
 // as for detected tables, so that a perfect labelling has zero error.
 //
-// Matching: a detected table (a TableCluster from the pipeline, its image
+// Matching: a detected table (a TableCluster from the Segmenter, its image
 // mask = TableCluster::pixels) matches a ground-truth instance when their
 // masks overlap with IoU >= `min_iou`; one-to-one, greedily by decreasing
 // IoU. Precision = matched / detected, recall = matched / ground truth,
@@ -189,7 +189,7 @@ std::vector<PositionError> nearestPositionErrors(const std::vector<SearchPositio
 
 // Sums over frames: predicted positions, their errors, and how many of them
 // are reachable in the true scene (e.g. synth::robotFits), of all and of
-// those the pipeline flagged reachable (SearchPosition::reachable).
+// those the Segmenter flagged reachable (SearchPosition::reachable).
 class SearchPositionMetrics {
  public:
   // One entry per predicted position in each vector; throws findmug::Error

@@ -14,7 +14,7 @@
 #include "findmug/learner/forest.hpp"
 #include "findmug/offline/depth_degradation.hpp"
 #include "findmug/offline/nyu_mat.hpp"
-#include "findmug/pipeline/segmenter.hpp"
+#include "findmug/segmenter/segmenter.hpp"
 
 namespace findmug {
 
@@ -72,7 +72,7 @@ struct ExtractionReport {
   std::vector<std::pair<std::string, std::string>> ground_methods;
 };
 
-// Runs the segmenter's geometric stages on every frame. Frames for which no
+// Runs the Segmenter's geometric steps on every frame. Frames for which no
 // ground plane is found are dropped (the paper drops frames with too few floor
 // points) and listed in the report. `progress(done, total)` after each frame.
 std::vector<FrameSample> extractSamples(const LabeledFrames& frames, const Segmenter& segmenter,
@@ -129,14 +129,14 @@ std::string fineLabelsFolder(SplitLabels split);
 // (label13/, label40/) or else training.split_labels ("" when neither needs one).
 std::string fineLabelsFolder(const SegmenterConfig& config, const TrainingOptions& training);
 
-// Trains the model `config` asks for on the given frames: the first-stage
+// Trains the model `config` asks for on the given frames: the first-round
 // forest (config.forest) or booster (learner.kind = xgboost, config.xgboost),
 // on the 8 labels or on internal classes (learner.classes: (label, NYU class)
 // pairs present in the frames, recorded in the model), and with features.context an auto-context
-// stage trained on first-stage distributions that are cross-fitted over
+// round trained on first-round distributions that are cross-fitted over
 // features.context_cross_fit_folds contiguous groups of the frames (each
 // group's distributions come from a forest trained on the other groups), so
-// the context stage learns from first-stage answers as good as those it will
+// the context round learns from first-round answers as good as those it will
 // get on new frames. With mrf.pairwise = context the model also carries the
 // pairwise term learned from the frames' labelled neighbours
 // (learnPairwiseContext). Extraction settings are not set (the caller does).

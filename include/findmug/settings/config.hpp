@@ -1,7 +1,7 @@
 // findmug/settings/config.hpp — every tunable parameter, one YAML file plus overrides.
 //
 // Keys are `section.name` (e.g. `forest.num_trees`, `mrf.lambda`,
-// `overseg.seed_resolution_m`, `tables.safety_distance_m`). Unknown keys and
+// `oversegmentation.seed_resolution_m`, `tables.safety_distance_m`). Unknown keys and
 // bad values are errors that name the key. The segmenter's sections are one
 // SettingsTable (segmenterSettings); a program binds it, and the other tables
 // it reads, into a SettingsSchema (settings.hpp). parseConfig/loadConfig read
@@ -26,7 +26,7 @@
 #include "findmug/objects/table_objects.hpp"
 #include "findmug/settings/offline_settings.hpp"
 #include "findmug/settings/settings.hpp"
-#include "findmug/supervoxels/oversegmentation.hpp"
+#include "findmug/oversegmentation/oversegmentation.hpp"
 #include "findmug/tables/tables.hpp"
 
 namespace findmug {
@@ -43,7 +43,7 @@ enum class ClassScheme {
 };
 const char* classSchemeName(ClassScheme scheme);  // "labels", "nyu13", "nyu40"
 
-// What forest.class_weighting balances when the model has internal classes
+// What learner.class_weighting balances when the model has internal classes
 // (learner.class_weight; training only, not recorded in the model).
 enum class ClassWeight {
   Labels,   // every label carries the same total weight, its internal classes
@@ -63,7 +63,7 @@ struct SegmenterConfig {
   DepthHoleFillConfig depth_holes;  // cloud.fill_depth_*
   NormalConfig normals;
   GroundConfig ground;
-  OversegmentationConfig overseg;
+  OversegmentationConfig oversegmentation;
   RegionConfig regions;    // features.regions, features.region_*
   SceneConfig scene;       // features.scene, features.scene_*
   ObjectConfig objects;    // features.objects, features.objects_*
@@ -86,7 +86,7 @@ struct Config {
   OfflineConfig offline;  // training.*, degrade.*, table_metrics.*
 };
 
-// The segmenter's sections (cloud, normals, ground, overseg, features, forest,
+// The segmenter's sections (cloud, normals, ground, oversegmentation, features, forest,
 // learner, xgboost, mrf, labels, tables): one table.
 const SettingsTable<SegmenterConfig>& segmenterSettings();
 // The rules across its keys (seed above voxel resolution, ...); throws Error naming them.
@@ -106,7 +106,7 @@ void applyOverride(Config& config, const std::string& key_equals_value);
 // The segmenter's effective settings as YAML (reports; SettingsSchema::dump for a whole program).
 std::string dumpConfig(const Config& config);
 
-// The settings that shape the features (cloud.*, normals.*, overseg.*,
+// The settings that shape the features (cloud.*, normals.*, oversegmentation.*,
 // features.* except the training-only features.context_cross_fit_folds), as
 // "key" -> "value" in a stable order. The trainer stores them in the model;
 // a model is only run with the same values (see checkModelMatchesConfig).

@@ -40,7 +40,7 @@ struct TrainingOptions {
   SplitLabels split_labels = SplitLabels::Labels;            // training.split_labels
   // Augmentation: each training frame also contributes the patches of this
   // many other oversegmentations (training.extra_oversegmentations), the k-th
-  // with overseg.seed_resolution_m scaled by extra_seed_scale^j, j = 1, -1,
+  // with oversegmentation.seed_resolution_m scaled by extra_seed_scale^j, j = 1, -1,
   // 2, -2, ... (training.extra_seed_scale): more and more varied patches per
   // frame. Evaluation and the daemon still use the configured one only.
   int extra_oversegmentations = 0;
@@ -52,7 +52,7 @@ struct TrainingOptions {
   std::uint64_t degraded_seed = 7;
   // Semi-supervised rounds (findmug/offline/pseudo_labels.hpp; findmug-train and
   // findmug-eval --unlabelled DIR): train, label the unlabelled frames with
-  // the whole pipeline (forest + MRF + table region vote), keep the patches
+  // the whole Segmenter (forest + MRF + table region vote), keep the patches
   // whose confidence exceeds pseudo_min_confidence as training patches of
   // weight pseudo_weight, at most pseudo_class_cap times the labelled patches
   // of the same label per label (the most confident first), retrain; this

@@ -17,6 +17,13 @@
 //    parses it straight into the typed field: once, no text kept for later. A
 //    section no table claims, or a key its table does not have, is an Error
 //    naming it (and the file and line).
+//
+// A renamed key: its old name stays readable for one release through one alias
+// table (renamedSettings, settings.cpp). The schema reads the old name as the
+// new one with a warning naming the new key; a file (or the --set flags) that
+// gives both names of one setting is refused naming both. Model files keep the
+// names they were trained with, so their recorded keys go through
+// currentSettingKey before they are compared.
 #pragma once
 
 #include <algorithm>
@@ -43,6 +50,16 @@ std::string formatSettingNumber(double value);
 std::string settingValueText(double value);
 std::string settingValueText(float value);
 bool parseSettingBool(const std::string& key, const std::string& value);
+
+// One renamed setting, or a whole renamed section when both names end in ".*".
+struct RenamedSetting {
+  std::string old_key;  // "overseg.*", "forest.num_threads"
+  std::string new_key;  // "oversegmentation.*", "learner.num_threads"
+};
+// Every renamed key of every findmug program, old -> new.
+const std::vector<RenamedSetting>& renamedSettings();
+// `key` under its current name: the new name of a renamed key, else `key` itself.
+std::string currentSettingKey(const std::string& key);
 
 template <typename T>
 struct Setting {
@@ -270,8 +287,12 @@ class SettingsSchema {
   }
 
   bool has(const std::string& section) const;
-  // "section.name" = value into its field. Throws Error naming the key.
-  void set(const std::string& key, const std::string& value) const;
+  // "section.name" = value into its field. Throws Error naming the key. A
+  // renamed key's old name sets the new one, with a warning; a file (or the
+  // flags, or the calls of set) giving both names of one setting is refused.
+  void set(const std::string& key, const std::string& value) const { setFrom(key, value, "", ""); }
+  // Where warnings go (an old key name read); default: a line on stderr.
+  void onWarning(std::function<void(const std::string&)> sink) { warn_ = std::move(sink); }
   // A YAML file's text: a map of sections, each a map of single values, every
   // one handed to its table. `origin` (a path) and the line name an error.
   void readYaml(const std::string& text, const std::string& origin) const;
@@ -293,9 +314,20 @@ class SettingsSchema {
     bool accepted_only = false;
   };
   void add(Binding binding);
+  // set() for a key read from `origin` (a path, "<flags>"); `where` starts its
+  // messages ("a.yaml: line 3: ").
+  void setFrom(const std::string& key, const std::string& value, const std::string& origin,
+               const std::string& where) const;
   const Binding* find(const std::string& section) const;
 
   std::vector<Binding> bindings_;
+  std::function<void(const std::string&)> warn_;
+  // Of every setting read, by its current key: the name it was given as, the
+  // origin and the place, to refuse one origin naming a setting by both names.
+  struct Given {
+    std::string key, origin, where;
+  };
+  mutable std::map<std::string, Given> given_;
 };
 
 }  // namespace findmug

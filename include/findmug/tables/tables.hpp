@@ -4,7 +4,7 @@
 // at z = 0, x forward from below the camera): the robot base frame when the
 // camera mount is known.
 //
-// Pipeline of findTables / detectTables, per labelled frame:
+// Steps of findTables / detectTables, per labelled frame:
 //   1. table points: label Table, finite coordinates, height within
 //      [min_table_height_m, max_table_height_m];
 //   2. Euclidean clustering with `cluster_tolerance_m` (exact: two points are

@@ -14,7 +14,7 @@
 #include "findmug/cloud/cloud.hpp"
 #include "findmug/common/error.hpp"
 #include "findmug/frame/dataset.hpp"
-#include "findmug/supervoxels/oversegmentation.hpp"
+#include "findmug/oversegmentation/oversegmentation.hpp"
 #include "test_data.hpp"
 
 namespace findmug {
@@ -309,7 +309,7 @@ void expectSameFeaturesBothPaths(const OrganizedCloud& cloud, const NormalImage&
   }
 }
 
-// Real frames: NYU clouds oversegmented as the pipeline does (camera frame:
+// Real frames: NYU clouds oversegmented as the Segmenter does (camera frame:
 // the pass does not care which frame it is).
 TEST(FeatureSimd, NyuFramesMatchThePortableCodeBitForBit) {
   FINDMUG_REQUIRE_DATA(root, "nyuv2_labeled");

@@ -19,7 +19,7 @@
 #include "findmug/features/region_features.hpp"
 #include "findmug/frame/dataset.hpp"
 #include "findmug/labels/labels.hpp"
-#include "findmug/pipeline/segmenter.hpp"
+#include "findmug/segmenter/segmenter.hpp"
 #include "findmug/settings/config.hpp"
 #include "test_data.hpp"
 
@@ -28,7 +28,7 @@ namespace {
 
 // A scene made of flat rectangular patches, each sampled every 2 cm; each
 // patch's points are a run of pixels in a one-row cloud, so the features
-// and moments are those the pipeline computes from points.
+// and moments are those the Segmenter computes from points.
 class Builder {
  public:
   // The rectangle origin + [0, 1] side_a + [0, 1] side_b, with `normal`.

@@ -125,7 +125,7 @@ TEST(RegionFeatures, RefusesInconsistentInput) {
   EXPECT_THROW(computeRegionFeatures(scene.cloud, scene.normals, scene.seg, RegionConfig{}), Error);
 }
 
-// The pipeline computes region features from the 14-D features' moments
+// The Segmenter computes region features from the 14-D features' moments
 // (no second pass over the pixels). Both ways must give the same regions and
 // the same values up to rounding.
 void expectSameRegions(const RegionFeatures& from_pixels, const RegionFeatures& from_moments,

@@ -15,7 +15,7 @@
 #include "findmug/common/error.hpp"
 #include "findmug/frame/dataset.hpp"
 #include "findmug/frame/image_io.hpp"
-#include "findmug/pipeline/segmenter.hpp"
+#include "findmug/segmenter/segmenter.hpp"
 #include "ground/ground_internal.hpp"
 #include "test_data.hpp"
 

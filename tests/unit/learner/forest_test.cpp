@@ -499,7 +499,8 @@ TEST(ForestFile, FileIsSerializeEndingInItsChecksumAndTheIdComesFromIt) {
 TEST(ForestFile, ExtractionSettingsRoundTripAndChangeTheId) {
   RandomForest forest = RandomForest::train(makeBlobs(20, 3), ForestParams{});
   const std::string bare_id = forest.id();
-  forest.setExtractionSettings({{"overseg.method", "organized"}, {"normals.window_radius_px", "4"}});
+  forest.setExtractionSettings(
+      {{"oversegmentation.method", "organized"}, {"normals.window_radius_px", "4"}});
   EXPECT_NE(forest.id(), bare_id);  // the id names the content, settings included
   TempDir dir;
   forest.save(dir.str("m.fmf"));
@@ -507,7 +508,7 @@ TEST(ForestFile, ExtractionSettingsRoundTripAndChangeTheId) {
   EXPECT_EQ(loaded.id(), forest.id());
   EXPECT_EQ(loaded.source(), dir.str("m.fmf"));
   ASSERT_EQ(loaded.extractionSettings().size(), 2u);
-  EXPECT_EQ(loaded.extractionSettings()[0].first, "overseg.method");
+  EXPECT_EQ(loaded.extractionSettings()[0].first, "oversegmentation.method");
   EXPECT_EQ(loaded.extractionSettings()[0].second, "organized");
   EXPECT_THROW(forest.setExtractionSettings({{"", "x"}}), Error);
 }
@@ -525,7 +526,7 @@ TrainingSet withExtraColumns(TrainingSet set, int extra, const std::string& pref
   return set;
 }
 
-TEST(ForestFile, ExtraColumnsAndContextStageRoundTrip) {
+TEST(ForestFile, ExtraColumnsAndContextRoundRoundTrip) {
   const TrainingSet first_set = withExtraColumns(makeBlobs(30, 21, 8.0f), 3, "region_");
   ForestParams params;
   params.num_trees = 3;
@@ -548,10 +549,10 @@ TEST(ForestFile, ExtraColumnsAndContextStageRoundTrip) {
     second_set.extra.push_back(0.5f);
   }
   const std::string first_id = forest.id();
-  forest.setContextStage(RandomForest::train(second_set, params));
-  EXPECT_NE(forest.id(), first_id);  // the id names the context stage too
-  ASSERT_NE(forest.contextStage(), nullptr);
-  EXPECT_EQ(forest.contextStage()->dim(), kFeatureDim + 5);
+  forest.setContextRound(RandomForest::train(second_set, params));
+  EXPECT_NE(forest.id(), first_id);  // the id names the context round too
+  ASSERT_NE(forest.contextRound(), nullptr);
+  EXPECT_EQ(forest.contextRound()->dim(), kFeatureDim + 5);
 
   TempDir dir;
   forest.save(dir.str("two-stage.fmf"));
@@ -559,8 +560,8 @@ TEST(ForestFile, ExtraColumnsAndContextStageRoundTrip) {
   EXPECT_EQ(loaded.id(), forest.id());
   EXPECT_EQ(loaded.formatVersion(), 5u);
   EXPECT_EQ(loaded.featureNames(), forest.featureNames());
-  ASSERT_NE(loaded.contextStage(), nullptr);
-  EXPECT_EQ(loaded.contextStage()->featureNames(), forest.contextStage()->featureNames());
+  ASSERT_NE(loaded.contextRound(), nullptr);
+  EXPECT_EQ(loaded.contextRound()->featureNames(), forest.contextRound()->featureNames());
   for (std::size_t i = 0; i < 40; ++i) {
     std::vector<float> row(first_set.features[i].begin(), first_set.features[i].end());
     row.insert(row.end(), first_set.extra.begin() + 3 * i, first_set.extra.begin() + 3 * i + 3);
@@ -568,8 +569,8 @@ TEST(ForestFile, ExtraColumnsAndContextStageRoundTrip) {
     EXPECT_EQ(std::memcmp(a.data(), b.data(), sizeof a), 0);
     row.push_back(static_cast<float>(first_set.labels[i]));
     row.push_back(0.5f);
-    a = forest.contextStage()->predict(row);
-    b = loaded.contextStage()->predict(row);
+    a = forest.contextRound()->predict(row);
+    b = loaded.contextRound()->predict(row);
     EXPECT_EQ(std::memcmp(a.data(), b.data(), sizeof a), 0);
   }
   loaded.save(dir.str("again.fmf"));
@@ -625,19 +626,20 @@ TEST(ForestFile, PairwiseTermRoundTripsAndNamesTheModel) {
   EXPECT_EQ(forest.id(), plain_id);
 }
 
-TEST(ForestFile, ContextStageMustExtendTheFirstStage) {
+TEST(ForestFile, ContextRoundMustExtendTheFirstRound) {
   ForestParams params;
   params.num_trees = 1;
   const TrainingSet base = makeBlobs(10, 3);
   RandomForest plain = RandomForest::train(base, params);
   // Same columns only: nothing added.
-  EXPECT_THROW(plain.setContextStage(RandomForest::train(base, params)), Error);
+  EXPECT_THROW(plain.setContextRound(RandomForest::train(base, params)), Error);
   // Different leading columns.
   RandomForest regions = RandomForest::train(withExtraColumns(base, 2, "region_"), params);
-  EXPECT_THROW(regions.setContextStage(
+  EXPECT_THROW(regions.setContextRound(
                    RandomForest::train(withExtraColumns(base, 3, "other_"), params)),
                Error);
-  EXPECT_NO_THROW(plain.setContextStage(RandomForest::train(withExtraColumns(base, 2, "c_"), params)));
+  EXPECT_NO_THROW(
+      plain.setContextRound(RandomForest::train(withExtraColumns(base, 2, "c_"), params)));
 }
 
 TEST(Forest, RefusesBadExtraColumns) {
@@ -823,13 +825,13 @@ TEST_F(ForestFileCorruption, WrongVersion) {
   expectRefused(bytes, "version 6");
 }
 
-// Format 2 (before extra columns and context stages): the same layout
-// without the context-stage flag. Such files still load, as 14-column
-// forests without a context stage.
-TEST_F(ForestFileCorruption, Format2FileLoadsAsFourteenColumnsWithoutContextStage) {
+// Format 2 (before extra columns and context rounds): the same layout
+// without the context-round flag. Such files still load, as 14-column
+// forests without a context round.
+TEST_F(ForestFileCorruption, Format2FileLoadsAsFourteenColumnsWithoutContextRound) {
   auto bytes = good_;
   ASSERT_EQ(getU32(bytes, kVersionOffset), 5u);
-  ASSERT_EQ(bytes[bytes.size() - 10], 0u);  // the context-stage flag: none
+  ASSERT_EQ(bytes[bytes.size() - 10], 0u);  // the context-round flag: none
   ASSERT_EQ(bytes[bytes.size() - 9], 0u);   // the pairwise term flag: none
   bytes.erase(bytes.end() - 10, bytes.end() - 8);
   // Format 4's learner and class map, which format 2 does not have.
@@ -838,7 +840,7 @@ TEST_F(ForestFileCorruption, Format2FileLoadsAsFourteenColumnsWithoutContextStag
   const RandomForest loaded = loadAsFormat(bytes, 2);
   EXPECT_EQ(loaded.formatVersion(), 2u);
   EXPECT_EQ(loaded.dim(), kFeatureDim);
-  EXPECT_EQ(loaded.contextStage(), nullptr);
+  EXPECT_EQ(loaded.contextRound(), nullptr);
   const TrainingSet probe = makeBlobs(5, 77, 2.0f);
   for (const auto& x : probe.features) {
     const auto a = forest_.predict(x);
@@ -853,12 +855,12 @@ TEST_F(ForestFileCorruption, Format2FileLoadsAsFourteenColumnsWithoutContextStag
   expectRefused(more, "15 features");
 }
 
-TEST_F(ForestFileCorruption, BadContextStageFlag) {
+TEST_F(ForestFileCorruption, BadContextRoundFlag) {
   auto bytes = good_;
   ASSERT_GT(bytes.size(), 10u);
   bytes[bytes.size() - 10] = 2;
   fixChecksum(bytes);
-  expectRefused(bytes, "context stage flag = 2");
+  expectRefused(bytes, "context round flag = 2");
 }
 
 // Format 4 (issue 35, before the learned pairwise term): format 5 without the

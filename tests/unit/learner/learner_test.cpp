@@ -16,7 +16,7 @@
 #include "findmug/frame/dataset.hpp"
 #include "findmug/learner/forest.hpp"
 #include "findmug/offline/training.hpp"
-#include "findmug/pipeline/segmenter.hpp"
+#include "findmug/segmenter/segmenter.hpp"
 #include "findmug/settings/config.hpp"
 #include "learner/forest_format.hpp"    // internal: file layout and checksum (src/)
 #include "test_data.hpp"
@@ -424,7 +424,7 @@ TEST_F(BoostedFileCorruption, BadClassMap) {
   expectRefused(bytes, "bad class map");
 }
 
-TEST_F(BoostedFileCorruption, BadLearnerByteAndContextStage) {
+TEST_F(BoostedFileCorruption, BadLearnerByteAndContextRound) {
   // The learner byte follows the label names.
   std::size_t offset = 12 + 4;
   for (auto name : kLabelNames) offset += 4 + name.size();
@@ -434,9 +434,9 @@ TEST_F(BoostedFileCorruption, BadLearnerByteAndContextStage) {
   fixChecksum(bytes);
   expectRefused(bytes, "learner = 7");
   bytes = good_;
-  bytes[bytes.size() - 10] = 1;  // a context stage behind a booster
+  bytes[bytes.size() - 10] = 1;  // a context round behind a booster
   fixChecksum(bytes);
-  expectRefused(bytes, "auto-context stage");
+  expectRefused(bytes, "auto-context round");
 }
 
 // ---------------------------------------------------------------------------
@@ -525,7 +525,7 @@ TEST(LearnerSegmenter, RefusesModelOfAnotherLearnerOrClasses) {
 TEST(LearnerTraining, InternalClassesFromRealFramesForBothLearners) {
   FINDMUG_REQUIRE_DATA(dir, "nyuv2_labeled");
   SegmenterConfig config;
-  config.overseg.kind = OversegmenterKind::Organized;
+  config.oversegmentation.kind = OversegmenterKind::Organized;
   config.ground.source = GroundSource::FloorLabels;
   config.forest.num_trees = 3;
   config.forest.num_threads = 1;

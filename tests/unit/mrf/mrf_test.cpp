@@ -182,7 +182,7 @@ TEST(Mrf, NegligiblePairwiseGivesUnaryArgmax) {
 }
 
 TEST(Mrf, StrongPairwiseSmoothsNoisyChain) {
-  // 30 supervoxels 1 cm apart, mostly "table" with a few noisy "chair" votes.
+  // 30 patches 1 cm apart, mostly "table" with a few noisy "chair" votes.
   Problem pr;
   const std::set<int> noisy = {4, 11, 12, 20, 27};
   for (int i = 0; i < 30; ++i) {

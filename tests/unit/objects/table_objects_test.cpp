@@ -25,7 +25,7 @@
 #include "findmug/frame/dataset.hpp"
 #include "findmug/ground/ground.hpp"
 #include "findmug/labels/labels.hpp"
-#include "findmug/pipeline/segmenter.hpp"
+#include "findmug/segmenter/segmenter.hpp"
 #include "findmug/settings/config.hpp"
 #include "findmug/synth/synth.hpp"
 #include "test_data.hpp"

@@ -1,6 +1,6 @@
 // The raw-depth model (depth_degradation.hpp): holes where a Kinect leaves
 // them on hand-made frames, determinism by seed, the hole statistics, and the
-// pipeline on a degraded real NYU frame.
+// Segmenter on a degraded real NYU frame.
 #include "findmug/offline/depth_degradation.hpp"
 
 #include <gtest/gtest.h>
@@ -10,7 +10,7 @@
 #include "findmug/common/error.hpp"
 #include "findmug/frame/dataset.hpp"
 #include "findmug/offline/training.hpp"
-#include "findmug/pipeline/segmenter.hpp"
+#include "findmug/segmenter/segmenter.hpp"
 #include "findmug/settings/config.hpp"
 #include "test_data.hpp"
 
@@ -183,7 +183,7 @@ TEST(DepthDegradation, HoleStatisticsBinsAndShadowSide) {
   EXPECT_THROW(holeStatistics(f, {0, 0, kW + 1, kH, 5}), Error);
 }
 
-// A degraded real NYU frame through the whole pipeline: finite features, and
+// A degraded real NYU frame through the whole Segmenter: finite features, and
 // labels only where there is depth.
 TEST(DepthDegradation, PipelineOnADegradedRealFrame) {
   FINDMUG_REQUIRE_DATA(nyu, "nyuv2_labeled");
@@ -193,7 +193,7 @@ TEST(DepthDegradation, PipelineOnADegradedRealFrame) {
   const DatasetFolder folder(nyu.string(), options);
   const LabeledFrame clean = folder.load(0);  // 0001: filled depth
   SegmenterConfig config;
-  config.overseg.kind = OversegmenterKind::Organized;
+  config.oversegmentation.kind = OversegmenterKind::Organized;
   config.ground.source = GroundSource::Gravity;
   config.regions.enabled = true;
   config.scene.enabled = true;
@@ -258,7 +258,7 @@ TEST(DepthDegradation, TrainingCopiesJoinTheTrainingSet) {
   const LabeledFrame clean = folder.load(1);  // 0002
   const LabeledFrames one{"0002", 1, [&](std::size_t) { return clean; }};
   Config config;
-  applyOverride(config, "overseg.method=organized");
+  applyOverride(config, "oversegmentation.method=organized");
   applyOverride(config, "ground.source=gravity");
   applyOverride(config, "training.degraded_copies=2");
   applyOverride(config, "training.degraded_seed=9");

@@ -2,7 +2,7 @@
 // offline/mrf_context.hpp): learned on hand-made graphs where a colour step
 // means a label change, it lets a weak patch follow its look-alike neighbour
 // where the paper's Potts term does not. The Segmenter's use of it:
-// tests/unit/pipeline/segmenter_context_test.cpp.
+// tests/unit/segmenter/segmenter_context_test.cpp.
 #include "findmug/offline/mrf_context.hpp"
 
 #include <gmock/gmock.h>

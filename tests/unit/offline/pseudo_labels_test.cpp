@@ -1,7 +1,7 @@
 // Semi-supervised rounds (pseudo_labels.hpp) on real NYU frames: labelled
 // frames from nyuv2_labeled, unlabelled ones from nyuv2_unlabeled_train with
 // their NYU gravity. Pseudo-labelled patches come only from confident
-// patches, carry the pipeline's label and the pseudo weight, respect the
+// patches, carry the Segmenter's label and the pseudo weight, respect the
 // per-label cap; a threshold nothing passes leaves the model as it was; a
 // round that adds patches changes it.
 #include <gtest/gtest.h>
@@ -27,7 +27,7 @@ struct Frames {
 
 SegmenterConfig smallConfig() {
   SegmenterConfig config;
-  config.overseg.kind = OversegmenterKind::Organized;
+  config.oversegmentation.kind = OversegmenterKind::Organized;
   config.ground.source = GroundSource::Gravity;
   config.regions.enabled = true;  // and so the table region vote, as shipped
   config.forest.num_trees = 4;
@@ -84,7 +84,7 @@ std::vector<SampleLabelling> labelAll(const RandomForest& model, const Frames& f
   return out;
 }
 
-// Every kept patch passed the threshold and carries the label the pipeline
+// Every kept patch passed the threshold and carries the label the Segmenter
 // gave it; with no cap every confident patch is kept.
 TEST(PseudoLabels, OnlyConfidentPatchesBecomeTrainingPatchesWithThePipelinesLabel) {
   SegmenterConfig config = smallConfig();

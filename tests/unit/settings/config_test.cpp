@@ -26,8 +26,8 @@ std::string errorOf(const std::function<void()>& f) {
 TEST(Config, EmptyTextGivesDefaults) {
   const Config c = parseConfig("", "empty");
   EXPECT_EQ(c.segmenter.forest.num_trees, ForestParams{}.num_trees);
-  EXPECT_FLOAT_EQ(c.segmenter.overseg.seed_resolution_m, 0.1f);
-  EXPECT_FLOAT_EQ(c.segmenter.overseg.voxel_resolution_m, 0.01f);
+  EXPECT_FLOAT_EQ(c.segmenter.oversegmentation.seed_resolution_m, 0.1f);
+  EXPECT_FLOAT_EQ(c.segmenter.oversegmentation.voxel_resolution_m, 0.01f);
   EXPECT_TRUE(c.segmenter.use_mrf);
 }
 
@@ -42,7 +42,7 @@ mrf:
   lambda: 2.5
   sigma: 0.3
   enabled: false
-overseg:
+oversegmentation:
   method: organized
   seed_resolution_m: 0.15
 ground:
@@ -58,7 +58,7 @@ tables:
   EXPECT_FLOAT_EQ(c.segmenter.mrf.lambda, 2.5f);
   EXPECT_FLOAT_EQ(c.segmenter.mrf.sigma, 0.3f);
   EXPECT_FALSE(c.segmenter.use_mrf);
-  EXPECT_EQ(c.segmenter.overseg.kind, OversegmenterKind::Organized);
+  EXPECT_EQ(c.segmenter.oversegmentation.kind, OversegmenterKind::Organized);
   EXPECT_EQ(c.segmenter.ground.source, GroundSource::FloorLabels);
   EXPECT_FLOAT_EQ(c.segmenter.tables.safety_distance_m, 0.4f);
 }
@@ -100,7 +100,7 @@ TEST(Config, BadValuesNameKeyAndValue) {
               HasSubstr("mrf.lambda"));
   EXPECT_THAT(errorOf([] { parseConfig("mrf:\n  enabled: maybe\n", "a.yaml"); }),
               HasSubstr("mrf.enabled"));
-  EXPECT_THAT(errorOf([] { parseConfig("overseg:\n  method: slic\n", "a.yaml"); }),
+  EXPECT_THAT(errorOf([] { parseConfig("oversegmentation:\n  method: slic\n", "a.yaml"); }),
               HasSubstr("one of pcl organized"));
   EXPECT_THAT(errorOf([] { parseConfig("forest: [1, 2]\n", "a.yaml"); }),
               HasSubstr("section 'forest'"));
@@ -188,9 +188,10 @@ TEST(Config, OfflineSettingsAreNotTheSegmenters) {
 
 TEST(Config, InconsistentResolutionsRefused) {
   const auto msg = errorOf([] {
-    parseConfig("overseg:\n  voxel_resolution_m: 0.2\n  seed_resolution_m: 0.1\n", "a.yaml");
+    parseConfig("oversegmentation:\n  voxel_resolution_m: 0.2\n  seed_resolution_m: 0.1\n",
+                "a.yaml");
   });
-  EXPECT_THAT(msg, HasSubstr("overseg.seed_resolution_m"));
+  EXPECT_THAT(msg, HasSubstr("oversegmentation.seed_resolution_m"));
 }
 
 TEST(Config, ObjectConsistencyIsAShareOfOne) {
@@ -254,7 +255,7 @@ TEST(Config, DumpRoundTrips) {
   EXPECT_EQ(dumpConfig(again), dumpConfig(c));
   EXPECT_EQ(again.segmenter.forest.num_trees, 7);
   EXPECT_EQ(again.segmenter.forest.seed, 99u);
-  EXPECT_EQ(again.segmenter.overseg.kind, OversegmenterKind::Organized);
+  EXPECT_EQ(again.segmenter.oversegmentation.kind, OversegmenterKind::Organized);
   EXPECT_EQ(again.segmenter.ground.source, GroundSource::Estimated);
 }
 

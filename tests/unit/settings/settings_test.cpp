@@ -183,5 +183,100 @@ TEST(SettingsTable, SeveralSectionsNameTheKeysOfTheOneAsked) {
   EXPECT_EQ(msg.find("forest."), std::string::npos) << msg;
 }
 
+// A renamed key (renamedSettings): the old name is read as the new one with a
+// warning naming the new key, and one file or the flags giving both is refused.
+TEST(SettingsSchema, OldKeyNamesAreReadAsTheNewOnesWithAWarning) {
+  EXPECT_EQ(currentSettingKey("overseg.seed_resolution_m"), "oversegmentation.seed_resolution_m");
+  EXPECT_EQ(currentSettingKey("oversegmentation.method"), "oversegmentation.method");
+  EXPECT_EQ(currentSettingKey("oversegx.method"), "oversegx.method");
+  EXPECT_EQ(currentSettingKey("mrf.lambda"), "mrf.lambda");
+
+  Config by_old, by_new;
+  std::vector<std::string> warnings;
+  SettingsSchema old_schema, new_schema;
+  old_schema.onWarning([&](const std::string& w) { warnings.push_back(w); });
+  new_schema.onWarning([&](const std::string& w) { warnings.push_back(w); });
+  bindCoreSettings(old_schema, by_old);
+  bindCoreSettings(new_schema, by_new);
+  old_schema.readYaml("overseg:\n  method: pcl\n  seed_resolution_m: 0.15\n", "old.yaml");
+  ASSERT_EQ(warnings.size(), 2u);
+  EXPECT_THAT(warnings[0], HasSubstr("old.yaml: line 2: setting 'overseg.method' is now called "
+                                     "'oversegmentation.method'"));
+  EXPECT_THAT(warnings[1], HasSubstr("'oversegmentation.seed_resolution_m'"));
+  new_schema.readYaml("oversegmentation:\n  method: pcl\n  seed_resolution_m: 0.15\n",
+                      "new.yaml");
+  EXPECT_EQ(warnings.size(), 2u);  // the new names warn of nothing
+  // The same effect: the same values in the same fields.
+  EXPECT_EQ(by_old.segmenter.oversegmentation.kind, OversegmenterKind::PclSupervoxels);
+  EXPECT_EQ(old_schema.dump(), new_schema.dump());
+  EXPECT_EQ(segmenterSettings().values(by_old.segmenter),
+            segmenterSettings().values(by_new.segmenter));
+  EXPECT_EQ(old_schema.dump().find("overseg:"), std::string::npos);  // printed by the new name
+
+  // --set takes the old name too, and a later origin overrides an earlier one
+  // whichever name each uses.
+  old_schema.applyOverride("overseg.min_segment_points=30");
+  EXPECT_EQ(by_old.segmenter.oversegmentation.min_segment_points, 30);
+  EXPECT_THAT(warnings.back(), HasSubstr("<flags>: setting 'overseg.min_segment_points' is now"));
+  old_schema.applyOverride("oversegmentation.method=organized");
+  EXPECT_EQ(by_old.segmenter.oversegmentation.kind, OversegmenterKind::Organized);
+}
+
+TEST(SettingsSchema, BothNamesOfOneSettingAreRefusedNamingBoth) {
+  Config config;
+  SettingsSchema schema;
+  schema.onWarning([](const std::string&) {});
+  bindCoreSettings(schema, config);
+  const std::string in_file = errorOf([&] {
+    schema.readYaml("oversegmentation:\n  method: organized\noverseg:\n  method: pcl\n",
+                    "both.yaml");
+  });
+  EXPECT_THAT(in_file, HasSubstr("both.yaml: line 4: setting 'oversegmentation.method' is given "
+                                 "by both its names, 'oversegmentation.method' (both.yaml: line "
+                                 "2) and 'overseg.method'; 'overseg.method' is its old name"));
+  // Either order, and in the flags.
+  SettingsSchema flags;
+  flags.onWarning([](const std::string&) {});
+  Config flag_config;
+  bindCoreSettings(flags, flag_config);
+  flags.applyOverride("overseg.seed_resolution_m=0.2");
+  const std::string in_flags =
+      errorOf([&] { flags.applyOverride("oversegmentation.seed_resolution_m=0.3"); });
+  EXPECT_THAT(in_flags, HasSubstr("<flags>: setting 'oversegmentation.seed_resolution_m' is "
+                                  "given by both its names"));
+  EXPECT_THAT(in_flags, HasSubstr("'overseg.seed_resolution_m' is its old name"));
+  // One name twice is not a conflict: the later value wins, as before.
+  flags.applyOverride("overseg.seed_resolution_m=0.25");
+  EXPECT_FLOAT_EQ(flag_config.segmenter.oversegmentation.seed_resolution_m, 0.25f);
+}
+
+// forest.class_weighting and forest.num_threads train either learner: they are
+// learner.* now, the old keys read as the new ones (one key each, not a section).
+TEST(SettingsSchema, TheLearnersSharedKeysAreReadByTheirOldForestNames) {
+  EXPECT_EQ(currentSettingKey("forest.num_threads"), "learner.num_threads");
+  EXPECT_EQ(currentSettingKey("forest.class_weighting"), "learner.class_weighting");
+  EXPECT_EQ(currentSettingKey("forest.num_trees"), "forest.num_trees");  // the forest's own
+  Config config;
+  std::vector<std::string> warnings;
+  SettingsSchema schema;
+  schema.onWarning([&](const std::string& w) { warnings.push_back(w); });
+  bindCoreSettings(schema, config);
+  schema.readYaml("forest:\n  num_trees: 3\n  num_threads: 2\n  class_weighting: false\n",
+                  "old.yaml");
+  EXPECT_EQ(config.segmenter.forest.num_trees, 3);
+  EXPECT_EQ(config.segmenter.forest.num_threads, 2);
+  EXPECT_FALSE(config.segmenter.forest.class_weighting);
+  ASSERT_EQ(warnings.size(), 2u);
+  EXPECT_THAT(warnings[0], HasSubstr("'forest.num_threads' is now called 'learner.num_threads'"));
+  const std::string dump = schema.dump();
+  EXPECT_THAT(dump, HasSubstr("learner:\n"));
+  EXPECT_THAT(dump, HasSubstr("  num_threads: 2\n"));
+  EXPECT_THAT(errorOf([&] {
+                schema.readYaml("learner:\n  num_threads: 1\nforest:\n  num_threads: 2\n",
+                                "both.yaml");
+              }),
+              HasSubstr("'learner.num_threads' is given by both its names"));
+}
+
 }  // namespace
 }  // namespace findmug

@@ -2,7 +2,7 @@
 //
 //   PrepareStep   the frame checked (validateFrame), then Segmenter::prepare: cloud,
 //                 normals, ground plane
-//   SegmentStep   Segmenter::oversegment + classify: supervoxels, features, forest, MRF,
+//   SegmentStep   Segmenter::oversegment + classify: oversegmentation, features, forest, MRF,
 //                 labels, tables
 //   PublishStep   the robot's pose for the frame (PoseInput, if any), then every
 //                 ResultSink in the order they were added (result_sinks.hpp)
@@ -22,7 +22,7 @@
 #include "findmug/daemon/pose_input.hpp"
 #include "findmug/daemon/result_sinks.hpp"
 #include "findmug/frame/frame.hpp"
-#include "findmug/pipeline/segmenter.hpp"
+#include "findmug/segmenter/segmenter.hpp"
 
 namespace findmug::daemon {
 

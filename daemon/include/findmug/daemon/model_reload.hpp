@@ -31,7 +31,7 @@
 #include "findmug/settings/config.hpp"
 #include "findmug/daemon/status_snapshot.hpp"
 #include "findmug/learner/forest.hpp"
-#include "findmug/pipeline/segmenter.hpp"
+#include "findmug/segmenter/segmenter.hpp"
 
 namespace findmug::daemon {
 

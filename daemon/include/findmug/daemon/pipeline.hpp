@@ -11,7 +11,7 @@
 // PublishStep) on its thread(s); the Pipeline only wires them and keeps the counters.
 //
 //   prepare   Segmenter::prepare: cloud, normals, ground plane
-//   segment   Segmenter::oversegment + classify (supervoxels, features, forest,
+//   segment   Segmenter::oversegment + classify (oversegmentation, features, forest,
 //             MRF, labels, tables): the bottleneck, run on N workers; results
 //             leave in frame order (ReorderBuffer)
 //   publish   hands each result, in frame order, to the sinks registered on
@@ -91,7 +91,7 @@
 #include "findmug/daemon/object_teacher.hpp"
 #include "findmug/daemon/pose_input.hpp"
 #include "findmug/daemon/result_sinks.hpp"
-#include "findmug/daemon/semantic_map_stage.hpp"
+#include "findmug/daemon/semantic_map_sink.hpp"
 #include "findmug/daemon/service.hpp"
 #include "findmug/daemon/stage.hpp"
 #include "findmug/daemon/status_snapshot.hpp"
@@ -99,7 +99,7 @@
 #include "findmug/io/bus.hpp"
 #include "findmug/learner/forest.hpp"
 #include "findmug/map/table_map.hpp"
-#include "findmug/pipeline/segmenter.hpp"
+#include "findmug/segmenter/segmenter.hpp"
 #include "findmug/settings/config.hpp"
 
 namespace findmug::io {
@@ -195,8 +195,8 @@ class Pipeline {
   const PoseInput* poseInput() const { return pose_input_.get(); }
   // Tables in the map now, tentative ones included (thread-safe copy).
   std::vector<MappedTable> mappedTables() const;
-  // The semantic map stage's counters (daemon.semantic_map), or nullopt when it is off.
-  std::optional<SemanticMapStage::Counters> semanticMapCounters() const;
+  // The semantic map sink's counters (daemon.semantic_map), or nullopt when it is off.
+  std::optional<SemanticMapSink::Counters> semanticMapCounters() const;
   // The semantic map's tables at its last publish (empty when it is off).
   std::vector<FusedTable> semanticMapTables() const;
   // Publishes refused by the output bus (frames' messages and status).
@@ -217,7 +217,7 @@ class Pipeline {
   PipelineHooks hooks_;
   int workers_;
   std::shared_ptr<TableMapSink> table_map_sink_;
-  std::shared_ptr<SemanticMapStage> semantic_map_;  // nullptr unless daemon.semantic_map
+  std::shared_ptr<SemanticMapSink> semantic_map_;  // nullptr unless daemon.semantic_map
   std::shared_ptr<LcmPublisherSink> publisher_;
   std::unique_ptr<PoseInput> pose_input_;  // nullptr: no pose input
   std::unique_ptr<ModelReloader> reloader_;

@@ -38,7 +38,7 @@
 #include "findmug/io/bus.hpp"
 #include "findmug/io/messages.hpp"
 #include "findmug/map/table_map.hpp"
-#include "findmug/pipeline/segmenter.hpp"
+#include "findmug/segmenter/segmenter.hpp"
 
 namespace findmug::daemon {
 
@@ -55,7 +55,7 @@ struct FrameResult {
   std::vector<io::TableMapInfo> map_info;
   // and the map's confirmed tables when they are due on FINDMUG_TABLE_MAP.
   std::optional<io::TablesMessage> table_map;
-  // Set by SemanticMapStage (daemon.semantic_map_fused_labels): the label image to
+  // Set by SemanticMapSink (daemon.semantic_map_fused_labels): the label image to
   // publish instead of the frame's own.
   std::optional<LabelImage> published_labels = std::nullopt;
 };

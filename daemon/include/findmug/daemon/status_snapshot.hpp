@@ -64,7 +64,7 @@ struct StatusSnapshot {
   int processing_threads = 0;
   std::uint64_t publish_failures = 0;  // refused publishes, every channel (status included)
   std::int64_t heap_in_use_bytes = -1;  // allocated and not freed (-1: unknown)
-  // The semantic map stage (all 0 when daemon.semantic_map is off).
+  // The semantic map sink (all 0 when daemon.semantic_map is off).
   std::uint64_t semantic_map_frames = 0, semantic_map_skipped = 0, semantic_map_voxels = 0;
   ReloadStatus reload;
   std::uint64_t commands_accepted = 0, commands_rejected = 0;

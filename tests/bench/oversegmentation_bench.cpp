@@ -33,7 +33,7 @@
 #include "bench_support.hpp"
 #include "findmug/cloud/cloud.hpp"
 #include "findmug/frame/dataset.hpp"
-#include "findmug/supervoxels/oversegmentation.hpp"
+#include "findmug/oversegmentation/oversegmentation.hpp"
 #include "test_data.hpp"
 
 namespace findmug {

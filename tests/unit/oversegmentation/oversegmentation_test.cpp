@@ -1,7 +1,7 @@
 // Oversegmentation stage: finalisation, quality measures, and both
 // oversegmenters (PCL supervoxels and the organized one) on ray-cast
 // synthetic scenes with known surfaces and on real NYU frames.
-#include "findmug/supervoxels/oversegmentation.hpp"
+#include "findmug/oversegmentation/oversegmentation.hpp"
 
 #include <gtest/gtest.h>
 
@@ -21,8 +21,8 @@
 #include "findmug/frame/dataset.hpp"
 #include "findmug/labels/labels.hpp"
 #include "common/int_runs.hpp"
-#include "supervoxels/lab_internal.hpp"
-#include "supervoxels/oversegmentation_internal.hpp"
+#include "oversegmentation/lab_internal.hpp"
+#include "oversegmentation/oversegmentation_internal.hpp"
 #include "test_data.hpp"
 
 namespace findmug {

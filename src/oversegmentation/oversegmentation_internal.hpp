@@ -4,7 +4,7 @@
 
 #include <memory>
 
-#include "findmug/supervoxels/oversegmentation.hpp"
+#include "findmug/oversegmentation/oversegmentation.hpp"
 
 namespace findmug::detail {
 

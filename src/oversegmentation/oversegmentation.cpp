@@ -1,7 +1,7 @@
 // Oversegmentation stage: the factory, the shared finalisation (drop small
 // patches, renumber, adjacency) and the quality measures against ground truth.
-// The two oversegmenters live in overseg_pcl.cpp and overseg_organized.cpp.
-#include "findmug/supervoxels/oversegmentation.hpp"
+// The two oversegmenters live in oversegmentation_pcl.cpp and oversegmentation_organized.cpp.
+#include "findmug/oversegmentation/oversegmentation.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -16,7 +16,7 @@
 #include "findmug/common/error.hpp"
 #include "findmug/labels/labels.hpp"
 #include "common/int_runs.hpp"
-#include "supervoxels/oversegmentation_internal.hpp"
+#include "oversegmentation/oversegmentation_internal.hpp"
 
 namespace findmug {
 
@@ -24,8 +24,8 @@ namespace {
 
 std::string fieldError(const std::string& field, const std::string& value,
                        const std::string& expected) {
-  return "oversegmentation config: overseg." + field + " = " + value + " (expected " + expected +
-         ")";
+  return "oversegmentation config: oversegmentation." + field + " = " + value + " (expected " +
+         expected + ")";
 }
 
 void requireFinitePositive(float value, const char* field) {
@@ -64,7 +64,7 @@ void validateOversegmentationConfig(const OversegmentationConfig& c) {
   if (c.seed_resolution_m <= c.voxel_resolution_m) {
     throw Error(fieldError(
         "seed_resolution_m", std::to_string(c.seed_resolution_m),
-        "more than overseg.voxel_resolution_m = " + std::to_string(c.voxel_resolution_m)));
+        "more than oversegmentation.voxel_resolution_m = " + std::to_string(c.voxel_resolution_m)));
   }
   if (c.seed_resolution_m > 100.0f) {
     throw Error(fieldError("seed_resolution_m", std::to_string(c.seed_resolution_m), "<= 100 m"));

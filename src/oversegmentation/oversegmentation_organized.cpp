@@ -53,10 +53,10 @@
 
 #include "common/cpu_features.hpp"
 #include "findmug/common/error.hpp"
-#include "findmug/supervoxels/oversegmentation.hpp"
+#include "findmug/oversegmentation/oversegmentation.hpp"
 #include "common/int_runs.hpp"
-#include "supervoxels/lab_internal.hpp"
-#include "supervoxels/oversegmentation_internal.hpp"
+#include "oversegmentation/lab_internal.hpp"
+#include "oversegmentation/oversegmentation_internal.hpp"
 #include "common/scratch.hpp"
 #include "common/simd_table.hpp"
 #include "common/simd_vec3.hpp"
@@ -1350,7 +1350,7 @@ class OrganizedOversegmenter final : public Oversegmenter {
     }
   }
 
-  // small[p]: piece p is below overseg.min_segment_points or a quarter of
+  // small[p]: piece p is below oversegmentation.min_segment_points or a quarter of
   // its cluster's nominal area, or no cluster reached it. Returns whether
   // any piece is small.
   bool markSmallPieces(const std::vector<Cluster>& clusters, const std::vector<int>& piece_size,

@@ -1,4 +1,5 @@
-// findmug/daemon/semantic_map_stage.hpp — the fused 3-D semantic map as a daemon stage.
+// findmug/daemon/semantic_map_sink.hpp — the fused 3-D semantic map as a result sink with
+// its own thread.
 //
 // A ResultSink on the publish thread (after TableMapSink, before LcmPublisherSink) that
 // hands every labelled frame with a robot pose (TableMapSink::isEvidence and a pose within
@@ -42,7 +43,7 @@
 
 namespace findmug::daemon {
 
-class SemanticMapStage final : public ResultSink {
+class SemanticMapSink final : public ResultSink {
  public:
   using Clock = std::chrono::steady_clock;
 
@@ -77,10 +78,10 @@ class SemanticMapStage final : public ResultSink {
   using OnError = std::function<void(const std::string& what)>;
 
   // Loads Options::file when it exists (see above). Throws findmug::Error for bad options.
-  SemanticMapStage(Options options, std::shared_ptr<io::Bus> bus, OnError on_error);
-  ~SemanticMapStage() override;
-  SemanticMapStage(const SemanticMapStage&) = delete;
-  SemanticMapStage& operator=(const SemanticMapStage&) = delete;
+  SemanticMapSink(Options options, std::shared_ptr<io::Bus> bus, OnError on_error);
+  ~SemanticMapSink() override;
+  SemanticMapSink(const SemanticMapSink&) = delete;
+  SemanticMapSink& operator=(const SemanticMapSink&) = delete;
 
   void start();
   void consume(FrameResult& result) override;

@@ -1,5 +1,5 @@
-// The semantic map stage (semantic_map_stage.hpp).
-#include "findmug/daemon/semantic_map_stage.hpp"
+// The semantic map sink (semantic_map_sink.hpp).
+#include "findmug/daemon/semantic_map_sink.hpp"
 
 #include <pthread.h>
 #include <spdlog/spdlog.h>
@@ -14,8 +14,8 @@
 
 namespace findmug::daemon {
 
-SemanticMapStage::SemanticMapStage(Options options, std::shared_ptr<io::Bus> bus,
-                                   OnError on_error)
+SemanticMapSink::SemanticMapSink(Options options, std::shared_ptr<io::Bus> bus,
+                                 OnError on_error)
     : options_(std::move(options)),
       on_error_(std::move(on_error)),
       bus_(std::move(bus)),
@@ -23,7 +23,7 @@ SemanticMapStage::SemanticMapStage(Options options, std::shared_ptr<io::Bus> bus
              DropPolicy::DropOldest),
       map_(options_.map, options_.tables),
       last_save_(Clock::now()) {
-  if (!bus_) throw Error("semantic map stage: no output bus");
+  if (!bus_) throw Error("semantic map sink: no output bus");
   if (options_.file.empty() || !std::filesystem::exists(options_.file)) return;
   try {
     map_.load(options_.file);
@@ -42,9 +42,9 @@ SemanticMapStage::SemanticMapStage(Options options, std::shared_ptr<io::Bus> bus
   }
 }
 
-SemanticMapStage::~SemanticMapStage() { stop(false); }
+SemanticMapSink::~SemanticMapSink() { stop(false); }
 
-void SemanticMapStage::start() {
+void SemanticMapSink::start() {
   if (options_.threaded && !thread_.joinable()) {
     thread_ = std::thread([this] {
       // Named for top -H and the benchmarks, which read its CPU time from /proc.
@@ -54,7 +54,7 @@ void SemanticMapStage::start() {
   }
 }
 
-void SemanticMapStage::consume(FrameResult& result) {
+void SemanticMapSink::consume(FrameResult& result) {
   if (stopped_.load() || !result.pose || !TableMapSink::isEvidence(result.labelled)) return;
   const PreparedFrame& prepared = result.labelled.segmented.prepared;
   Job job;
@@ -84,7 +84,7 @@ void SemanticMapStage::consume(FrameResult& result) {
   if (queue_.push(std::move(job)) == PushResult::AcceptedDroppedOldest) skipped_.fetch_add(1);
 }
 
-void SemanticMapStage::run() {
+void SemanticMapSink::run() {
   // Wakes at least every publish period, so that a change goes out even when no
   // further frame comes.
   const auto period = std::chrono::duration_cast<Clock::duration>(
@@ -98,7 +98,7 @@ void SemanticMapStage::run() {
   }
 }
 
-void SemanticMapStage::fuse(Job& job) {
+void SemanticMapSink::fuse(Job& job) {
   if (options_.before_fuse) options_.before_fuse();
   std::lock_guard lock(map_mutex_);
   try {
@@ -115,7 +115,7 @@ void SemanticMapStage::fuse(Job& job) {
   last_seq_ = job.seq;
 }
 
-void SemanticMapStage::publishIfDue(bool force) {
+void SemanticMapSink::publishIfDue(bool force) {
   io::TablesMessage tables_message;
   findmug_lcm::semantic_map_t map_message;
   {
@@ -166,7 +166,7 @@ void SemanticMapStage::publishIfDue(bool force) {
   publishes_.fetch_add(1);
 }
 
-void SemanticMapStage::saveIfDue(bool force) {
+void SemanticMapSink::saveIfDue(bool force) {
   if (options_.file.empty()) return;
   std::lock_guard lock(map_mutex_);
   const auto now = Clock::now();
@@ -181,7 +181,7 @@ void SemanticMapStage::saveIfDue(bool force) {
   }
 }
 
-void SemanticMapStage::stop(bool drain) {
+void SemanticMapSink::stop(bool drain) {
   if (stopped_.exchange(true)) return;
   if (!drain) queue_.clear();
   queue_.close();
@@ -193,7 +193,7 @@ void SemanticMapStage::stop(bool drain) {
   bus_.reset();
 }
 
-SemanticMapStage::Counters SemanticMapStage::counters() const {
+SemanticMapSink::Counters SemanticMapSink::counters() const {
   Counters c;
   c.queued = queued_.load();
   c.skipped = skipped_.load();
@@ -211,7 +211,7 @@ SemanticMapStage::Counters SemanticMapStage::counters() const {
   return c;
 }
 
-std::vector<FusedTable> SemanticMapStage::tables() const {
+std::vector<FusedTable> SemanticMapSink::tables() const {
   std::lock_guard lock(map_mutex_);
   return tables_;
 }

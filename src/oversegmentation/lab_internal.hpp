@@ -11,7 +11,7 @@
 namespace findmug::detail {
 
 enum class LabSimd {
-  Auto,  // AVX2 where the CPU has it (what the pipeline runs)
+  Auto,  // AVX2 where the CPU has it (what the Segmenter runs)
   Off,   // the scalar code only
 };
 

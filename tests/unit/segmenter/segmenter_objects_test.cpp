@@ -11,7 +11,7 @@
 
 #include "findmug/frame/dataset.hpp"
 #include "findmug/learner/forest.hpp"
-#include "findmug/pipeline/segmenter.hpp"
+#include "findmug/segmenter/segmenter.hpp"
 #include "findmug/settings/config.hpp"
 #include "shipped_model.hpp"
 #include "test_data.hpp"

@@ -6,7 +6,7 @@
 #include <algorithm>
 #include <set>
 
-#include "findmug/pipeline/segmenter.hpp"
+#include "findmug/segmenter/segmenter.hpp"
 #include "findmug/synth/synth.hpp"
 #include "small_forest.hpp"
 
@@ -18,7 +18,7 @@ constexpr auto kObject = static_cast<std::uint8_t>(Label::Object);
 
 SegmenterConfig fastConfig() {
   SegmenterConfig config;
-  config.overseg.kind = OversegmenterKind::Organized;
+  config.oversegmentation.kind = OversegmenterKind::Organized;
   return config;
 }
 

@@ -14,8 +14,8 @@
 #include "findmug/cloud/cloud.hpp"
 #include "findmug/frame/dataset.hpp"
 #include "findmug/offline/training.hpp"
-#include "findmug/pipeline/segmenter.hpp"
-#include "findmug/supervoxels/oversegmentation.hpp"
+#include "findmug/segmenter/segmenter.hpp"
+#include "findmug/oversegmentation/oversegmentation.hpp"
 #include "small_forest.hpp"
 
 namespace findmug {
@@ -84,7 +84,7 @@ RgbdFrame emptyFrame() {
 
 SegmenterConfig config() {
   SegmenterConfig c;
-  c.overseg.kind = OversegmenterKind::Organized;
+  c.oversegmentation.kind = OversegmenterKind::Organized;
   return c;
 }
 
@@ -126,7 +126,7 @@ void expectSameFrame(const LabelledFrame& got, const LabelledFrame& want) {
   EXPECT_TRUE(sameBytes(got.features.scene, want.features.scene));
   EXPECT_TRUE(sameBytes(got.features.objects, want.features.objects));
   EXPECT_TRUE(sameBytes(got.forest_probabilities, want.forest_probabilities));
-  EXPECT_TRUE(sameBytes(got.first_stage_probabilities, want.first_stage_probabilities));
+  EXPECT_TRUE(sameBytes(got.first_round_probabilities, want.first_round_probabilities));
   EXPECT_EQ(got.mrf.labels, want.mrf.labels);
   EXPECT_TRUE(sameBytes(got.mrf.confidence, want.mrf.confidence));
   EXPECT_EQ(got.mrf.iterations, want.mrf.iterations);
@@ -138,7 +138,7 @@ void expectSameFrame(const LabelledFrame& got, const LabelledFrame& want) {
 }
 
 // Every optional stage on (region, scene and object features, the
-// auto-context stage), with a model trained for them on `scene`.
+// auto-context round), with a model trained for them on `scene`.
 SegmenterConfig allStagesConfig() {
   SegmenterConfig c = config();
   c.regions.enabled = true;
@@ -213,7 +213,7 @@ TEST(BufferReuse, CloudFunctionsWriteIntoUsedBuffersAsIntoFreshOnes) {
 TEST(BufferReuse, SegmentIntoAUsedSegmentationEqualsAFreshOne) {
   const Scene a = floorAndWall(320, 240, 3.0, 1.2);
   const Scene b = floorAndWall(640, 480, 2.2, 1.0);
-  const auto oversegmenter = makeOversegmenter(config().overseg);
+  const auto oversegmenter = makeOversegmenter(config().oversegmentation);
   const OrganizedCloud cloud_a = frameToCloud(a.frame), cloud_b = frameToCloud(b.frame);
   const NormalImage normals_a = computeNormals(cloud_a, NormalConfig{});
   const NormalImage normals_b = computeNormals(cloud_b, NormalConfig{});
@@ -266,14 +266,14 @@ TEST(BufferReuse, RecycledFramesGiveTheResultsOfFreshOnesWithEveryStage) {
   const Scene a = floorAndWall(320, 240, 3.0, 1.2);
   const Scene b = floorAndWall(640, 480, 2.2, 1.0);
   const auto forest = trainAllStagesOn(a);
-  ASSERT_NE(forest->contextStage(), nullptr);
+  ASSERT_NE(forest->contextRound(), nullptr);
   const Segmenter fresh(allStagesConfig(), forest);
   const LabelledFrame want_a = fresh.process(a.frame);
   const LabelledFrame want_b = fresh.process(b.frame);
   const LabelledFrame want_empty = fresh.process(emptyFrame());
   ASSERT_FALSE(want_a.features.scene.empty());
   ASSERT_FALSE(want_a.features.objects.empty());
-  ASSERT_FALSE(want_a.first_stage_probabilities.empty());
+  ASSERT_FALSE(want_a.first_round_probabilities.empty());
 
   const Segmenter reusing(allStagesConfig(), forest);
   expectRecycledStreamGivesFreshResults(reusing, a, b, want_a, want_b, want_empty);

@@ -1,4 +1,4 @@
-// findmug/pipeline/segmenter.hpp — the whole pipeline for one frame, stage by stage.
+// findmug/segmenter/segmenter.hpp — the core's steps for one frame, in order.
 //
 // frame [-> short depth gaps filled, cloud.fill_depth_*] -> cloud + normals
 //       -> ground plane -> oversegmentation -> features [-> region features]
@@ -8,12 +8,12 @@
 //       (table_objects.*; with table_objects.relabel their table pixels
 //       become Object) [-> the label image's depth holes filled,
 //       labels.fill_holes]
-// The bracketed stages run when the model has them (features.regions,
+// The bracketed steps run when the model has them (features.regions,
 // features.context); the model file is the source of truth and a config
 // that disagrees with it is refused.
 //
-// Each stage is a method taking and returning plain data so that the daemon
-// can run stages on different threads and tests can check each alone.
+// Each step is a method taking and returning plain data so that the daemon
+// can run them in stages on different threads and tests can check each alone.
 // `process` runs them all in sequence. No threads, no LCM.
 #pragma once
 
@@ -33,26 +33,28 @@
 #include "findmug/mrf/mrf.hpp"
 #include "findmug/objects/table_objects.hpp"
 #include "findmug/settings/config.hpp"
-#include "findmug/supervoxels/oversegmentation.hpp"
+#include "findmug/oversegmentation/oversegmentation.hpp"
 #include "findmug/tables/tables.hpp"
 
 namespace findmug {
 
-// Time of each stage in milliseconds: wall time in `timings`, the calling
-// thread's CPU time in `cpu_timings` (what a stage costs on a shared machine,
+// Time of each step in milliseconds: wall time in `timings`, the calling
+// thread's CPU time in `cpu_timings` (what a step costs on a shared machine,
 // where wall time also counts the time other processes ran). In
-// `cpu_timings` the context stage is part of forest_ms (context_ms stays 0).
+// `cpu_timings` the context round is part of forest_ms (context_ms stays 0).
+// Named for what they become: the timing stages findmugd reports in status_t
+// (daemon/pipeline.cpp subStages), one per step or group of steps.
 struct StageTimings {
-  double cloud_ms = 0, normals_ms = 0, ground_ms = 0, overseg_ms = 0, features_ms = 0,
+  double cloud_ms = 0, normals_ms = 0, ground_ms = 0, oversegmentation_ms = 0, features_ms = 0,
          regions_ms = 0, forest_ms = 0, context_ms = 0, mrf_ms = 0, labels_ms = 0,
          tables_ms = 0, objects_ms = 0;
   double total() const {
-    return cloud_ms + normals_ms + ground_ms + overseg_ms + features_ms + regions_ms + forest_ms +
-           context_ms + mrf_ms + labels_ms + tables_ms + objects_ms;
+    return cloud_ms + normals_ms + ground_ms + oversegmentation_ms + features_ms + regions_ms +
+           forest_ms + context_ms + mrf_ms + labels_ms + tables_ms + objects_ms;
   }
 };
 
-// Stage 1 output: geometry in camera and ground frames.
+// Step 1 (prepare) output: geometry in camera and ground frames.
 struct PreparedFrame {
   RgbdFrame frame;
   OrganizedCloud cloud_camera;
@@ -64,7 +66,7 @@ struct PreparedFrame {
   StageTimings cpu_timings;
 };
 
-// Stage 2 output.
+// Step 2 (oversegment) output.
 struct SegmentedFrame {
   PreparedFrame prepared;
   Oversegmentation segmentation;
@@ -72,14 +74,14 @@ struct SegmentedFrame {
   StageTimings cpu_timings;
 };
 
-// Stage 3 output: everything a client needs.
+// Step 3 (classify) output: everything a client needs.
 struct LabelledFrame {
   SegmentedFrame segmented;
   SegmentFeatures features;
-  // The model's p(y|x) per segment: the context stage's when the model has
-  // one (the first stage's are then in first_stage_probabilities).
+  // The model's p(y|x) per segment: the context round's when the model has
+  // one (the first round's are then in first_round_probabilities).
   std::vector<ClassProbabilities> forest_probabilities;
-  std::vector<ClassProbabilities> first_stage_probabilities;  // empty without a context stage
+  std::vector<ClassProbabilities> first_round_probabilities;  // empty without a context round
   std::vector<std::uint8_t> forest_labels;  // argmax of forest_probabilities
   MrfResult mrf;
   LabelImage labels;                        // final (MRF if enabled, else forest)
@@ -107,7 +109,7 @@ class Segmenter {
   // Features only (used by the trainer).
   SegmentFeatures features(const SegmentedFrame& segmented) const;
   LabelledFrame classify(SegmentedFrame segmented) const;
-  // All stages. Throws findmug::Error for invalid frames; a frame without a
+  // All steps. Throws findmug::Error for invalid frames; a frame without a
   // ground plane comes back with an all-void label image.
   LabelledFrame process(RgbdFrame frame, const std::vector<std::uint8_t>* gt_labels = nullptr) const;
 
@@ -158,32 +160,32 @@ class Segmenter {
 // Throws findmug::Error naming the model and every setting whose value
 // differs when `forest` was trained with other feature-extraction settings
 // than `config` has (features would not mean what the trees learnt), or when
-// its columns or stages are not those the config computes (features.regions,
+// its columns or rounds are not those the config computes (features.regions,
 // features.context; a format-2 model has neither), or when the config has
 // mrf.pairwise = context and the model carries no learned pairwise term. A
 // model without recorded settings (trained in-process) is only checked for
-// its columns, stages and pairwise term.
+// its columns, rounds and pairwise term.
 void checkModelMatchesConfig(const RandomForest& forest, const SegmenterConfig& config);
 
-// Column names of the first stage's rows for `config` (kFeatureNames, then
+// Column names of the first round's rows for `config` (kFeatureNames, then
 // kRegionFeatureNames with features.regions, then kSceneFeatureNames with
-// features.scene), and of the context stage's.
-std::vector<std::string> firstStageFeatureNames(const SegmenterConfig& config);
-std::vector<std::string> contextStageFeatureNames(const SegmenterConfig& config);
+// features.scene), and of the context round's.
+std::vector<std::string> firstRoundFeatureNames(const SegmenterConfig& config);
+std::vector<std::string> contextRoundFeatureNames(const SegmenterConfig& config);
 
-// Row-major first-stage rows of every segment: base features, then region
+// Row-major first-round rows of every segment: base features, then region
 // features when `features.regions` is non-empty, then scene features when
 // `features.scene` is.
-std::vector<float> firstStageRows(const SegmentFeatures& features);
+std::vector<float> firstRoundRows(const SegmentFeatures& features);
 
-// The model's per-segment class distributions: the first stage, then, when
-// the model has a context stage, the context stage on the first stage's rows
-// plus context features of the first stage's answers. `weights` are the
-// segments' sizes (pixel counts). `first_stage` (optional) receives the first
-// stage's distributions.
+// The model's per-segment class distributions: the first round, then, when
+// the model has a context round, the context round on the first round's rows
+// plus context features of the first round's answers. `weights` are the
+// segments' sizes (pixel counts). `first_round` (optional) receives the first
+// round's distributions.
 std::vector<ClassProbabilities> predictSegments(
     const RandomForest& model, const SegmentFeatures& features, const std::vector<float>& weights,
-    const ContextConfig& context, std::vector<ClassProbabilities>* first_stage = nullptr,
+    const ContextConfig& context, std::vector<ClassProbabilities>* first_round = nullptr,
     double* context_ms = nullptr);
 
 // Per-segment training labels: the majority ground-truth label of each

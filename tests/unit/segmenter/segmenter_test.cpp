@@ -11,13 +11,14 @@
 #include "findmug/common/error.hpp"
 #include "findmug/offline/metrics.hpp"
 #include "findmug/offline/training.hpp"
-#include "findmug/pipeline/segmenter.hpp"
+#include "findmug/segmenter/segmenter.hpp"
 #include "small_forest.hpp"
 
 namespace findmug {
 namespace {
 
 using ::testing::HasSubstr;
+using ::testing::Not;
 
 // A camera 1.2 m above a floor, pitched 30 degrees down, facing a wall 3 m
 // ahead. Floor is grey-brown, wall light blue. Returns the frame and, per
@@ -67,7 +68,7 @@ std::shared_ptr<const RandomForest> trainOn(const Segmenter& segmenter, const Sc
 
 SegmenterConfig fastConfig() {
   SegmenterConfig config;
-  config.overseg.kind = OversegmenterKind::Organized;
+  config.oversegmentation.kind = OversegmenterKind::Organized;
   return config;
 }
 
@@ -224,14 +225,15 @@ TEST(Segmenter, RefusesModelTrainedWithOtherExtractionSettings) {
 
   EXPECT_NO_THROW(Segmenter(trained_config, model));
   SegmenterConfig other = trained_config;
-  other.overseg.kind = OversegmenterKind::PclSupervoxels;
-  other.overseg.seed_resolution_m = 0.15f;
+  other.oversegmentation.kind = OversegmenterKind::PclSupervoxels;
+  other.oversegmentation.seed_resolution_m = 0.15f;
   try {
     Segmenter segmenter(other, model);
     FAIL() << "expected the model to be refused";
   } catch (const Error& e) {
-    EXPECT_THAT(e.what(), HasSubstr("overseg.method: trained with organized, config has pcl"));
-    EXPECT_THAT(e.what(), HasSubstr("overseg.seed_resolution_m"));
+    EXPECT_THAT(e.what(),
+                HasSubstr("oversegmentation.method: trained with organized, config has pcl"));
+    EXPECT_THAT(e.what(), HasSubstr("oversegmentation.seed_resolution_m"));
     EXPECT_THAT(e.what(), HasSubstr(forest.id()));
   }
   // Settings that do not shape the features (MRF, tables) may differ freely.
@@ -239,6 +241,37 @@ TEST(Segmenter, RefusesModelTrainedWithOtherExtractionSettings) {
   mrf_only.mrf.lambda = 3.0f;
   mrf_only.tables.safety_distance_m = 0.4f;
   EXPECT_NO_THROW(Segmenter(mrf_only, model));
+}
+
+// Models trained before the rename of overseg.* record the old key names: they are
+// compared under the new names (currentSettingKey), so such a model still runs with
+// the settings it was trained with and is still refused with others.
+TEST(Segmenter, ModelsRecordingOldKeyNamesAreComparedUnderTheNewNames) {
+  const Scene scene = floorAndWall(true);
+  const SegmenterConfig trained_config = fastConfig();
+  RandomForest forest = *trainOn(Segmenter(trained_config, nullptr), scene);
+  RandomForest::Settings recorded = extractionSettings(trained_config);
+  int renamed = 0;
+  for (auto& [key, value] : recorded) {
+    if (key.rfind("oversegmentation.", 0) == 0) {
+      key = "overseg." + key.substr(std::string("oversegmentation.").size());
+      ++renamed;
+    }
+  }
+  ASSERT_GT(renamed, 5);
+  forest.setExtractionSettings(recorded);
+  const auto model = std::make_shared<const RandomForest>(forest);
+  EXPECT_NO_THROW(Segmenter(trained_config, model));
+  SegmenterConfig other = trained_config;
+  other.oversegmentation.kind = OversegmenterKind::PclSupervoxels;
+  try {
+    Segmenter segmenter(other, model);
+    FAIL() << "expected the model to be refused";
+  } catch (const Error& e) {
+    EXPECT_THAT(e.what(),
+                HasSubstr("oversegmentation.method: trained with organized, config has pcl"));
+    EXPECT_THAT(e.what(), Not(HasSubstr("unknown to this build")));
+  }
 }
 
 // The frame's features as the trainer and findmug-eval see them.
@@ -253,7 +286,7 @@ std::vector<FrameSample> extractScene(const Segmenter& segmenter, const Scene& s
   return samples;
 }
 
-TEST(Segmenter, RunsTheRegionAndContextStagesOfTheModel) {
+TEST(Segmenter, RunsTheRegionAndContextRoundsOfTheModel) {
   const Scene scene = floorAndWall(true);
   SegmenterConfig config = fastConfig();
   config.regions.enabled = true;
@@ -266,9 +299,9 @@ TEST(Segmenter, RunsTheRegionAndContextStagesOfTheModel) {
   const std::size_t n = samples[0].features.features.size();
   ASSERT_EQ(samples[0].features.regions.size(), n * kRegionFeatureDim);
   RandomForest trained = trainModel({&samples[0]}, config);
-  ASSERT_NE(trained.contextStage(), nullptr);
+  ASSERT_NE(trained.contextRound(), nullptr);
   EXPECT_EQ(trained.dim(), kFeatureDim + kRegionFeatureDim);
-  EXPECT_EQ(trained.contextStage()->featureNames(), contextStageFeatureNames(config));
+  EXPECT_EQ(trained.contextRound()->featureNames(), contextRoundFeatureNames(config));
   trained.setExtractionSettings(extractionSettings(config));
   const auto model = std::make_shared<const RandomForest>(trained);
 
@@ -276,7 +309,7 @@ TEST(Segmenter, RunsTheRegionAndContextStagesOfTheModel) {
   const LabelledFrame out = segmenter.process(scene.frame);
   ASSERT_EQ(out.features.features.size(), n);
   EXPECT_EQ(out.features.regions.size(), n * kRegionFeatureDim);
-  ASSERT_EQ(out.first_stage_probabilities.size(), n);
+  ASSERT_EQ(out.first_round_probabilities.size(), n);
   // The daemon's path gives exactly what evaluation computes for the frame.
   const auto expected = predictSample(*model, samples[0], config);
   ASSERT_EQ(out.forest_probabilities.size(), n);
@@ -310,7 +343,7 @@ TEST(Segmenter, RefusesModelWhoseStagesDifferFromTheConfig) {
     Segmenter segmenter(context, with_regions);
     FAIL() << "expected the model to be refused";
   } catch (const Error& e) {
-    EXPECT_THAT(e.what(), HasSubstr("has no auto-context stage"));
+    EXPECT_THAT(e.what(), HasSubstr("has no auto-context round"));
     EXPECT_THAT(e.what(), HasSubstr("features.context = true"));
   }
   // A 14-column model (as every format-2 model is) with features.regions on.
@@ -335,7 +368,7 @@ TEST(Segmenter, RunsTheSceneFeaturesOfTheModel) {
   ASSERT_EQ(samples[0].features.scene.size(), n * kSceneFeatureDim);
   RandomForest trained = trainModel({&samples[0]}, config);
   EXPECT_EQ(trained.dim(), kFeatureDim + kRegionFeatureDim + kSceneFeatureDim);
-  EXPECT_EQ(trained.featureNames(), firstStageFeatureNames(config));
+  EXPECT_EQ(trained.featureNames(), firstRoundFeatureNames(config));
   EXPECT_EQ(trained.featureNames().back(), std::string(kSceneFeatureNames.back()));
   trained.setExtractionSettings(extractionSettings(config));
   const auto model = std::make_shared<const RandomForest>(trained);
@@ -374,7 +407,7 @@ TEST(Segmenter, RunsTheObjectFeaturesOfTheModel) {
   ASSERT_EQ(samples[0].features.objects.size(), n * kObjectFeatureDim);
   RandomForest trained = trainModel({&samples[0]}, config);
   EXPECT_EQ(trained.dim(), kFeatureDim + kRegionFeatureDim + kSceneFeatureDim + kObjectFeatureDim);
-  EXPECT_EQ(trained.featureNames(), firstStageFeatureNames(config));
+  EXPECT_EQ(trained.featureNames(), firstRoundFeatureNames(config));
   EXPECT_EQ(trained.featureNames().back(), std::string(kObjectFeatureNames[kObjectFeatureDim - 1]));
   trained.setExtractionSettings(extractionSettings(config));
   const auto model = std::make_shared<const RandomForest>(trained);
@@ -410,7 +443,7 @@ TEST(Segmenter, RunsTheObjectFeaturesOfTheModel) {
   const auto context_samples = extractScene(Segmenter(context, nullptr), scene);
   ASSERT_EQ(context_samples[0].features.objects.size(), n * kObjectContextColumns.size());
   RandomForest context_model = trainModel({&context_samples[0]}, context);
-  EXPECT_EQ(context_model.featureNames(), firstStageFeatureNames(context));
+  EXPECT_EQ(context_model.featureNames(), firstRoundFeatureNames(context));
   EXPECT_EQ(context_model.featureNames().back(), "patch_height_in_object");
   context_model.setExtractionSettings(extractionSettings(context));
   const auto context_shared = std::make_shared<const RandomForest>(context_model);

@@ -1,4 +1,4 @@
-#include "findmug/pipeline/segmenter.hpp"
+#include "findmug/segmenter/segmenter.hpp"
 
 #include <algorithm>
 #include <array>
@@ -12,6 +12,7 @@
 #include "findmug/labels/label_holes.hpp"
 #include "findmug/mrf/context_pairwise.hpp"
 #include "findmug/mrf/object_consistency.hpp"
+#include "findmug/settings/settings.hpp"
 #include "findmug/tables/table_regions.hpp"
 #include "common/scratch.hpp"
 
@@ -43,7 +44,7 @@ class Stopwatch {
     cpu.*field = now - cpu_start_;
     cpu_start_ = now;
   }
-  // The same, added to what `field` holds (a stage done in two parts).
+  // The same, added to what `field` holds (a step done in two parts).
   void addLap(StageTimings& wall, StageTimings& cpu, double StageTimings::*field) {
     const double wall_before = wall.*field, cpu_before = cpu.*field;
     lap(wall, cpu, field);
@@ -75,13 +76,13 @@ void voidLabelsInto(int width, int height, LabelImage& image) {
 Segmenter::Segmenter(SegmenterConfig config, std::shared_ptr<const RandomForest> forest)
     : config_(std::move(config)),
       forest_(std::move(forest)),
-      oversegmenter_(makeOversegmenter(config_.overseg)) {
+      oversegmenter_(makeOversegmenter(config_.oversegmentation)) {
   if (forest_) checkModelMatchesConfig(*forest_, config_);
   if (forest_ && config_.use_mrf && config_.mrf.pairwise == MrfPairwise::Layout)
     layout_prior_ = std::make_shared<const LayoutPrior>(loadLayoutPrior(config_.mrf.layout_prior_path));
 }
 
-std::vector<std::string> firstStageFeatureNames(const SegmenterConfig& config) {
+std::vector<std::string> firstRoundFeatureNames(const SegmenterConfig& config) {
   std::vector<std::string> names(kFeatureNames.begin(), kFeatureNames.end());
   if (config.regions.enabled) names.insert(names.end(), kRegionFeatureNames.begin(), kRegionFeatureNames.end());
   if (config.scene.enabled) names.insert(names.end(), kSceneFeatureNames.begin(), kSceneFeatureNames.end());
@@ -91,8 +92,8 @@ std::vector<std::string> firstStageFeatureNames(const SegmenterConfig& config) {
   return names;
 }
 
-std::vector<std::string> contextStageFeatureNames(const SegmenterConfig& config) {
-  std::vector<std::string> names = firstStageFeatureNames(config);
+std::vector<std::string> contextRoundFeatureNames(const SegmenterConfig& config) {
+  std::vector<std::string> names = firstRoundFeatureNames(config);
   const auto context = contextFeatureNames();
   names.insert(names.end(), context.begin(), context.end());
   return names;
@@ -100,24 +101,24 @@ std::vector<std::string> contextStageFeatureNames(const SegmenterConfig& config)
 
 namespace {
 
-// firstStageRows into `rows`, reusing its memory.
-void firstStageRowsInto(const SegmentFeatures& features, std::vector<float>& rows) {
+// firstRoundRows into `rows`, reusing its memory.
+void firstRoundRowsInto(const SegmentFeatures& features, std::vector<float>& rows) {
   const std::size_t n = features.features.size();
   const bool regions = !features.regions.empty();
   if (regions && features.regions.size() != n * kRegionFeatureDim) {
-    throw Error("firstStageRows: " + std::to_string(n) + " segments but " +
+    throw Error("firstRoundRows: " + std::to_string(n) + " segments but " +
                 std::to_string(features.regions.size()) + " region feature values");
   }
   const bool scene = !features.scene.empty();
   if (scene && features.scene.size() != n * kSceneFeatureDim) {
-    throw Error("firstStageRows: " + std::to_string(n) + " segments but " +
+    throw Error("firstRoundRows: " + std::to_string(n) + " segments but " +
                 std::to_string(features.scene.size()) + " scene feature values");
   }
   const bool objects = !features.objects.empty();
   const std::size_t object_dim = objects && n > 0 ? features.objects.size() / n : 0;
   if (objects && (object_dim * n != features.objects.size() ||
                   objectColumnSetWithCount(object_dim) == nullptr)) {
-    throw Error("firstStageRows: " + std::to_string(n) + " segments but " +
+    throw Error("firstRoundRows: " + std::to_string(n) + " segments but " +
                 std::to_string(features.objects.size()) + " object feature values");
   }
   const std::size_t region_dim = regions ? kRegionFeatureDim : 0;
@@ -142,17 +143,17 @@ void firstStageRowsInto(const SegmentFeatures& features, std::vector<float>& row
   }
 }
 
-// predictSegments into `out` and `first_stage` (emptied without a context
-// stage), reusing their memory; the rows are per-thread scratch.
+// predictSegments into `out` and `first_round` (emptied without a context
+// round), reusing their memory; the rows are per-thread scratch.
 void predictSegmentsInto(const RandomForest& model, const SegmentFeatures& features,
                          const std::vector<float>& weights, const ContextConfig& context,
                          std::vector<ClassProbabilities>& out,
-                         std::vector<ClassProbabilities>& first_stage, double* context_ms) {
+                         std::vector<ClassProbabilities>& first_round, double* context_ms) {
   const std::size_t n = features.features.size();
   thread_local std::vector<float> rows_tls, row_tls;
   detail::Borrowed rows_buffer(rows_tls), row_buffer(row_tls);
   std::vector<float>& rows = *rows_buffer;
-  firstStageRowsInto(features, rows);
+  firstRoundRowsInto(features, rows);
   const auto dim = static_cast<std::size_t>(model.dim());
   if (rows.size() != n * dim) {
     throw Error("predictSegments: the model reads " + std::to_string(dim) +
@@ -161,21 +162,21 @@ void predictSegmentsInto(const RandomForest& model, const SegmentFeatures& featu
                 " (features.regions, features.scene or features.objects differs from the "
                 "model's)");
   }
-  const RandomForest* stage = model.contextStage();
-  // Without a context stage the first stage's answers are the output.
-  std::vector<ClassProbabilities>& probs = stage ? first_stage : out;
+  const RandomForest* round = model.contextRound();
+  // Without a context round the first round's answers are the output.
+  std::vector<ClassProbabilities>& probs = round ? first_round : out;
   probs.resize(n);
   model.predictRows(rows, n, probs);
-  if (!stage) {
-    first_stage.clear();
+  if (!round) {
+    first_round.clear();
     return;
   }
 
   Stopwatch watch;
   const std::vector<float> ctx = computeContextFeatures(probs, features.centroids, weights, context);
   const std::size_t dim2 = dim + kContextFeatureDim;
-  if (static_cast<std::size_t>(stage->dim()) != dim2) {
-    throw Error("predictSegments: the context stage reads " + std::to_string(stage->dim()) +
+  if (static_cast<std::size_t>(round->dim()) != dim2) {
+    throw Error("predictSegments: the context round reads " + std::to_string(round->dim()) +
                 " columns, expected " + std::to_string(dim2));
   }
   std::vector<float>& row = *row_buffer;
@@ -185,16 +186,16 @@ void predictSegmentsInto(const RandomForest& model, const SegmentFeatures& featu
     std::copy_n(rows.begin() + static_cast<std::ptrdiff_t>(i * dim), dim, row.begin());
     std::copy_n(ctx.begin() + static_cast<std::ptrdiff_t>(i * kContextFeatureDim),
                 kContextFeatureDim, row.begin() + static_cast<std::ptrdiff_t>(dim));
-    out[i] = stage->predict(row);
+    out[i] = round->predict(row);
   }
   if (context_ms) *context_ms = watch.lap();
 }
 
 }  // namespace
 
-std::vector<float> firstStageRows(const SegmentFeatures& features) {
+std::vector<float> firstRoundRows(const SegmentFeatures& features) {
   std::vector<float> rows;
-  firstStageRowsInto(features, rows);
+  firstRoundRowsInto(features, rows);
   return rows;
 }
 
@@ -202,11 +203,11 @@ std::vector<ClassProbabilities> predictSegments(const RandomForest& model,
                                                 const SegmentFeatures& features,
                                                 const std::vector<float>& weights,
                                                 const ContextConfig& context,
-                                                std::vector<ClassProbabilities>* first_stage,
+                                                std::vector<ClassProbabilities>* first_round,
                                                 double* context_ms) {
   std::vector<ClassProbabilities> out, first;
   predictSegmentsInto(model, features, weights, context, out, first, context_ms);
-  if (first_stage) *first_stage = std::move(first);
+  if (first_round) *first_round = std::move(first);
   return out;
 }
 
@@ -228,8 +229,8 @@ void checkModelMatchesConfig(const RandomForest& forest, const SegmenterConfig& 
                 classSchemeName(config.learner.classes) + "; set learner.classes = " +
                 forest.internalClasses().scheme + " or retrain");
   }
-  // Columns and stages first: they say in one line what is wrong.
-  const auto expected = firstStageFeatureNames(config);
+  // Columns and rounds first: they say in one line what is wrong.
+  const auto expected = firstRoundFeatureNames(config);
   if (forest.featureNames() != expected) {
     const bool model_regions = forest.dim() == kFeatureDim + kRegionFeatureDim;
     const auto& names = forest.featureNames();
@@ -269,21 +270,25 @@ void checkModelMatchesConfig(const RandomForest& forest, const SegmenterConfig& 
                            " model has no pairwise term)"
                      : std::string()));
   }
-  if (config.context.enabled != (forest.contextStage() != nullptr)) {
-    throw Error("model " + name + (forest.contextStage() ? " has" : " has no") +
-                " auto-context stage but the config has features.context = " +
+  if (config.context.enabled != (forest.contextRound() != nullptr)) {
+    throw Error("model " + name + (forest.contextRound() ? " has" : " has no") +
+                " auto-context round but the config has features.context = " +
                 (config.context.enabled ? "true" : "false") +
                 "; set it to match the model or retrain" +
-                (forest.formatVersion() == 2 ? " (a format-2 model has no context stage)" : ""));
+                (forest.formatVersion() == 2 ? " (a format-2 model has no context round)" : ""));
   }
-  if (forest.contextStage() && forest.contextStage()->featureNames() != contextStageFeatureNames(config)) {
-    throw Error("model " + name + ": the context stage's columns are not those this build computes");
+  if (forest.contextRound() &&
+      forest.contextRound()->featureNames() != contextRoundFeatureNames(config)) {
+    throw Error("model " + name +
+                ": the context round's columns are not those this build computes");
   }
   const auto& trained = forest.extractionSettings();
   if (trained.empty()) return;
   const auto current = extractionSettings(config);
   std::string differences;
-  for (const auto& [key, value] : trained) {
+  for (const auto& [trained_key, value] : trained) {
+    // A model keeps the key names it was trained with (overseg.* before the rename).
+    const std::string key = currentSettingKey(trained_key);
     const auto it = std::find_if(current.begin(), current.end(),
                                  [&name = key](const auto& kv) { return kv.first == name; });
     if (it == current.end()) {
@@ -311,7 +316,7 @@ void Segmenter::recycle(LabelledFrame&& done) const {
       recycled_->segmentations.size() < kRecycledFrames) {
     recycled_->segmentations.push_back(std::move(done.segmented.segmentation));
   }
-  // The rest: the classify stage's outputs (features, distributions, MRF,
+  // The rest: the classify step's outputs (features, distributions, MRF,
   // label image, tables: detectTablesInto reuses the tables' pixel lists).
   if (recycled_->labelled.size() < kRecycledFrames) {
     done.segmented = SegmentedFrame{};
@@ -332,7 +337,7 @@ PreparedFrame Segmenter::prepare(RgbdFrame frame, const std::vector<std::uint8_t
     }
   }
   Stopwatch watch;
-  // The cloud stage's time counts the fill.
+  // The cloud step's time counts the fill.
   fillDepthHoles(frame.depth_mm, frame.width, frame.height, config_.depth_holes);
   frameToCloud(frame, config_.max_depth_m, out.cloud_camera);
   watch.lap(out.timings, out.cpu_timings, &StageTimings::cloud_ms);
@@ -445,7 +450,7 @@ SegmentedFrame Segmenter::oversegment(PreparedFrame prepared) const {
     out.segmentation.height = prepared.cloud_camera.height;
     out.segmentation.pixel_segment.assign(prepared.cloud_camera.size(), -1);
   }
-  watch.lap(out.timings, out.cpu_timings, &StageTimings::overseg_ms);
+  watch.lap(out.timings, out.cpu_timings, &StageTimings::oversegmentation_ms);
   out.prepared = std::move(prepared);
   return out;
 }
@@ -505,7 +510,7 @@ LabelledFrame Segmenter::classify(SegmentedFrame segmented) const {
     out.features.objects.clear();
     out.features.object_group.clear();
     out.forest_probabilities.clear();
-    out.first_stage_probabilities.clear();
+    out.first_round_probabilities.clear();
     out.forest_labels.clear();
     out.mrf.labels.clear();
     out.mrf.confidence.clear();
@@ -565,7 +570,7 @@ LabelledFrame Segmenter::classify(SegmentedFrame segmented) const {
     out.features.objects.clear();
     out.features.object_group.clear();
   }
-  // Region, scene and object features share this stage's time.
+  // Region, scene and object features share this step's time.
   watch.lap(out.timings, out.cpu_timings, &StageTimings::regions_ms);
 
   const std::size_t n = out.features.features.size();
@@ -575,13 +580,13 @@ LabelledFrame Segmenter::classify(SegmentedFrame segmented) const {
     weights[i] = static_cast<float>(segmented.segmentation.segments[i].size());
   double context_ms = 0;
   predictSegmentsInto(*forest_, out.features, weights, config_.context, out.forest_probabilities,
-                      out.first_stage_probabilities, &context_ms);
+                      out.first_round_probabilities, &context_ms);
   out.forest_labels.resize(n);
   for (std::size_t i = 0; i < n; ++i) out.forest_labels[i] = argmax(out.forest_probabilities[i]);
-  // The context stage's time is measured inside and reported on its own.
+  // The context round's time is measured inside and reported on its own.
   out.timings.context_ms = context_ms;
   watch.lap(out.timings, out.cpu_timings, &StageTimings::forest_ms);
-  out.timings.forest_ms -= context_ms;  // CPU time: the context stage stays in forest_ms
+  out.timings.forest_ms -= context_ms;  // CPU time: the context round stays in forest_ms
 
   std::vector<float>& confidence = *confidence_buffer;
   confidence.resize(n);
@@ -654,7 +659,7 @@ LabelledFrame Segmenter::classify(SegmentedFrame segmented) const {
   if (config_.table_objects.relabel) relabelTableObjects(out.table_objects.objects, out.labels);
   watch.lap(out.timings, out.cpu_timings, &StageTimings::objects_ms);
 
-  // After the tables: the filled pixels have no point, and the table stage
+  // After the tables: the filled pixels have no point, and the table step
   // counts the table pixels without one as a diagnostic.
   fillLabelHoles(segmented.prepared.frame.depth_mm, config_.label_holes, out.labels);
   watch.addLap(out.timings, out.cpu_timings, &StageTimings::labels_ms);

@@ -9,7 +9,7 @@
 // supervoxels, renumbered with the segments.
 //
 // Cost: 150-360 ms per 640x480 frame on this machine; the organized
-// oversegmenter (overseg_organized.cpp) is the fast alternative.
+// oversegmenter (oversegmentation_organized.cpp) is the fast alternative.
 #include <pcl/point_cloud.h>
 #include <pcl/point_types.h>
 #include <pcl/segmentation/supervoxel_clustering.h>
@@ -23,8 +23,8 @@
 #include <string>
 
 #include "findmug/common/error.hpp"
-#include "findmug/supervoxels/oversegmentation.hpp"
-#include "supervoxels/oversegmentation_internal.hpp"
+#include "findmug/oversegmentation/oversegmentation.hpp"
+#include "oversegmentation/oversegmentation_internal.hpp"
 
 namespace findmug {
 namespace {

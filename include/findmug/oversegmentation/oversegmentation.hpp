@@ -1,4 +1,5 @@
-// findmug/supervoxels/oversegmentation.hpp — supervoxel patches and their adjacency graph.
+// findmug/oversegmentation/oversegmentation.hpp — the frame split into patches (made as
+// supervoxels) and their adjacency graph.
 //
 // Segments are sets of pixels of the organized cloud. Two oversegmenters sit
 // behind one interface: PCL's SupervoxelClustering (the paper's, the

@@ -10,7 +10,7 @@
 #include "findmug/common/error.hpp"
 #include "findmug/frame/dataset.hpp"
 #include "findmug/learner/forest.hpp"
-#include "findmug/pipeline/segmenter.hpp"
+#include "findmug/segmenter/segmenter.hpp"
 #include "findmug/settings/config.hpp"
 #include "shipped_model.hpp"
 #include "test_data.hpp"
@@ -48,7 +48,7 @@ TEST(SegmenterLayout, LoadsThePriorAndRefusesABadOne) {
 }
 
 // A strong prior changes some patch labels of a real frame, a zero weight
-// none: the term is used by the pipeline, and weight 0 is Potts.
+// none: the term is used by the Segmenter, and weight 0 is Potts.
 TEST(SegmenterLayout, ReachesTheLabelsOfARealFrame) {
   FINDMUG_REQUIRE_DATA(nyu, "nyuv2_labeled");
   const auto forest = test::shippedModel();
