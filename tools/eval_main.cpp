@@ -77,7 +77,8 @@ constexpr const char* kDescription =
 
 struct EvalFlags {
   DatasetFlags dataset;
-  std::string model, json, out, table_report, table_evidence, folds_by = "auto", curve_dir, nyu_split;
+  std::string model, json, out, table_report, table_evidence, curve_dir, nyu_split;
+  std::string folds_by = "auto";
   std::string curve_sizes = "5,10,20,30,all";
   int folds = 5, scene_gap = 2, train_frames = 0, curve_seeds = 3;
   std::uint64_t subset_seed = 0;
@@ -397,8 +398,8 @@ std::vector<std::uint8_t> nyu40Labels(const std::vector<std::string>& folders,
 
 void writeTableEvidenceHeader(std::ostream& out) {
   out << "source,frame,nyu40,nyu40_share,points,top_height_m,length_m,width_m,top_area_m2,"
-         "band_spread_m,band_flat_share,band_share,median_tilt_deg,tilt5_share,tilt10_share,tilt20_share,flat_share,"
-         "under_filled_share,under_floor_share\n";
+         "band_spread_m,band_flat_share,band_share,median_tilt_deg,tilt5_share,tilt10_share,"
+         "tilt20_share,flat_share,under_filled_share,under_floor_share\n";
 }
 
 void writeTableEvidence(std::ostream& out, const char* source, const TableTopEvidence& e) {
@@ -406,7 +407,8 @@ void writeTableEvidence(std::ostream& out, const char* source, const TableTopEvi
       << e.nyu40_share << "," << e.points << "," << e.top_height_m << "," << e.length_m << ","
       << e.width_m << "," << e.top_area_m2 << "," << e.band_spread_m << "," << e.band_flat_share
       << "," << e.band_share << "," << e.median_tilt_deg << "," << e.tilt5_share << ","
-      << e.tilt10_share << "," << e.tilt20_share << "," << e.flat_share << "," << e.under_filled_share << "," << e.under_floor_share << "\n";
+      << e.tilt10_share << "," << e.tilt20_share << "," << e.flat_share << ","
+      << e.under_filled_share << "," << e.under_floor_share << "\n";
 }
 
 // Tables found on each evaluated frame's forest+MRF labels (the pipeline's
@@ -417,10 +419,9 @@ void writeTableEvidence(std::ostream& out, const char* source, const TableTopEvi
 // With `diagnosis`, each frame's instances and detections are described
 // there, with why each unmatched one failed (eval_tables.hpp).
 void measureTables(const LabeledFrames& frames, const std::vector<FrameSample>& samples,
-                   Evaluation& eval, const Segmenter& segmenter,
-                   const TableMetricsConfig& metrics, const synth::SequenceGroundTruth* synth,
-                   EvalReport& report, std::ostream* diagnosis,
-                   const TableEvidenceOut& evidence = {}) {
+                   Evaluation& eval, const Segmenter& segmenter, const TableMetricsConfig& metrics,
+                   const synth::SequenceGroundTruth* synth, EvalReport& report,
+                   std::ostream* diagnosis, const TableEvidenceOut& evidence = {}) {
   const SegmenterConfig& config = segmenter.config();
   std::map<std::string, std::size_t> pose_of;
   if (synth) {
@@ -459,10 +460,10 @@ void measureTables(const LabeledFrames& frames, const std::vector<FrameSample>& 
       const std::vector<std::uint8_t>* fine = truth40.empty() ? nullptr : &truth40;
       auto write = [&](const char* source, const std::vector<TableCluster>& tables) {
         for (const TableCluster& t : tables)
-          writeTableEvidence(*evidence.csv, source,
-                             measureTableTop(sample.name, prepared.cloud_ground,
-                                             prepared.normals_ground, t,
-                                             config.tables.top_band_m, fine));
+          writeTableEvidence(
+              *evidence.csv, source,
+              measureTableTop(sample.name, prepared.cloud_ground, prepared.normals_ground, t,
+                              config.tables.top_band_m, fine));
       };
       write("detected", detected);
       // Every cluster of the predicted table pixels, before the top-area and horizontal
@@ -477,13 +478,13 @@ void measureTables(const LabeledFrames& frames, const std::vector<FrameSample>& 
             detectTables(prepared.cloud_ground, predicted, loose, &prepared.normals_ground).tables);
       if (fine && evidence.truth) {
         for (int c : {3, 4, 5, 6, 7, 12, 14, 17, 32, 39}) {
-          LabelImage as_table{sample.width, sample.height,
-                              std::vector<std::uint8_t>(truth40.size(), 0), {}};
+          LabelImage as_table{
+              sample.width, sample.height, std::vector<std::uint8_t>(truth40.size(), 0), {}};
           for (std::size_t p = 0; p < truth40.size(); ++p)
             if (truth40[p] == c) as_table.labels[p] = static_cast<std::uint8_t>(Label::Table);
-          write("truth", detectTables(prepared.cloud_ground, as_table, loose,
-                                      &prepared.normals_ground)
-                             .tables);
+          write("truth",
+                detectTables(prepared.cloud_ground, as_table, loose, &prepared.normals_ground)
+                    .tables);
         }
       }
     }

@@ -328,9 +328,9 @@ void validateTableConfig(const TableConfig& c) {
   nonNegative("soft_top_min_area_m2", c.soft_top_min_area_m2);
   if (!std::isfinite(c.flat_tilt_deg) || c.flat_tilt_deg < 0.0f ||
       c.flat_tilt_deg > c.horizontal_tilt_deg) {
-    badSetting("flat_tilt_deg", c.flat_tilt_deg,
-               "must be in [0, tables.horizontal_tilt_deg (" + fmt(c.horizontal_tilt_deg) +
-                   ")] degrees");
+    badSetting(
+        "flat_tilt_deg", c.flat_tilt_deg,
+        "must be in [0, tables.horizontal_tilt_deg (" + fmt(c.horizontal_tilt_deg) + ")] degrees");
   }
   if (!std::isfinite(c.min_flat_share) || c.min_flat_share < 0.0f || c.min_flat_share > 1.0f) {
     badSetting("min_flat_share", c.min_flat_share, "must be in [0, 1]");
@@ -599,9 +599,6 @@ struct ClusterMembers {
   const std::vector<int>& sample_members;
 };
 
-// Step 3's checks of one described cluster of n points, in this order; a
-// rejected one is counted and its reason goes to the diagnostics. With
-// normals, also sets the table's horizontal share.
 // Step 3b, the table-top test: whether a described cluster's top is large
 // and not flat (a bed or sofa: TableConfig::min_flat_share). Measures the
 // table's flat_share when the top is large enough and there are normals.
@@ -619,6 +616,9 @@ bool softTop(const int* member, int n, const int* full_pixels, const OrganizedCl
   return table.flat_share < config.min_flat_share;
 }
 
+// Step 3's checks of one described cluster of n points, in this order; a
+// rejected one is counted and its reason goes to the diagnostics. With
+// normals, also sets the table's horizontal share.
 bool acceptTable(const ClusterOutcome& outcome, const MemberSums& sums, int n, bool with_normals,
                  bool soft_top, const TableConfig& config, TableCluster& table,
                  TableDetection& result) {
@@ -671,9 +671,9 @@ bool acceptTable(const ClusterOutcome& outcome, const MemberSums& sums, int n, b
 // its sampled points, confidence and horizontal share from all of them) and,
 // when it passes the checks, appended to result.tables with its pixels.
 void describeClusters(int clusters, const ClusterMembers& m, const std::vector<int>& full_pixels,
-                      const OrganizedCloud& cloud_ground, const LabelImage& labels, const NormalImage* normals_ground,
-                      const TableConfig& config, DetectionScratch& scratch,
-                      TableDetection& result) {
+                      const OrganizedCloud& cloud_ground, const LabelImage& labels,
+                      const NormalImage* normals_ground, const TableConfig& config,
+                      DetectionScratch& scratch, TableDetection& result) {
   const float cos_tilt = std::cos(config.horizontal_tilt_deg * static_cast<float>(M_PI) / 180.0f);
   int small_clusters = 0, largest_small = 0;
   std::vector<TableCluster>& tables = result.tables;  // empty (resetDetection)
@@ -705,9 +705,9 @@ void describeClusters(int clusters, const ClusterMembers& m, const std::vector<i
     table = reusedTable(std::move(table));
     table.mean_confidence = static_cast<float>(sums.confidence / n);
     const ClusterOutcome outcome = describeCluster(cluster_points, n, config, table);
-    const bool soft = outcome.ok && table.top_area_m2 >= config.min_top_area_m2 &&
-                      softTop(member, n, full_pixels.data(), cloud_ground, normals_ground,
-                              config, table);
+    const bool soft =
+        outcome.ok && table.top_area_m2 >= config.min_top_area_m2 &&
+        softTop(member, n, full_pixels.data(), cloud_ground, normals_ground, config, table);
     if (!acceptTable(outcome, sums, n, normals_ground != nullptr, soft, config, table, result)) {
       if (soft) {
         const std::size_t at = result.soft_top_pixels.size();

@@ -51,13 +51,14 @@ Eigen::Vector2d centreOf(const std::vector<Eigen::Vector2d>& polygon) {
 // A table's box centre, base frame, moved into the map by `pose`.
 Eigen::Vector2d inMap(const TableCluster& t, const Pose2D& pose) {
   const double c = std::cos(pose.yaw), s = std::sin(pose.yaw);
-  return {pose.x + c * t.center.x() - s * t.center.y(), pose.y + s * t.center.x() + c * t.center.y()};
+  return {pose.x + c * t.center.x() - s * t.center.y(),
+          pose.y + s * t.center.x() + c * t.center.y()};
 }
 
 struct Counts {
-  int beds = 0, sofas = 0, tables = 0;                   // looked at
+  int beds = 0, sofas = 0, tables = 0;                       // looked at
   int beds_mapped = 0, sofas_mapped = 0, tables_mapped = 0;  // with a confirmed map table on them
-  int frames = 0, frames_on_soft = 0;                    // frames, frames with a detection on one
+  int frames = 0, frames_on_soft = 0;  // frames, frames with a detection on one
   void add(const Counts& o) {
     beds += o.beds, sofas += o.sofas, tables += o.tables;
     beds_mapped += o.beds_mapped, sofas_mapped += o.sofas_mapped;
@@ -65,8 +66,8 @@ struct Counts {
   }
   std::string row() const {
     char line[200];
-    std::snprintf(line, sizeof line, "%d of %d | %d of %d | %d of %d | %d of %d", beds_mapped,
-                  beds, sofas_mapped, sofas, tables_mapped, tables, frames_on_soft, frames);
+    std::snprintf(line, sizeof line, "%d of %d | %d of %d | %d of %d | %d of %d", beds_mapped, beds,
+                  sofas_mapped, sofas, tables_mapped, tables, frames_on_soft, frames);
     return line;
   }
 };
@@ -120,10 +121,12 @@ int main(int argc, char** argv) {
                            {std::make_unique<Segmenter>(off, forest), {}}};
     variants[0].tables = config.segmenter.tables;
     variants[1].tables = off.tables;
-    std::printf("model %s; a cell: furniture with a confirmed map table on it, of those looked "
-                "at; frames: with a detection on a bed or sofa\n\n",
-                model_path.c_str());
-    std::printf("| apartment | test | beds | sofas | tables | frames |\n|---|---|---|---|---|---|\n");
+    std::printf(
+        "model %s; a cell: furniture with a confirmed map table on it, of those looked "
+        "at; frames: with a detection on a bed or sofa\n\n",
+        model_path.c_str());
+    std::printf(
+        "| apartment | test | beds | sofas | tables | frames |\n|---|---|---|---|---|---|\n");
     Counts total[2];
     for (const std::uint64_t seed : seeds) {
       const synth::MultiRoomApartment apt = synth::makeMultiRoomApartment(seed);
@@ -152,11 +155,12 @@ int main(int argc, char** argv) {
           for (int shot = 0; shot < 2; ++shot, time_s += 0.5, ++frame_index) {
             pose.time_s = time_s;
             for (int v = 0; v < 2; ++v) {
-              synth::RenderedFrame rendered = synth::render(
-                  scene, pose, synth::RenderOptions{}, seed * 100000 + frame_index);
+              synth::RenderedFrame rendered =
+                  synth::render(scene, pose, synth::RenderOptions{}, seed * 100000 + frame_index);
               rendered.labeled.frame.utime = static_cast<std::uint64_t>(time_s * 1e6) + 1;
               rendered.labeled.frame.seq = frame_index;
-              LabelledFrame labelled = variants[v].segmenter->process(std::move(rendered.labeled.frame));
+              LabelledFrame labelled =
+                  variants[v].segmenter->process(std::move(rendered.labeled.frame));
               if (!labelled.segmented.prepared.ground) continue;
               const Pose2D base{xy.x(), xy.y(), pose.yaw};
               ++counts[v].frames;

@@ -161,8 +161,7 @@ TEST(TableTopTest, FlatShareBoundary) {
   const Top top = flatTop(1.2f, 0.8f, 0.74f, 2.0f, 15.0f, 0.595f);
   int flat = 0;
   for (const auto& n : top.normals.normals) flat += n.z() >= std::cos(10.0f * kDeg);
-  const float expected =
-      static_cast<float>(flat) / static_cast<float>(top.normals.normals.size());
+  const float expected = static_cast<float>(flat) / static_cast<float>(top.normals.normals.size());
   ASSERT_GT(expected, 0.45f);
   ASSERT_LT(expected, 0.55f);
   TableConfig measure;
@@ -252,9 +251,9 @@ TEST(TableTopTestOnNyu, BedsAreNoTablesAndTablesStay) {
   DatasetOptions options;
   options.nyu_rotations_file = rotations_file.string();
   const std::vector<NyuCase> beds = {{"0056", {4}}, {"0076", {4}}};
-  const std::vector<NyuCase> tables = {
-      {"0029", {7, 12, 14}}, {"0032", {7, 12, 14}}, {"0039", {7, 12, 14}},
-      {"0031", {7, 12, 14}}, {"0118", {7, 12, 14}}, {"0002", {7, 12, 14}}};
+  const std::vector<NyuCase> tables = {{"0029", {7, 12, 14}}, {"0032", {7, 12, 14}},
+                                       {"0039", {7, 12, 14}}, {"0031", {7, 12, 14}},
+                                       {"0118", {7, 12, 14}}, {"0002", {7, 12, 14}}};
   int seen = 0;
   for (const auto& [root, cases, is_bed] :
        {std::tuple{extra, beds, true}, std::tuple{extra, tables, false},
@@ -267,12 +266,13 @@ TEST(TableTopTestOnNyu, BedsAreNoTablesAndTablesStay) {
       if (index == folder.size()) continue;  // in the other folder
       ++seen;
       LabeledFrame f = folder.load(index);
-      const Image<std::uint8_t> fine =
-          readPng8((root / "label40" / (c.frame + ".png")).string());
+      const Image<std::uint8_t> fine = readPng8((root / "label40" / (c.frame + ".png")).string());
       const PreparedFrame p = segmenter.prepare(std::move(f.frame), &f.labels);
       ASSERT_TRUE(p.ground.has_value()) << c.frame;
-      LabelImage labels{p.cloud_ground.width, p.cloud_ground.height,
-                        std::vector<std::uint8_t>(fine.pixels.size(), kUnknownLabel), {}};
+      LabelImage labels{p.cloud_ground.width,
+                        p.cloud_ground.height,
+                        std::vector<std::uint8_t>(fine.pixels.size(), kUnknownLabel),
+                        {}};
       for (std::size_t q = 0; q < fine.pixels.size(); ++q)
         for (const int cls : c.classes)
           if (fine.pixels[q] == cls) labels.labels[q] = kTable;
@@ -287,8 +287,7 @@ TEST(TableTopTestOnNyu, BedsAreNoTablesAndTablesStay) {
         EXPECT_GE(with.soft_tops, 1) << c.frame;
       } else {
         EXPECT_GE(without.tables.size(), 1u) << c.frame << joined(without.diagnostics);
-        EXPECT_EQ(with.tables.size(), without.tables.size()) << c.frame
-                                                             << joined(with.diagnostics);
+        EXPECT_EQ(with.tables.size(), without.tables.size()) << c.frame << joined(with.diagnostics);
         EXPECT_EQ(with.soft_tops, 0) << c.frame;
       }
     }
