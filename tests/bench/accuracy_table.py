@@ -103,6 +103,8 @@ ROWS = [
      without(SHIPPED, "mrf.pairwise", "potts"), ["--degrade"], "shipped@raw"),
     ("shipped-labelholes@raw", "*raw-like copies*: shipped without the label-hole fill",
      SHIPPED + ["labels.fill_holes=false"], ["--degrade"], "shipped@raw"),
+    ("shipped-softtop@raw", "*raw-like copies*: shipped without the table-top test",
+     SHIPPED + ["tables.min_flat_share=0"], ["--degrade"], "shipped@raw"),
     ("shipped+nyu40@raw", "*raw-like copies*: shipped with NYU-40 classes",
      without(SHIPPED, "learner.classes", "nyu40"), ["--degrade"], "shipped@raw"),
 ]
