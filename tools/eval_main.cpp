@@ -77,7 +77,8 @@ constexpr const char* kDescription =
 
 struct EvalFlags {
   DatasetFlags dataset;
-  std::string model, json, out, table_report, folds_by = "auto", curve_dir, nyu_split;
+  std::string model, json, out, table_report, table_evidence, curve_dir, nyu_split;
+  std::string folds_by = "auto";
   std::string curve_sizes = "5,10,20,30,all";
   int folds = 5, scene_gap = 2, train_frames = 0, curve_seeds = 3;
   std::uint64_t subset_seed = 0;
@@ -153,6 +154,10 @@ std::unique_ptr<CLI::App> makeEvalApp(EvalFlags& f) {
                        "forest.seed + 1000 s")
            ->type_name("K")
            ->check(CLI::Range(1, 100)));
+  last(app->add_option("--table-evidence", f.table_evidence,
+                       "write a CSV of every detected table's top measures (height, size, "
+                       "flatness, normals, what is under it) with its true NYU-40 class")
+           ->type_name("FILE"));
   last(app->add_option("--table-report", f.table_report,
                        "write a per-frame diagnosis of table instances and detections "
                        "(why each unmatched one failed) to FILE")
@@ -368,6 +373,44 @@ void countTableByNyu40(const std::vector<std::string>& folders,
   }
 }
 
+// Where --table-evidence rows go (`csv`, null for none) and the folders whose label40/
+// holds the frames' NYU-40 labels.
+struct TableEvidenceOut {
+  std::ostream* csv = nullptr;
+  const std::vector<std::string>* folders = nullptr;
+  bool truth = true;  // also the true instances (the same on every seed)
+};
+
+// The frame's NYU-40 labels from the first of `folders` whose label40/ has it, or empty.
+std::vector<std::uint8_t> nyu40Labels(const std::vector<std::string>& folders,
+                                      const std::string& name, std::size_t pixels) {
+  for (const std::string& folder : folders) {
+    const auto path = std::filesystem::path(folder) / "label40" / (name + ".png");
+    if (!std::filesystem::exists(path)) continue;
+    Image<std::uint8_t> fine = readPng8(path.string());
+    if (fine.pixels.size() != pixels)
+      throw Error(path.string() + ": " + std::to_string(fine.pixels.size()) + " labels for " +
+                  std::to_string(pixels) + " pixels");
+    return std::move(fine.pixels);
+  }
+  return {};
+}
+
+void writeTableEvidenceHeader(std::ostream& out) {
+  out << "source,frame,nyu40,nyu40_share,points,top_height_m,length_m,width_m,top_area_m2,"
+         "band_spread_m,band_flat_share,band_share,median_tilt_deg,tilt5_share,tilt10_share,"
+         "tilt20_share,flat_share,under_filled_share,under_floor_share\n";
+}
+
+void writeTableEvidence(std::ostream& out, const char* source, const TableTopEvidence& e) {
+  out << source << "," << e.frame << "," << (e.nyu40 > 0 ? nyu40ClassName(e.nyu40) : "none") << ","
+      << e.nyu40_share << "," << e.points << "," << e.top_height_m << "," << e.length_m << ","
+      << e.width_m << "," << e.top_area_m2 << "," << e.band_spread_m << "," << e.band_flat_share
+      << "," << e.band_share << "," << e.median_tilt_deg << "," << e.tilt5_share << ","
+      << e.tilt10_share << "," << e.tilt20_share << "," << e.flat_share << ","
+      << e.under_filled_share << "," << e.under_floor_share << "\n";
+}
+
 // Tables found on each evaluated frame's forest+MRF labels (the Segmenter's
 // detectTables) against the ground-truth instances. The frame's geometry is
 // recomputed (cloud, ground): cheap, and it keeps FrameSample small.
@@ -376,14 +419,15 @@ void countTableByNyu40(const std::vector<std::string>& folders,
 // With `diagnosis`, each frame's instances and detections are described
 // there, with why each unmatched one failed (eval_tables.hpp).
 void measureTables(const LabeledFrames& frames, const std::vector<FrameSample>& samples,
-                   const Evaluation& eval, const Segmenter& segmenter,
-                   const TableMetricsConfig& metrics, const synth::SequenceGroundTruth* synth,
-                   EvalReport& report, std::ostream* diagnosis) {
+                   Evaluation& eval, const Segmenter& segmenter, const TableMetricsConfig& metrics,
+                   const synth::SequenceGroundTruth* synth, EvalReport& report,
+                   std::ostream* diagnosis, const TableEvidenceOut& evidence = {}) {
   const SegmenterConfig& config = segmenter.config();
   std::map<std::string, std::size_t> pose_of;
   if (synth) {
     for (std::size_t i = 0; i < synth->frame_names.size(); ++i) pose_of[synth->frame_names[i]] = i;
   }
+  bool relabelled = false;
   for (std::size_t f = 0; f < samples.size(); ++f) {
     if (eval.mrf_pixels[f].empty()) continue;
     LabeledFrame frame = frames.load(samples[f].source_index);
@@ -405,11 +449,53 @@ void measureTables(const LabeledFrames& frames, const std::vector<FrameSample>& 
           eval.probabilities[f][static_cast<std::size_t>(s)][static_cast<int>(Label::Table)];
       confidence[p] = eval.mrf_results[f].confidence[static_cast<std::size_t>(s)];
     }
-    const LabelImage predicted{sample.width, sample.height, eval.mrf_pixels[f], confidence};
-    const auto detected =
-        detectTables(prepared.cloud_ground, predicted, config.tables, &prepared.normals_ground)
-            .tables;
+    LabelImage predicted{sample.width, sample.height, eval.mrf_pixels[f], confidence};
+    const TableDetection detection =
+        detectTables(prepared.cloud_ground, predicted, config.tables, &prepared.normals_ground);
+    const std::vector<TableCluster>& detected = detection.tables;
     const auto matches = matchTables(truth, detected, metrics.min_iou);
+    if (evidence.csv) {
+      const std::vector<std::uint8_t> truth40 =
+          nyu40Labels(*evidence.folders, sample.name, sample.pixel_segment.size());
+      const std::vector<std::uint8_t>* fine = truth40.empty() ? nullptr : &truth40;
+      auto write = [&](const char* source, const std::vector<TableCluster>& tables) {
+        for (const TableCluster& t : tables)
+          writeTableEvidence(
+              *evidence.csv, source,
+              measureTableTop(sample.name, prepared.cloud_ground, prepared.normals_ground, t,
+                              config.tables.top_band_m, fine));
+      };
+      write("detected", detected);
+      // Every cluster of the predicted table pixels, before the top-area and horizontal
+      // filters, and every true instance of the candidate classes clustered as if it were
+      // labelled table (NYU-40: 3 cabinet, 4 bed, 5 chair, 6 sofa, 7 table, 12 counter,
+      // 14 desk, 17 dresser, 32 night stand, 39 otherfurniture).
+      TableConfig loose = config.tables;
+      loose.min_top_area_m2 = 0.0f;
+      loose.min_horizontal_share = 0.0f;
+      loose.min_flat_share = 0.0f;
+      write("predicted-all",
+            detectTables(prepared.cloud_ground, predicted, loose, &prepared.normals_ground).tables);
+      if (fine && evidence.truth) {
+        for (int c : {3, 4, 5, 6, 7, 12, 14, 17, 32, 39}) {
+          LabelImage as_table{
+              sample.width, sample.height, std::vector<std::uint8_t>(truth40.size(), 0), {}};
+          for (std::size_t p = 0; p < truth40.size(); ++p)
+            if (truth40[p] == c) as_table.labels[p] = static_cast<std::uint8_t>(Label::Table);
+          write("truth",
+                detectTables(prepared.cloud_ground, as_table, loose, &prepared.normals_ground)
+                    .tables);
+        }
+      }
+    }
+    // The pipeline's tables.relabel_soft_tops: a cluster that failed the table-top test is
+    // labelled Unknown, in the frame's final labels. (The pipeline relabels before the label
+    // holes are filled, these labels are filled already: pixels without depth are in no
+    // cluster and keep their filled label here.)
+    if (config.tables.relabel_soft_tops && relabelSoftTops(detection, predicted) > 0) {
+      eval.mrf_pixels[f] = predicted.labels;
+      relabelled = true;
+    }
     measureRelabel(prepared, predicted, detected, sample.ground_truth, config, report.relabel);
     if (diagnosis) {
       const FrameTableEvidence evidence{sample.name,          sample.width,
@@ -468,6 +554,12 @@ void measureTables(const LabeledFrames& frames, const std::vector<FrameSample>& 
     }
     report.search.add(nearestPositionErrors(predicted_positions, true_positions), flagged, truly);
     report.has_search_truth = true;
+  }
+  // The "+MRF" figures are of the final labels: counted again with the soft tops relabelled.
+  if (relabelled) {
+    eval.mrf = ConfusionMatrix{};
+    for (std::size_t f = 0; f < samples.size(); ++f)
+      if (!eval.mrf_pixels[f].empty()) eval.mrf.add(samples[f].ground_truth, eval.mrf_pixels[f]);
   }
 }
 
@@ -610,8 +702,8 @@ void runLearningCurve(const EvalFlags& f, const LabeledFrames& test_frames,
       SegmenterConfig config = segmenter.config();
       config.forest.seed += 1000u * static_cast<std::uint64_t>(seed);
       const TrainSubset subset{size, static_cast<std::uint64_t>(seed)};
-      const Evaluation eval = crossValidate(samples, test_samples, extra_training, plan, config,
-                                            offline.training, regions, true, subset);
+      Evaluation eval = crossValidate(samples, test_samples, extra_training, plan, config,
+                                      offline.training, regions, true, subset);
       EvalReport tables;
       measureTables(test_frames, test_samples, eval, segmenter, offline.table_metrics, nullptr,
                     tables, nullptr);
@@ -829,7 +921,6 @@ int run(int argc, char** argv) {
   for (const FrameSample& s : test_samples)
     report.oracle.add(s.ground_truth, pixelLabels(s, s.segment_labels));
   report.forest = eval.forest;
-  report.mrf = eval.mrf;
   std::optional<synth::SequenceGroundTruth> synth_truth;
   if (f.dataset.data.size() == 1 && f.dataset.mats.empty()) {
     const auto truth_path = std::filesystem::path(f.dataset.data.front()) / "ground_truth.yaml";
@@ -842,9 +933,18 @@ int run(int argc, char** argv) {
       diagnosis.open(f.table_report);
       if (!diagnosis) throw Error(f.table_report + ": cannot write the table report");
     }
+    std::ofstream evidence;
+    if (!f.table_evidence.empty()) {
+      evidence.open(f.table_evidence);
+      if (!evidence) throw Error(f.table_evidence + ": cannot write the table evidence");
+      writeTableEvidenceHeader(evidence);
+    }
     measureTables(test_frames, test_samples, eval, segmenter, config.offline.table_metrics,
                   synth_truth ? &*synth_truth : nullptr, report,
-                  f.table_report.empty() ? nullptr : &diagnosis);
+                  f.table_report.empty() ? nullptr : &diagnosis,
+                  {f.table_evidence.empty() ? nullptr : &evidence, &f.dataset.data});
+    // After measureTables, which labels the soft tops Unknown as the pipeline does.
+    report.mrf = eval.mrf;
     countTableByNyu40(f.dataset.data, test_samples, eval, report.table_by_nyu40);
     if (diagnosis.is_open()) {
       diagnosis << "\nsummary over all frames\n" << formatDiagnosisCounts(report.diagnosis);

@@ -215,6 +215,93 @@ std::string diagnoseFrameTables(const FrameTableEvidence& f, const std::vector<T
   return out.str();
 }
 
+TableTopEvidence measureTableTop(const std::string& frame, const OrganizedCloud& cloud,
+                                 const NormalImage& normals, const TableCluster& table,
+                                 float top_band_m, const std::vector<std::uint8_t>* truth40) {
+  TableTopEvidence e;
+  e.frame = frame;
+  e.points = table.point_count;
+  e.top_height_m = table.top_height;
+  e.length_m = 2.0 * table.extents.x();
+  e.width_m = 2.0 * table.extents.y();
+  e.top_area_m2 = table.top_area_m2;
+  if (truth40) {
+    std::array<int, 41> votes{};
+    int labelled = 0;
+    for (int p : table.pixels) {
+      const std::uint8_t c = (*truth40)[static_cast<std::size_t>(p)];
+      if (c == 0 || c > 40) continue;
+      ++votes[c];
+      ++labelled;
+    }
+    const auto best = std::max_element(votes.begin() + 1, votes.end());
+    if (labelled > 0) {
+      e.nyu40 = static_cast<int>(best - votes.begin());
+      e.nyu40_share = static_cast<double>(*best) / labelled;
+    }
+  }
+  double sum = 0, sum2 = 0;
+  int band = 0, flat = 0;
+  std::vector<float> tilts;
+  for (int p : table.pixels) {
+    const Eigen::Vector3f& q = cloud.points[static_cast<std::size_t>(p)];
+    const float dz = q.z() - table.top_height;
+    if (std::abs(dz) > top_band_m) continue;
+    ++band;
+    sum += dz;
+    sum2 += static_cast<double>(dz) * dz;
+    flat += std::abs(dz) <= 0.015f;
+    const Eigen::Vector3f& n = normals.normals[static_cast<std::size_t>(p)];
+    if (std::isfinite(n.z()))
+      tilts.push_back(std::acos(std::min(1.0f, std::abs(n.z()))) * 180.0f /
+                      static_cast<float>(M_PI));
+  }
+  if (band > 0) {
+    const double mean = sum / band;
+    e.band_spread_m = std::sqrt(std::max(0.0, sum2 / band - mean * mean));
+    e.band_flat_share = static_cast<double>(flat) / band;
+    e.band_share = static_cast<double>(band) / std::max<std::size_t>(1, table.pixels.size());
+  }
+  if (!tilts.empty()) {
+    std::nth_element(tilts.begin(), tilts.begin() + tilts.size() / 2, tilts.end());
+    e.median_tilt_deg = tilts[tilts.size() / 2];
+    int t5 = 0, t10 = 0, t20 = 0;
+    for (float t : tilts) t5 += t <= 5.0f, t10 += t <= 10.0f, t20 += t <= 20.0f;
+    e.tilt20_share = static_cast<double>(t20) / tilts.size();
+    e.flat_share = t20 > 0 ? static_cast<double>(t10) / t20 : std::nan("");
+    e.tilt5_share = static_cast<double>(t5) / tilts.size();
+    e.tilt10_share = static_cast<double>(t10) / tilts.size();
+  }
+  // Under the top: the box shrunk by 5 cm on a 5 cm grid.
+  constexpr float kCell = 0.05f, kShrink = 0.05f;
+  const float half_l = table.extents.x() - kShrink, half_w = table.extents.y() - kShrink;
+  if (half_l > 0 && half_w > 0) {
+    const int cols = std::max(1, static_cast<int>(2 * half_l / kCell));
+    const int rows = std::max(1, static_cast<int>(2 * half_w / kCell));
+    std::vector<std::uint8_t> filled(static_cast<std::size_t>(cols) * rows, 0),
+        floor(filled.size(), 0);
+    for (const Eigen::Vector3f& q : cloud.points) {
+      if (!std::isfinite(q.z()) || q.z() > table.top_height - 0.1f) continue;
+      const Eigen::Vector2f d = q.head<2>() - table.center;
+      const float a = d.dot(table.major_axis) + half_l, b = d.dot(table.minor_axis) + half_w;
+      if (a < 0 || b < 0 || a >= 2 * half_l || b >= 2 * half_w) continue;
+      const int c = std::min(cols - 1, static_cast<int>(a / kCell));
+      const int r = std::min(rows - 1, static_cast<int>(b / kCell));
+      const std::size_t cell = static_cast<std::size_t>(r) * cols + c;
+      if (q.z() < 0.05f) {
+        floor[cell] = 1;
+      } else {
+        filled[cell] = 1;
+      }
+    }
+    int f = 0, fl = 0;
+    for (std::size_t k = 0; k < filled.size(); ++k) f += filled[k], fl += floor[k];
+    e.under_filled_share = static_cast<double>(f) / filled.size();
+    e.under_floor_share = static_cast<double>(fl) / filled.size();
+  }
+  return e;
+}
+
 std::string formatDiagnosisCounts(const TableDiagnosisCounts& counts) {
   std::ostringstream out;
   out << "true instances:\n";

@@ -53,7 +53,7 @@ ROOMS = {
     "tables": (["tables", "table_regions"],
                ["tables.cpp", "tables_internal.hpp", "table_clustering.cpp", "table_geometry.cpp",
                 "table_reachability.cpp", "table_regions.cpp", "table_search_positions.cpp"],
-               ["tables", "table_regions"]),
+               ["tables", "table_regions", "table_top"]),
     "objects": (["table_objects", "object_model", "object_matcher"],
                 ["table_objects.cpp", "table_objects_clustering.cpp", "table_objects_internal.hpp",
                  "object_colour.cpp", "object_model.cpp", "object_matcher.cpp",

@@ -534,6 +534,7 @@ LabelledFrame Segmenter::classify(SegmentedFrame segmented) const {
     std::vector<float> heights;  // mrf.pairwise = layout
     MrfPairFactors factors;
     std::vector<float> edge_scales;  // mrf.pairwise = context
+    std::vector<int> soft_top_pixels;  // the table-top test's rejected clusters
   };
   thread_local Buffers buffers;
   detail::Borrowed regions_buffer(buffers.regions);
@@ -544,6 +545,7 @@ LabelledFrame Segmenter::classify(SegmentedFrame segmented) const {
   detail::Borrowed heights_buffer(buffers.heights);
   detail::Borrowed factors_buffer(buffers.factors);
   detail::Borrowed edge_scales_buffer(buffers.edge_scales);
+  detail::Borrowed soft_top_buffer(buffers.soft_top_pixels);
 
   Stopwatch watch;
   computeFeaturesInto(segmented.prepared.cloud_ground, segmented.prepared.normals_ground,
@@ -646,8 +648,12 @@ LabelledFrame Segmenter::classify(SegmentedFrame segmented) const {
   TableDetection detection;
   detection.tables = std::move(out.tables);
   detection.diagnostics = std::move(out.table_diagnostics);
+  detection.soft_top_pixels = std::move(*soft_top_buffer);
   detectTablesInto(segmented.prepared.cloud_ground, out.labels, config_.tables,
                    &segmented.prepared.normals_ground, detection);
+  // A bed or sofa is not a table (the table-top test): its pixels Unknown.
+  if (config_.tables.relabel_soft_tops) relabelSoftTops(detection, out.labels);
+  *soft_top_buffer = std::move(detection.soft_top_pixels);
   out.tables = std::move(detection.tables);
   out.table_diagnostics = std::move(detection.diagnostics);
   watch.lap(out.timings, out.cpu_timings, &StageTimings::tables_ms);

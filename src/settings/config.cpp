@@ -322,6 +322,14 @@ const std::vector<CoreSetting>& settings() {
                    [](C& c) -> float& { return c.tables.min_horizontal_share; }, 0, 1),
       floatSetting("tables.horizontal_tilt_deg",
                    [](C& c) -> float& { return c.tables.horizontal_tilt_deg; }, 0, 90),
+      floatSetting("tables.soft_top_min_area_m2",
+                   [](C& c) -> float& { return c.tables.soft_top_min_area_m2; }, 0, 100),
+      floatSetting("tables.flat_tilt_deg",
+                   [](C& c) -> float& { return c.tables.flat_tilt_deg; }, 0, 90),
+      floatSetting("tables.min_flat_share",
+                   [](C& c) -> float& { return c.tables.min_flat_share; }, 0, 1),
+      boolSetting("tables.relabel_soft_tops",
+                  [](C& c) -> bool& { return c.tables.relabel_soft_tops; }),
       // The objects on the table tops (table_objects.hpp); ranges as
       // validateTableObjectConfig's.
       documented(boolSetting("table_objects.enabled",

@@ -84,6 +84,27 @@ __attribute__((noinline)) MemberSums memberSums(const int* member, int n, const 
   return {confidence_sum, valid, horizontal};
 }
 
+// The table-top test's measure (TableCluster::flat_share): over the members
+// within `band` of the top height whose normal is within the horizontal tilt
+// of vertical (|n.z| >= cos_horizontal), the share within the flat tilt
+// (|n.z| >= cos_flat); NaN when none is horizontal. A non-finite normal
+// fails both comparisons.
+__attribute__((noinline)) float flatShare(const int* member, int n, const int* full_pixels,
+                                          const OrganizedCloud& cloud, const NormalImage& normals,
+                                          float top_height, float band, float cos_horizontal,
+                                          float cos_flat) {
+  int horizontal = 0, flat = 0;
+  for (int k = 0; k < n; ++k) {
+    const std::size_t pixel = static_cast<std::size_t>(full_pixels[member[k]]);
+    const float nz = std::abs(normals.normals[pixel].z());
+    const int in_band = std::abs(cloud.points[pixel].z() - top_height) <= band ? 1 : 0;
+    horizontal += in_band & (nz >= cos_horizontal ? 1 : 0);
+    flat += in_band & (nz >= cos_flat ? 1 : 0);
+  }
+  return horizontal > 0 ? static_cast<float>(flat) / static_cast<float>(horizontal)
+                        : std::numeric_limits<float>::quiet_NaN();
+}
+
 // out[k] = values[index[k]] for k < n, where `index` ascends strictly (a
 // cluster's members): whole stretches of consecutive indices are copied at
 // once. A stretch is found by doubling and halving its length, as
@@ -304,6 +325,37 @@ void validateTableConfig(const TableConfig& c) {
       c.horizontal_tilt_deg > 90.0f) {
     badSetting("horizontal_tilt_deg", c.horizontal_tilt_deg, "must be in [0, 90] degrees");
   }
+  nonNegative("soft_top_min_area_m2", c.soft_top_min_area_m2);
+  if (!std::isfinite(c.flat_tilt_deg) || c.flat_tilt_deg < 0.0f ||
+      c.flat_tilt_deg > c.horizontal_tilt_deg) {
+    badSetting(
+        "flat_tilt_deg", c.flat_tilt_deg,
+        "must be in [0, tables.horizontal_tilt_deg (" + fmt(c.horizontal_tilt_deg) + ")] degrees");
+  }
+  if (!std::isfinite(c.min_flat_share) || c.min_flat_share < 0.0f || c.min_flat_share > 1.0f) {
+    badSetting("min_flat_share", c.min_flat_share, "must be in [0, 1]");
+  }
+}
+
+int relabelSoftTops(const TableDetection& detection, LabelImage& labels) {
+  const auto n = static_cast<long long>(labels.labels.size());
+  // Checked first, so that a bad list leaves the image as it was.
+  for (const int p : detection.soft_top_pixels) {
+    if (p < 0 || p >= n) {
+      throw Error("relabelSoftTops: pixel " + std::to_string(p) + " is outside the " +
+                  std::to_string(labels.width) + "x" + std::to_string(labels.height) +
+                  " label image");
+    }
+  }
+  constexpr auto kUnknown = static_cast<std::uint8_t>(Label::Unknown);
+  int changed = 0;
+  for (const int p : detection.soft_top_pixels) {
+    std::uint8_t& l = labels.labels[static_cast<std::size_t>(p)];
+    if (l != kTableLabel) continue;
+    l = kUnknown;
+    ++changed;
+  }
+  return changed;
 }
 
 TableDetection detectTables(const OrganizedCloud& cloud_ground, const LabelImage& labels,
@@ -358,6 +410,8 @@ void resetDetection(TableDetection& result, std::vector<TableCluster>& spare) {
   result.diagnostics.clear();
   result.table_points = result.nonfinite_points = result.implausible_points = 0;
   result.clusters_rejected = result.unsampled_points = 0;
+  result.soft_tops = 0;
+  result.soft_top_pixels.clear();
 }
 
 // A spare's buffers for the next table (a new table when none is left).
@@ -545,11 +599,29 @@ struct ClusterMembers {
   const std::vector<int>& sample_members;
 };
 
+// Step 3b, the table-top test: whether a described cluster's top is large
+// and not flat (a bed or sofa: TableConfig::min_flat_share). Measures the
+// table's flat_share when the top is large enough and there are normals.
+bool softTop(const int* member, int n, const int* full_pixels, const OrganizedCloud& cloud,
+             const NormalImage* normals, const TableConfig& config, TableCluster& table) {
+  if (!normals || config.min_flat_share <= 0.0f ||
+      table.top_area_m2 < config.soft_top_min_area_m2) {
+    return false;
+  }
+  const float to_rad = static_cast<float>(M_PI) / 180.0f;
+  table.flat_share = flatShare(member, n, full_pixels, cloud, *normals, table.top_height,
+                               config.top_band_m, std::cos(config.horizontal_tilt_deg * to_rad),
+                               std::cos(config.flat_tilt_deg * to_rad));
+  // No horizontal top point (NaN): nothing says it is soft.
+  return table.flat_share < config.min_flat_share;
+}
+
 // Step 3's checks of one described cluster of n points, in this order; a
 // rejected one is counted and its reason goes to the diagnostics. With
 // normals, also sets the table's horizontal share.
 bool acceptTable(const ClusterOutcome& outcome, const MemberSums& sums, int n, bool with_normals,
-                 const TableConfig& config, TableCluster& table, TableDetection& result) {
+                 bool soft_top, const TableConfig& config, TableCluster& table,
+                 TableDetection& result) {
   if (!outcome.ok) {
     ++result.clusters_rejected;
     result.diagnostics.push_back(outcome.reason + ": dropped");
@@ -560,6 +632,16 @@ bool acceptTable(const ClusterOutcome& outcome, const MemberSums& sums, int n, b
     result.diagnostics.push_back("cluster of " + std::to_string(n) + " points with a top of " +
                                  fmt(table.top_area_m2) + " m² (below tables.min_top_area_m2 " +
                                  fmt(config.min_top_area_m2) + "): dropped");
+    return false;
+  }
+  if (soft_top) {
+    ++result.clusters_rejected;
+    ++result.soft_tops;
+    result.diagnostics.push_back(
+        "cluster of " + std::to_string(n) + " points with a top of " + fmt(table.top_area_m2) +
+        " m² whose horizontal points are " + fmt(100.0 * table.flat_share) +
+        " % flat (below tables.min_flat_share " + fmt(config.min_flat_share) +
+        "): a soft top (bed, sofa), not a table: dropped");
     return false;
   }
   if (table.mean_confidence < config.min_confidence) {
@@ -589,9 +671,9 @@ bool acceptTable(const ClusterOutcome& outcome, const MemberSums& sums, int n, b
 // its sampled points, confidence and horizontal share from all of them) and,
 // when it passes the checks, appended to result.tables with its pixels.
 void describeClusters(int clusters, const ClusterMembers& m, const std::vector<int>& full_pixels,
-                      const LabelImage& labels, const NormalImage* normals_ground,
-                      const TableConfig& config, DetectionScratch& scratch,
-                      TableDetection& result) {
+                      const OrganizedCloud& cloud_ground, const LabelImage& labels,
+                      const NormalImage* normals_ground, const TableConfig& config,
+                      DetectionScratch& scratch, TableDetection& result) {
   const float cos_tilt = std::cos(config.horizontal_tilt_deg * static_cast<float>(M_PI) / 180.0f);
   int small_clusters = 0, largest_small = 0;
   std::vector<TableCluster>& tables = result.tables;  // empty (resetDetection)
@@ -623,7 +705,15 @@ void describeClusters(int clusters, const ClusterMembers& m, const std::vector<i
     table = reusedTable(std::move(table));
     table.mean_confidence = static_cast<float>(sums.confidence / n);
     const ClusterOutcome outcome = describeCluster(cluster_points, n, config, table);
-    if (!acceptTable(outcome, sums, n, normals_ground != nullptr, config, table, result)) {
+    const bool soft =
+        outcome.ok && table.top_area_m2 >= config.min_top_area_m2 &&
+        softTop(member, n, full_pixels.data(), cloud_ground, normals_ground, config, table);
+    if (!acceptTable(outcome, sums, n, normals_ground != nullptr, soft, config, table, result)) {
+      if (soft) {
+        const std::size_t at = result.soft_top_pixels.size();
+        result.soft_top_pixels.resize(at + static_cast<std::size_t>(n));
+        gatherByIndex(full_pixels.data(), member, n, result.soft_top_pixels.data() + at);
+      }
       continue;
     }
     // A spare list that is too small grows with a quarter to spare, so that
@@ -731,7 +821,8 @@ void detectTablesInto(const OrganizedCloud& cloud_ground, const LabelImage& labe
                                strided ? scratch.sample_members : scratch.members};
 
   // 3. Geometry and checks, one cluster at a time.
-  describeClusters(clusters, members, full_pixels, labels, normals_ground, config, scratch, result);
+  describeClusters(clusters, members, full_pixels, cloud_ground, labels, normals_ground, config,
+                   scratch, result);
   sortLargestFirst(result.tables);
 
   // 4. Search positions, 5. their reachability.

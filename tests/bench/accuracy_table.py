@@ -67,6 +67,8 @@ ROWS = [
     ("before+labelholes", "+ the label image's depth holes filled (`labels.fill_holes`)",
      without(BEFORE, "labels.fill_holes"), [], "before"),
     ("shipped", "**shipped** (`daemon/findmugd.yaml`, `models/findmug.fmf`)", SHIPPED, [], "before"),
+    ("shipped-softtop", "shipped without the table-top test (`tables.min_flat_share=0`)",
+     SHIPPED + ["tables.min_flat_share=0"], [], "shipped"),
     ("shipped-nyu13", "shipped with the 8 labels instead of NYU-13 classes",
      without(SHIPPED, "learner.classes", "labels"), [], "shipped"),
     ("shipped-objects", "shipped without object features (object consistency then has no candidates)",
@@ -101,6 +103,8 @@ ROWS = [
      without(SHIPPED, "mrf.pairwise", "potts"), ["--degrade"], "shipped@raw"),
     ("shipped-labelholes@raw", "*raw-like copies*: shipped without the label-hole fill",
      SHIPPED + ["labels.fill_holes=false"], ["--degrade"], "shipped@raw"),
+    ("shipped-softtop@raw", "*raw-like copies*: shipped without the table-top test",
+     SHIPPED + ["tables.min_flat_share=0"], ["--degrade"], "shipped@raw"),
     ("shipped+nyu40@raw", "*raw-like copies*: shipped with NYU-40 classes",
      without(SHIPPED, "learner.classes", "nyu40"), ["--degrade"], "shipped@raw"),
 ]
@@ -199,6 +203,49 @@ def table(args, rows, seeds, paired_seeds):
     return "\n".join(out)
 
 
+def nyu40_table(args, rows, seeds):
+    """What becomes "table" (`table_by_nyu40` in the JSON), the rows side by side: per true
+    NYU-40 class, summed over the seeds, its share of the pixels labelled table and the
+    share of the class labelled table; the classes that are most of the table pixels in any
+    row, then bed, sofa and counter."""
+    sums = {}
+    for name, *_ in rows:
+        pixels, table = {}, {}
+        for seed in seeds:
+            path = os.path.join(args.out, f"{name}-{seed}.json")
+            if not os.path.exists(path):
+                return f"(row {name} seed {seed} not run)"
+            with open(path) as f:
+                report = json.load(f)
+            if "table_by_nyu40" not in report:
+                return f"({path} has no table_by_nyu40: frames without label40/)"
+            for c in report["table_by_nyu40"]["classes"]:
+                pixels[c["class"]] = pixels.get(c["class"], 0) + c["pixels"]
+                table[c["class"]] = table.get(c["class"], 0) + c["labelled_table"]
+        sums[name] = (pixels, table)
+    order = []
+    for pixels, table in sums.values():
+        order += sorted(table, key=lambda c: -table[c])[:10]
+    order += ["bed", "sofa", "counter", "table", "desk"]
+    order = list(dict.fromkeys(order))
+    names = [r[0] for r in rows]
+    out = ["| true NYU-40 class | " + " | ".join(
+               f"{n}: share of the table pixels | {n}: share of the class labelled table"
+               for n in names) + " |",
+           "|---|" + "---:|---:|" * len(names)]
+    totals = {n: sum(sums[n][1].values()) for n in names}
+    for c in order:
+        cells = []
+        for n in names:
+            pixels, table = sums[n]
+            cells.append(f"{100 * table.get(c, 0) / max(1, totals[n]):.1f} %")
+            cells.append(f"{100 * table.get(c, 0) / max(1, pixels.get(c, 0)):.1f} %")
+        out.append(f"| {c} | " + " | ".join(cells) + " |")
+    out.append("| all pixels labelled table | " + " | ".join(
+        f"{totals[n]} | " for n in names) + "|")
+    return "\n".join(out)
+
+
 def main():
     p = argparse.ArgumentParser(description=__doc__.split("\n")[0])
     p.add_argument("--build-dir", default="build")
@@ -211,6 +258,8 @@ def main():
     p.add_argument("--jobs", type=int, default=1,
                    help="findmug-eval runs at a time (each is single-threaded; default 1)")
     p.add_argument("--print-only", action="store_true", help="print the table from --out's JSON")
+    p.add_argument("--nyu40", action="store_true",
+                   help="also print what becomes table (true NYU-40 class), the rows side by side")
     args = p.parse_args()
     names = [n for n in args.rows.split(",") if n]
     known = {r[0] for r in ROWS}
@@ -224,6 +273,9 @@ def main():
     if not args.print_only:
         run_rows(args, rows, paired_seeds)
     print(table(args, rows, seeds, paired_seeds))
+    if args.nyu40:
+        print()
+        print(nyu40_table(args, rows, seeds))
 
 
 if __name__ == "__main__":

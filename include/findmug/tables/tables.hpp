@@ -19,6 +19,13 @@
 //      both sides, `safety_distance_m` from the table edge, facing the table;
 //      long tables get more positions along their long sides so that the top
 //      is within `arm_reach_m` of one of them (see computeSearchPositions);
+//   3b. the table-top test (a bed or sofa is not a table): a cluster whose
+//      top is at least `soft_top_min_area_m2` and whose top's near-horizontal
+//      normals (within `horizontal_tilt_deg` of vertical) are mostly not
+//      within `flat_tilt_deg` (share below `min_flat_share`) is a soft,
+//      undulating surface, not a hard flat top: dropped with a reason, and
+//      its pixels listed in TableDetection::soft_top_pixels for
+//      relabelSoftTops;
 //   5. reachability of each position from the same labelled cloud: an
 //      obstacle (non-floor points between `obstacle_min_height_m` and
 //      `robot_height_m`) within `robot_radius_m`, or too little observed floor
@@ -86,6 +93,15 @@ struct TableCluster {
   // tables.horizontal_tilt_deg of vertical (NaN when detectTables had no
   // normals): table tops are horizontal, chair backs and cabinet fronts not.
   float horizontal_share = std::numeric_limits<float>::quiet_NaN();
+  // The table-top test's measure (step 3b): of the top's points (within
+  // tables.top_band_m of top_height) whose normal is within
+  // tables.horizontal_tilt_deg of vertical, the share within
+  // tables.flat_tilt_deg. A hard top's near-horizontal normals are all
+  // nearly vertical; a blanket's spread. Measured on the horizontal part
+  // only, so that chair backs or a cabinet front in the cluster do not
+  // count. NaN where it is not measured: without normals, for a top smaller
+  // than tables.soft_top_min_area_m2, or with no horizontal top point.
+  float flat_share = std::numeric_limits<float>::quiet_NaN();
   int point_count = 0;
   // Image pixels (y * width + x) of all the cluster's points, ascending: its
   // image mask, for matching against ground truth (table_metrics.hpp).
@@ -146,6 +162,21 @@ struct TableConfig {
   // have a normal within horizontal_tilt_deg of vertical.
   float min_horizontal_share = 0.2f;
   float horizontal_tilt_deg = 20.0f;
+  // The table-top test (step 3b; needs normals): a top of at least
+  // soft_top_min_area_m2 (bed- or sofa-sized as far as a view shows it)
+  // whose flat_share (TableCluster) is below min_flat_share is not a table.
+  // On NYU's labelled frames with the shipped model (BENCHMARKS.md §1, "What
+  // becomes table"), the bed tops labelled table have flat shares of
+  // 0.16-0.45; the table, desk and counter tops of that size 0.67-0.95, and
+  // the largest mostly false cluster that still covers a true table 0.50.
+  // flat_tilt_deg must not be above horizontal_tilt_deg. min_flat_share 0
+  // turns the test off.
+  float soft_top_min_area_m2 = 0.5f;
+  float flat_tilt_deg = 10.0f;
+  float min_flat_share = 0.47f;
+  // Whether the Segmenter labels the pixels of a cluster that fails the
+  // table-top test Unknown (relabelSoftTops): NYU's bed and sofa are Unknown.
+  bool relabel_soft_tops = true;
 };
 
 // Why something produced no table or was flagged, for the caller to log.
@@ -160,7 +191,17 @@ struct TableDetection {
   // With tables.point_stride > 1: table points with no sampled point within
   // cluster_tolerance_m among their cell's corners, left out of every cluster.
   int unsampled_points = 0;
+  // Clusters that failed the table-top test (step 3b) and their pixels,
+  // ascending within each cluster (also counted in clusters_rejected).
+  int soft_tops = 0;
+  std::vector<int> soft_top_pixels;
 };
+
+// Labels Unknown the table-labelled pixels of the clusters that failed the
+// table-top test (detection.soft_top_pixels): a bed or sofa is neither a
+// table nor a search location. Returns how many pixels changed; throws
+// findmug::Error for a pixel outside `labels` (the image is then unchanged).
+int relabelSoftTops(const TableDetection& detection, LabelImage& labels);
 
 // Throws findmug::Error naming the setting (`tables.KEY = value: rule`) when
 // a setting is out of range or inconsistent with another. detectTables calls
