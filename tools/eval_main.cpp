@@ -41,6 +41,7 @@
 #include <sstream>
 
 #include "eval_report.hpp"
+#include "eval_table_measures.hpp"
 #include "eval_tables.hpp"
 #include "findmug/common/error.hpp"
 #include "findmug/common/numbers.hpp"
@@ -220,9 +221,8 @@ void labelFrames(const RandomForest& forest, const SegmenterConfig& config,
   for (std::size_t f : frames) {
     const FrameSample& s = samples[f];
     const std::size_t n = s.features.features.size();
-    SampleLabelling labelling =
-        labelSample(forest, s, with_mrf, regions.empty() ? nullptr : &regions[f],
-                    layout ? &*layout : nullptr);
+    SampleLabelling labelling = labelSample(
+        forest, s, with_mrf, regions.empty() ? nullptr : &regions[f], layout ? &*layout : nullptr);
     std::vector<std::uint8_t> forest_labels(n);
     for (std::size_t k = 0; k < n; ++k) forest_labels[k] = argmax(labelling.probabilities[k]);
     eval.forest.add(s.ground_truth, publishedPixelLabels(s, forest_labels, config.label_holes));
@@ -280,7 +280,8 @@ Evaluation crossValidate(const std::vector<FrameSample>& samples,
   const std::size_t n = samples.size();
   for (int fold = 0; fold < plan.folds; ++fold) {
     std::vector<std::size_t> train, test;
-    for (std::size_t i = 0; i < n; ++i) (plan.fold_of_sample[i] == fold ? test : train).push_back(i);
+    for (std::size_t i = 0; i < n; ++i)
+      (plan.fold_of_sample[i] == fold ? test : train).push_back(i);
     if (test.empty() || train.empty()) continue;
     if (subset.frames > 0) {
       train = chooseTrainingSubset(train, plan.scene_of_sample, subset.frames,
@@ -321,94 +322,6 @@ Evaluation crossValidate(const std::vector<FrameSample>& samples,
     for (auto& e : *per_round) e.folds = eval.folds;
   }
   return eval;
-}
-
-// The frame's table-top candidates on its detected tables, and its labels without and
-// with their table pixels relabelled Object (the Segmenter's table_objects.relabel). The
-// labels here are hole-filled already (the Segmenter relabels before the fill): the
-// candidates are made of pixels with depth, which the fill never changes.
-void measureRelabel(const PreparedFrame& prepared, const LabelImage& predicted,
-                    const std::vector<TableCluster>& detected,
-                    const std::vector<std::uint8_t>& ground_truth, const SegmenterConfig& config,
-                    EvalReport::Relabel& relabel) {
-  const TableObjectDetection candidates =
-      findTableObjects(prepared.cloud_ground, predicted, detected, config.table_objects);
-  LabelImage relabelled = predicted;
-  relabel.pixels_changed += static_cast<std::uint64_t>(
-      relabelTableObjects(candidates.objects, relabelled));
-  relabel.candidates += static_cast<int>(candidates.objects.size());
-  ++relabel.frames;
-  relabel.without.add(ground_truth, predicted.labels);
-  relabel.with.add(ground_truth, relabelled.labels);
-}
-
-// The true NYU-40 class under every pixel labelled Table (EvalReport::TableByNyu40), for
-// the frames whose label40/NAME.png is in one of `folders` (NYU folders; others have none).
-void countTableByNyu40(const std::vector<std::string>& folders,
-                       const std::vector<FrameSample>& samples, const Evaluation& eval,
-                       EvalReport::TableByNyu40& out) {
-  constexpr auto kTable = static_cast<std::uint8_t>(Label::Table);
-  for (std::size_t f = 0; f < samples.size(); ++f) {
-    const std::vector<std::uint8_t>& predicted = eval.mrf_pixels[f];
-    if (predicted.empty()) continue;
-    for (const std::string& folder : folders) {
-      const auto path = std::filesystem::path(folder) / "label40" / (samples[f].name + ".png");
-      if (!std::filesystem::exists(path)) continue;
-      const Image<std::uint8_t> fine = readPng8(path.string());
-      if (fine.pixels.size() != predicted.size()) {
-        throw Error(path.string() + ": " + std::to_string(fine.width) + "x" +
-                    std::to_string(fine.height) + " labels for a " +
-                    std::to_string(samples[f].width) + "x" + std::to_string(samples[f].height) +
-                    " frame");
-      }
-      for (std::size_t p = 0; p < predicted.size(); ++p) {
-        const std::uint8_t c = fine.pixels[p];
-        if (c == 0 || c > kNyu40Classes || samples[f].ground_truth[p] == kVoidLabel) continue;
-        ++out.pixels[c];
-        out.labelled_table[c] += predicted[p] == kTable;
-      }
-      ++out.frames;
-      break;
-    }
-  }
-}
-
-// Where --table-evidence rows go (`csv`, null for none) and the folders whose label40/
-// holds the frames' NYU-40 labels.
-struct TableEvidenceOut {
-  std::ostream* csv = nullptr;
-  const std::vector<std::string>* folders = nullptr;
-  bool truth = true;  // also the true instances (the same on every seed)
-};
-
-// The frame's NYU-40 labels from the first of `folders` whose label40/ has it, or empty.
-std::vector<std::uint8_t> nyu40Labels(const std::vector<std::string>& folders,
-                                      const std::string& name, std::size_t pixels) {
-  for (const std::string& folder : folders) {
-    const auto path = std::filesystem::path(folder) / "label40" / (name + ".png");
-    if (!std::filesystem::exists(path)) continue;
-    Image<std::uint8_t> fine = readPng8(path.string());
-    if (fine.pixels.size() != pixels)
-      throw Error(path.string() + ": " + std::to_string(fine.pixels.size()) + " labels for " +
-                  std::to_string(pixels) + " pixels");
-    return std::move(fine.pixels);
-  }
-  return {};
-}
-
-void writeTableEvidenceHeader(std::ostream& out) {
-  out << "source,frame,nyu40,nyu40_share,points,top_height_m,length_m,width_m,top_area_m2,"
-         "band_spread_m,band_flat_share,band_share,median_tilt_deg,tilt5_share,tilt10_share,"
-         "tilt20_share,flat_share,under_filled_share,under_floor_share\n";
-}
-
-void writeTableEvidence(std::ostream& out, const char* source, const TableTopEvidence& e) {
-  out << source << "," << e.frame << "," << (e.nyu40 > 0 ? nyu40ClassName(e.nyu40) : "none") << ","
-      << e.nyu40_share << "," << e.points << "," << e.top_height_m << "," << e.length_m << ","
-      << e.width_m << "," << e.top_area_m2 << "," << e.band_spread_m << "," << e.band_flat_share
-      << "," << e.band_share << "," << e.median_tilt_deg << "," << e.tilt5_share << ","
-      << e.tilt10_share << "," << e.tilt20_share << "," << e.flat_share << ","
-      << e.under_filled_share << "," << e.under_floor_share << "\n";
 }
 
 // Tables found on each evaluated frame's forest+MRF labels (the Segmenter's
@@ -498,10 +411,9 @@ void measureTables(const LabeledFrames& frames, const std::vector<FrameSample>& 
     }
     measureRelabel(prepared, predicted, detected, sample.ground_truth, config, report.relabel);
     if (diagnosis) {
-      const FrameTableEvidence evidence{sample.name,          sample.width,
-                                        sample.height,        &sample.ground_truth,
-                                        &eval.mrf_pixels[f],  &table_probability,
-                                        &prepared.normals_ground};
+      const FrameTableEvidence evidence{
+          sample.name,         sample.width,       sample.height,           &sample.ground_truth,
+          &eval.mrf_pixels[f], &table_probability, &prepared.normals_ground};
       *diagnosis << diagnoseFrameTables(evidence, truth, detected, matches, report.diagnosis);
     }
     report.tables.add(static_cast<int>(truth.size()), static_cast<int>(detected.size()), matches);
@@ -525,9 +437,9 @@ void measureTables(const LabeledFrames& frames, const std::vector<FrameSample>& 
     std::vector<SearchPosition> true_positions;
     for (const auto& table : synth->tables) {
       const synth::TableTruth t = synth::tableInGroundFrame(table, synth->poses[pose->second]);
-      const auto p = searchPositionsOfBox(t.center_xy.cast<float>(), static_cast<float>(t.yaw),
-                                          t.size.cast<float>(), static_cast<float>(t.height),
-                                          config.tables);
+      const auto p =
+          searchPositionsOfBox(t.center_xy.cast<float>(), static_cast<float>(t.yaw),
+                               t.size.cast<float>(), static_cast<float>(t.height), config.tables);
       true_positions.insert(true_positions.end(), p.begin(), p.end());
     }
     std::vector<SearchPosition> predicted_positions;
@@ -759,7 +671,8 @@ std::string formatPseudoRounds(const EvalReport& r, const Evaluation& eval) {
                   "  %5d  %9.1f  %6.1f  %5.1f  %5.1f  %7.1f  %8.1f  %8.1f  %11d/%-6d  %6.1f  "
                   "%6.1f\n",
                   p.round, 100 * p.mrf.classAverageAccuracy(), 100 * p.mrf.globalAccuracy(),
-                  100 * acc[static_cast<int>(Label::Table)], 100 * acc[static_cast<int>(Label::Chair)],
+                  100 * acc[static_cast<int>(Label::Table)],
+                  100 * acc[static_cast<int>(Label::Chair)],
                   100 * acc[static_cast<int>(Label::Cabinet)], 100 * p.searchable.precision(),
                   100 * p.searchable.recall(), p.searchable.framesWithFalseTable(),
                   p.searchable.frames(), 100 * p.tables.precision(), 100 * p.tables.recall());
@@ -789,6 +702,52 @@ void pairDegradedSamples(std::vector<FrameSample>& samples, std::vector<FrameSam
   }
   samples = std::move(kept);
   degraded = std::move(kept_degraded);
+}
+
+// --sweep: the cross-validation again with 1..16 trees, then depths 2..16.
+void runSweeps(const std::vector<FrameSample>& samples,
+               const std::vector<FrameSample>& test_samples,
+               const std::vector<FrameSample>& extra_training, const FoldPlan& plan,
+               const Config& config, const std::vector<RegionFeatures>& regions,
+               const TrainSubset& subset, EvalReport& report) {
+  for (int trees : {1, 2, 4, 6, 8, 10, 12, 14, 16}) {
+    SegmenterConfig c = config.segmenter;
+    c.forest.num_trees = trees;
+    const Evaluation e = crossValidate(samples, test_samples, extra_training, plan, c,
+                                       config.offline.training, regions, false, subset);
+    report.sweep_trees.push_back({trees, c.forest.max_depth, e.forest, e.mrf});
+    std::fprintf(stderr, "sweep trees=%d: forest %.1f/%.1f mrf %.1f/%.1f\n", trees,
+                 100 * e.forest.classAverageAccuracy(), 100 * e.forest.globalAccuracy(),
+                 100 * e.mrf.classAverageAccuracy(), 100 * e.mrf.globalAccuracy());
+  }
+  for (int depth : {2, 4, 6, 8, 10, 12, 14, 16}) {
+    SegmenterConfig c = config.segmenter;
+    c.forest.max_depth = depth;
+    const Evaluation e = crossValidate(samples, test_samples, extra_training, plan, c,
+                                       config.offline.training, regions, false, subset);
+    report.sweep_depth.push_back({c.forest.num_trees, depth, e.forest, e.mrf});
+    std::fprintf(stderr, "sweep depth=%d: forest %.1f/%.1f mrf %.1f/%.1f\n", depth,
+                 100 * e.forest.classAverageAccuracy(), 100 * e.forest.globalAccuracy(),
+                 100 * e.mrf.classAverageAccuracy(), 100 * e.mrf.globalAccuracy());
+  }
+}
+
+// --out: the confusion matrices, the sweeps and the overlays as pictures.
+void writePictures(const std::string& out_dir, const EvalReport& report,
+                   const LabeledFrames& test_frames, const std::vector<FrameSample>& test_samples,
+                   const Evaluation& eval) {
+  const std::filesystem::path dir = out_dir;
+  std::filesystem::create_directories(dir);
+  writeConfusionSvg((dir / "confusion_forest.svg").string(), report.forest,
+                    "Forest only: row-normalised confusion (%)");
+  writeConfusionSvg((dir / "confusion_mrf.svg").string(), report.mrf,
+                    "Forest + MRF: row-normalised confusion (%)");
+  if (!report.sweep_trees.empty()) {
+    writeSweepSvg((dir / "sweep_trees.svg").string(), report.sweep_trees, true);
+    writeSweepSvg((dir / "sweep_depth.svg").string(), report.sweep_depth, false);
+  }
+  writeOverlays(test_frames, test_samples, eval, dir / "overlays");
+  std::cout << "pictures in " << dir.string() << "\n";
 }
 
 int run(int argc, char** argv) {
@@ -869,8 +828,8 @@ int run(int argc, char** argv) {
       throw Error("--unlabelled trains forests (training.pseudo_rounds); not with --model");
     if (config.offline.training.pseudo_rounds == 0)
       std::cerr << "findmug-eval: --unlabelled without training.pseudo_rounds > 0 does nothing\n";
-    unlabelled = extractUnlabelled(f.unlabelled, f.dataset, config.segmenter, *input,
-                                   unlabelled_report);
+    unlabelled =
+        extractUnlabelled(f.unlabelled, f.dataset, config.segmenter, *input, unlabelled_report);
     if (unlabelled.empty())
       throw Error("--unlabelled: no frame could be used (no ground plane found in any)");
   }
@@ -908,14 +867,13 @@ int run(int argc, char** argv) {
                          unlabelled.empty() ? nullptr : &per_round);
     report.folds = foldRecords(eval, plan, samples);
     report.unlabelled_ground_methods = unlabelled_report.ground_methods;
-    for (const auto& d : unlabelled_report.dropped)
-      report.dropped.push_back("unlabelled " + d);
+    for (const auto& d : unlabelled_report.dropped) report.dropped.push_back("unlabelled " + d);
     for (std::size_t r = 0; r < per_round.size(); ++r) {
       EvalReport round_tables;
       measureTables(test_frames, test_samples, per_round[r], segmenter,
                     config.offline.table_metrics, nullptr, round_tables, nullptr);
-      report.pseudo_rounds.push_back({static_cast<int>(r), per_round[r].mrf,
-                                      round_tables.searchable, round_tables.tables});
+      report.pseudo_rounds.push_back(
+          {static_cast<int>(r), per_round[r].mrf, round_tables.searchable, round_tables.tables});
     }
   }
   for (const FrameSample& s : test_samples)
@@ -945,7 +903,7 @@ int run(int argc, char** argv) {
                   {f.table_evidence.empty() ? nullptr : &evidence, &f.dataset.data});
     // After measureTables, which labels the soft tops Unknown as the pipeline does.
     report.mrf = eval.mrf;
-    countTableByNyu40(f.dataset.data, test_samples, eval, report.table_by_nyu40);
+    countTableByNyu40(f.dataset.data, test_samples, eval.mrf_pixels, report.table_by_nyu40);
     if (diagnosis.is_open()) {
       diagnosis << "\nsummary over all frames\n" << formatDiagnosisCounts(report.diagnosis);
     }
@@ -953,26 +911,7 @@ int run(int argc, char** argv) {
 
   if (f.sweep) {
     if (!f.model.empty()) throw Error("--sweep retrains forests; it cannot be used with --model");
-    for (int trees : {1, 2, 4, 6, 8, 10, 12, 14, 16}) {
-      SegmenterConfig c = config.segmenter;
-      c.forest.num_trees = trees;
-      const Evaluation e = crossValidate(samples, test_samples, extra_training, plan, c,
-                                         config.offline.training, regions, false, subset);
-      report.sweep_trees.push_back({trees, c.forest.max_depth, e.forest, e.mrf});
-      std::fprintf(stderr, "sweep trees=%d: forest %.1f/%.1f mrf %.1f/%.1f\n", trees,
-                   100 * e.forest.classAverageAccuracy(), 100 * e.forest.globalAccuracy(),
-                   100 * e.mrf.classAverageAccuracy(), 100 * e.mrf.globalAccuracy());
-    }
-    for (int depth : {2, 4, 6, 8, 10, 12, 14, 16}) {
-      SegmenterConfig c = config.segmenter;
-      c.forest.max_depth = depth;
-      const Evaluation e = crossValidate(samples, test_samples, extra_training, plan, c,
-                                         config.offline.training, regions, false, subset);
-      report.sweep_depth.push_back({c.forest.num_trees, depth, e.forest, e.mrf});
-      std::fprintf(stderr, "sweep depth=%d: forest %.1f/%.1f mrf %.1f/%.1f\n", depth,
-                   100 * e.forest.classAverageAccuracy(), 100 * e.forest.globalAccuracy(),
-                   100 * e.mrf.classAverageAccuracy(), 100 * e.mrf.globalAccuracy());
-    }
+    runSweeps(samples, test_samples, extra_training, plan, config, regions, subset, report);
   }
   report.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
   if (!f.curve_dir.empty()) {
@@ -987,20 +926,7 @@ int run(int argc, char** argv) {
     if (!out) throw Error(f.json + ": cannot write JSON report");
     out << formatJson(report);
   }
-  if (!f.out.empty()) {
-    const std::filesystem::path dir = f.out;
-    std::filesystem::create_directories(dir);
-    writeConfusionSvg((dir / "confusion_forest.svg").string(), report.forest,
-                      "Forest only: row-normalised confusion (%)");
-    writeConfusionSvg((dir / "confusion_mrf.svg").string(), report.mrf,
-                      "Forest + MRF: row-normalised confusion (%)");
-    if (!report.sweep_trees.empty()) {
-      writeSweepSvg((dir / "sweep_trees.svg").string(), report.sweep_trees, true);
-      writeSweepSvg((dir / "sweep_depth.svg").string(), report.sweep_depth, false);
-    }
-    writeOverlays(test_frames, test_samples, eval, dir / "overlays");
-    std::cout << "pictures in " << dir.string() << "\n";
-  }
+  if (!f.out.empty()) writePictures(f.out, report, test_frames, test_samples, eval);
   return 0;
 }
 

@@ -102,12 +102,12 @@ std::string describe(const FrameTableEvidence& f, const TableCluster& t) {
   }
   const bool border = x0 <= bx0 + 2 || y0 <= by0 + 2 || x1 >= bx1 - 2 || y1 >= by1 - 2;
   char line[320];
-  std::snprintf(line, sizeof line,
-                "%6d px, top %.2f m, box %.2f x %.2f m, top area %.2f m2, p(table) %.2f, confidence %.2f, "
-                "horizontal %.0f%%, image box (%d,%d)-(%d,%d)%s",
-                t.point_count, t.top_height, 2 * t.extents.x(), 2 * t.extents.y(), t.top_area_m2, s.p_table,
-                t.mean_confidence, 100 * s.horizontal, x0, y0, x1, y1,
-                border ? " at the image border" : "");
+  std::snprintf(
+      line, sizeof line,
+      "%6d px, top %.2f m, box %.2f x %.2f m, top area %.2f m2, p(table) %.2f, confidence %.2f, "
+      "horizontal %.0f%%, image box (%d,%d)-(%d,%d)%s",
+      t.point_count, t.top_height, 2 * t.extents.x(), 2 * t.extents.y(), t.top_area_m2, s.p_table,
+      t.mean_confidence, 100 * s.horizontal, x0, y0, x1, y1, border ? " at the image border" : "");
   return line;
 }
 
@@ -118,8 +118,8 @@ std::string diagnoseFrameTables(const FrameTableEvidence& f, const std::vector<T
                                 const std::vector<TableMatch>& matches,
                                 TableDiagnosisCounts& counts) {
   std::ostringstream out;
-  out << "frame " << f.name << ": " << truth.size() << " true, " << detected.size()
-      << " detected, " << matches.size() << " matched\n";
+  out << "frame " << f.name << ": " << truth.size() << " true, " << detected.size() << " detected, "
+      << matches.size() << " matched\n";
   std::vector<int> truth_match(truth.size(), -1), detected_match(detected.size(), -1);
   for (const auto& m : matches) {
     truth_match[static_cast<std::size_t>(m.truth)] = m.detected;
@@ -166,15 +166,16 @@ std::string diagnoseFrameTables(const FrameTableEvidence& f, const std::vector<T
           reason = iou(t, d) >= 0.2 ? "partly covered (IoU 0.2-0.5)" : "partly covered (IoU < 0.2)";
         }
       } else {
-        reason = "table-labelled but no detection (small cluster, out of height range, or "
-                 "dropped by tables.min_top_area_m2 / min_horizontal_share)";
+        reason =
+            "table-labelled but no detection (small cluster, out of height range, or "
+            "dropped by tables.min_top_area_m2 / min_horizontal_share)";
       }
       (void)best;
     }
     ++counts.truth[reason];
     const auto predicted = histogram(*f.predicted_labels, tc.pixels);
-    out << "  truth " << t << ": " << describe(f, tc) << "\n    predicted there: " << share(predicted)
-        << "\n    -> " << reason << "\n";
+    out << "  truth " << t << ": " << describe(f, tc)
+        << "\n    predicted there: " << share(predicted) << "\n    -> " << reason << "\n";
   }
   for (std::size_t d = 0; d < detected.size(); ++d) {
     const TableCluster& dc = detected[d];
@@ -198,15 +199,16 @@ std::string diagnoseFrameTables(const FrameTableEvidence& f, const std::vector<T
       }
     }
     ++counts.detected[reason];
-    out << "  detected " << d << ": " << describe(f, dc) << "\n    truth there: " << share(truth_there)
-        << "\n    -> " << reason << "\n";
+    out << "  detected " << d << ": " << describe(f, dc)
+        << "\n    truth there: " << share(truth_there) << "\n    -> " << reason << "\n";
   }
   bool any = false;
   for (std::size_t t = 0; t < truth.size(); ++t) {
     for (std::size_t d = 0; d < detected.size(); ++d) {
       if (inter[t][d] == 0) continue;
       char cell[96];
-      std::snprintf(cell, sizeof cell, "%s(t%zu,d%zu) %.2f", any ? "  " : "  IoU: ", t, d, iou(t, d));
+      std::snprintf(cell, sizeof cell, "%s(t%zu,d%zu) %.2f", any ? "  " : "  IoU: ", t, d,
+                    iou(t, d));
       out << cell;
       any = true;
     }

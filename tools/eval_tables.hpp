@@ -19,8 +19,8 @@ struct FrameTableEvidence {
   int width = 0, height = 0;
   const std::vector<std::uint8_t>* truth_labels = nullptr;      // per pixel, 255 void
   const std::vector<std::uint8_t>* predicted_labels = nullptr;  // per pixel, the final labels
-  const std::vector<float>* table_probability = nullptr;        // per pixel forest p(table), or null
-  const NormalImage* normals_ground = nullptr;                  // for the horizontal share, or null
+  const std::vector<float>* table_probability = nullptr;  // per pixel forest p(table), or null
+  const NormalImage* normals_ground = nullptr;            // for the horizontal share, or null
 };
 
 // Failure categories summed over frames (category -> count).

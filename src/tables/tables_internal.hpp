@@ -13,12 +13,12 @@
 #include <utility>
 #include <vector>
 
+#include "common/floor_to_int.hpp"
+#include "common/scratch.hpp"
 #include "findmug/cloud/cloud.hpp"
 #include "findmug/labels/label_image.hpp"
 #include "findmug/labels/labels.hpp"
 #include "findmug/tables/tables.hpp"
-#include "common/floor_to_int.hpp"
-#include "common/scratch.hpp"
 
 namespace findmug::tables_detail {
 
@@ -141,5 +141,15 @@ class ReachabilityGrid {
   detail::Borrowed<std::vector<int>> obstacle_start_{threadBuffers().obstacle_start};
   detail::Borrowed<std::vector<Eigen::Vector2f>> obstacle_points_{threadBuffers().obstacle_points};
 };
+
+// The table-top test (table_top.cpp). flatShare: over the members within `band` of the top
+// height whose normal is within the horizontal tilt of vertical, the share within the flat
+// tilt (NaN when none is horizontal). softTop: whether a described cluster's top is large
+// and not flat (TableConfig::min_flat_share), setting table.flat_share when measured.
+float flatShare(const int* member, int n, const int* full_pixels, const OrganizedCloud& cloud,
+                const NormalImage& normals, float top_height, float band, float cos_horizontal,
+                float cos_flat);
+bool softTop(const int* member, int n, const int* full_pixels, const OrganizedCloud& cloud,
+             const NormalImage* normals, const TableConfig& config, TableCluster& table);
 
 }  // namespace findmug::tables_detail
