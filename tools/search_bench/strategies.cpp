@@ -184,6 +184,10 @@ class LookCloser {
   int taken_ = 0;
 };
 
+// With the matcher, the findmug strategy also looks this far to either side at a search
+// position (half the camera's horizontal field of view).
+constexpr double kTopSweepRad = 0.5;
+
 EpisodeResult runFindmug(const World& world, const SimParams& params,
                          const Perception& perception) {
   EpisodeResult result;
@@ -225,6 +229,15 @@ EpisodeResult runFindmug(const World& world, const SimParams& params,
     robot.driveTo(world.grid.center(next_cell));
     robot.turnTo(target.yaw);
     robot.look();
+    if (eyes.matcher()) {
+      // The matcher needs the mug whole and near the middle of the view, twice: the top
+      // to either side of the position's heading as well.
+      for (const double side : {kTopSweepRad, -2.0 * kTopSweepRad}) {
+        if (!robot.active()) break;
+        robot.turnTo(robot.yaw() + side);
+        robot.look();
+      }
+    }
     rooms.markHere(robot);
   }
   result.stats = robot.stats();

@@ -21,7 +21,9 @@
 //            mug in daemon.objects_dir, then "find mug" is asked on the command bus; "seen"
 //            ends the search, checked against the ground truth (claimIsCorrect). The findmug
 //            strategy also acts on "look closer" answers (the tables the daemon names first
-//            go before the rest of the table map, each at most twice); the oracle strategy,
+//            go before the rest of the table map, each at most twice) and at each search
+//            position looks 0.5 rad to either side too (the matcher wants the mug whole and
+//            twice); the oracle strategy,
 //            after its best view, drives to the free pose nearest the mug and looks three
 //            times from there (the object map names an object after two matches within its
 //            naming range), then does the same. The other baselines act on "seen" only.
