@@ -1,6 +1,8 @@
 // findmug-search-bench (tools/search_bench, issue 51): the simulated robot's motion model
-// and time accounting, the oracle's shortest path, findmug's table map driving the search
-// to the mug on a table, and the program's output not depending on its worker count.
+// and time accounting, frames while driving, the ground-truth check of a claimed find (a
+// false "found" ends the search as a failure), the oracle's shortest path, findmug's table
+// map driving the search to the mug on a table, the daemon's own matcher finding the taught
+// mug, and the program's output not depending on its worker count or on being run again.
 #include <gtest/gtest.h>
 #include <unistd.h>
 
@@ -9,6 +11,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <map>
 #include <sstream>
 
 #include "findmug/common/error.hpp"
@@ -43,7 +46,8 @@ World emptyRoomWorld(const SimParams& params) {
 }
 
 TEST(SearchSim, DrivingAndTurningTimeFollowTheBaseModel) {
-  const SimParams params;
+  SimParams params;
+  params.drive_frames_hz = 0.0;
   const World w = emptyRoomWorld(params);
   Robot robot(w, params);
   const Eigen::Vector2d goal = w.grid.center(w.grid.cellAt({4.0, 2.0}));
@@ -62,6 +66,111 @@ TEST(SearchSim, DrivingAndTurningTimeFollowTheBaseModel) {
   EXPECT_NEAR(robot.stats().time_s,
               robot.stats().drive_s + robot.stats().turn_s + robot.stats().process_s, 1e-9);
   EXPECT_FALSE(robot.stats().found);  // the mug has no primitive: nothing to see
+}
+
+TEST(SearchSim, FramesWhileDrivingFallOnTheMotionClockAndCostNoTime) {
+  SimParams params;
+  params.drive_frames_hz = 2.0;
+  const World w = emptyRoomWorld(params);
+  std::vector<std::pair<Eigen::Vector2d, double>> frames;  // pose and time of each frame
+  std::vector<double> yaws;
+  Robot robot(w, params,
+              [&](const synth::RenderedFrame&, const Eigen::Vector2d& xy, double yaw, double t) {
+                frames.push_back({xy, t});
+                yaws.push_back(yaw);
+                return Sighting{};
+              });
+  const Eigen::Vector2d goal = w.grid.center(w.grid.cellAt({4.0, 2.0}));
+  ASSERT_TRUE(robot.driveTo(goal));
+  const double d = (goal - w.start).norm();  // straight ahead: no turn
+  const auto expected = static_cast<std::size_t>(std::floor(d / 0.3 * 2.0));
+  ASSERT_EQ(frames.size(), expected);
+  for (std::size_t k = 0; k < frames.size(); ++k) {
+    const double t = 0.5 * static_cast<double>(k + 1);
+    EXPECT_NEAR(frames[k].second, t, 1e-9);  // every 0.5 s of motion
+    EXPECT_NEAR(frames[k].first.x(), w.start.x() + 0.3 * t, 1e-9);  // on the way, interpolated
+    EXPECT_NEAR(frames[k].first.y(), w.start.y(), 1e-9);
+  }
+  EXPECT_EQ(robot.stats().drive_frames, static_cast<int>(expected));
+  EXPECT_EQ(robot.stats().views, 0);
+  EXPECT_NEAR(robot.stats().time_s, d / 0.3, 1e-9);  // they cost no time
+  EXPECT_NEAR(robot.stats().process_s, 0.0, 1e-9);
+  // Turning: 90 deg at 45 deg/s = 2 s, frames at the motion clock's next multiples of 0.5 s.
+  frames.clear();
+  yaws.clear();
+  const double clock = d / 0.3;
+  robot.turnTo(M_PI / 2);
+  const double first = std::floor(clock / 0.5) * 0.5 + 0.5;
+  ASSERT_FALSE(frames.empty());
+  EXPECT_NEAR(frames[0].second, first, 1e-9);
+  EXPECT_NEAR(yaws[0], (first - clock) * M_PI / 4, 1e-9);
+  EXPECT_NEAR(robot.stats().time_s, clock + 2.0, 1e-9);
+}
+
+TEST(SearchSim, AClaimedFindIsCheckedAgainstTheGroundTruth) {
+  SimParams params;
+  params.drive_frames_hz = 0.0;
+  const World w = emptyRoomWorld(params);  // the mug at (5, 2, 0)
+  EXPECT_TRUE(claimIsCorrect(w, {5.2, 2.2, 0.05}, 0.3));
+  EXPECT_FALSE(claimIsCorrect(w, {5.25, 2.25, 0.05}, 0.3));  // 0.35 m off on the floor
+  EXPECT_TRUE(claimIsCorrect(w, {5.0, 2.0, 0.9}, 0.3));      // the height is not compared
+  // A matcher that says "seen" at its third frame, at `reported`.
+  auto run = [&](const Eigen::Vector3d& reported) {
+    int n = 0;
+    Robot robot(
+        w, params,
+        [&](const synth::RenderedFrame&, const Eigen::Vector2d&, double, double) {
+          return Sighting{++n == 3, reported};
+        },
+        Robot::Recognition::Matcher);
+    robot.lookAround();
+    return robot.stats();
+  };
+  const RunStats wrong = run({2.0, 2.0, 0.8});
+  EXPECT_TRUE(wrong.false_found);
+  EXPECT_FALSE(wrong.found);
+  EXPECT_EQ(wrong.views, 3);  // the search ended with the claim
+  EXPECT_EQ(wrong.recogniser_calls, 3);
+  EXPECT_NEAR(wrong.found_time_s, wrong.time_s, 1e-9);
+  const RunStats right = run({5.1, 2.1, 0.05});
+  EXPECT_TRUE(right.found);
+  EXPECT_FALSE(right.false_found);
+  EXPECT_EQ(right.views, 3);
+  // In the report a false "found" is a failure, counted apart.
+  std::vector<EpisodeRow> rows(2);
+  rows[0].result.strategy = rows[1].result.strategy = "findmug";
+  rows[0].mug_place = rows[1].mug_place = "table";
+  rows[0].episode.index = 0;
+  rows[1].episode.index = 1;
+  rows[0].result.stats = wrong;
+  rows[1].result.stats = right;
+  const StrategySummary s = summarise("findmug", rows);
+  EXPECT_EQ(s.found, 1);
+  EXPECT_EQ(s.false_found, 1);
+  EXPECT_DOUBLE_EQ(s.false_found_rate, 0.5);
+  EXPECT_DOUBLE_EQ(s.table_success, 0.5);
+  EXPECT_DOUBLE_EQ(rows[0].censoredTime(600.0), 600.0);
+}
+
+TEST(SearchSim, AFindFromADrivingFrameStopsTheRobotWhereItWasTaken) {
+  SimParams params;
+  params.drive_frames_hz = 1.0;
+  const World w = emptyRoomWorld(params);
+  int n = 0;
+  Robot robot(
+      w, params,
+      [&](const synth::RenderedFrame&, const Eigen::Vector2d&, double, double) {
+        return Sighting{++n == 4, {5.0, 2.0, 0.05}};
+      },
+      Robot::Recognition::Matcher);
+  robot.driveTo(w.grid.center(w.grid.cellAt({5.0, 2.0})));
+  EXPECT_TRUE(robot.stats().found);
+  EXPECT_EQ(robot.stats().drive_frames, 4);
+  // Taken at 4 s of driving (1.2 m); the answer 0.1 s of processing later.
+  EXPECT_NEAR(robot.stats().found_time_s, 4.1, 1e-9);
+  EXPECT_NEAR(robot.stats().path_m, 1.2, 1e-9);
+  EXPECT_NEAR(robot.xy().x(), w.start.x() + 1.2, 1e-9);
+  EXPECT_FALSE(robot.active());
 }
 
 TEST(SearchSim, PlannerGoesAroundObstaclesAndTheBudgetStopsTheRobot) {
@@ -90,12 +199,13 @@ TEST(SearchSim, PlannerGoesAroundObstaclesAndTheBudgetStopsTheRobot) {
 }
 
 TEST(SearchBench, OracleDrivesTheShortestPathAndSeesTheMug) {
-  const SimParams params;
+  SimParams params;
+  params.drive_frames_hz = 0.0;  // a driving frame may see the mug before the best view
   for (int e = 0; e < 2; ++e) {
     const World w = makeWorld({0, e, 11, 1100 + static_cast<std::uint64_t>(e)}, params);
     ASSERT_TRUE(std::isfinite(w.shortest_path_m));
     EXPECT_TRUE(mugRecognisable(w, params, w.best_view, w.best_view_yaw));
-    const EpisodeResult r = runStrategy("oracle", w, params, nullptr);
+    const EpisodeResult r = runStrategy("oracle", w, params, Perception{});
     EXPECT_TRUE(r.stats.found);
     EXPECT_NEAR(r.stats.path_m, w.shortest_path_m, 1e-6);
     EXPECT_EQ(r.stats.views, 1);
@@ -115,10 +225,14 @@ TEST(SearchBench, FindmugStrategyFindsTheMugOnTablesFromTheDaemonsTableMap) {
   for (int e = 0; e < 2; ++e) {
     const World w = makeWorld({1, e, 21 + static_cast<std::uint64_t>(e), 2100u + e}, params);
     ASSERT_EQ(w.mug.place, synth::MugPlace::Table);
-    const EpisodeResult r = runStrategy("findmug", w, params, &model);
+    Perception oracle;
+    oracle.model = &model;
+    const EpisodeResult r = runStrategy("findmug", w, params, oracle);
     EXPECT_TRUE(r.stats.found) << "episode " << e;
     EXPECT_LE(r.stats.found_time_s, params.time_budget_s);
-    EXPECT_EQ(r.frames_processed, r.stats.views);  // every view went through the daemon
+    EXPECT_GT(r.stats.drive_frames, 0);
+    // Every frame, stop views and driving frames, went through the daemon.
+    EXPECT_EQ(r.frames_processed, r.stats.views + r.stats.drive_frames);
     positions += r.positions_visited;
     tables += r.tables_mapped;
   }
@@ -127,30 +241,91 @@ TEST(SearchBench, FindmugStrategyFindsTheMugOnTablesFromTheDaemonsTableMap) {
   EXPECT_GT(positions, 0);
 }
 
-TEST(SearchBench, ProgramOutputDoesNotDependOnTheWorkers) {
-  const fs::path tmp = fs::temp_directory_path() /
-                       ("search_bench_test_" + std::to_string(static_cast<long>(::getpid())));
-  fs::remove_all(tmp);
-  const std::string root = FINDMUG_SOURCE_DIR;
-  auto run = [&](int jobs) {
-    const fs::path out = tmp / ("jobs" + std::to_string(jobs));
-    const std::string command =
-        std::string(FINDMUG_SEARCH_BENCH_EXE) +
-        " --apartments 2 --episodes-per-apartment 1 --strategies findmug,coverage,oracle" +
-        " --jobs " + std::to_string(jobs) + " --config " + root + "/daemon/findmugd.yaml" +
-        " --model " + root + "/models/findmug-nyu-synth.fmf --quiet --out " + out.string() + " > " +
-        (tmp / "stdout").string() + " 2>&1";
+// The rows of `csv` (header first) as column name -> value maps.
+std::vector<std::map<std::string, std::string>> csvRows(const std::string& csv) {
+  std::vector<std::vector<std::string>> cells;
+  std::stringstream lines(csv);
+  for (std::string line; std::getline(lines, line);) {
+    cells.emplace_back();
+    std::stringstream fields(line);
+    for (std::string f; std::getline(fields, f, ',');) cells.back().push_back(f);
+  }
+  std::vector<std::map<std::string, std::string>> rows;
+  for (std::size_t r = 1; r < cells.size(); ++r) {
+    rows.emplace_back();
+    for (std::size_t c = 0; c < cells[0].size() && c < cells[r].size(); ++c)
+      rows.back()[cells[0][c]] = cells[r][c];
+  }
+  return rows;
+}
+
+struct ProgramRun {
+  fs::path tmp;
+  explicit ProgramRun(const std::string& what)
+      : tmp(fs::temp_directory_path() /
+            ("search_bench_test_" + what + "_" + std::to_string(static_cast<long>(::getpid())))) {
+    fs::remove_all(tmp);
+    fs::create_directories(tmp);
+  }
+  ~ProgramRun() { fs::remove_all(tmp); }
+  fs::path operator()(const std::string& name, const std::string& args) {
+    const std::string root = FINDMUG_SOURCE_DIR;
+    const fs::path out = tmp / name;
+    // From the source folder: --models names the committed models by their relative paths.
+    const std::string command = "cd " + root + " && " + std::string(FINDMUG_SEARCH_BENCH_EXE) +
+                                " " + args + " --config " + root + "/daemon/findmugd.yaml" +
+                                " --quiet --out " + out.string() + " > " +
+                                (tmp / "stdout").string() + " 2>&1";
     EXPECT_EQ(std::system(command.c_str()), 0) << slurp(tmp / "stdout");
     return out;
-  };
-  fs::create_directories(tmp);
-  const fs::path one = run(1), two = run(2);
+  }
+};
+
+TEST(SearchBench, ProgramOutputDoesNotDependOnTheWorkers) {
+  ProgramRun run("jobs");
+  const std::string root = FINDMUG_SOURCE_DIR;
+  const std::string args =
+      "--apartments 2 --episodes-per-apartment 1 --strategies findmug,coverage,oracle"
+      " --drive-frames-hz 0.5 --model " + root + "/models/findmug-nyu-synth.fmf";
+  const fs::path one = run("jobs1", args + " --jobs 1"), two = run("jobs2", args + " --jobs 2");
   const std::string csv = slurp(one / "episodes.csv");
   EXPECT_EQ(csv, slurp(two / "episodes.csv"));
   EXPECT_EQ(slurp(one / "summary.md"), slurp(two / "summary.md"));
-  EXPECT_EQ(std::count(csv.begin(), csv.end(), '\n'), 1 + 2 * 3);
+  const auto rows = csvRows(csv);
+  ASSERT_EQ(rows.size(), 2u * 3u);
+  int drive_frames = 0;
+  for (const auto& r : rows) drive_frames += std::stoi(r.at("drive_frames"));
+  EXPECT_GT(drive_frames, 0);
   EXPECT_NE(slurp(one / "success_curve.svg").find("<polyline"), std::string::npos);
-  fs::remove_all(tmp);
+}
+
+// The daemon's own recogniser: the mug taught from other apartments, every frame through
+// the pipeline, "find mug" asked after each. Run twice: the same output.
+TEST(SearchBench, MatcherPerceptionFindsTheTaughtMugOnATableAndRepeats) {
+  ProgramRun run("matcher");
+  const std::string args =
+      "--apartments 1 --episodes-per-apartment 1 --strategies findmug --perception matcher"
+      " --models sim --drive-frames-hz 1 --jobs 2";
+  const fs::path first = run("first", args), second = run("second", args);
+  const std::string csv = slurp(first / "episodes.csv");
+  EXPECT_EQ(csv, slurp(second / "episodes.csv"));
+  const std::string summary = slurp(first / "summary.md");
+  EXPECT_EQ(summary, slurp(second / "summary.md"));
+  EXPECT_NE(summary.find("\"mug\" taught from 3 views"), std::string::npos) << summary;
+  const auto rows = csvRows(csv);
+  ASSERT_EQ(rows.size(), 1u);
+  bool found = false;
+  for (const auto& r : rows) {
+    ASSERT_EQ(r.at("run"), "findmug/matcher/sim");
+    ASSERT_EQ(r.at("mug_place"), "table");
+    EXPECT_GT(std::stoi(r.at("drive_frames")), 0);
+    found = r.at("found") == "1";
+    EXPECT_EQ(r.at("false_found"), "0");
+    EXPECT_GT(std::stoi(r.at("matches")), 0);
+    // One find request per frame the daemon processed.
+    EXPECT_EQ(r.at("recogniser_calls"), r.at("frames_processed"));
+  }
+  EXPECT_TRUE(found) << csv;
 }
 
 TEST(SearchReport, SplAndPairedRatios) {

@@ -4,6 +4,7 @@
 
 #include <chrono>
 #include <cmath>
+#include <sstream>
 #include <thread>
 
 #include "findmug/common/error.hpp"
@@ -28,7 +29,12 @@ FindmugModel loadFindmugModel(const std::string& config_path, const std::string&
   return model;
 }
 
-FindmugTables::FindmugTables(const FindmugModel& model)
+namespace {
+// The request id of every find of an episode (a navigation client's one search).
+constexpr std::int64_t kFindRequestId = 1;
+}  // namespace
+
+FindmugTables::FindmugTables(const FindmugModel& model, const std::string& objects_dir)
     : out_(std::make_shared<io::MemoryBus>(100000)),
       poses_(std::make_shared<io::MemoryBus>()),
       commands_(std::make_shared<io::MemoryBus>()) {
@@ -40,6 +46,7 @@ FindmugTables::FindmugTables(const FindmugModel& model)
   hooks.command_bus = commands_;
   daemon::DaemonConfig config = model.loaded.daemon;
   config.channel_suffix.clear();
+  config.objects_dir = objects_dir;
   pipeline_ =
       std::make_unique<daemon::Pipeline>(model.loaded.config.segmenter, config, model.forest,
                                          model.model_id, daemon::ExecutionMode::Sequential, hooks);
@@ -57,6 +64,13 @@ FindmugTables::FindmugTables(const FindmugModel& model)
             positions_.push_back({map.tables[t].id, p.xy.cast<double>(), p.yaw, p.reachable});
         }
       });
+  out_->subscribe(std::string(io::kFindResultChannel),
+                  [this](const std::string& channel, const std::uint8_t* data, std::size_t size) {
+                    io::FindResultMessage answer = io::decodeFindResult(data, size, channel);
+                    if (answer.request_id != kFindRequestId) return;
+                    last_answer_ = std::move(answer);
+                    ++answers_;
+                  });
   pipeline_->start();
 }
 
@@ -83,9 +97,48 @@ void FindmugTables::feed(const synth::RenderedFrame& frame, const Eigen::Vector2
   RgbdFrame f = frame.labeled.frame;
   f.utime = utime;
   f.seq = frames_++;
+  last_utime_ = utime;
   pipeline_->submit(std::move(f));
   while (out_->handle(std::chrono::milliseconds(0)) == io::HandleResult::Handled) {
   }
+}
+
+io::FindResultMessage FindmugTables::find(const std::string& name) {
+  if (pipeline_->commandInput() == nullptr)
+    throw Error("search: the daemon's command input is off (daemon.command_input must be true)");
+  // In sequential mode the object work of every frame fed is done and its answers handled
+  // (feed drains the bus), so the next answer to this request is the one to this command.
+  while (out_->handle(std::chrono::milliseconds(0)) == io::HandleResult::Handled) {
+  }
+  const std::uint64_t before = answers_;
+  io::publishMessage(*commands_, std::string(io::kCommandChannel),
+                     io::encodeCommand(io::CommandMessage{last_utime_, kFindRequestId, "find",
+                                                          name}));
+  ++find_requests_;
+  const auto deadline = std::chrono::steady_clock::now() + std::chrono::seconds(10);
+  while (answers_ == before) {
+    if (std::chrono::steady_clock::now() > deadline)
+      throw Error("search: no answer to \"find " + name + "\" on " +
+                  std::string(io::kFindResultChannel) + " within 10 s");
+    out_->handle(std::chrono::milliseconds(20));
+  }
+  return last_answer_;
+}
+
+daemon::ObjectSearchSink::Counters FindmugTables::objectCounters() const {
+  return pipeline_->objectSearch().counters();
+}
+
+std::vector<int> FindmugTables::lookCloserTables(const io::FindResultMessage& answer) {
+  std::vector<int> ids;
+  if (answer.result != io::FindResult::LookAt) return ids;
+  // "...; maybe on table 3 7 (matched too few times or from too far): look closer there first"
+  const std::string marker = "maybe on table";
+  const std::size_t at = answer.summary.find(marker);
+  if (at == std::string::npos) return ids;
+  std::istringstream words(answer.summary.substr(at + marker.size()));
+  for (int id; words >> id;) ids.push_back(id);
+  return ids;
 }
 
 }  // namespace findmug::search

@@ -6,6 +6,10 @@
 // on what a robot would receive from findmugd — the confirmed tables of the persistent
 // map and their search positions, decoded from tables_t (CONTENT_MAP) by the io codecs.
 // The pose goes in as robot_pose_t on FINDMUG_ROBOT_POSE through the pipeline's pose bus.
+//
+// With a folder of taught objects (daemon.objects_dir) the same pipeline names the table-top
+// candidates and keeps its object map; find() then asks it "find NAME" as a navigation client
+// would: command_t on FINDMUG_COMMAND, the answer find_result_t on FINDMUG_FIND_RESULT.
 #pragma once
 
 #include <Eigen/Core>
@@ -14,6 +18,8 @@
 #include <vector>
 
 #include "findmug/daemon/daemon_config.hpp"
+#include "findmug/daemon/object_search_sink.hpp"
+#include "findmug/io/lcm_codec_find.hpp"
 #include "findmug/learner/forest.hpp"
 #include "findmug/synth/synth.hpp"
 
@@ -46,10 +52,11 @@ struct FindmugModel {
 FindmugModel loadFindmugModel(const std::string& config_path, const std::string& model_path,
                               const std::vector<std::string>& overrides);
 
-// One episode's daemon: a fresh pipeline (and so an empty table map).
+// One episode's daemon: a fresh pipeline (and so an empty table and object map).
 class FindmugTables {
  public:
-  explicit FindmugTables(const FindmugModel& model);
+  // `objects_dir` ("" = none) is the daemon's objects_dir: the taught objects it names.
+  explicit FindmugTables(const FindmugModel& model, const std::string& objects_dir = "");
   ~FindmugTables();
   FindmugTables(const FindmugTables&) = delete;
   FindmugTables& operator=(const FindmugTables&) = delete;
@@ -63,12 +70,29 @@ class FindmugTables {
   int tables() const { return tables_; }
   int frames() const { return frames_; }
 
+  // Sends "find NAME" on the command bus and returns the daemon's answer to it. Every call
+  // of one FindmugTables carries the same request id: one search, asked again after each
+  // frame, so that the daemon's tables searched for it accumulate. Throws findmug::Error
+  // when no answer comes within 10 s.
+  io::FindResultMessage find(const std::string& name);
+  int findRequests() const { return find_requests_; }
+  // What the daemon's object work counted: candidates put to the matcher, matches,
+  // refusals by reason.
+  daemon::ObjectSearchSink::Counters objectCounters() const;
+  // Table map ids the last answer says may hold the object ("look closer" there), in its
+  // order, parsed from the summary ObjectSearch words (object_search.cpp).
+  static std::vector<int> lookCloserTables(const io::FindResultMessage& answer);
+
  private:
   std::shared_ptr<io::MemoryBus> out_, poses_, commands_;
   std::unique_ptr<daemon::Pipeline> pipeline_;
   std::vector<MapSearchPosition> positions_;
   int tables_ = 0;
   int frames_ = 0;
+  std::uint64_t last_utime_ = 0;
+  int find_requests_ = 0;
+  std::uint64_t answers_ = 0;
+  io::FindResultMessage last_answer_;
 };
 
 }  // namespace findmug::search

@@ -36,7 +36,7 @@ std::vector<const EpisodeRow*> rowsOf(const std::string& strategy,
                                       const std::vector<EpisodeRow>& rows) {
   std::vector<const EpisodeRow*> out;
   for (const EpisodeRow& r : rows)
-    if (r.result.strategy == strategy) out.push_back(&r);
+    if (r.label() == strategy) out.push_back(&r);
   return out;
 }
 
@@ -54,31 +54,44 @@ double EpisodeRow::censoredTime(double budget_s) const {
 }
 
 void writeCsv(std::ostream& out, const std::vector<EpisodeRow>& rows) {
-  out << "strategy,apartment,episode,apartment_seed,episode_seed,rooms,mug_place,mug_room,"
-         "shortest_m,found,time_s,path_m,views,drive_s,turn_s,process_s,spl,tables_mapped,"
-         "positions_visited,frames_processed\n";
+  out << "run,strategy,perception,model,apartment,episode,apartment_seed,episode_seed,rooms,"
+         "mug_place,mug_room,shortest_m,found,false_found,time_s,path_m,views,drive_frames,"
+         "recogniser_calls,drive_s,turn_s,process_s,spl,tables_mapped,positions_visited,"
+         "frames_processed,look_closer,candidates,matches,refused_size,refused_colour,"
+         "refused_shape\n";
   for (const EpisodeRow& r : rows) {
     const RunStats& s = r.result.stats;
-    out << r.result.strategy << ',' << r.episode.apartment << ',' << r.episode.index << ','
+    out << r.label() << ',' << r.result.strategy << ',' << r.perception << ',' << r.model << ','
+        << r.episode.apartment << ',' << r.episode.index << ','
         << r.episode.apartment_seed << ',' << r.episode.episode_seed << ',' << r.rooms << ','
         << r.mug_place << ',' << r.mug_room << ',' << fixed(r.shortest_path_m, 3) << ','
-        << (s.found ? 1 : 0) << ',' << fixed(s.found ? s.found_time_s : s.time_s, 2) << ','
-        << fixed(s.path_m, 3) << ',' << s.views << ',' << fixed(s.drive_s, 2) << ','
-        << fixed(s.turn_s, 2) << ',' << fixed(s.process_s, 2) << ',' << fixed(r.spl(), 4) << ','
-        << r.result.tables_mapped << ',' << r.result.positions_visited << ','
-        << r.result.frames_processed << '\n';
+        << (s.found ? 1 : 0) << ',' << (s.false_found ? 1 : 0) << ','
+        << fixed(std::isfinite(s.found_time_s) ? s.found_time_s : s.time_s, 2) << ','
+        << fixed(s.path_m, 3) << ',' << s.views << ',' << s.drive_frames << ','
+        << s.recogniser_calls << ',' << fixed(s.drive_s, 2) << ',' << fixed(s.turn_s, 2) << ','
+        << fixed(s.process_s, 2) << ',' << fixed(r.spl(), 4) << ',' << r.result.tables_mapped
+        << ',' << r.result.positions_visited << ',' << r.result.frames_processed << ','
+        << r.result.look_closer << ',' << r.result.candidates << ',' << r.result.matches << ','
+        << r.result.refused_size << ',' << r.result.refused_colour << ','
+        << r.result.refused_shape << '\n';
   }
 }
 
 StrategySummary summarise(const std::string& strategy, const std::vector<EpisodeRow>& rows) {
   StrategySummary s;
   s.strategy = strategy;
-  std::vector<double> times, paths, views;
+  std::vector<double> times, paths, views, drive_frames, calls;
   double spl = 0.0;
   for (const EpisodeRow* r : rowsOf(strategy, rows)) {
     ++s.episodes;
     spl += r->spl();
     views.push_back(r->result.stats.views);
+    drive_frames.push_back(r->result.stats.drive_frames);
+    calls.push_back(r->result.stats.recogniser_calls);
+    s.false_found += r->result.stats.false_found;
+    const bool on_table = r->mug_place == "table";
+    s.table_episodes += on_table;
+    s.table_found += on_table && r->result.stats.found;
     if (!r->result.stats.found) continue;
     ++s.found;
     times.push_back(r->result.stats.found_time_s);
@@ -86,6 +99,9 @@ StrategySummary summarise(const std::string& strategy, const std::vector<Episode
   }
   if (s.episodes == 0) return s;
   s.success = static_cast<double>(s.found) / s.episodes;
+  s.false_found_rate = static_cast<double>(s.false_found) / s.episodes;
+  s.table_success =
+      s.table_episodes ? static_cast<double>(s.table_found) / s.table_episodes : std::nan("");
   s.spl = spl / s.episodes;
   std::sort(times.begin(), times.end());
   std::sort(paths.begin(), paths.end());
@@ -94,6 +110,8 @@ StrategySummary summarise(const std::string& strategy, const std::vector<Episode
   s.path_median = quantile(paths, 0.5), s.path_q1 = quantile(paths, 0.25);
   s.path_q3 = quantile(paths, 0.75);
   s.views_median = median(views);
+  s.drive_frames_median = median(drive_frames);
+  s.recogniser_calls_median = median(calls);
   return s;
 }
 
@@ -165,15 +183,50 @@ void writeSuccessCurveSvg(std::ostream& out, const std::vector<std::string>& str
 
 void writeSummary(std::ostream& out, const std::vector<std::string>& strategies,
                   const std::vector<EpisodeRow>& rows, double budget_s) {
-  out << "| strategy | episodes | success | SPL | time to find, median [IQR] s | "
-         "path, median [IQR] m | views (median) |\n|---|---|---|---|---|---|---|\n";
+  out << "| run | episodes | success | success, mug on a table | false \"found\" | SPL | "
+         "time to find, median [IQR] s | path, median [IQR] m | views (median) | "
+         "driving frames (median) | recogniser calls (median) |\n"
+         "|---|---|---|---|---|---|---|---|---|---|---|\n";
   for (const std::string& name : strategies) {
     const StrategySummary s = summarise(name, rows);
     out << "| " << name << " | " << s.episodes << " | " << fixed(s.success, 3) << " | "
+        << fixed(s.table_success, 3) << " (" << s.table_found << "/" << s.table_episodes
+        << ") | " << fixed(s.false_found_rate, 3) << " (" << s.false_found << ") | "
         << fixed(s.spl, 3) << " | " << fixed(s.time_median, 1) << " [" << fixed(s.time_q1, 1)
         << ", " << fixed(s.time_q3, 1) << "] | " << fixed(s.path_median, 1) << " ["
         << fixed(s.path_q1, 1) << ", " << fixed(s.path_q3, 1) << "] | " << fixed(s.views_median, 0)
-        << " |\n";
+        << " | " << fixed(s.drive_frames_median, 0) << " | "
+        << fixed(s.recogniser_calls_median, 0) << " |\n";
+  }
+  // Success and median time (failures at the budget) by where the mug stood.
+  std::vector<std::string> places;
+  for (const EpisodeRow& r : rows)
+    if (std::find(places.begin(), places.end(), r.mug_place) == places.end())
+      places.push_back(r.mug_place);
+  std::sort(places.begin(), places.end(), [](const std::string& a, const std::string& b) {
+    auto rank = [](const std::string& p) { return p == "table" ? 0 : p == "cabinet" ? 1 : 2; };
+    return rank(a) < rank(b);
+  });
+  out << "\nSuccess (median time to find, failures at " << fixed(budget_s, 0)
+      << " s) by where the mug stood:\n\n| run |";
+  for (const std::string& p : places) out << " mug on " << p << " |";
+  out << "\n|---|";
+  for (std::size_t k = 0; k < places.size(); ++k) out << "---|";
+  out << "\n";
+  for (const std::string& name : strategies) {
+    out << "| " << name << " |";
+    for (const std::string& p : places) {
+      int n = 0, found = 0;
+      std::vector<double> times;
+      for (const EpisodeRow* r : rowsOf(name, rows)) {
+        if (r->mug_place != p) continue;
+        ++n;
+        found += r->result.stats.found;
+        times.push_back(r->censoredTime(budget_s));
+      }
+      out << " " << found << "/" << n << " (" << fixed(median(times), 1) << " s) |";
+    }
+    out << "\n";
   }
   if (strategies.size() < 2) return;
   out << "\nPaired time ratio other/" << strategies.front()

@@ -1,5 +1,7 @@
-// report.hpp — findmug-search-bench's results: the per-episode CSV, the summary per
-// strategy (success, SPL, median and IQR of time and path to find, views), paired
+// report.hpp — findmug-search-bench's results: the per-episode CSV, the summary per run
+// (a strategy under one perception, and for the daemon's runs one model: success overall and
+// on table episodes, false "found" rate, SPL, median and IQR of time and path to find, views,
+// driving frames and recogniser calls), success by where the mug stood, paired
 // differences against a reference strategy with a bootstrap 95 % interval, and the
 // success-against-time curve as SVG.
 //
@@ -19,6 +21,8 @@ namespace findmug::search {
 // One row of the CSV: a strategy's run of one episode and the episode's facts.
 struct EpisodeRow {
   Episode episode;
+  // What the summary groups by: "strategy/perception[/model]" ("" = result.strategy).
+  std::string run, perception, model;
   int rooms = 0;
   std::string mug_place, mug_room;
   double shortest_path_m = 0.0;
@@ -26,17 +30,20 @@ struct EpisodeRow {
   double spl() const;
   // Time to find, the budget when not found (the censored value the paired ratios use).
   double censoredTime(double budget_s) const;
+  const std::string& label() const { return run.empty() ? result.strategy : run; }
 };
 
 void writeCsv(std::ostream& out, const std::vector<EpisodeRow>& rows);
 
 struct StrategySummary {
   std::string strategy;
-  int episodes = 0, found = 0;
-  double success = 0.0, spl = 0.0;
+  int episodes = 0, found = 0, false_found = 0;
+  int table_episodes = 0, table_found = 0;  // the mug on a table
+  double success = 0.0, spl = 0.0, false_found_rate = 0.0, table_success = 0.0;
   double time_median = 0.0, time_q1 = 0.0, time_q3 = 0.0;  // over successes
   double path_median = 0.0, path_q1 = 0.0, path_q3 = 0.0;  // over successes
   double views_median = 0.0;                               // over all episodes
+  double drive_frames_median = 0.0, recogniser_calls_median = 0.0;  // over all episodes
 };
 
 StrategySummary summarise(const std::string& strategy, const std::vector<EpisodeRow>& rows);
@@ -57,7 +64,7 @@ PairedRatio pairedTimeRatio(const std::string& reference, const std::string& oth
 void writeSuccessCurveSvg(std::ostream& out, const std::vector<std::string>& strategies,
                           const std::vector<EpisodeRow>& rows, double budget_s);
 
-// The summary as a Markdown table plus the paired ratios.
+// The summary as Markdown tables: per run, success by the mug's place, the paired ratios.
 void writeSummary(std::ostream& out, const std::vector<std::string>& strategies,
                   const std::vector<EpisodeRow>& rows, double budget_s);
 

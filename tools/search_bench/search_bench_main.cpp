@@ -2,13 +2,19 @@
 // does a robot that looks on findmug's tables first find the mug sooner?
 //
 //   findmug-search-bench --apartments N --episodes-per-apartment K
-//       --strategies findmug,places,coverage,random,oracle --perception oracle
-//       --jobs 2 --out DIR [--config daemon/findmugd.yaml --model models/findmug-nyu-synth.fmf
-//       --set KEY=VALUE ...]
+//       --strategies findmug,places,coverage,random,oracle --perception oracle[,matcher]
+//       [--models sim[,shipped]] [--drive-frames-hz 1] --jobs 2 --out DIR
+//       [--config daemon/findmugd.yaml --model FILE --set KEY=VALUE ...]
 //
-// Writes DIR/episodes.csv (one row per strategy and episode), DIR/summary.md (the table
-// and paired ratios) and DIR/success_curve.svg. Episodes run on --jobs workers; each is a
-// pure function of its seeds, so the output does not depend on --jobs.
+// A run is a strategy under one perception (and, where the daemon runs, one model): every
+// strategy under every perception asked for; the findmug strategy once per model; the
+// baselines under the matcher with the first model (their recogniser is the daemon's).
+// With the matcher, "mug" is first taught (teach_mug.hpp) into a temporary objects_dir per
+// model, from apartments whose seeds no episode uses.
+//
+// Writes DIR/episodes.csv (one row per run and episode), DIR/summary.md (the tables and
+// paired ratios) and DIR/success_curve.svg. Episodes run on --jobs workers; each is a pure
+// function of its seeds, so the output does not depend on --jobs.
 #include <spdlog/spdlog.h>
 
 #include <algorithm>
@@ -21,15 +27,24 @@
 #include <sstream>
 #include <thread>
 
+#include <unistd.h>
+
 #include "findmug/common/error.hpp"
 #include "findmug_cli.hpp"
 #include "report.hpp"
 #include "strategies.hpp"
+#include "teach_mug.hpp"
 
 namespace {
 
 using namespace findmug;
 using namespace findmug::search;
+
+std::string fixed2(double v) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.2f", v);
+  return text;
+}
 
 std::vector<std::string> splitList(const std::string& text) {
   std::vector<std::string> out;
@@ -40,36 +55,93 @@ std::vector<std::string> splitList(const std::string& text) {
   return out;
 }
 
+// demo.sh's settings for the sim-domain model.
+const std::vector<std::string> kSimSettings{"learner.classes=labels", "features.objects=false",
+                                            "mrf.pairwise=potts"};
+
 struct Options {
   int apartments = 2, episodes = 2, jobs = 1;
   std::uint64_t seed = 1;
   std::string strategies = "findmug,places,coverage,random,oracle";
   std::string perception = "oracle";
+  std::string models;  // "" = the one of --model
   std::string out_dir;
   std::string config = "daemon/findmugd.yaml";
   std::string model = "models/findmug-nyu-synth.fmf";
-  // demo.sh's settings for the sim-domain model.
-  std::vector<std::string> overrides{"learner.classes=labels", "features.objects=false",
-                                     "mrf.pairwise=potts"};
+  std::vector<std::string> overrides = kSimSettings;
   std::vector<std::string> extra_overrides;
   double budget_s = 600.0;
+  double drive_frames_hz = 1.0;
+  int teach_views = 3;
+  std::uint64_t teach_seed = 7001;
   bool quiet = false;
 };
 
-// All rows of one episode, every strategy in the order asked for.
-std::vector<EpisodeRow> runEpisode(const Episode& episode, const std::vector<std::string>& names,
-                                   const SimParams& params, const FindmugModel* model) {
+// A model the daemon runs with: its short name in the run labels, file and settings.
+struct ModelChoice {
+  std::string key, path;
+  std::vector<std::string> overrides;
+  std::unique_ptr<FindmugModel> loaded;
+  std::string objects_dir;  // the taught mug (matcher)
+  TaughtObject taught;
+};
+
+// One run: a strategy under one perception, with its model when the daemon runs.
+struct RunSpec {
+  std::string strategy, perception, model, label;
+  Perception setup;
+};
+
+std::vector<std::string> splitWords(const std::string& text, const std::string& what) {
+  std::vector<std::string> out;
+  std::stringstream s(text);
+  for (std::string item; std::getline(s, item, ',');)
+    if (!item.empty() && std::find(out.begin(), out.end(), item) == out.end())
+      out.push_back(item);
+  if (out.empty()) throw Error(what + ": nothing named");
+  return out;
+}
+
+std::vector<ModelChoice> modelChoices(const Options& o) {
+  std::vector<ModelChoice> out;
+  if (o.models.empty()) {
+    const std::string stem = std::filesystem::path(o.model).stem().string();
+    const std::string key = stem == "findmug-nyu-synth" && !o.overrides.empty() ? "sim"
+                            : stem == "findmug" && o.overrides.empty()          ? "shipped"
+                                                                                : stem;
+    out.push_back({key, o.model, o.overrides, nullptr, "", {}});
+    return out;
+  }
+  for (const std::string& key : splitWords(o.models, "--models")) {
+    if (key == "sim")
+      out.push_back({key, "models/findmug-nyu-synth.fmf", kSimSettings, nullptr, "", {}});
+    else if (key == "shipped")
+      out.push_back({key, "models/findmug.fmf", {}, nullptr, "", {}});
+    else
+      throw Error("--models: unknown model '" + key +
+                  "' (sim: models/findmug-nyu-synth.fmf with demo.sh's settings; shipped: "
+                  "models/findmug.fmf, the NYU model, with the config's)");
+  }
+  return out;
+}
+
+// All rows of one episode, every run in the order of `runs`.
+std::vector<EpisodeRow> runEpisode(const Episode& episode, const std::vector<RunSpec>& runs,
+                                   const SimParams& params) {
   const World world = makeWorld(episode, params);
   std::vector<EpisodeRow> rows;
-  for (const std::string& name : names) {
+  for (const RunSpec& run : runs) {
     EpisodeRow row;
     row.episode = episode;
+    row.run = run.label;
+    row.perception = run.perception;
+    row.model = run.model;
     row.rooms = static_cast<int>(world.apartment.rooms.size());
     row.mug_place = synth::mugPlaceName(world.mug.place);
     row.mug_room =
         world.mug.room >= 0 ? synth::roomKindName(world.apartment.rooms[world.mug.room].kind) : "-";
     row.shortest_path_m = world.shortest_path_m;
-    row.result = runStrategy(name, world, params, model);
+    row.result = runStrategy(run.strategy, world, params, run.setup);
     rows.push_back(row);
   }
   return rows;
@@ -77,20 +149,75 @@ std::vector<EpisodeRow> runEpisode(const Episode& episode, const std::vector<std
 
 int run(const Options& o) {
   const std::vector<std::string> names = splitList(o.strategies);
-  if (o.perception != "oracle")
-    throw Error("--perception: only 'oracle' recognition of the mug is implemented");
+  const std::vector<std::string> perceptions = splitWords(o.perception, "--perception");
+  for (const std::string& p : perceptions)
+    if (p != "oracle" && p != "matcher")
+      throw Error("--perception: unknown recogniser '" + p + "' (oracle, matcher)");
   SimParams params;
   params.time_budget_s = o.budget_s;
-  std::unique_ptr<FindmugModel> model;
-  if (std::find(names.begin(), names.end(), "findmug") != names.end()) {
-    std::vector<std::string> overrides = o.overrides;
-    overrides.insert(overrides.end(), o.extra_overrides.begin(), o.extra_overrides.end());
-    model = std::make_unique<FindmugModel>(loadFindmugModel(o.config, o.model, overrides));
-  }
+  params.drive_frames_hz = o.drive_frames_hz;
   std::vector<Episode> episodes;
-  for (int a = 0; a < o.apartments; ++a)
+  std::vector<std::uint64_t> apartment_seeds;
+  for (int a = 0; a < o.apartments; ++a) {
+    apartment_seeds.push_back(o.seed * 1000003ULL + a);
     for (int e = 0; e < o.episodes; ++e)
       episodes.push_back({a, e, o.seed * 1000003ULL + a, (o.seed * 1000003ULL + a) * 7919ULL + e});
+  }
+
+  std::vector<ModelChoice> models = modelChoices(o);
+  std::vector<RunSpec> runs;
+  for (const std::string& perception : perceptions)
+    for (const std::string& name : names) {
+      const bool daemon = name == "findmug" || perception == "matcher";
+      const std::size_t n = name == "findmug" ? models.size() : daemon ? 1 : 0;
+      for (std::size_t m = 0; m < std::max<std::size_t>(n, 1); ++m) {
+        RunSpec spec;
+        spec.strategy = name;
+        spec.perception = perception;
+        spec.setup.kind =
+            perception == "matcher" ? Perception::Kind::Matcher : Perception::Kind::Oracle;
+        spec.label = name + "/" + perception;
+        if (daemon) {
+          spec.model = models[m].key;
+          spec.label += "/" + spec.model;
+        }
+        runs.push_back(spec);
+      }
+    }
+  // Load the models the runs use; teach the mug with each one the matcher runs with.
+  const std::filesystem::path scratch =
+      std::filesystem::temp_directory_path() /
+      ("findmug-search-bench-" + std::to_string(static_cast<long>(::getpid())));
+  struct RemoveScratch {
+    std::filesystem::path path;
+    ~RemoveScratch() {
+      std::error_code ignored;
+      std::filesystem::remove_all(path, ignored);
+    }
+  } remove_scratch{scratch};
+  for (ModelChoice& m : models) {
+    const bool used = std::any_of(runs.begin(), runs.end(),
+                                  [&m](const RunSpec& r) { return r.model == m.key; });
+    if (!used) continue;
+    std::vector<std::string> overrides = m.overrides;
+    overrides.insert(overrides.end(), o.extra_overrides.begin(), o.extra_overrides.end());
+    m.loaded = std::make_unique<FindmugModel>(loadFindmugModel(o.config, m.path, overrides));
+    const bool taught = std::any_of(runs.begin(), runs.end(), [&m](const RunSpec& r) {
+      return r.model == m.key && r.perception == "matcher";
+    });
+    if (!taught) continue;
+    m.objects_dir = (scratch / m.key).string();
+    std::filesystem::create_directories(m.objects_dir);
+    m.taught = teachTargetMug(*m.loaded, params, m.objects_dir, "mug", o.teach_views,
+                              o.teach_seed, apartment_seeds);
+  }
+  for (RunSpec& r : runs) {
+    for (const ModelChoice& m : models)
+      if (m.key == r.model) r.setup.model = m.loaded.get(), r.setup.objects_dir = m.objects_dir;
+  }
+  std::vector<std::string> labels;
+  for (const RunSpec& r : runs) labels.push_back(r.label);
+
   std::vector<std::vector<EpisodeRow>> results(episodes.size());
   std::atomic<std::size_t> next{0};
   std::mutex mutex;
@@ -98,7 +225,7 @@ int run(const Options& o) {
   auto worker = [&] {
     for (std::size_t i; (i = next.fetch_add(1)) < episodes.size();) {
       try {
-        results[i] = runEpisode(episodes[i], names, params, model.get());
+        results[i] = runEpisode(episodes[i], runs, params);
       } catch (const std::exception& e) {
         std::lock_guard lock(mutex);
         if (error.empty()) error = e.what();
@@ -122,19 +249,44 @@ int run(const Options& o) {
   std::ofstream csv(o.out_dir + "/episodes.csv");
   writeCsv(csv, rows);
   std::ofstream svg(o.out_dir + "/success_curve.svg");
-  writeSuccessCurveSvg(svg, names, rows, o.budget_s);
+  writeSuccessCurveSvg(svg, labels, rows, o.budget_s);
   std::ostringstream summary;
   summary << "Simulated object search: " << o.apartments << " apartments x " << o.episodes
           << " episodes, budget " << o.budget_s << " s; base " << params.speed_mps
-          << " m/s, 45 deg/s; " << params.view_processing_s << " s per view; look-around "
-          << params.look_around_views
-          << " views; oracle mug recognition (>= " << params.recognise_min_pixels << " px within "
-          << params.recognise_range_m
-          << " m). The robot starts outside the mug's room; mug placements no pose can "
-             "recognise are drawn again. Mug prior: table "
+          << " m/s, 45 deg/s; " << params.view_processing_s
+          << " s per stop view; look-around " << params.look_around_views << " views; ";
+  if (params.drive_frames_hz > 0)
+    summary << "frames while driving or turning every " << 1.0 / params.drive_frames_hz
+            << " s of motion (processed in parallel to the motion: they cost no time; a find "
+               "from one stops the robot there "
+            << params.view_processing_s << " s later); ";
+  else
+    summary << "no frames while driving; ";
+  summary << "runs are STRATEGY/PERCEPTION[/MODEL]. Oracle perception: >= "
+          << params.recognise_min_pixels << " mug px within " << params.recognise_range_m
+          << " m. The robot starts outside the mug's room; mug placements no pose can "
+             "recognise (by the oracle) are drawn again. Mug prior: table "
           << params.prior.table << ", cabinet/shelf " << params.prior.cabinet << ", floor "
-          << params.prior.floor << ".\n\n";
-  writeSummary(summary, names, rows, o.budget_s);
+          << params.prior.floor << ".\n";
+  for (const ModelChoice& m : models) {
+    if (!m.loaded) continue;
+    summary << "\nModel " << m.key << ": " << m.path << " (settings:";
+    for (const std::string& s : m.overrides) summary << " " << s;
+    for (const std::string& s : o.extra_overrides) summary << " " << s;
+    summary << (m.overrides.empty() && o.extra_overrides.empty() ? " the config's)" : ")");
+    if (!m.taught.views.empty()) {
+      summary << "; matcher: \"mug\" taught from " << m.taught.views.size()
+              << " views (apartment seed, camera to mug, candidate points):";
+      for (const TaughtView& v : m.taught.views)
+        summary << " " << v.apartment_seed << " " << fixed2(v.distance_m) << " m "
+                << v.candidate_points << " pts;";
+      summary << " \"seen\" counts as found within " << params.found_tolerance_m
+              << " m of the mug (floor plane), else as a false \"found\" (a failure)";
+    }
+    summary << ".\n";
+  }
+  summary << "\n";
+  writeSummary(summary, labels, rows, o.budget_s);
   std::ofstream(o.out_dir + "/summary.md") << summary.str();
   if (!csv || !svg) throw Error("cannot write the results into " + o.out_dir);
   std::cout << summary.str();
@@ -153,7 +305,20 @@ int main(int argc, char** argv) {
       ->check(cli::positive());
   app->add_option("--strategies", o.strategies,
                   "comma-separated: findmug|a, places|b, coverage|c, random|d, oracle|e");
-  app->add_option("--perception", o.perception, "mug recognition: oracle (the only one)");
+  app->add_option("--perception", o.perception,
+                  "mug recognition, comma-separated: oracle (rendered pixels), matcher "
+                  "(findmugd's taught-object matcher and \"find mug\")");
+  app->add_option("--models", o.models,
+                  "daemon models, comma-separated: sim (models/findmug-nyu-synth.fmf with "
+                  "demo.sh's settings), shipped (models/findmug.fmf); default: --model");
+  app->add_option("--drive-frames-hz", o.drive_frames_hz,
+                  "frames per second of motion while driving or turning (default 1; 0: views "
+                  "at stops only)")
+      ->check(CLI::Range(0.0, 30.0));
+  app->add_option("--teach-views", o.teach_views, "views the mug is taught from (default 3)")
+      ->check(CLI::Range(1, 10));
+  app->add_option("--teach-seed", o.teach_seed,
+                  "first apartment seed the mug is taught in (default 7001)");
   app->add_option("--jobs", o.jobs, "parallel episode workers (default 1)")->check(cli::positive());
   app->add_option("--seed", o.seed, "benchmark seed (default 1)");
   app->add_option("--budget", o.budget_s, "time budget per episode, simulated s (default 600)")

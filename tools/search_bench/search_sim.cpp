@@ -288,21 +288,60 @@ World makeWorld(const Episode& episode, const SimParams& params) {
 
 // ---- the robot ------------------------------------------------------------------------
 
-Robot::Robot(const World& world, const SimParams& params, FrameHook on_frame)
+bool claimIsCorrect(const World& world, const Eigen::Vector3d& reported, double tolerance_m) {
+  return (reported.head<2>() - world.mug.position.head<2>()).norm() <= tolerance_m;
+}
+
+Robot::Robot(const World& world, const SimParams& params, FrameHook on_frame,
+             Recognition recognition)
     : world_(world),
       params_(params),
       on_frame_(std::move(on_frame)),
+      recognition_(recognition),
       xy_(world.start),
-      yaw_(world.start_yaw) {}
+      yaw_(world.start_yaw) {
+  if (recognition_ == Recognition::Matcher && !on_frame_)
+    throw Error("search: matcher recognition needs the daemon's frames (no frame hook)");
+}
 
 void Robot::spend(double seconds) { stats_.time_s += seconds; }
 
+bool Robot::move(double seconds, const Eigen::Vector2d& to_xy, double to_yaw, bool turning) {
+  const Eigen::Vector2d from_xy = xy_;
+  const double from_yaw = yaw_, length = (to_xy - from_xy).norm();
+  const RunStats before = stats_;
+  const double m0 = motion_s_;
+  // The pose and the books a fraction `f` of the way through the motion.
+  auto at = [&](double f) {
+    const double dt = f * seconds;
+    (turning ? stats_.turn_s : stats_.drive_s) = (turning ? before.turn_s : before.drive_s) + dt;
+    stats_.path_m = before.path_m + f * length;
+    stats_.time_s = before.time_s + dt;
+    motion_s_ = m0 + dt;
+    xy_ = f >= 1.0 ? to_xy : Eigen::Vector2d(from_xy + f * (to_xy - from_xy));
+    yaw_ = wrap(from_yaw + f * (to_yaw - from_yaw));
+  };
+  if (params_.drive_frames_hz > 0.0 && seconds > 0.0) {
+    // Frames fall on multiples of the period of motion time, so a run of short motions
+    // (a look-around's turns) gets them at the same rate as one long one.
+    const double period = 1.0 / params_.drive_frames_hz;
+    for (auto k = static_cast<long long>(std::floor(m0 / period)) + 1; k * period <= m0 + seconds;
+         ++k) {
+      const double dt = k * period - m0;
+      if (before.time_s + dt > params_.time_budget_s) break;
+      at(dt / seconds);
+      ++stats_.drive_frames;
+      if (perceive(false)) return false;
+    }
+  }
+  at(1.0);
+  return true;
+}
+
 void Robot::turnTo(double yaw) {
   if (!active()) return;
-  const double turn = std::abs(wrap(yaw - yaw_)) / params_.turn_rate_rad_s;
-  stats_.turn_s += turn;
-  spend(turn);
-  yaw_ = wrap(yaw);
+  const double delta = wrap(yaw - yaw_);
+  move(std::abs(delta) / params_.turn_rate_rad_s, xy_, yaw_ + delta, true);
 }
 
 bool Robot::driveTo(const Eigen::Vector2d& goal) {
@@ -314,12 +353,46 @@ bool Robot::driveTo(const Eigen::Vector2d& goal) {
     const Eigen::Vector2d leg = path[i] - xy_;
     if (leg.norm() < 1e-9) continue;
     turnTo(std::atan2(leg.y(), leg.x()));
-    const double t = leg.norm() / params_.speed_mps;
-    stats_.drive_s += t;
-    stats_.path_m += leg.norm();
-    spend(t);
-    xy_ = path[i];
+    if (!active()) break;
+    if (!move(leg.norm() / params_.speed_mps, path[i], yaw_, false)) break;
   }
+  return true;
+}
+
+bool Robot::perceive(bool stop_view) {
+  ++stats_.recogniser_calls;
+  bool claimed = false;
+  Eigen::Vector3d reported = world_.mug.position;
+  if (on_frame_) {
+    // Noise differs per frame; the object index (what the oracle reads) does not.
+    ++frames_;
+    const synth::RenderedFrame frame =
+        synth::render(world_.apartment.scene, cameraAt(params_, xy_, yaw_), synth::RenderOptions{},
+                      mix(world_.episode.episode_seed * 1315423911ULL + frames_));
+    const Sighting sighting = on_frame_(frame, xy_, yaw_, stats_.time_s);
+    if (recognition_ == Recognition::Matcher) {
+      claimed = sighting.claimed;
+      reported = sighting.reported;
+    } else {
+      claimed = mugInRange(world_, params_, xy_) &&
+                mugPixels(world_, frame) >= params_.recognise_min_pixels;
+    }
+  } else {
+    claimed = mugRecognisable(world_, params_, xy_, yaw_);
+  }
+  if (!claimed) return false;
+  // A driving frame's answer comes after its processing, which overlapped the motion: the
+  // robot stops where the frame was taken, that much later.
+  const double when = stats_.time_s + (stop_view ? 0.0 : params_.view_processing_s);
+  if (when > params_.time_budget_s) return false;
+  if (!stop_view) stats_.process_s += params_.view_processing_s;
+  stats_.time_s = when;
+  stats_.found_time_s = when;
+  if (recognition_ == Recognition::Oracle ||
+      claimIsCorrect(world_, reported, params_.found_tolerance_m))
+    stats_.found = true;
+  else
+    stats_.false_found = true;
   return true;
 }
 
@@ -329,23 +402,7 @@ bool Robot::look() {
   spend(params_.view_processing_s);
   ++stats_.views;
   views_.push_back({xy_, yaw_});
-  bool seen = false;
-  if (on_frame_) {
-    // Noise differs per view; the object index (what the oracle reads) does not.
-    synth::RenderedFrame frame =
-        synth::render(world_.apartment.scene, cameraAt(params_, xy_, yaw_), synth::RenderOptions{},
-                      mix(world_.episode.episode_seed * 1315423911ULL + stats_.views));
-    seen = mugInRange(world_, params_, xy_) &&
-           mugPixels(world_, frame) >= params_.recognise_min_pixels;
-    on_frame_(frame, xy_, yaw_, stats_.time_s);
-  } else {
-    seen = mugRecognisable(world_, params_, xy_, yaw_);
-  }
-  if (seen && stats_.time_s <= params_.time_budget_s) {
-    stats_.found = true;
-    stats_.found_time_s = stats_.time_s;
-  }
-  return seen;
+  return perceive(true);
 }
 
 bool Robot::lookAround() {
@@ -354,7 +411,7 @@ bool Robot::lookAround() {
     if (k > 0) turnTo(yaw_ + 2.0 * M_PI / n);
     if (look()) return true;
   }
-  return stats_.found;
+  return stats_.found || stats_.false_found;
 }
 
 }  // namespace findmug::search

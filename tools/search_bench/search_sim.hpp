@@ -5,9 +5,12 @@
 // Why a simulator: the project claims that looking on tables first finds the mug sooner.
 // That is a claim about time spent by a robot, so every strategy runs on the same seeded
 // episodes with the same motion model, recogniser and time accounting:
-//   time = path / speed + |turns| / turn rate + views * per-view processing time.
-// The recogniser is an oracle on the rendered frame (the mug counts as seen when enough of
-// its pixels are visible within range), so strategies differ only in where they look.
+//   time = path / speed + |turns| / turn rate + stop views * per-view processing time.
+// Frames taken while the base drives or turns (drive_frames_hz) cost no time: the daemon
+// processes them in parallel to the motion. The recogniser is either an oracle on the
+// rendered frame (the mug counts as seen when enough of its pixels are visible within
+// range), so that strategies differ only in where they look, or findmugd's own taught-object
+// matcher asked "find mug" after every frame (strategies.hpp), whose "seen" may be wrong.
 #pragma once
 
 #include <Eigen/Core>
@@ -33,6 +36,10 @@ struct SimParams {
   double recognise_range_m = 3.5;
   int recognise_min_pixels = 150;  // of the mug, at 640x480
   double time_budget_s = 600.0;
+  // Frames while driving or turning, per second of motion (0: views at stops only).
+  double drive_frames_hz = 1.0;
+  // A matcher's "seen" counts as found when its position is this near the mug (on the floor).
+  double found_tolerance_m = 0.3;
   // Coverage counts floor within this range of a view as searched: nearer than the
   // recogniser's range, because a mug at 3.5 m shows 150 px only when seen whole and
   // head-on (tables, chairs and other objects hide it more often the further it is).
@@ -112,30 +119,53 @@ bool mugInRange(const World& world, const SimParams& params, const Eigen::Vector
 bool mugRecognisable(const World& world, const SimParams& params, const Eigen::Vector2d& xy,
                      double yaw);
 
-// Everything a strategy spent, and whether it found the mug.
-struct RunStats {
-  bool found = false;
-  double time_s = 0.0, path_m = 0.0, drive_s = 0.0, turn_s = 0.0, process_s = 0.0;
-  int views = 0;
-  double found_time_s = kInfinity;
+// What perception said after one frame: whether the robot now believes it found the mug,
+// and where perception put it (the matcher's answer; the oracle's are the mug's own).
+struct Sighting {
+  bool claimed = false;
+  Eigen::Vector3d reported = Eigen::Vector3d::Zero();
 };
 
-// The robot: pose, clock and the oracle recogniser. Every action checks the time budget;
-// once it is spent (or the mug is found) actions do nothing and return false.
+// The ground-truth check of a claimed find: true when the reported position is within
+// `tolerance_m` of the mug's centre on the floor plane (x, y; the object map reports the
+// candidate's centroid, whose height differs from the mug's base by design).
+bool claimIsCorrect(const World& world, const Eigen::Vector3d& reported, double tolerance_m);
+
+// Everything a strategy spent, and whether it found the mug.
+struct RunStats {
+  bool found = false;        // a correct find (the episode's success)
+  bool false_found = false;  // perception said "seen" with the mug elsewhere: the search ended
+  double time_s = 0.0, path_m = 0.0, drive_s = 0.0, turn_s = 0.0, process_s = 0.0;
+  int views = 0;             // stop views (each costs view_processing_s)
+  int drive_frames = 0;      // frames taken while the base moved (cost no time)
+  int recogniser_calls = 0;  // frames the recogniser judged (oracle tests or find requests)
+  double found_time_s = kInfinity;  // when the search ended with a claim (true or false)
+};
+
+// The robot: pose, clock and perception. Every action checks the time budget; once it is
+// spent (or the search has ended with a claim) actions do nothing and return false.
 class Robot {
  public:
-  // `on_frame`, when set, gets every view's rendered frame (noisy, 640x480) with the base
-  // pose and the simulated time (findmug's perception listens here).
-  using FrameHook = std::function<void(const synth::RenderedFrame&, const Eigen::Vector2d& xy,
-                                       double yaw, double time_s)>;
-  Robot(const World& world, const SimParams& params, FrameHook on_frame = {});
+  // `on_frame`, when set, gets every frame (stop views and driving frames; noisy, 640x480)
+  // with the base pose and the simulated time (findmug's perception listens here) and says
+  // what the matcher concluded. With Recognition::Oracle its answer is ignored and the mug
+  // counts as seen by the oracle test; with Recognition::Matcher its answer is the robot's
+  // belief, checked against the ground truth (claimIsCorrect).
+  enum class Recognition { Oracle, Matcher };
+  using FrameHook = std::function<Sighting(const synth::RenderedFrame&, const Eigen::Vector2d& xy,
+                                           double yaw, double time_s)>;
+  Robot(const World& world, const SimParams& params, FrameHook on_frame = {},
+        Recognition recognition = Recognition::Oracle);
 
-  bool active() const { return !stats_.found && stats_.time_s < params_.time_budget_s; }
+  bool active() const {
+    return !stats_.found && !stats_.false_found && stats_.time_s < params_.time_budget_s;
+  }
   // Plans and drives to `goal` (the nearest free cell to it), turning on the way.
   // False when unreachable or inactive.
   bool driveTo(const Eigen::Vector2d& goal);
   void turnTo(double yaw);
-  // One view at the current pose (processing time counted); true when the mug was seen.
+  // One view at the current pose (processing time counted); true when the search ended
+  // with it (the mug seen, or believed seen).
   bool look();
   // look_around_views views at even yaw steps, starting at the current heading.
   bool lookAround();
@@ -144,16 +174,26 @@ class Robot {
   double yaw() const { return yaw_; }
   int cell() const { return world_.grid.cellAt(xy_); }
   const RunStats& stats() const { return stats_; }
-  // Every pose a view was taken from (coverage bookkeeping).
+  // Every pose a stop view was taken from (coverage bookkeeping).
   const std::vector<std::pair<Eigen::Vector2d, double>>& viewPoses() const { return views_; }
 
  private:
   void spend(double seconds);
+  // The motion from the current pose: `seconds` long, ending at `xy`, `yaw`, moving at a
+  // constant rate; takes the driving frames that fall in it. Returns false when one of
+  // them ended the search (the robot then stands at that frame's pose).
+  bool move(double seconds, const Eigen::Vector2d& xy, double yaw, bool turning);
+  // One frame at the current pose and time through perception; true when it ended the
+  // search.
+  bool perceive(bool stop_view);
   const World& world_;
   const SimParams& params_;
   FrameHook on_frame_;
+  Recognition recognition_;
   Eigen::Vector2d xy_;
   double yaw_;
+  double motion_s_ = 0.0;  // seconds of motion so far (driving frames fall on its multiples)
+  int frames_ = 0;         // frames rendered (the noise seed of each)
   RunStats stats_;
   std::vector<std::pair<Eigen::Vector2d, double>> views_;
 };

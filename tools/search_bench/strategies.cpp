@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <memory>
 
 #include "findmug/common/error.hpp"
 
@@ -87,24 +88,132 @@ class RoomExplorer {
 
 void coverUntilDone(Robot& robot, const World& world, const SimParams& params, bool look_first);
 
-EpisodeResult runFindmug(const World& world, const SimParams& params, const FindmugModel& model) {
+// One run's perception: the daemon, when the strategy (its table map) or the recogniser
+// (the matcher) needs it, and the robot that sends it every frame.
+class Eyes {
+ public:
+  Eyes(const Perception& perception, bool table_map)
+      : matcher_(perception.kind == Perception::Kind::Matcher), name_(perception.object_name) {
+    if (!matcher_ && !table_map) return;
+    if (perception.model == nullptr)
+      throw Error(std::string("search: ") +
+                  (matcher_ ? "matcher perception" : "the findmug strategy") +
+                  " needs the daemon's model");
+    daemon_ = std::make_unique<FindmugTables>(*perception.model,
+                                              matcher_ ? perception.objects_dir : std::string());
+  }
+
+  Robot robot(const World& world, const SimParams& params) {
+    if (!daemon_) return Robot(world, params);
+    return Robot(
+        world, params,
+        [this](const synth::RenderedFrame& frame, const Eigen::Vector2d& xy, double yaw,
+               double t) {
+          daemon_->feed(frame, xy, yaw, t);
+          Sighting sighting;
+          if (!matcher_) return sighting;
+          answer_ = daemon_->find(name_);
+          sighting.claimed = answer_.result == io::FindResult::Seen;
+          sighting.reported = answer_.seen_position;
+          return sighting;
+        },
+        matcher_ ? Robot::Recognition::Matcher : Robot::Recognition::Oracle);
+  }
+
+  FindmugTables* daemon() const { return daemon_.get(); }
+  bool matcher() const { return matcher_; }
+  const io::FindResultMessage& answer() const { return answer_; }
+  int frames() const { return daemon_ ? daemon_->frames() : 0; }
+  // The daemon's frame count and the matcher's counts into `result`.
+  void report(EpisodeResult& result) const {
+    if (!daemon_) return;
+    result.frames_processed = daemon_->frames();
+    if (!matcher_) return;
+    const auto c = daemon_->objectCounters();
+    result.candidates = static_cast<int>(c.candidates);
+    result.matches = static_cast<int>(c.matches);
+    result.refused_size = static_cast<int>(c.refused_too_big + c.refused_too_small);
+    result.refused_colour = static_cast<int>(c.refused_colour);
+    result.refused_shape =
+        static_cast<int>(c.refused_shape + c.refused_not_round + c.refused_few_points);
+  }
+
+ private:
+  bool matcher_;
+  std::string name_;
+  std::unique_ptr<FindmugTables> daemon_;
+  io::FindResultMessage answer_;
+};
+
+// "Look closer": the daemon's last answer names tables that may hold the mug (matched too
+// few times or from too far). Drives to the first of their places in the answer's order
+// that was visited fewer than twice for this reason, faces it and looks. False when there
+// is none (or no matcher).
+class LookCloser {
+ public:
+  bool next(Robot& robot, const Eyes& eyes, const World& world) {
+    if (!eyes.matcher() || !robot.active()) return false;
+    const std::vector<int> tables = FindmugTables::lookCloserTables(eyes.answer());
+    if (tables.empty()) return false;
+    const std::vector<double> dist = world.grid.distancesFrom(robot.cell());
+    for (const PlaceToLook& place : eyes.answer().places) {
+      if (std::find(tables.begin(), tables.end(), place.table_id) == tables.end()) continue;
+      const Eigen::Vector2d xy = place.position.xy.cast<double>();
+      int& visits = visitsNear(xy);
+      const int cell = reachableCellNear(world.grid, dist, xy, 0.25);
+      if (visits >= 2 || cell < 0) continue;
+      ++visits;
+      ++taken_;
+      robot.driveTo(world.grid.center(cell));
+      robot.turnTo(place.position.yaw);
+      robot.look();
+      return true;
+    }
+    return false;
+  }
+  int taken() const { return taken_; }
+
+ private:
+  int& visitsNear(const Eigen::Vector2d& xy) {
+    for (auto& [at, n] : visits_)
+      if ((at - xy).norm() < 0.25) return n;
+    visits_.push_back({xy, 0});
+    return visits_.back().second;
+  }
+  std::vector<std::pair<Eigen::Vector2d, int>> visits_;
+  int taken_ = 0;
+};
+
+// With the matcher, the findmug strategy also looks this far to either side at a search
+// position (half the camera's horizontal field of view).
+constexpr double kTopSweepRad = 0.5;
+
+EpisodeResult runFindmug(const World& world, const SimParams& params,
+                         const Perception& perception) {
   EpisodeResult result;
-  FindmugTables tables(model);
-  Robot robot(world, params,
-              [&tables](const synth::RenderedFrame& frame, const Eigen::Vector2d& xy, double yaw,
-                        double t) { tables.feed(frame, xy, yaw, t); });
+  Eyes eyes(perception, true);
+  FindmugTables& tables = *eyes.daemon();
+  Robot robot = eyes.robot(world, params);
+  LookCloser closer;
   RoomExplorer rooms(world);
   rooms.markHere(robot);
   robot.lookAround();
+  // One search position per table: its top was in view from there (a table of several
+  // positions otherwise has the robot walk round it while other rooms wait).
   std::vector<Eigen::Vector2d> visited;
+  std::vector<int> tables_visited;
   while (robot.active()) {
+    if (closer.next(robot, eyes, world)) continue;
     const std::vector<double> dist = world.grid.distancesFrom(robot.cell());
     const MapSearchPosition* next = nullptr;
     int next_cell = -1;
     for (const MapSearchPosition& p : tables.positions()) {
       if (!p.reachable) continue;
-      const bool seen_before = std::any_of(visited.begin(), visited.end(),
-                                           [&p](const auto& v) { return (v - p.xy).norm() < 0.5; });
+      const bool seen_before =
+          std::find(tables_visited.begin(), tables_visited.end(), p.table_id) !=
+              tables_visited.end() ||
+          std::any_of(visited.begin(), visited.end(),
+                      [&p](const auto& v) { return (v - p.xy).norm() < 0.5; });
       const int c = seen_before ? -1 : reachableCellNear(world.grid, dist, p.xy, 0.25);
       if (c >= 0 && (next_cell < 0 || dist[c] < dist[next_cell])) next = &p, next_cell = c;
     }
@@ -115,15 +224,26 @@ EpisodeResult runFindmug(const World& world, const SimParams& params, const Find
     }
     const MapSearchPosition target = *next;  // positions() changes with the next frame
     visited.push_back(target.xy);
+    tables_visited.push_back(target.table_id);
     ++result.positions_visited;
     robot.driveTo(world.grid.center(next_cell));
     robot.turnTo(target.yaw);
     robot.look();
+    if (eyes.matcher()) {
+      // The matcher needs the mug whole and near the middle of the view, twice: the top
+      // to either side of the position's heading as well.
+      for (const double side : {kTopSweepRad, -2.0 * kTopSweepRad}) {
+        if (!robot.active()) break;
+        robot.turnTo(robot.yaw() + side);
+        robot.look();
+      }
+    }
     rooms.markHere(robot);
   }
   result.stats = robot.stats();
   result.tables_mapped = tables.tables();
-  result.frames_processed = tables.frames();
+  eyes.report(result);
+  result.look_closer = closer.taken();
   return result;
 }
 
@@ -170,9 +290,11 @@ std::vector<Place> handPlacedPlaces(const World& world, const SimParams& params)
   return places;
 }
 
-EpisodeResult runPlaces(const World& world, const SimParams& params) {
+EpisodeResult runPlaces(const World& world, const SimParams& params,
+                        const Perception& perception) {
   EpisodeResult result;
-  Robot robot(world, params);
+  Eyes eyes(perception, false);
+  Robot robot = eyes.robot(world, params);
   std::vector<Place> todo = handPlacedPlaces(world, params);
   RoomExplorer rooms(world);
   while (robot.active() && !todo.empty()) {
@@ -191,6 +313,7 @@ EpisodeResult runPlaces(const World& world, const SimParams& params) {
   }
   coverUntilDone(robot, world, params, false);
   result.stats = robot.stats();
+  eyes.report(result);
   return result;
 }
 
@@ -265,17 +388,22 @@ void coverUntilDone(Robot& robot, const World& world, const SimParams& params, b
   }
 }
 
-EpisodeResult runCoverage(const World& world, const SimParams& params) {
+EpisodeResult runCoverage(const World& world, const SimParams& params,
+                          const Perception& perception) {
   EpisodeResult result;
-  Robot robot(world, params);
+  Eyes eyes(perception, false);
+  Robot robot = eyes.robot(world, params);
   coverUntilDone(robot, world, params, true);
   result.stats = robot.stats();
+  eyes.report(result);
   return result;
 }
 
-EpisodeResult runRandom(const World& world, const SimParams& params) {
+EpisodeResult runRandom(const World& world, const SimParams& params,
+                        const Perception& perception) {
   EpisodeResult result;
-  Robot robot(world, params);
+  Eyes eyes(perception, false);
+  Robot robot = eyes.robot(world, params);
   const std::vector<double> dist = world.grid.distancesFrom(robot.cell());
   std::vector<int> reachable;
   for (int i = 0; i < world.grid.size(); ++i)
@@ -288,16 +416,36 @@ EpisodeResult runRandom(const World& world, const SimParams& params) {
     robot.lookAround();
   }
   result.stats = robot.stats();
+  eyes.report(result);
   return result;
 }
 
-EpisodeResult runOracle(const World& world, const SimParams& params) {
+EpisodeResult runOracle(const World& world, const SimParams& params,
+                        const Perception& perception) {
   EpisodeResult result;
-  Robot robot(world, params);
+  Eyes eyes(perception, false);
+  Robot robot = eyes.robot(world, params);
   robot.driveTo(world.best_view);
   robot.turnTo(world.best_view_yaw);
   robot.look();
+  if (eyes.matcher()) {
+    // The best view is the nearest pose the oracle recognises from, up to 3.5 m away; the
+    // object map names an object only after two matches from within object_map's naming
+    // range. So: the free pose nearest the mug, facing it, three looks.
+    const int near = world.grid.nearestFree(world.mug.position.head<2>(), 1.5);
+    if (robot.active() && near >= 0) {
+      robot.driveTo(world.grid.center(near));
+      const Eigen::Vector2d to = world.mug.position.head<2>() - robot.xy();
+      robot.turnTo(std::atan2(to.y(), to.x()));
+      for (int k = 0; k < 3 && robot.active(); ++k) robot.look();
+    }
+  }
+  LookCloser closer;
+  while (closer.next(robot, eyes, world)) {
+  }
   result.stats = robot.stats();
+  eyes.report(result);
+  result.look_closer = closer.taken();
   return result;
 }
 
@@ -312,20 +460,19 @@ std::string canonicalStrategy(const std::string& name) {
 }
 
 EpisodeResult runStrategy(const std::string& strategy, const World& world, const SimParams& params,
-                          const FindmugModel* model) {
+                          const Perception& perception) {
   const std::string name = canonicalStrategy(strategy);
   EpisodeResult result;
   if (name == "findmug") {
-    if (model == nullptr) throw Error("search: the findmug strategy needs a model");
-    result = runFindmug(world, params, *model);
+    result = runFindmug(world, params, perception);
   } else if (name == "places") {
-    result = runPlaces(world, params);
+    result = runPlaces(world, params, perception);
   } else if (name == "coverage") {
-    result = runCoverage(world, params);
+    result = runCoverage(world, params, perception);
   } else if (name == "random") {
-    result = runRandom(world, params);
+    result = runRandom(world, params, perception);
   } else {
-    result = runOracle(world, params);
+    result = runOracle(world, params, perception);
   }
   result.strategy = name;
   return result;

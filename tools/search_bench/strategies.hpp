@@ -2,7 +2,8 @@
 //
 //   a findmug      look around, then visit the search positions of findmug's table map
 //                  (the daemon's FINDMUG_TABLE_MAP), nearest first by planned path and
-//                  re-planned after every view; when none is left, explore the nearest
+//                  re-planned after every view, one position per table; when none is left,
+//                  explore the nearest
 //                  room not yet looked around in, and go on; with every room done, the
 //                  coverage of (c) from there on.
 //   b places       hand-placed search places from the furniture ground truth (one in front
@@ -13,7 +14,19 @@
 //                  view), look around again.
 //   d random       random reachable poses, a look-around at each.
 //   e oracle       straight to the nearest pose that recognises the mug (upper bound).
-// Every strategy uses the same oracle recogniser at every view it takes.
+// Every strategy uses the same recogniser at every frame it takes (stop views and frames
+// while driving):
+//   oracle   the rendered mug's pixels (>= recognise_min_pixels within recognise_range_m);
+//   matcher  findmugd's own: every frame goes through the daemon's Pipeline with the taught
+//            mug in daemon.objects_dir, then "find mug" is asked on the command bus; "seen"
+//            ends the search, checked against the ground truth (claimIsCorrect). The findmug
+//            strategy also acts on "look closer" answers (the tables the daemon names first
+//            go before the rest of the table map, each at most twice) and at each search
+//            position looks 0.5 rad to either side too (the matcher wants the mug whole and
+//            twice); the oracle strategy,
+//            after its best view, drives to the free pose nearest the mug and looks three
+//            times from there (the object map names an object after two matches within its
+//            naming range), then does the same. The other baselines act on "seen" only.
 #pragma once
 
 #include <string>
@@ -24,19 +37,35 @@
 
 namespace findmug::search {
 
+// How the mug is recognised, and the daemon behind it.
+struct Perception {
+  enum class Kind { Oracle, Matcher };
+  Kind kind = Kind::Oracle;
+  // The daemon's model and settings: the findmug strategy's table map, and with the
+  // matcher every strategy's recogniser. Null: no daemon (oracle baselines only).
+  const FindmugModel* model = nullptr;
+  std::string objects_dir;  // matcher: the folder holding the taught mug.fmo
+  std::string object_name = "mug";
+};
+
 struct EpisodeResult {
   std::string strategy;
   RunStats stats;
   int tables_mapped = 0;      // (a): confirmed tables in findmug's map at the end
   int positions_visited = 0;  // (a), (b): search positions / places visited
-  int frames_processed = 0;   // (a): frames the daemon's pipeline processed
+  int frames_processed = 0;   // frames the daemon's pipeline processed (findmug; matcher: all)
+  int look_closer = 0;        // matcher: "look closer" places the strategy went to
+  // Matcher: table-top candidates the daemon put to the matcher, those it named "mug", and
+  // the refusals by the reason the taught mug gave (size, colour, shape incl. roundness).
+  int candidates = 0, matches = 0, refused_size = 0, refused_colour = 0, refused_shape = 0;
 };
 
 // Known names: "findmug", "places", "coverage", "random", "oracle" (or a..e).
 std::string canonicalStrategy(const std::string& name);
 
-// Runs one strategy on one world. `model` is needed by "findmug" only.
+// Runs one strategy on one world. `perception.model` is needed by "findmug" and by every
+// strategy under the matcher. Throws findmug::Error when it is missing.
 EpisodeResult runStrategy(const std::string& strategy, const World& world, const SimParams& params,
-                          const FindmugModel* model);
+                          const Perception& perception);
 
 }  // namespace findmug::search
