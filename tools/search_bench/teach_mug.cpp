@@ -8,7 +8,7 @@
 
 #include "findmug/common/error.hpp"
 #include "findmug/objects/object_model.hpp"
-#include "findmug/pipeline/segmenter.hpp"
+#include "findmug/segmenter/segmenter.hpp"
 
 namespace findmug::search {
 
