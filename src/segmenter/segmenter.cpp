@@ -455,25 +455,35 @@ SegmentedFrame Segmenter::oversegment(PreparedFrame prepared) const {
   return out;
 }
 
+void Segmenter::contextRowsInto(const SegmentedFrame& segmented, SegmentFeatures& features,
+                                RegionFeatures& regions, ObjectFeatures& objects) const {
+  if (config_.regions.enabled || config_.objects.enabled)
+    computeRegionFeaturesInto(features, segmented.segmentation, config_.regions, regions);
+  if (config_.regions.enabled) features.regions = regions.values;
+  if (config_.scene.enabled) {
+    std::vector<float> scene = std::move(features.scene);
+    computeSceneFeaturesInto(segmented.prepared.cloud_ground, segmented.segmentation, features,
+                             segmented.prepared.ground->camera_to_ground.translation(),
+                             config_.scene, scene);
+    features.scene = std::move(scene);
+  }
+  if (config_.objects.enabled) {
+    computeObjectFeaturesInto(features, segmented.segmentation, regions, config_.objects, objects);
+    features.objects = objects.values;
+    objectCandidatesInto(objects, features.object_group);
+  } else {
+    features.objects.clear();
+    features.object_group.clear();
+  }
+}
+
 SegmentFeatures Segmenter::features(const SegmentedFrame& segmented) const {
   if (!segmented.prepared.ground) return {};
   SegmentFeatures out = computeFeatures(segmented.prepared.cloud_ground,
                                         segmented.prepared.normals_ground, segmented.segmentation);
   RegionFeatures regions;
-  if (config_.regions.enabled || config_.objects.enabled)
-    regions = computeRegionFeatures(out, segmented.segmentation, config_.regions);
-  if (config_.regions.enabled) out.regions = regions.values;
-  if (config_.scene.enabled) {
-    out.scene = computeSceneFeatures(segmented.prepared.cloud_ground, segmented.segmentation, out,
-                                     segmented.prepared.ground->camera_to_ground.translation(),
-                                     config_.scene);
-  }
-  if (config_.objects.enabled) {
-    const ObjectFeatures objects =
-        computeObjectFeatures(out, segmented.segmentation, regions, config_.objects);
-    out.objects = objects.values;
-    objectCandidatesInto(objects, out.object_group);
-  }
+  ObjectFeatures objects;
+  contextRowsInto(segmented, out, regions, objects);
   return out;
 }
 
@@ -552,26 +562,7 @@ LabelledFrame Segmenter::classify(SegmentedFrame segmented) const {
                       segmented.segmentation, out.features);
   watch.lap(out.timings, out.cpu_timings, &StageTimings::features_ms);
   RegionFeatures& regions = *regions_buffer;  // kept for the table region vote after the MRF
-  if (config_.regions.enabled || config_.objects.enabled)
-    computeRegionFeaturesInto(out.features, segmented.segmentation, config_.regions, regions);
-  if (config_.regions.enabled) out.features.regions = regions.values;
-  if (config_.scene.enabled) {
-    std::vector<float> scene = std::move(out.features.scene);
-    computeSceneFeaturesInto(segmented.prepared.cloud_ground, segmented.segmentation,
-                             out.features,
-                             segmented.prepared.ground->camera_to_ground.translation(),
-                             config_.scene, scene);
-    out.features.scene = std::move(scene);
-  }
-  if (config_.objects.enabled) {
-    computeObjectFeaturesInto(out.features, segmented.segmentation, regions, config_.objects,
-                              *objects_buffer);
-    out.features.objects = objects_buffer->values;
-    objectCandidatesInto(*objects_buffer, out.features.object_group);
-  } else {
-    out.features.objects.clear();
-    out.features.object_group.clear();
-  }
+  contextRowsInto(segmented, out.features, regions, *objects_buffer);
   // Region, scene and object features share this step's time.
   watch.lap(out.timings, out.cpu_timings, &StageTimings::regions_ms);
 

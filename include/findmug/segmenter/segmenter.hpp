@@ -25,6 +25,8 @@
 
 #include "findmug/cloud/cloud.hpp"
 #include "findmug/features/features.hpp"
+#include "findmug/features/object_features.hpp"
+#include "findmug/features/region_features.hpp"
 #include "findmug/frame/frame.hpp"
 #include "findmug/ground/ground.hpp"
 #include "findmug/labels/label_image.hpp"
@@ -106,7 +108,8 @@ class Segmenter {
   // from one mount: an estimated floor may come from an earlier frame.
   PreparedFrame prepare(RgbdFrame frame, const std::vector<std::uint8_t>* gt_labels = nullptr) const;
   SegmentedFrame oversegment(PreparedFrame prepared) const;
-  // Features only (used by the trainer).
+  // Features only (used by the trainer): the same feature rows classify computes, by the
+  // same step (contextRowsInto), so that training and running cannot drift apart.
   SegmentFeatures features(const SegmentedFrame& segmented) const;
   LabelledFrame classify(SegmentedFrame segmented) const;
   // All steps. Throws findmug::Error for invalid frames; a frame without a
@@ -128,6 +131,11 @@ class Segmenter {
   const RandomForest* forest() const { return forest_.get(); }
 
  private:
+  // The feature-row step after the per-patch features: the coplanar regions (kept in
+  // `regions` for the table region vote), and the region, scene and object columns and
+  // object groups the config turns on, into `features`; `objects` is working memory.
+  void contextRowsInto(const SegmentedFrame& segmented, SegmentFeatures& features,
+                       RegionFeatures& regions, ObjectFeatures& objects) const;
   // estimateGround, or with ground.reestimate_every_frames > 1 the plane of
   // an earlier frame while confirmGround accepts it (see GroundConfig).
   std::optional<GroundPlane> groundOfStream(const OrganizedCloud& cloud,
