@@ -12,6 +12,7 @@
 #include "findmug/common/error.hpp"
 #include "findmug/io/lcm_codec.hpp"
 #include "findmug/io/lcm_codec_objects.hpp"
+#include "findmug/map/semantic_map.hpp"
 #include "findmug/map/table_map.hpp"
 
 namespace findmug::daemon {
@@ -172,6 +173,22 @@ ObjectSearchSink::Job ObjectSearchSink::makeJob(const FrameResult& result) {
   job.frame_name = frameName(prepared.frame);
   job.pose = result.pose;
   job.evidence = result.pose && TableMapSink::isEvidence(labelled);
+  bool searching = false;
+  {
+    std::lock_guard lock(mutex_);
+    searching = request_name_.has_value();
+  }
+  if (searching && result.pose && prepared.ground) {
+    const RgbdFrame& frame = prepared.frame;
+    RgbdFrame depth;
+    depth.width = frame.width;
+    depth.height = frame.height;
+    depth.depth_mm = frame.depth_mm;
+    depth.intrinsics = frame.intrinsics;
+    depth.source = job.frame_name;
+    job.view_depth = std::move(depth);
+    job.camera_in_map = cameraInMap(result.pose->pose, prepared.ground->camera_to_ground);
+  }
   const std::vector<TableObject>& candidates = labelled.table_objects.objects;
   // The matcher reads each candidate's points from the cloud by pixel: copy those points
   // alone, in the same order (the same points go to the matcher, so the same results),
@@ -270,6 +287,7 @@ void ObjectSearchSink::work(Job& job) {
     }
     robot_ = job.pose->pose;
     search_.observeRobot(*robot_, *map_tables_);
+    if (job.view_depth) search_.observeView(*map_tables_, *job.view_depth, job.camera_in_map);
     if (request_name_) {
       io::FindResultMessage answer = answerLocked(nowUtime());
       if (answerKey(answer) != last_answer_) {

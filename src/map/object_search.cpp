@@ -80,7 +80,25 @@ void validateObjectSearchConfig(const ObjectSearchConfig& c) {
     throw Error("object_search.heading_tolerance_rad = " +
                 std::to_string(c.heading_tolerance_rad) + ": must be in (0, pi]");
   }
+  if (!std::isfinite(c.top_seen_share) || c.top_seen_share < 0.0f || c.top_seen_share > 1.0f) {
+    throw Error("object_search.top_seen_share = " + std::to_string(c.top_seen_share) +
+                ": must be in [0, 1]");
+  }
+  if (!std::isfinite(c.top_seen_range_m) || c.top_seen_range_m <= 0.0f) {
+    throw Error("object_search.top_seen_range_m = " + std::to_string(c.top_seen_range_m) +
+                ": must be a positive number");
+  }
 }
+
+namespace {
+
+TableTopViewsConfig topViewsConfig(const ObjectSearchConfig& c) {
+  TableTopViewsConfig out;
+  out.range_m = c.top_seen_range_m > 0.0f ? c.top_seen_range_m : out.range_m;
+  return out;
+}
+
+}  // namespace
 
 const SettingsTable<ObjectSearchConfig>& objectSearchSettings() {
   using S = ObjectSearchConfig;
@@ -94,13 +112,34 @@ const SettingsTable<ObjectSearchConfig>& objectSearchSettings() {
         "object_search.heading_tolerance_rad",
         [](S& s) -> float& { return s.heading_tolerance_rad; }, 0, 3.14159f,
         "... when it faces within this of the position's heading (the top in view)"));
+    t.add(numberSetting<S, float>(
+        "object_search.top_seen_share", [](S& s) -> float& { return s.top_seen_share; }, 0, 1,
+        "views that showed this share of a table's top have searched it (0: views do not)"));
+    t.add(numberSetting<S, float>(
+        "object_search.top_seen_range_m", [](S& s) -> float& { return s.top_seen_range_m; },
+        0.1, 10, "... from within this distance of the camera (the matcher's reach)"));
     return t;
   }();
   return table;
 }
 
-ObjectSearch::ObjectSearch(ObjectSearchConfig config) : config_(config) {
-  validateObjectSearchConfig(config_);
+ObjectSearch::ObjectSearch(ObjectSearchConfig config)
+    : config_((validateObjectSearchConfig(config), config)), top_views_(topViewsConfig(config)) {}
+
+std::vector<int> ObjectSearch::observeView(const std::vector<TableCluster>& map_tables,
+                                           const RgbdFrame& frame,
+                                           const Eigen::Isometry3d& camera_in_map) {
+  std::vector<int> marked;
+  if (config_.top_seen_share <= 0.0f) return marked;
+  top_views_.observe(map_tables, frame, camera_in_map);
+  for (const TableCluster& table : map_tables) {
+    if (searched_.count(table.id) != 0) continue;
+    if (top_views_.seenShare(table) >= config_.top_seen_share) {
+      searched_.insert(table.id);
+      marked.push_back(table.id);
+    }
+  }
+  return marked;
 }
 
 std::vector<int> ObjectSearch::observeRobot(const Pose2D& robot,
@@ -131,6 +170,7 @@ FindAnswer ObjectSearch::answer(std::int64_t request_id, const std::string& name
   if (request_id != request_id_) {
     request_id_ = request_id;
     searched_.clear();
+    top_views_.clear();
   }
   FindAnswer answer;
   answer.name = name;

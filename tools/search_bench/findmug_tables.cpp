@@ -57,9 +57,20 @@ FindmugTables::FindmugTables(const FindmugModel& model, const std::string& objec
       [this](const std::string& channel, const std::uint8_t* data, std::size_t size) {
         const io::TablesMessage map = io::decodeTables(data, size, channel);
         positions_.clear();
+        map_tables_.clear();
         tables_ = static_cast<int>(map.tables.size());
         for (std::size_t t = 0; t < map.tables.size(); ++t) {
           if (t < map.map_info.size() && !map.map_info[t].confirmed) continue;
+          // The table in the map frame: the map_ fields, the base frame's top height.
+          const io::MapFrameTable& in_map = map.map_tables[t];
+          TableCluster table;
+          table.id = map.tables[t].id;
+          table.top_height = map.tables[t].top_height;
+          table.centroid = in_map.centroid.cast<float>();
+          table.center = in_map.center.cast<float>();
+          for (const Eigen::Vector2d& p : in_map.hull) table.hull.push_back(p.cast<float>());
+          table.search_positions = in_map.search_positions;
+          map_tables_.push_back(std::move(table));
           for (const SearchPosition& p : map.map_tables[t].search_positions)
             positions_.push_back({map.tables[t].id, p.xy.cast<double>(), p.yaw, p.reachable});
         }

@@ -67,6 +67,8 @@ class FindmugTables {
             double time_s);
   // Search positions of the confirmed tables in the last published map.
   const std::vector<MapSearchPosition>& positions() const { return positions_; }
+  // The confirmed tables of the last published map (map frame, id = the stable id).
+  const std::vector<TableCluster>& mapTables() const { return map_tables_; }
   int tables() const { return tables_; }
   int frames() const { return frames_; }
 
@@ -87,6 +89,7 @@ class FindmugTables {
   std::shared_ptr<io::MemoryBus> out_, poses_, commands_;
   std::unique_ptr<daemon::Pipeline> pipeline_;
   std::vector<MapSearchPosition> positions_;
+  std::vector<TableCluster> map_tables_;
   int tables_ = 0;
   int frames_ = 0;
   std::uint64_t last_utime_ = 0;

@@ -75,6 +75,9 @@ struct Options {
   int teach_views = 3;
   std::uint64_t teach_seed = 7001;
   bool quiet = false;
+  std::string trace_dir;  // "" = no traces
+  double top_seen_share = 0.8;
+  bool no_replan = false;
 };
 
 // A model the daemon runs with: its short name in the run labels, file and settings.
@@ -147,6 +150,21 @@ std::vector<EpisodeRow> runEpisode(const Episode& episode, const std::vector<Run
   return rows;
 }
 
+// One file per run and episode, named RUN_aA_eE.txt (slashes of the run label as '-').
+void writeTraces(const std::string& dir, const std::vector<EpisodeRow>& rows) {
+  std::filesystem::create_directories(dir);
+  for (const EpisodeRow& row : rows) {
+    std::string name = row.run;
+    std::replace(name.begin(), name.end(), '/', '-');
+    std::ofstream f(dir + "/" + name + "_a" + std::to_string(row.episode.apartment) + "_e" +
+                    std::to_string(row.episode.index) + ".txt");
+    f << row.run << ", apartment " << row.episode.apartment << " episode " << row.episode.index
+      << ": mug on " << row.mug_place << " in the " << row.mug_room << "\n";
+    for (const std::string& line : row.result.trace) f << line << "\n";
+    if (!f) throw Error("--trace: cannot write into " + dir);
+  }
+}
+
 int run(const Options& o) {
   const std::vector<std::string> names = splitList(o.strategies);
   const std::vector<std::string> perceptions = splitWords(o.perception, "--perception");
@@ -156,6 +174,9 @@ int run(const Options& o) {
   SimParams params;
   params.time_budget_s = o.budget_s;
   params.drive_frames_hz = o.drive_frames_hz;
+  params.trace = !o.trace_dir.empty();
+  params.top_seen_share = o.top_seen_share;
+  params.replan_on_new_tables = !o.no_replan;
   std::vector<Episode> episodes;
   std::vector<std::uint64_t> apartment_seeds;
   for (int a = 0; a < o.apartments; ++a) {
@@ -246,6 +267,7 @@ int run(const Options& o) {
   std::vector<EpisodeRow> rows;
   for (const auto& r : results) rows.insert(rows.end(), r.begin(), r.end());
   std::filesystem::create_directories(o.out_dir);
+  if (!o.trace_dir.empty()) writeTraces(o.trace_dir, rows);
   std::ofstream csv(o.out_dir + "/episodes.csv");
   writeCsv(csv, rows);
   std::ofstream svg(o.out_dir + "/success_curve.svg");
@@ -333,6 +355,16 @@ int main(int argc, char** argv) {
       "drop demo.sh's settings for the sim-domain model");
   app->add_option("--set", o.extra_overrides, "KEY=VALUE daemon setting (repeatable)");
   app->add_flag("--quiet", o.quiet, "no progress lines");
+  app->add_option("--top-seen-share", o.top_seen_share,
+                  "findmug strategy: skip a table once this share of its top was in view within "
+                  "the recogniser's reach (default 0.8; 0: visit every table)")
+      ->check(CLI::Range(0.0, 1.0));
+  app->add_flag("--no-replan", o.no_replan,
+                "findmug strategy: explore a room to its centre and look around even when the "
+                "map shows a new table on the way");
+  app->add_option("--trace", o.trace_dir,
+                  "folder for one trace file per run and episode: every action with its time, "
+                  "pose and reason");
   if (const auto code = cli::parse(*app, argc, argv)) return *code;
   spdlog::set_level(spdlog::level::warn);  // one pipeline per episode: its start/stop lines
   try {

@@ -3,6 +3,7 @@
 #include "search_sim.hpp"
 
 #include <algorithm>
+#include <cstdio>
 #include <cmath>
 #include <queue>
 
@@ -306,6 +307,14 @@ Robot::Robot(const World& world, const SimParams& params, FrameHook on_frame,
 
 void Robot::spend(double seconds) { stats_.time_s += seconds; }
 
+void Robot::note(const std::string& what) {
+  if (!params_.trace) return;
+  char head[64];
+  std::snprintf(head, sizeof head, "%7.1f s  (%5.2f, %5.2f) %4.0f deg  ", stats_.time_s, xy_.x(),
+                xy_.y(), yaw_ * 180.0 / M_PI);
+  trace_.push_back(head + what);
+}
+
 bool Robot::move(double seconds, const Eigen::Vector2d& to_xy, double to_yaw, bool turning) {
   const Eigen::Vector2d from_xy = xy_;
   const double from_yaw = yaw_, length = (to_xy - from_xy).norm();
@@ -332,6 +341,10 @@ bool Robot::move(double seconds, const Eigen::Vector2d& to_xy, double to_yaw, bo
       at(dt / seconds);
       ++stats_.drive_frames;
       if (perceive(false)) return false;
+      if (stop_when_ != nullptr && (*stop_when_)()) {
+        interrupted_ = true;  // the robot stops where the frame was taken
+        return false;
+      }
     }
   }
   at(1.0);
@@ -344,18 +357,29 @@ void Robot::turnTo(double yaw) {
   move(std::abs(delta) / params_.turn_rate_rad_s, xy_, yaw_ + delta, true);
 }
 
-bool Robot::driveTo(const Eigen::Vector2d& goal) {
+bool Robot::driveTo(const Eigen::Vector2d& goal, const std::function<bool()>& stop_when) {
+  interrupted_ = false;
   if (!active()) return false;
   const int to = world_.grid.nearestFree(goal, 0.5);
   const std::vector<Eigen::Vector2d> path = world_.grid.path(cell(), to);
   if (path.empty()) return false;
+  if (params_.trace) {
+    double length = 0.0;
+    for (std::size_t i = 1; i < path.size(); ++i) length += (path[i] - path[i - 1]).norm();
+    char line[96];
+    std::snprintf(line, sizeof line, "drive to (%.2f, %.2f), %.1f m", goal.x(), goal.y(), length);
+    note(line);
+  }
+  stop_when_ = stop_when ? &stop_when : nullptr;
   for (std::size_t i = 1; i < path.size() && active(); ++i) {
     const Eigen::Vector2d leg = path[i] - xy_;
     if (leg.norm() < 1e-9) continue;
     turnTo(std::atan2(leg.y(), leg.x()));
-    if (!active()) break;
+    if (!active() || interrupted_) break;
     if (!move(leg.norm() / params_.speed_mps, path[i], yaw_, false)) break;
   }
+  stop_when_ = nullptr;
+  if (interrupted_) note("stopped: something new to look at");
   return true;
 }
 
@@ -393,6 +417,8 @@ bool Robot::perceive(bool stop_view) {
     stats_.found = true;
   else
     stats_.false_found = true;
+  note(std::string(stats_.found ? "found" : "false found") +
+       (stop_view ? " (stop view)" : " (driving frame)"));
   return true;
 }
 
@@ -407,6 +433,7 @@ bool Robot::look() {
 
 bool Robot::lookAround() {
   const int n = params_.look_around_views;
+  note("look around");
   for (int k = 0; k < n && active(); ++k) {
     if (k > 0) turnTo(yaw_ + 2.0 * M_PI / n);
     if (look()) return true;

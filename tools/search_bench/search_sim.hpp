@@ -44,8 +44,17 @@ struct SimParams {
   // recogniser's range, because a mug at 3.5 m shows 150 px only when seen whole and
   // head-on (tables, chairs and other objects hide it more often the further it is).
   double coverage_range_m = 2.0;
+  // The findmug strategy skips a table once this share of its top was in view within the
+  // recogniser's reach (findmug's TableTopViews; 0: visit every table's search position).
+  double top_seen_share = 0.8;
+  double top_seen_range_oracle_m = 3.0;   // the oracle's 150 px of mug: 3.5 m head-on
+  double top_seen_range_matcher_m = 1.5;  // the matcher names the mug from 1.0-1.5 m
+  // The findmug strategy stops exploring a room when the map shows a new table to look at.
+  bool replan_on_new_tables = true;
   synth::MultiRoomParams apartment;
   synth::MugPrior prior;
+  // Keep a line per action (time, pose, what and why) for --trace: where an episode's time went.
+  bool trace = false;
 };
 
 // Occupancy grid of the apartment's floor: a cell is free when a round robot of the
@@ -161,8 +170,11 @@ class Robot {
     return !stats_.found && !stats_.false_found && stats_.time_s < params_.time_budget_s;
   }
   // Plans and drives to `goal` (the nearest free cell to it), turning on the way.
-  // False when unreachable or inactive.
-  bool driveTo(const Eigen::Vector2d& goal);
+  // False when unreachable or inactive. `stop_when`, when set, is asked after every frame
+  // taken on the way (after perception has seen it): true stops the robot there
+  // (interrupted() then says so), as a robot re-plans when its map shows something new.
+  bool driveTo(const Eigen::Vector2d& goal, const std::function<bool()>& stop_when = {});
+  bool interrupted() const { return interrupted_; }
   void turnTo(double yaw);
   // One view at the current pose (processing time counted); true when the search ended
   // with it (the mug seen, or believed seen).
@@ -176,6 +188,10 @@ class Robot {
   const RunStats& stats() const { return stats_; }
   // Every pose a stop view was taken from (coverage bookkeeping).
   const std::vector<std::pair<Eigen::Vector2d, double>>& viewPoses() const { return views_; }
+  // With SimParams::trace: a line "time x y yaw: what" for the episode's trace (strategies
+  // say why they go where they go); nothing otherwise.
+  void note(const std::string& what);
+  const std::vector<std::string>& trace() const { return trace_; }
 
  private:
   void spend(double seconds);
@@ -196,6 +212,9 @@ class Robot {
   int frames_ = 0;         // frames rendered (the noise seed of each)
   RunStats stats_;
   std::vector<std::pair<Eigen::Vector2d, double>> views_;
+  std::vector<std::string> trace_;
+  const std::function<bool()>* stop_when_ = nullptr;  // during driveTo
+  bool interrupted_ = false;                           // the last driveTo stopped early
 };
 
 }  // namespace findmug::search

@@ -2,10 +2,15 @@
 #include "strategies.hpp"
 
 #include <algorithm>
+#include <cstdio>
+#include <functional>
 #include <cmath>
 #include <memory>
 
 #include "findmug/common/error.hpp"
+#include "findmug/ground/ground.hpp"
+#include "findmug/map/semantic_map.hpp"
+#include "findmug/map/table_top_views.hpp"
 
 namespace findmug::search {
 
@@ -54,13 +59,15 @@ int reachableCellInRoom(const Grid& grid, const std::vector<double>& dist,
 class RoomExplorer {
  public:
   explicit RoomExplorer(const World& world) : world_(world), done_(world.apartment.rooms.size()) {}
-  void markHere(const Robot& robot) {
-    const int r = world_.apartment.roomAt(robot.xy());
+  void markHere(const Robot& robot) { markAt(robot.xy()); }
+  void markAt(const Eigen::Vector2d& xy) {
+    const int r = world_.apartment.roomAt(xy);
     if (r >= 0) done_[r] = true;
   }
   // Drives to the reachable cell nearest the centre of the nearest room not yet explored
-  // and looks around; false when every room is done.
-  bool exploreNext(Robot& robot) {
+  // and looks around; false when every room is done. When `stop_when` stops the drive, the
+  // room stays to be explored and there is no look-around (the caller has something new).
+  bool exploreNext(Robot& robot, const std::function<bool()>& stop_when = {}) {
     const std::vector<double> dist = world_.grid.distancesFrom(robot.cell());
     int best_room = -1, best_cell = -1;
     for (std::size_t r = 0; r < done_.size(); ++r) {
@@ -76,7 +83,13 @@ class RoomExplorer {
     }
     if (best_cell < 0) return false;
     done_[best_room] = true;
-    robot.driveTo(world_.grid.center(best_cell));
+    robot.note("explore room " + std::to_string(best_room) + " (" +
+               synth::roomKindName(world_.apartment.rooms[best_room].kind) + ")");
+    robot.driveTo(world_.grid.center(best_cell), stop_when);
+    if (robot.interrupted()) {
+      done_[best_room] = false;
+      return true;
+    }
     robot.lookAround();
     return true;
   }
@@ -103,6 +116,21 @@ class Eyes {
                                               matcher_ ? perception.objects_dir : std::string());
   }
 
+  // What the frames showed of the mapped tables' tops within the recogniser's reach.
+  void watchTops(const SimParams& params) {
+    TableTopViewsConfig config;
+    config.range_m = static_cast<float>(matcher_ ? params.top_seen_range_matcher_m
+                                                 : params.top_seen_range_oracle_m);
+    tops_ = std::make_unique<TableTopViews>(config);
+  }
+  // The share of the table's top seen so (0 when tops are not watched or it is unknown).
+  double topSeen(int table_id) const {
+    if (!tops_ || !daemon_) return 0.0;
+    for (const TableCluster& t : daemon_->mapTables())
+      if (t.id == table_id) return tops_->seenShare(t);
+    return 0.0;
+  }
+
   Robot robot(const World& world, const SimParams& params) {
     if (!daemon_) return Robot(world, params);
     return Robot(
@@ -110,6 +138,13 @@ class Eyes {
         [this](const synth::RenderedFrame& frame, const Eigen::Vector2d& xy, double yaw,
                double t) {
           daemon_->feed(frame, xy, yaw, t);
+          if (tops_ && frame.labeled.frame.extrinsics) {
+            // The robot knows its head's pose: the base pose and the camera mount.
+            const Eigen::Isometry3d camera = cameraInMap(
+                Pose2D{xy.x(), xy.y(), yaw},
+                groundFromExtrinsics(*frame.labeled.frame.extrinsics).camera_to_ground);
+            tops_->observe(daemon_->mapTables(), frame.labeled.frame, camera);
+          }
           Sighting sighting;
           if (!matcher_) return sighting;
           answer_ = daemon_->find(name_);
@@ -142,6 +177,7 @@ class Eyes {
   bool matcher_;
   std::string name_;
   std::unique_ptr<FindmugTables> daemon_;
+  std::unique_ptr<TableTopViews> tops_;
   io::FindResultMessage answer_;
 };
 
@@ -192,6 +228,7 @@ EpisodeResult runFindmug(const World& world, const SimParams& params,
                          const Perception& perception) {
   EpisodeResult result;
   Eyes eyes(perception, true);
+  if (params.top_seen_share > 0.0) eyes.watchTops(params);
   FindmugTables& tables = *eyes.daemon();
   Robot robot = eyes.robot(world, params);
   LookCloser closer;
@@ -212,21 +249,56 @@ EpisodeResult runFindmug(const World& world, const SimParams& params,
       const bool seen_before =
           std::find(tables_visited.begin(), tables_visited.end(), p.table_id) !=
               tables_visited.end() ||
+          (params.top_seen_share > 0.0 && eyes.topSeen(p.table_id) >= params.top_seen_share) ||
           std::any_of(visited.begin(), visited.end(),
                       [&p](const auto& v) { return (v - p.xy).norm() < 0.5; });
       const int c = seen_before ? -1 : reachableCellNear(world.grid, dist, p.xy, 0.25);
       if (c >= 0 && (next_cell < 0 || dist[c] < dist[next_cell])) next = &p, next_cell = c;
     }
     if (next == nullptr) {
-      if (rooms.exploreNext(robot)) continue;
+      // Exploring a room stops as soon as the map shows a table not known when it began
+      // whose top is still to be seen: re-planning as the map grows.
+      std::vector<int> known;
+      for (const TableCluster& t : tables.mapTables()) known.push_back(t.id);
+      const auto new_table = [&] {
+        for (const MapSearchPosition& p : tables.positions())
+          if (p.reachable && std::find(known.begin(), known.end(), p.table_id) == known.end() &&
+              !(params.top_seen_share > 0.0 && eyes.topSeen(p.table_id) >= params.top_seen_share))
+            return true;
+        return false;
+      };
+      if (rooms.exploreNext(robot, params.replan_on_new_tables ? std::function<bool()>(new_table)
+                                                               : std::function<bool()>()))
+        continue;
+      robot.note("cover the floor plan");
       coverUntilDone(robot, world, params, false);  // nothing left but the floor plan
       break;
     }
     const MapSearchPosition target = *next;  // positions() changes with the next frame
+    if (params.trace) {
+      char line[160];
+      std::snprintf(line, sizeof line,
+                    "search position of table %d (%.2f, %.2f), %.0f %% of its top seen; %d "
+                    "tables mapped, the mug %.1f m from it",
+                    target.table_id, target.xy.x(), target.xy.y(),
+                    100.0 * eyes.topSeen(target.table_id), tables.tables(),
+                    (target.xy - world.mug.position.head<2>()).norm());
+      robot.note(line);
+    }
     visited.push_back(target.xy);
     tables_visited.push_back(target.table_id);
     ++result.positions_visited;
-    robot.driveTo(world.grid.center(next_cell));
+    // On the way, the top may come into view near enough: then it has been searched.
+    const auto top_seen = [&] {
+      return params.top_seen_share > 0.0 && eyes.topSeen(target.table_id) >= params.top_seen_share;
+    };
+    robot.driveTo(world.grid.center(next_cell), params.replan_on_new_tables
+                                                    ? std::function<bool()>(top_seen)
+                                                    : std::function<bool()>());
+    if (robot.interrupted()) {
+      rooms.markAt(target.xy);  // as if it had stood there
+      continue;
+    }
     robot.turnTo(target.yaw);
     robot.look();
     if (eyes.matcher()) {
@@ -241,6 +313,7 @@ EpisodeResult runFindmug(const World& world, const SimParams& params,
     rooms.markHere(robot);
   }
   result.stats = robot.stats();
+  result.trace = robot.trace();
   result.tables_mapped = tables.tables();
   eyes.report(result);
   result.look_closer = closer.taken();
@@ -313,6 +386,7 @@ EpisodeResult runPlaces(const World& world, const SimParams& params,
   }
   coverUntilDone(robot, world, params, false);
   result.stats = robot.stats();
+  result.trace = robot.trace();
   eyes.report(result);
   return result;
 }
@@ -395,6 +469,7 @@ EpisodeResult runCoverage(const World& world, const SimParams& params,
   Robot robot = eyes.robot(world, params);
   coverUntilDone(robot, world, params, true);
   result.stats = robot.stats();
+  result.trace = robot.trace();
   eyes.report(result);
   return result;
 }
@@ -416,6 +491,7 @@ EpisodeResult runRandom(const World& world, const SimParams& params,
     robot.lookAround();
   }
   result.stats = robot.stats();
+  result.trace = robot.trace();
   eyes.report(result);
   return result;
 }
@@ -444,6 +520,7 @@ EpisodeResult runOracle(const World& world, const SimParams& params,
   while (closer.next(robot, eyes, world)) {
   }
   result.stats = robot.stats();
+  result.trace = robot.trace();
   eyes.report(result);
   result.look_closer = closer.taken();
   return result;

@@ -58,6 +58,7 @@ struct EpisodeResult {
   // Matcher: table-top candidates the daemon put to the matcher, those it named "mug", and
   // the refusals by the reason the taught mug gave (size, colour, shape incl. roundness).
   int candidates = 0, matches = 0, refused_size = 0, refused_colour = 0, refused_shape = 0;
+  std::vector<std::string> trace;  // Robot::trace() with SimParams::trace
 };
 
 // Known names: "findmug", "places", "coverage", "random", "oracle" (or a..e).

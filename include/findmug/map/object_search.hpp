@@ -18,11 +18,13 @@
 //     (visitingOrder) from the robot, or from where the previous group ends.
 //   * A name nobody taught is refused, the answer listing the taught names.
 //
-// A table is searched for a request when the robot stood at one of its search
-// positions (within `position_tolerance_m`, heading within
-// `heading_tolerance_rad` of the position's, so that the top was in view)
-// after the request was made. ObjectSearch keeps that per request: a new
-// request (another request id) starts with no table searched.
+// A table is searched for a request when, after the request was made, the
+// robot stood at one of its search positions (within `position_tolerance_m`,
+// heading within `heading_tolerance_rad` of the position's, so that the top was
+// in view), or the camera's views showed at least `top_seen_share` of its top
+// from within `top_seen_range_m` (TableTopViews, table_top_views.hpp: a top seen
+// near enough while driving by needs no visit). ObjectSearch keeps that per
+// request: a new request (another request id) starts with no table searched.
 //
 // Pure core code: no LCM, no clock, no threads.
 #pragma once
@@ -36,6 +38,7 @@
 
 #include "findmug/common/pose2d.hpp"
 #include "findmug/map/object_map.hpp"
+#include "findmug/map/table_top_views.hpp"
 #include "findmug/settings/settings.hpp"
 #include "findmug/tables/tables.hpp"
 
@@ -44,6 +47,11 @@ namespace findmug {
 struct ObjectSearchConfig {
   float position_tolerance_m = 0.3f;   // robot this near a search position stood there
   float heading_tolerance_rad = 0.5f;  // ... facing within this of the position's yaw
+  // Views search a table once they showed this share of its top (0: only standing at a
+  // search position does) ...
+  float top_seen_share = 0.8f;
+  // ... from within this distance: the matcher's reach (it names a mug from 1-1.5 m).
+  float top_seen_range_m = 1.5f;
 };
 
 // Throws findmug::Error naming the setting (`object_search.KEY`) when out of range.
@@ -91,6 +99,13 @@ class ObjectSearch {
   // of whose search positions it stands. Returns the ids newly marked.
   std::vector<int> observeRobot(const Pose2D& robot, const std::vector<TableCluster>& map_tables);
 
+  // A camera view (its depth image and the camera's pose in the map): marks, for the
+  // current request, the tables of which the views since the request showed at least
+  // top_seen_share of the top. Returns the ids newly marked. Throws findmug::Error naming
+  // the frame when its depth image does not fit its size.
+  std::vector<int> observeView(const std::vector<TableCluster>& map_tables, const RgbdFrame& frame,
+                               const Eigen::Isometry3d& camera_in_map);
+
   std::int64_t requestId() const { return request_id_; }
   const std::set<int>& searchedTables() const { return searched_; }
 
@@ -98,6 +113,7 @@ class ObjectSearch {
   ObjectSearchConfig config_;
   std::int64_t request_id_ = -1;
   std::set<int> searched_;
+  TableTopViews top_views_;  // since the request
 };
 
 }  // namespace findmug

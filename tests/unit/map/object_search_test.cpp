@@ -8,6 +8,8 @@
 #include <cmath>
 
 #include "findmug/common/error.hpp"
+#include "findmug/ground/ground.hpp"
+#include "findmug/map/semantic_map.hpp"
 
 namespace findmug {
 namespace {
@@ -144,6 +146,66 @@ TEST(ObjectSearch, AMugMatchedOnlyFromFarIsLookCloserWithItsTableFirst) {
   EXPECT_EQ(answer.kind, FindAnswer::Kind::Seen) << answer.summary;
 }
 
+// A 640x480 depth image of a flat top at `top_z` everywhere the ray meets it, else the floor,
+// as seen from `camera` (map frame): enough for TableTopViews' visibility test.
+RgbdFrame flatDepth(const Eigen::Isometry3d& camera, float top_z, const TableCluster& table) {
+  RgbdFrame f;
+  f.width = 640;
+  f.height = 480;
+  f.source = "flat view";
+  f.depth_mm.assign(640 * 480, 0);
+  const Eigen::Vector3d o = camera.translation();
+  for (int v = 0; v < 480; ++v)
+    for (int u = 0; u < 640; ++u) {
+      const Eigen::Vector3d d = camera.linear() * Eigen::Vector3d((u - f.intrinsics.cx) / f.intrinsics.fx,
+                                                                  (v - f.intrinsics.cy) / f.intrinsics.fy, 1.0);
+      if (d.z() >= 0) continue;
+      double t = (top_z - o.z()) / d.z();
+      const Eigen::Vector3d p = o + t * d;
+      const Eigen::Vector2f c = table.center;
+      if (std::abs(p.x() - c.x()) > table.extents.x() || std::abs(p.y() - c.y()) > table.extents.y())
+        t = -o.z() / d.z();
+      f.depth_mm[v * 640 + u] = static_cast<std::uint16_t>(std::lround(t * 1000.0));
+    }
+  return f;
+}
+
+TEST(ObjectSearch, ATopSeenNearEnoughWhileDrivingByIsSearched) {
+  const std::vector<TableCluster> tables = {mappedTable(1, 1.0f, 0.0f), mappedTable(2, 6.0f, 0.0f)};
+  ObjectMap objects(oneMatchNames());
+  ObjectSearchConfig reach;
+  reach.top_seen_range_m = 2.5f;
+  ObjectSearch search(reach);
+  const Pose2D robot{-0.5, 0.0, 0.0};
+  FindAnswer answer = search.answer(1, "mug", kTaught, objects, tables, robot, 10);
+  ASSERT_EQ(answer.places.size(), 4u);
+  EXPECT_EQ(answer.places[0].table_id, 1);
+  // The head camera (1.2 m up, 0.5 rad down) 0.9 m behind table 1's near edge, facing it:
+  // its whole top in view within 2.5 m. Table 2 is far out of reach.
+  CameraExtrinsics mount;
+  mount.height_m = 1.2;
+  mount.pitch_rad = 0.5;
+  const Eigen::Isometry3d camera =
+      cameraInMap(robot, groundFromExtrinsics(mount).camera_to_ground);
+  EXPECT_EQ(search.observeView(tables, flatDepth(camera, 0.75f, tables[0]), camera),
+            std::vector<int>{1});
+  answer = search.answer(1, "mug", kTaught, objects, tables, robot, 20);
+  EXPECT_EQ(answer.places[0].table_id, 2);
+  EXPECT_TRUE(answer.places[3].searched);
+  EXPECT_EQ(answer.places[3].table_id, 1);
+  // Something in front (a wall 0.3 m away) shows nothing, for a new request.
+  answer = search.answer(2, "mug", kTaught, objects, tables, robot, 30);
+  RgbdFrame wall = flatDepth(camera, 0.75f, tables[0]);
+  std::fill(wall.depth_mm.begin(), wall.depth_mm.end(), std::uint16_t{300});
+  EXPECT_TRUE(search.observeView(tables, wall, camera).empty());
+  // With top_seen_share 0, views never search a table.
+  ObjectSearchConfig standing_only = reach;
+  standing_only.top_seen_share = 0.0f;
+  ObjectSearch strict(standing_only);
+  strict.answer(1, "mug", kTaught, objects, tables, robot, 10);
+  EXPECT_TRUE(strict.observeView(tables, flatDepth(camera, 0.75f, tables[0]), camera).empty());
+}
+
 TEST(ObjectSearch, AnUntaughtNameIsRefusedListingTheTaughtOnes) {
   ObjectMap objects;
   ObjectSearch search;
@@ -169,6 +231,10 @@ TEST(ObjectSearch, SettingsAreCheckedAndParsed) {
   objectSearchSettings().set(parsed, "object_search.position_tolerance_m", "0.5");
   EXPECT_FLOAT_EQ(parsed.position_tolerance_m, 0.5f);
   EXPECT_THROW(objectSearchSettings().set(parsed, "object_search.tolerance", "1"), Error);
+  objectSearchSettings().set(parsed, "object_search.top_seen_share", "0.9");
+  EXPECT_FLOAT_EQ(parsed.top_seen_share, 0.9f);
+  EXPECT_THROW(objectSearchSettings().set(parsed, "object_search.top_seen_share", "1.5"), Error);
+  EXPECT_THROW(objectSearchSettings().set(parsed, "object_search.top_seen_range_m", "0"), Error);
   ObjectSearchConfig config;
   config.heading_tolerance_rad = 4.0f;
   try {

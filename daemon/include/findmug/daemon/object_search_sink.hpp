@@ -157,6 +157,10 @@ class ObjectSearchSink final : public ResultSink {
     std::optional<io::RobotPose> pose;
     bool evidence = false;  // labelled (TableMapSink::isEvidence)
     std::shared_ptr<const std::vector<TableCluster>> map_tables;  // confirmed, map frame
+    // While a find request is open: the frame's depth image (no colour) and the camera's
+    // pose in the map, for the tables whose tops the view searched (ObjectSearch::observeView).
+    std::optional<RgbdFrame> view_depth;
+    Eigen::Isometry3d camera_in_map = Eigen::Isometry3d::Identity();
   };
   struct Done {};
 
