@@ -178,8 +178,10 @@ ObjectSearchSink::Job ObjectSearchSink::makeJob(const FrameResult& result) {
     std::lock_guard lock(mutex_);
     searching = request_name_.has_value();
   }
-  if (searching && result.pose && prepared.ground) {
-    const RgbdFrame& frame = prepared.frame;
+  const RgbdFrame& frame = prepared.frame;
+  const bool has_depth = frame.width > 0 && frame.height > 0 &&
+                         frame.depth_mm.size() == static_cast<std::size_t>(frame.width) * frame.height;
+  if (searching && has_depth && result.pose && prepared.ground) {
     RgbdFrame depth;
     depth.width = frame.width;
     depth.height = frame.height;

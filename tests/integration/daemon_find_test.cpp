@@ -17,6 +17,8 @@
 #include <vector>
 
 #include "findmug/common/error.hpp"
+#include "findmug/ground/ground.hpp"
+#include "findmug/map/semantic_map.hpp"
 #include "findmug/io/bus.hpp"
 #include "findmug/io/lcm_codec_find.hpp"
 #include "findmug/io/lcm_codec_objects.hpp"
@@ -154,6 +156,80 @@ TEST_F(DaemonFind, FindListsThePlacesToLookAndPutsASearchedTableLast) {
   EXPECT_TRUE(drain().empty());
   EXPECT_EQ(sink->counters().find_requests, 1u);
   EXPECT_EQ(sink->counters().find_answers, 2u);
+}
+
+// A 640x480 depth image, seen by the head camera (1.2 m up, 0.5 rad down) of a robot at
+// `robot` (map = base frame here), of table tops 0.75 m up over `tables`' oriented boxes and
+// the floor elsewhere; its ground plane from the same mount.
+LabelledFrame viewOf(const std::vector<TableCluster>& tables, const Pose2D& robot,
+                     std::uint64_t utime) {
+  LabelledFrame f = frameWith({}, utime);
+  CameraExtrinsics mount;
+  mount.height_m = 1.2;
+  mount.pitch_rad = 0.5;
+  f.segmented.prepared.ground = groundFromExtrinsics(mount);
+  RgbdFrame& frame = f.segmented.prepared.frame;
+  frame.width = 640;
+  frame.height = 480;
+  frame.source = "view";
+  frame.depth_mm.assign(640 * 480, 0);
+  const Eigen::Isometry3d camera =
+      cameraInMap(robot, f.segmented.prepared.ground->camera_to_ground);
+  const Eigen::Vector3d o = camera.translation();
+  for (int v = 0; v < 480; ++v)
+    for (int u = 0; u < 640; ++u) {
+      const Eigen::Vector3d d =
+          camera.linear() * Eigen::Vector3d((u - frame.intrinsics.cx) / frame.intrinsics.fx,
+                                            (v - frame.intrinsics.cy) / frame.intrinsics.fy, 1.0);
+      if (d.z() >= 0) continue;
+      double t = -o.z() / d.z();  // the floor
+      const double on_top = (0.75 - o.z()) / d.z();
+      const Eigen::Vector3d p = o + on_top * d;
+      for (const TableCluster& table : tables)
+        if (std::abs(p.x() - table.center.x()) <= table.extents.x() &&
+            std::abs(p.y() - table.center.y()) <= table.extents.y())
+          t = on_top;
+      frame.depth_mm[v * 640 + u] = static_cast<std::uint16_t>(std::lround(t * 1000.0));
+    }
+  return f;
+}
+
+// A table whose top the camera showed from near enough while a find is open is searched:
+// it moves to the end of the answer without the robot standing at it.
+TEST_F(DaemonFind, ATableTopSeenNearEnoughIsSearchedWithoutStandingThere) {
+  saveObjectModel(dir.str("mug.fmo"), test::sampleObjectModel("mug", 1));
+  ObjectSearchSettings settings;
+  settings.objects_dir = dir.str();
+  settings.mode = ExecutionMode::Sequential;
+  settings.object_search.top_seen_range_m = 2.5f;
+  auto sink = std::make_unique<ObjectSearchSink>(
+      settings, bus, ObjectSearchSink::Channels{kFindChannel, "FINDMUG_OBJECT_MAP"},
+      TableMapSource{[this] { return table_map_revision; }, [this] { return table_map; }},
+      [this](const std::string& what) { errors.push_back(what); });
+  mapTables({tableAt(2.0f, 0.0f), tableAt(5.0f, 0.0f)});
+  // A frame without depth brings the table map; the find is asked after it.
+  FrameResult first{frameWith({tableAt(2.0f, 0.0f), tableAt(5.0f, 0.0f)}, 1000), 0,
+                    std::nullopt, {}, std::nullopt};
+  asMapped(first, Pose2D{});
+  sink->consume(first);
+  sink->requestFind(12, "mug", 1500);
+  auto answers = drain();
+  ASSERT_EQ(answers.size(), 1u);
+  ASSERT_EQ(answers[0].places.size(), 4u);
+  EXPECT_EQ(answers[0].places.front().table_id, 1);
+
+  // A view before which nothing is in front: table 1's top whole within 2.5 m, table 2's not.
+  const Pose2D robot{0.5, 0.0, 0.0};
+  FrameResult view{viewOf(table_map, robot, 2000), 0, std::nullopt, {}, std::nullopt};
+  view.pose = io::RobotPose{2000, robot};
+  sink->consume(view);
+  answers = drain();
+  ASSERT_EQ(answers.size(), 1u);
+  ASSERT_EQ(answers[0].places.size(), 4u);
+  EXPECT_EQ(answers[0].places.front().table_id, 2);
+  EXPECT_EQ(answers[0].places.back().table_id, 1);
+  EXPECT_TRUE(answers[0].places.back().searched);
+  EXPECT_TRUE(errors.empty());
 }
 
 TEST_F(DaemonFind, AnUntaughtNameIsAnsweredWithTheTaughtNamesABadNameIsRefused) {
