@@ -101,6 +101,22 @@ class RoomExplorer {
 
 void coverUntilDone(Robot& robot, const World& world, const SimParams& params, bool look_first);
 
+// What stands at `xy` in the ground truth (for traces): the kind of the furniture whose
+// footprint holds it, or "nothing".
+std::string furnitureAt(const World& world, const Eigen::Vector2f& xy) {
+  for (const synth::FurnitureTruth& f : world.apartment.furniture) {
+    const std::size_t n = f.footprint.size();
+    bool inside = n >= 3;
+    for (std::size_t i = 0; i < n && inside; ++i) {
+      const Eigen::Vector2d e = f.footprint[(i + 1) % n] - f.footprint[i];
+      const Eigen::Vector2d q = xy.cast<double>() - f.footprint[i];
+      inside = e.x() * q.y() - e.y() * q.x() >= 0.0;
+    }
+    if (inside) return f.kind;
+  }
+  return "nothing";
+}
+
 // One run's perception: the daemon, when the strategy (its table map) or the recogniser
 // (the matcher) needs it, and the robot that sends it every frame.
 class Eyes {
@@ -276,11 +292,14 @@ EpisodeResult runFindmug(const World& world, const SimParams& params,
     }
     const MapSearchPosition target = *next;  // positions() changes with the next frame
     if (params.trace) {
-      char line[160];
+      std::string truth = "?";
+      for (const TableCluster& t : tables.mapTables())
+        if (t.id == target.table_id) truth = furnitureAt(world, t.center);
+      char line[200];
       std::snprintf(line, sizeof line,
-                    "search position of table %d (%.2f, %.2f), %.0f %% of its top seen; %d "
-                    "tables mapped, the mug %.1f m from it",
-                    target.table_id, target.xy.x(), target.xy.y(),
+                    "search position of table %d (%.2f, %.2f), truth %s, %.0f %% of its top "
+                    "seen; %d tables mapped, the mug %.1f m from it",
+                    target.table_id, target.xy.x(), target.xy.y(), truth.c_str(),
                     100.0 * eyes.topSeen(target.table_id), tables.tables(),
                     (target.xy - world.mug.position.head<2>()).norm());
       robot.note(line);
