@@ -298,7 +298,8 @@ void printFindResult(const io::FindResultMessage& m, bool json) {
           << ",\"y\":" << cli::jsonNumber(p.position.xy.y(), 3)
           << ",\"yaw\":" << cli::jsonNumber(p.position.yaw, 3)
           << ",\"seen_before\":" << (p.seen_here_before ? "true" : "false")
-          << ",\"searched\":" << (p.searched ? "true" : "false") << "}";
+          << ",\"searched\":" << (p.searched ? "true" : "false")
+          << ",\"look_closer\":" << (p.look_closer ? "true" : "false") << "}";
     }
     out << "]}";
     std::cout << out.str() << std::endl;
@@ -316,6 +317,7 @@ void printFindResult(const io::FindResultMessage& m, bool json) {
     printPosition(out, p.position);
     if (p.seen_here_before) out << " (seen here before)";
     if (p.searched) out << " (searched)";
+    if (p.look_closer) out << " (look closer)";
     out << "\n";
   }
   std::cout << out.str() << std::flush;

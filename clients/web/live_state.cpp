@@ -121,6 +121,7 @@ nlohmann::json findResultJson(const io::FindResultMessage& m) {
                       {"x", p.position.xy.x()},
                       {"y", p.position.xy.y()},
                       {"searched", p.searched},
+                      {"look_closer", p.look_closer},
                       {"seen_here_before", p.seen_here_before}});
   }
   nlohmann::json out = {{"request_id", m.request_id},

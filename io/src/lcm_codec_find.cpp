@@ -92,6 +92,7 @@ void decodePlaces(const findmug_lcm::find_result_t& m, std::string_view channel,
     place.table_id = m.place_table_ids[i];
     place.seen_here_before = m.place_seen_before[i];
     place.searched = m.place_searched[i];
+    place.look_closer = m.place_look_closer[i];
     out.places.push_back(place);
   }
 }
@@ -161,6 +162,7 @@ findmug_lcm::find_result_t encodeFindResult(const FindResultMessage& in) {
     m.place_table_ids.push_back(p.table_id);
     m.place_seen_before.push_back(p.seen_here_before);
     m.place_searched.push_back(p.searched);
+    m.place_look_closer.push_back(p.look_closer);
   }
   m.num_taught = static_cast<std::int32_t>(in.taught_names.size());
   m.taught_names = in.taught_names;

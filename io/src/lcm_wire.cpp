@@ -274,11 +274,12 @@ findmug_lcm::find_result_t decodeMessage<findmug_lcm::find_result_t>(const void*
     w.skip(kI32 + 3 * kF64 + kI32 + kI64 + kF32 + kBool, "seen_*/has_stand_here");
     walkSearchPosition(w, "stand_here");
     const std::int32_t places =
-        w.count("num_places", kMinSearchPosition + kI32 + 2 * kBool);
+        w.count("num_places", kMinSearchPosition + kI32 + 3 * kBool);
     for (std::int32_t i = 0; i < places; ++i) walkSearchPosition(w, "places");
     w.array(places, kI32, "place_table_ids");
     w.array(places, kBool, "place_seen_before");
     w.array(places, kBool, "place_searched");
+    w.array(places, kBool, "place_look_closer");
     const std::int32_t taught = w.count("num_taught", kMinString);
     for (std::int32_t i = 0; i < taught; ++i) w.string("taught_names");
   });

@@ -218,7 +218,7 @@ FindAnswer ObjectSearch::answer(std::int64_t request_id, const std::string& name
     for (const SearchPosition& p : table.search_positions) {
       if (!p.reachable) continue;
       const int group = maybe ? 0 : (searched ? 2 : (seen_before ? 0 : 1));
-      groups[group].push_back({table.id, p, seen_before, searched});
+      groups[group].push_back({table.id, p, seen_before, searched, maybe});
     }
   }
   Eigen::Vector2f from = robot ? Eigen::Vector2f(static_cast<float>(robot->x),

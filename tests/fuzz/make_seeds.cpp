@@ -255,6 +255,7 @@ void lcmSeeds(SeedWriter& w) {
     look.places = {place, place};
     look.places[1].table_id = 3;
     look.places[1].searched = true;
+    look.places[0].look_closer = true;
     w.write("find_result", "look_at", asString(io::encodeMessage(io::encodeFindResult(look))),
             decodeFind);
   }

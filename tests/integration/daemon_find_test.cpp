@@ -461,6 +461,28 @@ TEST(FindCodec, RoundTripsAndRefusesWhatIsNotAnAnswer) {
   ASSERT_TRUE(back.stand_here.has_value());
   EXPECT_FLOAT_EQ(back.stand_here->xy.y(), 1.1f);
   EXPECT_EQ(back.taught_names, m.taught_names);
+  // A "look at" answer's places keep their flags, "look closer" among them.
+  io::FindResultMessage look;
+  look.utime = 6;
+  look.request_id = 9;
+  look.name = "mug";
+  look.result = io::FindResult::LookAt;
+  look.summary = "mug not seen yet";
+  look.taught_names = {"mug"};
+  PlaceToLook place;
+  place.table_id = 4;
+  place.position = stand;
+  place.look_closer = true;
+  look.places = {place, place};
+  look.places[1].look_closer = false;
+  look.places[1].searched = true;
+  bytes = io::encodeMessage(io::encodeFindResult(look));
+  const io::FindResultMessage look_back = io::decodeFindResult(bytes.data(), bytes.size(), "C");
+  ASSERT_EQ(look_back.places.size(), 2u);
+  EXPECT_TRUE(look_back.places[0].look_closer);
+  EXPECT_FALSE(look_back.places[0].searched);
+  EXPECT_FALSE(look_back.places[1].look_closer);
+  EXPECT_TRUE(look_back.places[1].searched);
 
   auto refused = [](findmug_lcm::find_result_t lcm, const std::string& field) {
     try {

@@ -4,6 +4,7 @@
 
 #include <chrono>
 #include <cmath>
+#include <algorithm>
 #include <sstream>
 #include <thread>
 
@@ -143,12 +144,9 @@ daemon::ObjectSearchSink::Counters FindmugTables::objectCounters() const {
 std::vector<int> FindmugTables::lookCloserTables(const io::FindResultMessage& answer) {
   std::vector<int> ids;
   if (answer.result != io::FindResult::LookAt) return ids;
-  // "...; maybe on table 3 7 (matched too few times or from too far): look closer there first"
-  const std::string marker = "maybe on table";
-  const std::size_t at = answer.summary.find(marker);
-  if (at == std::string::npos) return ids;
-  std::istringstream words(answer.summary.substr(at + marker.size()));
-  for (int id; words >> id;) ids.push_back(id);
+  for (const PlaceToLook& p : answer.places)
+    if (p.look_closer && std::find(ids.begin(), ids.end(), p.table_id) == ids.end())
+      ids.push_back(p.table_id);
   return ids;
 }
 

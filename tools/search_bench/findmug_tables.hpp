@@ -82,7 +82,7 @@ class FindmugTables {
   // refusals by reason.
   daemon::ObjectSearchSink::Counters objectCounters() const;
   // Table map ids the last answer says may hold the object ("look closer" there), in its
-  // order, parsed from the summary ObjectSearch words (object_search.cpp).
+  // order (find_result_t.place_look_closer).
   static std::vector<int> lookCloserTables(const io::FindResultMessage& answer);
 
  private:

@@ -65,7 +65,8 @@ struct PlaceToLook {
   int table_id = 0;  // the table map's stable id
   SearchPosition position;
   bool seen_here_before = false;  // the object was once seen on this table
-  bool searched = false;          // the robot already stood here for this request
+  bool searched = false;          // the robot already stood here (or saw its top) for this request
+  bool look_closer = false;       // the table holds an object that may be it: look closer
 };
 
 struct FindAnswer {

@@ -134,6 +134,8 @@ TEST(ObjectSearch, AMugMatchedOnlyFromFarIsLookCloserWithItsTableFirst) {
   // Table 2 first although it is farther and was searched.
   EXPECT_EQ(answer.places[0].table_id, 2);
   EXPECT_EQ(answer.places[1].table_id, 2);
+  EXPECT_TRUE(answer.places[0].look_closer);
+  EXPECT_FALSE(answer.places[2].look_closer);
   EXPECT_NE(answer.summary.find("look closer"), std::string::npos) << answer.summary;
   // Two near sightings (the robot 1 m from it) confirm it: seen.
   const Pose2D near{4.0, 1.3, -M_PI / 2};  // facing -y: the mug 1 m ahead, 0.1 m left
