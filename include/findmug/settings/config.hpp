@@ -21,7 +21,6 @@
 #include "findmug/frame/depth_holes.hpp"
 #include "findmug/labels/label_holes.hpp"
 #include "findmug/learner/forest.hpp"
-#include "findmug/map/table_map.hpp"
 #include "findmug/mrf/mrf.hpp"
 #include "findmug/objects/table_objects.hpp"
 #include "findmug/settings/offline_settings.hpp"
