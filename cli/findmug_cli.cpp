@@ -31,6 +31,9 @@ void addConfigFlags(CLI::App& app, ConfigFlags& flags, const std::string& config
         if (eq == std::string::npos || eq == 0) return "expected KEY=VALUE, got '" + text + "'";
         return {};
       });
+  app.add_flag("--help-settings", flags.help_settings,
+               "list every setting: key = built-in default (what a value must be), its doc "
+               "line; [model] marks the keys a model records and sets unless given");
 }
 
 void readSettings(const ConfigFlags& flags, SettingsSchema& schema) {
@@ -48,6 +51,19 @@ Config configFrom(const ConfigFlags& flags) {
   bindOfflineSettings(schema, config);
   readSettings(flags, schema);
   return config;
+}
+
+std::string settingsHelp(SettingsSchema& schema) {
+  acceptSharedFileSettings(schema);
+  return schema.help();
+}
+
+std::string coreSettingsHelp() {
+  Config config;
+  SettingsSchema schema;
+  bindCoreSettings(schema, config);
+  bindOfflineSettings(schema, config);
+  return settingsHelp(schema);
 }
 
 CLI::Option* addSourceFlag(CLI::App& app, std::string& spec, const std::string& help) {

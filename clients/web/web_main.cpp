@@ -10,6 +10,7 @@
 // the token of --token-file is required on every request (web_server.hpp has the access
 // rules).
 #include <cstdio>
+#include <iostream>
 #include <filesystem>
 #include <memory>
 #include <string>
@@ -212,6 +213,15 @@ int main(int argc, char** argv) {
                           "camera image, tables and search positions, the table map, status");
   addFlags(*app, flags);
   if (auto code = cli::parse(*app, argc, argv)) return *code;
+  if (flags.config.help_settings) {
+    Config core;
+    web::WebConfig web;
+    SettingsSchema schema;
+    bindCoreSettings(schema, core);
+    schema.bind(web::webSettings(), web);
+    std::cout << cli::settingsHelp(schema);
+    return 0;
+  }
 
   web::WebConfig config;
   web::ServerOptions options;

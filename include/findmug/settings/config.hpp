@@ -17,15 +17,15 @@
 #include "findmug/features/object_features.hpp"
 #include "findmug/features/region_features.hpp"
 #include "findmug/features/scene_features.hpp"
-#include "findmug/ground/ground.hpp"
 #include "findmug/frame/depth_holes.hpp"
+#include "findmug/ground/ground.hpp"
 #include "findmug/labels/label_holes.hpp"
 #include "findmug/learner/forest.hpp"
 #include "findmug/mrf/mrf.hpp"
 #include "findmug/objects/table_objects.hpp"
+#include "findmug/oversegmentation/oversegmentation.hpp"
 #include "findmug/settings/offline_settings.hpp"
 #include "findmug/settings/settings.hpp"
-#include "findmug/oversegmentation/oversegmentation.hpp"
 #include "findmug/tables/tables.hpp"
 
 namespace findmug {
@@ -52,8 +52,8 @@ enum class ClassWeight {
 };
 
 struct LearnerOptions {
-  LearnerKind kind = LearnerKind::Forest;     // learner.kind
-  ClassScheme classes = ClassScheme::Labels;  // learner.classes
+  LearnerKind kind = LearnerKind::Forest;          // learner.kind
+  ClassScheme classes = ClassScheme::Labels;       // learner.classes
   ClassWeight class_weight = ClassWeight::Labels;  // learner.class_weight
 };
 
@@ -63,10 +63,10 @@ struct SegmenterConfig {
   NormalConfig normals;
   GroundConfig ground;
   OversegmentationConfig oversegmentation;
-  RegionConfig regions;    // features.regions, features.region_*
-  SceneConfig scene;       // features.scene, features.scene_*
-  ObjectConfig objects;    // features.objects, features.objects_*
-  ContextConfig context;   // features.context, features.context_*
+  RegionConfig regions;   // features.regions, features.region_*
+  SceneConfig scene;      // features.scene, features.scene_*
+  ObjectConfig objects;   // features.objects, features.objects_*
+  ContextConfig context;  // features.context, features.context_*
   ForestParams forest;
   LearnerOptions learner;  // learner.*
   XGBoostParams xgboost;   // xgboost.* (learner.kind = xgboost)
@@ -105,10 +105,12 @@ void applyOverride(Config& config, const std::string& key_equals_value);
 // The segmenter's effective settings as YAML (reports; SettingsSchema::dump for a whole program).
 std::string dumpConfig(const Config& config);
 
-// The settings that shape the features (cloud.*, normals.*, oversegmentation.*,
-// features.* except the training-only features.context_cross_fit_folds), as
-// "key" -> "value" in a stable order. The trainer stores them in the model;
-// a model is only run with the same values (see checkModelMatchesConfig).
+// The settings recorded in a model (Setting::recorded_in_model: the feature-extraction
+// settings cloud.max_depth_m, normals.*, oversegmentation.*, features.* but
+// features.context_cross_fit_folds), as "key" -> "value" in the table's order. The
+// trainer stores them in the model; a model runs only with the same values
+// (checkModelMatchesConfig).
 RandomForest::Settings extractionSettings(const SegmenterConfig& config);
+
 
 }  // namespace findmug

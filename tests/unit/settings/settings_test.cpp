@@ -280,3 +280,28 @@ TEST(SettingsSchema, TheLearnersSharedKeysAreReadByTheirOldForestNames) {
 
 }  // namespace
 }  // namespace findmug
+
+namespace findmug {
+namespace {
+
+// What --help-settings prints: key = value (what a value must be), the doc line below.
+TEST(SettingsSchema, HelpListsEveryBoundAndAcceptedSetting) {
+  Owned owned;
+  SettingsSchema schema;
+  auto table = ownedTable("owned");
+  schema.bind(table, owned);
+  schema.accept(ownedTable("other"));
+  owned.count = 4;
+  const std::string help = schema.help();
+  EXPECT_THAT(help, HasSubstr("owned.count = 4  (an integer in [1, 10])\n    \n"));
+  EXPECT_THAT(help, HasSubstr("owned.on = false  (true or false)\n"));
+  EXPECT_THAT(help, HasSubstr("other.rate = 0.5  (a number in [0, 1])\n"));
+  EXPECT_THAT(help, HasSubstr("owned.name = x  (text)\n"));
+  EXPECT_LT(help.find("other.count"), help.find("owned.count"));  // sections in name order
+  const auto described = schema.describe();
+  ASSERT_EQ(described.size(), 8u);
+  EXPECT_FALSE(described[0].recorded_in_model);
+}
+
+}  // namespace
+}  // namespace findmug
