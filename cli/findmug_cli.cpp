@@ -31,9 +31,16 @@ void addConfigFlags(CLI::App& app, ConfigFlags& flags, const std::string& config
         if (eq == std::string::npos || eq == 0) return "expected KEY=VALUE, got '" + text + "'";
         return {};
       });
-  app.add_flag("--help-settings", flags.help_settings,
-               "list every setting: key = built-in default (what a value must be), its doc "
-               "line; [model] marks the keys a model records and sets unless given");
+  // Stops the parse at once (before the checks of required flags): the program then prints
+  // its settings (settingsHelp) and exits.
+  app.add_flag_callback(
+      "--help-settings",
+      [&flags] {
+        flags.help_settings = true;
+        throw CLI::Success();
+      },
+      "list every setting: key = built-in default (what a value must be), its doc "
+      "line; [model] marks the keys a model records and sets unless given");
 }
 
 void readSettings(const ConfigFlags& flags, SettingsSchema& schema) {
@@ -111,6 +118,8 @@ std::optional<int> parse(CLI::App& app, int argc, const char* const* argv) {
   } catch (const CLI::CallForVersion&) {
     std::cout << app.version() << "\n";
     return 0;
+  } catch (const CLI::Success&) {
+    return std::nullopt;  // --help-settings (addConfigFlags): the program lists its settings
   } catch (const CLI::ParseError& e) {
     std::cerr << app.get_name() << ": " << e.what() << " (see --help)\n";
     return 2;

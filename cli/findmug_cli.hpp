@@ -60,7 +60,8 @@ CLI::Validator positive();
 CLI::Validator nonNegative();
 
 // Parses argv. Returns an exit code when the program should stop now (help,
-// version: 0; parse error: 2, message on stderr), nullopt to go on.
+// version: 0; parse error: 2, message on stderr), nullopt to go on (with
+// --help-settings, before any other flag is checked: ConfigFlags::help_settings).
 std::optional<int> parse(CLI::App& app, int argc, const char* const* argv);
 
 }  // namespace findmug::cli

@@ -112,4 +112,48 @@ RandomForest::Settings extractionSettings(const SegmenterConfig& config) {
   return out;
 }
 
+SegmenterConfig configForModel(SegmenterConfig config, const RandomForest& model) {
+  // What the model is (its learner and classes) it holds in its own fields, and the
+  // feature-extraction settings as text (models without them were trained in-process).
+  RandomForest::Settings recorded = model.extractionSettings();
+  recorded.emplace_back("learner.kind", learnerKindName(model.learnerKind()));
+  recorded.emplace_back("learner.classes", model.internalClasses().scheme);
+  const std::string model_name =
+      model.source().empty() ? "forest " + model.id() : "model " + model.source();
+  const SettingsTable<SegmenterConfig>& table = segmenterSettings();
+  const auto current = table.values(config);
+  std::string conflicts;
+  bool adopted = false;
+  for (const auto& [recorded_key, model_value] : recorded) {
+    const std::string key = currentSettingKey(recorded_key);
+    const auto it = current.find(key);
+    if (it == current.end() || it->second == model_value) continue;
+    const auto given = config.given.find(key);
+    if (given != config.given.end()) {
+      conflicts += "\n  " + key + " = " + it->second + " (" + given->second + ") but " +
+                   model_name + " records " + key + " = " + model_value;
+      continue;
+    }
+    try {
+      table.set(config, key, model_value);
+    } catch (const Error& e) {
+      throw Error(model_name + " records a value this build refuses: " + e.what());
+    }
+    adopted = true;
+  }
+  if (!conflicts.empty()) {
+    throw Error(model_name +
+                " was trained with other settings than given; remove the setting to take the "
+                "model's value, or retrain:" +
+                conflicts);
+  }
+  if (!adopted) return config;
+  try {
+    validateSegmenterConfig(config);
+  } catch (const Error& e) {
+    throw Error("with the settings " + model_name + " records: " + e.what());
+  }
+  return config;
+}
+
 }  // namespace findmug

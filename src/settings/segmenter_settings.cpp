@@ -331,13 +331,14 @@ std::vector<CoreSetting> learnerSettings() {
       documented(enumSetting<LearnerKind>(
                      "learner.kind", [](C& c) -> LearnerKind& { return c.learner.kind; },
                      {{"forest", LearnerKind::Forest}, {"xgboost", LearnerKind::XGBoost}}),
-                 "what the model is: forest (the paper's randomized forest) or xgboost"),
+                 "what the model is: forest (the paper's randomized forest) or xgboost; taken from "
+                 "the model"),
       documented(enumSetting<ClassScheme>("learner.classes",
                                           [](C& c) -> ClassScheme& { return c.learner.classes; },
                                           {{"labels", ClassScheme::Labels},
                                            {"nyu13", ClassScheme::Nyu13},
                                            {"nyu40", ClassScheme::Nyu40}}),
-                 "the classes the model learns, merged into the 8 labels: labels, nyu13 or nyu40"),
+                 "the classes the model learns, merged into the 8 labels; taken from the model"),
       documented(
           enumSetting<ClassWeight>(
               "learner.class_weight", [](C& c) -> ClassWeight& { return c.learner.class_weight; },

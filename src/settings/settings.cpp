@@ -125,6 +125,12 @@ void SettingsSchema::setFrom(const std::string& given_key, const std::string& va
                 "' (sections: " + list + ")");
   }
   binding->set(key, value);
+  if (binding->record) {
+    // "a.yaml: line 3: " -> "a.yaml: line 3"; the flags -> "--set".
+    std::string place = origin == "<flags>" ? std::string("--set") : where;
+    while (!place.empty() && (place.back() == ' ' || place.back() == ':')) place.pop_back();
+    binding->record(key, place.empty() ? std::string("the program") : place);
+  }
 }
 
 namespace {
@@ -155,6 +161,16 @@ void SettingsSchema::readYaml(const std::string& text, const std::string& origin
   if (!root.IsMap()) throw Error(origin + ": top level must be a map of sections");
   for (const auto& section : root) {
     const std::string section_name = keyText(section.first, origin, "section");
+    if (section.second.IsNull()) {
+      // Every key commented out (daemon/findmugd.yaml's normals:, taken from the model):
+      // nothing set, but the section must still be one the program knows.
+      const std::string current = currentSettingKey(section_name + ".x");
+      if (!has(current.substr(0, current.find('.')))) {
+        throw Error(origin + ": line " + lineOf(section.first) + ": unknown section '" +
+                    section_name + "'");
+      }
+      continue;
+    }
     if (!section.second.IsMap()) {
       throw Error(origin + ": line " + lineOf(section.first) + ": section '" + section_name +
                   "' must be a map of settings");

@@ -44,7 +44,7 @@ TEST(FindmugdCheck, RealFramesPassEveryItem) {
   const Result r = check(kModel + "--source dataset:" + nyu.string());
   EXPECT_EQ(r.code, 0) << r.out;
   for (const char* line :
-       {"[ OK ] config", "[ OK ] model", "forest of 16 trees", "settings match the config",
+       {"[ OK ] config", "[ OK ] model", "forest of 16 trees", "the settings it records in force",
         "[ OK ] source   dataset:", "[ OK ] frames   10 frames, 640x480", "depth valid on",
         "floor found in", "m above it", "[ OK ] labels   one frame labelled", "all items passed"}) {
     EXPECT_TRUE(has(r, line)) << line << " not in:\n" << r.out;

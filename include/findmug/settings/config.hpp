@@ -31,8 +31,8 @@
 namespace findmug {
 
 // The classes the model learns (learner.classes); the model merges them into
-// the 8 labels. Recorded in the model: the Segmenter refuses a model trained
-// on other classes. Supersedes nothing: training.split_labels (finer classes
+// the 8 labels. Recorded in the model, which gives it unless the config does
+// (configForModel). Supersedes nothing: training.split_labels (finer classes
 // for the forest's splits only, weighting by label) stays as it was, and the
 // two cannot be combined.
 enum class ClassScheme {
@@ -75,6 +75,10 @@ struct SegmenterConfig {
   LabelHoleFillConfig label_holes;  // labels.*
   TableConfig tables;
   TableObjectConfig table_objects;  // table_objects.*
+  // The keys a settings file or a --set gave, and where (SettingsSchema::bind fills
+  // it): of the keys a model records, these are the only ones it does not set
+  // (configForModel).
+  SettingOrigins given;
 };
 
 // The core's sections of a settings file: what the segmenter runs with, and what
@@ -109,8 +113,17 @@ std::string dumpConfig(const Config& config);
 // settings cloud.max_depth_m, normals.*, oversegmentation.*, features.* but
 // features.context_cross_fit_folds), as "key" -> "value" in the table's order. The
 // trainer stores them in the model; a model runs only with the same values
-// (checkModelMatchesConfig).
+// (configForModel, checkModelMatchesConfig).
 RandomForest::Settings extractionSettings(const SegmenterConfig& config);
 
+// `config` with the values `model` records (RandomForest::extractionSettings, keys
+// under their current names, and what the model is: learner.kind, learner.classes) for
+// every key `config.given` does not hold: a model's recorded settings are the defaults
+// of the keys it records. A key given explicitly
+// with another value is an Error naming the key, the value given and where, the
+// model's value and the model. Keys unknown to this build are left to
+// checkModelMatchesConfig; the cross-key rules (validateSegmenterConfig) are checked
+// on the result.
+SegmenterConfig configForModel(SegmenterConfig config, const RandomForest& model);
 
 }  // namespace findmug

@@ -72,12 +72,18 @@ struct Setting {
   std::string doc;       // one line, printed by --help-settings (SettingsSchema::help)
   std::string expected;  // what a value must be ("a number in [0, 1]"), printed beside it
   // A model file records this setting's value at training (the feature-extraction
-  // settings: what a feature means depends on them; extractionSettings,
-  // findmug/settings/config.hpp).
+  // settings: what a feature means depends on them); loading the model makes it the
+  // default (see configForModel, findmug/settings/config.hpp).
   bool recorded_in_model = false;
   std::function<void(T&, const std::string& value)> set;  // throws Error naming key
   std::function<std::string(const T&)> get;
 };
+
+// Where each setting a file or a flag gave explicitly came from, by its current key:
+// "a.yaml: line 3", "--set". A struct with a member `given` of this type gets it
+// filled by SettingsSchema::bind: SegmenterConfig, whose keys a model records take the
+// model's value unless given explicitly.
+using SettingOrigins = std::map<std::string, std::string>;
 
 // One line of a settings listing (SettingsSchema::help, describe).
 struct SettingHelp {
@@ -284,6 +290,11 @@ class SettingsSchema {
     b.set = [shared, &target](const std::string& key, const std::string& value) {
       shared->set(target, key, value);
     };
+    if constexpr (requires { target.given; }) {
+      b.record = [&target](const std::string& key, const std::string& place) {
+        target.given[key] = place;
+      };
+    }
     b.entries = [shared, &target] { return shared->entries(target); };
     b.describe = [shared, &target] { return describeSettings(*shared, target); };
     if (validate) b.validate = [validate, &target] { validate(target); };
@@ -347,6 +358,8 @@ class SettingsSchema {
   struct Binding {
     std::vector<std::string> sections;
     std::function<void(const std::string&, const std::string&)> set;
+    // Notes where a key was given (structs with a `given` member, SettingOrigins).
+    std::function<void(const std::string& key, const std::string& place)> record;
     std::function<std::vector<SettingHelp>()> describe;
     std::function<std::vector<std::pair<std::string, std::string>>()> entries;
     std::function<void()> validate;

@@ -63,6 +63,13 @@ std::vector<std::string> keysOf(const RandomForest::Settings& settings) {
   return keys;
 }
 
+// A model's recorded settings under the keys' current names (models trained before a
+// rename keep the old ones: overseg.* in the shipped models).
+RandomForest::Settings underCurrentNames(RandomForest::Settings settings) {
+  for (auto& [key, value] : settings) key = currentSettingKey(key);
+  return settings;
+}
+
 TEST(RecordedSettings, TheFlaggedKeysAreTheRecordedOnesInTableOrder) {
   EXPECT_EQ(keysOf(extractionSettings(SegmenterConfig{})), kRecordedKeys);
   std::vector<std::string> flagged;
@@ -90,10 +97,14 @@ TEST(RecordedSettings, ValuesKeepTheModelFilesText) {
   EXPECT_EQ(recorded[14], (std::pair<std::string, std::string>{"features.regions", "false"}));
 }
 
-// The shipped model holds exactly these keys.
-TEST(RecordedSettings, ShippedModelRecordsTheseKeys) {
+// The shipped model holds exactly these keys, and the settings it records, made the
+// config's by configForModel, are recorded again as the same text (a retrained model
+// records what this one does).
+TEST(RecordedSettings, ShippedModelRecordsTheseKeysAndReadsBackTheSameText) {
   const auto model = test::shippedModel();
   EXPECT_EQ(keysOf(model->extractionSettings()), kRecordedKeys);
+  const SegmenterConfig config = configForModel(SegmenterConfig{}, *model);
+  EXPECT_EQ(extractionSettings(config), underCurrentNames(model->extractionSettings()));
 }
 
 template <typename T>

@@ -284,6 +284,18 @@ TEST(SettingsSchema, TheLearnersSharedKeysAreReadByTheirOldForestNames) {
 namespace findmug {
 namespace {
 
+// A section whose every key is commented out (daemon/findmugd.yaml's normals:, whose keys
+// the model gives) reads as nothing set; a section no table knows is still refused.
+TEST(SettingsSchema, AnEmptySectionSetsNothingButMustBeKnown) {
+  Owned owned;
+  SettingsSchema schema;
+  schema.bind(ownedTable("owned"), owned);
+  schema.readYaml("owned:\n  # count: 3\n", "a.yaml");
+  EXPECT_EQ(owned.count, 2);
+  EXPECT_THAT(errorOf([&] { schema.readYaml("owned:\nowend:\n", "a.yaml"); }),
+              HasSubstr("a.yaml: line 2: unknown section 'owend'"));
+}
+
 // What --help-settings prints: key = value (what a value must be), the doc line below.
 TEST(SettingsSchema, HelpListsEveryBoundAndAcceptedSetting) {
   Owned owned;
