@@ -31,6 +31,16 @@ void addConfigFlags(CLI::App& app, ConfigFlags& flags, const std::string& config
         if (eq == std::string::npos || eq == 0) return "expected KEY=VALUE, got '" + text + "'";
         return {};
       });
+  // Stops the parse at once (before the checks of required flags): the program then prints
+  // its settings (settingsHelp) and exits.
+  app.add_flag_callback(
+      "--help-settings",
+      [&flags] {
+        flags.help_settings = true;
+        throw CLI::Success();
+      },
+      "list every setting: key = built-in default (what a value must be), its doc "
+      "line; [model] marks the keys a model records and sets unless given");
 }
 
 void readSettings(const ConfigFlags& flags, SettingsSchema& schema) {
@@ -48,6 +58,19 @@ Config configFrom(const ConfigFlags& flags) {
   bindOfflineSettings(schema, config);
   readSettings(flags, schema);
   return config;
+}
+
+std::string settingsHelp(SettingsSchema& schema) {
+  acceptSharedFileSettings(schema);
+  return schema.help();
+}
+
+std::string coreSettingsHelp() {
+  Config config;
+  SettingsSchema schema;
+  bindCoreSettings(schema, config);
+  bindOfflineSettings(schema, config);
+  return settingsHelp(schema);
 }
 
 CLI::Option* addSourceFlag(CLI::App& app, std::string& spec, const std::string& help) {
@@ -95,6 +118,8 @@ std::optional<int> parse(CLI::App& app, int argc, const char* const* argv) {
   } catch (const CLI::CallForVersion&) {
     std::cout << app.version() << "\n";
     return 0;
+  } catch (const CLI::Success&) {
+    return std::nullopt;  // --help-settings (addConfigFlags): the program lists its settings
   } catch (const CLI::ParseError& e) {
     std::cerr << app.get_name() << ": " << e.what() << " (see --help)\n";
     return 2;

@@ -30,7 +30,9 @@ std::unique_ptr<CLI::App> makeApp(const std::string& program, const std::string&
 struct ConfigFlags {
   std::optional<std::string> config_path;
   std::vector<std::string> overrides;  // KEY=VALUE as given
+  bool help_settings = false;          // --help-settings: the program prints settingsHelp
 };
+// Also --help-settings, which the program answers with settingsHelp of its schema.
 void addConfigFlags(CLI::App& app, ConfigFlags& flags, const std::string& config_help);
 // Reads the --config file (if any), then every --set, through `schema`: the tables the
 // program bound get its values, every other table of the shared file
@@ -40,6 +42,11 @@ void readSettings(const ConfigFlags& flags, SettingsSchema& schema);
 // For a program that uses the core's sections only (findmug-train, findmug-eval): readSettings
 // with bindCoreSettings and bindOfflineSettings.
 Config configFrom(const ConfigFlags& flags);
+// --help-settings: every setting `schema` has bound, and every one of the shared file
+// (acceptSharedFileSettings), with its built-in default, range and doc line.
+std::string settingsHelp(SettingsSchema& schema);
+// The same for the programs on configFrom (the core's and offline sections).
+std::string coreSettingsHelp();
 
 CLI::Option* addSourceFlag(CLI::App& app, std::string& spec, const std::string& help);
 // --lcm-url with --url as an alias (findmug-grab and the test tools have used --url).
@@ -53,7 +60,8 @@ CLI::Validator positive();
 CLI::Validator nonNegative();
 
 // Parses argv. Returns an exit code when the program should stop now (help,
-// version: 0; parse error: 2, message on stderr), nullopt to go on.
+// version: 0; parse error: 2, message on stderr), nullopt to go on (with
+// --help-settings, before any other flag is checked: ConfigFlags::help_settings).
 std::optional<int> parse(CLI::App& app, int argc, const char* const* argv);
 
 }  // namespace findmug::cli

@@ -65,7 +65,7 @@ class SelfCheck {
             (effectiveLcmUrl(d_).empty() ? "LCM default" : effectiveLcmUrl(d_)) + ")");
   }
 
-  // The model loads, and was trained with this config's feature extraction settings.
+  // The model loads, and the config gives none of the settings it records another value.
   std::unique_ptr<Segmenter> model() {
     try {
       std::string model_id;
@@ -73,13 +73,13 @@ class SelfCheck {
       auto segmenter = std::make_unique<Segmenter>(loaded_.config.segmenter, forest);
       say(Verdict::Ok, "model",
           d_.model_path + ": " + forest->summary() + " (" + model_id +
-              "), settings match the config");
+              "), the settings it records in force");
       return segmenter;
     } catch (const std::exception& e) {
       say(Verdict::Fail, "model", e.what(),
-          "set daemon.model_path to a model made by findmug-train with this config's cloud.*, "
-          "normals.* and oversegmentation.* settings (the package's are in "
-          "/usr/share/findmug/models)");
+          "set daemon.model_path to a model made by findmug-train (the package's are in "
+          "/usr/share/findmug/models), and leave out of the config the settings it records "
+          "(findmugd --help-settings marks them [model]) or give them its values");
       return nullptr;
     }
   }

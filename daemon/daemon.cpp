@@ -20,6 +20,18 @@ std::int64_t nowNs() {
   return std::chrono::duration_cast<std::chrono::nanoseconds>(Clock::now().time_since_epoch())
       .count();
 }
+
+// The settings the model gives that the config left at other values (configForModel), so
+// that the start-up log's effective config is complete; refuses a conflicting given one.
+void logSettingsTakenFromModel(const SegmenterConfig& config, const RandomForest& model) {
+  const auto before = segmenterSettings().values(config);
+  std::string taken;
+  for (const auto& [key, value] : segmenterSettings().values(configForModel(config, model))) {
+    if (before.at(key) != value) taken += " " + key + "=" + value;
+  }
+  if (!taken.empty()) spdlog::info("settings taken from the model:{}", taken);
+}
+
 }  // namespace
 
 std::shared_ptr<const RandomForest> loadModel(const std::string& path, std::string* model_id) {
@@ -51,6 +63,7 @@ Daemon::Daemon(const Config& config, const DaemonConfig& daemon_config,
   auto forest = loadModel(daemon_config_.model_path, &model_id);
   spdlog::info("model {} loaded from {} ({})", model_id, daemon_config_.model_path,
                forest->summary());
+  logSettingsTakenFromModel(config.segmenter, *forest);
   double rate_hz = 0.0;
   if (!source_) {
     try {

@@ -78,6 +78,9 @@ std::unique_ptr<CLI::App> daemonApp(CommandLine& cl) {
   }
   app->add_flag("--check-config", cl.check_config,
                 "validate and print the effective config, then exit");
+  app->add_flag("--help-settings", cl.help_settings,
+                "list every setting: key = built-in default (what a value must be), its doc "
+                "line; [model] marks the keys a model records and sets unless given");
   app->add_flag("--check", cl.check,
                 "first-run self-test: config, model, source, frames, ground plane, one "
                 "labelled frame; one verdict line each; exit 0 when nothing failed");
@@ -125,7 +128,7 @@ CommandLine parseCommandLine(const std::vector<std::string>& args) {
   for (const CLI::Option* option : app->parse_order()) {
     const std::string name = "--" + option->get_single_name();
     const std::size_t k = seen[option]++;
-    if (name == "--check-config" || name == "--check") continue;
+    if (name == "--check-config" || name == "--check" || name == "--help-settings") continue;
     const std::string& value = option->results().at(k);
     if (name == "--config") {
       cl.config_path = value;
@@ -172,6 +175,12 @@ LoadedConfig parseDaemonConfig(const std::string& yaml_text, const std::string& 
   schema.readYaml(yaml_text, origin);
   schema.validate(origin);
   return loaded;
+}
+
+std::string settingsHelp() {
+  Config config;
+  DaemonConfig daemon;
+  return daemonSchema(config, daemon).help();
 }
 
 std::string dumpDaemonConfig(const LoadedConfig& loaded) {

@@ -19,7 +19,9 @@ PreparedJob PrepareStep::operator()(FrameJob& job) const {
   const std::string name = frameName(job.frame);
   try {
     validateFrame(job.frame);
-    return PreparedJob{segmenter_()->prepare(std::move(job.frame)), job.arrival};
+    std::shared_ptr<const Segmenter> segmenter = segmenter_();
+    PreparedFrame prepared = segmenter->prepare(std::move(job.frame));
+    return PreparedJob{std::move(prepared), job.arrival, std::move(segmenter)};
   } catch (const std::exception& e) {
     throw Error(name + ": " + e.what());
   }
@@ -29,7 +31,7 @@ ResultJob SegmentStep::operator()(PreparedJob& job) const {
   if (before_segment_) before_segment_(job.prepared.frame);
   const std::string name = frameName(job.prepared.frame);
   try {
-    const std::shared_ptr<const Segmenter> segmenter = segmenter_();
+    const std::shared_ptr<const Segmenter> segmenter = job.segmenter ? job.segmenter : segmenter_();
     return ResultJob{segmenter->classify(segmenter->oversegment(std::move(job.prepared))),
                      job.arrival};
   } catch (const std::exception& e) {

@@ -34,6 +34,10 @@ int main(int argc, char** argv) {
       std::cout << usage();
       return 0;
     }
+    if (command_line.help_settings) {
+      std::cout << settingsHelp();
+      return 0;
+    }
     if (command_line.version) {
       std::cout << "findmugd " << kVersion << "\n";
       return 0;

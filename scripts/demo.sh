@@ -42,11 +42,11 @@ echo
 echo "== 2. findmugd: replaying the frames at $RATE_HZ fps through the threaded pipeline"
 echo "      (organized oversegmenter, committed model models/findmug-nyu-synth.fmf; LCM -> $LOG)"
 # The synthetic-scene model learns the 8 labels without object features
-# (models/README.md): the rendered frames have no NYU-13 classes to learn. It is
-# a format-3 file without the learned pairwise term, so its MRF is the paper's Potts.
+# (models/README.md): the rendered frames have no NYU-13 classes to learn. The model
+# records that, and findmugd takes it from the model. It is a format-3 file without
+# the learned pairwise term, so its MRF is the paper's Potts.
 "$BUILD_DIR"/daemon/findmugd --config daemon/findmugd.yaml \
-  --model models/findmug-nyu-synth.fmf \
-  --set learner.classes=labels --set features.objects=false --set mrf.pairwise=potts \
+  --model models/findmug-nyu-synth.fmf --set mrf.pairwise=potts \
   --source "dataset:$OUT_ABS/apartment?rate_hz=$RATE_HZ" \
   --lcm-url "file://$LOG?mode=w"
 

@@ -95,6 +95,10 @@ int run(int argc, char** argv) {
   app->add_option("--out", f.out, "write the degraded depth images here")->type_name("DIR");
   cli::addConfigFlags(*app, f.config, "YAML config (degrade.* settings)");
   if (auto code = cli::parse(*app, argc, argv)) return *code;
+  if (f.config.help_settings) {
+    std::cout << cli::coreSettingsHelp();
+    return 0;
+  }
   const Config config = cli::configFrom(f.config);
   DatasetOptions options;
   options.require_labels = false;

@@ -754,24 +754,21 @@ int run(int argc, char** argv) {
   EvalFlags f;
   const auto app = makeEvalApp(f);
   if (auto code = cli::parse(*app, argc, argv)) return *code;
+  if (f.config.help_settings) return (std::cout << cli::coreSettingsHelp(), 0);
   if (f.dataset.data.empty() && f.dataset.mats.empty()) {
     std::cerr << "findmug-eval: give --data DIR or --mat FILE (repeatable; see --help)\n";
     return 2;
   }
-  const Config config = cli::configFrom(f.config);
+  Config config = cli::configFrom(f.config);
   const int folds = f.folds;
-
+  // Loaded first: a bad file is refused before minutes of feature extraction.
+  std::optional<RandomForest> model;
+  if (!f.model.empty()) model = loadModelWithItsSettings(f.model, config);
+  if (model && (f.train_frames > 0 || !f.curve_dir.empty()))
+    throw Error("--train-frames and --learning-curve train forests; not with --model");
   const DatasetOptions options = datasetOptions(f.dataset, config);
   const auto input = LabeledInputs::open(f.dataset, options);
   const Segmenter segmenter(config.segmenter, nullptr);
-  // Load the model first: a bad file is refused before minutes of feature extraction.
-  std::optional<RandomForest> model;
-  if (!f.model.empty()) {
-    model = RandomForest::load(f.model);
-    checkModelMatchesConfig(*model, config.segmenter);
-    if (f.train_frames > 0 || !f.curve_dir.empty())
-      throw Error("--train-frames and --learning-curve train forests; not with --model");
-  }
 
   const auto start = std::chrono::steady_clock::now();
   ProgressBar bar("features");

@@ -158,6 +158,10 @@ int run(int argc, char** argv) {
   cli::addModelFlag(*app, f.model, "forest model the frames are segmented with");
   cli::addConfigFlags(*app, f.config, "YAML config (the daemon's, daemon/findmugd.yaml)");
   if (auto code = cli::parse(*app, argc, argv)) return *code;
+  if (f.config.help_settings) {
+    std::cout << cli::coreSettingsHelp();
+    return 0;
+  }
 
   validateObjectModelName(f.name);
   if (f.frames.empty() || f.frames.size() > static_cast<std::size_t>(kMaxObjectViews)) {

@@ -9,6 +9,7 @@
 #include "findmug/common/error.hpp"
 #include "findmug/common/numbers.hpp"
 #include "findmug/offline/pseudo_labels.hpp"
+#include "findmug/segmenter/segmenter.hpp"
 #include "findmug_cli.hpp"
 
 namespace findmug::tools {
@@ -271,6 +272,13 @@ void ProgressBar::update(int done, int total) {
 void ProgressBar::finish() {
   if (drawn_) std::fprintf(stderr, "\n");
   drawn_ = false;
+}
+
+RandomForest loadModelWithItsSettings(const std::string& path, Config& config) {
+  RandomForest model = RandomForest::load(path);
+  config.segmenter = configForModel(config.segmenter, model);
+  checkModelMatchesConfig(model, config.segmenter);
+  return model;
 }
 
 }  // namespace findmug::tools

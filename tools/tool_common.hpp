@@ -113,4 +113,9 @@ class ProgressBar {
   bool drawn_ = false;
 };
 
+// The model file at `path`, with `config` taking the settings it records (configForModel:
+// a value the config gives otherwise is refused naming both) and checked against it
+// (checkModelMatchesConfig), so that the features are extracted as the model's were.
+RandomForest loadModelWithItsSettings(const std::string& path, Config& config);
+
 }  // namespace findmug::tools

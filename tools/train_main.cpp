@@ -46,6 +46,10 @@ int run(int argc, char** argv) {
   tools::addUnlabelledFlag(*app, f.unlabelled);
   cli::addConfigFlags(*app, f.config, "YAML config (segmenter settings)");
   if (auto code = cli::parse(*app, argc, argv)) return *code;
+  if (f.config.help_settings) {
+    std::cout << cli::coreSettingsHelp();
+    return 0;
+  }
   if (f.dataset.data.empty() && f.dataset.mats.empty()) {
     std::cerr << "findmug-train: give at least one --data DIR or --mat FILE (see --help)\n";
     return 2;

@@ -60,7 +60,7 @@ struct LabelFrame {
 class LabelFrames {
  public:
   // `model` may be null (no prediction). Throws findmug::Error when the model's settings
-  // differ from `config` (checkModelMatchesConfig, as findmugd does).
+  // differ from those `config` gives (configForModel, as findmugd does).
   LabelFrames(SegmenterConfig config, std::shared_ptr<const RandomForest> model,
               std::string model_name, std::optional<std::string> nyu_rotations);
   std::shared_ptr<const LabelFrame> of(const std::filesystem::path& root, std::size_t root_index,

@@ -10,6 +10,7 @@
 // the token of --token-file is required on every request (web_server.hpp has the access
 // rules).
 #include <cstdio>
+#include <iostream>
 #include <filesystem>
 #include <memory>
 #include <string>
@@ -100,6 +101,9 @@ web::ServerOptions serverOptions(const WebFlags& f, web::WebConfig& config) {
     options.model = std::make_shared<const RandomForest>(RandomForest::load(config.model_path));
     options.model_name =
         std::filesystem::path(config.model_path).filename().string() + ":" + options.model->id();
+    // The settings the model records are the defaults of the keys it records (refused here,
+    // at start, when the config gives one another value).
+    options.segmenter = configForModel(loaded.segmenter, *options.model);
   }
   if (!config.nyu_rotations.empty()) options.nyu_rotations = config.nyu_rotations;
   if (!config.token_file.empty()) {
@@ -114,7 +118,8 @@ web::ServerOptions serverOptions(const WebFlags& f, web::WebConfig& config) {
 // The Retrain page's jobs (none without web.jobs_dir). The tools read the same config
 // findmug-web was given (the daemon's settings).
 std::unique_ptr<web::RetrainJobs> retrainJobs(const web::WebConfig& config,
-                                              const cli::ConfigFlags& config_flags) {
+                                              const cli::ConfigFlags& config_flags,
+                                              const web::ServerOptions& options) {
   if (config.jobs_dir.empty()) return nullptr;
   web::RetrainOptions r;
   r.train_program = config.train_program;
@@ -126,6 +131,17 @@ std::unique_ptr<web::RetrainJobs> retrainJobs(const web::WebConfig& config,
   for (const auto& o : config_flags.overrides) {
     r.config_args.push_back("--set");
     r.config_args.push_back(o);
+  }
+  // A retrained model computes the features the running one does: the settings the model
+  // records, which the config may not give (configForModel).
+  if (options.model) {
+    RandomForest::Settings recorded = extractionSettings(options.segmenter);
+    recorded.emplace_back("learner.kind", learnerKindName(options.segmenter.learner.kind));
+    recorded.emplace_back("learner.classes", classSchemeName(options.segmenter.learner.classes));
+    for (const auto& [key, value] : recorded) {
+      r.config_args.push_back("--set");
+      r.config_args.push_back(key + "=" + value);
+    }
   }
   // NYU frames get their gravity from NYU's rotations in training as on the Label page.
   if (!config.nyu_rotations.empty()) {
@@ -212,6 +228,15 @@ int main(int argc, char** argv) {
                           "camera image, tables and search positions, the table map, status");
   addFlags(*app, flags);
   if (auto code = cli::parse(*app, argc, argv)) return *code;
+  if (flags.config.help_settings) {
+    Config core;
+    web::WebConfig web;
+    SettingsSchema schema;
+    bindCoreSettings(schema, core);
+    schema.bind(web::webSettings(), web);
+    std::cout << cli::settingsHelp(schema);
+    return 0;
+  }
 
   web::WebConfig config;
   web::ServerOptions options;
@@ -233,7 +258,7 @@ int main(int argc, char** argv) {
       throw Error(kCommand + ": the LCM bus refused the command");
     }
   };
-  const std::unique_ptr<web::RetrainJobs> retrain = retrainJobs(config, flags.config);
+  const std::unique_ptr<web::RetrainJobs> retrain = retrainJobs(config, flags.config, options);
   options.retrain = retrain.get();
   web::LiveState live(config.history_s);
   std::unique_ptr<web::WebServer> server;

@@ -43,7 +43,7 @@ struct ServerOptions {
   std::filesystem::path static_dir;  // index.html, *.js, *.css
   std::vector<std::filesystem::path> data_dirs;
   // The oversegmentation the Label page shows is made with these settings (cloud,
-  // normals, oversegmentation.*: the ones the model is trained with).
+  // normals, oversegmentation.*: with a model, the ones it records, configForModel).
   SegmenterConfig segmenter;
   // The model whose prediction the Label page starts from (null: none), its name for
   // the page, and NYU's gravity rotations for frames named by their NYU index.

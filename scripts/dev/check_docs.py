@@ -37,10 +37,16 @@ ISSUE = re.compile(r"\b(?:issues?|pull request|PR)\s*#?\s*\d+", re.I)
 
 
 def read_yaml(path):
-    """section -> key -> (value, line); two levels, comments and commented-out keys skipped."""
+    """section -> key -> (value, line); two levels. A key shown commented out with one value
+    and nothing after it ("  # key: value": the value a model records, or a default path) is
+    read as stated too; other comments are skipped."""
     values, section = {}, None
     for n, raw in enumerate(open(path, encoding="utf-8"), 1):
         line = raw.rstrip("\n")
+        shown = re.match(r"^  # ([a-z_][a-z0-9_]*): (\S+)$", line)
+        if shown and section:
+            values[section][shown.group(1)] = (shown.group(2), n)
+            continue
         if not line.strip() or line.lstrip().startswith("#"):
             continue
         m = re.match(r"^([a-z_][a-z0-9_]*):\s*(?:#.*)?$", line)

@@ -10,7 +10,7 @@
 #include <numeric>
 #include <string>
 
-#include "common/moments_internal.hpp"
+#include "features/moments_internal.hpp"
 #include "common/scratch.hpp"
 #include "common/union_find.hpp"
 #include "findmug/common/error.hpp"

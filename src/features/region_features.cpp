@@ -12,7 +12,7 @@
 #include <string>
 
 #include "findmug/common/error.hpp"
-#include "common/moments_internal.hpp"
+#include "features/moments_internal.hpp"
 #include "common/scratch.hpp"
 #include "common/union_find.hpp"
 

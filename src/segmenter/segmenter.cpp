@@ -74,7 +74,7 @@ void voidLabelsInto(int width, int height, LabelImage& image) {
 }  // namespace
 
 Segmenter::Segmenter(SegmenterConfig config, std::shared_ptr<const RandomForest> forest)
-    : config_(std::move(config)),
+    : config_(forest ? configForModel(std::move(config), *forest) : std::move(config)),
       forest_(std::move(forest)),
       oversegmenter_(makeOversegmenter(config_.oversegmentation)) {
   if (forest_) checkModelMatchesConfig(*forest_, config_);

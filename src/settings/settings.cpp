@@ -99,8 +99,8 @@ void SettingsSchema::setFrom(const std::string& given_key, const std::string& va
       std::string place = earlier->second.where;  // "a.yaml: line 2: " -> " (a.yaml: line 2)"
       while (!place.empty() && (place.back() == ' ' || place.back() == ':')) place.pop_back();
       throw Error("setting '" + key + "' is given by both its names, '" + earlier->second.key +
-                  "'" + (place.empty() ? "" : " (" + place + ")") + " and '" + given_key +
-                  "'; '" + old_key + "' is its old name: keep only '" + key + "'");
+                  "'" + (place.empty() ? "" : " (" + place + ")") + " and '" + given_key + "'; '" +
+                  old_key + "' is its old name: keep only '" + key + "'");
     }
     earlier->second = Given{given_key, origin, where};
   }
@@ -125,6 +125,12 @@ void SettingsSchema::setFrom(const std::string& given_key, const std::string& va
                 "' (sections: " + list + ")");
   }
   binding->set(key, value);
+  if (binding->record) {
+    // "a.yaml: line 3: " -> "a.yaml: line 3"; the flags -> "--set".
+    std::string place = origin == "<flags>" ? std::string("--set") : where;
+    while (!place.empty() && (place.back() == ' ' || place.back() == ':')) place.pop_back();
+    binding->record(key, place.empty() ? std::string("the program") : place);
+  }
 }
 
 namespace {
@@ -155,6 +161,16 @@ void SettingsSchema::readYaml(const std::string& text, const std::string& origin
   if (!root.IsMap()) throw Error(origin + ": top level must be a map of sections");
   for (const auto& section : root) {
     const std::string section_name = keyText(section.first, origin, "section");
+    if (section.second.IsNull()) {
+      // Every key commented out (daemon/findmugd.yaml's normals:, taken from the model):
+      // nothing set, but the section must still be one the program knows.
+      const std::string current = currentSettingKey(section_name + ".x");
+      if (!has(current.substr(0, current.find('.')))) {
+        throw Error(origin + ": line " + lineOf(section.first) + ": unknown section '" +
+                    section_name + "'");
+      }
+      continue;
+    }
     if (!section.second.IsMap()) {
       throw Error(origin + ": line " + lineOf(section.first) + ": section '" + section_name +
                   "' must be a map of settings");
@@ -163,7 +179,8 @@ void SettingsSchema::readYaml(const std::string& text, const std::string& origin
       const std::string key =
           section_name + "." + keyText(entry.first, origin, "section '" + section_name + "':");
       const std::string where = origin + ": line " + lineOf(entry.first) + ": ";
-      if (!entry.second.IsScalar()) throw Error(where + "setting '" + key + "' must be a single value");
+      if (!entry.second.IsScalar())
+        throw Error(where + "setting '" + key + "' must be a single value");
       try {
         setFrom(key, entry.second.Scalar(), origin, where);
       } catch (const Error& e) {
@@ -218,6 +235,29 @@ std::string SettingsSchema::dump() const {
   for (const auto& [section, entries] : sections) {
     out << section << ":\n";
     for (const auto& [name, value] : entries) out << "  " << name << ": " << value << "\n";
+  }
+  return out.str();
+}
+
+std::vector<SettingHelp> SettingsSchema::describe() const {
+  std::map<std::string, std::vector<SettingHelp>> sections;
+  for (const auto& b : bindings_) {
+    for (auto& line : b.describe()) {
+      sections[line.key.substr(0, line.key.find('.'))].push_back(std::move(line));
+    }
+  }
+  std::vector<SettingHelp> out;
+  for (auto& [section, lines] : sections) {
+    for (auto& line : lines) out.push_back(std::move(line));
+  }
+  return out;
+}
+
+std::string SettingsSchema::help() const {
+  std::ostringstream out;
+  for (const auto& s : describe()) {
+    out << s.key << " = " << (s.value.empty() ? "\"\"" : s.value) << "  (" << s.expected << ")"
+        << (s.recorded_in_model ? " [model]" : "") << "\n    " << s.doc << "\n";
   }
   return out.str();
 }

@@ -124,6 +124,20 @@ TEST(Cli, TrainAndEvalGiveHelpAndVersion) {
   }
 }
 
+// --help-settings of the tools on the core's settings: every setting of the shared file with
+// its built-in default, what a value must be and its doc line; it reads no data.
+TEST(Cli, TrainAndEvalListTheirSettings) {
+  for (const std::string& exe : {std::string(FINDMUG_TRAIN_EXE), std::string(FINDMUG_EVAL_EXE)}) {
+    const ProgramRun r = runProgram(exe + " --help-settings");
+    EXPECT_EQ(r.exit_code, 0) << exe << r.err;
+    for (const char* line : {"forest.num_trees = 8  (an integer in [1, 1000])\n    trees",
+                             "training.degraded_copies = 0  (an integer in [0, 8])\n    ",
+                             "features.regions = false  (true or false) [model]\n    region"}) {
+      EXPECT_TRUE(has(r.out, line)) << exe << " --help-settings lacks " << line;
+    }
+  }
+}
+
 TEST(Cli, TrainAndEvalRejectBadFlagsWithCode2NamingThem) {
   const std::string train(FINDMUG_TRAIN_EXE), eval(FINDMUG_EVAL_EXE);
   struct Case {

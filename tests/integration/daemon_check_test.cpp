@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <filesystem>
 #include <fstream>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -43,7 +44,7 @@ TEST(FindmugdCheck, RealFramesPassEveryItem) {
   const Result r = check(kModel + "--source dataset:" + nyu.string());
   EXPECT_EQ(r.code, 0) << r.out;
   for (const char* line :
-       {"[ OK ] config", "[ OK ] model", "forest of 16 trees", "settings match the config",
+       {"[ OK ] config", "[ OK ] model", "forest of 16 trees", "the settings it records in force",
         "[ OK ] source   dataset:", "[ OK ] frames   10 frames, 640x480", "depth valid on",
         "floor found in", "m above it", "[ OK ] labels   one frame labelled", "all items passed"}) {
     EXPECT_TRUE(has(r, line)) << line << " not in:\n" << r.out;
@@ -71,6 +72,42 @@ TEST(FindmugdCheck, BrokenConfigModelAndSourceFailWithWhatToDo) {
   EXPECT_EQ(r.code, 1);
   EXPECT_TRUE(has(r, "[FAIL] model")) << r.out;
   EXPECT_TRUE(has(r, "cloud.max_depth_m")) << r.out;
+}
+
+// --help-settings lists every setting of the file findmugd reads (its own, the core's, the
+// offline tools' and findmug-web's sections): key = built-in default (what a value must be),
+// [model] on the keys a model records, and a doc line under each, never empty.
+TEST(FindmugdHelpSettings, ListsEverySettingWithDefaultRangeAndDoc) {
+  std::string out;
+  FILE* pipe = popen((std::string(FINDMUGD_EXE) + " --help-settings 2>&1").c_str(), "r");
+  ASSERT_TRUE(pipe);
+  char buffer[1024];
+  while (std::fgets(buffer, sizeof(buffer), pipe)) out += buffer;
+  const int status = pclose(pipe);
+  ASSERT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << out;
+  for (const char* line :
+       {"mrf.lambda = 1  (a number in [0, 1000])\n    weight of the unary term",
+        "daemon.queue_capacity = 2  (an integer in [1, 64])\n    frames per queue",
+        "features.objects = false  (true or false) [model]\n    object features",
+        "oversegmentation.method = organized  (one of pcl organized) [model]\n",
+        "learner.classes = labels  (one of labels nyu13 nyu40)\n",
+        "cloud.fill_depth_max_run_px = 0  (an integer in [0, 10000])\n",
+        "web.port = 8088  (", "training.degraded_seed = ", "table_map.forget_misses = "}) {
+    EXPECT_NE(out.find(line), std::string::npos) << line << " not in:\n" << out;
+  }
+  std::istringstream lines(out);
+  std::string key_line, doc_line;
+  int keys = 0;
+  while (std::getline(lines, key_line)) {
+    ASSERT_NE(key_line.rfind("    ", 0), 0u) << "a doc line without its key: " << key_line;
+    ASSERT_NE(key_line.find(" = "), std::string::npos) << key_line;
+    ASSERT_TRUE(std::getline(lines, doc_line)) << key_line << " has no doc line";
+    EXPECT_EQ(doc_line.rfind("    ", 0), 0u) << key_line << ": " << doc_line;
+    EXPECT_NE(doc_line.find_first_not_of(' '), std::string::npos)
+        << key_line << " has an empty doc line";
+    ++keys;
+  }
+  EXPECT_GT(keys, 240);
 }
 
 TEST(FindmugdCheck, NoFramesInTimeFails) {

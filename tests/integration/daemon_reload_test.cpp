@@ -3,9 +3,11 @@
 // buses: frames submitted at 30 fps, the reload asked for by a command_t on
 // FINDMUG_COMMAND) drops no frame, classifies every frame wholly with one
 // model, the old one until the swap and the new one after, and status names
-// the new model; a model trained with other feature settings is refused naming
-// the setting, a corrupt file is refused, hostile commands are refused and
-// counted, and frames keep flowing with the old model; and SIGHUP makes the
+// the new model; a model trained with other feature settings runs with them
+// (they are the defaults of the keys it records) unless the config gives one of
+// them another value: then it is refused naming the setting, as a corrupt file is;
+// hostile commands are refused and counted, and frames keep flowing with the old
+// model; and SIGHUP makes the
 // findmugd process reload (what systemd's ExecReload sends).
 #include <fcntl.h>
 #include <signal.h>
@@ -21,6 +23,8 @@
 #include <fstream>
 #include <map>
 #include <thread>
+#include <utility>
+#include <vector>
 
 #include "daemon_test_config.hpp"
 #include "daemon_test_support.hpp"
@@ -70,7 +74,7 @@ struct Models {
   TempDir dir;
   std::vector<LabeledFrame> frames;  // quartered, each with a ground plane at full size
   std::string a, b, mismatched;      // model files
-  std::shared_ptr<const RandomForest> forest_a, forest_b;
+  std::shared_ptr<const RandomForest> forest_a, forest_b, forest_mismatched;
 };
 
 const Models* models() {
@@ -91,7 +95,8 @@ const Models* models() {
     Config other;
     other.segmenter = config;
     applyOverride(other, "cloud.max_depth_m=8");
-    trainRecorded(other.segmenter, {out->frames[0], out->frames[1]}, out->mismatched);
+    out->forest_mismatched =
+        trainRecorded(other.segmenter, {out->frames[0], out->frames[1]}, out->mismatched);
     return out;
   }();
   return m;
@@ -133,8 +138,11 @@ void sendCommand(io::Bus& bus, const std::string& command, std::int64_t request_
 // in-memory buses; frames go in at 30 fps.
 class ReloadRig {
  public:
-  explicit ReloadRig(const std::string& model_path, std::shared_ptr<const RandomForest> forest) {
+  // `given`: segmenter settings the config states explicitly, as a file or --set would.
+  ReloadRig(const std::string& model_path, std::shared_ptr<const RandomForest> forest,
+            const std::vector<std::pair<std::string, std::string>>& given = {}) {
     config_.segmenter = reloadConfig();
+    for (const auto& [key, value] : given) config_.set(key, value);
     config_.set("daemon.model_path", model_path);
     config_.set("daemon.workers", "2");
     config_.set("daemon.queue_capacity", "8");
@@ -295,7 +303,8 @@ TEST(ModelReload, MismatchedCorruptAndHostileAreRefusedAndFramesGoOnWithTheOldMo
   const std::string model_path = tmp.str("installed.fmf");
   installAtomically(m->a, model_path);
   const auto with_a = libraryLabels(m->forest_a);
-  ReloadRig rig(model_path, m->forest_a);
+  // The config states the depth cut the mismatched model records otherwise.
+  ReloadRig rig(model_path, m->forest_a, {{"cloud.max_depth_m", "10"}});
   const std::string id_a = idOf(model_path, *m->forest_a);
 
   ReloadStatus mismatched, corrupt;
@@ -341,9 +350,11 @@ TEST(ModelReload, MismatchedCorruptAndHostileAreRefusedAndFramesGoOnWithTheOldMo
   EXPECT_FALSE(mismatched.last_ok);
   EXPECT_EQ(mismatched.refused, 1u);
   EXPECT_EQ(mismatched.last_request_id, -1);
-  // The refusal names the file and the setting that differs.
+  // The refusal names the file, the setting and both values.
   EXPECT_NE(mismatched.last_result.find(model_path), std::string::npos) << mismatched.last_result;
-  EXPECT_NE(mismatched.last_result.find("cloud.max_depth_m"), std::string::npos)
+  EXPECT_NE(mismatched.last_result.find("cloud.max_depth_m = 10 (the program) but model " +
+                                        model_path + " records cloud.max_depth_m = 8"),
+            std::string::npos)
       << mismatched.last_result;
   EXPECT_NE(mismatched.last_result.find("still running " + id_a), std::string::npos)
       << mismatched.last_result;
@@ -370,6 +381,58 @@ TEST(ModelReload, MismatchedCorruptAndHostileAreRefusedAndFramesGoOnWithTheOldMo
   EXPECT_EQ(last.commands_accepted, 1);  // request 9
   EXPECT_EQ(last.commands_rejected, 4);
   EXPECT_NE(last.last_error.find("command_t.command"), std::string::npos) << last.last_error;
+}
+
+// A model trained with another depth cut, reloaded into a daemon whose config does not
+// state it, runs with the cut it records: every frame after the swap is what the library
+// makes of it with that model and its settings.
+TEST(ModelReload, AModelWithOtherFeatureSettingsRunsWithThem) {
+  FINDMUG_REQUIRE_DATA(nyu, "nyuv2_labeled");
+  const Models* m = models();
+  ASSERT_TRUE(m);
+  TempDir tmp;
+  const std::string model_path = tmp.str("installed.fmf");
+  installAtomically(m->a, model_path);
+  const auto with_a = libraryLabels(m->forest_a);
+  const auto with_other = libraryLabels(m->forest_mismatched);
+  EXPECT_EQ(Segmenter(reloadConfig(), m->forest_mismatched).config().max_depth_m, 8.0f);
+  // The same trees run with the config's 10 m cut label some frames otherwise: the
+  // comparison below can tell whether the model's cut was taken.
+  RandomForest unrecorded = *m->forest_mismatched;
+  unrecorded.setExtractionSettings({});
+  const auto with_config_cut = libraryLabels(std::make_shared<const RandomForest>(unrecorded));
+  int cut_matters = 0;
+  for (std::size_t k = 0; k < with_other.size(); ++k) {
+    cut_matters += with_other[k].labels != with_config_cut[k].labels;
+  }
+  EXPECT_GT(cut_matters, 0);
+  ReloadRig rig(model_path, m->forest_a);
+
+  ReloadStatus reload;
+  rig.stream(30, [&](int i) {
+    if (i == 5) {
+      installAtomically(m->mismatched, model_path);
+      sendCommand(*rig.commands, "reload_model", 3);
+    }
+    if (i == 12) reload = rig.awaitReloads(1);
+  });
+  rig.finish();
+
+  EXPECT_TRUE(reload.last_ok) << reload.last_result;
+  EXPECT_EQ(reload.reloads, 1u);
+  EXPECT_EQ(rig.pipeline->modelId(), idOf(model_path, *m->forest_mismatched));
+  ASSERT_EQ(rig.got.labels.size(), 30u);
+  const std::size_t n = m->frames.size();
+  // Frames submitted before the reload are either model's (a swap lands between frames);
+  // those submitted after it finished are the new model's with its settings.
+  for (std::size_t i = 0; i < 5; ++i) {
+    EXPECT_TRUE(sameLabels(with_a[i % n], rig.got.labels[i]) ||
+                sameLabels(with_other[i % n], rig.got.labels[i]))
+        << "frame " << i;
+  }
+  for (std::size_t i = 12; i < rig.got.labels.size(); ++i) {
+    EXPECT_TRUE(sameLabels(with_other[i % n], rig.got.labels[i])) << "frame " << i;
+  }
 }
 
 // ---- the findmugd process: SIGHUP ----------------------------------------------

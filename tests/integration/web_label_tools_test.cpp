@@ -105,33 +105,28 @@ TEST(LabelRuns, DecodeAndEncodeAndRefuseBadRuns) {
   EXPECT_THROW(labelsFromRuns(nlohmann::json::parse("{}"), 6), Error);
 }
 
-TEST(LabelFrames, RefusesAModelWhoseSettingsAreNotTheConfigs) {
+// The settings the model records are the defaults of its keys (configForModel): a config
+// that states none of them takes the model's; one that states another value is refused,
+// naming the key, both values and the model.
+TEST(LabelFrames, TakesTheModelsSettingsAndRefusesOnesGivenOtherwise) {
   const fs::path model = test::sourceDir() / "models/findmug.fmf";
   auto forest = std::make_shared<const RandomForest>(RandomForest::load(model.string()));
-  // The shipped model has NYU-13 classes and region, scene and object features; a config
-  // with its classes but without those features is refused, naming the first that differs.
-  SegmenterConfig other_features;
-  other_features.learner.classes = ClassScheme::Nyu13;
+  EXPECT_NO_THROW(LabelFrames(SegmenterConfig{}, forest, "findmug.fmf", std::nullopt));
+  Config given;
+  applyOverride(given, "features.objects_columns=context");  // the columns of the model before
   try {
-    LabelFrames frames(other_features, forest, "findmug.fmf", std::nullopt);
-    FAIL() << "a model trained with other features was taken";
-  } catch (const Error& e) {
-    EXPECT_NE(std::string(e.what()).find("features."), std::string::npos) << e.what();
-  }
-  SegmenterConfig matching = other_features;
-  matching.regions.enabled = true;
-  matching.scene.enabled = true;
-  matching.objects.enabled = true;
-  matching.objects.columns = ObjectColumns::Context;  // the columns of the model before
-  try {
-    LabelFrames frames(matching, forest, "findmug.fmf", std::nullopt);
+    LabelFrames frames(given.segmenter, forest, "findmug.fmf", std::nullopt);
     FAIL() << "a model trained with other object columns was taken";
   } catch (const Error& e) {
-    EXPECT_NE(std::string(e.what()).find("features.objects_columns = context"), std::string::npos)
+    EXPECT_NE(std::string(e.what()).find("features.objects_columns = context (--set) but model " +
+                                         model.string() +
+                                         " records features.objects_columns = relations"),
+              std::string::npos)
         << e.what();
   }
-  matching.objects.columns = ObjectColumns::Relations;
-  EXPECT_NO_THROW(LabelFrames(matching, forest, "findmug.fmf", std::nullopt));
+  Config same;
+  applyOverride(same, "features.objects_columns=relations");
+  EXPECT_NO_THROW(LabelFrames(same.segmenter, forest, "findmug.fmf", std::nullopt));
 }
 
 }  // namespace

@@ -14,9 +14,11 @@
 #   tests   tests/                                                 may use anything
 # (tools may use the daemon's pipeline library: findmug-sequential runs it on one thread.)
 #
-# Two checks, both fail with a message naming the file or target and the rule:
+# Three checks, each fails with a message naming the file or target and the rule:
 #   * includes: every #include "..." / <...> of a layer's sources is matched against the
 #     header prefixes of the layers it may not use (and the core may not include LCM);
+#   * the core's rooms: inside the core, a room's files include only rooms below it
+#     (findmug_core_rooms, the order DEVELOPERS.md documents);
 #   * links (configure time only, needs the targets): LINK_LIBRARIES and
 #     INTERFACE_LINK_LIBRARIES of every target defined in a layer's folder name only
 #     targets of layers it may use.
@@ -123,6 +125,78 @@ function(findmug_check_includes source_dir)
   endif()
 endfunction()
 
+# --- the core's rooms ---------------------------------------------------------------------
+# Inside the core, a room may include only its own files and the rooms below it, lowest
+# first (DEVELOPERS.md, "Layout"): the mechanism every room states its settings with sits at
+# the bottom, the aggregate of all settings and the Segmenter that runs every step at the top.
+set(findmug_core_rooms
+    common settings.mechanism labels.ids frame cloud ground oversegmentation labels features mrf
+    learner tables objects map settings segmenter)
+# Files that are not of their folder's room ("FOLDER/NAME" without the extension = ROOM):
+# the settings mechanism (settings/ is otherwise the aggregate) and the label ids and names,
+# which frames carry (labels/ is otherwise the label image and its hole filling).
+set(findmug_core_room_files
+    "settings/settings=settings.mechanism"
+    "labels/labels=labels.ids")
+
+# The room of a core path relative to src/ or include/findmug/ ("" when it is no room's).
+function(findmug_core_room relative out)
+  string(REGEX REPLACE "\\.[a-z]+(\\.in)?$" "" stem "${relative}")
+  set(room "")
+  foreach(entry IN LISTS findmug_core_room_files)
+    string(REPLACE "=" ";" pair "${entry}")
+    list(GET pair 0 file_stem)
+    list(GET pair 1 file_room)
+    if(stem STREQUAL file_stem)
+      set(room ${file_room})
+    endif()
+  endforeach()
+  if(NOT room AND relative MATCHES "^([a-z_]+)/")
+    list(FIND findmug_core_rooms ${CMAKE_MATCH_1} index)
+    if(NOT index EQUAL -1)
+      set(room ${CMAKE_MATCH_1})
+    endif()
+  endif()
+  set(${out} "${room}" PARENT_SCOPE)
+endfunction()
+
+function(findmug_check_room_order source_dir)
+  set(problems "")
+  file(GLOB_RECURSE files ${source_dir}/src/*.cpp ${source_dir}/src/*.hpp
+       ${source_dir}/include/findmug/*.hpp)
+  foreach(file IN LISTS files)
+    file(RELATIVE_PATH rel ${source_dir} ${file})
+    string(REGEX REPLACE "^(src|include/findmug)/" "" in_core "${rel}")
+    findmug_core_room("${in_core}" room)
+    if(NOT room)
+      continue()  # src/offline, src/synth: layers of their own
+    endif()
+    list(FIND findmug_core_rooms ${room} level)
+    file(STRINGS ${file} lines REGEX "^[ \t]*#[ \t]*include[ \t]*[<\"]")
+    foreach(line IN LISTS lines)
+      string(REGEX REPLACE "^[ \t]*#[ \t]*include[ \t]*[<\"]([^>\"]+)[>\"].*" "\\1" name "${line}")
+      string(REGEX REPLACE "^findmug/" "" included "${name}")
+      if(NOT included MATCHES "/")
+        continue()  # <map>, "version.hpp": no room's
+      endif()
+      findmug_core_room("${included}" included_room)
+      if(NOT included_room)
+        continue()
+      endif()
+      list(FIND findmug_core_rooms ${included_room} included_level)
+      if(included_level GREATER level)
+        list(APPEND problems "${rel} (room ${room}) includes <${name}> of room ${included_room}")
+      endif()
+    endforeach()
+  endforeach()
+  if(problems)
+    list(JOIN findmug_core_rooms " < " order)
+    list(JOIN problems "\n  " text)
+    message(FATAL_ERROR "layering: a core room includes a room above it (order ${order}; rule in "
+                        "tests/layering/layers.cmake, rooms in DEVELOPERS.md):\n  ${text}")
+  endif()
+endfunction()
+
 # --- links (configure time) ---------------------------------------------------------------
 function(findmug_collect_targets dir out)
   get_property(targets DIRECTORY ${dir} PROPERTY BUILDSYSTEM_TARGETS)
@@ -192,8 +266,10 @@ if(CMAKE_SCRIPT_MODE_FILE)
     message(FATAL_ERROR "usage: cmake -DFINDMUG_SOURCE_DIR=<source tree> -P layers.cmake")
   endif()
   findmug_check_includes(${FINDMUG_SOURCE_DIR})
-  message(STATUS "layering: includes follow the layers")
+  findmug_check_room_order(${FINDMUG_SOURCE_DIR})
+  message(STATUS "layering: includes follow the layers and the core's room order")
 else()
   findmug_check_includes(${PROJECT_SOURCE_DIR})
+  findmug_check_room_order(${PROJECT_SOURCE_DIR})
   findmug_check_links()
 endif()

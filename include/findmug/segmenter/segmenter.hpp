@@ -99,8 +99,10 @@ struct LabelledFrame {
 
 class Segmenter {
  public:
-  // `forest` may be null for feature extraction only (training). A forest
-  // trained with other extraction settings is refused (checkModelMatchesConfig).
+  // `forest` may be null for feature extraction only (training). With a forest,
+  // the settings it records replace `config`'s where `config.given` does not
+  // hold them, and a given one that differs is refused (configForModel); then
+  // checkModelMatchesConfig. config() is the result.
   Segmenter(SegmenterConfig config, std::shared_ptr<const RandomForest> forest);
 
   // `gt_labels` is only used when config.ground.source == FloorLabels.

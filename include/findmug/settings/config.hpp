@@ -17,23 +17,22 @@
 #include "findmug/features/object_features.hpp"
 #include "findmug/features/region_features.hpp"
 #include "findmug/features/scene_features.hpp"
-#include "findmug/ground/ground.hpp"
 #include "findmug/frame/depth_holes.hpp"
+#include "findmug/ground/ground.hpp"
 #include "findmug/labels/label_holes.hpp"
 #include "findmug/learner/forest.hpp"
-#include "findmug/map/table_map.hpp"
 #include "findmug/mrf/mrf.hpp"
 #include "findmug/objects/table_objects.hpp"
+#include "findmug/oversegmentation/oversegmentation.hpp"
 #include "findmug/settings/offline_settings.hpp"
 #include "findmug/settings/settings.hpp"
-#include "findmug/oversegmentation/oversegmentation.hpp"
 #include "findmug/tables/tables.hpp"
 
 namespace findmug {
 
 // The classes the model learns (learner.classes); the model merges them into
-// the 8 labels. Recorded in the model: the Segmenter refuses a model trained
-// on other classes. Supersedes nothing: training.split_labels (finer classes
+// the 8 labels. Recorded in the model, which gives it unless the config does
+// (configForModel). Supersedes nothing: training.split_labels (finer classes
 // for the forest's splits only, weighting by label) stays as it was, and the
 // two cannot be combined.
 enum class ClassScheme {
@@ -53,8 +52,8 @@ enum class ClassWeight {
 };
 
 struct LearnerOptions {
-  LearnerKind kind = LearnerKind::Forest;     // learner.kind
-  ClassScheme classes = ClassScheme::Labels;  // learner.classes
+  LearnerKind kind = LearnerKind::Forest;          // learner.kind
+  ClassScheme classes = ClassScheme::Labels;       // learner.classes
   ClassWeight class_weight = ClassWeight::Labels;  // learner.class_weight
 };
 
@@ -64,10 +63,10 @@ struct SegmenterConfig {
   NormalConfig normals;
   GroundConfig ground;
   OversegmentationConfig oversegmentation;
-  RegionConfig regions;    // features.regions, features.region_*
-  SceneConfig scene;       // features.scene, features.scene_*
-  ObjectConfig objects;    // features.objects, features.objects_*
-  ContextConfig context;   // features.context, features.context_*
+  RegionConfig regions;   // features.regions, features.region_*
+  SceneConfig scene;      // features.scene, features.scene_*
+  ObjectConfig objects;   // features.objects, features.objects_*
+  ContextConfig context;  // features.context, features.context_*
   ForestParams forest;
   LearnerOptions learner;  // learner.*
   XGBoostParams xgboost;   // xgboost.* (learner.kind = xgboost)
@@ -76,6 +75,10 @@ struct SegmenterConfig {
   LabelHoleFillConfig label_holes;  // labels.*
   TableConfig tables;
   TableObjectConfig table_objects;  // table_objects.*
+  // The keys a settings file or a --set gave, and where (SettingsSchema::bind fills
+  // it): of the keys a model records, these are the only ones it does not set
+  // (configForModel).
+  SettingOrigins given;
 };
 
 // The core's sections of a settings file: what the segmenter runs with, and what
@@ -106,10 +109,21 @@ void applyOverride(Config& config, const std::string& key_equals_value);
 // The segmenter's effective settings as YAML (reports; SettingsSchema::dump for a whole program).
 std::string dumpConfig(const Config& config);
 
-// The settings that shape the features (cloud.*, normals.*, oversegmentation.*,
-// features.* except the training-only features.context_cross_fit_folds), as
-// "key" -> "value" in a stable order. The trainer stores them in the model;
-// a model is only run with the same values (see checkModelMatchesConfig).
+// The settings recorded in a model (Setting::recorded_in_model: the feature-extraction
+// settings cloud.max_depth_m, normals.*, oversegmentation.*, features.* but
+// features.context_cross_fit_folds), as "key" -> "value" in the table's order. The
+// trainer stores them in the model; a model runs only with the same values
+// (configForModel, checkModelMatchesConfig).
 RandomForest::Settings extractionSettings(const SegmenterConfig& config);
+
+// `config` with the values `model` records (RandomForest::extractionSettings, keys
+// under their current names, and what the model is: learner.kind, learner.classes) for
+// every key `config.given` does not hold: a model's recorded settings are the defaults
+// of the keys it records. A key given explicitly
+// with another value is an Error naming the key, the value given and where, the
+// model's value and the model. Keys unknown to this build are left to
+// checkModelMatchesConfig; the cross-key rules (validateSegmenterConfig) are checked
+// on the result.
+SegmenterConfig configForModel(SegmenterConfig config, const RandomForest& model);
 
 }  // namespace findmug

@@ -5,10 +5,12 @@
 //
 //  * SettingsTable<T>: the named settings of one struct T (key, how to parse
 //    a value into T with the strict number parser findmug/common/numbers.hpp and a
-//    range, how to print it back, a doc line), for one section or several (the
-//    segmenter's). Unknown keys and bad values are findmug::Error naming the key.
-//    The core's tables live next to their types (SegmenterConfig, OfflineConfig in
-//    config.cpp, TableMapConfig in table_map.cpp, SemanticMapConfig in semantic_map.cpp);
+//    range, how to print it back, what a value must be, a doc line, whether a model
+//    records it), for one section or several (the segmenter's). Unknown keys and bad
+//    values are findmug::Error naming the key. The core's tables live next to their
+//    types (SegmenterConfig in segmenter_settings.cpp, OfflineConfig in
+//    offline_settings.cpp, TableMapConfig in table_map.cpp, SemanticMapConfig in
+//    semantic_map_settings.cpp);
 //    the programs' own (daemon, check, web) in cli/program_settings.hpp.
 //  * SettingsSchema: the tables a program states at start-up, each bound to the
 //    struct its values go to (bind) or, for a section the program only has to
@@ -17,6 +19,9 @@
 //    parses it straight into the typed field: once, no text kept for later. A
 //    section no table claims, or a key its table does not have, is an Error
 //    naming it (and the file and line).
+//
+// This header is the bottom of the core: every room may include it (the aggregate of
+// the core's settings, findmug/settings/config.hpp, is the top; tests/layering).
 //
 // A renamed key: its old name stays readable for one release through one alias
 // table (renamedSettings, settings.cpp). The schema reads the old name as the
@@ -30,8 +35,8 @@
 #include <functional>
 #include <map>
 #include <memory>
-#include <type_traits>
 #include <string>
+#include <type_traits>
 #include <utility>
 #include <vector>
 
@@ -63,10 +68,27 @@ std::string currentSettingKey(const std::string& key);
 
 template <typename T>
 struct Setting {
-  std::string key;                                        // "section.name"
-  std::string doc;                                        // one line for --help style listings
+  std::string key;       // "section.name"
+  std::string doc;       // one line, printed by --help-settings (SettingsSchema::help)
+  std::string expected;  // what a value must be ("a number in [0, 1]"), printed beside it
+  // A model file records this setting's value at training (the feature-extraction
+  // settings: what a feature means depends on them); loading the model makes it the
+  // default (see configForModel, findmug/settings/config.hpp).
+  bool recorded_in_model = false;
   std::function<void(T&, const std::string& value)> set;  // throws Error naming key
   std::function<std::string(const T&)> get;
+};
+
+// Where each setting a file or a flag gave explicitly came from, by its current key:
+// "a.yaml: line 3", "--set". A struct with a member `given` of this type gets it
+// filled by SettingsSchema::bind: SegmenterConfig, whose keys a model records take the
+// model's value unless given explicitly.
+using SettingOrigins = std::map<std::string, std::string>;
+
+// One line of a settings listing (SettingsSchema::help, describe).
+struct SettingHelp {
+  std::string key, expected, value, doc;
+  bool recorded_in_model = false;
 };
 
 template <typename T>
@@ -160,6 +182,7 @@ Setting<T> numberSetting(std::string key, std::function<Number&(T&)> field, doub
   Setting<T> s;
   s.key = key;
   s.doc = std::move(doc);
+  s.expected = "a number in [" + formatSettingNumber(lo) + ", " + formatSettingNumber(hi) + "]";
   s.set = [key, field, lo, hi](T& t, const std::string& v) {
     const auto x = parseNumber(v);
     if (!x || *x < lo || *x > hi) {
@@ -178,6 +201,7 @@ Setting<T> integerSetting(std::string key, std::function<Integer&(T&)> field, lo
   Setting<T> s;
   s.key = key;
   s.doc = std::move(doc);
+  s.expected = "an integer in [" + std::to_string(lo) + ", " + std::to_string(hi) + "]";
   s.set = [key, field, lo, hi](T& t, const std::string& v) {
     const auto x = parseInteger(v);
     if (!x || *x < lo || *x > hi) {
@@ -195,6 +219,7 @@ Setting<T> boolSetting(std::string key, std::function<bool&(T&)> field, std::str
   Setting<T> s;
   s.key = key;
   s.doc = std::move(doc);
+  s.expected = "true or false";
   s.set = [key, field](T& t, const std::string& v) { field(t) = parseSettingBool(key, v); };
   s.get = [field](const T& t) { return std::string(field(const_cast<T&>(t)) ? "true" : "false"); };
   return s;
@@ -206,6 +231,8 @@ Setting<T> enumSetting(std::string key, std::function<Enum&(T&)> field,
   Setting<T> s;
   s.key = key;
   s.doc = std::move(doc);
+  s.expected = "one of";
+  for (const auto& n : names) s.expected += " " + n.first;
   s.set = [key, field, names](T& t, const std::string& v) {
     for (const auto& [name, value] : names) {
       if (name == v) {
@@ -234,6 +261,7 @@ Setting<T> textSetting(std::string key, std::function<std::string&(T&)> field,
   Setting<T> s;
   s.key = key;
   s.doc = std::move(doc);
+  s.expected = "text";
   s.set = [key, field, check](T& t, const std::string& v) {
     if (check) {
       const std::string expected = check(v);
@@ -262,7 +290,13 @@ class SettingsSchema {
     b.set = [shared, &target](const std::string& key, const std::string& value) {
       shared->set(target, key, value);
     };
+    if constexpr (requires { target.given; }) {
+      b.record = [&target](const std::string& key, const std::string& place) {
+        target.given[key] = place;
+      };
+    }
     b.entries = [shared, &target] { return shared->entries(target); };
+    b.describe = [shared, &target] { return describeSettings(*shared, target); };
     if (validate) b.validate = [validate, &target] { validate(target); };
     add(std::move(b));
     return *this;
@@ -280,6 +314,7 @@ class SettingsSchema {
       shared->set(*owned, key, value);
     };
     b.entries = [shared, owned] { return shared->entries(*owned); };
+    b.describe = [shared, owned] { return describeSettings(*shared, *owned); };
     if (validate) b.validate = [validate, owned] { validate(*owned); };
     b.accepted_only = true;
     add(std::move(b));
@@ -304,11 +339,28 @@ class SettingsSchema {
   // The effective values of the bound sections (not the accepted ones) as YAML,
   // sections in name order, keys in table order (--check-config, the start-up log).
   std::string dump() const;
+  // Every setting of every table the schema knows, bound or accepted, sections in
+  // name order, keys in table order, with its current value.
+  std::vector<SettingHelp> describe() const;
+  // describe() as text (--help-settings): per setting, "key = value  (expected)" and
+  // its doc line indented below; "[model]" marks the keys a model records.
+  std::string help() const;
 
  private:
+  template <typename T>
+  static std::vector<SettingHelp> describeSettings(const SettingsTable<T>& table, const T& values) {
+    std::vector<SettingHelp> out;
+    for (const auto& s : table.settings()) {
+      out.push_back({s.key, s.expected, s.get(values), s.doc, s.recorded_in_model});
+    }
+    return out;
+  }
   struct Binding {
     std::vector<std::string> sections;
     std::function<void(const std::string&, const std::string&)> set;
+    // Notes where a key was given (structs with a `given` member, SettingOrigins).
+    std::function<void(const std::string& key, const std::string& place)> record;
+    std::function<std::vector<SettingHelp>()> describe;
     std::function<std::vector<std::pair<std::string, std::string>>()> entries;
     std::function<void()> validate;
     bool accepted_only = false;

@@ -9,6 +9,7 @@
 #include <cmath>
 #include <cstring>
 #include <fstream>
+#include <initializer_list>
 #include <iterator>
 #include <random>
 
@@ -482,19 +483,28 @@ TEST(LearnerConfig, SettingsParseAndUnsupportedCombinationsAreRefused) {
               HasSubstr("training.split_labels"));
 }
 
-TEST(LearnerSegmenter, RefusesModelOfAnotherLearnerOrClasses) {
+// What a model is (learner.kind, learner.classes) is taken from it when the config does
+// not give it (configForModel); a config giving another value (a file, --set) is refused
+// naming the key and the model.
+TEST(LearnerSegmenter, TakesTheModelsLearnerAndClassesAndRefusesOthersGiven) {
   const FineSet fine = makeFineBlobs(2, 10, 1, "nyu13");
   SegmenterConfig config;
   ASSERT_FALSE(config.regions.enabled);
   ASSERT_FALSE(config.scene.enabled);
   ASSERT_FALSE(config.context.enabled);
+  auto given = [](const SegmenterConfig& c, std::initializer_list<const char*> settings) {
+    Config out;
+    out.segmenter = c;
+    for (const char* kv : settings) applyOverride(out, kv);
+    return out.segmenter;
+  };
   auto expectRefused = [](const SegmenterConfig& c, const RandomForest& model,
                           const std::string& key) {
     try {
       Segmenter segmenter(c, std::make_shared<const RandomForest>(model));
       ADD_FAILURE() << "accepted a model that does not match " << key;
     } catch (const Error& e) {
-      EXPECT_THAT(e.what(), HasSubstr(key));
+      EXPECT_THAT(e.what(), HasSubstr(key + " (--set)"));
       EXPECT_THAT(e.what(), HasSubstr(model.id()));
     }
   };
@@ -505,18 +515,21 @@ TEST(LearnerSegmenter, RefusesModelOfAnotherLearnerOrClasses) {
       RandomForest::trainBoosted(fine.set, fine.classes, smallBooster(), true, 1);
 
   EXPECT_NO_THROW(Segmenter(config, std::make_shared<const RandomForest>(forest8)));
-  expectRefused(config, forest13, "learner.classes = labels");
-  expectRefused(config, boosted13, "learner.kind = forest");
-  SegmenterConfig fine_forest = config;
-  fine_forest.learner.classes = ClassScheme::Nyu13;
+  const Segmenter taking13(config, std::make_shared<const RandomForest>(forest13));
+  EXPECT_EQ(taking13.config().learner.classes, ClassScheme::Nyu13);
+  const Segmenter taking_boosted(config, std::make_shared<const RandomForest>(boosted13));
+  EXPECT_EQ(taking_boosted.config().learner.kind, LearnerKind::XGBoost);
+  EXPECT_EQ(taking_boosted.config().learner.classes, ClassScheme::Nyu13);
+
+  expectRefused(given(config, {"learner.classes=labels"}), forest13, "learner.classes = labels");
+  expectRefused(given(config, {"learner.kind=forest"}), boosted13, "learner.kind = forest");
+  const SegmenterConfig fine_forest = given(config, {"learner.classes=nyu13"});
   EXPECT_NO_THROW(Segmenter(fine_forest, std::make_shared<const RandomForest>(forest13)));
   expectRefused(fine_forest, forest8, "learner.classes = nyu13");
-  SegmenterConfig boosted = fine_forest;
-  boosted.learner.kind = LearnerKind::XGBoost;
+  const SegmenterConfig boosted = given(fine_forest, {"learner.kind=xgboost"});
   EXPECT_NO_THROW(Segmenter(boosted, std::make_shared<const RandomForest>(boosted13)));
   expectRefused(boosted, forest13, "learner.kind = xgboost");
-  boosted.learner.classes = ClassScheme::Nyu40;
-  expectRefused(boosted, boosted13, "learner.classes = nyu40");
+  expectRefused(given(boosted, {"learner.classes=nyu40"}), boosted13, "learner.classes = nyu40");
 }
 
 // On real NYU frames: trainModel with learner.classes reads label13/ or

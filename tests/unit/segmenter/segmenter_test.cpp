@@ -215,7 +215,10 @@ TEST(Segmenter, FrameWithoutGroundGetsAllVoidLabels) {
   for (auto y : out.labels.labels) ASSERT_EQ(y, kVoidLabel);
 }
 
-TEST(Segmenter, RefusesModelTrainedWithOtherExtractionSettings) {
+// The extraction settings a model records are the defaults of their keys: a config that
+// does not give them (a file or --set) runs with the model's; one that gives another
+// value is refused, naming the key, both values, where the config's came from and the model.
+TEST(Segmenter, TakesTheModelsExtractionSettingsAndRefusesOnesGivenOtherwise) {
   const Scene scene = floorAndWall(true);
   SegmenterConfig trained_config = fastConfig();
   auto trained = trainOn(Segmenter(trained_config, nullptr), scene);
@@ -227,14 +230,23 @@ TEST(Segmenter, RefusesModelTrainedWithOtherExtractionSettings) {
   SegmenterConfig other = trained_config;
   other.oversegmentation.kind = OversegmenterKind::PclSupervoxels;
   other.oversegmentation.seed_resolution_m = 0.15f;
+  const Segmenter taking(other, model);
+  EXPECT_EQ(taking.config().oversegmentation.kind, OversegmenterKind::Organized);
+  EXPECT_EQ(taking.config().oversegmentation.seed_resolution_m,
+            trained_config.oversegmentation.seed_resolution_m);
+  EXPECT_EQ(extractionSettings(taking.config()), forest.extractionSettings());
+
+  Config given;
+  given.segmenter = trained_config;
+  applyOverride(given, "oversegmentation.method=pcl");
+  applyOverride(given, "oversegmentation.seed_resolution_m=0.15");
   try {
-    Segmenter segmenter(other, model);
+    Segmenter segmenter(given.segmenter, model);
     FAIL() << "expected the model to be refused";
   } catch (const Error& e) {
-    EXPECT_THAT(e.what(),
-                HasSubstr("oversegmentation.method: trained with organized, config has pcl"));
-    EXPECT_THAT(e.what(), HasSubstr("oversegmentation.seed_resolution_m"));
-    EXPECT_THAT(e.what(), HasSubstr(forest.id()));
+    EXPECT_THAT(e.what(), HasSubstr("oversegmentation.method = pcl (--set) but forest " +
+                                    forest.id() + " records oversegmentation.method = organized"));
+    EXPECT_THAT(e.what(), HasSubstr("oversegmentation.seed_resolution_m = 0.150000006 (--set)"));
   }
   // Settings that do not shape the features (MRF, tables) may differ freely.
   SegmenterConfig mrf_only = trained_config;
@@ -262,16 +274,28 @@ TEST(Segmenter, ModelsRecordingOldKeyNamesAreComparedUnderTheNewNames) {
   forest.setExtractionSettings(recorded);
   const auto model = std::make_shared<const RandomForest>(forest);
   EXPECT_NO_THROW(Segmenter(trained_config, model));
-  SegmenterConfig other = trained_config;
-  other.oversegmentation.kind = OversegmenterKind::PclSupervoxels;
+  Config other;
+  other.segmenter = trained_config;
+  applyOverride(other, "oversegmentation.method=pcl");
+  EXPECT_EQ(Segmenter(trained_config, model).config().oversegmentation.seed_resolution_m,
+            trained_config.oversegmentation.seed_resolution_m);
   try {
-    Segmenter segmenter(other, model);
+    Segmenter segmenter(other.segmenter, model);
     FAIL() << "expected the model to be refused";
   } catch (const Error& e) {
-    EXPECT_THAT(e.what(),
-                HasSubstr("oversegmentation.method: trained with organized, config has pcl"));
+    EXPECT_THAT(e.what(), HasSubstr("oversegmentation.method = pcl (--set) but forest " +
+                                    forest.id() + " records oversegmentation.method = organized"));
     EXPECT_THAT(e.what(), Not(HasSubstr("unknown to this build")));
   }
+}
+
+// `config` with `key=value` given explicitly, as a settings file or --set gives it: a
+// model recording another value is refused (configForModel).
+SegmenterConfig givenAs(SegmenterConfig config, const std::string& key_equals_value) {
+  Config c;
+  c.segmenter = std::move(config);
+  applyOverride(c, key_equals_value);
+  return c.segmenter;
 }
 
 // The frame's features as the trainer and findmug-eval see them.
@@ -353,8 +377,8 @@ TEST(Segmenter, RefusesModelWhoseStagesDifferFromTheConfig) {
 }
 
 // features.scene adds its columns after the region features; the daemon's
-// path (process) gives what evaluation computes, and a model trained without
-// them is refused with a message naming the setting.
+// path (process) gives what evaluation computes, and a config giving them another
+// value than the model records is refused with a message naming the setting.
 TEST(Segmenter, RunsTheSceneFeaturesOfTheModel) {
   const Scene scene = floorAndWall(true);
   SegmenterConfig config = fastConfig();
@@ -378,21 +402,22 @@ TEST(Segmenter, RunsTheSceneFeaturesOfTheModel) {
   ASSERT_EQ(out.forest_probabilities.size(), n);
   for (std::size_t i = 0; i < n; ++i) ASSERT_EQ(out.forest_probabilities[i], expected[i]) << i;
 
-  SegmenterConfig no_scene = config;
-  no_scene.scene.enabled = false;
+  SegmenterConfig not_given = config;
+  not_given.scene.enabled = false;
+  EXPECT_TRUE(Segmenter(not_given, model).config().scene.enabled);
   try {
-    Segmenter segmenter(no_scene, model);
+    Segmenter segmenter(givenAs(config, "features.scene=false"), model);
     FAIL() << "expected the model to be refused";
   } catch (const Error& e) {
-    EXPECT_THAT(e.what(), HasSubstr("features.scene = false"));
-    EXPECT_THAT(e.what(), HasSubstr("with scene features"));
+    EXPECT_THAT(e.what(), HasSubstr("features.scene = false (--set)"));
+    EXPECT_THAT(e.what(), HasSubstr("records features.scene = true"));
   }
 }
 
 // features.objects adds its columns after the scene features, computed by
 // the same code in training (Segmenter::features) and in the daemon's path
 // (classify): the same values to the bit and the same forest answers; a
-// model trained without them is refused with a message naming the setting.
+// config giving them another value than the model records is refused naming it.
 TEST(Segmenter, RunsTheObjectFeaturesOfTheModel) {
   const Scene scene = floorAndWall(true);
   SegmenterConfig config = fastConfig();
@@ -428,14 +453,12 @@ TEST(Segmenter, RunsTheObjectFeaturesOfTheModel) {
   ASSERT_EQ(out.forest_probabilities.size(), n);
   for (std::size_t i = 0; i < n; ++i) ASSERT_EQ(out.forest_probabilities[i], expected[i]) << i;
 
-  SegmenterConfig no_objects = config;
-  no_objects.objects.enabled = false;
   try {
-    Segmenter segmenter(no_objects, model);
+    Segmenter segmenter(givenAs(config, "features.objects=false"), model);
     FAIL() << "expected the model to be refused";
   } catch (const Error& e) {
-    EXPECT_THAT(e.what(), HasSubstr("features.objects = false"));
-    EXPECT_THAT(e.what(), HasSubstr("with object features"));
+    EXPECT_THAT(e.what(), HasSubstr("features.objects = false (--set)"));
+    EXPECT_THAT(e.what(), HasSubstr("records features.objects = true"));
   }
   // The context columns: a model of 3 object columns, refused by a config of all 11.
   SegmenterConfig context = config;
@@ -448,11 +471,12 @@ TEST(Segmenter, RunsTheObjectFeaturesOfTheModel) {
   context_model.setExtractionSettings(extractionSettings(context));
   const auto context_shared = std::make_shared<const RandomForest>(context_model);
   EXPECT_NO_THROW(Segmenter(context, context_shared).process(scene.frame));
+  EXPECT_EQ(Segmenter(config, context_shared).config().objects.columns, ObjectColumns::Context);
   try {
-    Segmenter segmenter(config, context_shared);
+    Segmenter segmenter(givenAs(config, "features.objects_columns=all"), context_shared);
     FAIL() << "expected the context-column model to be refused by an all-column config";
   } catch (const Error& e) {
-    EXPECT_THAT(e.what(), HasSubstr("with object features"));
+    EXPECT_THAT(e.what(), HasSubstr("records features.objects_columns = context"));
   }
   // The relations columns: trained and run through the same rows, refused by a context config.
   SegmenterConfig relations = config;
@@ -465,7 +489,8 @@ TEST(Segmenter, RunsTheObjectFeaturesOfTheModel) {
   const auto relations_shared = std::make_shared<const RandomForest>(relations_model);
   EXPECT_EQ(Segmenter(relations, relations_shared).process(scene.frame).features.objects,
             relations_samples[0].features.objects);
-  EXPECT_THROW(Segmenter(context, relations_shared), Error);
+  EXPECT_THROW(Segmenter(givenAs(context, "features.objects_columns=context"), relations_shared),
+               Error);
   // Objects on and regions off: the regions are still formed for the objects.
   SegmenterConfig objects_only = config;
   objects_only.regions.enabled = false;

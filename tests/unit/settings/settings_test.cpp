@@ -280,3 +280,40 @@ TEST(SettingsSchema, TheLearnersSharedKeysAreReadByTheirOldForestNames) {
 
 }  // namespace
 }  // namespace findmug
+
+namespace findmug {
+namespace {
+
+// A section whose every key is commented out (daemon/findmugd.yaml's normals:, whose keys
+// the model gives) reads as nothing set; a section no table knows is still refused.
+TEST(SettingsSchema, AnEmptySectionSetsNothingButMustBeKnown) {
+  Owned owned;
+  SettingsSchema schema;
+  schema.bind(ownedTable("owned"), owned);
+  schema.readYaml("owned:\n  # count: 3\n", "a.yaml");
+  EXPECT_EQ(owned.count, 2);
+  EXPECT_THAT(errorOf([&] { schema.readYaml("owned:\nowend:\n", "a.yaml"); }),
+              HasSubstr("a.yaml: line 2: unknown section 'owend'"));
+}
+
+// What --help-settings prints: key = value (what a value must be), the doc line below.
+TEST(SettingsSchema, HelpListsEveryBoundAndAcceptedSetting) {
+  Owned owned;
+  SettingsSchema schema;
+  auto table = ownedTable("owned");
+  schema.bind(table, owned);
+  schema.accept(ownedTable("other"));
+  owned.count = 4;
+  const std::string help = schema.help();
+  EXPECT_THAT(help, HasSubstr("owned.count = 4  (an integer in [1, 10])\n    \n"));
+  EXPECT_THAT(help, HasSubstr("owned.on = false  (true or false)\n"));
+  EXPECT_THAT(help, HasSubstr("other.rate = 0.5  (a number in [0, 1])\n"));
+  EXPECT_THAT(help, HasSubstr("owned.name = x  (text)\n"));
+  EXPECT_LT(help.find("other.count"), help.find("owned.count"));  // sections in name order
+  const auto described = schema.describe();
+  ASSERT_EQ(described.size(), 8u);
+  EXPECT_FALSE(described[0].recorded_in_model);
+}
+
+}  // namespace
+}  // namespace findmug

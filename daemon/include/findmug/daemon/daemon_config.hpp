@@ -46,6 +46,7 @@ struct CommandLine {
   std::vector<std::string> overrides;      // key=value, in order
   bool check_config = false;               // --check-config: validate, print, exit
   bool check = false;                      // --check: first-run self-test (check.hpp), exit
+  bool help_settings = false;              // --help-settings: list every setting, exit
   bool help = false;
   bool version = false;  // --version: print "findmugd VERSION", exit
 };
@@ -70,6 +71,9 @@ struct LoadedConfig {
 LoadedConfig loadDaemonConfig(const CommandLine& command_line);
 // The same from YAML text (tests, the config fuzzer); `origin` names it in errors.
 LoadedConfig parseDaemonConfig(const std::string& yaml_text, const std::string& origin);
+// Every setting of the file findmugd reads, with its built-in default, what a value
+// must be and its doc line (--help-settings; SettingsSchema::help).
+std::string settingsHelp();
 // The effective values of every section findmugd reads, as YAML (--check-config).
 std::string dumpDaemonConfig(const LoadedConfig& loaded);
 

@@ -42,6 +42,10 @@ struct FrameJob {
 struct PreparedJob {
   PreparedFrame prepared;
   StepClock::time_point arrival;
+  // The Segmenter that prepared the frame: the frame's other steps run on it too, so that
+  // a model swapped in meanwhile, whose recorded settings (cloud, normals) may differ,
+  // never classifies a frame another model's settings prepared.
+  std::shared_ptr<const Segmenter> segmenter;
 };
 struct ResultJob {
   LabelledFrame labelled;
@@ -67,7 +71,8 @@ class SegmentStep {
   explicit SegmentStep(CurrentSegmenter segmenter,
                        std::function<void(const RgbdFrame&)> before_segment = {})
       : segmenter_(std::move(segmenter)), before_segment_(std::move(before_segment)) {}
-  // Oversegments and classifies with one Segmenter (one model) for the whole frame.
+  // Oversegments and classifies with one Segmenter (one model) for the whole frame: the
+  // one that prepared it (PreparedJob::segmenter), else the current one.
   ResultJob operator()(PreparedJob& job) const;
 
  private:

@@ -2,15 +2,18 @@
 // loading it again while frames flow.
 //
 //   ModelSlot      the Segmenter in use, made for one model (the config is the
-//                  daemon's, fixed). Each step takes it once per frame
-//                  (segmenter()) and keeps that one for the frame, so a swap
-//                  lands between frames: a frame is classified wholly by the old
-//                  model or wholly by the new one, and none waits for a load.
+//                  daemon's, fixed). The prepare step takes it once per frame
+//                  (segmenter()) and the frame's later steps keep that one
+//                  (PreparedJob::segmenter), so a swap lands between frames: a
+//                  frame is prepared and classified wholly by the old model and
+//                  its settings or wholly by the new one, and none waits for a load.
 //   ModelReloader  its own thread, never a frame thread: on request() it reads
 //                  the model file again and checks it exactly as start-up does
 //                  (loadModel: readable, not corrupt, has trees; the Segmenter's
-//                  constructor: checkModelMatchesConfig, naming every setting
-//                  that differs), then swaps it into the slot. A refused model
+//                  constructor: configForModel, the new model's recorded
+//                  settings taken for every key the config does not give, a
+//                  given one that differs refused naming both values; then
+//                  checkModelMatchesConfig), then swaps it into the slot. A refused model
 //                  is logged (which file, why) and counted; the running one
 //                  stays. Requests made while a load runs are folded into one
 //                  more load after it. status() is what status_t reports.

@@ -6,7 +6,7 @@
 // this test fails.
 #include <gtest/gtest.h>
 
-#include "common/type_layout.hpp"
+#include "segmenter/type_layout.hpp"
 
 namespace findmug {
 namespace {

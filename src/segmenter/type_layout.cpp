@@ -1,5 +1,5 @@
 // type_layout.cpp — the library's own view of its types' layouts (type_layout.hpp).
-#include "common/type_layout.hpp"
+#include "segmenter/type_layout.hpp"
 
 namespace findmug::detail {
 
