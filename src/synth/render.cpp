@@ -10,8 +10,8 @@
 //     primitive's yaw frame. Small things (mugs, legs) cost a few hundred rays.
 //  3. Shading, labels and the depth noise model run once per pixel on the
 //     winning hit (deferred), so hidden surfaces are never shaded.
-//  4. Per frame, not per pixel: each primitive's pose in floats, the trace
-//     buffers (kept per thread), std::round done inline. Same bits as before.
+//  4. Per frame, not per pixel: each primitive's pose in floats; the trace
+//     buffers are kept per thread. Same bits as before.
 //  5. countObjectPixels runs steps 1-2 only, on the union of one object's
 //     screen boxes: what an oracle recogniser needs, not a whole frame.
 // Ray directions are scaled so their optical-axis component is 1: the ray
@@ -79,22 +79,6 @@ namespace {
 
 constexpr float kNear = 0.02f;  // metres; nothing closer is rendered
 constexpr float kInf = std::numeric_limits<float>::infinity();
-
-// std::round (halves away from zero) without a library call per pixel, to the same bits:
-// below 2^52 (2^23 for float) the truncation through an integer is exact and so is the
-// fraction a - trunc(a); larger magnitudes (and NaN, infinities) are integral already.
-inline double roundHalfAway(double x) {
-  const double a = std::fabs(x);
-  if (!(a < 4503599627370496.0)) return x;
-  const double t = static_cast<double>(static_cast<std::int64_t>(a));
-  return std::copysign(a - t >= 0.5 ? t + 1.0 : t, x);
-}
-inline float roundHalfAway(float x) {
-  const float a = std::fabs(x);
-  if (!(a < 8388608.0f)) return x;
-  const float t = static_cast<float>(static_cast<std::int32_t>(a));
-  return std::copysign(a - t >= 0.5f ? t + 1.0f : t, x);
-}
 
 struct V3 {
   float x, y, z;
@@ -245,9 +229,9 @@ void validate(const RenderOptions& o) {
 std::uint16_t noisyDepthMm(double z_m, const DepthNoiseParams& noise, double gaussian) {
   if (!(z_m >= noise.min_range_m && z_m <= noise.max_range_m)) return 0;
   double disparity = 1.0 / (noise.disparity_k * z_m) + noise.disparity_sigma * gaussian;
-  if (noise.quantise) disparity = roundHalfAway(disparity);
+  if (noise.quantise) disparity = std::round(disparity);
   if (disparity <= 0.0) return 0;
-  const double mm = roundHalfAway(1000.0 / (noise.disparity_k * disparity));
+  const double mm = std::round(1000.0 / (noise.disparity_k * disparity));
   return mm >= 1.0 && mm <= 65535.0 ? static_cast<std::uint16_t>(mm) : 0;
 }
 
@@ -292,11 +276,13 @@ struct Region {
 };
 
 // Step 1: the room shell: exit point of the box [0,X]x[0,Y]x[0,Hc] (hit = -1 - surface).
-void traceShell(const Rays& r, float X, float Y, float Hc, const Region& region, float* zbuf,
+void traceShell(const Rays& r, float X, float Y, float Hc, const Region region, float* zbuf,
                 std::int32_t* hit) {
   const V3 o = r.o;
   for (int v = region.v0; v <= region.v1; ++v) {
     const V3 base = r.b[v] * r.c1 + r.c2;
+    float* zrow = zbuf + region.index(region.u0, v);
+    std::int32_t* hrow = hit + region.index(region.u0, v);
     for (int u = region.u0; u <= region.u1; ++u) {
       const V3 d = r.a[u] * r.c0 + base;
       float t = kInf;
@@ -319,9 +305,8 @@ void traceShell(const Rays& r, float X, float Y, float Hc, const Region& region,
       consider(d.z, o.z, Hc, 0, 1);  // floor / ceiling
       consider(d.x, o.x, X, 2, 3);   // walls x = 0 / x = X
       consider(d.y, o.y, Y, 4, 5);   // walls y = 0 / y = Y
-      const std::size_t i = region.index(u, v);
-      zbuf[i] = t;
-      hit[i] = -1 - surface;
+      zrow[u - region.u0] = t;
+      hrow[u - region.u0] = -1 - surface;
     }
   }
 }
@@ -329,7 +314,7 @@ void traceShell(const Rays& r, float X, float Y, float Hc, const Region& region,
 // Step 2: one primitive over its screen bounding box [u0, u1] x [v0, v1] (within the
 // region), nearer hits replacing farther ones.
 void tracePrimitive(const Primitive& p, std::int32_t id, const Rays& r, int u0, int u1, int v0,
-                    int v1, const Region& region, float* zbuf, std::int32_t* hit) {
+                    int v1, const Region region, float* zbuf, std::int32_t* hit) {
   const float cy = static_cast<float>(std::cos(p.yaw)), sy = static_cast<float>(std::sin(p.yaw));
   const V3 center{static_cast<float>(p.center.x()), static_cast<float>(p.center.y()),
                   static_cast<float>(p.center.z())};
@@ -540,7 +525,7 @@ void shadePixels(const SynthScene& scene, const Rays& r, const std::vector<float
 
       // Depth: range, grazing dropout, projector shadow, disparity noise.
       if (!noise.enabled) {
-        const float mm = roundHalfAway(t * 1000.0f);
+        const float mm = std::round(t * 1000.0f);
         frame.depth_mm[i] = mm >= 1.0f && mm <= 65535.0f ? static_cast<std::uint16_t>(mm) : 0;
         continue;
       }
