@@ -10,6 +10,10 @@
 //     primitive's yaw frame. Small things (mugs, legs) cost a few hundred rays.
 //  3. Shading, labels and the depth noise model run once per pixel on the
 //     winning hit (deferred), so hidden surfaces are never shaded.
+//  4. Per frame, not per pixel: each primitive's pose in floats; the trace
+//     buffers are kept per thread. Same bits as before.
+//  5. countObjectPixels runs steps 1-2 only, on the union of one object's
+//     screen boxes: what an oracle recogniser needs, not a whole frame.
 // Ray directions are scaled so their optical-axis component is 1: the ray
 // parameter t IS the depth z the sensor reports.
 #include <algorithm>
@@ -259,13 +263,27 @@ Rays raysOf(const Eigen::Isometry3d& cam_to_world, const CameraIntrinsics& K, in
   return r;
 }
 
+// The pixels [u0, u1] x [v0, v1] whose depths and hits a trace keeps, in row-major buffers
+// of (u1 - u0 + 1) columns: the whole image for a frame, less when only some pixels matter
+// (countObjectPixels). A pixel's ray and its tests do not depend on the region.
+struct Region {
+  int u0, u1, v0, v1;
+  int columns() const { return u1 - u0 + 1; }
+  std::size_t pixels() const { return static_cast<std::size_t>(columns()) * (v1 - v0 + 1); }
+  std::size_t index(int u, int v) const {
+    return static_cast<std::size_t>(v - v0) * columns() + (u - u0);
+  }
+};
+
 // Step 1: the room shell: exit point of the box [0,X]x[0,Y]x[0,Hc] (hit = -1 - surface).
-void traceShell(const Rays& r, float X, float Y, float Hc, int W, int H, std::vector<float>& zbuf,
-                std::vector<std::int32_t>& hit) {
+void traceShell(const Rays& r, float X, float Y, float Hc, const Region region, float* zbuf,
+                std::int32_t* hit) {
   const V3 o = r.o;
-  for (int v = 0; v < H; ++v) {
+  for (int v = region.v0; v <= region.v1; ++v) {
     const V3 base = r.b[v] * r.c1 + r.c2;
-    for (int u = 0; u < W; ++u) {
+    float* zrow = zbuf + region.index(region.u0, v);
+    std::int32_t* hrow = hit + region.index(region.u0, v);
+    for (int u = region.u0; u <= region.u1; ++u) {
       const V3 d = r.a[u] * r.c0 + base;
       float t = kInf;
       int surface = 0;
@@ -287,17 +305,16 @@ void traceShell(const Rays& r, float X, float Y, float Hc, int W, int H, std::ve
       consider(d.z, o.z, Hc, 0, 1);  // floor / ceiling
       consider(d.x, o.x, X, 2, 3);   // walls x = 0 / x = X
       consider(d.y, o.y, Y, 4, 5);   // walls y = 0 / y = Y
-      const std::size_t i = static_cast<std::size_t>(v) * W + u;
-      zbuf[i] = t;
-      hit[i] = -1 - surface;
+      zrow[u - region.u0] = t;
+      hrow[u - region.u0] = -1 - surface;
     }
   }
 }
 
-// Step 2: one primitive over its screen bounding box [u0, u1] x [v0, v1], nearer hits
-// replacing farther ones.
+// Step 2: one primitive over its screen bounding box [u0, u1] x [v0, v1] (within the
+// region), nearer hits replacing farther ones.
 void tracePrimitive(const Primitive& p, std::int32_t id, const Rays& r, int u0, int u1, int v0,
-                    int v1, int W, std::vector<float>& zbuf, std::vector<std::int32_t>& hit) {
+                    int v1, const Region region, float* zbuf, std::int32_t* hit) {
   const float cy = static_cast<float>(std::cos(p.yaw)), sy = static_cast<float>(std::sin(p.yaw));
   const V3 center{static_cast<float>(p.center.x()), static_cast<float>(p.center.y()),
                   static_cast<float>(p.center.z())};
@@ -309,8 +326,8 @@ void tracePrimitive(const Primitive& p, std::int32_t id, const Rays& r, int u0, 
   if (p.shape == Shape::Box) {
     for (int v = v0; v <= v1; ++v) {
       const V3 base = r.b[v] * l1 + l2;
-      float* zrow = &zbuf[static_cast<std::size_t>(v) * W];
-      std::int32_t* hrow = &hit[static_cast<std::size_t>(v) * W];
+      float* zrow = zbuf + region.index(u0, v);
+      std::int32_t* hrow = hit + region.index(u0, v);
       for (int u = u0; u <= u1; ++u) {
         const V3 d = r.a[u] * l0 + base;
         const float ix = 1.0f / d.x, iy = 1.0f / d.y, iz = 1.0f / d.z;
@@ -321,9 +338,9 @@ void tracePrimitive(const Primitive& p, std::int32_t id, const Rays& r, int u0, 
             std::max(std::max(std::min(tx1, tx2), std::min(ty1, ty2)), std::min(tz1, tz2));
         const float tmax =
             std::min(std::min(std::max(tx1, tx2), std::max(ty1, ty2)), std::max(tz1, tz2));
-        if (tmin <= tmax && tmin > kNear && tmin < zrow[u]) {
-          zrow[u] = tmin;
-          hrow[u] = id;
+        if (tmin <= tmax && tmin > kNear && tmin < zrow[u - u0]) {
+          zrow[u - u0] = tmin;
+          hrow[u - u0] = id;
         }
       }
     }
@@ -333,8 +350,8 @@ void tracePrimitive(const Primitive& p, std::int32_t id, const Rays& r, int u0, 
   const float cxy = ol.x * ol.x + ol.y * ol.y - r2;
   for (int v = v0; v <= v1; ++v) {
     const V3 base = r.b[v] * l1 + l2;
-    float* zrow = &zbuf[static_cast<std::size_t>(v) * W];
-    std::int32_t* hrow = &hit[static_cast<std::size_t>(v) * W];
+    float* zrow = zbuf + region.index(u0, v);
+    std::int32_t* hrow = hit + region.index(u0, v);
     for (int u = u0; u <= u1; ++u) {
       const V3 d = r.a[u] * l0 + base;
       float t = kInf;
@@ -353,21 +370,21 @@ void tracePrimitive(const Primitive& p, std::int32_t id, const Rays& r, int u0, 
         const float x = ol.x + tc * d.x, y = ol.y + tc * d.y;
         if (tc > kNear && tc < t && x * x + y * y <= r2) t = tc;
       }
-      if (t < zrow[u]) {
-        zrow[u] = t;
-        hrow[u] = id;
+      if (t < zrow[u - u0]) {
+        zrow[u - u0] = t;
+        hrow[u - u0] = id;
       }
     }
   }
 }
 
 // Step 3: projector shadows (see synth.hpp): row-wise scan from the projector side.
-std::vector<std::uint8_t> projectorShadows(const std::vector<float>& zbuf,
-                                           const CameraIntrinsics& K, const DepthNoiseParams& noise,
-                                           int W, int H) {
-  std::vector<std::uint8_t> shadow(zbuf.size(), 0);
+void projectorShadows(const std::vector<float>& zbuf, const CameraIntrinsics& K,
+                      const DepthNoiseParams& noise, int W, int H,
+                      std::vector<std::uint8_t>& shadow) {
+  shadow.assign(zbuf.size(), 0);
   if (!(noise.enabled && noise.projector_shadows && noise.projector_baseline_m > 0.0)) {
-    return shadow;
+    return;
   }
   const float fb = static_cast<float>(K.fx * noise.projector_baseline_m);
   for (int v = 0; v < H; ++v) {
@@ -379,7 +396,6 @@ std::vector<std::uint8_t> projectorShadows(const std::vector<float>& zbuf,
       min_col = std::min(min_col, col_p);
     }
   }
-  return shadow;
 }
 
 // What a ray hit at P: the surface's normal, material, object, the point in the
@@ -392,7 +408,27 @@ struct SurfaceHit {
   std::uint64_t salt = 0;
 };
 
-SurfaceHit surfaceAt(const SynthScene& scene, std::int32_t hit, const V3& P) {
+// A primitive's pose in the renderer's floats, worked out once per frame rather than once
+// per pixel (the same conversions, so the same bits).
+struct PrimitiveFrame {
+  float cos_yaw, sin_yaw;
+  V3 center, half;
+};
+
+std::vector<PrimitiveFrame> primitiveFrames(const SynthScene& scene) {
+  std::vector<PrimitiveFrame> out;
+  out.reserve(scene.primitives.size());
+  for (const Primitive& p : scene.primitives)
+    out.push_back({static_cast<float>(std::cos(p.yaw)), static_cast<float>(std::sin(p.yaw)),
+                   V3{static_cast<float>(p.center.x()), static_cast<float>(p.center.y()),
+                      static_cast<float>(p.center.z())},
+                   V3{static_cast<float>(p.half_extent.x()), static_cast<float>(p.half_extent.y()),
+                      static_cast<float>(p.half_extent.z())}});
+  return out;
+}
+
+SurfaceHit surfaceAt(const SynthScene& scene, const std::vector<PrimitiveFrame>& frames,
+                     std::int32_t hit, const V3& P) {
   static const std::array<V3, 6> kShellNormals = {
       {{0, 0, 1}, {0, 0, -1}, {1, 0, 0}, {-1, 0, 0}, {0, 1, 0}, {0, -1, 0}}};
   SurfaceHit h;
@@ -407,13 +443,10 @@ SurfaceHit surfaceAt(const SynthScene& scene, std::int32_t hit, const V3& P) {
     return h;
   }
   const Primitive& p = scene.primitives[hit];
-  const float cy = static_cast<float>(std::cos(p.yaw)), sy = static_cast<float>(std::sin(p.yaw));
-  const V3 center{static_cast<float>(p.center.x()), static_cast<float>(p.center.y()),
-                  static_cast<float>(p.center.z())};
-  const V3 local = rotZ(P - center, cy, -sy);
-  const float hx = static_cast<float>(p.half_extent.x()),
-              hy = static_cast<float>(p.half_extent.y()),
-              hz = static_cast<float>(p.half_extent.z());
+  const PrimitiveFrame& f = frames[hit];
+  const float cy = f.cos_yaw, sy = f.sin_yaw;
+  const V3 local = rotZ(P - f.center, cy, -sy);
+  const float hx = f.half.x, hy = f.half.y, hz = f.half.z;
   V3 nl;
   if (p.shape == Shape::Box) {
     const float ex = std::abs(local.x) / hx, ey = std::abs(local.y) / hy,
@@ -460,6 +493,7 @@ void shadePixels(const SynthScene& scene, const Rays& r, const std::vector<float
   const V3 light{X / 2, Y / 2, Hc - 0.05f};
   const float rgb_sigma = static_cast<float>(noise.rgb_noise_sigma);
   const std::uint64_t frame_key = detail::mix64(noise_seed ^ 0xd1b54a32d192ed03ULL);
+  const std::vector<PrimitiveFrame> frames = primitiveFrames(scene);
 
   for (int v = 0; v < H; ++v) {
     const V3 base = r.b[v] * r.c1 + r.c2;
@@ -468,7 +502,7 @@ void shadePixels(const SynthScene& scene, const Rays& r, const std::vector<float
       const V3 d = r.a[u] * r.c0 + base;
       const float t = zbuf[i];
       const V3 P = r.o + t * d;
-      const SurfaceHit s = surfaceAt(scene, hit[i], P);
+      const SurfaceHit s = surfaceAt(scene, frames, hit[i], P);
 
       // Colour: texture x (ambient + diffuse from a ceiling light) + sensor noise.
       const V3 to_light = light - P;
@@ -508,6 +542,69 @@ void shadePixels(const SynthScene& scene, const Rays& r, const std::vector<float
   }
 }
 
+// The camera of one frame in the room: its rays and the transform primitives are projected
+// with. Throws when the camera is outside the room.
+struct View {
+  Eigen::Isometry3d cam_to_world, world_to_cam;
+  Rays rays;
+  float X, Y, Hc;  // the room's box
+};
+
+View viewOf(const SynthScene& scene, const CameraPose& pose, const RenderOptions& options) {
+  const Eigen::Vector3d room = scene.room_size;
+  View view;
+  view.cam_to_world = cameraToWorld(pose);
+  const Eigen::Vector3d o_d = view.cam_to_world.translation();
+  if (!(o_d.x() > 0 && o_d.y() > 0 && o_d.z() > 0 && o_d.x() < room.x() && o_d.y() < room.y() &&
+        o_d.z() < room.z())) {
+    std::ostringstream msg;
+    msg << "synth: camera at (" << o_d.transpose() << ") is outside the room (" << room.transpose()
+        << ")";
+    throw Error(msg.str());
+  }
+  view.world_to_cam = view.cam_to_world.inverse();
+  view.rays = raysOf(view.cam_to_world, options.intrinsics, options.width, options.height);
+  view.X = static_cast<float>(room.x());
+  view.Y = static_cast<float>(room.y());
+  view.Hc = static_cast<float>(room.z());
+  return view;
+}
+
+// Steps 1 and 2 on the pixels of `region`: depth and hit (primitive index, or -1 - shell
+// surface) of every one, into buffers of region.pixels().
+void traceRegion(const SynthScene& scene, const View& view, const RenderOptions& options,
+                 const Region& region, std::vector<float>& zbuf, std::vector<std::int32_t>& hit) {
+  zbuf.resize(region.pixels());
+  hit.resize(region.pixels());
+  traceShell(view.rays, view.X, view.Y, view.Hc, region, zbuf.data(), hit.data());
+  for (std::size_t pi = 0; pi < scene.primitives.size(); ++pi) {
+    int u0, u1, v0, v1;
+    if (!screenBounds(scene.primitives[pi], view.world_to_cam, options.intrinsics, options.width,
+                      options.height, u0, u1, v0, v1))
+      continue;
+    u0 = std::max(u0, region.u0);
+    u1 = std::min(u1, region.u1);
+    v0 = std::max(v0, region.v0);
+    v1 = std::min(v1, region.v1);
+    if (u0 > u1 || v0 > v1) continue;
+    tracePrimitive(scene.primitives[pi], static_cast<std::int32_t>(pi), view.rays, u0, u1, v0, v1,
+                   region, zbuf.data(), hit.data());
+  }
+}
+
+// A thread's buffers, kept from frame to frame (every frame writes them whole before it
+// reads them): a 640x480 frame would otherwise map and zero 3 MB of fresh pages each time.
+struct Scratch {
+  std::vector<float> zbuf;
+  std::vector<std::int32_t> hit;
+  std::vector<std::uint8_t> shadow;
+};
+
+Scratch& threadScratch() {
+  thread_local Scratch scratch;
+  return scratch;
+}
+
 }  // namespace
 
 RenderedFrame render(const SynthScene& scene, const CameraPose& pose, const RenderOptions& options,
@@ -516,32 +613,11 @@ RenderedFrame render(const SynthScene& scene, const CameraPose& pose, const Rend
   const int W = options.width, H = options.height;
   const std::size_t N = static_cast<std::size_t>(W) * H;
   const CameraIntrinsics& K = options.intrinsics;
-  const Eigen::Vector3d room = scene.room_size;
+  const View view = viewOf(scene, pose, options);
 
-  const Eigen::Isometry3d cam_to_world = cameraToWorld(pose);
-  const Eigen::Vector3d o_d = cam_to_world.translation();
-  if (!(o_d.x() > 0 && o_d.y() > 0 && o_d.z() > 0 && o_d.x() < room.x() && o_d.y() < room.y() &&
-        o_d.z() < room.z())) {
-    std::ostringstream msg;
-    msg << "synth: camera at (" << o_d.transpose() << ") is outside the room (" << room.transpose()
-        << ")";
-    throw Error(msg.str());
-  }
-  const Eigen::Isometry3d world_to_cam = cam_to_world.inverse();
-  const Rays rays = raysOf(cam_to_world, K, W, H);
-
-  std::vector<float> zbuf(N);
-  std::vector<std::int32_t> hit(N);  // primitive index, or -1 - shell surface
-  const float X = static_cast<float>(room.x()), Y = static_cast<float>(room.y()),
-              Hc = static_cast<float>(room.z());
-  traceShell(rays, X, Y, Hc, W, H, zbuf, hit);
-  for (std::size_t pi = 0; pi < scene.primitives.size(); ++pi) {
-    int u0, u1, v0, v1;
-    if (!screenBounds(scene.primitives[pi], world_to_cam, K, W, H, u0, u1, v0, v1)) continue;
-    tracePrimitive(scene.primitives[pi], static_cast<std::int32_t>(pi), rays, u0, u1, v0, v1, W,
-                   zbuf, hit);
-  }
-  const std::vector<std::uint8_t> shadow = projectorShadows(zbuf, K, options.noise, W, H);
+  Scratch& scratch = threadScratch();
+  traceRegion(scene, view, options, Region{0, W - 1, 0, H - 1}, scratch.zbuf, scratch.hit);
+  projectorShadows(scratch.zbuf, K, options.noise, W, H, scratch.shadow);
 
   RenderedFrame out;
   RgbdFrame& frame = out.labeled.frame;
@@ -555,8 +631,44 @@ RenderedFrame render(const SynthScene& scene, const CameraPose& pose, const Rend
   out.labeled.labels.resize(N);
   out.true_depth_m.resize(N);
   out.object.resize(N);
-  shadePixels(scene, rays, zbuf, hit, shadow, options, X, Y, Hc, noise_seed, out);
+  shadePixels(scene, view.rays, scratch.zbuf, scratch.hit, scratch.shadow, options, view.X, view.Y,
+              view.Hc, noise_seed, out);
   return out;
+}
+
+int countObjectPixels(const SynthScene& scene, const CameraPose& pose,
+                      const RenderOptions& options, int object) {
+  validate(options);
+  if (object < 0 || static_cast<std::size_t>(object) >= scene.objects.size())
+    throw Error("synth: countObjectPixels: object " + std::to_string(object) +
+                " is not in the scene (" + std::to_string(scene.objects.size()) + " objects)");
+  const View view = viewOf(scene, pose, options);
+  const int W = options.width, H = options.height;
+  // Only the pixels one of the object's primitives is traced on can show it: the union of
+  // their screen bounding boxes (the whole image for the shell's surfaces, objects 0..5).
+  Region region{W, -1, H, -1};
+  auto add = [&region](int u0, int u1, int v0, int v1) {
+    region.u0 = std::min(region.u0, u0);
+    region.u1 = std::max(region.u1, u1);
+    region.v0 = std::min(region.v0, v0);
+    region.v1 = std::max(region.v1, v1);
+  };
+  if (object < 6) add(0, W - 1, 0, H - 1);
+  for (const Primitive& p : scene.primitives) {
+    int u0, u1, v0, v1;
+    if (p.object == object &&
+        screenBounds(p, view.world_to_cam, options.intrinsics, W, H, u0, u1, v0, v1))
+      add(u0, u1, v0, v1);
+  }
+  if (region.u0 > region.u1 || region.v0 > region.v1) return 0;
+  Scratch& scratch = threadScratch();
+  traceRegion(scene, view, options, region, scratch.zbuf, scratch.hit);
+  int count = 0;
+  for (std::size_t i = 0; i < region.pixels(); ++i) {
+    const std::int32_t h = scratch.hit[i];
+    count += (h < 0 ? -1 - h : scene.primitives[static_cast<std::size_t>(h)].object) == object;
+  }
+  return count;
 }
 
 }  // namespace findmug::synth

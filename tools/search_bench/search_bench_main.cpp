@@ -13,8 +13,8 @@
 // model, from apartments whose seeds no episode uses.
 //
 // Writes DIR/episodes.csv (one row per run and episode), DIR/summary.md (the tables and
-// paired ratios) and DIR/success_curve.svg. Episodes run on --jobs workers; each is a pure
-// function of its seeds, so the output does not depend on --jobs.
+// paired ratios) and DIR/success_curve.svg. Runs of episodes run on --jobs workers; each is
+// a pure function of its episode's seeds, so the output does not depend on --jobs.
 #include <spdlog/spdlog.h>
 
 #include <algorithm>
@@ -128,25 +128,69 @@ std::vector<ModelChoice> modelChoices(const Options& o) {
   return out;
 }
 
-// All rows of one episode, every run in the order of `runs`.
-std::vector<EpisodeRow> runEpisode(const Episode& episode, const std::vector<RunSpec>& runs,
-                                   const SimParams& params) {
+// The row of one run on one episode. The world is built again for every run (a pure
+// function of the episode's seeds, and cheap beside a run that feeds the daemon).
+EpisodeRow runOnEpisode(const Episode& episode, const RunSpec& run, const SimParams& params) {
   const World world = makeWorld(episode, params);
+  EpisodeRow row;
+  row.episode = episode;
+  row.run = run.label;
+  row.perception = run.perception;
+  row.model = run.model;
+  row.rooms = static_cast<int>(world.apartment.rooms.size());
+  row.mug_place = synth::mugPlaceName(world.mug.place);
+  row.mug_room =
+      world.mug.room >= 0 ? synth::roomKindName(world.apartment.rooms[world.mug.room].kind) : "-";
+  row.shortest_path_m = world.shortest_path_m;
+  row.result = runStrategy(run.strategy, world, params, run.setup);
+  return row;
+}
+
+// Every run on every episode on `jobs` workers: the rows in the order of episodes, then runs.
+std::vector<EpisodeRow> runAll(const std::vector<Episode>& episodes,
+                               const std::vector<RunSpec>& runs, const SimParams& params,
+                               int jobs, bool quiet) {
+  // Work items of one run on one episode, not whole episodes: a run that feeds the daemon
+  // takes seconds to minutes, an oracle-perception baseline milliseconds, so whole episodes
+  // left one worker busy for minutes at the end. The daemon's runs go first for the same
+  // reason. Rows keep the order of episodes, then runs, whichever worker ran them.
+  std::vector<std::size_t> run_order(runs.size());
+  for (std::size_t r = 0; r < runs.size(); ++r) run_order[r] = r;
+  std::stable_partition(run_order.begin(), run_order.end(),
+                        [&runs](std::size_t r) { return runs[r].setup.model != nullptr; });
+  std::vector<std::pair<std::size_t, std::size_t>> items;  // (episode, run)
+  for (const std::size_t r : run_order)
+    for (std::size_t e = 0; e < episodes.size(); ++e) items.push_back({e, r});
+  std::vector<std::vector<EpisodeRow>> results(episodes.size(),
+                                               std::vector<EpisodeRow>(runs.size()));
+  std::vector<std::size_t> runs_done(episodes.size(), 0);
+  std::atomic<std::size_t> next{0};
+  std::mutex mutex;
+  std::string error;
+  auto worker = [&] {
+    for (std::size_t k; (k = next.fetch_add(1)) < items.size();) {
+      const auto [i, r] = items[k];
+      try {
+        results[i][r] = runOnEpisode(episodes[i], runs[r], params);
+      } catch (const std::exception& e) {
+        std::lock_guard lock(mutex);
+        if (error.empty()) error = e.what();
+        next = items.size();  // the other workers stop too
+        return;
+      }
+      std::lock_guard lock(mutex);
+      if (++runs_done[i] == runs.size() && !quiet)
+        std::fprintf(stderr, "episode %zu/%zu (apartment %d, episode %d) done\n", i + 1,
+                     episodes.size(), episodes[i].apartment, episodes[i].index);
+    }
+  };
+  std::vector<std::thread> threads;
+  for (int j = 0; j < std::max(1, jobs); ++j) threads.emplace_back(worker);
+  for (auto& t : threads) t.join();
+  if (!error.empty()) throw Error(error);
+
   std::vector<EpisodeRow> rows;
-  for (const RunSpec& run : runs) {
-    EpisodeRow row;
-    row.episode = episode;
-    row.run = run.label;
-    row.perception = run.perception;
-    row.model = run.model;
-    row.rooms = static_cast<int>(world.apartment.rooms.size());
-    row.mug_place = synth::mugPlaceName(world.mug.place);
-    row.mug_room =
-        world.mug.room >= 0 ? synth::roomKindName(world.apartment.rooms[world.mug.room].kind) : "-";
-    row.shortest_path_m = world.shortest_path_m;
-    row.result = runStrategy(run.strategy, world, params, run.setup);
-    rows.push_back(row);
-  }
+  for (const auto& r : results) rows.insert(rows.end(), r.begin(), r.end());
   return rows;
 }
 
@@ -239,33 +283,7 @@ int run(const Options& o) {
   std::vector<std::string> labels;
   for (const RunSpec& r : runs) labels.push_back(r.label);
 
-  std::vector<std::vector<EpisodeRow>> results(episodes.size());
-  std::atomic<std::size_t> next{0};
-  std::mutex mutex;
-  std::string error;
-  auto worker = [&] {
-    for (std::size_t i; (i = next.fetch_add(1)) < episodes.size();) {
-      try {
-        results[i] = runEpisode(episodes[i], runs, params);
-      } catch (const std::exception& e) {
-        std::lock_guard lock(mutex);
-        if (error.empty()) error = e.what();
-        return;
-      }
-      if (!o.quiet) {
-        std::lock_guard lock(mutex);
-        std::fprintf(stderr, "episode %zu/%zu (apartment %d, episode %d) done\n", i + 1,
-                     episodes.size(), episodes[i].apartment, episodes[i].index);
-      }
-    }
-  };
-  std::vector<std::thread> threads;
-  for (int j = 0; j < std::max(1, o.jobs); ++j) threads.emplace_back(worker);
-  for (auto& t : threads) t.join();
-  if (!error.empty()) throw Error(error);
-
-  std::vector<EpisodeRow> rows;
-  for (const auto& r : results) rows.insert(rows.end(), r.begin(), r.end());
+  const std::vector<EpisodeRow> rows = runAll(episodes, runs, params, o.jobs, o.quiet);
   std::filesystem::create_directories(o.out_dir);
   if (!o.trace_dir.empty()) writeTraces(o.trace_dir, rows);
   std::ofstream csv(o.out_dir + "/episodes.csv");

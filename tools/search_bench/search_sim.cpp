@@ -252,10 +252,11 @@ bool mugRecognisable(const World& world, const SimParams& params, const Eigen::V
   const double d = std::max(to.norm(), 0.1);
   const double half_width = std::asin(std::min(1.0, 0.08 / d));
   if (std::abs(wrap(std::atan2(to.y(), to.x()) - yaw)) > 0.547 + half_width + 0.05) return false;
+  // The mug's pixels only, not a whole frame: countObjectPixels equals the count in the
+  // rendered frame's object index (test ObjectPixelCountEqualsTheRenderedFrames).
   static const synth::RenderOptions options = oracleRender();
-  const synth::RenderedFrame frame =
-      synth::render(world.apartment.scene, cameraAt(params, xy, yaw), options, 0);
-  return mugPixels(world, frame) >= params.recognise_min_pixels;
+  return synth::countObjectPixels(world.apartment.scene, cameraAt(params, xy, yaw), options,
+                                  world.mug.object) >= params.recognise_min_pixels;
 }
 
 World makeWorld(const Episode& episode, const SimParams& params) {

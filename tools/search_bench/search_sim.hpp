@@ -124,7 +124,8 @@ synth::CameraPose cameraAt(const SimParams& params, const Eigen::Vector2d& xy, d
 int mugPixels(const World& world, const synth::RenderedFrame& frame);
 bool mugInRange(const World& world, const SimParams& params, const Eigen::Vector2d& xy);
 // Whether the oracle recogniser sees the mug from a pose: a cheap range and bearing test,
-// then a noise-free render.
+// then the mug's pixel count of the frame from there (synth::countObjectPixels, without
+// rendering the frame).
 bool mugRecognisable(const World& world, const SimParams& params, const Eigen::Vector2d& xy,
                      double yaw);
 

@@ -357,6 +357,15 @@ struct RenderedFrame {
 RenderedFrame render(const SynthScene& scene, const CameraPose& pose, const RenderOptions& options,
                      std::uint64_t noise_seed);
 
+// How many pixels of scene object `object` (an index into SynthScene::objects) the frame
+// render() would make from `pose` shows: the same ray casts in the same order on the pixels
+// where that object's primitives can appear, without shading or noise, so it equals the
+// count of `object` in render(...).object for every noise seed, at a fraction of the cost
+// (an oracle recogniser asks only this). Throws like render(), and when `object` is not in
+// the scene.
+int countObjectPixels(const SynthScene& scene, const CameraPose& pose, const RenderOptions& options,
+                      int object);
+
 // One depth sample of the noise model above for an exact depth z (metres) on
 // a surface seen head-on, without dropouts: the millimetre value written to
 // the depth image (0 when out of range). `gaussian` is a standard normal

@@ -135,6 +135,71 @@ TEST(MultiRoomApartment, TargetMugFollowsItsPrior) {
   EXPECT_THROW(placeTargetMug(apt, 1, {0.0, 0.0, 0.0}), Error);
 }
 
+// The oracle recogniser of the search benchmark counts the mug's pixels with
+// countObjectPixels instead of rendering a frame: the count must be the full render's, to
+// the pixel, whether the mug is in full view, cut by the image border, hidden behind
+// furniture or walls, or out of view; so must the count of any other object.
+TEST(MultiRoomApartment, ObjectPixelCountEqualsTheRenderedFrames) {
+  int views = 0, mug_seen = 0, mug_partly = 0, mug_hidden_in_box = 0;
+  for (std::uint64_t seed : {2ULL, 5ULL, 11ULL}) {
+    MultiRoomApartment apt = makeMultiRoomApartment(seed);
+    const TargetMug mug = placeTargetMug(apt, seed * 7 + 1);
+    const Eigen::Vector3d box = apt.scene.room_size;
+    int full = 0;
+    for (int k = 0; k < 24; ++k) {
+      // Around the mug at 0.7-4 m, facing it or turned away by up to about a field of view.
+      const double bearing = 0.9 * k, range = 0.7 + 0.15 * k;
+      CameraPose pose;
+      pose.xy = mug.position.head<2>() + range * Eigen::Vector2d(std::cos(bearing),
+                                                                 std::sin(bearing));
+      pose.xy.x() = std::clamp(pose.xy.x(), 0.2, box.x() - 0.2);
+      pose.xy.y() = std::clamp(pose.xy.y(), 0.2, box.y() - 0.2);
+      const Eigen::Vector2d to = mug.position.head<2>() - pose.xy;
+      pose.yaw = std::atan2(to.y(), to.x()) + (k % 4 == 3 ? 0.55 : 0.12 * (k % 3 - 1));
+      pose.pitch_rad = k % 2 ? 0.5 : 0.3;
+      RenderOptions options;
+      if (k % 3 == 0) options.noise.enabled = false;  // the object index ignores the noise
+      const RenderedFrame frame = render(apt.scene, pose, options, seed * 100 + k);
+      auto rendered = [&frame](int object) {
+        return static_cast<int>(std::count(frame.object.begin(), frame.object.end(), object));
+      };
+      const int n = rendered(mug.object);
+      ASSERT_EQ(countObjectPixels(apt.scene, pose, options, mug.object), n)
+          << "seed " << seed << " view " << k;
+      ++views;
+      full = std::max(full, n);
+      mug_seen += n > 0;
+      // In the middle of the image, yet not a pixel: something stands in front of it.
+      const Eigen::Vector3d c = cameraToWorld(pose).inverse() *
+                                (mug.position + Eigen::Vector3d(0, 0, 0.05));
+      const double u = 525.0 * c.x() / c.z() + 319.5, v = 525.0 * c.y() / c.z() + 239.5;
+      if (c.z() > 0.3 && u > 40 && u < 600 && v > 40 && v < 440 && n == 0) ++mug_hidden_in_box;
+      if (n > 0 && (u < 10 || u > 630 || v < 10 || v > 470)) ++mug_partly;
+      // Other objects: the floor (a shell surface, everywhere) and the furniture under the mug.
+      EXPECT_EQ(countObjectPixels(apt.scene, pose, options, 0), rendered(0));
+      for (const Primitive& p : apt.scene.primitives)
+        if (p.object != mug.object && (p.center - mug.position).norm() < 1.0) {
+          EXPECT_EQ(countObjectPixels(apt.scene, pose, options, p.object), rendered(p.object))
+              << "object " << p.object << " seed " << seed << " view " << k;
+          break;
+        }
+    }
+    EXPECT_GT(full, 150) << "seed " << seed << ": the mug was never in full view";
+  }
+  EXPECT_EQ(views, 72);
+  EXPECT_GT(mug_seen, 10);
+  EXPECT_LT(mug_seen, views);
+  EXPECT_GT(mug_hidden_in_box + mug_partly, 0);
+  MultiRoomApartment apt = makeMultiRoomApartment(2);
+  CameraPose pose;
+  pose.xy = {1.0, 1.0};
+  EXPECT_THROW(countObjectPixels(apt.scene, pose, RenderOptions{},
+                                 static_cast<int>(apt.scene.objects.size())),
+               Error);
+  pose.xy = {-1.0, 1.0};
+  EXPECT_THROW(countObjectPixels(apt.scene, pose, RenderOptions{}, 0), Error);
+}
+
 TEST(MultiRoomApartment, BadParametersAreRejected) {
   MultiRoomParams p;
   p.rooms_min = 5;
