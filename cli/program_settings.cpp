@@ -101,6 +101,9 @@ const SettingsTable<DaemonConfig>& daemonSettings() {
           return {};
         },
         "trace, debug, info, warn, error"));
+    t.add(textSetting<D>(
+        "daemon.frame_trace_file", [](D& d) -> std::string& { return d.frame_trace_file; },
+        nullptr, "one CSV row per published frame: its time in each queue and step; empty = off"));
     t.add(boolSetting<D>(
         "daemon.command_input", [](D& d) -> bool& { return d.command_input; },
         "listen for command_t (reload_model) on FINDMUG_COMMAND"));

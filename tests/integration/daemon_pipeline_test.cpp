@@ -189,13 +189,14 @@ void runAndCompare(const std::string& spec, std::size_t expected_frames,
 
 // A sink that keeps what it was handed (the pipeline's extension point, used as a client would).
 struct RecordingSink : ResultSink {
-  std::string name;
+  std::string label;
   std::vector<std::string>* order;
   std::vector<std::int64_t> seqs, latencies_us;
   std::vector<bool> had_pose;
-  RecordingSink(std::string n, std::vector<std::string>* o) : name(std::move(n)), order(o) {}
+  RecordingSink(std::string n, std::vector<std::string>* o) : label(std::move(n)), order(o) {}
+  std::string name() const override { return "RecordingSink " + label; }
   void consume(FrameResult& r) override {
-    order->push_back(name);
+    order->push_back(label);
     seqs.push_back(r.labelled.segmented.prepared.frame.seq);
     latencies_us.push_back(r.latency_us);
     had_pose.push_back(r.pose.has_value());
@@ -224,7 +225,7 @@ TEST(FrameSteps, PrepareSegmentPublishDoWhatSegmenterProcessDoesInOrder) {
     frame.seq = static_cast<std::int64_t>(10 + i);
     const LabelledFrame want = segmenter.process(frame);
     const auto arrival = StepClock::now();
-    FrameJob job{frame, arrival};
+    FrameJob job{frame, arrival, {}};
     PreparedJob prepared = prepare(job);
     EXPECT_TRUE(prepared.prepared.ground.has_value());
     ResultJob result = segment(prepared);
@@ -247,7 +248,7 @@ TEST(FrameSteps, ABrokenFrameIsRefusedByPrepareNamingIt) {
   frame.height = 480;
   frame.seq = 77;
   frame.depth_mm.assign(10, 1000);  // not 640 x 480 pixels
-  FrameJob job{frame, StepClock::now()};
+  FrameJob job{frame, StepClock::now(), {}};
   try {
     prepare(job);
     FAIL() << "a frame whose depth buffer does not match its size was prepared";
@@ -315,7 +316,7 @@ TEST(DaemonPipeline, SequentialModeRunsTheSamePipelineSynchronously) {
   expectSameLabels(expected[1], published.labels[1]);
 }
 
-TEST(DaemonPipeline, HeldSegmentStageDropsTheOldestFramesAndTheNewestWin) {
+TEST(DaemonPipeline, HeldSegmentStageDropsTheStaleFramesAtTheDoorAndTheNewestWin) {
   FINDMUG_REQUIRE_DATA(nyu, "nyuv2_labeled");
   ASSERT_TRUE(sharedModel());
   TempDir tmp;
@@ -354,33 +355,35 @@ TEST(DaemonPipeline, HeldSegmentStageDropsTheOldestFramesAndTheNewestWin) {
     std::unique_lock lock(m);
     ASSERT_TRUE(cv.wait_for(lock, 120s, [&] { return first_entered; }));
   }
+  // The worker is held: no frame can be taken now without dropping one, and a source loop
+  // (waitForRoom) leaves it in the source once the place after the door is taken.
   for (int seq = 1; seq < kFrames; ++seq) submit(seq);
-  // Wait (deadline only guards a hang) until the segment queue is full: the
-  // prepare stage then waits at the door, and whatever arrives meanwhile
-  // waits in the entry queue, which keeps the newest frames.
+  // Wait (deadline only guards a hang) until one prepared frame holds the segment queue's
+  // one place: the prepare stage then waits at the door, where newer frames push out older
+  // ones, and the source loop would wait too.
   auto segment_depth = [&] {
     const findmug_lcm::status_t s = makeStatus(pipeline);
     for (int i = 0; i < s.num_queues; ++i) {
-      if (s.queue_names[i] == "segment") return s.queue_depths[i];
+      if (s.queue_names[i] == "segment") {
+        EXPECT_EQ(s.queue_capacities[i], 1);
+        return s.queue_depths[i];
+      }
     }
     return -1;
   };
   const auto deadline = std::chrono::steady_clock::now() + 120s;
-  while (segment_depth() != 2 && std::chrono::steady_clock::now() < deadline) {
+  while ((segment_depth() != 1 || pipeline.counters().pending != 4) &&
+         std::chrono::steady_clock::now() < deadline) {
     std::this_thread::sleep_for(10ms);
   }
-  ASSERT_EQ(segment_depth(), 2);
-  std::this_thread::sleep_for(200ms);  // let the prepare stage settle at the door
-  const std::uint64_t pending = pipeline.counters().pending;
-  // Held + segment queue + 0..2 in the entry queue (how many prepare took
-  // before the segment queue filled depends on timing).
-  ASSERT_GE(pending, 3u);
-  ASSERT_LE(pending, 5u);
-  const auto kept = static_cast<std::int64_t>(pending);
+  ASSERT_EQ(segment_depth(), 1);
+  EXPECT_FALSE(pipeline.waitForRoom(50ms)) << "a source loop would take a frame that must wait";
+  // Held + the segment queue's place + the door's two newest.
+  ASSERT_EQ(pipeline.counters().pending, 4u);
   const findmug_lcm::status_t held = makeStatus(pipeline);
-  EXPECT_EQ(held.frames_dropped, kFrames - kept);
+  EXPECT_EQ(held.frames_dropped, kFrames - 4);
   // Every drop happened at the door, before any work was spent on the frame.
-  EXPECT_EQ(held.frames_dropped_at_door, kFrames - kept);
+  EXPECT_EQ(held.frames_dropped_at_door, kFrames - 4);
   EXPECT_EQ(held.frames_dropped_in_pipeline, 0);
   EXPECT_EQ(held.frames_dropped_at_shutdown, 0);
   {
@@ -390,25 +393,174 @@ TEST(DaemonPipeline, HeldSegmentStageDropsTheOldestFramesAndTheNewestWin) {
   cv.notify_all();
   pipeline.stop(StopMode::Drain);
 
+  // Released: the held frame, the prepared one, then the newest at the door; the other
+  // frame at the door was stale once the prepare stage could take one (dropped, counted).
   const PipelineCounters c = pipeline.counters();
   EXPECT_EQ(c.received, static_cast<std::uint64_t>(kFrames));
-  EXPECT_EQ(c.processed, pending);
-  EXPECT_EQ(c.dropped, static_cast<std::uint64_t>(kFrames - kept));
-  EXPECT_EQ(c.dropped_at_door, static_cast<std::uint64_t>(kFrames - kept));
+  EXPECT_EQ(c.processed, 3u);
+  EXPECT_EQ(c.dropped, static_cast<std::uint64_t>(kFrames - 3));
+  EXPECT_EQ(c.dropped_at_door, static_cast<std::uint64_t>(kFrames - 3));
   EXPECT_EQ(c.rejected, 0u);
   const Published published = readPublished(tmp.str("out.lcmlog"));
   std::vector<std::int64_t> seqs;
   for (const auto& l : published.labels) seqs.push_back(l.seq);
-  // The held frame first, in frame order, and the newest frame last: the
-  // door dropped older waiting frames in favour of newer ones.
-  ASSERT_EQ(seqs.size(), pending);
+  ASSERT_EQ(seqs.size(), 3u);
   EXPECT_EQ(seqs.front(), 0);
   EXPECT_TRUE(std::is_sorted(seqs.begin(), seqs.end()));
   EXPECT_EQ(seqs.back(), kFrames - 1);
   ASSERT_FALSE(published.statuses.empty());
-  EXPECT_EQ(published.statuses.back().frames_dropped, kFrames - kept);
-  EXPECT_EQ(published.statuses.back().frames_dropped_at_door, kFrames - kept);
-  EXPECT_EQ(published.statuses.back().frames_processed, kept);
+  EXPECT_EQ(published.statuses.back().frames_dropped, kFrames - 3);
+  EXPECT_EQ(published.statuses.back().frames_dropped_at_door, kFrames - 3);
+  EXPECT_EQ(published.statuses.back().frames_processed, 3);
+}
+
+// A sink that blocks until released (a slow disk, a stuck client) holds the publish thread
+// only: the segmentation workers go on with every frame, and the publish queue drops its
+// oldest results (counted "in the pipeline") instead of making them wait.
+TEST(DaemonPipeline, ASlowSinkNeverStallsTheSegmentWorkers) {
+  FINDMUG_REQUIRE_DATA(nyu, "nyuv2_labeled");
+  ASSERT_TRUE(sharedModel());
+  TempDir tmp;
+  test::TestConfig config = baseConfig("openni2", tmp.str("out.lcmlog"));
+  config.set("daemon.workers", "1");
+  config.set("daemon.queue_capacity", "2");
+
+  struct HeldSink : ResultSink {
+    std::mutex m;
+    std::condition_variable cv;
+    bool entered = false, release = false;
+    std::vector<std::int64_t> seqs;
+    std::string name() const override { return "HeldSink"; }
+    void consume(FrameResult& r) override {
+      std::unique_lock lock(m);
+      seqs.push_back(r.labelled.segmented.prepared.frame.seq);
+      entered = true;
+      cv.notify_all();
+      cv.wait(lock, [&] { return release; });
+    }
+  };
+  auto sink = std::make_shared<HeldSink>();
+  std::mutex segmented_mutex;
+  std::condition_variable segmented_cv;
+  int segmenting = 0;  // frames a worker has started on
+  PipelineHooks hooks;
+  hooks.before_segment = [&](const RgbdFrame&) {
+    std::lock_guard lock(segmented_mutex);
+    ++segmenting;
+    segmented_cv.notify_all();
+  };
+  DatasetFolder ds(nyu.string());
+  const RgbdFrame frame = ds.load(6).frame;
+  constexpr int kFrames = 8;
+  Pipeline pipeline(config.segmenter, config.daemon, sharedModel()->forest, "tiny",
+                    ExecutionMode::Threaded, hooks);
+  pipeline.addSink(sink);
+  pipeline.start();
+  for (int seq = 0; seq < kFrames; ++seq) {
+    RgbdFrame f = frame;
+    f.seq = seq;
+    f.utime = 1000 + static_cast<std::uint64_t>(seq);
+    ASSERT_TRUE(pipeline.submit(std::move(f)));
+    // One frame at a time, each once the previous is in a worker: nothing waits at the door.
+    std::unique_lock lock(segmented_mutex);
+    ASSERT_TRUE(segmented_cv.wait_for(lock, 120s, [&] { return segmenting == seq + 1; }))
+        << "frame " << seq << " never reached a segmentation worker: the worker is stalled";
+  }
+  {
+    std::unique_lock lock(sink->m);
+    ASSERT_TRUE(sink->cv.wait_for(lock, 120s, [&] { return sink->entered; }));
+  }
+  // Frame 0 is in the held sink, the last three results wait in the publish queue (its
+  // capacity: daemon.queue_capacity + one per worker); the others were segmented and then
+  // dropped at publish. (With a publish queue that made the workers wait, the worker would
+  // stop at frame 4 and the loop above would time out.)
+  const std::uint64_t expected_drops = kFrames - 1 - 3;
+  const auto deadline = std::chrono::steady_clock::now() + 120s;
+  while (pipeline.counters().dropped_in_pipeline < expected_drops &&
+         std::chrono::steady_clock::now() < deadline) {
+    std::this_thread::sleep_for(10ms);
+  }
+  const PipelineCounters during = pipeline.counters();
+  EXPECT_EQ(during.dropped_in_pipeline, expected_drops);
+  EXPECT_EQ(during.dropped_at_door, 0u);
+  EXPECT_EQ(makeStatus(pipeline).frames_dropped_in_pipeline,
+            static_cast<std::int64_t>(expected_drops));
+  {
+    std::lock_guard lock(sink->m);
+    sink->release = true;
+  }
+  sink->cv.notify_all();
+  pipeline.stop(StopMode::Drain);
+  const PipelineCounters c = pipeline.counters();
+  EXPECT_EQ(c.processed, 4u);
+  EXPECT_EQ(c.dropped, expected_drops);
+  EXPECT_EQ(sink->seqs, (std::vector<std::int64_t>{0, kFrames - 3, kFrames - 2, kFrames - 1}));
+}
+
+// The sinks' order is declared, not implied: a sink that reads a slot of the frame result
+// (here the map's ids, which TableMapSink adds) cannot be added before the sink that writes
+// it, and a sink that fills a slot it did not declare fails the frame.
+TEST(FrameSteps, SinksThatBreakTheDeclaredSlotOrderAreRefused) {
+  struct Reader : ResultSink {
+    std::string name() const override { return "Reader"; }
+    SinkSlots slots() const override { return {0, kMapInfo}; }
+    void consume(FrameResult&) override {}
+  };
+  struct Writer : ResultSink {
+    std::string name() const override { return "Writer"; }
+    SinkSlots slots() const override { return {kMapInfo, 0}; }
+    void consume(FrameResult&) override {}
+  };
+  struct Sneaky : ResultSink {
+    std::string name() const override { return "Sneaky"; }
+    void consume(FrameResult& r) override { r.published_labels = LabelImage{}; }
+  };
+  {
+    PublishStep publish(0);
+    publish.addSink(std::make_shared<Reader>());
+    try {
+      publish.addSink(std::make_shared<Writer>());
+      FAIL() << "a writer after its reader was accepted";
+    } catch (const std::logic_error& e) {
+      EXPECT_NE(std::string(e.what()).find("Writer writes map_info, which Reader"),
+                std::string::npos)
+          << e.what();
+    }
+  }
+  {
+    PublishStep publish(0);
+    publish.addSink(std::make_shared<Writer>());
+    publish.addSink(std::make_shared<Reader>());  // the declared order
+    EXPECT_THROW(publish.addSink(std::make_shared<Writer>()), std::logic_error);  // two writers
+  }
+  {
+    // The daemon's own sinks, in the daemon's order, are accepted; the publisher before the
+    // table map is not.
+    auto bus = std::make_shared<io::MemoryBus>();
+    auto table_map = std::make_shared<TableMapSink>(TableMapConfig{}, TableConfig{}, true,
+                                                    [](const std::string&) {});
+    auto publisher = std::make_shared<LcmPublisherSink>(
+        bus, LcmPublisherSink::Channels{"L", "T", "O", "M", "S"}, false, true);
+    PublishStep right(0);
+    EXPECT_NO_THROW(right.addSink(table_map));
+    EXPECT_NO_THROW(right.addSink(publisher));
+    PublishStep wrong(0);
+    wrong.addSink(publisher);
+    EXPECT_THROW(wrong.addSink(table_map), std::logic_error);
+  }
+  {
+    PublishStep publish(0);
+    publish.addSink(std::make_shared<Sneaky>());
+    LabelledFrame labelled;
+    ResultJob job{std::move(labelled), StepClock::now(), {}};
+    try {
+      publish(job, StepClock::now());
+      FAIL() << "an undeclared slot write went through";
+    } catch (const std::logic_error& e) {
+      EXPECT_NE(std::string(e.what()).find("Sneaky filled published_labels"), std::string::npos)
+          << e.what();
+    }
+  }
 }
 
 // The object work (matching, object map) runs on its own worker: while it is held, the

@@ -71,38 +71,50 @@ TEST(BoundedQueue, ClearCountsDiscardedItemsAsDropped) {
   EXPECT_EQ(q.size(), 0u);
 }
 
-TEST(BoundedQueue, BlockPolicyWaitsForRoomInsteadOfDropping) {
-  BoundedQueue<int> q(1, DropPolicy::Block);
+// The pop takes the newest waiting item: the older ones are stale and dropped (counted as
+// evicted), so a consumer never works on an item behind a newer one that already waits.
+TEST(BoundedQueue, KeepNewestPopTakesTheNewestAndCountsTheStaleOnes) {
+  BoundedQueue<int> q(3, DropPolicy::KeepNewest);
   q.push(1);
-  std::atomic<bool> pushed{false};
-  std::thread producer([&] {
-    q.push(2);  // must wait until the consumer pops
-    pushed = true;
-  });
-  // The producer cannot finish while the queue is full; pop releases it.
-  auto first = q.pop();
-  producer.join();
-  EXPECT_TRUE(pushed);
-  ASSERT_TRUE(first);
-  EXPECT_EQ(first->value, 1);
-  auto second = q.pop();
-  ASSERT_TRUE(second);
-  EXPECT_EQ(second->value, 2);
-  EXPECT_EQ(q.droppedCount(), 0u);
+  q.push(2);
+  q.push(3);
+  EXPECT_EQ(q.push(4), PushResult::AcceptedDroppedOldest);  // full: as DropOldest
+  auto newest = q.pop();
+  ASSERT_TRUE(newest);
+  EXPECT_EQ(newest->value, 4);
+  EXPECT_EQ(newest->ticket, 0u);  // tickets stay consecutive for the reorder buffer
+  EXPECT_EQ(q.size(), 0u);
+  EXPECT_EQ(q.droppedCount(), 3u);  // 1 at the push, 2 and 3 at the pop
+  EXPECT_EQ(q.evictedCount(), 3u);
+  q.push(5);  // alone: taken as it is
+  auto next = q.pop();
+  ASSERT_TRUE(next);
+  EXPECT_EQ(next->value, 5);
+  EXPECT_EQ(next->ticket, 1u);
+  EXPECT_EQ(q.droppedCount(), 3u);
 }
 
-TEST(BoundedQueue, CloseWakesABlockedProducer) {
-  BoundedQueue<int> q(1, DropPolicy::Block);
-  q.push(1);
-  PushResult result = PushResult::Accepted;
-  std::thread producer([&] { result = q.push(2); });
-  q.close();
-  producer.join();
-  EXPECT_EQ(result, PushResult::Closed);
+// No policy makes push wait: a producer (a stage's worker handing its result on) is never
+// stalled by a consumer that does not pop.
+TEST(BoundedQueue, PushNeverWaitsForAConsumer) {
+  for (DropPolicy policy : {DropPolicy::DropOldest, DropPolicy::KeepNewest}) {
+    BoundedQueue<int> q(1, policy);
+    std::atomic<int> pushed{0};
+    std::thread producer([&] {
+      for (int i = 0; i < 100; ++i) {
+        q.push(i);
+        ++pushed;
+      }
+    });
+    producer.join();  // would hang here if a push waited for room
+    EXPECT_EQ(pushed.load(), 100);
+    EXPECT_EQ(q.size(), 1u);
+    EXPECT_EQ(q.droppedCount(), 99u);
+  }
 }
 
 TEST(BoundedQueue, ZeroCapacityIsRejected) {
-  EXPECT_THROW(BoundedQueue<int>(0, DropPolicy::Block), std::invalid_argument);
+  EXPECT_THROW(BoundedQueue<int>(0, DropPolicy::DropOldest), std::invalid_argument);
 }
 
 TEST(ReorderBuffer, ReleasesInTicketOrderAndSkipsTombstones) {
@@ -143,13 +155,13 @@ TEST(Stage, SequentialRunsInlineAndInOrder) {
 }
 
 TEST(Stage, ParallelWorkersPublishInInputOrder) {
-  // Random per-item work so that workers finish out of order; the block
-  // policy makes sure nothing is dropped and every item must come out.
+  // Random per-item work so that workers finish out of order; a queue as large as the input
+  // makes sure nothing is dropped and every item must come out.
   constexpr int kItems = 200;
   std::mutex m;
   std::vector<int> out;
   std::atomic<int> concurrent{0}, max_concurrent{0};
-  Stage<int, int> stage({"work", ExecutionMode::Threaded, 4, 8, DropPolicy::Block},
+  Stage<int, int> stage({"work", ExecutionMode::Threaded, 4, kItems, DropPolicy::DropOldest},
                         {.work = [&](int& x) -> std::optional<int> {
                            const int now = ++concurrent;
                            int seen = max_concurrent.load();
@@ -255,7 +267,7 @@ TEST(Stage, TickRunsOnTheWorkerThread) {
   std::atomic<int> ticks{0};
   std::thread::id worker_id, tick_id;
   std::mutex m;
-  Stage<int, int> stage({"tick", ExecutionMode::Threaded, 1, 2, DropPolicy::Block, 10s, 1ms},
+  Stage<int, int> stage({"tick", ExecutionMode::Threaded, 1, 2, DropPolicy::DropOldest, 10s, 1ms},
                         {.work = [&](int& x) -> std::optional<int> {
                            std::lock_guard lock(m);
                            worker_id = std::this_thread::get_id();
