@@ -55,7 +55,7 @@ const SettingsTable<DaemonConfig>& daemonSettings() {
         "forest model file"));
     t.add(integerSetting<D, int>(
         "daemon.queue_capacity", [](D& d) -> int& { return d.queue_capacity; }, 1, 64,
-        "frames per queue between stages"));
+        "frames at the pipeline entry; results in the publish queue besides one per worker"));
     t.add(integerSetting<D, int>(
         "daemon.workers", [](D& d) -> int& { return d.workers; }, 0, 64,
         "segmentation workers; 0 = one per CPU core"));
