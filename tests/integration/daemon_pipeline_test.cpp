@@ -10,6 +10,7 @@
 #include <condition_variable>
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <map>
 #include <mutex>
 #include <thread>
@@ -343,6 +344,18 @@ TEST(DaemonPipeline, HeldSegmentStageDropsTheStaleFramesAtTheDoorAndTheNewestWin
   constexpr int kFrames = 10;
   Pipeline pipeline(config.segmenter, dc, sharedModel()->forest, "tiny", ExecutionMode::Threaded,
                     hooks);
+  // Whatever happens below, the held worker is let go before the pipeline is destroyed
+  // (its destructor joins the worker).
+  struct Releaser {
+    std::function<void()> release;
+    ~Releaser() { release(); }
+  } releaser{[&] {
+    {
+      std::lock_guard lock(m);
+      release = true;
+    }
+    cv.notify_all();
+  }};
   pipeline.start();
   auto submit = [&](int seq) {
     RgbdFrame f = frame;
@@ -372,46 +385,47 @@ TEST(DaemonPipeline, HeldSegmentStageDropsTheStaleFramesAtTheDoorAndTheNewestWin
     return -1;
   };
   const auto deadline = std::chrono::steady_clock::now() + 120s;
-  while ((segment_depth() != 1 || pipeline.counters().pending != 4) &&
-         std::chrono::steady_clock::now() < deadline) {
+  while (segment_depth() != 1 && std::chrono::steady_clock::now() < deadline) {
     std::this_thread::sleep_for(10ms);
   }
   ASSERT_EQ(segment_depth(), 1);
+  std::this_thread::sleep_for(200ms);  // let the prepare stage settle at the gate
   EXPECT_FALSE(pipeline.waitForRoom(50ms)) << "a source loop would take a frame that must wait";
-  // Held + the segment queue's place + the door's two newest.
-  ASSERT_EQ(pipeline.counters().pending, 4u);
+  // Held + the segment queue's place + at the door the newest frames that came after the
+  // prepare stage took its one: none, one or two (the door holds two), by timing.
+  const std::uint64_t pending = pipeline.counters().pending;
+  ASSERT_GE(pending, 2u);
+  ASSERT_LE(pending, 4u);
+  const auto kept = static_cast<std::int64_t>(pending);
   const findmug_lcm::status_t held = makeStatus(pipeline);
-  EXPECT_EQ(held.frames_dropped, kFrames - 4);
+  EXPECT_EQ(held.frames_dropped, kFrames - kept);
   // Every drop happened at the door, before any work was spent on the frame.
-  EXPECT_EQ(held.frames_dropped_at_door, kFrames - 4);
+  EXPECT_EQ(held.frames_dropped_at_door, kFrames - kept);
   EXPECT_EQ(held.frames_dropped_in_pipeline, 0);
   EXPECT_EQ(held.frames_dropped_at_shutdown, 0);
-  {
-    std::lock_guard lock(m);
-    release = true;
-  }
-  cv.notify_all();
+  releaser.release();
   pipeline.stop(StopMode::Drain);
 
-  // Released: the held frame, the prepared one, then the newest at the door; the other
+  // Released: the held frame, the prepared one, then the newest at the door if any; an older
   // frame at the door was stale once the prepare stage could take one (dropped, counted).
+  const std::int64_t published_count = std::min<std::int64_t>(kept, 3);
   const PipelineCounters c = pipeline.counters();
   EXPECT_EQ(c.received, static_cast<std::uint64_t>(kFrames));
-  EXPECT_EQ(c.processed, 3u);
-  EXPECT_EQ(c.dropped, static_cast<std::uint64_t>(kFrames - 3));
-  EXPECT_EQ(c.dropped_at_door, static_cast<std::uint64_t>(kFrames - 3));
+  EXPECT_EQ(c.processed, static_cast<std::uint64_t>(published_count));
+  EXPECT_EQ(c.dropped, static_cast<std::uint64_t>(kFrames - published_count));
+  EXPECT_EQ(c.dropped_at_door, static_cast<std::uint64_t>(kFrames - published_count));
   EXPECT_EQ(c.rejected, 0u);
   const Published published = readPublished(tmp.str("out.lcmlog"));
   std::vector<std::int64_t> seqs;
   for (const auto& l : published.labels) seqs.push_back(l.seq);
-  ASSERT_EQ(seqs.size(), 3u);
+  ASSERT_EQ(static_cast<std::int64_t>(seqs.size()), published_count);
   EXPECT_EQ(seqs.front(), 0);
   EXPECT_TRUE(std::is_sorted(seqs.begin(), seqs.end()));
-  EXPECT_EQ(seqs.back(), kFrames - 1);
+  EXPECT_EQ(seqs.back(), kFrames - 1);  // the newest frame wins
   ASSERT_FALSE(published.statuses.empty());
-  EXPECT_EQ(published.statuses.back().frames_dropped, kFrames - 3);
-  EXPECT_EQ(published.statuses.back().frames_dropped_at_door, kFrames - 3);
-  EXPECT_EQ(published.statuses.back().frames_processed, 3);
+  EXPECT_EQ(published.statuses.back().frames_dropped, kFrames - published_count);
+  EXPECT_EQ(published.statuses.back().frames_dropped_at_door, kFrames - published_count);
+  EXPECT_EQ(published.statuses.back().frames_processed, published_count);
 }
 
 // A sink that blocks until released (a slow disk, a stuck client) holds the publish thread
@@ -455,6 +469,18 @@ TEST(DaemonPipeline, ASlowSinkNeverStallsTheSegmentWorkers) {
   Pipeline pipeline(config.segmenter, config.daemon, sharedModel()->forest, "tiny",
                     ExecutionMode::Threaded, hooks);
   pipeline.addSink(sink);
+  // Whatever happens below, the sink lets go before the pipeline is destroyed (its
+  // destructor drains the publish stage).
+  struct Releaser {
+    HeldSink& sink;
+    ~Releaser() {
+      {
+        std::lock_guard lock(sink.m);
+        sink.release = true;
+      }
+      sink.cv.notify_all();
+    }
+  } releaser{*sink};
   pipeline.start();
   for (int seq = 0; seq < kFrames; ++seq) {
     RgbdFrame f = frame;
