@@ -13,6 +13,7 @@
 #include <functional>
 #include <map>
 #include <mutex>
+#include <sstream>
 #include <thread>
 
 #include "daemon_test_config.hpp"
@@ -791,6 +792,66 @@ TEST(DaemonPipeline, CorruptLcmMessagesAreCountedAndSkipped) {
   EXPECT_EQ(last.frames_rejected, 5);
   EXPECT_FALSE(last.last_error.empty());
   EXPECT_GT(last.last_error_utime, 0);
+}
+
+// daemon.frame_trace_file: one row per published frame, in frame order, whose intervals add
+// up to no more than the frame's total; a file that cannot be written is refused naming the key.
+TEST(DaemonPipeline, FrameTraceHasOneRowPerPublishedFrame) {
+  FINDMUG_REQUIRE_DATA(nyu, "nyuv2_labeled");
+  ASSERT_TRUE(sharedModel());
+  TempDir tmp;
+  test::TestConfig config = baseConfig("openni2", tmp.str("out.lcmlog"));
+  config.set("daemon.frame_trace_file", tmp.str("trace.csv"));
+  DatasetFolder ds(nyu.string());
+  const RgbdFrame frame = ds.load(6).frame;
+  constexpr int kFrames = 4;
+  {
+    Pipeline pipeline(config.segmenter, config.daemon, sharedModel()->forest, "tiny",
+                      ExecutionMode::Threaded);
+    pipeline.start();
+    for (int seq = 0; seq < kFrames; ++seq) {
+      RgbdFrame f = frame;
+      f.seq = seq;
+      f.utime = 1000 + static_cast<std::uint64_t>(seq);
+      ASSERT_TRUE(pipeline.waitForRoom(120s));
+      ASSERT_TRUE(pipeline.submit(std::move(f)));
+    }
+    pipeline.stop(StopMode::Drain);
+    ASSERT_EQ(pipeline.counters().processed, static_cast<std::uint64_t>(kFrames));
+  }
+  std::ifstream in(tmp.str("trace.csv"));
+  std::string line;
+  ASSERT_TRUE(std::getline(in, line));
+  EXPECT_EQ(line,
+            "seq,frame_utime,source_us,door_us,prepare_us,segment_wait_us,segment_us,reorder_us,"
+            "publish_wait_us,publish_us,total_us");
+  std::vector<std::int64_t> seqs;
+  while (std::getline(in, line)) {
+    std::vector<std::int64_t> v;
+    std::stringstream row(line);
+    for (std::string cell; std::getline(row, cell, ',');) v.push_back(std::stoll(cell));
+    ASSERT_EQ(v.size(), 11u) << line;
+    seqs.push_back(v[0]);
+    std::int64_t parts = 0;
+    for (std::size_t i = 3; i < 10; ++i) {
+      EXPECT_GE(v[i], 0) << "interval " << i << " of " << line;
+      parts += v[i];
+    }
+    EXPECT_GT(v[6], 0) << "no segmentation time: " << line;
+    EXPECT_LE(parts, v[10]) << line;
+    EXPECT_GE(parts, v[10] - 1000) << "time unaccounted for: " << line;
+  }
+  EXPECT_EQ(seqs, (std::vector<std::int64_t>{0, 1, 2, 3}));
+
+  config.set("daemon.frame_trace_file", tmp.str("no-such-dir/trace.csv"));
+  try {
+    Pipeline pipeline(config.segmenter, config.daemon, sharedModel()->forest, "tiny",
+                      ExecutionMode::Threaded);
+    FAIL() << "an unwritable trace file was accepted";
+  } catch (const Error& e) {
+    EXPECT_NE(std::string(e.what()).find("daemon.frame_trace_file"), std::string::npos)
+        << e.what();
+  }
 }
 
 TEST(DaemonPipeline, StartupErrorsNameTheKey) {
