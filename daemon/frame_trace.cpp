@@ -8,8 +8,7 @@ namespace findmug::daemon {
 namespace {
 
 std::int64_t microseconds(FrameTrace::Clock::time_point from, FrameTrace::Clock::time_point to) {
-  // A stage the frame never reached (e.g. sequential mode's inline steps are all reached; a
-  // zero instant is not) shows as -1 rather than a huge negative span.
+  // An instant never stamped (left at its default) shows as -1 rather than a huge span.
   if (from == FrameTrace::Clock::time_point{} || to == FrameTrace::Clock::time_point{}) return -1;
   return std::chrono::duration_cast<std::chrono::microseconds>(to - from).count();
 }
@@ -25,10 +24,9 @@ FrameTraceWriter::FrameTraceWriter(const std::string& path) : out_(path, std::io
 void FrameTraceWriter::write(std::int64_t seq, std::int64_t frame_utime,
                              FrameTrace::Clock::time_point arrival, const FrameTrace& t,
                              FrameTrace::Clock::time_point published) {
-  const std::int64_t source_us =
-      frame_utime > 0 && t.submit_utime > 0
-          ? static_cast<std::int64_t>(t.submit_utime) - frame_utime
-          : -1;
+  const std::int64_t source_us = frame_utime > 0 && t.submit_utime > 0
+                                     ? static_cast<std::int64_t>(t.submit_utime) - frame_utime
+                                     : -1;
   std::lock_guard lock(mutex_);
   if (!out_.is_open()) return;
   out_ << seq << ',' << frame_utime << ',' << source_us << ','

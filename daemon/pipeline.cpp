@@ -124,13 +124,12 @@ void Pipeline::makeSinks(const SegmenterConfig& segmenter_config, std::shared_pt
 
 // The three stages, last first (each hands its results to the next). The rules that keep
 // latency bounded live here:
-//   - the door (the prepare queue) and the segment queue keep the newest frame: a worker
-//     that takes a frame takes the newest waiting, the older ones are dropped and counted
-//     (a navigation client acts on where things are now; a label image of a frame that
-//     waited behind a newer one is out of date before it is made, and working on it would
-//     delay the newer one too);
-//   - the prepare step runs only when the one place in the segment queue is free (the
-//     gate), so under overload frames wait and are dropped at the door, before any work;
+//   - a frame never waits behind another frame once work has been spent on it (a
+//     navigation client acts on where things are now; a label image of a frame that waited
+//     behind a newer one is out of date before it is made, and working on it delays the
+//     newer one too): the segment queue is one place, and the prepare step runs only when
+//     that place is free (the gate), so under overload frames wait, and the oldest are
+//     dropped, in the source (Pipeline::waitForRoom) or at the door, before any work;
 //   - nothing blocks a worker that hands a result on: the publish queue (daemon.queue_capacity
 //     + one place per worker) drops its oldest result (counted) when the sinks fall behind,
 //     so a slow sink never stalls the segmentation workers, whose emit runs under their
@@ -167,7 +166,7 @@ void Pipeline::makeStages() {
                        });
 
   // One prepared frame waits for the next free worker, no more.
-  StageOptions segment_options{"segment", mode_, workers_, 1, DropPolicy::KeepNewest, window};
+  StageOptions segment_options{"segment", mode_, workers_, 1, DropPolicy::DropOldest, window};
   segment_ = std::make_unique<Stage<PreparedJob, ResultJob>>(
       segment_options, StageCallbacks<PreparedJob, ResultJob>{
                            .work = [this](PreparedJob& job) -> std::optional<ResultJob> {
@@ -190,7 +189,7 @@ void Pipeline::makeStages() {
                            .on_error = on_error,
                        });
 
-  StageOptions prepare_options{"prepare", mode_, 1, capacity, DropPolicy::KeepNewest, window};
+  StageOptions prepare_options{"prepare", mode_, 1, capacity, DropPolicy::DropOldest, window};
   prepare_ = std::make_unique<Stage<FrameJob, PreparedJob>>(
       prepare_options, StageCallbacks<FrameJob, PreparedJob>{
                            .work = [this](FrameJob& job) -> std::optional<PreparedJob> {
@@ -339,9 +338,8 @@ bool Pipeline::submit(RgbdFrame frame) {
 bool Pipeline::waitForRoom(Clock::duration timeout) {
   if (mode_ == ExecutionMode::Sequential) return true;  // submit() runs the frame itself
   const auto deadline = Clock::now() + timeout;
-  // Nothing waiting at the door (so that its pop, which keeps the newest, drops none of a
-  // source's frames), and the place after it free: a frame taken now is prepared at once,
-  // instead of waiting at the door while newer frames arrive in the source.
+  // Nothing waiting at the door, and the place after it free: a frame taken now is prepared
+  // at once, instead of waiting at the door while newer frames arrive in the source.
   return prepare_->waitUntilEmpty(timeout) &&
          segment_->waitForRoom(std::max(deadline - Clock::now(), Clock::duration::zero()));
 }

@@ -5,13 +5,18 @@ namespace findmug::daemon {
 
 const std::vector<std::pair<std::string, double StageTimings::*>>& reportedStepTimings() {
   static const std::vector<std::pair<std::string, double StageTimings::*>> all = {
-      {"cloud", &StageTimings::cloud_ms},       {"normals", &StageTimings::normals_ms},
+      {"cloud", &StageTimings::cloud_ms},
+      {"normals", &StageTimings::normals_ms},
       {"ground", &StageTimings::ground_ms},
       {"oversegmentation", &StageTimings::oversegmentation_ms},
-      {"features", &StageTimings::features_ms}, {"regions", &StageTimings::regions_ms},
-      {"forest", &StageTimings::forest_ms},     {"context", &StageTimings::context_ms},
-      {"mrf", &StageTimings::mrf_ms},           {"labels", &StageTimings::labels_ms},
-      {"tables", &StageTimings::tables_ms},     {"objects", &StageTimings::objects_ms}};
+      {"features", &StageTimings::features_ms},
+      {"regions", &StageTimings::regions_ms},
+      {"forest", &StageTimings::forest_ms},
+      {"context", &StageTimings::context_ms},
+      {"mrf", &StageTimings::mrf_ms},
+      {"labels", &StageTimings::labels_ms},
+      {"tables", &StageTimings::tables_ms},
+      {"objects", &StageTimings::objects_ms}};
   return all;
 }
 
@@ -23,7 +28,8 @@ std::uint64_t hostUtimeNow() {
 
 PipelineStatistics::PipelineStatistics(Clock::duration window)
     : input_rate_(1000, window), output_rate_(1000, window) {
-  for (const auto& [name, field] : reportedStepTimings()) latency_.emplace(name, LatencyWindow(window));
+  for (const auto& [name, field] : reportedStepTimings())
+    latency_.emplace(name, LatencyWindow(window));
   latency_.emplace("total", LatencyWindow(window));
 }
 
@@ -36,7 +42,8 @@ void PipelineStatistics::framePublished(const StageTimings& timings, double late
                                         Clock::time_point now) {
   std::lock_guard lock(mutex_);
   output_rate_.tick(now);
-  for (const auto& [name, field] : reportedStepTimings()) latency_.at(name).add(timings.*field, now);
+  for (const auto& [name, field] : reportedStepTimings())
+    latency_.at(name).add(timings.*field, now);
   latency_.at("total").add(latency_ms, now);
 }
 

@@ -71,34 +71,28 @@ TEST(BoundedQueue, ClearCountsDiscardedItemsAsDropped) {
   EXPECT_EQ(q.size(), 0u);
 }
 
-// The pop takes the newest waiting item: the older ones are stale and dropped (counted as
-// evicted), so a consumer never works on an item behind a newer one that already waits.
-TEST(BoundedQueue, KeepNewestPopTakesTheNewestAndCountsTheStaleOnes) {
-  BoundedQueue<int> q(3, DropPolicy::KeepNewest);
+// A waiter for an empty queue (the daemon's source loop) wakes when the consumer takes the
+// last item, and is refused once the queue is closed.
+TEST(BoundedQueue, WaitUntilEmptyWakesWhenTheLastItemIsTaken) {
+  BoundedQueue<int> q(2, DropPolicy::DropOldest);
+  EXPECT_TRUE(q.waitUntilEmpty(std::chrono::milliseconds(0)));
   q.push(1);
-  q.push(2);
-  q.push(3);
-  EXPECT_EQ(q.push(4), PushResult::AcceptedDroppedOldest);  // full: as DropOldest
-  auto newest = q.pop();
-  ASSERT_TRUE(newest);
-  EXPECT_EQ(newest->value, 4);
-  EXPECT_EQ(newest->ticket, 0u);  // tickets stay consecutive for the reorder buffer
-  EXPECT_EQ(q.size(), 0u);
-  EXPECT_EQ(q.droppedCount(), 3u);  // 1 at the push, 2 and 3 at the pop
-  EXPECT_EQ(q.evictedCount(), 3u);
-  q.push(5);  // alone: taken as it is
-  auto next = q.pop();
-  ASSERT_TRUE(next);
-  EXPECT_EQ(next->value, 5);
-  EXPECT_EQ(next->ticket, 1u);
-  EXPECT_EQ(q.droppedCount(), 3u);
+  EXPECT_FALSE(q.waitUntilEmpty(std::chrono::milliseconds(20)));
+  std::thread consumer([&] {
+    std::this_thread::sleep_for(std::chrono::milliseconds(20));
+    q.pop();
+  });
+  EXPECT_TRUE(q.waitUntilEmpty(std::chrono::seconds(60)));
+  consumer.join();
+  q.close();
+  EXPECT_FALSE(q.waitUntilEmpty(std::chrono::milliseconds(0)));
 }
 
 // No policy makes push wait: a producer (a stage's worker handing its result on) is never
 // stalled by a consumer that does not pop.
 TEST(BoundedQueue, PushNeverWaitsForAConsumer) {
-  for (DropPolicy policy : {DropPolicy::DropOldest, DropPolicy::KeepNewest}) {
-    BoundedQueue<int> q(1, policy);
+  {
+    BoundedQueue<int> q(1, DropPolicy::DropOldest);
     std::atomic<int> pushed{0};
     std::thread producer([&] {
       for (int i = 0; i < 100; ++i) {

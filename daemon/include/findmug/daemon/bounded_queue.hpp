@@ -4,10 +4,7 @@
 // The daemon's stages are joined by these queues. Frames are perishable: when
 // a consumer falls behind, the right answer for a robot is to forget the
 // oldest waiting frame and keep the newest, so latency stays bounded
-// (DropPolicy::DropOldest, every drop counted). DropPolicy::KeepNewest goes
-// further: a consumer takes the newest waiting item and the older ones are
-// dropped (counted) then, so nothing is ever worked on behind a newer item
-// that already waits. There is no blocking policy: push() never waits, so a
+// (DropPolicy::DropOldest, every drop counted). There is no blocking policy: push() never waits, so a
 // stage's worker handing its result on can never be stalled by a slow stage
 // after it (which would stall every worker of the stage behind it).
 //
@@ -35,7 +32,6 @@ namespace findmug::daemon {
 
 enum class DropPolicy {
   DropOldest,  // full: evict the oldest waiting item, count it, accept the new one
-  KeepNewest,  // as DropOldest, and a pop takes the newest item, evicting (counting) the older
 };
 
 enum class PushResult {
@@ -105,7 +101,7 @@ class BoundedQueue {
   }
 
   // Waits at most `timeout` until no item waits (or the queue is closed); true when empty
-  // and open. A producer that pushes only then never makes a KeepNewest pop drop its items.
+  // and open. A producer that pushes only then never has an item wait behind another.
   template <typename Rep, typename Period>
   bool waitUntilEmpty(std::chrono::duration<Rep, Period> timeout) {
     std::unique_lock lock(mutex_);
@@ -169,16 +165,6 @@ class BoundedQueue {
  private:
   std::optional<Popped> takeFrontLocked(std::unique_lock<std::mutex>& lock) {
     if (items_.empty()) return std::nullopt;
-    std::deque<T> stale;  // destroyed after the lock is released
-    if (policy_ == DropPolicy::KeepNewest && items_.size() > 1) {
-      const std::size_t older = items_.size() - 1;
-      for (std::size_t i = 0; i < older; ++i) {
-        stale.push_back(std::move(items_.front()));
-        items_.pop_front();
-      }
-      dropped_ += older;
-      evicted_ += older;
-    }
     Popped popped{std::move(items_.front()), next_ticket_++};
     items_.pop_front();
     lock.unlock();

@@ -1,9 +1,9 @@
 // findmug/daemon/pipeline.hpp — frames in, label images / tables / status out over LCM.
 //
 //   submit(frame) ─▶ [prepare queue] ─▶ prepare ─▶ [segment queue] ─▶ segment ×N
-//                     the door: the      1 thread,   one place:        reorder ▼
-//                     newest is taken,   waits for   the newest is  [publish queue]
-//                     older ones dropped that place  taken            drop-oldest ─▶ publish
+//                     the door:          1 thread,   one place          reorder ▼
+//                     drop oldest        waits for                  [publish queue]
+//                                        that place                   drop-oldest ─▶ publish
 //                                                                    (1 thread: the sinks,
 //                                                                     also sends status)
 //
@@ -45,11 +45,12 @@
 //
 // The newest frame wins. A navigation client acts on where things are now: a label image
 // of a frame that waited behind a newer one is out of date before it is made, and the work
-// spent on it delays the newer frame too. So frames are dropped at the door: the prepare
-// stage takes a frame only when the one place in the segment queue is free, and then the
-// newest waiting in the prepare queue (the pipeline's entry); the older ones are dropped
-// before any work is spent on them. A daemon source loop calls waitForRoom() before taking
-// a frame from its source, so that they wait there, before decoding. Nothing blocks a
+// spent on it delays the newer frame too. So no frame waits behind another once work has
+// been spent on it: the prepare stage takes a frame only when the one place in the segment
+// queue is free, and a daemon source loop calls waitForRoom() before taking a frame from
+// its source, which waits until nothing waits at the door and that place is free; so under
+// overload frames wait, and the oldest are dropped, in the source before decoding (or, for
+// a caller that submits without waiting, at the door, which drops its oldest when full). Nothing blocks a
 // worker handing a result on (BoundedQueue::push never waits): when the sinks fall behind,
 // the publish queue drops its oldest result, so a slow sink never stalls the segmentation
 // workers. Drops are counted by reason (PipelineCounters).
