@@ -55,7 +55,7 @@ const SettingsTable<DaemonConfig>& daemonSettings() {
         "forest model file"));
     t.add(integerSetting<D, int>(
         "daemon.queue_capacity", [](D& d) -> int& { return d.queue_capacity; }, 1, 64,
-        "frames per queue between stages"));
+        "frames at the pipeline entry; results in the publish queue besides one per worker"));
     t.add(integerSetting<D, int>(
         "daemon.workers", [](D& d) -> int& { return d.workers; }, 0, 64,
         "segmentation workers; 0 = one per CPU core"));
@@ -101,6 +101,9 @@ const SettingsTable<DaemonConfig>& daemonSettings() {
           return {};
         },
         "trace, debug, info, warn, error"));
+    t.add(textSetting<D>(
+        "daemon.frame_trace_file", [](D& d) -> std::string& { return d.frame_trace_file; },
+        nullptr, "one CSV row per published frame: its time in each queue and step; empty = off"));
     t.add(boolSetting<D>(
         "daemon.command_input", [](D& d) -> bool& { return d.command_input; },
         "listen for command_t (reload_model) on FINDMUG_COMMAND"));

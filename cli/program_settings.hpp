@@ -61,6 +61,9 @@ struct DaemonConfig {
   // watchdog is no longer fed. Paced file sources get at least 3 periods.
   double source_timeout_s = 10.0;
   std::string log_level = "info";     // trace, debug, info, warn, error
+  // One CSV row per published frame: where its time went, queue by queue
+  // (frame_trace.hpp; what tests/bench/daemon_bench.sh reads). "" = off.
+  std::string frame_trace_file;
 
   // Commands (command_t on FINDMUG_COMMAND: reload_model), command_input.hpp.
   bool command_input = true;       // listen for command_t

@@ -5,10 +5,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <ctime>
-#if defined(__GLIBC__)
-#include <malloc.h>
-#endif
 #include <thread>
 
 #include "findmug/common/error.hpp"
@@ -21,43 +17,9 @@ namespace findmug::daemon {
 
 namespace {
 
-// Sub-stage names reported in status_t, in pipeline order, with the
-// StageTimings field each comes from. "prepare"/"segment"/"publish" are the
-// pipeline stages' wall times, "total" is arrival to published.
-const std::vector<std::pair<std::string, double StageTimings::*>>& subStages() {
-  static const std::vector<std::pair<std::string, double StageTimings::*>> all = {
-      {"cloud", &StageTimings::cloud_ms},       {"normals", &StageTimings::normals_ms},
-      {"ground", &StageTimings::ground_ms},
-      {"oversegmentation", &StageTimings::oversegmentation_ms},
-      {"features", &StageTimings::features_ms}, {"regions", &StageTimings::regions_ms},
-      {"forest", &StageTimings::forest_ms},     {"context", &StageTimings::context_ms},
-      {"mrf", &StageTimings::mrf_ms},           {"labels", &StageTimings::labels_ms},
-      {"tables", &StageTimings::tables_ms},     {"objects", &StageTimings::objects_ms}};
-  return all;
-}
-
-std::uint64_t utimeNow() {
-  return static_cast<std::uint64_t>(std::chrono::duration_cast<std::chrono::microseconds>(
-                                        std::chrono::system_clock::now().time_since_epoch())
-                                        .count());
-}
-
-double processCpuSeconds() {
-  timespec ts{};
-  if (clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts) != 0) return 0.0;
-  return static_cast<double>(ts.tv_sec) + static_cast<double>(ts.tv_nsec) * 1e-9;
-}
-
-// Bytes the allocator has handed out and not got back (the heap's own view):
-// a leak grows this; memory freed but kept for reuse (daemon.heap_keep_mb,
-// glibc arenas) shows in RSS only. -1 where the C library cannot say.
-std::int64_t heapInUseBytes() {
-#if defined(__GLIBC__) && (__GLIBC__ > 2 || (__GLIBC__ == 2 && __GLIBC_MINOR__ >= 33))
-  const struct mallinfo2 m = mallinfo2();
-  return static_cast<std::int64_t>(m.uordblks + m.hblkhd);
-#else
-  return -1;
-#endif
+Pipeline::Clock::duration statsWindow(const DaemonConfig& config) {
+  return std::chrono::duration_cast<Pipeline::Clock::duration>(
+      std::chrono::duration<double>(config.stats_window_s));
 }
 
 }  // namespace
@@ -70,27 +32,40 @@ Pipeline::Pipeline(const SegmenterConfig& segmenter_config, const DaemonConfig& 
       mode_(mode),
       hooks_(std::move(hooks)),
       workers_(daemon_config.effectiveWorkers()),
-      pose_max_age_us_(
-          static_cast<std::uint64_t>(std::llround(daemon_config.pose_max_age_s * 1e6))),
+      statistics_(statsWindow(daemon_config)),
       prepare_step_([this] { return model_.segmenter(); }),
       segment_step_([this] { return model_.segmenter(); }, hooks_.before_segment),
-      publish_step_(pose_max_age_us_),
+      publish_step_(
+          static_cast<std::uint64_t>(std::llround(daemon_config.pose_max_age_s * 1e6))),
       started_(Clock::now()),
-      last_sequential_status_(started_),
-      cpu_sample_time_(started_),
-      cpu_sample_s_(processCpuSeconds()) {
+      last_sequential_status_(started_) {
   if (!forest || forest->empty()) throw Error("findmugd: the model has no trees");
+  if (!daemon_config_.frame_trace_file.empty()) {
+    trace_ = std::make_unique<FrameTraceWriter>(daemon_config_.frame_trace_file);
+  }
   std::shared_ptr<io::Bus> bus = hooks_.output_bus;
   if (!bus) bus = std::make_shared<io::LcmBus>(effectiveLcmUrl(daemon_config_), "daemon.lcm_url");
   // Every bus of the daemon applies daemon.channel_suffix: channels are named by base name.
-  bus = io::withChannelSuffix(std::move(bus), daemon_config_.channel_suffix);
-  // The sinks, in the order they see a result: the map first, as the frame's
-  // tables_t carries what the map made of it.
+  makeSinks(segmenter_config, io::withChannelSuffix(std::move(bus), daemon_config_.channel_suffix));
+  makeStages();
+  // Last (with the inputs below): their threads report through recordError,
+  // so everything they may touch must exist already.
+  reloader_ = std::make_unique<ModelReloader>(
+      daemon_config_.model_path, model_,
+      [this](const std::string& what) { recordErrorQuietly(what); });
+  makeCommandInput();
+  makePoseInput();
+}
+
+// The sinks, in the order they see a result (PublishStep::addSink checks that no sink reads
+// a slot of the FrameResult that a sink after it writes: result_sinks.hpp).
+void Pipeline::makeSinks(const SegmenterConfig& segmenter_config, std::shared_ptr<io::Bus> bus) {
+  auto on_error = [this](const std::string& what) { recordError(what); };
+  // The map first, as the frame's tables_t carries what the map made of it.
   // With the semantic map on, FINDMUG_TABLE_MAP carries the map's tables instead.
   table_map_sink_ = std::make_shared<TableMapSink>(
       daemon_config_.table_map, segmenter_config.tables,
-      daemon_config_.publish_table_map && !daemon_config_.semantic_map,
-      [this](const std::string& what) { recordError(what); });
+      daemon_config_.publish_table_map && !daemon_config_.semantic_map, on_error);
   if (daemon_config_.semantic_map) {
     SemanticMapSink::Options options;
     options.map = daemon_config_.semantic_map_config;
@@ -103,8 +78,7 @@ Pipeline::Pipeline(const SegmenterConfig& segmenter_config, const DaemonConfig& 
     options.save_period_s = daemon_config_.semantic_map_save_s;
     options.map_channel = io::kSemanticMapChannel;
     options.table_map_channel = io::kTableMapChannel;
-    semantic_map_ = std::make_shared<SemanticMapSink>(
-        std::move(options), bus, [this](const std::string& what) { recordError(what); });
+    semantic_map_ = std::make_shared<SemanticMapSink>(std::move(options), bus, on_error);
   }
   ObjectSearchSettings object_search;
   object_search.objects_dir = daemon_config_.objects_dir;
@@ -123,7 +97,7 @@ Pipeline::Pipeline(const SegmenterConfig& segmenter_config, const DaemonConfig& 
                                  std::string(io::kObjectMapChannel)},
       TableMapSource{[sink = table_map_sink_] { return sink->revision(); },
                      [sink = table_map_sink_] { return sink->confirmedTables(); }},
-      [this](const std::string& what) { recordError(what); });
+      on_error);
   publisher_ = std::make_shared<LcmPublisherSink>(
       std::move(bus),
       LcmPublisherSink::Channels{std::string(io::kLabelsChannel), std::string(io::kTablesChannel),
@@ -143,24 +117,35 @@ Pipeline::Pipeline(const SegmenterConfig& segmenter_config, const DaemonConfig& 
   if (!daemon_config_.collect_dir.empty()) {
     collector_ = std::make_shared<FrameCollector>(
         FrameCollector::fromConfig(daemon_config_), [this] { return model_.modelId(); },
-        [this](const std::string& what) { recordError(what); });
+        on_error);
     publish_step_.addSink(collector_);
   }
-  const auto window = std::chrono::duration_cast<Clock::duration>(
-      std::chrono::duration<double>(daemon_config_.stats_window_s));
-  input_rate_ = RateMeter(1000, window);
-  output_rate_ = RateMeter(1000, window);
-  for (const auto& [name, field] : subStages()) latency_.emplace(name, LatencyWindow(window));
-  latency_.emplace("total", LatencyWindow(window));
+}
 
+// The three stages, last first (each hands its results to the next). The rules that keep
+// latency bounded live here:
+//   - a frame never waits behind another frame once work has been spent on it (a
+//     navigation client acts on where things are now; a label image of a frame that waited
+//     behind a newer one is out of date before it is made, and working on it delays the
+//     newer one too): the segment queue is one place, and the prepare step runs only when
+//     that place is free (the gate), so under overload frames wait, and the oldest are
+//     dropped, in the source (Pipeline::waitForRoom) or at the door, before any work;
+//   - nothing blocks a worker that hands a result on: the publish queue (daemon.queue_capacity
+//     + one place per worker) drops its oldest result (counted) when the sinks fall behind,
+//     so a slow sink never stalls the segmentation workers, whose emit runs under their
+//     stage's release lock.
+void Pipeline::makeStages() {
+  const auto window = statsWindow(daemon_config_);
   const auto capacity = static_cast<std::size_t>(daemon_config_.queue_capacity);
   auto on_error = [this](const std::string& what) { recordError(what); };
 
+  // Room for a whole run the reorder buffer releases at once (one result per worker) on top
+  // of daemon.queue_capacity: only sinks that fall behind make it drop.
   StageOptions publish_options{"publish",
                                mode_,
                                1,
-                               capacity,
-                               DropPolicy::Block,
+                               capacity + static_cast<std::size_t>(workers_),
+                               DropPolicy::DropOldest,
                                window,
                                std::chrono::duration_cast<Clock::duration>(
                                    std::chrono::duration<double>(daemon_config_.status_period_s))};
@@ -171,19 +156,28 @@ Pipeline::Pipeline(const SegmenterConfig& segmenter_config, const DaemonConfig& 
                              return Published{};
                            },
                            .emit = [](Published&&) {},
+                           .on_drop =
+                               [](const ResultJob& dropped) {
+                                 spdlog::debug("publish queue full: dropped {}",
+                                               frameName(dropped.labelled.segmented.prepared.frame));
+                               },
                            .on_error = on_error,
                            .tick = [this] { publishStatus(); },
                        });
 
-  StageOptions segment_options{"segment", mode_, workers_, capacity, DropPolicy::DropOldest,
-                               window};
+  // One prepared frame waits for the next free worker, no more.
+  StageOptions segment_options{"segment", mode_, workers_, 1, DropPolicy::DropOldest, window};
   segment_ = std::make_unique<Stage<PreparedJob, ResultJob>>(
       segment_options, StageCallbacks<PreparedJob, ResultJob>{
                            .work = [this](PreparedJob& job) -> std::optional<ResultJob> {
-                             return segment_step_(job);
+                             job.trace.segment_start = Clock::now();
+                             ResultJob r = segment_step_(job);
+                             r.trace.segment_end = Clock::now();
+                             return r;
                            },
                            .emit =
                                [this](ResultJob&& r) {
+                                 r.trace.released = Clock::now();
                                  if (!publish_->push(std::move(r)))
                                    abandoned_.fetch_add(1);  // only after stop()
                                },
@@ -199,7 +193,10 @@ Pipeline::Pipeline(const SegmenterConfig& segmenter_config, const DaemonConfig& 
   prepare_ = std::make_unique<Stage<FrameJob, PreparedJob>>(
       prepare_options, StageCallbacks<FrameJob, PreparedJob>{
                            .work = [this](FrameJob& job) -> std::optional<PreparedJob> {
-                             return prepare_step_(job);
+                             job.trace.prepare_start = Clock::now();
+                             PreparedJob p = prepare_step_(job);
+                             p.trace.prepare_end = Clock::now();
+                             return p;
                            },
                            .emit =
                                [this](PreparedJob&& p) {
@@ -225,72 +222,83 @@ Pipeline::Pipeline(const SegmenterConfig& segmenter_config, const DaemonConfig& 
                                  }
                                },
                        });
+}
 
-  // Last (with the inputs below): their threads report through recordError,
-  // so everything they may touch must exist already.
-  reloader_ = std::make_unique<ModelReloader>(
-      daemon_config_.model_path, model_,
-      [this](const std::string& what) { recordErrorQuietly(what); });
+// Commands on FINDMUG_COMMAND: one handler per command name.
+void Pipeline::makeCommandInput() {
   const auto command_url = effectiveCommandUrl(daemon_config_);
-  if (hooks_.command_bus || command_url) {
-    const std::string channel(io::kCommandChannel);
-    std::map<std::string, CommandInput::Handler> handlers;
-    handlers.emplace("reload_model", [this](const io::CommandMessage& c) {
-      if (!c.argument.empty()) {
-        throw Error("reload_model takes no argument (it loads daemon.model_path), got '" +
-                    c.argument + "'");
-      }
-      requestModelReload(c.request_id, "command request " + std::to_string(c.request_id));
-    });
-    handlers.emplace("save_frame", [this](const io::CommandMessage& c) {
-      requestFrameSave(c.request_id, c.argument);
-    });
-    handlers.emplace("find", [this](const io::CommandMessage& c) {
-      object_search_->requestFind(c.request_id, c.argument, c.utime);
-    });
-    handlers.emplace("teach", [this](const io::CommandMessage& c) {
-      object_teacher_->teach(c.request_id, c.argument);
-    });
-    auto on_command_error = [this](const std::string& what) { recordError(what); };
-    std::shared_ptr<io::Bus> command_bus = hooks_.command_bus;
-    if (!command_bus) {
-      command_bus = io::openBus(*command_url, "daemon.command_url (commands on " + channel + ")");
-    }
-    command_input_ = std::make_unique<CommandInput>(
-        io::withChannelSuffix(std::move(command_bus), daemon_config_.channel_suffix), channel,
-        std::move(handlers), on_command_error);
-    spdlog::info("commands from {} on {}", command_input_->describe(), channel);
-  } else {
+  if (!hooks_.command_bus && !command_url) {
     spdlog::info("no command input ({}): reload the model with SIGHUP",
                  daemon_config_.command_input
                      ? "the output is a log file and daemon.command_url is empty"
                      : "daemon.command_input is off");
+    return;
   }
-  const auto pose_url = effectivePoseUrl(daemon_config_);
-  if (hooks_.pose_bus || pose_url) {
-    const std::string channel(io::kRobotPoseChannel);
-    auto on_pose_error = [this](const std::string& what) { recordError(what); };
-    std::shared_ptr<io::Bus> pose_bus = hooks_.pose_bus;
-    if (!pose_bus) {
-      pose_bus = io::openBus(*pose_url, "daemon.pose_url (robot poses on " + channel + ")");
+  const std::string channel(io::kCommandChannel);
+  std::map<std::string, CommandInput::Handler> handlers;
+  handlers.emplace("reload_model", [this](const io::CommandMessage& c) {
+    if (!c.argument.empty()) {
+      throw Error("reload_model takes no argument (it loads daemon.model_path), got '" +
+                  c.argument + "'");
     }
-    pose_input_ = std::make_unique<PoseInput>(
-        io::withChannelSuffix(std::move(pose_bus), daemon_config_.channel_suffix), channel,
-        daemon_config_.pose_history_s, on_pose_error);
-    publish_step_.setPoseInput(pose_input_.get());
-    spdlog::info("robot poses from {} on {}: tables also in the map frame, table map on {}",
-                 hooks_.pose_bus     ? hooks_.pose_bus->describe()
-                 : pose_url->empty() ? std::string("the default LCM provider")
-                                     : *pose_url,
-                 channel, publisher_->channels().table_map);
-  } else {
+    requestModelReload(c.request_id, "command request " + std::to_string(c.request_id));
+  });
+  handlers.emplace("save_frame", [this](const io::CommandMessage& c) {
+    requestFrameSave(c.request_id, c.argument);
+  });
+  handlers.emplace("find", [this](const io::CommandMessage& c) {
+    object_search_->requestFind(c.request_id, c.argument, c.utime);
+  });
+  handlers.emplace("teach", [this](const io::CommandMessage& c) {
+    object_teacher_->teach(c.request_id, c.argument);
+  });
+  auto on_command_error = [this](const std::string& what) { recordError(what); };
+  std::shared_ptr<io::Bus> command_bus = hooks_.command_bus;
+  if (!command_bus) {
+    command_bus = io::openBus(*command_url, "daemon.command_url (commands on " + channel + ")");
+  }
+  command_input_ = std::make_unique<CommandInput>(
+      io::withChannelSuffix(std::move(command_bus), daemon_config_.channel_suffix), channel,
+      std::move(handlers), on_command_error);
+  spdlog::info("commands from {} on {}", command_input_->describe(), channel);
+}
+
+// Robot poses on FINDMUG_ROBOT_POSE, looked up by the publish step.
+void Pipeline::makePoseInput() {
+  const auto pose_url = effectivePoseUrl(daemon_config_);
+  if (!hooks_.pose_bus && !pose_url) {
     spdlog::info("no robot pose input ({}): tables in the base frame only, no table map",
                  daemon_config_.pose_input ? "the output is a log file and daemon.pose_url is empty"
                                            : "daemon.pose_input is off");
+    return;
   }
+  const std::string channel(io::kRobotPoseChannel);
+  auto on_pose_error = [this](const std::string& what) { recordError(what); };
+  std::shared_ptr<io::Bus> pose_bus = hooks_.pose_bus;
+  if (!pose_bus) {
+    pose_bus = io::openBus(*pose_url, "daemon.pose_url (robot poses on " + channel + ")");
+  }
+  pose_input_ = std::make_unique<PoseInput>(
+      io::withChannelSuffix(std::move(pose_bus), daemon_config_.channel_suffix), channel,
+      daemon_config_.pose_history_s, on_pose_error);
+  publish_step_.setPoseInput(pose_input_.get());
+  spdlog::info("robot poses from {} on {}: tables also in the map frame, table map on {}",
+               hooks_.pose_bus     ? hooks_.pose_bus->describe()
+               : pose_url->empty() ? std::string("the default LCM provider")
+                                   : *pose_url,
+               channel, publisher_->channels().table_map);
 }
 
-Pipeline::~Pipeline() { stop(StopMode::Discard); }
+Pipeline::~Pipeline() {
+  stop(StopMode::Discard);
+  // A Discard stop does not wait for a segmentation past daemon.shutdown_grace_s: its worker
+  // is joined here, upstream stage first, while everything a worker touches (the next
+  // stage's queue, the steps, the statistics, the sinks) is still alive. So the order in
+  // which the members are declared does not matter to the workers.
+  prepare_.reset();
+  segment_.reset();
+  publish_.reset();
+}
 
 void Pipeline::requestModelReload(std::int64_t request_id, const std::string& origin) {
   reloader_->request(request_id, origin);
@@ -318,11 +326,10 @@ bool Pipeline::submit(RgbdFrame frame) {
     if (stopped_) return false;
   }
   received_.fetch_add(1);
-  {
-    std::lock_guard lock(stats_mutex_);
-    input_rate_.tick();
-  }
-  const bool accepted = prepare_->push(FrameJob{std::move(frame), Clock::now()});
+  statistics_.frameIn();
+  FrameTrace trace;
+  trace.submit_utime = hostUtimeNow();
+  const bool accepted = prepare_->push(FrameJob{std::move(frame), Clock::now(), trace});
   // No publish thread ticks in sequential mode: keep the status period here.
   publishStatusIfDue();
   return accepted;
@@ -330,7 +337,11 @@ bool Pipeline::submit(RgbdFrame frame) {
 
 bool Pipeline::waitForRoom(Clock::duration timeout) {
   if (mode_ == ExecutionMode::Sequential) return true;  // submit() runs the frame itself
-  return prepare_->waitForRoom(timeout);
+  const auto deadline = Clock::now() + timeout;
+  // Nothing waiting at the door, and the place after it free: a frame taken now is prepared
+  // at once, instead of waiting at the door while newer frames arrive in the source.
+  return prepare_->waitUntilEmpty(timeout) &&
+         segment_->waitForRoom(std::max(deadline - Clock::now(), Clock::duration::zero()));
 }
 
 void Pipeline::publishStatusIfDue() {
@@ -376,6 +387,7 @@ void Pipeline::stop(StopMode mode) {
     if (segment_->stats().in_flight == 0) segment_->join();
   }
   publish_->stop(StopMode::Drain);  // finished results are always published
+  if (trace_) trace_->close();
   if (collector_) collector_->stop();  // writes what it has queued
   // Nothing feeds the map any more: its last frames (Drain), last publish and save.
   if (semantic_map_) semantic_map_->stop(mode == StopMode::Drain);
@@ -402,23 +414,20 @@ void Pipeline::recordError(const std::string& message) {
   recordErrorQuietly(message);
 }
 
-void Pipeline::recordErrorQuietly(const std::string& message) {
-  std::lock_guard lock(stats_mutex_);
-  last_error_ = message;
-  last_error_utime_ = utimeNow();
-}
+void Pipeline::recordErrorQuietly(const std::string& message) { statistics_.recordError(message); }
 
 // The result goes to the sinks (PublishStep), then into the output statistics.
 void Pipeline::publishResult(ResultJob& job) {
   const auto now = Clock::now();
+  job.trace.publish_start = now;
   const std::int64_t latency_us = publish_step_(job, now);
   processed_.fetch_add(1);
-  std::lock_guard lock(stats_mutex_);
-  output_rate_.tick(now);
-  for (const auto& [name, field] : subStages()) {
-    latency_.at(name).add(job.labelled.timings.*field, now);
+  if (trace_) {
+    const RgbdFrame& frame = job.labelled.segmented.prepared.frame;
+    trace_->write(frame.seq, static_cast<std::int64_t>(frame.utime), job.arrival, job.trace,
+                  Clock::now());
   }
-  latency_.at("total").add(static_cast<double>(latency_us) / 1000.0, now);
+  statistics_.framePublished(job.labelled.timings, static_cast<double>(latency_us) / 1000.0, now);
   // The sinks are done with it: its buffers serve the next frames (no
   // per-frame allocation of clouds, normals and segment lists once warm).
   // (Into the Segmenter in use now: after a model swap the old one's are freed.)
@@ -484,7 +493,7 @@ ProgressSnapshot Pipeline::progress() const {
 StatusSnapshot Pipeline::statusSnapshot() const {
   StatusSnapshot s;
   const auto now = Clock::now();
-  s.utime = utimeNow();
+  s.utime = hostUtimeNow();
   s.uptime_us = std::chrono::duration_cast<std::chrono::microseconds>(now - started_).count();
   s.counters = counters();
   s.cpu_budget_cores = daemon_config_.max_cpu_cores;
@@ -504,24 +513,15 @@ StatusSnapshot Pipeline::statusSnapshot() const {
     s.commands_rejected = command_input_->rejected();
   }
   s.publish_failures = publishFailures();
-  s.heap_in_use_bytes = heapInUseBytes();
+  s.heap_in_use_bytes = ProcessUsage::heapInUseBytes();
+  s.cpu_used_cores = process_usage_.lastCores();
 
   const StageStats stages[] = {prepare_->stats(), segment_->stats(), publish_->stats()};
   const ObjectSearchSink::Counters objects = object_search_->counters();
-  {
-    std::lock_guard lock(stats_mutex_);
-    s.input_fps = input_rate_.rate(now);
-    s.output_fps = output_rate_.rate(now);
-    for (const auto& st : stages) s.latencies.emplace_back(st.name, st.latency);
-    if (object_search_->active()) s.latencies.emplace_back("object_search", objects.latency);
-    for (const auto& [name, field] : subStages()) {
-      s.latencies.emplace_back(name, latency_.at(name).summary(now));
-    }
-    s.latencies.emplace_back("total", latency_.at("total").summary(now));
-    s.last_error = last_error_;
-    s.last_error_utime = last_error_utime_;
-    s.cpu_used_cores = cpu_used_cores_;
-  }
+  // Report order: the stages, then the step timings and "total" (statistics_.fill).
+  for (const auto& st : stages) s.latencies.emplace_back(st.name, st.latency);
+  if (object_search_->active()) s.latencies.emplace_back("object_search", objects.latency);
+  statistics_.fill(s, now);
   for (const auto& st : stages) s.queues.push_back({st.name, st.queue_depth, st.queue_capacity});
   if (object_search_->active()) {
     s.queues.push_back({"object_search", objects.queue_depth, objects.queue_capacity});
@@ -553,16 +553,8 @@ findmug_lcm::status_t makeStatus(const Pipeline& pipeline) {
 }
 
 void Pipeline::publishStatus() {
-  {
-    // The CPU the process used since the previous status, against the budget.
-    const double cpu_s = processCpuSeconds();
-    const auto now = Clock::now();
-    std::lock_guard lock(stats_mutex_);
-    const double wall_s = std::chrono::duration<double>(now - cpu_sample_time_).count();
-    if (wall_s > 0.0) cpu_used_cores_ = (cpu_s - cpu_sample_s_) / wall_s;
-    cpu_sample_s_ = cpu_s;
-    cpu_sample_time_ = now;
-  }
+  // The CPU the process used since the previous status, against the budget.
+  process_usage_.sampleCores();
   publisher_->publishStatus(statusSnapshot());
 }
 

@@ -4,6 +4,7 @@
 #include <spdlog/spdlog.h>
 
 #include <algorithm>
+#include <utility>
 
 #include "findmug/common/error.hpp"
 #include "findmug/daemon/status_builder.hpp"
@@ -26,6 +27,18 @@ bool TableMapSink::isEvidence(const LabelledFrame& labelled) {
   return labelled.segmented.prepared.ground.has_value() &&
          std::any_of(labelled.labels.labels.begin(), labelled.labels.labels.end(),
                      [](std::uint8_t id) { return id != kVoidLabel; });
+}
+
+std::string resultSlotNames(unsigned slots) {
+  std::string names;
+  for (const auto& [bit, name] : {std::pair<unsigned, const char*>{kMapInfo, "map_info"},
+                                  {kTableMapMessage, "table_map"},
+                                  {kPublishedLabels, "published_labels"}}) {
+    if (!(slots & bit)) continue;
+    if (!names.empty()) names += ", ";
+    names += name;
+  }
+  return names;
 }
 
 void TableMapSink::consume(FrameResult& result) {

@@ -1,7 +1,6 @@
 // The semantic map sink (semantic_map_sink.hpp).
 #include "findmug/daemon/semantic_map_sink.hpp"
 
-#include <pthread.h>
 #include <spdlog/spdlog.h>
 
 #include <cstdio>
@@ -19,11 +18,36 @@ SemanticMapSink::SemanticMapSink(Options options, std::shared_ptr<io::Bus> bus,
     : options_(std::move(options)),
       on_error_(std::move(on_error)),
       bus_(std::move(bus)),
-      queue_(static_cast<std::size_t>(std::max(1, options_.queue_capacity)),
-             DropPolicy::DropOldest),
       map_(options_.map, options_.tables),
       last_save_(Clock::now()) {
   if (!bus_) throw Error("semantic map sink: no output bus");
+  // Wakes at least every publish period, so that a change goes out even when no
+  // further frame comes.
+  StageOptions stage;
+  stage.name = "semantic_map";
+  stage.mode = options_.threaded ? ExecutionMode::Threaded : ExecutionMode::Sequential;
+  stage.queue_capacity = static_cast<std::size_t>(std::max(1, options_.queue_capacity));
+  stage.policy = DropPolicy::DropOldest;
+  stage.tick_period = std::chrono::duration_cast<Clock::duration>(
+      std::chrono::duration<double>(std::max(0.05, options_.publish_period_s)));
+  stage.thread_name = "findmug-semmap";
+  stage_ = std::make_unique<Stage<Job, Fused>>(
+      std::move(stage), StageCallbacks<Job, Fused>{
+                            .work = [this](Job& job) -> std::optional<Fused> {
+                              fuse(job);
+                              publishIfDue(false);
+                              saveIfDue(false);
+                              return Fused{};
+                            },
+                            .emit = [](Fused&&) {},
+                            .on_drop = [this](const Job&) { skipped_.fetch_add(1); },
+                            .on_error = on_error_,
+                            .tick =
+                                [this] {
+                                  publishIfDue(false);
+                                  saveIfDue(false);
+                                },
+                        });
   if (options_.file.empty() || !std::filesystem::exists(options_.file)) return;
   try {
     map_.load(options_.file);
@@ -44,15 +68,7 @@ SemanticMapSink::SemanticMapSink(Options options, std::shared_ptr<io::Bus> bus,
 
 SemanticMapSink::~SemanticMapSink() { stop(false); }
 
-void SemanticMapSink::start() {
-  if (options_.threaded && !thread_.joinable()) {
-    thread_ = std::thread([this] {
-      // Named for top -H and the benchmarks, which read its CPU time from /proc.
-      pthread_setname_np(pthread_self(), "findmug-semmap");
-      run();
-    });
-  }
-}
+void SemanticMapSink::start() { stage_->start(); }
 
 void SemanticMapSink::consume(FrameResult& result) {
   if (stopped_.load() || !result.pose || !TableMapSink::isEvidence(result.labelled)) return;
@@ -75,27 +91,7 @@ void SemanticMapSink::consume(FrameResult& result) {
   job.utime = prepared.frame.utime;
   job.seq = prepared.frame.seq;
   queued_.fetch_add(1);
-  if (!options_.threaded) {
-    fuse(job);
-    publishIfDue(false);
-    saveIfDue(false);
-    return;
-  }
-  if (queue_.push(std::move(job)) == PushResult::AcceptedDroppedOldest) skipped_.fetch_add(1);
-}
-
-void SemanticMapSink::run() {
-  // Wakes at least every publish period, so that a change goes out even when no
-  // further frame comes.
-  const auto period = std::chrono::duration_cast<Clock::duration>(
-      std::chrono::duration<double>(std::max(0.05, options_.publish_period_s)));
-  for (;;) {
-    auto popped = queue_.popFor(period);
-    if (popped) fuse(popped->value);
-    if (!popped && queue_.closed()) break;
-    publishIfDue(false);
-    saveIfDue(false);
-  }
+  stage_->push(std::move(job));  // sequential: fused (and published when due) right here
 }
 
 void SemanticMapSink::fuse(Job& job) {
@@ -183,9 +179,7 @@ void SemanticMapSink::saveIfDue(bool force) {
 
 void SemanticMapSink::stop(bool drain) {
   if (stopped_.exchange(true)) return;
-  if (!drain) queue_.clear();
-  queue_.close();
-  if (thread_.joinable()) thread_.join();
+  stage_->stop(drain ? StopMode::Drain : StopMode::Discard);
   if (bus_) {
     publishIfDue(true);
     saveIfDue(true);
@@ -202,7 +196,7 @@ SemanticMapSink::Counters SemanticMapSink::counters() const {
   c.publishes = publishes_.load();
   c.fused_frames = fused_frames_.load();
   c.fused_busy = fused_busy_.load();
-  c.queue_depth = queue_.size();
+  c.queue_depth = stage_->queueSize();
   c.queue_capacity = static_cast<std::size_t>(std::max(1, options_.queue_capacity));
   std::lock_guard lock(map_mutex_);
   const SemanticMapStats stats = map_.stats();

@@ -237,10 +237,14 @@ run_one() {
     --histogram-csv "$dir/histogram.csv" --histogram-txt "$dir/histogram.txt" --bins 60 \
     --timeout $((DURATION + 900)) > "$dir/probe.log" 2>&1 &
   local probe=$!; PIDS+=("$probe")
-  local exe=$FINDMUGD
+  local exe=$FINDMUGD trace=()
   [[ $mode == sequential ]] && exe=$SEQUENTIAL
+  # Where each frame's time went (frame_trace.hpp), when the build has the setting.
+  [[ $mode == threaded ]] && grep -qa daemon.frame_trace_file "$exe" &&
+    trace=(--set "daemon.frame_trace_file=$dir/frame-trace.csv")
   "$exe" --source "lcm:FINDMUG_RGBD?url=$URL" --lcm-url "$URL" --model "$MODEL" \
-    "${MODEL_SETS[@]}" --set daemon.stats_window_s=3600 "${EXTRA_SETS[@]+"${EXTRA_SETS[@]}"}" \
+    "${MODEL_SETS[@]}" --set daemon.stats_window_s=3600 "${trace[@]+"${trace[@]}"}" \
+    "${EXTRA_SETS[@]+"${EXTRA_SETS[@]}"}" \
     --log-level warn > "$dir/daemon.log" 2>&1 &
   local daemon=$!; PIDS+=("$daemon")
   monitor "$daemon" "$dir/usage" &
@@ -458,6 +462,27 @@ mem_gb=$(awk '/MemTotal/ {printf "%.0f", $2 / 1048576}' /proc/meminfo)
     echo "| data | input fps | mode | frames | skipped | candidates / frame | named | mapped | maps out | objects stage ms | object work ms | object thread CPU % |"
     echo "|---|---|---|---|---|---|---|---|---|---|---|---|"
     printf "%s" "$obj_rows"
+  fi
+  trace_rows=""
+  for ds in $DATASETS; do
+    for rate in $RATES $([[ $ds == nyu ]] && echo "$SEARCHED"); do
+      t="$RESULTS/$ds-${rate}fps-threaded/frame-trace.csv"
+      [[ -s "$t" ]] || continue
+      trace_rows+="$(python3 "$ROOT/tests/bench/frame_trace_summary.py" "$t" --label "$ds $rate fps")"$'\n'
+    done
+  done
+  if [[ -n "$trace_rows" ]]; then
+    echo
+    echo "### Where the latency goes (threaded, the daemon's frame trace), ms p50 / p99 / max (mean of the slowest 1 %)"
+    echo
+    echo "Per published frame (daemon.frame_trace_file): source = frame sent to taken by the daemon"
+    echo "(transit and the source's queue), door = waiting in the prepare queue, prepare, segment_wait"
+    echo "= waiting for a segmentation worker, segment, reorder = held so that frames leave in order,"
+    echo "publish_wait = waiting for the publish thread, publish = the sinks; total = submit to published."
+    echo
+    echo "| run | frames | source | door | prepare | segment_wait | segment | reorder | publish_wait | publish | total |"
+    echo "|---|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|"
+    printf "%s" "$trace_rows"
   fi
   if [[ " $MODES " == *" threaded "* && " $MODES " == *" sequential "* ]]; then
     echo

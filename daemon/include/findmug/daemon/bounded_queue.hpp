@@ -4,9 +4,9 @@
 // The daemon's stages are joined by these queues. Frames are perishable: when
 // a consumer falls behind, the right answer for a robot is to forget the
 // oldest waiting frame and keep the newest, so latency stays bounded
-// (DropPolicy::DropOldest, every drop counted). Results that already cost a
-// full segmentation are not perishable; those queues apply back-pressure
-// instead (DropPolicy::Block).
+// (DropPolicy::DropOldest, every drop counted). There is no blocking policy: push() never waits, so a
+// stage's worker handing its result on can never be stalled by a slow stage
+// after it (which would stall every worker of the stage behind it).
 //
 // Every pop hands out a ticket: 0, 1, 2, ... in pop order. Because pops are
 // FIFO, ticket order is arrival order among the items that survived the drop
@@ -32,7 +32,6 @@ namespace findmug::daemon {
 
 enum class DropPolicy {
   DropOldest,  // full: evict the oldest waiting item, count it, accept the new one
-  Block,       // full: wait until there is room (or the queue is closed)
 };
 
 enum class PushResult {
@@ -55,17 +54,13 @@ class BoundedQueue {
   BoundedQueue(const BoundedQueue&) = delete;
   BoundedQueue& operator=(const BoundedQueue&) = delete;
 
-  // Adds `value` under the queue's drop policy. With DropOldest this never
-  // blocks. `evicted`, when given, receives the dropped item (so a caller can
-  // log which frame was lost).
+  // Adds `value` under the queue's drop policy; never blocks. `evicted`, when
+  // given, receives the dropped item (so a caller can log which frame was lost).
   PushResult push(T value, std::optional<T>* evicted = nullptr) {
     std::unique_lock lock(mutex_);
-    if (policy_ == DropPolicy::Block) {
-      not_full_.wait(lock, [&] { return closed_ || items_.size() < capacity_; });
-    }
     if (closed_) return PushResult::Closed;
     PushResult result = PushResult::Accepted;
-    if (items_.size() >= capacity_) {  // only reachable with DropOldest
+    if (items_.size() >= capacity_) {
       if (evicted) *evicted = std::move(items_.front());
       items_.pop_front();
       ++dropped_;
@@ -105,7 +100,16 @@ class BoundedQueue {
            !closed_;
   }
 
-  // Refuses further pushes and wakes every waiter. Items already queued can
+  // Waits at most `timeout` until no item waits (or the queue is closed); true when empty
+  // and open. A producer that pushes only then never has an item wait behind another.
+  template <typename Rep, typename Period>
+  bool waitUntilEmpty(std::chrono::duration<Rep, Period> timeout) {
+    std::unique_lock lock(mutex_);
+    return not_full_.wait_for(lock, timeout, [&] { return closed_ || items_.empty(); }) &&
+           !closed_;
+  }
+
+  // Refuses further pushes and wakes every waiter (pop, waitForRoom). Items already queued can
   // still be popped (drain) unless clear() discards them.
   void close() {
     {
@@ -143,7 +147,7 @@ class BoundedQueue {
     std::lock_guard lock(mutex_);
     return dropped_;
   }
-  // Of those, the ones evicted by DropOldest (the rest were discarded by clear()).
+  // Of those, the ones evicted by the policy (the rest were discarded by clear()).
   std::uint64_t evictedCount() const {
     std::lock_guard lock(mutex_);
     return evicted_;
@@ -164,7 +168,7 @@ class BoundedQueue {
     Popped popped{std::move(items_.front()), next_ticket_++};
     items_.pop_front();
     lock.unlock();
-    not_full_.notify_all();  // blocked pushers and waitForRoom callers alike
+    not_full_.notify_all();  // waitForRoom and waitUntilEmpty callers
     return popped;
   }
 

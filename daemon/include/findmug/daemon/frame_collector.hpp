@@ -74,6 +74,7 @@ class FrameCollector final : public ResultSink {
   // The next published frame is saved, with `note` in frames.csv. Throws
   // findmug::Error for a note with a comma, quote or control character.
   void requestSave(std::int64_t request_id, const std::string& note);
+  std::string name() const override { return "FrameCollector"; }
   void consume(FrameResult& result) override;
   // Writes what is queued, then ends the writer. Idempotent.
   void stop();

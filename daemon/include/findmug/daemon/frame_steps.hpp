@@ -19,6 +19,7 @@
 #include <memory>
 #include <vector>
 
+#include "findmug/daemon/frame_trace.hpp"
 #include "findmug/daemon/pose_input.hpp"
 #include "findmug/daemon/result_sinks.hpp"
 #include "findmug/frame/frame.hpp"
@@ -34,10 +35,12 @@ using CurrentSegmenter = std::function<std::shared_ptr<const Segmenter>()>;
 // Always `segmenter` (not owned: it must outlive the step).
 CurrentSegmenter fixedSegmenter(const Segmenter& segmenter);
 
-// What travels between the steps: the frame's data and when it arrived (for latency).
+// What travels between the steps: the frame's data, when it arrived (for latency) and when
+// it entered and left each stage so far (the Stage callbacks stamp it; the steps carry it on).
 struct FrameJob {
   RgbdFrame frame;
   StepClock::time_point arrival;
+  FrameTrace trace;
 };
 struct PreparedJob {
   PreparedFrame prepared;
@@ -46,10 +49,12 @@ struct PreparedJob {
   // a model swapped in meanwhile, whose recorded settings (cloud, normals) may differ,
   // never classifies a frame another model's settings prepared.
   std::shared_ptr<const Segmenter> segmenter;
+  FrameTrace trace;
 };
 struct ResultJob {
   LabelledFrame labelled;
   StepClock::time_point arrival;
+  FrameTrace trace;
 };
 
 class PrepareStep {

@@ -119,6 +119,8 @@ class ObjectSearchSink final : public ResultSink {
   ObjectSearchSink(const ObjectSearchSink&) = delete;
   ObjectSearchSink& operator=(const ObjectSearchSink&) = delete;
 
+  std::string name() const override { return "ObjectSearchSink"; }
+  SinkSlots slots() const override { return {0, kMapInfo}; }
   void consume(FrameResult& result) override;
 
   // The command "find NAME" with its request id; answers on the find channel

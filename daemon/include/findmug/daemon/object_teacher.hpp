@@ -56,6 +56,7 @@ class ObjectTeacher final : public ResultSink {
   // `objects_dir`: where the models are written ("" = teaching refused).
   explicit ObjectTeacher(std::string objects_dir, std::size_t frames_kept = kDefaultFramesKept);
 
+  std::string name() const override { return "ObjectTeacher"; }
   void consume(FrameResult& result) override;
 
   // `argument`: "NAME SEQ INDEX" (io::parseTeachArgument). Returns the outcome's

@@ -1,14 +1,17 @@
 // findmug/daemon/pipeline.hpp — frames in, label images / tables / status out over LCM.
 //
 //   submit(frame) ─▶ [prepare queue] ─▶ prepare ─▶ [segment queue] ─▶ segment ×N
-//                     the door:          1 thread,   (never full)      reorder ▼
-//                     drop oldest        waits for room downstream
-//                                                   [publish queue] ◀──────────┘
-//                                                     blocking  ─▶ publish (1 thread: the sinks,
-//                                                                  also sends status)
+//                     the door:          1 thread,   one place          reorder ▼
+//                     drop oldest        waits for                  [publish queue]
+//                                        that place                   drop-oldest ─▶ publish
+//                                                                    (1 thread: the sinks,
+//                                                                     also sends status)
 //
 // Each stage runs one step class of frame_steps.hpp (PrepareStep, SegmentStep,
-// PublishStep) on its thread(s); the Pipeline only wires them and keeps the counters.
+// PublishStep) on its thread(s). The Pipeline only wires them (makeSinks, makeStages,
+// makeCommandInput, makePoseInput); the figures live in their own types
+// (PipelineStatistics: rates, step latencies, last error; ProcessUsage: CPU and heap;
+// the stages' own StageStats: queues, drops, stage latencies).
 //
 //   prepare   Segmenter::prepare: cloud, normals, ground plane
 //   segment   Segmenter::oversegment + classify (oversegmentation, features, forest,
@@ -25,7 +28,9 @@
 //             FINDMUG_FIND_RESULT; a drop-oldest queue, daemon.objects_queue),
 //             then any added with addSink(); and, every
 //             daemon.status_period_s, status_t on FINDMUG_STATUS, built by
-//             StatusBuilder (status_builder.hpp) from statusSnapshot()
+//             StatusBuilder (status_builder.hpp) from statusSnapshot().
+//             Each sink declares which slots of the FrameResult it adds and
+//             reads (ResultSink::slots); addSink refuses an order that breaks them.
 //
 // Map frame (pose_input.hpp): when robot poses arrive on FINDMUG_ROBOT_POSE,
 // the publish stage looks up the pose closest in time to each frame (within
@@ -38,13 +43,17 @@
 // was dropped) and map changes (created / confirmed / forgotten) are logged
 // at debug level.
 //
-// Frames are perishable, results are not. Frames are dropped at the door:
-// the prepare stage takes a frame only when the segment queue has room, so
-// under overload frames wait in the prepare queue (the pipeline's entry),
-// which drops its oldest when full, before any work is spent on them. A
-// daemon source loop calls waitForRoom() before taking a frame from its
-// source, so that they wait there, before decoding. The publish queue
-// applies back-pressure. Drops are counted by reason (PipelineCounters).
+// The newest frame wins. A navigation client acts on where things are now: a label image
+// of a frame that waited behind a newer one is out of date before it is made, and the work
+// spent on it delays the newer frame too. So no frame waits behind another once work has
+// been spent on it: the prepare stage takes a frame only when the one place in the segment
+// queue is free, and a daemon source loop calls waitForRoom() before taking a frame from
+// its source, which waits until nothing waits at the door and that place is free; so under
+// overload frames wait, and the oldest are dropped, in the source before decoding (or, for
+// a caller that submits without waiting, at the door, which drops its oldest when full). Nothing blocks a
+// worker handing a result on (BoundedQueue::push never waits): when the sinks fall behind,
+// the publish queue drops its oldest result, so a slow sink never stalls the segmentation
+// workers. Drops are counted by reason (PipelineCounters).
 //
 // CPU budget (daemon.max_cpu_cores): the daemon runs the pipeline
 // sequentially on its source thread below 2 cores, threaded with at most
@@ -86,10 +95,13 @@
 #include "findmug/daemon/daemon_config.hpp"
 #include "findmug/daemon/frame_collector.hpp"
 #include "findmug/daemon/frame_steps.hpp"
+#include "findmug/daemon/frame_trace.hpp"
 #include "findmug/daemon/model_reload.hpp"
 #include "findmug/daemon/object_search_sink.hpp"
 #include "findmug/daemon/object_teacher.hpp"
+#include "findmug/daemon/pipeline_statistics.hpp"
 #include "findmug/daemon/pose_input.hpp"
+#include "findmug/daemon/process_usage.hpp"
 #include "findmug/daemon/result_sinks.hpp"
 #include "findmug/daemon/semantic_map_sink.hpp"
 #include "findmug/daemon/service.hpp"
@@ -151,10 +163,11 @@ class Pipeline {
   // Returns false after stop().
   bool submit(RgbdFrame frame);
   // Threaded: waits at most `timeout` until a submitted frame would be
-  // accepted without dropping one (false on timeout or after stop()). A
+  // accepted without dropping one and prepared at once (nothing waits at the
+  // door and the segment queue's place is free; false on timeout or after stop()). A
   // source loop that calls this before taking its next frame leaves frames
   // waiting in the source, where overload drops them before they are even
-  // decoded. Sequential: true at once.
+  // decoded, and takes each when it can be worked on. Sequential: true at once.
   bool waitForRoom(Clock::duration timeout);
   // Sequential mode: publish a status now (threaded mode does it periodically).
   void publishStatusNow();
@@ -205,17 +218,28 @@ class Pipeline {
  private:
   struct Published {};
 
+  // The constructor's steps, in order.
+  void makeSinks(const SegmenterConfig& segmenter_config, std::shared_ptr<io::Bus> bus);
+  void makeStages();
+  void makeCommandInput();
+  void makePoseInput();
   // PublishStep on one result, then the output rate and latency statistics.
   void publishResult(ResultJob& job);
   void publishStatus();
   void recordError(const std::string& message);
   void recordErrorQuietly(const std::string& message);  // last_error only (logged elsewhere)
 
+  // The stages' workers are joined by the destructor before any member dies (~Pipeline), so
+  // the order below only matters to construction: what a member's constructor uses comes
+  // before it.
   DaemonConfig daemon_config_;
   ModelSlot model_;  // the Segmenter (and model) frames run with
   ExecutionMode mode_;
   PipelineHooks hooks_;
   int workers_;
+  PipelineStatistics statistics_;  // rates, step latencies, last error (status_t)
+  ProcessUsage process_usage_;     // CPU cores used between statuses, heap in use
+  std::unique_ptr<FrameTraceWriter> trace_;  // nullptr unless daemon.frame_trace_file
   std::shared_ptr<TableMapSink> table_map_sink_;
   std::shared_ptr<SemanticMapSink> semantic_map_;  // nullptr unless daemon.semantic_map
   std::shared_ptr<LcmPublisherSink> publisher_;
@@ -225,7 +249,6 @@ class Pipeline {
   std::shared_ptr<FrameCollector> collector_;    // nullptr unless daemon.collect_dir
   std::shared_ptr<ObjectSearchSink> object_search_;  // taught objects, object map, "find"
   std::shared_ptr<ObjectTeacher> object_teacher_;    // "teach": the last frames' candidates
-  std::uint64_t pose_max_age_us_ = 0;
   // The three steps (frame_steps.hpp), each run by its Stage below.
   PrepareStep prepare_step_;
   SegmentStep segment_step_;
@@ -234,17 +257,8 @@ class Pipeline {
   Clock::time_point last_sequential_status_;
   std::mutex sequential_status_mutex_;  // guards last_sequential_status_
   std::atomic<const io::FrameSource*> source_{nullptr};
-
   std::atomic<std::uint64_t> received_{0}, processed_{0}, abandoned_{0};
   std::atomic<bool> finalized_{false};
-  mutable std::mutex stats_mutex_;  // guards the members below
-  RateMeter input_rate_, output_rate_;
-  std::map<std::string, LatencyWindow> latency_;  // per named stage/sub-stage
-  std::string last_error_;
-  std::uint64_t last_error_utime_ = 0;
-  Clock::time_point cpu_sample_time_;  // process CPU time at the previous status
-  double cpu_sample_s_ = 0.0;
-  double cpu_used_cores_ = 0.0;
 
   std::unique_ptr<Stage<ResultJob, Published>> publish_;
   std::unique_ptr<Stage<PreparedJob, ResultJob>> segment_;

@@ -44,25 +44,50 @@ namespace findmug::daemon {
 
 struct StatusSnapshot;
 
-// One frame's result on its way through the sinks. `labelled` is valid only
-// during consume(): afterwards the pipeline hands its buffers back to the
-// Segmenter (Segmenter::recycle) for the next frames. Copy what you keep.
+// One frame's result on its way through the sinks. The segment step's result (`labelled`),
+// the latency and the pose are fixed before the first sink; the slots after them are what a
+// sink adds for the sinks after it, each declared by the sink (ResultSink::slots) so that the
+// order is stated where the sinks are added and checked there (PublishStep::addSink).
+// `labelled` is valid only during consume(): afterwards the pipeline hands its buffers back
+// to the Segmenter (Segmenter::recycle) for the next frames. Copy what you keep.
 struct FrameResult {
   const LabelledFrame& labelled;
   std::int64_t latency_us = 0;        // arrival to publish
   std::optional<io::RobotPose> pose;  // the robot's pose for this frame, if one is close enough
-  // Set by TableMapSink: one entry per table of the frame when the map took it,
+  // Slot MapInfo (TableMapSink): one entry per table of the frame when the map took it,
   std::vector<io::TableMapInfo> map_info;
-  // and the map's confirmed tables when they are due on FINDMUG_TABLE_MAP.
+  // slot TableMapMessage (TableMapSink): the map's confirmed tables when they are due on
+  // FINDMUG_TABLE_MAP.
   std::optional<io::TablesMessage> table_map;
-  // Set by SemanticMapSink (daemon.semantic_map_fused_labels): the label image to
-  // publish instead of the frame's own.
+  // Slot PublishedLabels (SemanticMapSink, daemon.semantic_map_fused_labels): the label
+  // image to publish instead of the frame's own.
   std::optional<LabelImage> published_labels = std::nullopt;
+};
+
+// The slots of FrameResult a sink may add to, as bits.
+enum ResultSlot : unsigned {
+  kMapInfo = 1u << 0,
+  kTableMapMessage = 1u << 1,
+  kPublishedLabels = 1u << 2,
+};
+// "map_info", "table_map", "published_labels", joined with ", ".
+std::string resultSlotNames(unsigned slots);
+
+// What a sink adds (`writes`) and what it reads of what other sinks add (`reads`). A sink
+// that reads a slot must come after every sink that writes it; one slot has one writer.
+struct SinkSlots {
+  unsigned writes = 0;
+  unsigned reads = 0;
 };
 
 class ResultSink {
  public:
   virtual ~ResultSink() = default;
+  // For messages: the sink's class name.
+  virtual std::string name() const = 0;
+  // The slots it adds and reads (none by default). PublishStep refuses an order that breaks
+  // them, and a frame on which a sink filled a slot it did not declare.
+  virtual SinkSlots slots() const { return {}; }
   virtual void consume(FrameResult& result) = 0;
 };
 
@@ -79,6 +104,8 @@ class TableMapSink final : public ResultSink {
   // Whether `labelled` is evidence about tables (see the header comment).
   static bool isEvidence(const LabelledFrame& labelled);
 
+  std::string name() const override { return "TableMapSink"; }
+  SinkSlots slots() const override { return {kMapInfo | kTableMapMessage, 0}; }
   void consume(FrameResult& result) override;
 
   // Tables in the map now, tentative ones included (thread-safe copy).
@@ -113,6 +140,8 @@ class LcmPublisherSink final : public ResultSink {
   LcmPublisherSink(std::shared_ptr<io::Bus> bus, Channels channels, bool publish_confidence,
                    bool publish_tables);
 
+  std::string name() const override { return "LcmPublisherSink"; }
+  SinkSlots slots() const override { return {0, kMapInfo | kTableMapMessage | kPublishedLabels}; }
   void consume(FrameResult& result) override;
   // Puts each frame's colour image, as a JPEG of `quality` (1..100), into its label
   // image (daemon.publish_color). Call before the first frame.

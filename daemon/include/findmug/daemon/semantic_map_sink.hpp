@@ -19,10 +19,11 @@
 // frame's own; when the map thread holds the map at that moment the frame keeps its own
 // labels (counted as fused_busy), so that the label stream never waits.
 //
-// The map thread is named "findmug-semmap" (top -H; tests/bench/daemon_bench.sh reads
-// its CPU time from /proc/PID/task/*/stat).
+// The map thread is a Stage (stage.hpp) of one worker, named "findmug-semmap" (top -H;
+// tests/bench/daemon_bench.sh reads its CPU time from /proc/PID/task/*/stat), whose
+// periodic tick publishes and saves when due even while no frame comes.
 //
-// In sequential mode (daemon.max_cpu_cores < 2) there is no thread: consume() fuses the
+// In sequential mode (daemon.max_cpu_cores < 2) the Stage runs inline: consume() fuses the
 // frame itself, and publishes when due.
 #pragma once
 
@@ -33,11 +34,10 @@
 #include <memory>
 #include <mutex>
 #include <string>
-#include <thread>
 #include <vector>
 
-#include "findmug/daemon/bounded_queue.hpp"
 #include "findmug/daemon/result_sinks.hpp"
+#include "findmug/daemon/stage.hpp"
 #include "findmug/io/bus.hpp"
 #include "findmug/map/semantic_map.hpp"
 
@@ -84,6 +84,8 @@ class SemanticMapSink final : public ResultSink {
   SemanticMapSink& operator=(const SemanticMapSink&) = delete;
 
   void start();
+  std::string name() const override { return "SemanticMapSink"; }
+  SinkSlots slots() const override { return {kPublishedLabels, 0}; }
   void consume(FrameResult& result) override;
   // Drain: fuse every queued frame first; then a last publish (when changed) and save.
   // Releases the bus. Idempotent.
@@ -103,7 +105,8 @@ class SemanticMapSink final : public ResultSink {
     std::int64_t seq = 0;
   };
 
-  void run();
+  struct Fused {};
+
   void fuse(Job& job);
   void publishIfDue(bool force);
   void saveIfDue(bool force);
@@ -111,8 +114,6 @@ class SemanticMapSink final : public ResultSink {
   Options options_;
   OnError on_error_;
   std::shared_ptr<io::Bus> bus_;
-  BoundedQueue<Job> queue_;
-  std::thread thread_;
   std::atomic<bool> stopped_{false};
 
   mutable std::mutex map_mutex_;  // guards map_ and the members up to tables_
@@ -128,6 +129,9 @@ class SemanticMapSink final : public ResultSink {
 
   std::atomic<std::uint64_t> queued_{0}, skipped_{0}, integrated_{0}, failed_{0}, publishes_{0},
       fused_frames_{0}, fused_busy_{0};
+  // The map thread: fuses each queued frame. Last, so that its worker (joined by stop(), or
+  // by its own destructor first of all members) never outlives what it touches.
+  std::unique_ptr<Stage<Job, Fused>> stage_;
 };
 
 }  // namespace findmug::daemon

@@ -127,7 +127,7 @@ class Stage {
     for (int i = 0; i < options_.workers; ++i) threads_.emplace_back([this] { workerLoop(); });
   }
 
-  // Threaded: enqueue under the drop policy (blocks only with DropPolicy::Block).
+  // Threaded: enqueue under the drop policy; never blocks.
   // Sequential: run work + emit now. Returns false if the stage is stopped.
   bool push(In item) {
     if (options_.mode == ExecutionMode::Sequential) {
@@ -152,6 +152,12 @@ class Stage {
   template <typename Rep, typename Period>
   bool waitForRoom(std::chrono::duration<Rep, Period> timeout) {
     return queue_.waitForRoom(timeout);
+  }
+  // Waits at most `timeout` until nothing waits in the input queue; false on timeout or
+  // once the stage is closed.
+  template <typename Rep, typename Period>
+  bool waitUntilEmpty(std::chrono::duration<Rep, Period> timeout) {
+    return queue_.waitUntilEmpty(timeout);
   }
   bool closed() const { return queue_.closed(); }
   std::size_t queueSize() const { return queue_.size(); }
