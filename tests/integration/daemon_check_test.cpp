@@ -87,7 +87,7 @@ TEST(FindmugdHelpSettings, ListsEverySettingWithDefaultRangeAndDoc) {
   ASSERT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << out;
   for (const char* line :
        {"mrf.lambda = 1  (a number in [0, 1000])\n    weight of the unary term",
-        "daemon.queue_capacity = 2  (an integer in [1, 64])\n    frames per queue",
+        "daemon.queue_capacity = 2  (an integer in [1, 64])\n    frames at the pipeline entry",
         "features.objects = false  (true or false) [model]\n    object features",
         "oversegmentation.method = organized  (one of pcl organized) [model]\n",
         "learner.classes = labels  (one of labels nyu13 nyu40)\n",
