@@ -362,6 +362,27 @@ TEST(SearchBench, ProgramOutputDoesNotDependOnTheWorkers) {
   for (const auto& r : rows) drive_frames += std::stoi(r.at("drive_frames"));
   EXPECT_GT(drive_frames, 0);
   EXPECT_NE(slurp(one / "success_curve.svg").find("<polyline"), std::string::npos);
+  // One episode of the run again (--only), traced: the same rows, a trace per run.
+  const fs::path again = run("only", args + " --only 1.0 --trace " + (run.tmp / "traces").string());
+  const auto again_rows = csvRows(slurp(again / "episodes.csv"));
+  ASSERT_EQ(again_rows.size(), 3u);
+  for (const auto& r : again_rows) {
+    EXPECT_EQ(r.at("apartment"), "1");
+    const auto same = std::find_if(rows.begin(), rows.end(), [&](const auto& x) {
+      return x.at("run") == r.at("run") && x.at("apartment") == "1";
+    });
+    ASSERT_NE(same, rows.end());
+    EXPECT_EQ(*same, r);
+  }
+  const std::string trace = slurp(run.tmp / "traces" / "findmug-oracle-sim_a1_e0.txt");
+  EXPECT_NE(trace.find("look around"), std::string::npos) << trace;
+  // An episode not in the run is refused by name.
+  const std::string bad = std::string(FINDMUG_SEARCH_BENCH_EXE) + " " + args +
+                          " --only 7.3 --quiet --out " + (run.tmp / "bad").string() + " > " +
+                          (run.tmp / "bad.txt").string() + " 2>&1";
+  EXPECT_NE(std::system(("cd " + root + " && " + bad).c_str()), 0);
+  EXPECT_NE(slurp(run.tmp / "bad.txt").find("--only: episode 7.3"), std::string::npos)
+      << slurp(run.tmp / "bad.txt");
 }
 
 // The daemon's own recogniser: the mug taught from other apartments, every frame through

@@ -78,6 +78,7 @@ struct Options {
   std::string trace_dir;  // "" = no traces
   double top_seen_share = 0.8;
   bool no_replan = false;
+  std::string only;  // "" = every episode
 };
 
 // A model the daemon runs with: its short name in the run labels, file and settings.
@@ -194,6 +195,28 @@ std::vector<EpisodeRow> runAll(const std::vector<Episode>& episodes,
   return rows;
 }
 
+// The episodes named in --only ("A.E", apartment and episode index, comma-separated) among
+// `all`: one episode of a large run again, with the same seeds. Throws findmug::Error
+// naming an entry that is not "A.E" or not among them.
+std::vector<Episode> onlyEpisodes(const std::vector<Episode>& all, const std::string& only) {
+  std::vector<Episode> out;
+  for (const std::string& item : splitWords(only, "--only")) {
+    int a = -1, e = -1;
+    char dot = 0, rest = 0;
+    std::istringstream in(item);
+    if (!(in >> a >> dot >> e) || dot != '.' || (in >> rest))
+      throw Error("--only: '" + item + "' is not APARTMENT.EPISODE (e.g. 25.1)");
+    const auto it = std::find_if(all.begin(), all.end(), [&](const Episode& x) {
+      return x.apartment == a && x.index == e;
+    });
+    if (it == all.end())
+      throw Error("--only: episode " + item + " is not in this run (--apartments, " +
+                  "--episodes-per-apartment)");
+    out.push_back(*it);
+  }
+  return out;
+}
+
 // One file per run and episode, named RUN_aA_eE.txt (slashes of the run label as '-').
 void writeTraces(const std::string& dir, const std::vector<EpisodeRow>& rows) {
   std::filesystem::create_directories(dir);
@@ -228,6 +251,7 @@ int run(const Options& o) {
     for (int e = 0; e < o.episodes; ++e)
       episodes.push_back({a, e, o.seed * 1000003ULL + a, (o.seed * 1000003ULL + a) * 7919ULL + e});
   }
+  if (!o.only.empty()) episodes = onlyEpisodes(episodes, o.only);
 
   std::vector<ModelChoice> models = modelChoices(o);
   std::vector<RunSpec> runs;
@@ -377,6 +401,9 @@ int main(int argc, char** argv) {
                   "findmug strategy: skip a table once this share of its top was in view within "
                   "the recogniser's reach (default 0.8; 0: visit every table)")
       ->check(CLI::Range(0.0, 1.0));
+  app->add_option("--only", o.only,
+                  "run only these episodes of the run, APARTMENT.EPISODE comma-separated (e.g. "
+                  "25.1,46.0), with the seeds they have in it");
   app->add_flag("--no-replan", o.no_replan,
                 "findmug strategy: explore a room to its centre and look around even when the "
                 "map shows a new table on the way");
