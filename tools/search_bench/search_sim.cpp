@@ -13,14 +13,7 @@ namespace findmug::search {
 
 namespace {
 
-// SplitMix64, the same mix the renderer uses: seeds from seeds, the same on every platform.
-std::uint64_t mix(std::uint64_t z) {
-  z += 0x9e3779b97f4a7c15ULL;
-  z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
-  z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
-  return z ^ (z >> 31);
-}
-
+// A mixed seed as a uniform number in [0, 1).
 double unit(std::uint64_t bits) { return (bits >> 11) * 0x1.0p-53; }
 
 double wrap(double a) {

@@ -88,6 +88,16 @@ class Grid {
 
 inline constexpr double kInfinity = std::numeric_limits<double>::infinity();
 
+// The benchmark's seed mixer (SplitMix64, the same mix the renderer uses: the same on every
+// platform): every seed it derives (episodes, start
+// cells, frame noise, random poses, teaching views) goes through this one function.
+inline std::uint64_t mix(std::uint64_t z) {
+  z += 0x9e3779b97f4a7c15ULL;
+  z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
+  z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
+  return z ^ (z >> 31);
+}
+
 // One episode: an apartment, the mug, where the robot starts, and what the best could do.
 struct Episode {
   int apartment = 0;  // index among the benchmark's apartments

@@ -16,13 +16,6 @@ namespace findmug::search {
 
 namespace {
 
-std::uint64_t mix(std::uint64_t z) {
-  z += 0x9e3779b97f4a7c15ULL;
-  z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
-  z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
-  return z ^ (z >> 31);
-}
-
 // Among the reachable cells (finite `dist`) within `max_m` of `xy`, the one closest to it.
 int reachableCellNear(const Grid& grid, const std::vector<double>& dist, const Eigen::Vector2d& xy,
                       double max_m) {

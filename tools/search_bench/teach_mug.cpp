@@ -14,13 +14,6 @@ namespace findmug::search {
 
 namespace {
 
-std::uint64_t mix(std::uint64_t z) {
-  z += 0x9e3779b97f4a7c15ULL;
-  z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
-  z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
-  return z ^ (z >> 31);
-}
-
 // The free pose 1.0-1.6 m from the mug (on the floor) facing it that shows the most of it
 // (noise-free render), on a 0.15 m lattice; false when none shows recognise_min_pixels.
 bool teachingPose(const World& w, const SimParams& params, Eigen::Vector2d& xy, double& yaw) {
