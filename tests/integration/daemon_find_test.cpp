@@ -23,32 +23,19 @@
 #include "findmug/io/lcm_codec_find.hpp"
 #include "findmug/io/lcm_codec_objects.hpp"
 #include "object_scenes.hpp"
+#include "table_scenes.hpp"
 #include "test_data.hpp"
 
 namespace findmug::daemon {
 namespace {
 
+// A mapped table with a search position on each long side.
+TableCluster tableAt(float cx, float cy) {
+  return test::withSearchPositions(test::tableAt(cx, cy));
+}
+
 using namespace std::chrono_literals;
 constexpr const char* kFindChannel = "FINDMUG_FIND_RESULT";
-
-// A 1.2 x 0.8 m table centred at (cx, cy) of the frame's base frame, with one
-// search position on each long side facing it.
-TableCluster tableAt(float cx, float cy) {
-  TableCluster t;
-  t.top_height = 0.75f;
-  t.centroid = {cx, cy, 0.75f};
-  t.center = {cx, cy};
-  t.extents = {0.6f, 0.4f};
-  t.hull = {{cx - 0.6f, cy - 0.4f}, {cx + 0.6f, cy - 0.4f}, {cx + 0.6f, cy + 0.4f},
-            {cx - 0.6f, cy + 0.4f}};
-  SearchPosition north, south;
-  north.xy = {cx, cy + 0.9f};
-  north.yaw = static_cast<float>(-M_PI / 2);
-  south.xy = {cx, cy - 0.9f};
-  south.yaw = static_cast<float>(M_PI / 2);
-  t.search_positions = {north, south};
-  return t;
-}
 
 // A labelled frame (a ground plane, one labelled pixel) with `tables`.
 LabelledFrame frameWith(std::vector<TableCluster> tables, std::uint64_t utime) {
@@ -164,33 +151,10 @@ TEST_F(DaemonFind, FindListsThePlacesToLookAndPutsASearchedTableLast) {
 LabelledFrame viewOf(const std::vector<TableCluster>& tables, const Pose2D& robot,
                      std::uint64_t utime) {
   LabelledFrame f = frameWith({}, utime);
-  CameraExtrinsics mount;
-  mount.height_m = 1.2;
-  mount.pitch_rad = 0.5;
-  f.segmented.prepared.ground = groundFromExtrinsics(mount);
-  RgbdFrame& frame = f.segmented.prepared.frame;
-  frame.width = 640;
-  frame.height = 480;
-  frame.source = "view";
-  frame.depth_mm.assign(640 * 480, 0);
-  const Eigen::Isometry3d camera =
-      cameraInMap(robot, f.segmented.prepared.ground->camera_to_ground);
-  const Eigen::Vector3d o = camera.translation();
-  for (int v = 0; v < 480; ++v)
-    for (int u = 0; u < 640; ++u) {
-      const Eigen::Vector3d d =
-          camera.linear() * Eigen::Vector3d((u - frame.intrinsics.cx) / frame.intrinsics.fx,
-                                            (v - frame.intrinsics.cy) / frame.intrinsics.fy, 1.0);
-      if (d.z() >= 0) continue;
-      double t = -o.z() / d.z();  // the floor
-      const double on_top = (0.75 - o.z()) / d.z();
-      const Eigen::Vector3d p = o + on_top * d;
-      for (const TableCluster& table : tables)
-        if (std::abs(p.x() - table.center.x()) <= table.extents.x() &&
-            std::abs(p.y() - table.center.y()) <= table.extents.y())
-          t = on_top;
-      frame.depth_mm[v * 640 + u] = static_cast<std::uint16_t>(std::lround(t * 1000.0));
-    }
+  f.segmented.prepared.ground = groundFromExtrinsics(test::headMount());
+  f.segmented.prepared.frame =
+      test::depthOfTops(tables, cameraInMap(robot, f.segmented.prepared.ground->camera_to_ground));
+  f.segmented.prepared.frame.utime = utime;
   return f;
 }
 

@@ -8,9 +8,12 @@
 #include <cmath>
 
 #include "findmug/common/error.hpp"
+#include "table_scenes.hpp"
 
 namespace findmug {
 namespace {
+
+using test::tableAt;
 
 ObjectColourHistogram histogramAt(int bin) {
   ObjectColourHistogram h{};
@@ -20,18 +23,6 @@ ObjectColourHistogram histogramAt(int bin) {
 
 constexpr int kRedBin = 1;   // any chromatic bin
 constexpr int kBlueBin = 17;
-
-// A 1.2 x 0.8 m table top at 0.75 m, centred at (cx, cy) in the frame's base frame.
-TableCluster tableAt(float cx, float cy) {
-  TableCluster t;
-  t.top_height = 0.75f;
-  t.centroid = {cx, cy, 0.75f};
-  t.center = {cx, cy};
-  t.extents = {0.6f, 0.4f};
-  t.hull = {{cx - 0.6f, cy - 0.4f}, {cx + 0.6f, cy - 0.4f}, {cx + 0.6f, cy + 0.4f},
-            {cx - 0.6f, cy + 0.4f}};
-  return t;
-}
 
 // A mug-sized candidate at (x, y) of the base frame on table 0.
 TableObject mugAt(float x, float y, int colour_bin = kRedBin) {

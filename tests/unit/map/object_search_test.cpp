@@ -10,28 +10,14 @@
 #include "findmug/common/error.hpp"
 #include "findmug/ground/ground.hpp"
 #include "findmug/map/semantic_map.hpp"
+#include "table_scenes.hpp"
 
 namespace findmug {
 namespace {
 
-// A mapped table (map frame) with id `id` centred at (cx, cy), 1.2 x 0.8 m,
-// one search position on each long side facing it.
+// A mapped table with a search position on each long side.
 TableCluster mappedTable(int id, float cx, float cy) {
-  TableCluster t;
-  t.id = id;
-  t.top_height = 0.75f;
-  t.centroid = {cx, cy, 0.75f};
-  t.center = {cx, cy};
-  t.extents = {0.6f, 0.4f};
-  t.hull = {{cx - 0.6f, cy - 0.4f}, {cx + 0.6f, cy - 0.4f}, {cx + 0.6f, cy + 0.4f},
-            {cx - 0.6f, cy + 0.4f}};
-  SearchPosition north, south;
-  north.xy = {cx, cy + 0.9f};
-  north.yaw = static_cast<float>(-M_PI / 2);
-  south.xy = {cx, cy - 0.9f};
-  south.yaw = static_cast<float>(M_PI / 2);
-  t.search_positions = {north, south};
-  return t;
+  return test::withSearchPositions(test::tableAt(cx, cy, id));
 }
 
 TableObject mugOn(int table, float x, float y) {
@@ -148,30 +134,6 @@ TEST(ObjectSearch, AMugMatchedOnlyFromFarIsLookCloserWithItsTableFirst) {
   EXPECT_EQ(answer.kind, FindAnswer::Kind::Seen) << answer.summary;
 }
 
-// A 640x480 depth image of a flat top at `top_z` everywhere the ray meets it, else the floor,
-// as seen from `camera` (map frame): enough for TableTopViews' visibility test.
-RgbdFrame flatDepth(const Eigen::Isometry3d& camera, float top_z, const TableCluster& table) {
-  RgbdFrame f;
-  f.width = 640;
-  f.height = 480;
-  f.source = "flat view";
-  f.depth_mm.assign(640 * 480, 0);
-  const Eigen::Vector3d o = camera.translation();
-  for (int v = 0; v < 480; ++v)
-    for (int u = 0; u < 640; ++u) {
-      const Eigen::Vector3d d = camera.linear() * Eigen::Vector3d((u - f.intrinsics.cx) / f.intrinsics.fx,
-                                                                  (v - f.intrinsics.cy) / f.intrinsics.fy, 1.0);
-      if (d.z() >= 0) continue;
-      double t = (top_z - o.z()) / d.z();
-      const Eigen::Vector3d p = o + t * d;
-      const Eigen::Vector2f c = table.center;
-      if (std::abs(p.x() - c.x()) > table.extents.x() || std::abs(p.y() - c.y()) > table.extents.y())
-        t = -o.z() / d.z();
-      f.depth_mm[v * 640 + u] = static_cast<std::uint16_t>(std::lround(t * 1000.0));
-    }
-  return f;
-}
-
 TEST(ObjectSearch, ATopSeenNearEnoughWhileDrivingByIsSearched) {
   const std::vector<TableCluster> tables = {mappedTable(1, 1.0f, 0.0f), mappedTable(2, 6.0f, 0.0f)};
   ObjectMap objects(oneMatchNames());
@@ -189,7 +151,7 @@ TEST(ObjectSearch, ATopSeenNearEnoughWhileDrivingByIsSearched) {
   mount.pitch_rad = 0.5;
   const Eigen::Isometry3d camera =
       cameraInMap(robot, groundFromExtrinsics(mount).camera_to_ground);
-  EXPECT_EQ(search.observeView(tables, flatDepth(camera, 0.75f, tables[0]), camera),
+  EXPECT_EQ(search.observeView(tables, test::depthOfTops({tables[0]}, camera), camera),
             std::vector<int>{1});
   answer = search.answer(1, "mug", kTaught, objects, tables, robot, 20);
   EXPECT_EQ(answer.places[0].table_id, 2);
@@ -197,7 +159,7 @@ TEST(ObjectSearch, ATopSeenNearEnoughWhileDrivingByIsSearched) {
   EXPECT_EQ(answer.places[3].table_id, 1);
   // Something in front (a wall 0.3 m away) shows nothing, for a new request.
   answer = search.answer(2, "mug", kTaught, objects, tables, robot, 30);
-  RgbdFrame wall = flatDepth(camera, 0.75f, tables[0]);
+  RgbdFrame wall = test::depthOfTops({tables[0]}, camera);
   std::fill(wall.depth_mm.begin(), wall.depth_mm.end(), std::uint16_t{300});
   EXPECT_TRUE(search.observeView(tables, wall, camera).empty());
   // With top_seen_share 0, views never search a table.
@@ -205,7 +167,7 @@ TEST(ObjectSearch, ATopSeenNearEnoughWhileDrivingByIsSearched) {
   standing_only.top_seen_share = 0.0f;
   ObjectSearch strict(standing_only);
   strict.answer(1, "mug", kTaught, objects, tables, robot, 10);
-  EXPECT_TRUE(strict.observeView(tables, flatDepth(camera, 0.75f, tables[0]), camera).empty());
+  EXPECT_TRUE(strict.observeView(tables, test::depthOfTops({tables[0]}, camera), camera).empty());
 }
 
 TEST(ObjectSearch, AnUntaughtNameIsRefusedListingTheTaughtOnes) {

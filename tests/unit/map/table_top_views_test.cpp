@@ -9,6 +9,7 @@
 #include "findmug/common/error.hpp"
 #include "findmug/ground/ground.hpp"
 #include "findmug/map/semantic_map.hpp"
+#include "table_scenes.hpp"
 
 namespace findmug {
 namespace {
@@ -26,97 +27,57 @@ TableCluster squareTable(int id) {
   return t;
 }
 
-// The head camera of a robot standing at (x, y) with heading yaw: 1.2 m up, 0.5 rad down.
-Eigen::Isometry3d headCamera(double x, double y, double yaw) {
-  CameraExtrinsics mount;
-  mount.height_m = 1.2;
-  mount.pitch_rad = 0.5;
-  return cameraInMap(Pose2D{x, y, yaw}, groundFromExtrinsics(mount).camera_to_ground);
-}
-
-// A 640x480 depth frame of the table top and the floor (nothing else) seen from `camera`:
-// every pixel's ray meets the top (inside its hull) or the floor.
-RgbdFrame depthOf(const TableCluster& table, const Eigen::Isometry3d& camera) {
-  RgbdFrame f;
-  f.width = 640;
-  f.height = 480;
-  f.source = "rendered table";
-  f.depth_mm.assign(640 * 480, 0);
-  f.rgb.assign(640 * 480, Rgb8{});
-  const Eigen::Vector3d origin = camera.translation();
-  for (int v = 0; v < f.height; ++v) {
-    for (int u = 0; u < f.width; ++u) {
-      const Eigen::Vector3d ray((u - f.intrinsics.cx) / f.intrinsics.fx,
-                                (v - f.intrinsics.cy) / f.intrinsics.fy, 1.0);
-      const Eigen::Vector3d dir = camera.linear() * ray;  // z of the ray in the camera is 1
-      if (dir.z() >= -1e-9) continue;                     // never meets the floor
-      double t = (kTop - origin.z()) / dir.z();
-      const Eigen::Vector3d on_top = origin + t * dir;
-      bool inside = true;
-      for (std::size_t i = 0; i < table.hull.size(); ++i) {
-        const Eigen::Vector2d a = table.hull[i].cast<double>();
-        const Eigen::Vector2d b = table.hull[(i + 1) % table.hull.size()].cast<double>();
-        if ((b.x() - a.x()) * (on_top.y() - a.y()) - (b.y() - a.y()) * (on_top.x() - a.x()) < 0)
-          inside = false;
-      }
-      if (!inside) t = -origin.z() / dir.z();  // the floor
-      f.depth_mm[v * f.width + u] = static_cast<std::uint16_t>(std::lround(t * 1000.0));
-    }
-  }
-  return f;
-}
-
 TEST(TableTopViews, ATopInFullViewWithinReachIsSeenWhole) {
   const TableCluster table = squareTable(3);
-  const Eigen::Isometry3d camera = headCamera(0.0, 0.0, 0.0);
+  const Eigen::Isometry3d camera = test::headCamera(Pose2D{0.0, 0.0, 0.0});
   TableTopViews views;
   EXPECT_EQ(views.seenShare(table), 0.0);
-  const int added = views.observe({table}, depthOf(table, camera), camera);
+  const int added = views.observe({table}, test::depthOfTops({table}, camera), camera);
   EXPECT_EQ(added, 256);  // 16 x 16 cells of 5 cm
   EXPECT_DOUBLE_EQ(views.seenShare(table), 1.0);
   // Seeing it again adds nothing.
-  EXPECT_EQ(views.observe({table}, depthOf(table, camera), camera), 0);
+  EXPECT_EQ(views.observe({table}, test::depthOfTops({table}, camera), camera), 0);
 }
 
 TEST(TableTopViews, ATopBehindTheCameraIsNotSeen) {
   const TableCluster table = squareTable(3);
-  const Eigen::Isometry3d away = headCamera(0.0, 0.0, M_PI);
+  const Eigen::Isometry3d away = test::headCamera(Pose2D{0.0, 0.0, M_PI});
   TableTopViews views;
-  views.observe({table}, depthOf(table, away), away);
+  views.observe({table}, test::depthOfTops({table}, away), away);
   EXPECT_EQ(views.seenShare(table), 0.0);
 }
 
 TEST(TableTopViews, OnlyCellsWithinTheRecognisersReachCount) {
   const TableCluster table = squareTable(3);
-  const Eigen::Isometry3d camera = headCamera(0.0, 0.0, 0.0);
+  const Eigen::Isometry3d camera = test::headCamera(Pose2D{0.0, 0.0, 0.0});
   TableTopViewsConfig near;
   near.range_m = 1.5f;  // the top spans 1.15-1.9 m from the camera
   TableTopViews views(near);
-  views.observe({table}, depthOf(table, camera), camera);
+  views.observe({table}, test::depthOfTops({table}, camera), camera);
   const double share = views.seenShare(table);
   EXPECT_GT(share, 0.2);
   EXPECT_LT(share, 0.8);
   // From 4 m back, nothing is within 2 m.
   TableTopViews far_views;
-  const Eigen::Isometry3d far_camera = headCamera(-2.6, 0.0, 0.0);
-  far_views.observe({table}, depthOf(table, far_camera), far_camera);
+  const Eigen::Isometry3d far_camera = test::headCamera(Pose2D{-2.6, 0.0, 0.0});
+  far_views.observe({table}, test::depthOfTops({table}, far_camera), far_camera);
   EXPECT_EQ(far_views.seenShare(table), 0.0);
 }
 
 TEST(TableTopViews, SomethingInFrontHidesTheTopAndMissingDepthShowsNothing) {
   const TableCluster table = squareTable(3);
-  const Eigen::Isometry3d camera = headCamera(0.0, 0.0, 0.0);
-  RgbdFrame wall = depthOf(table, camera);
+  const Eigen::Isometry3d camera = test::headCamera(Pose2D{0.0, 0.0, 0.0});
+  RgbdFrame wall = test::depthOfTops({table}, camera);
   std::fill(wall.depth_mm.begin(), wall.depth_mm.end(), std::uint16_t{500});  // 0.5 m away
   TableTopViews views;
   views.observe({table}, wall, camera);
   EXPECT_EQ(views.seenShare(table), 0.0);
-  RgbdFrame holes = depthOf(table, camera);
+  RgbdFrame holes = test::depthOfTops({table}, camera);
   std::fill(holes.depth_mm.begin(), holes.depth_mm.end(), std::uint16_t{0});
   views.observe({table}, holes, camera);
   EXPECT_EQ(views.seenShare(table), 0.0);
   // An object 10 cm tall on the top is within the occlusion margin: the top counts.
-  RgbdFrame object = depthOf(table, camera);
+  RgbdFrame object = test::depthOfTops({table}, camera);
   for (auto& d : object.depth_mm)
     if (d > 0 && d < 2500) d = static_cast<std::uint16_t>(d - 100);
   views.observe({table}, object, camera);
@@ -125,8 +86,8 @@ TEST(TableTopViews, SomethingInFrontHidesTheTopAndMissingDepthShowsNothing) {
 
 TEST(TableTopViews, ViewsAddUpAndTheMemoryIsKeyedByPlaceNotId) {
   const TableCluster table = squareTable(3);
-  const Eigen::Isometry3d camera = headCamera(0.0, 0.0, 0.0);
-  RgbdFrame left = depthOf(table, camera), right = left;
+  const Eigen::Isometry3d camera = test::headCamera(Pose2D{0.0, 0.0, 0.0});
+  RgbdFrame left = test::depthOfTops({table}, camera), right = left;
   for (int v = 0; v < 480; ++v)
     for (int u = 0; u < 640; ++u) (u < 320 ? left : right).depth_mm[v * 640 + u] = 0;
   TableTopViews views;
@@ -164,7 +125,7 @@ TEST(TableTopViews, BadSettingsAndFramesAreRefusedByName) {
   broken.source = "short.png";
   broken.depth_mm.assign(10, 0);
   try {
-    views.observe({squareTable(1)}, broken, headCamera(0, 0, 0));
+    views.observe({squareTable(1)}, broken, test::headCamera(Pose2D{0, 0, 0}));
     FAIL() << "a depth image of the wrong size was accepted";
   } catch (const Error& e) {
     EXPECT_NE(std::string(e.what()).find("short.png"), std::string::npos) << e.what();
