@@ -19,7 +19,9 @@
 // --recycle 1 (default) hands each finished frame back with
 // Segmenter::recycle, as findmugd does after publishing; 0 does not.
 //
-// --config comes before the --set flags it should not override. Defaults:
+// --config comes before the --set flags it should not override; it may be findmugd's own
+// file (`--config daemon/findmugd.yaml`: the shipped configuration; its daemon's sections
+// are read and not used). Defaults:
 // the NYU labelled frames, 3 passes after the warm-up, the library's default
 // config (ground.source auto: NYU frames carry no
 // extrinsics, so the floor is estimated from the frame, as in the daemon).
@@ -43,6 +45,7 @@
 #include "findmug/frame/dataset.hpp"
 #include "findmug/segmenter/segmenter.hpp"
 #include "findmug/settings/config.hpp"
+#include "program_settings.hpp"
 #include "findmug/tables/tables.hpp"
 #include "test_data.hpp"
 
@@ -57,6 +60,19 @@ double percentile(std::vector<double> v, double p) {
   std::sort(v.begin(), v.end());
   const auto i = static_cast<std::size_t>(p / 100.0 * static_cast<double>(v.size() - 1) + 0.5);
   return v[std::min(i, v.size() - 1)];
+}
+
+// The segmenter's settings of a config file that may also hold other programs' sections
+// (daemon/findmugd.yaml as it ships): those are checked key by key and not used.
+Config sharedConfigFile(const std::string& path) {
+  Config config;
+  SettingsSchema schema;
+  bindCoreSettings(schema, config);
+  bindOfflineSettings(schema, config);
+  cli::acceptSharedFileSettings(schema);
+  schema.readFile(path);
+  schema.validate(path);
+  return config;
 }
 
 int run(int argc, char** argv) {
@@ -84,7 +100,7 @@ int run(int argc, char** argv) {
     else if (!std::strcmp(argv[i], "--heap-keep-mb"))
       heap_keep_mb = std::atoi(argv[i + 1]);
     else if (!std::strcmp(argv[i], "--config"))
-      config = loadConfig(argv[i + 1]);
+      config = sharedConfigFile(argv[i + 1]);
     else if (!std::strcmp(argv[i], "--set"))
       applyOverride(config, argv[i + 1]);
     else
