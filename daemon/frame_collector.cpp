@@ -4,6 +4,7 @@
 #include <spdlog/spdlog.h>
 
 #include <chrono>
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <map>
@@ -128,19 +129,23 @@ FrameCollector::FrameCollector(Options options, std::function<std::string()> mod
                "frames, {:.0f} MB)",
                options_.dir, frames_, static_cast<double>(bytes_) / (1 << 20), options_.max_frames,
                static_cast<double>(options_.max_bytes) / (1 << 20));
-  writer_ = std::thread([this] { writerLoop(); });
+  StageOptions stage;
+  stage.name = "collect";
+  stage.queue_capacity = std::max<std::size_t>(1, options_.queue_capacity);
+  stage.thread_name = "findmug-collect";
+  writer_ = std::make_unique<Stage<Job, Written>>(
+      std::move(stage),
+      StageCallbacks<Job, Written>{
+          .work = [this](Job& job) -> std::optional<Written> { return writeJob(job); },
+          .emit = [this](Written&& written) { recordWritten(std::move(written)); },
+          .on_error = on_error_,
+      });
+  writer_->start();
 }
 
 FrameCollector::~FrameCollector() { stop(); }
 
-void FrameCollector::stop() {
-  {
-    std::lock_guard lock(mutex_);
-    stopping_ = true;
-  }
-  wake_.notify_all();
-  if (writer_.joinable()) writer_.join();
-}
+void FrameCollector::stop() { writer_->stop(StopMode::Drain); }
 
 FrameCollector::Counters FrameCollector::counters() const {
   std::lock_guard lock(mutex_);
@@ -238,69 +243,72 @@ void FrameCollector::enqueue(const LabelledFrame& labelled, const std::string& t
   std::string why;
   {
     std::lock_guard lock(mutex_);
-    if (frames_ + queue_.size() >= options_.max_frames) {
+    // queued_ counts the frame being written too, so the writer's queue has room for the
+    // push below, which therefore never evicts a frame (only this thread pushes).
+    if (frames_ + queued_ >= options_.max_frames) {
       why = "daemon.collect_max_frames (" + std::to_string(options_.max_frames) + ") reached";
     } else if (bytes_ >= options_.max_bytes) {
       why = "daemon.collect_max_mb reached (" + std::to_string(bytes_) + " bytes)";
-    } else if (queue_.size() >= options_.queue_capacity) {
-      why = "the writer is still busy with " + std::to_string(queue_.size()) +
+    } else if (queued_ >= options_.queue_capacity) {
+      why = "the writer is still busy with " + std::to_string(queued_) +
             " frames (daemon.collect_queue)";
+    } else {
+      ++queued_;
     }
-    if (why.empty()) {
-      Job job;
-      job.name = name;
-      job.frame.width = frame.width;
-      job.frame.height = frame.height;
-      job.frame.rgb = frame.rgb;
-      job.frame.depth_mm = frame.depth_mm;
-      job.frame.intrinsics = frame.intrinsics;
-      job.frame.extrinsics = frame.extrinsics;
-      job.frame.gravity_up = frame.gravity_up;
-      job.frame.utime = frame.utime;
-      job.frame.seq = frame.seq;
-      job.row = options_.scene + "," + std::to_string(frame.utime) + "," + trigger + "," +
-                (confidence ? number(*confidence) : std::string()) + "," +
-                std::to_string(labelled.tables.size()) + "," + model_id_() + "," + note;
-      queue_.push_back(std::move(job));
-      wake_.notify_all();
-      return;
-    }
+  }
+  if (why.empty()) {
+    Job job;
+    job.name = name;
+    job.frame.width = frame.width;
+    job.frame.height = frame.height;
+    job.frame.rgb = frame.rgb;
+    job.frame.depth_mm = frame.depth_mm;
+    job.frame.intrinsics = frame.intrinsics;
+    job.frame.extrinsics = frame.extrinsics;
+    job.frame.gravity_up = frame.gravity_up;
+    job.frame.utime = frame.utime;
+    job.frame.seq = frame.seq;
+    job.row = options_.scene + "," + std::to_string(frame.utime) + "," + trigger + "," +
+              (confidence ? number(*confidence) : std::string()) + "," +
+              std::to_string(labelled.tables.size()) + "," + model_id_() + "," + note;
+    if (writer_->push(std::move(job))) return;
+    std::lock_guard lock(mutex_);
+    --queued_;
+    why = "the collector is stopped";
   }
   refuse("not saving " + frameName(frame) + " (" + trigger + "): " + why);
 }
 
-void FrameCollector::writerLoop() {
-  std::unique_lock lock(mutex_);
-  for (;;) {
-    wake_.wait(lock, [this] { return stopping_ || !queue_.empty(); });
-    if (queue_.empty()) return;  // stopping, everything written
-    Job job = std::move(queue_.front());
-    // Still counted as queued (against the frame bound) until written.
-    lock.unlock();
-    std::uint64_t written = 0;
-    std::string error;
-    try {
-      write(job);
-      const fs::path root(options_.dir);
-      written = fs::file_size(root / "rgb" / (job.name + ".png")) +
-                fs::file_size(root / "depth" / (job.name + ".png"));
-    } catch (const std::exception& e) {
-      error = e.what();
-    }
-    lock.lock();
-    queue_.pop_front();
-    if (error.empty()) {
+FrameCollector::Written FrameCollector::writeJob(const Job& job) {
+  Written written{job.name, 0, ""};
+  try {
+    write(job);
+    const fs::path root(options_.dir);
+    written.bytes = fs::file_size(root / "rgb" / (job.name + ".png")) +
+                    fs::file_size(root / "depth" / (job.name + ".png"));
+  } catch (const std::exception& e) {
+    written.error = e.what();
+  }
+  return written;
+}
+
+void FrameCollector::recordWritten(Written&& written) {
+  {
+    std::lock_guard lock(mutex_);
+    --queued_;
+    if (written.error.empty()) {
       ++frames_;
-      bytes_ += written;
+      bytes_ += written.bytes;
       ++counters_.saved;
-      counters_.last_saved = job.name;
-      spdlog::info("collect: saved {} into {}", job.name, options_.dir);
+      counters_.last_saved = written.name;
     } else {
       ++counters_.refused;
-      lock.unlock();
-      if (on_error_) on_error_("collect: " + job.name + " not saved: " + error);
-      lock.lock();
     }
+  }
+  if (written.error.empty()) {
+    spdlog::info("collect: saved {} into {}", written.name, options_.dir);
+  } else if (on_error_) {
+    on_error_("collect: " + written.name + " not saved: " + written.error);
   }
 }
 

@@ -9,9 +9,9 @@
 //     times within daemon.collect_flicker_window_s (then the count starts again).
 // Automatic saves are rate-limited to one per daemon.collect_min_interval_s of
 // capture time (the frames' utime, so a replay behaves as it did live); a request
-// is not. The frame (colour, depth, camera) is copied into a bounded queue and a
-// writer thread of the collector's own encodes and writes it: the publish
-// thread never waits for the disk. A save is refused, logged and counted when
+// is not. The frame (colour, depth, camera) is copied into the bounded queue of
+// a one-worker Stage (stage.hpp, thread findmug-collect) that encodes and
+// writes it: the publish thread never waits for the disk. A save is refused, logged and counted when
 // the folder has reached its bound (daemon.collect_max_frames frames or
 // daemon.collect_max_mb of rgb/ and depth/ PNGs, what was there at start
 // included; at most one frame past the bytes), when the writer's queue is full,
@@ -26,17 +26,17 @@
 // NAME is "<utime>_<seq>". No label8/: that is for the person labelling them.
 #pragma once
 
-#include <condition_variable>
 #include <cstdint>
 #include <deque>
 #include <functional>
+#include <memory>
 #include <mutex>
 #include <optional>
 #include <string>
-#include <thread>
 
 #include "findmug/daemon/daemon_config.hpp"
 #include "findmug/daemon/result_sinks.hpp"
+#include "findmug/daemon/stage.hpp"
 #include "findmug/frame/frame.hpp"
 
 namespace findmug::daemon {
@@ -64,7 +64,7 @@ class FrameCollector final : public ResultSink {
   static Options fromConfig(const DaemonConfig& config);
 
   // Creates the folder and counts what it holds; throws findmug::Error naming
-  // daemon.collect_dir when it cannot. Starts the writer thread. `model_id`
+  // daemon.collect_dir when it cannot. Starts the writer stage. `model_id`
   // names the model in use (frames.csv); `on_error` gets each refusal.
   FrameCollector(Options options, std::function<std::string()> model_id, OnError on_error);
   ~FrameCollector() override;
@@ -90,12 +90,19 @@ class FrameCollector final : public ResultSink {
     RgbdFrame frame;  // colour, depth, camera (copied off the publish thread's frame)
     std::string row;  // frames.csv columns after `frame`
   };
+  // What the writer did with a job.
+  struct Written {
+    std::string name;
+    std::uint64_t bytes = 0;  // of its two PNGs
+    std::string error;        // "" = written
+  };
 
   std::optional<std::string> automaticTrigger(const LabelledFrame& labelled);
   void enqueue(const LabelledFrame& labelled, const std::string& trigger,
                const std::string& note, std::optional<double> confidence);
   void refuse(const std::string& what);
-  void writerLoop();
+  Written writeJob(const Job& job);  // on the writer's thread
+  void recordWritten(Written&& written);
   void write(const Job& job);  // throws findmug::Error
 
   Options options_;
@@ -106,14 +113,13 @@ class FrameCollector final : public ResultSink {
   std::deque<std::uint64_t> table_changes_;  // utimes of the count's changes in the window
   std::optional<std::uint64_t> last_automatic_utime_;
 
-  mutable std::mutex mutex_;  // guards everything below
-  std::condition_variable wake_;
+  mutable std::mutex mutex_;  // guards everything below but the stage
   std::deque<std::pair<std::int64_t, std::string>> requests_;  // (request id, note)
-  std::deque<Job> queue_;
+  std::uint64_t queued_ = 0;  // handed to the writer, not yet written (against the bounds)
   std::uint64_t frames_ = 0, bytes_ = 0;  // in the folder (written + there at start)
   Counters counters_;
-  bool stopping_ = false;
-  std::thread writer_;
+  // Last member: its worker uses everything above and is joined first (~FrameCollector).
+  std::unique_ptr<Stage<Job, Written>> writer_;
 };
 
 }  // namespace findmug::daemon
