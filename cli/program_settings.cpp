@@ -212,6 +212,14 @@ void bindDaemonSettings(SettingsSchema& schema, DaemonConfig& daemon) {
   schema.bind(objectSearchSettings(), daemon.object_search, validateObjectSearchConfig);
 }
 
+SettingsSchema daemonSchema(Config& config, DaemonConfig& daemon) {
+  SettingsSchema schema;
+  bindCoreSettings(schema, config);
+  bindDaemonSettings(schema, daemon);
+  cli::acceptSharedFileSettings(schema);
+  return schema;
+}
+
 }  // namespace findmug::daemon
 
 namespace findmug::web {

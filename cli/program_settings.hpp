@@ -119,6 +119,11 @@ const SettingsTable<CheckConfig>& checkSettings();    // check.*
 // (the last two with their cross-key checks).
 void bindDaemonSettings(SettingsSchema& schema, DaemonConfig& daemon);
 
+// findmugd's settings schema: the segmenter's sections bound to `config`, its own
+// (bindDaemonSettings) to `daemon`, other programs' sections of the file accepted
+// (cli::acceptSharedFileSettings). Also for the tools that read findmugd.yaml as findmugd does.
+SettingsSchema daemonSchema(Config& config, DaemonConfig& daemon);
+
 }  // namespace findmug::daemon
 
 namespace findmug::web {

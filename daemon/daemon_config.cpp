@@ -143,14 +143,6 @@ CommandLine parseCommandLine(const std::vector<std::string>& args) {
   return cl;
 }
 
-SettingsSchema daemonSchema(Config& config, DaemonConfig& daemon) {
-  SettingsSchema schema;
-  bindCoreSettings(schema, config);
-  bindDaemonSettings(schema, daemon);
-  cli::acceptSharedFileSettings(schema);  // findmug-web's web: in a shared file
-  return schema;
-}
-
 LoadedConfig loadDaemonConfig(const CommandLine& command_line) {
   LoadedConfig loaded;
   const SettingsSchema schema = daemonSchema(loaded.config, loaded.daemon);

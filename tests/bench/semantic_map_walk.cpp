@@ -245,10 +245,7 @@ int main(int argc, char** argv) {
     // The file as findmugd reads it; this tool uses the segmenter's and the maps' sections.
     Config config;
     daemon::DaemonConfig daemon_settings;
-    SettingsSchema schema;
-    bindCoreSettings(schema, config);
-    daemon::bindDaemonSettings(schema, daemon_settings);
-    cli::acceptSharedFileSettings(schema);
+    const SettingsSchema schema = daemon::daemonSchema(config, daemon_settings);
     schema.readFile(config_path);
     schema.validate(config_path);
     config.segmenter.forest.num_threads = 1;

@@ -106,10 +106,7 @@ int main(int argc, char** argv) {
   try {
     Config config;
     daemon::DaemonConfig daemon_settings;
-    SettingsSchema schema;
-    bindCoreSettings(schema, config);
-    daemon::bindDaemonSettings(schema, daemon_settings);
-    cli::acceptSharedFileSettings(schema);
+    const SettingsSchema schema = daemon::daemonSchema(config, daemon_settings);
     schema.readFile(config_path);
     for (const std::string& s : sets) schema.applyOverride(s);
     schema.validate(config_path);

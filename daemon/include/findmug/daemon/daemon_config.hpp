@@ -57,9 +57,7 @@ std::string usage();
 // The flags that stand for one daemon setting ("--model" -> "daemon.model_path").
 const std::vector<std::pair<std::string, std::string>>& daemonFlagShortcuts();
 
-// findmugd's settings schema: the segmenter's sections bound to `config`, its own
-// (bindDaemonSettings) to `daemon`, other programs' sections of the file accepted.
-SettingsSchema daemonSchema(Config& config, DaemonConfig& daemon);
+// findmugd's settings schema: daemonSchema (program_settings.hpp).
 
 // Reads the file (the default one may be absent: then built-in defaults) and the
 // overrides through daemonSchema, then checks the rules across keys.
