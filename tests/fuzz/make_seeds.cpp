@@ -539,7 +539,11 @@ void nyuSeeds(SeedWriter& w, const fs::path& scratch) {
   auto put = [file](const char* name, hid_t file_type, hid_t mem_type, std::vector<hsize_t> dims,
                     const void* data) {
     const hid_t space = H5Screate_simple(static_cast<int>(dims.size()), dims.data(), nullptr);
-    const hid_t set = H5Dcreate2(file, name, file_type, space, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
+    // No modification times in the object headers: the same seeds every run.
+    const hid_t create = H5Pcreate(H5P_DATASET_CREATE);
+    H5Pset_obj_track_times(create, false);
+    const hid_t set = H5Dcreate2(file, name, file_type, space, H5P_DEFAULT, create, H5P_DEFAULT);
+    H5Pclose(create);
     H5Dwrite(set, mem_type, H5S_ALL, H5S_ALL, H5P_DEFAULT, data);
     H5Dclose(set);
     H5Sclose(space);
