@@ -157,9 +157,11 @@ void Pipeline::makeStages() {
                            },
                            .emit = [](Published&&) {},
                            .on_drop =
-                               [](const ResultJob& dropped) {
+                               [this](ResultJob& dropped) {
                                  spdlog::debug("publish queue full: dropped {}",
                                                frameName(dropped.labelled.segmented.prepared.frame));
+                                 // Its buffers serve the next frames, as a published one's do.
+                                 model_.segmenter()->recycle(std::move(dropped.labelled));
                                },
                            .on_error = on_error,
                            .tick = [this] { publishStatus(); },

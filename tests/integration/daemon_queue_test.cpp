@@ -222,6 +222,45 @@ TEST(Stage, SlowWorkerMakesTheQueueDropTheOldestItems) {
   EXPECT_EQ(stage.stats().dropped, 7u);
 }
 
+// The drop callback may take an evicted item's buffers (the daemon hands a dropped
+// result's back to the Segmenter): it gets the item itself, not a copy.
+TEST(Stage, AnEvictedItemIsTheDropCallbacksToMoveFrom) {
+  std::mutex m;
+  std::condition_variable cv;
+  bool entered = false, release = false;
+  std::vector<std::vector<int>> taken;
+  Stage<std::vector<int>, int> stage(
+      {"slow", ExecutionMode::Threaded, 1, 1, DropPolicy::DropOldest},
+      {.work = [&](std::vector<int>& x) -> std::optional<int> {
+         std::unique_lock lock(m);
+         entered = true;
+         cv.notify_all();
+         cv.wait(lock, [&] { return release; });
+         return static_cast<int>(x.size());
+       },
+       .emit = [](int&&) {},
+       .on_drop = [&](std::vector<int>& d) { taken.push_back(std::move(d)); }});
+  stage.start();
+  stage.push({0});
+  {
+    std::unique_lock lock(m);
+    cv.wait(lock, [&] { return entered; });
+  }
+  std::vector<int> big(1000, 7);
+  const int* buffer = big.data();
+  stage.push(std::move(big));
+  stage.push({1, 2});  // evicts `big`
+  ASSERT_EQ(taken.size(), 1u);
+  EXPECT_EQ(taken[0].size(), 1000u);
+  EXPECT_EQ(taken[0].data(), buffer);  // the same allocation, moved, not copied
+  {
+    std::lock_guard lock(m);
+    release = true;
+  }
+  cv.notify_all();
+  stage.stop(StopMode::Drain);
+}
+
 TEST(Stage, DiscardOnStopDropsQueuedItemsButFinishesTheOneInFlight) {
   std::mutex m;
   std::condition_variable cv;

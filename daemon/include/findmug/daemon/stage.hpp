@@ -91,7 +91,9 @@ template <typename In, typename Out>
 struct StageCallbacks {
   std::function<std::optional<Out>(In&)> work{};     // an item -> its result, or nothing
   std::function<void(Out&&)> emit{};                 // each result, in input order, one at a time
-  std::function<void(const In& dropped)> on_drop{};  // an item the drop policy evicted
+  // An item the drop policy evicted; the callback may move from it (e.g. hand its buffers
+  // back for reuse), nothing reads it afterwards.
+  std::function<void(In& dropped)> on_drop{};
   std::function<void(const std::string& what)> on_error{};  // an exception escaped `work`
   std::function<void()> tick{};  // every StageOptions::tick_period (single worker only)
   std::function<void()> gate{};  // run by a worker before it takes the next item
