@@ -28,9 +28,7 @@ ROOTS = ["src", "include", "io", "daemon", "clients", "tools"]
 KNOWN = {
     "tools/eval_main.cpp": 943,
     "tools/eval_main.cpp:run": 179,
-    "tools/eval_report.cpp:formatTable": 199,
     "src/segmenter/segmenter.cpp:Segmenter::classify": 195,
-    "tools/eval_report.cpp:formatJson": 184,
 }
 
 NOT_FUNCTIONS = ("//", "#", "}", "namespace", "using", "struct", "class", "enum", "template",
