@@ -40,6 +40,7 @@
 #include <optional>
 #include <sstream>
 
+#include "eval_cv.hpp"
 #include "eval_report.hpp"
 #include "eval_table_measures.hpp"
 #include "eval_tables.hpp"
@@ -171,157 +172,6 @@ std::unique_ptr<CLI::App> makeEvalApp(EvalFlags& f) {
   app->add_flag("--score-labelled-only", f.score_labelled_only,
                 "score only pixels the Segmenter labelled (leave depth holes out)");
   return app;
-}
-
-struct Evaluation {
-  ConfusionMatrix forest, mrf;
-  std::vector<std::vector<std::uint8_t>> mrf_pixels;  // per frame, for overlays
-  // Per frame and segment (kept with mrf_pixels): the model's p(y|x) and the
-  // MRF's labels and confidence, for the table stage and its diagnosis.
-  std::vector<std::vector<ClassProbabilities>> probabilities;
-  std::vector<MrfResult> mrf_results;
-  // Cross-validation only: each fold's training and test samples.
-  struct Fold {
-    int fold = 0;
-    std::vector<std::size_t> train, test;
-    PseudoLabelReport pseudo;  // semi-supervised rounds (--unlabelled)
-  };
-  std::vector<Fold> folds;
-};
-
-std::uint8_t argmax(const ClassProbabilities& p) {
-  return static_cast<std::uint8_t>(std::max_element(p.begin(), p.end()) - p.begin());
-}
-
-// The regions of every sample's segmentation (region_features.hpp), for the
-// table region vote that follows the MRF in the Segmenter (table_regions.hpp);
-// empty when the vote is off. They come from what the sample kept: its
-// segments' moments (SegmentFeatures::moments) and its adjacency.
-std::vector<RegionFeatures> sampleRegions(const std::vector<FrameSample>& samples,
-                                          const SegmenterConfig& config) {
-  if (!config.regions.enabled || !config.tables.region_vote) return {};
-  std::vector<RegionFeatures> out;
-  out.reserve(samples.size());
-  for (const FrameSample& s : samples) out.push_back(sampleRegionFeatures(s, config.regions));
-  return out;
-}
-
-// Labels the test frames with `forest` and accumulates both confusions. The
-// "+MRF" labels are the Segmenter's final ones: with `regions`, after the
-// table region vote, as in Segmenter::classify. With mrf.pairwise = context
-// the term is the one the fold's model learned from its training frames.
-void labelFrames(const RandomForest& forest, const SegmenterConfig& config,
-                 const std::vector<FrameSample>& samples, const std::vector<std::size_t>& frames,
-                 const std::vector<RegionFeatures>& regions, Evaluation& eval, bool keep_pixels) {
-  SegmenterConfig with_mrf = config;
-  with_mrf.use_mrf = true;  // the "+MRF" figures, whatever use_mrf says
-  std::optional<LayoutPrior> layout;
-  if (with_mrf.mrf.pairwise == MrfPairwise::Layout)
-    layout = loadLayoutPrior(with_mrf.mrf.layout_prior_path);
-  for (std::size_t f : frames) {
-    const FrameSample& s = samples[f];
-    const std::size_t n = s.features.features.size();
-    SampleLabelling labelling = labelSample(
-        forest, s, with_mrf, regions.empty() ? nullptr : &regions[f], layout ? &*layout : nullptr);
-    std::vector<std::uint8_t> forest_labels(n);
-    for (std::size_t k = 0; k < n; ++k) forest_labels[k] = argmax(labelling.probabilities[k]);
-    eval.forest.add(s.ground_truth, publishedPixelLabels(s, forest_labels, config.label_holes));
-    auto mrf_pixels = publishedPixelLabels(s, labelling.mrf.labels, config.label_holes);
-    eval.mrf.add(s.ground_truth, mrf_pixels);
-    if (keep_pixels) {
-      eval.mrf_pixels[f] = std::move(mrf_pixels);
-      eval.probabilities[f] = std::move(labelling.probabilities);
-      eval.mrf_results[f] = std::move(labelling.mrf);
-    }
-  }
-}
-
-// How the frames are split: each sample's fold and scene (cv_folds.hpp).
-struct FoldPlan {
-  std::string rule;  // "scenes" or "blocks"
-  int folds = 0;
-  std::vector<int> fold_of_sample;
-  std::vector<std::string> scene_of_sample;  // "frame:NAME" where no scene is known
-};
-
-// Training on N frames of each fold (0 = all), chosen by `seed` + fold.
-struct TrainSubset {
-  int frames = 0;
-  std::uint64_t seed = 0;
-};
-
-// Frame i of `samples` is tested as test_samples[i] (the same frame, or its
-// raw-like copy with --degrade).
-// With `unlabelled` frames and training.pseudo_rounds, each fold's model
-// comes from trainModelWithPseudoLabels on that fold's training frames: the
-// unlabelled frames are labelled by the fold's own models only, and the fold's
-// test frames are never among them. `per_round`, when given, gets the figures
-// of every round's models side by side (0 = labelled frames only).
-Evaluation crossValidate(const std::vector<FrameSample>& samples,
-                         const std::vector<FrameSample>& test_samples,
-                         const std::vector<FrameSample>& extra_training, const FoldPlan& plan,
-                         const SegmenterConfig& config, const TrainingOptions& training,
-                         const std::vector<RegionFeatures>& regions, bool keep_pixels,
-                         const TrainSubset& subset = {},
-                         const std::vector<FrameSample>& unlabelled = {},
-                         std::vector<Evaluation>* per_round = nullptr) {
-  Evaluation eval;
-  auto sized = [&](Evaluation& e) {
-    e.mrf_pixels.resize(samples.size());
-    e.probabilities.resize(samples.size());
-    e.mrf_results.resize(samples.size());
-  };
-  sized(eval);
-  const int rounds = unlabelled.empty() ? 0 : training.pseudo_rounds;
-  if (per_round) {
-    per_round->assign(static_cast<std::size_t>(rounds) + 1, Evaluation{});
-    for (auto& e : *per_round) sized(e);
-  }
-  const std::size_t n = samples.size();
-  for (int fold = 0; fold < plan.folds; ++fold) {
-    std::vector<std::size_t> train, test;
-    for (std::size_t i = 0; i < n; ++i)
-      (plan.fold_of_sample[i] == fold ? test : train).push_back(i);
-    if (test.empty() || train.empty()) continue;
-    if (subset.frames > 0) {
-      train = chooseTrainingSubset(train, plan.scene_of_sample, subset.frames,
-                                   subset.seed + static_cast<std::uint64_t>(fold));
-    }
-    std::vector<const FrameSample*> frames;
-    for (std::size_t i : train) frames.push_back(&samples[i]);
-    for (const auto& s : extra_training) frames.push_back(&s);
-    if (makeTrainingSet(frames).labels.empty()) continue;
-    SegmenterConfig fold_config = config;
-    fold_config.forest.seed += static_cast<std::uint64_t>(fold);
-    PseudoLabelReport pseudo;
-    if (rounds > 0) {
-      // The pool: unlabelled frames only. A frame also among the labelled
-      // inputs was refused when the inputs were read (extractUnlabelled);
-      // checked again here, per fold, against this fold's test frames.
-      for (const FrameSample& u : unlabelled)
-        for (std::size_t t : test)
-          if (u.name == samples[t].name)
-            throw Error("fold " + std::to_string(fold) + ": test frame " + u.name +
-                        " is among the unlabelled frames");
-      const RandomForest forest = trainModelWithPseudoLabels(
-          frames, unlabelled, fold_config, training, &pseudo,
-          [&](int r, const RandomForest& model) {
-            if (per_round && r < rounds)
-              labelFrames(model, config, test_samples, test, regions,
-                          (*per_round)[static_cast<std::size_t>(r)], keep_pixels);
-          });
-      labelFrames(forest, config, test_samples, test, regions, eval, keep_pixels);
-    } else {
-      const RandomForest forest = trainModel(frames, fold_config, training);
-      labelFrames(forest, config, test_samples, test, regions, eval, keep_pixels);
-    }
-    eval.folds.push_back({fold, train, test, std::move(pseudo)});
-  }
-  if (per_round) {
-    per_round->back() = eval;
-    for (auto& e : *per_round) e.folds = eval.folds;
-  }
-  return eval;
 }
 
 // Tables found on each evaluated frame's forest+MRF labels (the Segmenter's
@@ -527,45 +377,10 @@ FoldPlan planFolds(const EvalFlags& f, const LabeledInputs& input,
   return plan;
 }
 
-std::string describeFolds(const FoldPlan& plan, const std::string& nyu_rule,
-                          const TrainSubset& subset) {
-  std::string text = std::to_string(plan.folds) + "-fold cross-validation by frame, ";
-  text += plan.rule == "scenes" ? "folds of whole scenes (frames.csv scene, else " + nyu_rule +
-                                      "; largest scene first into the smallest fold)"
-                                : "contiguous blocks of frames in input order";
-  if (subset.frames > 0) {
-    text += "; each fold trained on " + std::to_string(subset.frames) +
-            " of its training frames (subset seed " + std::to_string(subset.seed) + " + fold)";
-  }
-  return text;
-}
-
 // How NYU frames' scenes are formed, for the reports.
 std::string nyuSceneRule(const EvalFlags& f) {
   return f.nyu_split.empty() ? "NYU index runs with gap " + std::to_string(f.scene_gap)
                              : "runs of NYU's train/test split (" + f.nyu_split + ")";
-}
-
-std::vector<EvalReport::Fold> foldRecords(const Evaluation& eval, const FoldPlan& plan,
-                                          const std::vector<FrameSample>& samples) {
-  std::vector<EvalReport::Fold> out;
-  for (const auto& fold : eval.folds) {
-    EvalReport::Fold r;
-    r.fold = fold.fold;
-    r.train_frames = static_cast<int>(fold.train.size());
-    for (std::size_t i : fold.test) {
-      r.test_frames.push_back(samples[i].name);
-      r.test_scenes.push_back(plan.scene_of_sample[i]);
-    }
-    for (std::size_t i : fold.train) r.train_frame_names.push_back(samples[i].name);
-    r.pseudo_pool = fold.pseudo.pool;
-    for (const auto& round : fold.pseudo.rounds) {
-      r.pseudo_frames.push_back(round.frames);
-      r.pseudo_patches.push_back(round.keptTotal());
-    }
-    out.push_back(std::move(r));
-  }
-  return out;
 }
 
 // The training-frame counts of --curve-sizes ("all" = 0).
@@ -704,34 +519,6 @@ void pairDegradedSamples(std::vector<FrameSample>& samples, std::vector<FrameSam
   degraded = std::move(kept_degraded);
 }
 
-// --sweep: the cross-validation again with 1..16 trees, then depths 2..16.
-void runSweeps(const std::vector<FrameSample>& samples,
-               const std::vector<FrameSample>& test_samples,
-               const std::vector<FrameSample>& extra_training, const FoldPlan& plan,
-               const Config& config, const std::vector<RegionFeatures>& regions,
-               const TrainSubset& subset, EvalReport& report) {
-  for (int trees : {1, 2, 4, 6, 8, 10, 12, 14, 16}) {
-    SegmenterConfig c = config.segmenter;
-    c.forest.num_trees = trees;
-    const Evaluation e = crossValidate(samples, test_samples, extra_training, plan, c,
-                                       config.offline.training, regions, false, subset);
-    report.sweep_trees.push_back({trees, c.forest.max_depth, e.forest, e.mrf});
-    std::fprintf(stderr, "sweep trees=%d: forest %.1f/%.1f mrf %.1f/%.1f\n", trees,
-                 100 * e.forest.classAverageAccuracy(), 100 * e.forest.globalAccuracy(),
-                 100 * e.mrf.classAverageAccuracy(), 100 * e.mrf.globalAccuracy());
-  }
-  for (int depth : {2, 4, 6, 8, 10, 12, 14, 16}) {
-    SegmenterConfig c = config.segmenter;
-    c.forest.max_depth = depth;
-    const Evaluation e = crossValidate(samples, test_samples, extra_training, plan, c,
-                                       config.offline.training, regions, false, subset);
-    report.sweep_depth.push_back({c.forest.num_trees, depth, e.forest, e.mrf});
-    std::fprintf(stderr, "sweep depth=%d: forest %.1f/%.1f mrf %.1f/%.1f\n", depth,
-                 100 * e.forest.classAverageAccuracy(), 100 * e.forest.globalAccuracy(),
-                 100 * e.mrf.classAverageAccuracy(), 100 * e.mrf.globalAccuracy());
-  }
-}
-
 // --out: the confusion matrices, the sweeps and the overlays as pictures.
 void writePictures(const std::string& out_dir, const EvalReport& report,
                    const LabeledFrames& test_frames, const std::vector<FrameSample>& test_samples,
@@ -750,37 +537,34 @@ void writePictures(const std::string& out_dir, const EvalReport& report,
   std::cout << "pictures in " << dir.string() << "\n";
 }
 
-int run(int argc, char** argv) {
-  EvalFlags f;
-  const auto app = makeEvalApp(f);
-  if (auto code = cli::parse(*app, argc, argv)) return *code;
-  if (f.config.help_settings) return (std::cout << cli::coreSettingsHelp(), 0);
-  if (f.dataset.data.empty() && f.dataset.mats.empty()) {
-    std::cerr << "findmug-eval: give --data DIR or --mat FILE (repeatable; see --help)\n";
-    return 2;
-  }
-  Config config = cli::configFrom(f.config);
-  const int folds = f.folds;
-  // Loaded first: a bad file is refused before minutes of feature extraction.
-  std::optional<RandomForest> model;
-  if (!f.model.empty()) model = loadModelWithItsSettings(f.model, config);
-  if (model && (f.train_frames > 0 || !f.curve_dir.empty()))
-    throw Error("--train-frames and --learning-curve train forests; not with --model");
-  const DatasetOptions options = datasetOptions(f.dataset, config);
-  const auto input = LabeledInputs::open(f.dataset, options);
-  const Segmenter segmenter(config.segmenter, nullptr);
+// What findmug-eval evaluates and trains on, with what the extraction reported.
+struct EvalSamples {
+  std::vector<FrameSample> samples;         // the labelled frames, for training
+  LabeledFrames test_frames;                // the frames evaluated: the same, or raw-like
+  std::vector<FrameSample> test_samples;    // copies of them (--degrade)
+  std::vector<FrameSample> extra_training;  // --train-extra
+  std::vector<FrameSample> unlabelled;      // --unlabelled
+  ExtractionReport extraction, unlabelled_report;
+};
 
-  const auto start = std::chrono::steady_clock::now();
+// The features of every input frame (and of the raw-like copies, the extra training sets and
+// the unlabelled frames the flags ask for), with the checks that refuse what cannot run.
+EvalSamples extractEvalSamples(const EvalFlags& f, const Config& config,
+                               const DatasetOptions& options, const LabeledInputs& input,
+                               const Segmenter& segmenter) {
+  EvalSamples out;
   ProgressBar bar("features");
-  ExtractionReport extraction;
-  auto samples = extractTrainingSamples(input->frames(), segmenter, config.offline, extraction,
-                                        [&](int done, int total) { bar.update(done, total); });
+  ExtractionReport& extraction = out.extraction;
+  std::vector<FrameSample>& samples = out.samples;
+  samples = extractTrainingSamples(input.frames(), segmenter, config.offline, extraction,
+                                   [&](int done, int total) { bar.update(done, total); });
   bar.finish();
   // The frames evaluated: the same, or raw-like copies (--degrade) of them.
-  const LabeledFrames test_frames =
-      f.degrade ? degradedFrames(input->frames(), config.offline.degrade, f.degrade_seed)
-                : input->frames();
-  std::vector<FrameSample> test_samples;
+  out.test_frames = f.degrade
+                        ? degradedFrames(input.frames(), config.offline.degrade, f.degrade_seed)
+                        : input.frames();
+  const LabeledFrames& test_frames = out.test_frames;
+  std::vector<FrameSample>& test_samples = out.test_samples;
   if (f.degrade) {
     ProgressBar degraded_bar("features (raw-like)");
     ExtractionReport degraded_report;
@@ -798,8 +582,8 @@ int run(int argc, char** argv) {
         if (s.pixel_segment[p] < 0) s.ground_truth[p] = kVoidLabel;
     }
   }
-  if (samples.empty()) throw Error(input->frames().description + ": no frame could be used");
-  std::vector<FrameSample> extra_training;
+  if (samples.empty()) throw Error(input.frames().description + ": no frame could be used");
+  std::vector<FrameSample>& extra_training = out.extra_training;
   for (const auto& dir : f.train_extra) {
     if (!f.model.empty())
       throw Error("--train-extra trains forests; it cannot be used with --model");
@@ -814,22 +598,104 @@ int run(int argc, char** argv) {
     extra_bar.finish();
     for (auto& s : part) extra_training.push_back(std::move(s));
   }
-  if (!!f.model.empty() && static_cast<int>(samples.size()) < folds) {
+  if (!!f.model.empty() && static_cast<int>(samples.size()) < f.folds) {
     throw Error("only " + std::to_string(samples.size()) + " usable frames for " +
-                std::to_string(folds) + " folds");
+                std::to_string(f.folds) + " folds");
   }
-  ExtractionReport unlabelled_report;
-  std::vector<FrameSample> unlabelled;
+  ExtractionReport& unlabelled_report = out.unlabelled_report;
+  std::vector<FrameSample>& unlabelled = out.unlabelled;
   if (!f.unlabelled.empty()) {
     if (!f.model.empty())
       throw Error("--unlabelled trains forests (training.pseudo_rounds); not with --model");
     if (config.offline.training.pseudo_rounds == 0)
       std::cerr << "findmug-eval: --unlabelled without training.pseudo_rounds > 0 does nothing\n";
     unlabelled =
-        extractUnlabelled(f.unlabelled, f.dataset, config.segmenter, *input, unlabelled_report);
+        extractUnlabelled(f.unlabelled, f.dataset, config.segmenter, input, unlabelled_report);
     if (unlabelled.empty())
       throw Error("--unlabelled: no frame could be used (no ground plane found in any)");
   }
+  return out;
+}
+
+// The tables found on the evaluated frames against the true ones (and --table-report,
+// --table-evidence); then the +MRF confusion and the table pixels by NYU-40 class, which
+// follow the soft tops' relabelling there.
+void measureEvaluatedTables(const EvalFlags& f, const Config& config,
+                            const LabeledFrames& test_frames,
+                            const std::vector<FrameSample>& test_samples,
+                            const Segmenter& segmenter, Evaluation& eval, EvalReport& report) {
+  std::optional<synth::SequenceGroundTruth> synth_truth;
+  if (f.dataset.data.size() == 1 && f.dataset.mats.empty()) {
+    const auto truth_path = std::filesystem::path(f.dataset.data.front()) / "ground_truth.yaml";
+    if (std::filesystem::exists(truth_path))
+      synth_truth = synth::readGroundTruth(truth_path.string());
+  }
+  {
+    std::ofstream diagnosis;
+    if (!f.table_report.empty()) {
+      diagnosis.open(f.table_report);
+      if (!diagnosis) throw Error(f.table_report + ": cannot write the table report");
+    }
+    std::ofstream evidence;
+    if (!f.table_evidence.empty()) {
+      evidence.open(f.table_evidence);
+      if (!evidence) throw Error(f.table_evidence + ": cannot write the table evidence");
+      writeTableEvidenceHeader(evidence);
+    }
+    measureTables(test_frames, test_samples, eval, segmenter, config.offline.table_metrics,
+                  synth_truth ? &*synth_truth : nullptr, report,
+                  f.table_report.empty() ? nullptr : &diagnosis,
+                  {f.table_evidence.empty() ? nullptr : &evidence, &f.dataset.data});
+    // After measureTables, which labels the soft tops Unknown as the pipeline does.
+    report.mrf = eval.mrf;
+    countTableByNyu40(f.dataset.data, test_samples, eval.mrf_pixels, report.table_by_nyu40);
+    if (diagnosis.is_open()) {
+      diagnosis << "\nsummary over all frames\n" << formatDiagnosisCounts(report.diagnosis);
+    }
+  }
+}
+
+// The text report on stdout, and the JSON report and pictures the flags ask for.
+void writeReports(const EvalFlags& f, const EvalReport& report, const Evaluation& eval,
+                  const LabeledFrames& test_frames, const std::vector<FrameSample>& test_samples) {
+  std::cout << formatTable(report);
+  if (!report.pseudo_rounds.empty()) std::cout << formatPseudoRounds(report, eval);
+  if (!f.json.empty()) {
+    std::ofstream out(f.json);
+    if (!out) throw Error(f.json + ": cannot write JSON report");
+    out << formatJson(report);
+  }
+  if (!f.out.empty()) writePictures(f.out, report, test_frames, test_samples, eval);
+}
+
+int run(int argc, char** argv) {
+  EvalFlags f;
+  const auto app = makeEvalApp(f);
+  if (auto code = cli::parse(*app, argc, argv)) return *code;
+  if (f.config.help_settings) return (std::cout << cli::coreSettingsHelp(), 0);
+  if (f.dataset.data.empty() && f.dataset.mats.empty()) {
+    std::cerr << "findmug-eval: give --data DIR or --mat FILE (repeatable; see --help)\n";
+    return 2;
+  }
+  Config config = cli::configFrom(f.config);
+  // Loaded first: a bad file is refused before minutes of feature extraction.
+  std::optional<RandomForest> model;
+  if (!f.model.empty()) model = loadModelWithItsSettings(f.model, config);
+  if (model && (f.train_frames > 0 || !f.curve_dir.empty()))
+    throw Error("--train-frames and --learning-curve train forests; not with --model");
+  const DatasetOptions options = datasetOptions(f.dataset, config);
+  const auto input = LabeledInputs::open(f.dataset, options);
+  const Segmenter segmenter(config.segmenter, nullptr);
+
+  const auto start = std::chrono::steady_clock::now();
+  EvalSamples input_samples = extractEvalSamples(f, config, options, *input, segmenter);
+  std::vector<FrameSample>& samples = input_samples.samples;
+  const LabeledFrames& test_frames = input_samples.test_frames;
+  const std::vector<FrameSample>& test_samples = input_samples.test_samples;
+  const std::vector<FrameSample>& extra_training = input_samples.extra_training;
+  const std::vector<FrameSample>& unlabelled = input_samples.unlabelled;
+  const ExtractionReport& extraction = input_samples.extraction;
+  const ExtractionReport& unlabelled_report = input_samples.unlabelled_report;
   // Folds only for cross-validation: a --model run reads no frames.csv.
   const FoldPlan plan = f.model.empty() ? planFolds(f, *input, samples) : FoldPlan{};
   const TrainSubset subset{f.train_frames, f.subset_seed};
@@ -876,35 +742,7 @@ int run(int argc, char** argv) {
   for (const FrameSample& s : test_samples)
     report.oracle.add(s.ground_truth, pixelLabels(s, s.segment_labels));
   report.forest = eval.forest;
-  std::optional<synth::SequenceGroundTruth> synth_truth;
-  if (f.dataset.data.size() == 1 && f.dataset.mats.empty()) {
-    const auto truth_path = std::filesystem::path(f.dataset.data.front()) / "ground_truth.yaml";
-    if (std::filesystem::exists(truth_path))
-      synth_truth = synth::readGroundTruth(truth_path.string());
-  }
-  {
-    std::ofstream diagnosis;
-    if (!f.table_report.empty()) {
-      diagnosis.open(f.table_report);
-      if (!diagnosis) throw Error(f.table_report + ": cannot write the table report");
-    }
-    std::ofstream evidence;
-    if (!f.table_evidence.empty()) {
-      evidence.open(f.table_evidence);
-      if (!evidence) throw Error(f.table_evidence + ": cannot write the table evidence");
-      writeTableEvidenceHeader(evidence);
-    }
-    measureTables(test_frames, test_samples, eval, segmenter, config.offline.table_metrics,
-                  synth_truth ? &*synth_truth : nullptr, report,
-                  f.table_report.empty() ? nullptr : &diagnosis,
-                  {f.table_evidence.empty() ? nullptr : &evidence, &f.dataset.data});
-    // After measureTables, which labels the soft tops Unknown as the pipeline does.
-    report.mrf = eval.mrf;
-    countTableByNyu40(f.dataset.data, test_samples, eval.mrf_pixels, report.table_by_nyu40);
-    if (diagnosis.is_open()) {
-      diagnosis << "\nsummary over all frames\n" << formatDiagnosisCounts(report.diagnosis);
-    }
-  }
+  measureEvaluatedTables(f, config, test_frames, test_samples, segmenter, eval, report);
 
   if (f.sweep) {
     if (!f.model.empty()) throw Error("--sweep retrains forests; it cannot be used with --model");
@@ -916,14 +754,7 @@ int run(int argc, char** argv) {
                      config.offline, regions);
   }
 
-  std::cout << formatTable(report);
-  if (!report.pseudo_rounds.empty()) std::cout << formatPseudoRounds(report, eval);
-  if (!f.json.empty()) {
-    std::ofstream out(f.json);
-    if (!out) throw Error(f.json + ": cannot write JSON report");
-    out << formatJson(report);
-  }
-  if (!f.out.empty()) writePictures(f.out, report, test_frames, test_samples, eval);
+  writeReports(f, report, eval, test_frames, test_samples);
   return 0;
 }
 

@@ -63,13 +63,12 @@ void writeFile(const std::string& path, const std::string& text) {
   out << text;
 }
 
-}  // namespace
-
-std::string formatTable(const EvalReport& r) {
-  std::ostringstream out;
+// formatTable's parts, in the order they print.
+// The data, protocol, dropped frames, folds and how each frame got its ground.
+void textHeader(std::ostringstream& out, const EvalReport& r) {
   out << "findmug-eval: " << r.data << "\n"
-      << "protocol: " << r.protocol << "; frames used " << r.frames_used << " of "
-      << r.frames_total << "\n";
+      << "protocol: " << r.protocol << "; frames used " << r.frames_used << " of " << r.frames_total
+      << "\n";
   for (const auto& d : r.dropped) out << "  dropped " << d << "\n";
   for (const auto& fold : r.folds) {
     std::vector<std::string> scenes;
@@ -97,6 +96,10 @@ std::string formatTable(const EvalReport& r) {
       out << "  ground " << method << ": " << frames << "\n";
     }
   }
+}
+
+// Per-class accuracy of the forest, with the MRF, the paper's and the oracle's.
+void textAccuracies(std::ostringstream& out, const EvalReport& r) {
   out << "\n  class        forest   +MRF   paper  oracle\n";
   const auto f = r.forest.perClassAccuracy();
   const auto m = r.mrf.perClassAccuracy();
@@ -119,8 +122,12 @@ std::string formatTable(const EvalReport& r) {
                 percent(kPaperGlobal / 100).c_str(), percent(r.oracle.globalAccuracy()).c_str());
   out << line;
   out << "  (oracle: every patch labelled with its majority true label)\n";
-  // Where each class's pixels go with the MRF: rows truth, columns prediction,
-  // row-normalised; the last column is pixels left without a label.
+}
+
+// Where each class's pixels go with the MRF: rows truth, columns prediction,
+// row-normalised; the last column is pixels left without a label.
+void textConfusion(std::ostringstream& out, const EvalReport& r) {
+  char line[160];
   out << "\n  +MRF confusion, % of each true class (rows: truth, columns: predicted)\n  "
       << std::string(10, ' ');
   for (int p = 0; p < kNumLabels; ++p) {
@@ -139,134 +146,147 @@ std::string formatTable(const EvalReport& r) {
     }
     out << "\n";
   }
-  {
-    const TableMetrics& t = r.tables;
-    std::snprintf(line, sizeof line,
-                  "\n  table instances (forest+MRF, IoU >= 0.5): %d in ground truth, %d detected, "
-                  "%d matched\n",
-                  t.truth(), t.detected(), t.matched());
-    out << line;
-    std::snprintf(line, sizeof line, "  %-10s %s\n  %-10s %s\n", "precision",
-                  percent(t.precision()).c_str(), "recall", percent(t.recall()).c_str());
-    out << line;
-    const auto curve = precisionRecallCurve(r.scored_tables, t.truth());
-    for (double min_precision : kOperatingPrecisions) {
-      const PrecisionRecallPoint* p = operatingPoint(curve, min_precision);
-      if (p) {
-        std::snprintf(line, sizeof line,
-                      "  at precision >= %.0f %%: recall %s (%d of %d detected, confidence >= "
-                      "%.3f)\n",
-                      100 * min_precision, percent(p->recall).c_str(), p->matched, p->detected,
-                      p->threshold);
-      } else {
-        std::snprintf(line, sizeof line, "  at precision >= %.0f %%: no threshold reaches it\n",
-                      100 * min_precision);
-      }
-      out << line;
-    }
-    if (t.matched() > 0) {
-      std::snprintf(line, sizeof line,
-                    "  matched tables, median error: height %.1f cm, centroid %.1f cm, "
-                    "axis %.1f deg\n",
-                    100 * t.medianHeightError(), 100 * t.medianCentroidError(),
-                    t.medianAxisErrorDeg());
-      out << line;
-    }
-  }
-  {
-    const SearchableMetrics& s = r.searchable;
-    out << "\n  searchable tables (true top >= table_metrics.searchable_min_top_area_m2, matched "
-           "by top overlap): "
-        << s.searchable() << " true, " << s.matched() << " matched, " << s.detected()
-        << " detected (" << s.detectedSmall() << " on smaller true tables)\n";
-    std::snprintf(line, sizeof line, "  %-10s %s\n  %-10s %s\n", "precision",
-                  percent(s.precision()).c_str(), "recall", percent(s.recall()).c_str());
-    out << line;
-    std::snprintf(line, sizeof line,
-                  "  false tables (on no true table): %d, in %d of %d frames (%.1f %%)\n",
-                  s.falseTables(), s.framesWithFalseTable(), s.frames(),
-                  100 * s.falseTableFrameShare());
-    out << line;
-  }
-  if (r.relabel.frames > 0) {
-    const auto& m = r.relabel;
-    const auto before = m.without.perClassAccuracy(), after = m.with.perClassAccuracy();
-    const auto t = static_cast<std::size_t>(Label::Table);
-    const auto o = static_cast<std::size_t>(Label::Object);
-    char text[512];
-    std::snprintf(text, sizeof text,
-                  "\n  table-top candidates' table pixels labelled object (table_objects.relabel), "
-                  "%d frames, %d candidates, %llu pixels changed:\n"
-                  "  %-10s %s -> %s\n  %-10s %s -> %s\n  %-10s %s -> %s\n  %-10s %s -> %s\n",
-                  m.frames, m.candidates, static_cast<unsigned long long>(m.pixels_changed),
-                  "table", percent(before[t]).c_str(), percent(after[t]).c_str(), "object",
-                  percent(before[o]).c_str(), percent(after[o]).c_str(), "class avg",
-                  percent(m.without.classAverageAccuracy()).c_str(),
-                  percent(m.with.classAverageAccuracy()).c_str(), "global",
-                  percent(m.without.globalAccuracy()).c_str(),
-                  percent(m.with.globalAccuracy()).c_str());
-    out << text;
-  }
-  if (r.table_by_nyu40.frames > 0) {
-    const auto& t = r.table_by_nyu40;
-    std::uint64_t table_pixels = 0;
-    for (const std::uint64_t n : t.labelled_table) table_pixels += n;
-    std::vector<int> order;
-    for (int c = 1; c <= 40; ++c) {
-      if (t.labelled_table[static_cast<std::size_t>(c)] > 0) order.push_back(c);
-    }
-    std::sort(order.begin(), order.end(), [&](int a, int b) {
-      return t.labelled_table[static_cast<std::size_t>(a)] >
-             t.labelled_table[static_cast<std::size_t>(b)];
-    });
-    out << "\n  pixels labelled table, by true NYU-40 class (" << t.frames
-        << " frames with label40; share of the table-labelled pixels, share of the class "
-           "labelled table):\n";
-    for (std::size_t k = 0; k < std::min<std::size_t>(order.size(), 10); ++k) {
-      const auto c = static_cast<std::size_t>(order[k]);
-      std::snprintf(line, sizeof line, "  %-16s %s of table pixels, %s of its own\n",
-                    nyu40ClassName(order[k]),
-                    percent(static_cast<double>(t.labelled_table[c]) /
-                            static_cast<double>(table_pixels)).c_str(),
-                    percent(static_cast<double>(t.labelled_table[c]) /
-                            static_cast<double>(t.pixels[c])).c_str());
-      out << line;
-    }
-  }
-  if (r.has_search_truth) {
-    const SearchPositionMetrics& p = r.search;
-    std::snprintf(line, sizeof line,
-                  "  search positions vs true tables: %d predicted, median error %.1f cm, "
-                  "%.1f deg\n",
-                  p.predicted(), 100 * p.medianPositionError(), p.medianYawErrorDeg());
-    out << line;
-    std::snprintf(line, sizeof line,
-                  "  reachable in the true scene: %s %% of all, %s %% of the %d flagged "
-                  "reachable\n",
-                  percent(p.reachableShare()).c_str(), percent(p.flaggedReachableShare()).c_str(),
-                  p.flaggedReachable());
-    out << line;
-  }
-  if (!r.sweep_trees.empty()) {
-    out << "\n  sweep   trees depth   forest(avg/glob)   mrf(avg/glob)\n";
-    for (const auto* points : {&r.sweep_trees, &r.sweep_depth}) {
-      for (const auto& p : *points) {
-        std::snprintf(line, sizeof line, "          %5d %5d   %s %s   %s %s\n", p.trees, p.depth,
-                      percent(p.forest.classAverageAccuracy()).c_str(),
-                      percent(p.forest.globalAccuracy()).c_str(),
-                      percent(p.mrf.classAverageAccuracy()).c_str(),
-                      percent(p.mrf.globalAccuracy()).c_str());
-        out << line;
-      }
-    }
-  }
-  std::snprintf(line, sizeof line, "\n  time %.1f s\n", r.seconds);
-  out << line;
-  return out.str();
 }
 
-std::string formatJson(const EvalReport& r) {
-  std::ostringstream out;
+// Table instances: counts, precision and recall, operating points, errors.
+void textTableInstances(std::ostringstream& out, const EvalReport& r) {
+  char line[160];
+  const TableMetrics& t = r.tables;
+  std::snprintf(line, sizeof line,
+                "\n  table instances (forest+MRF, IoU >= 0.5): %d in ground truth, %d detected, "
+                "%d matched\n",
+                t.truth(), t.detected(), t.matched());
+  out << line;
+  std::snprintf(line, sizeof line, "  %-10s %s\n  %-10s %s\n", "precision",
+                percent(t.precision()).c_str(), "recall", percent(t.recall()).c_str());
+  out << line;
+  const auto curve = precisionRecallCurve(r.scored_tables, t.truth());
+  for (double min_precision : kOperatingPrecisions) {
+    const PrecisionRecallPoint* p = operatingPoint(curve, min_precision);
+    if (p) {
+      std::snprintf(line, sizeof line,
+                    "  at precision >= %.0f %%: recall %s (%d of %d detected, confidence >= "
+                    "%.3f)\n",
+                    100 * min_precision, percent(p->recall).c_str(), p->matched, p->detected,
+                    p->threshold);
+    } else {
+      std::snprintf(line, sizeof line, "  at precision >= %.0f %%: no threshold reaches it\n",
+                    100 * min_precision);
+    }
+    out << line;
+  }
+  if (t.matched() > 0) {
+    std::snprintf(line, sizeof line,
+                  "  matched tables, median error: height %.1f cm, centroid %.1f cm, "
+                  "axis %.1f deg\n",
+                  100 * t.medianHeightError(), 100 * t.medianCentroidError(),
+                  t.medianAxisErrorDeg());
+    out << line;
+  }
+}
+
+// Searchable tables (matched by top overlap) and false tables.
+void textSearchable(std::ostringstream& out, const EvalReport& r) {
+  char line[160];
+  const SearchableMetrics& s = r.searchable;
+  out << "\n  searchable tables (true top >= table_metrics.searchable_min_top_area_m2, matched "
+         "by top overlap): "
+      << s.searchable() << " true, " << s.matched() << " matched, " << s.detected() << " detected ("
+      << s.detectedSmall() << " on smaller true tables)\n";
+  std::snprintf(line, sizeof line, "  %-10s %s\n  %-10s %s\n", "precision",
+                percent(s.precision()).c_str(), "recall", percent(s.recall()).c_str());
+  out << line;
+  std::snprintf(
+      line, sizeof line, "  false tables (on no true table): %d, in %d of %d frames (%.1f %%)\n",
+      s.falseTables(), s.framesWithFalseTable(), s.frames(), 100 * s.falseTableFrameShare());
+  out << line;
+}
+
+// What table_objects.relabel changes.
+void textRelabel(std::ostringstream& out, const EvalReport& r) {
+  const auto& m = r.relabel;
+  const auto before = m.without.perClassAccuracy(), after = m.with.perClassAccuracy();
+  const auto t = static_cast<std::size_t>(Label::Table);
+  const auto o = static_cast<std::size_t>(Label::Object);
+  char text[512];
+  std::snprintf(
+      text, sizeof text,
+      "\n  table-top candidates' table pixels labelled object (table_objects.relabel), "
+      "%d frames, %d candidates, %llu pixels changed:\n"
+      "  %-10s %s -> %s\n  %-10s %s -> %s\n  %-10s %s -> %s\n  %-10s %s -> %s\n",
+      m.frames, m.candidates, static_cast<unsigned long long>(m.pixels_changed), "table",
+      percent(before[t]).c_str(), percent(after[t]).c_str(), "object", percent(before[o]).c_str(),
+      percent(after[o]).c_str(), "class avg", percent(m.without.classAverageAccuracy()).c_str(),
+      percent(m.with.classAverageAccuracy()).c_str(), "global",
+      percent(m.without.globalAccuracy()).c_str(), percent(m.with.globalAccuracy()).c_str());
+  out << text;
+}
+
+// Which true NYU-40 classes the table-labelled pixels come from.
+void textTableByNyu40(std::ostringstream& out, const EvalReport& r) {
+  char line[160];
+  const auto& t = r.table_by_nyu40;
+  std::uint64_t table_pixels = 0;
+  for (const std::uint64_t n : t.labelled_table) table_pixels += n;
+  std::vector<int> order;
+  for (int c = 1; c <= 40; ++c) {
+    if (t.labelled_table[static_cast<std::size_t>(c)] > 0) order.push_back(c);
+  }
+  std::sort(order.begin(), order.end(), [&](int a, int b) {
+    return t.labelled_table[static_cast<std::size_t>(a)] >
+           t.labelled_table[static_cast<std::size_t>(b)];
+  });
+  out << "\n  pixels labelled table, by true NYU-40 class (" << t.frames
+      << " frames with label40; share of the table-labelled pixels, share of the class "
+         "labelled table):\n";
+  for (std::size_t k = 0; k < std::min<std::size_t>(order.size(), 10); ++k) {
+    const auto c = static_cast<std::size_t>(order[k]);
+    std::snprintf(
+        line, sizeof line, "  %-16s %s of table pixels, %s of its own\n", nyu40ClassName(order[k]),
+        percent(static_cast<double>(t.labelled_table[c]) / static_cast<double>(table_pixels))
+            .c_str(),
+        percent(static_cast<double>(t.labelled_table[c]) / static_cast<double>(t.pixels[c]))
+            .c_str());
+    out << line;
+  }
+}
+
+// Search positions against the true tables.
+void textSearchPositions(std::ostringstream& out, const EvalReport& r) {
+  char line[160];
+  const SearchPositionMetrics& p = r.search;
+  std::snprintf(line, sizeof line,
+                "  search positions vs true tables: %d predicted, median error %.1f cm, "
+                "%.1f deg\n",
+                p.predicted(), 100 * p.medianPositionError(), p.medianYawErrorDeg());
+  out << line;
+  std::snprintf(line, sizeof line,
+                "  reachable in the true scene: %s %% of all, %s %% of the %d flagged "
+                "reachable\n",
+                percent(p.reachableShare()).c_str(), percent(p.flaggedReachableShare()).c_str(),
+                p.flaggedReachable());
+  out << line;
+}
+
+// The trees and depth sweeps.
+void textSweep(std::ostringstream& out, const EvalReport& r) {
+  char line[160];
+  out << "\n  sweep   trees depth   forest(avg/glob)   mrf(avg/glob)\n";
+  for (const auto* points : {&r.sweep_trees, &r.sweep_depth}) {
+    for (const auto& p : *points) {
+      std::snprintf(line, sizeof line, "          %5d %5d   %s %s   %s %s\n", p.trees, p.depth,
+                    percent(p.forest.classAverageAccuracy()).c_str(),
+                    percent(p.forest.globalAccuracy()).c_str(),
+                    percent(p.mrf.classAverageAccuracy()).c_str(),
+                    percent(p.mrf.globalAccuracy()).c_str());
+      out << line;
+    }
+  }
+}
+
+// formatJson's parts, in the order they print.
+// The data, protocol, dropped frames and each frame's ground method.
+void jsonHeader(std::ostringstream& out, const EvalReport& r) {
   out << "{\n  \"data\": " << jsonString(r.data) << ",\n  \"protocol\": " << jsonString(r.protocol)
       << ",\n  \"frames_total\": " << r.frames_total << ",\n  \"frames_used\": " << r.frames_used
       << ",\n  \"dropped\": [";
@@ -278,6 +298,10 @@ std::string formatJson(const EvalReport& r) {
     out << (i ? ",\n    " : "\n    ") << "{\"frame\": " << jsonString(r.ground_methods[i].first)
         << ", \"method\": " << jsonString(r.ground_methods[i].second) << "}";
   }
+}
+
+// The fold rule and each fold's test and training frames (and pseudo-label rounds).
+void jsonFolds(std::ostringstream& out, const EvalReport& r) {
   out << "],\n  \"folds\": {\"rule\": " << jsonString(r.fold_rule)
       << ", \"nyu_scenes\": " << jsonString(r.scene_rule) << ", \"folds\": [";
   for (std::size_t i = 0; i < r.folds.size(); ++i) {
@@ -310,128 +334,136 @@ std::string formatJson(const EvalReport& r) {
     out << "}";
   }
   out << "]}";
-  if (!r.pseudo_rounds.empty()) {
-    out << ",\n  \"pseudo_rounds\": [";
-    for (std::size_t i = 0; i < r.pseudo_rounds.size(); ++i) {
-      const auto& p = r.pseudo_rounds[i];
-      const auto acc = p.mrf.perClassAccuracy();
-      out << (i ? ",\n    " : "\n    ") << "{\"round\": " << p.round
-          << ", \"class_average\": " << jsonNumber(p.mrf.classAverageAccuracy())
-          << ", \"global\": " << jsonNumber(p.mrf.globalAccuracy()) << ", \"per_class\": {";
-      for (int c = 0; c < kNumLabels; ++c)
-        out << (c ? ", " : "") << "\"" << kLabelNames[c] << "\": " << jsonNumber(acc[c]);
-      out << "}, \"table_instance_precision\": " << jsonNumber(p.tables.precision())
-          << ", \"table_instance_recall\": " << jsonNumber(p.tables.recall())
-          << ", \"searchable_precision\": " << jsonNumber(p.searchable.precision())
-          << ", \"searchable_recall\": " << jsonNumber(p.searchable.recall())
-          << ", \"false_table_frame_share\": " << jsonNumber(p.searchable.falseTableFrameShare())
-          << "}";
+}
+
+// Self-training: each pseudo-label round's accuracy, and the unlabelled frames' ground.
+void jsonPseudoRounds(std::ostringstream& out, const EvalReport& r) {
+  out << ",\n  \"pseudo_rounds\": [";
+  for (std::size_t i = 0; i < r.pseudo_rounds.size(); ++i) {
+    const auto& p = r.pseudo_rounds[i];
+    const auto acc = p.mrf.perClassAccuracy();
+    out << (i ? ",\n    " : "\n    ") << "{\"round\": " << p.round
+        << ", \"class_average\": " << jsonNumber(p.mrf.classAverageAccuracy())
+        << ", \"global\": " << jsonNumber(p.mrf.globalAccuracy()) << ", \"per_class\": {";
+    for (int c = 0; c < kNumLabels; ++c)
+      out << (c ? ", " : "") << "\"" << kLabelNames[c] << "\": " << jsonNumber(acc[c]);
+    out << "}, \"table_instance_precision\": " << jsonNumber(p.tables.precision())
+        << ", \"table_instance_recall\": " << jsonNumber(p.tables.recall())
+        << ", \"searchable_precision\": " << jsonNumber(p.searchable.precision())
+        << ", \"searchable_recall\": " << jsonNumber(p.searchable.recall())
+        << ", \"false_table_frame_share\": " << jsonNumber(p.searchable.falseTableFrameShare())
+        << "}";
+  }
+  out << "],\n  \"unlabelled_ground\": [";
+  for (std::size_t i = 0; i < r.unlabelled_ground_methods.size(); ++i)
+    out << (i ? ", " : "") << "{\"frame\": " << jsonString(r.unlabelled_ground_methods[i].first)
+        << ", \"method\": " << jsonString(r.unlabelled_ground_methods[i].second) << "}";
+  out << "]";
+}
+
+// Table instances with their precision/recall curve, operating points and frames.
+void jsonTableInstances(std::ostringstream& out, const EvalReport& r) {
+  const TableMetrics& t = r.tables;
+  out << ",\n  \"table_instances\": {\"labels\": \"forest+mrf\", \"truth\": " << t.truth()
+      << ", \"detected\": " << t.detected() << ", \"matched\": " << t.matched()
+      << ", \"precision\": " << jsonNumber(t.precision())
+      << ", \"recall\": " << jsonNumber(t.recall())
+      << ", \"median_height_error_m\": " << jsonNumber(t.medianHeightError())
+      << ", \"median_centroid_error_m\": " << jsonNumber(t.medianCentroidError())
+      << ", \"median_axis_error_deg\": " << jsonNumber(t.medianAxisErrorDeg())
+      << ", \"precision_recall\": [";
+  const auto curve = precisionRecallCurve(r.scored_tables, t.truth());
+  for (std::size_t i = 0; i < curve.size(); ++i) {
+    const auto& p = curve[i];
+    out << (i ? ", " : "") << "{\"min_confidence\": " << jsonNumber(p.threshold)
+        << ", \"detected\": " << p.detected << ", \"matched\": " << p.matched
+        << ", \"precision\": " << jsonNumber(p.precision)
+        << ", \"recall\": " << jsonNumber(p.recall) << "}";
+  }
+  out << "], \"operating_points\": [";
+  for (std::size_t i = 0; i < std::size(kOperatingPrecisions); ++i) {
+    const PrecisionRecallPoint* p = operatingPoint(curve, kOperatingPrecisions[i]);
+    out << (i ? ", " : "") << "{\"min_precision\": " << jsonNumber(kOperatingPrecisions[i]);
+    if (p) {
+      out << ", \"min_confidence\": " << jsonNumber(p->threshold)
+          << ", \"detected\": " << p->detected << ", \"matched\": " << p->matched
+          << ", \"precision\": " << jsonNumber(p->precision)
+          << ", \"recall\": " << jsonNumber(p->recall);
+    } else {
+      out << ", \"recall\": null";
     }
-    out << "],\n  \"unlabelled_ground\": [";
-    for (std::size_t i = 0; i < r.unlabelled_ground_methods.size(); ++i)
-      out << (i ? ", " : "") << "{\"frame\": " << jsonString(r.unlabelled_ground_methods[i].first)
-          << ", \"method\": " << jsonString(r.unlabelled_ground_methods[i].second) << "}";
-    out << "]";
+    out << "}";
   }
-  out << ",\n  \"train_extra\": [";
-  for (std::size_t i = 0; i < r.train_extra.size(); ++i) {
-    out << (i ? ", " : "") << jsonString(r.train_extra[i]);
+  out << "], \"per_frame\": [";
+  for (std::size_t i = 0; i < r.frame_tables.size(); ++i) {
+    const auto& f = r.frame_tables[i];
+    out << (i ? ",\n    " : "\n    ") << "{\"frame\": " << jsonString(f.frame)
+        << ", \"truth\": " << f.truth << ", \"detected\": " << f.detected
+        << ", \"matched\": " << f.matched << "}";
   }
-  out << "],\n  \"labels\": [";
-  for (int c = 0; c < kNumLabels; ++c) out << (c ? ", " : "") << "\"" << kLabelNames[c] << "\"";
-  out << "],\n  \"forest\": " << jsonMatrix(r.forest) << ",\n  \"mrf\": " << jsonMatrix(r.mrf)
-      << ",\n  \"oracle\": " << jsonMatrix(r.oracle);
-  {
-    const TableMetrics& t = r.tables;
-    out << ",\n  \"table_instances\": {\"labels\": \"forest+mrf\", \"truth\": " << t.truth()
-        << ", \"detected\": " << t.detected() << ", \"matched\": " << t.matched()
-        << ", \"precision\": " << jsonNumber(t.precision())
-        << ", \"recall\": " << jsonNumber(t.recall())
-        << ", \"median_height_error_m\": " << jsonNumber(t.medianHeightError())
-        << ", \"median_centroid_error_m\": " << jsonNumber(t.medianCentroidError())
-        << ", \"median_axis_error_deg\": " << jsonNumber(t.medianAxisErrorDeg())
-        << ", \"precision_recall\": [";
-    const auto curve = precisionRecallCurve(r.scored_tables, t.truth());
-    for (std::size_t i = 0; i < curve.size(); ++i) {
-      const auto& p = curve[i];
-      out << (i ? ", " : "") << "{\"min_confidence\": " << jsonNumber(p.threshold)
-          << ", \"detected\": " << p.detected << ", \"matched\": " << p.matched
-          << ", \"precision\": " << jsonNumber(p.precision)
-          << ", \"recall\": " << jsonNumber(p.recall) << "}";
-    }
-    out << "], \"operating_points\": [";
-    for (std::size_t i = 0; i < std::size(kOperatingPrecisions); ++i) {
-      const PrecisionRecallPoint* p = operatingPoint(curve, kOperatingPrecisions[i]);
-      out << (i ? ", " : "") << "{\"min_precision\": " << jsonNumber(kOperatingPrecisions[i]);
-      if (p) {
-        out << ", \"min_confidence\": " << jsonNumber(p->threshold)
-            << ", \"detected\": " << p->detected << ", \"matched\": " << p->matched
-            << ", \"precision\": " << jsonNumber(p->precision)
-            << ", \"recall\": " << jsonNumber(p->recall);
-      } else {
-        out << ", \"recall\": null";
-      }
-      out << "}";
-    }
-    out << "], \"per_frame\": [";
-    for (std::size_t i = 0; i < r.frame_tables.size(); ++i) {
-      const auto& f = r.frame_tables[i];
-      out << (i ? ",\n    " : "\n    ") << "{\"frame\": " << jsonString(f.frame)
-          << ", \"truth\": " << f.truth << ", \"detected\": " << f.detected
-          << ", \"matched\": " << f.matched << "}";
-    }
-    out << "]}";
+  out << "]}";
+}
+
+// What table_objects.relabel changes.
+void jsonRelabel(std::ostringstream& out, const EvalReport& r) {
+  const auto& m = r.relabel;
+  const auto t = static_cast<std::size_t>(Label::Table);
+  const auto o = static_cast<std::size_t>(Label::Object);
+  const auto before = m.without.perClassAccuracy(), after = m.with.perClassAccuracy();
+  out << ",\n  \"table_objects_relabel\": {\"frames\": " << m.frames
+      << ", \"candidates\": " << m.candidates << ", \"pixels_changed\": " << m.pixels_changed
+      << ", \"table\": [" << jsonNumber(before[t]) << ", " << jsonNumber(after[t])
+      << "], \"object\": [" << jsonNumber(before[o]) << ", " << jsonNumber(after[o])
+      << "], \"class_average\": [" << jsonNumber(m.without.classAverageAccuracy()) << ", "
+      << jsonNumber(m.with.classAverageAccuracy()) << "], \"global\": ["
+      << jsonNumber(m.without.globalAccuracy()) << ", " << jsonNumber(m.with.globalAccuracy())
+      << "]}";
+}
+
+// Which true NYU-40 classes the table-labelled pixels come from.
+void jsonTableByNyu40(std::ostringstream& out, const EvalReport& r) {
+  const auto& t = r.table_by_nyu40;
+  out << ",\n  \"table_by_nyu40\": {\"frames\": " << t.frames << ", \"classes\": [";
+  bool first = true;
+  for (int c = 1; c <= 40; ++c) {
+    const auto k = static_cast<std::size_t>(c);
+    if (t.pixels[k] == 0) continue;
+    out << (first ? "" : ", ") << "{\"class\": " << jsonString(nyu40ClassName(c))
+        << ", \"pixels\": " << t.pixels[k] << ", \"labelled_table\": " << t.labelled_table[k]
+        << "}";
+    first = false;
   }
-  if (r.relabel.frames > 0) {
-    const auto& m = r.relabel;
-    const auto t = static_cast<std::size_t>(Label::Table);
-    const auto o = static_cast<std::size_t>(Label::Object);
-    const auto before = m.without.perClassAccuracy(), after = m.with.perClassAccuracy();
-    out << ",\n  \"table_objects_relabel\": {\"frames\": " << m.frames
-        << ", \"candidates\": " << m.candidates << ", \"pixels_changed\": " << m.pixels_changed
-        << ", \"table\": [" << jsonNumber(before[t]) << ", " << jsonNumber(after[t])
-        << "], \"object\": [" << jsonNumber(before[o]) << ", " << jsonNumber(after[o])
-        << "], \"class_average\": [" << jsonNumber(m.without.classAverageAccuracy()) << ", "
-        << jsonNumber(m.with.classAverageAccuracy()) << "], \"global\": ["
-        << jsonNumber(m.without.globalAccuracy()) << ", " << jsonNumber(m.with.globalAccuracy())
-        << "]}";
-  }
-  if (r.table_by_nyu40.frames > 0) {
-    const auto& t = r.table_by_nyu40;
-    out << ",\n  \"table_by_nyu40\": {\"frames\": " << t.frames << ", \"classes\": [";
-    bool first = true;
-    for (int c = 1; c <= 40; ++c) {
-      const auto k = static_cast<std::size_t>(c);
-      if (t.pixels[k] == 0) continue;
-      out << (first ? "" : ", ") << "{\"class\": " << jsonString(nyu40ClassName(c))
-          << ", \"pixels\": " << t.pixels[k] << ", \"labelled_table\": " << t.labelled_table[k]
-          << "}";
-      first = false;
-    }
-    out << "]}";
-  }
-  {
-    const SearchableMetrics& s = r.searchable;
-    out << ",\n  \"searchable_tables\": {\"labels\": \"forest+mrf\", \"frames\": " << s.frames()
-        << ", \"truth\": " << s.searchable() << ", \"matched\": " << s.matched()
-        << ", \"detected\": " << s.detected()
-        << ", \"detected_on_small_tables\": " << s.detectedSmall()
-        << ", \"false_tables\": " << s.falseTables()
-        << ", \"frames_with_false_table\": " << s.framesWithFalseTable()
-        << ", \"precision\": " << jsonNumber(s.precision())
-        << ", \"recall\": " << jsonNumber(s.recall())
-        << ", \"false_table_frame_share\": " << jsonNumber(s.falseTableFrameShare()) << "}";
-  }
-  if (r.has_search_truth) {
-    const SearchPositionMetrics& p = r.search;
-    out << ",\n  \"search_positions\": {\"predicted\": " << p.predicted()
-        << ", \"reachable_in_truth\": " << p.reachableInTruth()
-        << ", \"reachable_share\": " << jsonNumber(p.reachableShare())
-        << ", \"flagged_reachable\": " << p.flaggedReachable()
-        << ", \"flagged_reachable_share\": " << jsonNumber(p.flaggedReachableShare())
-        << ", \"median_position_error_m\": " << jsonNumber(p.medianPositionError())
-        << ", \"median_yaw_error_deg\": " << jsonNumber(p.medianYawErrorDeg()) << "}";
-  }
+  out << "]}";
+}
+
+// Searchable tables and false tables.
+void jsonSearchable(std::ostringstream& out, const EvalReport& r) {
+  const SearchableMetrics& s = r.searchable;
+  out << ",\n  \"searchable_tables\": {\"labels\": \"forest+mrf\", \"frames\": " << s.frames()
+      << ", \"truth\": " << s.searchable() << ", \"matched\": " << s.matched()
+      << ", \"detected\": " << s.detected()
+      << ", \"detected_on_small_tables\": " << s.detectedSmall()
+      << ", \"false_tables\": " << s.falseTables()
+      << ", \"frames_with_false_table\": " << s.framesWithFalseTable()
+      << ", \"precision\": " << jsonNumber(s.precision())
+      << ", \"recall\": " << jsonNumber(s.recall())
+      << ", \"false_table_frame_share\": " << jsonNumber(s.falseTableFrameShare()) << "}";
+}
+
+// Search positions against the true tables.
+void jsonSearchPositions(std::ostringstream& out, const EvalReport& r) {
+  const SearchPositionMetrics& p = r.search;
+  out << ",\n  \"search_positions\": {\"predicted\": " << p.predicted()
+      << ", \"reachable_in_truth\": " << p.reachableInTruth()
+      << ", \"reachable_share\": " << jsonNumber(p.reachableShare())
+      << ", \"flagged_reachable\": " << p.flaggedReachable()
+      << ", \"flagged_reachable_share\": " << jsonNumber(p.flaggedReachableShare())
+      << ", \"median_position_error_m\": " << jsonNumber(p.medianPositionError())
+      << ", \"median_yaw_error_deg\": " << jsonNumber(p.medianYawErrorDeg()) << "}";
+}
+
+// The trees and depth sweeps.
+void jsonSweeps(std::ostringstream& out, const EvalReport& r) {
   for (const auto& [name, points] :
        {std::pair{"sweep_trees", &r.sweep_trees}, std::pair{"sweep_depth", &r.sweep_depth}}) {
     out << ",\n  \"" << name << "\": [";
@@ -445,12 +477,53 @@ std::string formatJson(const EvalReport& r) {
     }
     out << "]";
   }
-  out << ",\n  \"config\": " << jsonString(r.config_yaml) << ",\n  \"seconds\": "
-      << jsonNumber(r.seconds) << "\n}\n";
+}
+
+}  // namespace
+
+std::string formatTable(const EvalReport& r) {
+  std::ostringstream out;
+  textHeader(out, r);
+  textAccuracies(out, r);
+  textConfusion(out, r);
+  textTableInstances(out, r);
+  textSearchable(out, r);
+  if (r.relabel.frames > 0) textRelabel(out, r);
+  if (r.table_by_nyu40.frames > 0) textTableByNyu40(out, r);
+  if (r.has_search_truth) textSearchPositions(out, r);
+  if (!r.sweep_trees.empty()) textSweep(out, r);
+  char line[160];
+  std::snprintf(line, sizeof line, "\n  time %.1f s\n", r.seconds);
+  out << line;
   return out.str();
 }
 
-void writeConfusionSvg(const std::string& path, const ConfusionMatrix& m, const std::string& title) {
+std::string formatJson(const EvalReport& r) {
+  std::ostringstream out;
+  jsonHeader(out, r);
+  jsonFolds(out, r);
+  if (!r.pseudo_rounds.empty()) jsonPseudoRounds(out, r);
+  out << ",\n  \"train_extra\": [";
+  for (std::size_t i = 0; i < r.train_extra.size(); ++i) {
+    out << (i ? ", " : "") << jsonString(r.train_extra[i]);
+  }
+  out << "],\n  \"labels\": [";
+  for (int c = 0; c < kNumLabels; ++c) out << (c ? ", " : "") << "\"" << kLabelNames[c] << "\"";
+  out << "],\n  \"forest\": " << jsonMatrix(r.forest) << ",\n  \"mrf\": " << jsonMatrix(r.mrf)
+      << ",\n  \"oracle\": " << jsonMatrix(r.oracle);
+  jsonTableInstances(out, r);
+  if (r.relabel.frames > 0) jsonRelabel(out, r);
+  if (r.table_by_nyu40.frames > 0) jsonTableByNyu40(out, r);
+  jsonSearchable(out, r);
+  if (r.has_search_truth) jsonSearchPositions(out, r);
+  jsonSweeps(out, r);
+  out << ",\n  \"config\": " << jsonString(r.config_yaml)
+      << ",\n  \"seconds\": " << jsonNumber(r.seconds) << "\n}\n";
+  return out.str();
+}
+
+void writeConfusionSvg(const std::string& path, const ConfusionMatrix& m,
+                       const std::string& title) {
   constexpr int kCell = 56, kLeft = 90, kTop = 70;
   const int size = kLeft + kCell * kNumLabels + 20;
   std::ostringstream svg;
@@ -517,9 +590,12 @@ void writeSweepSvg(const std::string& path, const std::vector<SweepPoint>& point
     double (*value)(const SweepPoint&);
   };
   const Series series[] = {
-      {"forest class avg", "#1f77b4", "", [](const SweepPoint& p) { return p.forest.classAverageAccuracy(); }},
-      {"forest global", "#1f77b4", "6,4", [](const SweepPoint& p) { return p.forest.globalAccuracy(); }},
-      {"MRF class avg", "#d62728", "", [](const SweepPoint& p) { return p.mrf.classAverageAccuracy(); }},
+      {"forest class avg", "#1f77b4", "",
+       [](const SweepPoint& p) { return p.forest.classAverageAccuracy(); }},
+      {"forest global", "#1f77b4", "6,4",
+       [](const SweepPoint& p) { return p.forest.globalAccuracy(); }},
+      {"MRF class avg", "#d62728", "",
+       [](const SweepPoint& p) { return p.mrf.classAverageAccuracy(); }},
       {"MRF global", "#d62728", "6,4", [](const SweepPoint& p) { return p.mrf.globalAccuracy(); }},
   };
   int legend_y = kTop + 10;

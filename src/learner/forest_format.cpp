@@ -1,6 +1,6 @@
 // forest_format.cpp — the RandomForest model file: writing (save), reading
-// with every length and index checked before use (load), and the checksum /
-// id. The layout is documented in forest_format.hpp.
+// with every length and index checked before use (load, one step per section
+// of the file), and the checksum / id. The layout is documented in forest_format.hpp.
 #include "learner/forest_format.hpp"
 
 #include <algorithm>
@@ -10,6 +10,8 @@
 #include <fstream>
 #include <iomanip>
 #include <iterator>
+#include <memory>
+#include <optional>
 #include <sstream>
 
 #include "findmug/common/error.hpp"
@@ -284,15 +286,21 @@ void RandomForest::save(const std::string& path) const {
   }
 }
 
-RandomForest RandomForest::load(const std::string& path) {
+namespace {
+
+// The whole file; refuses one that cannot be opened or read.
+std::vector<std::uint8_t> readModelFile(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
   if (!in) throw Error(path + ": cannot open forest model (missing or unreadable)");
   std::vector<std::uint8_t> buf((std::istreambuf_iterator<char>(in)),
                                 std::istreambuf_iterator<char>());
   if (in.bad()) throw Error(path + ": read error");
+  return buf;
+}
 
-  // Magic and version first: a different file type or format gets a message
-  // that says so rather than a checksum complaint.
+// Magic and version first: a different file type or format gets a message
+// that says so rather than a checksum complaint. Returns the version.
+std::uint32_t checkMagicAndVersion(const std::vector<std::uint8_t>& buf, const std::string& path) {
   if (buf.size() < sizeof kMagic + 4) {
     if (buf.size() >= sizeof kMagic && std::memcmp(buf.data(), kMagic, sizeof kMagic) != 0)
       throw Error(path + ": not a findmug forest model (wrong magic)");
@@ -308,233 +316,305 @@ RandomForest RandomForest::load(const std::string& path) {
     throw Error(path + ": forest model format version " + std::to_string(version) +
                 " is not supported (this build reads versions " +
                 std::to_string(kOldestFormatVersion) + ".." + std::to_string(kFormatVersion) + ")");
+  return version;
+}
 
-  // Whether the trailing checksum matches tells apart "truncated or corrupt"
-  // from "intact but not loadable by this build" in the messages below.
-  bool checksum_ok = false;
-  std::uint64_t stored_checksum = 0;
+// The trailing checksum and whether it matches the bytes before it. It tells
+// apart "truncated or corrupt" from "intact but not loadable by this build"
+// in load's messages.
+struct StoredChecksum {
+  std::uint64_t value = 0;
+  bool matches = false;
+};
+StoredChecksum storedChecksum(const std::vector<std::uint8_t>& buf) {
+  StoredChecksum checksum;
   if (buf.size() >= sizeof kMagic + 4 + kChecksumSize) {
     const std::size_t body = buf.size() - kChecksumSize;
     for (std::size_t i = 0; i < kChecksumSize; ++i)
-      stored_checksum |= static_cast<std::uint64_t>(buf[body + i]) << (8 * i);
-    checksum_ok = fnv1a64(buf.data(), body) == stored_checksum;
+      checksum.value |= static_cast<std::uint64_t>(buf[body + i]) << (8 * i);
+    checksum.matches = fnv1a64(buf.data(), body) == checksum.value;
   }
+  return checksum;
+}
+
+// Reads the sections of one model file in their order (forest_format.hpp),
+// each checked as it is read. `which` prefixes the fields of the context
+// round ("context round ") in the messages.
+class SectionReader {
+ public:
+  SectionReader(Reader& r, const std::string& path, std::uint32_t version)
+      : r_(r), path_(path), version_(version) {}
+
+  void header() {
+    for (std::size_t i = 0; i < sizeof kMagic; ++i) r_.u8("magic");
+    r_.u32("format version");
+  }
+
+  void labelNames() {
+    const std::uint32_t num_labels = r_.u32("label count");
+    if (num_labels != kNumLabels)
+      throw Error(path_ + ": forest model has " + std::to_string(num_labels) +
+                  " labels, this build has " + std::to_string(kNumLabels));
+    for (int c = 0; c < kNumLabels; ++c) {
+      const std::string name = r_.str("label name");
+      if (name != kLabelNames[c])
+        throw Error(path_ + ": forest model label " + std::to_string(c) + " is '" + name +
+                    "', this build expects '" + std::string(kLabelNames[c]) +
+                    "' (label names differ)");
+    }
+  }
+
+  // Format 4: the learner and the internal classes. Returns whether the
+  // learner is xgboost.
+  bool learnerAndClasses(InternalClasses& internal_classes) {
+    const std::uint8_t kind = r_.u8("learner");
+    if (kind > 1)
+      throw Error(path_ + ": forest model learner = " + std::to_string(kind) +
+                  " (expected 0 forest or 1 xgboost)");
+    InternalClasses classes;
+    classes.names.clear();
+    classes.scheme = r_.str("internal class scheme");
+    const std::uint32_t count = r_.u32("internal class count");
+    if (count < 1 || count > kMaxInternalClasses)
+      throw Error(path_ + ": bad class map: " + std::to_string(count) +
+                  " internal classes (expected 1.." + std::to_string(kMaxInternalClasses) + ")");
+    for (std::uint32_t c = 0; c < count; ++c) {
+      classes.names.push_back(r_.str("internal class name"));
+      classes.to_label.push_back(r_.u8("internal class label"));
+    }
+    validateInternalClasses(classes, path_);
+    internal_classes = std::move(classes);
+    return kind == 1;
+  }
+
+  // Column names: the 14 base features first; format 3 may add extras.
+  std::vector<std::string> featureNames(const std::string& which) {
+    const std::uint32_t num_features = r_.u32(which + "feature count");
+    if (version_ == 2 ? num_features != kFeatureDim
+                      : (num_features < kFeatureDim || num_features > kMaxFeatures))
+      throw Error(path_ + ": forest model " + which + "has " + std::to_string(num_features) +
+                  " features, this build computes " + std::to_string(kFeatureDim) +
+                  (version_ == 2 ? ""
+                                 : " base features plus at most " +
+                                       std::to_string(kMaxFeatures - kFeatureDim) + " extra ones"));
+    std::vector<std::string> names;
+    for (std::uint32_t f = 0; f < num_features; ++f) {
+      std::string name = r_.str(which + "feature name");
+      if (f < kFeatureDim && name != kFeatureNames[f])
+        throw Error(path_ + ": forest model " + which + "feature " + std::to_string(f) + " is '" +
+                    name + "', this build computes '" + std::string(kFeatureNames[f]) +
+                    "' (feature layout differs)");
+      if (name.empty()) throw Error(path_ + ": forest model " + which + "feature name is empty");
+      names.push_back(std::move(name));
+    }
+    return names;
+  }
+
+  void forestParams(ForestParams& p, const std::string& which) {
+    p.num_trees = r_.i32(which + "params.num_trees");
+    p.max_depth = r_.i32(which + "params.max_depth");
+    p.min_samples_leaf = r_.i32(which + "params.min_samples_leaf");
+    p.candidate_features = r_.i32(which + "params.candidate_features");
+    p.candidate_thresholds = r_.i32(which + "params.candidate_thresholds");
+    const std::uint8_t weighting = r_.u8(which + "params.class_weighting");
+    if (weighting > 1)
+      throw Error(path_ + ": forest model " + which +
+                  "params.class_weighting = " + std::to_string(weighting) + " (expected 0 or 1)");
+    p.class_weighting = weighting == 1;
+    p.bagging_fraction = r_.f64(which + "params.bagging_fraction");
+    p.seed = r_.u64(which + "params.seed");
+    validateParams(p, path_);
+  }
+
+  // An xgboost model's parameters; its class weighting goes to
+  // `class_weighting` (the forest parameters' field, as for a forest).
+  void boosterParams(XGBoostParams& p, bool& class_weighting) {
+    p.rounds = r_.i32("xgboost.rounds");
+    p.max_depth = r_.i32("xgboost.max_depth");
+    p.eta = r_.f64("xgboost.eta");
+    p.subsample = r_.f64("xgboost.subsample");
+    p.colsample = r_.f64("xgboost.colsample");
+    p.min_child_weight = r_.f64("xgboost.min_child_weight");
+    p.lambda = r_.f64("xgboost.lambda");
+    p.seed = r_.i32("xgboost.seed");
+    const std::uint8_t weighting = r_.u8("xgboost class_weighting");
+    if (weighting > 1)
+      throw Error(path_ + ": forest model xgboost class_weighting = " + std::to_string(weighting) +
+                  " (expected 0 or 1)");
+    class_weighting = weighting == 1;
+    xgboost_learner::validateParams(p, path_);
+  }
+
+  void extractionSettings(RandomForest::Settings& settings) {
+    const std::uint32_t num_settings = r_.u32("extraction setting count");
+    if (num_settings > kMaxSettings)
+      throw Error(path_ + ": forest model has an absurd extraction setting count " +
+                  std::to_string(num_settings) + " (at most " + std::to_string(kMaxSettings) + ")");
+    for (std::uint32_t i = 0; i < num_settings; ++i) {
+      std::string key = r_.str("extraction setting name");
+      std::string value = r_.str("extraction setting value");
+      if (key.empty())
+        throw Error(path_ + ": forest model has an extraction setting without a name");
+      settings.emplace_back(std::move(key), std::move(value));
+    }
+  }
+
+  // XGBoost's own parser gets only bytes the checksum vouches for.
+  std::shared_ptr<const RandomForest::Booster> booster(bool checksum_ok, int num_classes, int dim) {
+    const std::uint64_t length = r_.u64("booster length");
+    if (length == 0 || length > r_.remaining())
+      throw Error(path_ + ": xgboost booster blob of " + std::to_string(length) +
+                  " bytes but only " + std::to_string(r_.remaining()) +
+                  " remain (booster blob truncated)");
+    if (!checksum_ok)
+      throw Error(path_ +
+                  ": forest model checksum mismatch (file corrupt; the xgboost booster "
+                  "was not read)");
+    std::vector<std::uint8_t> blob(length);
+    for (auto& b : blob) b = r_.u8("booster");
+    return RandomForest::Booster::fromBlob(std::move(blob), num_classes, dim, path_);
+  }
+
+  // The trees of a forest on `dim` features, into `out`: as many as its
+  // params.num_trees (`num_trees_param`) says.
+  void trees(std::vector<RandomForest::Tree>& out, int num_trees_param, int dim,
+             const std::string& which) {
+    const std::uint32_t num_trees = r_.u32(which + "tree count");
+    if (num_trees == 0 || num_trees > kMaxTrees)
+      throw Error(path_ + ": forest model " + which + "has an absurd num_trees " +
+                  std::to_string(num_trees) + " (expected 1.." + std::to_string(kMaxTrees) + ")");
+    if (num_trees != static_cast<std::uint32_t>(num_trees_param))
+      throw Error(path_ + ": forest model " + which + "holds " + std::to_string(num_trees) +
+                  " trees but params.num_trees = " + std::to_string(num_trees_param));
+    out.resize(num_trees);
+    for (std::uint32_t t = 0; t < num_trees; ++t) {
+      tree(out[t], which + "tree " + std::to_string(t));
+      validateTree(out[t], t, dim, path_);
+    }
+  }
+
+  // Format 3: whether an auto-context round follows.
+  bool contextRoundFlag(bool boosted) {
+    const std::uint8_t has_round = r_.u8("context round flag");
+    if (has_round > 1)
+      throw Error(path_ + ": forest model context round flag = " + std::to_string(has_round) +
+                  " (expected 0 or 1)");
+    if (has_round == 1 && boosted)
+      throw Error(path_ + ": an xgboost model cannot have an auto-context round");
+    return has_round == 1;
+  }
+
+  // The context round's columns: the first round's, then context columns.
+  void checkContextColumns(const std::vector<std::string>& first,
+                           const std::vector<std::string>& round) const {
+    if (round.size() <= first.size() || !std::equal(first.begin(), first.end(), round.begin()))
+      throw Error(path_ + ": forest model context round columns do not start with the " +
+                  std::to_string(first.size()) +
+                  " first-round columns followed by context columns");
+  }
+
+  // Format 5: the learned pairwise term, if the file has one.
+  std::optional<PairwiseContext> pairwiseTerm() {
+    const std::uint8_t has_pairwise = r_.u8("pairwise term flag");
+    if (has_pairwise > 1)
+      throw Error(path_ + ": forest model pairwise term flag = " + std::to_string(has_pairwise) +
+                  " (expected 0 or 1)");
+    if (has_pairwise != 1) return std::nullopt;
+    PairwiseContext term;
+    term.bias = r_.f64("pairwise term bias");
+    for (double& v : term.weights) v = r_.f64("pairwise term weights");
+    for (double& v : term.mean) v = r_.f64("pairwise term means");
+    for (double& v : term.scale) v = r_.f64("pairwise term scales");
+    term.mean_cost = r_.f64("pairwise term mean cost");
+    term.training_edges = r_.u64("pairwise term training edges");
+    validatePairwiseContext(term, path_ + ": forest model");
+    return term;
+  }
+
+  // Nothing but the checksum after the last section.
+  void end() {
+    if (r_.remaining() < kChecksumSize) r_.need(kChecksumSize, "checksum");
+    if (r_.remaining() > kChecksumSize)
+      throw Error(path_ + ": forest model has " + std::to_string(r_.remaining() - kChecksumSize) +
+                  " unexpected bytes after the trees");
+  }
+
+ private:
+  void tree(RandomForest::Tree& out, const std::string& tree_name) {
+    const std::uint32_t num_nodes = r_.u32(tree_name + " node count");
+    // Every node takes at least kInnerNodeBytes, so a count the rest of the
+    // file cannot hold is refused before allocating for it.
+    if (num_nodes == 0) throw Error(path_ + ": forest model " + tree_name + " has no nodes");
+    if (num_nodes > r_.remaining() / kInnerNodeBytes)
+      throw Error(path_ + ": forest model " + tree_name + " has node count " +
+                  std::to_string(num_nodes) + " but only " + std::to_string(r_.remaining()) +
+                  " bytes remain (absurd count, or the file is truncated)");
+    out.resize(num_nodes);
+    for (std::uint32_t i = 0; i < num_nodes; ++i) {
+      RandomForest::Node& node = out[i];
+      node.feature = r_.i32(tree_name + " node feature");
+      if (node.feature >= 0) {
+        node.threshold = r_.f32(tree_name + " node threshold");
+        node.left = r_.i32(tree_name + " node left");
+        node.right = r_.i32(tree_name + " node right");
+      } else {
+        r_.need(kLeafNodeBytes - 4, tree_name + " leaf distribution");
+        for (float& prob : node.distribution) prob = r_.f32(tree_name + " leaf distribution");
+      }
+    }
+  }
+
+  Reader& r_;
+  const std::string& path_;
+  std::uint32_t version_;
+};
+
+}  // namespace
+
+RandomForest RandomForest::load(const std::string& path) {
+  const std::vector<std::uint8_t> buf = readModelFile(path);
+  const std::uint32_t version = checkMagicAndVersion(buf, path);
+  const StoredChecksum checksum = storedChecksum(buf);
 
   RandomForest forest;
   try {
     Reader r(buf, buf.size(), path);
-    for (std::size_t i = 0; i < sizeof kMagic; ++i) r.u8("magic");
-    r.u32("format version");
-
-    const std::uint32_t num_labels = r.u32("label count");
-    if (num_labels != kNumLabels)
-      throw Error(path + ": forest model has " + std::to_string(num_labels) +
-                  " labels, this build has " + std::to_string(kNumLabels));
-    for (int c = 0; c < kNumLabels; ++c) {
-      const std::string name = r.str("label name");
-      if (name != kLabelNames[c])
-        throw Error(path + ": forest model label " + std::to_string(c) + " is '" + name +
-                    "', this build expects '" + std::string(kLabelNames[c]) +
-                    "' (label names differ)");
-    }
-    // Format 4: the learner and the internal classes.
-    bool boosted = false;
-    if (version >= 4) {
-      const std::uint8_t kind = r.u8("learner");
-      if (kind > 1)
-        throw Error(path + ": forest model learner = " + std::to_string(kind) +
-                    " (expected 0 forest or 1 xgboost)");
-      boosted = kind == 1;
-      InternalClasses classes;
-      classes.names.clear();
-      classes.scheme = r.str("internal class scheme");
-      const std::uint32_t count = r.u32("internal class count");
-      if (count < 1 || count > kMaxInternalClasses)
-        throw Error(path + ": bad class map: " + std::to_string(count) +
-                    " internal classes (expected 1.." + std::to_string(kMaxInternalClasses) + ")");
-      for (std::uint32_t c = 0; c < count; ++c) {
-        classes.names.push_back(r.str("internal class name"));
-        classes.to_label.push_back(r.u8("internal class label"));
-      }
-      validateInternalClasses(classes, path);
-      forest.internal_classes_ = std::move(classes);
-    }
-    // Column names: the 14 base features first; format 3 may add extras.
-    auto readFeatureNames = [&](const std::string& which) {
-      const std::uint32_t num_features = r.u32(which + "feature count");
-      if (version == 2 ? num_features != kFeatureDim
-                       : (num_features < kFeatureDim || num_features > kMaxFeatures))
-        throw Error(path + ": forest model " + which + "has " + std::to_string(num_features) +
-                    " features, this build computes " + std::to_string(kFeatureDim) +
-                    (version == 2
-                         ? ""
-                         : " base features plus at most " +
-                               std::to_string(kMaxFeatures - kFeatureDim) + " extra ones"));
-      std::vector<std::string> names;
-      for (std::uint32_t f = 0; f < num_features; ++f) {
-        std::string name = r.str(which + "feature name");
-        if (f < kFeatureDim && name != kFeatureNames[f])
-          throw Error(path + ": forest model " + which + "feature " + std::to_string(f) + " is '" +
-                      name + "', this build computes '" + std::string(kFeatureNames[f]) +
-                      "' (feature layout differs)");
-        if (name.empty()) throw Error(path + ": forest model " + which + "feature name is empty");
-        names.push_back(std::move(name));
-      }
-      return names;
-    };
-    auto readParams = [&](ForestParams& p, const std::string& which) {
-      p.num_trees = r.i32(which + "params.num_trees");
-      p.max_depth = r.i32(which + "params.max_depth");
-      p.min_samples_leaf = r.i32(which + "params.min_samples_leaf");
-      p.candidate_features = r.i32(which + "params.candidate_features");
-      p.candidate_thresholds = r.i32(which + "params.candidate_thresholds");
-      const std::uint8_t weighting = r.u8(which + "params.class_weighting");
-      if (weighting > 1)
-        throw Error(path + ": forest model " + which +
-                    "params.class_weighting = " + std::to_string(weighting) + " (expected 0 or 1)");
-      p.class_weighting = weighting == 1;
-      p.bagging_fraction = r.f64(which + "params.bagging_fraction");
-      p.seed = r.u64(which + "params.seed");
-      validateParams(p, path);
-    };
-    auto readTrees = [&](RandomForest& f, const std::string& which) {
-      const std::uint32_t num_trees = r.u32(which + "tree count");
-      if (num_trees == 0 || num_trees > kMaxTrees)
-        throw Error(path + ": forest model " + which + "has an absurd num_trees " +
-                    std::to_string(num_trees) + " (expected 1.." + std::to_string(kMaxTrees) + ")");
-      if (num_trees != static_cast<std::uint32_t>(f.params_.num_trees))
-        throw Error(path + ": forest model " + which + "holds " + std::to_string(num_trees) +
-                    " trees but params.num_trees = " + std::to_string(f.params_.num_trees));
-      f.trees_.resize(num_trees);
-      for (std::uint32_t t = 0; t < num_trees; ++t) {
-        const std::string tree_name = which + "tree " + std::to_string(t);
-        const std::uint32_t num_nodes = r.u32(tree_name + " node count");
-        // Every node takes at least kInnerNodeBytes, so a count the rest of the
-        // file cannot hold is refused before allocating for it.
-        if (num_nodes == 0) throw Error(path + ": forest model " + tree_name + " has no nodes");
-        if (num_nodes > r.remaining() / kInnerNodeBytes)
-          throw Error(path + ": forest model " + tree_name + " has node count " +
-                      std::to_string(num_nodes) + " but only " + std::to_string(r.remaining()) +
-                      " bytes remain (absurd count, or the file is truncated)");
-        Tree& tree = f.trees_[t];
-        tree.resize(num_nodes);
-        for (std::uint32_t i = 0; i < num_nodes; ++i) {
-          Node& node = tree[i];
-          node.feature = r.i32(tree_name + " node feature");
-          if (node.feature >= 0) {
-            node.threshold = r.f32(tree_name + " node threshold");
-            node.left = r.i32(tree_name + " node left");
-            node.right = r.i32(tree_name + " node right");
-          } else {
-            r.need(kLeafNodeBytes - 4, tree_name + " leaf distribution");
-            for (float& prob : node.distribution) prob = r.f32(tree_name + " leaf distribution");
-          }
-        }
-        validateTree(tree, t, f.dim(), path);
-      }
-    };
-
-    forest.feature_names_ = readFeatureNames("");
+    SectionReader read(r, path, version);
+    read.header();
+    read.labelNames();
+    const bool boosted = version >= 4 && read.learnerAndClasses(forest.internal_classes_);
+    forest.feature_names_ = read.featureNames("");
     if (boosted) {
-      XGBoostParams& p = forest.xgboost_params_;
-      p.rounds = r.i32("xgboost.rounds");
-      p.max_depth = r.i32("xgboost.max_depth");
-      p.eta = r.f64("xgboost.eta");
-      p.subsample = r.f64("xgboost.subsample");
-      p.colsample = r.f64("xgboost.colsample");
-      p.min_child_weight = r.f64("xgboost.min_child_weight");
-      p.lambda = r.f64("xgboost.lambda");
-      p.seed = r.i32("xgboost.seed");
-      const std::uint8_t weighting = r.u8("xgboost class_weighting");
-      if (weighting > 1)
-        throw Error(path + ": forest model xgboost class_weighting = " +
-                    std::to_string(weighting) + " (expected 0 or 1)");
-      forest.params_.class_weighting = weighting == 1;
-      xgboost_learner::validateParams(p, path);
+      read.boosterParams(forest.xgboost_params_, forest.params_.class_weighting);
     } else {
-      readParams(forest.params_, "");
+      read.forestParams(forest.params_, "");
     }
-
-    const std::uint32_t num_settings = r.u32("extraction setting count");
-    if (num_settings > kMaxSettings)
-      throw Error(path + ": forest model has an absurd extraction setting count " +
-                  std::to_string(num_settings) + " (at most " + std::to_string(kMaxSettings) + ")");
-    for (std::uint32_t i = 0; i < num_settings; ++i) {
-      std::string key = r.str("extraction setting name");
-      std::string value = r.str("extraction setting value");
-      if (key.empty())
-        throw Error(path + ": forest model has an extraction setting without a name");
-      forest.extraction_settings_.emplace_back(std::move(key), std::move(value));
-    }
-
+    read.extractionSettings(forest.extraction_settings_);
     if (boosted) {
-      const std::uint64_t length = r.u64("booster length");
-      if (length == 0 || length > r.remaining())
-        throw Error(path + ": xgboost booster blob of " + std::to_string(length) +
-                    " bytes but only " + std::to_string(r.remaining()) +
-                    " remain (booster blob truncated)");
-      // XGBoost's own parser gets only bytes the checksum vouches for.
-      if (!checksum_ok)
-        throw Error(path + ": forest model checksum mismatch (file corrupt; the xgboost booster "
-                    "was not read)");
-      std::vector<std::uint8_t> blob(length);
-      for (auto& b : blob) b = r.u8("booster");
-      forest.booster_ = Booster::fromBlob(std::move(blob), forest.internal_classes_.count(),
-                                          forest.dim(), path);
+      forest.booster_ =
+          read.booster(checksum.matches, forest.internal_classes_.count(), forest.dim());
     } else {
-      readTrees(forest, "");
+      read.trees(forest.trees_, forest.params_.num_trees, forest.dim(), "");
     }
-    if (version >= 3) {
-      const std::uint8_t has_round = r.u8("context round flag");
-      if (has_round > 1)
-        throw Error(path + ": forest model context round flag = " + std::to_string(has_round) +
-                    " (expected 0 or 1)");
-      if (has_round == 1 && boosted)
-        throw Error(path + ": an xgboost model cannot have an auto-context round");
-      if (has_round == 1) {
-        RandomForest round;
-        round.feature_names_ = readFeatureNames("context round ");
-        if (round.feature_names_.size() <= forest.feature_names_.size() ||
-            !std::equal(forest.feature_names_.begin(), forest.feature_names_.end(),
-                        round.feature_names_.begin()))
-          throw Error(path + ": forest model context round columns do not start with the " +
-                      std::to_string(forest.feature_names_.size()) +
-                      " first-round columns followed by context columns");
-        readParams(round.params_, "context round ");
-        readTrees(round, "context round ");
-        round.format_version_ = version;
-        forest.context_round_ = std::make_shared<const RandomForest>(std::move(round));
-      }
+    if (version >= 3 && read.contextRoundFlag(boosted)) {
+      RandomForest round;
+      round.feature_names_ = read.featureNames("context round ");
+      read.checkContextColumns(forest.feature_names_, round.feature_names_);
+      read.forestParams(round.params_, "context round ");
+      read.trees(round.trees_, round.params_.num_trees, round.dim(), "context round ");
+      round.format_version_ = version;
+      forest.context_round_ = std::make_shared<const RandomForest>(std::move(round));
     }
-    if (version >= 5) {
-      const std::uint8_t has_pairwise = r.u8("pairwise term flag");
-      if (has_pairwise > 1)
-        throw Error(path + ": forest model pairwise term flag = " + std::to_string(has_pairwise) +
-                    " (expected 0 or 1)");
-      if (has_pairwise == 1) {
-        PairwiseContext term;
-        term.bias = r.f64("pairwise term bias");
-        for (double& v : term.weights) v = r.f64("pairwise term weights");
-        for (double& v : term.mean) v = r.f64("pairwise term means");
-        for (double& v : term.scale) v = r.f64("pairwise term scales");
-        term.mean_cost = r.f64("pairwise term mean cost");
-        term.training_edges = r.u64("pairwise term training edges");
-        validatePairwiseContext(term, path + ": forest model");
-        forest.pairwise_context_ = term;
-      }
-    }
-    if (r.remaining() < kChecksumSize) r.need(kChecksumSize, "checksum");
-    if (r.remaining() > kChecksumSize)
-      throw Error(path + ": forest model has " + std::to_string(r.remaining() - kChecksumSize) +
-                  " unexpected bytes after the trees");
+    if (version >= 5) forest.pairwise_context_ = read.pairwiseTerm();
+    read.end();
   } catch (const Error& e) {
-    if (checksum_ok) throw;
+    if (checksum.matches) throw;
     throw Error(std::string(e.what()) + " [checksum mismatch too: file truncated or corrupt]");
   }
-  if (!checksum_ok)
+  if (!checksum.matches)
     throw Error(path + ": forest model checksum mismatch (file corrupt; stored " +
-                idFromChecksum(stored_checksum) + "...)");
-  forest.id_ = idFromChecksum(stored_checksum);
+                idFromChecksum(checksum.value) + "...)");
+  forest.id_ = idFromChecksum(checksum.value);
   forest.source_ = path;
   forest.format_version_ = version;
   return forest;
