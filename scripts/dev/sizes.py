@@ -31,7 +31,6 @@ KNOWN = {
     "src/learner/forest_format.cpp:RandomForest::load": 255,
     "tools/eval_main.cpp:run": 179,
     "tools/eval_report.cpp:formatTable": 199,
-    "src/segmenter/segmenter.cpp:Segmenter::classify": 195,
     "tools/eval_report.cpp:formatJson": 184,
 }
 
