@@ -340,6 +340,16 @@ void Segmenter::recycle(LabelledFrame&& done) const {
 }
 
 PreparedFrame Segmenter::prepare(RgbdFrame frame, const std::vector<std::uint8_t>* gt_labels) const {
+  return prepareWith(std::move(frame), nullptr, gt_labels);
+}
+
+PreparedFrame Segmenter::prepare(RgbdFrame frame, GroundTracker& ground,
+                                 const std::vector<std::uint8_t>* gt_labels) const {
+  return prepareWith(std::move(frame), &ground, gt_labels);
+}
+
+PreparedFrame Segmenter::prepareWith(RgbdFrame frame, GroundTracker* stream,
+                                     const std::vector<std::uint8_t>* gt_labels) const {
   PreparedFrame out;
   {
     std::lock_guard lock(recycled_->mutex);
@@ -362,7 +372,7 @@ PreparedFrame Segmenter::prepare(RgbdFrame frame, const std::vector<std::uint8_t
   switch (config_.ground.source) {
     case GroundSource::Auto:
       out.ground = frame.extrinsics ? std::optional(groundFromExtrinsics(*frame.extrinsics))
-                                    : groundOfStream(out.cloud_camera, out.normals_camera);
+                                    : estimatedGround(out.cloud_camera, out.normals_camera, stream);
       break;
     case GroundSource::Extrinsics:
       if (!frame.extrinsics) {
@@ -383,7 +393,7 @@ PreparedFrame Segmenter::prepare(RgbdFrame frame, const std::vector<std::uint8_t
       out.ground = fitGroundToLabels(out.cloud_camera, *gt_labels, config_.ground);
       break;
     case GroundSource::Estimated:
-      out.ground = groundOfStream(out.cloud_camera, out.normals_camera);
+      out.ground = estimatedGround(out.cloud_camera, out.normals_camera, stream);
       break;
     case GroundSource::Gravity:
       // A robot knows its mount; a dataset frame brings its gravity; a frame
@@ -427,22 +437,11 @@ PreparedFrame Segmenter::prepare(RgbdFrame frame, const std::vector<std::uint8_t
   return out;
 }
 
-std::optional<GroundPlane> Segmenter::groundOfStream(const OrganizedCloud& cloud,
-                                                     const NormalImage& normals) const {
-  if (config_.ground.reestimate_every_frames <= 1) {
-    return estimateGround(cloud, normals, config_.ground);
-  }
-  std::lock_guard lock(ground_memory_->mutex);
-  GroundMemory& memory = *ground_memory_;
-  if (memory.plane && memory.frames_since_estimate + 1 < config_.ground.reestimate_every_frames) {
-    if (auto kept = confirmGround(cloud, normals, *memory.plane, config_.ground)) {
-      ++memory.frames_since_estimate;
-      return kept;
-    }
-  }
-  memory.plane = estimateGround(cloud, normals, config_.ground);
-  memory.frames_since_estimate = 0;
-  return memory.plane;
+std::optional<GroundPlane> Segmenter::estimatedGround(const OrganizedCloud& cloud,
+                                                      const NormalImage& normals,
+                                                      GroundTracker* stream) const {
+  if (stream) return stream->groundOf(cloud, normals, config_.ground);
+  return estimateGround(cloud, normals, config_.ground);
 }
 
 SegmentedFrame Segmenter::oversegment(PreparedFrame prepared) const {
@@ -715,6 +714,11 @@ LabelledFrame Segmenter::classify(SegmentedFrame segmented) const {
 
 LabelledFrame Segmenter::process(RgbdFrame frame, const std::vector<std::uint8_t>* gt_labels) const {
   return classify(oversegment(prepare(std::move(frame), gt_labels)));
+}
+
+LabelledFrame Segmenter::process(RgbdFrame frame, GroundTracker& ground,
+                                 const std::vector<std::uint8_t>* gt_labels) const {
+  return classify(oversegment(prepare(std::move(frame), ground, gt_labels)));
 }
 
 std::vector<std::uint8_t> segmentMajorityLabels(const Oversegmentation& segmentation,

@@ -76,6 +76,7 @@ struct Counts {
 struct Variant {
   std::unique_ptr<Segmenter> segmenter;
   TableConfig tables;
+  GroundTracker ground;  // each variant sees the walk as its own stream
 };
 
 }  // namespace
@@ -160,7 +161,7 @@ int main(int argc, char** argv) {
               rendered.labeled.frame.utime = static_cast<std::uint64_t>(time_s * 1e6) + 1;
               rendered.labeled.frame.seq = frame_index;
               LabelledFrame labelled =
-                  variants[v].segmenter->process(std::move(rendered.labeled.frame));
+                  variants[v].segmenter->process(std::move(rendered.labeled.frame), variants[v].ground);
               if (!labelled.segmented.prepared.ground) continue;
               const Pose2D base{xy.x(), xy.y(), pose.yaw};
               ++counts[v].frames;

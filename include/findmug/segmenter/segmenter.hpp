@@ -29,6 +29,7 @@
 #include "findmug/features/region_features.hpp"
 #include "findmug/frame/frame.hpp"
 #include "findmug/ground/ground.hpp"
+#include "findmug/ground/ground_tracker.hpp"
 #include "findmug/labels/label_image.hpp"
 #include "findmug/learner/forest.hpp"
 #include "findmug/mrf/layout_prior.hpp"
@@ -107,9 +108,13 @@ class Segmenter {
   Segmenter(SegmenterConfig config, std::shared_ptr<const RandomForest> forest);
 
   // `gt_labels` is only used when config.ground.source == FloorLabels.
-  // With ground.reestimate_every_frames > 1 the frames are taken as a stream
-  // from one mount: an estimated floor may come from an earlier frame.
+  // Each frame on its own: an estimated floor is this frame's estimate.
   PreparedFrame prepare(RgbdFrame frame, const std::vector<std::uint8_t>* gt_labels = nullptr) const;
+  // A frame of the stream `ground` follows: with ground.reestimate_every_frames > 1 an
+  // estimated floor may be the one an earlier frame of the stream found (GroundTracker).
+  // The stream's owner keeps `ground` across frames and models.
+  PreparedFrame prepare(RgbdFrame frame, GroundTracker& ground,
+                        const std::vector<std::uint8_t>* gt_labels = nullptr) const;
   SegmentedFrame oversegment(PreparedFrame prepared) const;
   // Features only (used by the trainer): the same feature rows classify computes, by the
   // same step (featureRowsInto), so that training and running cannot drift apart.
@@ -121,6 +126,8 @@ class Segmenter {
   // All steps. Throws findmug::Error for invalid frames; a frame without a
   // ground plane comes back with an all-void label image.
   LabelledFrame process(RgbdFrame frame, const std::vector<std::uint8_t>* gt_labels = nullptr) const;
+  LabelledFrame process(RgbdFrame frame, GroundTracker& ground,
+                        const std::vector<std::uint8_t>* gt_labels = nullptr) const;
 
   // Hands the buffers of a frame the caller is done with back to the
   // Segmenter: the next prepare(), oversegment() and classify() write into
@@ -177,10 +184,13 @@ class Segmenter {
   // object groups the config turns on, into `features`; `objects` is working memory.
   void contextRowsInto(const SegmentedFrame& segmented, SegmentFeatures& features,
                        RegionFeatures& regions, ObjectFeatures& objects) const;
-  // estimateGround, or with ground.reestimate_every_frames > 1 the plane of
-  // an earlier frame while confirmGround accepts it (see GroundConfig).
-  std::optional<GroundPlane> groundOfStream(const OrganizedCloud& cloud,
-                                            const NormalImage& normals) const;
+  // prepare with the stream's tracker, or none (every frame its own estimate).
+  PreparedFrame prepareWith(RgbdFrame frame, GroundTracker* stream,
+                            const std::vector<std::uint8_t>* gt_labels) const;
+  // The floor estimated from the frame alone: by `stream` when there is one.
+  std::optional<GroundPlane> estimatedGround(const OrganizedCloud& cloud,
+                                             const NormalImage& normals,
+                                             GroundTracker* stream) const;
 
   SegmenterConfig config_;
   std::shared_ptr<const RandomForest> forest_;
@@ -188,15 +198,6 @@ class Segmenter {
   MrfVariant mrf_variant_ = MrfVariant::None;
   // mrf.pairwise = layout: the prior file's costs, loaded once.
   std::shared_ptr<const LayoutPrior> layout_prior_;
-  // The floor kept between frames (ground.reestimate_every_frames > 1). The
-  // daemon prepares frames in order on one thread; the mutex only keeps
-  // concurrent callers safe (they then share one stream).
-  struct GroundMemory {
-    std::mutex mutex;
-    std::optional<GroundPlane> plane;  // as last estimated (its support is the reference)
-    int frames_since_estimate = 0;
-  };
-  std::unique_ptr<GroundMemory> ground_memory_ = std::make_unique<GroundMemory>();
   // Buffers handed back by recycle(), taken by prepare() and oversegment().
   struct Recycled {
     std::mutex mutex;
