@@ -41,7 +41,7 @@ ROOMS = {
                   "scene_features.cpp", "context_features.cpp", "object_features.cpp"],
                  ["features", "region_features", "scene_features", "context_features", "object_features"]),
     "learner": (["forest"],
-                ["forest.cpp", "forest_format.cpp", "forest_format.hpp", "forest_train.cpp",
+                ["forest.cpp", "forest_format.cpp", "forest_format.hpp",
                  "xgboost_learner.cpp", "xgboost_learner.hpp"],
                 ["forest", "learner"]),
     "mrf": (["mrf", "context_pairwise", "object_consistency", "layout_prior"],
@@ -77,7 +77,7 @@ ROOMS = {
                  "nyu_mat", "layout_counts", "pseudo_labels"],
                 ["training.cpp", "metrics.cpp", "table_metrics.cpp", "cv_folds.cpp",
                  "depth_degradation.cpp", "mrf_context.cpp", "nyu_mat.cpp", "layout_counts.cpp",
-                 "pseudo_labels.cpp"],
+                 "pseudo_labels.cpp", "forest_train.cpp", "xgboost_train.cpp"],
                 ["cv_folds", "depth_degradation", "mrf_context", "nyu_mat", "table_metrics",
                  "fine_label_inference", "layout_counts", "pseudo_labels"]),
     # synth builds in its own CMakeLists.txt and includes synth_internal.hpp from its own folder

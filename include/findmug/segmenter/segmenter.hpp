@@ -239,9 +239,4 @@ std::vector<ClassProbabilities> predictSegments(
     const ContextConfig& context, std::vector<ClassProbabilities>* first_round = nullptr,
     double* context_ms = nullptr);
 
-// Per-segment training labels: the majority ground-truth label of each
-// segment's pixels; segments whose pixels are mostly void get kVoidLabel.
-std::vector<std::uint8_t> segmentMajorityLabels(const Oversegmentation& segmentation,
-                                                const std::vector<std::uint8_t>& gt_labels);
-
 }  // namespace findmug
