@@ -118,8 +118,8 @@ int main(int argc, char** argv) {
     auto forest = std::make_shared<const RandomForest>(RandomForest::load(model_path));
     SegmenterConfig off = config.segmenter;
     off.tables.min_flat_share = 0.0f;
-    Variant variants[2] = {{std::make_unique<Segmenter>(config.segmenter, forest), {}},
-                           {std::make_unique<Segmenter>(off, forest), {}}};
+    Variant variants[2] = {{std::make_unique<Segmenter>(config.segmenter, forest), {}, {}},
+                           {std::make_unique<Segmenter>(off, forest), {}, {}}};
     variants[0].tables = config.segmenter.tables;
     variants[1].tables = off.tables;
     std::printf(
