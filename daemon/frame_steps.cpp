@@ -27,12 +27,12 @@ CurrentSegmenter fixedSegmenter(const Segmenter& segmenter) {
   return [p = &segmenter] { return std::shared_ptr<const Segmenter>(std::shared_ptr<void>(), p); };
 }
 
-PreparedJob PrepareStep::operator()(FrameJob& job) const {
+PreparedJob PrepareStep::operator()(FrameJob& job) {
   const std::string name = frameName(job.frame);
   try {
     validateFrame(job.frame);
     std::shared_ptr<const Segmenter> segmenter = segmenter_();
-    PreparedFrame prepared = segmenter->prepare(std::move(job.frame));
+    PreparedFrame prepared = segmenter->prepare(std::move(job.frame), ground_);
     return PreparedJob{std::move(prepared), job.arrival, std::move(segmenter), job.trace};
   } catch (const std::exception& e) {
     throw Error(name + ": " + e.what());

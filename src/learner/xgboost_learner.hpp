@@ -4,7 +4,8 @@
 // model) and one loaded XGBoost handle, which predicts on one thread from
 // dense rows. A trained booster goes through the same bytes -> handle path as
 // a loaded one, so a model predicts the same bits before and after a save.
-// No XGBoost header is included here: only xgboost_learner.cpp sees the C API.
+// No XGBoost header is included here: only xgboost_learner.cpp (prediction) and
+// src/offline/xgboost_train.cpp (training, outside the core) see the C API.
 #pragma once
 
 #include <cstddef>
@@ -47,6 +48,12 @@ inline constexpr int kMaxRounds = 10000;
 inline constexpr int kMaxDepth = 30;
 // Throws an Error naming `where` and the parameter when one is out of range.
 void validateParams(const XGBoostParams& p, const std::string& where);
+// Throws an Error naming `where` and the call `what` when an XGBoost call returned `rc` != 0.
+void check(int rc, const std::string& where, const char* what);
+// Tells XGBoost not to log warnings on its own (to stderr); once per process.
+void quietXGBoost();
+// `v` in full precision, as XGBoost's parameters and our messages take it.
+std::string number(double v);
 
 }  // namespace xgboost_learner
 

@@ -10,6 +10,33 @@
 
 namespace findmug {
 
+std::vector<std::uint8_t> segmentMajorityLabels(const Oversegmentation& segmentation,
+                                                const std::vector<std::uint8_t>& gt_labels) {
+  if (gt_labels.size() != segmentation.pixel_segment.size()) {
+    throw Error("segmentMajorityLabels: label image has " + std::to_string(gt_labels.size()) +
+                " pixels, segmentation has " + std::to_string(segmentation.pixel_segment.size()));
+  }
+  std::vector<std::uint8_t> out(segmentation.segments.size(), kVoidLabel);
+  for (std::size_t s = 0; s < segmentation.segments.size(); ++s) {
+    std::array<int, kNumLabels> counts{};
+    int void_count = 0;
+    for (int pixel : segmentation.segments[s]) {
+      const std::uint8_t y = gt_labels[pixel];
+      if (y < kNumLabels) {
+        ++counts[y];
+      } else {
+        ++void_count;
+      }
+    }
+    const auto best = std::max_element(counts.begin(), counts.end());
+    // The plurality label; a patch that is mostly void has no trustworthy label.
+    if (*best > 0 && void_count * 2 < static_cast<int>(segmentation.segments[s].size())) {
+      out[s] = static_cast<std::uint8_t>(best - counts.begin());
+    }
+  }
+  return out;
+}
+
 LabeledFrames framesOf(const DatasetFolder& dataset) {
   return {dataset.dir(), dataset.size(), [&dataset](std::size_t i) { return dataset.load(i); }};
 }

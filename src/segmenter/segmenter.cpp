@@ -1,7 +1,6 @@
 #include "findmug/segmenter/segmenter.hpp"
 
 #include <algorithm>
-#include <array>
 #include <chrono>
 #include <ctime>
 
@@ -78,8 +77,23 @@ Segmenter::Segmenter(SegmenterConfig config, std::shared_ptr<const RandomForest>
       forest_(std::move(forest)),
       oversegmenter_(makeOversegmenter(config_.oversegmentation)) {
   if (forest_) checkModelMatchesConfig(*forest_, config_);
-  if (forest_ && config_.use_mrf && config_.mrf.pairwise == MrfPairwise::Layout)
+  mrf_variant_ = mrfVariantFor(config_);
+  if (forest_ && mrf_variant_ == MrfVariant::LayoutPrior)
     layout_prior_ = std::make_shared<const LayoutPrior>(loadLayoutPrior(config_.mrf.layout_prior_path));
+}
+
+Segmenter::MrfVariant Segmenter::mrfVariantFor(const SegmenterConfig& config) {
+  if (!config.use_mrf) return MrfVariant::None;
+  switch (config.mrf.pairwise) {
+    case MrfPairwise::Layout:
+      return MrfVariant::LayoutPrior;
+    case MrfPairwise::Context:
+      // checkModelMatchesConfig has refused a model without the learned term.
+      return MrfVariant::LearnedPairwise;
+    case MrfPairwise::Potts:
+      break;
+  }
+  return MrfVariant::Potts;
 }
 
 std::vector<std::string> firstRoundFeatureNames(const SegmenterConfig& config) {
@@ -325,6 +339,16 @@ void Segmenter::recycle(LabelledFrame&& done) const {
 }
 
 PreparedFrame Segmenter::prepare(RgbdFrame frame, const std::vector<std::uint8_t>* gt_labels) const {
+  return prepareWith(std::move(frame), nullptr, gt_labels);
+}
+
+PreparedFrame Segmenter::prepare(RgbdFrame frame, GroundTracker& ground,
+                                 const std::vector<std::uint8_t>* gt_labels) const {
+  return prepareWith(std::move(frame), &ground, gt_labels);
+}
+
+PreparedFrame Segmenter::prepareWith(RgbdFrame frame, GroundTracker* stream,
+                                     const std::vector<std::uint8_t>* gt_labels) const {
   PreparedFrame out;
   {
     std::lock_guard lock(recycled_->mutex);
@@ -347,7 +371,7 @@ PreparedFrame Segmenter::prepare(RgbdFrame frame, const std::vector<std::uint8_t
   switch (config_.ground.source) {
     case GroundSource::Auto:
       out.ground = frame.extrinsics ? std::optional(groundFromExtrinsics(*frame.extrinsics))
-                                    : groundOfStream(out.cloud_camera, out.normals_camera);
+                                    : estimatedGround(out.cloud_camera, out.normals_camera, stream);
       break;
     case GroundSource::Extrinsics:
       if (!frame.extrinsics) {
@@ -368,7 +392,7 @@ PreparedFrame Segmenter::prepare(RgbdFrame frame, const std::vector<std::uint8_t
       out.ground = fitGroundToLabels(out.cloud_camera, *gt_labels, config_.ground);
       break;
     case GroundSource::Estimated:
-      out.ground = groundOfStream(out.cloud_camera, out.normals_camera);
+      out.ground = estimatedGround(out.cloud_camera, out.normals_camera, stream);
       break;
     case GroundSource::Gravity:
       // A robot knows its mount; a dataset frame brings its gravity; a frame
@@ -412,22 +436,11 @@ PreparedFrame Segmenter::prepare(RgbdFrame frame, const std::vector<std::uint8_t
   return out;
 }
 
-std::optional<GroundPlane> Segmenter::groundOfStream(const OrganizedCloud& cloud,
-                                                     const NormalImage& normals) const {
-  if (config_.ground.reestimate_every_frames <= 1) {
-    return estimateGround(cloud, normals, config_.ground);
-  }
-  std::lock_guard lock(ground_memory_->mutex);
-  GroundMemory& memory = *ground_memory_;
-  if (memory.plane && memory.frames_since_estimate + 1 < config_.ground.reestimate_every_frames) {
-    if (auto kept = confirmGround(cloud, normals, *memory.plane, config_.ground)) {
-      ++memory.frames_since_estimate;
-      return kept;
-    }
-  }
-  memory.plane = estimateGround(cloud, normals, config_.ground);
-  memory.frames_since_estimate = 0;
-  return memory.plane;
+std::optional<GroundPlane> Segmenter::estimatedGround(const OrganizedCloud& cloud,
+                                                      const NormalImage& normals,
+                                                      GroundTracker* stream) const {
+  if (stream) return stream->groundOf(cloud, normals, config_.ground);
+  return estimateGround(cloud, normals, config_.ground);
 }
 
 SegmentedFrame Segmenter::oversegment(PreparedFrame prepared) const {
@@ -477,21 +490,56 @@ void Segmenter::contextRowsInto(const SegmentedFrame& segmented, SegmentFeatures
   }
 }
 
+// The stopwatch of one classify call and the frame's timings its laps go into.
+class Segmenter::Laps {
+ public:
+  explicit Laps(LabelledFrame& frame) : frame_(frame) {}
+  void lap(double StageTimings::*field) { watch_.lap(frame_.timings, frame_.cpu_timings, field); }
+  void addLap(double StageTimings::*field) {
+    watch_.addLap(frame_.timings, frame_.cpu_timings, field);
+  }
+
+ private:
+  LabelledFrame& frame_;
+  Stopwatch watch_;
+};
+
+// classify's per-thread working memory (scratch.hpp), borrowed for one call.
+struct Segmenter::ClassifyScratch {
+  RegionFeatures regions;  // kept from the feature rows for the table region vote
+  ObjectFeatures objects;
+  std::vector<float> weights;     // each patch's pixel count
+  std::vector<float> confidence;  // of the labels the MRF step settles on
+  // The learner's distributions with the decision's bias towards tables.
+  std::vector<ClassProbabilities> weighted;
+  ObjectMeanScratch object_means;  // mrf.object_consistency
+  std::vector<float> heights;      // mrf.pairwise = layout
+  MrfPairFactors factors;
+  std::vector<float> edge_scales;    // mrf.pairwise = context
+  std::vector<int> soft_top_pixels;  // the table-top test's rejected clusters
+};
+
+void Segmenter::featureRowsInto(const SegmentedFrame& segmented, SegmentFeatures& features,
+                                RegionFeatures& regions, ObjectFeatures& objects,
+                                Laps* laps) const {
+  computeFeaturesInto(segmented.prepared.cloud_ground, segmented.prepared.normals_ground,
+                      segmented.segmentation, features);
+  if (laps) laps->lap(&StageTimings::features_ms);
+  contextRowsInto(segmented, features, regions, objects);
+  // Region, scene and object features share this step's time.
+  if (laps) laps->lap(&StageTimings::regions_ms);
+}
+
 SegmentFeatures Segmenter::features(const SegmentedFrame& segmented) const {
   if (!segmented.prepared.ground) return {};
-  SegmentFeatures out = computeFeatures(segmented.prepared.cloud_ground,
-                                        segmented.prepared.normals_ground, segmented.segmentation);
+  SegmentFeatures out;
   RegionFeatures regions;
   ObjectFeatures objects;
-  contextRowsInto(segmented, out, regions, objects);
+  featureRowsInto(segmented, out, regions, objects, nullptr);
   return out;
 }
 
-LabelledFrame Segmenter::classify(SegmentedFrame segmented) const {
-  if (!forest_ || forest_->empty()) {
-    throw Error("Segmenter::classify: no trained forest loaded");
-  }
-  // The outputs go into the vectors of a frame handed back by recycle(), if any.
+LabelledFrame Segmenter::takeRecycledOutput(const SegmentedFrame& segmented) const {
   LabelledFrame out;
   {
     std::lock_guard lock(recycled_->mutex);
@@ -502,75 +550,44 @@ LabelledFrame Segmenter::classify(SegmentedFrame segmented) const {
   }
   out.timings = segmented.timings;
   out.cpu_timings = segmented.cpu_timings;
-  const int width = segmented.prepared.cloud_camera.width;
-  const int height = segmented.prepared.cloud_camera.height;
-  if (!segmented.prepared.ground) {
-    // Emptied, not replaced: a recycled frame's vectors keep their capacity
-    // for the frames after this one (a stream with frames lacking a ground
-    // plane otherwise reallocated them all on the next frame with one).
-    // (A new member of either struct must be emptied here too.)
-    static_assert(sizeof(SegmentFeatures) == 7 * sizeof(std::vector<float>));
-    static_assert(sizeof(MrfResult) ==
-                  2 * sizeof(std::vector<float>) + sizeof(std::int64_t));
-    out.features.features.clear();
-    out.features.centroids.clear();
-    out.features.moments.clear();
-    out.features.regions.clear();
-    out.features.scene.clear();
-    out.features.objects.clear();
-    out.features.object_group.clear();
-    out.forest_probabilities.clear();
-    out.first_round_probabilities.clear();
-    out.forest_labels.clear();
-    out.mrf.labels.clear();
-    out.mrf.confidence.clear();
-    out.mrf.iterations = 0;
-    out.mrf.converged = false;
-    voidLabelsInto(width, height, out.labels);
-    out.tables.clear();  // a recycled frame's
-    out.table_diagnostics.clear();
-    findTableObjectsInto({}, out.labels, out.tables, config_.table_objects, out.table_objects);
-    out.segmented = std::move(segmented);
-    return out;
-  }
+  return out;
+}
 
-  // Per-thread working memory (scratch.hpp).
-  struct Buffers {
-    RegionFeatures regions;
-    ObjectFeatures objects;
-    std::vector<float> weights, confidence;
-    std::vector<ClassProbabilities> weighted;
-    ObjectMeanScratch object_means;  // mrf.object_consistency
-    std::vector<float> heights;  // mrf.pairwise = layout
-    MrfPairFactors factors;
-    std::vector<float> edge_scales;  // mrf.pairwise = context
-    std::vector<int> soft_top_pixels;  // the table-top test's rejected clusters
-  };
-  thread_local Buffers buffers;
-  detail::Borrowed regions_buffer(buffers.regions);
-  detail::Borrowed objects_buffer(buffers.objects);
-  detail::Borrowed weights_buffer(buffers.weights), confidence_buffer(buffers.confidence);
-  detail::Borrowed weighted_buffer(buffers.weighted);
-  detail::Borrowed object_means_buffer(buffers.object_means);
-  detail::Borrowed heights_buffer(buffers.heights);
-  detail::Borrowed factors_buffer(buffers.factors);
-  detail::Borrowed edge_scales_buffer(buffers.edge_scales);
-  detail::Borrowed soft_top_buffer(buffers.soft_top_pixels);
+void Segmenter::unlabelledFrameInto(const SegmentedFrame& segmented, LabelledFrame& out) const {
+  // Emptied, not replaced: a recycled frame's vectors keep their capacity
+  // for the frames after this one (a stream with frames lacking a ground
+  // plane otherwise reallocated them all on the next frame with one).
+  // (A new member of either struct must be emptied here too.)
+  static_assert(sizeof(SegmentFeatures) == 7 * sizeof(std::vector<float>));
+  static_assert(sizeof(MrfResult) == 2 * sizeof(std::vector<float>) + sizeof(std::int64_t));
+  out.features.features.clear();
+  out.features.centroids.clear();
+  out.features.moments.clear();
+  out.features.regions.clear();
+  out.features.scene.clear();
+  out.features.objects.clear();
+  out.features.object_group.clear();
+  out.forest_probabilities.clear();
+  out.first_round_probabilities.clear();
+  out.forest_labels.clear();
+  out.mrf.labels.clear();
+  out.mrf.confidence.clear();
+  out.mrf.iterations = 0;
+  out.mrf.converged = false;
+  voidLabelsInto(segmented.prepared.cloud_camera.width, segmented.prepared.cloud_camera.height,
+                 out.labels);
+  out.tables.clear();  // a recycled frame's
+  out.table_diagnostics.clear();
+  findTableObjectsInto({}, out.labels, out.tables, config_.table_objects, out.table_objects);
+}
 
-  Stopwatch watch;
-  computeFeaturesInto(segmented.prepared.cloud_ground, segmented.prepared.normals_ground,
-                      segmented.segmentation, out.features);
-  watch.lap(out.timings, out.cpu_timings, &StageTimings::features_ms);
-  RegionFeatures& regions = *regions_buffer;  // kept for the table region vote after the MRF
-  contextRowsInto(segmented, out.features, regions, *objects_buffer);
-  // Region, scene and object features share this step's time.
-  watch.lap(out.timings, out.cpu_timings, &StageTimings::regions_ms);
-
+void Segmenter::learnerInto(const Oversegmentation& segmentation, ClassifyScratch& scratch,
+                            LabelledFrame& out, Laps& laps) const {
   const std::size_t n = out.features.features.size();
-  std::vector<float>& weights = *weights_buffer;
+  std::vector<float>& weights = scratch.weights;
   weights.resize(n);
   for (std::size_t i = 0; i < n; ++i)
-    weights[i] = static_cast<float>(segmented.segmentation.segments[i].size());
+    weights[i] = static_cast<float>(segmentation.segments[i].size());
   double context_ms = 0;
   predictSegmentsInto(*forest_, out.features, weights, config_.context, out.forest_probabilities,
                       out.first_round_probabilities, &context_ms);
@@ -578,88 +595,118 @@ LabelledFrame Segmenter::classify(SegmentedFrame segmented) const {
   for (std::size_t i = 0; i < n; ++i) out.forest_labels[i] = argmax(out.forest_probabilities[i]);
   // The context round's time is measured inside and reported on its own.
   out.timings.context_ms = context_ms;
-  watch.lap(out.timings, out.cpu_timings, &StageTimings::forest_ms);
+  laps.lap(&StageTimings::forest_ms);
   out.timings.forest_ms -= context_ms;  // CPU time: the context round stays in forest_ms
+}
 
-  std::vector<float>& confidence = *confidence_buffer;
-  confidence.resize(n);
-  const std::vector<std::uint8_t>* final_labels = &out.forest_labels;
-  // The distributions with the decision's bias towards tables.
-  std::vector<ClassProbabilities>& weighted = *weighted_buffer;
+const std::vector<std::uint8_t>& Segmenter::mrfLabelsInto(const Oversegmentation& segmentation,
+                                                         ClassifyScratch& scratch,
+                                                         LabelledFrame& out) const {
+  const std::size_t n = out.features.features.size();
+  std::vector<ClassProbabilities>& weighted = scratch.weighted;
   weighted = out.forest_probabilities;
-  if (config_.use_mrf)
-    mixObjectMeansInPlace(weighted, out.features.object_group, weights,
-                          config_.mrf.object_consistency, *object_means_buffer);
+  if (mrf_variant_ != MrfVariant::None)
+    mixObjectMeansInPlace(weighted, out.features.object_group, scratch.weights,
+                          config_.mrf.object_consistency, scratch.object_means);
   weightTableProbabilityInPlace(weighted, config_.tables.table_weight);
-  if (config_.use_mrf && layout_prior_) {
-    std::vector<float>& heights = *heights_buffer;
-    const float threshold = layoutHeightsInto(
-        config_.mrf,
-        {&segmented.segmentation.pixel_segment, segmented.segmentation.width,
-         &out.features.features},
-        heights);
-    layoutPairFactorsInto(*layout_prior_, config_.mrf.layout_weight, threshold, heights,
-                          segmented.segmentation.edges, *factors_buffer);
-    solveMrfWithFactorsInto(weighted, out.features.centroids, segmented.segmentation.edges,
-                            *factors_buffer, config_.mrf, out.mrf);
-    final_labels = &out.mrf.labels;
-    confidence = out.mrf.confidence;
-  } else if (config_.use_mrf && config_.mrf.pairwise == MrfPairwise::Context) {
-    std::vector<float>& scales = *edge_scales_buffer;
-    pairwiseContextScalesInto(*forest_->pairwiseContext(), out.features.features,
-                              segmented.segmentation.edges, scales);
-    solveMrfScaledInto(weighted, out.features.centroids, segmented.segmentation.edges, scales,
-                       config_.mrf, out.mrf);
-    final_labels = &out.mrf.labels;
-    confidence = out.mrf.confidence;
-  } else if (config_.use_mrf) {
-    solveMrfInto(weighted, out.features.centroids, segmented.segmentation.edges, config_.mrf,
-                 out.mrf);
-    final_labels = &out.mrf.labels;
-    confidence = out.mrf.confidence;
-  } else {
-    out.mrf = MrfResult{};
-    for (std::size_t i = 0; i < n; ++i) {
-      confidence[i] = out.forest_probabilities[i][out.forest_labels[i]];
+  switch (mrf_variant_) {
+    case MrfVariant::LayoutPrior: {
+      const float threshold = layoutHeightsInto(
+          config_.mrf, {&segmentation.pixel_segment, segmentation.width, &out.features.features},
+          scratch.heights);
+      layoutPairFactorsInto(*layout_prior_, config_.mrf.layout_weight, threshold,
+                            scratch.heights, segmentation.edges, scratch.factors);
+      solveMrfWithFactorsInto(weighted, out.features.centroids, segmentation.edges,
+                              scratch.factors, config_.mrf, out.mrf);
+      break;
     }
+    case MrfVariant::LearnedPairwise:
+      pairwiseContextScalesInto(*forest_->pairwiseContext(), out.features.features,
+                                segmentation.edges, scratch.edge_scales);
+      solveMrfScaledInto(weighted, out.features.centroids, segmentation.edges,
+                         scratch.edge_scales, config_.mrf, out.mrf);
+      break;
+    case MrfVariant::Potts:
+      solveMrfInto(weighted, out.features.centroids, segmentation.edges, config_.mrf, out.mrf);
+      break;
+    case MrfVariant::None:
+      out.mrf = MrfResult{};
+      scratch.confidence.resize(n);
+      for (std::size_t i = 0; i < n; ++i)
+        scratch.confidence[i] = out.forest_probabilities[i][out.forest_labels[i]];
+      return out.forest_labels;
   }
-  // One label per horizontal surface at table height (table_regions.hpp).
-  RegionVoteResult vote;
-  if (config_.tables.region_vote && config_.regions.enabled) {
-    vote = voteTableRegions(*final_labels, confidence, weighted, weights, regions, config_.tables);
-    final_labels = &vote.labels;
-    confidence = std::move(vote.confidence);
-  }
-  watch.lap(out.timings, out.cpu_timings, &StageTimings::mrf_ms);
+  scratch.confidence = out.mrf.confidence;
+  return out.mrf.labels;
+}
 
-  projectLabelsInto(segmented.segmentation, *final_labels, confidence, out.labels);
-  watch.lap(out.timings, out.cpu_timings, &StageTimings::labels_ms);
+const std::vector<std::uint8_t>& Segmenter::tableRegionVote(
+    const std::vector<std::uint8_t>& labels, ClassifyScratch& scratch,
+    RegionVoteResult& vote) const {
+  if (!config_.tables.region_vote || !config_.regions.enabled) return labels;
+  vote = voteTableRegions(labels, scratch.confidence, scratch.weighted, scratch.weights,
+                          scratch.regions, config_.tables);
+  scratch.confidence = std::move(vote.confidence);
+  return vote.labels;
+}
 
+void Segmenter::tablesInto(const PreparedFrame& prepared, ClassifyScratch& scratch,
+                           LabelledFrame& out) const {
   // A recycled frame's tables lend their buffers to this frame's.
   TableDetection detection;
   detection.tables = std::move(out.tables);
   detection.diagnostics = std::move(out.table_diagnostics);
-  detection.soft_top_pixels = std::move(*soft_top_buffer);
-  detectTablesInto(segmented.prepared.cloud_ground, out.labels, config_.tables,
-                   &segmented.prepared.normals_ground, detection);
+  detection.soft_top_pixels = std::move(scratch.soft_top_pixels);
+  detectTablesInto(prepared.cloud_ground, out.labels, config_.tables, &prepared.normals_ground,
+                   detection);
   // A bed or sofa is not a table (the table-top test): its pixels Unknown.
   if (config_.tables.relabel_soft_tops) relabelSoftTops(detection, out.labels);
-  *soft_top_buffer = std::move(detection.soft_top_pixels);
+  scratch.soft_top_pixels = std::move(detection.soft_top_pixels);
   out.tables = std::move(detection.tables);
   out.table_diagnostics = std::move(detection.diagnostics);
-  watch.lap(out.timings, out.cpu_timings, &StageTimings::tables_ms);
+}
 
-  // The objects standing on them (their pixel lists reuse a recycled frame's).
-  findTableObjectsInto(segmented.prepared.cloud_ground, out.labels, out.tables,
-                       config_.table_objects, out.table_objects);
+void Segmenter::objectsOnTopsInto(const PreparedFrame& prepared, LabelledFrame& out) const {
+  // Their pixel lists reuse a recycled frame's.
+  findTableObjectsInto(prepared.cloud_ground, out.labels, out.tables, config_.table_objects,
+                       out.table_objects);
   // Before the hole filling, which then spreads Object into the gaps beside them.
   if (config_.table_objects.relabel) relabelTableObjects(out.table_objects.objects, out.labels);
-  watch.lap(out.timings, out.cpu_timings, &StageTimings::objects_ms);
+}
 
+LabelledFrame Segmenter::classify(SegmentedFrame segmented) const {
+  if (!forest_ || forest_->empty()) {
+    throw Error("Segmenter::classify: no trained forest loaded");
+  }
+  // The outputs go into the vectors of a frame handed back by recycle(), if any.
+  LabelledFrame out = takeRecycledOutput(segmented);
+  if (!segmented.prepared.ground) {
+    unlabelledFrameInto(segmented, out);
+    out.segmented = std::move(segmented);
+    return out;
+  }
+  thread_local ClassifyScratch scratch_of_thread;
+  detail::Borrowed scratch(scratch_of_thread);
+  const Oversegmentation& segmentation = segmented.segmentation;
+  const PreparedFrame& prepared = segmented.prepared;
+
+  Laps laps(out);
+  featureRowsInto(segmented, out.features, scratch->regions, scratch->objects, &laps);
+  learnerInto(segmentation, *scratch, out, laps);
+  RegionVoteResult vote;  // One label per horizontal surface at table height.
+  const std::vector<std::uint8_t>& labels =
+      tableRegionVote(mrfLabelsInto(segmentation, *scratch, out), *scratch, vote);
+  laps.lap(&StageTimings::mrf_ms);
+  projectLabelsInto(segmentation, labels, scratch->confidence, out.labels);
+  laps.lap(&StageTimings::labels_ms);
+  tablesInto(prepared, *scratch, out);
+  laps.lap(&StageTimings::tables_ms);
+  objectsOnTopsInto(prepared, out);
+  laps.lap(&StageTimings::objects_ms);
   // After the tables: the filled pixels have no point, and the table step
   // counts the table pixels without one as a diagnostic.
-  fillLabelHoles(segmented.prepared.frame.depth_mm, config_.label_holes, out.labels);
-  watch.addLap(out.timings, out.cpu_timings, &StageTimings::labels_ms);
+  fillLabelHoles(prepared.frame.depth_mm, config_.label_holes, out.labels);
+  laps.addLap(&StageTimings::labels_ms);
   out.segmented = std::move(segmented);
   return out;
 }
@@ -668,31 +715,9 @@ LabelledFrame Segmenter::process(RgbdFrame frame, const std::vector<std::uint8_t
   return classify(oversegment(prepare(std::move(frame), gt_labels)));
 }
 
-std::vector<std::uint8_t> segmentMajorityLabels(const Oversegmentation& segmentation,
-                                                const std::vector<std::uint8_t>& gt_labels) {
-  if (gt_labels.size() != segmentation.pixel_segment.size()) {
-    throw Error("segmentMajorityLabels: label image has " + std::to_string(gt_labels.size()) +
-                " pixels, segmentation has " + std::to_string(segmentation.pixel_segment.size()));
-  }
-  std::vector<std::uint8_t> out(segmentation.segments.size(), kVoidLabel);
-  for (std::size_t s = 0; s < segmentation.segments.size(); ++s) {
-    std::array<int, kNumLabels> counts{};
-    int void_count = 0;
-    for (int pixel : segmentation.segments[s]) {
-      const std::uint8_t y = gt_labels[pixel];
-      if (y < kNumLabels) {
-        ++counts[y];
-      } else {
-        ++void_count;
-      }
-    }
-    const auto best = std::max_element(counts.begin(), counts.end());
-    // The plurality label; a patch that is mostly void has no trustworthy label.
-    if (*best > 0 && void_count * 2 < static_cast<int>(segmentation.segments[s].size())) {
-      out[s] = static_cast<std::uint8_t>(best - counts.begin());
-    }
-  }
-  return out;
+LabelledFrame Segmenter::process(RgbdFrame frame, GroundTracker& ground,
+                                 const std::vector<std::uint8_t>* gt_labels) const {
+  return classify(oversegment(prepare(std::move(frame), ground, gt_labels)));
 }
 
 }  // namespace findmug

@@ -128,9 +128,12 @@ int run(int argc, char** argv) {
   std::size_t truth_pixels = 0, correct_pixels = 0;  // first timed pass, labelled data only
   auto forest = std::make_shared<const RandomForest>(RandomForest::load(model_path));
   const Segmenter segmenter(config.segmenter, forest);
+  // The frames are one stream, as findmugd's prepare stage takes them: the floor it
+  // follows (ground.reestimate_every_frames) carries over from the warm-up to every pass.
+  GroundTracker ground;
 
   for (const auto& f : frames) {  // warm-up: caches, page faults, scratch
-    LabelledFrame out = segmenter.process(f);
+    LabelledFrame out = segmenter.process(f, ground);
     if (recycle) segmenter.recycle(std::move(out));
   }
 
@@ -163,7 +166,7 @@ int run(int argc, char** argv) {
       const std::uint64_t bytes_before = bench::g_bytes.load();
       // process() is exactly these three calls; made one by one to count the
       // allocations of each.
-      PreparedFrame prepared = segmenter.prepare(std::move(frame));
+      PreparedFrame prepared = segmenter.prepare(std::move(frame), ground);
       const std::uint64_t news_prepared = bench::g_news.load();
       SegmentedFrame segmented = segmenter.oversegment(std::move(prepared));
       const std::uint64_t news_segmented = bench::g_news.load();

@@ -253,6 +253,7 @@ int main(int argc, char** argv) {
     const TableMapConfig table_map_config = daemon_settings.table_map;
     auto forest = std::make_shared<const RandomForest>(RandomForest::load(model_path));
     const Segmenter segmenter(config.segmenter, forest);
+    GroundTracker ground;  // the walk is one stream from one camera
     const double safety = config.segmenter.tables.safety_distance_m;
     std::string growth_rows, frame_rows, move_rows;
     std::printf("model %s, %d frames at %.1f fps per walk, pose noise %.3f m / %.2f deg%s\n\n",
@@ -342,7 +343,7 @@ int main(int argc, char** argv) {
                         rendered.labeled.frame.height, map_config.max_range_m)) {
           ++fused_events.old_in_view;
         }
-        LabelledFrame labelled = segmenter.process(std::move(rendered.labeled.frame));
+        LabelledFrame labelled = segmenter.process(std::move(rendered.labeled.frame), ground);
         const PreparedFrame& prepared = labelled.segmented.prepared;
         if (!prepared.ground) continue;
         Pose2D pose{path[i].xy.x(), path[i].xy.y(), path[i].yaw};

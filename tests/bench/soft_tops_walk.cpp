@@ -76,6 +76,7 @@ struct Counts {
 struct Variant {
   std::unique_ptr<Segmenter> segmenter;
   TableConfig tables;
+  GroundTracker ground;  // each variant sees the walk as its own stream
 };
 
 }  // namespace
@@ -114,8 +115,8 @@ int main(int argc, char** argv) {
     auto forest = std::make_shared<const RandomForest>(RandomForest::load(model_path));
     SegmenterConfig off = config.segmenter;
     off.tables.min_flat_share = 0.0f;
-    Variant variants[2] = {{std::make_unique<Segmenter>(config.segmenter, forest), {}},
-                           {std::make_unique<Segmenter>(off, forest), {}}};
+    Variant variants[2] = {{std::make_unique<Segmenter>(config.segmenter, forest), {}, {}},
+                           {std::make_unique<Segmenter>(off, forest), {}, {}}};
     variants[0].tables = config.segmenter.tables;
     variants[1].tables = off.tables;
     std::printf(
@@ -157,7 +158,7 @@ int main(int argc, char** argv) {
               rendered.labeled.frame.utime = static_cast<std::uint64_t>(time_s * 1e6) + 1;
               rendered.labeled.frame.seq = frame_index;
               LabelledFrame labelled =
-                  variants[v].segmenter->process(std::move(rendered.labeled.frame));
+                  variants[v].segmenter->process(std::move(rendered.labeled.frame), variants[v].ground);
               if (!labelled.segmented.prepared.ground) continue;
               const Pose2D base{xy.x(), xy.y(), pose.yaw};
               ++counts[v].frames;

@@ -210,7 +210,7 @@ struct RecordingSink : ResultSink {
 TEST(FrameSteps, PrepareSegmentPublishDoWhatSegmenterProcessDoesInOrder) {
   FINDMUG_REQUIRE_DATA(nyu, "nyuv2_labeled");
   const Segmenter segmenter(test::fastSegmenterConfig(), sharedModel()->forest);
-  const PrepareStep prepare(segmenter);
+  PrepareStep prepare(segmenter);
   std::vector<std::int64_t> held;
   const SegmentStep segment(segmenter, [&](const RgbdFrame& f) { held.push_back(f.seq); });
   PublishStep publish(/*pose_max_age_us=*/100000);
@@ -244,7 +244,7 @@ TEST(FrameSteps, PrepareSegmentPublishDoWhatSegmenterProcessDoesInOrder) {
 
 TEST(FrameSteps, ABrokenFrameIsRefusedByPrepareNamingIt) {
   const Segmenter segmenter(SegmenterConfig{}, nullptr);
-  const PrepareStep prepare(segmenter);
+  PrepareStep prepare(segmenter);
   RgbdFrame frame;
   frame.width = 640;
   frame.height = 480;

@@ -193,6 +193,7 @@ class ReloadRig {
   }
 
   int submitted() const { return submitted_; }
+  std::int64_t submitted_extra = 1000;  // seqs of frames a test submits itself
 
   Collected got;
   std::shared_ptr<io::MemoryBus> commands = std::make_shared<io::MemoryBus>(100);
@@ -293,6 +294,38 @@ TEST(ModelReload, SwappedInWhileFramesFlowAt30FpsWithoutDroppingOne) {
   EXPECT_EQ(last.frames_dropped, 0);
   // Statuses before the swap named the old model.
   EXPECT_EQ(rig.got.statuses.front().model_id, id_a);
+}
+
+// The floor a stream follows belongs to the stream, not to the model: after a reload the
+// frames keep the plane found before it instead of estimating it again.
+TEST(ModelReload, KeepsTheFloorTheStreamFollows) {
+  FINDMUG_REQUIRE_DATA(nyu, "nyuv2_labeled");
+  const Models* m = models();
+  ASSERT_NE(m, nullptr);
+  installAtomically(m->a, m->dir.str("live.fmf"));
+  ReloadRig rig(m->dir.str("live.fmf"), m->forest_a, {{"ground.reestimate_every_frames", "1000"}});
+  // One view again and again: confirmGround keeps its floor every time.
+  const RgbdFrame& view = m->frames[0].frame;
+  auto submit = [&](int count) {
+    for (int i = 0; i < count; ++i) {
+      RgbdFrame frame = view;
+      frame.seq = rig.submitted_extra++;
+      ASSERT_TRUE(rig.pipeline->waitForRoom(10s));  // none dropped at the door
+      ASSERT_TRUE(rig.pipeline->submit(std::move(frame)));
+    }
+  };
+  submit(6);
+  installAtomically(m->b, m->dir.str("live.fmf"));
+  sendCommand(*rig.commands, "reload_model", 5);
+  const ReloadStatus reload = rig.awaitReloads(1);
+  ASSERT_EQ(reload.reloads, 1u) << reload.last_result;
+  submit(6);
+  rig.finish();
+  ASSERT_EQ(rig.got.labels.size(), 12u);
+  const GroundTracker& ground = rig.pipeline->groundTracker();
+  ASSERT_TRUE(ground.plane().has_value());
+  // Estimated on the first frame, kept by the eleven after it, the reload's included.
+  EXPECT_EQ(ground.framesSinceEstimate(), 11);
 }
 
 TEST(ModelReload, MismatchedCorruptAndHostileAreRefusedAndFramesGoOnWithTheOldModel) {

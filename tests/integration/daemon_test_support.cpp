@@ -9,6 +9,7 @@
 #include <lcm/lcm-cpp.hpp>
 #include <stdexcept>
 
+#include "findmug/offline/training.hpp"
 #include "findmug/segmenter/segmenter.hpp"
 
 namespace findmug::daemon::test {

@@ -11,6 +11,7 @@
 
 #include "findmug/frame/frame.hpp"
 #include "findmug/learner/forest.hpp"
+#include "findmug/offline/training.hpp"
 #include "findmug/segmenter/segmenter.hpp"
 
 namespace findmug::test {

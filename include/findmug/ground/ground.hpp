@@ -93,8 +93,8 @@ struct GroundConfig {
   // it. The median over the NYU labelled frames whose floor is labelled
   // (17 frames, 0.82..1.41 m, median 1.28 m; perf-log §1d).
   float prior_camera_height_m = 1.28f;
-  // A stream of frames from one mount (Segmenter::prepare with the floor
-  // estimated from the frame): the floor found in one frame is kept for the
+  // A stream of frames from one mount (a GroundTracker, ground_tracker.hpp, with
+  // the floor estimated from the frame): the floor found in one frame is kept for the
   // next ones while confirmGround finds that it still holds at least
   // `reuse_min_support_fraction` of the support it had, and re-estimated at
   // the latest every `reestimate_every_frames` frames. 1 = estimate in every

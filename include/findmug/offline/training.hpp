@@ -72,6 +72,11 @@ struct ExtractionReport {
   std::vector<std::pair<std::string, std::string>> ground_methods;
 };
 
+// Per-segment training labels: the majority ground-truth label of each
+// segment's pixels; segments whose pixels are mostly void get kVoidLabel.
+std::vector<std::uint8_t> segmentMajorityLabels(const Oversegmentation& segmentation,
+                                                const std::vector<std::uint8_t>& gt_labels);
+
 // Runs the Segmenter's geometric steps on every frame. Frames for which no
 // ground plane is found are dropped (the paper drops frames with too few floor
 // points) and listed in the report. `progress(done, total)` after each frame.

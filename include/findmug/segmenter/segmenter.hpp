@@ -29,6 +29,7 @@
 #include "findmug/features/region_features.hpp"
 #include "findmug/frame/frame.hpp"
 #include "findmug/ground/ground.hpp"
+#include "findmug/ground/ground_tracker.hpp"
 #include "findmug/labels/label_image.hpp"
 #include "findmug/learner/forest.hpp"
 #include "findmug/mrf/layout_prior.hpp"
@@ -36,6 +37,7 @@
 #include "findmug/objects/table_objects.hpp"
 #include "findmug/settings/config.hpp"
 #include "findmug/oversegmentation/oversegmentation.hpp"
+#include "findmug/tables/table_regions.hpp"
 #include "findmug/tables/tables.hpp"
 
 namespace findmug {
@@ -106,17 +108,26 @@ class Segmenter {
   Segmenter(SegmenterConfig config, std::shared_ptr<const RandomForest> forest);
 
   // `gt_labels` is only used when config.ground.source == FloorLabels.
-  // With ground.reestimate_every_frames > 1 the frames are taken as a stream
-  // from one mount: an estimated floor may come from an earlier frame.
+  // Each frame on its own: an estimated floor is this frame's estimate.
   PreparedFrame prepare(RgbdFrame frame, const std::vector<std::uint8_t>* gt_labels = nullptr) const;
+  // A frame of the stream `ground` follows: with ground.reestimate_every_frames > 1 an
+  // estimated floor may be the one an earlier frame of the stream found (GroundTracker).
+  // The stream's owner keeps `ground` across frames and models.
+  PreparedFrame prepare(RgbdFrame frame, GroundTracker& ground,
+                        const std::vector<std::uint8_t>* gt_labels = nullptr) const;
   SegmentedFrame oversegment(PreparedFrame prepared) const;
   // Features only (used by the trainer): the same feature rows classify computes, by the
-  // same step (contextRowsInto), so that training and running cannot drift apart.
+  // same step (featureRowsInto), so that training and running cannot drift apart.
   SegmentFeatures features(const SegmentedFrame& segmented) const;
+  // The steps after the oversegmentation, in order (each a private step below): the feature
+  // rows, the learner, the MRF and the table region vote, the label image, the tables, the
+  // objects on their tops, the label image's depth holes filled.
   LabelledFrame classify(SegmentedFrame segmented) const;
   // All steps. Throws findmug::Error for invalid frames; a frame without a
   // ground plane comes back with an all-void label image.
   LabelledFrame process(RgbdFrame frame, const std::vector<std::uint8_t>* gt_labels = nullptr) const;
+  LabelledFrame process(RgbdFrame frame, GroundTracker& ground,
+                        const std::vector<std::uint8_t>* gt_labels = nullptr) const;
 
   // Hands the buffers of a frame the caller is done with back to the
   // Segmenter: the next prepare(), oversegment() and classify() write into
@@ -133,30 +144,60 @@ class Segmenter {
   const RandomForest* forest() const { return forest_.get(); }
 
  private:
+  // The pairwise term classify's MRF step uses, chosen once from the config (and so from
+  // the model's settings): none (mrf.enabled false), Potts, the model's learned pairwise
+  // term (mrf.pairwise = context) or the label-layout prior (mrf.pairwise = layout).
+  enum class MrfVariant { None, Potts, LearnedPairwise, LayoutPrior };
+  static MrfVariant mrfVariantFor(const SegmenterConfig& config);
+  // classify's stopwatch and per-thread working memory (segmenter.cpp).
+  class Laps;
+  struct ClassifyScratch;
+
+  // The feature-row step, shared by classify and features(): the per-patch features, then
+  // contextRowsInto. `laps` (null when training) takes features_ms and regions_ms.
+  void featureRowsInto(const SegmentedFrame& segmented, SegmentFeatures& features,
+                       RegionFeatures& regions, ObjectFeatures& objects, Laps* laps) const;
+  // The output frame: one handed back by recycle() if any, with the timings so far.
+  LabelledFrame takeRecycledOutput(const SegmentedFrame& segmented) const;
+  // A frame without a ground plane: every pixel void, nothing found.
+  void unlabelledFrameInto(const SegmentedFrame& segmented, LabelledFrame& out) const;
+  // The learner's distributions and argmax labels per patch (forest_ms, context_ms).
+  void learnerInto(const Oversegmentation& segmentation, ClassifyScratch& scratch,
+                   LabelledFrame& out, Laps& laps) const;
+  // The MRF variant's labels per patch (the learner's with none), their confidence into
+  // scratch.confidence.
+  const std::vector<std::uint8_t>& mrfLabelsInto(const Oversegmentation& segmentation,
+                                                 ClassifyScratch& scratch,
+                                                 LabelledFrame& out) const;
+  // With tables.region_vote and features.regions, one label per horizontal surface at table
+  // height (table_regions.hpp) into `vote`; else `labels` as they are.
+  const std::vector<std::uint8_t>& tableRegionVote(const std::vector<std::uint8_t>& labels,
+                                                   ClassifyScratch& scratch,
+                                                   RegionVoteResult& vote) const;
+  // The tables in the label image, and their soft tops (beds, sofas) relabelled.
+  void tablesInto(const PreparedFrame& prepared, ClassifyScratch& scratch,
+                  LabelledFrame& out) const;
+  // The objects standing on the tables' tops, and their pixels relabelled Object.
+  void objectsOnTopsInto(const PreparedFrame& prepared, LabelledFrame& out) const;
   // The feature-row step after the per-patch features: the coplanar regions (kept in
   // `regions` for the table region vote), and the region, scene and object columns and
   // object groups the config turns on, into `features`; `objects` is working memory.
   void contextRowsInto(const SegmentedFrame& segmented, SegmentFeatures& features,
                        RegionFeatures& regions, ObjectFeatures& objects) const;
-  // estimateGround, or with ground.reestimate_every_frames > 1 the plane of
-  // an earlier frame while confirmGround accepts it (see GroundConfig).
-  std::optional<GroundPlane> groundOfStream(const OrganizedCloud& cloud,
-                                            const NormalImage& normals) const;
+  // prepare with the stream's tracker, or none (every frame its own estimate).
+  PreparedFrame prepareWith(RgbdFrame frame, GroundTracker* stream,
+                            const std::vector<std::uint8_t>* gt_labels) const;
+  // The floor estimated from the frame alone: by `stream` when there is one.
+  std::optional<GroundPlane> estimatedGround(const OrganizedCloud& cloud,
+                                             const NormalImage& normals,
+                                             GroundTracker* stream) const;
 
   SegmenterConfig config_;
   std::shared_ptr<const RandomForest> forest_;
   std::unique_ptr<Oversegmenter> oversegmenter_;
+  MrfVariant mrf_variant_ = MrfVariant::None;
   // mrf.pairwise = layout: the prior file's costs, loaded once.
   std::shared_ptr<const LayoutPrior> layout_prior_;
-  // The floor kept between frames (ground.reestimate_every_frames > 1). The
-  // daemon prepares frames in order on one thread; the mutex only keeps
-  // concurrent callers safe (they then share one stream).
-  struct GroundMemory {
-    std::mutex mutex;
-    std::optional<GroundPlane> plane;  // as last estimated (its support is the reference)
-    int frames_since_estimate = 0;
-  };
-  std::unique_ptr<GroundMemory> ground_memory_ = std::make_unique<GroundMemory>();
   // Buffers handed back by recycle(), taken by prepare() and oversegment().
   struct Recycled {
     std::mutex mutex;
@@ -197,10 +238,5 @@ std::vector<ClassProbabilities> predictSegments(
     const RandomForest& model, const SegmentFeatures& features, const std::vector<float>& weights,
     const ContextConfig& context, std::vector<ClassProbabilities>* first_round = nullptr,
     double* context_ms = nullptr);
-
-// Per-segment training labels: the majority ground-truth label of each
-// segment's pixels; segments whose pixels are mostly void get kVoidLabel.
-std::vector<std::uint8_t> segmentMajorityLabels(const Oversegmentation& segmentation,
-                                                const std::vector<std::uint8_t>& gt_labels);
 
 }  // namespace findmug

@@ -19,6 +19,7 @@
 #include "findmug/features/region_features.hpp"
 #include "findmug/frame/dataset.hpp"
 #include "findmug/labels/labels.hpp"
+#include "findmug/offline/training.hpp"
 #include "findmug/segmenter/segmenter.hpp"
 #include "findmug/settings/config.hpp"
 #include "test_data.hpp"

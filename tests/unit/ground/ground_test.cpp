@@ -2,6 +2,7 @@
 // (RANSAC), and estimated from the frame alone; synthetic scenes with known
 // answers and real NYU Depth V2 frames.
 #include "findmug/ground/ground.hpp"
+#include "findmug/ground/ground_tracker.hpp"
 
 #include <gtest/gtest.h>
 
@@ -324,8 +325,8 @@ TEST(SegmenterGround, ReestimatesEveryNFramesAndWhenTheCheckFails) {
   auto estimated = [](const Rendered& r) {
     return *estimateGround(r.cloud, computeNormals(r.cloud, NormalConfig{}), GroundConfig{});
   };
-  auto planeOf = [](const Segmenter& seg, const Rendered& r) {
-    const PreparedFrame p = seg.prepare(r.frame);
+  auto planeOf = [](const Segmenter& seg, GroundTracker& stream, const Rendered& r) {
+    const PreparedFrame p = seg.prepare(r.frame, stream);
     EXPECT_TRUE(p.ground.has_value());
     return p.ground.value_or(GroundPlane{});
   };
@@ -337,26 +338,54 @@ TEST(SegmenterGround, ReestimatesEveryNFramesAndWhenTheCheckFails) {
   {
     // Default: every frame its own estimate.
     const Segmenter seg(config, nullptr);
-    EXPECT_EQ(planeOf(seg, a1).offset, estimated(a1).offset);
-    EXPECT_EQ(planeOf(seg, a2).offset, estimated(a2).offset);
+    GroundTracker stream;
+    EXPECT_EQ(planeOf(seg, stream, a1).offset, estimated(a1).offset);
+    EXPECT_EQ(planeOf(seg, stream, a2).offset, estimated(a2).offset);
+    EXPECT_FALSE(stream.plane().has_value());  // nothing kept
   }
   config.ground.reestimate_every_frames = 2;
   {
     const Segmenter seg(config, nullptr);
-    EXPECT_EQ(planeOf(seg, a1).offset, estimated(a1).offset);
-    EXPECT_EQ(planeOf(seg, a2).offset, estimated(a1).offset);  // kept
-    EXPECT_EQ(planeOf(seg, a3).offset, estimated(a3).offset);  // second frame: estimated again
+    GroundTracker stream;
+    EXPECT_EQ(planeOf(seg, stream, a1).offset, estimated(a1).offset);
+    EXPECT_EQ(planeOf(seg, stream, a2).offset, estimated(a1).offset);  // kept
+    EXPECT_EQ(stream.framesSinceEstimate(), 1);
+    EXPECT_EQ(planeOf(seg, stream, a3).offset, estimated(a3).offset);  // second frame: estimated again
+    EXPECT_EQ(stream.framesSinceEstimate(), 0);
   }
   config.ground.reestimate_every_frames = 100;
   {
     const Segmenter seg(config, nullptr);
-    EXPECT_EQ(planeOf(seg, a1).offset, estimated(a1).offset);
-    EXPECT_EQ(planeOf(seg, a2).offset, estimated(a1).offset);
-    EXPECT_EQ(planeOf(seg, a3).offset, estimated(a1).offset);
+    GroundTracker stream;
+    EXPECT_EQ(planeOf(seg, stream, a1).offset, estimated(a1).offset);
+    EXPECT_EQ(planeOf(seg, stream, a2).offset, estimated(a1).offset);
+    EXPECT_EQ(planeOf(seg, stream, a3).offset, estimated(a1).offset);
     // Another mount: the check fails and the floor is estimated again.
-    EXPECT_EQ(planeOf(seg, b).offset, estimated(b).offset);
-    EXPECT_NEAR(planeOf(seg, b).offset, lower.mount.height_m, 0.03);
+    EXPECT_EQ(planeOf(seg, stream, b).offset, estimated(b).offset);
+    EXPECT_NEAR(planeOf(seg, stream, b).offset, lower.mount.height_m, 0.03);
+    // Frames prepared without a tracker are each their own estimate, whatever the setting.
+    EXPECT_EQ(seg.prepare(a2.frame).ground.value_or(GroundPlane{}).offset, estimated(a2).offset);
   }
+}
+
+TEST(SegmenterGround, TheStreamKeepsItsFloorAcrossSegmenters) {
+  // A model reload builds a new Segmenter; the stream's tracker, not the Segmenter, holds
+  // the floor, so the frames after the reload keep the plane found before it.
+  const Scene s = roomWithTable();
+  const Rendered a1 = render(s, 1), a2 = render(s, 2);
+  const auto own = *estimateGround(a2.cloud, computeNormals(a2.cloud, NormalConfig{}),
+                                   GroundConfig{});
+  SegmenterConfig config;
+  config.ground.source = GroundSource::Estimated;
+  config.ground.reestimate_every_frames = 30;
+  GroundTracker stream;
+  const PreparedFrame before = Segmenter(config, nullptr).prepare(a1.frame, stream);
+  ASSERT_TRUE(before.ground.has_value());
+  const PreparedFrame after = Segmenter(config, nullptr).prepare(a2.frame, stream);
+  ASSERT_TRUE(after.ground.has_value());
+  EXPECT_EQ(after.ground->offset, before.ground->offset);
+  EXPECT_NE(after.ground->offset, own.offset);
+  EXPECT_EQ(stream.framesSinceEstimate(), 1);
 }
 
 TEST(EstimateGround, SlopedSurfaceBelowFloorLevelIsNotTheFloor) {

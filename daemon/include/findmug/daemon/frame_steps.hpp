@@ -57,14 +57,21 @@ struct ResultJob {
   FrameTrace trace;
 };
 
+// Owns the stream's ground tracker (ground.reestimate_every_frames): the floor found in one
+// frame is kept for the next ones, whichever model the current Segmenter has, so a model
+// reload does not reset it. Not thread-safe: one thread at a time runs a PrepareStep (the
+// pipeline's prepare stage has one worker; sequential mode runs it on the caller's thread).
 class PrepareStep {
  public:
   explicit PrepareStep(const Segmenter& segmenter) : segmenter_(fixedSegmenter(segmenter)) {}
   explicit PrepareStep(CurrentSegmenter segmenter) : segmenter_(std::move(segmenter)) {}
-  PreparedJob operator()(FrameJob& job) const;
+  PreparedJob operator()(FrameJob& job);
+  // The floor the stream follows (tests).
+  const GroundTracker& ground() const { return ground_; }
 
  private:
   CurrentSegmenter segmenter_;
+  GroundTracker ground_;
 };
 
 class SegmentStep {

@@ -194,6 +194,9 @@ class Pipeline {
   // the load; thread-safe. `request_id`: the command's, -1 for SIGHUP.
   void requestModelReload(std::int64_t request_id, const std::string& origin);
   ReloadStatus reloadStatus() const { return reloader_->status(); }
+  // The floor the frame stream follows (ground.reestimate_every_frames), kept across model
+  // reloads: the prepare stage's, so read it only once the pipeline has stopped.
+  const GroundTracker& groundTracker() const { return prepare_step_.ground(); }
   // Saves the next published frame for labelling (daemon.collect_dir); throws
   // findmug::Error when collection is off or the note is not fit for frames.csv.
   void requestFrameSave(std::int64_t request_id, const std::string& note);

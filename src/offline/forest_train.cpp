@@ -1,7 +1,9 @@
 // forest_train.cpp — RandomForest::train: node splitting by information
 // gain over random (feature, threshold) candidates, seeded per tree, trees
-// built by a pool of threads that lives only for the call (the core keeps no
-// long-lived threads); the calling thread reports progress.
+// built by a pool of threads that lives only for the call; the calling thread
+// reports progress. Built into findmug_offline, not the core: the daemon and the
+// package never train (RandomForest::train and trainBoosted are declared with the
+// model type in forest.hpp and defined here and in xgboost_train.cpp).
 //
 // Training follows Criminisi et al.: at every node a few random features and,
 // per feature, a few random thresholds between the node's minimum and maximum
