@@ -246,8 +246,11 @@ void checkModelMatchesConfig(const RandomForest& forest, const SegmenterConfig& 
   // Columns and rounds first: they say in one line what is wrong.
   const auto expected = firstRoundFeatureNames(config);
   if (forest.featureNames() != expected) {
-    const bool model_regions = forest.dim() == kFeatureDim + kRegionFeatureDim;
+    // Which column groups the model reads, by their names (its width alone cannot say once
+    // scene and object columns come after the region ones).
     const auto& names = forest.featureNames();
+    const bool model_regions =
+        std::find(names.begin(), names.end(), std::string(kRegionFeatureNames[0])) != names.end();
     const bool model_scene =
         std::find(names.begin(), names.end(), std::string(kSceneFeatureNames[0])) != names.end();
     const auto model_object_columns = std::count_if(names.begin(), names.end(), [](const std::string& n) {

@@ -412,6 +412,19 @@ TEST(Segmenter, RunsTheSceneFeaturesOfTheModel) {
     EXPECT_THAT(e.what(), HasSubstr("features.scene = false (--set)"));
     EXPECT_THAT(e.what(), HasSubstr("records features.scene = true"));
   }
+  // A model that records no settings (as older files): the column check names every group
+  // of columns it reads, the region ones too though more columns follow them.
+  const auto unrecorded =
+      std::make_shared<const RandomForest>(trainModel({&samples[0]}, config));
+  SegmenterConfig fewer = config;
+  fewer.scene.enabled = false;
+  try {
+    Segmenter segmenter(fewer, unrecorded);
+    FAIL() << "expected the model to be refused";
+  } catch (const Error& e) {
+    EXPECT_THAT(e.what(), HasSubstr("(with region features) (with scene features)"));
+    EXPECT_THAT(e.what(), HasSubstr("features.scene = false"));
+  }
 }
 
 // features.objects adds its columns after the scene features, computed by
