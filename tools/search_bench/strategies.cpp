@@ -464,12 +464,12 @@ void coverUntilDone(Robot& robot, const World& world, const SimParams& params, b
     for (; marked < robot.viewPoses().size(); ++marked)
       coverage.markView(robot.viewPoses()[marked].first, robot.viewPoses()[marked].second);
   };
-  if (look_first) robot.lookAround();
+  if (look_first) robot.lookAround(false);
   mark();
   while (robot.active()) {
     const int goal = coverage.nextGoal(world.grid.distancesFrom(robot.cell()));
     if (goal < 0 || !robot.driveTo(world.grid.center(goal))) break;
-    robot.lookAround();
+    robot.lookAround(false);
     mark();
   }
 }
