@@ -225,6 +225,69 @@ TEST(SearchSim, PlannerGoesAroundObstaclesAndTheBudgetStopsTheRobot) {
   EXPECT_EQ(robot.stats().views, 0);
 }
 
+// Two rooms: a tall wall across the 6 x 4 m room at x = 3 with a doorway at its top.
+World twoRoomWorld(const SimParams& params) {
+  World w = emptyRoomWorld(params);
+  w.apartment.scene.obstacles.push_back({{{2.9, 0.0}, {3.1, 0.0}, {3.1, 2.8}, {2.9, 2.8}}, 2.6, 6});
+  w.grid = Grid(w.apartment.scene, params.robot_radius_m, params.cell_m);
+  return w;
+}
+
+// A look-around turns only through what the robot's frames have not shown: none after a
+// full one from the same spot, most of them in a room it has not seen, and every heading
+// again with full_look_arounds.
+TEST(SearchSim, ALookAroundTurnsOnlyThroughHeadingsNotYetSeen) {
+  SimParams params;
+  params.drive_frames_hz = 0.0;  // stop views only: the other room is not seen on the way
+  const World w = twoRoomWorld(params);
+  Robot robot(w, params);
+  ASSERT_FALSE(robot.lookAround(false));
+  EXPECT_EQ(robot.stats().views, 12);
+  const RunStats full = robot.stats();
+  robot.lookAround();
+  EXPECT_EQ(robot.stats().views, full.views);
+  EXPECT_EQ(robot.stats().turn_s, full.turn_s);
+  EXPECT_EQ(robot.stats().look_around_views_skipped, 12);
+  // Every cell in reach of the spot is now covered, the ones behind the wall are not.
+  const ViewCoverage& seen = robot.viewCoverage();
+  EXPECT_TRUE(seen.covered(w.grid.cellAt({2.0, 1.0})));
+  EXPECT_TRUE(seen.covered(w.grid.cellAt({0.3, 3.5})));
+  EXPECT_FALSE(seen.covered(w.grid.cellAt({3.5, 1.0})));
+  EXPECT_TRUE(seen.blocksView(w.grid.cellAt({3.0, 1.0})));
+
+  // Through the doorway into the other room, unseen: there it still turns and looks.
+  ASSERT_TRUE(robot.driveTo(w.grid.center(w.grid.cellAt({4.5, 1.5}))));
+  const RunStats before = robot.stats();
+  robot.lookAround();
+  const int new_views = robot.stats().views - before.views;
+  EXPECT_GE(new_views, 4);
+  EXPECT_GT(robot.stats().turn_s, before.turn_s);
+  EXPECT_TRUE(seen.covered(w.grid.cellAt({5.5, 0.5})));
+  // Less turning than a full look-around (330 deg at 45 deg/s) when it skipped headings.
+  if (new_views < 12) {
+    EXPECT_LT(robot.stats().turn_s - before.turn_s, 330.0 / 45.0 - 1e-9);
+  }
+
+  // With frames while driving, what they showed on the way needs no stop view there.
+  SimParams driving = params;
+  driving.drive_frames_hz = 1.0;
+  Robot driver(w, driving);
+  driver.lookAround(false);
+  driver.driveTo(w.grid.center(w.grid.cellAt({4.5, 1.5})));
+  const int views_before = driver.stats().views;
+  driver.lookAround();
+  EXPECT_LT(driver.stats().views - views_before, new_views);
+
+  // The behaviour before: every heading, also from a spot already looked around at.
+  SimParams every = params;
+  every.full_look_arounds = true;
+  Robot old(w, every);
+  old.lookAround();
+  old.lookAround();
+  EXPECT_EQ(old.stats().views, 24);
+  EXPECT_EQ(old.stats().look_around_views_skipped, 0);
+}
+
 TEST(SearchBench, OracleDrivesTheShortestPathAndSeesTheMug) {
   SimParams params;
   params.drive_frames_hz = 0.0;  // a driving frame may see the mug before the best view

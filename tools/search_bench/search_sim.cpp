@@ -356,6 +356,15 @@ Robot::Robot(const World& world, const SimParams& params, FrameHook on_frame,
                   world.mug.position.x(), world.mug.position.y(), world.mug.position.z(),
                   world.mug.furniture, world.mug.room);
     note(line);
+    if (world.mug.furniture >= 0) {
+      const synth::FurnitureTruth& f = world.apartment.furniture[world.mug.furniture];
+      std::string corners;
+      for (const Eigen::Vector2d& v : f.footprint) {
+        std::snprintf(line, sizeof line, " (%.2f, %.2f)", v.x(), v.y());
+        corners += line;
+      }
+      note("the mug's " + f.kind + ": footprint" + corners);
+    }
   }
 }
 

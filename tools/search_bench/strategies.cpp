@@ -324,6 +324,19 @@ EpisodeResult runFindmug(const World& world, const SimParams& params,
     }
     rooms.markHere(robot);
   }
+  if (params.trace) {
+    // What the map held at the end, and how much of each top the frames showed.
+    for (const TableCluster& t : tables.mapTables()) {
+      char line[200];
+      std::snprintf(line, sizeof line,
+                    "at the end: table %d at (%.2f, %.2f), truth %s, %.0f %% of its top seen, "
+                    "the mug %.1f m from its centre",
+                    t.id, t.center.x(), t.center.y(), furnitureAt(world, t.center).c_str(),
+                    100.0 * eyes.topSeen(t.id),
+                    (t.center.cast<double>() - world.mug.position.head<2>()).norm());
+      robot.note(line);
+    }
+  }
   result.stats = robot.stats();
   result.trace = robot.trace();
   result.tables_mapped = tables.tables();
