@@ -78,6 +78,7 @@ struct Options {
   std::string trace_dir;  // "" = no traces
   double top_seen_share = 0.8;
   bool no_replan = false;
+  bool no_furniture_visits = false;
   bool full_look_arounds = false;
   std::string only;  // "" = every episode
 };
@@ -245,6 +246,7 @@ int run(const Options& o) {
   params.trace = !o.trace_dir.empty();
   params.top_seen_share = o.top_seen_share;
   params.replan_on_new_tables = !o.no_replan;
+  params.furniture_after_coverage = !o.no_furniture_visits;
   params.full_look_arounds = o.full_look_arounds;
   std::vector<Episode> episodes;
   std::vector<std::uint64_t> apartment_seeds;
@@ -416,6 +418,9 @@ int main(int argc, char** argv) {
   app->add_flag("--no-replan", o.no_replan,
                 "findmug strategy: explore a room to its centre and look around even when the "
                 "map shows a new table on the way");
+  app->add_flag("--no-furniture-visits", o.no_furniture_visits,
+                "findmug strategy: end when coverage has left nothing, instead of then looking at "
+                "every footprint of the occupancy grid from beside it");
   app->add_flag("--full-look-arounds", o.full_look_arounds,
                 "every look-around turns through all its headings, also those whose view would "
                 "show nothing the robot's frames have not shown (the behaviour before look-arounds "

@@ -58,6 +58,9 @@ struct SimParams {
   double top_seen_range_matcher_m = 1.5;  // the matcher names the mug from 1.0-1.5 m
   // The findmug strategy stops exploring a room when the map shows a new table to look at.
   bool replan_on_new_tables = true;
+  // The findmug strategy, when coverage has left nothing and the mug is not seen: it looks at
+  // every footprint of the occupancy grid from beside it, nearest first.
+  bool furniture_after_coverage = true;
   synth::MultiRoomParams apartment;
   synth::MugPrior prior;
   // Keep a line per action (time, pose, what and why) for --trace: where an episode's time went.

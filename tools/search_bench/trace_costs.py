@@ -8,6 +8,7 @@ somewhere starts a segment that lasts until the next such line or the end of the
     centre stands on KIND in the ground truth (table, bed, sofa, cabinet, ..., nothing)
   * "explore room"                     -> exploring a room (driving to its centre)
   * "cover the floor plan"             -> covering what is left
+  * "look at the furniture ..."        -> then every footprint of the grid from beside it
 "drive to" and "stopped" lines belong to the segment they are in. The search ends at the
 "found" line, else at the budget (--budget, default 600 s).
 
@@ -35,6 +36,8 @@ def category(what):
         return "explore a room"
     if what.startswith("cover the floor plan"):
         return "cover the floor plan"
+    if what.startswith("look at the furniture"):
+        return "the grid's furniture from beside it"
     return None
 
 
