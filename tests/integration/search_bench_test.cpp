@@ -59,7 +59,7 @@ TEST(SearchSim, DrivingAndTurningTimeFollowTheBaseModel) {
   EXPECT_NEAR(robot.stats().turn_s, 0.0, 1e-9);
   robot.turnTo(M_PI / 2);  // 90 deg at 45 deg/s
   EXPECT_NEAR(robot.stats().turn_s, 2.0, 1e-9);
-  robot.lookAround();  // 12 views, 11 turns of 30 deg, 0.1 s each view
+  robot.lookAround(false);  // every heading: 12 views, 11 turns of 30 deg, 0.1 s each view
   EXPECT_EQ(robot.stats().views, 12);
   EXPECT_NEAR(robot.stats().turn_s, 2.0 + 11 * (M_PI / 6) / (M_PI / 4), 1e-9);
   EXPECT_NEAR(robot.stats().process_s, 1.2, 1e-9);
@@ -128,7 +128,13 @@ TEST(SearchSim, ADriveStopsAtTheFirstFrameAfterWhichItsConditionHolds) {
   EXPECT_FALSE(robot.interrupted());
   EXPECT_NEAR((robot.xy() - goal).norm(), 0.0, 1e-9);
   // The trace says where it went and why it stopped.
-  const std::vector<std::string>& trace = robot.trace();
+  // (after the lines naming the mug and its furniture, the episode's ground truth)
+  std::vector<std::string> trace = robot.trace();
+  trace.erase(std::remove_if(trace.begin(), trace.end(),
+                             [](const std::string& l) {
+                               return l.find("the mug") != std::string::npos;
+                             }),
+              trace.end());
   ASSERT_GE(trace.size(), 3u);
   EXPECT_NE(trace[0].find("drive to"), std::string::npos) << trace[0];
   EXPECT_NE(trace[1].find("stopped"), std::string::npos) << trace[1];
