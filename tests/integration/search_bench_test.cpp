@@ -59,7 +59,7 @@ TEST(SearchSim, DrivingAndTurningTimeFollowTheBaseModel) {
   EXPECT_NEAR(robot.stats().turn_s, 0.0, 1e-9);
   robot.turnTo(M_PI / 2);  // 90 deg at 45 deg/s
   EXPECT_NEAR(robot.stats().turn_s, 2.0, 1e-9);
-  robot.lookAround();  // 12 views, 11 turns of 30 deg, 0.1 s each view
+  robot.lookAround(false);  // every heading: 12 views, 11 turns of 30 deg, 0.1 s each view
   EXPECT_EQ(robot.stats().views, 12);
   EXPECT_NEAR(robot.stats().turn_s, 2.0 + 11 * (M_PI / 6) / (M_PI / 4), 1e-9);
   EXPECT_NEAR(robot.stats().process_s, 1.2, 1e-9);
@@ -128,7 +128,13 @@ TEST(SearchSim, ADriveStopsAtTheFirstFrameAfterWhichItsConditionHolds) {
   EXPECT_FALSE(robot.interrupted());
   EXPECT_NEAR((robot.xy() - goal).norm(), 0.0, 1e-9);
   // The trace says where it went and why it stopped.
-  const std::vector<std::string>& trace = robot.trace();
+  // (after the lines naming the mug and its furniture, the episode's ground truth)
+  std::vector<std::string> trace = robot.trace();
+  trace.erase(std::remove_if(trace.begin(), trace.end(),
+                             [](const std::string& l) {
+                               return l.find("the mug") != std::string::npos;
+                             }),
+              trace.end());
   ASSERT_GE(trace.size(), 3u);
   EXPECT_NE(trace[0].find("drive to"), std::string::npos) << trace[0];
   EXPECT_NE(trace[1].find("stopped"), std::string::npos) << trace[1];
@@ -225,6 +231,69 @@ TEST(SearchSim, PlannerGoesAroundObstaclesAndTheBudgetStopsTheRobot) {
   EXPECT_EQ(robot.stats().views, 0);
 }
 
+// Two rooms: a tall wall across the 6 x 4 m room at x = 3 with a doorway at its top.
+World twoRoomWorld(const SimParams& params) {
+  World w = emptyRoomWorld(params);
+  w.apartment.scene.obstacles.push_back({{{2.9, 0.0}, {3.1, 0.0}, {3.1, 2.8}, {2.9, 2.8}}, 2.6, 6});
+  w.grid = Grid(w.apartment.scene, params.robot_radius_m, params.cell_m);
+  return w;
+}
+
+// A look-around turns only through what the robot's frames have not shown: none after a
+// full one from the same spot, most of them in a room it has not seen, and every heading
+// again with full_look_arounds.
+TEST(SearchSim, ALookAroundTurnsOnlyThroughHeadingsNotYetSeen) {
+  SimParams params;
+  params.drive_frames_hz = 0.0;  // stop views only: the other room is not seen on the way
+  const World w = twoRoomWorld(params);
+  Robot robot(w, params);
+  ASSERT_FALSE(robot.lookAround(false));
+  EXPECT_EQ(robot.stats().views, 12);
+  const RunStats full = robot.stats();
+  robot.lookAround();
+  EXPECT_EQ(robot.stats().views, full.views);
+  EXPECT_EQ(robot.stats().turn_s, full.turn_s);
+  EXPECT_EQ(robot.stats().look_around_views_skipped, 12);
+  // Every cell in reach of the spot is now covered, the ones behind the wall are not.
+  const ViewCoverage& seen = robot.viewCoverage();
+  EXPECT_TRUE(seen.covered(w.grid.cellAt({2.0, 1.0})));
+  EXPECT_TRUE(seen.covered(w.grid.cellAt({0.3, 3.5})));
+  EXPECT_FALSE(seen.covered(w.grid.cellAt({3.5, 1.0})));
+  EXPECT_TRUE(seen.blocksView(w.grid.cellAt({3.0, 1.0})));
+
+  // Through the doorway into the other room, unseen: there it still turns and looks.
+  ASSERT_TRUE(robot.driveTo(w.grid.center(w.grid.cellAt({4.5, 1.5}))));
+  const RunStats before = robot.stats();
+  robot.lookAround();
+  const int new_views = robot.stats().views - before.views;
+  EXPECT_GE(new_views, 4);
+  EXPECT_GT(robot.stats().turn_s, before.turn_s);
+  EXPECT_TRUE(seen.covered(w.grid.cellAt({5.5, 0.5})));
+  // Less turning than a full look-around (330 deg at 45 deg/s) when it skipped headings.
+  if (new_views < 12) {
+    EXPECT_LT(robot.stats().turn_s - before.turn_s, 330.0 / 45.0 - 1e-9);
+  }
+
+  // With frames while driving, what they showed on the way needs no stop view there.
+  SimParams driving = params;
+  driving.drive_frames_hz = 1.0;
+  Robot driver(w, driving);
+  driver.lookAround(false);
+  driver.driveTo(w.grid.center(w.grid.cellAt({4.5, 1.5})));
+  const int views_before = driver.stats().views;
+  driver.lookAround();
+  EXPECT_LT(driver.stats().views - views_before, new_views);
+
+  // The behaviour before: every heading, also from a spot already looked around at.
+  SimParams every = params;
+  every.full_look_arounds = true;
+  Robot old(w, every);
+  old.lookAround();
+  old.lookAround();
+  EXPECT_EQ(old.stats().views, 24);
+  EXPECT_EQ(old.stats().look_around_views_skipped, 0);
+}
+
 TEST(SearchBench, OracleDrivesTheShortestPathAndSeesTheMug) {
   SimParams params;
   params.drive_frames_hz = 0.0;  // a driving frame may see the mug before the best view
@@ -304,6 +373,64 @@ TEST(SearchBench, FindmugStrategySkipsTheTablesWhoseTopsItHasSeen) {
   }
   EXPECT_LT(visited_skipping, visited_all);
   EXPECT_LT(time_skipping, time_all);
+}
+
+// A mug the far views cannot show: a small one (about 1.1 m is the farthest it shows 150
+// pixels from) on a cabinet against the wall of an otherwise empty room, between two tall
+// side boards, so that only a view from in front of the cabinet shows it. Without the looks
+// at the grid's furniture the search ends early, not found (coverage of the floor plan, 2 m,
+// never stood in front of it); with them, the look from beside the cabinet finds the mug.
+TEST(SearchBench, FindmugStrategyLooksAtTheGridsFurnitureWhenCoverageLeftNothing) {
+  const std::string root = FINDMUG_SOURCE_DIR;
+  const FindmugModel model =
+      loadFindmugModel(root + "/daemon/findmugd.yaml", root + "/models/findmug-nyu-synth.fmf",
+                       {"learner.classes=labels", "features.objects=false", "mrf.pairwise=potts"});
+  SimParams params;
+  params.trace = true;
+  params.time_budget_s = 400.0;
+  World w = emptyRoomWorld(params);
+  synth::SynthScene& scene = w.apartment.scene;
+  const std::vector<Eigen::Vector2d> footprint{{5.4, 1.65}, {5.95, 1.65}, {5.95, 2.35}, {5.4, 2.35}};
+  synth::Primitive body, left, right;
+  body.center = {5.675, 2.0, 0.45};
+  body.half_extent = {0.275, 0.3, 0.45};
+  body.material.color = {120, 90, 60};
+  left = body;
+  left.center = {5.675, 1.675, 0.8};
+  left.half_extent = {0.275, 0.025, 0.8};
+  right = left;
+  right.center.y() = 2.325;
+  const int cabinet = synth::addObject(scene, "cabinet", Label::Cabinet, {body, left, right});
+  scene.obstacles.push_back({footprint, 1.6, cabinet});
+  w.apartment.furniture.push_back({cabinet, "cabinet", 0, -1, footprint, 1.6});
+  synth::Primitive cup;
+  cup.shape = synth::Shape::Cylinder;
+  cup.center = {5.85, 2.0, 0.92};
+  cup.half_extent = {0.0125, 0.0125, 0.02};
+  cup.material.color = {200, 30, 30};
+  w.mug.object = synth::addObject(scene, "target_mug", Label::Object, {cup});
+  w.mug.position = {5.85, 2.0, 0.9};
+  w.mug.height = 0.04;
+  w.mug.furniture = 0;
+  w.mug.room = 0;
+  w.grid = Grid(scene, params.robot_radius_m, params.cell_m);
+  Perception oracle;
+  oracle.model = &model;
+  SimParams before = params;
+  before.furniture_after_coverage = false;
+  const EpisodeResult ended = runStrategy("findmug", w, before, oracle);
+  std::string ended_trace;
+  for (const std::string& line : ended.trace) ended_trace += line + "\n";
+  EXPECT_FALSE(ended.stats.found) << ended_trace;
+  EXPECT_LT(ended.stats.time_s, before.time_budget_s) << ended_trace;  // nothing left to do, not the budget
+  const EpisodeResult found = runStrategy("findmug", w, params, oracle);
+  EXPECT_TRUE(found.stats.found);
+  const auto at = [&found](const std::string& what) {
+    return std::find_if(found.trace.begin(), found.trace.end(), [&what](const std::string& l) {
+             return l.find(what) != std::string::npos;
+           }) - found.trace.begin();
+  };
+  EXPECT_LT(at("look at the furniture of the grid"), at("found"));
 }
 
 // The rows of `csv` (header first) as column name -> value maps.

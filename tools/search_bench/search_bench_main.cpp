@@ -78,6 +78,8 @@ struct Options {
   std::string trace_dir;  // "" = no traces
   double top_seen_share = 0.8;
   bool no_replan = false;
+  bool no_furniture_visits = false;
+  bool full_look_arounds = false;
   std::string only;  // "" = every episode
 };
 
@@ -244,6 +246,8 @@ int run(const Options& o) {
   params.trace = !o.trace_dir.empty();
   params.top_seen_share = o.top_seen_share;
   params.replan_on_new_tables = !o.no_replan;
+  params.furniture_after_coverage = !o.no_furniture_visits;
+  params.full_look_arounds = o.full_look_arounds;
   std::vector<Episode> episodes;
   std::vector<std::uint64_t> apartment_seeds;
   for (int a = 0; a < o.apartments; ++a) {
@@ -318,7 +322,14 @@ int run(const Options& o) {
   summary << "Simulated object search: " << o.apartments << " apartments x " << o.episodes
           << " episodes, budget " << o.budget_s << " s; base " << params.speed_mps
           << " m/s, 45 deg/s; " << params.view_processing_s
-          << " s per stop view; look-around " << params.look_around_views << " views; ";
+          << " s per stop view; look-around " << params.look_around_views << " views"
+          << (params.full_look_arounds
+                  ? " (every heading)"
+                  : " (findmug, places' fallback, random: only headings that show >= " +
+                        fixed2(params.look_unseen_min_m2) + " m^2 of floor plan no frame showed "
+                        "within " + fixed2(params.look_coverage_range_m) +
+                        " m; coverage: every heading)")
+          << "; ";
   if (params.drive_frames_hz > 0)
     summary << "frames while driving or turning every " << 1.0 / params.drive_frames_hz
             << " s of motion (processed in parallel to the motion: they cost no time; a find "
@@ -407,6 +418,13 @@ int main(int argc, char** argv) {
   app->add_flag("--no-replan", o.no_replan,
                 "findmug strategy: explore a room to its centre and look around even when the "
                 "map shows a new table on the way");
+  app->add_flag("--no-furniture-visits", o.no_furniture_visits,
+                "findmug strategy: end when coverage has left nothing, instead of then looking at "
+                "every footprint of the occupancy grid from beside it");
+  app->add_flag("--full-look-arounds", o.full_look_arounds,
+                "every look-around turns through all its headings, also those whose view would "
+                "show nothing the robot's frames have not shown (the behaviour before look-arounds "
+                "skipped them)");
   app->add_option("--trace", o.trace_dir,
                   "folder for one trace file per run and episode: every action with its time, "
                   "pose and reason");

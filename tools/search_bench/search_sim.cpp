@@ -281,6 +281,58 @@ World makeWorld(const Episode& episode, const SimParams& params) {
               std::to_string(episode.episode_seed));
 }
 
+// ---- what the frames have shown --------------------------------------------------------
+
+ViewCoverage::ViewCoverage(const World& world, const SimParams& params)
+    : grid_(&world.grid),
+      range_m_(params.look_coverage_range_m),
+      seen_(world.grid.size(), 0),
+      blocks_(world.grid.size(), 0),
+      stamp_(world.grid.size(), 0) {
+  for (int i = 0; i < world.grid.size(); ++i) {
+    const Eigen::Vector2d p = world.grid.center(i);
+    for (const synth::Obstacle& o : world.apartment.scene.obstacles) {
+      if (o.top_z <= params.camera_height_m - 0.2) continue;  // the camera looks over it
+      if (insideGrown(o.polygon, p, 0.0)) {
+        blocks_[i] = 1;
+        break;
+      }
+    }
+  }
+}
+
+template <typename Visit>
+void ViewCoverage::castFrame(const Eigen::Vector2d& xy, double yaw, Visit&& visit) const {
+  if (grid_ == nullptr) return;
+  constexpr double kHalfFov = 0.547;  // atan(320 / 525), the camera's horizontal half angle
+  const double step = 0.5 * grid_->cell();
+  // Rays no further apart than half a cell at the range: every cell in view is hit.
+  const int rays = static_cast<int>(std::ceil(2.0 * kHalfFov * range_m_ / step)) + 1;
+  if (++casts_ == 0) std::fill(stamp_.begin(), stamp_.end(), 0), casts_ = 1;
+  for (int k = 0; k < rays; ++k) {
+    const double a = yaw - kHalfFov + 2.0 * kHalfFov * k / (rays - 1);
+    const Eigen::Vector2d dir(std::cos(a), std::sin(a));
+    for (double r = 0.0; r <= range_m_; r += step) {
+      const int c = grid_->cellAt(xy + r * dir);
+      if (c < 0 || blocks_[c]) break;
+      if (stamp_[c] == casts_) continue;
+      stamp_[c] = casts_;
+      visit(c);
+    }
+  }
+}
+
+void ViewCoverage::markFrame(const Eigen::Vector2d& xy, double yaw) {
+  castFrame(xy, yaw, [this](int c) { seen_[c] = 1; });
+}
+
+double ViewCoverage::unseenM2(const Eigen::Vector2d& xy, double yaw) const {
+  if (grid_ == nullptr) return 0.0;
+  int unseen = 0;
+  castFrame(xy, yaw, [&](int c) { unseen += seen_[c] == 0; });
+  return unseen * grid_->cell() * grid_->cell();
+}
+
 // ---- the robot ------------------------------------------------------------------------
 
 bool claimIsCorrect(const World& world, const Eigen::Vector3d& reported, double tolerance_m) {
@@ -294,9 +346,26 @@ Robot::Robot(const World& world, const SimParams& params, FrameHook on_frame,
       on_frame_(std::move(on_frame)),
       recognition_(recognition),
       xy_(world.start),
-      yaw_(world.start_yaw) {
+      yaw_(world.start_yaw),
+      coverage_(world, params) {
   if (recognition_ == Recognition::Matcher && !on_frame_)
     throw Error("search: matcher recognition needs the daemon's frames (no frame hook)");
+  if (params_.trace) {
+    char line[160];
+    std::snprintf(line, sizeof line, "the mug at (%.2f, %.2f, %.2f), on furniture %d, room %d",
+                  world.mug.position.x(), world.mug.position.y(), world.mug.position.z(),
+                  world.mug.furniture, world.mug.room);
+    note(line);
+    if (world.mug.furniture >= 0) {
+      const synth::FurnitureTruth& f = world.apartment.furniture[world.mug.furniture];
+      std::string corners;
+      for (const Eigen::Vector2d& v : f.footprint) {
+        std::snprintf(line, sizeof line, " (%.2f, %.2f)", v.x(), v.y());
+        corners += line;
+      }
+      note("the mug's " + f.kind + ": footprint" + corners);
+    }
+  }
 }
 
 void Robot::spend(double seconds) { stats_.time_s += seconds; }
@@ -351,6 +420,11 @@ void Robot::turnTo(double yaw) {
   move(std::abs(delta) / params_.turn_rate_rad_s, xy_, yaw_ + delta, true);
 }
 
+void Robot::turnBy(double delta) {
+  if (!active()) return;
+  move(std::abs(delta) / params_.turn_rate_rad_s, xy_, yaw_ + delta, true);
+}
+
 bool Robot::driveTo(const Eigen::Vector2d& goal, const std::function<bool()>& stop_when) {
   interrupted_ = false;
   if (!active()) return false;
@@ -379,6 +453,7 @@ bool Robot::driveTo(const Eigen::Vector2d& goal, const std::function<bool()>& st
 
 bool Robot::perceive(bool stop_view) {
   ++stats_.recogniser_calls;
+  coverage_.markFrame(xy_, yaw_);
   bool claimed = false;
   Eigen::Vector3d reported = world_.mug.position;
   if (on_frame_) {
@@ -425,11 +500,67 @@ bool Robot::look() {
   return perceive(true);
 }
 
-bool Robot::lookAround() {
+bool Robot::lookAround(bool only_unseen) {
   const int n = params_.look_around_views;
-  note("look around");
-  for (int k = 0; k < n && active(); ++k) {
-    if (k > 0) turnTo(yaw_ + 2.0 * M_PI / n);
+  const double step = 2.0 * M_PI / n;
+  if (!only_unseen || params_.full_look_arounds) {
+    note("look around");
+    for (int k = 0; k < n && active(); ++k) {
+      if (k > 0) turnTo(yaw_ + step);
+      if (look()) return true;
+    }
+    return stats_.found || stats_.false_found;
+  }
+  // The headings worth a view, as steps from the current heading (0..n-1).
+  const double yaw0 = yaw_;
+  std::vector<int> wanted;
+  for (int k = 0; k < n; ++k)
+    if (coverage_.unseenM2(xy_, yaw0 + k * step) >= params_.look_unseen_min_m2) wanted.push_back(k);
+  stats_.look_around_views_skipped += n - static_cast<int>(wanted.size());
+  // The shortest turn through them: counter-clockwise up to wanted[i - 1] and clockwise
+  // down to wanted[i], whichever way first (i = 0: all clockwise; i = m: all
+  // counter-clockwise).
+  const int m = static_cast<int>(wanted.size());
+  int best_split = m;
+  bool ccw_first = true;
+  double best_turn = kInfinity;
+  for (int i = 0; i <= m; ++i) {
+    const double ccw = i > 0 ? wanted[i - 1] * step : 0.0;
+    // The current heading (wanted[0] == 0) needs no turn either way.
+    int j = i;
+    while (j < m && wanted[j] == 0) ++j;
+    const double cw_part = j < m ? (n - wanted[j]) * step : 0.0;
+    for (const bool first_ccw : {true, false}) {
+      const double turn = first_ccw ? 2.0 * ccw + cw_part : ccw + 2.0 * cw_part;
+      if (turn < best_turn - 1e-9) best_turn = turn, best_split = i, ccw_first = first_ccw;
+    }
+  }
+  // Signed offsets from the heading at the start, in the order the turn reaches them.
+  std::vector<double> tour;
+  std::vector<double> ccw_part, cw_part;
+  for (int i = 0; i < best_split; ++i) ccw_part.push_back(wanted[i] * step);
+  for (int i = m - 1; i >= best_split; --i)
+    cw_part.push_back(wanted[i] == 0 ? 0.0 : (wanted[i] - n) * step);
+  // A heading at offset 0 is taken first, where the robot stands.
+  for (auto* part : ccw_first ? std::vector{&ccw_part, &cw_part} : std::vector{&cw_part, &ccw_part})
+    tour.insert(tour.end(), part->begin(), part->end());
+  std::stable_partition(tour.begin(), tour.end(), [](double o) { return o == 0.0; });
+  {
+    char line[96];
+    std::snprintf(line, sizeof line, "look around: %d of %d headings show something new, %.0f deg",
+                  m, n, best_turn * 180.0 / M_PI);
+    note(line);
+  }
+  double at = 0.0;  // the current offset from yaw0
+  for (const double offset : tour) {
+    if (!active()) break;
+    // Frames while turning may have shown it meanwhile: then it needs no stop view.
+    if (coverage_.unseenM2(xy_, yaw0 + offset) < params_.look_unseen_min_m2) {
+      ++stats_.look_around_views_skipped;
+      continue;
+    }
+    turnBy(offset - at);
+    at = offset;
     if (look()) return true;
   }
   return stats_.found || stats_.false_found;

@@ -31,6 +31,13 @@ struct SimParams {
   double turn_rate_rad_s = 0.785398163397448;  // 45 deg/s
   double view_processing_s = 0.1;              // per view, fixed (stated in the report)
   int look_around_views = 12;                  // 30 deg steps
+  // A look-around turns only through the headings whose view would show at least this much
+  // floor plan (within look_coverage_range_m, in line of sight) that no earlier frame of the
+  // robot showed: a small table top (0.5 m^2). Headings below it are skipped and the turn
+  // takes the short way through the rest. full_look_arounds: every heading, always.
+  double look_unseen_min_m2 = 0.5;
+  double look_coverage_range_m = 3.0;  // the oracle's top-seen range (a mug shows from 3.5 m)
+  bool full_look_arounds = false;
   double camera_height_m = 1.2;
   double camera_pitch_rad = 0.5;  // 28.6 deg down: table tops and the floor from 0.9 m
   double recognise_range_m = 3.5;
@@ -51,6 +58,9 @@ struct SimParams {
   double top_seen_range_matcher_m = 1.5;  // the matcher names the mug from 1.0-1.5 m
   // The findmug strategy stops exploring a room when the map shows a new table to look at.
   bool replan_on_new_tables = true;
+  // The findmug strategy, when coverage has left nothing and the mug is not seen: it looks at
+  // every footprint of the occupancy grid from beside it, nearest first.
+  bool furniture_after_coverage = true;
   synth::MultiRoomParams apartment;
   synth::MugPrior prior;
   // Keep a line per action (time, pose, what and why) for --trace: where an episode's time went.
@@ -151,6 +161,33 @@ struct Sighting {
 // candidate's centroid, whose height differs from the mug's base by design).
 bool claimIsCorrect(const World& world, const Eigen::Vector3d& reported, double tolerance_m);
 
+// What the robot's frames have shown of the floor plan: the cells within
+// look_coverage_range_m inside a frame's horizontal field of view, in line of sight on the
+// grid (obstacles taller than the camera less 0.2 m block the view; lower furniture, such
+// as tables, is looked over). The robot knows its map and its past poses, so it can tell
+// which headings of a look-around would show something new.
+class ViewCoverage {
+ public:
+  ViewCoverage() = default;
+  ViewCoverage(const World& world, const SimParams& params);
+  // Marks what a frame from this pose shows.
+  void markFrame(const Eigen::Vector2d& xy, double yaw);
+  // The floor (m^2) a frame from this pose would show that no marked frame showed.
+  double unseenM2(const Eigen::Vector2d& xy, double yaw) const;
+  bool covered(int cell) const { return seen_[cell] != 0; }
+  bool blocksView(int cell) const { return blocks_[cell] != 0; }
+
+ private:
+  // Calls visit(cell) once per cell a frame from this pose shows.
+  template <typename Visit>
+  void castFrame(const Eigen::Vector2d& xy, double yaw, Visit&& visit) const;
+  const Grid* grid_ = nullptr;
+  double range_m_ = 0.0;
+  std::vector<std::uint8_t> seen_, blocks_;
+  mutable std::vector<std::uint32_t> stamp_;  // per-cell mark of the last cast (once per cell)
+  mutable std::uint32_t casts_ = 0;
+};
+
 // Everything a strategy spent, and whether it found the mug.
 struct RunStats {
   bool found = false;        // a correct find (the episode's success)
@@ -159,6 +196,7 @@ struct RunStats {
   int views = 0;             // stop views (each costs view_processing_s)
   int drive_frames = 0;      // frames taken while the base moved (cost no time)
   int recogniser_calls = 0;  // frames the recogniser judged (oracle tests or find requests)
+  int look_around_views_skipped = 0;  // headings of look-arounds that showed too little new
   double found_time_s = kInfinity;  // when the search ended with a claim (true or false)
 };
 
@@ -187,11 +225,18 @@ class Robot {
   bool driveTo(const Eigen::Vector2d& goal, const std::function<bool()>& stop_when = {});
   bool interrupted() const { return interrupted_; }
   void turnTo(double yaw);
+  // Turns by `delta` rad (signed, not wrapped: a look-around's turns keep their direction).
+  void turnBy(double delta);
   // One view at the current pose (processing time counted); true when the search ended
   // with it (the mug seen, or believed seen).
   bool look();
-  // look_around_views views at even yaw steps, starting at the current heading.
-  bool lookAround();
+  // Views at look_around_views even yaw steps from the current heading. With `only_unseen`
+  // (and not SimParams::full_look_arounds) only the headings whose view would show at least
+  // look_unseen_min_m2 of floor plan no frame has shown yet, the turn through them the
+  // shortest way (one way, or one way and back); a heading that the frames while turning
+  // covered by the time it is reached gets no stop view. True when the search ended.
+  bool lookAround(bool only_unseen = true);
+  const ViewCoverage& viewCoverage() const { return coverage_; }
 
   const Eigen::Vector2d& xy() const { return xy_; }
   double yaw() const { return yaw_; }
@@ -222,6 +267,7 @@ class Robot {
   double motion_s_ = 0.0;  // seconds of motion so far (driving frames fall on its multiples)
   int frames_ = 0;         // frames rendered (the noise seed of each)
   RunStats stats_;
+  ViewCoverage coverage_;
   std::vector<std::pair<Eigen::Vector2d, double>> views_;
   std::vector<std::string> trace_;
   const std::function<bool()>* stop_when_ = nullptr;  // during driveTo

@@ -229,6 +229,69 @@ class LookCloser {
   int taken_ = 0;
 };
 
+// One place in front of a piece of furniture: the first reachable spot just clear of it,
+// trying directions from the one towards its room's centre.
+struct Place {
+  int cell = -1;
+  double yaw = 0.0;
+};
+
+// Hand-placed: in front of each table, cabinet and shelf (an expert's places). With
+// `every_piece`, in front of every footprint of the robot's occupancy grid that stands in a
+// room, whatever it is (what a robot knows without semantics: its map's obstacles).
+std::vector<Place> placesBesideFurniture(const World& world, const SimParams& params,
+                                         bool every_piece) {
+  const std::vector<double> from_start = world.grid.distancesFrom(world.grid.cellAt(world.start));
+  std::vector<Place> places;
+  for (const synth::FurnitureTruth& f : world.apartment.furniture) {
+    if (!every_piece && f.kind != "table" && f.kind != "cabinet" && f.kind != "shelf") continue;
+    if (f.room < 0) continue;
+    Eigen::Vector2d c = Eigen::Vector2d::Zero();
+    for (const auto& v : f.footprint) c += v / static_cast<double>(f.footprint.size());
+    const Eigen::Vector2d to_room = world.apartment.rooms[f.room].center() - c;
+    const double a0 = std::atan2(to_room.y(), to_room.x());
+    for (int k = 0; k < 16; ++k) {
+      const double a = a0 + (k % 2 ? 1 : -1) * ((k + 1) / 2) * (2.0 * M_PI / 16);
+      const Eigen::Vector2d dir(std::cos(a), std::sin(a));
+      // Step out until the robot would clear the footprint by 0.15 m.
+      double r = 0.0;
+      const double clear = params.robot_radius_m + 0.15;
+      auto inside = [&](const Eigen::Vector2d& p) {
+        const std::size_t n = f.footprint.size();
+        for (std::size_t i = 0; i < n; ++i) {
+          const Eigen::Vector2d e = f.footprint[(i + 1) % n] - f.footprint[i];
+          const Eigen::Vector2d q = p - f.footprint[i];
+          if (e.x() * q.y() - e.y() * q.x() < -clear * e.norm()) return false;
+        }
+        return true;
+      };
+      while (r < 3.0 && inside(c + r * dir)) r += 0.05;
+      const int cell = reachableCellNear(world.grid, from_start, c + r * dir, 0.1);
+      if (cell < 0) continue;
+      const Eigen::Vector2d look = c - world.grid.center(cell);
+      places.push_back({cell, std::atan2(look.y(), look.x())});
+      break;
+    }
+  }
+  return places;
+}
+
+// Visits the places, nearest first by planned path, facing each and looking once.
+void visitPlaces(Robot& robot, const World& world, std::vector<Place> todo, int& visited) {
+  while (robot.active() && !todo.empty()) {
+    const std::vector<double> dist = world.grid.distancesFrom(robot.cell());
+    const auto next = std::min_element(
+        todo.begin(), todo.end(),
+        [&dist](const Place& a, const Place& b) { return dist[a.cell] < dist[b.cell]; });
+    const Place place = *next;
+    todo.erase(next);
+    ++visited;
+    robot.driveTo(world.grid.center(place.cell));
+    robot.turnTo(place.yaw);
+    robot.look();
+  }
+}
+
 // With the matcher, the findmug strategy also looks this far to either side at a search
 // position (half the camera's horizontal field of view).
 constexpr double kTopSweepRad = 0.5;
@@ -281,6 +344,15 @@ EpisodeResult runFindmug(const World& world, const SimParams& params,
         continue;
       robot.note("cover the floor plan");
       coverUntilDone(robot, world, params, false);  // nothing left but the floor plan
+      if (params.furniture_after_coverage && robot.active()) {
+        // Every room explored, every mapped top seen, the floor plan covered, and the mug
+        // not seen: it may stand where only a near view from the right side shows it, on
+        // furniture the table map missed or hidden from the views so far. A robot knows
+        // where its map's obstacles are: it looks at each from beside it.
+        robot.note("look at the furniture of the grid from beside it");
+        int beside = 0;
+        visitPlaces(robot, world, placesBesideFurniture(world, params, true), beside);
+      }
       break;
     }
     const MapSearchPosition target = *next;  // positions() changes with the next frame
@@ -324,6 +396,19 @@ EpisodeResult runFindmug(const World& world, const SimParams& params,
     }
     rooms.markHere(robot);
   }
+  if (params.trace) {
+    // What the map held at the end, and how much of each top the frames showed.
+    for (const TableCluster& t : tables.mapTables()) {
+      char line[200];
+      std::snprintf(line, sizeof line,
+                    "at the end: table %d at (%.2f, %.2f), truth %s, %.0f %% of its top seen, "
+                    "the mug %.1f m from its centre",
+                    t.id, t.center.x(), t.center.y(), furnitureAt(world, t.center).c_str(),
+                    100.0 * eyes.topSeen(t.id),
+                    (t.center.cast<double>() - world.mug.position.head<2>()).norm());
+      robot.note(line);
+    }
+  }
   result.stats = robot.stats();
   result.trace = robot.trace();
   result.tables_mapped = tables.tables();
@@ -332,68 +417,14 @@ EpisodeResult runFindmug(const World& world, const SimParams& params,
   return result;
 }
 
-// One hand-placed place in front of a piece of furniture: the first reachable spot just
-// clear of it, trying directions from the one towards its room's centre.
-struct Place {
-  int cell = -1;
-  double yaw = 0.0;
-};
-
-std::vector<Place> handPlacedPlaces(const World& world, const SimParams& params) {
-  const std::vector<double> from_start = world.grid.distancesFrom(world.grid.cellAt(world.start));
-  std::vector<Place> places;
-  for (const synth::FurnitureTruth& f : world.apartment.furniture) {
-    if (f.kind != "table" && f.kind != "cabinet" && f.kind != "shelf") continue;
-    if (f.room < 0) continue;
-    Eigen::Vector2d c = Eigen::Vector2d::Zero();
-    for (const auto& v : f.footprint) c += v / static_cast<double>(f.footprint.size());
-    const Eigen::Vector2d to_room = world.apartment.rooms[f.room].center() - c;
-    const double a0 = std::atan2(to_room.y(), to_room.x());
-    for (int k = 0; k < 16; ++k) {
-      const double a = a0 + (k % 2 ? 1 : -1) * ((k + 1) / 2) * (2.0 * M_PI / 16);
-      const Eigen::Vector2d dir(std::cos(a), std::sin(a));
-      // Step out until the robot would clear the footprint by 0.15 m.
-      double r = 0.0;
-      const double clear = params.robot_radius_m + 0.15;
-      auto inside = [&](const Eigen::Vector2d& p) {
-        const std::size_t n = f.footprint.size();
-        for (std::size_t i = 0; i < n; ++i) {
-          const Eigen::Vector2d e = f.footprint[(i + 1) % n] - f.footprint[i];
-          const Eigen::Vector2d q = p - f.footprint[i];
-          if (e.x() * q.y() - e.y() * q.x() < -clear * e.norm()) return false;
-        }
-        return true;
-      };
-      while (r < 3.0 && inside(c + r * dir)) r += 0.05;
-      const int cell = reachableCellNear(world.grid, from_start, c + r * dir, 0.1);
-      if (cell < 0) continue;
-      const Eigen::Vector2d look = c - world.grid.center(cell);
-      places.push_back({cell, std::atan2(look.y(), look.x())});
-      break;
-    }
-  }
-  return places;
-}
-
 EpisodeResult runPlaces(const World& world, const SimParams& params,
                         const Perception& perception) {
   EpisodeResult result;
   Eyes eyes(perception, false);
   Robot robot = eyes.robot(world, params);
-  std::vector<Place> todo = handPlacedPlaces(world, params);
+  std::vector<Place> todo = placesBesideFurniture(world, params, false);
   RoomExplorer rooms(world);
-  while (robot.active() && !todo.empty()) {
-    const std::vector<double> dist = world.grid.distancesFrom(robot.cell());
-    const auto next = std::min_element(
-        todo.begin(), todo.end(),
-        [&dist](const Place& a, const Place& b) { return dist[a.cell] < dist[b.cell]; });
-    const Place place = *next;
-    todo.erase(next);
-    ++result.positions_visited;
-    robot.driveTo(world.grid.center(place.cell));
-    robot.turnTo(place.yaw);
-    robot.look();
-  }
+  visitPlaces(robot, world, std::move(todo), result.positions_visited);
   while (robot.active() && rooms.exploreNext(robot)) {
   }
   coverUntilDone(robot, world, params, false);
@@ -464,12 +495,12 @@ void coverUntilDone(Robot& robot, const World& world, const SimParams& params, b
     for (; marked < robot.viewPoses().size(); ++marked)
       coverage.markView(robot.viewPoses()[marked].first, robot.viewPoses()[marked].second);
   };
-  if (look_first) robot.lookAround();
+  if (look_first) robot.lookAround(false);
   mark();
   while (robot.active()) {
     const int goal = coverage.nextGoal(world.grid.distancesFrom(robot.cell()));
     if (goal < 0 || !robot.driveTo(world.grid.center(goal))) break;
-    robot.lookAround();
+    robot.lookAround(false);
     mark();
   }
 }

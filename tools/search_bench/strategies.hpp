@@ -14,6 +14,11 @@
 //                  view), look around again.
 //   d random       random reachable poses, a look-around at each.
 //   e oracle       straight to the nearest pose that recognises the mug (upper bound).
+// Look-arounds (a, d, and the room exploring (a) and (b) fall back to) turn only through the
+// headings whose view would show enough floor plan that none of the robot's frames showed
+// (Robot::lookAround, ViewCoverage); coverage's look-arounds turn through every heading (it
+// marks its own frontiers by its stop views, and goes only where they showed nothing yet).
+// --full-look-arounds: every look-around turns through every heading.
 // Every strategy uses the same recogniser at every frame it takes (stop views and frames
 // while driving):
 //   oracle   the rendered mug's pixels (>= recognise_min_pixels within recognise_range_m);
