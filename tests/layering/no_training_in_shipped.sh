@@ -11,6 +11,12 @@ if [[ $# -ne 3 ]]; then
   exit 2
 fi
 core=$1 daemon=$2 trainer=$3
+for f in "$core" "$daemon" "$trainer"; do
+  if [[ ! -f $f ]]; then
+    echo "FAIL: $f is not built: build it first (nothing to check)" >&2
+    exit 1
+  fi
+done
 pattern='findmug::RandomForest::train(Boosted)?\('
 # Functions a file defines (text symbols), demangled; the dynamic table of a shared library.
 defined() { nm -C --defined-only "$@" 2>/dev/null | grep -E " [Tt] " || true; }
