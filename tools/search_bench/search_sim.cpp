@@ -486,8 +486,13 @@ bool Robot::perceive(bool stop_view) {
     stats_.found = true;
   else
     stats_.false_found = true;
+  // Where perception put it: what a false "found" took for the mug.
+  char where[96];
+  std::snprintf(where, sizeof(where), " at (%.2f, %.2f, %.2f), %.2f m from the mug", reported.x(),
+                reported.y(), reported.z(),
+                (reported.head<2>() - world_.mug.position.head<2>()).norm());
   note(std::string(stats_.found ? "found" : "false found") +
-       (stop_view ? " (stop view)" : " (driving frame)"));
+       (stop_view ? " (stop view)" : " (driving frame)") + where);
   return true;
 }
 
