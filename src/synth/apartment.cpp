@@ -479,7 +479,33 @@ MultiRoomApartment makeMultiRoomApartment(std::uint64_t seed, const MultiRoomPar
               " after 40 attempts");
 }
 
-TargetMug placeTargetMug(MultiRoomApartment& apt, std::uint64_t seed, const MugPrior& prior) {
+bool looksLikeTargetMugRed(Rgb8 colour) {
+  // The palette's red is 5:1 red to green and blue, its orange 2:1; the jitter moves the
+  // ratio by at most 13 %, so 3:1 parts them with room on both sides.
+  return colour.r >= 100 && colour.r >= 3 * std::max(colour.g, colour.b);
+}
+
+namespace {
+
+// Every small object of kind "mug" as red as the target gets the blue of its brightness
+// (channels rotated): one mug in the apartment looks like the target. Returns how many.
+int recolourLookAlikeMugs(SynthScene& scene) {
+  std::vector<bool> recoloured(scene.objects.size(), false);
+  for (const Primitive& p : scene.primitives)
+    if (scene.objects[p.object].kind == "mug" && looksLikeTargetMugRed(p.material.color))
+      recoloured[p.object] = true;
+  for (Primitive& p : scene.primitives) {
+    if (!recoloured[p.object]) continue;
+    const Rgb8 c = p.material.color;
+    p.material.color = {c.g, c.b, c.r};
+  }
+  return static_cast<int>(std::count(recoloured.begin(), recoloured.end(), true));
+}
+
+}  // namespace
+
+TargetMug placeTargetMug(MultiRoomApartment& apt, std::uint64_t seed, const MugPrior& prior,
+                         LookAlikes look_alikes) {
   const double total = prior.table + prior.cabinet + prior.floor;
   if (!(prior.table >= 0 && prior.cabinet >= 0 && prior.floor >= 0 && total > 0 &&
         std::isfinite(total)))
@@ -527,6 +553,8 @@ TargetMug placeTargetMug(MultiRoomApartment& apt, std::uint64_t seed, const MugP
   const Primitive handle =
       boxPart(at(local(c, handle_yaw, r + 0.012, 0.0), mug.position.z() + mug.height * 0.55),
               handle_yaw, {0.014, 0.006, mug.height * 0.28}, red);
+  if (look_alikes == LookAlikes::Recolour)
+    mug.look_alikes_recoloured = recolourLookAlikeMugs(apt.scene);
   mug.object = addObject(apt.scene, "target_mug", Label::Object, {body, handle});
   if (mug.place == MugPlace::Floor)
     apt.scene.obstacles.push_back({detail::circle(c, r + 0.03, 8), mug.height, mug.object});

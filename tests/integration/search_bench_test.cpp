@@ -32,6 +32,13 @@ std::string slurp(const fs::path& path) {
   return s.str();
 }
 
+// The sim-domain model as the bench's "sim" runs it.
+FindmugModel simDomainModel() {
+  const std::string root = FINDMUG_SOURCE_DIR;
+  return loadFindmugModel(root + "/daemon/findmugd.yaml", root + "/models/findmug-nyu-synth.fmf",
+                          simDomainSettings());
+}
+
 // A world in an empty 6 x 4 m room with the mug on the floor at (5, 2).
 World emptyRoomWorld(const SimParams& params) {
   World w;
@@ -311,10 +318,7 @@ TEST(SearchBench, OracleDrivesTheShortestPathAndSeesTheMug) {
 }
 
 TEST(SearchBench, FindmugStrategyFindsTheMugOnTablesFromTheDaemonsTableMap) {
-  const std::string root = FINDMUG_SOURCE_DIR;
-  const FindmugModel model =
-      loadFindmugModel(root + "/daemon/findmugd.yaml", root + "/models/findmug-nyu-synth.fmf",
-                       {"learner.classes=labels", "features.objects=false", "mrf.pairwise=potts"});
+  const FindmugModel model = simDomainModel();
   SimParams params;
   params.prior = {1.0, 0.0, 0.0};  // table episodes only
   int positions = 0, tables = 0;
@@ -341,10 +345,7 @@ TEST(SearchBench, FindmugStrategyFindsTheMugOnTablesFromTheDaemonsTableMap) {
 // episode (one of 8 tables, whose trace showed every visit wasted) the findmug strategy visits fewer search positions, finds every mug and spends
 // no more time than when it visits every table and explores every room to its centre.
 TEST(SearchBench, FindmugStrategySkipsTheTablesWhoseTopsItHasSeen) {
-  const std::string root = FINDMUG_SOURCE_DIR;
-  const FindmugModel model =
-      loadFindmugModel(root + "/daemon/findmugd.yaml", root + "/models/findmug-nyu-synth.fmf",
-                       {"learner.classes=labels", "features.objects=false", "mrf.pairwise=potts"});
+  const FindmugModel model = simDomainModel();
   SimParams seen_tops;
   seen_tops.prior = {1.0, 0.0, 0.0};
   seen_tops.trace = true;
@@ -381,10 +382,7 @@ TEST(SearchBench, FindmugStrategySkipsTheTablesWhoseTopsItHasSeen) {
 // at the grid's furniture the search ends early, not found (coverage of the floor plan, 2 m,
 // never stood in front of it); with them, the look from beside the cabinet finds the mug.
 TEST(SearchBench, FindmugStrategyLooksAtTheGridsFurnitureWhenCoverageLeftNothing) {
-  const std::string root = FINDMUG_SOURCE_DIR;
-  const FindmugModel model =
-      loadFindmugModel(root + "/daemon/findmugd.yaml", root + "/models/findmug-nyu-synth.fmf",
-                       {"learner.classes=labels", "features.objects=false", "mrf.pairwise=potts"});
+  const FindmugModel model = simDomainModel();
   SimParams params;
   params.trace = true;
   params.time_budget_s = 400.0;

@@ -17,6 +17,12 @@
 
 namespace findmug::search {
 
+const std::vector<std::string>& simDomainSettings() {
+  static const std::vector<std::string> settings{"learner.classes=labels",
+                                                 "features.objects=false", "mrf.pairwise=potts"};
+  return settings;
+}
+
 FindmugModel loadFindmugModel(const std::string& config_path, const std::string& model_path,
                               const std::vector<std::string>& overrides) {
   std::vector<std::string> args{"--config", config_path, "--model", model_path};

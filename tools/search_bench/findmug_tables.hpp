@@ -52,6 +52,10 @@ struct FindmugModel {
 FindmugModel loadFindmugModel(const std::string& config_path, const std::string& model_path,
                               const std::vector<std::string>& overrides);
 
+// The settings the sim-domain model (models/findmug-nyu-synth.fmf) runs with, demo.sh's:
+// it learned the 8 labels, without object features, for the Potts pairwise term.
+const std::vector<std::string>& simDomainSettings();
+
 // One episode's daemon: a fresh pipeline (and so an empty table and object map).
 class FindmugTables {
  public:

@@ -58,7 +58,7 @@ void writeCsv(std::ostream& out, const std::vector<EpisodeRow>& rows) {
          "mug_place,mug_room,shortest_m,found,false_found,time_s,path_m,views,drive_frames,"
          "recogniser_calls,drive_s,turn_s,process_s,spl,tables_mapped,positions_visited,"
          "frames_processed,look_closer,candidates,matches,refused_size,refused_colour,"
-         "refused_shape\n";
+         "refused_shape,look_alikes\n";
   for (const EpisodeRow& r : rows) {
     const RunStats& s = r.result.stats;
     out << r.label() << ',' << r.result.strategy << ',' << r.perception << ',' << r.model << ','
@@ -73,7 +73,7 @@ void writeCsv(std::ostream& out, const std::vector<EpisodeRow>& rows) {
         << ',' << r.result.positions_visited << ',' << r.result.frames_processed << ','
         << r.result.look_closer << ',' << r.result.candidates << ',' << r.result.matches << ','
         << r.result.refused_size << ',' << r.result.refused_colour << ','
-        << r.result.refused_shape << '\n';
+        << r.result.refused_shape << ',' << r.look_alikes << '\n';
   }
 }
 

@@ -25,6 +25,7 @@ struct EpisodeRow {
   std::string run, perception, model;
   int rooms = 0;
   std::string mug_place, mug_room;
+  int look_alikes = 0;  // other red mugs recoloured (synth::LookAlikes)
   double shortest_path_m = 0.0;
   EpisodeResult result;
   double spl() const;

@@ -55,10 +55,6 @@ std::vector<std::string> splitList(const std::string& text) {
   return out;
 }
 
-// demo.sh's settings for the sim-domain model.
-const std::vector<std::string> kSimSettings{"learner.classes=labels", "features.objects=false",
-                                            "mrf.pairwise=potts"};
-
 struct Options {
   int apartments = 2, episodes = 2, jobs = 1;
   std::uint64_t seed = 1;
@@ -68,7 +64,7 @@ struct Options {
   std::string out_dir;
   std::string config = "daemon/findmugd.yaml";
   std::string model = "models/findmug-nyu-synth.fmf";
-  std::vector<std::string> overrides = kSimSettings;
+  std::vector<std::string> overrides = simDomainSettings();
   std::vector<std::string> extra_overrides;
   double budget_s = 600.0;
   double drive_frames_hz = 1.0;
@@ -80,6 +76,7 @@ struct Options {
   bool no_replan = false;
   bool no_furniture_visits = false;
   bool full_look_arounds = false;
+  bool keep_look_alikes = false;
   std::string only;  // "" = every episode
 };
 
@@ -120,7 +117,7 @@ std::vector<ModelChoice> modelChoices(const Options& o) {
   }
   for (const std::string& key : splitWords(o.models, "--models")) {
     if (key == "sim")
-      out.push_back({key, "models/findmug-nyu-synth.fmf", kSimSettings, nullptr, "", {}});
+      out.push_back({key, "models/findmug-nyu-synth.fmf", simDomainSettings(), nullptr, "", {}});
     else if (key == "shipped")
       out.push_back({key, "models/findmug.fmf", {}, nullptr, "", {}});
     else
@@ -145,6 +142,7 @@ EpisodeRow runOnEpisode(const Episode& episode, const RunSpec& run, const SimPar
   row.mug_room =
       world.mug.room >= 0 ? synth::roomKindName(world.apartment.rooms[world.mug.room].kind) : "-";
   row.shortest_path_m = world.shortest_path_m;
+  row.look_alikes = world.mug.look_alikes_recoloured;
   row.result = runStrategy(run.strategy, world, params, run.setup);
   return row;
 }
@@ -248,6 +246,7 @@ int run(const Options& o) {
   params.replan_on_new_tables = !o.no_replan;
   params.furniture_after_coverage = !o.no_furniture_visits;
   params.full_look_arounds = o.full_look_arounds;
+  params.look_alikes = o.keep_look_alikes ? synth::LookAlikes::Keep : synth::LookAlikes::Recolour;
   std::vector<Episode> episodes;
   std::vector<std::uint64_t> apartment_seeds;
   for (int a = 0; a < o.apartments; ++a) {
@@ -342,7 +341,11 @@ int run(const Options& o) {
           << " m. The robot starts outside the mug's room; mug placements no pose can "
              "recognise (by the oracle) are drawn again. Mug prior: table "
           << params.prior.table << ", cabinet/shelf " << params.prior.cabinet << ", floor "
-          << params.prior.floor << ".\n";
+          << params.prior.floor << "; "
+          << (params.look_alikes == synth::LookAlikes::Keep
+                  ? "other mugs as red as the target kept (--keep-look-alikes)"
+                  : "other mugs as red as the target recoloured (one mug looks like it)")
+          << ".\n";
   for (const ModelChoice& m : models) {
     if (!m.loaded) continue;
     summary << "\nModel " << m.key << ": " << m.path << " (settings:";
@@ -425,6 +428,9 @@ int main(int argc, char** argv) {
                 "every look-around turns through all its headings, also those whose view would "
                 "show nothing the robot's frames have not shown (the behaviour before look-arounds "
                 "skipped them)");
+  app->add_flag("--keep-look-alikes", o.keep_look_alikes,
+                "keep the other mugs as red as the target (twins no recogniser can tell from it); "
+                "by default they are recoloured");
   app->add_option("--trace", o.trace_dir,
                   "folder for one trace file per run and episode: every action with its time, "
                   "pose and reason");

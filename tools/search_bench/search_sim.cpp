@@ -260,7 +260,8 @@ World makeWorld(const Episode& episode, const SimParams& params) {
     w.episode = episode;
     w.apartment = base;
     w.mug =
-        synth::placeTargetMug(w.apartment, mix(episode.episode_seed + 977 * attempt), params.prior);
+        synth::placeTargetMug(w.apartment, mix(episode.episode_seed + 977 * attempt), params.prior,
+                              params.look_alikes);
     w.grid = Grid(w.apartment.scene, params.robot_radius_m, params.cell_m);
     const int start =
         drawStartCell(w.grid, w.apartment, w.mug.room, mix(episode.episode_seed ^ 0x5747ULL));

@@ -63,6 +63,8 @@ struct SimParams {
   bool furniture_after_coverage = true;
   synth::MultiRoomParams apartment;
   synth::MugPrior prior;
+  // Other mugs as red as the target: recoloured (default) or kept (--keep-look-alikes).
+  synth::LookAlikes look_alikes = synth::LookAlikes::Recolour;
   // Keep a line per action (time, pose, what and why) for --trace: where an episode's time went.
   bool trace = false;
 };

@@ -57,7 +57,8 @@ TaughtObject teachTargetMug(const FindmugModel& model, const SimParams& params,
                   " is also an episode's apartment");
     World w;
     w.apartment = synth::makeMultiRoomApartment(seed, table_only.apartment);
-    w.mug = synth::placeTargetMug(w.apartment, mix(seed ^ 0x7eac4ULL), table_only.prior);
+    w.mug = synth::placeTargetMug(w.apartment, mix(seed ^ 0x7eac4ULL), table_only.prior,
+                                  params.look_alikes);
     w.grid = Grid(w.apartment.scene, params.robot_radius_m, params.cell_m);
     Eigen::Vector2d xy;
     double yaw = 0.0;

@@ -262,6 +262,16 @@ struct MugPrior {
   double table = 0.7, cabinet = 0.2, floor = 0.1;
 };
 
+// Whether other mugs may look like the target. The furnishing draws small objects' colours
+// from one palette, red among them, so about one small object in 25 is a red mug of the
+// target's size: a twin that no recogniser taught from the target's looks can tell from it,
+// and a robot asked for "my mug" in a home with two identical mugs has no wrong answer to
+// give. Recolour (the default) turns every other mug whose body is as red as the target's
+// into another colour of the palette, so that a false "found" measures a recogniser's
+// confusion, not the world's; boxes and books keep their colours (red ones stay, refused by
+// shape). Keep leaves them (the worlds before this rule).
+enum class LookAlikes { Recolour, Keep };
+
 struct TargetMug {
   int object = -1;     // index into SynthScene::objects (kind "target_mug")
   MugPlace place = MugPlace::Table;
@@ -269,13 +279,20 @@ struct TargetMug {
   int room = -1;
   Eigen::Vector3d position = Eigen::Vector3d::Zero();  // centre of its base, world
   double height = 0.0;
+  int look_alikes_recoloured = 0;  // other mugs as red as it, recoloured (LookAlikes)
 };
 
 // Adds a target mug to `apartment` (its scene, and an obstacle when on the floor) by the
-// prior, clear of the objects already there. Deterministic in `seed`. Throws
-// findmug::Error when the prior is not a distribution or no place could be found.
+// prior, clear of the objects already there, and recolours the other mugs that look like it
+// unless told to keep them. Deterministic in `seed`. Throws findmug::Error when the prior is
+// not a distribution or no place could be found.
 TargetMug placeTargetMug(MultiRoomApartment& apartment, std::uint64_t seed,
-                         const MugPrior& prior = {});
+                         const MugPrior& prior = {},
+                         LookAlikes look_alikes = LookAlikes::Recolour);
+
+// Whether a colour is the target mug's red (the palette's red, however the furnishing's
+// jitter of +-15 % brightness and +-6 % per channel drew it; its orange is not).
+bool looksLikeTargetMugRed(Rgb8 colour);
 
 // ---------------------------------------------------------------- camera ----
 

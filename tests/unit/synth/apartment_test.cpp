@@ -135,6 +135,44 @@ TEST(MultiRoomApartment, TargetMugFollowsItsPrior) {
   EXPECT_THROW(placeTargetMug(apt, 1, {0.0, 0.0, 0.0}), Error);
 }
 
+// The target is the apartment's only red mug unless told otherwise: the furnishing's red
+// mugs (twins no recogniser can tell from it) turn blue; red boxes and books stay.
+TEST(MultiRoomApartment, TargetMugHasNoTwinUnlessTwinsAreKept) {
+  // The palette's red and orange at the jitter's extremes (+-15 % brightness, +-6 % a channel).
+  EXPECT_TRUE(looksLikeTargetMugRed({205, 35, 35}));
+  EXPECT_TRUE(looksLikeTargetMugRed({160, 40, 40}));   // dark red, greenest
+  EXPECT_TRUE(looksLikeTargetMugRed({244, 46, 46}));
+  EXPECT_FALSE(looksLikeTargetMugRed({186, 99, 27}));  // orange, reddest
+  EXPECT_FALSE(looksLikeTargetMugRed({252, 110, 30}));
+  EXPECT_FALSE(looksLikeTargetMugRed({40, 90, 200}));
+  auto redMugs = [](const SynthScene& scene, const std::string& kind) {
+    int n = 0;
+    std::vector<bool> counted(scene.objects.size(), false);
+    for (const Primitive& p : scene.primitives)
+      if (scene.objects[p.object].kind == kind && looksLikeTargetMugRed(p.material.color) &&
+          !counted[p.object])
+        counted[p.object] = true, ++n;
+    return n;
+  };
+  int kept_twins = 0, red_boxes = 0;
+  for (std::uint64_t seed = 1000003; seed < 1000013; ++seed) {
+    MultiRoomApartment kept = makeMultiRoomApartment(seed);
+    const TargetMug k = placeTargetMug(kept, seed * 7919, {}, LookAlikes::Keep);
+    MultiRoomApartment unique = makeMultiRoomApartment(seed);
+    const TargetMug u = placeTargetMug(unique, seed * 7919);
+    EXPECT_EQ(k.position, u.position);
+    EXPECT_EQ(k.look_alikes_recoloured, 0);
+    EXPECT_EQ(u.look_alikes_recoloured, redMugs(kept.scene, "mug"));
+    EXPECT_EQ(redMugs(unique.scene, "mug"), 0) << "seed " << seed;
+    EXPECT_EQ(redMugs(unique.scene, "target_mug"), 1);
+    EXPECT_EQ(redMugs(unique.scene, "box"), redMugs(kept.scene, "box"));
+    kept_twins += redMugs(kept.scene, "mug");
+    red_boxes += redMugs(kept.scene, "box");
+  }
+  EXPECT_GT(kept_twins, 5);  // the rule has twins to remove in these apartments
+  EXPECT_GT(red_boxes, 0);
+}
+
 // The oracle recogniser of the search benchmark counts the mug's pixels with
 // countObjectPixels instead of rendering a frame: the count must be the full render's, to
 // the pixel, whether the mug is in full view, cut by the image border, hidden behind
