@@ -63,12 +63,14 @@ ObjectSearchSink::ObjectSearchSink(ObjectSearchSettings settings, std::shared_pt
       options, StageCallbacks<Job, Done>{
                    .work = [this](Job& job) -> std::optional<Done> {
                      work(job);
+                     recycle(job);
                      return Done{};
                    },
                    .emit = [](Done&&) {},
                    .on_drop =
-                       [](const Job& dropped) {
+                       [this](Job& dropped) {
                          spdlog::debug("object search behind: skipped frame seq {}", dropped.seq);
+                         recycle(dropped);
                        },
                    .on_error = [this](const std::string& what) { on_error_(what); },
                });
@@ -164,6 +166,23 @@ TableCluster withoutPixels(const TableCluster& t) {
 
 }  // namespace
 
+std::vector<std::uint16_t> ObjectSearchSink::takeDepthBuffer() {
+  std::lock_guard lock(spare_depth_mutex_);
+  if (spare_depth_.empty()) return {};
+  std::vector<std::uint16_t> buffer = std::move(spare_depth_.back());
+  spare_depth_.pop_back();
+  return buffer;
+}
+
+void ObjectSearchSink::recycle(Job& job) {
+  if (!job.view_depth) return;
+  std::lock_guard lock(spare_depth_mutex_);
+  // As many as can be in flight: the queue, the job at work and the one being made.
+  if (spare_depth_.size() < static_cast<std::size_t>(settings_.queue_capacity) + 2)
+    spare_depth_.push_back(std::move(job.view_depth->depth_mm));
+  job.view_depth.reset();
+}
+
 ObjectSearchSink::Job ObjectSearchSink::makeJob(const FrameResult& result) {
   const LabelledFrame& labelled = result.labelled;
   const PreparedFrame& prepared = labelled.segmented.prepared;
@@ -185,7 +204,8 @@ ObjectSearchSink::Job ObjectSearchSink::makeJob(const FrameResult& result) {
     RgbdFrame depth;
     depth.width = frame.width;
     depth.height = frame.height;
-    depth.depth_mm = frame.depth_mm;
+    depth.depth_mm = takeDepthBuffer();
+    depth.depth_mm.assign(frame.depth_mm.begin(), frame.depth_mm.end());
     depth.intrinsics = frame.intrinsics;
     depth.source = job.frame_name;
     job.view_depth = std::move(depth);

@@ -174,9 +174,15 @@ class ObjectSearchSink final : public ResultSink {
   io::FindResultMessage answerLocked(std::uint64_t utime);
   void publish(const io::FindResultMessage& message);
   void publishMap(const std::vector<std::uint8_t>& bytes, std::int64_t seq);
+  // Depth buffers of finished or dropped jobs, reused by the next ones: a 640x480 image is
+  // 600 KB, which a fresh allocation maps and faults in page by page every frame.
+  std::vector<std::uint16_t> takeDepthBuffer();
+  void recycle(Job& job);
 
   ObjectSearchSettings settings_;
   mutable std::mutex bus_mutex_;  // guards bus_ (worker, command thread, stop)
+  std::mutex spare_depth_mutex_;  // guards spare_depth_ (frame thread, worker)
+  std::vector<std::vector<std::uint16_t>> spare_depth_;
   std::shared_ptr<io::Bus> bus_;
   Channels channels_;
   TableMapSource table_map_;
