@@ -77,6 +77,7 @@ struct Options {
   bool quiet = false;
   std::string trace_dir;  // "" = no traces
   double top_seen_share = 0.8;
+  double room_seen_share = 0.8;
   bool no_replan = false;
   bool no_furniture_visits = false;
   bool full_look_arounds = false;
@@ -245,6 +246,7 @@ int run(const Options& o) {
   params.drive_frames_hz = o.drive_frames_hz;
   params.trace = !o.trace_dir.empty();
   params.top_seen_share = o.top_seen_share;
+  params.room_seen_share = o.room_seen_share;
   params.replan_on_new_tables = !o.no_replan;
   params.furniture_after_coverage = !o.no_furniture_visits;
   params.full_look_arounds = o.full_look_arounds;
@@ -411,6 +413,11 @@ int main(int argc, char** argv) {
   app->add_option("--top-seen-share", o.top_seen_share,
                   "findmug strategy: skip a table once this share of its top was in view within "
                   "the recogniser's reach (default 0.8; 0: visit every table)")
+      ->check(CLI::Range(0.0, 1.0));
+  app->add_option("--room-seen-share", o.room_seen_share,
+                  "findmug and places strategies: a room counts as explored once the robot looked "
+                  "around in it or its frames have shown this share of its floor plan (default "
+                  "0.8; 1: only a look-around in it)")
       ->check(CLI::Range(0.0, 1.0));
   app->add_option("--only", o.only,
                   "run only these episodes of the run, APARTMENT.EPISODE comma-separated (e.g. "

@@ -56,6 +56,10 @@ struct SimParams {
   double top_seen_share = 0.8;
   double top_seen_range_oracle_m = 3.0;   // the oracle's 150 px of mug: 3.5 m head-on
   double top_seen_range_matcher_m = 1.5;  // the matcher names the mug from 1.0-1.5 m
+  // A room counts as explored (the findmug and places strategies' room exploring) once the
+  // robot looked around in it, or once its frames have shown this share of its floor plan
+  // (ViewCoverage; 1: only a look-around in it).
+  double room_seen_share = 0.8;
   // The findmug strategy stops exploring a room when the map shows a new table to look at.
   bool replan_on_new_tables = true;
   // The findmug strategy, when coverage has left nothing and the mug is not seen: it looks at
