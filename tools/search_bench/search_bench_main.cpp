@@ -81,6 +81,7 @@ struct Options {
   bool no_replan = false;
   bool no_furniture_visits = false;
   bool full_look_arounds = false;
+  bool explore_to_room_centres = false;
   std::string only;  // "" = every episode
 };
 
@@ -250,6 +251,7 @@ int run(const Options& o) {
   params.replan_on_new_tables = !o.no_replan;
   params.furniture_after_coverage = !o.no_furniture_visits;
   params.full_look_arounds = o.full_look_arounds;
+  params.explore_to_room_centres = o.explore_to_room_centres;
   std::vector<Episode> episodes;
   std::vector<std::uint64_t> apartment_seeds;
   for (int a = 0; a < o.apartments; ++a) {
@@ -432,6 +434,10 @@ int main(int argc, char** argv) {
                 "every look-around turns through all its headings, also those whose view would "
                 "show nothing the robot's frames have not shown (the behaviour before look-arounds "
                 "skipped them)");
+  app->add_flag("--explore-to-room-centres", o.explore_to_room_centres,
+                "findmug and places strategies: exploring a room drives to its centre before "
+                "looking around, also when a spot on the way (its doorway) would show as much of "
+                "it (the behaviour before exploring looked from the first such spot)");
   app->add_option("--trace", o.trace_dir,
                   "folder for one trace file per run and episode: every action with its time, "
                   "pose and reason");

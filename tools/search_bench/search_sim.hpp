@@ -60,6 +60,10 @@ struct SimParams {
   // robot looked around in it, or once its frames have shown this share of its floor plan
   // (ViewCoverage; 1: only a look-around in it).
   double room_seen_share = 0.8;
+  // Exploring a room drives to its centre before the look-around, also when a look-around
+  // from a spot passed on the way (its doorway) would show as much of it (the behaviour
+  // before exploring looked from the first such spot).
+  bool explore_to_room_centres = false;
   // The findmug strategy stops exploring a room when the map shows a new table to look at.
   bool replan_on_new_tables = true;
   // The findmug strategy, when coverage has left nothing and the mug is not seen: it looks at
@@ -178,13 +182,19 @@ class ViewCoverage {
   void markFrame(const Eigen::Vector2d& xy, double yaw);
   // The floor (m^2) a frame from this pose would show that no marked frame showed.
   double unseenM2(const Eigen::Vector2d& xy, double yaw) const;
+  // The cells a full turn at this spot would show (every heading): the most a look-around
+  // there can show.
+  std::vector<int> cellsInViewAround(const Eigen::Vector2d& xy) const;
   bool covered(int cell) const { return seen_[cell] != 0; }
   bool blocksView(int cell) const { return blocks_[cell] != 0; }
 
  private:
-  // Calls visit(cell) once per cell a frame from this pose shows.
+  // Calls visit(cell) once per cell a frame from this pose shows; a wider half angle than
+  // the camera's (pi: all around) for what several frames from the spot show.
   template <typename Visit>
-  void castFrame(const Eigen::Vector2d& xy, double yaw, Visit&& visit) const;
+  void castFrame(const Eigen::Vector2d& xy, double yaw, Visit&& visit,
+                 double half_angle = kCameraHalfFov) const;
+  static constexpr double kCameraHalfFov = 0.547;  // atan(320 / 525), horizontal
   const Grid* grid_ = nullptr;
   double range_m_ = 0.0;
   std::vector<std::uint8_t> seen_, blocks_;

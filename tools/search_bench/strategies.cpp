@@ -528,11 +528,12 @@ RoomExplorer::RoomExplorer(const World& world, const SimParams& params)
   // Each room's floor plan: its cells that do not block the view (low furniture included:
   // the camera looks over it and would show a mug on it).
   floor_.resize(world.apartment.rooms.size());
+  room_of_.assign(world.grid.size(), -1);
   const ViewCoverage blocking(world, params);
   for (int i = 0; i < world.grid.size(); ++i) {
     if (blocking.blocksView(i)) continue;
     const int r = world.apartment.roomAt(world.grid.center(i));
-    if (r >= 0) floor_[r].push_back(i);
+    if (r >= 0) floor_[r].push_back(i), room_of_[i] = r;
   }
 }
 
@@ -553,6 +554,17 @@ bool RoomExplorer::explored(const Robot& robot, int room) const {
   return done_[room] || seenShare(robot, room) >= params_.room_seen_share;
 }
 
+double RoomExplorer::seenShareAfterLookAround(const Robot& robot, int room,
+                                              const Eigen::Vector2d& xy) const {
+  const std::vector<int>& cells = floor_[room];
+  if (cells.empty()) return 1.0;
+  const ViewCoverage& coverage = robot.viewCoverage();
+  int seen = 0;
+  for (const int c : cells) seen += coverage.covered(c);
+  for (const int c : coverage.cellsInViewAround(xy)) seen += room_of_[c] == room && !coverage.covered(c);
+  return static_cast<double>(seen) / static_cast<double>(cells.size());
+}
+
 bool RoomExplorer::exploreNext(Robot& robot, const std::function<bool()>& stop_when) {
   const std::vector<double> dist = world_.grid.distancesFrom(robot.cell());
   int best_room = -1, best_cell = -1;
@@ -571,9 +583,35 @@ bool RoomExplorer::exploreNext(Robot& robot, const std::function<bool()>& stop_w
                 best_room, synth::roomKindName(world_.apartment.rooms[best_room].kind),
                 100.0 * seenShare(robot, best_room));
   robot.note(line);
-  robot.driveTo(world_.grid.center(best_cell), stop_when);
-  if (robot.interrupted()) return true;
+  // Whether a look-around where the robot stands would show the room as well as one from
+  // the centre, or well enough: then it looks around here.
+  const Eigen::Vector2d centre = world_.grid.center(best_cell);
+  const auto room_in_view = [&] {
+    if (params_.explore_to_room_centres || world_.apartment.roomAt(robot.xy()) != best_room)
+      return false;
+    const double enough = std::min(params_.room_seen_share,
+                                   seenShareAfterLookAround(robot, best_room, centre));
+    return seenShareAfterLookAround(robot, best_room, robot.xy()) >= enough;
+  };
+  bool look_here = room_in_view();
+  if (!look_here) {
+    const std::function<bool()> stop = [&] {
+      if (stop_when && stop_when()) return true;
+      look_here = room_in_view();
+      return look_here;
+    };
+    robot.driveTo(centre, stop);
+    if (robot.interrupted() && !look_here) return true;
+  }
   done_[best_room] = true;  // also when the drive failed: it is not tried again
+  if (look_here) {
+    std::snprintf(line, sizeof line,
+                  "the room in view: a look-around here shows %.0f %% of its floor plan, at its "
+                  "centre %.0f %%",
+                  100.0 * seenShareAfterLookAround(robot, best_room, robot.xy()),
+                  100.0 * seenShareAfterLookAround(robot, best_room, centre));
+    robot.note(line);
+  }
   robot.lookAround();
   return true;
 }

@@ -81,10 +81,17 @@ class RoomExplorer {
   // The share of the room's floor plan the robot's frames have shown.
   double seenShare(const Robot& robot, int room) const;
   bool explored(const Robot& robot, int room) const;
-  // Drives to the reachable cell nearest the centre of the nearest room not yet explored
-  // and looks around there; false when every room is explored. When `stop_when` stops the
-  // drive, the room stays to be explored and there is no look-around (the caller has
-  // something new to look at).
+  // The share of the room's floor plan the robot's frames would have shown after a
+  // look-around at `xy` (what they showed, and what a full turn there shows of it).
+  double seenShareAfterLookAround(const Robot& robot, int room, const Eigen::Vector2d& xy) const;
+  // Explores the nearest room not yet explored (by planned path to the reachable cell
+  // nearest its centre); false when every room is explored. The robot drives towards that
+  // cell and looks around (only through headings that show something new) at the first
+  // frame's spot inside the room from which a look-around would show as much of its floor
+  // plan as one from the centre would, or room_seen_share of it: a room seen from its
+  // doorway needs no walk to its middle and back (SimParams::explore_to_room_centres: at the
+  // centre, always). When `stop_when` stops the drive, the room stays to be explored and
+  // there is no look-around (the caller has something new to look at).
   bool exploreNext(Robot& robot, const std::function<bool()>& stop_when = {});
 
  private:
@@ -92,6 +99,7 @@ class RoomExplorer {
   const SimParams& params_;
   std::vector<bool> done_;               // looked around in
   std::vector<std::vector<int>> floor_;  // per room: its grid cells that do not block the view
+  std::vector<int> room_of_;             // per grid cell: the room whose floor_ holds it, or -1
 };
 
 // Known names: "findmug", "places", "coverage", "random", "oracle" (or a..e).
