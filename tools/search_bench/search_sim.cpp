@@ -302,17 +302,17 @@ ViewCoverage::ViewCoverage(const World& world, const SimParams& params)
 }
 
 template <typename Visit>
-void ViewCoverage::castFrame(const Eigen::Vector2d& xy, double yaw, Visit&& visit,
-                             double half_angle) const {
+void ViewCoverage::castFrame(const Eigen::Vector2d& xy, double yaw, double range_m,
+                             double half_angle, Visit&& visit) const {
   if (grid_ == nullptr) return;
   const double step = 0.5 * grid_->cell();
   // Rays no further apart than half a cell at the range: every cell in view is hit.
-  const int rays = static_cast<int>(std::ceil(2.0 * half_angle * range_m_ / step)) + 1;
+  const int rays = static_cast<int>(std::ceil(2.0 * half_angle * range_m / step)) + 1;
   if (++casts_ == 0) std::fill(stamp_.begin(), stamp_.end(), 0), casts_ = 1;
   for (int k = 0; k < rays; ++k) {
     const double a = yaw - half_angle + 2.0 * half_angle * k / (rays - 1);
     const Eigen::Vector2d dir(std::cos(a), std::sin(a));
-    for (double r = 0.0; r <= range_m_; r += step) {
+    for (double r = 0.0; r <= range_m; r += step) {
       const int c = grid_->cellAt(xy + r * dir);
       if (c < 0 || blocks_[c]) break;
       if (stamp_[c] == casts_) continue;
@@ -323,19 +323,19 @@ void ViewCoverage::castFrame(const Eigen::Vector2d& xy, double yaw, Visit&& visi
 }
 
 void ViewCoverage::markFrame(const Eigen::Vector2d& xy, double yaw) {
-  castFrame(xy, yaw, [this](int c) { seen_[c] = 1; });
+  castFrame(xy, yaw, range_m_, kCameraHalfFov, [this](int c) { seen_[c] = 1; });
 }
 
 double ViewCoverage::unseenM2(const Eigen::Vector2d& xy, double yaw) const {
   if (grid_ == nullptr) return 0.0;
   int unseen = 0;
-  castFrame(xy, yaw, [&](int c) { unseen += seen_[c] == 0; });
+  castFrame(xy, yaw, range_m_, kCameraHalfFov, [&](int c) { unseen += seen_[c] == 0; });
   return unseen * grid_->cell() * grid_->cell();
 }
 
-std::vector<int> ViewCoverage::cellsInViewAround(const Eigen::Vector2d& xy) const {
+std::vector<int> ViewCoverage::cellsInViewAround(const Eigen::Vector2d& xy, double range_m) const {
   std::vector<int> cells;
-  castFrame(xy, 0.0, [&cells](int c) { cells.push_back(c); }, M_PI);
+  castFrame(xy, 0.0, range_m, M_PI, [&cells](int c) { cells.push_back(c); });
   return cells;
 }
 

@@ -182,18 +182,18 @@ class ViewCoverage {
   void markFrame(const Eigen::Vector2d& xy, double yaw);
   // The floor (m^2) a frame from this pose would show that no marked frame showed.
   double unseenM2(const Eigen::Vector2d& xy, double yaw) const;
-  // The cells a full turn at this spot would show (every heading): the most a look-around
-  // there can show.
-  std::vector<int> cellsInViewAround(const Eigen::Vector2d& xy) const;
+  // The cells within `range_m` that a full turn at this spot would show (every heading, in
+  // line of sight): the most a look-around there can show from that near.
+  std::vector<int> cellsInViewAround(const Eigen::Vector2d& xy, double range_m) const;
   bool covered(int cell) const { return seen_[cell] != 0; }
   bool blocksView(int cell) const { return blocks_[cell] != 0; }
 
  private:
-  // Calls visit(cell) once per cell a frame from this pose shows; a wider half angle than
-  // the camera's (pi: all around) for what several frames from the spot show.
+  // Calls visit(cell) once per cell a frame from this pose shows within `range_m`; a wider
+  // half angle than the camera's (pi: all around) for what several frames from the spot show.
   template <typename Visit>
-  void castFrame(const Eigen::Vector2d& xy, double yaw, Visit&& visit,
-                 double half_angle = kCameraHalfFov) const;
+  void castFrame(const Eigen::Vector2d& xy, double yaw, double range_m, double half_angle,
+                 Visit&& visit) const;
   static constexpr double kCameraHalfFov = 0.547;  // atan(320 / 525), horizontal
   const Grid* grid_ = nullptr;
   double range_m_ = 0.0;

@@ -561,7 +561,8 @@ double RoomExplorer::seenShareAfterLookAround(const Robot& robot, int room,
   const ViewCoverage& coverage = robot.viewCoverage();
   int seen = 0;
   for (const int c : cells) seen += coverage.covered(c);
-  for (const int c : coverage.cellsInViewAround(xy)) seen += room_of_[c] == room && !coverage.covered(c);
+  for (const int c : coverage.cellsInViewAround(xy, params_.coverage_range_m))
+    seen += room_of_[c] == room && !coverage.covered(c);
   return static_cast<double>(seen) / static_cast<double>(cells.size());
 }
 

@@ -82,7 +82,9 @@ class RoomExplorer {
   double seenShare(const Robot& robot, int room) const;
   bool explored(const Robot& robot, int room) const;
   // The share of the room's floor plan the robot's frames would have shown after a
-  // look-around at `xy` (what they showed, and what a full turn there shows of it).
+  // look-around at `xy`: what they showed, and what a full turn there shows of it within
+  // SimParams::coverage_range_m (near enough to count as searched: a mug shows from further
+  // only head-on and unhidden).
   double seenShareAfterLookAround(const Robot& robot, int room, const Eigen::Vector2d& xy) const;
   // Explores the nearest room not yet explored (by planned path to the reachable cell
   // nearest its centre); false when every room is explored. The robot drives towards that
