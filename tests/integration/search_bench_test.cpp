@@ -344,6 +344,49 @@ TEST(SearchSim, ARoomIsExploredWhenItsFloorPlanWasSeenNotWhenADriveEndedInIt) {
   }
 }
 
+// Exploring a room looks around from the first spot on the way inside it that shows the room
+// as well as its centre would: a narrow room (1.9 x 4 m) entered through a doorway in the
+// middle of its long wall is in view from just inside the doorway, so the robot looks around
+// there, drives less than to the centre, and the room is explored as well.
+TEST(SearchSim, ExploringARoomLooksAroundWhereTheRoomIsInViewNotAtItsCentre) {
+  SimParams params;  // frames while driving at 1 Hz: each is a spot the robot may stop at
+  World w = emptyRoomWorld(params);
+  // A tall wall at x = 4 with a 1 m doorway from y = 1.5 to 2.5.
+  w.apartment.scene.obstacles.push_back({{{3.9, 0.0}, {4.1, 0.0}, {4.1, 1.5}, {3.9, 1.5}}, 2.6, 6});
+  w.apartment.scene.obstacles.push_back({{{3.9, 2.5}, {4.1, 2.5}, {4.1, 4.0}, {3.9, 4.0}}, 2.6, 6});
+  w.apartment.rooms = {{synth::RoomKind::Living, {0.0, 0.0}, {3.9, 4.0}},
+                       {synth::RoomKind::Kitchen, {4.1, 0.0}, {6.0, 4.0}}};
+  w.grid = Grid(w.apartment.scene, params.robot_radius_m, params.cell_m);
+  SimParams to_centre = params;
+  to_centre.explore_to_room_centres = true;
+  struct Explored {
+    RunStats stats;
+    Eigen::Vector2d looked_from;
+    double share = 0.0;
+  };
+  const auto explore = [&w](const SimParams& p) {
+    Robot robot(w, p);
+    RoomExplorer rooms(w, p);
+    robot.lookAround(false);
+    rooms.lookedAroundHere(robot);
+    EXPECT_TRUE(rooms.exploreNext(robot));
+    EXPECT_FALSE(robot.interrupted());
+    EXPECT_TRUE(rooms.explored(robot, 1));
+    EXPECT_FALSE(rooms.exploreNext(robot));  // nothing left
+    return Explored{robot.stats(), robot.xy(), rooms.seenShare(robot, 1)};
+  };
+  const Explored near = explore(params), centre = explore(to_centre);
+  const Eigen::Vector2d room_centre = w.apartment.rooms[1].center();
+  EXPECT_LT((centre.looked_from - room_centre).norm(), 0.1);
+  EXPECT_EQ(w.apartment.roomAt(near.looked_from), 1);
+  EXPECT_GT((near.looked_from - room_centre).norm(), 0.3);
+  EXPECT_LT(near.stats.path_m, centre.stats.path_m - 0.3);
+  EXPECT_LT(near.stats.time_s, centre.stats.time_s);
+  // It saw the room as well: what the frames showed of its floor plan (3 m).
+  EXPECT_GE(near.share, params.room_seen_share);
+  EXPECT_GE(near.share, centre.share - 0.1);
+}
+
 TEST(SearchBench, OracleDrivesTheShortestPathAndSeesTheMug) {
   SimParams params;
   params.drive_frames_hz = 0.0;  // a driving frame may see the mug before the best view

@@ -238,6 +238,8 @@ class Robot {
   // (interrupted() then says so), as a robot re-plans when its map shows something new.
   bool driveTo(const Eigen::Vector2d& goal, const std::function<bool()>& stop_when = {});
   bool interrupted() const { return interrupted_; }
+  // The caller took the last stop as arriving (its goal was reached on the way).
+  void clearInterrupted() { interrupted_ = false; }
   void turnTo(double yaw);
   // Turns by `delta` rad (signed, not wrapped: a look-around's turns keep their direction).
   void turnBy(double delta);

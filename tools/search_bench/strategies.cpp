@@ -603,6 +603,7 @@ bool RoomExplorer::exploreNext(Robot& robot, const std::function<bool()>& stop_w
     };
     robot.driveTo(centre, stop);
     if (robot.interrupted() && !look_here) return true;
+    robot.clearInterrupted();
   }
   done_[best_room] = true;  // also when the drive failed: it is not tried again
   if (look_here) {
