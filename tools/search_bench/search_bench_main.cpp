@@ -73,10 +73,12 @@ struct Options {
   bool quiet = false;
   std::string trace_dir;  // "" = no traces
   double top_seen_share = 0.8;
+  double room_seen_share = 0.8;
   bool no_replan = false;
   bool no_furniture_visits = false;
   bool full_look_arounds = false;
   bool keep_look_alikes = false;
+  bool explore_to_room_centres = false;
   std::string only;  // "" = every episode
 };
 
@@ -243,10 +245,12 @@ int run(const Options& o) {
   params.drive_frames_hz = o.drive_frames_hz;
   params.trace = !o.trace_dir.empty();
   params.top_seen_share = o.top_seen_share;
+  params.room_seen_share = o.room_seen_share;
   params.replan_on_new_tables = !o.no_replan;
   params.furniture_after_coverage = !o.no_furniture_visits;
   params.full_look_arounds = o.full_look_arounds;
   params.look_alikes = o.keep_look_alikes ? synth::LookAlikes::Keep : synth::LookAlikes::Recolour;
+  params.explore_to_room_centres = o.explore_to_room_centres;
   std::vector<Episode> episodes;
   std::vector<std::uint64_t> apartment_seeds;
   for (int a = 0; a < o.apartments; ++a) {
@@ -415,6 +419,11 @@ int main(int argc, char** argv) {
                   "findmug strategy: skip a table once this share of its top was in view within "
                   "the recogniser's reach (default 0.8; 0: visit every table)")
       ->check(CLI::Range(0.0, 1.0));
+  app->add_option("--room-seen-share", o.room_seen_share,
+                  "findmug and places strategies: a room counts as explored once the robot looked "
+                  "around in it or its frames have shown this share of its floor plan (default "
+                  "0.8; 1: only a look-around in it)")
+      ->check(CLI::Range(0.0, 1.0));
   app->add_option("--only", o.only,
                   "run only these episodes of the run, APARTMENT.EPISODE comma-separated (e.g. "
                   "25.1,46.0), with the seeds they have in it");
@@ -431,6 +440,10 @@ int main(int argc, char** argv) {
   app->add_flag("--keep-look-alikes", o.keep_look_alikes,
                 "keep the other mugs as red as the target (twins no recogniser can tell from it); "
                 "by default they are recoloured");
+  app->add_flag("--explore-to-room-centres", o.explore_to_room_centres,
+                "findmug and places strategies: exploring a room drives to its centre before "
+                "looking around, also when a spot on the way (its doorway) would show as much of "
+                "it (the behaviour before exploring looked from the first such spot)");
   app->add_option("--trace", o.trace_dir,
                   "folder for one trace file per run and episode: every action with its time, "
                   "pose and reason");

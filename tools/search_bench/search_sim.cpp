@@ -303,17 +303,17 @@ ViewCoverage::ViewCoverage(const World& world, const SimParams& params)
 }
 
 template <typename Visit>
-void ViewCoverage::castFrame(const Eigen::Vector2d& xy, double yaw, Visit&& visit) const {
+void ViewCoverage::castFrame(const Eigen::Vector2d& xy, double yaw, double range_m,
+                             double half_angle, Visit&& visit) const {
   if (grid_ == nullptr) return;
-  constexpr double kHalfFov = 0.547;  // atan(320 / 525), the camera's horizontal half angle
   const double step = 0.5 * grid_->cell();
   // Rays no further apart than half a cell at the range: every cell in view is hit.
-  const int rays = static_cast<int>(std::ceil(2.0 * kHalfFov * range_m_ / step)) + 1;
+  const int rays = static_cast<int>(std::ceil(2.0 * half_angle * range_m / step)) + 1;
   if (++casts_ == 0) std::fill(stamp_.begin(), stamp_.end(), 0), casts_ = 1;
   for (int k = 0; k < rays; ++k) {
-    const double a = yaw - kHalfFov + 2.0 * kHalfFov * k / (rays - 1);
+    const double a = yaw - half_angle + 2.0 * half_angle * k / (rays - 1);
     const Eigen::Vector2d dir(std::cos(a), std::sin(a));
-    for (double r = 0.0; r <= range_m_; r += step) {
+    for (double r = 0.0; r <= range_m; r += step) {
       const int c = grid_->cellAt(xy + r * dir);
       if (c < 0 || blocks_[c]) break;
       if (stamp_[c] == casts_) continue;
@@ -324,14 +324,20 @@ void ViewCoverage::castFrame(const Eigen::Vector2d& xy, double yaw, Visit&& visi
 }
 
 void ViewCoverage::markFrame(const Eigen::Vector2d& xy, double yaw) {
-  castFrame(xy, yaw, [this](int c) { seen_[c] = 1; });
+  castFrame(xy, yaw, range_m_, kCameraHalfFov, [this](int c) { seen_[c] = 1; });
 }
 
 double ViewCoverage::unseenM2(const Eigen::Vector2d& xy, double yaw) const {
   if (grid_ == nullptr) return 0.0;
   int unseen = 0;
-  castFrame(xy, yaw, [&](int c) { unseen += seen_[c] == 0; });
+  castFrame(xy, yaw, range_m_, kCameraHalfFov, [&](int c) { unseen += seen_[c] == 0; });
   return unseen * grid_->cell() * grid_->cell();
+}
+
+std::vector<int> ViewCoverage::cellsInViewAround(const Eigen::Vector2d& xy, double range_m) const {
+  std::vector<int> cells;
+  castFrame(xy, 0.0, range_m, M_PI, [&cells](int c) { cells.push_back(c); });
+  return cells;
 }
 
 // ---- the robot ------------------------------------------------------------------------
@@ -357,6 +363,13 @@ Robot::Robot(const World& world, const SimParams& params, FrameHook on_frame,
                   world.mug.position.x(), world.mug.position.y(), world.mug.position.z(),
                   world.mug.furniture, world.mug.room);
     note(line);
+    for (std::size_t r = 0; r < world.apartment.rooms.size(); ++r) {
+      const synth::RoomTruth& room = world.apartment.rooms[r];
+      std::snprintf(line, sizeof line, "room %zu (%s): (%.2f, %.2f) to (%.2f, %.2f)", r,
+                    synth::roomKindName(room.kind), room.lo.x(), room.lo.y(), room.hi.x(),
+                    room.hi.y());
+      note(line);
+    }
     if (world.mug.furniture >= 0) {
       const synth::FurnitureTruth& f = world.apartment.furniture[world.mug.furniture];
       std::string corners;

@@ -56,6 +56,14 @@ struct SimParams {
   double top_seen_share = 0.8;
   double top_seen_range_oracle_m = 3.0;   // the oracle's 150 px of mug: 3.5 m head-on
   double top_seen_range_matcher_m = 1.5;  // the matcher names the mug from 1.0-1.5 m
+  // A room counts as explored (the findmug and places strategies' room exploring) once the
+  // robot looked around in it, or once its frames have shown this share of its floor plan
+  // (ViewCoverage; 1: only a look-around in it).
+  double room_seen_share = 0.8;
+  // Exploring a room drives to its centre before the look-around, also when a look-around
+  // from a spot passed on the way (its doorway) would show as much of it (the behaviour
+  // before exploring looked from the first such spot).
+  bool explore_to_room_centres = false;
   // The findmug strategy stops exploring a room when the map shows a new table to look at.
   bool replan_on_new_tables = true;
   // The findmug strategy, when coverage has left nothing and the mug is not seen: it looks at
@@ -176,13 +184,19 @@ class ViewCoverage {
   void markFrame(const Eigen::Vector2d& xy, double yaw);
   // The floor (m^2) a frame from this pose would show that no marked frame showed.
   double unseenM2(const Eigen::Vector2d& xy, double yaw) const;
+  // The cells within `range_m` that a full turn at this spot would show (every heading, in
+  // line of sight): the most a look-around there can show from that near.
+  std::vector<int> cellsInViewAround(const Eigen::Vector2d& xy, double range_m) const;
   bool covered(int cell) const { return seen_[cell] != 0; }
   bool blocksView(int cell) const { return blocks_[cell] != 0; }
 
  private:
-  // Calls visit(cell) once per cell a frame from this pose shows.
+  // Calls visit(cell) once per cell a frame from this pose shows within `range_m`; a wider
+  // half angle than the camera's (pi: all around) for what several frames from the spot show.
   template <typename Visit>
-  void castFrame(const Eigen::Vector2d& xy, double yaw, Visit&& visit) const;
+  void castFrame(const Eigen::Vector2d& xy, double yaw, double range_m, double half_angle,
+                 Visit&& visit) const;
+  static constexpr double kCameraHalfFov = 0.547;  // atan(320 / 525), horizontal
   const Grid* grid_ = nullptr;
   double range_m_ = 0.0;
   std::vector<std::uint8_t> seen_, blocks_;
@@ -226,6 +240,8 @@ class Robot {
   // (interrupted() then says so), as a robot re-plans when its map shows something new.
   bool driveTo(const Eigen::Vector2d& goal, const std::function<bool()>& stop_when = {});
   bool interrupted() const { return interrupted_; }
+  // The caller took the last stop as arriving (its goal was reached on the way).
+  void clearInterrupted() { interrupted_ = false; }
   void turnTo(double yaw);
   // Turns by `delta` rad (signed, not wrapped: a look-around's turns keep their direction).
   void turnBy(double delta);

@@ -48,50 +48,6 @@ int reachableCellInRoom(const Grid& grid, const std::vector<double>& dist,
   return best;
 }
 
-// Rooms a strategy has looked around in; the fallback explores the others, nearest first.
-class RoomExplorer {
- public:
-  explicit RoomExplorer(const World& world) : world_(world), done_(world.apartment.rooms.size()) {}
-  void markHere(const Robot& robot) { markAt(robot.xy()); }
-  void markAt(const Eigen::Vector2d& xy) {
-    const int r = world_.apartment.roomAt(xy);
-    if (r >= 0) done_[r] = true;
-  }
-  // Drives to the reachable cell nearest the centre of the nearest room not yet explored
-  // and looks around; false when every room is done. When `stop_when` stops the drive, the
-  // room stays to be explored and there is no look-around (the caller has something new).
-  bool exploreNext(Robot& robot, const std::function<bool()>& stop_when = {}) {
-    const std::vector<double> dist = world_.grid.distancesFrom(robot.cell());
-    int best_room = -1, best_cell = -1;
-    for (std::size_t r = 0; r < done_.size(); ++r) {
-      if (done_[r]) continue;
-      const synth::RoomTruth& room = world_.apartment.rooms[r];
-      const int c = reachableCellInRoom(world_.grid, dist, room);
-      if (c < 0) {
-        done_[r] = true;  // nothing of it is reachable
-        continue;
-      }
-      if (best_cell < 0 || dist[c] < dist[best_cell])
-        best_room = static_cast<int>(r), best_cell = c;
-    }
-    if (best_cell < 0) return false;
-    done_[best_room] = true;
-    robot.note("explore room " + std::to_string(best_room) + " (" +
-               synth::roomKindName(world_.apartment.rooms[best_room].kind) + ")");
-    robot.driveTo(world_.grid.center(best_cell), stop_when);
-    if (robot.interrupted()) {
-      done_[best_room] = false;
-      return true;
-    }
-    robot.lookAround();
-    return true;
-  }
-
- private:
-  const World& world_;
-  std::vector<bool> done_;
-};
-
 void coverUntilDone(Robot& robot, const World& world, const SimParams& params, bool look_first);
 
 // What stands at `xy` in the ground truth (for traces): the kind of the furniture whose
@@ -304,9 +260,9 @@ EpisodeResult runFindmug(const World& world, const SimParams& params,
   FindmugTables& tables = *eyes.daemon();
   Robot robot = eyes.robot(world, params);
   LookCloser closer;
-  RoomExplorer rooms(world);
-  rooms.markHere(robot);
+  RoomExplorer rooms(world, params);
   robot.lookAround();
+  rooms.lookedAroundHere(robot);
   // One search position per table: its top was in view from there (a table of several
   // positions otherwise has the robot walk round it while other rooms wait).
   std::vector<Eigen::Vector2d> visited;
@@ -379,10 +335,7 @@ EpisodeResult runFindmug(const World& world, const SimParams& params,
     robot.driveTo(world.grid.center(next_cell), params.replan_on_new_tables
                                                     ? std::function<bool()>(top_seen)
                                                     : std::function<bool()>());
-    if (robot.interrupted()) {
-      rooms.markAt(target.xy);  // as if it had stood there
-      continue;
-    }
+    if (robot.interrupted()) continue;  // the top was seen on the way
     robot.turnTo(target.yaw);
     robot.look();
     if (eyes.matcher()) {
@@ -394,7 +347,6 @@ EpisodeResult runFindmug(const World& world, const SimParams& params,
         robot.look();
       }
     }
-    rooms.markHere(robot);
   }
   if (params.trace) {
     // What the map held at the end, and how much of each top the frames showed.
@@ -423,7 +375,7 @@ EpisodeResult runPlaces(const World& world, const SimParams& params,
   Eyes eyes(perception, false);
   Robot robot = eyes.robot(world, params);
   std::vector<Place> todo = placesBesideFurniture(world, params, false);
-  RoomExplorer rooms(world);
+  RoomExplorer rooms(world, params);
   visitPlaces(robot, world, std::move(todo), result.positions_visited);
   while (robot.active() && rooms.exploreNext(robot)) {
   }
@@ -570,6 +522,101 @@ EpisodeResult runOracle(const World& world, const SimParams& params,
 }
 
 }  // namespace
+
+RoomExplorer::RoomExplorer(const World& world, const SimParams& params)
+    : world_(world), params_(params), done_(world.apartment.rooms.size()) {
+  // Each room's floor plan: its cells that do not block the view (low furniture included:
+  // the camera looks over it and would show a mug on it).
+  floor_.resize(world.apartment.rooms.size());
+  room_of_.assign(world.grid.size(), -1);
+  const ViewCoverage blocking(world, params);
+  for (int i = 0; i < world.grid.size(); ++i) {
+    if (blocking.blocksView(i)) continue;
+    const int r = world.apartment.roomAt(world.grid.center(i));
+    if (r >= 0) floor_[r].push_back(i), room_of_[i] = r;
+  }
+}
+
+void RoomExplorer::lookedAroundHere(const Robot& robot) {
+  const int r = world_.apartment.roomAt(robot.xy());
+  if (r >= 0) done_[r] = true;
+}
+
+double RoomExplorer::seenShare(const Robot& robot, int room) const {
+  const std::vector<int>& cells = floor_[room];
+  if (cells.empty()) return 1.0;
+  int seen = 0;
+  for (const int c : cells) seen += robot.viewCoverage().covered(c);
+  return static_cast<double>(seen) / static_cast<double>(cells.size());
+}
+
+bool RoomExplorer::explored(const Robot& robot, int room) const {
+  return done_[room] || seenShare(robot, room) >= params_.room_seen_share;
+}
+
+double RoomExplorer::seenShareAfterLookAround(const Robot& robot, int room,
+                                              const Eigen::Vector2d& xy) const {
+  const std::vector<int>& cells = floor_[room];
+  if (cells.empty()) return 1.0;
+  const ViewCoverage& coverage = robot.viewCoverage();
+  int seen = 0;
+  for (const int c : cells) seen += coverage.covered(c);
+  for (const int c : coverage.cellsInViewAround(xy, params_.coverage_range_m))
+    seen += room_of_[c] == room && !coverage.covered(c);
+  return static_cast<double>(seen) / static_cast<double>(cells.size());
+}
+
+bool RoomExplorer::exploreNext(Robot& robot, const std::function<bool()>& stop_when) {
+  const std::vector<double> dist = world_.grid.distancesFrom(robot.cell());
+  int best_room = -1, best_cell = -1;
+  for (std::size_t r = 0; r < done_.size(); ++r) {
+    if (explored(robot, static_cast<int>(r))) continue;
+    const int c = reachableCellInRoom(world_.grid, dist, world_.apartment.rooms[r]);
+    if (c < 0) {
+      done_[r] = true;  // nothing of it is reachable
+      continue;
+    }
+    if (best_cell < 0 || dist[c] < dist[best_cell]) best_room = static_cast<int>(r), best_cell = c;
+  }
+  if (best_cell < 0) return false;
+  char line[120];
+  std::snprintf(line, sizeof line, "explore room %d (%s), %.0f %% of its floor plan seen",
+                best_room, synth::roomKindName(world_.apartment.rooms[best_room].kind),
+                100.0 * seenShare(robot, best_room));
+  robot.note(line);
+  // Whether a look-around where the robot stands would show the room as well as one from
+  // the centre, or well enough: then it looks around here.
+  const Eigen::Vector2d centre = world_.grid.center(best_cell);
+  const auto room_in_view = [&] {
+    if (params_.explore_to_room_centres || world_.apartment.roomAt(robot.xy()) != best_room)
+      return false;
+    const double enough = std::min(params_.room_seen_share,
+                                   seenShareAfterLookAround(robot, best_room, centre));
+    return seenShareAfterLookAround(robot, best_room, robot.xy()) >= enough;
+  };
+  bool look_here = room_in_view();
+  if (!look_here) {
+    const std::function<bool()> stop = [&] {
+      if (stop_when && stop_when()) return true;
+      look_here = room_in_view();
+      return look_here;
+    };
+    robot.driveTo(centre, stop);
+    if (robot.interrupted() && !look_here) return true;
+    robot.clearInterrupted();
+  }
+  done_[best_room] = true;  // also when the drive failed: it is not tried again
+  if (look_here) {
+    std::snprintf(line, sizeof line,
+                  "the room in view: a look-around here shows %.0f %% of its floor plan, at its "
+                  "centre %.0f %%",
+                  100.0 * seenShareAfterLookAround(robot, best_room, robot.xy()),
+                  100.0 * seenShareAfterLookAround(robot, best_room, centre));
+    robot.note(line);
+  }
+  robot.lookAround();
+  return true;
+}
 
 std::string canonicalStrategy(const std::string& name) {
   static const char* names[] = {"findmug", "places", "coverage", "random", "oracle"};

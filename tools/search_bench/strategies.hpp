@@ -34,6 +34,7 @@
 //            naming range), then does the same. The other baselines act on "seen" only.
 #pragma once
 
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -64,6 +65,43 @@ struct EpisodeResult {
   // the refusals by the reason the taught mug gave (size, colour, shape incl. roundness).
   int candidates = 0, matches = 0, refused_size = 0, refused_colour = 0, refused_shape = 0;
   std::vector<std::string> trace;  // Robot::trace() with SimParams::trace
+};
+
+// Which rooms a strategy has explored (the findmug and places strategies explore the
+// others, nearest first). A room is explored once the robot looked around in it (at the
+// start, or at its centre) or once its frames have shown SimParams::room_seen_share of its
+// floor plan: its cells that do not block the view, as the robot's ViewCoverage marks them
+// (stop views and frames while driving, through doorways too). A drive that ends in a room,
+// or a look at one table in it, does not explore it: the rest of its floor may hold the mug.
+class RoomExplorer {
+ public:
+  RoomExplorer(const World& world, const SimParams& params);
+  // The robot looked around where it stands: its room is explored.
+  void lookedAroundHere(const Robot& robot);
+  // The share of the room's floor plan the robot's frames have shown.
+  double seenShare(const Robot& robot, int room) const;
+  bool explored(const Robot& robot, int room) const;
+  // The share of the room's floor plan the robot's frames would have shown after a
+  // look-around at `xy`: what they showed, and what a full turn there shows of it within
+  // SimParams::coverage_range_m (near enough to count as searched: a mug shows from further
+  // only head-on and unhidden).
+  double seenShareAfterLookAround(const Robot& robot, int room, const Eigen::Vector2d& xy) const;
+  // Explores the nearest room not yet explored (by planned path to the reachable cell
+  // nearest its centre); false when every room is explored. The robot drives towards that
+  // cell and looks around (only through headings that show something new) at the first
+  // frame's spot inside the room from which a look-around would show as much of its floor
+  // plan as one from the centre would, or room_seen_share of it: a room seen from its
+  // doorway needs no walk to its middle and back (SimParams::explore_to_room_centres: at the
+  // centre, always). When `stop_when` stops the drive, the room stays to be explored and
+  // there is no look-around (the caller has something new to look at).
+  bool exploreNext(Robot& robot, const std::function<bool()>& stop_when = {});
+
+ private:
+  const World& world_;
+  const SimParams& params_;
+  std::vector<bool> done_;               // looked around in
+  std::vector<std::vector<int>> floor_;  // per room: its grid cells that do not block the view
+  std::vector<int> room_of_;             // per grid cell: the room whose floor_ holds it, or -1
 };
 
 // Known names: "findmug", "places", "coverage", "random", "oracle" (or a..e).

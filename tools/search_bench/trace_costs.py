@@ -13,13 +13,24 @@ somewhere starts a segment that lasts until the next such line or the end of the
 of "cover the floor plan" (coverage looks around at each of its goals). The search ends at the
 "found" line, else at the budget (--budget, default 600 s).
 
-Usage: trace_costs.py [--budget S] [--run PREFIX] TRACE_DIR
+With --rooms (traces that name the rooms, "room N (KIND): (X, Y) to (X, Y)", and the mug's
+room on the first line): the time of each decision counted to the room it was about (a room
+explored, a search position's room, a look-around's room) against the mug's room: the start's
+look-around, other rooms, the mug's room, covering at the end; medians over the episodes,
+and how many spent no time on another room before the find. With --episodes EPISODES_CSV
+(the run's episodes.csv, with the oracle strategy) also the median per episode of the search
+time over the oracle's, as it is and without the time on other rooms (and the start's
+look-around): what a search that knew the mug's room would still take.
+
+Usage: trace_costs.py [--budget S] [--run PREFIX] [--rooms [--episodes CSV]] TRACE_DIR
 Prints, per category, the seconds per episode (mean), the share of all search time, and for
 table visits the number of visits and how many of them were on a real table.
 """
 import argparse
 import pathlib
+import csv
 import re
+import statistics
 import sys
 from collections import defaultdict
 
@@ -72,15 +83,112 @@ def episode_costs(path, budget):
     return costs, visits, found, end
 
 
+ROOM = re.compile(r"^room (\d+) \([a-z ]+\): \(([-0-9.]+), ([-0-9.]+)\) to \(([-0-9.]+), ([-0-9.]+)\)$")
+POSE = re.compile(r"^\s*[0-9.]+ s\s+\(\s*([-0-9.]+),\s*([-0-9.]+)\)")
+
+
+def room_costs(path, budget):
+    """Seconds of one trace on the start's look-around, other rooms, the mug's room, covering."""
+    rooms, mug_room, segments = {}, None, []
+    end = budget
+
+    def room_at(x, y):
+        for k, (lx, ly, hx, hy) in rooms.items():
+            if lx <= x <= hx and ly <= y <= hy:
+                return k
+        return -1
+
+    for raw in path.read_text().splitlines()[1:]:
+        m = LINE.match(raw)
+        if not m:
+            raise ValueError(f"{path}: not a trace line: {raw!r}")
+        t, what = float(m.group(1)), m.group(2)
+        x, y = (float(v) for v in POSE.match(raw).groups())
+        r = ROOM.match(what)
+        if r:
+            rooms[int(r.group(1))] = tuple(float(r.group(i)) for i in range(2, 6))
+            continue
+        mug = re.match(r"the mug at .* room (-?\d+)$", what)
+        if mug:
+            mug_room = int(mug.group(1))
+            continue
+        if what.startswith("found") or what.startswith("false found"):
+            end = t
+            break
+        if what.startswith("look around"):
+            if segments and segments[-1][1] == "cover":
+                continue  # coverage looks around at each of its goals
+            kind = "start" if not segments else ("mug" if room_at(x, y) == mug_room else "other")
+        elif what.startswith("explore room"):
+            kind = "mug" if int(what.split()[2]) == mug_room else "other"
+        elif what.startswith("search position of table"):
+            p = re.search(r"\(([-0-9.]+), ([-0-9.]+)\)", what)
+            kind = "mug" if room_at(float(p.group(1)), float(p.group(2))) == mug_room else "other"
+        elif what.startswith("cover the floor plan") or what.startswith("look at the furniture"):
+            kind = "cover"
+        else:
+            continue
+        segments.append((t, kind))
+    if not rooms or mug_room is None:
+        raise ValueError(f"{path}: no room lines (--rooms needs traces that name the rooms)")
+    costs = dict.fromkeys(["start", "other", "mug", "cover"], 0.0)
+    for i, (t, kind) in enumerate(segments):
+        costs[kind] += (segments[i + 1][0] if i + 1 < len(segments) else end) - t
+    return costs, end
+
+
+def print_rooms(files, budget, episodes_csv):
+    runs = [room_costs(f, budget) for f in files]
+    costs = [c for c, _ in runs]
+    print(f"{len(files)} episodes, time per decision's room (median; mean)")
+    print("| about | s per episode, median | mean |")
+    print("|---|---|---|")
+    names = {"start": "the start's look-around", "other": "rooms other than the mug's",
+             "mug": "the mug's room", "cover": "covering at the end, the grid's furniture"}
+    for k, name in names.items():
+        v = [c[k] for c in costs]
+        print(f"| {name} | {statistics.median(v):.1f} | {statistics.mean(v):.1f} |")
+    print(f"episodes with no time on another room: {sum(c['other'] == 0 for c in costs)}")
+    if not episodes_csv:
+        return
+    oracle = {}
+    with open(episodes_csv) as f:
+        for row in csv.DictReader(f):
+            if row["strategy"] == "oracle":
+                t = float(row["time_s"]) if row["found"] == "1" else budget
+                oracle[(row["apartment"], row["episode"])] = t
+    ratios = []
+    for path, (c, end) in zip(files, runs):
+        m = re.search(r"_a(\d+)_e(\d+)\.txt$", path.name)
+        key = (m.group(1), m.group(2))
+        if key not in oracle:
+            raise ValueError(f"{episodes_csv}: no oracle row for episode {key[0]}.{key[1]}")
+        o = max(1e-3, oracle[key])
+        ratios.append((end / o, (end - c["other"]) / o, (end - c["other"] - c["start"]) / o))
+    print("median per episode, search time over the oracle's: "
+          f"{statistics.median(r[0] for r in ratios):.2f}; without other rooms "
+          f"{statistics.median(r[1] for r in ratios):.2f}; without them and the start's "
+          f"look-around {statistics.median(r[2] for r in ratios):.2f}")
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("trace_dir")
     ap.add_argument("--budget", type=float, default=600.0)
     ap.add_argument("--run", default="findmug-", help="trace file name prefix (the run label)")
+    ap.add_argument("--rooms", action="store_true",
+                    help="the time per room a decision was about, against the mug's room")
+    ap.add_argument("--episodes", help="with --rooms: the run's episodes.csv (oracle times)")
     a = ap.parse_args()
     files = sorted(pathlib.Path(a.trace_dir).glob(a.run + "*.txt"))
     if not files:
         sys.exit(f"trace_costs: no trace files {a.run}*.txt in {a.trace_dir}")
+    if a.rooms:
+        try:
+            print_rooms(files, a.budget, a.episodes)
+        except ValueError as e:
+            sys.exit(f"trace_costs: {e}")
+        return
     total = defaultdict(float)
     visits = defaultdict(int)
     time_all = 0.0
