@@ -267,9 +267,9 @@ struct MugPrior {
 // target's size: a twin that no recogniser taught from the target's looks can tell from it,
 // and a robot asked for "my mug" in a home with two identical mugs has no wrong answer to
 // give. Recolour (the default) turns every other mug whose body is as red as the target's
-// into another colour of the palette, so that a false "found" measures a recogniser's
-// confusion, not the world's; boxes and books keep their colours (red ones stay, refused by
-// shape). Keep leaves them (the worlds before this rule).
+// blue (its colour channels rotated, so as bright as it was), so that a false "found"
+// measures a recogniser's confusion, not the world's; boxes and books keep their colours (red
+// ones stay, refused by shape). Keep leaves them (the worlds before this rule).
 enum class LookAlikes { Recolour, Keep };
 
 struct TargetMug {
