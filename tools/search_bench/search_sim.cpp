@@ -477,6 +477,7 @@ bool Robot::perceive(bool stop_view) {
         synth::render(world_.apartment.scene, cameraAt(params_, xy_, yaw_), synth::RenderOptions{},
                       mix(world_.episode.episode_seed * 1315423911ULL + frames_));
     const Sighting sighting = on_frame_(frame, xy_, yaw_, stats_.time_s);
+    for (const std::string& line : sighting.notes) note(line);
     if (recognition_ == Recognition::Matcher) {
       claimed = sighting.claimed;
       reported = sighting.reported;

@@ -164,6 +164,8 @@ bool mugRecognisable(const World& world, const SimParams& params, const Eigen::V
 struct Sighting {
   bool claimed = false;
   Eigen::Vector3d reported = Eigen::Vector3d::Zero();
+  // Lines for the trace (with SimParams::trace): what the frame changed in the daemon's map.
+  std::vector<std::string> notes;
 };
 
 // The ground-truth check of a claimed find: true when the reported position is within

@@ -66,6 +66,33 @@ std::string furnitureAt(const World& world, const Eigen::Vector2f& xy) {
   return "nothing";
 }
 
+// Trace lines for the tables a frame added to the daemon's map or took from it: where a
+// table the search needed was never mapped, or was forgotten.
+std::vector<std::string> mapChanges(const World& world, const std::vector<TableCluster>& before,
+                                    const std::vector<TableCluster>& after) {
+  const auto has = [](const std::vector<TableCluster>& tables, int id) {
+    return std::any_of(tables.begin(), tables.end(),
+                       [id](const TableCluster& t) { return t.id == id; });
+  };
+  std::vector<std::string> lines;
+  const auto line = [&](const char* what, const TableCluster& t) {
+    Eigen::Vector2f lo = Eigen::Vector2f::Constant(1e9f), hi = -lo;
+    for (const Eigen::Vector2f& p : t.hull) lo = lo.cwiseMin(p), hi = hi.cwiseMax(p);
+    if (t.hull.empty()) lo = hi = Eigen::Vector2f::Zero();
+    char text[200];
+    std::snprintf(text, sizeof text,
+                  "map: table %d %s at (%.2f, %.2f), top %.2f x %.2f m (x, y), %.2f m high, truth %s",
+                  t.id, what, t.center.x(), t.center.y(), hi.x() - lo.x(), hi.y() - lo.y(),
+                  t.top_height, furnitureAt(world, t.center).c_str());
+    lines.emplace_back(text);
+  };
+  for (const TableCluster& t : after)
+    if (!has(before, t.id)) line("confirmed", t);
+  for (const TableCluster& t : before)
+    if (!has(after, t.id)) line("gone", t);
+  return lines;
+}
+
 // One run's perception: the daemon, when the strategy (its table map) or the recogniser
 // (the matcher) needs it, and the robot that sends it every frame.
 class Eyes {
@@ -100,9 +127,13 @@ class Eyes {
     if (!daemon_) return Robot(world, params);
     return Robot(
         world, params,
-        [this](const synth::RenderedFrame& frame, const Eigen::Vector2d& xy, double yaw,
-               double t) {
+        [this, &world, trace = params.trace](const synth::RenderedFrame& frame,
+                                             const Eigen::Vector2d& xy, double yaw, double t) {
+          Sighting sighting;
+          std::vector<TableCluster> before;
+          if (trace) before = daemon_->mapTables();
           daemon_->feed(frame, xy, yaw, t);
+          if (trace) sighting.notes = mapChanges(world, before, daemon_->mapTables());
           if (tops_ && frame.labeled.frame.extrinsics) {
             // The robot knows its head's pose: the base pose and the camera mount.
             const Eigen::Isometry3d camera = cameraInMap(
@@ -110,7 +141,6 @@ class Eyes {
                 groundFromExtrinsics(*frame.labeled.frame.extrinsics).camera_to_ground);
             tops_->observe(daemon_->mapTables(), frame.labeled.frame, camera);
           }
-          Sighting sighting;
           if (!matcher_) return sighting;
           answer_ = daemon_->find(name_);
           sighting.claimed = answer_.result == io::FindResult::Seen;
