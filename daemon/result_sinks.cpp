@@ -4,12 +4,15 @@
 #include <spdlog/spdlog.h>
 
 #include <algorithm>
+#include <optional>
 #include <utility>
 
 #include "findmug/common/error.hpp"
 #include "findmug/daemon/status_builder.hpp"
 #include "findmug/io/lcm_codec.hpp"
 #include "findmug/io/lcm_codec_objects.hpp"
+#include "findmug/map/depth_view.hpp"
+#include "findmug/map/semantic_map.hpp"
 
 namespace findmug::daemon {
 
@@ -55,9 +58,16 @@ bool TableMapSink::update(const LabelledFrame& labelled, const io::RobotPose& po
   const RgbdFrame& frame = labelled.segmented.prepared.frame;
   const Pose2D& base_in_map = pose.pose;
   std::lock_guard lock(mutex_);
+  // The frame's depth and its camera in the map: a mapped table that something hid from
+  // this view is not missed in it.
+  std::optional<DepthView> view;
+  const auto& ground = labelled.segmented.prepared.ground;
+  if (ground && frame.width > 0 && frame.height > 0 &&
+      frame.depth_mm.size() == static_cast<std::size_t>(frame.width) * frame.height)
+    view.emplace(frame, cameraInMap(base_in_map, ground->camera_to_ground));
   TableMapUpdate update;
   try {
-    update = map_.update(labelled.tables, base_in_map, frame.utime);
+    update = map_.update(labelled.tables, base_in_map, frame.utime, view ? &*view : nullptr);
   } catch (const std::exception& e) {
     // E.g. a source that restarted its clock: the frame is still published,
     // in the base frame and with its map pose, but the map skips it.

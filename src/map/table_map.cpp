@@ -204,6 +204,9 @@ void validateTableMapConfig(const TableMapConfig& c) {
     badMapSetting("view_max_range_m", c.view_max_range_m,
                   "must be above table_map.view_min_range_m (" + fmt(c.view_min_range_m) + ")");
   }
+  if (!std::isfinite(c.hidden_margin_m) || c.hidden_margin_m < 0.0f) {
+    badMapSetting("hidden_margin_m", c.hidden_margin_m, "must be a number >= 0");
+  }
   if (c.max_observations < 1) badMapSetting("max_observations", c.max_observations, "must be >= 1");
   if (!std::isfinite(c.position_match_m) || c.position_match_m < 0.0f) {
     badMapSetting("position_match_m", c.position_match_m, "must be a number >= 0");
@@ -291,8 +294,25 @@ void TableMap::rebuild(std::size_t index) {
   }
 }
 
+bool TableMap::topInSight(const TableCluster& table, const DepthView& view) const {
+  // The box centre and points 60 % of the way from it to each hull corner: inside the
+  // top, clear of its edge.
+  const Eigen::Vector2f centre = table.center;
+  int shown = 0, hidden = 0;
+  const auto sample = [&](const Eigen::Vector2f& xy) {
+    const Eigen::Vector3d p(xy.x(), xy.y(), table.top_height);
+    const DepthView::Point seen = view.show(p, map_config_.hidden_margin_m, 0);
+    shown += seen == DepthView::Point::Shown;
+    hidden += seen == DepthView::Point::Hidden;
+  };
+  sample(centre);
+  for (const Eigen::Vector2f& corner : table.hull) sample(centre + 0.6f * (corner - centre));
+  return shown > 0 && shown >= hidden;
+}
+
 TableMapUpdate TableMap::update(const std::vector<TableCluster>& tables_base,
-                                const Pose2D& base_in_map, std::uint64_t utime) {
+                                const Pose2D& base_in_map, std::uint64_t utime,
+                                const DepthView* view) {
   if (!std::isfinite(base_in_map.x) || !std::isfinite(base_in_map.y) ||
       !std::isfinite(base_in_map.yaw)) {
     throw Error("TableMap::update: robot pose (" + fmt(base_in_map.x) + ", " + fmt(base_in_map.y) +
@@ -356,7 +376,8 @@ TableMapUpdate TableMap::update(const std::vector<TableCluster>& tables_base,
       }
       continue;
     }
-    if (expectedInView(t.table, base_in_map)) ++t.misses;
+    if (expectedInView(t.table, base_in_map) && (view == nullptr || topInSight(t.table, *view)))
+      ++t.misses;
     if (t.misses >= map_config_.forget_misses) {
       remove[j] = true;
       result.diagnostics.push_back("table " + std::to_string(t.table.id) +
@@ -454,6 +475,9 @@ const SettingsTable<TableMapConfig>& tableMapSettings() {
     t.add(numberSetting<M, float>(
         "table_map.view_max_range_m", [](M& m) -> float& { return m.view_max_range_m; }, 0, 100,
         "far end of that range"));
+    t.add(numberSetting<M, float>(
+        "table_map.hidden_margin_m", [](M& m) -> float& { return m.hidden_margin_m; }, 0, 5,
+        "depth this much nearer than a mapped top hides it: not seen there is no miss"));
     t.add(integerSetting<M, int>(
         "table_map.max_observations", [](M& m) -> int& { return m.max_observations; }, 1, 1000,
         "newest observations kept per table"));

@@ -6,6 +6,7 @@
 #include <limits>
 
 #include "findmug/common/error.hpp"
+#include "findmug/map/depth_view.hpp"
 
 namespace findmug {
 
@@ -71,14 +72,9 @@ void TableTopViews::forEachTopCell(const TableCluster& table, F&& f) const {
 
 int TableTopViews::observe(const std::vector<TableCluster>& map_tables, const RgbdFrame& frame,
                            const Eigen::Isometry3d& camera_in_map) {
-  if (frame.width <= 0 || frame.height <= 0 ||
-      frame.depth_mm.size() != static_cast<std::size_t>(frame.width) * frame.height)
-    throw Error("table top views: frame " + frame.source + " has no depth image of its size");
-  const Eigen::Isometry3d map_to_camera = camera_in_map.inverse();
-  const Eigen::Vector3d camera = camera_in_map.translation();
-  const CameraIntrinsics& k = frame.intrinsics;
+  const DepthView view(frame, camera_in_map);
+  const Eigen::Vector3d& camera = view.cameraPosition();
   const double range2 = static_cast<double>(config_.range_m) * config_.range_m;
-  const int border = config_.border_px;
   int added = 0;
   for (const TableCluster& table : map_tables) {
     const double z = table.top_height;
@@ -95,14 +91,7 @@ int TableTopViews::observe(const std::vector<TableCluster>& map_tables, const Rg
     forEachTopCell(table, [&](int ix, int iy, float x, float y) {
       const Eigen::Vector3d p(x, y, z);
       if ((p - camera).squaredNorm() > range2) return;
-      const Eigen::Vector3d q = map_to_camera * p;
-      if (q.z() <= 0.05) return;
-      const double u = k.fx * q.x() / q.z() + k.cx, v = k.fy * q.y() / q.z() + k.cy;
-      const int pu = static_cast<int>(std::lround(u)), pv = static_cast<int>(std::lround(v));
-      if (pu < border || pv < border || pu >= frame.width - border || pv >= frame.height - border)
-        return;
-      const std::uint16_t d = frame.depth_mm[static_cast<std::size_t>(pv) * frame.width + pu];
-      if (d == 0 || d * 0.001 < q.z() - config_.occlusion_m) return;
+      if (view.show(p, config_.occlusion_m, config_.border_px) != DepthView::Point::Shown) return;
       if (seen_.insert(key(ix, iy)).second) ++added;
     });
   }

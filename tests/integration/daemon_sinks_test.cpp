@@ -19,6 +19,7 @@
 #include "findmug/io/lcm_codec.hpp"
 #include "findmug/io/lcm_codec_objects.hpp"
 #include "findmug_lcm/status_t.hpp"
+#include "table_scenes.hpp"
 
 namespace findmug::daemon {
 namespace {
@@ -125,6 +126,49 @@ TEST(TableMapSink, WithoutPublishingTheMapIsStillUpdated) {
   EXPECT_EQ(sink.updates(), 1u);
   EXPECT_EQ(r.map_info.size(), 1u);
   EXPECT_FALSE(r.table_map.has_value());
+}
+
+// The sink gives the table map the frame's depth and camera pose: a confirmed table that a
+// wall hides from the robot stays in the map; one whose place the depth shows empty goes.
+TEST(TableMapSink, ATableHiddenBehindAWallIsNotForgotten) {
+  TableMapSink sink(TableMapConfig{}, TableConfig{}, false, {});  // forget after 3 misses
+  for (std::int64_t seq = 1; seq <= 3; ++seq) {
+    const LabelledFrame l = labelledFrame(seq, true, true, {tableAhead(2.0f)});
+    FrameResult r{l, 0, poseAt(l.segmented.prepared.frame.utime), {}, std::nullopt};
+    sink.consume(r);
+  }
+  ASSERT_EQ(sink.tables().size(), 1u);
+
+  // Frames of a head camera with a depth image and no table detected in them.
+  const GroundPlane ground = groundFromExtrinsics(test::headMount());
+  const io::RobotPose pose = poseAt(0);
+  const Eigen::Isometry3d camera = cameraInMap(pose.pose, ground.camera_to_ground);
+  const auto frameOf = [&](std::int64_t seq, std::vector<std::uint16_t> depth) {
+    LabelledFrame l = labelledFrame(seq, true, true, {});
+    RgbdFrame& f = l.segmented.prepared.frame;
+    f.width = 640;
+    f.height = 480;
+    f.depth_mm = std::move(depth);
+    l.segmented.prepared.ground = ground;
+    return l;
+  };
+  const std::vector<std::uint16_t> wall(640 * 480, 1000);  // 1 m in front of the camera
+  std::int64_t seq = 4;
+  for (int i = 0; i < 6; ++i, ++seq) {
+    const LabelledFrame l = frameOf(seq, wall);
+    FrameResult r{l, 0, io::RobotPose{l.segmented.prepared.frame.utime, pose.pose}, {},
+                  std::nullopt};
+    sink.consume(r);
+  }
+  EXPECT_EQ(sink.tables().size(), 1u) << "a table behind a wall was forgotten";
+  const std::vector<std::uint16_t> floor = test::depthOfTops({}, camera).depth_mm;
+  for (int i = 0; i < 3; ++i, ++seq) {
+    const LabelledFrame l = frameOf(seq, floor);
+    FrameResult r{l, 0, io::RobotPose{l.segmented.prepared.frame.utime, pose.pose}, {},
+                  std::nullopt};
+    sink.consume(r);
+  }
+  EXPECT_TRUE(sink.tables().empty()) << "a table whose place shows empty floor was kept";
 }
 
 // What arrives on the bus's channels, subscribed once, collected by drain().

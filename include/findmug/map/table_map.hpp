@@ -14,8 +14,13 @@
 //     tentative table. A table is confirmed after `confirm_sightings`
 //     sightings, and forgotten after `forget_misses` consecutive updates in
 //     which it was expected (its box centre inside the camera's view: range
-//     and bearing from the pose) but not seen. A tentative table that is not
-//     confirmed within `tentative_timeout_s` is dropped as well.
+//     and bearing from the pose) but not seen. Given the frame's depth image
+//     (a DepthView), an update counts a miss only when the depth image shows
+//     the table's top, or what lies beyond it, at more of its sample points
+//     than it shows something nearer (by `hidden_margin_m`) in front of them:
+//     a table behind a wall or a cabinet is not missing, it is out of sight.
+//     A tentative table that is not confirmed within `tentative_timeout_s` is
+//     dropped as well.
 //   * The geometry of a mapped table comes from its last `max_observations`
 //     observations: the hull is the hull of their hulls (so partial views of
 //     one table add up to the whole top), the axes are the principal axes of
@@ -37,6 +42,7 @@
 #include <vector>
 
 #include "findmug/common/pose2d.hpp"
+#include "findmug/map/depth_view.hpp"
 #include "findmug/settings/settings.hpp"
 #include "findmug/tables/tables.hpp"
 
@@ -62,6 +68,9 @@ struct TableMapConfig {
   float view_half_angle_rad = 0.4f;
   float view_min_range_m = 0.8f;
   float view_max_range_m = 4.0f;
+  // With a depth image: measured depth this much nearer than a point of a
+  // mapped table's top means something stands in front of it (not a miss).
+  float hidden_margin_m = 0.3f;
   int max_observations = 10;      // newest observations kept per table
   float position_match_m = 0.3f;  // observed position near a recomputed one lends its verdict
 };
@@ -97,10 +106,13 @@ class TableMap {
   explicit TableMap(TableMapConfig map_config = {}, TableConfig table_config = {});
 
   // Merges one labelled frame's tables (base frame, as from findTables)
-  // seen from `base_in_map` at `utime` (microseconds). Throws
-  // findmug::Error on a non-finite pose or an update older than the last.
+  // seen from `base_in_map` at `utime` (microseconds). `view` (optional) is
+  // the frame's depth image with its camera pose in the map: without it, a
+  // table expected in view and not seen is missed even when something hid
+  // it. Throws findmug::Error on a non-finite pose or an update older than
+  // the last.
   TableMapUpdate update(const std::vector<TableCluster>& tables_base, const Pose2D& base_in_map,
-                        std::uint64_t utime);
+                        std::uint64_t utime, const DepthView* view = nullptr);
 
   // Every table in the map, tentative ones included, by id.
   const std::vector<MappedTable>& tables() const { return tables_; }
@@ -113,6 +125,9 @@ class TableMap {
  private:
   void rebuild(std::size_t index);
   bool expectedInView(const TableCluster& table, const Pose2D& base_in_map) const;
+  // Whether `view` shows the table's top (or beyond it) at more sample points than it
+  // shows something in front of them.
+  bool topInSight(const TableCluster& table, const DepthView& view) const;
 
   TableMapConfig map_config_;
   TableConfig table_config_;

@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <limits>
 #include <map>
@@ -15,7 +16,10 @@
 #include "findmug/cloud/cloud.hpp"
 #include "findmug/common/error.hpp"
 #include "findmug/ground/ground.hpp"
+#include "findmug/map/depth_view.hpp"
+#include "findmug/map/semantic_map.hpp"
 #include "findmug/synth/synth.hpp"
+#include "table_scenes.hpp"
 
 namespace findmug {
 namespace {
@@ -249,6 +253,55 @@ TEST(TableMap, ForgetsOnlyWhenNotSeenWhereExpected) {
     }
   }
   EXPECT_TRUE(map.tables().empty());
+}
+
+// A table not detected in a frame is missed only when the frame's depth shows its top or
+// the floor where it stood: behind a wall, or where the sensor measured nothing, it is out
+// of sight, and the map keeps it however long the robot looks that way.
+TEST(TableMap, ATableHiddenFromViewIsNotMissedAndOneGoneIs) {
+  TableMap map;  // forget after 3 misses
+  const auto outline = rectangle({5.0f, 0.0f}, 0.0f, 1.2f, 0.8f);
+  const Pose2D facing = lookingAt({5.0f, 0.0f}, 0.0, 2.0);
+  std::uint64_t t = 1;
+  for (int i = 0; i < 3; ++i) map.update({observe(outline, 0.75f, facing)}, facing, t++);
+  ASSERT_EQ(map.confirmedTables().size(), 1u);
+  const TableCluster table = map.confirmedTables()[0];
+
+  const Eigen::Isometry3d camera = test::headCamera(facing);
+  RgbdFrame wall = test::depthOfTops({}, camera);
+  std::fill(wall.depth_mm.begin(), wall.depth_mm.end(), std::uint16_t{1000});  // 1 m away
+  RgbdFrame no_depth = wall;
+  std::fill(no_depth.depth_mm.begin(), no_depth.depth_mm.end(), std::uint16_t{0});
+  for (const RgbdFrame* frame : {&wall, &no_depth}) {
+    const DepthView view(*frame, camera);
+    for (int i = 0; i < 6; ++i) {
+      const auto u = map.update({}, facing, t++, &view);
+      EXPECT_TRUE(u.forgotten.empty());
+    }
+    ASSERT_EQ(map.tables().size(), 1u);
+    EXPECT_EQ(map.tables()[0].misses, 0);
+  }
+
+  // The top in plain view but not detected (a frame the segmenter got wrong) is a miss,
+  // and so is the floor where the table stood.
+  const RgbdFrame top = test::depthOfTops({table}, camera, 0.75);
+  const DepthView top_view(top, camera);
+  map.update({}, facing, t++, &top_view);
+  EXPECT_EQ(map.tables()[0].misses, 1);
+  const RgbdFrame floor = test::depthOfTops({}, camera);
+  const DepthView floor_view(floor, camera);
+  map.update({}, facing, t++, &floor_view);
+  const auto u = map.update({}, facing, t++, &floor_view);
+  ASSERT_EQ(u.forgotten.size(), 1u);
+  EXPECT_TRUE(map.tables().empty());
+}
+
+TEST(TableMap, HiddenMarginIsASetting) {
+  TableMapConfig c;
+  tableMapSettings().set(c, "table_map.hidden_margin_m", "0.5");
+  EXPECT_FLOAT_EQ(c.hidden_margin_m, 0.5f);
+  c.hidden_margin_m = -0.1f;
+  EXPECT_THROW(validateTableMapConfig(c), Error);
 }
 
 TEST(TableMap, SeeingItAgainResetsMisses) {

@@ -157,7 +157,7 @@ TEST(TableMapSettings, TheCoreTableParsesAndValidatesItsSection) {
   EXPECT_EQ(values.at("table_map.forget_misses"), "3");
   EXPECT_EQ(values.at("table_map.view_max_range_m"), "4");
   EXPECT_EQ(values.at("table_map.match_height_m"), "0.15");  // the float's shortest text
-  EXPECT_EQ(tableMapSettings().settings().size(), 10u);
+  EXPECT_EQ(tableMapSettings().settings().size(), 11u);
 
   EXPECT_THAT(errorOf([&] { schema.readYaml("table_map:\n  no_such_key: 1\n", "map.yaml"); }),
               HasSubstr("map.yaml: line 2: unknown setting 'table_map.no_such_key' (table_map keys: "));
