@@ -161,7 +161,7 @@ TEST(SearchSim, AClaimedFindIsCheckedAgainstTheGroundTruth) {
     Robot robot(
         w, params,
         [&](const synth::RenderedFrame&, const Eigen::Vector2d&, double, double) {
-          return Sighting{++n == 3, reported};
+          return Sighting{++n == 3, reported, {}};
         },
         Robot::Recognition::Matcher);
     robot.lookAround();
@@ -201,7 +201,7 @@ TEST(SearchSim, AFindFromADrivingFrameStopsTheRobotWhereItWasTaken) {
   Robot robot(
       w, params,
       [&](const synth::RenderedFrame&, const Eigen::Vector2d&, double, double) {
-        return Sighting{++n == 4, {5.0, 2.0, 0.05}};
+        return Sighting{++n == 4, {5.0, 2.0, 0.05}, {}};
       },
       Robot::Recognition::Matcher);
   robot.driveTo(w.grid.center(w.grid.cellAt({5.0, 2.0})));

@@ -75,6 +75,7 @@ struct Options {
   double top_seen_share = 0.8;
   double room_seen_share = 0.8;
   bool no_replan = false;
+  bool only_daemon_reachable = false;
   bool no_furniture_visits = false;
   bool full_look_arounds = false;
   bool keep_look_alikes = false;
@@ -247,6 +248,7 @@ int run(const Options& o) {
   params.top_seen_share = o.top_seen_share;
   params.room_seen_share = o.room_seen_share;
   params.replan_on_new_tables = !o.no_replan;
+  params.only_daemon_reachable = o.only_daemon_reachable;
   params.furniture_after_coverage = !o.no_furniture_visits;
   params.full_look_arounds = o.full_look_arounds;
   params.look_alikes = o.keep_look_alikes ? synth::LookAlikes::Keep : synth::LookAlikes::Recolour;
@@ -430,6 +432,9 @@ int main(int argc, char** argv) {
   app->add_flag("--no-replan", o.no_replan,
                 "findmug strategy: explore a room to its centre and look around even when the "
                 "map shows a new table on the way");
+  app->add_flag("--only-daemon-reachable", o.only_daemon_reachable,
+                "findmug strategy: drive only to the search positions findmugd marks reachable, "
+                "not to the others the robot's occupancy grid reaches");
   app->add_flag("--no-furniture-visits", o.no_furniture_visits,
                 "findmug strategy: end when coverage has left nothing, instead of then looking at "
                 "every footprint of the occupancy grid from beside it");

@@ -303,7 +303,7 @@ EpisodeResult runFindmug(const World& world, const SimParams& params,
     const MapSearchPosition* next = nullptr;
     int next_cell = -1;
     for (const MapSearchPosition& p : tables.positions()) {
-      if (!p.reachable) continue;
+      if (!p.reachable && params.only_daemon_reachable) continue;
       const bool seen_before =
           std::find(tables_visited.begin(), tables_visited.end(), p.table_id) !=
               tables_visited.end() ||
@@ -320,7 +320,8 @@ EpisodeResult runFindmug(const World& world, const SimParams& params,
       for (const TableCluster& t : tables.mapTables()) known.push_back(t.id);
       const auto new_table = [&] {
         for (const MapSearchPosition& p : tables.positions())
-          if (p.reachable && std::find(known.begin(), known.end(), p.table_id) == known.end() &&
+          if ((p.reachable || !params.only_daemon_reachable) &&
+              std::find(known.begin(), known.end(), p.table_id) == known.end() &&
               !(params.top_seen_share > 0.0 && eyes.topSeen(p.table_id) >= params.top_seen_share))
             return true;
         return false;
@@ -381,12 +382,15 @@ EpisodeResult runFindmug(const World& world, const SimParams& params,
   if (params.trace) {
     // What the map held at the end, and how much of each top the frames showed.
     for (const TableCluster& t : tables.mapTables()) {
-      char line[200];
+      int positions = 0, reachable = 0;
+      for (const MapSearchPosition& p : tables.positions())
+        if (p.table_id == t.id) ++positions, reachable += p.reachable;
+      char line[240];
       std::snprintf(line, sizeof line,
                     "at the end: table %d at (%.2f, %.2f), truth %s, %.0f %% of its top seen, "
-                    "the mug %.1f m from its centre",
+                    "%d of %d search positions reachable, the mug %.1f m from its centre",
                     t.id, t.center.x(), t.center.y(), furnitureAt(world, t.center).c_str(),
-                    100.0 * eyes.topSeen(t.id),
+                    100.0 * eyes.topSeen(t.id), reachable, positions,
                     (t.center.cast<double>() - world.mug.position.head<2>()).norm());
       robot.note(line);
     }
@@ -572,12 +576,16 @@ void RoomExplorer::lookedAroundHere(const Robot& robot) {
   if (r >= 0) done_[r] = true;
 }
 
+int RoomExplorer::coveredCells(const Robot& robot, int room) const {
+  int seen = 0;
+  for (const int c : floor_[room]) seen += robot.viewCoverage().covered(c);
+  return seen;
+}
+
 double RoomExplorer::seenShare(const Robot& robot, int room) const {
   const std::vector<int>& cells = floor_[room];
   if (cells.empty()) return 1.0;
-  int seen = 0;
-  for (const int c : cells) seen += robot.viewCoverage().covered(c);
-  return static_cast<double>(seen) / static_cast<double>(cells.size());
+  return static_cast<double>(coveredCells(robot, room)) / static_cast<double>(cells.size());
 }
 
 bool RoomExplorer::explored(const Robot& robot, int room) const {
@@ -589,8 +597,7 @@ double RoomExplorer::seenShareAfterLookAround(const Robot& robot, int room,
   const std::vector<int>& cells = floor_[room];
   if (cells.empty()) return 1.0;
   const ViewCoverage& coverage = robot.viewCoverage();
-  int seen = 0;
-  for (const int c : cells) seen += coverage.covered(c);
+  int seen = coveredCells(robot, room);
   for (const int c : coverage.cellsInViewAround(xy, params_.coverage_range_m))
     seen += room_of_[c] == room && !coverage.covered(c);
   return static_cast<double>(seen) / static_cast<double>(cells.size());

@@ -97,6 +97,9 @@ class RoomExplorer {
   bool exploreNext(Robot& robot, const std::function<bool()>& stop_when = {});
 
  private:
+  // How many of the room's floor_ cells the robot's frames have shown.
+  int coveredCells(const Robot& robot, int room) const;
+
   const World& world_;
   const SimParams& params_;
   std::vector<bool> done_;               // looked around in
