@@ -656,6 +656,32 @@ TEST(SearchBench, MatcherPerceptionFindsTheTaughtMugOnATableAndRepeats) {
   EXPECT_TRUE(found) << csv;
 }
 
+// Episode 3.0 of a 10-apartment run: the mug on a kitchen table ringed by chairs, whose four
+// search positions findmugd never saw the floor of (all marked unreachable). Once every room
+// is explored the findmug strategy drives to such positions when its occupancy grid reaches
+// them, and the matcher finds the mug there before covering the floor plan would; driving
+// only to the positions findmugd marked reachable, it has not found it by then.
+TEST(SearchBench, FindmugStrategyVisitsThePositionsFindmugdCouldNotJudgeBeforeCovering) {
+  ProgramRun run("unjudged");
+  const std::string args =
+      "--apartments 10 --episodes-per-apartment 2 --only 3.0 --strategies findmug"
+      " --perception matcher --models sim --budget 215 --jobs 2";
+  const fs::path now = run("now", args + " --trace " + (run.tmp / "trace").string());
+  const fs::path before = run("before", args + " --only-daemon-reachable");
+  const auto now_rows = csvRows(slurp(now / "episodes.csv"));
+  const auto before_rows = csvRows(slurp(before / "episodes.csv"));
+  ASSERT_EQ(now_rows.size(), 1u);
+  ASSERT_EQ(before_rows.size(), 1u);
+  EXPECT_EQ(now_rows[0].at("mug_place"), "table");
+  EXPECT_EQ(now_rows[0].at("found"), "1") << slurp(now / "episodes.csv");
+  EXPECT_EQ(before_rows[0].at("found"), "0") << slurp(before / "episodes.csv");
+  const std::string trace = slurp(run.tmp / "trace" / "findmug-matcher-sim_a3_e0.txt");
+  const std::size_t judged = trace.find("the search positions findmugd could not judge");
+  ASSERT_NE(judged, std::string::npos) << trace;
+  EXPECT_NE(trace.find("search position of table", judged), std::string::npos) << trace;
+  EXPECT_EQ(trace.find("cover the floor plan", judged), std::string::npos) << trace;
+}
+
 TEST(SearchReport, SplAndPairedRatios) {
   std::vector<EpisodeRow> rows;
   for (int e = 0; e < 4; ++e) {

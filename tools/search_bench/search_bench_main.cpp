@@ -434,7 +434,8 @@ int main(int argc, char** argv) {
                 "map shows a new table on the way");
   app->add_flag("--only-daemon-reachable", o.only_daemon_reachable,
                 "findmug strategy: drive only to the search positions findmugd marks reachable, "
-                "not to the others the robot's occupancy grid reaches");
+                "not, once every room is explored, to the others the robot's occupancy grid "
+                "reaches");
   app->add_flag("--no-furniture-visits", o.no_furniture_visits,
                 "findmug strategy: end when coverage has left nothing, instead of then looking at "
                 "every footprint of the occupancy grid from beside it");

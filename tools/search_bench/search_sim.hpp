@@ -67,9 +67,9 @@ struct SimParams {
   // The findmug strategy stops exploring a room when the map shows a new table to look at.
   bool replan_on_new_tables = true;
   // The findmug strategy drives only to the search positions findmugd marks reachable
-  // (the behaviour before it also tried the others its own occupancy grid can reach: the
-  // daemon marks a spot unreachable when its frames did not show the floor there, which a
-  // robot's navigation map decides better).
+  // (the behaviour before it also tried the others its own occupancy grid can reach once
+  // every room was explored: the daemon marks a spot unreachable when its frames did not
+  // show the floor there, which a robot's navigation map decides better).
   bool only_daemon_reachable = false;
   // The findmug strategy, when coverage has left nothing and the mug is not seen: it looks at
   // every footprint of the occupancy grid from beside it, nearest first.

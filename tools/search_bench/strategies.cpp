@@ -297,13 +297,18 @@ EpisodeResult runFindmug(const World& world, const SimParams& params,
   // positions otherwise has the robot walk round it while other rooms wait).
   std::vector<Eigen::Vector2d> visited;
   std::vector<int> tables_visited;
+  // Once every room is explored, the search positions findmugd could not judge come before
+  // covering the floor plan (it marks a spot unreachable when its frames did not show the
+  // floor there, as behind a table; the robot's occupancy grid decides). Before that they
+  // would draw the robot to every sofa taken for a table.
+  bool rooms_explored = false;
   while (robot.active()) {
     if (closer.next(robot, eyes, world)) continue;
     const std::vector<double> dist = world.grid.distancesFrom(robot.cell());
     const MapSearchPosition* next = nullptr;
     int next_cell = -1;
     for (const MapSearchPosition& p : tables.positions()) {
-      if (!p.reachable && params.only_daemon_reachable) continue;
+      if (!p.reachable && (params.only_daemon_reachable || !rooms_explored)) continue;
       const bool seen_before =
           std::find(tables_visited.begin(), tables_visited.end(), p.table_id) !=
               tables_visited.end() ||
@@ -320,15 +325,20 @@ EpisodeResult runFindmug(const World& world, const SimParams& params,
       for (const TableCluster& t : tables.mapTables()) known.push_back(t.id);
       const auto new_table = [&] {
         for (const MapSearchPosition& p : tables.positions())
-          if ((p.reachable || !params.only_daemon_reachable) &&
-              std::find(known.begin(), known.end(), p.table_id) == known.end() &&
+          if (p.reachable && std::find(known.begin(), known.end(), p.table_id) == known.end() &&
               !(params.top_seen_share > 0.0 && eyes.topSeen(p.table_id) >= params.top_seen_share))
             return true;
         return false;
       };
-      if (rooms.exploreNext(robot, params.replan_on_new_tables ? std::function<bool()>(new_table)
+      if (!rooms_explored &&
+          rooms.exploreNext(robot, params.replan_on_new_tables ? std::function<bool()>(new_table)
                                                                : std::function<bool()>()))
         continue;
+      if (!rooms_explored && !params.only_daemon_reachable) {
+        rooms_explored = true;
+        robot.note("every room explored: the search positions findmugd could not judge");
+        continue;
+      }
       robot.note("cover the floor plan");
       coverUntilDone(robot, world, params, false);  // nothing left but the floor plan
       if (params.furniture_after_coverage && robot.active()) {
