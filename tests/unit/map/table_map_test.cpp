@@ -222,12 +222,20 @@ TEST(TableMap, PartialViewsAddUpToTheWholeTop) {
   EXPECT_EQ(t.search_positions.size(), 4u);
 }
 
-TEST(TableMap, ForgetsOnlyWhenNotSeenWhereExpected) {
-  TableMap map;  // forget after 3 misses
-  const auto outline = rectangle({5.0f, 0.0f}, 0.0f, 1.2f, 0.8f);
+// A map (forgetting after 3 misses) with one confirmed 1.2 x 0.8 m table centred at (5, 0),
+// seen three times from `facing`, 2 m west of it; `t` is the next update's time.
+class TableMapWithOneTable : public ::testing::Test {
+ protected:
+  TableMapWithOneTable() {
+    const auto outline = rectangle({5.0f, 0.0f}, 0.0f, 1.2f, 0.8f);
+    for (int i = 0; i < 3; ++i) map.update({observe(outline, 0.75f, facing)}, facing, t++);
+  }
+  TableMap map;
   const Pose2D facing = lookingAt({5.0f, 0.0f}, 0.0, 2.0);
   std::uint64_t t = 1;
-  for (int i = 0; i < 3; ++i) map.update({observe(outline, 0.75f, facing)}, facing, t++);
+};
+
+TEST_F(TableMapWithOneTable, ForgetsOnlyWhenNotSeenWhereExpected) {
   ASSERT_EQ(map.confirmedTables().size(), 1u);
   // Looking the other way (the table is behind the robot): no evidence.
   const Pose2D away{3.0, 0.0, kPi};
@@ -258,12 +266,7 @@ TEST(TableMap, ForgetsOnlyWhenNotSeenWhereExpected) {
 // A table not detected in a frame is missed only when the frame's depth shows its top or
 // the floor where it stood: behind a wall, or where the sensor measured nothing, it is out
 // of sight, and the map keeps it however long the robot looks that way.
-TEST(TableMap, ATableHiddenFromViewIsNotMissedAndOneGoneIs) {
-  TableMap map;  // forget after 3 misses
-  const auto outline = rectangle({5.0f, 0.0f}, 0.0f, 1.2f, 0.8f);
-  const Pose2D facing = lookingAt({5.0f, 0.0f}, 0.0, 2.0);
-  std::uint64_t t = 1;
-  for (int i = 0; i < 3; ++i) map.update({observe(outline, 0.75f, facing)}, facing, t++);
+TEST_F(TableMapWithOneTable, ATableHiddenFromViewIsNotMissedAndOneGoneIs) {
   ASSERT_EQ(map.confirmedTables().size(), 1u);
   const TableCluster table = map.confirmedTables()[0];
 
