@@ -5,6 +5,11 @@
 //   findmug-synth --seed 7 --frames 300 --out /tmp/synth7 [--fps 30]
 //                 [--camera-height 1.0:1.4] [--pitch-deg 20:45] [--tables 1:3]
 //                 [--speed 0.4] [--no-noise]
+//   findmug-synth --multi-room --seed 9001 --frames 200 --out /tmp/rooms9001 [--fps 2]
+//
+// --multi-room renders the search bench's multi-room apartments (beds, sofas, shelves),
+// one view of a piece of furniture a frame (synth::apartmentViews), for a model to learn
+// the object search's domain.
 #include <cstdio>
 #include <iostream>
 #include <lcm/lcm-cpp.hpp>
@@ -73,6 +78,7 @@ int main(int argc, char** argv) {
   std::string seed_text, out, fps_text, height_text, pitch_text, tables_text, speed_text, lcm_log;
   int frames = 0;
   bool no_noise = false;
+  bool multi_room = false;
   auto app = cli::makeApp("findmug-synth",
                           "Renders a synthetic apartment sequence with ground truth into a "
                           "dataset folder (rgb/, depth/, label8/, intrinsics.yaml, "
@@ -95,6 +101,9 @@ int main(int argc, char** argv) {
   app->add_option("--tables", tables_text, "number of tables (default 1:3)")->type_name("A:B");
   app->add_option("--speed", speed_text, "robot speed in m/s (default 0.4)")->type_name("V");
   app->add_flag("--no-noise", no_noise, "exact depth (mm), no dropouts, no colour noise");
+  app->add_flag("--multi-room", multi_room,
+                "a multi-room apartment of the search bench (3-6 rooms, beds, sofas), one view "
+                "of a piece of its furniture a frame, instead of one room along a path");
   app->add_option("--lcm-log", lcm_log,
                   "also write the frames as an LCM log of rgbd_frame_t on FINDMUG_RGBD (what "
                   "lcm-logplayer replays to findmugd), stamped with the sequence's frame times")
@@ -104,6 +113,10 @@ int main(int argc, char** argv) {
     synth::SequenceSpec spec;
     spec.seed = parseSeed(seed_text);
     spec.frames = frames;
+    spec.multi_room = multi_room;
+    if (multi_room && (!tables_text.empty() || !speed_text.empty()))
+      throw Error("flag --multi-room: --tables and --speed are for one room along a path "
+                  "(a multi-room apartment is furnished by room kind, one view a frame)");
     if (!fps_text.empty()) spec.fps = findmug::tools::parseNumber("--fps", fps_text);
     if (!height_text.empty())
       std::tie(spec.path.height_min, spec.path.height_max) =

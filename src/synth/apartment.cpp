@@ -479,6 +479,48 @@ MultiRoomApartment makeMultiRoomApartment(std::uint64_t seed, const MultiRoomPar
               " after 40 attempts");
 }
 
+std::vector<CameraPose> apartmentViews(const MultiRoomApartment& apt, int n_views,
+                                       std::uint64_t seed, const CameraPathParams& params) {
+  validate(params);
+  if (n_views < 0) throw Error("synth: apartmentViews: n_views = " + std::to_string(n_views) + " < 0");
+  if (apt.furniture.empty()) throw Error("synth: apartmentViews: the apartment has no furniture");
+  Rng rng(detail::hash3(seed, 0x71e75, 0));
+  // Every piece in turn, in an order of the seed's: beds and sofas as often as tables.
+  std::vector<int> order(apt.furniture.size());
+  for (std::size_t i = 0; i < order.size(); ++i) order[i] = static_cast<int>(i);
+  for (std::size_t i = order.size(); i > 1; --i)
+    std::swap(order[i - 1], order[static_cast<std::size_t>(rng.integer(0, static_cast<int>(i) - 1))]);
+  std::vector<CameraPose> views;
+  for (std::size_t k = 0; static_cast<int>(views.size()) < n_views; ++k) {
+    if (k >= order.size() * 4 && views.empty())
+      throw Error("synth: apartmentViews: no spot in seed " + std::to_string(seed) +
+                  "'s apartment where the robot fits and sees its furniture");
+    const FurnitureTruth& piece = apt.furniture[order[k % order.size()]];
+    Eigen::Vector2d centre = Eigen::Vector2d::Zero();
+    for (const auto& p : piece.footprint) centre += p;
+    centre /= std::max<std::size_t>(1, piece.footprint.size());
+    for (int attempt = 0; attempt < 60; ++attempt) {
+      const double distance = rng.uniform(0.9, params.max_view_distance_m + 0.8);
+      const double bearing = rng.uniform(-M_PI, M_PI);
+      const Eigen::Vector2d stand = centre + distance * Eigen::Vector2d(std::cos(bearing), std::sin(bearing));
+      if (apt.roomAt(stand) != piece.room ||
+          !robotFits(apt.scene.room_size, apt.scene.obstacles, stand, params.robot_radius_m))
+        continue;
+      CameraPose pose;
+      pose.xy = stand;
+      const Eigen::Vector2d to = centre - stand;
+      pose.yaw = std::atan2(to.y(), to.x()) + rng.uniform(-params.pan_amplitude_rad * 2.0,
+                                                          params.pan_amplitude_rad * 2.0);
+      pose.height_m = rng.uniform(params.height_min, params.height_max);
+      pose.pitch_rad = rng.uniform(params.pitch_min_deg, params.pitch_max_deg) * M_PI / 180.0;
+      pose.time_s = static_cast<double>(views.size());
+      views.push_back(pose);
+      break;
+    }
+  }
+  return views;
+}
+
 bool looksLikeTargetMugRed(Rgb8 colour) {
   // The palette's red is 5:1 red to green and blue, its orange 2:1; the jitter moves the
   // ratio by at most 13 %, so 3:1 parts them with room on both sides.

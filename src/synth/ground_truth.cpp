@@ -297,8 +297,17 @@ SequenceGroundTruth writeSequence(const std::string& dir, const SequenceSpec& sp
   fs::create_directories(dir, ec);
   if (ec) throw Error(dir + ": cannot create (" + ec.message() + ")");
 
-  const SynthScene scene = makeApartment(spec.seed, spec.apartment);
-  const std::vector<CameraPose> poses = cameraPath(scene, spec.frames, spec.fps, spec.path);
+  SynthScene scene;
+  std::vector<CameraPose> poses;
+  if (spec.multi_room) {
+    MultiRoomApartment apartment = makeMultiRoomApartment(spec.seed, spec.multi_room_params);
+    poses = apartmentViews(apartment, spec.frames, spec.seed, spec.path);
+    for (CameraPose& pose : poses) pose.time_s /= spec.fps;
+    scene = std::move(apartment.scene);
+  } else {
+    scene = makeApartment(spec.seed, spec.apartment);
+    poses = cameraPath(scene, spec.frames, spec.fps, spec.path);
+  }
   SequenceGroundTruth truth;
   truth.seed = spec.seed;
   truth.fps = spec.fps;
@@ -312,7 +321,9 @@ SequenceGroundTruth writeSequence(const std::string& dir, const SequenceSpec& sp
   for (int i = 0; i < spec.frames; ++i) {
     RenderedFrame r = render(scene, poses[i], spec.render, detail::hash3(spec.seed, i, 0xf4a3e));
     LabeledFrame& lf = r.labeled;
-    lf.name = frameName(i);
+    // A multi-room apartment's frames carry its seed: several apartments train one model,
+    // and the trainer wants every frame name once.
+    lf.name = (spec.multi_room ? "apartment" + std::to_string(spec.seed) + "-" : "") + frameName(i);
     lf.frame.seq = i;
     lf.frame.utime = static_cast<std::uint64_t>(std::llround(i * 1e6 / spec.fps));
     lf.frame.source = (fs::path(dir) / "rgb" / (lf.name + ".png")).string();

@@ -8,6 +8,7 @@
 
 #include "findmug/frame/dataset.hpp"
 #include "findmug/io/channels.hpp"
+#include "findmug/labels/labels.hpp"
 #include "findmug/io/lcm_codec.hpp"
 #include "test_data.hpp"
 
@@ -47,6 +48,43 @@ TEST(SynthTool, WritesAnLcmLogEqualToTheDatasetFolder) {
       EXPECT_NEAR(static_cast<double>(frames[i].utime - frames[i - 1].utime), 200000.0, 1.0);
     }
   }
+}
+
+// --multi-room: views of the search bench's apartments for training. Frames of two
+// apartments carry their seeds in their names (the trainer takes every name once), read
+// back as labelled frames that show furniture; the one-room options are refused.
+TEST(SynthTool, MultiRoomApartmentsWriteFramesNamedByTheirSeeds) {
+  test::TempDir tmp;
+  for (const char* seed : {"9001", "9002"}) {
+    const std::string command = std::string(FINDMUG_SYNTH_EXE) + " --multi-room --seed " + seed +
+                                " --frames 3 --fps 2 --pitch-deg 20:35 --out " +
+                                tmp.str(seed) + " > /dev/null 2>&1";
+    ASSERT_EQ(std::system(command.c_str()), 0) << command;
+  }
+  const DatasetFolder a(tmp.str("9001")), b(tmp.str("9002"));
+  ASSERT_EQ(a.size(), 3u);
+  ASSERT_EQ(b.size(), 3u);
+  int furniture_pixels = 0;
+  for (std::size_t i = 0; i < 3; ++i) {
+    const LabeledFrame fa = a.load(i), fb = b.load(i);
+    EXPECT_EQ(fa.name, "apartment9001-00000" + std::to_string(i));
+    EXPECT_EQ(fb.name, "apartment9002-00000" + std::to_string(i));
+    ASSERT_TRUE(fa.frame.extrinsics.has_value());
+    for (const std::uint8_t l : fa.labels)
+      furniture_pixels += l == static_cast<std::uint8_t>(Label::Table) ||
+                          l == static_cast<std::uint8_t>(Label::Chair) ||
+                          l == static_cast<std::uint8_t>(Label::Cabinet);
+  }
+  EXPECT_GT(furniture_pixels, 3 * 640 * 480 / 20);
+  const std::string bad = std::string(FINDMUG_SYNTH_EXE) + " --multi-room --tables 2 --seed 1" +
+                          " --frames 1 --out " + tmp.str("bad") + " 2>&1";
+  FILE* pipe = popen(bad.c_str(), "r");
+  ASSERT_NE(pipe, nullptr);
+  std::string output;
+  char buf[512];
+  while (std::fgets(buf, sizeof buf, pipe)) output += buf;
+  EXPECT_NE(pclose(pipe), 0);
+  EXPECT_THAT(output, ::testing::HasSubstr("--multi-room"));
 }
 
 TEST(SynthTool, UnwritableLogIsNamed) {

@@ -52,8 +52,9 @@ struct FindmugModel {
 FindmugModel loadFindmugModel(const std::string& config_path, const std::string& model_path,
                               const std::vector<std::string>& overrides);
 
-// The settings the sim-domain model (models/findmug-nyu-synth.fmf) runs with, demo.sh's:
-// it learned the 8 labels, without object features, for the Potts pairwise term.
+// The settings the sim-domain model (models/findmug-apartments.fmf; the demo's
+// models/findmug-nyu-synth.fmf too) runs with: it learned the 8 labels (findmug-synth
+// writes no NYU-13 classes), without object features, for the Potts pairwise term.
 const std::vector<std::string>& simDomainSettings();
 
 // One episode's daemon: a fresh pipeline (and so an empty table and object map).

@@ -5,10 +5,14 @@
 //       --strategies findmug,places,coverage,random,oracle --perception oracle[,matcher]
 //       [--models sim[,shipped]] [--drive-frames-hz 1] --jobs 2 --out DIR
 //       [--config daemon/findmugd.yaml --model FILE --set KEY=VALUE ...]
+//   findmug-search-bench ... --runs findmug/oracle/sim,coverage/oracle,findmug/matcher/sim ...
 //
 // A run is a strategy under one perception (and, where the daemon runs, one model): every
 // strategy under every perception asked for; the findmug strategy once per model; the
 // baselines under the matcher with the first model (their recogniser is the daemon's).
+// --runs names the runs instead, by their labels STRATEGY/PERCEPTION[/MODEL]: the whole
+// benchmark (five strategies with the oracle recogniser, findmug with the matcher and each
+// model) is one command and one pool of workers.
 // With the matcher, "mug" is first taught (teach_mug.hpp) into a temporary objects_dir per
 // model, from apartments whose seeds no episode uses.
 //
@@ -61,9 +65,10 @@ struct Options {
   std::string strategies = "findmug,places,coverage,random,oracle";
   std::string perception = "oracle";
   std::string models;  // "" = the one of --model
+  std::string runs;    // "" = every strategy under every perception (--strategies, --perception)
   std::string out_dir;
   std::string config = "daemon/findmugd.yaml";
-  std::string model = "models/findmug-nyu-synth.fmf";
+  std::string model = "models/findmug-apartments.fmf";
   std::vector<std::string> overrides = simDomainSettings();
   std::vector<std::string> extra_overrides;
   double budget_s = 600.0;
@@ -112,7 +117,7 @@ std::vector<ModelChoice> modelChoices(const Options& o) {
   std::vector<ModelChoice> out;
   if (o.models.empty()) {
     const std::string stem = std::filesystem::path(o.model).stem().string();
-    const std::string key = stem == "findmug-nyu-synth" && !o.overrides.empty() ? "sim"
+    const std::string key = stem == "findmug-apartments" && !o.overrides.empty() ? "sim"
                             : stem == "findmug" && o.overrides.empty()          ? "shipped"
                                                                                 : stem;
     out.push_back({key, o.model, o.overrides, nullptr, "", {}});
@@ -120,12 +125,12 @@ std::vector<ModelChoice> modelChoices(const Options& o) {
   }
   for (const std::string& key : splitWords(o.models, "--models")) {
     if (key == "sim")
-      out.push_back({key, "models/findmug-nyu-synth.fmf", simDomainSettings(), nullptr, "", {}});
+      out.push_back({key, "models/findmug-apartments.fmf", simDomainSettings(), nullptr, "", {}});
     else if (key == "shipped")
       out.push_back({key, "models/findmug.fmf", {}, nullptr, "", {}});
     else
       throw Error("--models: unknown model '" + key +
-                  "' (sim: models/findmug-nyu-synth.fmf with demo.sh's settings; shipped: "
+                  "' (sim: models/findmug-apartments.fmf with its settings; shipped: "
                   "models/findmug.fmf, the NYU model, with the config's)");
   }
   return out;
@@ -156,12 +161,19 @@ std::vector<EpisodeRow> runAll(const std::vector<Episode>& episodes,
                                int jobs, bool quiet) {
   // Work items of one run on one episode, not whole episodes: a run that feeds the daemon
   // takes seconds to minutes, an oracle-perception baseline milliseconds, so whole episodes
-  // left one worker busy for minutes at the end. The daemon's runs go first for the same
-  // reason. Rows keep the order of episodes, then runs, whichever worker ran them.
+  // left one worker busy for minutes at the end. The longest runs go first for the same
+  // reason: the matcher's (every frame through the daemon and a find request), then the
+  // daemon's other runs, then the baselines. Rows keep the order of episodes, then runs,
+  // whichever worker ran them.
   std::vector<std::size_t> run_order(runs.size());
   for (std::size_t r = 0; r < runs.size(); ++r) run_order[r] = r;
-  std::stable_partition(run_order.begin(), run_order.end(),
-                        [&runs](std::size_t r) { return runs[r].setup.model != nullptr; });
+  const auto cost_rank = [&runs](std::size_t r) {
+    return runs[r].setup.kind == Perception::Kind::Matcher ? 0
+           : runs[r].setup.model != nullptr                ? 1
+                                                           : 2;
+  };
+  std::stable_sort(run_order.begin(), run_order.end(),
+                   [&](std::size_t a, std::size_t b) { return cost_rank(a) < cost_rank(b); });
   std::vector<std::pair<std::size_t, std::size_t>> items;  // (episode, run)
   for (const std::size_t r : run_order)
     for (std::size_t e = 0; e < episodes.size(); ++e) items.push_back({e, r});
@@ -235,12 +247,89 @@ void writeTraces(const std::string& dir, const std::vector<EpisodeRow>& rows) {
   }
 }
 
-int run(const Options& o) {
+// A run's perception and label; `model` is empty for a run without the daemon.
+RunSpec runSpec(const std::string& strategy, const std::string& perception,
+                const std::string& model) {
+  RunSpec spec;
+  spec.strategy = strategy;
+  spec.perception = perception;
+  spec.model = model;
+  spec.setup.kind = perception == "matcher" ? Perception::Kind::Matcher : Perception::Kind::Oracle;
+  spec.label = strategy + "/" + perception + (model.empty() ? "" : "/" + model);
+  return spec;
+}
+
+void checkPerception(const std::string& p, const std::string& what) {
+  if (p != "oracle" && p != "matcher")
+    throw Error(what + ": unknown recogniser '" + p + "' (oracle, matcher)");
+}
+
+// Every strategy of --strategies under every perception of --perception; `models` gets
+// those of --models (or --model).
+std::vector<RunSpec> gridRuns(const Options& o, std::vector<ModelChoice>& models) {
   const std::vector<std::string> names = splitList(o.strategies);
   const std::vector<std::string> perceptions = splitWords(o.perception, "--perception");
-  for (const std::string& p : perceptions)
-    if (p != "oracle" && p != "matcher")
-      throw Error("--perception: unknown recogniser '" + p + "' (oracle, matcher)");
+  for (const std::string& p : perceptions) checkPerception(p, "--perception");
+  models = modelChoices(o);
+  std::vector<RunSpec> runs;
+  for (const std::string& perception : perceptions)
+    for (const std::string& name : names) {
+      const bool daemon = name == "findmug" || perception == "matcher";
+      if (!daemon) {
+        runs.push_back(runSpec(name, perception, ""));
+        continue;
+      }
+      // The findmug strategy once per model; a baseline with the first model's recogniser.
+      const std::size_t n = name == "findmug" ? models.size() : 1;
+      for (std::size_t m = 0; m < n; ++m) runs.push_back(runSpec(name, perception, models[m].key));
+    }
+  return runs;
+}
+
+// The runs --runs names by their labels, STRATEGY/PERCEPTION[/MODEL]; `models` gets the
+// models they name (those of --models, or by default the ones named). Throws
+// findmug::Error naming a label that is malformed, lacks the model a daemon run needs or
+// names one a run without the daemon cannot use.
+std::vector<RunSpec> namedRuns(const Options& o, std::vector<ModelChoice>& models) {
+  if (o.strategies != Options{}.strategies || o.perception != Options{}.perception)
+    throw Error("--runs names strategy and perception itself: leave out --strategies and "
+                "--perception");
+  std::vector<RunSpec> runs;
+  std::vector<std::string> keys;
+  for (const std::string& label : splitWords(o.runs, "--runs")) {
+    std::vector<std::string> parts;
+    std::stringstream s(label);
+    for (std::string part; std::getline(s, part, '/');) parts.push_back(part);
+    if (parts.size() < 2 || parts.size() > 3 ||
+        std::any_of(parts.begin(), parts.end(), [](const std::string& x) { return x.empty(); }))
+      throw Error("--runs: '" + label + "' is not STRATEGY/PERCEPTION[/MODEL] (e.g. "
+                  "findmug/matcher/sim, coverage/oracle)");
+    const std::string strategy = canonicalStrategy(parts[0]);
+    checkPerception(parts[1], "--runs: '" + label + "'");
+    const bool daemon = strategy == "findmug" || parts[1] == "matcher";
+    if (daemon && parts.size() == 2)
+      throw Error("--runs: '" + label + "' runs the daemon: name its model (" + label +
+                  "/sim or " + label + "/shipped)");
+    if (!daemon && parts.size() == 3)
+      throw Error("--runs: '" + label + "' runs no daemon (the oracle recogniser, not the "
+                  "findmug strategy): it takes no model");
+    const std::string model = daemon ? parts[2] : "";
+    if (daemon && std::find(keys.begin(), keys.end(), model) == keys.end()) keys.push_back(model);
+    runs.push_back(runSpec(strategy, parts[1], model));
+  }
+  Options named = o;
+  if (o.models.empty() && !keys.empty() && keys != std::vector<std::string>{modelChoices(o)[0].key}) {
+    named.models.clear();
+    for (const std::string& k : keys) named.models += (named.models.empty() ? "" : ",") + k;
+  }
+  models = keys.empty() ? std::vector<ModelChoice>{} : modelChoices(named);
+  for (const std::string& k : keys)
+    if (std::none_of(models.begin(), models.end(), [&k](const ModelChoice& m) { return m.key == k; }))
+      throw Error("--runs: model '" + k + "' is not among --models");
+  return runs;
+}
+
+int run(const Options& o) {
   SimParams params;
   params.time_budget_s = o.budget_s;
   params.drive_frames_hz = o.drive_frames_hz;
@@ -262,26 +351,8 @@ int run(const Options& o) {
   }
   if (!o.only.empty()) episodes = onlyEpisodes(episodes, o.only);
 
-  std::vector<ModelChoice> models = modelChoices(o);
-  std::vector<RunSpec> runs;
-  for (const std::string& perception : perceptions)
-    for (const std::string& name : names) {
-      const bool daemon = name == "findmug" || perception == "matcher";
-      const std::size_t n = name == "findmug" ? models.size() : daemon ? 1 : 0;
-      for (std::size_t m = 0; m < std::max<std::size_t>(n, 1); ++m) {
-        RunSpec spec;
-        spec.strategy = name;
-        spec.perception = perception;
-        spec.setup.kind =
-            perception == "matcher" ? Perception::Kind::Matcher : Perception::Kind::Oracle;
-        spec.label = name + "/" + perception;
-        if (daemon) {
-          spec.model = models[m].key;
-          spec.label += "/" + spec.model;
-        }
-        runs.push_back(spec);
-      }
-    }
+  std::vector<ModelChoice> models;
+  std::vector<RunSpec> runs = o.runs.empty() ? gridRuns(o, models) : namedRuns(o, models);
   // Load the models the runs use; teach the mug with each one the matcher runs with.
   const std::filesystem::path scratch =
       std::filesystem::temp_directory_path() /
@@ -392,9 +463,14 @@ int main(int argc, char** argv) {
   app->add_option("--perception", o.perception,
                   "mug recognition, comma-separated: oracle (rendered pixels), matcher "
                   "(findmugd's taught-object matcher and \"find mug\")");
+  app->add_option("--runs", o.runs,
+                  "the runs, comma-separated labels STRATEGY/PERCEPTION[/MODEL] (e.g. "
+                  "findmug/oracle/sim,coverage/oracle,findmug/matcher/shipped), instead of every "
+                  "strategy under every perception");
   app->add_option("--models", o.models,
-                  "daemon models, comma-separated: sim (models/findmug-nyu-synth.fmf with "
-                  "demo.sh's settings), shipped (models/findmug.fmf); default: --model");
+                  "daemon models, comma-separated: sim (models/findmug-apartments.fmf, NYU and "
+                  "rendered apartments, with its settings), shipped (models/findmug.fmf); "
+                  "default: --model");
   app->add_option("--drive-frames-hz", o.drive_frames_hz,
                   "frames per second of motion while driving or turning (default 1; 0: views "
                   "at stops only)")
@@ -410,11 +486,11 @@ int main(int argc, char** argv) {
   app->add_option("--out", o.out_dir, "output folder")->required();
   app->add_option("--config", o.config, "findmugd config for the findmug strategy");
   app->add_option("--model", o.model,
-                  "model for the findmug strategy (default models/findmug-nyu-synth.fmf; "
+                  "model for the findmug strategy (default models/findmug-apartments.fmf; "
                   "models/findmug.fmf for the cross-domain case, with --no-sim-settings)");
   app->add_flag_callback(
       "--no-sim-settings", [&o] { o.overrides.clear(); },
-      "drop demo.sh's settings for the sim-domain model");
+      "drop the sim-domain model's settings (learner.classes=labels, ...)");
   app->add_option("--set", o.extra_overrides, "KEY=VALUE daemon setting (repeatable)");
   app->add_flag("--quiet", o.quiet, "no progress lines");
   app->add_option("--top-seen-share", o.top_seen_share,

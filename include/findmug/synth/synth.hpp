@@ -331,6 +331,17 @@ struct CameraPathParams {
 
 void validate(const CameraPathParams& params);
 
+// Views of an apartment's furniture as a robot's head camera sees it, for a model to learn
+// the search's domain from (findmug-synth --multi-room): view i looks at a piece of
+// furniture (every piece in turn, in an order of the seed's: beds, sofas, chairs and
+// shelves as often as tables) from a spot in its room 0.9 to max_view_distance_m + 0.8 m
+// from its centre where the robot fits (robot_radius_m), heading at it within twice
+// pan_amplitude_rad, camera height and pitch drawn per view from the params' ranges.
+// time_s is the view's index. Deterministic in `seed`. Throws findmug::Error when the
+// params are out of range or the apartment has no furniture any spot sees.
+std::vector<CameraPose> apartmentViews(const MultiRoomApartment& apartment, int n_views,
+                                       std::uint64_t seed, const CameraPathParams& params = {});
+
 // A robot's camera driving between viewpoints around the tables (two per table
 // where possible), always turning to look at the table it visits next. The
 // camera height and pitch are drawn once per sequence from the ranges. Throws
@@ -421,12 +432,17 @@ struct SequenceSpec {
   std::uint64_t seed = 1;
   int frames = 30;
   double fps = 30.0;
+  // false: one room (makeApartment, `apartment`) along cameraPath; true: a multi-room
+  // apartment (makeMultiRoomApartment, `multi_room`) in apartmentViews, one view a frame.
+  bool multi_room = false;
+  MultiRoomParams multi_room_params;
   ApartmentParams apartment;
   CameraPathParams path;
   RenderOptions render;
 };
 
-// Frame i is named "%06d"; utime = round(i * 1e6 / fps) microseconds.
+// Frame i is named "%06d" (a multi-room apartment's "apartmentSEED-%06d", writeSequence);
+// utime = round(i * 1e6 / fps) microseconds.
 std::string frameName(int index);
 
 // What `findmug-synth` does: renders the sequence into the dataset folder

@@ -238,6 +238,47 @@ TEST(MultiRoomApartment, ObjectPixelCountEqualsTheRenderedFrames) {
   EXPECT_THROW(countObjectPixels(apt.scene, pose, RenderOptions{}, 0), Error);
 }
 
+// The training views of findmug-synth --multi-room: the robot fits where it stands, in the
+// room of what it looks at, and every piece of furniture (beds and sofas as much as tables)
+// fills part of some view; the same seed gives the same views.
+TEST(MultiRoomApartment, TrainingViewsShowEveryPieceOfFurnitureFromWhereTheRobotFits) {
+  for (std::uint64_t seed : {2ULL, 5ULL}) {
+    const MultiRoomApartment apt = makeMultiRoomApartment(seed);
+    const int n = 2 * static_cast<int>(apt.furniture.size());
+    const std::vector<CameraPose> views = apartmentViews(apt, n, seed);
+    ASSERT_EQ(static_cast<int>(views.size()), n);
+    const std::vector<CameraPose> again = apartmentViews(apt, n, seed);
+    std::vector<int> best_pixels(apt.furniture.size(), 0);
+    int views_with_furniture = 0;
+    for (std::size_t v = 0; v < views.size(); ++v) {
+      const CameraPose& pose = views[v];
+      EXPECT_EQ(pose.xy, again[v].xy);
+      EXPECT_EQ(pose.yaw, again[v].yaw);
+      EXPECT_TRUE(robotFits(apt.scene.room_size, apt.scene.obstacles, pose.xy, 0.3))
+          << "seed " << seed << " view " << v;
+      EXPECT_GE(apt.roomAt(pose.xy), 0) << "seed " << seed << " view " << v;
+      EXPECT_GE(pose.pitch_rad, 20.0 * M_PI / 180.0 - 1e-9);
+      EXPECT_LE(pose.pitch_rad, 45.0 * M_PI / 180.0 + 1e-9);
+      RenderOptions options;
+      options.noise.enabled = false;
+      const RenderedFrame frame = render(apt.scene, pose, options, seed);
+      bool any = false;
+      for (std::size_t f = 0; f < apt.furniture.size(); ++f) {
+        const int px = static_cast<int>(
+            std::count(frame.object.begin(), frame.object.end(), apt.furniture[f].object));
+        best_pixels[f] = std::max(best_pixels[f], px);
+        any = any || px > 2000;
+      }
+      views_with_furniture += any;
+    }
+    EXPECT_GE(views_with_furniture, n * 9 / 10) << "seed " << seed;
+    for (std::size_t f = 0; f < apt.furniture.size(); ++f)
+      EXPECT_GT(best_pixels[f], 1000) << "seed " << seed << ": " << apt.furniture[f].kind << " "
+                                      << f << " never in view";
+  }
+  EXPECT_THROW(apartmentViews(makeMultiRoomApartment(2), -1, 1), Error);
+}
+
 TEST(MultiRoomApartment, BadParametersAreRejected) {
   MultiRoomParams p;
   p.rooms_min = 5;
