@@ -15,6 +15,20 @@
 namespace findmug {
 namespace {
 
+// Runs `command` (stderr into stdout); returns its output and sets `status` to pclose's.
+std::string outputOf(const std::string& command, int& status) {
+  FILE* pipe = popen((command + " 2>&1").c_str(), "r");
+  if (!pipe) {
+    status = -1;
+    return "";
+  }
+  std::string output;
+  char buf[512];
+  while (std::fgets(buf, sizeof buf, pipe)) output += buf;
+  status = pclose(pipe);
+  return output;
+}
+
 TEST(SynthTool, WritesAnLcmLogEqualToTheDatasetFolder) {
   test::TempDir tmp;
   const std::string log = tmp.str("synth.lcmlog");
@@ -76,28 +90,23 @@ TEST(SynthTool, MultiRoomApartmentsWriteFramesNamedByTheirSeeds) {
                           l == static_cast<std::uint8_t>(Label::Cabinet);
   }
   EXPECT_GT(furniture_pixels, 3 * 640 * 480 / 20);
-  const std::string bad = std::string(FINDMUG_SYNTH_EXE) + " --multi-room --tables 2 --seed 1" +
-                          " --frames 1 --out " + tmp.str("bad") + " 2>&1";
-  FILE* pipe = popen(bad.c_str(), "r");
-  ASSERT_NE(pipe, nullptr);
-  std::string output;
-  char buf[512];
-  while (std::fgets(buf, sizeof buf, pipe)) output += buf;
-  EXPECT_NE(pclose(pipe), 0);
+  int status = 0;
+  const std::string output = outputOf(std::string(FINDMUG_SYNTH_EXE) +
+                                          " --multi-room --tables 2 --seed 1 --frames 1 --out " +
+                                          tmp.str("bad"),
+                                      status);
+  EXPECT_NE(status, 0);
   EXPECT_THAT(output, ::testing::HasSubstr("--multi-room"));
 }
 
 TEST(SynthTool, UnwritableLogIsNamed) {
   test::TempDir tmp;
-  const std::string command = std::string(FINDMUG_SYNTH_EXE) +
-                              " --seed 3 --frames 1 --out " + tmp.str("seq") +
-                              " --lcm-log /nonexistent-dir/x.lcmlog 2>&1";
-  FILE* pipe = popen(command.c_str(), "r");
-  ASSERT_NE(pipe, nullptr);
-  std::string output;
-  char buf[512];
-  while (std::fgets(buf, sizeof buf, pipe)) output += buf;
-  EXPECT_NE(pclose(pipe), 0);
+  int status = 0;
+  const std::string output =
+      outputOf(std::string(FINDMUG_SYNTH_EXE) + " --seed 3 --frames 1 --out " + tmp.str("seq") +
+                   " --lcm-log /nonexistent-dir/x.lcmlog",
+               status);
+  EXPECT_NE(status, 0);
   EXPECT_THAT(output, ::testing::HasSubstr("/nonexistent-dir/x.lcmlog"));
 }
 
