@@ -226,12 +226,26 @@ void validate(const RenderOptions& o) {
   throw Error(msg.str());
 }
 
+namespace {
+
+// std::round (halves away from zero) without the libm call, which took a few per cent of
+// a frame's render (two per pixel). The same value for every double: from 2^52 on every
+// double is an integer, and NaN and infinities pass through as std::round leaves them.
+inline double roundHalfAwayFromZero(double x) {
+  const double magnitude = std::abs(x);
+  if (!(magnitude < 0x1p52)) return x;
+  const double whole = static_cast<double>(static_cast<std::int64_t>(magnitude));
+  return std::copysign(magnitude - whole >= 0.5 ? whole + 1.0 : whole, x);
+}
+
+}  // namespace
+
 std::uint16_t noisyDepthMm(double z_m, const DepthNoiseParams& noise, double gaussian) {
   if (!(z_m >= noise.min_range_m && z_m <= noise.max_range_m)) return 0;
   double disparity = 1.0 / (noise.disparity_k * z_m) + noise.disparity_sigma * gaussian;
-  if (noise.quantise) disparity = std::round(disparity);
+  if (noise.quantise) disparity = roundHalfAwayFromZero(disparity);
   if (disparity <= 0.0) return 0;
-  const double mm = std::round(1000.0 / (noise.disparity_k * disparity));
+  const double mm = roundHalfAwayFromZero(1000.0 / (noise.disparity_k * disparity));
   return mm >= 1.0 && mm <= 65535.0 ? static_cast<std::uint16_t>(mm) : 0;
 }
 

@@ -14,8 +14,9 @@ namespace findmug::search {
 
 namespace {
 
-// The free pose 1.0-1.6 m from the mug (on the floor) facing it that shows the most of it
-// (noise-free render), on a 0.15 m lattice; false when none shows recognise_min_pixels.
+// The free pose 1.0-1.6 m from the mug (on the floor) facing it that shows the most of it,
+// on a 0.15 m lattice; false when none shows recognise_min_pixels. The mug's pixels are
+// counted without rendering whole frames (countObjectPixels: the count a frame would show).
 bool teachingPose(const World& w, const SimParams& params, Eigen::Vector2d& xy, double& yaw) {
   const Eigen::Vector2d mug = w.mug.position.head<2>();
   synth::RenderOptions options;
@@ -29,8 +30,8 @@ bool teachingPose(const World& w, const SimParams& params, Eigen::Vector2d& xy, 
       const int c = w.grid.cellAt(p);
       if (c < 0 || !w.grid.free(c)) continue;
       const double a = std::atan2(mug.y() - p.y(), mug.x() - p.x());
-      const int pixels =
-          mugPixels(w, synth::render(w.apartment.scene, cameraAt(params, p, a), options, 0));
+      const int pixels = synth::countObjectPixels(w.apartment.scene, cameraAt(params, p, a),
+                                                  options, w.mug.object);
       if (pixels > best) best = pixels, xy = p, yaw = a;
     }
   return best >= params.recognise_min_pixels;

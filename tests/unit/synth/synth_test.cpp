@@ -359,6 +359,36 @@ TEST(SynthNoise, NoisyDepthSampleFunction) {
   EXPECT_LT(noisyDepthMm(2.0, n, 2.0), noisyDepthMm(2.0, n, 0.0));
 }
 
+// The renderer rounds without libm's std::round (speed); every sample must still be the
+// model's formula with std::round, quantised or not, over the range and noise draws.
+TEST(SynthNoise, NoisyDepthSamplesAreTheFormulaWithStdRound) {
+  for (const bool quantise : {true, false}) {
+    DepthNoiseParams n;
+    n.quantise = quantise;
+    auto reference = [&n](double z, double g) -> std::uint16_t {
+      if (!(z >= n.min_range_m && z <= n.max_range_m)) return 0;
+      double disparity = 1.0 / (n.disparity_k * z) + n.disparity_sigma * g;
+      if (n.quantise) disparity = std::round(disparity);
+      if (disparity <= 0.0) return 0;
+      const double mm = std::round(1000.0 / (n.disparity_k * disparity));
+      return mm >= 1.0 && mm <= 65535.0 ? static_cast<std::uint16_t>(mm) : 0;
+    };
+    int checked = 0;
+    for (double z = 0.45; z < 4.6; z += 0.000731)
+      for (const double g : {-4.0, -1.3, -0.5, 0.0, 0.25, 0.5, 1.7, 3.9}) {
+        ASSERT_EQ(noisyDepthMm(z, n, g), reference(z, g)) << "z " << z << " g " << g;
+        ++checked;
+      }
+    // Disparities exactly halfway between levels round away from zero, as std::round does.
+    for (int level = 200; level < 1500; ++level) {
+      const double z = 1.0 / (n.disparity_k * (level + 0.5));
+      const double g = (level + 0.5 - 1.0 / (n.disparity_k * z)) / n.disparity_sigma;
+      ASSERT_EQ(noisyDepthMm(z, n, g), reference(z, g)) << "level " << level;
+    }
+    EXPECT_GT(checked, 40000);
+  }
+}
+
 TEST(SynthNoise, BeyondRangeAndGrazingFloorHaveNoDepth) {
   {
     WallShot far(5.0);
