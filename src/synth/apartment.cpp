@@ -479,30 +479,49 @@ MultiRoomApartment makeMultiRoomApartment(std::uint64_t seed, const MultiRoomPar
               " after 40 attempts");
 }
 
+Eigen::Vector2d FurnitureTruth::centre() const {
+  Eigen::Vector2d sum = Eigen::Vector2d::Zero();
+  for (const Eigen::Vector2d& corner : footprint) sum += corner;
+  return sum / static_cast<double>(std::max<std::size_t>(1, footprint.size()));
+}
+
+bool FurnitureTruth::covers(const Eigen::Vector2d& xy) const {
+  if (footprint.size() < 3) return false;
+  for (std::size_t i = 0; i < footprint.size(); ++i) {
+    const Eigen::Vector2d edge = footprint[(i + 1) % footprint.size()] - footprint[i];
+    const Eigen::Vector2d to = xy - footprint[i];
+    if (edge.x() * to.y() - edge.y() * to.x() < 0.0) return false;  // right of a CCW edge
+  }
+  return true;
+}
+
 std::vector<CameraPose> apartmentViews(const MultiRoomApartment& apt, int n_views,
                                        std::uint64_t seed, const CameraPathParams& params) {
   validate(params);
-  if (n_views < 0) throw Error("synth: apartmentViews: n_views = " + std::to_string(n_views) + " < 0");
-  if (apt.furniture.empty()) throw Error("synth: apartmentViews: the apartment has no furniture");
+  if (n_views < 0)
+    throw Error("synth: apartmentViews: n_views = " + std::to_string(n_views) + " < 0");
+  if (apt.furniture.empty())
+    throw Error("synth: apartmentViews: the apartment has no furniture");
   Rng rng(detail::hash3(seed, 0x71e75, 0));
   // Every piece in turn, in an order of the seed's: beds and sofas as often as tables.
   std::vector<int> order(apt.furniture.size());
   for (std::size_t i = 0; i < order.size(); ++i) order[i] = static_cast<int>(i);
-  for (std::size_t i = order.size(); i > 1; --i)
-    std::swap(order[i - 1], order[static_cast<std::size_t>(rng.integer(0, static_cast<int>(i) - 1))]);
+  for (std::size_t i = order.size(); i > 1; --i) {
+    const int pick = rng.integer(0, static_cast<int>(i) - 1);
+    std::swap(order[i - 1], order[static_cast<std::size_t>(pick)]);
+  }
   std::vector<CameraPose> views;
   for (std::size_t k = 0; static_cast<int>(views.size()) < n_views; ++k) {
     if (k >= order.size() * 4 && views.empty())
       throw Error("synth: apartmentViews: no spot in seed " + std::to_string(seed) +
                   "'s apartment where the robot fits and sees its furniture");
     const FurnitureTruth& piece = apt.furniture[order[k % order.size()]];
-    Eigen::Vector2d centre = Eigen::Vector2d::Zero();
-    for (const auto& p : piece.footprint) centre += p;
-    centre /= std::max<std::size_t>(1, piece.footprint.size());
+    const Eigen::Vector2d centre = piece.centre();
     for (int attempt = 0; attempt < 60; ++attempt) {
       const double distance = rng.uniform(0.9, params.max_view_distance_m + 0.8);
       const double bearing = rng.uniform(-M_PI, M_PI);
-      const Eigen::Vector2d stand = centre + distance * Eigen::Vector2d(std::cos(bearing), std::sin(bearing));
+      const Eigen::Vector2d stand =
+          centre + distance * Eigen::Vector2d(std::cos(bearing), std::sin(bearing));
       if (apt.roomAt(stand) != piece.room ||
           !robotFits(apt.scene.room_size, apt.scene.obstacles, stand, params.robot_radius_m))
         continue;

@@ -32,23 +32,6 @@ namespace {
 
 using namespace findmug;
 
-bool insideConvex(const std::vector<Eigen::Vector2d>& polygon, const Eigen::Vector2d& p) {
-  if (polygon.size() < 3) return false;
-  for (std::size_t i = 0; i < polygon.size(); ++i) {
-    const Eigen::Vector2d& a = polygon[i];
-    const Eigen::Vector2d& b = polygon[(i + 1) % polygon.size()];
-    const Eigen::Vector2d e = b - a, q = p - a;
-    if (e.x() * q.y() - e.y() * q.x() < 0.0) return false;  // right of a CCW edge
-  }
-  return true;
-}
-
-Eigen::Vector2d centreOf(const std::vector<Eigen::Vector2d>& polygon) {
-  Eigen::Vector2d c = Eigen::Vector2d::Zero();
-  for (const auto& p : polygon) c += p;
-  return c / static_cast<double>(std::max<std::size_t>(1, polygon.size()));
-}
-
 // A table's box centre, base frame, moved into the map by `pose`.
 Eigen::Vector2d inMap(const TableCluster& t, const Pose2D& pose) {
   const double c = std::cos(pose.yaw), s = std::sin(pose.yaw);
@@ -138,7 +121,7 @@ int main(int argc, char** argv) {
       int frame_index = 0;
       for (const synth::FurnitureTruth& f : apt.furniture) {
         if (f.kind != "bed" && f.kind != "sofa" && f.kind != "table") continue;
-        const Eigen::Vector2d c = centreOf(f.footprint);
+        const Eigen::Vector2d c = f.centre();
         int views = 0;
         for (int k = 0; k < 8 && views < 3; ++k) {
           const double a = k * M_PI / 4.0;
@@ -167,7 +150,7 @@ int main(int argc, char** argv) {
               for (const TableCluster& t : labelled.tables) {
                 for (const synth::FurnitureTruth& g : apt.furniture)
                   on_soft |= (g.kind == "bed" || g.kind == "sofa") &&
-                             insideConvex(g.footprint, inMap(t, base));
+                             g.covers(inMap(t, base));
               }
               counts[v].frames_on_soft += on_soft;
               maps[v].update(labelled.tables, base, labelled.segmented.prepared.frame.utime);
@@ -181,7 +164,7 @@ int main(int argc, char** argv) {
         for (const synth::FurnitureTruth* f : looked) {
           bool mapped = false;
           for (const TableCluster& t : confirmed)
-            mapped |= insideConvex(f->footprint, t.center.cast<double>());
+            mapped |= f->covers(t.center.cast<double>());
           if (f->kind == "bed") counts[v].beds += 1, counts[v].beds_mapped += mapped;
           if (f->kind == "sofa") counts[v].sofas += 1, counts[v].sofas_mapped += mapped;
           if (f->kind == "table") counts[v].tables += 1, counts[v].tables_mapped += mapped;

@@ -422,9 +422,7 @@ TEST(SearchBench, SimDomainModelMapsTablesButNotBedsOrSofas) {
     const synth::MultiRoomApartment apt = synth::makeMultiRoomApartment(seed);
     for (const synth::FurnitureTruth& piece : apt.furniture) {
       if (piece.kind != "bed" && piece.kind != "sofa" && piece.kind != "table") continue;
-      Eigen::Vector2d centre = Eigen::Vector2d::Zero();
-      for (const auto& p : piece.footprint) centre += p;
-      centre /= static_cast<double>(piece.footprint.size());
+      const Eigen::Vector2d centre = piece.centre();
       FindmugTables daemon(model);
       int sides = 0;
       double t = 0.0;
@@ -442,19 +440,10 @@ TEST(SearchBench, SimDomainModelMapsTablesButNotBedsOrSofas) {
                       at, yaw, t);
       }
       if (sides == 0) continue;
-      // A map table whose box centre lies on the piece's (convex, CCW) footprint.
+      // A map table whose box centre lies on the piece's footprint.
       bool on_it = false;
-      for (const TableCluster& table : daemon.mapTables()) {
-        const Eigen::Vector2d c = table.center.cast<double>();
-        bool inside = true;
-        for (std::size_t i = 0; i < piece.footprint.size(); ++i) {
-          const Eigen::Vector2d e = piece.footprint[(i + 1) % piece.footprint.size()] -
-                                    piece.footprint[i];
-          const Eigen::Vector2d q = c - piece.footprint[i];
-          inside = inside && e.x() * q.y() - e.y() * q.x() >= 0.0;
-        }
-        on_it = on_it || inside;
-      }
+      for (const TableCluster& table : daemon.mapTables())
+        on_it = on_it || piece.covers(table.center.cast<double>());
       const bool is_table = piece.kind == "table";
       (is_table ? tables : soft) += 1;
       (is_table ? tables_mapped : soft_mapped) += on_it;

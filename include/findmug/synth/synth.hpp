@@ -229,6 +229,11 @@ struct FurnitureTruth {
   int table = -1;    // index into SynthScene::tables for tables
   std::vector<Eigen::Vector2d> footprint;  // convex, CCW, world xy
   double top_z = 0.0;
+
+  // The mean of the footprint's corners: the centre of the boxes and discs furniture is.
+  Eigen::Vector2d centre() const;
+  // Whether `xy` lies on the footprint, its edges included.
+  bool covers(const Eigen::Vector2d& xy) const;
 };
 
 struct MultiRoomParams {

@@ -279,6 +279,32 @@ TEST(MultiRoomApartment, TrainingViewsShowEveryPieceOfFurnitureFromWhereTheRobot
   EXPECT_THROW(apartmentViews(makeMultiRoomApartment(2), -1, 1), Error);
 }
 
+TEST(MultiRoomApartment, FurnitureKnowsItsCentreAndWhatItsFootprintCovers) {
+  FurnitureTruth piece;
+  piece.footprint = {{1.0, 2.0}, {3.0, 2.0}, {3.0, 3.0}, {1.0, 3.0}};  // CCW
+  EXPECT_TRUE(piece.centre().isApprox(Eigen::Vector2d(2.0, 2.5)));
+  EXPECT_TRUE(piece.covers({2.0, 2.5}));
+  EXPECT_TRUE(piece.covers({3.0, 2.2}));  // on an edge
+  EXPECT_FALSE(piece.covers({3.01, 2.5}));
+  EXPECT_FALSE(piece.covers({2.0, 1.99}));
+  // Every table of an apartment covers its own centre, and no other table's.
+  const MultiRoomApartment apt = makeMultiRoomApartment(4);
+  int tables = 0;
+  for (const FurnitureTruth& a : apt.furniture) {
+    if (a.kind != "table") continue;
+    ++tables;
+    EXPECT_TRUE(a.covers(a.centre()));
+    for (const FurnitureTruth& b : apt.furniture) {
+      if (&a != &b && b.kind == "table") {
+        EXPECT_FALSE(b.covers(a.centre()));
+      }
+    }
+  }
+  EXPECT_GE(tables, 1);
+  piece.footprint.resize(2);
+  EXPECT_FALSE(piece.covers({2.0, 2.0}));  // two corners cover nothing
+}
+
 TEST(MultiRoomApartment, BadParametersAreRejected) {
   MultiRoomParams p;
   p.rooms_min = 5;
