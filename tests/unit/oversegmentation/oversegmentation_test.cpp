@@ -460,11 +460,8 @@ TEST(FinalizeOversegmentation, RecycledPixelListsStayNearOneFrameOfCapacity) {
     double total = 0.0;
     std::vector<double> weights(lengths.size());
     for (auto& x : weights) total += (x = small(rng));
-    int used = 0;
-    for (int k = 0; k < segments; ++k) {
+    for (int k = 0; k < segments; ++k)
       lengths[k] = k == big_at ? big : std::max(1, static_cast<int>((n - big) * weights[k] / total));
-      used += lengths[k];
-    }
     seg.width = w;
     seg.height = h;
     seg.pixel_segment.assign(n, -1);
