@@ -8,6 +8,9 @@
 #       [--set KEY=VALUE]...   (extra daemon settings, e.g. --set daemon.max_cpu_cores=1)
 #       [--robot-pose X,Y,YAW] (findmug-replay also publishes this fixed robot pose with
 #                               every frame: what daemon.semantic_map / the table map need)
+#       [--raw-frames]         (findmug-replay sends frames uncompressed, as a camera on the
+#                               robot PC hands them over: no JPEG or zlib decoding in the daemon;
+#                               default: depth zlib, colour JPEG, as an LCM camera driver sends)
 #       [--objects]            (objects on: an object taught with findmug-teach from the first
 #                               NYU frame it can teach from, in daemon.objects_dir, so every
 #                               frame's candidates go through the matcher; with the robot pose
@@ -50,6 +53,7 @@ OUT="$ROOT/BENCHMARKS-replay.md"
 RESULTS=""
 EXTRA_SETS=()
 REPLAY_POSE=()
+REPLAY_CODEC=()
 OBJECTS=0
 COMMAND_LINE="tests/bench/daemon_bench.sh $*"
 ARGS=("$@")
@@ -68,7 +72,8 @@ while [[ $# -gt 0 ]]; do
     --set) EXTRA_SETS+=(--set "$2"); shift 2 ;;
     --robot-pose) REPLAY_POSE=(--robot-pose "$2"); shift 2 ;;
     --objects) OBJECTS=1; shift ;;
-    -h|--help) sed -n '2,38p' "$0"; exit 0 ;;
+    --raw-frames) REPLAY_CODEC=(--depth-compression none --color-compression none); shift ;;
+    -h|--help) sed -n '2,40p' "$0"; exit 0 ;;
     *) echo "daemon_bench: unknown argument '$1'" >&2; exit 2 ;;
   esac
 done
@@ -131,28 +136,36 @@ wait_for() {  # FILE SECONDS PID
 
 # monitor PID FILE: "epoch_ms cpu_ticks vmhwm_kb map_ticks objects_ticks" every 0.2 s while
 # PID lives; map_ticks = CPU ticks of the semantic map thread ("findmug-semmap"), objects_ticks
-# those of the object work's thread ("findmug-objects"); 0 without them.
+# those of the object work's thread ("findmug-objects"); 0 without them. Bash builtins only
+# (read, no cat/awk/date/sleep): forking a dozen programs every 0.2 s cost ~10 % of a core, on
+# the same two cores as the daemon it measures.
+procTicks() {  # STAT_FILE -> utime + stime in REPLY, 1 if unreadable
+  local stat fields
+  read -r stat 2>/dev/null < "$1" || return 1
+  # Fields after the command name (which may hold spaces): utime is 12th, stime 13th there.
+  read -r -a fields <<< "${stat##*) }"
+  REPLY=$((fields[11] + fields[12]))
+}
 monitor() {
-  local pid=$1 file=$2 stat ticks hwm map objects task comm
+  local pid=$1 file=$2 ticks hwm map objects task comm key value unit tick_fd
+  local tick_fifo="$WORK/monitor-$BASHPID.fifo"
+  mkfifo "$tick_fifo" && exec {tick_fd}<>"$tick_fifo"  # read -t on it: a sleep without a fork
   : > "$file"
-  while [[ -r /proc/$pid/stat ]]; do
-    stat=$(cat "/proc/$pid/stat" 2>/dev/null) || break
-    # Fields after the command name (which may hold spaces): utime is 14th, stime 15th.
-    ticks=$(echo "${stat##*) }" | awk '{print $12 + $13}')
-    hwm=$(awk '/^VmHWM:/ {print $2}' "/proc/$pid/status" 2>/dev/null || echo 0)
-    map=0 objects=0
+  while procTicks "/proc/$pid/stat"; do
+    ticks=$REPLY hwm="" map=0 objects=0
+    while read -r key value unit; do
+      [[ $key == VmHWM: ]] && { hwm=$value; break; }
+    done 2>/dev/null < "/proc/$pid/status" || true
     for task in /proc/$pid/task/*; do
-      comm=$(cat "$task/comm" 2>/dev/null) || continue
-      [[ "$comm" == findmug-semmap || "$comm" == findmug-objects ]] || continue
-      stat=$(cat "$task/stat" 2>/dev/null) || continue
-      if [[ "$comm" == findmug-semmap ]]; then
-        map=$(echo "${stat##*) }" | awk '{print $12 + $13}')
-      else
-        objects=$(echo "${stat##*) }" | awk '{print $12 + $13}')
+      read -r comm 2>/dev/null < "$task/comm" || continue
+      if [[ $comm == findmug-semmap ]]; then
+        procTicks "$task/stat" && map=$REPLY
+      elif [[ $comm == findmug-objects ]]; then
+        procTicks "$task/stat" && objects=$REPLY
       fi
     done
-    [[ -n "$hwm" ]] && echo "$(date +%s%3N) $ticks $hwm $map $objects" >> "$file"
-    sleep 0.2
+    [[ -n "$hwm" ]] && echo "$(( ${EPOCHREALTIME//[!0-9]/} / 1000 )) $ticks $hwm $map $objects" >> "$file"
+    read -r -t 0.2 -u "$tick_fd" _ || true
   done
 }
 
@@ -260,7 +273,7 @@ run_one() {
   fi
   date +%s%3N > "$dir/start_ms"
   "$REPLAY" --source "${SPEC[$ds]}" --rate "$rate" --duration "$DURATION" --url "$URL" \
-    "${REPLAY_POSE[@]+"${REPLAY_POSE[@]}"}" --count-file "$dir/count" > "$dir/replay.log" 2>&1 || { cat "$dir/replay.log" >&2; exit 1; }
+    "${REPLAY_POSE[@]+"${REPLAY_POSE[@]}"}" "${REPLAY_CODEC[@]+"${REPLAY_CODEC[@]}"}" --count-file "$dir/count" > "$dir/replay.log" 2>&1 || { cat "$dir/replay.log" >&2; exit 1; }
   # Let queued frames finish (a slow mode may need a while), then stop.
   wait_for "$dir/drained" 120 "$daemon" || log "$tag: not drained after 120 s, stopping"
   date +%s%3N > "$dir/end_ms"
