@@ -405,6 +405,22 @@ int countObjectPixels(const SynthScene& scene, const CameraPose& pose, const Ren
 // sample (the renderer draws it from a per-pixel hash).
 std::uint16_t noisyDepthMm(double z_m, const DepthNoiseParams& noise, double gaussian);
 
+// noisyDepthMm for one set of noise parameters, with the depth of every integer disparity
+// level a sample can round to worked out once: the renderer's per-pixel depth (the second
+// division and rounding of each sample were a tenth of a frame's render). Returns exactly
+// noisyDepthMm(z_m, noise, gaussian) for every input.
+class NoisyDepthSampler {
+ public:
+  explicit NoisyDepthSampler(const DepthNoiseParams& noise);
+  std::uint16_t operator()(double z_m, double gaussian) const;
+
+ private:
+  DepthNoiseParams noise_;
+  // Quantised noise: level_mm_[d] is the sample of disparity level d (1 <= d < size);
+  // levels beyond, which only far tails of the noise reach, take the formula.
+  std::vector<std::uint16_t> level_mm_;
+};
+
 // --------------------------------------------------------- ground truth ----
 
 struct SequenceGroundTruth {

@@ -389,6 +389,36 @@ TEST(SynthNoise, NoisyDepthSamplesAreTheFormulaWithStdRound) {
   }
 }
 
+// The renderer's sampler looks the depth of each disparity level up in a table: every
+// sample must be noisyDepthMm's, inside the table, beyond it (noise tails, a table capped
+// at 2^16 levels by a tiny disparity_k times min_range) and without quantising.
+TEST(SynthNoise, NoisyDepthSamplerGivesNoisyDepthMmSamples) {
+  std::vector<DepthNoiseParams> variants(4);
+  variants[1].quantise = false;
+  variants[2].min_range_m = 1e-4;  // 1 / (k z) beyond 2^16 levels near the camera
+  variants[2].disparity_k = 1e-3;
+  variants[3].disparity_sigma = 3.0;  // tails far past the table's eight sigmas of 0.5
+  for (std::size_t v = 0; v < variants.size(); ++v) {
+    const DepthNoiseParams& n = variants[v];
+    const NoisyDepthSampler sample(n);
+    int checked = 0, nonzero = 0;
+    for (double z = 0.4 * n.min_range_m; z < n.max_range_m + 0.2; z += 0.00073)
+      for (const double g : {-30.0, -4.0, -1.3, -0.5, 0.0, 0.25, 0.5, 1.7, 3.9, 30.0}) {
+        const std::uint16_t expected = noisyDepthMm(z, n, g);
+        ASSERT_EQ(sample(z, g), expected) << "variant " << v << " z " << z << " g " << g;
+        ++checked;
+        nonzero += expected != 0;
+      }
+    for (int level = 1; level < 1500; ++level) {  // exactly halfway between levels
+      const double z = 1.0 / (n.disparity_k * (level + 0.5));
+      const double g = (level + 0.5 - 1.0 / (n.disparity_k * z)) / n.disparity_sigma;
+      ASSERT_EQ(sample(z, g), noisyDepthMm(z, n, g)) << "variant " << v << " level " << level;
+    }
+    EXPECT_GT(checked, 50000) << "variant " << v;
+    EXPECT_GT(nonzero, checked / 2) << "variant " << v;
+  }
+}
+
 TEST(SynthNoise, BeyondRangeAndGrazingFloorHaveNoDepth) {
   {
     WallShot far(5.0);
