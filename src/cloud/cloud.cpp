@@ -224,6 +224,12 @@ __attribute__((target("avx2"))) void rawNormalsAvx2(const Eigen::Vector3f* pts, 
   }
 }
 
+// Whether the eight lanes of v hold one value.
+__attribute__((target("avx2"))) inline bool sameInEveryLane(__m256i v) {
+  const __m256i first = _mm256_permutevar8x32_epi32(v, _mm256_setzero_si256());
+  return _mm256_movemask_epi8(_mm256_cmpeq_epi32(v, first)) == -1;
+}
+
 // k % ring for prefix rows k >= k0 with k - k0 < ring, given k0 and k0 % ring.
 __attribute__((target("avx2"))) inline __m256i ringSlot(__m256i k, __m256i k0, __m256i k0_slot,
                                                        __m256i ring_last, __m256i ring) {
@@ -233,7 +239,8 @@ __attribute__((target("avx2"))) inline __m256i ringSlot(__m256i k, __m256i k0, _
 
 // The column step of smoothNormals for pixels [u0, u1) of row v: each
 // pixel's box sum is the difference of two prefix rows, picked per pixel
-// (its vertical run clips the box), so the eight lanes gather their rows.
+// (its vertical run clips the box), so the eight lanes gather their rows,
+// unless the eight read the same two rows (plain loads then).
 // The same operations as the scalar loop there (Eigen's norm is
 // sqrt(x^2 + (y^2 + z^2))), so the same normals to the bit. `prefix` holds
 // rows k of the column prefix table at slot k % ring (of width w); slots of
@@ -264,21 +271,32 @@ __attribute__((target("avx2"))) void smoothColumnsAvx2(
         lowest, _mm256_loadu_si256(reinterpret_cast<const __m256i*>(run_start + i)));
     const __m256i hi = _mm256_min_epi32(
         highest, _mm256_loadu_si256(reinterpret_cast<const __m256i*>(run_end + i)));
-    const __m256i column = _mm256_add_epi32(_mm256_set1_epi32(3 * u), lane_floats);
-    const __m256i top = _mm256_add_epi32(
-        _mm256_mullo_epi32(ringSlot(_mm256_add_epi32(hi, _mm256_set1_epi32(1)), first_row,
-                                    first_slot, ring_last, ring_size),
-                           row_floats),
-        column);
-    const __m256i bottom = _mm256_add_epi32(
-        _mm256_mullo_epi32(ringSlot(lo, first_row, first_slot, ring_last, ring_size), row_floats),
-        column);
-    const __m256 sx = _mm256_sub_ps(_mm256_i32gather_ps(table, top, 4),
-                                    _mm256_i32gather_ps(table, bottom, 4));
-    const __m256 sy = _mm256_sub_ps(_mm256_i32gather_ps(table + 1, top, 4),
-                                    _mm256_i32gather_ps(table + 1, bottom, 4));
-    const __m256 sz = _mm256_sub_ps(_mm256_i32gather_ps(table + 2, top, 4),
-                                    _mm256_i32gather_ps(table + 2, bottom, 4));
+    const __m256i top_slot = ringSlot(_mm256_add_epi32(hi, _mm256_set1_epi32(1)), first_row,
+                                      first_slot, ring_last, ring_size);
+    const __m256i bottom_slot = ringSlot(lo, first_row, first_slot, ring_last, ring_size);
+    __m256 sx, sy, sz;
+    if (sameInEveryLane(top_slot) && sameInEveryLane(bottom_slot)) {
+      // No box of the eight is clipped differently (inside a surface, most pixels): both
+      // prefix rows are one row each, read as eight consecutive points, not gathered.
+      const std::size_t top_row = static_cast<std::size_t>(_mm256_cvtsi256_si32(top_slot)) * w;
+      const std::size_t bottom_row =
+          static_cast<std::size_t>(_mm256_cvtsi256_si32(bottom_slot)) * w;
+      __m256 tx, ty, tz, bx, by, bz;
+      loadPoints8(prefix + top_row + u, tx, ty, tz);
+      loadPoints8(prefix + bottom_row + u, bx, by, bz);
+      sx = _mm256_sub_ps(tx, bx);
+      sy = _mm256_sub_ps(ty, by);
+      sz = _mm256_sub_ps(tz, bz);
+    } else {
+      const __m256i column = _mm256_add_epi32(_mm256_set1_epi32(3 * u), lane_floats);
+      const __m256i top = _mm256_add_epi32(_mm256_mullo_epi32(top_slot, row_floats), column);
+      const __m256i bottom = _mm256_add_epi32(_mm256_mullo_epi32(bottom_slot, row_floats), column);
+      sx = _mm256_sub_ps(_mm256_i32gather_ps(table, top, 4), _mm256_i32gather_ps(table, bottom, 4));
+      sy = _mm256_sub_ps(_mm256_i32gather_ps(table + 1, top, 4),
+                         _mm256_i32gather_ps(table + 1, bottom, 4));
+      sz = _mm256_sub_ps(_mm256_i32gather_ps(table + 2, top, 4),
+                         _mm256_i32gather_ps(table + 2, bottom, 4));
+    }
     const __m256 norm = _mm256_sqrt_ps(_mm256_add_ps(
         _mm256_mul_ps(sx, sx), _mm256_add_ps(_mm256_mul_ps(sy, sy), _mm256_mul_ps(sz, sz))));
     // Lanes without a normal, or whose sum nearly cancels, keep what they had.
