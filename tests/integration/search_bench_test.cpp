@@ -11,6 +11,7 @@
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
+#include <limits>
 #include <map>
 #include <sstream>
 
@@ -73,6 +74,27 @@ TEST(SearchSim, DrivingAndTurningTimeFollowTheBaseModel) {
   EXPECT_NEAR(robot.stats().time_s,
               robot.stats().drive_s + robot.stats().turn_s + robot.stats().process_s, 1e-9);
   EXPECT_FALSE(robot.stats().found);  // the mug has no primitive: nothing to see
+}
+
+// A heading that is not one (not finite, or so large that turning by 2 pi no longer changes
+// it) is refused with an error naming it: wrapping one into [-pi, pi] once spun forever.
+TEST(SearchSim, ATurnToAHeadingThatIsNotOneIsRefused) {
+  SimParams params;
+  params.drive_frames_hz = 0.0;
+  const World w = emptyRoomWorld(params);
+  Robot robot(w, params);
+  for (const double yaw : {7.8e26, -1e7, std::numeric_limits<double>::infinity(),
+                           std::numeric_limits<double>::quiet_NaN()}) {
+    try {
+      robot.turnTo(yaw);
+      ADD_FAILURE() << "turned to " << yaw;
+    } catch (const Error& e) {
+      EXPECT_NE(std::string(e.what()).find("is not a heading"), std::string::npos) << e.what();
+    }
+  }
+  robot.turnTo(2.5 * M_PI);  // one a turn can reach: the same as pi / 2
+  EXPECT_NEAR(robot.yaw(), M_PI / 2, 1e-12);
+  EXPECT_NEAR(robot.stats().turn_s, (M_PI / 2 - w.start_yaw) / (M_PI / 4), 1e-9);
 }
 
 TEST(SearchSim, FramesWhileDrivingFallOnTheMotionClockAndCostNoTime) {

@@ -190,7 +190,10 @@ std::vector<EpisodeRow> runAll(const std::vector<Episode>& episodes,
         results[i][r] = runOnEpisode(episodes[i], runs[r], params);
       } catch (const std::exception& e) {
         std::lock_guard lock(mutex);
-        if (error.empty()) error = e.what();
+        if (error.empty()) {
+          error = "episode " + std::to_string(episodes[i].apartment) + "." +
+                  std::to_string(episodes[i].index) + ", run " + runs[r].label + ": " + e.what();
+        }
         next = items.size();  // the other workers stop too
         return;
       }

@@ -16,7 +16,15 @@ namespace {
 // A mixed seed as a uniform number in [0, 1).
 double unit(std::uint64_t bits) { return (bits >> 11) * 0x1.0p-53; }
 
+// Into [-pi, pi]. An angle that is not finite, or so large that subtracting 2 pi no longer
+// changes it, is refused: the loop below never ended on one (a heading of 7.8e26 rad reached
+// Robot::turnTo once, in one episode of a whole benchmark run and not when run alone).
 double wrap(double a) {
+  if (!(std::abs(a) < 1e6)) {
+    char what[96];
+    std::snprintf(what, sizeof what, "search sim: an angle of %g rad is not a heading", a);
+    throw Error(what);
+  }
   while (a > M_PI) a -= 2.0 * M_PI;
   while (a < -M_PI) a += 2.0 * M_PI;
   return a;
