@@ -5,6 +5,7 @@
 
 #include <gtest/gtest.h>
 
+#include <atomic>
 #include <chrono>
 #include <filesystem>
 #include <string>
@@ -201,6 +202,30 @@ TEST(Subscriber, ReceiveThreadHandlesUntilEndOfLog) {
   EXPECT_EQ(poses.accepted(), 5u);
   EXPECT_EQ(poses.ended(), HandleResult::EndOfLog);
   EXPECT_EQ(end_seen, HandleResult::EndOfLog);
+}
+
+// A message counts as accepted once its handler has run: a caller that waits for the count
+// (the search benchmark waits for the pose input's before it submits a frame) must find
+// what the handler did. Counted before the handler, the pose could be missing.
+TEST(Subscriber, CountsAMessageAcceptedOnlyAfterItsHandlerRan) {
+  MemoryBus bus;
+  std::atomic<int> handled{0};
+  Subscriber<RobotPose> poses(bus, "POSE", poseDecoder(),
+                              [&](const RobotPose&, const std::string&) {
+                                std::this_thread::sleep_for(30ms);  // a handler that takes a while
+                                handled.fetch_add(1);
+                              });
+  poses.startReceiving();
+  for (std::uint64_t t = 1; t <= 5; ++t) {
+    const auto m = poseBytes(t, 0.0);
+    ASSERT_TRUE(bus.publish("POSE", m.data(), m.size()));
+    const auto deadline = std::chrono::steady_clock::now() + 10s;
+    while (poses.accepted() < t) {
+      ASSERT_LT(std::chrono::steady_clock::now(), deadline) << "message " << t;
+      std::this_thread::yield();
+    }
+    EXPECT_EQ(handled.load(), static_cast<int>(t)) << "accepted() said " << t;
+  }
 }
 
 TEST(Subscriber, ReadsAnLcmLogFileToItsEnd) {

@@ -70,7 +70,7 @@ class Subscriber {
 
   // Messages that arrived (accepted + rejected).
   std::uint64_t received() const { return accepted_.load() + rejected_.load(); }
-  std::uint64_t accepted() const { return accepted_.load(); }
+  std::uint64_t accepted() const { return accepted_.load(); }  // after their handler ran
   std::uint64_t rejected() const { return rejected_.load(); }
   std::optional<T> latest() const {
     std::lock_guard lock(latest_mutex_);
@@ -97,7 +97,6 @@ class Subscriber {
       std::lock_guard lock(latest_mutex_);
       latest_ = *message;
     }
-    accepted_.fetch_add(1);
     if (on_message_) {
       try {
         on_message_(*message, channel);
@@ -105,6 +104,10 @@ class Subscriber {
         report(channel + ": " + e.what());
       }
     }
+    // Counted once its handler is done, so that a caller who sees the count go up may rely
+    // on what the handler did (counted before, the pose input reported a pose received
+    // before its history held it, and a frame submitted then could miss it).
+    accepted_.fetch_add(1);
   }
   void report(const std::string& what) {
     if (on_error_) on_error_(what);
