@@ -236,6 +236,48 @@ TEST(SearchSim, AFindFromADrivingFrameStopsTheRobotWhereItWasTaken) {
   EXPECT_FALSE(robot.active());
 }
 
+// The matcher's answer is replaced by every frame the robot takes (its drive's too): "look
+// closer" must face the place it chose, not whatever the answer holds on arrival. (Holding a
+// reference into the answer read another answer's heading, or a freed one: a turn to
+// 7.8e26 rad stopped a whole benchmark run.)
+TEST(SearchSim, LookCloserFacesThePlaceItChoseWhateverTheAnswerBecomesOnTheWay) {
+  SimParams params;
+  params.drive_frames_hz = 1.0;
+  const World w = emptyRoomWorld(params);
+  const auto answerWithPlace = [](double yaw) {
+    io::FindResultMessage answer;
+    answer.result = io::FindResult::LookAt;
+    PlaceToLook place;
+    place.table_id = 3;
+    place.look_closer = true;
+    place.position.xy = {3.0f, 2.0f};
+    place.position.yaw = static_cast<float>(yaw);
+    place.position.reachable = true;
+    answer.places.push_back(place);
+    return answer;
+  };
+  io::FindResultMessage answer = answerWithPlace(1.0);
+  int frames = 0;
+  Robot robot(
+      w, params,
+      [&](const synth::RenderedFrame&, const Eigen::Vector2d&, double, double) {
+        ++frames;
+        answer = answerWithPlace(-2.0);  // the same table, another heading
+        return Sighting{};
+      },
+      Robot::Recognition::Matcher);
+  LookCloser closer;
+  ASSERT_TRUE(closer.next(robot, answer, w));
+  EXPECT_GT(frames, 2);  // frames while driving the 2 m, and the look
+  EXPECT_NEAR((robot.xy() - Eigen::Vector2d(3.0, 2.0)).norm(), 0.0, 0.05);
+  EXPECT_NEAR(robot.yaw(), 1.0, 1e-6);
+  EXPECT_EQ(closer.taken(), 1);
+  // The same place twice at most, then nothing to look closer at.
+  EXPECT_TRUE(closer.next(robot, answer, w));
+  EXPECT_FALSE(closer.next(robot, answer, w));
+  EXPECT_EQ(closer.taken(), 2);
+}
+
 TEST(SearchSim, PlannerGoesAroundObstaclesAndTheBudgetStopsTheRobot) {
   SimParams params;
   World w = emptyRoomWorld(params);

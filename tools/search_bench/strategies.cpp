@@ -6,6 +6,7 @@
 #include <functional>
 #include <cmath>
 #include <memory>
+#include <optional>
 
 #include "findmug/common/error.hpp"
 #include "findmug/ground/ground.hpp"
@@ -176,45 +177,6 @@ class Eyes {
   io::FindResultMessage answer_;
 };
 
-// "Look closer": the daemon's last answer names tables that may hold the mug (matched too
-// few times or from too far). Drives to the first of their places in the answer's order
-// that was visited fewer than twice for this reason, faces it and looks. False when there
-// is none (or no matcher).
-class LookCloser {
- public:
-  bool next(Robot& robot, const Eyes& eyes, const World& world) {
-    if (!eyes.matcher() || !robot.active()) return false;
-    const std::vector<int> tables = FindmugTables::lookCloserTables(eyes.answer());
-    if (tables.empty()) return false;
-    const std::vector<double> dist = world.grid.distancesFrom(robot.cell());
-    for (const PlaceToLook& place : eyes.answer().places) {
-      if (std::find(tables.begin(), tables.end(), place.table_id) == tables.end()) continue;
-      const Eigen::Vector2d xy = place.position.xy.cast<double>();
-      int& visits = visitsNear(xy);
-      const int cell = reachableCellNear(world.grid, dist, xy, 0.25);
-      if (visits >= 2 || cell < 0) continue;
-      ++visits;
-      ++taken_;
-      robot.driveTo(world.grid.center(cell));
-      robot.turnTo(place.position.yaw);
-      robot.look();
-      return true;
-    }
-    return false;
-  }
-  int taken() const { return taken_; }
-
- private:
-  int& visitsNear(const Eigen::Vector2d& xy) {
-    for (auto& [at, n] : visits_)
-      if ((at - xy).norm() < 0.25) return n;
-    visits_.push_back({xy, 0});
-    return visits_.back().second;
-  }
-  std::vector<std::pair<Eigen::Vector2d, int>> visits_;
-  int taken_ = 0;
-};
-
 // One place in front of a piece of furniture: the first reachable spot just clear of it,
 // trying directions from the one towards its room's centre.
 struct Place {
@@ -303,7 +265,7 @@ EpisodeResult runFindmug(const World& world, const SimParams& params,
   // would draw the robot to every sofa taken for a table.
   bool rooms_explored = false;
   while (robot.active()) {
-    if (closer.next(robot, eyes, world)) continue;
+    if (eyes.matcher() && closer.next(robot, eyes.answer(), world)) continue;
     const std::vector<double> dist = world.grid.distancesFrom(robot.cell());
     const MapSearchPosition* next = nullptr;
     int next_cell = -1;
@@ -556,7 +518,7 @@ EpisodeResult runOracle(const World& world, const SimParams& params,
     }
   }
   LookCloser closer;
-  while (closer.next(robot, eyes, world)) {
+  while (eyes.matcher() && closer.next(robot, eyes.answer(), world)) {
   }
   result.stats = robot.stats();
   result.trace = robot.trace();
@@ -566,6 +528,43 @@ EpisodeResult runOracle(const World& world, const SimParams& params,
 }
 
 }  // namespace
+
+std::optional<LookCloser::Choice> LookCloser::choose(const Robot& robot,
+                                                     const io::FindResultMessage& answer,
+                                                     const World& world) {
+  const std::vector<int> tables = FindmugTables::lookCloserTables(answer);
+  if (tables.empty()) return std::nullopt;
+  const std::vector<double> dist = world.grid.distancesFrom(robot.cell());
+  for (const PlaceToLook& place : answer.places) {
+    if (std::find(tables.begin(), tables.end(), place.table_id) == tables.end()) continue;
+    const Eigen::Vector2d xy = place.position.xy.cast<double>();
+    int& visits = visitsNear(xy);
+    const int cell = reachableCellNear(world.grid, dist, xy, 0.25);
+    if (visits >= 2 || cell < 0) continue;
+    ++visits;
+    return Choice{place, cell};
+  }
+  return std::nullopt;
+}
+
+bool LookCloser::next(Robot& robot, const io::FindResultMessage& answer, const World& world) {
+  if (!robot.active()) return false;
+  // A copy: every frame of the drive below replaces `answer` (and frees its places).
+  const std::optional<Choice> choice = choose(robot, answer, world);
+  if (!choice) return false;
+  ++taken_;
+  robot.driveTo(world.grid.center(choice->cell));
+  robot.turnTo(choice->place.position.yaw);
+  robot.look();
+  return true;
+}
+
+int& LookCloser::visitsNear(const Eigen::Vector2d& xy) {
+  for (auto& [at, n] : visits_)
+    if ((at - xy).norm() < 0.25) return n;
+  visits_.push_back({xy, 0});
+  return visits_.back().second;
+}
 
 RoomExplorer::RoomExplorer(const World& world, const SimParams& params)
     : world_(world), params_(params), done_(world.apartment.rooms.size()) {

@@ -35,7 +35,9 @@
 #pragma once
 
 #include <functional>
+#include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "findmug_tables.hpp"
@@ -105,6 +107,30 @@ class RoomExplorer {
   std::vector<bool> done_;               // looked around in
   std::vector<std::vector<int>> floor_;  // per room: its grid cells that do not block the view
   std::vector<int> room_of_;             // per grid cell: the room whose floor_ holds it, or -1
+};
+
+// "Look closer" (matcher only): the daemon's answer names tables that may hold the mug
+// (find_result_t.place_look_closer: matched too few times or from too far). next() drives
+// to the first of their places in the answer's order that was visited fewer than twice for
+// this reason and has a reachable cell within 0.25 m, faces it and looks; false when there
+// is none. `answer` is the caller's latest answer, which the frames of that drive replace:
+// the place is copied before the robot moves (a reference into it read a freed heading).
+class LookCloser {
+ public:
+  bool next(Robot& robot, const io::FindResultMessage& answer, const World& world);
+  int taken() const { return taken_; }
+
+ private:
+  struct Choice {
+    PlaceToLook place;
+    int cell = -1;  // the reachable grid cell to stand on
+  };
+  std::optional<Choice> choose(const Robot& robot, const io::FindResultMessage& answer,
+                               const World& world);
+  int& visitsNear(const Eigen::Vector2d& xy);
+
+  std::vector<std::pair<Eigen::Vector2d, int>> visits_;
+  int taken_ = 0;
 };
 
 // Known names: "findmug", "places", "coverage", "random", "oracle" (or a..e).
