@@ -17,8 +17,8 @@ namespace {
 double unit(std::uint64_t bits) { return (bits >> 11) * 0x1.0p-53; }
 
 // Into [-pi, pi]. An angle that is not finite, or so large that subtracting 2 pi no longer
-// changes it, is refused: the loop below never ended on one (a heading of 7.8e26 rad reached
-// Robot::turnTo once, in one episode of a whole benchmark run and not when run alone).
+// changes it, is refused: the loop below never ended on one (a heading of 7.8e26 rad, read
+// from a freed answer by the look-closer step before d51ad03, reached Robot::turnTo once).
 double wrap(double a) {
   if (!(std::abs(a) < 1e6)) {
     char what[96];
