@@ -6,6 +6,8 @@ set -euo pipefail
 
 packages=(
   build-essential cmake ninja-build pkg-config git
+  # the linker (CMakeLists.txt: FINDMUG_LLD), ~3x faster than GNU ld on the test programs
+  lld
   # messaging: liblcm-dev forgets libglib2.0-dev, without which `pkg-config lcm` fails
   liblcm-dev liblcm-bin liblcm-java libglib2.0-dev
   # perception
