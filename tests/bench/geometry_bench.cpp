@@ -26,15 +26,11 @@
 #include "findmug/ground/ground.hpp"
 #include "findmug/oversegmentation/oversegmentation.hpp"
 #include "oversegmentation/lab_internal.hpp"
+#include "test_data.hpp"
 
 namespace {
 
 using namespace findmug;
-
-std::filesystem::path dataRoot() {
-  if (const char* env = std::getenv("FINDMUG_DATA"); env && *env) return env;
-  return FINDMUG_DEFAULT_DATA_DIR;
-}
 
 struct Fixture {
   RgbdFrame frame;
@@ -52,7 +48,7 @@ struct Fixture {
 // Loads once; throws when the data is missing (reported per benchmark).
 const Fixture& fixture() {
   static const Fixture f = [] {
-    const auto dir = dataRoot() / "nyuv2_labeled";
+    const auto dir = findmug::test::dataRoot() / "nyuv2_labeled";
     const std::string name = "0433";
     Fixture x;
     const auto depth = readPng16((dir / "depth" / (name + ".png")).string());

@@ -17,6 +17,7 @@
 #include "findmug/version.hpp"
 #include "findmug_cli.hpp"
 #include "program_settings.hpp"
+#include "test_data.hpp"
 
 namespace findmug {
 namespace {
@@ -188,7 +189,7 @@ TEST(Cli, EvalAndTrainCheckEverySectionOfTheSharedFile) {
                            "table_map:\n  confirm_sightings: 5\nforest:\n  num_trees: 3\n";
   std::ofstream(daemon_typo) << "forest:\n  num_trees: 3\ndaemon:\n  wokers: 2\n";
   std::ofstream(typo) << "forrest:\n  num_trees: 3\n";
-  for (const std::string program : {FINDMUG_EVAL_EXE, FINDMUG_TRAIN_EXE}) {
+  for (const std::string& program : {FINDMUG_EVAL_EXE, FINDMUG_TRAIN_EXE}) {
     const std::string exe =
         program == FINDMUG_TRAIN_EXE ? program + " --out " + dir + "/cli_test.fmf" : program;
     const ProgramRun ok = runProgram(exe + " --config " + shared + " --data /nonexistent/d");

@@ -24,7 +24,7 @@ struct Result {
 
 Result check(const std::string& args) {
   const std::string command = std::string(FINDMUGD_EXE) + " --check --config " +
-                              FINDMUG_SOURCE_DIR "/daemon/findmugd.yaml " + args + " 2>/dev/null";
+                              (findmug::test::sourceDir() / "daemon/findmugd.yaml").string() + " " + args + " 2>/dev/null";
   Result r;
   FILE* pipe = popen(command.c_str(), "r");
   if (!pipe) return r;
@@ -37,7 +37,8 @@ Result check(const std::string& args) {
 
 bool has(const Result& r, const std::string& text) { return r.out.find(text) != std::string::npos; }
 
-const std::string kModel = "--model " FINDMUG_SOURCE_DIR "/models/findmug.fmf ";
+const std::string kModel =
+    "--model " + (findmug::test::sourceDir() / "models/findmug.fmf").string() + " ";
 
 TEST(FindmugdCheck, RealFramesPassEveryItem) {
   FINDMUG_REQUIRE_DATA(nyu, "nyuv2_labeled");

@@ -187,7 +187,7 @@ TEST(Findmugd, InvalidConfigValueStopsStartupNamingTheKey) {
   // A core key is validated the same way, from a flag (over the repository's config, not
   // whatever /etc/findmug holds on this machine: a bad file is reported first).
   const pid_t pid2 = spawnDaemon(
-      {"--config", FINDMUG_SOURCE_DIR "/daemon/findmugd.yaml", "--set", "mrf.lambda=-3"}, {},
+      {"--config", (findmug::test::sourceDir() / "daemon/findmugd.yaml").string(), "--set", "mrf.lambda=-3"}, {},
       tmp.str("stderr2.txt"));
   const auto status2 = waitFor(pid2, 30s);
   ASSERT_TRUE(status2);

@@ -35,7 +35,7 @@ std::string slurp(const fs::path& path) {
 
 // The sim-domain model as the bench's "sim" runs it.
 FindmugModel simDomainModel() {
-  const std::string root = FINDMUG_SOURCE_DIR;
+  const std::string root = findmug::test::sourceDir().string();
   return loadFindmugModel(root + "/daemon/findmugd.yaml", root + "/models/findmug-apartments.fmf",
                           simDomainSettings());
 }
@@ -685,7 +685,7 @@ struct ProgramRun {
   }
   ~ProgramRun() { fs::remove_all(tmp); }
   fs::path operator()(const std::string& name, const std::string& args) {
-    const std::string root = FINDMUG_SOURCE_DIR;
+    const std::string root = findmug::test::sourceDir().string();
     const fs::path out = tmp / name;
     // From the source folder: --models names the committed models by their relative paths.
     const std::string command = "cd " + root + " && " + std::string(FINDMUG_SEARCH_BENCH_EXE) +
@@ -699,7 +699,7 @@ struct ProgramRun {
 
 TEST(SearchBench, ProgramOutputDoesNotDependOnTheWorkers) {
   ProgramRun run("jobs");
-  const std::string root = FINDMUG_SOURCE_DIR;
+  const std::string root = findmug::test::sourceDir().string();
   const std::string args =
       "--apartments 2 --episodes-per-apartment 1 --strategies findmug,coverage,oracle"
       " --drive-frames-hz 0.5 --model " + root + "/models/findmug-apartments.fmf";

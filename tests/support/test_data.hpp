@@ -16,10 +16,8 @@
 
 namespace findmug::test {
 
-inline std::filesystem::path dataRoot() {
-  if (const char* env = std::getenv("FINDMUG_DATA"); env && *env) return env;
-  return FINDMUG_DEFAULT_DATA_DIR;
-}
+// $FINDMUG_DATA, else the build's default (../shared/data beside the checkout).
+std::filesystem::path dataRoot();
 
 inline bool runningInCi() {
   const char* ci = std::getenv("CI");
@@ -32,8 +30,14 @@ inline std::filesystem::path dataPath(const std::string& relative) {
   return std::filesystem::exists(p) ? p : std::filesystem::path();
 }
 
-inline std::filesystem::path sourceDir() { return FINDMUG_SOURCE_DIR; }
-inline std::filesystem::path binaryDir() { return FINDMUG_BINARY_DIR; }
+// The checkout and the build tree the tests were built from. Compiled into
+// test_data.cpp alone: a path on every test file's command line would give each of
+// them another ccache key in every clone, and CI compiles each fresh clone.
+std::filesystem::path sourceDir();
+std::filesystem::path binaryDir();
+// A program of this build by its path inside the build tree (the tests' FINDMUG_*_EXE
+// macros, tests/CMakeLists.txt: findmug_test_program_paths).
+std::string builtProgram(const std::string& path_in_build_tree);
 
 // A fresh directory under the system temp dir, removed at scope exit.
 class TempDir {
