@@ -3,7 +3,7 @@
 #   build-asan clang-14, ASan + UBSan (+ libFuzzer coverage, FINDMUG_FUZZ=ON):
 #               the unit tests, the io integration tests (LCM codecs, wire fields,
 #               frame sources) and the daemon's building blocks; then every fuzz
-#               target for FUZZ_SECONDS (default 30) from the committed corpus;
+#               target for FUZZ_SECONDS (default 20) from the committed corpus;
 #   build-tsan clang-14, TSan: the daemon's queue/stage tests, the threaded
 #               pipeline end to end and the object search sink's worker.
 # Only the targets these runs need are built (the sanitizer builds are 2-3x
@@ -64,9 +64,9 @@ for step in "${STEPS[@]}"; do
       # the OS): with the test options above, ASan's quarantine alone trips the
       # 256 MB RSS limit after ~30k inputs and reads as an out-of-memory finding.
       configure "$ASAN_DIR" -DFINDMUG_FUZZ=ON
-      timed "fuzz ${FUZZ_SECONDS:-30} s per target" \
+      timed "fuzz ${FUZZ_SECONDS:-20} s per target" \
         env -u ASAN_OPTIONS BUILD_DIR="$ASAN_DIR" JOBS="$JOBS" BUILD_JOBS="$JOBS" \
-          scripts/fuzz.sh "${FUZZ_SECONDS:-30}" ;;
+          scripts/fuzz.sh "${FUZZ_SECONDS:-20}" ;;
     tsan)
       configure "$TSAN_DIR" -DFINDMUG_SANITIZE=thread
       timed "tsan build" cmake --build "$TSAN_DIR" -j"$JOBS" --target daemon_queue_test \
