@@ -1,5 +1,6 @@
 # Fails when a compile command defines a macro whose value holds a path of this checkout or
-# build tree, except tests/support/test_data.cpp's (the one file meant to carry them).
+# build tree, except tests/support/test_data.cpp's (the one file meant to carry them), or when
+# a unity batch includes a source by its absolute path.
 #
 #   cmake -DSOURCE_DIR=. -DBUILD_DIR=build -P tests/clone_paths_check.cmake
 #
@@ -33,6 +34,7 @@ set(command "")
 set(checked 0)
 set(carrier_seen FALSE)
 set(bad "")
+set(batch_files "")
 foreach(line IN LISTS lines)
   if(line MATCHES "^ *\"command\": ")
     set(command "${line}")
@@ -43,6 +45,9 @@ foreach(line IN LISTS lines)
   set(has_path FALSE)
   if(command MATCHES "${source_regex}" OR command MATCHES "${build_regex}")
     set(has_path TRUE)
+  endif()
+  if(file MATCHES "/[Uu]nity/[^/]+\\.(cpp|cxx)$")
+    list(APPEND batch_files "${file}")
   endif()
   if(file MATCHES "tests/support/test_data\\.cpp$")
     set(carrier_seen ${has_path})
@@ -64,5 +69,25 @@ if(bad)
   message(FATAL_ERROR "a path of this checkout or build tree in a -D value (a new ccache key in "
                       "every clone; name it at run time, as tests/support/test_data.hpp does):\n  ${bad_text}")
 endif()
+
+# The unity batches (CMakeLists.txt, findmug_unity_batches) name their sources by their path
+# inside the checkout; CMake's own UNITY_BUILD would write absolute ones.
+file(STRINGS ${BUILD_DIR}/CMakeCache.txt unity_setting REGEX "^FINDMUG_UNITY:BOOL=")
+if(unity_setting MATCHES "=ON$" AND NOT batch_files)
+  message(FATAL_ERROR "FINDMUG_UNITY is ON but ${BUILD_DIR} holds no unity batch file")
+endif()
+foreach(batch IN LISTS batch_files)
+  file(READ ${batch} text)
+  string(FIND "${text}" "${SOURCE_DIR}/" at)
+  if(NOT at EQUAL -1 OR text MATCHES "#include \"/")
+    list(APPEND bad_batches ${batch})
+  endif()
+endforeach()
+if(bad_batches)
+  list(JOIN bad_batches "\n  " bad_text)
+  message(FATAL_ERROR "unity batches that include a source by its absolute path (a new ccache "
+                      "key in every clone):\n  ${bad_text}")
+endif()
+list(LENGTH batch_files batch_count)
 message(STATUS "${checked} compile commands: no path of the checkout or build tree in a define "
-               "but test_data.cpp's")
+               "but test_data.cpp's; ${batch_count} unity batches name their sources inside the checkout")

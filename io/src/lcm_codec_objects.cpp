@@ -13,8 +13,11 @@
 #include "findmug/common/error.hpp"
 #include "findmug/common/pose2d.hpp"
 #include "findmug/objects/object_model.hpp"
+#include "lcm_codec_checks.hpp"
 
 namespace findmug::io {
+
+using detail::checkFinite;
 
 namespace {
 
@@ -29,12 +32,6 @@ constexpr double kUnitTolerance = 1e-3;  // as the tables' axes
 
 std::string field(std::string_view channel, std::string_view name) {
   return std::string(channel) + ": " + std::string(kType) + "." + std::string(name);
-}
-
-void checkFinite(std::initializer_list<double> values, const std::string& where) {
-  for (double v : values) {
-    if (!std::isfinite(v)) throw Error(where + ": non-finite value");
-  }
 }
 
 // The map-frame centroid: x, y through the pose, z unchanged (the map floor is the base floor),

@@ -2,14 +2,12 @@
 #include "findmug/common/pose2d.hpp"
 
 #include <cmath>
+#include <numbers>
 
 namespace findmug {
 
-namespace {
-constexpr double kPi = 3.14159265358979323846;
-}  // namespace
-
 double wrapAngle(double angle) {
+  constexpr double kPi = std::numbers::pi;
   angle = std::remainder(angle, 2.0 * kPi);  // [-pi, pi]
   return angle <= -kPi ? angle + 2.0 * kPi : angle;
 }

@@ -10,7 +10,7 @@ namespace findmug {
 namespace {
 // A Kinect-class sensor is 640x480; allow up to 4K so that other sensors and
 // synthetic frames fit, but refuse sizes that can only come from corruption.
-constexpr int kMaxDimension = 4096;
+constexpr int kMaxFrameDimension = 4096;
 
 std::string where(const RgbdFrame& frame) {
   return frame.source.empty() ? std::string("frame ") + std::to_string(frame.seq) : frame.source;
@@ -18,11 +18,11 @@ std::string where(const RgbdFrame& frame) {
 }  // namespace
 
 void validateFrame(const RgbdFrame& frame) {
-  if (frame.width <= 0 || frame.height <= 0 || frame.width > kMaxDimension ||
-      frame.height > kMaxDimension) {
+  if (frame.width <= 0 || frame.height <= 0 || frame.width > kMaxFrameDimension ||
+      frame.height > kMaxFrameDimension) {
     std::ostringstream msg;
     msg << where(frame) << ": absurd frame size " << frame.width << "x" << frame.height
-        << " (expected 1.." << kMaxDimension << " per side)";
+        << " (expected 1.." << kMaxFrameDimension << " per side)";
     throw Error(msg.str());
   }
   const auto pixels = static_cast<std::size_t>(frame.width) * frame.height;

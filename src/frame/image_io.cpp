@@ -28,7 +28,7 @@ namespace {
 
 // Kinect-class images are 640x480; refuse sizes that can only be corruption
 // before allocating memory for them.
-constexpr png_uint_32 kMaxDimension = 16384;
+constexpr png_uint_32 kMaxPngDimension = 16384;
 
 struct PngErrorState {
   std::string message;
@@ -158,7 +158,7 @@ bool runRead(ReadJob* job) {
   } else {
     png_init_io(png, job->file);
   }
-  png_set_user_limits(png, kMaxDimension, kMaxDimension);
+  png_set_user_limits(png, kMaxPngDimension, kMaxPngDimension);
   png_read_info(png, info);
   Decoded& out = job->out;
   int interlace = 0;
@@ -241,8 +241,8 @@ void flushNothing(png_structp) {}
 template <typename T>
 void checkWritable(const Image<T>& image, const std::string& what) {
   if (image.width <= 0 || image.height <= 0 ||
-      static_cast<png_uint_32>(image.width) > kMaxDimension ||
-      static_cast<png_uint_32>(image.height) > kMaxDimension) {
+      static_cast<png_uint_32>(image.width) > kMaxPngDimension ||
+      static_cast<png_uint_32>(image.height) > kMaxPngDimension) {
     throw Error(what + ": cannot write image of size " + std::to_string(image.width) + "x" +
                 std::to_string(image.height));
   }

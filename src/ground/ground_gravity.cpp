@@ -24,7 +24,7 @@ using detail::validateConfig;
 
 namespace {
 
-constexpr std::uint8_t kFloorId = static_cast<std::uint8_t>(Label::Floor);
+constexpr std::uint8_t kFloorLabelId = static_cast<std::uint8_t>(Label::Floor);
 
 // groundFromGravity's inputs checked; returns up_camera as a unit vector.
 Eigen::Vector3f checkedGravityUp(const OrganizedCloud& cloud_camera,
@@ -76,7 +76,7 @@ std::optional<FloorHeight> labelledFloorHeight(const OrganizedCloud& cloud_camer
   const auto& pts = cloud_camera.points;
   std::vector<float> floor;
   for (std::size_t i = 0; i < pts.size(); ++i)
-    if (labels[i] == kFloorId && cloud_camera.valid(i)) floor.push_back(up.dot(pts[i]));
+    if (labels[i] == kFloorLabelId && cloud_camera.valid(i)) floor.push_back(up.dot(pts[i]));
   if (floor.size() < min_points) return std::nullopt;
   return FloorHeight{quantile(floor, 0.5), floor.size()};
 }

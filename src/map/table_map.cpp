@@ -11,6 +11,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <numbers>
 #include <sstream>
 #include <utility>
 
@@ -20,13 +21,11 @@ namespace findmug {
 
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
-
 float cross(const Eigen::Vector2f& a, const Eigen::Vector2f& b) {
   return a.x() * b.y() - a.y() * b.x();
 }
 
-std::string fmt(double value) {
+std::string formatNumber(double value) {
   std::ostringstream out;
   out.precision(4);
   out << value;
@@ -100,7 +99,7 @@ void describeFootprint(const std::vector<Eigen::Vector2f>& hull, TableCluster& t
 }
 
 [[noreturn]] void badMapSetting(const std::string& key, double value, const std::string& rule) {
-  throw Error("table_map." + key + " = " + fmt(value) + ": " + rule);
+  throw Error("table_map." + key + " = " + formatNumber(value) + ": " + rule);
 }
 
 }  // namespace
@@ -194,15 +193,16 @@ void validateTableMapConfig(const TableMapConfig& c) {
     badMapSetting("match_height_m", c.match_height_m, "must be a number >= 0");
   }
   if (!std::isfinite(c.view_half_angle_rad) || c.view_half_angle_rad <= 0.0f ||
-      c.view_half_angle_rad > static_cast<float>(kPi)) {
+      c.view_half_angle_rad > static_cast<float>(std::numbers::pi)) {
     badMapSetting("view_half_angle_rad", c.view_half_angle_rad, "must be in (0, pi]");
   }
   if (!std::isfinite(c.view_min_range_m) || c.view_min_range_m < 0.0f) {
     badMapSetting("view_min_range_m", c.view_min_range_m, "must be a number >= 0");
   }
   if (!std::isfinite(c.view_max_range_m) || c.view_max_range_m <= c.view_min_range_m) {
-    badMapSetting("view_max_range_m", c.view_max_range_m,
-                  "must be above table_map.view_min_range_m (" + fmt(c.view_min_range_m) + ")");
+    badMapSetting(
+        "view_max_range_m", c.view_max_range_m,
+        "must be above table_map.view_min_range_m (" + formatNumber(c.view_min_range_m) + ")");
   }
   if (!std::isfinite(c.hidden_margin_m) || c.hidden_margin_m < 0.0f) {
     badMapSetting("hidden_margin_m", c.hidden_margin_m, "must be a number >= 0");
@@ -315,8 +315,9 @@ TableMapUpdate TableMap::update(const std::vector<TableCluster>& tables_base,
                                 const DepthView* view) {
   if (!std::isfinite(base_in_map.x) || !std::isfinite(base_in_map.y) ||
       !std::isfinite(base_in_map.yaw)) {
-    throw Error("TableMap::update: robot pose (" + fmt(base_in_map.x) + ", " + fmt(base_in_map.y) +
-                ", " + fmt(base_in_map.yaw) + ") is not finite");
+    throw Error("TableMap::update: robot pose (" + formatNumber(base_in_map.x) + ", " +
+                formatNumber(base_in_map.y) + ", " + formatNumber(base_in_map.yaw) +
+                ") is not finite");
   }
   if (utime < last_utime_) {
     throw Error("TableMap::update: utime " + std::to_string(utime) + " is older than the last (" +
@@ -388,7 +389,7 @@ TableMapUpdate TableMap::update(const std::vector<TableCluster>& tables_base,
       remove[j] = true;
       result.diagnostics.push_back("tentative table " + std::to_string(t.table.id) +
                                    " dropped: not confirmed within " +
-                                   fmt(map_config_.tentative_timeout_s) + " s");
+                                   formatNumber(map_config_.tentative_timeout_s) + " s");
     }
   }
 

@@ -22,7 +22,7 @@ namespace {
 static_assert(std::endian::native == std::endian::little,
               "the object model file is little-endian and written from memory");
 
-constexpr char kMagic[8] = {'F', 'M', 'O', 'B', 'J', 'E', 'C', 'T'};
+constexpr char kObjectModelMagic[8] = {'F', 'M', 'O', 'B', 'J', 'E', 'C', 'T'};
 // A histogram (normalised to 1 when taught) may be off by float rounding only.
 constexpr double kHistogramSumTolerance = 1e-3;
 // Sizes and coordinates beyond this are no table-top object.
@@ -190,9 +190,9 @@ constexpr std::size_t kPointBytes = 3 * sizeof(float) + 3;
 constexpr std::uint32_t kFirstRoundnessVersion = 2;
 
 std::uint32_t readHeader(Reader& r, const std::string& what) {
-  char magic[sizeof(kMagic)];
+  char magic[sizeof(kObjectModelMagic)];
   r.getBytes(magic, sizeof(magic), "magic");
-  if (std::memcmp(magic, kMagic, sizeof(kMagic)) != 0) {
+  if (std::memcmp(magic, kObjectModelMagic, sizeof(kObjectModelMagic)) != 0) {
     std::string shown;
     for (char c : magic) shown += (c >= 32 && c < 127) ? c : '?';
     badField(what, "magic", "\"" + shown + "\"", "must be \"FMOBJECT\" (not an object model)");
@@ -396,7 +396,7 @@ int addObjectViewToFile(const std::string& path, const std::string& name, Object
 std::vector<std::uint8_t> encodeObjectModel(const ObjectModel& model) {
   validateObjectModel(model, "\"" + model.name + "\" (being written)");
   Writer w;
-  w.putBytes(kMagic, sizeof(kMagic));
+  w.putBytes(kObjectModelMagic, sizeof(kObjectModelMagic));
   w.put(kObjectModelFormatVersion);
   w.put(static_cast<std::uint32_t>(model.name.size()));
   w.putBytes(model.name.data(), model.name.size());

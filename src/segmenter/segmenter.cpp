@@ -17,7 +17,10 @@
 
 namespace findmug {
 
-namespace {
+// A named namespace, not an unnamed one: Segmenter::Laps holds a Stopwatch, and a member of a
+// class with linkage may not have a type of an unnamed namespace once this file is compiled
+// inside a unity batch (FINDMUG_UNITY).
+namespace segmenter_detail {
 
 double threadCpuMs() {
   timespec ts{};
@@ -55,6 +58,12 @@ class Stopwatch {
   std::chrono::steady_clock::time_point start_;
   double cpu_start_;
 };
+
+}  // namespace segmenter_detail
+
+namespace {
+
+using segmenter_detail::Stopwatch;
 
 std::uint8_t argmax(const ClassProbabilities& p) {
   return static_cast<std::uint8_t>(std::max_element(p.begin(), p.end()) - p.begin());
@@ -504,7 +513,7 @@ class Segmenter::Laps {
 
  private:
   LabelledFrame& frame_;
-  Stopwatch watch_;
+  segmenter_detail::Stopwatch watch_;
 };
 
 // classify's per-thread working memory (scratch.hpp), borrowed for one call.

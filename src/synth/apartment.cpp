@@ -18,6 +18,7 @@ namespace findmug::synth {
 
 using detail::Polygon2;
 using detail::Rng;
+using detail::at;
 
 namespace {
 
@@ -132,8 +133,6 @@ Eigen::Vector2d local(const Eigen::Vector2d& c, double yaw, double lx, double ly
   return c + Eigen::Vector2d(std::cos(yaw) * lx - std::sin(yaw) * ly,
                              std::sin(yaw) * lx + std::cos(yaw) * ly);
 }
-
-Eigen::Vector3d at(const Eigen::Vector2d& xy, double z) { return {xy.x(), xy.y(), z}; }
 
 // Moves one furnished room (its objects after the shell) into the apartment at `offset`.
 void mergeRoom(MultiRoomApartment& apt, const SynthScene& room, const Eigen::Vector2d& offset,

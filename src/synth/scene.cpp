@@ -13,6 +13,7 @@ namespace findmug::synth {
 
 using detail::Polygon2;
 using detail::Rng;
+using detail::at;
 
 namespace {
 
@@ -77,8 +78,6 @@ Eigen::Vector2d toWorld(const Eigen::Vector2d& center, double yaw, double lx, do
   const double c = std::cos(yaw), s = std::sin(yaw);
   return center + Eigen::Vector2d(c * lx - s * ly, s * lx + c * ly);
 }
-
-Eigen::Vector3d at(const Eigen::Vector2d& xy, double z) { return {xy.x(), xy.y(), z}; }
 
 // The four walls as lines: a point at distance `s` along wall w, `offset`
 // metres into the room, and the yaw whose local +y faces into the room.

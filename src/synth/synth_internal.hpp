@@ -102,6 +102,9 @@ inline bool convexOverlap(const Polygon2& a, const Polygon2& b) {
   return !separated(a, b) && !separated(b, a);
 }
 
+// A floor-plan point lifted to height z.
+inline Eigen::Vector3d at(const Eigen::Vector2d& xy, double z) { return {xy.x(), xy.y(), z}; }
+
 inline double wrapAngle(double a) {
   while (a > M_PI) a -= 2.0 * M_PI;
   while (a < -M_PI) a += 2.0 * M_PI;
