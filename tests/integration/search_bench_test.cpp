@@ -303,6 +303,29 @@ TEST(SearchSim, PlannerGoesAroundObstaclesAndTheBudgetStopsTheRobot) {
   EXPECT_EQ(robot.stats().views, 0);
 }
 
+// A robot that stopped in a cell its grid marks blocked (a driving frame's stop on a leg
+// that cuts a corner) plans from the nearest free cell. It used to plan from the blocked
+// cell, find no path to anywhere, and end the search there (episode 0.0 of the tables
+// strategy: the covering at the end found no goal at 48 s).
+TEST(SearchSim, ARobotStandingInABlockedCellStillPlansAndDrives) {
+  SimParams params;
+  params.drive_frames_hz = 0.0;
+  World w = emptyRoomWorld(params);
+  // Within the robot's radius of the wall at y = 0: blocked on the grid, and so the start.
+  const int blocked = w.grid.cellAt({3.0, 0.5 * params.robot_radius_m});
+  ASSERT_GE(blocked, 0);
+  ASSERT_FALSE(w.grid.free(blocked));
+  w.start = w.grid.center(blocked);
+  Robot robot(w, params);
+  ASSERT_GE(robot.cell(), 0);
+  EXPECT_TRUE(w.grid.free(robot.cell()));
+  EXPECT_LT((w.grid.center(robot.cell()) - w.start).norm(), params.robot_radius_m + params.cell_m);
+  EXPECT_TRUE(std::isfinite(w.grid.distancesFrom(robot.cell())[w.grid.cellAt({3.0, 2.0})]));
+  const Eigen::Vector2d goal = w.grid.center(w.grid.cellAt({3.0, 2.0}));
+  ASSERT_TRUE(robot.driveTo(goal));
+  EXPECT_LT((robot.xy() - goal).norm(), 1e-9);
+}
+
 // Two rooms: a tall wall across the 6 x 4 m room at x = 3 with a doorway at its top.
 World twoRoomWorld(const SimParams& params) {
   World w = emptyRoomWorld(params);
@@ -472,6 +495,40 @@ TEST(SearchBench, OracleDrivesTheShortestPathAndSeesTheMug) {
     // The start is outside the mug's room.
     EXPECT_NE(w.apartment.roomAt(w.start), w.mug.room);
   }
+}
+
+// The tables strategy (a perfect table map, no daemon): every table mug of these episodes
+// found, never sooner than the oracle (which knows the mug's table), no look-around at the
+// start (it knows where the tables are), and not every table driven to (a top seen near
+// enough on the way is skipped).
+TEST(SearchBench, TablesStrategyOnAPerfectTableMapFindsTableMugsNoSoonerThanTheOracle) {
+  SimParams params;
+  params.prior = {1.0, 0.0, 0.0};
+  params.trace = true;
+  int visited = 0, tables = 0;
+  for (int e = 0; e < 3; ++e) {
+    const World w = makeWorld({e, 0, 1000003 + static_cast<std::uint64_t>(e), 7919023757ULL + e},
+                              params);
+    const EpisodeResult tables_run = runStrategy("tables", w, params, Perception{});
+    const EpisodeResult oracle = runStrategy("oracle", w, params, Perception{});
+    EXPECT_EQ(tables_run.strategy, "tables");
+    EXPECT_TRUE(tables_run.stats.found) << "episode " << e;
+    EXPECT_GE(tables_run.stats.found_time_s, oracle.stats.found_time_s - 1e-9) << "episode " << e;
+    EXPECT_EQ(std::count_if(tables_run.trace.begin(), tables_run.trace.end(),
+                            [](const std::string& line) {
+                              return line.find(" 0.0 s") != std::string::npos &&
+                                     line.find("look around") != std::string::npos;
+                            }),
+              0)
+        << "episode " << e;
+    int true_tables = 0;
+    for (const synth::FurnitureTruth& f : w.apartment.furniture) true_tables += f.kind == "table";
+    EXPECT_EQ(tables_run.tables_mapped, true_tables);
+    visited += tables_run.positions_visited;
+    tables += true_tables;
+  }
+  EXPECT_LT(visited, tables);
+  EXPECT_EQ(canonicalStrategy("f"), "tables");
 }
 
 // The sim-domain model learned the apartments' beds and sofas (models/README.md): looked at

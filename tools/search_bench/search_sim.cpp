@@ -447,6 +447,13 @@ void Robot::turnBy(double delta) {
   move(std::abs(delta) / params_.turn_rate_rad_s, xy_, yaw_ + delta, true);
 }
 
+int Robot::cell() const {
+  const int own = world_.grid.cellAt(xy_);
+  if (own >= 0 && world_.grid.free(own)) return own;
+  const int near = world_.grid.nearestFree(xy_, 0.25);
+  return near >= 0 ? near : own;
+}
+
 bool Robot::driveTo(const Eigen::Vector2d& goal, const std::function<bool()>& stop_when) {
   interrupted_ = false;
   if (!active()) return false;

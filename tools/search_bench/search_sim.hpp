@@ -265,7 +265,11 @@ class Robot {
 
   const Eigen::Vector2d& xy() const { return xy_; }
   double yaw() const { return yaw_; }
-  int cell() const { return world_.grid.cellAt(xy_); }
+  // The grid cell the robot plans from: its own, or, when the grid marks that one blocked,
+  // the nearest free cell. A stop on a string-pulled leg (a driving frame's find, or a drive
+  // stopped to re-plan) can fall in a cell the robot's radius marks blocked, at a corner the
+  // leg cuts; planning from there found no path at all, and the search ended early.
+  int cell() const;
   const RunStats& stats() const { return stats_; }
   // Every pose a stop view was taken from (coverage bookkeeping).
   const std::vector<std::pair<Eigen::Vector2d, double>>& viewPoses() const { return views_; }

@@ -116,16 +116,31 @@ class Eyes {
                                                  : params.top_seen_range_oracle_m);
     tops_ = std::make_unique<TableTopViews>(config);
   }
+  // The same for a fixed list of tables instead of the daemon's map (the tables strategy:
+  // the apartment's true tables).
+  void watchTopsOf(std::vector<TableCluster> tables, const SimParams& params) {
+    known_tables_ = std::move(tables);
+    watchTops(params);
+  }
   // The share of the table's top seen so (0 when tops are not watched or it is unknown).
   double topSeen(int table_id) const {
-    if (!tops_ || !daemon_) return 0.0;
-    for (const TableCluster& t : daemon_->mapTables())
+    if (!tops_) return 0.0;
+    for (const TableCluster& t : watchedTables())
       if (t.id == table_id) return tops_->seenShare(t);
     return 0.0;
   }
 
   Robot robot(const World& world, const SimParams& params) {
-    if (!daemon_) return Robot(world, params);
+    if (!daemon_ && !tops_) return Robot(world, params);
+    if (!daemon_) {
+      // No daemon: the frames only show the known tables' tops (oracle recognition).
+      return Robot(world, params,
+                   [this](const synth::RenderedFrame& frame, const Eigen::Vector2d& xy, double yaw,
+                          double) {
+                     observeTops(frame, xy, yaw);
+                     return Sighting{};
+                   });
+    }
     return Robot(
         world, params,
         [this, &world, trace = params.trace](const synth::RenderedFrame& frame,
@@ -135,13 +150,7 @@ class Eyes {
           if (trace) before = daemon_->mapTables();
           daemon_->feed(frame, xy, yaw, t);
           if (trace) sighting.notes = mapChanges(world, before, daemon_->mapTables());
-          if (tops_ && frame.labeled.frame.extrinsics) {
-            // The robot knows its head's pose: the base pose and the camera mount.
-            const Eigen::Isometry3d camera = cameraInMap(
-                Pose2D{xy.x(), xy.y(), yaw},
-                groundFromExtrinsics(*frame.labeled.frame.extrinsics).camera_to_ground);
-            tops_->observe(daemon_->mapTables(), frame.labeled.frame, camera);
-          }
+          observeTops(frame, xy, yaw);
           if (!matcher_) return sighting;
           answer_ = daemon_->find(name_);
           sighting.claimed = answer_.result == io::FindResult::Seen;
@@ -173,7 +182,21 @@ class Eyes {
   bool matcher_;
   std::string name_;
   std::unique_ptr<FindmugTables> daemon_;
+  // The tables whose tops are watched: the daemon's map, or the known ones.
+  const std::vector<TableCluster>& watchedTables() const {
+    return daemon_ && known_tables_.empty() ? daemon_->mapTables() : known_tables_;
+  }
+  void observeTops(const synth::RenderedFrame& frame, const Eigen::Vector2d& xy, double yaw) {
+    if (!tops_ || !frame.labeled.frame.extrinsics) return;
+    // The robot knows its head's pose: the base pose and the camera mount.
+    const Eigen::Isometry3d camera =
+        cameraInMap(Pose2D{xy.x(), xy.y(), yaw},
+                    groundFromExtrinsics(*frame.labeled.frame.extrinsics).camera_to_ground);
+    tops_->observe(watchedTables(), frame.labeled.frame, camera);
+  }
+
   std::unique_ptr<TableTopViews> tops_;
+  std::vector<TableCluster> known_tables_;
   io::FindResultMessage answer_;
 };
 
@@ -184,6 +207,40 @@ struct Place {
   double yaw = 0.0;
 };
 
+// The first reachable spot (from the start) just clear of the piece's footprint, trying
+// directions from the one towards its room's centre, facing the piece; nullopt when none.
+std::optional<Place> placeBeside(const World& world, const SimParams& params,
+                                 const synth::FurnitureTruth& f,
+                                 const std::vector<double>& from_start) {
+  if (f.room < 0) return std::nullopt;
+  Eigen::Vector2d c = Eigen::Vector2d::Zero();
+  for (const auto& v : f.footprint) c += v / static_cast<double>(f.footprint.size());
+  const Eigen::Vector2d to_room = world.apartment.rooms[f.room].center() - c;
+  const double a0 = std::atan2(to_room.y(), to_room.x());
+  for (int k = 0; k < 16; ++k) {
+    const double a = a0 + (k % 2 ? 1 : -1) * ((k + 1) / 2) * (2.0 * M_PI / 16);
+    const Eigen::Vector2d dir(std::cos(a), std::sin(a));
+    // Step out until the robot would clear the footprint by 0.15 m.
+    double r = 0.0;
+    const double clear = params.robot_radius_m + 0.15;
+    auto inside = [&](const Eigen::Vector2d& p) {
+      const std::size_t n = f.footprint.size();
+      for (std::size_t i = 0; i < n; ++i) {
+        const Eigen::Vector2d e = f.footprint[(i + 1) % n] - f.footprint[i];
+        const Eigen::Vector2d q = p - f.footprint[i];
+        if (e.x() * q.y() - e.y() * q.x() < -clear * e.norm()) return false;
+      }
+      return true;
+    };
+    while (r < 3.0 && inside(c + r * dir)) r += 0.05;
+    const int cell = reachableCellNear(world.grid, from_start, c + r * dir, 0.1);
+    if (cell < 0) continue;
+    const Eigen::Vector2d look = c - world.grid.center(cell);
+    return Place{cell, std::atan2(look.y(), look.x())};
+  }
+  return std::nullopt;
+}
+
 // Hand-placed: in front of each table, cabinet and shelf (an expert's places). With
 // `every_piece`, in front of every footprint of the robot's occupancy grid that stands in a
 // room, whatever it is (what a robot knows without semantics: its map's obstacles).
@@ -193,33 +250,8 @@ std::vector<Place> placesBesideFurniture(const World& world, const SimParams& pa
   std::vector<Place> places;
   for (const synth::FurnitureTruth& f : world.apartment.furniture) {
     if (!every_piece && f.kind != "table" && f.kind != "cabinet" && f.kind != "shelf") continue;
-    if (f.room < 0) continue;
-    Eigen::Vector2d c = Eigen::Vector2d::Zero();
-    for (const auto& v : f.footprint) c += v / static_cast<double>(f.footprint.size());
-    const Eigen::Vector2d to_room = world.apartment.rooms[f.room].center() - c;
-    const double a0 = std::atan2(to_room.y(), to_room.x());
-    for (int k = 0; k < 16; ++k) {
-      const double a = a0 + (k % 2 ? 1 : -1) * ((k + 1) / 2) * (2.0 * M_PI / 16);
-      const Eigen::Vector2d dir(std::cos(a), std::sin(a));
-      // Step out until the robot would clear the footprint by 0.15 m.
-      double r = 0.0;
-      const double clear = params.robot_radius_m + 0.15;
-      auto inside = [&](const Eigen::Vector2d& p) {
-        const std::size_t n = f.footprint.size();
-        for (std::size_t i = 0; i < n; ++i) {
-          const Eigen::Vector2d e = f.footprint[(i + 1) % n] - f.footprint[i];
-          const Eigen::Vector2d q = p - f.footprint[i];
-          if (e.x() * q.y() - e.y() * q.x() < -clear * e.norm()) return false;
-        }
-        return true;
-      };
-      while (r < 3.0 && inside(c + r * dir)) r += 0.05;
-      const int cell = reachableCellNear(world.grid, from_start, c + r * dir, 0.1);
-      if (cell < 0) continue;
-      const Eigen::Vector2d look = c - world.grid.center(cell);
-      places.push_back({cell, std::atan2(look.y(), look.x())});
-      break;
-    }
+    if (const std::optional<Place> place = placeBeside(world, params, f, from_start))
+      places.push_back(*place);
   }
   return places;
 }
@@ -388,6 +420,78 @@ EpisodeResult runPlaces(const World& world, const SimParams& params,
   coverUntilDone(robot, world, params, false);
   result.stats = robot.stats();
   result.trace = robot.trace();
+  eyes.report(result);
+  return result;
+}
+
+// The apartment's true tables as a perfect table map would hold them: the footprint as the
+// top's hull, the top's height, the furniture index as the id.
+std::vector<TableCluster> trueTables(const World& world) {
+  std::vector<TableCluster> tables;
+  for (std::size_t i = 0; i < world.apartment.furniture.size(); ++i) {
+    const synth::FurnitureTruth& f = world.apartment.furniture[i];
+    if (f.kind != "table") continue;
+    TableCluster t;
+    t.id = static_cast<int>(i);
+    t.top_height = static_cast<float>(f.top_z);
+    t.center = f.centre().cast<float>();
+    for (const Eigen::Vector2d& v : f.footprint) t.hull.push_back(v.cast<float>());
+    tables.push_back(std::move(t));
+  }
+  return tables;
+}
+
+// (f) The findmug strategy's rules on a perfect table map: every true table known from the
+// start (so no look-around there), nearest first, skipped once its top was seen near enough;
+// then the same fallbacks as (b). Its time over the oracle's is the price of not knowing
+// which table holds the mug; findmug's over its own, the price of findmug's table
+// perception (missed and false tables, search positions).
+EpisodeResult runTables(const World& world, const SimParams& params,
+                        const Perception& perception) {
+  EpisodeResult result;
+  Eyes eyes(perception, false);
+  const std::vector<TableCluster> tables = trueTables(world);
+  eyes.watchTopsOf(tables, params);
+  Robot robot = eyes.robot(world, params);
+  struct Target {
+    int table_id = -1;
+    Place place;
+  };
+  std::vector<Target> todo;
+  const std::vector<double> from_start = world.grid.distancesFrom(robot.cell());
+  for (const TableCluster& t : tables)
+    if (const std::optional<Place> place =
+            placeBeside(world, params, world.apartment.furniture[t.id], from_start))
+      todo.push_back({t.id, *place});
+  const auto top_seen = [&](int table_id) {
+    return params.top_seen_share > 0.0 && eyes.topSeen(table_id) >= params.top_seen_share;
+  };
+  while (robot.active()) {
+    todo.erase(std::remove_if(todo.begin(), todo.end(),
+                              [&](const Target& t) { return top_seen(t.table_id); }),
+               todo.end());
+    if (todo.empty()) break;
+    const std::vector<double> dist = world.grid.distancesFrom(robot.cell());
+    const auto next =
+        std::min_element(todo.begin(), todo.end(), [&](const Target& a, const Target& b) {
+          return dist[a.place.cell] < dist[b.place.cell];
+        });
+    const Target target = *next;
+    todo.erase(next);
+    ++result.positions_visited;
+    robot.driveTo(world.grid.center(target.place.cell),
+                  [&, id = target.table_id] { return top_seen(id); });
+    if (robot.interrupted()) continue;  // the top was seen on the way
+    robot.turnTo(target.place.yaw);
+    robot.look();
+  }
+  RoomExplorer rooms(world, params);
+  while (robot.active() && rooms.exploreNext(robot)) {
+  }
+  coverUntilDone(robot, world, params, false);
+  result.stats = robot.stats();
+  result.trace = robot.trace();
+  result.tables_mapped = static_cast<int>(tables.size());
   eyes.report(result);
   return result;
 }
@@ -665,11 +769,11 @@ bool RoomExplorer::exploreNext(Robot& robot, const std::function<bool()>& stop_w
 }
 
 std::string canonicalStrategy(const std::string& name) {
-  static const char* names[] = {"findmug", "places", "coverage", "random", "oracle"};
-  for (int i = 0; i < 5; ++i)
+  static const char* names[] = {"findmug", "places", "coverage", "random", "oracle", "tables"};
+  for (int i = 0; i < 6; ++i)
     if (name == names[i] || (name.size() == 1 && name[0] == 'a' + i)) return names[i];
   throw Error("search: unknown strategy '" + name +
-              "' (findmug|a, places|b, coverage|c, random|d, oracle|e)");
+              "' (findmug|a, places|b, coverage|c, random|d, oracle|e, tables|f)");
 }
 
 EpisodeResult runStrategy(const std::string& strategy, const World& world, const SimParams& params,
@@ -684,6 +788,8 @@ EpisodeResult runStrategy(const std::string& strategy, const World& world, const
     result = runCoverage(world, params, perception);
   } else if (name == "random") {
     result = runRandom(world, params, perception);
+  } else if (name == "tables") {
+    result = runTables(world, params, perception);
   } else {
     result = runOracle(world, params, perception);
   }

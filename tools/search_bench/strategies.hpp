@@ -14,6 +14,12 @@
 //                  view), look around again.
 //   d random       random reachable poses, a look-around at each.
 //   e oracle       straight to the nearest pose that recognises the mug (upper bound).
+//   f tables       (a)'s rules on a perfect table map: the apartment's true tables known from
+//                  the start (no look-around there), nearest first, one place in front of
+//                  each, a table skipped once its top was seen near enough; then (b)'s
+//                  fallbacks. A bound, not a baseline: its time over the oracle's is what
+//                  not knowing the mug's table costs, findmug's over its own what findmug's
+//                  table perception costs.
 // Look-arounds (a, d, and the room exploring (a) and (b) fall back to) turn only through the
 // headings whose view would show enough floor plan that none of the robot's frames showed
 // (Robot::lookAround, ViewCoverage); coverage's look-arounds turn through every heading (it
@@ -133,7 +139,7 @@ class LookCloser {
   int taken_ = 0;
 };
 
-// Known names: "findmug", "places", "coverage", "random", "oracle" (or a..e).
+// Known names: "findmug", "places", "coverage", "random", "oracle", "tables" (or a..f).
 std::string canonicalStrategy(const std::string& name);
 
 // Runs one strategy on one world. `perception.model` is needed by "findmug" and by every
