@@ -11,8 +11,8 @@
 // strategy under every perception asked for; the findmug strategy once per model; the
 // baselines under the matcher with the first model (their recogniser is the daemon's).
 // --runs names the runs instead, by their labels STRATEGY/PERCEPTION[/MODEL]: the whole
-// benchmark (five strategies with the oracle recogniser, findmug with the matcher and each
-// model) is one command and one pool of workers.
+// benchmark (five strategies and the perfect-table-map bound with the oracle recogniser,
+// findmug with the matcher and each model) is one command and one pool of workers.
 // With the matcher, "mug" is first taught (teach_mug.hpp) into a temporary objects_dir per
 // model, from apartments whose seeds no episode uses.
 //
@@ -462,7 +462,8 @@ int main(int argc, char** argv) {
   app->add_option("--episodes-per-apartment", o.episodes, "episodes per apartment (default 2)")
       ->check(cli::positive());
   app->add_option("--strategies", o.strategies,
-                  "comma-separated: findmug|a, places|b, coverage|c, random|d, oracle|e");
+                  "comma-separated: findmug|a, places|b, coverage|c, random|d, oracle|e, tables|f (a "
+                  "perfect table map: a bound, not in the default)");
   app->add_option("--perception", o.perception,
                   "mug recognition, comma-separated: oracle (rendered pixels), matcher "
                   "(findmugd's taught-object matcher and \"find mug\")");
