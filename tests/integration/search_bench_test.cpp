@@ -507,8 +507,8 @@ TEST(SearchBench, TablesStrategyOnAPerfectTableMapFindsTableMugsNoSoonerThanTheO
   params.trace = true;
   int visited = 0, tables = 0;
   for (int e = 0; e < 3; ++e) {
-    const World w = makeWorld({e, 0, 1000003 + static_cast<std::uint64_t>(e), 7919023757ULL + e},
-                              params);
+    const World w =
+        makeWorld({e, 0, 1000003 + static_cast<std::uint64_t>(e), 7919023757ULL + e}, params);
     const EpisodeResult tables_run = runStrategy("tables", w, params, Perception{});
     const EpisodeResult oracle = runStrategy("oracle", w, params, Perception{});
     EXPECT_EQ(tables_run.strategy, "tables");

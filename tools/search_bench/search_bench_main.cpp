@@ -461,9 +461,10 @@ int main(int argc, char** argv) {
   app->add_option("--apartments", o.apartments, "apartments (default 2)")->check(cli::positive());
   app->add_option("--episodes-per-apartment", o.episodes, "episodes per apartment (default 2)")
       ->check(cli::positive());
-  app->add_option("--strategies", o.strategies,
-                  "comma-separated: findmug|a, places|b, coverage|c, random|d, oracle|e, tables|f (a "
-                  "perfect table map: a bound, not in the default)");
+  app->add_option(
+      "--strategies", o.strategies,
+      "comma-separated: findmug|a, places|b, coverage|c, random|d, oracle|e, tables|f (a "
+      "perfect table map: a bound, not in the default)");
   app->add_option("--perception", o.perception,
                   "mug recognition, comma-separated: oracle (rendered pixels), matcher "
                   "(findmugd's taught-object matcher and \"find mug\")");

@@ -134,12 +134,12 @@ class Eyes {
     if (!daemon_ && !tops_) return Robot(world, params);
     if (!daemon_) {
       // No daemon: the frames only show the known tables' tops (oracle recognition).
-      return Robot(world, params,
-                   [this](const synth::RenderedFrame& frame, const Eigen::Vector2d& xy, double yaw,
-                          double) {
-                     observeTops(frame, xy, yaw);
-                     return Sighting{};
-                   });
+      return Robot(
+          world, params,
+          [this](const synth::RenderedFrame& frame, const Eigen::Vector2d& xy, double yaw, double) {
+            observeTops(frame, xy, yaw);
+            return Sighting{};
+          });
     }
     return Robot(
         world, params,
@@ -446,8 +446,7 @@ std::vector<TableCluster> trueTables(const World& world) {
 // then the same fallbacks as (b). Its time over the oracle's is the price of not knowing
 // which table holds the mug; findmug's over its own, the price of findmug's table
 // perception (missed and false tables, search positions).
-EpisodeResult runTables(const World& world, const SimParams& params,
-                        const Perception& perception) {
+EpisodeResult runTables(const World& world, const SimParams& params, const Perception& perception) {
   EpisodeResult result;
   Eyes eyes(perception, false);
   const std::vector<TableCluster> tables = trueTables(world);
@@ -472,10 +471,9 @@ EpisodeResult runTables(const World& world, const SimParams& params,
                todo.end());
     if (todo.empty()) break;
     const std::vector<double> dist = world.grid.distancesFrom(robot.cell());
-    const auto next =
-        std::min_element(todo.begin(), todo.end(), [&](const Target& a, const Target& b) {
-          return dist[a.place.cell] < dist[b.place.cell];
-        });
+    const auto next = std::min_element(
+        todo.begin(), todo.end(),
+        [&](const Target& a, const Target& b) { return dist[a.place.cell] < dist[b.place.cell]; });
     const Target target = *next;
     todo.erase(next);
     ++result.positions_visited;

@@ -65,8 +65,8 @@ struct Perception {
 struct EpisodeResult {
   std::string strategy;
   RunStats stats;
-  int tables_mapped = 0;      // (a): confirmed tables in findmug's map at the end
-  int positions_visited = 0;  // (a), (b): search positions / places visited
+  int tables_mapped = 0;      // (a): confirmed tables in findmug's map at the end; (f): true tables
+  int positions_visited = 0;  // (a), (b), (f): search positions / places visited
   int frames_processed = 0;   // frames the daemon's pipeline processed (findmug; matcher: all)
   int look_closer = 0;        // matcher: "look closer" places the strategy went to
   // Matcher: table-top candidates the daemon put to the matcher, those it named "mug", and
